@@ -1,0 +1,12 @@
+// Per-frame camera data (set 0). Matches `FrameUniforms` in src/forward/mod.rs.
+#ifndef PENUMBRA_FRAME_GLSL
+#define PENUMBRA_FRAME_GLSL
+
+layout(set = 0, binding = 0) uniform FrameUniforms {
+    mat4 view_proj;
+    vec4 camera_pos;   // xyz: eye position (world)
+    vec4 ambient;      // rgb: constant ambient radiance reflected as rho * ambient
+    uvec4 counts;      // x: number of lights
+} frame;
+
+#endif

@@ -1,0 +1,58 @@
+#version 460
+// Forward direct lighting: emission + ambient + sum over punctual lights of BRDF * E * cos,
+// in linear radiance. Material maps are always bound (1x1 defaults when a material has none).
+#include "common/frame.glsl"
+#include "common/lights.glsl"
+
+struct Material {
+    vec4 albedo;        // rgb: diffuse albedo
+    vec4 specular;      // rgb: Blinn-Phong specular colour; w: exponent
+    vec4 emission;      // rgb: emitted radiance
+    uvec4 maps;         // x: has normal map
+};
+
+layout(set = 0, binding = 1) readonly buffer Lights { Light items[]; } lights;
+layout(set = 0, binding = 2) readonly buffer Materials { Material items[]; } materials;
+layout(set = 0, binding = 3) uniform sampler2D albedo_map;
+layout(set = 0, binding = 4) uniform sampler2D normal_map;
+layout(set = 0, binding = 5) uniform sampler2D specular_map;
+
+layout(push_constant) uniform Draw {
+    mat4 model;
+    uint material;
+} draw;
+
+layout(location = 0) in vec3 in_world;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv;
+layout(location = 3) in vec4 in_tangent;
+
+layout(location = 0) out vec4 out_radiance;
+
+void main() {
+    Material m = materials.items[draw.material];
+    vec3 n = normalize(in_normal);
+    if (m.maps.x != 0u) {
+        // Tangent-space normal map; Gram-Schmidt keeps the frame orthonormal after interpolation.
+        vec3 t = normalize(in_tangent.xyz - n * dot(n, in_tangent.xyz));
+        vec3 b = cross(n, t) * in_tangent.w;
+        vec3 tn = texture(normal_map, in_uv).xyz * 2.0 - 1.0;
+        n = normalize(t * tn.x + b * tn.y + n * tn.z);
+    }
+    vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
+    vec3 specular = m.specular.rgb * texture(specular_map, in_uv).rgb;
+    vec3 v = normalize(frame.camera_pos.xyz - in_world);
+    // Light arriving at the back of a single-sided surface is not reflected; flip the normal
+    // for surfaces seen from behind so thin geometry is lit from the viewer's side.
+    if (dot(n, v) < 0.0) {
+        n = -n;
+    }
+    vec3 radiance = m.emission.rgb + albedo * frame.ambient.rgb;
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        vec3 l;
+        vec3 e;
+        light_incidence(lights.items[i], in_world, l, e);
+        radiance += brdf_times_cos(n, v, l, albedo, specular, m.specular.w) * e;
+    }
+    out_radiance = vec4(radiance, 1.0);
+}

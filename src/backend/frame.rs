@@ -1,0 +1,215 @@
+//! Per-frame objects: a command buffer, its fence, a descriptor pool reset every frame, a
+//! timestamp query pool and a bump-allocated upload buffer for per-frame constants.
+//!
+//! A frame's query results and descriptor sets are reused only after its fence has signalled,
+//! so `begin_frame` waits for the frame's previous submission before touching any of them.
+
+use std::cell::RefCell;
+
+use ash::vk;
+
+use super::error::{BackendError, BackendResult, VkContext};
+use super::resources::{BufferDesc, BufferId, MemoryKind};
+use super::timestamps::{elapsed_ns, PassTiming};
+use super::Gpu;
+
+/// Handle of a frame in flight.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Frame(pub(crate) u32);
+
+pub(crate) const MAX_QUERIES: u32 = 512;
+const UPLOAD_BYTES: u64 = 4 << 20;
+/// Conservative for every device (the spec allows up to 256 for minUniformBufferOffsetAlignment).
+pub(crate) const UPLOAD_ALIGN: u64 = 256;
+
+pub(crate) struct FrameData {
+    pub cb: vk::CommandBuffer,
+    pub fence: vk::Fence,
+    pub submitted: bool,
+    pub descriptor_pool: vk::DescriptorPool,
+    pub queries: Option<vk::QueryPool>,
+    pub next_query: u32,
+    /// (name, begin query, end query) in the order scopes were opened.
+    pub scopes: Vec<(String, u32, Option<u32>)>,
+    pub open_scopes: Vec<usize>,
+    pub timings: Option<Vec<PassTiming>>,
+    pub upload: BufferId,
+    pub upload_offset: u64,
+}
+
+impl FrameData {
+    pub(crate) unsafe fn destroy(&self, device: &ash::Device) {
+        unsafe {
+            device.destroy_fence(self.fence, None);
+            device.destroy_descriptor_pool(self.descriptor_pool, None);
+            if let Some(q) = self.queries {
+                device.destroy_query_pool(q, None);
+            }
+        }
+    }
+}
+
+impl Gpu {
+    /// A new frame slot. Create one for headless work, two or more for frames in flight.
+    pub fn create_frame(&mut self) -> BackendResult<Frame> {
+        let upload = self.create_buffer(&BufferDesc {
+            name: format!("frame {} uploads", self.frames.len()),
+            size: UPLOAD_BYTES,
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER
+                | vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::VERTEX_BUFFER
+                | vk::BufferUsageFlags::INDEX_BUFFER,
+            memory: MemoryKind::CpuToGpu,
+        })?;
+        let cb = unsafe {
+            self.device.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(self.command_pool)
+                    .level(vk::CommandBufferLevel::PRIMARY)
+                    .command_buffer_count(1),
+            )
+        }
+        .vk("vkAllocateCommandBuffers")?[0];
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .vk("vkCreateFence")?;
+        let sizes = [
+            (vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096),
+            (vk::DescriptorType::STORAGE_IMAGE, 2048),
+            (vk::DescriptorType::UNIFORM_BUFFER, 2048),
+            (vk::DescriptorType::STORAGE_BUFFER, 2048),
+        ]
+        .map(|(ty, n)| vk::DescriptorPoolSize { ty, descriptor_count: n });
+        let descriptor_pool = unsafe {
+            self.device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default().max_sets(2048).pool_sizes(&sizes),
+                None,
+            )
+        }
+        .vk("vkCreateDescriptorPool")?;
+        let queries = if self.caps.timestamp_valid_bits > 0 {
+            Some(
+                unsafe {
+                    self.device.create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(MAX_QUERIES),
+                        None,
+                    )
+                }
+                .vk("vkCreateQueryPool")?,
+            )
+        } else {
+            None
+        };
+        self.frames.push(Some(RefCell::new(FrameData {
+            cb,
+            fence,
+            submitted: false,
+            descriptor_pool,
+            queries,
+            next_query: 0,
+            scopes: Vec::new(),
+            open_scopes: Vec::new(),
+            timings: None,
+            upload,
+            upload_offset: 0,
+        })));
+        Ok(Frame(self.frames.len() as u32 - 1))
+    }
+
+    pub(crate) fn frame_data(&self, f: Frame) -> BackendResult<&RefCell<FrameData>> {
+        self.frames
+            .get(f.0 as usize)
+            .and_then(|x| x.as_ref())
+            .ok_or_else(|| BackendError::Invalid(format!("frame {f:?} does not exist")))
+    }
+
+    /// Waits for the frame's last submission (if any) and collects its timestamps.
+    pub fn wait_frame(&self, f: Frame) -> BackendResult<()> {
+        let mut fd = self.frame_data(f)?.try_borrow_mut().map_err(|_| {
+            BackendError::Invalid("frame is being recorded".into())
+        })?;
+        if !fd.submitted {
+            return Ok(());
+        }
+        unsafe { self.device.wait_for_fences(&[fd.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        unsafe { self.device.reset_fences(&[fd.fence]) }.vk("vkResetFences")?;
+        fd.submitted = false;
+        fd.timings = self.read_timings(&fd)?;
+        Ok(())
+    }
+
+    fn read_timings(&self, fd: &FrameData) -> BackendResult<Option<Vec<PassTiming>>> {
+        let Some(pool) = fd.queries else { return Ok(None) };
+        if fd.next_query == 0 {
+            return Ok(Some(Vec::new()));
+        }
+        let mut raw = vec![0u64; fd.next_query as usize];
+        unsafe {
+            self.device.get_query_pool_results(
+                pool,
+                0,
+                &mut raw,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
+        let bits = self.caps.timestamp_valid_bits;
+        let period = self.caps.timestamp_period_ns;
+        Ok(Some(
+            fd.scopes
+                .iter()
+                .filter_map(|(name, b, e)| {
+                    let e = (*e)?;
+                    Some(PassTiming {
+                        name: name.clone(),
+                        ms: elapsed_ns(raw[*b as usize], raw[e as usize], bits, period) / 1e6,
+                    })
+                })
+                .collect(),
+        ))
+    }
+
+    /// Timings of the frame's last completed submission, in scope order (`None` when the device
+    /// has no timestamps on this queue).
+    pub fn frame_timings(&self, f: Frame) -> BackendResult<Option<Vec<PassTiming>>> {
+        Ok(self.frame_data(f)?.borrow().timings.clone())
+    }
+
+    /// Submits the frame's recorded commands. `wait`/`signal` are binary semaphores for
+    /// presentation.
+    pub fn submit_frame(
+        &self,
+        f: Frame,
+        wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>,
+        signal: Option<vk::Semaphore>,
+    ) -> BackendResult<()> {
+        let mut fd = self.frame_data(f)?.borrow_mut();
+        let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(fd.cb)];
+        let waits: Vec<vk::SemaphoreSubmitInfo> = wait
+            .iter()
+            .map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage))
+            .collect();
+        let signals: Vec<vk::SemaphoreSubmitInfo> = signal
+            .iter()
+            .map(|&s| {
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(s)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            })
+            .collect();
+        let submit = [vk::SubmitInfo2::default()
+            .command_buffer_infos(&cbs)
+            .wait_semaphore_infos(&waits)
+            .signal_semaphore_infos(&signals)];
+        unsafe { self.device.queue_submit2(self.queue, &submit, fd.fence) }.vk("vkQueueSubmit2")?;
+        fd.submitted = true;
+        Ok(())
+    }
+
+    /// Submits and waits: the headless path.
+    pub fn submit_and_wait(&self, f: Frame) -> BackendResult<()> {
+        self.submit_frame(f, None, None)?;
+        self.wait_frame(f)
+    }
+}

@@ -1,0 +1,290 @@
+//! `penumbra demo`: the scene in a window with a fly camera and live GPU pass times.
+
+use std::collections::HashSet;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use glam::Vec3;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{DeviceEvent, DeviceId, ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use crate::backend::{vk, Gpu, Swapchain};
+use crate::capture::{load_scene, CaptureOptions};
+use crate::error::{Error, Result};
+use crate::renderer::{FrameOutput, Renderer};
+use crate::scene::Camera;
+
+const FRAMES_IN_FLIGHT: usize = 2;
+
+/// A fly camera: position plus yaw/pitch, seeded from the scene's camera.
+#[derive(Clone, Debug)]
+pub struct FlyCamera {
+    pub base: Camera,
+    pub yaw: f32,
+    pub pitch: f32,
+}
+
+impl FlyCamera {
+    pub fn new(base: Camera) -> Self {
+        let d = (base.target - base.position).normalize_or(Vec3::NEG_Z);
+        FlyCamera { yaw: d.x.atan2(-d.z), pitch: d.y.clamp(-1.0, 1.0).asin(), base }
+    }
+    pub fn forward(&self) -> Vec3 {
+        Vec3::new(self.yaw.sin() * self.pitch.cos(), self.pitch.sin(), -self.yaw.cos() * self.pitch.cos())
+    }
+    pub fn camera(&self) -> Camera {
+        let mut c = self.base.clone();
+        c.target = c.position + self.forward();
+        c.up = Vec3::Y;
+        c
+    }
+    pub fn look(&mut self, dx: f32, dy: f32) {
+        self.yaw += dx * 0.003;
+        self.pitch = (self.pitch - dy * 0.003).clamp(-1.5, 1.5);
+    }
+    pub fn fly(&mut self, keys: &HashSet<KeyCode>, dt: f32) {
+        let f = self.forward();
+        let right = f.cross(Vec3::Y).normalize_or_zero();
+        let mut v = Vec3::ZERO;
+        for (k, d) in [
+            (KeyCode::KeyW, f),
+            (KeyCode::KeyS, -f),
+            (KeyCode::KeyD, right),
+            (KeyCode::KeyA, -right),
+            (KeyCode::KeyE, Vec3::Y),
+            (KeyCode::KeyQ, -Vec3::Y),
+        ] {
+            if keys.contains(&k) {
+                v += d;
+            }
+        }
+        let speed = if keys.contains(&KeyCode::ShiftLeft) { 8.0 } else { 2.0 };
+        self.base.position += v.normalize_or_zero() * speed * dt;
+    }
+}
+
+struct Running {
+    window: Window,
+    renderer: Renderer,
+    swapchain: Swapchain,
+    camera: FlyCamera,
+    keys: HashSet<KeyCode>,
+    looking: bool,
+    last: Instant,
+    title_at: Instant,
+    frames: u64,
+    screenshots: u32,
+}
+
+struct App {
+    opts: CaptureOptions,
+    max_frames: Option<u64>,
+    screenshot: Option<PathBuf>,
+    state: Option<Running>,
+    error: Option<Error>,
+}
+
+impl App {
+    fn start(&mut self, el: &ActiveEventLoop) -> Result<Running> {
+        let scene = load_scene(self.opts.scene.as_deref())?;
+        let (w, h) = self.opts.size;
+        let attrs = Window::default_attributes()
+            .with_title("penumbra")
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = el
+            .create_window(attrs)
+            .map_err(|e| Error::Usage(format!("cannot open a window: {e}")))?;
+        let desc = self.opts.gpu.clone().with_display(el)?;
+        let mut gpu = Gpu::new(&desc)?;
+        let size = window.inner_size();
+        let swapchain = gpu.create_swapchain(&window, (size.width.max(1), size.height.max(1)), FRAMES_IN_FLIGHT)?;
+        let extent = swapchain.extent;
+        let renderer = Renderer::new(gpu, scene, self.opts.method.as_deref(), (extent.width, extent.height), FRAMES_IN_FLIGHT)?;
+        let camera = FlyCamera::new(renderer.scene.camera.clone());
+        Ok(Running {
+            window,
+            renderer,
+            swapchain,
+            camera,
+            keys: HashSet::new(),
+            looking: false,
+            last: Instant::now(),
+            title_at: Instant::now(),
+            frames: 0,
+            screenshots: 0,
+        })
+    }
+
+    fn fail(&mut self, el: &ActiveEventLoop, e: Error) {
+        self.error.get_or_insert(e);
+        el.exit();
+    }
+}
+
+impl Running {
+    fn recreate(&mut self) -> Result<()> {
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(());
+        }
+        self.renderer.gpu.recreate_swapchain(&mut self.swapchain, (size.width, size.height))?;
+        let e = self.swapchain.extent;
+        self.renderer.resize((e.width, e.height))?;
+        Ok(())
+    }
+
+    /// Renders and presents one frame; returns false when the window is minimised.
+    fn frame(&mut self) -> Result<bool> {
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(false);
+        }
+        let now = Instant::now();
+        let dt = (now - self.last).as_secs_f32().min(0.1);
+        self.last = now;
+        self.camera.fly(&self.keys, dt);
+
+        let slot = self.renderer.current_frame();
+        // Waiting for the slot's previous frame also makes its acquire semaphore reusable.
+        self.renderer.gpu.wait_frame(slot)?;
+        if self.title_at.elapsed().as_secs_f32() > 0.5 {
+            if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
+                let parts: Vec<String> = t.iter().map(|p| format!("{} {:.2} ms", p.name, p.ms)).collect();
+                self.window.set_title(&format!("penumbra — {} — {}", self.renderer.method.name(), parts.join(" | ")));
+            }
+            self.title_at = Instant::now();
+        }
+        let Some(acquired) = self.renderer.gpu.acquire(&self.swapchain, self.frames as usize)? else {
+            self.recreate()?;
+            return Ok(true);
+        };
+        let wait_stage = vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+        self.renderer.states.acquired_image(acquired.image, wait_stage);
+        let camera = self.camera.camera();
+        self.renderer.render(&camera, FrameOutput::Present { image: acquired.image, exposure: 1.0 })?;
+        let gpu = &self.renderer.gpu;
+        gpu.submit_frame(
+            self.renderer.last_frame(),
+            Some((acquired.acquired, wait_stage)),
+            Some(acquired.rendered),
+        )?;
+        if !gpu.present(&self.swapchain, &acquired)? {
+            self.recreate()?;
+        }
+        self.frames += 1;
+        Ok(true)
+    }
+
+    fn screenshot(&mut self, path: PathBuf) -> Result<PathBuf> {
+        let camera = self.camera.camera();
+        let image = self
+            .renderer
+            .render(&camera, FrameOutput::Readback)?
+            .image
+            .ok_or_else(|| Error::Usage("screenshot readback failed".into()))?;
+        image.write_png(&path, 1.0)?;
+        Ok(path)
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.state.is_none() {
+            match self.start(el) {
+                Ok(s) => {
+                    s.window.request_redraw();
+                    self.state = Some(s);
+                }
+                Err(e) => self.fail(el, e),
+            }
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(s) = self.state.as_mut() else { return };
+        let result: Result<()> = (|| {
+            match event {
+                WindowEvent::CloseRequested => el.exit(),
+                WindowEvent::Resized(_) => s.recreate()?,
+                WindowEvent::MouseInput { state, button: MouseButton::Left | MouseButton::Right, .. } => {
+                    s.looking = state == ElementState::Pressed;
+                }
+                WindowEvent::KeyboardInput { event, .. } => {
+                    if let PhysicalKey::Code(code) = event.physical_key {
+                        if event.state == ElementState::Pressed {
+                            s.keys.insert(code);
+                            match code {
+                                KeyCode::Escape => el.exit(),
+                                KeyCode::F12 if !event.repeat => {
+                                    s.screenshots += 1;
+                                    let p = s.screenshot(PathBuf::from(format!("penumbra-screenshot-{}.png", s.screenshots)))?;
+                                    println!("saved {}", p.display());
+                                }
+                                KeyCode::KeyR if !event.repeat => match s.renderer.reload_shaders() {
+                                    Ok(n) => println!("reloaded {n} pipelines from glsl/"),
+                                    // A broken shader is reported; the old pipelines keep running.
+                                    Err(e) => eprintln!("shader reload failed, keeping the old pipelines: {e}"),
+                                },
+                                _ => {}
+                            }
+                        } else {
+                            s.keys.remove(&code);
+                        }
+                    }
+                }
+                WindowEvent::RedrawRequested => {
+                    s.frame()?;
+                    if self.max_frames.is_some_and(|n| s.frames >= n) {
+                        el.exit();
+                    } else {
+                        s.window.request_redraw();
+                    }
+                }
+                _ => {}
+            }
+            Ok(())
+        })();
+        if let Err(e) = result {
+            self.fail(el, e);
+        }
+    }
+
+    fn device_event(&mut self, _el: &ActiveEventLoop, _id: DeviceId, event: DeviceEvent) {
+        if let (Some(s), DeviceEvent::MouseMotion { delta }) = (self.state.as_mut(), event) {
+            if s.looking {
+                s.camera.look(delta.0 as f32, delta.1 as f32);
+            }
+        }
+    }
+}
+
+/// Runs the window until Esc, the close button, or `max_frames`.
+pub fn run(opts: &CaptureOptions, max_frames: Option<u64>, screenshot: Option<PathBuf>) -> Result<()> {
+    let event_loop = EventLoop::new().map_err(|e| Error::Usage(format!("cannot connect to a display: {e}")))?;
+    let mut app = App { opts: opts.clone(), max_frames, screenshot, state: None, error: None };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::Usage(format!("event loop: {e}")))?;
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    if let Some(mut s) = app.state.take() {
+        if let Some(p) = app.screenshot.take() {
+            let p = s.screenshot(p)?;
+            println!("saved {} after {} frames", p.display(), s.frames);
+        }
+        s.renderer.gpu.wait_idle()?;
+        let n = s.renderer.gpu.validation_log().count();
+        let Running { renderer, swapchain, .. } = s;
+        let mut renderer = renderer;
+        renderer.gpu.destroy_swapchain(swapchain);
+        if n > 0 {
+            return Err(Error::Usage(format!("{n} validation message(s) (see above)")));
+        }
+    }
+    Ok(())
+}

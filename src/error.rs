@@ -1,0 +1,20 @@
+//! The crate-level error: every failure a user can cause or meet, printed as one line.
+
+use crate::backend::BackendError;
+use crate::image_io::ImageIoError;
+use crate::scene::SceneError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Backend(#[from] BackendError),
+    #[error(transparent)]
+    Image(#[from] ImageIoError),
+    /// A request that cannot be honoured as asked (a method the scene doesn't enable, a size of 0…).
+    #[error("{0}")]
+    Usage(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,126 @@
+//! Writing and reading captures: EXR holds linear radiance exactly as rendered (no exposure, no
+//! clamping); PNG holds the display image (exposure, the ACES fit of `glsl/common/tonemap.glsl`,
+//! sRGB encoding).
+
+use std::path::Path;
+
+/// A linear RGBA float image, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HdrImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageIoError {
+    #[error("{path}: {message}")]
+    Io { path: String, message: String },
+}
+
+impl HdrImage {
+    pub fn new(width: u32, height: u32) -> Self {
+        HdrImage { width, height, pixels: vec![[0.0; 4]; (width * height) as usize] }
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// From tightly packed RGBA32F bytes as read back from the GPU.
+    pub fn from_rgba32f_bytes(width: u32, height: u32, bytes: &[u8]) -> Option<Self> {
+        if bytes.len() != (width * height * 16) as usize {
+            return None;
+        }
+        let pixels = bytes
+            .chunks_exact(16)
+            .map(|c| {
+                let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
+                [f(0), f(4), f(8), f(12)]
+            })
+            .collect();
+        Some(HdrImage { width, height, pixels })
+    }
+
+    pub fn write_exr(&self, path: &Path) -> Result<(), ImageIoError> {
+        let raw: Vec<f32> = self.pixels.iter().flat_map(|p| *p).collect();
+        let img = image::Rgba32FImage::from_raw(self.width, self.height, raw).ok_or_else(|| ImageIoError::Io {
+            path: path.display().to_string(),
+            message: "pixel buffer does not match the size".into(),
+        })?;
+        img.save_with_format(path, image::ImageFormat::OpenExr).map_err(|e| ImageIoError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    pub fn read_exr(path: &Path) -> Result<Self, ImageIoError> {
+        let img = image::open(path).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })?;
+        let rgba = img.to_rgba32f();
+        Ok(HdrImage {
+            width: rgba.width(),
+            height: rgba.height(),
+            pixels: rgba.pixels().map(|p| p.0).collect(),
+        })
+    }
+
+    /// The display image as 8-bit sRGB.
+    pub fn to_display(&self, exposure: f32) -> image::RgbaImage {
+        let mut out = image::RgbaImage::new(self.width, self.height);
+        for (o, p) in out.pixels_mut().zip(&self.pixels) {
+            let c = [0, 1, 2].map(|i| (srgb_encode(aces_fit(p[i] * exposure)) * 255.0 + 0.5).clamp(0.0, 255.0) as u8);
+            *o = image::Rgba([c[0], c[1], c[2], 255]);
+        }
+        out
+    }
+
+    pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), ImageIoError> {
+        self.to_display(exposure)
+            .save_with_format(path, image::ImageFormat::Png)
+            .map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
+    }
+}
+
+/// Narkowicz's fit of the ACES filmic curve (same constants as the GLSL).
+pub fn aces_fit(x: f32) -> f32 {
+    let x = x.max(0.0);
+    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+/// The sRGB transfer function (linear → encoded).
+pub fn srgb_encode(c: f32) -> f32 {
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_exact() {
+        let mut img = HdrImage::new(3, 2);
+        img.pixels[0] = [1e-6, 123.5, 7.25, 1.0];
+        img.pixels[5] = [65504.0, 0.1, 3.0, 1.0];
+        let p = std::env::temp_dir().join(format!("penumbra-io-{}.exr", std::process::id()));
+        img.write_exr(&p).unwrap();
+        let back = HdrImage::read_exr(&p).unwrap();
+        std::fs::remove_file(&p).ok();
+        assert_eq!(back, img);
+    }
+
+    #[test]
+    fn display_curve_known_values() {
+        assert_eq!(aces_fit(0.0), 0.0);
+        assert!((aces_fit(1.0) - 0.8038).abs() < 1e-3);
+        assert_eq!(aces_fit(1e6), 1.0);
+        assert!((srgb_encode(0.5) - 0.7354).abs() < 1e-3);
+        let mut img = HdrImage::new(1, 1);
+        img.pixels[0] = [0.0, 1.0, 100.0, 1.0];
+        let d = img.to_display(1.0);
+        assert_eq!(d.get_pixel(0, 0).0, [0, 232, 255, 255]);
+    }
+}

@@ -1,0 +1,56 @@
+//! The lighting methods penumbra implements, and how a scene's `methods` entries become them.
+//!
+//! A method adds its passes to the frame graph; everything it needs beyond the shared scene data
+//! (pipelines, its own images) it creates in `create`. Only the methods a scene declares are
+//! created, so a scene instantiates only the passes it needs.
+
+use crate::backend::{Gpu, ImageId};
+use crate::error::{Error, Result};
+use crate::forward::Forward;
+use crate::graph::{RenderGraph, ResourceStates};
+use crate::renderer::{FrameUniforms, SceneGpu};
+use crate::scene::{MethodDecl, MethodSchema, Scene};
+use crate::shaders::ShaderLibrary;
+
+/// What a method writes into: linear HDR radiance plus a depth/stencil buffer.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameTargets {
+    pub radiance: ImageId,
+    pub depth_stencil: ImageId,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Everything a method reads to build one frame.
+pub struct FrameInputs<'a> {
+    pub gpu: &'a Gpu,
+    pub scene: &'a SceneGpu,
+    pub targets: FrameTargets,
+    pub uniforms: FrameUniforms,
+}
+
+pub trait LightingMethod {
+    /// The name scenes and `--method` use.
+    fn name(&self) -> &'static str;
+    /// Adds the passes that fill `inputs.targets.radiance` for this frame.
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, inputs: &FrameInputs<'a>) -> Result<()>;
+}
+
+/// Every method scenes may declare, with its parameters.
+pub fn schemas() -> Vec<MethodSchema> {
+    vec![crate::forward::SCHEMA]
+}
+
+/// Creates the method a scene declared.
+pub fn create(
+    decl: &MethodDecl,
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    _states: &mut ResourceStates,
+    _scene: &Scene,
+) -> Result<Box<dyn LightingMethod>> {
+    match decl.name.as_str() {
+        "forward" => Ok(Box::new(Forward::new(gpu, shaders, decl)?)),
+        other => Err(Error::Usage(format!("method `{other}` is not implemented"))),
+    }
+}

@@ -1,0 +1,195 @@
+//! The scene on the GPU: one vertex and one index buffer for every object, materials, lights and
+//! material textures. Shared by every lighting method.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::backend::{vk, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId};
+use crate::error::{Error, Result};
+use crate::graph::{Access, ResourceStates};
+use crate::scene::{Light, Mesh, Scene};
+
+/// The vertex every raster pass reads: 48 bytes, interleaved.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    pub tangent: [f32; 4],
+}
+
+/// Matches `Material` in glsl/forward/forward.frag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub albedo: [f32; 4],
+    pub specular: [f32; 4],
+    pub emission: [f32; 4],
+    pub maps: [u32; 4],
+}
+
+/// Matches `Light` in glsl/common/lights.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 4],
+    pub direction: [f32; 4],
+    pub intensity: [f32; 4],
+    pub cone: [f32; 4],
+}
+
+pub const LIGHT_POINT: f32 = 0.0;
+pub const LIGHT_SPOT: f32 = 1.0;
+pub const LIGHT_DIRECTIONAL: f32 = 2.0;
+
+/// One object's slice of the shared buffers.
+#[derive(Clone, Debug)]
+pub struct DrawItem {
+    pub name: String,
+    pub first_index: u32,
+    pub index_count: u32,
+    pub vertex_offset: i32,
+    pub model: Mat4,
+    pub material: u32,
+}
+
+/// Textures of one material (1×1 defaults where the material has no map).
+#[derive(Clone, Copy, Debug)]
+pub struct MaterialMaps {
+    pub albedo: ImageId,
+    pub normal: ImageId,
+    pub specular: ImageId,
+}
+
+pub struct SceneGpu {
+    pub vertices: BufferId,
+    pub indices: BufferId,
+    pub draws: Vec<DrawItem>,
+    pub materials: BufferId,
+    pub material_maps: Vec<MaterialMaps>,
+    pub lights: Vec<GpuLight>,
+    pub sampler: SamplerId,
+    /// Object-space meshes, kept for CPU-side methods and tests.
+    pub meshes: Vec<Mesh>,
+}
+
+/// Punctual lights the raster methods evaluate. Spherical lights and emissive quads are area
+/// lights; methods that don't model them skip them (the reference renderer does).
+pub fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
+    let mut out = Vec::new();
+    for l in &scene.lights {
+        match l {
+            Light::Point { position, intensity, .. } => out.push(GpuLight {
+                position: position.extend(LIGHT_POINT).into(),
+                direction: [0.0; 4],
+                intensity: intensity.extend(0.0).into(),
+                cone: [0.0; 4],
+            }),
+            Light::Spot { position, direction, intensity, inner_deg, outer_deg, .. } => out.push(GpuLight {
+                position: position.extend(LIGHT_SPOT).into(),
+                direction: direction.normalize().extend(0.0).into(),
+                intensity: intensity.extend(0.0).into(),
+                cone: [inner_deg.to_radians().cos(), outer_deg.to_radians().cos(), 0.0, 0.0],
+            }),
+            Light::Directional { direction, irradiance, .. } => out.push(GpuLight {
+                position: Vec4::new(0.0, 0.0, 0.0, LIGHT_DIRECTIONAL).into(),
+                direction: direction.normalize().extend(0.0).into(),
+                intensity: irradiance.extend(0.0).into(),
+                cone: [0.0; 4],
+            }),
+            _ => {}
+        }
+    }
+    out
+}
+
+fn load_texture(
+    gpu: &mut Gpu,
+    states: &mut ResourceStates,
+    path: Option<&std::path::Path>,
+    default: [u8; 4],
+    srgb: bool,
+    what: &str,
+) -> Result<ImageId> {
+    let (w, h, data) = match path {
+        Some(p) => {
+            let img = image::open(p)
+                .map_err(|e| Error::Usage(format!("{}: {what}: cannot load: {e}", p.display())))?
+                .to_rgba8();
+            (img.width(), img.height(), img.into_raw())
+        }
+        None => (1, 1, default.to_vec()),
+    };
+    let format = if srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
+    let name = path.map(|p| p.display().to_string()).unwrap_or_else(|| format!("default {what}"));
+    let id = gpu.create_image(
+        &ImageDesc::new_2d(&name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
+    gpu.upload_image(id, 0, &data)?;
+    states.set_image(gpu, id, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    Ok(id)
+}
+
+impl SceneGpu {
+    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene) -> Result<SceneGpu> {
+        let mut vertices: Vec<Vertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut draws = Vec::new();
+        let mut meshes = Vec::new();
+        for obj in &scene.objects {
+            let mesh = obj.load_mesh(std::path::Path::new("."))?;
+            let first_index = indices.len() as u32;
+            let vertex_offset = vertices.len() as i32;
+            for i in 0..mesh.positions.len() {
+                vertices.push(Vertex {
+                    position: mesh.positions[i].into(),
+                    normal: mesh.normals.get(i).copied().unwrap_or(Vec3::Y).into(),
+                    uv: mesh.uvs.get(i).copied().unwrap_or_default().into(),
+                    tangent: mesh.tangents.get(i).copied().unwrap_or(Vec4::new(1.0, 0.0, 0.0, 1.0)).into(),
+                });
+            }
+            indices.extend_from_slice(&mesh.indices);
+            draws.push(DrawItem {
+                name: obj.name.clone(),
+                first_index,
+                index_count: mesh.indices.len() as u32,
+                vertex_offset,
+                model: obj.transform,
+                material: obj.material as u32,
+            });
+            meshes.push(mesh);
+        }
+        if vertices.is_empty() {
+            vertices.push(Vertex::zeroed());
+            indices.extend([0, 0, 0]);
+        }
+        let vb = gpu.create_buffer_init("scene vertices", vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&vertices))?;
+        let ib = gpu.create_buffer_init("scene indices", vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&indices))?;
+        let mut gpu_materials = Vec::new();
+        let mut material_maps = Vec::new();
+        for m in &scene.materials {
+            gpu_materials.push(GpuMaterial {
+                albedo: m.albedo.extend(1.0).into(),
+                specular: m.specular.extend(m.exponent).into(),
+                emission: m.emission.extend(0.0).into(),
+                maps: [m.normal_map.is_some() as u32, 0, 0, 0],
+            });
+            material_maps.push(MaterialMaps {
+                albedo: load_texture(gpu, states, m.albedo_map.as_deref(), [255; 4], true, "albedo_map")?,
+                normal: load_texture(gpu, states, m.normal_map.as_deref(), [128, 128, 255, 255], false, "normal_map")?,
+                specular: load_texture(gpu, states, m.specular_map.as_deref(), [255; 4], false, "specular_map")?,
+            });
+        }
+        if gpu_materials.is_empty() {
+            gpu_materials.push(GpuMaterial::zeroed());
+        }
+        let materials = gpu.create_buffer_init("materials", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&gpu_materials))?;
+        for id in [vb, ib, materials] {
+            // Uploads were waited for: nothing is pending on these buffers.
+            states.forget_buffer(id);
+        }
+        let sampler = gpu.sampler(SamplerDesc::LINEAR_REPEAT)?;
+        Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: punctual_lights(scene), sampler, meshes })
+    }
+}

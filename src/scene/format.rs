@@ -1,0 +1,509 @@
+//! The scene file format (documented in `scenes/README.md`): reads the spanned TOML tree into a
+//! checked [`Scene`].
+
+use std::path::Path;
+
+use glam::{Mat4, Vec3};
+
+use super::cornell;
+use super::doc::{Ctx, Field, Table};
+use super::error::SceneError;
+use super::generators;
+use super::methods::{self, MethodDecl};
+use super::types::{Camera, Environment, Light, Material, MeshSource, Object};
+use super::Scene;
+
+pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+    let ctx = Ctx {
+        file: source,
+        text,
+        base_dir,
+    };
+    let root = ctx.parse()?;
+    let top = Table::new(&ctx, String::new(), &root, None)?;
+    top.allow(&[
+        "camera",
+        "materials",
+        "objects",
+        "lights",
+        "environment",
+        "methods",
+    ])?;
+
+    let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
+    let mut materials: Vec<Material> = Vec::new();
+    for item in array(top.get("materials"))? {
+        materials.push(read_material(&item, &materials)?);
+    }
+    // Objects may pull in built-in materials and (Cornell box) lights.
+    let mut objects = Vec::new();
+    let mut extra_lights = Vec::new();
+    for item in array(top.get("objects"))? {
+        read_object(&item, &mut materials, &mut objects, &mut extra_lights)?;
+    }
+    let mut lights = Vec::new();
+    for item in array(top.get("lights"))? {
+        lights.push(read_light(&item)?);
+    }
+    lights.extend(extra_lights);
+    let environment = top
+        .get("environment")
+        .map(|f| read_environment(&f))
+        .transpose()?;
+    let mut methods = match top.get("methods") {
+        Some(f) => methods::read(&f)?,
+        None => Vec::new(),
+    };
+    if methods.is_empty() {
+        methods.push(MethodDecl::implicit_forward());
+    }
+    Ok(Scene {
+        source: source.to_owned(),
+        camera,
+        materials,
+        objects,
+        lights,
+        environment,
+        methods,
+    })
+}
+
+/// Elements of an optional array field (absent = empty).
+fn array<'a>(f: Option<Field<'a>>) -> Result<Vec<Field<'a>>, SceneError> {
+    f.map_or(Ok(Vec::new()), |f| f.array())
+}
+
+/// Converts an optional field, keeping its error.
+fn opt<'a, T>(
+    f: Option<Field<'a>>,
+    conv: impl FnOnce(&Field<'a>) -> Result<T, SceneError>,
+) -> Result<Option<T>, SceneError> {
+    f.as_ref().map(conv).transpose()
+}
+
+fn positive(f: &Field) -> Result<f32, SceneError> {
+    f.number_where("a positive number", |x| x > 0.0)
+}
+
+fn non_negative(f: &Field) -> Result<f32, SceneError> {
+    f.number_where("a non-negative number", |x| x >= 0.0)
+}
+
+fn name(f: &Field) -> Result<String, SceneError> {
+    let s = f.string()?;
+    if s.trim().is_empty() {
+        return Err(f.err("expected a name, got an empty string"));
+    }
+    Ok(s.to_owned())
+}
+
+/// A unit direction from a non-zero vector.
+fn direction(f: &Field) -> Result<Vec3, SceneError> {
+    f.vec3()?
+        .try_normalize()
+        .ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
+}
+
+fn read_camera(f: &Field) -> Result<Camera, SceneError> {
+    let t = f.table()?;
+    t.allow(&["position", "target", "up", "fov_y_deg", "near"])?;
+    let position = t.require("position", "3 numbers, metres")?.vec3()?;
+    let target_f = t.require("target", "3 numbers, metres")?;
+    let target = target_f.vec3()?;
+    let up_f = t.get("up");
+    let up = opt(up_f.clone(), |f| f.vec3())?.unwrap_or(Vec3::Y);
+    let fov_y_deg = opt(t.get("fov_y_deg"), |f| {
+        f.number_where("a vertical field of view in degrees, in (0, 180)", |x| {
+            x > 0.0 && x < 180.0
+        })
+    })?
+    .unwrap_or(60.0);
+    let near = opt(t.get("near"), positive)?.unwrap_or(0.05);
+
+    let Some(forward) = (target - position).try_normalize() else {
+        return Err(target_f.err("must differ from camera.position"));
+    };
+    if forward.cross(up.normalize_or_zero()).length() < 1e-3 {
+        let msg = "must not be zero or parallel to the view direction (target - position)";
+        return Err(match &up_f {
+            Some(u) => u.err(msg),
+            None => t.ctx.err(
+                t.line,
+                "camera.up",
+                format!("the default [0, 1, 0] {msg}; set camera.up"),
+            ),
+        });
+    }
+    Ok(Camera {
+        position,
+        target,
+        up,
+        fov_y_deg,
+        near,
+    })
+}
+
+fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError> {
+    let t = f.table()?;
+    t.allow(&[
+        "name",
+        "albedo",
+        "specular",
+        "exponent",
+        "albedo_map",
+        "normal_map",
+        "specular_map",
+        "transmittance",
+        "emission",
+    ])?;
+    let name_f = t.require("name", "a unique material name")?;
+    let name = name(&name_f)?;
+    if earlier.iter().any(|m| m.name == name) {
+        return Err(name_f.err(format!("material {name:?} is defined twice")));
+    }
+    let albedo = opt(t.get("albedo"), |f| f.unit_colour())?.unwrap_or(Vec3::splat(0.8));
+    let transmittance_f = t.get("transmittance");
+    let transmittance = opt(transmittance_f.clone(), |f| f.unit_colour())?.unwrap_or(Vec3::ZERO);
+    if let Some(tf) = &transmittance_f {
+        if (albedo + transmittance).max_element() > 1.0 {
+            return Err(tf.err(format!(
+                "albedo + transmittance must not exceed 1 in any channel, got {} + {}",
+                fmt3(albedo),
+                fmt3(transmittance)
+            )));
+        }
+    }
+    Ok(Material {
+        name,
+        albedo,
+        specular: opt(t.get("specular"), |f| f.unit_colour())?.unwrap_or(Vec3::ZERO),
+        exponent: opt(t.get("exponent"), non_negative)?.unwrap_or(32.0),
+        albedo_map: opt(t.get("albedo_map"), |f| f.existing_file())?,
+        normal_map: opt(t.get("normal_map"), |f| f.existing_file())?,
+        specular_map: opt(t.get("specular_map"), |f| f.existing_file())?,
+        transmittance,
+        emission: opt(t.get("emission"), |f| f.colour())?.unwrap_or(Vec3::ZERO),
+    })
+}
+
+fn fmt3(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+fn read_object(
+    f: &Field,
+    materials: &mut Vec<Material>,
+    objects: &mut Vec<Object>,
+    lights: &mut Vec<Light>,
+) -> Result<(), SceneError> {
+    let t = f.table()?;
+    const PLACEMENT: [&str; 5] = ["name", "mesh", "translate", "rotate_deg", "scale"];
+    let Some(mesh_f) = t.get("mesh") else {
+        // Report a misspelt key before the missing `mesh`.
+        t.allow(&all_keys(
+            &[&PLACEMENT[..], &["material"]].concat(),
+            &MESH_KEYS,
+        ))?;
+        return Err(t.missing("mesh", &format!("one of: {}", type_names(&MESH_KEYS))));
+    };
+    let kind = mesh_f.string()?;
+    let Some((_, mesh_extra)) = MESH_KEYS.iter().find(|(n, _)| *n == kind) else {
+        let msg = format!(
+            "unknown mesh type {kind:?}; expected one of: {}",
+            type_names(&MESH_KEYS)
+        );
+        return Err(mesh_f.err(msg));
+    };
+    let material_key: &[&str] = if kind == "cornell_box" {
+        &[]
+    } else {
+        &["material"]
+    };
+    t.allow(&[&PLACEMENT[..], material_key, mesh_extra].concat())?;
+
+    let obj_name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
+    let translate = opt(t.get("translate"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
+    let rot = opt(t.get("rotate_deg"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
+    let scale = opt(t.get("scale"), |f| f.positive3())?.unwrap_or(Vec3::ONE);
+    // x rotation first, then y, then z.
+    let transform = Mat4::from_translation(translate)
+        * Mat4::from_rotation_z(rot.z.to_radians())
+        * Mat4::from_rotation_y(rot.y.to_radians())
+        * Mat4::from_rotation_x(rot.x.to_radians())
+        * Mat4::from_scale(scale);
+    let subdivisions = opt(t.get("subdivisions"), |f| {
+        f.int_in(1, generators::MAX_SUBDIVISIONS)
+    })?
+    .unwrap_or(1);
+
+    if kind == "cornell_box" {
+        for part in cornell::parts(subdivisions) {
+            objects.push(Object {
+                name: format!("{obj_name}.{}", part.suffix),
+                mesh: part.mesh,
+                material: material_index(materials, part.material).unwrap_or(0),
+                transform: transform * part.local,
+            });
+        }
+        if opt(t.get("light"), |f| f.boolean())?.unwrap_or(true) {
+            lights.push(cornell::light(format!("{obj_name}.light"), &transform));
+        }
+        return Ok(());
+    }
+
+    let mesh = match kind {
+        "plane" => MeshSource::Plane {
+            size: opt(t.get("size"), |f| f.positive2())?.unwrap_or(glam::Vec2::ONE),
+            subdivisions,
+        },
+        "box" => MeshSource::Box {
+            size: opt(t.get("size"), |f| f.positive3())?.unwrap_or(Vec3::ONE),
+            subdivisions,
+        },
+        "quad" => {
+            let corner = t.require("corner", "3 numbers, metres")?.vec3()?;
+            let edge_u = t.require("edge_u", "3 numbers, metres")?.vec3()?;
+            let v_f = t.require("edge_v", "3 numbers, metres")?;
+            let edge_v = v_f.vec3()?;
+            check_quad_edges(&v_f, edge_u, edge_v)?;
+            MeshSource::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                subdivisions,
+            }
+        }
+        "sphere" => MeshSource::Sphere {
+            radius: opt(t.get("radius"), positive)?.unwrap_or(1.0),
+            segments: opt(t.get("segments"), |f| f.int_in(3, generators::MAX_SEGMENTS))?
+                .unwrap_or(48),
+            rings: opt(t.get("rings"), |f| f.int_in(2, generators::MAX_RINGS))?.unwrap_or(24),
+        },
+        _ => MeshSource::Obj(
+            t.require("path", "an OBJ file relative to the scene file")?
+                .existing_file()?,
+        ),
+    };
+    let material = match t.get("material") {
+        None => material_index(materials, "default").unwrap_or(0),
+        Some(mf) => {
+            let wanted = mf.string()?;
+            material_index(materials, wanted).ok_or_else(|| {
+                let mut names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                for b in cornell::BUILTIN_MATERIALS {
+                    if !names.contains(&b) {
+                        names.push(b);
+                    }
+                }
+                mf.err(format!(
+                    "unknown material {wanted:?}; defined materials: {}",
+                    names.join(", ")
+                ))
+            })?
+        }
+    };
+    objects.push(Object {
+        name: obj_name,
+        mesh,
+        material,
+        transform,
+    });
+    Ok(())
+}
+
+/// Index of material `name`, appending the built-in of that name on first use.
+fn material_index(materials: &mut Vec<Material>, name: &str) -> Option<usize> {
+    if let Some(i) = materials.iter().position(|m| m.name == name) {
+        return Some(i);
+    }
+    materials.push(cornell::builtin_material(name)?);
+    Some(materials.len() - 1)
+}
+
+fn check_quad_edges(v_field: &Field, u: Vec3, v: Vec3) -> Result<(), SceneError> {
+    let scale = u.length() * v.length();
+    if scale.is_nan() || scale <= 0.0 || u.cross(v).length() <= 1e-6 * scale {
+        return Err(v_field
+            .err("edge_u and edge_v must be non-zero and not parallel (the quad has no area)"));
+    }
+    Ok(())
+}
+
+/// Each light type and its keys besides `type` and `name`.
+const LIGHT_KEYS: [(&str, &[&str]); 5] = [
+    ("point", &["position", "intensity", "radius"]),
+    (
+        "spot",
+        &[
+            "position",
+            "direction",
+            "target",
+            "intensity",
+            "inner_deg",
+            "outer_deg",
+        ],
+    ),
+    ("directional", &["direction", "irradiance"]),
+    ("sphere", &["center", "radius", "radiance"]),
+    ("quad", &["corner", "edge_u", "edge_v", "radiance"]),
+];
+
+/// Each mesh type and its keys besides the placement ones and `material`.
+const MESH_KEYS: [(&str, &[&str]); 6] = [
+    ("plane", &["size", "subdivisions"]),
+    ("quad", &["corner", "edge_u", "edge_v", "subdivisions"]),
+    ("box", &["size", "subdivisions"]),
+    ("sphere", &["radius", "segments", "rings"]),
+    ("obj", &["path"]),
+    ("cornell_box", &["subdivisions", "light"]),
+];
+
+/// `common` followed by the keys of every type, without repeats (for tables missing their type).
+fn all_keys(common: &[&'static str], by_type: &[(&str, &[&'static str])]) -> Vec<&'static str> {
+    let mut keys = common.to_vec();
+    for k in by_type.iter().flat_map(|(_, ks)| ks.iter()) {
+        if !keys.contains(k) {
+            keys.push(k);
+        }
+    }
+    keys
+}
+
+fn type_names(by_type: &[(&str, &[&str])]) -> String {
+    by_type
+        .iter()
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn read_light(f: &Field) -> Result<Light, SceneError> {
+    let t = f.table()?;
+    let Some(kind_f) = t.get("type") else {
+        // Report a misspelt key before the missing `type`.
+        t.allow(&all_keys(&["type", "name"], &LIGHT_KEYS))?;
+        return Err(t.missing("type", &format!("one of: {}", type_names(&LIGHT_KEYS))));
+    };
+    let kind = kind_f.string()?;
+    let Some((_, keys)) = LIGHT_KEYS.iter().find(|(n, _)| *n == kind) else {
+        let msg = format!(
+            "unknown light type {kind:?}; expected one of: {}",
+            type_names(&LIGHT_KEYS)
+        );
+        return Err(kind_f.err(msg));
+    };
+    t.allow(&[&["type", "name"][..], keys].concat())?;
+    let name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
+    let point = |k: &str| t.require(k, "3 numbers, metres").and_then(|f| f.vec3());
+    let colour = |k: &str, what: &str| t.require(k, what).and_then(|f| f.colour());
+    Ok(match kind {
+        "point" => Light::Point {
+            name,
+            position: point("position")?,
+            intensity: colour("intensity", "W/sr, a number or 3")?,
+            radius: opt(t.get("radius"), non_negative)?.unwrap_or(0.0),
+        },
+        "spot" => {
+            let position = point("position")?;
+            let direction = match (t.get("direction"), t.get("target")) {
+                (Some(d), None) => direction(&d)?,
+                (None, Some(tg)) => (tg.vec3()? - position)
+                    .try_normalize()
+                    .ok_or_else(|| tg.err("must differ from position"))?,
+                (Some(_), Some(tg)) => {
+                    return Err(tg.err("give either direction or target, not both"))
+                }
+                (None, None) => {
+                    return Err(t.missing("direction", "3 numbers, or give target instead"))
+                }
+            };
+            let outer_f = t.get("outer_deg");
+            let outer_deg = opt(outer_f.clone(), |f| {
+                f.number_where("a half-angle in degrees in (0, 90]", |x| {
+                    x > 0.0 && x <= 90.0
+                })
+            })?
+            .unwrap_or(30.0);
+            let inner_f = t.get("inner_deg");
+            let inner_deg = opt(inner_f.clone(), |f| {
+                f.number_where("a half-angle in degrees in [0, 90]", |x| {
+                    (0.0..=90.0).contains(&x)
+                })
+            })?
+            .unwrap_or(0.8 * outer_deg);
+            if inner_deg > outer_deg {
+                let msg =
+                    format!("inner_deg ({inner_deg}) must not exceed outer_deg ({outer_deg})");
+                let at = inner_f.or(outer_f);
+                return Err(match at {
+                    Some(f) => f.err(msg),
+                    None => t.ctx.err(t.line, &t.path, msg),
+                });
+            }
+            let intensity = colour("intensity", "W/sr, a number or 3")?;
+            Light::Spot {
+                name,
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+            }
+        }
+        "directional" => Light::Directional {
+            name,
+            direction: direction(&t.require("direction", "the direction the light travels")?)?,
+            irradiance: colour("irradiance", "W/m², a number or 3")?,
+        },
+        "sphere" => Light::Sphere {
+            name,
+            center: point("center")?,
+            radius: positive(&t.require("radius", "metres, > 0")?)?,
+            radiance: colour("radiance", "W/(m²·sr), a number or 3")?,
+        },
+        _ => {
+            let corner = point("corner")?;
+            let edge_u = point("edge_u")?;
+            let v_f = t.require("edge_v", "3 numbers, metres")?;
+            let edge_v = v_f.vec3()?;
+            check_quad_edges(&v_f, edge_u, edge_v)?;
+            Light::Quad {
+                name,
+                corner,
+                edge_u,
+                edge_v,
+                radiance: colour("radiance", "W/(m²·sr), a number or 3")?,
+            }
+        }
+    })
+}
+
+fn read_environment(f: &Field) -> Result<Environment, SceneError> {
+    let t = f.table()?;
+    let Some(kind_f) = t.get("type") else {
+        t.allow(&["type", "radiance", "path", "scale"])?;
+        return Err(t.missing("type", "constant or image"));
+    };
+    match kind_f.string()? {
+        "constant" => {
+            t.allow(&["type", "radiance"])?;
+            Ok(Environment::Constant {
+                radiance: t
+                    .require("radiance", "W/(m²·sr), a number or 3")?
+                    .colour()?,
+            })
+        }
+        "image" => {
+            t.allow(&["type", "path", "scale"])?;
+            Ok(Environment::Image {
+                path: t
+                    .require("path", "an equirectangular .hdr or .exr file")?
+                    .existing_file()?,
+                scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
+            })
+        }
+        other => Err(kind_f.err(format!(
+            "unknown environment type {other:?}; expected constant or image"
+        ))),
+    }
+}

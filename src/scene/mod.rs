@@ -1,0 +1,129 @@
+//! Scenes: the TOML scene format (documented in `scenes/README.md`), its parser, procedural
+//! meshes and OBJ loading. Pure CPU code.
+//!
+//! ```text
+//! let scene = Scene::from_file("scenes/cornell.toml")?;      // or Scene::default_scene()
+//! scene.check_methods(&renderer_method_schemas)?;          // names, parameters, types
+//! for object in &scene.objects {
+//!     let mesh = object.load_mesh(Path::new("."))?;         // object space
+//!     let world = mesh.transformed(&object.transform);     // or transform on the GPU
+//! }
+//! ```
+//!
+//! Conventions: right-handed world, y up, metres, linear RGB, radiometric units (W/sr, W/m²,
+//! W/(m²·sr)). Every error is a [`SceneError`] naming file, line and field on one line.
+
+mod cornell;
+mod doc;
+mod error;
+mod format;
+pub mod generators;
+mod mesh;
+mod methods;
+mod obj;
+#[cfg(test)]
+mod tests;
+mod types;
+
+use std::path::Path;
+
+pub use cornell::{builtin_material, BUILTIN_MATERIALS};
+pub use error::SceneError;
+pub use mesh::Mesh;
+pub use methods::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+pub use obj::load_obj;
+pub use types::{Camera, Environment, Light, Material, MeshSource, Object};
+
+/// The name a scene is known by in error messages: the path it was read from, or
+/// [`DEFAULT_SOURCE`].
+pub type SourceName = String;
+
+/// Source name of [`Scene::default_scene`].
+pub const DEFAULT_SOURCE: &str = "<built-in default>";
+
+/// The built-in default scene's TOML text (also shipped as `scenes/default.toml`).
+pub const DEFAULT_SCENE_TOML: &str = include_str!("default.toml");
+
+/// A checked scene. File paths inside it (OBJ meshes, textures, environment maps) are absolute
+/// and were verified to exist when it was parsed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    pub source: SourceName,
+    pub camera: Camera,
+    pub materials: Vec<Material>,
+    pub objects: Vec<Object>,
+    pub lights: Vec<Light>,
+    pub environment: Option<Environment>,
+    /// Requested lighting methods in file order; `[forward]` (line 0) when the file names none.
+    pub methods: Vec<MethodDecl>,
+}
+
+impl Scene {
+    /// Reads and checks a scene file. Relative paths inside it are relative to its directory.
+    /// Errors name the file as `path` was given.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let source = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::new(&source, None, "file", format!("cannot read: {e}")))?;
+        let base_dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        Scene::from_str(&text, &source, base_dir)
+    }
+
+    /// Parses scene text. `source_name` is used in errors; relative paths in the text are
+    /// resolved against `base_dir`.
+    pub fn from_str(text: &str, source_name: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+        format::parse(text, source_name, base_dir)
+    }
+
+    /// The built-in default scene: a ground plane, a box and a glossy sphere under a
+    /// directional, a point and a spot light.
+    pub fn default_scene() -> Scene {
+        // The text is ours and a unit test parses it, so failure here is a build defect, not a
+        // user error.
+        Scene::from_str(DEFAULT_SCENE_TOML, DEFAULT_SOURCE, Path::new("."))
+            .unwrap_or_else(|e| panic!("the built-in default scene is invalid: {e}"))
+    }
+
+    /// Checks every declared method and parameter against the renderer's `known` methods.
+    /// Errors name the line and field (`methods[1]`, `methods[1].resolution`) and list the
+    /// known alternatives.
+    pub fn check_methods(&self, known: &[MethodSchema]) -> Result<(), SceneError> {
+        methods::check(&self.source, &self.methods, known)
+    }
+
+    /// The material of `object` (`None` only for a hand-built object with a bad index).
+    pub fn material_of(&self, object: &Object) -> Option<&Material> {
+        self.materials.get(object.material)
+    }
+}
+
+impl Object {
+    /// The object's mesh in object space (apply [`Object::transform`] to place it), with
+    /// normals, uvs and tangents. A relative OBJ path is resolved against `base_dir`; paths in a
+    /// parsed [`Scene`] are already absolute, so any `base_dir` works for them.
+    pub fn load_mesh(&self, base_dir: &Path) -> Result<Mesh, SceneError> {
+        let mesh = match &self.mesh {
+            MeshSource::Obj(path) => return load_obj(&base_dir.join(path)),
+            MeshSource::Plane { size, subdivisions } => generators::plane(*size, *subdivisions),
+            MeshSource::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                subdivisions,
+            } => generators::quad(*corner, *edge_u, *edge_v, *subdivisions),
+            MeshSource::Box { size, subdivisions } => generators::cuboid(*size, *subdivisions),
+            MeshSource::Sphere {
+                radius,
+                segments,
+                rings,
+            } => generators::sphere(*radius, *segments, *rings),
+        };
+        // Generators only meet non-finite input from hand-built MeshSources.
+        mesh.validate(&format!("object {:?}", self.name))?;
+        Ok(mesh)
+    }
+}

@@ -1,0 +1,331 @@
+//! The checked, in-memory scene description: camera, materials, objects, lights, environment.
+//!
+//! Conventions (see `scenes/README.md`): right-handed world, y up, lengths in metres, colours in
+//! linear RGB, radiometric quantities in watts (per steradian, per square metre).
+
+use std::path::PathBuf;
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+/// A pinhole camera. Right-handed, y up, looking from `position` toward `target`.
+///
+/// Image conventions: row 0 is the top of the image and column 0 its left; pixel `(i, j)` covers
+/// `[i, i+1) × [j, j+1)` in continuous pixel coordinates, so its centre `(i + 0.5, j + 0.5)`
+/// samples NDC `((i + 0.5) / W * 2 - 1, (j + 0.5) / H * 2 - 1)` with NDC y pointing **down**
+/// (Vulkan). [`Camera::projection`] and [`Camera::ray`] agree on this.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub target: Vec3,
+    /// Approximate up direction; only its component orthogonal to the view direction matters.
+    pub up: Vec3,
+    /// Full vertical field of view in degrees, in (0, 180).
+    pub fov_y_deg: f32,
+    /// Distance of the near plane in metres (> 0). The far plane is at infinity.
+    pub near: f32,
+}
+
+impl Camera {
+    /// World → view transform (glam `look_at_rh`): the camera looks down −z, y up, x right.
+    pub fn view_matrix(&self) -> Mat4 {
+        Mat4::look_at_rh(self.position, self.target, self.up)
+    }
+
+    /// View → Vulkan clip space for `aspect` = width / height: NDC y points down, depth in [0, 1]
+    /// with the standard (not reversed) orientation and an infinite far plane, i.e. depth
+    /// `= 1 - near / distance` for a point at `distance` in front of the camera (0 on the near
+    /// plane, → 1 at infinity). Use a `LESS` depth test cleared to 1.
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        let f = 1.0 / (0.5 * self.fov_y_deg.to_radians()).tan();
+        Mat4::from_cols(
+            Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, -f, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, -1.0, -1.0),
+            Vec4::new(0.0, 0.0, -self.near, 0.0),
+        )
+    }
+
+    /// `projection(aspect) * view_matrix()`.
+    pub fn view_projection(&self, aspect: f32) -> Mat4 {
+        self.projection(aspect) * self.view_matrix()
+    }
+
+    /// Primary ray through continuous pixel coordinates `(px, py)` of a `width × height` image
+    /// (pass `i as f32 + 0.5` for the centre of column `i`; row 0 is the top). Returns the camera
+    /// position and a unit direction; consistent with [`Camera::view_projection`].
+    pub fn ray(&self, px: f32, py: f32, width: u32, height: u32) -> (Vec3, Vec3) {
+        let (w, h) = (width.max(1) as f32, height.max(1) as f32);
+        let ndc_x = px / w * 2.0 - 1.0;
+        let ndc_y = py / h * 2.0 - 1.0;
+        let tan_half = (0.5 * self.fov_y_deg.to_radians()).tan();
+        let (right, up, forward) = self.basis();
+        let dir = forward + right * (ndc_x * tan_half * (w / h)) - up * (ndc_y * tan_half);
+        (self.position, dir.normalize())
+    }
+
+    /// Ray through the centre of pixel `(i, j)`.
+    pub fn pixel_center_ray(&self, i: u32, j: u32, width: u32, height: u32) -> (Vec3, Vec3) {
+        self.ray(i as f32 + 0.5, j as f32 + 0.5, width, height)
+    }
+
+    /// Orthonormal (right, up, forward) in world space, as `look_at_rh` builds them.
+    pub fn basis(&self) -> (Vec3, Vec3, Vec3) {
+        let forward = (self.target - self.position).normalize();
+        let right = forward.cross(self.up).normalize();
+        let up = right.cross(forward);
+        (right, up, forward)
+    }
+}
+
+/// Surface material: Lambertian diffuse plus a Blinn-Phong specular lobe, optional textures,
+/// thin-surface diffuse transmittance and emission. Colours are linear RGB.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse albedo ρ, each channel in [0, 1].
+    pub albedo: Vec3,
+    /// Blinn-Phong specular colour, each channel in [0, 1].
+    pub specular: Vec3,
+    /// Blinn-Phong exponent (≥ 0).
+    pub exponent: f32,
+    /// Absolute path of an albedo texture (sRGB-encoded colour; multiplies `albedo`).
+    pub albedo_map: Option<PathBuf>,
+    /// Absolute path of a tangent-space normal map (OpenGL convention, green = +bitangent).
+    pub normal_map: Option<PathBuf>,
+    /// Absolute path of a specular texture (multiplies `specular`).
+    pub specular_map: Option<PathBuf>,
+    /// Diffuse transmittance of a thin surface, each channel in [0, 1], `albedo + transmittance ≤ 1`.
+    pub transmittance: Vec3,
+    /// Emitted radiance in W/(m²·sr), seen directly only (it lights nothing; use lights for that).
+    pub emission: Vec3,
+}
+
+impl Material {
+    /// The material used by objects that name none: grey, matte.
+    pub fn default_grey(name: &str) -> Material {
+        Material {
+            name: name.to_owned(),
+            albedo: Vec3::splat(0.8),
+            specular: Vec3::ZERO,
+            exponent: 32.0,
+            albedo_map: None,
+            normal_map: None,
+            specular_map: None,
+            transmittance: Vec3::ZERO,
+            emission: Vec3::ZERO,
+        }
+    }
+}
+
+/// Where an object's geometry comes from. Generated meshes are in object space, centred on the
+/// origin unless stated otherwise; see `generators.rs` for their exact layout.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshSource {
+    /// A Wavefront OBJ file (absolute path once parsed).
+    Obj(PathBuf),
+    /// A square grid in the xz-plane at y = 0, facing +y; `size.x` along x, `size.y` along z;
+    /// `subdivisions` cells per side.
+    Plane { size: Vec2, subdivisions: u32 },
+    /// A parallelogram `corner + s·edge_u + t·edge_v`, s, t ∈ [0, 1], facing
+    /// `normalize(edge_u × edge_v)` (one-sided, like the quad light); `subdivisions` per side.
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        subdivisions: u32,
+    },
+    /// An axis-aligned box centred on the origin, each face split into `subdivisions²` cells.
+    /// Closed 2-manifold.
+    Box { size: Vec3, subdivisions: u32 },
+    /// A UV sphere centred on the origin: `segments` around y, `rings` from pole to pole.
+    /// Closed 2-manifold.
+    Sphere {
+        radius: f32,
+        segments: u32,
+        rings: u32,
+    },
+}
+
+/// One drawable object: a mesh, a material and a placement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Object {
+    pub name: String,
+    pub mesh: MeshSource,
+    /// Index into [`crate::scene::Scene::materials`].
+    pub material: usize,
+    /// Object → world: `translate · Rz · Ry · Rx · scale` (x rotation applied first).
+    pub transform: Mat4,
+}
+
+/// A light in radiometric units (watts; linear RGB per channel).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Light {
+    /// Isotropic point light. `intensity` in W/sr; `radius` is an influence/culling radius in
+    /// metres beyond which the renderer may ignore it (0 = infinite). It does not change the
+    /// inverse-square falloff.
+    Point {
+        name: String,
+        position: Vec3,
+        intensity: Vec3,
+        radius: f32,
+    },
+    /// Spot light: `intensity` (W/sr) on the axis, full inside `inner_deg`, zero outside
+    /// `outer_deg` (half-angles from `direction`, a unit vector).
+    Spot {
+        name: String,
+        position: Vec3,
+        direction: Vec3,
+        intensity: Vec3,
+        inner_deg: f32,
+        outer_deg: f32,
+    },
+    /// Distant light. `direction` is the unit direction the light travels (from the light toward
+    /// the scene); `irradiance` in W/m² on a surface facing it.
+    Directional {
+        name: String,
+        direction: Vec3,
+        irradiance: Vec3,
+    },
+    /// Spherical area light emitting uniform `radiance` (W/(m²·sr)) from its surface.
+    Sphere {
+        name: String,
+        center: Vec3,
+        radius: f32,
+        radiance: Vec3,
+    },
+    /// One-sided parallelogram area light `corner + s·edge_u + t·edge_v` emitting uniform
+    /// `radiance` toward `normalize(edge_u × edge_v)`.
+    Quad {
+        name: String,
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        radiance: Vec3,
+    },
+}
+
+impl Light {
+    pub fn name(&self) -> &str {
+        match self {
+            Light::Point { name, .. }
+            | Light::Spot { name, .. }
+            | Light::Directional { name, .. }
+            | Light::Sphere { name, .. }
+            | Light::Quad { name, .. } => name,
+        }
+    }
+}
+
+/// Radiance arriving from infinitely far away where no geometry is hit.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Environment {
+    /// The same radiance (W/(m²·sr)) from every direction.
+    Constant { radiance: Vec3 },
+    /// An equirectangular (latitude-longitude) `.hdr`/`.exr` image of radiance, multiplied by
+    /// `scale`. See [`Environment::equirect_uv`] for the mapping.
+    Image { path: PathBuf, scale: f32 },
+}
+
+impl Environment {
+    /// Texture coordinates (u right, v down, both in [0, 1]) of world direction `dir` in an
+    /// equirectangular map: v = 0 is straight up (+y), v = 1 straight down; u = 0.5 is −z (the
+    /// direction a default camera looks), u increases toward +x (u = 0.75 is +x).
+    pub fn equirect_uv(dir: Vec3) -> Vec2 {
+        let d = dir.normalize_or(Vec3::NEG_Z);
+        let u = 0.5 + d.x.atan2(-d.z) / std::f32::consts::TAU;
+        let v = d.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+        Vec2::new(u, v)
+    }
+
+    /// Inverse of [`Environment::equirect_uv`]: the unit direction at texture coordinates `uv`.
+    pub fn equirect_dir(uv: Vec2) -> Vec3 {
+        let phi = (uv.x - 0.5) * std::f32::consts::TAU;
+        let theta = uv.y * std::f32::consts::PI;
+        Vec3::new(
+            theta.sin() * phi.sin(),
+            theta.cos(),
+            -theta.sin() * phi.cos(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam() -> Camera {
+        Camera {
+            position: Vec3::new(1.0, 2.0, 5.0),
+            target: Vec3::new(0.0, 0.5, 0.0),
+            up: Vec3::Y,
+            fov_y_deg: 50.0,
+            near: 0.1,
+        }
+    }
+
+    /// Projects a world point to continuous pixel coordinates and depth.
+    fn to_pixel(c: &Camera, p: Vec3, w: u32, h: u32) -> (f32, f32, f32) {
+        let clip = c.view_projection(w as f32 / h as f32) * p.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        (
+            (ndc.x + 1.0) * 0.5 * w as f32,
+            (ndc.y + 1.0) * 0.5 * h as f32,
+            ndc.z,
+        )
+    }
+
+    #[test]
+    fn points_on_pixel_rays_project_to_pixel_centres() {
+        let c = cam();
+        let (w, h) = (64u32, 48u32);
+        for &(i, j) in &[(0u32, 0u32), (63, 0), (0, 47), (63, 47), (31, 23), (10, 40)] {
+            let (o, d) = c.pixel_center_ray(i, j, w, h);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            for t in [0.5f32, 3.0, 40.0] {
+                let (x, y, z) = to_pixel(&c, o + d * t, w, h);
+                assert!((x - (i as f32 + 0.5)).abs() < 1e-3, "pixel {i},{j}: x {x}");
+                assert!((y - (j as f32 + 0.5)).abs() < 1e-3, "pixel {i},{j}: y {y}");
+                assert!((0.0..1.0).contains(&z));
+            }
+        }
+    }
+
+    #[test]
+    fn row_zero_is_top_and_column_zero_is_left() {
+        let c = cam();
+        let (right, up, _) = c.basis();
+        let (_, d) = c.pixel_center_ray(0, 0, 8, 8);
+        assert!(d.dot(up) > 0.0 && d.dot(right) < 0.0);
+        // The image centre (4, 4) lies on a pixel corner and looks straight at the target.
+        let (_, d) = c.ray(4.0, 4.0, 8, 8);
+        assert!((d - (c.target - c.position).normalize()).length() < 1e-5);
+    }
+
+    #[test]
+    fn depth_is_zero_at_near_and_tends_to_one() {
+        let c = cam();
+        let (_, _, fwd) = c.basis();
+        let near = to_pixel(&c, c.position + fwd * c.near, 4, 4).2;
+        let mid = to_pixel(&c, c.position + fwd * (2.0 * c.near), 4, 4).2;
+        let far = to_pixel(&c, c.position + fwd * 1e5, 4, 4).2;
+        assert!(near.abs() < 1e-5, "{near}");
+        assert!((mid - 0.5).abs() < 1e-5, "{mid}");
+        assert!(far > 0.999 && far <= 1.0, "{far}");
+    }
+
+    #[test]
+    fn equirect_round_trip() {
+        assert!((Environment::equirect_uv(Vec3::NEG_Z) - Vec2::new(0.5, 0.5)).length() < 1e-6);
+        assert!((Environment::equirect_uv(Vec3::X) - Vec2::new(0.75, 0.5)).length() < 1e-6);
+        assert!(Environment::equirect_uv(Vec3::Y).y.abs() < 1e-6);
+        for d in [
+            Vec3::new(0.3, 0.5, -0.8),
+            Vec3::new(-0.9, -0.2, 0.1),
+            Vec3::new(0.1, 0.9, 0.4),
+        ] {
+            let d = d.normalize();
+            let back = Environment::equirect_dir(Environment::equirect_uv(d));
+            assert!((back - d).length() < 1e-5, "{d} -> {back}");
+        }
+    }
+}

@@ -1,0 +1,29 @@
+//! Shared by the integration tests: every GPU test runs on lavapipe (or PENUMBRA_TEST_DEVICE)
+//! with the Khronos validation layer and synchronization validation, and fails on any message.
+#![allow(dead_code)]
+
+use penumbra::backend::{Gpu, GpuDesc};
+
+pub fn test_gpu_desc() -> GpuDesc {
+    GpuDesc {
+        validation: true,
+        device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())),
+        display: None,
+    }
+}
+
+pub fn test_gpu() -> Gpu {
+    Gpu::new(&test_gpu_desc()).expect("create a validated Vulkan device (is lavapipe installed? run tools/setup.sh)")
+}
+
+/// Fails the test if the validation layer reported anything.
+pub fn assert_clean(gpu: &Gpu) {
+    let messages = gpu.validation_log().take();
+    assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+}
+
+pub fn temp_path(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("penumbra-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir.join(name)
+}

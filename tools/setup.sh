@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs what penumbra needs on Debian 12 that is not there yet, then returns.
+#  - lavapipe (mesa-vulkan-drivers), the Vulkan loader and headers, the Khronos validation layer
+#  - shaderc and glslang as static libraries: shaderc is linked statically from Debian's archives
+#    (see .cargo/config.toml) instead of being built from source, which takes ~6 minutes
+#  - Xvfb and xauth for the windowed demo test
+# Needs root (or sudo) only when something is missing. The Rust toolchain itself must be present.
+set -euo pipefail
+
+packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
+          libshaderc-dev glslang-dev xvfb xauth)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}" >&2
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+if ! command -v cargo >/dev/null; then
+  echo "setup: cargo not found; install a Rust toolchain (1.80 or newer) first" >&2
+  exit 1
+fi
