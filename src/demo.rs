@@ -78,6 +78,9 @@ struct Running {
     title_at: Instant,
     frames: u64,
     screenshots: u32,
+    /// Copy the next presented frame back (F12, or the last frame with --screenshot).
+    grab_next: bool,
+    grabbed: Option<image::RgbaImage>,
 }
 
 struct App {
@@ -116,6 +119,8 @@ impl App {
             title_at: Instant::now(),
             frames: 0,
             screenshots: 0,
+            grab_next: false,
+            grabbed: None,
         })
     }
 
@@ -165,29 +170,33 @@ impl Running {
         let wait_stage = vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
         self.renderer.states.acquired_image(acquired.image, wait_stage);
         let camera = self.camera.camera();
-        self.renderer.render(&camera, FrameOutput::Present { image: acquired.image, exposure: 1.0 })?;
+        let readback = self.grab_next;
+        self.renderer.render(&camera, FrameOutput::Present { image: acquired.image, exposure: 1.0, readback })?;
         let gpu = &self.renderer.gpu;
         gpu.submit_frame(
             self.renderer.last_frame(),
             Some((acquired.acquired, wait_stage)),
             Some(acquired.rendered),
         )?;
-        if !gpu.present(&self.swapchain, &acquired)? {
+        let presented = gpu.present(&self.swapchain, &acquired)?;
+        if readback {
+            gpu.wait_frame(self.renderer.last_frame())?;
+            self.grabbed = Some(self.renderer.presented_pixels(acquired.image)?);
+            self.grab_next = false;
+        }
+        if !presented {
             self.recreate()?;
         }
         self.frames += 1;
         Ok(true)
     }
 
-    fn screenshot(&mut self, path: PathBuf) -> Result<PathBuf> {
-        let camera = self.camera.camera();
-        let image = self
-            .renderer
-            .render(&camera, FrameOutput::Readback)?
-            .image
-            .ok_or_else(|| Error::Usage("screenshot readback failed".into()))?;
-        image.write_png(&path, 1.0)?;
-        Ok(path)
+    /// Saves the last grabbed presented frame.
+    fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
+        let image = self.grabbed.take().ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
+        image
+            .save_with_format(path, image::ImageFormat::Png)
+            .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
     }
 }
 
@@ -219,11 +228,8 @@ impl ApplicationHandler for App {
                             s.keys.insert(code);
                             match code {
                                 KeyCode::Escape => el.exit(),
-                                KeyCode::F12 if !event.repeat => {
-                                    s.screenshots += 1;
-                                    let p = s.screenshot(PathBuf::from(format!("penumbra-screenshot-{}.png", s.screenshots)))?;
-                                    println!("saved {}", p.display());
-                                }
+                                // The next presented frame is copied back and saved.
+                                KeyCode::F12 if !event.repeat => s.grab_next = true,
                                 KeyCode::KeyR if !event.repeat => match s.renderer.reload_shaders() {
                                     Ok(n) => println!("reloaded {n} pipelines from glsl/"),
                                     // A broken shader is reported; the old pipelines keep running.
@@ -237,7 +243,22 @@ impl ApplicationHandler for App {
                     }
                 }
                 WindowEvent::RedrawRequested => {
+                    // With --frames N --screenshot, the last frame is the one grabbed.
+                    if self.screenshot.is_some() && self.max_frames.is_some_and(|n| s.frames + 1 >= n) {
+                        s.grab_next = true;
+                    }
                     s.frame()?;
+                    if s.grabbed.is_some() {
+                        let path = match (&self.screenshot, self.max_frames.is_some_and(|n| s.frames >= n)) {
+                            (Some(p), true) => p.clone(),
+                            _ => {
+                                s.screenshots += 1;
+                                PathBuf::from(format!("penumbra-screenshot-{}.png", s.screenshots))
+                            }
+                        };
+                        s.save_grab(&path)?;
+                        println!("saved {} after {} frames", path.display(), s.frames);
+                    }
                     if self.max_frames.is_some_and(|n| s.frames >= n) {
                         el.exit();
                     } else {
@@ -272,11 +293,7 @@ pub fn run(opts: &CaptureOptions, max_frames: Option<u64>, screenshot: Option<Pa
     if let Some(e) = app.error.take() {
         return Err(e);
     }
-    if let Some(mut s) = app.state.take() {
-        if let Some(p) = app.screenshot.take() {
-            let p = s.screenshot(p)?;
-            println!("saved {} after {} frames", p.display(), s.frames);
-        }
+    if let Some(s) = app.state.take() {
         s.renderer.gpu.wait_idle()?;
         let n = s.renderer.gpu.validation_log().count();
         let Running { renderer, swapchain, .. } = s;

@@ -43,8 +43,10 @@ pub enum FrameOutput {
     None,
     /// Copy radiance into a host buffer and return it.
     Readback,
-    /// Tone-map into a swapchain image and leave it ready to present.
-    Present { image: ImageId, exposure: f32 },
+    /// Tone-map into a swapchain image and leave it ready to present. With `readback`, the
+    /// presented pixels are also copied to a host buffer (a screenshot of exactly what the
+    /// window shows); fetch them with [`Renderer::presented_pixels`] once the frame completed.
+    Present { image: ImageId, exposure: f32, readback: bool },
 }
 
 pub struct FrameResult {
@@ -63,6 +65,7 @@ pub struct Renderer {
     frames: Vec<Frame>,
     frame_index: usize,
     readback: Option<BufferId>,
+    present_readback: Option<BufferId>,
     tonemap: Option<(PipelineId, vk::Format)>,
 }
 
@@ -84,7 +87,7 @@ impl Renderer {
         let method = methods::create(&decl, &mut gpu, &shaders, &mut states, &scene)?;
         let targets = create_targets(&mut gpu, size)?;
         let frames = (0..frames_in_flight.max(1)).map(|_| gpu.create_frame()).collect::<std::result::Result<Vec<_>, _>>()?;
-        Ok(Renderer { gpu, shaders, scene, scene_gpu, method, states, targets, frames, frame_index: 0, readback: None, tonemap: None })
+        Ok(Renderer { gpu, shaders, scene, scene_gpu, method, states, targets, frames, frame_index: 0, readback: None, present_readback: None, tonemap: None })
     }
 
     /// Recreates the size-dependent targets.
@@ -133,8 +136,22 @@ impl Renderer {
                 memory: MemoryKind::GpuToCpu,
             })?);
         }
-        if let FrameOutput::Present { image, .. } = &output {
-            let format = self.gpu.image_desc(*image)?.format;
+        if let FrameOutput::Present { image, readback, .. } = &output {
+            let d = self.gpu.image_desc(*image)?;
+            let format = d.format;
+            let bytes = d.extent.width as u64 * d.extent.height as u64 * 4;
+            if *readback && self.present_readback.map(|b| self.gpu.buffer_desc(b).map(|d| d.size).unwrap_or(0)) != Some(bytes) {
+                if let Some(old) = self.present_readback.take() {
+                    self.gpu.destroy_buffer(old);
+                    self.states.forget_buffer(old);
+                }
+                self.present_readback = Some(self.gpu.create_buffer(&BufferDesc {
+                    name: "presented pixels".into(),
+                    size: bytes,
+                    usage: vk::BufferUsageFlags::TRANSFER_DST,
+                    memory: MemoryKind::GpuToCpu,
+                })?);
+            }
             if self.tonemap.map(|t| t.1) != Some(format) {
                 let mut desc = GraphicsPipelineDesc::new("tonemap", "post/fullscreen.vert", Some("post/tonemap.frag"));
                 desc.raster.cull = vk::CullModeFlags::NONE;
@@ -164,9 +181,10 @@ impl Renderer {
                 // Makes the copy visible to the host once the frame's fence has signalled.
                 graph.pass("host visibility").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
             }
-            FrameOutput::Present { image, exposure } => {
+            FrameOutput::Present { image, exposure, readback } => {
                 let (pipeline, _) = self.tonemap.ok_or_else(|| Error::Usage("tonemap pipeline missing".into()))?;
                 let (image, exposure) = (*image, *exposure);
+                let present_readback = if *readback { self.present_readback } else { None };
                 graph
                     .pass("tonemap")
                     .sample("hdr", t.radiance, SubresourceRange::mip(0), display_sampler, vk::PipelineStageFlags2::FRAGMENT_SHADER)
@@ -180,6 +198,14 @@ impl Renderer {
                         ctx.rec.end_rendering();
                         Ok(())
                     });
+                if let Some(rb) = present_readback {
+                    graph
+                        .pass("screenshot readback")
+                        .transfer_read(image, SubresourceRange::mip(0))
+                        .buffer(rb, Access::TransferWrite, None)
+                        .record(move |ctx| Ok(ctx.rec.copy_image_to_buffer(image, 0, 0, rb)?));
+                    graph.pass("screenshot host visibility").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
+                }
                 graph.pass("present").present(image).record(|_| Ok(()));
             }
         }
@@ -197,6 +223,21 @@ impl Renderer {
             }
             Ok(r)
         })
+    }
+
+    /// The pixels of the last frame rendered with `Present { readback: true }`, as 8-bit RGBA
+    /// (display-encoded, as the window shows them). Call after that frame has completed.
+    pub fn presented_pixels(&self, image: ImageId) -> Result<image::RgbaImage> {
+        let rb = self.present_readback.ok_or_else(|| Error::Usage("no frame was presented with readback".into()))?;
+        let d = self.gpu.image_desc(image)?;
+        let mut bytes = self.gpu.read_buffer(rb)?;
+        if matches!(d.format, vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM) {
+            for px in bytes.chunks_exact_mut(4) {
+                px.swap(0, 2);
+            }
+        }
+        image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes)
+            .ok_or_else(|| Error::Usage("presented pixels do not match the image size".into()))
     }
 
     /// The frame slot the next [`Renderer::render`] records into (for presenting).

@@ -1,0 +1,130 @@
+//! The `penumbra` binary as users meet it: deterministic captures, profiling output, device
+//! info, and one clear error line (never a panic) for every kind of bad input.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn penumbra(args: &[&str]) -> Output {
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(args)
+        .env("PENUMBRA_VALIDATION", "1")
+        .args(["--device", &device])
+        .output()
+        .expect("run penumbra")
+}
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn capture_is_deterministic_and_writes_both_files() {
+    let (png1, exr1, png2, exr2) = (common::temp_path("a.png"), common::temp_path("a.exr"), common::temp_path("b.png"), common::temp_path("b.exr"));
+    for (png, exr) in [(&png1, &exr1), (&png2, &exr2)] {
+        let o = penumbra(&["capture", "--size", "64x48", "-o", path_str(png), "--exr", path_str(exr)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert_eq!(std::fs::read(&png1).unwrap(), std::fs::read(&png2).unwrap(), "PNG differs between runs");
+    assert_eq!(std::fs::read(&exr1).unwrap(), std::fs::read(&exr2).unwrap(), "EXR differs between runs");
+    let hdr = penumbra::image_io::HdrImage::read_exr(&exr1).unwrap();
+    assert_eq!((hdr.width, hdr.height), (64, 48));
+    // The EXR is unclamped linear radiance: the glossy sphere's highlight exceeds 1.
+    let max = hdr.pixels.iter().map(|p| p[0].max(p[1]).max(p[2])).fold(0.0f32, f32::max);
+    assert!(max > 1.0, "brightest radiance {max}");
+    // The PNG is its tone-mapped image.
+    let png = image::open(&png1).unwrap().to_rgba8();
+    assert_eq!(png, hdr.to_display(1.0));
+}
+
+#[test]
+fn profile_reports_every_pass_as_json() {
+    let json = common::temp_path("profile.json");
+    let o = penumbra(&["profile", "--size", "64x48", "--frames", "5", "--json", path_str(&json)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("forward") && table.contains("median ms"), "{table}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["device"].as_str().unwrap().to_lowercase().contains("llvmpipe") || std::env::var("PENUMBRA_TEST_DEVICE").is_ok());
+    assert!(!v["driver"].as_str().unwrap().is_empty());
+    assert_eq!(v["frames"], 5);
+    let passes: Vec<&str> = v["passes"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(passes, vec!["frame", "forward"]);
+    for p in v["passes"].as_array().unwrap() {
+        let (lo, med, hi) = (p["min_ms"].as_f64().unwrap(), p["median_ms"].as_f64().unwrap(), p["max_ms"].as_f64().unwrap());
+        assert!(0.0 < lo && lo <= med && med <= hi, "{p}");
+    }
+}
+
+#[test]
+fn info_names_the_device_and_its_limits() {
+    let o = penumbra(&["info"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for key in ["device", "driver", "depth clamp", "timestamps", "max push constants", "validation"] {
+        assert!(text.contains(key), "missing {key}: {text}");
+    }
+}
+
+/// Writes `content` as a scene file and returns the error line of `capture` on it.
+fn scene_error(name: &str, content: &str) -> (String, PathBuf) {
+    let path = common::temp_path(name);
+    std::fs::write(&path, content).unwrap();
+    let out = common::temp_path(&format!("{name}.png"));
+    let o = penumbra(&["capture", path_str(&path), "--size", "16x16", "-o", path_str(&out)]);
+    assert!(!o.status.success(), "{name}: bad scene was accepted");
+    assert!(!out.exists(), "{name}: an output was written for a bad scene");
+    let err = stderr(&o);
+    assert!(!err.contains("panicked"), "{name}: panic: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{name}: expected one error line, got:\n{err}");
+    (lines[0].to_string(), path)
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n";
+
+#[test]
+fn malformed_scenes_get_one_clear_error_line() {
+    let cases: Vec<(&str, String, &str, &str)> = vec![
+        ("syntax.toml", format!("{CAMERA}[[lights]\ntype = \"point\"\n"), ":4:", ""),
+        ("unknown_key.toml", format!("{CAMERA}colour = 3\n"), ":4: camera.colour", "unknown field"),
+        ("negative.toml", format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, -2, 1]\n"), ":7: lights[0].intensity", "non-negative"),
+        ("material.toml", format!("{CAMERA}[[objects]]\nmesh = \"box\"\nmaterial = \"marble\"\n"), ":6: objects[0].material", "marble"),
+        ("method.toml", format!("methods = [\"raytraced_gi\"]\n{CAMERA}"), ":1: methods[0]", "forward"),
+        ("obj_missing.toml", format!("{CAMERA}[[objects]]\nmesh = \"obj\"\npath = \"nowhere.obj\"\n"), ":6: objects[0].path", "nowhere.obj"),
+        ("fov.toml", "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\nfov_y_deg = 190\n".to_string(), ":4: camera.fov_y_deg", "180"),
+    ];
+    for (name, content, location, detail) in cases {
+        let (line, path) = scene_error(name, &content);
+        assert!(line.starts_with(&format!("error: {}", path.display())), "{name}: {line}");
+        assert!(line.contains(location), "{name}: expected `{location}` in: {line}");
+        assert!(line.contains(detail), "{name}: expected `{detail}` in: {line}");
+    }
+}
+
+#[test]
+fn nan_in_a_mesh_names_the_obj_and_vertex() {
+    let obj = common::temp_path("nan.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n").unwrap();
+    let (line, _) = scene_error("nan_mesh.toml", &format!("{CAMERA}[[objects]]\nmesh = \"obj\"\npath = \"{}\"\n", path_str(&obj)));
+    assert!(line.contains("nan.obj") && line.to_lowercase().contains("vertex 3"), "{line}");
+}
+
+#[test]
+fn bad_command_line_values_are_reported() {
+    let o = penumbra(&["capture", "no/such/scene.toml"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).starts_with("error: no/such/scene.toml: file: cannot read"), "{}", stderr(&o));
+    let o = penumbra(&["capture", "--size", "64by48"]);
+    assert!(!o.status.success() && stderr(&o).contains("WIDTHxHEIGHT"), "{}", stderr(&o));
+    let o = penumbra(&["capture", "--method", "lpv", "--size", "8x8"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("method `lpv` is not enabled") && e.contains("forward"), "{e}");
+}
