@@ -1,0 +1,138 @@
+//! Backend features the techniques rely on, each checked by a value that could be wrong:
+//! 3D, cube and array images with mip chains; specialization constants; shader hot reload that
+//! keeps the old pipeline when the new source does not compile.
+
+mod common;
+
+use penumbra::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, ImageDesc, ImageId, MemoryKind, PipelineId, SamplerDesc, SpecConstant, SubresourceRange};
+use penumbra::graph::{Access, RenderGraph, ResourceStates};
+use penumbra::shaders::ShaderLibrary;
+
+fn readback_buffer(gpu: &mut Gpu, bytes: u64) -> BufferId {
+    gpu.create_buffer(&BufferDesc { name: "readback".into(), size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu }).unwrap()
+}
+
+/// Copies mip `mip`, layer `layer` of `image` back through the graph.
+fn read_subresource(gpu: &mut Gpu, states: &mut ResourceStates, image: ImageId, mip: u32, layer: u32) -> Vec<u8> {
+    let e = gpu.image_desc(image).unwrap().mip_extent(mip);
+    let texel = penumbra::backend::format_texel_size(gpu.image_desc(image).unwrap().format).unwrap();
+    let buf = readback_buffer(gpu, texel * (e.width * e.height * e.depth) as u64);
+    let frame = gpu.create_frame().unwrap();
+    let mut graph = RenderGraph::new();
+    graph
+        .pass("read")
+        .transfer_read(image, SubresourceRange::mip_layer(mip, layer))
+        .buffer(buf, Access::TransferWrite, None)
+        .record(move |ctx| ctx.rec.copy_image_to_buffer(image, mip, layer, buf));
+    graph.pass("host").buffer(buf, Access::HostRead, None).record(|_| Ok(()));
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+    gpu.read_buffer(buf).unwrap()
+}
+
+#[test]
+fn volume_cube_and_array_images_round_trip_every_subresource() {
+    let mut gpu = common::test_gpu();
+    let mut states = ResourceStates::default();
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+    let f = vk::Format::R32_SFLOAT;
+    let kinds = [
+        ImageDesc::new_3d("volume", f, 8, 4, 6).mips(2).usage(usage),
+        ImageDesc::new_cube("cube", f, 8).all_mips().usage(usage),
+        ImageDesc::new_2d("array", f, 4, 4).layers(3).all_mips().usage(usage),
+    ];
+    for desc in kinds {
+        let img = gpu.create_image(&desc).unwrap();
+        let e = desc.mip_extent(1);
+        let texels = (e.width * e.height * e.depth * desc.layers) as usize;
+        let data: Vec<f32> = (0..texels).map(|i| i as f32 * 0.5 + desc.layers as f32).collect();
+        gpu.upload_image(img, 1, bytemuck::cast_slice(&data)).unwrap();
+        states.set_image(&gpu, img, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS }).unwrap();
+        let per_layer = texels / desc.layers as usize;
+        for layer in 0..desc.layers {
+            let got = read_subresource(&mut gpu, &mut states, img, 1, layer);
+            let want = &data[layer as usize * per_layer..(layer as usize + 1) * per_layer];
+            assert_eq!(bytemuck::cast_slice::<u8, f32>(&got), want, "{} layer {layer}", desc.name);
+        }
+        assert!(desc.mip_levels >= 2, "{}: {} mips", desc.name, desc.mip_levels);
+    }
+    assert_eq!(ImageDesc::new_cube("c", f, 8).all_mips().mip_levels, 4);
+    common::assert_clean(&gpu);
+}
+
+/// Runs util/downsample.comp on a 2×2 image of constant `value` and returns the 1×1 result.
+fn downsample_once(gpu: &mut Gpu, pipeline: PipelineId, value: f32) -> f32 {
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+    let img = gpu.create_image(&ImageDesc::new_2d("img", vk::Format::R32G32B32A32_SFLOAT, 2, 2).mips(2).usage(usage)).unwrap();
+    gpu.upload_image(img, 0, bytemuck::cast_slice(&[value; 16])).unwrap();
+    let sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP).unwrap();
+    let mut states = ResourceStates::default();
+    states.set_image(gpu, img, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS }).unwrap();
+    let frame = gpu.create_frame().unwrap();
+    let c = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let mut graph = RenderGraph::new();
+    graph
+        .pass("downsample")
+        .sample("src", img, SubresourceRange::mip(0), sampler, c)
+        .storage_write("dst", img, SubresourceRange::mip(1), c)
+        .record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[])?;
+            ctx.rec.push_constants(&0u32.to_le_bytes())?;
+            ctx.rec.dispatch([1, 1, 1])
+        });
+    graph.output_image(img);
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, &mut states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+    let bytes = read_subresource(gpu, &mut states, img, 1, 0);
+    bytemuck::cast_slice::<u8, f32>(&bytes)[0]
+}
+
+#[test]
+fn specialization_constants_reach_the_shader() {
+    let mut gpu = common::test_gpu();
+    let lib = ShaderLibrary::Embedded;
+    let desc = |scale: f32| ComputePipelineDesc {
+        name: format!("downsample x{scale}"),
+        shader: "util/downsample.comp".into(),
+        specialization: vec![SpecConstant { id: 0, bits: scale.to_bits() }],
+    };
+    let plain = gpu.create_compute_pipeline(&ComputePipelineDesc { specialization: vec![], ..desc(1.0) }, &lib).unwrap();
+    let tripled = gpu.create_compute_pipeline(&desc(3.0), &lib).unwrap();
+    assert_eq!(downsample_once(&mut gpu, plain, 2.5), 2.5);
+    assert_eq!(downsample_once(&mut gpu, tripled, 2.5), 7.5);
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn hot_reload_swaps_pipelines_and_keeps_the_old_one_on_errors() {
+    // A private copy of glsl/ to edit, as a user would edit the checkout's.
+    let root = common::temp_path("glsl-reload");
+    for rel in ["util/downsample.comp"] {
+        let dst = root.join(rel);
+        std::fs::create_dir_all(dst.parent().unwrap()).unwrap();
+        std::fs::copy(ShaderLibrary::source_dir().join(rel), &dst).unwrap();
+    }
+    let lib = ShaderLibrary::Directory(root.clone());
+    let mut gpu = common::test_gpu();
+    let p = gpu
+        .create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &lib)
+        .unwrap();
+    assert_eq!(downsample_once(&mut gpu, p, 1.0), 1.0);
+
+    let file = root.join("util/downsample.comp");
+    let source = std::fs::read_to_string(&file).unwrap();
+    std::fs::write(&file, source.replace("r * SCALE", "r * SCALE * 4.0")).unwrap();
+    gpu.reload_pipeline(p, &lib).unwrap();
+    assert_eq!(downsample_once(&mut gpu, p, 1.0), 4.0, "the edited shader runs after reload");
+
+    std::fs::write(&file, source.replace("r * SCALE", "r * undefined_scale")).unwrap();
+    let err = gpu.reload_pipeline(p, &lib).unwrap_err().to_string();
+    assert!(err.contains("undefined_scale") && err.contains("downsample.comp"), "{err}");
+    assert_eq!(downsample_once(&mut gpu, p, 1.0), 4.0, "the previous pipeline keeps running");
+    common::assert_clean(&gpu);
+}
