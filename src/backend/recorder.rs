@@ -380,6 +380,13 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// Non-indexed draw starting at vertex `first`.
+    pub fn draw_from(&mut self, vertices: u32, first: u32) -> BackendResult<()> {
+        self.bound_pipeline()?;
+        unsafe { self.gpu.device.cmd_draw(self.cb, vertices, 1, first, 0) };
+        Ok(())
+    }
+
     pub fn draw_indexed(&mut self, indices: u32, first_index: u32, vertex_offset: i32) -> BackendResult<()> {
         self.bound_pipeline()?;
         unsafe { self.gpu.device.cmd_draw_indexed(self.cb, indices, 1, first_index, vertex_offset, 0) };
