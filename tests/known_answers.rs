@@ -168,3 +168,142 @@ intensity = [5.0, 5.0, 5.0]
     // A real highlight: much brighter than the diffuse floor around it.
     assert!(gpu_best.2 > 10.0 * img.get(0, H - 1)[0], "highlight {} vs corner {}", gpu_best.2, img.get(0, H - 1)[0]);
 }
+
+#[test]
+fn spherical_light_is_exact_above_the_horizon_and_drawn_as_an_emitter() {
+    let toml = format!(
+        r#"{CAMERA}
+[[materials]]
+name = "white"
+albedo = [0.7, 0.7, 0.7]
+
+[[objects]]
+mesh = "plane"
+size = [6, 6]
+material = "white"
+
+[[lights]]
+type = "sphere"
+center = [0.3, 0.8, -0.2]
+radius = 0.25
+radiance = [20.0, 10.0, 5.0]
+"#
+    );
+    let (img, scene) = render(&toml);
+    let (c, r) = (Vec3::new(0.3, 0.8, -0.2), 0.25f32);
+    let radiance = Vec3::new(20.0, 10.0, 5.0);
+    let (mut ground, mut emitter) = (0, 0);
+    for j in 0..H {
+        for i in 0..W {
+            let (o, d) = scene.camera.pixel_center_ray(i, j, W, H);
+            // Ray–sphere: pixels looking at the light itself show its radiance (away from its rim).
+            let oc = o - c;
+            let (b, cc) = (oc.dot(d), oc.length_squared() - r * r);
+            let disc = b * b - cc;
+            if disc > 0.0 {
+                if disc > 0.25 * r * r {
+                    emitter += 1;
+                    let p = img.get(i, j);
+                    assert!((p[0] - 20.0).abs() < 1e-3 && (p[2] - 5.0).abs() < 1e-3, "emitter pixel ({i},{j}): {p:?}");
+                }
+                continue;
+            }
+            let Some(p) = hit_ground(&scene, i, j, 2.9) else { continue };
+            // Irradiance from a uniform sphere wholly above the horizon: π·L·(R/d)²·cos θ.
+            let to = c - p;
+            let d2 = to.length_squared();
+            let expected = 0.7 * radiance.x * r * r / d2 * (to.y / d2.sqrt());
+            let got = img.get(i, j)[0];
+            assert!((got - expected).abs() <= 1e-3 * expected, "pixel ({i},{j}): {got} vs {expected}");
+            ground += 1;
+        }
+    }
+    assert!(emitter > 4 && ground > 1000, "{emitter} emitter pixels, {ground} ground pixels");
+}
+
+#[test]
+fn albedo_and_normal_maps_modulate_lambert() {
+    // A four-colour albedo map (sRGB) and a normal map tilting the normal 45° about z.
+    let dir = common::temp_path("maps");
+    std::fs::create_dir_all(&dir).unwrap();
+    let texels = [[255u8, 255, 255, 255], [128, 128, 128, 255], [64, 64, 64, 255], [255, 0, 0, 255]];
+    // 8×8 texels in four uniform 4×4 quadrants, so bilinear filtering well inside a quadrant
+    // returns that quadrant's colour exactly.
+    let albedo = image::RgbaImage::from_fn(8, 8, |x, y| image::Rgba(texels[((y / 4) * 2 + x / 4) as usize]));
+    albedo.save(dir.join("albedo.png")).unwrap();
+    // Tangent space (x, y, z) = (sin 45°, 0, cos 45°) encoded as (n + 1)/2.
+    let t = std::f32::consts::FRAC_1_SQRT_2;
+    let enc = |v: f32| ((v * 0.5 + 0.5) * 255.0).round() as u8;
+    let normal = image::RgbaImage::from_pixel(2, 2, image::Rgba([enc(t), enc(0.0), enc(t), 255]));
+    normal.save(dir.join("normal.png")).unwrap();
+    let toml = format!(
+        r#"{CAMERA}
+[[materials]]
+name = "textured"
+albedo = [1.0, 1.0, 1.0]
+albedo_map = "albedo.png"
+
+[[materials]]
+name = "bumped"
+albedo = [0.5, 0.5, 0.5]
+normal_map = "normal.png"
+
+[[objects]]
+mesh = "plane"
+size = [2, 2]
+material = "textured"
+translate = [-1.05, 0, 0]
+
+[[objects]]
+mesh = "plane"
+size = [2, 2]
+material = "bumped"
+translate = [1.05, 0, 0]
+
+[[lights]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+irradiance = [3.0, 3.0, 3.0]
+"#
+    );
+    let scene = Scene::from_str(&toml, "<test>", &dir).expect("test scene parses");
+    let gpu = common::test_gpu();
+    let mut r = Renderer::new(gpu, scene.clone(), None, (W, H), 1).unwrap();
+    let cam = r.scene.camera.clone();
+    let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+    common::assert_clean(&r.gpu);
+    let srgb = |c: u8| {
+        let c = c as f32 / 255.0;
+        if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    };
+    let (mut textured, mut bumped) = (0, 0);
+    for j in 0..H {
+        for i in 0..W {
+            // Both planes span z ∈ [−1, 1]; stay clear of their edges.
+            let Some(p) = hit_ground(&scene, i, j, 2.0).filter(|p| p.z.abs() < 0.95) else { continue };
+            let got = img.get(i, j);
+            if p.x < -0.1 && p.x > -2.0 {
+                // uv spans [0, 1] over the plane (u along +x, v along +z); ×2 gives quadrant units.
+                let (u, v) = ((p.x + 1.05) / 2.0 + 0.5, p.z / 2.0 + 0.5);
+                let (u, v) = (u * 2.0, v * 2.0);
+                let (fu, fv) = (u.fract(), v.fract());
+                if !(0.3..0.7).contains(&fu) || !(0.3..0.7).contains(&fv) || u < 0.0 || v < 0.0 || u >= 2.0 || v >= 2.0 {
+                    continue;
+                }
+                let texel = texels[(v as usize) * 2 + u as usize];
+                for c in 0..3 {
+                    let expected = srgb(texel[c]) / std::f32::consts::PI * 3.0;
+                    // 8-bit sRGB decoding in the sampler is approximate (lavapipe: 0.4% at 128).
+                    assert!((got[c] - expected).abs() <= 6e-3 * expected.max(0.05), "textured ({i},{j}) ch {c}: {} vs {expected}", got[c]);
+                }
+                textured += 1;
+            } else if p.x > 0.1 && p.x < 2.0 {
+                // The mapped normal is tilted 45° from the light: cos θ = cos 45° (to 8-bit precision).
+                let expected = 0.5 / std::f32::consts::PI * 3.0 * t;
+                assert!((got[0] - expected).abs() <= 1e-2 * expected, "bumped ({i},{j}): {} vs {expected}", got[0]);
+                bumped += 1;
+            }
+        }
+    }
+    assert!(textured > 20 && bumped > 100, "{textured} textured and {bumped} bumped pixels checked");
+}

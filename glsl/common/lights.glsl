@@ -7,10 +7,11 @@ const float PI = 3.14159265358979323846;
 const uint LIGHT_POINT = 0u;
 const uint LIGHT_SPOT = 1u;
 const uint LIGHT_DIRECTIONAL = 2u;
+const uint LIGHT_QUAD_FAR = 3u;  // emissive quad as a point: intensity L*A*cos(theta_e)
 
 struct Light {
     vec4 position;   // xyz position (point, spot); w: type
-    vec4 direction;  // xyz: direction the light travels (spot, directional), normalised
+    vec4 direction;  // xyz: direction the light travels (spot, directional) or the quad's normal
     vec4 intensity;  // rgb: intensity W/sr (point, spot) or irradiance W/m^2 (directional)
     vec4 cone;       // x: cos(inner), y: cos(outer) (spot)
 };
@@ -30,6 +31,8 @@ void light_incidence(Light light, vec3 p, out vec3 to_light, out vec3 irradiance
     if (type == LIGHT_SPOT) {
         float cos_angle = dot(-to_light, light.direction.xyz);
         irradiance *= smoothstep(light.cone.y, light.cone.x, cos_angle);
+    } else if (type == LIGHT_QUAD_FAR) {
+        irradiance *= max(dot(-to_light, light.direction.xyz), 0.0);
     }
 }
 

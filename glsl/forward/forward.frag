@@ -8,7 +8,7 @@ struct Material {
     vec4 albedo;        // rgb: diffuse albedo
     vec4 specular;      // rgb: Blinn-Phong specular colour; w: exponent
     vec4 emission;      // rgb: emitted radiance
-    uvec4 maps;         // x: has normal map
+    uvec4 maps;         // x: has normal map; y: one-sided emitter (no emission from the back)
 };
 
 layout(set = 0, binding = 1) readonly buffer Lights { Light items[]; } lights;
@@ -31,7 +31,18 @@ layout(location = 0) out vec4 out_radiance;
 
 void main() {
     Material m = materials.items[draw.material];
+    vec3 v = normalize(frame.camera_pos.xyz - in_world);
     vec3 n = normalize(in_normal);
+    vec3 emission = m.emission.rgb;
+    // Surfaces seen from behind: one-sided emitters don't emit there; other surfaces are thin
+    // and lit from the viewer's side, so the shading frame is flipped before normal mapping
+    // (deciding on the mapped normal would flip texels that merely lean away).
+    if (dot(n, v) < 0.0) {
+        n = -n;
+        if (m.maps.y != 0u) {
+            emission = vec3(0.0);
+        }
+    }
     if (m.maps.x != 0u) {
         // Tangent-space normal map; Gram-Schmidt keeps the frame orthonormal after interpolation.
         vec3 t = normalize(in_tangent.xyz - n * dot(n, in_tangent.xyz));
@@ -41,13 +52,7 @@ void main() {
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
     vec3 specular = m.specular.rgb * texture(specular_map, in_uv).rgb;
-    vec3 v = normalize(frame.camera_pos.xyz - in_world);
-    // Light arriving at the back of a single-sided surface is not reflected; flip the normal
-    // for surfaces seen from behind so thin geometry is lit from the viewer's side.
-    if (dot(n, v) < 0.0) {
-        n = -n;
-    }
-    vec3 radiance = m.emission.rgb + albedo * frame.ambient.rgb;
+    vec3 radiance = emission + albedo * frame.ambient.rgb;
     for (uint i = 0u; i < frame.counts.x; ++i) {
         vec3 l;
         vec3 e;

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::renderer::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
+use crate::renderer::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_QUAD_FAR, LIGHT_SPOT};
 
 /// Surface reflectance as the shaders see it.
 #[derive(Clone, Copy, Debug)]
@@ -33,6 +33,8 @@ pub fn light_incidence(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
     if ty == LIGHT_SPOT {
         let cos_angle = (-to_light).dot(Vec3::from_slice(&light.direction[..3]));
         e *= smoothstep(light.cone[1], light.cone[0], cos_angle);
+    } else if ty == LIGHT_QUAD_FAR {
+        e *= (-to_light).dot(Vec3::from_slice(&light.direction[..3])).max(0.0);
     }
     (to_light, e)
 }

@@ -42,6 +42,8 @@ pub struct GpuLight {
 pub const LIGHT_POINT: f32 = 0.0;
 pub const LIGHT_SPOT: f32 = 1.0;
 pub const LIGHT_DIRECTIONAL: f32 = 2.0;
+/// An emissive quad seen from afar: a point at its centre with intensity L·A·cos θ_e.
+pub const LIGHT_QUAD_FAR: f32 = 3.0;
 
 /// One object's slice of the shared buffers.
 #[derive(Clone, Debug)]
@@ -74,8 +76,11 @@ pub struct SceneGpu {
     pub meshes: Vec<Mesh>,
 }
 
-/// Punctual lights the raster methods evaluate. Spherical lights and emissive quads are area
-/// lights; methods that don't model them skip them (the reference renderer does).
+/// The lights as the raster methods evaluate them: punctual lights exactly; area lights in their
+/// far-field form. A sphere of radiance L and radius R is exact as a point of intensity L·πR²
+/// wherever it is wholly above the receiver's horizon (and unoccluded); an emissive quad becomes
+/// a point of intensity L·A·cos θ_e at its centre, which is accurate only at distances large
+/// against its size — the reference renderer integrates both exactly.
 pub fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
     let mut out = Vec::new();
     for l in &scene.lights {
@@ -98,6 +103,40 @@ pub fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
                 intensity: irradiance.extend(0.0).into(),
                 cone: [0.0; 4],
             }),
+            Light::Sphere { center, radius, radiance, .. } => out.push(GpuLight {
+                position: center.extend(LIGHT_POINT).into(),
+                direction: [0.0; 4],
+                intensity: (*radiance * std::f32::consts::PI * radius * radius).extend(0.0).into(),
+                cone: [0.0; 4],
+            }),
+            Light::Quad { corner, edge_u, edge_v, radiance, .. } => {
+                let cross = edge_u.cross(*edge_v);
+                out.push(GpuLight {
+                    position: (*corner + 0.5 * (*edge_u + *edge_v)).extend(LIGHT_QUAD_FAR).into(),
+                    direction: cross.normalize_or_zero().extend(0.0).into(),
+                    intensity: (*radiance * cross.length()).extend(0.0).into(),
+                    cone: [0.0; 4],
+                })
+            }
+        }
+    }
+    out
+}
+
+/// Geometry for the area lights, so every method sees them as emissive surfaces (one-sided for
+/// quads, whose back does not emit).
+fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
+    use crate::scene::generators;
+    let mut out = Vec::new();
+    for l in &scene.lights {
+        match l {
+            Light::Sphere { name, center, radius, radiance } => {
+                let m = generators::sphere(*radius, 32, 16).transformed(&Mat4::from_translation(*center));
+                out.push((name.clone(), m, *radiance));
+            }
+            Light::Quad { name, corner, edge_u, edge_v, radiance } => {
+                out.push((name.clone(), generators::quad(*corner, *edge_u, *edge_v, 1), *radiance));
+            }
             _ => {}
         }
     }
@@ -131,6 +170,17 @@ fn load_texture(
     Ok(id)
 }
 
+fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
+    for i in 0..mesh.positions.len() {
+        vertices.push(Vertex {
+            position: mesh.positions[i].into(),
+            normal: mesh.normals.get(i).copied().unwrap_or(Vec3::Y).into(),
+            uv: mesh.uvs.get(i).copied().unwrap_or_default().into(),
+            tangent: mesh.tangents.get(i).copied().unwrap_or(Vec4::new(1.0, 0.0, 0.0, 1.0)).into(),
+        });
+    }
+}
+
 impl SceneGpu {
     pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene) -> Result<SceneGpu> {
         let mut vertices: Vec<Vertex> = Vec::new();
@@ -141,14 +191,7 @@ impl SceneGpu {
             let mesh = obj.load_mesh(std::path::Path::new("."))?;
             let first_index = indices.len() as u32;
             let vertex_offset = vertices.len() as i32;
-            for i in 0..mesh.positions.len() {
-                vertices.push(Vertex {
-                    position: mesh.positions[i].into(),
-                    normal: mesh.normals.get(i).copied().unwrap_or(Vec3::Y).into(),
-                    uv: mesh.uvs.get(i).copied().unwrap_or_default().into(),
-                    tangent: mesh.tangents.get(i).copied().unwrap_or(Vec4::new(1.0, 0.0, 0.0, 1.0)).into(),
-                });
-            }
+            push_vertices(&mut vertices, &mesh);
             indices.extend_from_slice(&mesh.indices);
             draws.push(DrawItem {
                 name: obj.name.clone(),
@@ -160,12 +203,6 @@ impl SceneGpu {
             });
             meshes.push(mesh);
         }
-        if vertices.is_empty() {
-            vertices.push(Vertex::zeroed());
-            indices.extend([0, 0, 0]);
-        }
-        let vb = gpu.create_buffer_init("scene vertices", vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&vertices))?;
-        let ib = gpu.create_buffer_init("scene indices", vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&indices))?;
         let mut gpu_materials = Vec::new();
         let mut material_maps = Vec::new();
         for m in &scene.materials {
@@ -181,6 +218,41 @@ impl SceneGpu {
                 specular: load_texture(gpu, states, m.specular_map.as_deref(), [255; 4], false, "specular_map")?,
             });
         }
+        let emitters = emitter_meshes(scene);
+        if !emitters.is_empty() {
+            let defaults = MaterialMaps {
+                albedo: load_texture(gpu, states, None, [255; 4], true, "albedo_map")?,
+                normal: load_texture(gpu, states, None, [128, 128, 255, 255], false, "normal_map")?,
+                specular: load_texture(gpu, states, None, [255; 4], false, "specular_map")?,
+            };
+            for (name, mesh, radiance) in emitters {
+                let material = gpu_materials.len() as u32;
+                gpu_materials.push(GpuMaterial {
+                    albedo: [0.0, 0.0, 0.0, 1.0],
+                    specular: [0.0, 0.0, 0.0, 1.0],
+                    emission: radiance.extend(0.0).into(),
+                    maps: [0, 1, 0, 0],
+                });
+                material_maps.push(defaults);
+                draws.push(DrawItem {
+                    name: format!("{name} (emitter)"),
+                    first_index: indices.len() as u32,
+                    index_count: mesh.indices.len() as u32,
+                    vertex_offset: vertices.len() as i32,
+                    model: Mat4::IDENTITY,
+                    material,
+                });
+                push_vertices(&mut vertices, &mesh);
+                indices.extend_from_slice(&mesh.indices);
+                meshes.push(mesh);
+            }
+        }
+        if vertices.is_empty() {
+            vertices.push(Vertex::zeroed());
+            indices.extend([0, 0, 0]);
+        }
+        let vb = gpu.create_buffer_init("scene vertices", vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&vertices))?;
+        let ib = gpu.create_buffer_init("scene indices", vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&indices))?;
         if gpu_materials.is_empty() {
             gpu_materials.push(GpuMaterial::zeroed());
         }
