@@ -13,7 +13,7 @@ use crate::image_io::HdrImage;
 use crate::methods::{self, FrameInputs, FrameTargets, LightingMethod};
 use crate::scene::{Camera, Scene};
 use crate::shaders::ShaderLibrary;
-pub use scene_gpu::{punctual_lights, DrawItem, GpuLight, GpuMaterial, MaterialMaps, SceneGpu, Vertex, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_QUAD_FAR, LIGHT_SPOT};
+pub use scene_gpu::{punctual_lights, raster_lights, DrawItem, GpuLight, GpuMaterial, MaterialMaps, SceneGpu, Vertex, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_QUAD_FAR, LIGHT_SPOT};
 
 /// Linear radiance: 32-bit float so captures read back exactly what the shaders computed.
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;

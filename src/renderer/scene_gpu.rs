@@ -76,12 +76,22 @@ pub struct SceneGpu {
     pub meshes: Vec<Mesh>,
 }
 
+/// Point, spot and directional lights, exactly as given (area lights are left out).
+pub fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
+    let mut out = raster_lights(scene);
+    out.retain(|l| l.position[3] != LIGHT_QUAD_FAR && !(l.position[3] == LIGHT_POINT && l.cone[3] == AREA_MARK));
+    out
+}
+
+/// Marks a point light that stands in for a sphere light (`cone.w`), so it can be told apart.
+const AREA_MARK: f32 = 1.0;
+
 /// The lights as the raster methods evaluate them: punctual lights exactly; area lights in their
 /// far-field form. A sphere of radiance L and radius R is exact as a point of intensity L·πR²
 /// wherever it is wholly above the receiver's horizon (and unoccluded); an emissive quad becomes
 /// a point of intensity L·A·cos θ_e at its centre, which is accurate only at distances large
 /// against its size — the reference renderer integrates both exactly.
-pub fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
+pub fn raster_lights(scene: &Scene) -> Vec<GpuLight> {
     let mut out = Vec::new();
     for l in &scene.lights {
         match l {
@@ -107,7 +117,7 @@ pub fn punctual_lights(scene: &Scene) -> Vec<GpuLight> {
                 position: center.extend(LIGHT_POINT).into(),
                 direction: [0.0; 4],
                 intensity: (*radiance * std::f32::consts::PI * radius * radius).extend(0.0).into(),
-                cone: [0.0; 4],
+                cone: [0.0, 0.0, 0.0, AREA_MARK],
             }),
             Light::Quad { corner, edge_u, edge_v, radiance, .. } => {
                 let cross = edge_u.cross(*edge_v);
@@ -262,6 +272,58 @@ impl SceneGpu {
             states.forget_buffer(id);
         }
         let sampler = gpu.sampler(SamplerDesc::LINEAR_REPEAT)?;
-        Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: punctual_lights(scene), sampler, meshes })
+        Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: raster_lights(scene), sampler, meshes })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn area_lights_are_raster_lights_but_not_punctual() {
+        let scene = Scene::from_str(
+            r#"
+[camera]
+position = [0, 1, 3]
+target = [0, 0, 0]
+[[lights]]
+type = "point"
+position = [0, 2, 0]
+intensity = 1
+[[lights]]
+type = "spot"
+position = [0, 2, 0]
+target = [0, 0, 0]
+intensity = 1
+[[lights]]
+type = "directional"
+direction = [0, -1, 0]
+irradiance = 1
+[[lights]]
+type = "sphere"
+center = [0, 3, 0]
+radius = 0.5
+radiance = 2
+[[lights]]
+type = "quad"
+corner = [0, 2, 0]
+edge_u = [2, 0, 0]
+edge_v = [0, 0, 1]
+radiance = 3
+"#,
+            "<test>",
+            std::path::Path::new("."),
+        )
+        .unwrap();
+        let punctual = punctual_lights(&scene);
+        assert_eq!(punctual.iter().map(|l| l.position[3]).collect::<Vec<_>>(), vec![LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL]);
+        let raster = raster_lights(&scene);
+        assert_eq!(raster.len(), 5);
+        // Sphere: I = L·πR²; quad: I = L·A with A = |u × v| = 2, facing (2,0,0)×(0,0,1) = −y.
+        assert!((raster[3].intensity[0] - 2.0 * std::f32::consts::PI * 0.25).abs() < 1e-6);
+        assert_eq!(raster[4].position, [1.0, 2.0, 0.5, LIGHT_QUAD_FAR]);
+        assert_eq!(raster[4].intensity[0], 6.0);
+        assert_eq!(raster[4].direction[..3], [0.0, -1.0, 0.0]);
     }
 }
