@@ -6,7 +6,7 @@ use crate::backend::{Gpu, GpuDesc};
 use crate::error::Result;
 use crate::image_io::HdrImage;
 use crate::renderer::{FrameOutput, Renderer};
-use crate::scene::Scene;
+use crate::scene::{MethodDecl, Scene};
 
 #[derive(Clone, Debug)]
 pub struct CaptureOptions {
@@ -18,6 +18,8 @@ pub struct CaptureOptions {
     pub method: Option<String>,
     pub exposure: f32,
     pub gpu: GpuDesc,
+    /// Render this configuration instead of the scene's own method declaration.
+    pub config: Option<MethodDecl>,
 }
 
 /// Loads the scene (or the built-in default) as the CLI does.
@@ -30,7 +32,10 @@ pub fn load_scene(path: Option<&std::path::Path>) -> Result<Scene> {
 
 /// Renders `frames` frames and returns the last one's radiance.
 pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
-    let scene = load_scene(opts.scene.as_deref())?;
+    let mut scene = load_scene(opts.scene.as_deref())?;
+    if let Some(decl) = &opts.config {
+        scene.methods = vec![decl.clone()];
+    }
     let gpu = Gpu::new(&opts.gpu)?;
     let mut renderer = Renderer::new(gpu, scene, opts.method.as_deref(), opts.size, 1)?;
     let camera = renderer.scene.camera.clone();
@@ -63,4 +68,34 @@ pub fn run(opts: &CaptureOptions) -> Result<Vec<String>> {
         return Err(crate::error::Error::Usage(format!("{n} validation message(s) (see above)")));
     }
     Ok(written)
+}
+
+/// `capture --max-error E`: the cheapest configuration within E (relative MSE) from the chart
+/// data cached for this scene and size, and a sentence saying why it was chosen.
+pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: &std::path::Path) -> Result<(MethodDecl, String)> {
+    use crate::chart::{cached_table, choose, parse_csv, Choice};
+    use crate::error::Error;
+    let path = opts.scene.as_deref().ok_or_else(|| Error::Usage("--max-error needs a scene file (the chart is measured per scene)".into()))?;
+    let scene = load_scene(Some(path))?;
+    let table = cached_table(&scene, opts.size, cache_dir);
+    let text = std::fs::read_to_string(&table).map_err(|_| {
+        Error::Usage(format!(
+            "{}: no chart data for this scene at {}x{} in {}; run `penumbra chart {} --size {}x{}` first",
+            path.display(), opts.size.0, opts.size.1, cache_dir.display(), path.display(), opts.size.0, opts.size.1
+        ))
+    })?;
+    let configs = parse_csv(&text)?;
+    match choose(&configs, max_rel_mse) {
+        Some(Choice::Picked { config, rejected }) => {
+            let why = Choice::Picked { config: config.clone(), rejected }.to_string();
+            let info = crate::methods::info(&config.method)?;
+            let decl = scene.methods.iter().find(|d| d.name == config.method).ok_or_else(|| Error::Usage(format!("the chart names method `{}`, which the scene no longer enables; run `penumbra chart` again", config.method)))?;
+            let chosen = (info.sweep)(decl).into_iter().find(|(label, _)| *label == config.config).map(|(_, d)| d).ok_or_else(|| {
+                Error::Usage(format!("configuration `{}` is no longer in {}'s sweep; run `penumbra chart` again", config.config, config.method))
+            })?;
+            Ok((chosen, why))
+        }
+        Some(none) => Err(Error::Usage(format!("--max-error {max_rel_mse}: {none}"))),
+        None => Err(Error::Usage(format!("{}: the chart table is empty", table.display()))),
+    }
 }

@@ -12,6 +12,8 @@ pub enum Error {
     Backend(#[from] BackendError),
     #[error(transparent)]
     Image(#[from] ImageIoError),
+    #[error(transparent)]
+    Metrics(#[from] crate::metrics::MetricsError),
     /// A request that cannot be honoured as asked (a method the scene doesn't enable, a size of 0…).
     #[error("{0}")]
     Usage(String),

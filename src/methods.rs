@@ -36,9 +36,39 @@ pub trait LightingMethod {
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, inputs: &FrameInputs<'a>) -> Result<()>;
 }
 
+/// What the reference must contain for a method's error to mean something.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ReferenceKind {
+    /// Emission and light after one surface interaction (shadowed): direct-lighting methods.
+    Direct,
+    /// Up to this many bounces after the first hit (global illumination methods).
+    Bounces(u32),
+}
+
+/// How `penumbra chart` treats a method: its schema, its quality sweep, and its reference.
+pub struct MethodInfo {
+    pub schema: MethodSchema,
+    /// The configurations to measure, as (label, declaration with the swept parameters set),
+    /// starting from the scene's declaration.
+    pub sweep: fn(&MethodDecl) -> Vec<(String, MethodDecl)>,
+    pub reference: ReferenceKind,
+}
+
+/// Every method penumbra implements.
+pub fn registry() -> Vec<MethodInfo> {
+    vec![MethodInfo { schema: crate::forward::SCHEMA, sweep: crate::forward::sweep, reference: ReferenceKind::Direct }]
+}
+
 /// Every method scenes may declare, with its parameters.
 pub fn schemas() -> Vec<MethodSchema> {
-    vec![crate::forward::SCHEMA]
+    registry().into_iter().map(|m| m.schema).collect()
+}
+
+pub fn info(name: &str) -> Result<MethodInfo> {
+    registry()
+        .into_iter()
+        .find(|m| m.schema.name == name)
+        .ok_or_else(|| Error::Usage(format!("method `{name}` is not implemented")))
 }
 
 /// Creates the method a scene declared.

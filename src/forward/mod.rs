@@ -15,6 +15,11 @@ use crate::shaders::ShaderLibrary;
 
 pub const SCHEMA: MethodSchema = MethodSchema { name: "forward", params: &[] };
 
+/// Forward has no quality settings: one configuration.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    vec![("forward".to_string(), decl.clone())]
+}
+
 pub struct Forward {
     pipeline: PipelineId,
 }

@@ -30,6 +30,11 @@ impl ShaderLibrary {
     }
 }
 
+/// The embedded SPIR-V, in the order of [`ShaderLibrary::embedded_names`] (for cache keys).
+pub fn embedded_bytes() -> impl Iterator<Item = &'static [u8]> {
+    EMBEDDED.iter().map(|(_, b)| *b)
+}
+
 fn words(bytes: &[u8]) -> Vec<u32> {
     bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
 }

@@ -1,0 +1,103 @@
+//! `penumbra compare`, `penumbra chart` and `capture --max-error` as users run them.
+
+mod common;
+
+use std::process::{Command, Output};
+
+use penumbra::image_io::HdrImage;
+
+fn penumbra(args: &[&str]) -> Output {
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+    cmd.args(args).env("PENUMBRA_VALIDATION", "1");
+    if args[0] != "compare" {
+        cmd.args(["--device", &device]);
+    }
+    cmd.output().expect("run penumbra")
+}
+
+fn ok(o: &Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn compare_prints_known_metrics_and_writes_a_diff_image() {
+    let (a, b, diff) = (common::temp_path("cmp-test.exr"), common::temp_path("cmp-ref.exr"), common::temp_path("cmp-diff.png"));
+    let mut reference = HdrImage::new(8, 4);
+    for (i, p) in reference.pixels.iter_mut().enumerate() {
+        let v = if i % 2 == 0 { 0.2 } else { 1.0 };
+        *p = [v, v, v, 1.0];
+    }
+    let mut test = reference.clone();
+    for p in &mut test.pixels {
+        for c in &mut p[..3] {
+            *c += 0.1;
+        }
+    }
+    test.write_exr(&a).unwrap();
+    reference.write_exr(&b).unwrap();
+    let out = ok(&penumbra(&["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--json", "--diff", diff.to_str().unwrap()]));
+    let json: String = out.lines().take_while(|l| !l.starts_with("wrote")).collect::<Vec<_>>().join("\n");
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let near = |k: &str, x: f64| assert!((v[k].as_f64().unwrap() - x).abs() < 1e-6, "{k} = {} (want {x})", v[k]);
+    near("rmse", 0.1);
+    near("mean_bias", 0.1);
+    near("max_abs_error", 0.1);
+    // Half the pixels at 0.2, half at 1.0: mean of 0.01/(r²+0.01).
+    near("rel_mse", 0.5 * (0.01 / 0.05 + 0.01 / 1.01));
+    assert!(v["flip_mean"].as_f64().unwrap() > 0.0);
+    let d = image::open(&diff).unwrap();
+    assert_eq!((d.width(), d.height()), (8, 4));
+    // Mismatched sizes: one clear line.
+    let small = common::temp_path("cmp-small.exr");
+    HdrImage::new(2, 2).write_exr(&small).unwrap();
+    let o = penumbra(&["compare", small.to_str().unwrap(), b.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("2x2") && e.contains("8x4") && e.lines().count() == 1, "{e}");
+}
+
+#[test]
+fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
+    let cache = common::temp_path("chart-cache");
+    let (png, csv) = (common::temp_path("chart.png"), common::temp_path("chart.csv"));
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml");
+    let args = ["chart", scene, "--size", "32x32", "--reference-spp", "16", "--frames", "3", "--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()];
+    let first = penumbra(&args);
+    ok(&first);
+    assert!(String::from_utf8_lossy(&first.stderr).contains("rendering the reference"));
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let rows = penumbra::chart::parse_csv(&table).unwrap();
+    assert_eq!(rows.len(), 1);
+    assert_eq!((rows[0].method.as_str(), rows[0].config.as_str()), ("forward", "forward"));
+    assert!(rows[0].frame_ms > 0.0 && rows[0].rel_mse > 0.0 && rows[0].rel_mse.is_finite());
+    let header = table.lines().next().unwrap();
+    for col in ["frame_ms", "pass:forward_ms", "rmse", "rel_mse", "mean_bias", "p99_abs_error", "max_abs_error", "flip"] {
+        assert!(header.split(',').any(|h| h == col), "missing column {col}: {header}");
+    }
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (1000, 700));
+
+    // Second run: the reference comes from the cache, and the error is the same.
+    let second = penumbra(&args);
+    ok(&second);
+    assert!(!String::from_utf8_lossy(&second.stderr).contains("rendering the reference"));
+    let again = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    assert_eq!(again[0].rel_mse, rows[0].rel_mse);
+
+    // --max-error picks from these measurements, or says none qualifies and names the closest.
+    let out = common::temp_path("max-error.png");
+    let loose = format!("{}", rows[0].rel_mse * 2.0);
+    let o = ok(&penumbra(&["capture", scene, "--size", "32x32", "--max-error", &loose, "--cache-dir", cache.to_str().unwrap(), "-o", out.to_str().unwrap()]));
+    assert!(o.contains("picked `forward`"), "{o}");
+    assert!(out.exists());
+    let tight = format!("{}", rows[0].rel_mse / 2.0);
+    let o = penumbra(&["capture", scene, "--size", "32x32", "--max-error", &tight, "--cache-dir", cache.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("no configuration reaches the bound") && e.contains("closest is `forward`"), "{e}");
+    // Without chart data for that size it says what to run.
+    let o = penumbra(&["capture", scene, "--size", "16x16", "--max-error", "0.1", "--cache-dir", cache.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("run `penumbra chart"), "{}", String::from_utf8_lossy(&o.stderr));
+}
