@@ -3,12 +3,12 @@
 #  - lavapipe (mesa-vulkan-drivers), the Vulkan loader and headers, the Khronos validation layer
 #  - shaderc and glslang as static libraries: shaderc is linked statically from Debian's archives
 #    (see .cargo/config.toml) instead of being built from source, which takes ~6 minutes
-#  - Xvfb and xauth for the windowed demo test
+#  - Xvfb and xauth for the windowed demo test; a TrueType font for the chart's text
 # Needs root (or sudo) only when something is missing. The Rust toolchain itself must be present.
 set -euo pipefail
 
 packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
-          libshaderc-dev glslang-dev xvfb xauth)
+          libshaderc-dev glslang-dev xvfb xauth fonts-dejavu-core)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
