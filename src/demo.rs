@@ -83,10 +83,20 @@ struct Running {
     grabbed: Option<image::RgbaImage>,
 }
 
+/// Scripted runs (tests, benchmarks): stop after a number of frames, save the last one, resize.
+#[derive(Clone, Debug, Default)]
+pub struct DemoScript {
+    pub frames: Option<u64>,
+    pub screenshot: Option<PathBuf>,
+    /// After this many frames, ask the window system for this inner size.
+    pub resize_at: Option<(u64, u32, u32)>,
+}
+
 struct App {
     opts: CaptureOptions,
     max_frames: Option<u64>,
     screenshot: Option<PathBuf>,
+    resize_at: Option<(u64, u32, u32)>,
     state: Option<Running>,
     error: Option<Error>,
 }
@@ -259,6 +269,14 @@ impl ApplicationHandler for App {
                         s.save_grab(&path)?;
                         println!("saved {} after {} frames", path.display(), s.frames);
                     }
+                    if let Some((at, w, h)) = self.resize_at {
+                        if s.frames == at {
+                            // Applied at once (Some) or announced later by a Resized event.
+                            if s.window.request_inner_size(PhysicalSize::new(w, h)).is_some() {
+                                s.recreate()?;
+                            }
+                        }
+                    }
                     if self.max_frames.is_some_and(|n| s.frames >= n) {
                         el.exit();
                     } else {
@@ -284,9 +302,10 @@ impl ApplicationHandler for App {
 }
 
 /// Runs the window until Esc, the close button, or `max_frames`.
-pub fn run(opts: &CaptureOptions, max_frames: Option<u64>, screenshot: Option<PathBuf>) -> Result<()> {
+pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
+    let DemoScript { frames: max_frames, screenshot, resize_at } = script;
     let event_loop = EventLoop::new().map_err(|e| Error::Usage(format!("cannot connect to a display: {e}")))?;
-    let mut app = App { opts: opts.clone(), max_frames, screenshot, state: None, error: None };
+    let mut app = App { opts: opts.clone(), max_frames, screenshot, resize_at, state: None, error: None };
     event_loop
         .run_app(&mut app)
         .map_err(|e| Error::Usage(format!("event loop: {e}")))?;

@@ -7,15 +7,20 @@
 
 pub mod backend;
 pub mod capture;
+pub mod chart;
 pub mod demo;
 pub mod error;
 pub mod forward;
 pub mod graph;
 pub mod image_io;
 pub mod methods;
+pub mod metrics;
 pub mod profile;
+pub mod reference;
 pub mod renderer;
 pub mod scene;
+pub mod sh;
 pub mod shaders;
+pub mod world;
 
 pub use error::{Error, Result};

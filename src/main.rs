@@ -57,6 +57,58 @@ enum Command {
         /// Exposure multiplier applied before tone mapping the PNG.
         #[arg(long, default_value_t = 1.0)]
         exposure: f32,
+        /// Render with the cheapest configuration (of every method the scene enables) whose
+        /// relative MSE against the reference is at most E, from the data `penumbra chart` cached
+        /// for this scene and size; says which it picked and why.
+        #[arg(long, value_name = "E")]
+        max_error: Option<f64>,
+        /// Where `chart` caches references and tables.
+        #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
+        cache_dir: PathBuf,
+    },
+    /// Image metrics of TEST against REF (linear radiance EXRs): RMSE, relative MSE, mean bias,
+    /// 99th-percentile and max per-pixel error, and FLIP on the tone-mapped pair.
+    Compare {
+        /// The image to judge.
+        test: PathBuf,
+        /// The reference.
+        reference: PathBuf,
+        /// Write a false-colour (magma) image of the per-pixel FLIP error.
+        #[arg(long, value_name = "PNG")]
+        diff: Option<PathBuf>,
+        /// Exposure applied to both images before tone mapping for FLIP.
+        #[arg(long, default_value_t = 1.0)]
+        exposure: f32,
+        /// Print the metrics as JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Speed against accuracy: every method the scene enables, at every point of its quality sweep,
+    /// timed with GPU timestamps and measured against the scene's reference (rendered once and
+    /// cached); a log–log chart with the Pareto front, and a CSV of every per-pass time and metric.
+    Chart {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Chart image (PNG).
+        #[arg(short = 'o', long = "output", value_name = "PNG", default_value = "chart.png")]
+        output: PathBuf,
+        /// Also write the table as CSV.
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
+        /// Image size as WIDTHxHEIGHT.
+        #[arg(long, default_value = "128x128", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Frames timed per configuration (the median is reported).
+        #[arg(long, default_value_t = 20)]
+        frames: usize,
+        /// Samples per pixel of the reference.
+        #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
+        reference_spp: u32,
+        /// Where references and tables are cached.
+        #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
+        cache_dir: PathBuf,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
     /// Per-pass GPU time from timestamp queries: median, min and max over the frames.
     Profile {
@@ -85,6 +137,38 @@ enum Command {
         /// Save a screenshot (PNG) of the last frame when quitting.
         #[arg(long, value_name = "PNG")]
         screenshot: Option<PathBuf>,
+        /// Scripted resize, for tests: after FRAME frames resize the window to WxH (e.g. 10:320x200).
+        #[arg(long, value_name = "FRAME:WxH", value_parser = parse_resize)]
+        resize_at: Option<(u64, u32, u32)>,
+    },
+    /// Ground truth: path-trace a scene (Monte Carlo, compute shader) and write the mean radiance
+    /// EXR plus the per-pixel standard error of that mean as NAME.stderr.exr next to it.
+    Reference {
+        /// Scene file (TOML, see scenes/README.md).
+        scene: PathBuf,
+        /// Samples per pixel.
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
+        spp: u32,
+        /// Image size as WIDTHxHEIGHT.
+        #[arg(long, default_value = "640x360", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Surface interactions followed after the first hit: light that made at most K+1 is counted (0: direct light only). No Russian roulette.
+        #[arg(long, value_name = "K", default_value_t = penumbra::reference::DEFAULT_BOUNCES)]
+        bounces: u32,
+        /// Only emission seen directly and light after exactly one surface interaction (same as --bounces 0).
+        #[arg(long, conflicts_with_all = ["indirect_only", "bounces"])]
+        direct_only: bool,
+        /// Everything but what --direct-only counts: light after 2 to K+1 interactions.
+        #[arg(long)]
+        indirect_only: bool,
+        /// Random seed: the same seed gives a bit-identical image, another seed independent noise.
+        #[arg(long, value_name = "S", default_value_t = 0)]
+        seed: u32,
+        /// Output EXR of the mean radiance, W/(m²·sr).
+        #[arg(short = 'o', long = "output", value_name = "EXR", default_value = "reference.exr")]
+        output: PathBuf,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
 }
 
@@ -95,6 +179,13 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         (Some(w), Some(h)) => Ok((w, h)),
         _ => Err(format!("`{s}`: width and height must be whole numbers from 1 to 16384")),
     }
+}
+
+fn parse_resize(s: &str) -> Result<(u64, u32, u32), String> {
+    let (frame, size) = s.split_once(':').ok_or_else(|| format!("`{s}`: expected FRAME:WxH, e.g. 10:320x200"))?;
+    let frame = frame.trim().parse::<u64>().map_err(|_| format!("`{frame}`: expected a frame number"))?;
+    let (w, h) = parse_size(size)?;
+    Ok((frame, w, h))
 }
 
 fn gpu_desc(d: &DeviceArgs) -> GpuDesc {
@@ -112,13 +203,19 @@ fn options(r: &RenderArgs) -> CaptureOptions {
         method: r.method.clone(),
         exposure: 1.0,
         gpu: gpu_desc(&r.device),
+        config: None,
     }
 }
 
 fn run(cli: Cli) -> penumbra::Result<()> {
     match cli.command {
-        Command::Capture { render, output, exr, frames, exposure } => {
-            let opts = CaptureOptions { png: output, exr, frames, exposure, ..options(&render) };
+        Command::Capture { render, output, exr, frames, exposure, max_error, cache_dir } => {
+            let mut opts = CaptureOptions { png: output, exr, frames, exposure, ..options(&render) };
+            if let Some(e) = max_error {
+                let (decl, why) = penumbra::capture::choose_configuration(&opts, e, &cache_dir)?;
+                println!("{why}");
+                opts.config = Some(decl);
+            }
             for path in penumbra::capture::run(&opts)? {
                 println!("wrote {path}");
             }
@@ -132,15 +229,52 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 println!("wrote {}", p.display());
             }
         }
+        Command::Compare { test, reference, diff, exposure, json } => {
+            use penumbra::image_io::HdrImage;
+            use penumbra::metrics::{colorize, compare_with_map, CompareOptions};
+            let (t, r) = (HdrImage::read_exr(&test)?, HdrImage::read_exr(&reference)?);
+            let (metrics, map) = compare_with_map(&t, &r, &CompareOptions { exposure, ..CompareOptions::default() })?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?);
+            } else {
+                print!("{}", metrics.table());
+            }
+            if let Some(p) = diff {
+                colorize(&map).save_with_format(&p, image::ImageFormat::Png).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
+                println!("wrote {}", p.display());
+            }
+        }
+        Command::Chart { scene, output, csv, size, frames, reference_spp, cache_dir, device } => {
+            let opts = penumbra::chart::ChartOptions { scene, size, frames, reference_spp, png: Some(output.clone()), csv: csv.clone(), cache_dir, gpu: gpu_desc(&device) };
+            let chart = penumbra::chart::run(&opts)?;
+            for r in &chart.rows {
+                println!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
+            }
+            println!("wrote {}", output.display());
+            if let Some(p) = csv {
+                println!("wrote {}", p.display());
+            }
+        }
         Command::Info { device } => {
             let gpu = Gpu::new(&gpu_desc(&device))?;
             for (k, v) in gpu.caps().report() {
                 println!("{k:<38} {v}");
             }
         }
-        Command::Demo { render, frames, screenshot } => {
+        Command::Demo { render, frames, screenshot, resize_at } => {
             let opts = options(&render);
-            penumbra::demo::run(&opts, frames, screenshot)?;
+            penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at })?;
+        }
+        Command::Reference { scene, spp, size, bounces, direct_only, indirect_only, seed, output, device } => {
+            use penumbra::reference::{Batching, LightPaths, ReferenceOptions, Settings};
+            let paths = if direct_only { LightPaths::Direct } else if indirect_only { LightPaths::Indirect } else { LightPaths::All };
+            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive };
+            let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, gpu: gpu_desc(&device) })?;
+            for p in &report.written {
+                println!("wrote {}", p.display());
+            }
+            let img = &report.image;
+            println!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
         }
     }
     Ok(())

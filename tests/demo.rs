@@ -46,3 +46,20 @@ fn demo_presents_the_scene_under_xvfb() {
     let distinct: std::collections::HashSet<[u8; 4]> = window.pixels().map(|p| p.0).collect();
     assert!(distinct.len() > 100, "only {} distinct colours", distinct.len());
 }
+
+#[test]
+fn demo_survives_a_resize_under_validation() {
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let shot = common::temp_path("demo-resized.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["demo", "--size", "96x64", "--frames", "8", "--resize-at", "3:120x40", "--validation", "--device", &device, "--screenshot"])
+        .arg(&shot)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "demo failed:\n{}", String::from_utf8_lossy(&o.stderr));
+    // The last frame was presented at the new size: the swapchain and targets were rebuilt.
+    let window = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(window.dimensions(), (120, 40));
+    let distinct: std::collections::HashSet<[u8; 4]> = window.pixels().map(|p| p.0).collect();
+    assert!(distinct.len() > 50, "only {} distinct colours after the resize", distinct.len());
+}

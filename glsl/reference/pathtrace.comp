@@ -1,0 +1,278 @@
+#version 460
+// The ground-truth reference: unidirectional Monte Carlo path tracing with next-event
+// estimation, one pixel per invocation, adding `batch.sample_count` samples to each pixel's
+// running mean and sum of squared deviations (Welford) so the host can stop, read progress and
+// go on. Lighting and BRDF are those of glsl/common/lights.glsl; see src/reference/mod.rs for
+// what the estimator counts.
+#include "common/lights.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+struct Node {
+    vec3 lo;
+    uint index;  // interior: second child (the first is the next node); leaf: first triangle
+    vec3 hi;
+    uint count;  // triangles in a leaf; 0 for interior nodes
+};
+
+struct Triangle {
+    vec4 p0;
+    vec4 e1;
+    vec4 e2;
+};
+
+struct Shading {
+    vec3 n0;
+    uint material;
+    vec3 n1;
+    uint pad0;
+    vec3 n2;
+    uint pad1;
+};
+
+layout(set = 0, binding = 0) uniform Params {
+    vec4 eye;          // xyz: camera position
+    vec4 right;        // xyz: camera right * tan(fov_y / 2) * aspect
+    vec4 up;           // xyz: camera up * tan(fov_y / 2)
+    vec4 forward;      // xyz: unit view direction
+    vec4 environment;  // rgb: radiance of rays that escape
+    uvec4 counts;      // x: lights, y: triangles, z: width, w: height
+    uvec4 environment_map;  // x, y: size of the map (0 for the constant environment); z: sampled
+} params;
+
+layout(set = 0, binding = 1) readonly buffer Nodes { Node items[]; } nodes;
+layout(set = 0, binding = 2) readonly buffer Triangles { Triangle items[]; } triangles;
+layout(set = 0, binding = 3) readonly buffer TriangleShading { Shading items[]; } shading;
+layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
+layout(set = 0, binding = 8) readonly buffer EnvironmentMap { vec4 items[]; } environment_map;
+layout(set = 0, binding = 9) readonly buffer EnvironmentCdf { float items[]; } environment_cdf;
+
+#include "reference/bsdf.glsl"
+#include "reference/environment.glsl"
+#include "reference/trace.glsl"
+
+layout(set = 0, binding = 5) readonly buffer Materials { Material items[]; } materials;
+layout(set = 0, binding = 6, rgba32f) uniform image2D mean_radiance;
+layout(set = 0, binding = 7, rgba32f) uniform image2D second_moment;
+
+layout(push_constant) uniform Batch {
+    uint sample_offset;  // index of this dispatch's first sample (0: start afresh)
+    uint sample_count;   // samples each pixel adds in this dispatch
+    uint seed;
+    uint bounces;        // surface interactions followed after the first hit
+    uint flags;
+} batch;
+
+// Leave out light that reaches the camera after fewer than two surface interactions.
+const uint FLAG_INDIRECT_ONLY = 1u;
+// Seed difference of the next-event estimation stream.
+const uint LIGHT_STREAM = 0x9e3779b9u;
+
+// The surface hit by the ray along d, normals turned toward where the ray came from: a one-sided
+// thin surface seen from behind reflects like its front, as in the forward method.
+Surface surface_at(Hit h, vec3 d, out uint material) {
+    Triangle tri = triangles.items[h.triangle];
+    Shading sh = shading.items[h.triangle];
+    material = sh.material;
+    Surface s;
+    s.p = tri.p0.xyz + h.uv.x * tri.e1.xyz + h.uv.y * tri.e2.xyz;
+    vec3 ng = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+    vec3 ns = (1.0 - h.uv.x - h.uv.y) * sh.n0 + h.uv.x * sh.n1 + h.uv.y * sh.n2;
+    float len = length(ns);
+    ns = len > 0.0 ? ns / len : ng;
+    s.geometric_normal = dot(ng, d) > 0.0 ? -ng : ng;
+    s.shading_normal = dot(ns, d) > 0.0 ? -ns : ns;
+    return s;
+}
+
+vec3 spawn_origin(Surface s, vec3 dir) {
+    return offset_origin(s.p, dot(s.geometric_normal, dir) >= 0.0 ? s.geometric_normal : -s.geometric_normal);
+}
+
+// Radiance an area light sends back along -d (quads emit from their front side only).
+vec3 light_seen(uint i, vec3 d) {
+    Light light = lights.items[i];
+    if (uint(light.position.w) == LIGHT_QUAD && dot(d, cross(light.direction.xyz, light.cone.xyz)) >= 0.0) {
+        return vec3(0.0);
+    }
+    return light.intensity.rgb;
+}
+
+// A direction toward a point light, its distance and what arrives along it divided by the
+// solid-angle pdf of the direction (for delta lights, the irradiance at normal incidence).
+bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving, out float dist) {
+    Light light = lights.items[i];
+    uint type = uint(light.position.w);
+    l = vec3(0.0, 1.0, 0.0);
+    arriving = vec3(0.0);
+    dist = NO_HIT;
+    if (type <= LIGHT_DIRECTIONAL) {
+        light_incidence(light, p, l, arriving);
+        if (type != LIGHT_DIRECTIONAL) {
+            dist = distance(light.position.xyz, p);
+        }
+        return true;
+    }
+    vec2 u = vec2(rand(rng), rand(rng));
+    if (type == LIGHT_SPHERE) {
+        // Uniform directions in the cone of the sphere's visible cap: pdf 1 / (2 pi (1 - cos_max)).
+        vec3 to_center = light.position.xyz - p;
+        float d2 = dot(to_center, to_center);
+        float r2 = light.direction.x * light.direction.x;
+        if (d2 <= r2) {
+            return false;
+        }
+        float sin2_max = r2 / d2;
+        float cap = sin2_max / (1.0 + sqrt(1.0 - sin2_max));  // 1 - cos_max without cancellation
+        float one_minus_cos = u.x * cap;
+        float sin2 = one_minus_cos * (2.0 - one_minus_cos);
+        float dc = sqrt(d2);
+        l = around(to_center / dc, 1.0 - one_minus_cos, sqrt(sin2), 2.0 * PI * u.y);
+        dist = dc * (1.0 - one_minus_cos) - sqrt(max(0.0, r2 - d2 * sin2));
+        arriving = light.intensity.rgb * (2.0 * PI * cap);
+        return true;
+    }
+    if (type == LIGHT_QUAD) {
+        // Uniform on the area: pdf dist^2 / (cos_light * area) per solid angle.
+        vec3 q = light.position.xyz + u.x * light.direction.xyz + u.y * light.cone.xyz;
+        vec3 n = cross(light.direction.xyz, light.cone.xyz);
+        float area = length(n);
+        vec3 to_q = q - p;
+        float d2 = dot(to_q, to_q);
+        dist = sqrt(d2);
+        l = to_q / dist;
+        float cos_light = -dot(l, n) / area;
+        if (cos_light <= 0.0 || d2 <= 0.0) {
+            return false;
+        }
+        arriving = light.intensity.rgb * (cos_light * area / d2);
+        return true;
+    }
+    return false;
+}
+
+// Next-event estimation: one shadow ray to each light, and one to the environment map, weighted
+// against the BSDF sampling that can also find it.
+vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < params.counts.x; ++i) {
+        vec3 l;
+        vec3 arriving;
+        float dist;
+        if (!sample_light(i, s.p, rng, l, arriving, dist) || all(equal(arriving, vec3(0.0)))) {
+            continue;
+        }
+        vec3 f = bsdf_times_cos(s, m, v, l);
+        if (all(equal(f, vec3(0.0)))) {
+            continue;
+        }
+        float t_max = dist == NO_HIT ? NO_HIT : dist * (1.0 - 1e-4);
+        if (!occluded(spawn_origin(s, l), l, t_max, i)) {
+            sum += f * arriving;
+        }
+    }
+    vec2 u = vec2(rand(rng), rand(rng));
+    vec3 l;
+    float pdf;
+    if (params.environment_map.z != 0u && sample_environment(u, l, pdf)) {
+        vec3 f = bsdf_times_cos(s, m, v, l);
+        if (any(greaterThan(f, vec3(0.0))) && !occluded(spawn_origin(s, l), l, NO_HIT, NO_LIGHT)) {
+            float weight = mis_weight(pdf, bsdf_pdf(s, m, lobe_choice(m), v, l));
+            sum += f * environment_radiance(l) * (weight / pdf);
+        }
+    }
+    return sum;
+}
+
+vec3 camera_ray(vec2 film) {
+    vec2 ndc = film / vec2(params.counts.zw) * 2.0 - 1.0;
+    return normalize(params.forward.xyz + params.right.xyz * ndc.x - params.up.xyz * ndc.y);
+}
+
+// One sample of the radiance through film position `film` (pixels). Next-event estimation at
+// each vertex draws from a stream of its own, keyed by `light_key` and the depth, so the path and
+// every other vertex's light samples are the same whichever terms the flags leave out.
+vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
+    bool skip_direct = (batch.flags & FLAG_INDIRECT_ONLY) != 0u;
+    vec3 d = camera_ray(film);
+    Hit h = trace_closest(params.eye.xyz, d);
+    if (h.triangle < 0) {
+        if (skip_direct) {
+            return vec3(0.0);
+        }
+        return h.light >= 0 ? light_seen(uint(h.light), d) : environment_radiance(d);
+    }
+    vec3 radiance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    for (uint depth = 0u;; ++depth) {
+        // Light gathered at this vertex (by NEE, or hit by the sampled ray) has made depth + 1
+        // surface interactions; primary emission has made none.
+        bool counted = !skip_direct || depth >= 1u;
+        uint material;
+        Surface s = surface_at(h, d, material);
+        Material m = materials.items[material];
+        vec3 v = -d;
+        if (depth == 0u && counted) {
+            radiance += m.emission.rgb;
+        }
+        if (counted) {
+            uint light_rng = pcg_hash(light_key ^ pcg_hash(depth));
+            radiance += throughput * direct_light(s, m, v, light_rng);
+        }
+        vec3 l;
+        vec3 weight;
+        float pdf;
+        if (!sample_bsdf(s, m, v, rng, l, weight, pdf)) {
+            break;
+        }
+        throughput *= weight;
+        d = l;
+        h = trace_closest(spawn_origin(s, l), d);
+        if (h.light >= 0) {
+            break;  // area lights were sampled by next-event estimation
+        }
+        if (h.triangle < 0) {
+            if (counted) {
+                radiance += throughput * environment_radiance(d) * mis_weight(pdf, environment_pdf(d));
+            }
+            break;
+        }
+        if (counted) {
+            radiance += throughput * materials.items[shading.items[h.triangle].material].emission.rgb;
+        }
+        if (depth >= batch.bounces) {
+            break;
+        }
+    }
+    return radiance;
+}
+
+void main() {
+    uvec2 size = params.counts.zw;
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(pixel, size))) {
+        return;
+    }
+    vec4 mean = vec4(0.0);
+    vec4 m2 = vec4(0.0);
+    if (batch.sample_offset > 0u) {
+        mean = imageLoad(mean_radiance, ivec2(pixel));
+        m2 = imageLoad(second_moment, ivec2(pixel));
+    }
+    uint pixel_index = pixel.y * size.x + pixel.x;
+    for (uint k = 0u; k < batch.sample_count; ++k) {
+        uint index = batch.sample_offset + k;
+        uint rng = rng_start(pixel_index, index, batch.seed);
+        uint light_key = rng_start(pixel_index, index, batch.seed ^ LIGHT_STREAM);
+        // Box filter: uniform over the pixel's square.
+        vec2 film = vec2(pixel) + vec2(rand(rng), rand(rng));
+        vec3 x = path_radiance(film, rng, light_key);
+        vec3 delta = x - mean.rgb;
+        mean.rgb += delta / float(index + 1u);
+        m2.rgb += delta * (x - mean.rgb);
+    }
+    mean.a = 1.0;
+    m2.a = float(batch.sample_offset + batch.sample_count);
+    imageStore(mean_radiance, ivec2(pixel), mean);
+    imageStore(second_moment, ivec2(pixel), m2);
+}

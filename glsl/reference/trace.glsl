@@ -1,0 +1,221 @@
+// Ray queries against the scene: the BVH over triangles (built by src/reference/bvh.rs, whose
+// CPU traversal mirrors this one) and the area lights, which are opaque to every ray.
+// The including shader declares `params` (counts.x: lights, counts.y: triangles), `nodes`,
+// `triangles` and `lights` before including this file.
+#ifndef PENUMBRA_REFERENCE_TRACE_GLSL
+#define PENUMBRA_REFERENCE_TRACE_GLSL
+
+const float NO_HIT = 3.0e38;
+// Matches bvh::MAX_DEPTH: the build bounds the tree's depth by it.
+const uint MAX_DEPTH = 64u;
+const uint LIGHT_SPHERE = 3u;
+const uint LIGHT_QUAD = 4u;
+// A light index no light has: occlusion tests that skip none.
+const uint NO_LIGHT = 0xffffffffu;
+
+struct Hit {
+    float t;
+    int triangle;  // slot in `triangles`, or -1
+    int light;     // index of the area light hit, or -1
+    vec2 uv;       // barycentrics of p1 and p2 on the triangle
+};
+
+// Moller-Trumbore, the same arithmetic as bvh::intersect_triangle.
+bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out float t, out vec2 uv) {
+    t = NO_HIT;
+    uv = vec2(0.0);
+    vec3 pv = cross(d, e2);
+    float det = dot(e1, pv);
+    if (det == 0.0) {
+        return false;
+    }
+    float inv = 1.0 / det;
+    vec3 tv = o - p0;
+    uv.x = dot(tv, pv) * inv;
+    if (uv.x < 0.0 || uv.x > 1.0) {
+        return false;
+    }
+    vec3 qv = cross(tv, e1);
+    uv.y = dot(d, qv) * inv;
+    if (uv.y < 0.0 || uv.x + uv.y > 1.0) {
+        return false;
+    }
+    t = dot(e2, qv) * inv;
+    return t > 0.0 && t < t_max;
+}
+
+// Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it.
+float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
+    vec3 t0 = (nodes.items[i].lo - o) * inv_d;
+    vec3 t1 = (nodes.items[i].hi - o) * inv_d;
+    vec3 near = min(t0, t1);
+    vec3 far = max(t0, t1);
+    float enter = max(max(near.x, near.y), max(near.z, 0.0));
+    float exit = min(min(far.x, far.y), min(far.z, t_max));
+    return enter <= exit ? enter : NO_HIT;
+}
+
+// Closest triangle hit closer than t_max (which it lowers), or with `any_hit` the first found.
+bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
+    triangle = -1;
+    uv = vec2(0.0);
+    if (params.counts.y == 0u) {
+        return false;
+    }
+    // Zero components would give 0 * inf = NaN in the slab test.
+    vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    if (box_entry(0u, o, inv_d, t_max) == NO_HIT) {
+        return false;
+    }
+    uint stack_node[MAX_DEPTH];
+    float stack_t[MAX_DEPTH];
+    uint sp = 0u;
+    uint node = 0u;
+    while (true) {
+        Node n = nodes.items[node];
+        bool descended = false;
+        if (n.count > 0u) {
+            for (uint k = 0u; k < n.count; ++k) {
+                uint slot = n.index + k;
+                Triangle tri = triangles.items[slot];
+                float t;
+                vec2 b;
+                if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
+                    t_max = t;
+                    triangle = int(slot);
+                    uv = b;
+                    if (any_hit) {
+                        return true;
+                    }
+                }
+            }
+        } else {
+            // Nearer child first; the other waits on the stack with its entry distance.
+            uint a = node + 1u;
+            uint c = n.index;
+            float ta = box_entry(a, o, inv_d, t_max);
+            float tc = box_entry(c, o, inv_d, t_max);
+            if (tc < ta) {
+                uint swap_node = a;
+                a = c;
+                c = swap_node;
+                float swap_t = ta;
+                ta = tc;
+                tc = swap_t;
+            }
+            if (ta != NO_HIT) {
+                if (tc != NO_HIT && sp < MAX_DEPTH) {
+                    stack_node[sp] = c;
+                    stack_t[sp] = tc;
+                    ++sp;
+                }
+                node = a;
+                descended = true;
+            }
+        }
+        if (!descended) {
+            bool found = false;
+            while (sp > 0u) {
+                --sp;
+                if (stack_t[sp] < t_max) {
+                    node = stack_node[sp];
+                    found = true;
+                    break;
+                }
+            }
+            if (!found) {
+                break;
+            }
+        }
+    }
+    return triangle >= 0;
+}
+
+// Nearest positive distance to a sphere, NO_HIT if none.
+float hit_sphere(vec3 o, vec3 d, vec3 center, float radius) {
+    vec3 oc = o - center;
+    float b = dot(oc, d);
+    float disc = b * b - (dot(oc, oc) - radius * radius);
+    if (disc < 0.0) {
+        return NO_HIT;
+    }
+    float s = sqrt(disc);
+    float t = -b - s > 0.0 ? -b - s : -b + s;
+    return t > 0.0 ? t : NO_HIT;
+}
+
+// Distance to area light `i` (either side of a quad), NO_HIT if missed or not an area light.
+float hit_area_light(uint i, vec3 o, vec3 d) {
+    Light light = lights.items[i];
+    uint type = uint(light.position.w);
+    if (type == LIGHT_SPHERE) {
+        return hit_sphere(o, d, light.position.xyz, light.direction.x);
+    }
+    if (type == LIGHT_QUAD) {
+        // A parallelogram is a triangle test without the u + v <= 1 bound.
+        vec3 e1 = light.direction.xyz;
+        vec3 e2 = light.cone.xyz;
+        vec3 pv = cross(d, e2);
+        float det = dot(e1, pv);
+        if (det == 0.0) {
+            return NO_HIT;
+        }
+        float inv = 1.0 / det;
+        vec3 tv = o - light.position.xyz;
+        float u = dot(tv, pv) * inv;
+        vec3 qv = cross(tv, e1);
+        float v = dot(d, qv) * inv;
+        float t = dot(e2, qv) * inv;
+        return (u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0 && t > 0.0) ? t : NO_HIT;
+    }
+    return NO_HIT;
+}
+
+Hit trace_closest(vec3 o, vec3 d) {
+    Hit h;
+    h.t = NO_HIT;
+    h.light = -1;
+    trace_triangles(o, d, false, h.t, h.triangle, h.uv);
+    for (uint i = 0u; i < params.counts.x; ++i) {
+        float t = hit_area_light(i, o, d);
+        if (t < h.t) {
+            h.t = t;
+            h.light = int(i);
+            h.triangle = -1;
+        }
+    }
+    return h;
+}
+
+// Whether anything lies on the ray closer than t_max; `skip_light` is the light being sampled.
+bool occluded(vec3 o, vec3 d, float t_max, uint skip_light) {
+    for (uint i = 0u; i < params.counts.x; ++i) {
+        if (i != skip_light && hit_area_light(i, o, d) < t_max) {
+            return true;
+        }
+    }
+    int triangle;
+    vec2 uv;
+    return trace_triangles(o, d, true, t_max, triangle, uv);
+}
+
+// A ray origin just off the surface at p on the side of unit `n`, offset in units of the float
+// spacing at p (Waechter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection",
+// Ray Tracing Gems, 2019), so it works at any distance from the origin.
+vec3 offset_origin(vec3 p, vec3 n) {
+    const float ORIGIN = 1.0 / 32.0;
+    const float FLOAT_SCALE = 1.0 / 65536.0;
+    const float INT_SCALE = 256.0;
+    ivec3 of_i = ivec3(INT_SCALE * n);
+    ivec3 bits = floatBitsToInt(p);
+    vec3 p_i = intBitsToFloat(ivec3(
+        bits.x + (p.x < 0.0 ? -of_i.x : of_i.x),
+        bits.y + (p.y < 0.0 ? -of_i.y : of_i.y),
+        bits.z + (p.z < 0.0 ? -of_i.z : of_i.z)));
+    return vec3(
+        abs(p.x) < ORIGIN ? p.x + FLOAT_SCALE * n.x : p_i.x,
+        abs(p.y) < ORIGIN ? p.y + FLOAT_SCALE * n.y : p_i.y,
+        abs(p.z) < ORIGIN ? p.z + FLOAT_SCALE * n.z : p_i.z);
+}
+
+#endif

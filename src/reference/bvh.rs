@@ -1,0 +1,445 @@
+//! A bounding volume hierarchy over world-space triangles, built on the CPU with binned SAH and
+//! flattened into the 32-byte nodes `glsl/reference/trace.glsl` walks.
+//!
+//! Layout: nodes are in depth-first order, so an interior node's first child is the next node;
+//! `index` holds the second child. A leaf (`count > 0`) covers triangles
+//! `index .. index + count` of the reordered triangle list ([`Bvh::order`] maps those slots back
+//! to the input triangles).
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// One node as the shader reads it (std430 `struct { vec3 lo; uint index; vec3 hi; uint count; }`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub lo: [f32; 3],
+    /// Interior: the second child's node index (the first child is the next node). Leaf: the
+    /// first triangle slot.
+    pub index: u32,
+    pub hi: [f32; 3],
+    /// Triangles in the leaf; 0 marks an interior node.
+    pub count: u32,
+}
+
+impl BvhNode {
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+    /// `order[slot]` is the input triangle stored at leaf slot `slot`.
+    pub order: Vec<u32>,
+    /// Deepest leaf (the root is depth 0); the shader's traversal stack holds [`MAX_DEPTH`].
+    pub depth: u32,
+}
+
+/// Traversal stack size of the shader. The build switches to median splits, which halve the
+/// triangle count, once SAH splits have gone `SAH_DEPTH` levels deep, so no leaf is deeper than
+/// `SAH_DEPTH + 32`.
+pub const MAX_DEPTH: u32 = 64;
+const SAH_DEPTH: u32 = 24;
+const BINS: usize = 16;
+/// Leaves never hold more than this many triangles (unless they are all at one centroid).
+const MAX_LEAF: usize = 8;
+/// Cost of visiting a node relative to intersecting one triangle.
+const TRAVERSAL_COST: f32 = 1.0;
+
+#[derive(Clone, Copy, Debug)]
+struct Aabb {
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb { lo: Vec3::splat(f32::INFINITY), hi: Vec3::splat(f32::NEG_INFINITY) };
+    fn grow(&mut self, p: Vec3) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+    fn union(&mut self, o: &Aabb) {
+        self.lo = self.lo.min(o.lo);
+        self.hi = self.hi.max(o.hi);
+    }
+    fn half_area(&self) -> f32 {
+        let d = (self.hi - self.lo).max(Vec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+}
+
+struct Builder<'a> {
+    tris: &'a [[Vec3; 3]],
+    bounds: Vec<Aabb>,
+    centroids: Vec<Vec3>,
+    order: Vec<u32>,
+    nodes: Vec<BvhNode>,
+    depth: u32,
+}
+
+impl Bvh {
+    /// Builds over `tris` (world-space corners). An empty input gives an empty hierarchy.
+    pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
+        if tris.is_empty() {
+            return Bvh::default();
+        }
+        let bounds: Vec<Aabb> = tris
+            .iter()
+            .map(|t| {
+                let mut b = Aabb::EMPTY;
+                t.iter().for_each(|&p| b.grow(p));
+                b
+            })
+            .collect();
+        let centroids = bounds.iter().map(|b| 0.5 * (b.lo + b.hi)).collect();
+        let mut b = Builder { tris, bounds, centroids, order: (0..tris.len() as u32).collect(), nodes: Vec::new(), depth: 0 };
+        b.node(0, tris.len(), 0);
+        debug_assert_eq!(b.tris.len(), b.order.len());
+        Bvh { nodes: b.nodes, order: b.order, depth: b.depth }
+    }
+}
+
+impl Builder<'_> {
+    fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
+        let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
+        for &t in &self.order[start..end] {
+            all.union(&self.bounds[t as usize]);
+            cent.grow(self.centroids[t as usize]);
+        }
+        (all, cent)
+    }
+
+    /// Appends the subtree over `order[start..end]` and returns its root's index.
+    fn node(&mut self, start: usize, end: usize, depth: u32) -> u32 {
+        let (bounds, cent) = self.range_bounds(start, end);
+        let id = self.nodes.len() as u32;
+        self.nodes.push(BvhNode { lo: bounds.lo.into(), index: start as u32, hi: bounds.hi.into(), count: (end - start) as u32 });
+        self.depth = self.depth.max(depth);
+        let n = end - start;
+        let extent = cent.hi - cent.lo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
+        if n == 1 || extent[axis] <= 0.0 {
+            // One triangle, or all centroids coincide: no split can separate them.
+            return id;
+        }
+        let mid = if depth < SAH_DEPTH {
+            match self.sah_split(start, end, &bounds, &cent) {
+                Some(mid) => mid,
+                None if n <= MAX_LEAF => return id,
+                None => self.median_split(start, end, axis),
+            }
+        } else {
+            self.median_split(start, end, axis)
+        };
+        self.nodes[id as usize].count = 0;
+        self.node(start, mid, depth + 1);
+        let second = self.node(mid, end, depth + 1);
+        self.nodes[id as usize].index = second;
+        id
+    }
+
+    /// The best binned-SAH partition over all three axes, or `None` when a leaf is cheaper.
+    fn sah_split(&mut self, start: usize, end: usize, bounds: &Aabb, cent: &Aabb) -> Option<usize> {
+        let n = end - start;
+        let mut best: Option<(f32, usize, usize)> = None; // cost, axis, bins left of the split
+        for axis in 0..3 {
+            let (lo, hi) = (cent.lo[axis], cent.hi[axis]);
+            if hi <= lo {
+                continue;
+            }
+            let scale = BINS as f32 / (hi - lo);
+            let bin_of = |c: f32| (((c - lo) * scale) as usize).min(BINS - 1);
+            let mut bins = [(Aabb::EMPTY, 0usize); BINS];
+            for &t in &self.order[start..end] {
+                let b = &mut bins[bin_of(self.centroids[t as usize][axis])];
+                b.0.union(&self.bounds[t as usize]);
+                b.1 += 1;
+            }
+            // Sweep from the right to get each suffix's area × count, then from the left.
+            let mut right_cost = [0.0f32; BINS];
+            let (mut acc, mut count) = (Aabb::EMPTY, 0);
+            for i in (1..BINS).rev() {
+                acc.union(&bins[i].0);
+                count += bins[i].1;
+                right_cost[i] = acc.half_area() * count as f32;
+            }
+            let (mut acc, mut count) = (Aabb::EMPTY, 0);
+            for i in 0..BINS - 1 {
+                acc.union(&bins[i].0);
+                count += bins[i].1;
+                if count == 0 || count == n {
+                    continue;
+                }
+                let cost = acc.half_area() * count as f32 + right_cost[i + 1];
+                if best.map_or(true, |b| cost < b.0) {
+                    best = Some((cost, axis, i + 1));
+                }
+            }
+        }
+        let (cost, axis, left_bins) = best?;
+        let area = bounds.half_area().max(f32::MIN_POSITIVE);
+        let split_cost = TRAVERSAL_COST + cost / area;
+        if n <= MAX_LEAF && split_cost >= n as f32 {
+            return None;
+        }
+        let (lo, hi) = (cent.lo[axis], cent.hi[axis]);
+        let scale = BINS as f32 / (hi - lo);
+        let centroids = &self.centroids;
+        let slice = &mut self.order[start..end];
+        let left = partition(slice, |&t| (((centroids[t as usize][axis] - lo) * scale) as usize).min(BINS - 1) < left_bins);
+        Some(start + left)
+    }
+
+    /// Splits at the median centroid along `axis` (halves the count: bounds the depth).
+    fn median_split(&mut self, start: usize, end: usize, axis: usize) -> usize {
+        let mid = start + (end - start) / 2;
+        let centroids = &self.centroids;
+        self.order[start..end].select_nth_unstable_by(mid - start, |a, b| {
+            centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis])
+        });
+        mid
+    }
+}
+
+/// Moves the elements satisfying `pred` to the front; returns how many there are.
+fn partition<T>(s: &mut [T], pred: impl Fn(&T) -> bool) -> usize {
+    let mut left = 0;
+    for i in 0..s.len() {
+        if pred(&s[i]) {
+            s.swap(i, left);
+            left += 1;
+        }
+    }
+    left
+}
+
+/// Möller–Trumbore; the same arithmetic as `intersect_triangle` in the shader. Returns the
+/// distance and barycentrics (u, v) of a hit with `0 < t < t_max`.
+pub fn intersect_triangle(o: Vec3, d: Vec3, p0: Vec3, e1: Vec3, e2: Vec3, t_max: f32) -> Option<(f32, f32, f32)> {
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - p0;
+    let u = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = e2.dot(qv) * inv;
+    (t > 0.0 && t < t_max).then_some((t, u, v))
+}
+
+/// Entry distance of the ray into the box, or `None` when it misses within `[0, t_max]`.
+pub fn box_entry(lo: Vec3, hi: Vec3, o: Vec3, inv_d: Vec3, t_max: f32) -> Option<f32> {
+    let t0 = (lo - o) * inv_d;
+    let t1 = (hi - o) * inv_d;
+    let enter = t0.min(t1).max_element().max(0.0);
+    let exit = t0.max(t1).min_element().min(t_max);
+    (enter <= exit).then_some(enter)
+}
+
+/// `1 / d` with zero components replaced by a tiny value, so slab tests never compute 0 × ∞.
+pub fn safe_inverse(d: Vec3) -> Vec3 {
+    let f = |x: f32| 1.0 / if x == 0.0 { 1e-30 } else { x };
+    Vec3::new(f(d.x), f(d.y), f(d.z))
+}
+
+impl Bvh {
+    /// Closest hit of the ray among `tris` (indexed like the input of [`Bvh::build`]): the
+    /// distance and the input triangle. The CPU twin of `trace_closest` in the shader.
+    pub fn closest_hit(&self, tris: &[[Vec3; 3]], o: Vec3, d: Vec3) -> Option<(f32, u32)> {
+        let inv_d = safe_inverse(d);
+        let mut best: Option<(f32, u32)> = None;
+        let mut t_max = f32::INFINITY;
+        let root = self.nodes.first()?;
+        box_entry(root.lo.into(), root.hi.into(), o, inv_d, t_max)?;
+        let mut stack: Vec<(u32, f32)> = Vec::new();
+        let mut node = 0u32;
+        loop {
+            let n = &self.nodes[node as usize];
+            if n.is_leaf() {
+                for slot in n.index..n.index + n.count {
+                    let tri = self.order[slot as usize];
+                    let [p0, p1, p2] = tris[tri as usize];
+                    if let Some((t, _, _)) = intersect_triangle(o, d, p0, p1 - p0, p2 - p0, t_max) {
+                        t_max = t;
+                        best = Some((t, tri));
+                    }
+                }
+            } else {
+                let (mut a, mut b) = (node + 1, n.index);
+                let entry = |i: u32| {
+                    let c = &self.nodes[i as usize];
+                    box_entry(c.lo.into(), c.hi.into(), o, inv_d, t_max)
+                };
+                let (mut ta, mut tb) = (entry(a), entry(b));
+                if tb.unwrap_or(f32::INFINITY) < ta.unwrap_or(f32::INFINITY) {
+                    std::mem::swap(&mut a, &mut b);
+                    std::mem::swap(&mut ta, &mut tb);
+                }
+                if ta.is_some() {
+                    if let Some(tb) = tb {
+                        stack.push((b, tb));
+                    }
+                    node = a;
+                    continue;
+                }
+            }
+            // Continue with the most recently deferred subtree that can still hold a closer hit.
+            loop {
+                match stack.pop() {
+                    None => return best,
+                    Some((next, t)) if t < t_max => {
+                        node = next;
+                        break;
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (the tests must not depend on a crate's RNG).
+    struct Lcg(u64);
+    impl Lcg {
+        fn f(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn v(&mut self, scale: f32) -> Vec3 {
+            Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * scale
+        }
+    }
+
+    fn soup(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
+        let mut r = Lcg(seed);
+        (0..n)
+            .map(|_| {
+                let c = r.v(10.0);
+                [c + r.v(1.0), c + r.v(1.0), c + r.v(1.0)]
+            })
+            .collect()
+    }
+
+    /// A tessellated sphere and an axis-aligned floor: shared edges, thin boxes, coplanar faces.
+    fn structured() -> Vec<[Vec3; 3]> {
+        let s = crate::scene::generators::sphere(1.0, 24, 12);
+        let p = crate::scene::generators::plane(glam::Vec2::splat(6.0), 8);
+        let mut out = Vec::new();
+        for (m, off) in [(&s, Vec3::new(0.0, 1.0, 0.0)), (&p, Vec3::ZERO)] {
+            for t in m.triangles() {
+                out.push(t.map(|i| m.positions[i] + off));
+            }
+        }
+        out
+    }
+
+    fn brute_force(tris: &[[Vec3; 3]], o: Vec3, d: Vec3) -> Option<(f32, u32)> {
+        let mut best: Option<(f32, u32)> = None;
+        for (i, [p0, p1, p2]) in tris.iter().enumerate() {
+            let t_max = best.map_or(f32::INFINITY, |b| b.0);
+            if let Some((t, _, _)) = intersect_triangle(o, d, *p0, *p1 - *p0, *p2 - *p0, t_max) {
+                best = Some((t, i as u32));
+            }
+        }
+        best
+    }
+
+    /// Walks the tree: leaves partition the slots, every triangle lies in every ancestor's box.
+    fn check_structure(bvh: &Bvh, tris: &[[Vec3; 3]]) {
+        let mut seen = vec![0u32; tris.len()];
+        let mut slots = vec![0u32; tris.len()];
+        let mut stack = vec![(0u32, 0u32, Vec::<u32>::new())];
+        let mut max_depth = 0;
+        while let Some((i, depth, ancestors)) = stack.pop() {
+            let n = bvh.nodes[i as usize];
+            max_depth = max_depth.max(depth);
+            let mut path = ancestors.clone();
+            path.push(i);
+            if n.is_leaf() {
+                for slot in n.index..n.index + n.count {
+                    slots[slot as usize] += 1;
+                    let t = bvh.order[slot as usize];
+                    seen[t as usize] += 1;
+                    for &a in &path {
+                        let b = bvh.nodes[a as usize];
+                        for p in tris[t as usize] {
+                            assert!(p.cmpge(b.lo.into()).all() && p.cmple(b.hi.into()).all(), "triangle {t} outside node {a}");
+                        }
+                    }
+                }
+            } else {
+                assert!(n.index > i + 1 && (n.index as usize) < bvh.nodes.len(), "node {i}: second child {}", n.index);
+                stack.push((i + 1, depth + 1, path.clone()));
+                stack.push((n.index, depth + 1, path));
+            }
+        }
+        assert!(seen.iter().all(|&c| c == 1), "every triangle reachable exactly once");
+        assert!(slots.iter().all(|&c| c == 1), "leaves partition the slots");
+        assert_eq!(max_depth, bvh.depth);
+        assert!(bvh.depth < MAX_DEPTH);
+    }
+
+    #[test]
+    fn every_triangle_is_reachable_exactly_once() {
+        for tris in [soup(1, 1), soup(2, 2), soup(7, 3), soup(1000, 4), structured()] {
+            let bvh = Bvh::build(&tris);
+            check_structure(&bvh, &tris);
+        }
+        // Degenerate inputs: all triangles at one spot, and a long line of them.
+        let same = vec![[Vec3::ZERO, Vec3::X, Vec3::Y]; 100];
+        check_structure(&Bvh::build(&same), &same);
+        let line: Vec<_> = (0..5000).map(|i| [Vec3::X * i as f32, Vec3::X * i as f32 + Vec3::Y, Vec3::X * i as f32 + Vec3::Z]).collect();
+        check_structure(&Bvh::build(&line), &line);
+        assert!(Bvh::build(&[]).nodes.is_empty());
+    }
+
+    #[test]
+    fn traversal_equals_brute_force() {
+        let mut r = Lcg(99);
+        for tris in [soup(500, 5), structured()] {
+            let bvh = Bvh::build(&tris);
+            let mut hits = 0;
+            for k in 0..3000 {
+                let o = r.v(14.0);
+                // Some rays aimed at the geometry, some axis-aligned (zero direction components).
+                let d = match k % 3 {
+                    0 => r.v(1.0),
+                    1 => r.v(4.0) - o,
+                    _ => [Vec3::X, Vec3::NEG_Y, Vec3::Z][k % 9 / 3],
+                };
+                let Some(d) = d.try_normalize() else { continue };
+                let (a, b) = (bvh.closest_hit(&tris, o, d), brute_force(&tris, o, d));
+                match (a, b) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) => {
+                        hits += 1;
+                        // The triangles may differ only where two share an edge, at equal distance.
+                        assert_eq!(a.0, b.0, "ray {k}: bvh {a:?} vs brute force {b:?}");
+                    }
+                    _ => panic!("ray {k} from {o} along {d}: bvh {a:?} vs brute force {b:?}"),
+                }
+            }
+            assert!(hits > 500, "enough rays hit something ({hits})");
+        }
+    }
+
+    #[test]
+    fn node_layout_is_32_bytes() {
+        assert_eq!(std::mem::size_of::<BvhNode>(), 32);
+    }
+}

@@ -1,0 +1,359 @@
+//! `penumbra reference`: the ground truth every lighting method is measured against, a Monte
+//! Carlo path tracer in a compute shader (`glsl/reference/pathtrace.comp`).
+//!
+//! What one sample of a pixel estimates:
+//! - the camera ray goes through a uniformly random point of the pixel (a box filter);
+//! - at each surface: material emission (both sides), next-event estimation of every light
+//!   (point, spot and directional exactly as `glsl/common/lights.glsl`; spherical lights by
+//!   uniform sampling of the visible cap's cone; quad lights by uniform area sampling, one-sided),
+//!   then a direction sampled from the Lambert + Blinn-Phong + diffuse-transmission BSDF;
+//! - a ray that escapes sees the constant environment; a ray that hits an area light after a
+//!   bounce ends there without adding its radiance (next-event estimation already counted it),
+//!   so area lights are seen directly only by camera rays. Area lights are opaque to all rays;
+//! - no Russian roulette: a path is cut after `bounces` surface interactions past the first hit,
+//!   so the estimate counts exactly the light that made at most `bounces + 1` interactions.
+//!   The bias of that cut is the energy of longer paths, e.g. ρ^(K+2)/(1 − ρ) of the emission in
+//!   a closed furnace of albedo ρ.
+//!
+//! [`LightPaths::Direct`] is `bounces = 0` (emission seen directly plus light after one surface
+//! interaction); [`LightPaths::Indirect`] is the full estimator minus exactly those terms, so
+//! direct + indirect = all for the same seed.
+//!
+//! Each pixel sample draws its random numbers from a PCG stream keyed by (pixel, sample index,
+//! seed) and is added to a running mean and sum of squared deviations (Welford), so the result
+//! is bit-identical for a seed whatever the batching, and the standard error of the mean is
+//! `sqrt(M2 / (n − 1) / n)`.
+
+pub mod bvh;
+pub mod environment;
+mod scene_data;
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Frame, Gpu, GpuDesc, ImageDesc, ImageId, MemoryKind, PipelineId, SubresourceRange};
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::image_io::HdrImage;
+use crate::scene::Scene;
+use crate::shaders::ShaderLibrary;
+pub use scene_data::{SceneBuffers, TracedMaterial, TracedScene, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
+
+/// Which light the estimator counts, by the surface interactions along its path.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightPaths {
+    /// Everything up to the bounce limit.
+    #[default]
+    All,
+    /// Emission seen directly and light after exactly one interaction (`bounces` = 0).
+    Direct,
+    /// [`LightPaths::All`] minus [`LightPaths::Direct`].
+    Indirect,
+}
+
+/// How many samples each dispatch adds to every pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Batching {
+    /// Grow batches toward about a quarter of a second of GPU work each.
+    Adaptive,
+    /// Exactly this many samples per dispatch (the last one may be smaller).
+    Fixed(u32),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Samples per pixel (≥ 1).
+    pub spp: u32,
+    /// Surface interactions followed after the first hit (ignored by [`LightPaths::Direct`]).
+    pub bounces: u32,
+    pub paths: LightPaths,
+    pub seed: u32,
+    pub batching: Batching,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { spp: 256, bounces: DEFAULT_BOUNCES, paths: LightPaths::All, seed: 0, batching: Batching::Adaptive }
+    }
+}
+
+/// Enough for 0.6^17 ≈ 2e-4 of the light in a white-walled room to be cut off.
+pub const DEFAULT_BOUNCES: u32 = 16;
+
+impl Settings {
+    fn check(&self) -> Result<()> {
+        if self.spp == 0 {
+            return Err(Error::Usage("--spp must be at least 1".into()));
+        }
+        if self.paths == LightPaths::Indirect && self.bounces == 0 {
+            return Err(Error::Usage("--indirect-only needs --bounces of at least 1: with 0 bounces there is no indirect light".into()));
+        }
+        if let Batching::Fixed(0) = self.batching {
+            return Err(Error::Usage("a batch must hold at least one sample".into()));
+        }
+        Ok(())
+    }
+
+    fn push(&self, offset: u32, count: u32) -> BatchPush {
+        let (bounces, flags) = match self.paths {
+            LightPaths::All => (self.bounces, 0),
+            LightPaths::Direct => (0, 0),
+            LightPaths::Indirect => (self.bounces, FLAG_INDIRECT_ONLY),
+        };
+        BatchPush { sample_offset: offset, sample_count: count, seed: self.seed, bounces, flags }
+    }
+}
+
+const FLAG_INDIRECT_ONLY: u32 = 1;
+
+/// `Params` in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Params {
+    eye: [f32; 4],
+    right: [f32; 4],
+    up: [f32; 4],
+    forward: [f32; 4],
+    environment: [f32; 4],
+    counts: [u32; 4],
+    environment_map: [u32; 4],
+}
+
+/// `Batch` push constants in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct BatchPush {
+    sample_offset: u32,
+    sample_count: u32,
+    seed: u32,
+    bounces: u32,
+    flags: u32,
+}
+
+/// A finished render: per-pixel mean radiance and the standard error of that mean.
+#[derive(Clone, Debug)]
+pub struct ReferenceImage {
+    pub mean: HdrImage,
+    /// sqrt(sample variance / n) per RGB channel; infinite with a single sample. Alpha is 1.
+    pub standard_error: HdrImage,
+    pub spp: u32,
+    /// From the first dispatch to the read-back results.
+    pub seconds: f64,
+}
+
+impl ReferenceImage {
+    /// Pixel samples per second.
+    pub fn samples_per_second(&self) -> f64 {
+        self.mean.width as f64 * self.mean.height as f64 * self.spp as f64 / self.seconds.max(1e-9)
+    }
+}
+
+/// The tracer for one scene and image size: the scene's buffers, the accumulation images and
+/// the pipeline stay on the GPU between renders.
+pub struct ReferenceRenderer {
+    pub gpu: Gpu,
+    pub scene: TracedScene,
+    pipeline: PipelineId,
+    buffers: SceneBuffers,
+    params: Params,
+    mean: ImageId,
+    second_moment: ImageId,
+    readback: [BufferId; 2],
+    frame: Frame,
+    states: ResourceStates,
+    width: u32,
+    height: u32,
+}
+
+const ACCUMULATION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+impl ReferenceRenderer {
+    pub fn new(mut gpu: Gpu, scene: &Scene, (width, height): (u32, u32)) -> Result<ReferenceRenderer> {
+        if width == 0 || height == 0 {
+            return Err(Error::Usage(format!("image size {width}x{height} is empty")));
+        }
+        let traced = TracedScene::build(scene)?;
+        let buffers = traced.upload(&mut gpu)?;
+        let pipeline = gpu.create_compute_pipeline(
+            &ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] },
+            &ShaderLibrary::Embedded,
+        )?;
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
+        let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
+        let bytes = width as u64 * height as u64 * 16;
+        let readback = [readback_buffer(&mut gpu, "reference mean readback", bytes)?, readback_buffer(&mut gpu, "reference second moment readback", bytes)?];
+        let frame = gpu.create_frame()?;
+        let cam = &scene.camera;
+        let (right, up, forward) = cam.basis();
+        let tan_half = (0.5 * cam.fov_y_deg.to_radians()).tan();
+        let params = Params {
+            eye: cam.position.extend(1.0).into(),
+            right: (right * tan_half * (width as f32 / height as f32)).extend(0.0).into(),
+            up: (up * tan_half).extend(0.0).into(),
+            forward: forward.extend(0.0).into(),
+            environment: traced.environment.extend(0.0).into(),
+            counts: [traced.lights.len() as u32, traced.triangles.len() as u32, width, height],
+            environment_map: match &traced.environment_map {
+                Some(m) => [m.width, m.height, m.has_power as u32, 0],
+                None => [0; 4],
+            },
+        };
+        Ok(ReferenceRenderer {
+            gpu,
+            scene: traced,
+            pipeline,
+            buffers,
+            params,
+            mean,
+            second_moment,
+            readback,
+            frame,
+            states: ResourceStates::default(),
+            width,
+            height,
+        })
+    }
+
+    /// Renders `settings.spp` samples per pixel, calling `progress(done, total)` after each batch.
+    pub fn render(&mut self, settings: &Settings, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
+        settings.check()?;
+        let start = Instant::now();
+        let target = Duration::from_millis(250);
+        let mut batch = match settings.batching {
+            Batching::Adaptive => 1,
+            Batching::Fixed(n) => n,
+        };
+        let mut done = 0;
+        while done < settings.spp {
+            let count = batch.min(settings.spp - done);
+            let last = done + count == settings.spp;
+            let t0 = Instant::now();
+            self.dispatch(settings.push(done, count), last)?;
+            done += count;
+            progress(done, settings.spp);
+            if settings.batching == Batching::Adaptive {
+                let per_sample = t0.elapsed().as_secs_f64() / count as f64;
+                let fit = (target.as_secs_f64() / per_sample.max(1e-9)) as u32;
+                batch = fit.clamp(1, count.saturating_mul(2));
+            }
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let read = |b: BufferId| -> Result<HdrImage> {
+            let bytes = self.gpu.read_buffer(b)?;
+            HdrImage::from_rgba32f_bytes(self.width, self.height, &bytes).ok_or_else(|| Error::Usage("reference readback has the wrong size".into()))
+        };
+        let mean = read(self.readback[0])?;
+        let mut standard_error = read(self.readback[1])?;
+        let n = settings.spp as f64;
+        for p in &mut standard_error.pixels {
+            for c in &mut p[..3] {
+                *c = if settings.spp < 2 { f32::INFINITY } else { (*c as f64 / (n - 1.0) / n).max(0.0).sqrt() as f32 };
+            }
+            p[3] = 1.0;
+        }
+        Ok(ReferenceImage { mean, standard_error, spp: settings.spp, seconds })
+    }
+
+    /// One submitted and waited-for batch; the last one also copies the results to the host.
+    fn dispatch(&mut self, push: BatchPush, read_back: bool) -> Result<()> {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let (pipeline, mean, m2, rb) = (self.pipeline, self.mean, self.second_moment, self.readback);
+        let (width, height) = (self.width, self.height);
+        let params = bytemuck::bytes_of(&self.params);
+        let mut graph = RenderGraph::new();
+        let mut pass = graph
+            .pass("path trace")
+            .storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute)
+            .storage_write("second_moment", m2, SubresourceRange::mip(0), compute);
+        for (name, buffer) in self.buffers.bindings() {
+            pass = pass.buffer(buffer, Access::StorageRead { stages: compute }, Some(name));
+        }
+        pass.record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[("params", Bind::UniformData(params))])?;
+            ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+            ctx.rec.dispatch([width, height, 1])
+        });
+        if read_back {
+            for (name, image, buffer) in [("read back mean", mean, rb[0]), ("read back second moment", m2, rb[1])] {
+                graph
+                    .pass(name)
+                    .transfer_read(image, SubresourceRange::mip(0))
+                    .buffer(buffer, Access::TransferWrite, None)
+                    .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
+            }
+            graph.pass("host visibility").buffer(rb[0], Access::HostRead, None).buffer(rb[1], Access::HostRead, None).record(|_| Ok(()));
+        } else {
+            graph.output_image(mean);
+            graph.output_image(m2);
+        }
+        let gpu = &self.gpu;
+        let mut rec = gpu.begin_frame(self.frame)?;
+        rec.begin_scope("reference");
+        graph.execute(&mut rec, &mut self.states)?;
+        rec.end_scope();
+        rec.finish()?;
+        gpu.submit_and_wait(self.frame)?;
+        Ok(())
+    }
+}
+
+fn readback_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
+    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?)
+}
+
+/// The standard-error image written next to `output`: `ref.exr` → `ref.stderr.exr`.
+pub fn stderr_path(output: &Path) -> PathBuf {
+    output.with_extension("stderr.exr")
+}
+
+/// What `penumbra reference` was asked for.
+#[derive(Clone, Debug)]
+pub struct ReferenceOptions {
+    pub scene: PathBuf,
+    pub output: PathBuf,
+    pub size: (u32, u32),
+    pub settings: Settings,
+    pub gpu: GpuDesc,
+}
+
+/// What `penumbra reference` did.
+pub struct ReferenceReport {
+    pub written: Vec<PathBuf>,
+    pub image: ReferenceImage,
+}
+
+/// Renders the scene and writes the mean and standard-error EXRs, printing progress on stderr.
+pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
+    let is_exr = opts.output.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        return Err(Error::Usage(format!("{}: the reference is written as OpenEXR; give a file name ending in .exr", opts.output.display())));
+    }
+    opts.settings.check()?;
+    let scene = Scene::from_file(&opts.scene)?;
+    let gpu = Gpu::new(&opts.gpu)?;
+    let mut renderer = ReferenceRenderer::new(gpu, &scene, opts.size)?;
+    let terminal = std::io::stderr().is_terminal();
+    let image = renderer.render(&opts.settings, &mut |done, total| {
+        if terminal {
+            eprint!("\rreference: {done}/{total} spp");
+        } else {
+            eprintln!("reference: {done}/{total} spp");
+        }
+    })?;
+    if terminal {
+        eprintln!();
+    }
+    let n = renderer.gpu.validation_log().count();
+    if n > 0 {
+        return Err(Error::Usage(format!("{n} validation message(s) (see above)")));
+    }
+    let stderr = stderr_path(&opts.output);
+    image.mean.write_exr(&opts.output)?;
+    image.standard_error.write_exr(&stderr)?;
+    Ok(ReferenceReport { written: vec![opts.output.clone(), stderr], image })
+}
