@@ -303,6 +303,27 @@ unsafe fn destroy_image(device: &ash::Device, allocator: &Mutex<Allocator>, mut 
 }
 
 impl Gpu {
+    /// Memory for a buffer (`linear`) or an optimally tiled image, from gpu-allocator.
+    fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> BackendResult<Allocation> {
+        self.allocator
+            .lock()
+            .map_err(|_| BackendError::Invalid("allocator lock poisoned".into()))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| BackendError::Allocation { name: name.into(), message: e.to_string() })
+    }
+
     pub fn create_buffer(&mut self, desc: &BufferDesc) -> BackendResult<BufferId> {
         if desc.size == 0 {
             return Err(BackendError::Invalid(format!("buffer `{}` has size 0", desc.name)));
@@ -318,22 +339,11 @@ impl Gpu {
             MemoryKind::CpuToGpu => MemoryLocation::CpuToGpu,
             MemoryKind::GpuToCpu => MemoryLocation::GpuToCpu,
         };
-        let allocation = self
-            .allocator
-            .lock()
-            .map_err(|_| BackendError::Invalid("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc {
-                name: &desc.name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
+        let allocation = match self.allocate(&desc.name, requirements, location, true) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { self.device.destroy_buffer(raw, None) };
-                return Err(BackendError::Allocation { name: desc.name.clone(), message: e.to_string() });
+                return Err(e);
             }
         };
         unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
@@ -482,22 +492,11 @@ impl Gpu {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let raw = unsafe { self.device.create_image(&info, None) }.vk("vkCreateImage")?;
         let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
-        let allocation = self
-            .allocator
-            .lock()
-            .map_err(|_| BackendError::Invalid("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc {
-                name: &desc.name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
+        let allocation = match self.allocate(&desc.name, requirements, MemoryLocation::GpuOnly, false) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { self.device.destroy_image(raw, None) };
-                return Err(BackendError::Allocation { name: desc.name.clone(), message: e.to_string() });
+                return Err(e);
             }
         };
         unsafe { self.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
