@@ -16,6 +16,15 @@ struct Light {
     vec4 cone;       // x: cos(inner), y: cos(outer) (spot)
 };
 
+// Smooth from the outer cone (0) to the inner cone (1); a hard edge when they coincide, where
+// smoothstep's result is undefined.
+float spot_falloff(float cos_outer, float cos_inner, float cos_angle) {
+    if (cos_inner - cos_outer <= 1e-7) {
+        return cos_angle >= cos_outer ? 1.0 : 0.0;
+    }
+    return smoothstep(cos_outer, cos_inner, cos_angle);
+}
+
 // Irradiance at normal incidence arriving at `p` and the unit vector towards the light.
 void light_incidence(Light light, vec3 p, out vec3 to_light, out vec3 irradiance) {
     uint type = uint(light.position.w);
@@ -30,7 +39,7 @@ void light_incidence(Light light, vec3 p, out vec3 to_light, out vec3 irradiance
     irradiance = light.intensity.rgb / dist2;
     if (type == LIGHT_SPOT) {
         float cos_angle = dot(-to_light, light.direction.xyz);
-        irradiance *= smoothstep(light.cone.y, light.cone.x, cos_angle);
+        irradiance *= spot_falloff(light.cone.y, light.cone.x, cos_angle);
     } else if (type == LIGHT_QUAD_FAR) {
         irradiance *= max(dot(-to_light, light.direction.xyz), 0.0);
     }

@@ -171,10 +171,13 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
             sum += f * arriving;
         }
     }
+    if (params.environment_map.z == 0u) {
+        return sum;
+    }
     vec2 u = vec2(rand(rng), rand(rng));
     vec3 l;
     float pdf;
-    if (params.environment_map.z != 0u && sample_environment(u, l, pdf)) {
+    if (sample_environment(u, l, pdf)) {
         vec3 f = bsdf_times_cos(s, m, v, l);
         if (any(greaterThan(f, vec3(0.0))) && !occluded(spawn_origin(s, l), l, NO_HIT, NO_LIGHT)) {
             float weight = mis_weight(pdf, bsdf_pdf(s, m, lobe_choice(m), v, l));

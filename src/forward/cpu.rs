@@ -14,8 +14,13 @@ pub struct Surface {
     pub emission: Vec3,
 }
 
-fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
-    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+/// `spot_falloff` of glsl/common/lights.glsl: smoothstep from the outer to the inner cone, a hard
+/// edge when the two coincide.
+pub fn spot_falloff(cos_outer: f32, cos_inner: f32, cos_angle: f32) -> f32 {
+    if cos_inner - cos_outer <= 1e-7 {
+        return if cos_angle >= cos_outer { 1.0 } else { 0.0 };
+    }
+    let t = ((cos_angle - cos_outer) / (cos_inner - cos_outer)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
 
@@ -32,7 +37,7 @@ pub fn light_incidence(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
     let mut e = intensity / dist2;
     if ty == LIGHT_SPOT {
         let cos_angle = (-to_light).dot(Vec3::from_slice(&light.direction[..3]));
-        e *= smoothstep(light.cone[1], light.cone[0], cos_angle);
+        e *= spot_falloff(light.cone[1], light.cone[0], cos_angle);
     } else if ty == LIGHT_QUAD_FAR {
         e *= (-to_light).dot(Vec3::from_slice(&light.direction[..3])).max(0.0);
     }
@@ -80,6 +85,17 @@ mod tests {
         };
         let l = shade(Vec3::ZERO, Vec3::Y, Vec3::new(0.0, 5.0, 1.0), &s, &[light], Vec3::ZERO);
         assert!((l.x - 0.5 / std::f32::consts::PI * 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn spot_cone_edges() {
+        let (o, i) = (30f32.to_radians().cos(), 20f32.to_radians().cos());
+        assert!((spot_falloff(o, i, 0.5 * (o + i)) - 0.5).abs() < 1e-6);
+        assert_eq!(spot_falloff(o, i, 10f32.to_radians().cos()), 1.0);
+        assert_eq!(spot_falloff(o, i, 35f32.to_radians().cos()), 0.0);
+        // Equal cones: a hard edge, not smoothstep's undefined result.
+        assert_eq!(spot_falloff(o, o, 29f32.to_radians().cos()), 1.0);
+        assert_eq!(spot_falloff(o, o, 31f32.to_radians().cos()), 0.0);
     }
 
     #[test]

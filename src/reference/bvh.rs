@@ -173,7 +173,7 @@ impl Builder<'_> {
                     continue;
                 }
                 let cost = acc.half_area() * count as f32 + right_cost[i + 1];
-                if best.map_or(true, |b| cost < b.0) {
+                if best.is_none_or(|b| cost < b.0) {
                     best = Some((cost, axis, i + 1));
                 }
             }

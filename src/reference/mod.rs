@@ -7,9 +7,15 @@
 //!   (point, spot and directional exactly as `glsl/common/lights.glsl`; spherical lights by
 //!   uniform sampling of the visible cap's cone; quad lights by uniform area sampling, one-sided),
 //!   then a direction sampled from the Lambert + Blinn-Phong + diffuse-transmission BSDF;
-//! - a ray that escapes sees the constant environment; a ray that hits an area light after a
-//!   bounce ends there without adding its radiance (next-event estimation already counted it),
-//!   so area lights are seen directly only by camera rays. Area lights are opaque to all rays;
+//! - a ray that escapes sees the environment: a constant, found by BSDF sampling alone, or an
+//!   equirectangular map ([`environment`]), also sampled at every vertex in proportion to
+//!   luminance × sin θ and combined with BSDF sampling by multiple importance sampling (power
+//!   heuristic);
+//! - a ray that hits an area light after a bounce ends there without adding its radiance
+//!   (next-event estimation already counted it), so area lights are seen directly only by
+//!   camera rays. Area lights are opaque to all rays;
+//! - material emission is added wherever a path hits it (both sides), so an emissive mesh lights
+//!   the scene too; texture maps are not supported (an error names the material);
 //! - no Russian roulette: a path is cut after `bounces` surface interactions past the first hit,
 //!   so the estimate counts exactly the light that made at most `bounces + 1` interactions.
 //!   The bias of that cut is the energy of longer paths, e.g. ρ^(K+2)/(1 − ρ) of the emission in
@@ -22,7 +28,9 @@
 //! Each pixel sample draws its random numbers from a PCG stream keyed by (pixel, sample index,
 //! seed) and is added to a running mean and sum of squared deviations (Welford), so the result
 //! is bit-identical for a seed whatever the batching, and the standard error of the mean is
-//! `sqrt(M2 / (n − 1) / n)`.
+//! `sqrt(M2 / (n − 1) / n)`. That standard error is itself estimated from the samples: where a
+//! pixel's value hinges on rare events (a small bright light found by few paths) it is too
+//! small until enough of them have been drawn.
 
 pub mod bvh;
 pub mod environment;

@@ -1,0 +1,571 @@
+//! The reference path tracer against closed forms, on lavapipe with validation. Checks are in
+//! units of the renderer's own standard-error image (see [`Agreement`]), plus known biases
+//! (bounce truncation) and float rounding; estimators with no noise are thus checked to
+//! rounding.
+
+mod common;
+mod reference_support;
+
+use std::path::Path;
+
+use glam::Vec3;
+use penumbra::forward::cpu::{shade, Surface};
+use penumbra::image_io::HdrImage;
+use penumbra::reference::environment::EnvironmentMap;
+use reference_support::{ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance, reflected_environment, rmse, Agreement};
+use penumbra::reference::{Batching, LightPaths, ReferenceImage, ReferenceOptions, ReferenceRenderer, Settings};
+use penumbra::renderer::punctual_lights;
+use penumbra::scene::Scene;
+
+fn scene_file(name: &str) -> Scene {
+    Scene::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).expect("scene parses")
+}
+
+fn parse(toml: &str) -> Scene {
+    Scene::from_str(toml, "<test>", Path::new(".")).expect("test scene parses")
+}
+
+fn settings(spp: u32, bounces: u32, paths: LightPaths, seed: u32) -> Settings {
+    Settings { spp, bounces, paths, seed, batching: Batching::Adaptive }
+}
+
+/// Renders each settings in turn on one validated device.
+fn render(scene: &Scene, size: (u32, u32), runs: &[Settings]) -> Vec<ReferenceImage> {
+    let mut r = ReferenceRenderer::new(common::test_gpu(), scene, size).expect("reference renderer");
+    let images = runs.iter().map(|s| r.render(s, &mut |_, _| {}).expect("render")).collect();
+    common::assert_clean(&r.gpu);
+    images
+}
+
+#[test]
+fn furnace_converges_to_the_geometric_series() {
+    let scene = scene_file("furnace.toml");
+    let m = &scene.materials[0];
+    let (albedo, emission) = (m.albedo, m.emission);
+    let bounces = 14;
+    assert!(albedo.max_element().powi(bounces as i32) < 1e-4);
+    let img = &render(&scene, (32, 32), &[settings(32, bounces, LightPaths::All, 7)])[0];
+    let want = emission / (Vec3::ONE - albedo);
+    // The estimate keeps the first K + 2 terms E ρ^k of the series.
+    let truncation = emission * albedo.powf(bounces as f32 + 2.0) / (Vec3::ONE - albedo);
+    let mut furnace = Agreement::new("furnace");
+    for j in 0..32 {
+        for i in 0..32 {
+            furnace.check(img, i, j, want, truncation);
+        }
+    }
+    furnace.assert();
+    // With too few bounces the missing tail must show: the test can see truncation.
+    let short = &render(&scene, (8, 8), &[settings(4, 1, LightPaths::All, 7)])[0];
+    let three_terms = emission * (Vec3::ONE + albedo + albedo * albedo);
+    let mut truncated = Agreement::new("furnace with 1 bounce");
+    truncated.check(short, 3, 3, three_terms, Vec3::ZERO);
+    truncated.assert();
+}
+
+const SKY_CAMERA: &str = r#"
+[camera]
+position = [0.0, 2.0, 0.0]
+target = [0.5, 0.0, -0.5]
+fov_y_deg = 60
+"#;
+
+#[test]
+fn planes_under_a_constant_sky() {
+    // A surface under a sky of radiance L reflects L ∫ f cos dω: ρ L when Lambertian. A thin
+    // plane that also transmits sees the sky below too, adding τ L. The glossy case checks the
+    // Blinn-Phong lobe's importance sampling against quadrature of the BRDF itself.
+    let sky = Vec3::new(1.0, 2.0, 0.5);
+    let lambert = |albedo, transmittance| Surface { albedo, specular: Vec3::ZERO, exponent: 1.0, emission: transmittance };
+    let cases = [
+        lambert(Vec3::new(0.2, 0.5, 0.9), Vec3::ZERO),
+        lambert(Vec3::new(0.3, 0.1, 0.5), Vec3::new(0.6, 0.2, 0.1)),
+        Surface { albedo: Vec3::new(0.2, 0.3, 0.1), specular: Vec3::new(0.5, 0.4, 0.3), exponent: 20.0, emission: Vec3::new(0.15, 0.2, 0.25) },
+    ];
+    // Lobes are chosen by luminance; each must be chosen often enough in 64 samples for the
+    // sample variance to see it (a lobe never drawn leaves the mean low with a tiny s.e.).
+    for case in cases {
+        // `emission` carries the transmittance here (Surface has no such field).
+        let (albedo, specular, transmittance) = (case.albedo, case.specular, case.emission);
+        let surface = Surface { emission: Vec3::ZERO, ..case };
+        let scene = parse(&format!(
+            r#"{SKY_CAMERA}
+[[materials]]
+name = "ground"
+albedo = [{}, {}, {}]
+specular = [{}, {}, {}]
+exponent = {}
+transmittance = [{}, {}, {}]
+
+[[objects]]
+mesh = "plane"
+size = 400
+material = "ground"
+
+[environment]
+type = "constant"
+radiance = [{}, {}, {}]
+"#,
+            albedo.x, albedo.y, albedo.z, specular.x, specular.y, specular.z, case.exponent, transmittance.x, transmittance.y, transmittance.z, sky.x, sky.y, sky.z
+        ));
+        let img = &render(&scene, (32, 32), &[settings(64, 4, LightPaths::All, 1)])[0];
+        let mut sky_check = Agreement::new("plane under the sky");
+        for j in 0..32 {
+            for i in 0..32 {
+                assert!(ground_point(&scene, i as f32, j as f32, (32, 32), 150.0).is_some(), "the plane fills the image");
+                if specular == Vec3::ZERO {
+                    sky_check.check(img, i, j, (albedo + transmittance) * sky, Vec3::ZERO);
+                } else {
+                    let v = -scene.camera.pixel_center_ray(i, j, 32, 32).1;
+                    let want = (hemispherical_reflectance(v, &surface) + transmittance) * sky;
+                    sky_check.check(img, i, j, want, want * 2e-3);
+                }
+            }
+        }
+        sky_check.assert();
+        if transmittance != Vec3::ZERO {
+            let noisy = img.standard_error.pixels.iter().any(|p| p[0] > 0.0);
+            assert!(noisy, "choosing between lobes is random, so the s.e. is not 0");
+        }
+    }
+}
+
+const LIT_PLANE: &str = r#"
+[camera]
+position = [0.3, 2.5, 2.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 50
+"#;
+
+/// Direct light from punctual lights is the forward method's closed form (plus `extra`, for
+/// what it does not model), box-filtered over each pixel; the only noise is the pixel jitter.
+fn check_punctual(material: &str, surface: Surface, lights: &str, extra: impl Fn(Vec3) -> Vec3) {
+    let toml = format!("{LIT_PLANE}\n[[materials]]\nname = \"m\"\n{material}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n{lights}");
+    let scene = parse(&toml);
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 3)])[0];
+    let gpu_lights = punctual_lights(&scene);
+    let mut agreement = Agreement::new("punctual lights");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            let want = pixel_average(i, j, 8, |x, y| {
+                let p = ground_point(&scene, x, y, size, 3.0)?;
+                Some(shade(p, Vec3::Y, scene.camera.position, &surface, &gpu_lights, Vec3::ZERO) + extra(p))
+            });
+            let Some(want) = want else { continue };
+            agreement.check(img, i, j, want, want * 1e-3);
+        }
+    }
+    assert!(agreement.pixels > 400, "most pixels see the plane ({})", agreement.pixels);
+    agreement.assert();
+}
+
+#[test]
+fn point_light_and_shadow_over_a_plane_direct_only() {
+    // ρ/π I cos θ / r², and exactly 0 in the umbra of a box.
+    let (light, intensity, albedo) = (Vec3::new(0.2, 1.0, -0.3), 10.0, 0.9);
+    let (box_center, half) = (Vec3::new(0.5, 0.4, -0.2), 0.15);
+    let toml = format!(
+        "{LIT_PLANE}\n[[materials]]\nname = \"m\"\nalbedo = {albedo}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n\n\
+         [[objects]]\nmesh = \"box\"\nsize = {}\ntranslate = [{}, {}, {}]\nmaterial = \"m\"\n\n\
+         [[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {intensity}\n",
+        2.0 * half, box_center.x, box_center.y, box_center.z, light.x, light.y, light.z
+    );
+    let scene = parse(&toml);
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 3)])[0];
+    // Segment or ray against the box grown (or shrunk) by `grow`, for margins at silhouettes.
+    let hits_box = |o: Vec3, d: Vec3, t_max: f32, grow: f32| {
+        let h = Vec3::splat(half + grow);
+        penumbra::reference::bvh::box_entry(box_center - h, box_center + h, o, penumbra::reference::bvh::safe_inverse(d), t_max).is_some()
+    };
+    let (mut lit, mut umbra) = (Agreement::new("lit by a point light"), Agreement::new("point light umbra"));
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            let (mut shadowed, mut unsure) = (0, false);
+            let want = pixel_average(i, j, 8, |x, y| {
+                let (o, d) = scene.camera.ray(x, y, size.0, size.1);
+                let p = ground_point(&scene, x, y, size, 2.9)?;
+                if hits_box(o, d, f32::MAX, 0.01) {
+                    return None;
+                }
+                let to_light = light - p;
+                let (blocked, maybe) = (hits_box(p, to_light, 1.0, -0.01), hits_box(p, to_light, 1.0, 0.01));
+                unsure |= blocked != maybe;
+                shadowed += blocked as u32;
+                let r2 = to_light.length_squared();
+                Some(Vec3::splat(if blocked { 0.0 } else { albedo / std::f32::consts::PI * intensity * (to_light.y / r2.sqrt()) / r2 }))
+            });
+            let Some(want) = want else { continue };
+            match shadowed {
+                _ if unsure => {}
+                0 => lit.check(img, i, j, want, want * 1e-3),
+                64 => umbra.check(img, i, j, Vec3::ZERO, Vec3::ZERO),
+                _ => {}
+            }
+        }
+    }
+    assert!(lit.pixels > 400 && umbra.pixels >= 4, "{} lit pixels, {} in the umbra", lit.pixels, umbra.pixels);
+    lit.assert();
+    umbra.assert();
+}
+
+#[test]
+fn spot_directional_transmission_and_blinn_phong_direct_only() {
+    let surface = Surface { albedo: Vec3::new(0.3, 0.2, 0.1), specular: Vec3::splat(0.5), exponent: 32.0, emission: Vec3::ZERO };
+    let lights = r#"
+[[lights]]
+type = "spot"
+position = [-0.5, 2.0, 0.5]
+target = [0.2, 0.0, -0.2]
+intensity = [20, 15, 10]
+inner_deg = 15
+outer_deg = 30
+
+[[lights]]
+type = "directional"
+direction = [-1.0, -2.0, -0.5]
+irradiance = [1.0, 2.0, 3.0]
+
+[[lights]]
+type = "point"
+position = [0.3, -0.8, 0.1]
+intensity = [3, 6, 9]
+"#;
+    // The light under the plane reaches the viewer's side through diffuse transmission τ/π.
+    let (transmittance, below, intensity) = (Vec3::new(0.2, 0.3, 0.4), Vec3::new(0.3, -0.8, 0.1), Vec3::new(3.0, 6.0, 9.0));
+    let through = |p: Vec3| {
+        let d = below - p;
+        transmittance / std::f32::consts::PI * intensity * (-d.y / d.length()) / d.length_squared()
+    };
+    check_punctual("albedo = [0.3, 0.2, 0.1]\nspecular = 0.5\nexponent = 32\ntransmittance = [0.2, 0.3, 0.4]", surface, lights, through);
+}
+
+#[test]
+fn quad_light_over_a_plane_direct_only() {
+    let toml = r#"
+[camera]
+position = [1.5, 0.9, 2.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 60
+
+[[materials]]
+name = "m"
+albedo = 0.7
+
+[[objects]]
+mesh = "plane"
+size = 20
+material = "m"
+
+[[lights]]
+type = "quad"
+corner = [-0.4, 1.2, -0.3]
+edge_u = [0.8, 0.0, 0.0]
+edge_v = [0.0, 0.0, 0.6]
+radiance = [5.0, 4.0, 3.0]
+"#;
+    let scene = parse(toml);
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(128, 0, LightPaths::Direct, 11)])[0];
+    let (corner, u, v, radiance) = (Vec3::new(-0.4, 1.2, -0.3), Vec3::new(0.8, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.6), Vec3::new(5.0, 4.0, 3.0));
+    let verts = [corner, corner + u, corner + u + v, corner + v];
+    let mut plane = Agreement::new("plane under a quad light");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            let want = pixel_average(i, j, 8, |x, y| {
+                // The camera is below the light and may see it; those pixels are left out.
+                let (o, d) = scene.camera.ray(x, y, size.0, size.1);
+                let t = (corner.y - o.y) / d.y;
+                let q = o + d * t;
+                if t > 0.0 && (-0.5..=0.5).contains(&q.x) && (-0.4..=0.4).contains(&q.z) {
+                    return None;
+                }
+                let p = ground_point(&scene, x, y, size, 9.0)?;
+                Some(0.7 / std::f32::consts::PI * radiance * polygon_irradiance(p, Vec3::Y, &verts))
+            });
+            if let Some(want) = want {
+                plane.check(img, i, j, want, want * 1e-3);
+            }
+        }
+    }
+    assert!(plane.pixels > 600, "{} pixels", plane.pixels);
+    plane.assert();
+}
+
+#[test]
+fn sphere_light_over_a_plane_direct_only() {
+    // A sphere wholly above a Lambertian receiver's horizon gives the same irradiance as a point
+    // light of intensity π R² L at its centre: E = π L R² cos θ / D². Directly below the centre
+    // at distance d this is the cap formula E = π L (R/d)², radiance ρ L (R/d)².
+    let (center, radius, radiance, albedo) = (Vec3::new(0.0, 1.5, 0.0), 0.5, Vec3::new(4.0, 3.0, 2.0), 0.8);
+    let toml = r#"
+[camera]
+position = [2.5, 2.0, 2.5]
+target = [0.0, 0.5, 0.0]
+fov_y_deg = 55
+
+[[materials]]
+name = "m"
+albedo = 0.8
+
+[[objects]]
+mesh = "plane"
+size = 30
+material = "m"
+
+[[lights]]
+type = "sphere"
+center = [0.0, 1.5, 0.0]
+radius = 0.5
+radiance = [4.0, 3.0, 2.0]
+"#;
+    let scene = parse(toml);
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(128, 0, LightPaths::Direct, 5)])[0];
+    // Grid points can miss a sliver of the silhouette: a pixel counts as wholly on the light if
+    // a slightly smaller sphere covers its grid, and as off it if a slightly larger one misses.
+    let hits_sphere = |x: f32, y: f32, r: f32| {
+        let (o, d) = scene.camera.ray(x, y, size.0, size.1);
+        let oc = o - center;
+        let b = oc.dot(d);
+        b * b - (oc.length_squared() - r * r) >= 0.0 && b < 0.0
+    };
+    let (mut on_light, mut on_plane, mut nearest_axis) = (Agreement::new("sphere light seen directly"), Agreement::new("plane under a sphere light"), (f32::MAX, 0, 0));
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            if pixel_average(i, j, 6, |x, y| hits_sphere(x, y, 0.97 * radius).then_some(Vec3::ONE)).is_some() {
+                on_light.check(img, i, j, radiance, Vec3::ZERO);
+                continue;
+            }
+            let want = pixel_average(i, j, 8, |x, y| {
+                if hits_sphere(x, y, 1.03 * radius) {
+                    return None;
+                }
+                let p = ground_point(&scene, x, y, size, 14.0)?;
+                let to_c = center - p;
+                let dist = to_c.length();
+                Some(albedo * radiance * radius * radius * (to_c.y / dist) / (dist * dist))
+            });
+            let Some(want) = want else { continue };
+            on_plane.check(img, i, j, want, want * 1e-3);
+            let p = ground_point(&scene, i as f32 + 0.5, j as f32 + 0.5, size, 14.0).unwrap_or(Vec3::splat(99.0));
+            if p.x.hypot(p.z) < nearest_axis.0 {
+                nearest_axis = (p.x.hypot(p.z), i, j);
+            }
+        }
+    }
+    assert!(on_light.pixels > 10 && on_plane.pixels > 300, "{} pixels on the light, {} on the plane", on_light.pixels, on_plane.pixels);
+    on_light.assert();
+    on_plane.assert();
+    let (r, i, j) = nearest_axis;
+    assert!(r < 0.1, "a pixel looks almost straight below the light ({r} m off the axis)");
+    let d = center.y;
+    let mut axis = Agreement::new("on the axis");
+    axis.check(img, i, j, albedo * radiance * (radius / d).powi(2), albedo * radiance * 0.02);
+    axis.assert();
+}
+
+#[test]
+fn error_falls_as_one_over_sqrt_spp() {
+    let scene = scene_file("cornell.toml");
+    let size = (32, 32);
+    // Independent seeds: renders sharing a seed share their first samples.
+    let runs = [settings(8, 3, LightPaths::All, 1), settings(32, 3, LightPaths::All, 2), settings(512, 3, LightPaths::All, 3)];
+    let imgs = render(&scene, size, &runs);
+    // The ~20 pixels straddling the light's outline hold nearly all the squared error at these
+    // sample counts; with so few terms the RMSE ratio would scatter from 1.2 to 3.5 between seeds.
+    let keep = off_light_outline(&scene, size);
+    assert!(keep.iter().filter(|k| !**k).count() < 40);
+    let (e8, e32) = (rmse(&imgs[0].mean, &imgs[2].mean, Some(&keep)), rmse(&imgs[1].mean, &imgs[2].mean, Some(&keep)));
+    // Expected sqrt((1/8 + 1/512) / (1/32 + 1/512)) ≈ 1.96, the reference's own noise included.
+    let ratio = e8 / e32;
+    assert!((1.6..=2.5).contains(&ratio), "RMSE at 8 spp {e8}, at 32 spp {e32}: ratio {ratio}");
+}
+
+#[test]
+fn direct_plus_indirect_is_everything_and_batching_changes_nothing() {
+    let scene = scene_file("cornell.toml");
+    let batched = |batching| Settings { batching, ..settings(6, 3, LightPaths::All, 9) };
+    let runs = [
+        batched(Batching::Fixed(1)),
+        batched(Batching::Fixed(4)),
+        settings(6, 3, LightPaths::Direct, 9),
+        settings(6, 3, LightPaths::Indirect, 9),
+    ];
+    let imgs = render(&scene, (16, 16), &runs);
+    assert_eq!(imgs[0].mean, imgs[1].mean, "samples do not depend on how they are batched");
+    assert_eq!(imgs[0].standard_error, imgs[1].standard_error);
+    let (all, direct, indirect) = (&imgs[0].mean, &imgs[2].mean, &imgs[3].mean);
+    let (mut some_direct, mut some_indirect) = (false, false);
+    for ((a, d), n) in all.pixels.iter().zip(&direct.pixels).zip(&indirect.pixels) {
+        for c in 0..3 {
+            // The same seed draws the same first interaction in all three estimators.
+            assert!((a[c] - d[c] - n[c]).abs() <= 1e-4 * a[c].abs() + 1e-6, "{a:?} != {d:?} + {n:?}");
+            some_direct |= d[c] > 0.0;
+            some_indirect |= n[c] > 0.0;
+        }
+    }
+    assert!(some_direct && some_indirect);
+    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (4, 4)).expect("reference renderer");
+    let e = r.render(&settings(1, 0, LightPaths::Indirect, 0), &mut |_, _| {}).expect_err("--indirect-only with 0 bounces is an error").to_string();
+    assert!(e.contains("--indirect-only") && e.contains("--bounces"), "{e}");
+    common::assert_clean(&r.gpu);
+}
+
+fn cli_options(scene: &str, output: &Path, seed: u32) -> ReferenceOptions {
+    ReferenceOptions {
+        scene: Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene),
+        output: output.to_path_buf(),
+        size: (16, 16),
+        settings: settings(4, 2, LightPaths::All, seed),
+        gpu: common::test_gpu_desc(),
+    }
+}
+
+#[test]
+fn same_seed_gives_identical_files_and_another_seed_differs() {
+    let paths = ["same-a.exr", "same-b.exr", "other.exr"].map(common::temp_path);
+    // `run` fails when the validation layer reported anything.
+    for (path, seed) in paths.iter().zip([3, 3, 4]) {
+        let report = penumbra::reference::run(&cli_options("cornell.toml", path, seed)).expect("reference run");
+        assert_eq!(report.written, vec![path.clone(), penumbra::reference::stderr_path(path)]);
+    }
+    let bytes = |p: &Path| std::fs::read(p).expect("written");
+    let stderr = |p: &Path| bytes(&penumbra::reference::stderr_path(p));
+    assert_eq!(bytes(&paths[0]), bytes(&paths[1]), "same seed, same mean");
+    assert_eq!(stderr(&paths[0]), stderr(&paths[1]), "same seed, same standard error");
+    assert_ne!(bytes(&paths[0]), bytes(&paths[2]), "another seed, other noise");
+}
+
+#[test]
+fn command_line_renders_the_furnace_and_rejects_bad_input() {
+    let out = common::temp_path("cli-furnace.exr");
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let furnace = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/furnace.toml");
+    let penumbra = |args: &[&str]| {
+        let mut all = vec!["reference", furnace.to_str().expect("utf-8 path"), "--device", &device, "--validation"];
+        all.extend_from_slice(args);
+        std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&all).output().expect("run penumbra")
+    };
+    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "-o", out.to_str().expect("utf-8 path")]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    assert!(stderr.contains("reference: 3/3 spp") && stdout.contains("samples/s"), "{stdout}\n{stderr}");
+    let mean = HdrImage::read_exr(&out).expect("mean EXR");
+    let se = HdrImage::read_exr(&penumbra::reference::stderr_path(&out)).expect("standard-error EXR");
+    assert_eq!((mean.width, mean.height, se.width), (8, 8, 8));
+    assert!(mean.pixels.iter().all(|p| (p[0] - 1.0).abs() < 1e-3), "{:?}", mean.pixels[0]);
+
+    for (args, expect) in [
+        (&["-o", "x.png"][..], "OpenEXR"),
+        (&["--direct-only", "--bounces", "3"][..], "cannot be used with"),
+        (&["--indirect-only", "--bounces", "0"][..], "--indirect-only"),
+        (&["--spp", "0"][..], "--spp"),
+        (&["--size", "0x4"][..], "--size"),
+    ] {
+        let o = penumbra(args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && stderr.contains(expect), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn texture_maps_are_an_error_naming_the_field() {
+    let png = common::temp_path("wood.png");
+    HdrImage::new(2, 2).write_png(&png, 1.0).expect("write texture");
+    let texture = format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nalbedo_map = {:?}\n", png.display().to_string());
+    let e = penumbra::reference::TracedScene::build(&parse(&texture)).err().expect("unsupported").to_string();
+    assert!(e.contains("<test>") && e.contains("albedo_map") && e.contains("\"wood\"") && e.contains("unsupported"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+}
+
+/// A 16 × 8 sky: a bright sun texel, a bluish gradient above the horizon, a dim ground below,
+/// with left-right asymmetry so that a mirrored or rotated lookup would show.
+fn sky_texels() -> (u32, u32, Vec<[f32; 4]>) {
+    let (w, h) = (16u32, 8u32);
+    let texels = (0..w * h)
+        .map(|k| {
+            let (i, j) = (k % w, k / w);
+            if (i, j) == (11, 2) {
+                [40.0, 36.0, 30.0, 1.0]
+            } else if j < h / 2 {
+                [0.2 + 0.05 * i as f32, 0.4 + 0.02 * j as f32, 0.9, 1.0]
+            } else {
+                [0.15, 0.1 + 0.01 * i as f32, 0.05, 1.0]
+            }
+        })
+        .collect();
+    (w, h, texels)
+}
+
+#[test]
+fn image_environment_seen_directly_and_lighting_planes() {
+    let (w, h, texels) = sky_texels();
+    let exr = common::temp_path("sky.exr");
+    HdrImage { width: w, height: h, pixels: texels.clone() }.write_exr(&exr).expect("write sky");
+    let scale = 1.5;
+    let sky = EnvironmentMap::from_texels(w, h, texels.iter().map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, 0.0]).collect());
+    let environment = format!("\n[environment]\ntype = \"image\"\npath = {:?}\nscale = {scale}\n", exr.display().to_string());
+
+    // Seen directly: every pixel whose footprint lies in one texel shows exactly that texel.
+    let scene = parse(&format!("[camera]\nposition = [0, 0, 0]\ntarget = [0.6, 0.5, -1]\nfov_y_deg = 100\n{environment}"));
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(4, 2, LightPaths::All, 1)])[0];
+    let mut direct = Agreement::new("environment seen directly");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            let mut texel = None;
+            let want = pixel_average(i, j, 4, |x, y| {
+                let d = scene.camera.ray(x, y, size.0, size.1).1;
+                let uv = penumbra::scene::Environment::equirect_uv(d);
+                let t = ((uv.x * w as f32) as u32, (uv.y * h as f32) as u32);
+                (*texel.get_or_insert(t) == t).then(|| sky.radiance(d))
+            });
+            if let Some(want) = want {
+                direct.check(img, i, j, want, Vec3::ZERO);
+            }
+        }
+    }
+    assert!(direct.pixels > 500, "{} pixels", direct.pixels);
+    direct.assert();
+
+    // A Lambertian plane facing +y: for a map constant over texels, each texel row between θ0 and
+    // θ1 adds L (2π/W) (sin²θ1 − sin²θ0)/2 of irradiance; the rows above the horizon light the
+    // front, those below reach the viewer through transmission.
+    let irradiance = |rows: std::ops::Range<u32>| {
+        let mut e = Vec3::ZERO;
+        for j in rows {
+            let (t0, t1) = (j as f32 / h as f32 * std::f32::consts::PI, (j + 1) as f32 / h as f32 * std::f32::consts::PI);
+            let band = std::f32::consts::TAU / w as f32 * (t1.sin().powi(2) - t0.sin().powi(2)).abs() / 2.0;
+            for i in 0..w {
+                let t = sky.texels[(j * w + i) as usize];
+                e += Vec3::new(t[0], t[1], t[2]) * band;
+            }
+        }
+        e
+    };
+    let (above, below) = (irradiance(0..h / 2), irradiance(h / 2..h));
+    let size = (16, 16);
+    for (material, glossy) in [("albedo = [0.6, 0.5, 0.4]", false), ("albedo = [0.2, 0.3, 0.1]\nspecular = [0.5, 0.4, 0.3]\nexponent = 20\ntransmittance = [0.3, 0.3, 0.3]", true)] {
+        let scene = parse(&format!("{SKY_CAMERA}\n[[materials]]\nname = \"m\"\n{material}\n\n[[objects]]\nmesh = \"plane\"\nsize = 400\nmaterial = \"m\"\n{environment}"));
+        let m = &scene.materials[0];
+        let surface = Surface { albedo: m.albedo, specular: m.specular, exponent: m.exponent, emission: Vec3::ZERO };
+        let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 2)])[0];
+        let mut lit = Agreement::new(if glossy { "glossy plane under an image sky" } else { "plane under an image sky" });
+        for j in 0..size.1 {
+            for i in 0..size.0 {
+                let v = -scene.camera.pixel_center_ray(i, j, size.0, size.1).1;
+                let (want, slack) = if glossy {
+                    let want = reflected_environment(&sky, v, &surface) + m.transmittance / std::f32::consts::PI * below;
+                    (want, want * 2e-3)
+                } else {
+                    (m.albedo / std::f32::consts::PI * above, Vec3::ZERO)
+                };
+                lit.check(img, i, j, want, slack);
+            }
+        }
+        lit.assert();
+    }
+}
