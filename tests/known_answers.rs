@@ -307,3 +307,46 @@ irradiance = [3.0, 3.0, 3.0]
     }
     assert!(textured > 20 && bumped > 100, "{textured} textured and {bumped} bumped pixels checked");
 }
+
+#[test]
+fn constant_sky_lights_an_open_plane_with_rho_l_and_is_seen_behind_it() {
+    let toml = format!(
+        r#"{CAMERA}
+[[materials]]
+name = "grey"
+albedo = [0.6, 0.4, 0.2]
+
+[[objects]]
+mesh = "plane"
+size = [4, 4]
+material = "grey"
+
+[environment]
+type = "constant"
+radiance = [2.0, 1.5, 1.0]
+"#
+    );
+    let (img, scene) = render(&toml);
+    let sky = [2.0f32, 1.5, 1.0];
+    let (mut ground, mut background) = (0, 0);
+    for j in 0..H {
+        for i in 0..W {
+            let p = img.get(i, j);
+            match hit_ground(&scene, i, j, 2.5) {
+                Some(q) if q.x.abs() < 1.9 && q.z.abs() < 1.9 => {
+                    // An unoccluded Lambertian surface under a uniform sky reflects ρ·L.
+                    for (c, rho) in [0.6f32, 0.4, 0.2].into_iter().enumerate() {
+                        assert!((p[c] - rho * sky[c]).abs() <= 1e-3 * rho * sky[c], "ground ({i},{j}) ch {c}: {}", p[c]);
+                    }
+                    ground += 1;
+                }
+                None => {
+                    assert_eq!(&p[..3], &sky, "sky pixel ({i},{j})");
+                    background += 1;
+                }
+                _ => {}
+            }
+        }
+    }
+    assert!(ground > 500 && background > 50, "{ground} ground and {background} sky pixels");
+}

@@ -1,8 +1,9 @@
 #version 460
-// Forward direct lighting: emission + ambient + sum over punctual lights of BRDF * E * cos,
+// Forward direct lighting: emission + unshadowed environment irradiance + sum over lights of BRDF * E * cos,
 // in linear radiance. Material maps are always bound (1x1 defaults when a material has none).
 #include "common/frame.glsl"
 #include "common/lights.glsl"
+#include "common/sh.glsl"
 
 struct Material {
     vec4 albedo;        // rgb: diffuse albedo
@@ -29,6 +30,17 @@ layout(location = 3) in vec4 in_tangent;
 
 layout(location = 0) out vec4 out_radiance;
 
+// Unshadowed irradiance from the environment (clamped: a 3-band fit can dip below zero).
+vec3 environment_irradiance(vec3 n) {
+    float y[SH_MAX_COEFFS];
+    sh_eval_bands(sh_world_to_sh(n), 3, y);
+    vec3 e = vec3(0.0);
+    for (int i = 0; i < 9; ++i) {
+        e += frame.env_irradiance[i].rgb * y[i];
+    }
+    return max(e, vec3(0.0));
+}
+
 void main() {
     Material m = materials.items[draw.material];
     vec3 v = normalize(frame.camera_pos.xyz - in_world);
@@ -52,7 +64,7 @@ void main() {
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
     vec3 specular = m.specular.rgb * texture(specular_map, in_uv).rgb;
-    vec3 radiance = emission + albedo * frame.ambient.rgb;
+    vec3 radiance = emission + albedo / PI * environment_irradiance(n);
     for (uint i = 0u; i < frame.counts.x; ++i) {
         vec3 l;
         vec3 e;

@@ -5,7 +5,7 @@
 
 pub mod cpu;
 
-use crate::backend::{vk, Bind, ColorTarget, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::backend::{vk, Bind, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SubresourceRange, VertexAttribute, VertexLayout};
 use crate::error::Result;
 use crate::graph::{Access, RenderGraph};
 use crate::methods::{FrameInputs, LightingMethod};
@@ -22,6 +22,9 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
 
 pub struct Forward {
     pipeline: PipelineId,
+    /// The environment behind the geometry.
+    sky: PipelineId,
+    sky_sampler: SamplerId,
 }
 
 /// The vertex layout of [`Vertex`], shared by raster methods.
@@ -47,7 +50,14 @@ impl Forward {
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(gpu.caps().depth_stencil_format);
         let pipeline = gpu.create_graphics_pipeline(&desc, shaders)?;
-        Ok(Forward { pipeline })
+        let mut sky = GraphicsPipelineDesc::new("sky", "forward/sky.vert", Some("forward/sky.frag"));
+        sky.raster.cull = vk::CullModeFlags::NONE;
+        sky.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+        sky.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        sky.depth_format = Some(gpu.caps().depth_stencil_format);
+        let sky = gpu.create_graphics_pipeline(&sky, shaders)?;
+        let sky_sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
+        Ok(Forward { pipeline, sky, sky_sampler })
     }
 }
 
@@ -70,8 +80,7 @@ impl LightingMethod for Forward {
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
             .record(move |ctx| {
                 let _extent = ctx.rec.begin_rendering(&RenderingDesc {
-                    // Rays that hit nothing see the constant environment (black without one).
-                    colors: vec![RenderTarget::clear_color(t.radiance, [uniforms.ambient[0], uniforms.ambient[1], uniforms.ambient[2], 1.0])],
+                    colors: vec![RenderTarget::clear_color(t.radiance, [0.0, 0.0, 0.0, 1.0])],
                     depth_stencil: Some(RenderTarget::clear_depth(t.depth_stencil, 1.0, 0)),
                 })?;
                 ctx.rec.bind_pipeline(self.pipeline)?;
@@ -98,6 +107,15 @@ impl LightingMethod for Forward {
                     ctx.rec.push_constants(&bytemuck::bytes_of(&push)[..68])?;
                     ctx.rec.draw_indexed(d.index_count, d.first_index, d.vertex_offset)?;
                 }
+                // The sky last, on the far plane: it covers only pixels no geometry reached.
+                ctx.rec.bind_pipeline(self.sky)?;
+                ctx.rec.bind(&[(
+                    "environment_map",
+                    Bind::Sampled { image: scene.environment.map, range: SubresourceRange::mip(0), sampler: self.sky_sampler },
+                )])?;
+                let inverse = glam::Mat4::from_cols_array(&uniforms.view_proj).inverse();
+                ctx.rec.push_constants(bytemuck::bytes_of(&inverse.to_cols_array()))?;
+                ctx.rec.draw(3, 1)?;
                 ctx.rec.end_rendering();
                 Ok(())
             });

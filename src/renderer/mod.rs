@@ -1,6 +1,7 @@
 //! Frame assembly: the scene on the GPU, the frame targets, the lighting method the scene asked
 //! for, and the passes around it (readback for captures, tone mapping for the window).
 
+pub mod environment;
 mod scene_gpu;
 
 use bytemuck::{Pod, Zeroable};
@@ -26,6 +27,8 @@ pub struct FrameUniforms {
     pub camera_pos: [f32; 4],
     pub ambient: [f32; 4],
     pub counts: [u32; 4],
+    /// Environment irradiance, 3-band SH (see `environment::EnvironmentLighting`).
+    pub env_irradiance: [[f32; 4]; 9],
 }
 
 /// Push constants of raster draws (`Draw` in glsl/forward/forward.vert); 68 bytes are pushed.
@@ -121,6 +124,7 @@ impl Renderer {
                 _ => [0.0; 4],
             },
             counts: [self.scene_gpu.lights.len() as u32, 0, 0, 0],
+            env_irradiance: self.scene_gpu.environment.irradiance_sh,
         }
     }
 

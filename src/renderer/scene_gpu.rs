@@ -74,6 +74,7 @@ pub struct SceneGpu {
     pub sampler: SamplerId,
     /// Object-space meshes, kept for CPU-side methods and tests.
     pub meshes: Vec<Mesh>,
+    pub environment: super::environment::EnvironmentLighting,
 }
 
 /// Point, spot and directional lights, exactly as given (area lights are left out).
@@ -272,7 +273,8 @@ impl SceneGpu {
             states.forget_buffer(id);
         }
         let sampler = gpu.sampler(SamplerDesc::LINEAR_REPEAT)?;
-        Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: raster_lights(scene), sampler, meshes })
+        let environment = super::environment::EnvironmentLighting::upload(gpu, states, scene)?;
+        Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: raster_lights(scene), sampler, meshes, environment })
     }
 }
 
