@@ -12,6 +12,7 @@ pub mod demo;
 pub mod error;
 pub mod forward;
 pub mod graph;
+pub mod heightfield;
 pub mod image_io;
 pub mod methods;
 pub mod metrics;
@@ -21,6 +22,7 @@ pub mod renderer;
 pub mod scene;
 pub mod sh;
 pub mod shaders;
+pub mod shadow_volumes;
 pub mod world;
 
 pub use error::{Error, Result};

@@ -56,7 +56,12 @@ pub struct MethodInfo {
 
 /// Every method penumbra implements.
 pub fn registry() -> Vec<MethodInfo> {
-    vec![MethodInfo { schema: crate::forward::SCHEMA, sweep: crate::forward::sweep, reference: ReferenceKind::Direct }]
+    vec![
+        MethodInfo { schema: crate::forward::SCHEMA, sweep: crate::forward::sweep, reference: ReferenceKind::Direct },
+        MethodInfo { schema: crate::shadow_volumes::SCHEMA, sweep: crate::shadow_volumes::sweep, reference: ReferenceKind::Direct },
+        MethodInfo { schema: crate::heightfield::PYRAMID_SCHEMA, sweep: crate::heightfield::pyramid_sweep, reference: ReferenceKind::Direct },
+        MethodInfo { schema: crate::heightfield::BRUTE_FORCE_SCHEMA, sweep: crate::heightfield::brute_sweep, reference: ReferenceKind::Direct },
+    ]
 }
 
 /// Every method scenes may declare, with its parameters.
@@ -76,11 +81,13 @@ pub fn create(
     decl: &MethodDecl,
     gpu: &mut Gpu,
     shaders: &ShaderLibrary,
-    _states: &mut ResourceStates,
-    _scene: &Scene,
+    states: &mut ResourceStates,
+    scene: &Scene,
 ) -> Result<Box<dyn LightingMethod>> {
     match decl.name.as_str() {
         "forward" => Ok(Box::new(Forward::new(gpu, shaders, decl)?)),
+        crate::shadow_volumes::NAME => Ok(Box::new(crate::shadow_volumes::ShadowVolumes::new(gpu, shaders, states, scene, decl)?)),
+        crate::heightfield::PYRAMID | crate::heightfield::BRUTE_FORCE => Ok(Box::new(crate::heightfield::HeightfieldMethod::new(gpu, shaders, states, scene, decl)?)),
         other => Err(Error::Usage(format!("method `{other}` is not implemented"))),
     }
 }

@@ -104,6 +104,10 @@ impl ProfileReport {
         if !self.culled.is_empty() {
             s += &format!("culled (outputs unused): {}\n", self.culled.join(", "));
         }
+        // The height-field methods also print their passes as seed 001's Table 6.6.
+        if let Some(t) = crate::heightfield::measure::table_6_6(&self.passes) {
+            s += &t;
+        }
         s
     }
 }

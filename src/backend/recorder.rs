@@ -317,6 +317,23 @@ impl<'g> Recorder<'g> {
         Ok(extent)
     }
 
+    /// Clears the stencil aspect of the bound depth/stencil attachment to `value` over `extent`
+    /// (what [`Recorder::begin_rendering`] returned), keeping depth: one light's shadow-volume
+    /// counts start from zero without touching the depth the ambient pass wrote.
+    pub fn clear_stencil(&mut self, extent: vk::Extent2D, value: u32) -> BackendResult<()> {
+        if !self.rendering {
+            return Err(BackendError::Invalid("clear_stencil outside a rendering scope".into()));
+        }
+        let attachment = vk::ClearAttachment {
+            aspect_mask: vk::ImageAspectFlags::STENCIL,
+            color_attachment: 0,
+            clear_value: vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: value } },
+        };
+        let rect = vk::ClearRect { rect: vk::Rect2D { offset: vk::Offset2D::default(), extent }, base_array_layer: 0, layer_count: 1 };
+        unsafe { self.gpu.device.cmd_clear_attachments(self.cb, &[attachment], &[rect]) };
+        Ok(())
+    }
+
     pub fn end_rendering(&mut self) {
         if self.rendering {
             unsafe { self.gpu.device.cmd_end_rendering(self.cb) };

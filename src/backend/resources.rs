@@ -592,6 +592,12 @@ impl Gpu {
         Ok(view)
     }
 
+    /// What the device supports for `format` in optimal tiling (e.g. whether it can be sampled
+    /// with linear filtering: `SAMPLED_IMAGE_FILTER_LINEAR`, optional for 32-bit float formats).
+    pub fn format_features(&self, format: vk::Format) -> vk::FormatFeatureFlags {
+        unsafe { self.instance.get_physical_device_format_properties(self.physical, format) }.optimal_tiling_features
+    }
+
     /// A sampler, shared among everyone asking for the same description.
     pub fn sampler(&mut self, desc: SamplerDesc) -> BackendResult<SamplerId> {
         if let Some(&id) = self.arenas.sampler_cache.get(&desc) {

@@ -10,7 +10,9 @@ use super::doc::{Ctx, Field, Table};
 use super::error::SceneError;
 use super::generators;
 use super::methods::{self, MethodDecl};
-use super::types::{Camera, Environment, Light, Material, MeshSource, Object};
+use super::types::{Animation, Camera, Environment, Light, Material, MeshSource, Object};
+use super::world_mesh::{self, WorldLevel};
+use crate::world::level_gen::RoomsParams;
 use super::Scene;
 
 pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
@@ -214,12 +216,10 @@ fn read_object(
         );
         return Err(mesh_f.err(msg));
     };
-    let material_key: &[&str] = if kind == "cornell_box" {
-        &[]
-    } else {
-        &["material"]
-    };
-    t.allow(&[&PLACEMENT[..], material_key, mesh_extra].concat())?;
+    let expands = matches!(kind, "cornell_box" | "bsp_rooms" | "bsp_fig8c");
+    let material_key: &[&str] = if expands { &[] } else { &["material"] };
+    let animation_keys: &[&str] = if expands { &[] } else { &ANIMATION_KEYS };
+    t.allow(&[&PLACEMENT[..], material_key, animation_keys, mesh_extra].concat())?;
 
     let obj_name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
     let translate = opt(t.get("translate"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
@@ -236,6 +236,11 @@ fn read_object(
     })?
     .unwrap_or(1);
 
+    if kind == "bsp_rooms" || kind == "bsp_fig8c" {
+        return read_world(&t, kind, &obj_name, materials, objects);
+    }
+    let animation = read_animation(&t)?;
+
     if kind == "cornell_box" {
         for part in cornell::parts(subdivisions) {
             objects.push(Object {
@@ -243,6 +248,7 @@ fn read_object(
                 mesh: part.mesh,
                 material: material_index(materials, part.material).unwrap_or(0),
                 transform: transform * part.local,
+                animation,
             });
         }
         if opt(t.get("light"), |f| f.boolean())?.unwrap_or(true) {
@@ -279,6 +285,7 @@ fn read_object(
                 .unwrap_or(48),
             rings: opt(t.get("rings"), |f| f.int_in(2, generators::MAX_RINGS))?.unwrap_or(24),
         },
+        "heightfield" => MeshSource::Heightfield(super::heightfield::read(&t)?),
         _ => MeshSource::Obj(
             t.require("path", "an OBJ file relative to the scene file")?
                 .existing_file()?,
@@ -307,7 +314,113 @@ fn read_object(
         mesh,
         material,
         transform,
+        animation,
     });
+    Ok(())
+}
+
+/// Keys of an entity's [`Animation`] (any mesh but the expanding ones).
+const ANIMATION_KEYS: [&str; 3] = ["spin_deg_per_s", "bob_amplitude", "bob_period_s"];
+
+fn read_animation(t: &Table) -> Result<Option<Animation>, SceneError> {
+    let spin = opt(t.get("spin_deg_per_s"), |f| f.vec3())?;
+    let amplitude = opt(t.get("bob_amplitude"), |f| f.vec3())?;
+    let period = opt(t.get("bob_period_s"), positive)?;
+    if spin.is_none() && amplitude.is_none() && period.is_none() {
+        return Ok(None);
+    }
+    Ok(Some(Animation {
+        spin_deg_per_s: spin.unwrap_or(Vec3::ZERO),
+        bob_amplitude: amplitude.unwrap_or(Vec3::ZERO),
+        bob_period_s: period.unwrap_or(4.0),
+    }))
+}
+
+/// Keys of the world meshes besides the placement: the generator's parameters, then one material
+/// per face class (`<class>_material`).
+const ROOMS_KEYS: [&str; 10] = [
+    "seed",
+    "columns",
+    "rows",
+    "pillars",
+    "floor_material",
+    "ceiling_material",
+    "wall_material",
+    "pillar_material",
+    "corridor_material",
+    "cell_size",
+];
+const FIG8C_KEYS: [&str; 5] = [
+    "floor_material",
+    "ceiling_material",
+    "wall_material",
+    "pillar_material",
+    "corridor_material",
+];
+
+/// `bsp_rooms` / `bsp_fig8c`: one object per face class, like `cornell_box`. Only a translation
+/// is allowed (methods map lights into the world's frame with it).
+fn read_world(
+    t: &Table,
+    kind: &str,
+    obj_name: &str,
+    materials: &mut Vec<Material>,
+    objects: &mut Vec<Object>,
+) -> Result<(), SceneError> {
+    for key in ["rotate_deg", "scale"] {
+        if let Some(f) = t.get(key) {
+            return Err(f.err(format!("{kind} allows only `translate` (the world's axes are fixed)")));
+        }
+    }
+    let translate = opt(t.get("translate"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
+    let level = if kind == "bsp_fig8c" {
+        WorldLevel::Fig8c
+    } else {
+        let mut params = RoomsParams::default();
+        if let Some(v) = opt(t.get("columns"), |f| f.int_in(1, 8))? {
+            params.columns = v as usize;
+        }
+        if let Some(v) = opt(t.get("rows"), |f| f.int_in(1, 8))? {
+            params.rows = v as usize;
+        }
+        if params.columns * params.rows < 2 {
+            let f = t.get("columns").or(t.get("rows"));
+            let msg = "columns × rows must be at least 2 (rooms are joined by corridors)";
+            return Err(match f {
+                Some(f) => f.err(msg),
+                None => t.ctx.err(t.line, &t.path, msg),
+            });
+        }
+        if let Some(f) = t.get("pillars") {
+            let v = f.int_in(0, 6)? as usize;
+            params.pillars = (v, v);
+        }
+        if let Some(v) = opt(t.get("cell_size"), |f| f.number_where("a cell size in metres, from 12 to 40", |x| (12.0..=40.0).contains(&x)))? {
+            params.cell_size = f64::from(v);
+        }
+        let seed = opt(t.get("seed"), |f| f.int_in(0, u32::MAX))?.unwrap_or(1);
+        WorldLevel::Rooms { seed: u64::from(seed), params }
+    };
+    for (suffix, class) in world_mesh::CLASSES {
+        let key = format!("{suffix}_material");
+        let material = match t.get(&key) {
+            None => material_index(materials, "default").unwrap_or(0),
+            Some(mf) => {
+                let wanted = mf.string()?;
+                material_index(materials, wanted).ok_or_else(|| {
+                    let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                    mf.err(format!("unknown material {wanted:?}; defined materials: {}", names.join(", ")))
+                })?
+            }
+        };
+        objects.push(Object {
+            name: format!("{obj_name}.{suffix}"),
+            mesh: MeshSource::World { level: level.clone(), class },
+            material,
+            transform: Mat4::from_translation(translate),
+            animation: None,
+        });
+    }
     Ok(())
 }
 
@@ -349,13 +462,16 @@ const LIGHT_KEYS: [(&str, &[&str]); 5] = [
 ];
 
 /// Each mesh type and its keys besides the placement ones and `material`.
-const MESH_KEYS: [(&str, &[&str]); 6] = [
+const MESH_KEYS: [(&str, &[&str]); 9] = [
     ("plane", &["size", "subdivisions"]),
     ("quad", &["corner", "edge_u", "edge_v", "subdivisions"]),
     ("box", &["size", "subdivisions"]),
     ("sphere", &["radius", "segments", "rings"]),
     ("obj", &["path"]),
     ("cornell_box", &["subdivisions", "light"]),
+    ("heightfield", super::heightfield::HEIGHTFIELD_KEYS),
+    ("bsp_rooms", &ROOMS_KEYS),
+    ("bsp_fig8c", &FIG8C_KEYS),
 ];
 
 /// `common` followed by the keys of every type, without repeats (for tables missing their type).

@@ -18,21 +18,24 @@ mod doc;
 mod error;
 mod format;
 pub mod generators;
+pub mod heightfield;
 mod mesh;
 mod methods;
 mod obj;
 #[cfg(test)]
 mod tests;
 mod types;
+pub mod world_mesh;
 
 use std::path::Path;
 
 pub use cornell::{builtin_material, BUILTIN_MATERIALS};
 pub use error::SceneError;
+pub use heightfield::{HeightImage, HeightShape, HeightfieldSource};
 pub use mesh::Mesh;
 pub use methods::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
 pub use obj::load_obj;
-pub use types::{Camera, Environment, Light, Material, MeshSource, Object};
+pub use types::{Animation, Camera, Environment, Light, Material, MeshSource, Object};
 
 /// The name a scene is known by in error messages: the path it was read from, or
 /// [`DEFAULT_SOURCE`].
@@ -121,6 +124,13 @@ impl Object {
                 segments,
                 rings,
             } => generators::sphere(*radius, *segments, *rings),
+            MeshSource::World { level, class } => {
+                let world = world_mesh::compiled(level).map_err(|e| {
+                    SceneError::new(format!("object {:?}", self.name), None, level.mesh_name(), format!("the world does not compile: {e}"))
+                })?;
+                world_mesh::class_mesh(&world, *class).0
+            }
+            MeshSource::Heightfield(h) => h.mesh()?,
         };
         // Generators only meet non-finite input from hand-built MeshSources.
         mesh.validate(&format!("object {:?}", self.name))?;

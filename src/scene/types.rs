@@ -144,6 +144,40 @@ pub enum MeshSource {
         segments: u32,
         rings: u32,
     },
+    /// A height field over a square in the xz-plane (see [`crate::scene::heightfield`]):
+    /// generated or loaded from an image, traced and drawn at its time-0 shape.
+    Heightfield(super::heightfield::HeightfieldSource),
+    /// The faces of one material class (`class`, a [`crate::world::MaterialId`]) of a compiled
+    /// BSP world, in scene axes: see [`crate::scene::world_mesh`].
+    World {
+        level: super::world_mesh::WorldLevel,
+        class: u32,
+    },
+}
+
+/// Simple rigid motion of an entity over time `t` (seconds): a spin about its own origin (in
+/// object space, before the placement) and a sinusoidal bob of its position. At `t = 0` the
+/// object is exactly at its placement, which is what methods without animation and the
+/// reference render.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Animation {
+    /// Angular velocity about the object's x, y, z axes (applied x first), degrees per second.
+    pub spin_deg_per_s: Vec3,
+    /// Peak offset of the bob, metres: `bob_amplitude · sin(2π t / bob_period_s)`.
+    pub bob_amplitude: Vec3,
+    pub bob_period_s: f32,
+}
+
+impl Animation {
+    /// The object → world transform at time `t` for placement `base`.
+    pub fn transform_at(&self, base: Mat4, t: f32) -> Mat4 {
+        let a = self.spin_deg_per_s * t;
+        let spin = Mat4::from_rotation_z(a.z.to_radians())
+            * Mat4::from_rotation_y(a.y.to_radians())
+            * Mat4::from_rotation_x(a.x.to_radians());
+        let phase = std::f32::consts::TAU * t / self.bob_period_s.max(1e-6);
+        Mat4::from_translation(self.bob_amplitude * phase.sin()) * base * spin
+    }
 }
 
 /// One drawable object: a mesh, a material and a placement.
@@ -155,6 +189,8 @@ pub struct Object {
     pub material: usize,
     /// Object → world: `translate · Rz · Ry · Rx · scale` (x rotation applied first).
     pub transform: Mat4,
+    /// Motion over time, for methods that animate entities (`transform` is the pose at t = 0).
+    pub animation: Option<Animation>,
 }
 
 /// A light in radiometric units (watts; linear RGB per channel).

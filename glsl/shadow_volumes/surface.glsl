@@ -1,0 +1,26 @@
+// Shared by the ambient and light passes of the stencil shadow-volume method: the per-draw push
+// constants, the light block and the material record. Matches src/shadow_volumes/mod.rs.
+#ifndef PENUMBRA_SV_SURFACE_GLSL
+#define PENUMBRA_SV_SURFACE_GLSL
+
+// One point light per lighting pass. The ambient pass binds zeros (its vertex shader is the
+// light pass's, so both write bit-identical depth).
+layout(set = 0, binding = 1) uniform PointLightBlock {
+    vec4 position;  // xyz: world position; w: radius (0: infinite)
+    vec4 colour;    // rgb: faithful light colour L_C, or intensity I in W/sr (physical)
+    vec4 params;    // unused, reserved
+} light;
+
+struct Material {
+    vec4 albedo;    // rgb: diffuse albedo
+    vec4 specular;  // rgb: specular colour; w: Blinn-Phong exponent (physical mode)
+    vec4 emission;  // rgb: emitted radiance (the seed's luminance term)
+    uvec4 maps;     // x: has a normal map
+};
+
+layout(push_constant) uniform Draw {
+    mat4 model;
+    uint material;
+} draw;
+
+#endif

@@ -1,0 +1,40 @@
+#version 460
+// Ambient and light passes: world position, frame, texture coordinates, and the light and eye
+// vectors in tangent space (the seed's per-vertex tangent-space vectors; the fragment shader
+// keeps the world-space light vector for attenuation, as Listing 1 does).
+#include "common/frame.glsl"
+#include "surface.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv;
+layout(location = 3) in vec4 in_tangent;
+
+layout(location = 0) out vec3 out_world;
+layout(location = 1) out vec3 out_normal;
+layout(location = 2) out vec2 out_uv;
+layout(location = 3) out vec4 out_tangent;
+layout(location = 4) out vec3 out_light_ts;
+layout(location = 5) out vec3 out_eye_ts;
+
+// The light passes test depth with LESS_OR_EQUAL against the ambient pass's depth: both run
+// this same shader on the same vertices, so the depths are identical. (`invariant` would say so
+// too, but lavapipe warns about the decoration glslang puts on the gl_PerVertex member.)
+
+void main() {
+    vec4 world = draw.model * vec4(in_position, 1.0);
+    mat3 normal_matrix = transpose(inverse(mat3(draw.model)));
+    vec3 n = normalize(normal_matrix * in_normal);
+    vec3 t = mat3(draw.model) * in_tangent.xyz;
+    t = normalize(t - n * dot(n, t));
+    vec3 b = cross(n, t) * in_tangent.w;
+    vec3 to_light = light.position.xyz - world.xyz;
+    vec3 to_eye = frame.camera_pos.xyz - world.xyz;
+    out_world = world.xyz;
+    out_normal = n;
+    out_uv = in_uv;
+    out_tangent = vec4(t, in_tangent.w);
+    out_light_ts = vec3(dot(to_light, t), dot(to_light, b), dot(to_light, n));
+    out_eye_ts = vec3(dot(to_eye, t), dot(to_eye, b), dot(to_eye, n));
+    gl_Position = frame.view_proj * world;
+}

@@ -1,0 +1,287 @@
+//! Soft shadows on dynamic height fields from an environment and spherical local lights (seed
+//! 001, extending Snyder & Nowrouzezahrai 2008; digest `shared/notes/seed-001-heightfield-shadows.md`).
+//!
+//! Per height-field texel and per frame, all as compute passes (each with its own timestamp):
+//! 1. **height update** — the scene's generator (or height image) at this frame's time;
+//! 2. **pyramid** — decimation by s_r = 2^(1/ls) per level and cubic B-spline reconstruction of
+//!    every level to full resolution ([`pyramid`]); the brute-force method instead finds the
+//!    field's height bounds;
+//! 3. **environment SH** — the environment projected to SH (constant or equirectangular map);
+//! 4. **environment** — horizons in nφ directions (one sample per level at d_i = s_r^i texels,
+//!    level offset lo, B-spline maximum, clamped at 0), hemisphere wedge-table lookups, z-rotation
+//!    and sum into the SH visibility V, T = V • C with the clamped cosine about the normal, L · T;
+//! 5. **one pass per sphere light** — horizons truncated at the light's planar distance and
+//!    signed, the full-sphere table, the light as a cap ZH (half-angle asin(r/d)) rotated toward it;
+//! 6. **accumulation** — environment plus lights, clamped at 0;
+//!
+//! then the displaced mesh is drawn with that shading image times the albedo. Two methods share
+//! this code: `heightfield_pyramid` (the thesis) and `heightfield_bruteforce` (horizons ray-marched
+//! on the bilinear field, exact up to the march step, for error and speed comparison).
+//!
+//! Scope: the method draws the scene's first height field and, with their emission only, every
+//! other object (so sphere-light emitters look as in the reference); other objects neither cast
+//! shadows on the field nor are lit. Lights must be spheres; the environment constant or an
+//! equirectangular image (clear colour: the constant, black for images). Diffuse only: the
+//! material's specular lobe and texture maps are ignored.
+
+pub mod cpu;
+pub mod gpu;
+pub mod measure;
+pub mod pyramid;
+pub mod settings;
+pub mod standalone;
+pub mod wedge;
+
+use std::cell::Cell;
+
+use crate::backend::{vk, Bind, ColorTarget, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::error::Result;
+use crate::forward::vertex_layout;
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::methods::{FrameInputs, LightingMethod};
+use crate::renderer::{DrawPush, RADIANCE_FORMAT};
+use crate::scene::{MethodDecl, MethodSchema, Scene};
+use crate::shaders::ShaderLibrary;
+pub use gpu::{FieldInputs, HeightfieldGpu, SphereLight};
+pub use settings::{Decimation, Horizon, Mode, Settings};
+
+pub const PYRAMID: &str = "heightfield_pyramid";
+pub const BRUTE_FORCE: &str = "heightfield_bruteforce";
+
+pub const PYRAMID_SCHEMA: MethodSchema = MethodSchema { name: PYRAMID, params: settings::PYRAMID_PARAMS };
+pub const BRUTE_FORCE_SCHEMA: MethodSchema = MethodSchema { name: BRUTE_FORCE, params: settings::BRUTE_PARAMS };
+
+/// `decl` with parameter `name` set to `value` (replaced if present).
+fn with(decl: &MethodDecl, name: &str, value: toml::Value) -> MethodDecl {
+    let mut d = decl.clone();
+    d.params.retain(|(n, _, _)| n != name);
+    d.params.push((name.to_string(), value, 0));
+    d
+}
+
+fn push_unique(out: &mut Vec<(String, MethodDecl)>, decl: MethodDecl, horizon: Horizon) {
+    let Ok(s) = Settings::from_decl(&decl, horizon) else { return };
+    let prefix = match horizon {
+        Horizon::Pyramid => "pyramid",
+        Horizon::BruteForce => "brute",
+    };
+    let label = format!("{prefix} {}", s.label());
+    if !out.iter().any(|(l, _)| *l == label) {
+        out.push((label, decl));
+    }
+}
+
+/// The pyramid's sweep, one parameter at a time from the scene's declaration: nφ ∈ {4, 8, 16,
+/// 32}, ls ∈ {1, 2, 3, 4}, lo ∈ {0, 2, 4}, bands ∈ {2, 3, 4}, and the faithful and corrected
+/// modes (issue: chart sweep; thesis Tables 6.1–6.2 and Fig. 6.1–6.2).
+pub fn pyramid_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let mut out = Vec::new();
+    push_unique(&mut out, decl.clone(), Horizon::Pyramid);
+    for n in [4i64, 8, 16, 32] {
+        push_unique(&mut out, with(decl, "nphi", n.into()), Horizon::Pyramid);
+    }
+    for ls in [1i64, 2, 3, 4] {
+        push_unique(&mut out, with(decl, "ls", ls.into()), Horizon::Pyramid);
+    }
+    for lo in [0.0f64, 2.0, 4.0] {
+        push_unique(&mut out, with(decl, "lo", lo.into()), Horizon::Pyramid);
+    }
+    for b in [2i64, 3, 4] {
+        push_unique(&mut out, with(decl, "bands", b.into()), Horizon::Pyramid);
+    }
+    for m in ["faithful", "corrected"] {
+        push_unique(&mut out, with(decl, "mode", m.into()), Horizon::Pyramid);
+    }
+    out
+}
+
+/// The brute force's sweep: march steps {2, 1, 0.5, 0.25} texels and nφ ∈ {8, 16, 32}, both
+/// modes.
+pub fn brute_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let mut out = Vec::new();
+    push_unique(&mut out, decl.clone(), Horizon::BruteForce);
+    for step in [2.0f64, 1.0, 0.5, 0.25] {
+        push_unique(&mut out, with(decl, "march_step", step.into()), Horizon::BruteForce);
+    }
+    for n in [8i64, 16, 32] {
+        push_unique(&mut out, with(decl, "nphi", n.into()), Horizon::BruteForce);
+    }
+    for m in ["faithful", "corrected"] {
+        push_unique(&mut out, with(decl, "mode", m.into()), Horizon::BruteForce);
+    }
+    out
+}
+
+/// One of the two height-field methods in a scene.
+pub struct HeightfieldMethod {
+    name: &'static str,
+    pub core: HeightfieldGpu,
+    terrain: PipelineId,
+    emitter: PipelineId,
+    /// Frames rendered so far; the animation time is frame × time_step (frame 0 is time 0, the
+    /// shape the reference traces).
+    frame: Cell<u64>,
+    /// Scene draws other than the height field (drawn with their emission only).
+    others: Vec<usize>,
+}
+
+impl HeightfieldMethod {
+    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, scene: &Scene, decl: &MethodDecl) -> Result<Self> {
+        let (name, horizon) = if decl.name == BRUTE_FORCE { (BRUTE_FORCE, Horizon::BruteForce) } else { (PYRAMID, Horizon::Pyramid) };
+        let settings = Settings::from_decl(decl, horizon)?;
+        let inputs = FieldInputs::from_scene(scene, name)?;
+        let object = inputs.object;
+        let core = HeightfieldGpu::new(gpu, shaders, states, settings, inputs)?;
+        let mut desc = GraphicsPipelineDesc::new("hf terrain", "heightfield/terrain.vert", Some("heightfield/terrain.frag"));
+        desc.raster.cull = vk::CullModeFlags::NONE;
+        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        desc.depth_format = Some(gpu.caps().depth_stencil_format);
+        let terrain = gpu.create_graphics_pipeline(&desc, shaders)?;
+        let mut desc = GraphicsPipelineDesc::new("hf emitters", "heightfield/emitter.vert", Some("heightfield/emitter.frag"));
+        desc.vertex_layout = vertex_layout();
+        desc.raster.cull = vk::CullModeFlags::NONE;
+        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        desc.depth_format = Some(gpu.caps().depth_stencil_format);
+        let emitter = gpu.create_graphics_pipeline(&desc, shaders)?;
+        // SceneGpu draws every object in order, then the area-light emitters.
+        let total = scene.objects.len() + scene.lights.iter().filter(|l| matches!(l, crate::scene::Light::Sphere { .. } | crate::scene::Light::Quad { .. })).count();
+        let others = (0..total).filter(|&i| i != object).collect();
+        Ok(HeightfieldMethod { name, core, terrain, emitter, frame: Cell::new(0), others })
+    }
+
+    /// The animation time of the next frame.
+    pub fn next_time(&self) -> f32 {
+        self.frame.get() as f32 * self.core.settings.time_step
+    }
+}
+
+/// `Terrain` push constants of `terrain.vert`/`terrain.frag`.
+fn terrain_push(core: &HeightfieldGpu) -> [u8; 48] {
+    let mut out = [0u8; 48];
+    let v: [f32; 12] = [
+        core.origin.x,
+        core.origin.y,
+        core.spacing,
+        core.res as f32,
+        core.inputs.albedo.x,
+        core.inputs.albedo.y,
+        core.inputs.albedo.z,
+        core.inputs.translation.y,
+        core.inputs.emission.x,
+        core.inputs.emission.y,
+        core.inputs.emission.z,
+        0.0,
+    ];
+    out.copy_from_slice(bytemuck::cast_slice(&v));
+    out
+}
+
+impl LightingMethod for HeightfieldMethod {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, inputs: &FrameInputs<'a>) -> Result<()> {
+        let t = self.next_time();
+        self.frame.set(self.frame.get() + 1);
+        let core = &self.core;
+        core.add_compute_passes(graph, t)?;
+        let targets = inputs.targets;
+        let uniforms = inputs.uniforms;
+        let push = terrain_push(core);
+        let vertices = core.res.saturating_sub(1).pow(2) * 6;
+        let terrain = self.terrain;
+        graph
+            .pass("hf raster")
+            .color_attachment(targets.radiance, SubresourceRange::mip(0), true)
+            .depth_stencil_write(targets.depth_stencil, true)
+            .sample("heights", core.heights, SubresourceRange::mip(0), core.nearest, vk::PipelineStageFlags2::VERTEX_SHADER)
+            .sample("shading", core.shading, SubresourceRange::mip(0), core.linear, vk::PipelineStageFlags2::FRAGMENT_SHADER)
+            .record(move |ctx| {
+                let a = uniforms.ambient;
+                let _extent = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::clear_color(targets.radiance, [a[0], a[1], a[2], 1.0])],
+                    depth_stencil: Some(RenderTarget::clear_depth(targets.depth_stencil, 1.0, 0)),
+                })?;
+                ctx.rec.bind_pipeline(terrain)?;
+                ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+                ctx.rec.push_constants(&push)?;
+                ctx.rec.draw(vertices, 1)?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+        if !self.others.is_empty() {
+            let scene = inputs.scene;
+            let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+            let emitter = self.emitter;
+            let others = &self.others;
+            graph
+                .pass("hf emitters")
+                .color_attachment(targets.radiance, SubresourceRange::mip(0), false)
+                .depth_stencil_write(targets.depth_stencil, false)
+                .buffer(scene.vertices, Access::VertexRead, None)
+                .buffer(scene.indices, Access::IndexRead, None)
+                .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+                .record(move |ctx| {
+                    let _extent = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(targets.radiance)], depth_stencil: Some(RenderTarget::load(targets.depth_stencil)) })?;
+                    ctx.rec.bind_pipeline(emitter)?;
+                    ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+                    ctx.rec.bind_vertex_buffers(&[(scene.vertices, 0)])?;
+                    ctx.rec.bind_index_buffer(scene.indices, 0)?;
+                    for &i in others {
+                        let Some(d) = scene.draws.get(i) else { continue };
+                        let push = DrawPush { model: d.model.to_cols_array(), material: d.material, _pad: [0; 3] };
+                        ctx.rec.push_constants(&bytemuck::bytes_of(&push)[..68])?;
+                        ctx.rec.draw_indexed(d.index_count, d.first_index, d.vertex_offset)?;
+                    }
+                    ctx.rec.end_rendering();
+                    Ok(())
+                });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(extra: &str) -> Scene {
+        let text = format!(
+            "methods = [\"heightfield_pyramid\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\ngenerator = \"flat\"\n{extra}\n"
+        );
+        Scene::from_str(&text, "t.toml", std::path::Path::new(".")).unwrap()
+    }
+
+    #[test]
+    fn inputs_need_sphere_lights_and_a_translated_field() {
+        let ok = scene("translate = [1, 0, 2]\n[[lights]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.1\nradiance = 2");
+        let inputs = FieldInputs::from_scene(&ok, PYRAMID).unwrap();
+        assert_eq!(inputs.lights.len(), 1);
+        assert_eq!(inputs.translation, glam::Vec3::new(1.0, 0.0, 2.0));
+        let point = scene("[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1");
+        let e = FieldInputs::from_scene(&point, PYRAMID).err().unwrap().to_string();
+        assert!(e.contains("t.toml: lights[0] (\"lights[0]\"): heightfield_pyramid lights with sphere lights and the environment only, not a point light"), "{e}");
+        let rotated = scene("rotate_deg = [0, 30, 0]");
+        let e = FieldInputs::from_scene(&rotated, PYRAMID).err().unwrap().to_string();
+        assert!(e.contains("objects[0]") && e.contains("translate only"), "{e}");
+    }
+
+    #[test]
+    fn settings_ranges_and_sweeps() {
+        let decl = |params: &[(&str, toml::Value)]| MethodDecl { name: PYRAMID.into(), line: 3, params: params.iter().map(|(k, v)| (k.to_string(), v.clone(), 3)).collect() };
+        let s = Settings::from_decl(&decl(&[("nphi", 16.into()), ("lo", 2.5.into()), ("mode", "faithful".into())]), Horizon::Pyramid).unwrap();
+        assert_eq!((s.nphi, s.lo, s.mode), (16, 2.5, Mode::Faithful));
+        let e = Settings::from_decl(&decl(&[("bands", 9.into())]), Horizon::Pyramid).unwrap_err().to_string();
+        assert!(e.contains("heightfield_pyramid.bands: expected an integer from 1 to 6, got 9"), "{e}");
+        let e = Settings::from_decl(&decl(&[("resolution", 300.into())]), Horizon::Pyramid).unwrap_err().to_string();
+        assert!(e.contains("resolution: expected a power of two"), "{e}");
+        let sweep: Vec<String> = pyramid_sweep(&decl(&[])).into_iter().map(|(l, _)| l).collect();
+        for want in ["pyramid nphi=4 ls=4 lo=4 bands=4 corrected", "pyramid nphi=32 ls=1 lo=4 bands=4 corrected", "pyramid nphi=32 ls=4 lo=0 bands=4 corrected", "pyramid nphi=32 ls=4 lo=4 bands=2 corrected", "pyramid nphi=32 ls=4 lo=4 bands=4 faithful"] {
+            assert!(sweep.iter().any(|l| l == want), "{want} missing from {sweep:?}");
+        }
+        assert_eq!(sweep.len(), 12, "{sweep:?}");
+        let brute: Vec<String> = brute_sweep(&MethodDecl { name: BRUTE_FORCE.into(), line: 0, params: vec![] }).into_iter().map(|(l, _)| l).collect();
+        assert!(brute.contains(&"brute nphi=32 step=2 bands=4 corrected".to_string()), "{brute:?}");
+    }
+}

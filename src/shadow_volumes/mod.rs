@@ -1,0 +1,646 @@
+//! Dynamic per-pixel Phong lighting with robust stenciled shadow volumes over a BSP/PVS world:
+//! seed 000 §4 and §6.3 (digest §1.3, §1.4, §4.4, §4.5).
+//!
+//! A frame is
+//! 1. **silhouettes** (compute): for every light of the frame and every entity, the silhouette
+//!    edges from edge adjacency, extruded to infinity, with caps (open meshes: a volume per
+//!    triangle) — [`volumes::silhouette_volume`] is its CPU mirror;
+//! 2. **ambient**: depth, and the ambient/emissive term of Eq. 5 (`diffuse·lightmap·N_z +
+//!    luminance`; the physical mode writes the emission only);
+//! 3. per light: **volumes** — stencil cleared, then every caster's volume with two-sided
+//!    wrapping stencil ops, colour writes off, depth test on, no depth writes, z-fail (or z-pass
+//!    for comparison), the far caps at infinity (w = 0) kept by depth clamp where the device has
+//!    it and by the infinite projection otherwise; then **lighting** — the light's receivers
+//!    drawn again, added where the stencil is 0.
+//!
+//! World casters are the back-facing faces (light behind their plane) of the caster strategy
+//! ([`config::Casters`]: every face, the light's PVS, or the PVS with the Potential
+//! Shadow-Casters Set), each with its own closed volume ([`volumes::polygon_volume_template`],
+//! extruded in the vertex shader). Receivers and casters are culled by the light's radius and
+//! the camera's PVS ([`plan`]). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
+//! (*physical*), in both of the seed's material paths: special-case pipelines per map
+//! combination, or one pipeline with 1×1 default maps.
+
+pub mod config;
+pub mod cpu;
+pub mod maps;
+pub mod plan;
+pub mod volumes;
+
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::backend::{vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::methods::{FrameInputs, LightingMethod};
+use crate::renderer::{DrawPush, SceneGpu, RADIANCE_FORMAT};
+use crate::scene::world_mesh::{self, WorldLevel};
+use crate::scene::{Light, MeshSource, MethodDecl, Scene};
+use crate::shaders::ShaderLibrary;
+use crate::world::FaceId;
+
+pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
+pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, WorldFrame};
+
+/// The chart's sweep (see [`config::sweep`]).
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    config::sweep(decl)
+}
+
+/// Animation step per rendered frame when `animate` is on.
+const FRAME_TIME_S: f32 = 1.0 / 60.0;
+
+/// Everything the method derives from the scene on the CPU: configuration, the world (if the
+/// scene has one), entities, lights and each light's static world sets. Tests build it without
+/// a GPU to check what the passes will draw.
+pub struct Setup {
+    pub config: Config,
+    pub world: Option<WorldFrame>,
+    /// Scene object indices of the world's class objects.
+    pub world_objects: Vec<usize>,
+    pub entities: Vec<Entity>,
+    pub lights: Vec<PointLight>,
+    pub sets: Vec<LightWorldSets>,
+}
+
+impl Setup {
+    pub fn new(scene: &Scene, decl: &MethodDecl) -> Result<Setup> {
+        let config = Config::from_decl(decl, scene)?;
+        let mut lights = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let kind = match l {
+                Light::Point { name, position, intensity, radius } => {
+                    lights.push(PointLight { name: name.clone(), position: *position, intensity: *intensity, radius: *radius });
+                    continue;
+                }
+                Light::Spot { .. } => "spot",
+                Light::Directional { .. } => "directional",
+                Light::Sphere { .. } => "sphere",
+                Light::Quad { .. } => "quad",
+            };
+            return Err(Error::Usage(format!(
+                "{}: lights[{i}] ({}): the {NAME} method lights with point lights only (the seed's model); this one is a {kind} light",
+                scene.source,
+                l.name()
+            )));
+        }
+        let mut level: Option<(WorldLevel, Vec3)> = None;
+        let mut world_objects = Vec::new();
+        let mut entities = Vec::new();
+        for (i, obj) in scene.objects.iter().enumerate() {
+            if let MeshSource::World { level: l, .. } = &obj.mesh {
+                let translate = obj.transform.w_axis.truncate();
+                match &level {
+                    Some((other, t)) if other != l || *t != translate => {
+                        return Err(Error::Usage(format!("{}: objects[{i}] ({}): the {NAME} method supports one BSP world per scene", scene.source, obj.name)));
+                    }
+                    _ => level = Some((l.clone(), translate)),
+                }
+                world_objects.push(i);
+                continue;
+            }
+            let mesh = obj.load_mesh(std::path::Path::new("."))?;
+            let topology = volumes::Topology::new(&mesh);
+            entities.push(Entity {
+                draw: i,
+                name: obj.name.clone(),
+                bounds: mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO)),
+                topology,
+                base: obj.transform,
+                animation: obj.animation,
+            });
+        }
+        let world = match level {
+            None => None,
+            Some((l, translate)) => {
+                let compiled = world_mesh::compiled(&l).map_err(|e| Error::Usage(format!("{}: {}: the world does not compile: {e}", scene.source, l.mesh_name())))?;
+                Some(WorldFrame { world: compiled, translate })
+            }
+        };
+        let sets = match &world {
+            Some(w) => lights.iter().map(|l| plan::light_world_sets(&config, w, l)).collect(),
+            None => vec![LightWorldSets::default(); lights.len()],
+        };
+        Ok(Setup { config, world, world_objects, entities, lights, sets })
+    }
+
+    /// The frame plan for an eye at `camera` (scene space) at animation time `t`.
+    pub fn plan(&self, camera: Vec3, t: f32) -> FramePlan {
+        plan::plan_frame(&self.config, self.world.as_ref(), &self.sets, &self.lights, &self.entities, camera, t)
+    }
+}
+
+/// `PointLightBlock` in glsl/shadow_volumes/surface.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct LightBlock {
+    position: [f32; 4],
+    colour: [f32; 4],
+    params: [f32; 4],
+}
+
+/// `Volume` push constants of glsl/shadow_volumes/volume.vert.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct VolumePush {
+    light: [f32; 4],
+    nudge_far: u32,
+}
+
+/// `Entity` push constants of glsl/shadow_volumes/silhouette.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct SilhouettePush {
+    model: [f32; 16],
+    vertex_offset: u32,
+    triangle_offset: u32,
+    triangle_count: u32,
+    edge_offset: u32,
+    edge_count: u32,
+    out_offset: u32,
+    light_stride: u32,
+    closed: u32,
+}
+
+/// Where one entity's data lives in the silhouette buffers.
+#[derive(Clone, Copy, Debug)]
+struct EntitySlots {
+    vertex_offset: u32,
+    triangle_offset: u32,
+    edge_offset: u32,
+    /// First output vertex for light 0; light k adds k × stride.
+    out_offset: u32,
+    out_vertices: u32,
+}
+
+struct SilhouetteBuffers {
+    positions: BufferId,
+    triangles: BufferId,
+    edges: BufferId,
+    volumes: BufferId,
+    /// Output vertices per light.
+    stride: u32,
+    slots: Vec<EntitySlots>,
+}
+
+/// Where a world face is drawn from: its class object's draw and index range, and its volume
+/// template's vertex range.
+#[derive(Clone, Copy, Debug, Default)]
+struct FaceDraw {
+    draw: usize,
+    first_index: u32,
+    index_count: u32,
+    template_first: u32,
+    template_count: u32,
+}
+
+/// Per material: which special-case pipeline draws it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Features {
+    normal_map: bool,
+    specular: bool,
+}
+
+pub struct ShadowVolumes {
+    setup: Setup,
+    faces: Vec<FaceDraw>,
+    templates: Option<BufferId>,
+    silhouettes: Option<SilhouetteBuffers>,
+    features: Vec<Features>,
+    /// Ambient pipelines by normal map; light pipelines by (normal map, specular).
+    ambient: [PipelineId; 2],
+    light: [[PipelineId; 2]; 2],
+    volume: PipelineId,
+    silhouette: PipelineId,
+    nudge_far: bool,
+    /// The exact flat normal (0.5, 0.5, 1) in RGBA32F for the default-map path (8-bit 128 is
+    /// not 0.5).
+    default_normal: ImageId,
+    frames: Cell<u64>,
+    last_plan: RefCell<Option<FramePlan>>,
+}
+
+fn spec(id: u32, bits: u32) -> SpecConstant {
+    SpecConstant { id, bits }
+}
+
+impl ShadowVolumes {
+    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, scene: &Scene, decl: &MethodDecl) -> Result<ShadowVolumes> {
+        let setup = Setup::new(scene, decl)?;
+        let c = &setup.config;
+        let ds_format = gpu.caps().depth_stencil_format;
+        let mode = match c.mode {
+            Mode::Faithful => 0,
+            Mode::Physical => 1,
+        };
+        let surface = |name: &str, frag: &str, specs: Vec<SpecConstant>| {
+            let mut d = GraphicsPipelineDesc::new(name, "shadow_volumes/surface.vert", Some(frag));
+            d.vertex_layout = crate::forward::vertex_layout();
+            d.raster.cull = vk::CullModeFlags::NONE;
+            d.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+            d.depth_format = Some(ds_format);
+            d.specialization = specs;
+            d
+        };
+        let mut ambient = Vec::with_capacity(2);
+        for nm in [false, true] {
+            let d = surface(&format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }), "shadow_volumes/ambient.frag", vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)]);
+            ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
+        }
+        let mut light = Vec::with_capacity(4);
+        for nm in [false, true] {
+            for sp in [false, true] {
+                let mut d = surface(&format!("{NAME} light{}{}", if nm { " normal-mapped" } else { "" }, if sp { " specular" } else { "" }), "shadow_volumes/light.frag", vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)]);
+                d.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+                d.color_targets[0].blend = BlendMode::Additive;
+                let outside = StencilFace { compare_mask: 0xff, write_mask: 0, ..StencilFace::test(vk::CompareOp::EQUAL, 0) };
+                d.stencil = Some(StencilFaces { front: outside, back: outside });
+                light.push(gpu.create_graphics_pipeline(&d, shaders)?);
+            }
+        }
+        let ambient = [ambient[0], ambient[1]];
+        let light = [[light[0], light[1]], [light[2], light[3]]];
+        let (inc, dec) = if c.stencil_wrap {
+            (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
+        } else {
+            (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
+        };
+        let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace { pass, depth_fail, ..StencilFace::test(vk::CompareOp::ALWAYS, 0) };
+        let keep = vk::StencilOp::KEEP;
+        // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
+        // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
+        let faces = match c.stencil {
+            Stencil::ZFail => StencilFaces { front: count(keep, dec), back: count(keep, inc) },
+            Stencil::ZPass => StencilFaces { front: count(inc, keep), back: count(dec, keep) },
+        };
+        let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
+        let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
+        vd.vertex_layout = VertexLayout { buffers: vec![(0, 16)], attributes: vec![VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32A32_SFLOAT, offset: 0 }] };
+        vd.raster.cull = vk::CullModeFlags::NONE;
+        vd.raster.depth_clamp = depth_clamp;
+        vd.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS };
+        vd.stencil = Some(faces);
+        vd.depth_format = Some(ds_format);
+        let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
+        let silhouette = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} silhouettes"), shader: "shadow_volumes/silhouette.comp".into(), specialization: Vec::new() }, shaders)?;
+
+        let features = scene.materials.iter().map(|m| Features { normal_map: m.normal_map.is_some(), specular: m.specular.max_element() > 0.0 }).collect();
+        let (faces, templates) = Self::world_geometry(gpu, scene, &setup)?;
+        let silhouettes = Self::silhouette_buffers(gpu, &setup)?;
+        let default_normal = gpu.create_image(&ImageDesc::new_2d("flat normal (exact)", vk::Format::R32G32B32A32_SFLOAT, 1, 1).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        gpu.upload_image(default_normal, 0, bytemuck::cast_slice(&[0.5f32, 0.5, 1.0, 1.0]))?;
+        states.set_image(gpu, default_normal, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        let frames = Cell::new(0);
+        Ok(ShadowVolumes { setup, faces, templates, silhouettes, features, ambient, light, volume, silhouette, nudge_far: !depth_clamp, default_normal, frames, last_plan: RefCell::new(None) })
+    }
+
+    pub fn setup(&self) -> &Setup {
+        &self.setup
+    }
+
+    /// The plan of the last frame recorded.
+    pub fn last_plan(&self) -> Option<FramePlan> {
+        self.last_plan.borrow().clone()
+    }
+
+    /// Per world face: its draw and index range (the class meshes are built as in the scene),
+    /// and the volume templates of every face in one vertex buffer.
+    fn world_geometry(gpu: &mut Gpu, scene: &Scene, setup: &Setup) -> Result<(Vec<FaceDraw>, Option<BufferId>)> {
+        let Some(frame) = &setup.world else { return Ok((Vec::new(), None)) };
+        let w = &frame.world;
+        let mut faces = vec![FaceDraw::default(); w.faces.len()];
+        // The renderer uploads objects in order, each mesh's indices after the previous ones.
+        let mut first_index = 0u32;
+        for (i, obj) in scene.objects.iter().enumerate() {
+            let mesh = obj.load_mesh(std::path::Path::new("."))?;
+            if let MeshSource::World { class, .. } = &obj.mesh {
+                for span in world_mesh::class_mesh(w, *class).1 {
+                    let f = &mut faces[span.face as usize];
+                    f.draw = i;
+                    f.first_index = first_index + span.first_index;
+                    f.index_count = span.index_count;
+                }
+            }
+            first_index += mesh.indices.len() as u32;
+        }
+        let mut data: Vec<Vec4> = Vec::new();
+        for (id, face) in w.faces.iter().enumerate() {
+            let verts: Vec<Vec3> = face.polygon.vertices.iter().map(|&p| frame.to_scene(p)).collect();
+            let t = volumes::polygon_volume_template(&verts);
+            faces[id].template_first = data.len() as u32;
+            faces[id].template_count = t.len() as u32;
+            data.extend(t);
+        }
+        if data.is_empty() {
+            return Ok((faces, None));
+        }
+        let buffer = gpu.create_buffer_init("shadow volume templates", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&data))?;
+        Ok((faces, Some(buffer)))
+    }
+
+    fn silhouette_buffers(gpu: &mut Gpu, setup: &Setup) -> Result<Option<SilhouetteBuffers>> {
+        if setup.entities.is_empty() || setup.lights.is_empty() {
+            return Ok(None);
+        }
+        let (mut positions, mut triangles, mut edges) = (Vec::<Vec4>::new(), Vec::<[u32; 4]>::new(), Vec::<[u32; 4]>::new());
+        let mut slots = Vec::new();
+        let mut out = 0u32;
+        for e in &setup.entities {
+            let t = &e.topology;
+            let out_vertices = 3 * t.volume_triangles() as u32;
+            slots.push(EntitySlots { vertex_offset: positions.len() as u32, triangle_offset: triangles.len() as u32, edge_offset: edges.len() as u32, out_offset: out, out_vertices });
+            positions.extend(t.positions.iter().map(|p| p.extend(1.0)));
+            triangles.extend(t.triangles.iter().map(|t| [t[0], t[1], t[2], 0]));
+            edges.extend(t.edges.iter().copied());
+            out += out_vertices;
+        }
+        let storage = |gpu: &mut Gpu, name: &str, bytes: &[u8]| -> Result<BufferId> {
+            let zero = [0u8; 16];
+            Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, if bytes.is_empty() { &zero } else { bytes })?)
+        };
+        let positions = storage(gpu, "entity positions", bytemuck::cast_slice(&positions))?;
+        let triangles = storage(gpu, "entity triangles", bytemuck::cast_slice(&triangles))?;
+        let edges = storage(gpu, "entity edges", bytemuck::cast_slice(&edges))?;
+        let volumes = gpu.create_buffer(&BufferDesc {
+            name: "entity shadow volumes".into(),
+            size: (u64::from(out) * setup.lights.len() as u64 * 16).max(16),
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER,
+            memory: MemoryKind::GpuOnly,
+        })?;
+        Ok(Some(SilhouetteBuffers { positions, triangles, edges, volumes, stride: out, slots }))
+    }
+
+    fn time(&self) -> f32 {
+        let n = self.frames.get();
+        self.frames.set(n + 1);
+        self.setup.config.time_s + if self.setup.config.animate { n as f32 * FRAME_TIME_S } else { 0.0 }
+    }
+
+    /// Index ranges (per draw, merged) of a set of world faces, in draw order.
+    fn face_ranges(&self, faces: &[FaceId]) -> Vec<(usize, Vec<(u32, u32)>)> {
+        let mut by_draw: Vec<(usize, Vec<(u32, u32)>)> = Vec::new();
+        for &f in faces {
+            let fd = self.faces[f as usize];
+            match by_draw.iter_mut().find(|(d, _)| *d == fd.draw) {
+                Some((_, r)) => r.push((fd.first_index, fd.index_count)),
+                None => by_draw.push((fd.draw, vec![(fd.first_index, fd.index_count)])),
+            }
+        }
+        for (_, r) in &mut by_draw {
+            r.sort_unstable();
+            *r = plan::merge_ranges(r.iter().copied());
+        }
+        by_draw.sort_by_key(|(d, _)| *d);
+        by_draw
+    }
+
+    /// The draws of a pass: world ranges and entities, each with its model matrix and
+    /// material, sorted by pipeline (features) then material, as the seed pre-sorts meshes.
+    fn draw_list(&self, scene: &SceneGpu, plan: &FramePlan, faces: &[FaceId], entities: &[usize]) -> Vec<DrawCall> {
+        let mut calls = Vec::new();
+        for (draw, ranges) in self.face_ranges(faces) {
+            let d = &scene.draws[draw];
+            calls.push(DrawCall { material: d.material, model: d.model, vertex_offset: d.vertex_offset, ranges });
+        }
+        for &e in entities {
+            let d = &scene.draws[self.setup.entities[e].draw];
+            calls.push(DrawCall { material: d.material, model: plan.entity_transforms[e], vertex_offset: d.vertex_offset, ranges: vec![(d.first_index, d.index_count)] });
+        }
+        calls.sort_by_key(|c| (self.features_of(c.material), c.material));
+        calls
+    }
+
+    fn features_of(&self, material: u32) -> Features {
+        match self.setup.config.materials {
+            // The default-map path draws everything with the full pipeline.
+            MaterialPath::DefaultMaps => Features { normal_map: true, specular: true },
+            MaterialPath::SpecialCase => self.features.get(material as usize).copied().unwrap_or(Features { normal_map: false, specular: false }),
+        }
+    }
+
+    /// The maps bound for a material: the scene's, with the exact flat normal standing in for a
+    /// missing normal map on the default-map path.
+    fn maps(&self, scene: &SceneGpu, material: u32) -> (ImageId, ImageId, ImageId) {
+        let m = scene.material_maps[material as usize];
+        let has_normal = self.features.get(material as usize).is_some_and(|f| f.normal_map);
+        let normal = if has_normal || self.setup.config.materials == MaterialPath::SpecialCase { m.normal } else { self.default_normal };
+        (m.albedo, normal, m.specular)
+    }
+
+    fn light_block(&self, light: usize) -> LightBlock {
+        let l = &self.setup.lights[light];
+        let c = &self.setup.config;
+        let colour = match c.mode {
+            Mode::Faithful => cpu::faithful_light_colour(l.intensity, l.radius, c.atten),
+            Mode::Physical => l.intensity,
+        };
+        LightBlock { position: l.position.extend(l.radius).into(), colour: colour.extend(0.0).into(), params: [0.0; 4] }
+    }
+}
+
+/// One draw of a pass: index ranges sharing a model matrix and material.
+#[derive(Clone, Debug)]
+struct DrawCall {
+    material: u32,
+    model: Mat4,
+    vertex_offset: i32,
+    ranges: Vec<(u32, u32)>,
+}
+
+/// Records the draws of a surface pass, binding the pipeline for each call's features and the
+/// material's maps (`extra` names them for the pass's shaders).
+#[allow(clippy::too_many_arguments)]
+fn record_surface<'b>(
+    ctx: &mut crate::graph::PassContext<'_, '_>,
+    method: &ShadowVolumes,
+    scene: &SceneGpu,
+    calls: &[DrawCall],
+    pipeline_of: impl Fn(Features) -> PipelineId,
+    extra: impl Fn(ImageId, ImageId, ImageId) -> Vec<(&'static str, Bind<'b>)>,
+    frame_bytes: &'b [u8],
+    light_bytes: &'b [u8],
+) -> std::result::Result<(), crate::backend::BackendError> {
+    ctx.rec.bind_vertex_buffers(&[(scene.vertices, 0)])?;
+    ctx.rec.bind_index_buffer(scene.indices, 0)?;
+    let mut bound: Option<(PipelineId, u32)> = None;
+    for call in calls {
+        let pipeline = pipeline_of(method.features_of(call.material));
+        if bound != Some((pipeline, call.material)) {
+            if bound.map(|b| b.0) != Some(pipeline) {
+                ctx.rec.bind_pipeline(pipeline)?;
+            }
+            let (albedo, normal, specular) = method.maps(scene, call.material);
+            let mut binds: Vec<(&str, Bind<'b>)> = vec![("frame", Bind::UniformData(frame_bytes)), ("light", Bind::UniformData(light_bytes))];
+            binds.extend(extra(albedo, normal, specular));
+            ctx.bind(&binds)?;
+            bound = Some((pipeline, call.material));
+        }
+        let push = DrawPush { model: call.model.to_cols_array(), material: call.material, _pad: [0; 3] };
+        ctx.rec.push_constants(&bytemuck::bytes_of(&push)[..68])?;
+        for &(first, count) in &call.ranges {
+            ctx.rec.draw_indexed(count, first, call.vertex_offset)?;
+        }
+    }
+    Ok(())
+}
+
+impl LightingMethod for ShadowVolumes {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, inputs: &FrameInputs<'a>) -> Result<()> {
+        let scene = inputs.scene;
+        let t = inputs.targets;
+        let uniforms = inputs.uniforms;
+        let camera = Vec3::from_slice(&uniforms.camera_pos[..3]);
+        let plan = Rc::new(self.setup.plan(camera, self.time()));
+        *self.last_plan.borrow_mut() = Some((*plan).clone());
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let sampler = scene.sampler;
+        let whole = SubresourceRange::mip(0);
+
+        // Silhouettes of every entity for every light of the frame.
+        let silhouettes = self.silhouettes.as_ref().filter(|_| plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
+        if let Some(s) = silhouettes {
+            let p = plan.clone();
+            graph
+                .pass("silhouettes")
+                .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
+                .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
+                .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
+                .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
+                .record(move |ctx| {
+                    let lights: Vec<Vec4> = p.lights.iter().map(|l| self.setup.lights[l.light].position.extend(1.0)).collect();
+                    ctx.rec.bind_pipeline(self.silhouette)?;
+                    ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&lights)))])?;
+                    for (e, slot) in s.slots.iter().enumerate() {
+                        let topo = &self.setup.entities[e].topology;
+                        if topo.items() == 0 {
+                            continue;
+                        }
+                        let push = SilhouettePush {
+                            model: p.entity_transforms[e].to_cols_array(),
+                            vertex_offset: slot.vertex_offset,
+                            triangle_offset: slot.triangle_offset,
+                            triangle_count: topo.triangles.len() as u32,
+                            edge_offset: slot.edge_offset,
+                            edge_count: topo.edges.len() as u32,
+                            out_offset: slot.out_offset,
+                            light_stride: s.stride,
+                            closed: topo.closed as u32,
+                        };
+                        ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                        ctx.rec.dispatch([topo.items() as u32, lights.len() as u32, 1])?;
+                    }
+                    Ok(())
+                });
+        }
+
+        // Ambient + emissive, and the depth every later pass tests against.
+        let ambient_calls = self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities);
+        let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
+        graph
+            .pass("ambient")
+            .color_attachment(t.radiance, whole, true)
+            .depth_stencil_write(t.depth_stencil, true)
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::clear_color(t.radiance, [uniforms.ambient[0], uniforms.ambient[1], uniforms.ambient[2], 1.0])],
+                    depth_stencil: Some(RenderTarget::clear_depth(t.depth_stencil, 1.0, 0)),
+                })?;
+                let zero_light = LightBlock::zeroed();
+                let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
+                let extra = |albedo, normal, _specular| {
+                    vec![
+                        ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
+                        ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
+                        ("ambient", Bind::UniformData(ambient_bytes)),
+                    ]
+                };
+                record_surface(ctx, self, scene, &ambient_calls, |f| self.ambient[f.normal_map as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&zero_light))?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+
+        for (li, lp) in plan.lights.iter().enumerate() {
+            // The silhouette pass wrote this light's entity volumes at slot `li`.
+            let li = li as u32;
+            let light_index = lp.light;
+            let light = &self.setup.lights[light_index];
+            let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| (self.faces[f as usize].template_first, self.faces[f as usize].template_count)));
+            let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
+                Some(s) => lp.caster_entities.iter().map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices)).collect(),
+                None => Vec::new(),
+            };
+            let light_pos = light.position;
+            let nudge = self.nudge_far as u32;
+            let mut pass = graph.pass(&format!("light {light_index} volumes")).depth_stencil_write(t.depth_stencil, false);
+            if let Some(b) = self.templates {
+                pass = pass.buffer(b, Access::VertexRead, None);
+            }
+            if let Some(s) = &self.silhouettes {
+                pass = pass.buffer(s.volumes, Access::VertexRead, None);
+            }
+            let templates = self.templates;
+            let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
+            pass.record(move |ctx| {
+                let extent = ctx.rec.begin_rendering(&RenderingDesc { colors: Vec::new(), depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                ctx.rec.clear_stencil(extent, 0)?;
+                ctx.rec.bind_pipeline(self.volume)?;
+                ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+                if let (Some(b), false) = (templates, world_ranges.is_empty()) {
+                    ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+                    ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(1.0).into(), nudge_far: nudge }))?;
+                    for &(first, count) in &world_ranges {
+                        ctx.rec.draw_from(count, first)?;
+                    }
+                }
+                if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
+                    ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+                    ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(0.0).into(), nudge_far: nudge }))?;
+                    for &(first, count) in &entity_ranges {
+                        ctx.rec.draw_from(count, first)?;
+                    }
+                }
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+
+            let calls = self.draw_list(scene, &plan, &lp.receiver_faces, &lp.receiver_entities);
+            let block = self.light_block(light_index);
+            graph
+                .pass(&format!("light {light_index} lighting"))
+                .color_attachment(t.radiance, whole, false)
+                .depth_stencil_read(t.depth_stencil)
+                .buffer(scene.vertices, Access::VertexRead, None)
+                .buffer(scene.indices, Access::IndexRead, None)
+                .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+                .record(move |ctx| {
+                    let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                        colors: vec![RenderTarget::load(t.radiance)],
+                        depth_stencil: Some(RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) }),
+                    })?;
+                    let extra = |albedo, normal, specular| {
+                        vec![
+                            ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
+                            ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
+                            ("specular_map", Bind::Sampled { image: specular, range: whole, sampler }),
+                        ]
+                    };
+                    record_surface(ctx, self, scene, &calls, |f| self.light[f.normal_map as usize][f.specular as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&block))?;
+                    ctx.rec.end_rendering();
+                    Ok(())
+                });
+        }
+        Ok(())
+    }
+}

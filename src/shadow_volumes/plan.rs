@@ -1,0 +1,343 @@
+//! What a frame draws, decided on the CPU: the faces and entities the camera's PVS keeps, and
+//! per light the receivers it lights and the casters whose volumes it extrudes (seed §4.3.1,
+//! §4.1.5). Pure CPU, so tests can assert the counts the GPU passes are built from.
+//!
+//! World coordinates here are the world module's (z up, f64); entities and lights arrive in
+//! scene coordinates and are mapped with [`WorldFrame`].
+
+use std::sync::Arc;
+
+use glam::{DVec3, Mat4, Vec3};
+
+use super::config::{Casters, Config};
+use super::volumes::Topology;
+use crate::scene::world_mesh::{scene_to_world, world_to_scene};
+use crate::scene::Animation;
+use crate::world::polygon::{clip_points_front, Aabb, Plane};
+use crate::world::{CompiledWorld, FaceId, LeafId};
+
+/// Slack of the entity pyramids (as the world's PSCS): touching counts as meeting.
+const PYRAMID_SLACK: f64 = 1e-6;
+
+/// A compiled world placed in the scene: world point `p` is scene point `world_to_scene(p) + translate`.
+#[derive(Clone)]
+pub struct WorldFrame {
+    pub world: Arc<CompiledWorld>,
+    pub translate: Vec3,
+}
+
+impl WorldFrame {
+    pub fn to_world(&self, p: Vec3) -> DVec3 {
+        scene_to_world(p - self.translate)
+    }
+
+    pub fn to_scene(&self, p: DVec3) -> Vec3 {
+        world_to_scene(p) + self.translate
+    }
+}
+
+/// A point light as the method uses it (scene coordinates).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLight {
+    pub name: String,
+    pub position: Vec3,
+    pub intensity: Vec3,
+    /// 0: infinite.
+    pub radius: f32,
+}
+
+/// A scene object that is not part of the world: it receives light and casts volumes.
+#[derive(Clone, Debug)]
+pub struct Entity {
+    /// Index into the scene's draws (= its object index).
+    pub draw: usize,
+    pub name: String,
+    pub topology: Topology,
+    /// Object-space bounds.
+    pub bounds: (Vec3, Vec3),
+    pub base: Mat4,
+    pub animation: Option<Animation>,
+}
+
+impl Entity {
+    pub fn transform_at(&self, t: f32) -> Mat4 {
+        match &self.animation {
+            Some(a) => a.transform_at(self.base, t),
+            None => self.base,
+        }
+    }
+
+    /// Scene-space bounds under `m`.
+    pub fn world_bounds(&self, m: &Mat4) -> (Vec3, Vec3) {
+        let (lo, hi) = self.bounds;
+        let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for i in 0..8 {
+            let c = Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z });
+            let p = m.transform_point3(c);
+            out = (out.0.min(p), out.1.max(p));
+        }
+        out
+    }
+}
+
+/// Per light, what does not change while the light stands still: its receivers and casters
+/// among the world's faces, before the camera's PVS and the entity pyramids.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightWorldSets {
+    /// World position, leaf (None: inside solid or no world).
+    pub leaf: Option<LeafId>,
+    /// Front-facing faces the light can reach (light PVS, radius): the lit receivers.
+    pub receivers: Vec<FaceId>,
+    /// Back-facing faces of the caster strategy (radius applied).
+    pub casters: Vec<FaceId>,
+}
+
+/// The effective culling radius (infinite without culling or without a radius).
+pub fn culling_radius(config: &Config, light: &PointLight) -> f64 {
+    if config.radius_culling && light.radius > 0.0 {
+        f64::from(light.radius)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The world sets of one light under `config`.
+pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &PointLight) -> LightWorldSets {
+    let w = &frame.world;
+    let p = frame.to_world(light.position);
+    let r = culling_radius(config, light);
+    let leaf = w.leaf_of(p);
+    if w.is_solid(leaf) {
+        return LightWorldSets { leaf: None, ..Default::default() };
+    }
+    let in_radius = |f: &FaceId| w.faces[*f as usize].bounds.touches_sphere(p, r);
+    let all_in_radius: Vec<FaceId> = (0..w.faces.len() as FaceId).filter(in_radius).collect();
+    let reachable = if config.pvs { w.casters_light_pvs(p, r) } else { all_in_radius.clone() };
+    let candidates = match (config.casters, config.pvs) {
+        (Casters::Naive, _) | (_, false) => all_in_radius,
+        (Casters::Pvs, true) => reachable.clone(),
+        (Casters::Pscs, true) => w.casters_with_pscs(p, r),
+    };
+    LightWorldSets { leaf: Some(leaf), receivers: w.front_facing(&reachable, p), casters: w.back_facing(&candidates, p) }
+}
+
+/// One light's share of a frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightPlan {
+    /// Index into the method's lights.
+    pub light: usize,
+    /// World faces lit (after the camera's PVS), ascending.
+    pub receiver_faces: Vec<FaceId>,
+    pub receiver_entities: Vec<usize>,
+    /// World faces whose volumes are drawn, ascending.
+    pub caster_faces: Vec<FaceId>,
+    pub caster_entities: Vec<usize>,
+    /// Back-facing faces the entity pyramids added to the strategy's set.
+    pub added_by_entity_pyramids: usize,
+}
+
+/// Everything one frame draws.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FramePlan {
+    /// World faces the camera's PVS keeps (all without a PVS), ascending.
+    pub visible_faces: Vec<FaceId>,
+    pub visible_entities: Vec<usize>,
+    /// Lights that light something visible, in light order.
+    pub lights: Vec<LightPlan>,
+    /// Entity transforms of this frame (scene space), by entity.
+    pub entity_transforms: Vec<Mat4>,
+}
+
+/// Leaves of a few points of a box (corners pulled in by 1 mm, and the centre): the leaves an
+/// entity is taken to occupy. Points in solid leaves are skipped.
+fn sample_leaves(w: &CompiledWorld, b: &Aabb) -> Vec<LeafId> {
+    let inner = b.expanded(-1e-3);
+    let inner = if inner.is_empty() { *b } else { inner };
+    let mut out: Vec<LeafId> = (0..9)
+        .map(|i| if i == 8 { inner.center() } else { DVec3::new(if i & 1 == 0 { inner.min.x } else { inner.max.x }, if i & 2 == 0 { inner.min.y } else { inner.max.y }, if i & 4 == 0 { inner.min.z } else { inner.max.z }) })
+        .map(|p| w.leaf_of(p))
+        .filter(|&l| !w.is_solid(l))
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+fn world_aabb(frame: &WorldFrame, (lo, hi): (Vec3, Vec3)) -> Aabb {
+    let (a, b) = (frame.to_world(lo), frame.to_world(hi));
+    Aabb { min: a.min(b), max: a.max(b) }
+}
+
+/// Bounding planes (front = inside) of the pyramid from `apex` over a convex polygon that faces
+/// it, with the base's plane; `None` if degenerate.
+fn pyramid(apex: DVec3, base: &[DVec3]) -> Option<(Vec<Plane>, Aabb)> {
+    let center = base.iter().copied().sum::<DVec3>() / base.len() as f64;
+    let base_plane = Plane::from_points(base[0], base[1], base[2])?;
+    let base_plane = if base_plane.distance(apex) < 0.0 { base_plane.flipped() } else { base_plane };
+    let mut planes = vec![base_plane];
+    for i in 0..base.len() {
+        let side = Plane::from_points(apex, base[i], base[(i + 1) % base.len()])?;
+        planes.push(if side.distance(center) < 0.0 { side.flipped() } else { side });
+    }
+    let mut bounds = Aabb::from_points(base);
+    bounds.include(apex);
+    Some((planes, bounds.expanded(PYRAMID_SLACK)))
+}
+
+/// Back-facing world faces (within `r`) meeting a pyramid from the light over a face of the box
+/// that faces the light: the casters that can shadow an entity inside the box (the world's PSCS
+/// stands on world faces only).
+fn entity_pyramid_casters(w: &CompiledWorld, light: DVec3, r: f64, b: &Aabb) -> Vec<FaceId> {
+    if b.contains(light) {
+        return Vec::new();
+    }
+    let (lo, hi) = (b.min, b.max);
+    let corner = |x: bool, y: bool, z: bool| DVec3::new(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z });
+    let mut pyramids = Vec::new();
+    for axis in 0..3 {
+        for high in [false, true] {
+            let outside = if high { light[axis] > hi[axis] } else { light[axis] < lo[axis] };
+            if !outside {
+                continue;
+            }
+            let quad: Vec<DVec3> = [(false, false), (true, false), (true, true), (false, true)]
+                .iter()
+                .map(|&(s, t)| {
+                    let mut c = [false; 3];
+                    c[axis] = high;
+                    c[(axis + 1) % 3] = s;
+                    c[(axis + 2) % 3] = t;
+                    corner(c[0], c[1], c[2])
+                })
+                .collect();
+            pyramids.extend(pyramid(light, &quad));
+        }
+    }
+    let mut out = Vec::new();
+    for (f, face) in w.faces.iter().enumerate() {
+        if face.polygon.plane.distance(light) >= -crate::world::PLANE_EPSILON || !face.bounds.touches_sphere(light, r) {
+            continue;
+        }
+        let meets = pyramids.iter().any(|(planes, bounds)| {
+            bounds.overlaps(&face.bounds) && {
+                let mut points = face.polygon.vertices.clone();
+                for plane in planes {
+                    points = clip_points_front(&points, plane, PYRAMID_SLACK);
+                    if points.is_empty() {
+                        break;
+                    }
+                }
+                !points.is_empty()
+            }
+        });
+        if meets {
+            out.push(f as FaceId);
+        }
+    }
+    out
+}
+
+/// Plans a frame: `sets[i]` are light `i`'s world sets (from [`light_world_sets`]; ignored
+/// without a world), `camera` the eye (scene space), `t` the animation time.
+pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets], lights: &[PointLight], entities: &[Entity], camera: Vec3, t: f32) -> FramePlan {
+    let entity_transforms: Vec<Mat4> = entities.iter().map(|e| e.transform_at(t)).collect();
+    let entity_bounds: Vec<(Vec3, Vec3)> = entities.iter().zip(&entity_transforms).map(|(e, m)| e.world_bounds(m)).collect();
+    let touches = |(lo, hi): (Vec3, Vec3), p: Vec3, r: f64| {
+        let nearest = p.clamp(lo, hi);
+        f64::from(nearest.distance_squared(p)) <= r * r
+    };
+    let Some(frame) = world else {
+        // No world: every entity is drawn, lit within the radius and casts within it.
+        let visible_entities: Vec<usize> = (0..entities.len()).collect();
+        let plans = lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| {
+                let r = culling_radius(config, l);
+                let near: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], l.position, r)).collect();
+                (!near.is_empty()).then(|| LightPlan { light: i, receiver_entities: near.clone(), caster_entities: near, ..Default::default() })
+            })
+            .collect();
+        return FramePlan { visible_faces: Vec::new(), visible_entities, lights: plans, entity_transforms };
+    };
+    let w = &frame.world;
+    let cam_leaf = w.leaf_of(frame.to_world(camera));
+    // Without a PVS, or with the eye outside the world, everything is potentially visible.
+    let cull = config.pvs && !w.is_solid(cam_leaf);
+    let mut face_visible = vec![!cull; w.faces.len()];
+    let mut leaf_visible = vec![!cull; w.leaves().len()];
+    if cull {
+        for l in w.visible_leaves(cam_leaf) {
+            leaf_visible[l as usize] = true;
+            for &f in &w.leaves()[l as usize].faces {
+                face_visible[f as usize] = true;
+            }
+        }
+    }
+    let entity_leaves: Vec<Vec<LeafId>> = entity_bounds.iter().map(|&b| sample_leaves(w, &world_aabb(frame, b))).collect();
+    let visible_entities: Vec<usize> = (0..entities.len()).filter(|&e| !cull || entity_leaves[e].iter().any(|&l| leaf_visible[l as usize])).collect();
+    let visible_faces: Vec<FaceId> = (0..w.faces.len() as FaceId).filter(|&f| face_visible[f as usize]).collect();
+    let mut plans = Vec::new();
+    for (i, light) in lights.iter().enumerate() {
+        let Some(s) = sets.get(i) else { continue };
+        let Some(light_leaf) = s.leaf else { continue };
+        let r = culling_radius(config, light);
+        let p = frame.to_world(light.position);
+        let receiver_faces: Vec<FaceId> = s.receivers.iter().copied().filter(|&f| face_visible[f as usize]).collect();
+        let receiver_entities: Vec<usize> = visible_entities
+            .iter()
+            .copied()
+            .filter(|&e| touches(entity_bounds[e], light.position, r))
+            .filter(|&e| !config.pvs || entity_leaves[e].iter().any(|&l| w.is_visible(light_leaf, l)))
+            .collect();
+        if receiver_faces.is_empty() && receiver_entities.is_empty() {
+            continue;
+        }
+        let mut caster_faces = s.casters.clone();
+        let mut added = 0;
+        if config.casters == Casters::Pscs && config.pvs {
+            let mut taken = vec![false; w.faces.len()];
+            for &f in &caster_faces {
+                taken[f as usize] = true;
+            }
+            for &e in &receiver_entities {
+                for f in entity_pyramid_casters(w, p, r, &world_aabb(frame, entity_bounds[e])) {
+                    if !taken[f as usize] {
+                        taken[f as usize] = true;
+                        caster_faces.push(f);
+                        added += 1;
+                    }
+                }
+            }
+            caster_faces.sort_unstable();
+        }
+        let caster_entities: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], light.position, r)).collect();
+        plans.push(LightPlan { light: i, receiver_faces, receiver_entities, caster_faces, caster_entities, added_by_entity_pyramids: added });
+    }
+    FramePlan { visible_faces, visible_entities, lights: plans, entity_transforms }
+}
+
+/// Merges ascending `(first, count)` ranges that touch.
+pub fn merge_ranges(ranges: impl IntoIterator<Item = (u32, u32)>) -> Vec<(u32, u32)> {
+    let mut out: Vec<(u32, u32)> = Vec::new();
+    for (first, count) in ranges {
+        if count == 0 {
+            continue;
+        }
+        match out.last_mut() {
+            Some(last) if last.0 + last.1 == first => last.1 += count,
+            _ => out.push((first, count)),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_merge_only_when_contiguous() {
+        assert_eq!(merge_ranges([(0, 3), (3, 6), (12, 3), (15, 0), (15, 3)]), vec![(0, 9), (12, 6)]);
+    }
+}

@@ -1,0 +1,293 @@
+//! The lighting of the stencil shadow-volume method, per pixel against the CPU: the seed's Eq. 5
+//! (faithful mode, every attenuation function, N_z on and off) on a normal-, specular- and
+//! albedo-mapped quad whose vertex normals fan out like a smoothing group — so the tangent-space
+//! light vector the shading uses differs from the world-space one the attenuation uses, and
+//! collapsing them would show — the radiometric (physical) mode, the two material paths (special-
+//! case pipelines, default 1×1 maps), and two lights being the sum of each alone.
+
+mod common;
+mod sv_common;
+
+use glam::{Vec2, Vec3, Vec4};
+use penumbra::forward::cpu::Surface;
+use penumbra::image_io::HdrImage;
+use penumbra::scene::{load_obj, Mesh, Scene};
+use penumbra::shadow_volumes::cpu::{attenuation, faithful_ambient, faithful_light, faithful_light_colour, physical_light};
+use sv_common::{hit_plane_y, method, render_in, render_scene};
+
+const SIZE: (u32, u32) = (64, 64);
+const LIGHT: Vec3 = Vec3::new(0.5, 1.2, 0.3);
+const RADIUS: f32 = 3.0;
+const INTENSITY: f32 = 4.0;
+const ALBEDO: Vec3 = Vec3::new(0.9, 0.8, 0.7);
+const SPECULAR: Vec3 = Vec3::splat(0.5);
+const EMISSION: Vec3 = Vec3::new(0.02, 0.01, 0.0);
+const LIGHTMAP: Vec3 = Vec3::new(0.2, 0.25, 0.3);
+/// Texels of the constant maps: albedo (sRGB), normal (tilted), specular.
+const ALBEDO_TEXEL: [u8; 3] = [200, 150, 100];
+const SPECULAR_TEXEL: u8 = 180;
+
+fn normal_texel() -> [u8; 3] {
+    let n = Vec3::new(0.2, -0.3, 0.9).normalize();
+    [n.x, n.y, n.z].map(|c| ((c * 0.5 + 0.5) * 255.0).round() as u8)
+}
+
+/// Writes the maps and a 4 m quad (y = 0, facing +y) whose vertex normals lean outward.
+fn fixture() -> std::path::PathBuf {
+    let dir = common::temp_path("sv-shading");
+    std::fs::create_dir_all(&dir).unwrap();
+    let solid = |rgb: [u8; 3]| image::RgbaImage::from_pixel(4, 4, image::Rgba([rgb[0], rgb[1], rgb[2], 255]));
+    solid(ALBEDO_TEXEL).save(dir.join("albedo.png")).unwrap();
+    solid(normal_texel()).save(dir.join("normal.png")).unwrap();
+    solid([SPECULAR_TEXEL; 3]).save(dir.join("specular.png")).unwrap();
+    let obj = "v -2 0 2\nv 2 0 2\nv 2 0 -2\nv -2 0 -2\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+               vn -0.35 1 0.35\nvn 0.35 1 0.35\nvn 0.35 1 -0.35\nvn -0.35 1 -0.35\nf 1/1/1 2/2/2 3/3/3 4/4/4\n";
+    std::fs::write(dir.join("quad.obj"), obj).unwrap();
+    dir
+}
+
+fn scene_text(params: &[&str], lights: &str) -> String {
+    format!(
+        r#"{}
+[camera]
+position = [0.3, 5.0, 1.2]
+target = [0, 0, 0]
+fov_y_deg = 45
+
+[[materials]]
+name = "mapped"
+albedo = [{}, {}, {}]
+albedo_map = "albedo.png"
+normal_map = "normal.png"
+specular = [{}, {}, {}]
+specular_map = "specular.png"
+emission = [{}, {}, {}]
+
+[[objects]]
+mesh = "obj"
+path = "quad.obj"
+material = "mapped"
+{lights}"#,
+        method(params),
+        ALBEDO.x, ALBEDO.y, ALBEDO.z, SPECULAR.x, SPECULAR.y, SPECULAR.z, EMISSION.x, EMISSION.y, EMISSION.z
+    )
+}
+
+fn light_text() -> String {
+    format!("[[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {INTENSITY}\nradius = {RADIUS}\n", LIGHT.x, LIGHT.y, LIGHT.z)
+}
+
+fn srgb_to_linear(b: u8) -> f32 {
+    let c = b as f32 / 255.0;
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// The vertex shader's outputs at a point of the quad, interpolated as the rasterizer does
+/// (perspective-correct, i.e. barycentric in 3D): world position, normal, tangent, uv and the
+/// tangent-space light and eye vectors.
+struct Interpolated {
+    p: Vec3,
+    normal: Vec3,
+    tangent: Vec4,
+    light_ts: Vec3,
+    eye_ts: Vec3,
+}
+
+/// Per vertex: normal, tangent, tangent-space light and eye vectors.
+type VertexVectors = (Vec3, Vec4, Vec3, Vec3);
+
+fn interpolate(mesh: &Mesh, p: Vec3, eye: Vec3) -> Option<Interpolated> {
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+        let (pa, pb, pc) = (mesh.positions[a], mesh.positions[b], mesh.positions[c]);
+        let n = (pb - pa).cross(pc - pa);
+        let area = n.length();
+        let w = [(pc - pb).cross(p - pb).dot(n) / (area * area), (pa - pc).cross(p - pc).dot(n) / (area * area), (pb - pa).cross(p - pa).dot(n) / (area * area)];
+        if w.iter().any(|&x| x < -1e-6) {
+            continue;
+        }
+        // Per vertex, as surface.vert computes it (identity model matrix).
+        let per_vertex = |i: usize| {
+            let n = mesh.normals[i].normalize();
+            let t4 = mesh.tangents[i];
+            let t = (t4.truncate() - n * n.dot(t4.truncate())).normalize();
+            let b = n.cross(t) * t4.w;
+            let (l, e) = (LIGHT - mesh.positions[i], eye - mesh.positions[i]);
+            (n, t.extend(t4.w), Vec3::new(l.dot(t), l.dot(b), l.dot(n)), Vec3::new(e.dot(t), e.dot(b), e.dot(n)))
+        };
+        let v = [per_vertex(a), per_vertex(b), per_vertex(c)];
+        let mix3 = |f: &dyn Fn(&VertexVectors) -> Vec3| f(&v[0]) * w[0] + f(&v[1]) * w[1] + f(&v[2]) * w[2];
+        return Some(Interpolated {
+            p,
+            normal: mix3(&|x| x.0),
+            tangent: v[0].1 * w[0] + v[1].1 * w[1] + v[2].1 * w[2],
+            light_ts: mix3(&|x| x.2),
+            eye_ts: mix3(&|x| x.3),
+        });
+    }
+    None
+}
+
+fn map_normal() -> Vec3 {
+    Vec3::from(normal_texel().map(|b| b as f32 / 255.0 * 2.0 - 1.0)).normalize()
+}
+
+fn diffuse() -> Vec3 {
+    ALBEDO * Vec3::from(ALBEDO_TEXEL.map(srgb_to_linear))
+}
+
+fn specular() -> Vec3 {
+    SPECULAR * (SPECULAR_TEXEL as f32 / 255.0)
+}
+
+/// Every pixel whose centre ray meets the quad (away from its edges), with its interpolation.
+fn pixels(scene: &Scene, mesh: &Mesh) -> Vec<(u32, u32, Interpolated)> {
+    let mut out = Vec::new();
+    for y in 0..SIZE.1 {
+        for x in 0..SIZE.0 {
+            let Some((p, _)) = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 0.0) else { continue };
+            if p.x.abs() > 1.95 || p.z.abs() > 1.95 {
+                continue;
+            }
+            if let Some(i) = interpolate(mesh, p, scene.camera.position) {
+                out.push((x, y, i));
+            }
+        }
+    }
+    out
+}
+
+fn max_error(img: &HdrImage, expected: &[(u32, u32, Vec3)]) -> f32 {
+    expected.iter().map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element()).fold(0.0, f32::max)
+}
+
+#[test]
+fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
+    let dir = fixture();
+    let mesh = load_obj(&dir.join("quad.obj")).unwrap();
+    let n_map = map_normal();
+    let mut collapse_detected = false;
+    for atten in 1..=4u32 {
+        for nz in [true, false] {
+            let params = ["mode = \"faithful\"".to_string(), format!("atten = {atten}"), format!("ambient_nz = {nz}"), format!("lightmap = [{}, {}, {}]", LIGHTMAP.x, LIGHTMAP.y, LIGHTMAP.z)];
+            let params: Vec<&str> = params.iter().map(String::as_str).collect();
+            let (img, scene) = render_in(&scene_text(&params, &light_text()), &dir, SIZE);
+            let colour = faithful_light_colour(Vec3::splat(INTENSITY), RADIUS, atten);
+            let mut expected = Vec::new();
+            let mut collapsed = Vec::new();
+            for (x, y, i) in pixels(&scene, &mesh) {
+                let ambient = faithful_ambient(diffuse(), LIGHTMAP, n_map.z, nz, EMISSION);
+                let dist = LIGHT.distance(i.p);
+                let light = faithful_light(n_map, i.light_ts, i.eye_ts, dist, diffuse(), specular(), colour, atten, RADIUS);
+                expected.push((x, y, ambient + light));
+                // The same with the attenuation taken from the interpolated tangent-space vector.
+                let wrong = faithful_light(n_map, i.light_ts, i.eye_ts, i.light_ts.length(), diffuse(), specular(), colour, atten, RADIUS);
+                collapsed.push((x, y, ambient + wrong));
+            }
+            assert!(expected.len() > 1500, "the quad fills the view");
+            assert!(expected.iter().all(|e| e.2.max_element() <= 1.0), "values stay in [0, 1] for the UNORM8 comparison");
+            let err = max_error(&img, &expected);
+            println!("atten{atten} N_z {nz}: max |GPU − CPU| = {err:.2e}; collapsed vectors would be off by {:.2e}", max_error(&img, &collapsed));
+            assert!(err <= 2.0 / 255.0, "atten{atten}, N_z {nz}: max error {err} > 2/255");
+            collapse_detected |= max_error(&img, &collapsed) > 3.0 / 255.0;
+        }
+    }
+    assert!(collapse_detected, "the fixture must be sensitive to collapsing the two light vectors");
+    let _ = attenuation(4, 1.0, 2.0);
+}
+
+#[test]
+fn physical_mode_matches_the_cpu_per_pixel() {
+    let dir = fixture();
+    let mesh = load_obj(&dir.join("quad.obj")).unwrap();
+    let (img, scene) = render_in(&scene_text(&["mode = \"physical\""], &light_text()), &dir, SIZE);
+    let tn = map_normal();
+    let surface = Surface { albedo: diffuse(), specular: specular(), exponent: 32.0, emission: EMISSION };
+    let mut expected = Vec::new();
+    for (x, y, i) in pixels(&scene, &mesh) {
+        // light.frag: the interpolated frame, renormalised, then the normal map.
+        let n = i.normal.normalize();
+        let t = (i.tangent.truncate() - n * n.dot(i.tangent.truncate())).normalize();
+        let b = n.cross(t) * i.tangent.w;
+        let nm = (t * tn.x + b * tn.y + n * tn.z).normalize();
+        expected.push((x, y, EMISSION + physical_light(i.p, nm, scene.camera.position, &surface, LIGHT, Vec3::splat(INTENSITY), RADIUS)));
+    }
+    // Relative to the pixel's brightest channel (a dim channel of a lit pixel carries the
+    // hardware sRGB decode's absolute rounding).
+    let worst = expected.iter().map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element() / e.max_element().max(1e-3)).fold(0.0, f32::max);
+    println!("physical: max relative error {worst:.2e} over {} pixels", expected.len());
+    assert!(worst < 3e-3, "{worst}");
+}
+
+/// The level with its maps: special-case pipelines and the one default-map pipeline compute
+/// the same image (the default maps are exact: white albedo and specular, the flat normal
+/// (0.5, 0.5, 1) in a float texture), in both modes.
+#[test]
+fn both_material_paths_give_the_same_image() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bsp_rooms.toml");
+    for mode in ["faithful", "physical"] {
+        let mut images = Vec::new();
+        for materials in ["special", "default_maps"] {
+            let mut scene = Scene::from_file(&path).unwrap();
+            let decl = &mut scene.methods[0];
+            decl.params.retain(|(n, _, _)| n != "mode");
+            for (k, v) in [("mode", mode), ("materials", materials)] {
+                decl.params.push((k.into(), toml::Value::String(v.into()), 0));
+            }
+            images.push(render_scene(scene, (96, 64)));
+        }
+        let worst = images[0].pixels.iter().zip(&images[1].pixels).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs() / a[c].abs().max(1e-3)).fold(0.0, f32::max)).fold(0.0, f32::max);
+        println!("{mode}: largest relative difference {worst:.2e}");
+        assert!(worst <= 1e-5, "{mode}: special-case and default-map images differ by {worst}");
+    }
+}
+
+/// Ambient + light A + light B = (ambient + A) + (ambient + B) − ambient, within 1/255: the
+/// stencil is cleared between lights and each light's pass only adds.
+#[test]
+fn two_lights_are_the_sum_of_each_alone() {
+    let world = r#"
+[[materials]]
+name = "wall"
+albedo = 0.6
+specular = 0.2
+
+[[objects]]
+name = "world"
+mesh = "bsp_rooms"
+seed = 1
+wall_material = "wall"
+floor_material = "wall"
+ceiling_material = "wall"
+pillar_material = "wall"
+corridor_material = "wall"
+
+[[objects]]
+name = "ball"
+mesh = "sphere"
+radius = 0.4
+translate = [6.3, 1.0, -5.2]
+material = "wall"
+"#;
+    let camera = "[camera]\nposition = [2.8, 1.7, -4.1]\ntarget = [9.0, 0.8, -9.2]\nfov_y_deg = 70\n";
+    let a = "[[lights]]\ntype = \"point\"\nposition = [5.2, 2.7, -8.6]\nintensity = [9, 7, 4.5]\nradius = 8\n";
+    let b = "[[lights]]\ntype = \"point\"\nposition = [8.0, 2.2, -5.0]\nintensity = [2, 4, 9]\nradius = 6\n";
+    let render = |lights: &str| {
+        let text = format!("{}\n{camera}\n{world}\n{lights}", method(&["mode = \"faithful\"", "lightmap = [0.05, 0.05, 0.06]", "animate = false"]));
+        render_scene(Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap(), (96, 64))
+    };
+    let (both, only_a, only_b, none) = (render(&format!("{a}{b}")), render(a), render(b), render(""));
+    let mut worst = 0.0f32;
+    let mut lit_by_both = 0;
+    for i in 0..both.pixels.len() {
+        for c in 0..3 {
+            let sum = only_a.pixels[i][c] + only_b.pixels[i][c] - none.pixels[i][c];
+            worst = worst.max((both.pixels[i][c] - sum).abs());
+        }
+        lit_by_both += usize::from(only_a.pixels[i][0] > none.pixels[i][0] && only_b.pixels[i][0] > none.pixels[i][0]);
+    }
+    println!("max |both − (a + b − ambient)| = {worst:.2e}; {lit_by_both} pixels lit by both");
+    assert!(lit_by_both > 500, "the lights overlap in view");
+    assert!(worst <= 1.0 / 255.0, "{worst}");
+    let _ = Vec2::ZERO;
+}
