@@ -32,8 +32,9 @@ layout(location = 0) out vec4 out_radiance;
 
 // Unshadowed irradiance from the environment (clamped: a 3-band fit can dip below zero).
 vec3 environment_irradiance(vec3 n) {
-    float y[SH_MAX_COEFFS];
-    sh_eval_bands(sh_world_to_sh(n), 3, y);
+    // The unrolled 4-band evaluation; only the first 3 bands (9 coefficients) are used.
+    float y[16];
+    sh_eval16(sh_world_to_sh(n), y);
     vec3 e = vec3(0.0);
     for (int i = 0; i < 9; ++i) {
         e += frame.env_irradiance[i].rgb * y[i];
