@@ -458,3 +458,79 @@ fn translated_field_moves_with_its_lights() {
     let peak = a.iter().map(|p| p[0]).fold(0.0f32, f32::max);
     assert!(worst < 1e-4 * peak.max(1e-3), "{worst} against a peak of {peak}");
 }
+
+/// The brute force's march agrees with the CPU mirror even where it runs 2048 positions in each
+/// of 32 directions (one-position loops stop silently on llvmpipe after 65535 iterations per
+/// invocation), and a march that cannot fit is refused with a clear error there.
+#[test]
+fn long_marches_match_the_cpu_mirror() {
+    use penumbra::heightfield::cpu::{direction, BruteHorizon};
+    use penumbra::heightfield::pyramid::Grid;
+    let field = "size = 8\nresolution = 64\ngenerator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 1.5";
+    let s = scene(field, r#"{ name = "heightfield_bruteforce", march_step = 0.03125 }"#, SKY);
+    let MeshSource::Heightfield(src) = &s.objects[0].mesh else { unreachable!() };
+    let mut h = harness(&s);
+    let gpu = h.horizons(0.0, None).unwrap();
+    clean(&h);
+    let g = Grid { size: 64, values: src.grid(64, 0.0, None) };
+    let cpu = BruteHorizon { heights: &g, step: 0.03125, spacing: 0.125 };
+    let mut worst = 0.0f64;
+    for k in 0..24u32 {
+        let (i, j) = ((k * 37 + 5) % 64, (k * 23 + 11) % 64);
+        for dir in 0..32usize {
+            let want = cpu.env((i as i64, j as i64), direction(dir, 32));
+            worst = worst.max((gpu[dir * 4096 + (j * 64 + i) as usize] as f64 - want).abs());
+        }
+    }
+    assert!(worst.to_degrees() < 0.05, "worst {:.3}°", worst.to_degrees());
+
+    if h.gpu.caps().name.contains("llvmpipe") {
+        let s = scene(field, r#"{ name = "heightfield_bruteforce", march_step = 0.01, resolution = 1024 }"#, SKY);
+        let e = Standalone::new(h.gpu, &s, &s.methods[0]).err().expect("refused").to_string();
+        assert!(e.contains("llvmpipe stops a shader's loops"), "{e}");
+    }
+}
+
+/// C6: a small cone between two of nφ = 4 directions casts no environment shadow at all (seed
+/// 001 Fig. 6.1); nφ = 32 sees it. Around a centred cone, the shading at equal radius spreads
+/// less with more directions (azimuthal aliasing).
+#[test]
+fn azimuthal_sampling_of_a_cone() {
+    // 64² over 8 m; a cone of radius 3 texels, 4.8 texels (0.6 m) tall, at texel (42, 22); the receiver at
+    // (32, 32) sees it at azimuth 45° (SH φ from +x toward −z), 14 texels away.
+    let (cx, cz) = texel_xz(42, 22, 64, 8.0);
+    let field = format!("size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 1\nring_radius = 0\nradius = 0.375\nheight = 0.6\noffset = [{cx}, {cz}]");
+    let at = |nphi: u32| {
+        let mut h = harness(&scene(&field, &format!(r#"{{ name = "heightfield_pyramid", nphi = {nphi} }}"#), SKY));
+        let img = h.shading(0.0).unwrap();
+        clean(&h);
+        img
+    };
+    let (four, many) = (at(4), at(32));
+    let (a, b) = (four[32 * 64 + 32][0], many[32 * 64 + 32][0]);
+    eprintln!("cone at 45°: nφ = 4 → {a:.5}, nφ = 32 → {b:.5}");
+    assert!((a - 1.0).abs() < 1e-4, "nφ = 4 should miss the cone: {a}");
+    // The cone's silhouette from the receiver: a triangle about 24° wide and 19° tall near the
+    // horizon, so cosine-weighted it hides about 0.002 of the sky.
+    assert!((0.001..0.004).contains(&(1.0 - b)), "nφ = 32 should see the cone hide about 0.002: {b}");
+
+    let centred = "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 1\nring_radius = 0\nradius = 0.75\nheight = 1";
+    let mut spreads = Vec::new();
+    for nphi in [4u32, 8, 32] {
+        let mut h = harness(&scene(centred, &format!(r#"{{ name = "heightfield_pyramid", nphi = {nphi} }}"#), SKY));
+        let img = h.shading(0.0).unwrap();
+        clean(&h);
+        // Receivers 12 texels from the cone's centre (31.5, 31.5), every 5°.
+        let values: Vec<f32> = (0..72)
+            .map(|k| {
+                let t = (k as f32 * 5.0).to_radians();
+                let (x, z) = (31.5 + 12.0 * t.cos(), 31.5 + 12.0 * t.sin());
+                img[(z.round() as usize) * 64 + x.round() as usize][0]
+            })
+            .collect();
+        let spread = values.iter().cloned().fold(f32::MIN, f32::max) - values.iter().cloned().fold(f32::MAX, f32::min);
+        eprintln!("cone, receivers at 12 texels: nφ = {nphi}: spread {spread:.4}");
+        spreads.push(spread);
+    }
+    assert!(spreads[1] < spreads[0] && spreads[2] < spreads[1], "{spreads:?}");
+}

@@ -105,20 +105,35 @@ void hf_load_receiver(ivec2 p) {
     hf_h0 = hf_height_texel(p);
 }
 
+// One march position: stops at the end or once even the field's highest point could not beat
+// `best`.
+#define HF_MARCH_AT(k)                                                              \
+    if (!stop) {                                                                    \
+        int m = base + k;                                                           \
+        float dist = float(m) * step;                                               \
+        if (m > count || rise <= best * dist) {                                     \
+            stop = true;                                                            \
+        } else {                                                                    \
+            float hq = hf_height_bilinear(vec2(p) + dist * d);                      \
+            best = max(best, (hq - hf_h0) * params.grid.w / dist);                  \
+        }                                                                           \
+    }
+
 // Largest slope (h(q) - h0) / dist over the march positions dist = step, 2 step, ... <= limit
 // (at least one step, so a light straight above still sees the receiver's surroundings, as the
 // pyramid's first sample does), starting from `best`. Stops early once even the field's highest
-// point could not beat it.
+// point could not beat it. Eight positions per loop iteration: llvmpipe ends every loop of an
+// invocation after 65535 iterations in total (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS, shared by
+// all loops), which a one-position loop over 32 directions reaches at 2048 positions each.
 float hf_march(ivec2 p, int j, float limit, float best) {
     vec2 d = hf_dir(j);
     float step = params.horizon.z;
     float rise = (bounds.b.x - hf_h0) * params.grid.w;
     int count = max(int(floor(limit / step)), 1);
-    for (int m = 1; m <= count; ++m) {
-        float dist = float(m) * step;
-        if (rise <= best * dist) break;
-        float hq = hf_height_bilinear(vec2(p) + dist * d);
-        best = max(best, (hq - hf_h0) * params.grid.w / dist);
+    bool stop = false;
+    for (int base = 1; base <= count && !stop; base += 8) {
+        HF_MARCH_AT(0) HF_MARCH_AT(1) HF_MARCH_AT(2) HF_MARCH_AT(3)
+        HF_MARCH_AT(4) HF_MARCH_AT(5) HF_MARCH_AT(6) HF_MARCH_AT(7)
     }
     return best;
 }
@@ -130,9 +145,10 @@ float hf_horizon_env(ivec2 p, int j) {
     return atan(hf_march(p, j, limit, 0.0));
 }
 
+// Marched to the light's planar distance, at most twice the field's width (beyond that the
+// edge-clamped field adds nothing the march has not seen).
 float hf_horizon_light(ivec2 p, int j, float d_li) {
-    float limit = d_li;
-    if (params.horizon.w > 0.0) limit = min(limit, params.horizon.w);
+    float limit = min(d_li, params.horizon.w > 0.0 ? params.horizon.w : 2.0 * float(hf_res()));
     return atan(hf_march(p, j, limit, -1e30));
 }
 #endif  // HF_BRUTE

@@ -123,9 +123,9 @@ impl BruteHorizon<'_> {
         self.march(p, dir, self.heights.size as f64, 0.0).atan()
     }
 
-    /// Local-light horizon, marched to the light's planar distance, signed.
+    /// Local-light horizon, marched to the light's planar distance (at most 2·res), signed.
     pub fn light(&self, p: (i64, i64), dir: (f64, f64), d_li: f64) -> f64 {
-        let best = self.march(p, dir, d_li, f64::NEG_INFINITY);
+        let best = self.march(p, dir, d_li.min(2.0 * self.heights.size as f64), f64::NEG_INFINITY);
         if best == f64::NEG_INFINITY {
             -FRAC_PI_2
         } else {

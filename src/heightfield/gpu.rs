@@ -255,6 +255,10 @@ pub struct HeightfieldGpu {
     pipelines: Pipelines,
 }
 
+/// Loop iterations llvmpipe allows one shader invocation, all loops together (gallivm's
+/// LP_MAX_TGSI_LOOP_ITERATIONS); beyond it loops end silently.
+const LLVMPIPE_LOOP_BUDGET: f32 = 65535.0;
+
 /// Layers of the per-light radiance image.
 fn light_layers(lights: usize) -> u32 {
     lights.max(2) as u32
@@ -290,6 +294,20 @@ impl HeightfieldGpu {
         }
         if settings.bands > MAX_BANDS || settings.nphi > MAX_NPHI {
             return Err(Error::Usage(format!("bands ≤ {MAX_BANDS} and nphi ≤ {MAX_NPHI} are supported")));
+        }
+        if settings.horizon == Horizon::BruteForce && gpu.caps().name.contains("llvmpipe") {
+            // llvmpipe ends a shader invocation's loops after 65535 iterations in all (shared by
+            // every loop), silently; the march takes 8 positions per iteration, over res texels
+            // (environment) or up to 2·res (lights), in every direction.
+            let reach = if settings.max_distance > 0.0 { settings.max_distance } else { 2.0 * res as f32 };
+            // The march, then the visibility, product and basis loops (≤ 2907 product terms).
+            let trips = settings.nphi as f32 * ((reach / settings.march_step / 8.0).ceil() + 66.0) + 3000.0;
+            if trips > LLVMPIPE_LOOP_BUDGET {
+                return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!(
+                    "heightfield_bruteforce at {res}² with nphi = {} and march_step = {} needs about {trips:.0} loop iterations per texel; llvmpipe stops a shader's loops after {LLVMPIPE_LOOP_BUDGET:.0} (use a larger march_step or max_distance)",
+                    settings.nphi, settings.march_step
+                ))));
+            }
         }
         let level_sizes: Vec<u32> = (0..levels).map(|k| pyramid::level_size(res, settings.ls, k)).collect();
         let spacing = inputs.source.size / res as f32;

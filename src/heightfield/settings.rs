@@ -62,8 +62,8 @@ pub struct Settings {
     /// Wedge-table nodes per horizon angle.
     pub table_size: u32,
     pub decimation: Decimation,
-    /// Brute force: march step and largest distance, texels (0: res texels, the pyramid's reach
-    /// over the edge-clamped field).
+    /// Brute force: march step and largest distance, texels (0: res texels for the environment,
+    /// the pyramid's reach over the edge-clamped field, and 2·res toward a light).
     pub march_step: f32,
     pub max_distance: f32,
     /// Seconds of animation per rendered frame.
