@@ -471,13 +471,179 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
     }
 }
 
+/// An 8 × 8 map of four 4 × 4 quadrants (top-left, top-right, bottom-left, bottom-right), saved
+/// as a PNG; distinct quadrants show a flipped or transposed lookup.
+fn quadrant_png(name: &str, quadrants: [[u8; 3]; 4]) -> std::path::PathBuf {
+    let path = common::temp_path(name);
+    image::RgbaImage::from_fn(8, 8, |x, y| {
+        let [r, g, b] = quadrants[(y / 4 * 2 + x / 4) as usize];
+        image::Rgba([r, g, b, 255])
+    })
+    .save(&path)
+    .expect("write map");
+    path
+}
+
+/// The quadrant (0–3, as in [`quadrant_png`]) whose texels alone the bilinear, repeat-wrapped
+/// lookup at uv blends, or None where it blends two quadrants (within half a texel of a
+/// quadrant's edge, the map's border included, where repeat wrapping blends in the far side).
+fn pure_quadrant(u: f32, v: f32) -> Option<usize> {
+    let block = |c: f32| {
+        let i = (c * 8.0 - 0.5).floor() as i64;
+        let (a, b) = (i.rem_euclid(8) / 4, (i + 1).rem_euclid(8) / 4);
+        (a == b).then_some(a as usize)
+    };
+    Some(block(v)? * 2 + block(u)?)
+}
+
 #[test]
-fn texture_maps_are_an_error_naming_the_field() {
-    let png = common::temp_path("wood.png");
-    HdrImage::new(2, 2).write_png(&png, 1.0).expect("write texture");
-    let texture = format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nalbedo_map = {:?}\n", png.display().to_string());
-    let e = penumbra::reference::TracedScene::build(&parse(&texture)).err().expect("unsupported").to_string();
-    assert!(e.contains("<test>") && e.contains("albedo_map") && e.contains("\"wood\"") && e.contains("unsupported"), "{e}");
+fn albedo_and_specular_maps_give_each_texel_region_its_closed_form() {
+    // Albedo bytes are sRGB, specular bytes linear: each quadrant a different known surface.
+    let albedo_bytes = [[200, 64, 16], [32, 128, 240], [250, 250, 250], [10, 90, 160]];
+    let specular_bytes = [[51, 51, 51], [255, 255, 255], [102, 102, 102], [0, 0, 0]];
+    let (albedo_png, specular_png) = (quadrant_png("quad-albedo.png", albedo_bytes), quadrant_png("quad-specular.png", specular_bytes));
+    let (base_albedo, base_specular, exponent) = (Vec3::new(0.9, 0.8, 0.7), 0.5, 16.0);
+    // The highlight's mirror point lies in the top-right quadrant (u ≈ 0.66, v ≈ 0.30).
+    let toml = format!(
+        "{LIT_PLANE}\n[[materials]]\nname = \"m\"\nalbedo = [0.9, 0.8, 0.7]\nspecular = {base_specular}\nexponent = {exponent}\n\
+         albedo_map = {:?}\nspecular_map = {:?}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n\n\
+         [[lights]]\ntype = \"point\"\nposition = [1.2, 1.0, -2.5]\nintensity = 10\n",
+        albedo_png.display().to_string(),
+        specular_png.display().to_string()
+    );
+    let scene = parse(&toml);
+    // The plane's uvs as the tracer reads them: u = (x + 3)/6, v = (z + 3)/6.
+    let mesh = scene.objects[0].load_mesh(Path::new(".")).unwrap();
+    for (p, uv) in mesh.positions.iter().zip(&mesh.uvs) {
+        assert!((uv.x - (p.x + 3.0) / 6.0).abs() < 1e-6 && (uv.y - (p.z + 3.0) / 6.0).abs() < 1e-6, "{p} has uv {uv}");
+    }
+    let surface_of = |q: usize| Surface {
+        albedo: base_albedo * Vec3::from(albedo_bytes[q].map(penumbra::reference::srgb_decode)),
+        specular: Vec3::from(specular_bytes[q].map(|b| b as f32 / 255.0)) * base_specular,
+        exponent,
+        emission: Vec3::ZERO,
+    };
+    let size = (48, 48);
+    let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 5)])[0];
+    let lights = punctual_lights(&scene);
+    let mut agreement = Agreement::new("albedo and specular maps");
+    let (mut per_quadrant, mut specular_share) = ([0; 4], 0.0f32);
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            // The plane's image of a pixel is convex, so its four corners in one pure quadrant
+            // put the whole pixel there.
+            let corner_quadrant = |x: u32, y: u32| ground_point(&scene, x as f32, y as f32, size, 3.0).and_then(|p| pure_quadrant((p.x + 3.0) / 6.0, (p.z + 3.0) / 6.0));
+            let Some(q) = corner_quadrant(i, j) else { continue };
+            if [(i + 1, j), (i, j + 1), (i + 1, j + 1)].into_iter().any(|(x, y)| corner_quadrant(x, y) != Some(q)) {
+                continue;
+            }
+            let s = surface_of(q);
+            let Some(want) = pixel_average(i, j, 8, |x, y| Some(shade(ground_point(&scene, x, y, size, 3.0)?, Vec3::Y, scene.camera.position, &s, &lights, Vec3::ZERO))) else { continue };
+            let diffuse_only = Surface { specular: Vec3::ZERO, ..s };
+            let diffuse = pixel_average(i, j, 4, |x, y| Some(shade(ground_point(&scene, x, y, size, 3.0)?, Vec3::Y, scene.camera.position, &diffuse_only, &lights, Vec3::ZERO))).unwrap();
+            specular_share = specular_share.max(1.0 - diffuse.x / want.x.max(1e-9));
+            agreement.check(img, i, j, want, want * 1e-3);
+            per_quadrant[q] += 1;
+        }
+    }
+    println!("pixels per quadrant {per_quadrant:?}, largest specular share {specular_share}");
+    assert!(per_quadrant.iter().all(|&n| n >= 40), "every quadrant is checked: {per_quadrant:?}");
+    assert!(specular_share > 0.3, "the specular lobe matters somewhere checked ({specular_share})");
+    agreement.assert();
+}
+
+/// Between texel centres the map is filtered as the raster sampler filters it: sRGB decoded per
+/// texel, then bilinear with texel centres at half-integers, wrapping around the map's edges.
+#[test]
+fn albedo_map_is_filtered_bilinearly_with_repeat_wrapping() {
+    let png = common::temp_path("gradient-albedo.png");
+    let texels = [[250, 20, 90], [30, 200, 60], [120, 120, 250], [10, 60, 10], [220, 220, 40], [60, 10, 200], [250, 250, 250], [0, 90, 30]];
+    image::RgbaImage::from_fn(4, 2, |x, y| {
+        let [r, g, b] = texels[(y * 4 + x) as usize];
+        image::Rgba([r, g, b, 255])
+    })
+    .save(&png)
+    .expect("write map");
+    let toml = format!(
+        "{LIT_PLANE}\n[[materials]]\nname = \"m\"\nalbedo = 1\nalbedo_map = {:?}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 2\n",
+        png.display().to_string()
+    );
+    let scene = parse(&toml);
+    let traced = penumbra::reference::TracedScene::build(&scene).unwrap();
+    let map = &traced.textures[0];
+    // The lookup itself: at a texel centre the texel; on the left edge half the far right texel.
+    let decoded = |k: usize| Vec3::from(texels[k].map(penumbra::reference::srgb_decode));
+    assert!((map.sample(glam::Vec2::new(0.625, 0.25)).truncate() - decoded(2)).abs().max_element() < 1e-6);
+    let edge = map.sample(glam::Vec2::new(0.0, 0.25)).truncate();
+    assert!((edge - 0.5 * (decoded(0) + decoded(3))).abs().max_element() < 1e-6, "{edge}");
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 11)])[0];
+    let mut agreement = Agreement::new("bilinear albedo map");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            let Some(want) = pixel_average(i, j, 8, |x, y| {
+                let p = ground_point(&scene, x, y, size, 3.0)?;
+                Some(map.sample(glam::Vec2::new((p.x + 3.0) / 6.0, (p.z + 3.0) / 6.0)).truncate() * (2.0 / std::f32::consts::PI))
+            }) else {
+                continue;
+            };
+            // The 8 × 8 point average misses the kinks at texel centres by a little.
+            agreement.check(img, i, j, want, want * 5e-3);
+        }
+    }
+    assert!(agreement.pixels > 400, "{} pixels", agreement.pixels);
+    agreement.assert();
+}
+
+#[test]
+fn normal_map_tilts_the_normal_in_the_meshs_tangent_frame() {
+    // A uniform map of the tangent-space normal (0.3, 0.4, 0.866) on a plane turned 90° about y,
+    // so that the world frame comes from the mesh's transformed tangents: T = (0, 0, −1),
+    // B = N × T = (−1, 0, 0) (toward −v, green up), N = +y.
+    let encode = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+    let bytes = [encode(0.3), encode(0.4), encode(0.866)];
+    let png = quadrant_png("normal-map.png", [bytes; 4]);
+    let toml = format!(
+        "{LIT_PLANE}\n[[materials]]\nname = \"m\"\nalbedo = 0.7\nnormal_map = {:?}\n\n\
+         [[objects]]\nmesh = \"plane\"\nsize = 6\nrotate_deg = [0, 90, 0]\nmaterial = \"m\"\n\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [1.0, -1.0, 0.5]\nirradiance = 3\n",
+        png.display().to_string()
+    );
+    let scene = parse(&toml);
+    let mesh = scene.objects[0].load_mesh(Path::new(".")).unwrap().transformed(&scene.objects[0].transform);
+    for t in &mesh.tangents {
+        assert!((t.truncate() - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5 && t.w == 1.0, "tangent {t}");
+    }
+    let tn = Vec3::from(bytes.map(|b| b as f32 / 255.0 * 2.0 - 1.0)).normalize();
+    let (t, b, n) = (Vec3::new(0.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, 0.0), Vec3::Y);
+    let tilted = (t * tn.x + b * tn.y + n * tn.z).normalize();
+    let l = -Vec3::new(1.0, -1.0, 0.5).normalize();
+    let (cos_tilted, cos_flat, cos_mirrored_b) = (tilted.dot(l), n.dot(l), (t * tn.x - b * tn.y + n * tn.z).normalize().dot(l));
+    // The test can tell the tilt, and the bitangent's sign, apart.
+    assert!(cos_tilted > 1.3 * cos_flat && cos_tilted > 1.5 * cos_mirrored_b, "{cos_tilted} {cos_flat} {cos_mirrored_b}");
+    let want = Vec3::splat(0.7 / std::f32::consts::PI * 3.0 * cos_tilted);
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(16, 0, LightPaths::Direct, 9)])[0];
+    let mut agreement = Agreement::new("normal-mapped plane under a directional light");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            if [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].into_iter().all(|(x, y)| ground_point(&scene, x as f32, y as f32, size, 3.0).is_some()) {
+                agreement.check(img, i, j, want, want * 1e-4);
+            }
+        }
+    }
+    assert!(agreement.pixels > 400, "{} pixels", agreement.pixels);
+    agreement.assert();
+}
+
+#[test]
+fn an_unreadable_texture_map_is_an_error_naming_the_field() {
+    let bad = common::temp_path("not-an-image.png");
+    std::fs::write(&bad, "not a PNG").expect("write");
+    let texture = format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nspecular_map = {:?}\n", bad.display().to_string());
+    let e = penumbra::reference::TracedScene::build(&parse(&texture)).err().expect("an error").to_string();
+    assert!(e.contains("<test>") && e.contains("specular_map") && e.contains("\"wood\"") && e.contains("not-an-image.png"), "{e}");
     assert_eq!(e.lines().count(), 1, "{e}");
 }
 

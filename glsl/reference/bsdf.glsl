@@ -17,6 +17,7 @@ struct Material {
     vec4 specular;       // rgb: Blinn-Phong colour; w: exponent
     vec4 transmittance;  // rgb: diffuse transmittance of a thin surface
     vec4 emission;       // rgb: emitted radiance (both sides)
+    uvec4 maps;          // x: albedo, y: normal, z: specular map, each a texture index + 1 (0: none)
 };
 
 // A point on a surface, normals turned toward the side the path arrived from.

@@ -28,6 +28,13 @@ struct Shading {
     uint pad0;
     vec3 n2;
     uint pad1;
+    vec4 t0;  // xyz: world-space tangent (toward +u); w: bitangent sign
+    vec4 t1;
+    vec4 t2;
+    vec2 uv0;
+    vec2 uv1;
+    vec2 uv2;
+    vec2 pad2;
 };
 
 layout(set = 0, binding = 0) uniform Params {
@@ -46,6 +53,10 @@ layout(set = 0, binding = 3) readonly buffer TriangleShading { Shading items[]; 
 layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
 layout(set = 0, binding = 8) readonly buffer EnvironmentMap { vec4 items[]; } environment_map;
 layout(set = 0, binding = 9) readonly buffer EnvironmentCdf { float items[]; } environment_cdf;
+// Texture maps as linear float texels (src/reference/scene_data.rs); per texture
+// (first texel, width, height, 0).
+layout(set = 0, binding = 10) readonly buffer TextureTexels { vec4 items[]; } texture_texels;
+layout(set = 0, binding = 11) readonly buffer Textures { uvec4 items[]; } textures;
 
 #include "reference/bsdf.glsl"
 #include "reference/environment.glsl"
@@ -68,20 +79,67 @@ const uint FLAG_INDIRECT_ONLY = 1u;
 // Seed difference of the next-event estimation stream.
 const uint LIGHT_STREAM = 0x9e3779b9u;
 
+// Texture `index` at uv as the raster sampler (LINEAR, REPEAT, one mip level) filters it: texel
+// centres at half-integers, the four nearest texels wrapped and blended bilinearly.
+// `i` within one texel of [0, size): GLSL leaves % of negative numbers undefined.
+vec4 texel_at(uvec4 header, ivec2 i) {
+    ivec2 size = ivec2(header.yz);
+    i += size * ivec2(lessThan(i, ivec2(0))) - size * ivec2(greaterThanEqual(i, size));
+    return texture_texels.items[header.x + uint(i.y * size.x + i.x)];
+}
+
+vec4 sample_texture(uint index, vec2 uv) {
+    uvec4 header = textures.items[index];
+    vec2 s = fract(uv) * vec2(header.yz) - 0.5;
+    vec2 base = floor(s);
+    vec2 f = s - base;
+    ivec2 i = ivec2(base);
+    vec4 top = mix(texel_at(header, i), texel_at(header, i + ivec2(1, 0)), f.x);
+    vec4 bottom = mix(texel_at(header, i + ivec2(0, 1)), texel_at(header, i + ivec2(1, 1)), f.x);
+    return mix(top, bottom, f.y);
+}
+
 // The surface hit by the ray along d, normals turned toward where the ray came from: a one-sided
-// thin surface seen from behind reflects like its front, as in the forward method.
-Surface surface_at(Hit h, vec3 d, out uint material) {
+// thin surface seen from behind reflects like its front, as in the forward method. The material
+// comes back with its maps applied as the raster methods apply them (glsl/forward/forward.frag,
+// glsl/shadow_volumes/light.frag): albedo and specular multiplied by their maps, and the shading
+// normal bent by the normal map in the frame (t, b, n) built after the flip, so that seen from
+// behind the frame is (t, -b, -n).
+Surface surface_at(Hit h, vec3 d, out Material m) {
     Triangle tri = triangles.items[h.triangle];
     Shading sh = shading.items[h.triangle];
-    material = sh.material;
+    m = materials.items[sh.material];
     Surface s;
     s.p = tri.p0.xyz + h.uv.x * tri.e1.xyz + h.uv.y * tri.e2.xyz;
     vec3 ng = normalize(cross(tri.e1.xyz, tri.e2.xyz));
-    vec3 ns = (1.0 - h.uv.x - h.uv.y) * sh.n0 + h.uv.x * sh.n1 + h.uv.y * sh.n2;
+    vec3 bary = vec3(1.0 - h.uv.x - h.uv.y, h.uv.x, h.uv.y);
+    vec3 ns = bary.x * sh.n0 + bary.y * sh.n1 + bary.z * sh.n2;
     float len = length(ns);
     ns = len > 0.0 ? ns / len : ng;
     s.geometric_normal = dot(ng, d) > 0.0 ? -ng : ng;
     s.shading_normal = dot(ns, d) > 0.0 ? -ns : ns;
+    if (all(equal(m.maps.xyz, uvec3(0u)))) {
+        return s;
+    }
+    vec2 uv = bary.x * sh.uv0 + bary.y * sh.uv1 + bary.z * sh.uv2;
+    if (m.maps.x != 0u) {
+        m.albedo.rgb *= sample_texture(m.maps.x - 1u, uv).rgb;
+    }
+    if (m.maps.z != 0u) {
+        m.specular.rgb *= sample_texture(m.maps.z - 1u, uv).rgb;
+    }
+    if (m.maps.y != 0u) {
+        vec4 tangent = bary.x * sh.t0 + bary.y * sh.t1 + bary.z * sh.t2;
+        vec3 n = s.shading_normal;
+        vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
+        // A tangent along the normal has no frame; the raster methods would shade NaN there.
+        if (dot(t, t) > 1e-20) {
+            t = normalize(t);
+            vec3 b = cross(n, t) * tangent.w;
+            vec3 tn = normalize(sample_texture(m.maps.y - 1u, uv).xyz * 2.0 - 1.0);
+            s.shading_normal = normalize(t * tn.x + b * tn.y + n * tn.z);
+        }
+    }
     return s;
 }
 
@@ -211,9 +269,8 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
         // Light gathered at this vertex (by NEE, or hit by the sampled ray) has made depth + 1
         // surface interactions; primary emission has made none.
         bool counted = !skip_direct || depth >= 1u;
-        uint material;
-        Surface s = surface_at(h, d, material);
-        Material m = materials.items[material];
+        Material m;
+        Surface s = surface_at(h, d, m);
         vec3 v = -d;
         if (depth == 0u && counted) {
             radiance += m.emission.rgb;

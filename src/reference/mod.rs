@@ -15,7 +15,11 @@
 //!   (next-event estimation already counted it), so area lights are seen directly only by
 //!   camera rays. Area lights are opaque to all rays;
 //! - material emission is added wherever a path hits it (both sides), so an emissive mesh lights
-//!   the scene too; texture maps are not supported (an error names the material);
+//!   the scene too;
+//! - albedo, normal and specular maps as the raster methods apply them (see [`scene_data`]);
+//!   the raster methods sample each map at a pixel's centre, the reference averages it over the
+//!   pixel, so fine texture detail differs between them by aliasing alone (the maps have one
+//!   mip level, so there is no mipmapping to differ);
 //! - no Russian roulette: a path is cut after `bounces` surface interactions past the first hit,
 //!   so the estimate counts exactly the light that made at most `bounces + 1` interactions.
 //!   The bias of that cut is the energy of longer paths, e.g. ρ^(K+2)/(1 − ρ) of the emission in
@@ -48,7 +52,7 @@ use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
 use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
-pub use scene_data::{SceneBuffers, TracedMaterial, TracedScene, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
+pub use scene_data::{srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
 
 /// Which light the estimator counts, by the surface interactions along its path.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -1,13 +1,20 @@
 //! The scene as the path tracer reads it: world-space triangles in BVH leaf order (positions for
-//! intersection, shading normals and material for the hit), the BVH nodes, materials and every
-//! light, laid out as `glsl/reference/pathtrace.comp` declares them.
+//! intersection; shading normals, tangents, uvs and material for the hit), the BVH nodes,
+//! materials, their texture maps and every light, laid out as `glsl/reference/pathtrace.comp`
+//! declares them.
+//!
+//! Texture maps follow the raster methods exactly (`src/renderer/scene_gpu.rs` and the
+//! `LINEAR_REPEAT` sampler): an albedo map is sRGB-decoded per texel before filtering (an
+//! `R8G8B8A8_SRGB` image), normal and specular maps are `UNORM` (byte/255); every map is sampled
+//! bilinearly with repeat wrapping at its only mip level. The shader filters by hand from
+//! decoded float texels, so the reference does not depend on a device's filtering precision.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 
 use super::bvh::{Bvh, BvhNode};
 use super::environment::EnvironmentMap;
-use crate::backend::{vk, BackendError, BufferId, Gpu};
+use crate::backend::{vk, BufferId, Gpu};
 use crate::error::{Error, Result};
 use crate::renderer::{punctual_lights, GpuLight};
 use crate::scene::{Environment, Light, Scene};
@@ -25,7 +32,9 @@ pub struct TracedTriangle {
     pub e2: [f32; 4],
 }
 
-/// What the closest hit reads (`Shading` in the shader): vertex normals and the material.
+/// What the closest hit reads (`Shading` in the shader): world-space vertex normals, tangents
+/// (xyz orthogonal to the normal, w the bitangent's sign, as the raster vertex shaders make
+/// them), texture coordinates and the material.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct TriangleShading {
@@ -35,6 +44,13 @@ pub struct TriangleShading {
     pub _pad0: u32,
     pub n2: [f32; 3],
     pub _pad1: u32,
+    pub t0: [f32; 4],
+    pub t1: [f32; 4],
+    pub t2: [f32; 4],
+    pub uv0: [f32; 2],
+    pub uv1: [f32; 2],
+    pub uv2: [f32; 2],
+    pub _pad2: [f32; 2],
 }
 
 /// `Material` in the shader.
@@ -46,6 +62,44 @@ pub struct TracedMaterial {
     pub specular: [f32; 4],
     pub transmittance: [f32; 4],
     pub emission: [f32; 4],
+    /// x: albedo map, y: normal map, z: specular map, each an index into
+    /// [`TracedScene::textures`] plus one (0: no map).
+    pub maps: [u32; 4],
+}
+
+/// One texture map, decoded to linear floats (what the raster sampler filters).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TracedTexture {
+    pub width: u32,
+    pub height: u32,
+    /// Row 0 is the image's top row (v = 0).
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl TracedTexture {
+    /// Bilinear, repeat-wrapped lookup at mip 0, as Vulkan's `LINEAR`/`REPEAT` sampler defines it
+    /// (texel centres at half-integers); the CPU twin of `sample_texture` in the shader.
+    pub fn sample(&self, uv: Vec2) -> Vec4 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        // Wrapped first, as the shader does, so large coordinates keep their precision alike.
+        let s = (uv - uv.floor()) * Vec2::new(w as f32, h as f32) - 0.5;
+        let (i0, j0) = (s.x.floor() as i64, s.y.floor() as i64);
+        let (fx, fy) = (s.x - s.x.floor(), s.y - s.y.floor());
+        let at = |i: i64, j: i64| Vec4::from(self.texels[(j.rem_euclid(h) * w + i.rem_euclid(w)) as usize]);
+        let top = at(i0, j0).lerp(at(i0 + 1, j0), fx);
+        let bottom = at(i0, j0 + 1).lerp(at(i0 + 1, j0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+}
+
+/// The sRGB transfer function's inverse, exactly as an `_SRGB` format decodes a byte.
+pub fn srgb_decode(byte: u8) -> f32 {
+    let c = byte as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// The scene flattened for tracing, on the CPU.
@@ -60,13 +114,19 @@ pub struct TracedScene {
     /// radius, `intensity` = radiance) and quad lights (`position` = corner, `direction` =
     /// edge_u, `cone` = edge_v, `intensity` = radiance).
     pub lights: Vec<GpuLight>,
+    /// Every distinct (file, encoding) texture map the materials use.
+    pub textures: Vec<TracedTexture>,
     /// Constant radiance of rays that escape (when there is no map).
     pub environment: Vec3,
     pub environment_map: Option<EnvironmentMap>,
 }
 
-fn unsupported(message: String) -> Error {
-    Error::Backend(BackendError::Unsupported(message))
+/// A map as the raster methods upload it: 8 bits per channel, sRGB-decoded for albedo.
+fn load_texture(path: &std::path::Path, srgb: bool) -> std::result::Result<TracedTexture, image::ImageError> {
+    let img = image::open(path)?.to_rgba8();
+    let decode = |b: u8| if srgb { srgb_decode(b) } else { b as f32 / 255.0 };
+    let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2]), p.0[3] as f32 / 255.0]).collect();
+    Ok(TracedTexture { width: img.width(), height: img.height(), texels })
 }
 
 impl TracedScene {
@@ -79,21 +139,48 @@ impl TracedScene {
             Some(Environment::Constant { radiance }) => (*radiance, None),
             Some(Environment::Image { path, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load(path, *scale, src)?)),
         };
+        let mut textures = Vec::new();
+        let mut loaded: Vec<(std::path::PathBuf, bool)> = Vec::new();
+        let mut material_maps = Vec::with_capacity(scene.materials.len());
         for m in &scene.materials {
-            for (field, map) in [("albedo_map", &m.albedo_map), ("normal_map", &m.normal_map), ("specular_map", &m.specular_map)] {
-                if map.is_some() {
-                    return Err(unsupported(format!(
-                        "{src}: material \"{}\": {field}: the reference renderer does not support texture maps",
-                        m.name
-                    )));
-                }
+            let mut slots = [0u32; 4];
+            for (k, (field, map, srgb)) in [("albedo_map", &m.albedo_map, true), ("normal_map", &m.normal_map, false), ("specular_map", &m.specular_map, false)].into_iter().enumerate() {
+                let Some(path) = map else { continue };
+                let key = (path.clone(), srgb);
+                let index = match loaded.iter().position(|l| *l == key) {
+                    Some(i) => i,
+                    None => {
+                        textures.push(load_texture(path, srgb).map_err(|e| {
+                            Error::Usage(format!("{src}: material \"{}\": {field}: cannot load {}: {e}", m.name, path.display()))
+                        })?);
+                        loaded.push(key);
+                        textures.len() - 1
+                    }
+                };
+                slots[k] = index as u32 + 1;
             }
+            material_maps.push(slots);
         }
         let mut corners = Vec::new();
         let mut normals = Vec::new();
+        let mut frames = Vec::new();
         let mut material_of = Vec::new();
         for obj in &scene.objects {
-            let mesh = obj.load_mesh(std::path::Path::new("."))?.transformed(&obj.transform);
+            let mut mesh = obj.load_mesh(std::path::Path::new("."))?;
+            // What the raster vertex buffer substitutes for missing attributes (`push_vertices`
+            // in src/renderer/scene_gpu.rs), before the placement, as the vertex shaders see it.
+            let count = mesh.positions.len();
+            if mesh.uvs.len() != count {
+                mesh.uvs = vec![Vec2::ZERO; count];
+            }
+            if mesh.tangents.len() != count {
+                mesh.tangents = vec![Vec4::new(1.0, 0.0, 0.0, 1.0); count];
+            }
+            if mesh.normals.len() != count {
+                // Zero normals fall back to the geometric normal in the shader.
+                mesh.normals = vec![Vec3::ZERO; count];
+            }
+            let mesh = mesh.transformed(&obj.transform);
             for [a, b, c] in mesh.triangles() {
                 let p = [mesh.positions[a], mesh.positions[b], mesh.positions[c]];
                 // Zero-area triangles are never hit; leaving them out keeps the BVH tight.
@@ -102,8 +189,10 @@ impl TracedScene {
                     continue;
                 }
                 let n = |i: usize| mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
+                let tangent_uv = |i: usize| (mesh.tangents.get(i).copied().unwrap_or(Vec4::X), mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO));
                 corners.push(p);
                 normals.push([n(a), n(b), n(c)]);
+                frames.push([tangent_uv(a), tangent_uv(b), tangent_uv(c)]);
                 material_of.push(obj.material as u32);
             }
         }
@@ -113,17 +202,34 @@ impl TracedScene {
         for &t in &bvh.order {
             let [p0, p1, p2] = corners[t as usize];
             let [n0, n1, n2] = normals[t as usize];
+            let [(t0, uv0), (t1, uv1), (t2, uv2)] = frames[t as usize];
             triangles.push(TracedTriangle { p0: p0.extend(0.0).into(), e1: (p1 - p0).extend(0.0).into(), e2: (p2 - p0).extend(0.0).into() });
-            shading.push(TriangleShading { n0: n0.into(), material: material_of[t as usize], n1: n1.into(), _pad0: 0, n2: n2.into(), _pad1: 0 });
+            shading.push(TriangleShading {
+                n0: n0.into(),
+                material: material_of[t as usize],
+                n1: n1.into(),
+                _pad0: 0,
+                n2: n2.into(),
+                _pad1: 0,
+                t0: t0.into(),
+                t1: t1.into(),
+                t2: t2.into(),
+                uv0: uv0.into(),
+                uv1: uv1.into(),
+                uv2: uv2.into(),
+                _pad2: [0.0; 2],
+            });
         }
         let materials = scene
             .materials
             .iter()
-            .map(|m| TracedMaterial {
+            .zip(material_maps)
+            .map(|(m, maps)| TracedMaterial {
                 albedo: m.albedo.extend(0.0).into(),
                 specular: m.specular.extend(m.exponent).into(),
                 transmittance: m.transmittance.extend(0.0).into(),
                 emission: m.emission.extend(0.0).into(),
+                maps,
             })
             .collect();
         let mut lights = punctual_lights(scene);
@@ -144,7 +250,19 @@ impl TracedScene {
                 Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => {}
             }
         }
-        Ok(TracedScene { corners, bvh, triangles, shading, materials, lights, environment, environment_map })
+        Ok(TracedScene { corners, bvh, triangles, shading, materials, lights, textures, environment, environment_map })
+    }
+
+    /// Every texture's texels, one after another, and per texture (first texel, width, height, 0):
+    /// the `texture_texels` and `textures` buffers.
+    pub fn texture_buffers(&self) -> (Vec<[f32; 4]>, Vec<[u32; 4]>) {
+        let mut texels = Vec::new();
+        let mut headers = Vec::with_capacity(self.textures.len());
+        for t in &self.textures {
+            headers.push([texels.len() as u32, t.width, t.height, 0]);
+            texels.extend_from_slice(&t.texels);
+        }
+        (texels, headers)
     }
 
     pub fn upload(&self, gpu: &mut Gpu) -> Result<SceneBuffers> {
@@ -154,7 +272,10 @@ impl TracedScene {
             let items = if items.is_empty() { &zero[..] } else { items };
             Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(items))?)
         }
+        let (texels, headers) = self.texture_buffers();
         Ok(SceneBuffers {
+            texture_texels: storage(gpu, "reference texture texels", &texels)?,
+            textures: storage(gpu, "reference textures", &headers)?,
             nodes: storage::<BvhNode>(gpu, "reference bvh nodes", &self.bvh.nodes)?,
             triangles: storage(gpu, "reference triangles", &self.triangles)?,
             shading: storage(gpu, "reference triangle shading", &self.shading)?,
@@ -176,10 +297,12 @@ pub struct SceneBuffers {
     pub lights: BufferId,
     pub environment_map: BufferId,
     pub environment_cdf: BufferId,
+    pub texture_texels: BufferId,
+    pub textures: BufferId,
 }
 
 impl SceneBuffers {
-    pub fn bindings(&self) -> [(&'static str, BufferId); 7] {
+    pub fn bindings(&self) -> [(&'static str, BufferId); 9] {
         [
             ("nodes", self.nodes),
             ("triangles", self.triangles),
@@ -188,6 +311,8 @@ impl SceneBuffers {
             ("lights", self.lights),
             ("environment_map", self.environment_map),
             ("environment_cdf", self.environment_cdf),
+            ("texture_texels", self.texture_texels),
+            ("textures", self.textures),
         ]
     }
 }
