@@ -148,19 +148,12 @@ pub struct FramePlan {
     pub entity_transforms: Vec<Mat4>,
 }
 
-/// Leaves of a few points of a box (corners pulled in by 1 mm, and the centre): the leaves an
-/// entity is taken to occupy. Points in solid leaves are skipped.
-fn sample_leaves(w: &CompiledWorld, b: &Aabb) -> Vec<LeafId> {
+/// The empty leaves an entity's box reaches: the leaves it is taken to occupy. The box is pulled
+/// in by 1 mm first, so an entity resting on a floor or against a wall does not also count the
+/// leaf on the plane's far side.
+fn occupied_leaves(w: &CompiledWorld, b: &Aabb) -> Vec<LeafId> {
     let inner = b.expanded(-1e-3);
-    let inner = if inner.is_empty() { *b } else { inner };
-    let mut out: Vec<LeafId> = (0..9)
-        .map(|i| if i == 8 { inner.center() } else { DVec3::new(if i & 1 == 0 { inner.min.x } else { inner.max.x }, if i & 2 == 0 { inner.min.y } else { inner.max.y }, if i & 4 == 0 { inner.min.z } else { inner.max.z }) })
-        .map(|p| w.leaf_of(p))
-        .filter(|&l| !w.is_solid(l))
-        .collect();
-    out.sort_unstable();
-    out.dedup();
-    out
+    w.box_leaves(if inner.is_empty() { b } else { &inner })
 }
 
 fn world_aabb(frame: &WorldFrame, (lo, hi): (Vec3, Vec3)) -> Aabb {
@@ -274,7 +267,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
             }
         }
     }
-    let entity_leaves: Vec<Vec<LeafId>> = entity_bounds.iter().map(|&b| sample_leaves(w, &world_aabb(frame, b))).collect();
+    let entity_leaves: Vec<Vec<LeafId>> = entity_bounds.iter().map(|&b| occupied_leaves(w, &world_aabb(frame, b))).collect();
     let visible_entities: Vec<usize> = (0..entities.len()).filter(|&e| !cull || entity_leaves[e].iter().any(|&l| leaf_visible[l as usize])).collect();
     let visible_faces: Vec<FaceId> = (0..w.faces.len() as FaceId).filter(|&f| face_visible[f as usize]).collect();
     let mut plans = Vec::new();

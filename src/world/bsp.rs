@@ -165,6 +165,37 @@ impl Tree {
         }
     }
 
+    /// Every leaf a box reaches, solid ones included: the box goes down each side of every
+    /// plane it reaches (points on a plane count as in front, as in [`Tree::leaf_of`]), so a
+    /// leaf the box passes through is found even when no corner lies in it.
+    pub fn box_leaves(&self, b: &Aabb) -> Vec<LeafId> {
+        let (center, half) = (b.center(), 0.5 * (b.max - b.min));
+        let mut out = Vec::new();
+        let mut stack = vec![self.root.unwrap_or(Child::Leaf(0))];
+        while let Some(child) = stack.pop() {
+            match child {
+                Child::Leaf(l) => out.push(l),
+                Child::Node(n) => {
+                    let node = &self.nodes[n as usize];
+                    // The box's extent along the normal about its centre's distance.
+                    let (d, r) = (
+                        node.plane.distance(center),
+                        half.dot(node.plane.normal.abs()),
+                    );
+                    if d + r >= 0.0 {
+                        stack.push(node.front);
+                    }
+                    if d - r < 0.0 {
+                        stack.push(node.back);
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
     /// Filters a polygon down from `start`, splitting it at every plane it crosses: the pieces
     /// and the leaves they end in. A piece lying in a plane below `start` (only possible
     /// through rounding, since coplanar faces are gathered in one node) goes both ways.

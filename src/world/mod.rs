@@ -140,6 +140,14 @@ impl CompiledWorld {
         self.tree.leaf_of(p)
     }
 
+    /// The empty leaves a box reaches, ascending: a conservative descent of the tree (see
+    /// [`bsp::Tree::box_leaves`]).
+    pub fn box_leaves(&self, b: &Aabb) -> Vec<LeafId> {
+        let mut out = self.tree.box_leaves(b);
+        out.retain(|&l| !self.is_solid(l));
+        out
+    }
+
     pub fn is_solid(&self, leaf: LeafId) -> bool {
         self.tree.leaves.get(leaf as usize).is_none_or(|l| l.solid)
     }

@@ -419,3 +419,63 @@ fn oblique_level_compiles_sealed_with_exact_ray_casts_and_a_conservative_pvs() {
         );
     }
 }
+
+/// An entity's box that reaches through a short corridor from one room into the next, its
+/// corners and centre all in the rooms: the corner-and-centre rule misses the corridor's leaf,
+/// the descent of the tree finds it (and every leaf a point of the box lies in).
+#[test]
+fn a_box_through_a_corridor_reaches_the_corridor_leaf_though_no_corner_is_in_it() {
+    // Rooms x 0–6 and 7–13 joined by a 1 m corridor through both walls (y 2.2–3.8, z 0–2.2).
+    let w = rooms_with_corridors(&[room(0.0, 0.0), room(7.0, 0.0)], &[(0, 1, 0, 3.0)])
+        .compile()
+        .unwrap();
+    let corridor = w.leaf_of(DVec3::new(6.5, 3.0, 1.0));
+    let b = Aabb {
+        min: DVec3::new(4.0, 2.5, 0.5),
+        max: DVec3::new(7.5, 3.5, 1.5),
+    };
+    let mut old_rule: Vec<LeafId> = (0..9)
+        .map(|i| {
+            if i == 8 {
+                b.center()
+            } else {
+                DVec3::new(
+                    if i & 1 == 0 { b.min.x } else { b.max.x },
+                    if i & 2 == 0 { b.min.y } else { b.max.y },
+                    if i & 4 == 0 { b.min.z } else { b.max.z },
+                )
+            }
+        })
+        .map(|p| w.leaf_of(p))
+        .collect();
+    old_rule.sort_unstable();
+    old_rule.dedup();
+    assert!(
+        !w.is_solid(corridor) && !old_rule.contains(&corridor),
+        "the corner-and-centre rule gets {old_rule:?}, corridor leaf {corridor}"
+    );
+    let reached = w.box_leaves(&b);
+    assert!(
+        reached.contains(&corridor),
+        "{reached:?} lacks the corridor leaf {corridor}"
+    );
+    assert!(
+        old_rule.iter().all(|l| reached.contains(l)),
+        "{reached:?} ⊉ {old_rule:?}"
+    );
+    // Conservative: every empty leaf holding a point of the box is reached.
+    let mut rng = Rng::new(3);
+    for _ in 0..2000 {
+        let l = w.leaf_of(rng.point_in(&b));
+        assert!(
+            w.is_solid(l) || reached.contains(&l),
+            "leaf {l} holds a point of the box but is not in {reached:?}"
+        );
+    }
+    // A box inside one room reaches that room's leaf alone.
+    let inside = Aabb {
+        min: DVec3::new(1.0, 1.0, 0.5),
+        max: DVec3::new(2.0, 2.0, 1.5),
+    };
+    assert_eq!(w.box_leaves(&inside), vec![w.leaf_of(inside.center())]);
+}
