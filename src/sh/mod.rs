@@ -1,7 +1,8 @@
 //! Spherical harmonics: the core every SH lighting method shares (seed 001's height-field
 //! shadows, seed 000's SH light-maps, seed 002's GPU transfer). CPU side here; the GPU side
 //! (basis evaluation, z/ZH rotation, kernels, texel solid angles) is `glsl/common/sh.glsl`, which
-//! follows exactly the same conventions.
+//! follows exactly the same conventions, and the projection of environment images
+//! (equirectangular or cube) is a compute pass, [`ShProjector`] (`gpu.rs`, `glsl/sh/`).
 //!
 //! # Conventions (one for the whole crate; the GLSL matches)
 //!
@@ -41,6 +42,7 @@
 //! (z-rotation), §1.8 (cap ZH), seed-000 §5.1–5.2, seed-002 §5 and its appendix A.
 
 mod basis;
+mod gpu;
 mod product;
 mod projection;
 mod rotation;
@@ -50,6 +52,7 @@ mod zonal;
 #[cfg(test)]
 mod tests;
 
+pub use gpu::{EnvImage, EnvLayout, ShProjector, GPU_PROJECTION_MAX_BANDS};
 pub use basis::{basis, dot, eval, eval_basis, eval_basis_f64, eval_f64};
 pub use product::{product, product_matrix, ProductMatrix, TripleProductTensor};
 pub use projection::{
