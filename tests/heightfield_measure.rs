@@ -117,7 +117,7 @@ fn cost_by_resolution() {
             "| {res}² | {} | {:.1} | {pyr:.1} | {:.1} | {:.1} | {:.1} | {total:.1} |\n",
             d.name,
             get(&|n| n == "hf height update"),
-            get(&|n| n == "hf environment" || n == "hf environment SH"),
+            get(&|n| n == "hf environment" || n.starts_with("hf environment SH")),
             get(&|n| n == "hf light 1"),
             get(&|n| n == "hf accumulate"),
         );
@@ -200,7 +200,7 @@ fn chart_and_speedup_at_equal_error() {
                 table66,
                 "| {name} | {:.1} | {:.1} | {:.1} | {} |",
                 get(&|n| n.starts_with("hf pyramid")),
-                get(&|n| n == "hf environment" || n == "hf environment SH"),
+                get(&|n| n == "hf environment" || n.starts_with("hf environment SH")),
                 get(&|n| n == "hf light 1"),
                 r.config
             );

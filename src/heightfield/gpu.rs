@@ -122,6 +122,8 @@ struct Pipelines {
     reconstruct: PipelineId,
     bounds: PipelineId,
     env_sh: PipelineId,
+    /// The SH core's projection pass, for image environments.
+    env_project: crate::sh::ShProjector,
     env: PipelineId,
     light: PipelineId,
     accumulate: PipelineId,
@@ -360,6 +362,7 @@ impl HeightfieldGpu {
             reconstruct: compute(gpu, shaders, "hf reconstruct", "heightfield/reconstruct.comp")?,
             bounds: compute(gpu, shaders, "hf bounds", "heightfield/bounds.comp")?,
             env_sh: compute(gpu, shaders, "hf environment SH", "heightfield/env_sh.comp")?,
+            env_project: crate::sh::ShProjector::new(gpu, shaders, "hf environment SH")?,
             env: compute_spec(gpu, shaders, "hf environment", env_shader, spec.clone())?,
             light: compute_spec(gpu, shaders, "hf light", light_shader, spec.clone())?,
             accumulate: compute(gpu, shaders, "hf accumulate", "heightfield/accumulate.comp")?,
@@ -459,25 +462,26 @@ impl HeightfieldGpu {
             });
         self.add_horizon_inputs(graph);
         let has_env = !matches!(self.inputs.environment, EnvInput::None);
-        if has_env {
-            let (mode, constant) = match &self.inputs.environment {
-                EnvInput::Constant(c) => (0i32, *c),
-                _ => (1, Vec3::ZERO),
-            };
-            let mut push = [0u8; 24];
-            push[..12].copy_from_slice(bytemuck::cast_slice(&constant.to_array()));
-            push[16..20].copy_from_slice(&mode.to_le_bytes());
-            push[20..24].copy_from_slice(&(self.settings.bands as i32).to_le_bytes());
-            graph
-                .pass("hf environment SH")
-                .sample("env_map", self.env_map, SubresourceRange::mip(0), self.nearest, COMPUTE)
-                .buffer(self.env_sh, Access::StorageWrite { stages: COMPUTE }, Some("env_sh"))
-                .record(move |ctx| {
+        match &self.inputs.environment {
+            EnvInput::None => {}
+            EnvInput::Constant(c) => {
+                // Exact and free: a constant sky is c_00 = 2√π·L alone, no quadrature.
+                let mut push = [0u8; 20];
+                push[..12].copy_from_slice(bytemuck::cast_slice(&c.to_array()));
+                push[16..20].copy_from_slice(&(self.settings.bands as i32).to_le_bytes());
+                graph.pass("hf environment SH").buffer(self.env_sh, Access::StorageWrite { stages: COMPUTE }, Some("env_sh")).record(move |ctx| {
                     ctx.rec.bind_pipeline(p.env_sh)?;
                     ctx.bind(&[])?;
                     ctx.rec.push_constants(&push)?;
                     ctx.rec.dispatch([64, 1, 1])
                 });
+            }
+            EnvInput::Map { width, height, .. } => {
+                let env = crate::sh::EnvImage { image: self.env_map, layout: crate::sh::EnvLayout::Equirect, width: *width, height: *height };
+                p.env_project.add_passes(graph, "hf environment SH", env, self.settings.bands, self.env_sh)?;
+            }
+        }
+        if has_env {
             let params = self.pass_params(None).bytes();
             let pass = self
                 .lighting_pass(graph, "hf environment", Some(self.env_table))
@@ -569,9 +573,10 @@ impl HeightfieldGpu {
         for (k, s) in self.level_sizes.iter().enumerate() {
             sizes[16 * k..16 * k + 4].copy_from_slice(&(*s as i32).to_le_bytes());
         }
-        let mut push = [0u8; 8];
+        let mut push = [0u8; 12];
         push[..4].copy_from_slice(&(res as i32).to_le_bytes());
         push[4..8].copy_from_slice(&(levels as i32).to_le_bytes());
+        push[8..12].copy_from_slice(&((self.settings.mode == Mode::Corrected) as i32).to_le_bytes());
         graph
             .pass("hf pyramid reconstruct")
             .sample("levels", dec, SubresourceRange::new(0, 1, 0, levels), self.nearest, COMPUTE)

@@ -18,7 +18,7 @@ pub fn table_6_6(passes: &[PassStats]) -> Option<String> {
         return None;
     }
     let pyramid = sum(&|n| n.starts_with("hf pyramid") || n == "hf bounds");
-    let env = sum(&|n| n == "hf environment" || n == "hf environment SH");
+    let env = sum(&|n| n == "hf environment" || n.starts_with("hf environment SH"));
     let lights: Vec<(String, f64)> = passes.iter().filter(|p| p.name.starts_with("hf light ")).map(|p| (p.name.clone(), p.median_ms)).collect();
     let height = sum(&|n| n == "hf height update");
     let rest = sum(&|n| n == "hf accumulate" || n == "hf raster" || n == "hf emitters");

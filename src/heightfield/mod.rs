@@ -6,7 +6,9 @@
 //! 2. **pyramid** — decimation by s_r = 2^(1/ls) per level and cubic B-spline reconstruction of
 //!    every level to full resolution ([`pyramid`]); the brute-force method instead finds the
 //!    field's height bounds;
-//! 3. **environment SH** — the environment projected to SH (constant or equirectangular map);
+//! 3. **environment SH** — the environment in SH: a constant exactly (c_00 alone), an
+//!    equirectangular map through the SH core's projection pass ([`crate::sh::ShProjector`]:
+//!    exact texel solid angles, workgroup partial sums, then a reduction dispatch);
 //! 4. **environment** — horizons in nφ directions (one sample per level at d_i = s_r^i texels,
 //!    level offset lo, B-spline maximum, clamped at 0), hemisphere wedge-table lookups, z-rotation
 //!    and sum into the SH visibility V, T = V • C with the clamped cosine about the normal, L · T;

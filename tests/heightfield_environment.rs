@@ -1,0 +1,122 @@
+//! Height fields under an image environment, on the device under validation: the environment SH
+//! now comes from the SH core's projection pass (src/sh/gpu.rs), so these check its plumbing into
+//! the environment pass — a constant image against the constant-sky shortcut, and a lopsided sky
+//! on a flat plane against the CPU projection and the CPU mirror of the transfer.
+
+mod common;
+
+use glam::{DVec3, Vec3};
+use penumbra::heightfield::cpu;
+use penumbra::heightfield::standalone::Standalone;
+use penumbra::heightfield::wedge::TableKind;
+use penumbra::image_io::HdrImage;
+use penumbra::scene::Scene;
+use penumbra::sh;
+
+fn scene(field: &str, method: &str, environment: &str) -> Scene {
+    let toml = format!(
+        r#"methods = [{method}]
+[camera]
+position = [0, 10, 10]
+target = [0, 0, 0]
+[[materials]]
+name = "ground"
+albedo = 1
+[[objects]]
+mesh = "heightfield"
+material = "ground"
+{field}
+{environment}
+"#
+    );
+    Scene::from_str(&toml, "<test>", std::path::Path::new("/")).unwrap_or_else(|e| panic!("{e}\n{toml}"))
+}
+
+fn shading(s: &Scene) -> Vec<[f32; 4]> {
+    let mut h = Standalone::new(common::test_gpu(), s, &s.methods[0]).unwrap();
+    let img = h.shading(0.0).unwrap();
+    let m = h.validation_messages();
+    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
+    img
+}
+
+/// Writes a `w`×`h` equirect EXR whose texel centres have radiance `f(world direction)`.
+fn sky_image(name: &str, w: u32, h: u32, f: impl Fn(Vec3) -> [f32; 3]) -> (std::path::PathBuf, Vec<[f32; 3]>) {
+    let rgb: Vec<[f32; 3]> = (0..w * h).map(|i| f(sh::equirect_texel_dir_world((i % w) as usize, (i / w) as usize, w as usize, h as usize))).collect();
+    let path = common::temp_path(name);
+    HdrImage { width: w, height: h, pixels: rgb.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect() }.write_exr(&path).unwrap();
+    (path, rgb)
+}
+
+fn image_env(path: &std::path::Path) -> String {
+    format!("[environment]\ntype = \"image\"\npath = {:?}\n", path.display().to_string())
+}
+
+const CONES: &str = "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 5\nradius = 1.2\nring_radius = 2\nheight = 1.5";
+
+/// A constant image (256×128, the largest the method takes unfiltered) lights a field of cones
+/// as the constant-sky shortcut does. With 2 bands the image's projection is exact (c_00: the
+/// texel solid angles sum to 4π; band 1 vanishes by the rows' symmetry), so ≤ 1e-5. With 4 bands
+/// the equirect quadrature leaves a residue in c_20 (θ midpoint rule, 5.6e-5·c_00 at 128 rows,
+/// the CPU's too), which can move the shading by at most |T|·|residue| ≤ √(2π/3)/π·|residue|
+/// (|T| ≤ |max(cos, 0)/π|); the GPU must stay within that bound computed from the CPU residue.
+#[test]
+fn constant_image_matches_the_constant_sky() {
+    let l = 0.7f32;
+    let (path, rgb) = sky_image("hf-constant-sky.exr", 256, 128, |_| [l, l, l]);
+    let cpu = sh::project_equirect(&rgb, 256, 128, 4).unwrap();
+    let residue = cpu[1..].iter().map(|c| (c.x as f64).powi(2)).sum::<f64>().sqrt();
+    for (bands, tol) in [(2u32, 1e-5f64), (4, (2.0 * std::f64::consts::PI / 3.0).sqrt() / std::f64::consts::PI * residue + 1e-5)] {
+        let method = format!("{{ name = \"heightfield_pyramid\", bands = {bands} }}");
+        let shortcut = shading(&scene(CONES, &method, &format!("[environment]\ntype = \"constant\"\nradiance = {l}\n")));
+        let image = shading(&scene(CONES, &method, &image_env(&path)));
+        let worst = shortcut.iter().zip(&image).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max)).fold(0.0f32, f32::max);
+        eprintln!("{bands} bands: largest |image - constant| {worst:.2e} (bound {tol:.2e})");
+        assert!((worst as f64) <= tol, "{bands} bands: {worst} > {tol}");
+        // Not trivially equal: the cones do shadow.
+        assert!(shortcut.iter().any(|p| p[0] < 0.9 * l), "{bands} bands: no shadow");
+    }
+}
+
+/// A lopsided sky (brighter overhead, toward +x and toward −z, plus a warm lobe near the +x
+/// horizon and a black ground) on a flat plane: every texel's shading is L · T with L the CPU
+/// projection of the same texels and T the CPU mirror's transfer of an open horizon (V • C/π),
+/// to 1e-5 of the sky's scale. A world/SH frame slip in the projection (y up vs z up, a mirrored
+/// azimuth) moves it by tens of per cent. It also equals the cosine-weighted irradiance L · C/π
+/// (the clamped cosine ZH about +z) up to the product's band truncation (within 2%).
+#[test]
+fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
+    let (w, h) = (128u32, 64u32);
+    let (path, rgb) = sky_image("hf-lopsided-sky.exr", w, h, |d| {
+        if d.y < 0.0 {
+            return [0.0; 3];
+        }
+        let sun = (-(d - Vec3::new(0.8, 0.3, 0.0).normalize()).length_squared() / 0.08).exp();
+        let base = 1.0 + 0.8 * d.y + 0.9 * d.x - 0.5 * d.z;
+        [base + 4.0 * sun, 0.6 * base + 2.0 * sun, 0.4 * base]
+    });
+    let bands = 4usize;
+    let method = format!("{{ name = \"heightfield_pyramid\", bands = {bands} }}");
+    let s = scene("size = 8\nresolution = 32\ngenerator = \"flat\"\nheight = 0", &method, &image_env(&path));
+    let img = shading(&s);
+    let settings = penumbra::heightfield::Settings::from_decl(&s.methods[0], penumbra::heightfield::Horizon::Pyramid).unwrap();
+    let light = sh::project_equirect(&rgb, w as usize, h as usize, bands).unwrap();
+    let cosine = cpu::transfer_cosine(DVec3::Z, bands).unwrap();
+    let scale = light[0].max_element() as f64 * sh::Y00;
+    for ch in 0..3 {
+        let l: Vec<f64> = light.iter().map(|c| c[ch] as f64).collect();
+        let mirror = cpu::shade_horizons(&vec![0.0; settings.nphi as usize], TableKind::Environment, &settings, DVec3::Z, &l).unwrap();
+        let irradiance: f64 = l.iter().zip(&cosine).map(|(a, b)| a * b).sum();
+        let worst = img.iter().map(|p| (p[ch] as f64 - mirror).abs()).fold(0.0, f64::max);
+        eprintln!("channel {ch}: GPU {:.6}, CPU mirror {mirror:.6}, L·C/π {irradiance:.6}, largest |GPU - mirror| {worst:.2e}", img[0][ch]);
+        assert!(worst <= 1e-5 * scale.max(1.0), "channel {ch}: GPU {} vs CPU mirror {mirror}", img[0][ch]);
+        assert!((mirror - irradiance).abs() <= 0.02 * irradiance, "channel {ch}: the open-horizon transfer {mirror} vs the clamped cosine {irradiance}");
+        // The test can see a convention slip: the same sky upside down (v = 0 taken as straight
+        // down) is lit by the black ground. (Only the zonal part about +y reaches a flat plane,
+        // so an azimuth slip is for the cone and random-image tests of tests/sh_gpu.rs.)
+        let flipped: Vec<[f32; 3]> = (0..h).rev().flat_map(|j| rgb[(j * w) as usize..((j + 1) * w) as usize].to_vec()).collect();
+        let fl = sh::project_equirect(&flipped, w as usize, h as usize, bands).unwrap();
+        let wrong: f64 = fl.iter().zip(&cosine).map(|(a, b)| a[ch] as f64 * b).sum();
+        assert!((wrong - mirror).abs() > 0.5 * mirror, "channel {ch}: flipped {wrong} vs {mirror}");
+    }
+}
