@@ -34,8 +34,17 @@ float hf_level_bilinear(vec2 q, int layer) {
     return mix(a, b, t.y);
 }
 
+// Faithful (Eq. 4.5): the receiver's height from each sample's own level. Corrected: never below
+// its true height (level 0), since a level that has smoothed a ridge or plateau edge away puts
+// the receiver under the surface around it, and it would see a horizon above the true one (up
+// to 4.6 degrees on the digest's wall field); in valleys, where smoothing raises the receiver, the
+// level's height still cancels the raised samples.
 void hf_load_receiver(ivec2 p) {
-    for (int l = 0; l < params.dims.y; ++l) hf_h0[l] = hf_level_texel(p, l);
+    float h = hf_level_texel(p, 0);
+    for (int l = 0; l < params.dims.y; ++l) {
+        float hl = hf_level_texel(p, l);
+        hf_h0[l] = params.cfg.y != 0 ? max(hl, h) : hl;
+    }
 }
 
 // Elevation angle of sample i along texel direction d (Eq. 4.5-4.6): at distance d_i, from

@@ -52,7 +52,11 @@ impl PyramidHorizon<'_> {
                 let d = pyramid::sample_distance(self.ls, i as u32);
                 let l = &self.levels[pyramid::sample_level(i as u32, self.ls, self.lo, n) as usize];
                 let h = l.bilinear(p.0 as f64 + d * dir.0, p.1 as f64 + d * dir.1);
-                ((h - l.at(p.0, p.1) as f64) / (d * self.spacing)).atan()
+                let mut h0 = l.at(p.0, p.1) as f64;
+                if self.mode == Mode::Corrected {
+                    h0 = h0.max(self.levels[0].at(p.0, p.1) as f64);
+                }
+                ((h - h0) / (d * self.spacing)).atan()
             })
             .collect()
     }

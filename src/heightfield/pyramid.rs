@@ -122,8 +122,9 @@ pub fn reconstruct(level: &Grid, res: u32) -> Grid {
     Grid { size: res, values }
 }
 
-/// Every level, decimated (level 0 is the input) and reconstructed to full resolution.
-pub fn build(heights: &Grid, ls: u32, decimation: Decimation) -> Vec<Grid> {
+/// Every level, decimated (level 0 is the input) and reconstructed to full resolution; with
+/// `exact_level0` (the corrected mode) level 0 is the input itself.
+pub fn build(heights: &Grid, ls: u32, decimation: Decimation, exact_level0: bool) -> Vec<Grid> {
     let res = heights.size;
     let n = level_count(res, ls);
     let mut decimated = vec![heights.clone()];
@@ -131,7 +132,7 @@ pub fn build(heights: &Grid, ls: u32, decimation: Decimation) -> Vec<Grid> {
         let next = decimate(&decimated[k as usize - 1], level_size(res, ls, k), decimation);
         decimated.push(next);
     }
-    decimated.iter().map(|l| reconstruct(l, res)).collect()
+    decimated.iter().enumerate().map(|(k, l)| if k == 0 && exact_level0 { l.clone() } else { reconstruct(l, res) }).collect()
 }
 
 #[cfg(test)]
@@ -159,14 +160,14 @@ mod tests {
         let res = 32;
         let ramp = Grid { size: res, values: (0..res * res).map(|i| (i % res) as f32 * 0.5).collect() };
         for d in [Decimation::Bilinear, Decimation::Bicubic] {
-            let levels = build(&ramp, 2, d);
+            let levels = build(&ramp, 2, d, false);
             assert_eq!(levels.len(), 11);
             for l in &levels[..5] {
                 let v = l.at(16, 16) as f64;
                 assert!((v - 8.0).abs() < 0.3, "{d:?}: {v}");
             }
             let flat = Grid { size: res, values: vec![3.0; (res * res) as usize] };
-            for l in build(&flat, 2, d) {
+            for l in build(&flat, 2, d, false) {
                 assert!(l.values.iter().all(|v| (v - 3.0).abs() < 1e-5));
             }
         }

@@ -18,10 +18,20 @@ pub fn shader_kind(path: &Path) -> Option<shaderc::ShaderKind> {
 }
 
 /// Compiles `root/rel` with warnings as errors. Returns SPIR-V words, or the compiler's message.
+/// The debug info embeds the source text in SPIR-V strings, and rspirv-reflect fails to decode
+/// one that a multi-byte character straddles, so shader sources stay ASCII.
+fn ascii_only(rel: &str, source: &str) -> Result<(), String> {
+    match source.lines().enumerate().find(|(_, l)| !l.is_ascii()) {
+        Some((n, _)) => Err(format!("{rel}:{}: non-ASCII character (shader sources must be ASCII: SPIR-V reflection cannot decode the embedded source otherwise)", n + 1)),
+        None => Ok(()),
+    }
+}
+
 pub fn compile_glsl(root: &Path, rel: &str) -> Result<Vec<u32>, String> {
     let path = root.join(rel);
     let kind = shader_kind(&path).ok_or_else(|| format!("{rel}: not a shader stage file"))?;
     let source = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    ascii_only(rel, &source)?;
     let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
     let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
     // SPIR-V 1.5 (Vulkan 1.2 environment): with 1.6, glslang declares workgroup sizes with
@@ -37,6 +47,7 @@ pub fn compile_glsl(root: &Path, rel: &str) -> Result<Vec<u32>, String> {
         for dir in [from_dir, root_owned.clone()] {
             let candidate = dir.join(name);
             if let Ok(content) = std::fs::read_to_string(&candidate) {
+                ascii_only(name, &content)?;
                 let resolved = candidate
                     .strip_prefix(&root_owned)
                     .map(|p| p.to_string_lossy().into_owned())
