@@ -87,7 +87,7 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
             .label_style(("sans-serif", 14))
             .x_labels(12)
             .y_labels(12)
-            .x_label_formatter(&|v| format!("{v:.3}"))
+            .x_label_formatter(&|v| short_number(*v))
             .y_label_formatter(&|v| format!("{v:.1e}"))
             .draw()
             .map_err(plot_err)?;
@@ -122,4 +122,19 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
     }
     let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| Error::Usage("chart: bitmap size mismatch".into()))?;
     img.save_with_format(path, image::ImageFormat::Png).map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
+}
+
+/// Axis text with as many decimals as the value's size needs (log axes span decades, and
+/// "1000.000" next to "900.000" overlaps).
+fn short_number(v: f64) -> String {
+    let a = v.abs();
+    if a >= 100.0 {
+        format!("{v:.0}")
+    } else if a >= 10.0 {
+        format!("{v:.1}")
+    } else if a >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
 }

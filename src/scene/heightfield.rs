@@ -533,4 +533,37 @@ mod tests {
         assert_eq!(s.height_at(0.0, 0.0, 0.0, None), 1.0);
         assert!(s.height_at(1.999, 0.0, 0.0, None) < 1e-3);
     }
+
+    /// Heights load value by value: a 16-bit PNG normalised by 65535, an EXR's first channel as
+    /// stored (negative and above-one values kept), row 0 first; non-finite and too-small images
+    /// are one error naming the file and the field.
+    #[test]
+    fn height_images_load_value_by_value() {
+        let dir = std::env::temp_dir().join(format!("penumbra-height-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let png = dir.join("h.png");
+        let raw: [u16; 6] = [0, 65535, 32768, 1000, 7, 40000];
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(3, 2, raw.to_vec()).unwrap().save(&png).unwrap();
+        let img = HeightImage::load(&png).unwrap();
+        assert_eq!((img.width, img.height), (3, 2));
+        for (v, r) in img.values.iter().zip(raw) {
+            assert!((v - r as f32 / 65535.0).abs() < 1e-6, "{v} vs {r}");
+        }
+        let exr = dir.join("h.exr");
+        let floats: [f32; 6] = [-1.5, 2.25, 1000.0, 0.0, 0.125, 3.0];
+        let rgb: Vec<f32> = floats.iter().flat_map(|&v| [v, 9.0, 9.0]).collect();
+        image::Rgb32FImage::from_raw(3, 2, rgb).unwrap().save(&exr).unwrap();
+        assert_eq!(HeightImage::load(&exr).unwrap().values, floats.to_vec());
+        let nan = dir.join("nan.exr");
+        image::Rgb32FImage::from_raw(2, 2, vec![0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap().save(&nan).unwrap();
+        let e = HeightImage::load(&nan).err().unwrap().to_string();
+        assert!(e.contains("nan.exr") && e.contains("pixel (1, 0)") && e.contains("not a finite number"), "{e}");
+        let tiny = dir.join("tiny.png");
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(1, 1, vec![5]).unwrap().save(&tiny).unwrap();
+        let e = HeightImage::load(&tiny).err().unwrap().to_string();
+        assert!(e.contains("tiny.png") && e.contains("at least 2×2"), "{e}");
+        let e = HeightImage::load(&dir.join("missing.png")).err().unwrap().to_string();
+        assert!(e.contains("missing.png") && e.contains("cannot load"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
