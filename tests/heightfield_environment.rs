@@ -120,3 +120,21 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
         assert!((wrong - mirror).abs() > 0.5 * mirror, "channel {ch}: flipped {wrong} vs {mirror}");
     }
 }
+
+/// scenes/terrain_sky.toml (the chart's image-environment scene) loads, and one frame of the
+/// pyramid method at 64² is finite, lit and shadowed, under validation.
+#[test]
+fn the_sky_scene_renders() {
+    let s = Scene::from_file("scenes/terrain_sky.toml").unwrap();
+    assert!(matches!(s.environment, Some(penumbra::scene::Environment::Image { .. })));
+    let mut decl = s.methods[0].clone();
+    decl.params.push(("resolution".into(), toml::Value::Integer(64), 0));
+    let mut h = Standalone::new(common::test_gpu(), &s, &decl).unwrap();
+    let img = h.shading(0.0).unwrap();
+    let m = h.validation_messages();
+    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
+    assert!(img.iter().all(|p| p[..3].iter().all(|v| v.is_finite() && *v >= 0.0)));
+    let max = img.iter().map(|p| p[2]).fold(0.0f32, f32::max);
+    let min = img.iter().map(|p| p[2]).fold(f32::MAX, f32::min);
+    assert!(max > 0.1 && min < 0.8 * max, "blue channel from {min} to {max}");
+}
