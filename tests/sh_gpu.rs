@@ -2,7 +2,9 @@
 //! rotation of caps and the clamped cosine, equirect and cube texel solid angles and directions.
 //! The check kernel's output layout is documented in glsl/util/sh_check.comp. Then the
 //! environment projection pass (ShProjector) against the CPU projections: a band-limited sky, a
-//! random image and a constant one, each equirectangular and as a cube map.
+//! random image and a constant one, each equirectangular and as a cube map. Then the general
+//! rotation (against ShRotation, identity, band energies, composition, the 4-band build), the
+//! windows and the triple product over sh::product_terms (glsl/util/sh_ops_check*.comp).
 
 mod common;
 
@@ -223,4 +225,225 @@ fn gpu_projection_of_a_constant_image_is_band_zero() {
         eprintln!("cube {cube}: c00 {} (exact {c00}); largest other |c_k|/c00 {worst:.2e}", got[0]);
     }
     common::assert_clean(&gpu);
+}
+
+// ---- General rotation, windows and the triple product of glsl/common/sh.glsl against src/sh/
+// (check kernels glsl/util/sh_ops_check*.comp; layout in sh_ops_check.glsl).
+
+const OPS_CASES: usize = 64;
+const OPS_STRIDE: usize = 512;
+
+/// One check case: the rotations (R1, R2 in the SH frame, Rw in the world frame), a window width
+/// and two random 8-band vectors.
+struct OpsCase {
+    r1: glam::Mat3,
+    r2: glam::Mat3,
+    rw: glam::Mat3,
+    width: f32,
+    a: Vec<f32>,
+    b: Vec<f32>,
+}
+
+/// Random rotations (normalised quaternions) and coefficients in [-1, 1); the last two cases'
+/// widths are 0 and NaN (refused on the CPU; all-zero windows on the GPU).
+fn ops_cases() -> Vec<OpsCase> {
+    let mut rng = Rng(0x5eed_0f5b_0007);
+    let mut s = move || 2.0 * rng.next() - 1.0;
+    (0..OPS_CASES)
+        .map(|i| {
+            let mut rot = || glam::Mat3::from_quat(glam::Quat::from_xyzw(s(), s(), s(), s()).normalize());
+            let (r1, r2, rw) = (rot(), rot(), rot());
+            let width = match i {
+                62 => 0.0,
+                63 => f32::NAN,
+                _ => 0.5 + 0.25 * i as f32, // 0.5 .. 15.75: below, at and above 8 bands
+            };
+            let a = (0..64).map(|_| s()).collect();
+            let b = (0..64).map(|_| s()).collect();
+            OpsCase { r1, r2, rw, width, a, b }
+        })
+        .collect()
+}
+
+/// Runs `shader` on `cases` with the 8-band product term list; returns each case's 512 outputs.
+fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
+    let mut gpu = common::test_gpu();
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh ops check".into(), shader: shader.into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    let mut input = Vec::<f32>::with_capacity(OPS_CASES * 48 * 4);
+    for c in cases {
+        for m in [c.r1, c.r2, c.rw] {
+            for col in [m.x_axis, m.y_axis, m.z_axis] {
+                input.extend([col.x, col.y, col.z, 0.0]);
+            }
+        }
+        input.extend([c.width, 0.0, 0.0, 0.0]);
+        input.extend(&c.a);
+        input.extend(&c.b);
+        input.resize(input.len() + 6 * 4, 0.0); // 42 vec4s used of the case's 48
+    }
+    let terms = sh::product_terms(8).unwrap();
+    let cases_buf = gpu.create_buffer_init("sh ops cases", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&input)).unwrap();
+    let terms_buf = gpu.create_buffer_init("sh ops terms", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&terms)).unwrap();
+    let out = gpu.create_buffer(&BufferDesc { name: "sh ops result".into(), size: (OPS_CASES * OPS_STRIDE * 4) as u64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
+    let frame = gpu.create_frame().unwrap();
+    let mut graph = RenderGraph::new();
+    let c = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let count = [terms.len() as i32];
+    graph
+        .pass("sh ops check")
+        .buffer(cases_buf, Access::StorageRead { stages: c }, Some("cases"))
+        .buffer(terms_buf, Access::StorageRead { stages: c }, Some("terms"))
+        .buffer(out, Access::StorageWrite { stages: c }, Some("result"))
+        .record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[])?;
+            ctx.rec.push_constants(bytemuck::cast_slice(&count))?;
+            ctx.rec.dispatch([OPS_CASES as u32, 1, 1])
+        });
+    graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
+    let mut states = ResourceStates::default();
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, &mut states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+    let got: Vec<f32> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
+    common::assert_clean(&gpu);
+    got.chunks_exact(OPS_STRIDE).map(<[f32]>::to_vec).collect()
+}
+
+/// Largest |gpu - cpu| over a slice pair.
+fn worst(gpu: &[f32], cpu: &[f64]) -> f64 {
+    assert_eq!(gpu.len(), cpu.len());
+    gpu.iter().zip(cpu).map(|(g, c)| (*g as f64 - c).abs()).fold(0.0, f64::max)
+}
+
+fn f64s(v: &[f32]) -> Vec<f64> {
+    v.iter().map(|x| *x as f64).collect()
+}
+
+/// Float rounding in the recurrence grows with the band; coefficients are O(1) here, and the
+/// f32 recurrence measured (lavapipe) under the bound by the margin printed below.
+const ROTATION_TOL: f64 = 1e-5;
+
+/// sh_rotate against ShRotation (f64) for 64 random rotations and vectors, 8 bands; a 4-band
+/// call leaves the higher bands alone; a world-frame rotation through sh_rotation_from_world
+/// equals ShRotation::from_world.
+#[test]
+fn glsl_general_rotation_matches_the_cpu() {
+    let cases = ops_cases();
+    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let (mut w8, mut w4, mut ww) = (0.0f64, 0.0f64, 0.0f64);
+    for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
+        let a = f64s(&c.a);
+        let cpu = sh::ShRotation::new(c.r1, 8).unwrap().rotate(&a).unwrap();
+        w8 = w8.max(worst(&g[0..64], &cpu));
+        let cpu4 = sh::ShRotation::new(c.r1, 4).unwrap().rotate(&a[..16]).unwrap();
+        w4 = w4.max(worst(&g[192..208], &cpu4));
+        assert_eq!(&g[208..256], &c.a[16..], "case {i}: a 4-band rotation changed bands 4..7");
+        let cpuw = sh::ShRotation::from_world(c.rw, 8).unwrap().rotate(&a).unwrap();
+        ww = ww.max(worst(&g[256..320], &cpuw));
+    }
+    eprintln!("sh_rotate vs ShRotation, largest |GPU - CPU|: 8 bands {w8:.2e}, 4 bands {w4:.2e}, world frame {ww:.2e}");
+    assert!(w8 <= ROTATION_TOL && w4 <= ROTATION_TOL && ww <= ROTATION_TOL, "8 bands {w8:e}, 4 bands {w4:e}, world {ww:e}");
+}
+
+/// Rotation by the identity returns the vector; every rotation keeps each band's energy
+/// sum_m c_lm^2 (the blocks are orthogonal).
+#[test]
+fn glsl_rotation_identity_and_band_energies() {
+    let cases = ops_cases();
+    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let (mut wid, mut wen) = (0.0f64, 0.0f64);
+    for (c, g) in cases.iter().zip(&got) {
+        wid = wid.max(worst(&g[128..192], &f64s(&c.a)));
+        for l in 0..8 {
+            let band = l * l..(l + 1) * (l + 1);
+            let e0: f64 = c.a[band.clone()].iter().map(|v| (*v as f64).powi(2)).sum();
+            for out in [0usize, 64, 256] {
+                let e: f64 = g[out..][band.clone()].iter().map(|v| (*v as f64).powi(2)).sum();
+                wen = wen.max((e - e0).abs() / e0);
+            }
+        }
+    }
+    eprintln!("identity: largest |GPU - a| {wid:.2e}; band energy: largest relative change {wen:.2e}");
+    assert!(wid <= 1e-6, "identity rotation moved a coefficient by {wid:e}");
+    assert!(wen <= 1e-5, "a rotation changed a band's energy by {wen:e} (relative)");
+}
+
+/// Rotating by R1 then R2 on the GPU equals rotating once by R2 R1 on the CPU.
+#[test]
+fn glsl_rotation_composes() {
+    let cases = ops_cases();
+    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let mut w = 0.0f64;
+    for (c, g) in cases.iter().zip(&got) {
+        let cpu = sh::ShRotation::new(c.r2 * c.r1, 8).unwrap().rotate(&f64s(&c.a)).unwrap();
+        w = w.max(worst(&g[64..128], &cpu));
+    }
+    eprintln!("sh_rotate(R2, sh_rotate(R1, a)) vs ShRotation(R2 R1): largest difference {w:.2e}");
+    assert!(w <= 2.0 * ROTATION_TOL, "composition off by {w:e}");
+}
+
+/// With SH_ROTATE_MAX_BANDS 4 the first 4 bands rotate as before and an 8-band request zeroes
+/// bands 4..7 (documented: never silently unrotated).
+#[test]
+fn glsl_rotation_with_4_band_scratch() {
+    let cases = ops_cases();
+    let got = run_ops_check("util/sh_ops_check4.comp", &cases);
+    let mut w = 0.0f64;
+    for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
+        let cpu = sh::ShRotation::new(c.r1, 4).unwrap().rotate(&f64s(&c.a[..16])).unwrap();
+        w = w.max(worst(&g[0..16], &cpu)).max(worst(&g[192..208], &cpu));
+        assert!(g[16..64].iter().all(|v| *v == 0.0), "case {i}: bands 4..7 not zeroed");
+    }
+    eprintln!("4-band scratch: largest |GPU - CPU| {w:.2e}");
+    assert!(w <= ROTATION_TOL, "{w:e}");
+}
+
+/// sh_hanning / sh_lanczos equal sh::hanning / sh::lanczos for widths 0.5..15.75 (below, at and
+/// above the band count), sh_apply_window scales each band; width 0 and NaN give all zeros.
+#[test]
+fn glsl_windows_match_the_cpu() {
+    let cases = ops_cases();
+    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let mut w = 0.0f64;
+    for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
+        if c.width.is_nan() || c.width <= 0.0 {
+            assert!(g[384..464].iter().all(|v| *v == 0.0), "case {i}: width {} must give zero windows", c.width);
+            continue;
+        }
+        let h = sh::hanning(8, c.width as f64).unwrap();
+        let l = sh::lanczos(8, c.width as f64).unwrap();
+        w = w.max(worst(&g[384..392], &h)).max(worst(&g[392..400], &l));
+        let mut a = f64s(&c.a);
+        sh::apply_window(&mut a, &l).unwrap();
+        w = w.max(worst(&g[400..464], &a));
+    }
+    eprintln!("windows: largest |GPU - CPU| {w:.2e}");
+    assert!(w <= 1e-6, "{w:e}");
+}
+
+/// sh_product over sh::product_terms(8) equals sh::product (f64) to 1e-5 of each output's
+/// rounding scale sum |Gamma_ijk a_i b_j|.
+#[test]
+fn glsl_triple_product_matches_the_cpu() {
+    let cases = ops_cases();
+    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let terms = sh::product_terms(8).unwrap();
+    let mut w = 0.0f64;
+    for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
+        let (a, b) = (f64s(&c.a), f64s(&c.b));
+        let cpu = sh::product(&a, &b, 8).unwrap();
+        let mut scale = [0.0f64; 64];
+        for [packed, bits] in &terms {
+            let (ti, tj, tk) = ((packed & 0xff) as usize, ((packed >> 8) & 0xff) as usize, (packed >> 16) as usize);
+            scale[tk] += (f32::from_bits(*bits) as f64 * a[ti] * b[tj]).abs();
+        }
+        for k in 0..64 {
+            let rel = (g[320 + k] as f64 - cpu[k]).abs() / scale[k].abs().max(1e-30);
+            w = w.max(rel);
+            assert!(rel <= 1e-5, "case {i} coefficient {k}: GPU {} vs CPU {} (scale {})", g[320 + k], cpu[k], scale[k]);
+        }
+    }
+    eprintln!("sh_product vs sh::product: largest |GPU - CPU| / scale {w:.2e}");
 }

@@ -1,5 +1,10 @@
 // Spherical harmonics for penumbra's GPU passes. The CPU twin is src/sh/ (its mod.rs documents
-// the conventions in full); src/sh/tests/glsl.rs checks the constants below against it.
+// the conventions in full); src/sh/tests/glsl.rs checks the constants below against it and
+// tests/sh_gpu.rs every function on the device. Contents: basis evaluation (loop to 8 bands,
+// unrolled 4), z-rotation, ZH rotation, general rotation by a 3x3 matrix (Ivanic-Ruedenberg, up
+// to SH_ROTATE_MAX_BANDS = 8 bands), clamped-cosine / Lambert / cap ZH, Hanning and Lanczos
+// windows, the triple product over the CPU's term list (sh::product_terms), texel solid angles
+// and directions of equirect and cube maps.
 //
 // * Real SH, orthonormal over the sphere, Condon-Shortley phase included:
 //   y_1^{-1} = -0.488603 y, y_1^0 = +0.488603 z, y_1^1 = -0.488603 x.
@@ -275,6 +280,168 @@ float sh_cube_texel_solid_angle(ivec2 texel, int size) {
     float h = 2.0 / n;
     float area2 = h * h;  // exact, unlike (x1 - x0)(y1 - y0) in float
     return sh_triangle_solid_angle(p00, p10, p11, area2) + sh_triangle_solid_angle(p00, p11, p01, area2);
+}
+
+// ---- Windowing against ringing (src/sh/window.rs; Sloan, "Stupid SH Tricks"). Width w in bands,
+// usually w = the number of bands used. A NaN or non-positive width (an error on the CPU) gives 0
+// for every band, so a bad width blanks the result instead of passing it through unwindowed.
+
+// Hanning: (1 + cos(pi l / w)) / 2 for l < w, else 0.
+float sh_hanning(int l, float width) {
+    if (!(width > 0.0) || float(l) >= width) return 0.0;
+    return 0.5 * (1.0 + cos(SH_PI * float(l) / width));
+}
+
+// Lanczos sigma factor: sinc(l / w) = sin(pi l / w) / (pi l / w) for l < w (1 at l = 0), else 0.
+float sh_lanczos(int l, float width) {
+    if (!(width > 0.0) || float(l) >= width) return 0.0;
+    if (l == 0) return 1.0;
+    float x = SH_PI * float(l) / width;
+    return sin(x) / x;
+}
+
+// Scales band l (< bands, clamped to 1..8) of c by window[l].
+void sh_apply_window(inout float c[SH_MAX_COEFFS], int bands, float window[SH_MAX_BANDS]) {
+    int nb = clamp(bands, 1, SH_MAX_BANDS);
+    for (int l = 0; l < nb; ++l) {
+        for (int i = l * l; i < (l + 1) * (l + 1); ++i) c[i] *= window[l];
+    }
+}
+
+// ---- Triple product (a * b)_k = sum_ij a_i b_j Gamma_ijk (src/sh/product.rs) over the sparse
+// term list that sh::product_terms builds on the CPU: one uvec2 per ordered (i, j, k) with
+// Gamma_ijk != 0, x = i | j << 8 | k << 16, y = the float bits of Gamma_ijk. The list's band
+// count sets the bands of all three vectors (everything else in c is 0).
+//
+// A storage buffer cannot be passed to a function, so a shader that calls sh_product defines
+//     uvec2 sh_product_term(int e) { return my_list.e[e]; }
+// (shaders that do not call it need not). Terms with an index beyond SH_MAX_COEFFS (a list built
+// for more than 8 bands) are skipped rather than read out of bounds.
+uvec2 sh_product_term(int e);
+
+void sh_product(float a[SH_MAX_COEFFS], float b[SH_MAX_COEFFS], int count, out float c[SH_MAX_COEFFS]) {
+    for (int k = 0; k < SH_MAX_COEFFS; ++k) c[k] = 0.0;
+    for (int e = 0; e < count; ++e) {
+        uvec2 g = sh_product_term(e);
+        if ((g.x & 0xffc0c0c0u) != 0u) continue;
+        int i = int(g.x & 0xffu), j = int((g.x >> 8) & 0xffu), k = int(g.x >> 16);
+        c[k] += uintBitsToFloat(g.y) * a[i] * b[j];
+    }
+}
+
+// ---- General rotation by a 3x3 rotation matrix: the Ivanic-Ruedenberg recurrence of
+// src/sh/rotation.rs (ShRotation), the same algorithm in float. Band l's (2l+1)^2 block comes from
+// band 1 (R itself, rows/columns in (y, z, x) order) and band l - 1; the recurrence is for the
+// basis without the Condon-Shortley phase, so each band is conjugated by diag((-1)^m).
+//
+// Only two blocks are alive at a time (band l - 1 and band l), in module-scope arrays: function
+// arguments are copied in and out, which would cost more than the recurrence. Their size is set
+// by SH_ROTATE_MAX_BANDS (default 8, the library's max; define it as 2..8 before the first include
+// to shrink them): 2 * (2 * max - 1)^2 floats, 450 at 8 bands, 98 at 4 bands. On a discrete GPU
+// that much per-invocation memory spills to scratch; a pass rotating many vectors by one R should
+// build the blocks once (per workgroup, or on the CPU with ShRotation) and multiply.
+#ifndef SH_ROTATE_MAX_BANDS
+#define SH_ROTATE_MAX_BANDS 8
+#endif
+#if SH_ROTATE_MAX_BANDS < 2 || SH_ROTATE_MAX_BANDS > 8
+#error SH_ROTATE_MAX_BANDS must be in 2..8
+#endif
+#define SH_ROT_W (2 * SH_ROTATE_MAX_BANDS - 1)  // width of the widest block
+float sh_rot_r1[9];                       // band 1, (m + 1) * 3 + (n + 1), no CS phase
+float sh_rot_prev[SH_ROT_W * SH_ROT_W];   // band l - 1, width 2l - 1
+float sh_rot_cur[SH_ROT_W * SH_ROT_W];    // band l, width 2l + 1
+
+float sh_rot_r1_at(int m, int n) { return sh_rot_r1[(m + 1) * 3 + n + 1]; }
+float sh_rot_prev_at(int l, int a, int b) { return sh_rot_prev[(a + l - 1) * (2 * l - 1) + b + l - 1]; }
+
+// Ivanic-Ruedenberg's P (their Table 2) for band l.
+float sh_rot_p(int l, int i, int a, int b) {
+    if (b == l) return sh_rot_r1_at(i, 1) * sh_rot_prev_at(l, a, l - 1) - sh_rot_r1_at(i, -1) * sh_rot_prev_at(l, a, 1 - l);
+    if (b == -l) return sh_rot_r1_at(i, 1) * sh_rot_prev_at(l, a, 1 - l) + sh_rot_r1_at(i, -1) * sh_rot_prev_at(l, a, l - 1);
+    return sh_rot_r1_at(i, 0) * sh_rot_prev_at(l, a, b);
+}
+
+// sh_rot_cur = the block of band l >= 2 from sh_rot_prev. u, v, w as on the CPU (with the 1998
+// corrections); a term is skipped exactly where its coefficient is zero, which is also where
+// its P would index outside band l - 1.
+void sh_rot_band(int l) {
+    int w = 2 * l + 1;
+    for (int m = -l; m <= l; ++m) {
+        int am = abs(m);
+        float d0 = m == 0 ? 1.0 : 0.0;
+        for (int n = -l; n <= l; ++n) {
+            float denom = abs(n) == l ? float(2 * l * (2 * l - 1)) : float((l + n) * (l - n));
+            float val = 0.0;
+            if (am < l) val += sqrt(float((l + m) * (l - m)) / denom) * sh_rot_p(l, 0, m, n);
+            float v = 0.5 * sqrt((1.0 + d0) * float((l + am - 1) * (l + am)) / denom) * (1.0 - 2.0 * d0);
+            float vv;
+            if (m == 0) {
+                vv = sh_rot_p(l, 1, 1, n) + sh_rot_p(l, -1, -1, n);
+            } else if (m == 1) {
+                vv = sh_rot_p(l, 1, 0, n) * 1.4142135623730951;
+            } else if (m > 1) {
+                vv = sh_rot_p(l, 1, m - 1, n) - sh_rot_p(l, -1, 1 - m, n);
+            } else if (m == -1) {
+                vv = sh_rot_p(l, -1, 0, n) * 1.4142135623730951;
+            } else {
+                vv = sh_rot_p(l, 1, m + 1, n) + sh_rot_p(l, -1, -m - 1, n);
+            }
+            val += v * vv;
+            if (m != 0 && am < l - 1) {
+                float ww = -0.5 * sqrt(float((l - am - 1) * (l - am)) / denom);
+                float wv = m > 0 ? sh_rot_p(l, 1, m + 1, n) + sh_rot_p(l, -1, -m - 1, n)
+                                 : sh_rot_p(l, 1, m - 1, n) - sh_rot_p(l, -1, 1 - m, n);
+                val += ww * wv;
+            }
+            sh_rot_cur[(m + l) * w + n + l] = val;
+        }
+    }
+}
+
+// Rotates the function c (bands clamped to 1..8) by the rotation r (SH frame): afterwards
+// c(w) holds the old c(r^T w), so a lobe about axis a ends up about r a (mod.rs's convention).
+// r is re-orthonormalised as on the CPU (Gram-Schmidt on the columns); a matrix far from a
+// rotation gives a meaningless result (the CPU refuses it). Bands from SH_ROTATE_MAX_BANDS up to
+// `bands` are set to 0 (a missing band is visible, a silently unrotated one is not); coefficients
+// beyond bands^2 are untouched.
+void sh_rotate(mat3 r, int bands, inout float c[SH_MAX_COEFFS]) {
+    int nb = clamp(bands, 1, SH_MAX_BANDS);
+    int nr = min(nb, SH_ROTATE_MAX_BANDS);
+    for (int i = nr * nr; i < nb * nb; ++i) c[i] = 0.0;
+    if (nr < 2) return;
+    vec3 c0 = normalize(r[0]);
+    vec3 c1 = normalize(r[1] - c0 * dot(c0, r[1]));
+    mat3 q = mat3(c0, c1, cross(c0, c1));
+    // Band 1 in (y, z, x) order; q[col][row].
+    int perm[3] = int[3](1, 2, 0);
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) sh_rot_r1[i * 3 + j] = q[perm[j]][perm[i]];
+    }
+    for (int k = 0; k < 9; ++k) sh_rot_prev[k] = sh_rot_r1[k];
+    float t[SH_ROT_W];
+    for (int l = 1; l < nr; ++l) {
+        int w = 2 * l + 1, base = l * l;
+        if (l >= 2) sh_rot_band(l);
+        else for (int k = 0; k < 9; ++k) sh_rot_cur[k] = sh_rot_r1[k];
+        // c_band = D M D c_band, D = diag((-1)^m); (-1)^m = (-1)^(i + l) for row i = m + l.
+        for (int i = 0; i < w; ++i) {
+            float acc = 0.0;
+            for (int j = 0; j < w; ++j) {
+                float s = ((i + j) & 1) == 0 ? 1.0 : -1.0;
+                acc += s * sh_rot_cur[i * w + j] * c[base + j];
+            }
+            t[i] = acc;
+        }
+        for (int i = 0; i < w; ++i) c[base + i] = t[i];
+        for (int k = 0; k < w * w; ++k) sh_rot_prev[k] = sh_rot_cur[k];
+    }
+}
+
+// A rotation given in penumbra's world frame (y up) as the same rotation in the SH frame:
+// WORLD_TO_SH * r_world * SH_TO_WORLD, as ShRotation::from_world.
+mat3 sh_rotation_from_world(mat3 r_world) {
+    const mat3 world_to_sh = mat3(vec3(1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0), vec3(0.0, -1.0, 0.0));
+    return world_to_sh * r_world * transpose(world_to_sh);
 }
 
 #endif  // PENUMBRA_SH_GLSL

@@ -1,7 +1,8 @@
 //! Spherical harmonics: the core every SH lighting method shares (seed 001's height-field
 //! shadows, seed 000's SH light-maps, seed 002's GPU transfer). CPU side here; the GPU side
-//! (basis evaluation, z/ZH rotation, kernels, texel solid angles) is `glsl/common/sh.glsl`, which
-//! follows exactly the same conventions, and the projection of environment images
+//! (basis evaluation, z/ZH/general rotation, kernels, windows, the triple product over
+//! [`product_terms`], texel solid angles) is `glsl/common/sh.glsl`, which follows exactly the
+//! same conventions and algorithms, and the projection of environment images
 //! (equirectangular or cube) is a compute pass, [`ShProjector`] (`gpu.rs`, `glsl/sh/`).
 //!
 //! # Conventions (one for the whole crate; the GLSL matches)
@@ -54,7 +55,7 @@ mod tests;
 
 pub use gpu::{EnvImage, EnvLayout, ShProjector, GPU_PROJECTION_MAX_BANDS};
 pub use basis::{basis, dot, eval, eval_basis, eval_basis_f64, eval_f64};
-pub use product::{product, product_matrix, ProductMatrix, TripleProductTensor};
+pub use product::{product, product_matrix, product_terms, ProductMatrix, TripleProductTensor};
 pub use projection::{
     cube_texel_dir_world, cube_texel_solid_angle, equirect_texel_dir_world,
     equirect_texel_solid_angle, gauss_legendre, project, project_cubemap, project_equirect,

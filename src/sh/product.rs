@@ -205,6 +205,32 @@ pub fn product<C: Coeff, S: Copy + Into<f64>>(a: &[C], b: &[S], bands: usize) ->
     TripleProductTensor::shared(ba.max(bb).max(bands))?.product(a, b, bands)
 }
 
+/// The triple-product term list `sh_product` in `glsl/common/sh.glsl` consumes, for `bands`
+/// bands (1..=[`GLSL_MAX_BANDS`](super::GLSL_MAX_BANDS)): one `[packed, bits]` per ordered
+/// (i, j, k) with Γ_ijk kept, `packed = i | j << 8 | k << 16` and `bits` the f32 bits of Γ_ijk.
+/// Ordered by the distinct (i ≤ j ≤ k) entries, then their distinct permutations, so the GPU's
+/// summation order is fixed.
+pub fn product_terms(bands: usize) -> ShResult<Vec<[u32; 2]>> {
+    // The GLSL's coefficient arrays hold 8 bands; a longer list would only be skipped there.
+    if !(1..=super::GLSL_MAX_BANDS).contains(&bands) {
+        return Err(ShError::Range { what: "bands of a GPU product term list", range: "1..=8", got: bands as f64 });
+    }
+    let gamma = TripleProductTensor::shared(bands)?;
+    let mut out = Vec::with_capacity(gamma.len());
+    for &([a, b, c], v) in gamma.unique_entries() {
+        let mut perms = [[a, b, c], [a, c, b], [b, a, c], [b, c, a], [c, a, b], [c, b, a]];
+        perms.sort_unstable();
+        let mut last = None;
+        for p @ [i, j, k] in perms {
+            if last != Some(p) {
+                out.push([i as u32 | (j as u32) << 8 | (k as u32) << 16, (v as f32).to_bits()]);
+                last = Some(p);
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// `M` with `(a • b) = M b` for every `b` of `bands` bands (seed 001 Eq. 3.29–3.30,
 /// `M_kj = Σ_i a_i Γ_ijk = ∫ a y_j y_k`), row-major `bands² × bands²`.
 #[derive(Debug, Clone, PartialEq)]

@@ -153,3 +153,24 @@ fn tensor_sizes_and_16_band_build() {
     assert!(TripleProductTensor::shared(4).unwrap().product(&f, &f, 4).is_err()); // 16 bands > 4
     assert!(product(&[0.0f32; 5], &[0.0f32; 4], 2).is_err());
 }
+
+#[test]
+fn gpu_product_term_list_applies_like_the_tensor() {
+    // The packed list sh_product (glsl/common/sh.glsl) loops over, applied here in f64 with the
+    // shader's decoding: the same product as the tensor (the values are f32, hence 1e-6).
+    let mut rng = Rng::new(29);
+    for bands in [1usize, 4, 8] {
+        let terms = product_terms(bands).unwrap();
+        assert_eq!(terms.len(), TripleProductTensor::shared(bands).unwrap().len());
+        let (a, b) = (rng.coeffs(bands), rng.coeffs(bands));
+        let mut c = vec![0.0; bands * bands];
+        for [packed, bits] in &terms {
+            let (i, j, k) = ((packed & 0xff) as usize, ((packed >> 8) & 0xff) as usize, (packed >> 16) as usize);
+            c[k] += f32::from_bits(*bits) as f64 * a[i] * b[j];
+        }
+        assert!(max_diff(&c, &product(&a, &b, bands).unwrap()) < 1e-6 * bands as f64);
+    }
+    // The GLSL arrays hold 8 bands.
+    assert!(matches!(product_terms(0), Err(ShError::Range { .. })));
+    assert!(matches!(product_terms(9), Err(ShError::Range { .. })));
+}
