@@ -124,6 +124,12 @@ impl Standalone {
     /// The horizons (radians) at time `t`: `nphi` blocks of res² values, direction-major; the
     /// environment's, or light `k`'s (truncated at its planar distance).
     pub fn horizons(&mut self, t: f32, light: Option<usize>) -> Result<Vec<f32>> {
+        Ok(self.horizons_timed(t, light)?.0)
+    }
+
+    /// `horizons`, with that frame's GPU pass timings (the horizon kernel is "hf horizons"; empty
+    /// where the device cannot time passes).
+    pub fn horizons_timed(&mut self, t: f32, light: Option<usize>) -> Result<(Vec<f32>, Vec<PassTiming>)> {
         let res = self.core.res as u64;
         let n = self.core.settings.nphi as u64 * res * res;
         let out = self.gpu.create_buffer(&BufferDesc { name: "hf horizons".into(), size: 4 * n, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu })?;
@@ -134,7 +140,8 @@ impl Standalone {
             core.add_horizon_pass(&mut graph, out, light);
             graph.pass("hf host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
             run_graph(&self.gpu, &mut self.states, self.frame, graph)?;
-            Ok(bytemuck::cast_slice::<u8, f32>(&self.gpu.read_buffer(out)?).to_vec())
+            let timings = self.gpu.frame_timings(self.frame)?.unwrap_or_default();
+            Ok((bytemuck::cast_slice::<u8, f32>(&self.gpu.read_buffer(out)?).to_vec(), timings))
         })();
         self.gpu.destroy_buffer(out);
         self.states.forget_buffer(out);
