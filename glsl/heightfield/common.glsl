@@ -1,5 +1,6 @@
 // Shared by the height-field lighting passes (seed 001): parameters, bilinear height fetches,
-// normals, wedge-table lookup, z-rotation with per-direction tables, the truncated SH product.
+// normals, wedge-table lookup, z-rotation with per-direction tables, the truncated SH product
+// (the SH core's sh_product over this file's term list).
 // The CPU mirror is src/heightfield/cpu.rs; conventions are those of common/sh.glsl (SH frame
 // z up, world -> SH (x, -z, y)). Texel (i, j) of the field lies at world
 // (origin.x + i * spacing, h, origin.z + j * spacing); azimuth phi (SH frame) walks the texel
@@ -152,15 +153,20 @@ void hf_transfer_cosine(vec3 n_sh) {
     hf_zh_rotate_into_c(zh, n_sh);
 }
 
-// hf_t = hf_vis * hf_c, the truncated SH product through the sparse Gamma list.
+// The term list for the SH core's sh_product (built by sh::product_terms).
+uvec2 sh_product_term(int e) { return product.e[e]; }
+
+// hf_t = hf_vis * hf_c, the truncated SH product (sh_product: the same terms in the same order
+// as before it moved to the core). Its arrays are SH_MAX_COEFFS long, so the operands are
+// copied across once per texel: negligible next to the product's thousands of terms.
 void hf_product() {
-    for (int k = 0; k < HF_MAX_COEFFS; ++k) hf_t[k] = 0.0;
-    int count = params.cfg.z;
-    for (int e = 0; e < count; ++e) {
-        uvec2 g = product.e[e];
-        int i = int(g.x & 0xffu), j = int((g.x >> 8) & 0xffu), k = int(g.x >> 16);
-        hf_t[k] += uintBitsToFloat(g.y) * hf_vis[i] * hf_c[j];
+    float a[SH_MAX_COEFFS], b[SH_MAX_COEFFS], t[SH_MAX_COEFFS];
+    for (int k = 0; k < SH_MAX_COEFFS; ++k) {
+        a[k] = k < HF_MAX_COEFFS ? hf_vis[k] : 0.0;
+        b[k] = k < HF_MAX_COEFFS ? hf_c[k] : 0.0;
     }
+    sh_product(a, b, params.cfg.z, t);
+    for (int k = 0; k < HF_MAX_COEFFS; ++k) hf_t[k] = t[k];
 }
 #endif  // HF_HORIZON_ONLY
 

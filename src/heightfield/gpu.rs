@@ -100,20 +100,10 @@ impl PassParams {
     }
 }
 
-/// The non-zero Γ_ijk (i, j, k < bands²) as the shader's packed list: i | j << 8 | k << 16 and
-/// the value's bits.
+/// The non-zero Γ_ijk (i, j, k < bands²) as the shader's packed list (the SH core's
+/// `sh::product_terms`, which `sh_product` in glsl/common/sh.glsl consumes).
 pub fn product_entries(bands: u32) -> Result<Vec<[u32; 2]>> {
-    let gamma = crate::sh::TripleProductTensor::shared(bands as usize).map_err(|e| Error::Usage(format!("SH product: {e}")))?;
-    let mut out = Vec::new();
-    for ([a, b, c], v) in gamma.unique_entries() {
-        let mut perms = vec![[*a, *b, *c], [*a, *c, *b], [*b, *a, *c], [*b, *c, *a], [*c, *a, *b], [*c, *b, *a]];
-        perms.sort();
-        perms.dedup();
-        for [i, j, k] in perms {
-            out.push([i as u32 | (j as u32) << 8 | (k as u32) << 16, (*v as f32).to_bits()]);
-        }
-    }
-    Ok(out)
+    crate::sh::product_terms(bands as usize).map_err(|e| Error::Usage(format!("SH product: {e}")))
 }
 
 struct Pipelines {
