@@ -229,6 +229,40 @@ mod tests {
         assert!((above - 0.0317).abs() < 5e-4, "{above}");
     }
 
+    /// Where the method fails (digest §3.2.3): a light of radius 10° at elevation 30° behind an
+    /// infinite wall of elevation β. With exact wedges (nφ = 32) the 16-coefficient products give
+    /// the digest's values: shadows far wider than the geometric penumbra, about a third of the
+    /// unoccluded light leaking into the true umbra just past full occlusion (β = 40°), and a
+    /// negative value deeper in (which the accumulation clamps to 0). The exact column is the
+    /// cosine-weighted visible cap by quadrature.
+    #[test]
+    fn umbra_leak_of_a_small_light_behind_a_wall() {
+        let (elev, half) = (30f64.to_radians(), 10f64.to_radians());
+        let axis = DVec3::new(elev.cos(), 0.0, elev.sin());
+        let light = sphere_light(axis, half.sin(), 4).unwrap();
+        let cosine = transfer_cosine(DVec3::Z, 4).unwrap();
+        let q = sh::Quadrature::sphere(600, 1200).unwrap();
+        let unoccluded = exact_cap_cosine(elev, half);
+        // (β, the digest's SH value, its exact value)
+        for (beta_deg, want_sh, want_exact) in [(20.0f64, 0.01079, 0.01508), (30.0, 0.00813, 0.00851), (40.0, 0.00510, 0.0), (50.0, 0.00207, 0.0), (60.0, -0.00058, 0.0), (85.0, -0.00381, 0.0)] {
+            let tb = beta_deg.to_radians().tan();
+            let horizon = |phi: f64| if phi.cos() > 0.0 { (tb * phi.cos()).atan() } else { 0.0 };
+            let horizons: Vec<f64> = (0..32).map(|j| horizon(TAU * j as f64 / 32.0)).collect();
+            let v = wedge::visibility(&horizons, WedgeSource::Exact, 4).unwrap();
+            let got = shade(&v, &cosine, &light, 4).unwrap();
+            let exact = q.integrate(|d| {
+                let above = d.z.asin() > horizon(d.y.atan2(d.x));
+                if above && d.dot(axis) >= half.cos() { d.z.max(0.0) } else { 0.0 }
+            }) / PI;
+            assert!((got - want_sh).abs() < 2e-4, "β {beta_deg}°: SH {got:.5}, digest {want_sh}");
+            assert!((exact - want_exact).abs() < 3e-4, "β {beta_deg}°: exact {exact:.5}, digest {want_exact}");
+            if beta_deg == 40.0 {
+                // Fully hidden, yet about a third of the unoccluded light comes through.
+                assert!((0.3..0.4).contains(&(got / unoccluded)), "{}", got / unoccluded);
+            }
+        }
+    }
+
     /// Flat plane under a unit sky: 1 with the environment table (C1), and the local table's
     /// missing node at 0° shows with nearest lookup (0.995) but not bilinear (digest §3.2.5).
     #[test]
