@@ -4,41 +4,13 @@
 //! and a frame through the renderer. Fields are 64² (the horizon comparison 128²).
 
 mod common;
+mod hf_common;
 
 use glam::Vec3;
+use hf_common::{clean, harness, scene};
 use penumbra::heightfield::standalone::Standalone;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{MeshSource, Scene};
-
-/// A scene with one height field (`field`: the keys after `mesh = "heightfield"`), the method
-/// declaration `method` (a TOML inline table) and `extra` (lights, environment).
-fn scene(field: &str, method: &str, extra: &str) -> Scene {
-    let toml = format!(
-        r#"methods = [{method}]
-[camera]
-position = [0, 10, 10]
-target = [0, 0, 0]
-[[materials]]
-name = "ground"
-albedo = 1
-[[objects]]
-mesh = "heightfield"
-material = "ground"
-{field}
-{extra}
-"#
-    );
-    Scene::from_str(&toml, "<test>", std::path::Path::new("/")).unwrap_or_else(|e| panic!("{e}\n{toml}"))
-}
-
-fn harness(s: &Scene) -> Standalone {
-    Standalone::new(common::test_gpu(), s, &s.methods[0]).unwrap()
-}
-
-fn clean(h: &Standalone) {
-    let m = h.validation_messages();
-    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
-}
 
 const SKY: &str = "[environment]\ntype = \"constant\"\nradiance = 1\n";
 const PYRAMID: &str = r#"{ name = "heightfield_pyramid" }"#;

@@ -4,8 +4,10 @@
 //! on a flat plane against the CPU projection and the CPU mirror of the transfer.
 
 mod common;
+mod hf_common;
 
 use glam::{DVec3, Vec3};
+use hf_common::{clean, harness, scene};
 use penumbra::heightfield::cpu;
 use penumbra::heightfield::standalone::Standalone;
 use penumbra::heightfield::wedge::TableKind;
@@ -13,30 +15,10 @@ use penumbra::image_io::HdrImage;
 use penumbra::scene::Scene;
 use penumbra::sh;
 
-fn scene(field: &str, method: &str, environment: &str) -> Scene {
-    let toml = format!(
-        r#"methods = [{method}]
-[camera]
-position = [0, 10, 10]
-target = [0, 0, 0]
-[[materials]]
-name = "ground"
-albedo = 1
-[[objects]]
-mesh = "heightfield"
-material = "ground"
-{field}
-{environment}
-"#
-    );
-    Scene::from_str(&toml, "<test>", std::path::Path::new("/")).unwrap_or_else(|e| panic!("{e}\n{toml}"))
-}
-
 fn shading(s: &Scene) -> Vec<[f32; 4]> {
-    let mut h = Standalone::new(common::test_gpu(), s, &s.methods[0]).unwrap();
+    let mut h = harness(s);
     let img = h.shading(0.0).unwrap();
-    let m = h.validation_messages();
-    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
+    clean(&h);
     img
 }
 

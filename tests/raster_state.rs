@@ -5,7 +5,7 @@
 mod common;
 
 use penumbra::backend::{vk, BufferDesc, ColorTarget, DepthState, GraphicsPipelineDesc, ImageDesc, MemoryKind, RenderTarget, RenderingDesc, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout};
-use penumbra::graph::{Access, RenderGraph, ResourceStates};
+use penumbra::graph::{Access, RenderGraph};
 use penumbra::shaders::ShaderLibrary;
 
 const W: u32 = 64;
@@ -98,11 +98,7 @@ fn two_sided_stencil_and_depth_clamp() {
     graph.pass("read").transfer_read(color, SubresourceRange::mip(0)).buffer(rb, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(color, 0, 0, rb));
     graph.pass("host").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
     let frame = gpu.create_frame().unwrap();
-    let mut states = ResourceStates::default();
-    let mut rec = gpu.begin_frame(frame).unwrap();
-    graph.execute(&mut rec, &mut states).unwrap();
-    rec.finish().unwrap();
-    gpu.submit_and_wait(frame).unwrap();
+    common::run_once(&gpu, frame, graph);
     let px: Vec<[f32; 4]> = bytemuck::cast_slice(&gpu.read_buffer(rb).unwrap()).to_vec();
     let at = |x: u32, y: u32| px[(y * W + x) as usize];
     for y in [1, H / 2, H - 2] {

@@ -31,11 +31,7 @@ fn glsl_sh_matches_the_cpu_library() {
         ctx.rec.dispatch([128, 1, 1])
     });
     graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
-    let mut states = ResourceStates::default();
-    let mut rec = gpu.begin_frame(frame).unwrap();
-    graph.execute(&mut rec, &mut states).unwrap();
-    rec.finish().unwrap();
-    gpu.submit_and_wait(frame).unwrap();
+    common::run_once(&gpu, frame, graph);
     let got: Vec<f32> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
 
     let close = |a: f32, b: f64, tol: f64, what: &str| assert!((a as f64 - b).abs() <= tol * b.abs().max(1.0), "{what}: GPU {a} vs CPU {b}");
@@ -301,11 +297,7 @@ fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
             ctx.rec.dispatch([OPS_CASES as u32, 1, 1])
         });
     graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
-    let mut states = ResourceStates::default();
-    let mut rec = gpu.begin_frame(frame).unwrap();
-    graph.execute(&mut rec, &mut states).unwrap();
-    rec.finish().unwrap();
-    gpu.submit_and_wait(frame).unwrap();
+    common::run_once(&gpu, frame, graph);
     let got: Vec<f32> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
     common::assert_clean(&gpu);
     got.chunks_exact(OPS_STRIDE).map(<[f32]>::to_vec).collect()

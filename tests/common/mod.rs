@@ -27,3 +27,12 @@ pub fn temp_path(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir.join(name)
 }
+
+/// Records `graph` into `frame` with fresh resource states, submits it and waits.
+pub fn run_once(gpu: &Gpu, frame: penumbra::backend::Frame, graph: penumbra::graph::RenderGraph<'_>) {
+    let mut states = penumbra::graph::ResourceStates::default();
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, &mut states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+}
