@@ -132,3 +132,56 @@ fn chart_measures_the_textured_shadow_volume_level() {
     let table = std::fs::read_to_string(&csv).unwrap();
     assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,")), "{table}");
 }
+
+/// `penumbra chart` on a height field: both methods' sweeps against the direct-light reference,
+/// and the trends the sweep is there to show — the faithful planar light distance (a light close
+/// above the field becomes a hemisphere) and 2 bands are far worse than the corrected 4-band
+/// default, and fewer directions are no better.
+#[test]
+fn chart_measures_the_height_field_methods() {
+    let scene = common::temp_path("hf-chart.toml");
+    std::fs::write(
+        &scene,
+        r#"methods = [{ name = "heightfield_pyramid" }, { name = "heightfield_bruteforce", march_step = 0.5 }]
+[camera]
+position = [0, 6, 5]
+target = [0, 0, 0]
+[[materials]]
+name = "ground"
+albedo = 0.7
+[[objects]]
+mesh = "heightfield"
+material = "ground"
+size = 8
+resolution = 32
+generator = "sine"
+wavelength = 2
+height = 0.6
+[[lights]]
+type = "sphere"
+center = [0, 0.9, 0]
+radius = 0.2
+radiance = 30
+[environment]
+type = "constant"
+radiance = 0.3
+"#,
+    )
+    .unwrap();
+    let (cache, csv, png) = (common::temp_path("hf-chart-cache"), common::temp_path("hf-chart.csv"), common::temp_path("hf-chart.png"));
+    let args = ["chart", scene.to_str().unwrap(), "--size", "32x32", "--reference-spp", "16", "--frames", "1", "--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()];
+    ok(&penumbra(&args));
+    let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    let count = |m: &str| rows.iter().filter(|r| r.method == m).count();
+    assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (12, 7));
+    let err = |c: &str| rows.iter().find(|r| r.config == c).map(|r| r.rel_mse).unwrap_or_else(|| panic!("{c} missing"));
+    let default = err("pyramid nphi=32 ls=4 lo=4 bands=4 corrected");
+    println!("relative MSE: pyramid {default:.4}, nφ = 4 {:.4}, faithful {:.4}, 2 bands {:.4}, brute {:.4}", err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected"), err("pyramid nphi=32 ls=4 lo=4 bands=4 faithful"), err("pyramid nphi=32 ls=4 lo=4 bands=2 corrected"), err("brute nphi=32 step=0.5 bands=4 corrected"));
+    assert!(default < 0.05, "{default}");
+    assert!(err("pyramid nphi=32 ls=4 lo=4 bands=4 faithful") > 3.0 * default);
+    assert!(err("brute nphi=32 step=0.5 bands=4 faithful") > 3.0 * err("brute nphi=32 step=0.5 bands=4 corrected"));
+    assert!(err("pyramid nphi=32 ls=4 lo=4 bands=2 corrected") > 1.5 * default);
+    assert!(err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected") >= default);
+    let table = std::fs::read_to_string(&csv).unwrap();
+    assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,")), "{table}");
+}
