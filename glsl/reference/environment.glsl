@@ -1,12 +1,14 @@
-// Radiance from where rays escape: the constant `params.environment`, or an equirectangular map
-// (src/reference/environment.rs) taken as constant over each texel and importance-sampled in
-// proportion to luminance x sin(theta). The including shader declares `params`
-// (environment_map: x width, y height, both 0 without a map; z: 1 if the map can be sampled),
-// `environment_map` and `environment_cdf` first.
+// Radiance from where rays escape: the constant `params.environment`, or an equirectangular or
+// cube map (src/reference/environment.rs) taken as constant over each texel and importance-sampled
+// in proportion to luminance x texel solid angle. The including shader declares `params`
+// (environment_map: x width, y height, both 0 without a map; z: 1 if the map can be sampled;
+// w: 1 for a cube map, its faces stacked, height = 6 width), `environment_map` and
+// `environment_cdf` first.
 #ifndef PENUMBRA_REFERENCE_ENVIRONMENT_GLSL
 #define PENUMBRA_REFERENCE_ENVIRONMENT_GLSL
 
 #include "common/lights.glsl"
+#include "common/cube.glsl"
 
 // Matches Environment::equirect_uv / equirect_dir in src/scene/types.rs.
 vec2 equirect_uv(vec3 d) {
@@ -19,7 +21,30 @@ vec3 equirect_dir(vec2 uv) {
     return vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
 }
 
-uvec2 environment_texel(vec2 uv) {
+// Solid-angle density of sampling uniformly within a texel, per unit of the texel's probability:
+// equirect dw = 2 pi^2 sin(theta) du dv over a 1/(w h) uv cell; cube dw = ds dt / (1 + s^2 + t^2)^1.5
+// over a (2/n)^2 st cell.
+float equirect_density(float v) {
+    float sin_theta = sin(v * PI);
+    float texels = float(params.environment_map.x * params.environment_map.y);
+    return sin_theta > 0.0 ? texels / (2.0 * PI * PI * sin_theta) : 0.0;
+}
+
+float cube_density(vec2 st) {
+    float n = float(params.environment_map.x);
+    return 0.25 * n * n * pow(1.0 + dot(st, st), 1.5);
+}
+
+// The stored texel (column, row) direction d falls in, and equirect_density / cube_density there.
+uvec2 environment_texel(vec3 d, out float density) {
+    if (params.environment_map.w != 0u) {
+        vec2 st;
+        uint face = cube_face(d, st);
+        density = cube_density(st);
+        return cube_texel(face, st, params.environment_map.x);
+    }
+    vec2 uv = equirect_uv(d);
+    density = equirect_density(uv.y);
     uvec2 size = params.environment_map.xy;
     return min(uvec2(uv * vec2(size)), size - 1u);
 }
@@ -28,14 +53,9 @@ vec3 environment_radiance(vec3 d) {
     if (params.environment_map.x == 0u) {
         return params.environment.rgb;
     }
-    uvec2 t = environment_texel(equirect_uv(d));
+    float density;
+    uvec2 t = environment_texel(d, density);
     return environment_map.items[t.y * params.environment_map.x + t.x].rgb;
-}
-
-// dw = 2 pi^2 sin(theta) du dv.
-float environment_solid_angle_pdf(float uv_pdf, float v) {
-    float sin_theta = sin(v * PI);
-    return sin_theta > 0.0 ? uv_pdf / (2.0 * PI * PI * sin_theta) : 0.0;
 }
 
 // Probabilities of texel row j and of column i within it, from the CDFs.
@@ -52,9 +72,9 @@ float environment_pdf(vec3 d) {
     if (params.environment_map.z == 0u) {
         return 0.0;
     }
-    vec2 uv = equirect_uv(d);
-    float texels = float(params.environment_map.x * params.environment_map.y);
-    return environment_solid_angle_pdf(environment_texel_probability(environment_texel(uv)) * texels, uv.y);
+    float density;
+    uvec2 t = environment_texel(d, density);
+    return environment_texel_probability(t) * density;
 }
 
 // The first k in [0, n) with cdf[offset + k + 1] > u (the CDF ends at 1 > u).
@@ -72,7 +92,8 @@ uint cdf_search(uint offset, uint n, float u) {
     return lo;
 }
 
-// A direction drawn by texel (row, then column) and uniformly within the texel's uv rectangle.
+// A direction drawn by texel (row, then column) and uniformly within the texel's uv (equirect) or
+// st (cube) rectangle.
 bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
     uint w = params.environment_map.x;
     uint h = params.environment_map.y;
@@ -83,9 +104,18 @@ bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
     uint i = cdf_search(row, w, u.y);
     float c0 = environment_cdf.items[row + i];
     float c1 = environment_cdf.items[row + i + 1u];
-    vec2 uv = vec2((float(i) + (u.y - c0) / (c1 - c0)) / float(w), (float(j) + (u.x - r0) / (r1 - r0)) / float(h));
-    dir = equirect_dir(uv);
-    pdf = environment_solid_angle_pdf((r1 - r0) * (c1 - c0) * float(w * h), uv.y);
+    vec2 within = vec2((u.y - c0) / (c1 - c0), (u.x - r0) / (r1 - r0));
+    float probability = (r1 - r0) * (c1 - c0);
+    if (params.environment_map.w != 0u) {
+        uint face = j / w;
+        vec2 st = 2.0 * (vec2(float(i), float(j - face * w)) + within) / float(w) - 1.0;
+        dir = normalize(cube_dir(face, st));
+        pdf = probability * cube_density(st);
+    } else {
+        vec2 uv = (vec2(float(i), float(j)) + within) / vec2(float(w), float(h));
+        dir = equirect_dir(uv);
+        pdf = probability * equirect_density(uv.y);
+    }
     return pdf > 0.0;
 }
 

@@ -44,7 +44,7 @@ layout(set = 0, binding = 0) uniform Params {
     vec4 forward;      // xyz: unit view direction
     vec4 environment;  // rgb: radiance of rays that escape
     uvec4 counts;      // x: lights, y: triangles, z: width, w: height
-    uvec4 environment_map;  // x, y: size of the map (0 for the constant environment); z: sampled
+    uvec4 environment_map;  // x, y: size of the map (0 for the constant environment); z: sampled; w: cube
 } params;
 
 layout(set = 0, binding = 1) readonly buffer Nodes { Node items[]; } nodes;

@@ -114,7 +114,10 @@ impl LightingMethod for Forward {
                     Bind::Sampled { image: scene.environment.map, range: SubresourceRange::mip(0), sampler: self.sky_sampler },
                 )])?;
                 let inverse = glam::Mat4::from_cols_array(&uniforms.view_proj).inverse();
-                ctx.rec.push_constants(bytemuck::bytes_of(&inverse.to_cols_array()))?;
+                let mut push = [0u8; 68];
+                push[..64].copy_from_slice(bytemuck::bytes_of(&inverse.to_cols_array()));
+                push[64..].copy_from_slice(&(scene.environment.cube as u32).to_le_bytes());
+                ctx.rec.push_constants(&push)?;
                 ctx.rec.draw(3, 1)?;
                 ctx.rec.end_rendering();
                 Ok(())

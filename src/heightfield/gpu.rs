@@ -127,6 +127,8 @@ pub enum EnvInput {
     Constant(Vec3),
     /// An equirectangular map (already reduced), RGBA texels, rows from straight up.
     Map { width: u32, height: u32, texels: Vec<[f32; 4]> },
+    /// A cube map (already reduced): six `size`² faces in layer order (as [`crate::scene::CubeFaces`]).
+    Cube { size: u32, texels: Vec<[f32; 4]> },
 }
 
 /// The height field, its lights and environment, as the method takes them from a scene.
@@ -184,6 +186,7 @@ impl FieldInputs {
             None => EnvInput::None,
             Some(Environment::Constant { radiance }) => EnvInput::Constant(*radiance),
             Some(Environment::Image { path, scale }) => load_environment(path, *scale, src)?,
+            Some(Environment::Cube { faces, scale }) => load_cube_environment(faces, *scale, src)?,
         };
         Ok(FieldInputs { object, source: source.clone(), translation, albedo: material.albedo, emission: material.emission, lights, environment })
     }
@@ -213,6 +216,33 @@ fn load_environment(path: &std::path::Path, scale: f32, source: &str) -> Result<
     Ok(EnvInput::Map { width: nw, height: nh, texels })
 }
 
+/// Loads a cube map's faces and box-filters them to at most [`MAX_ENV_WIDTH`]/4 a side (about the
+/// texel count of the largest equirect map; the SH projection needs no more).
+fn load_cube_environment(faces: &[std::path::PathBuf; 6], scale: f32, source: &str) -> Result<EnvInput> {
+    let c = crate::reference::environment::load_cube_faces(faces, scale, source)?;
+    let n = c.size;
+    let f = n.div_ceil(MAX_ENV_WIDTH / 4).max(1);
+    let m = (n / f).max(1);
+    let mut texels = vec![[0.0f32; 4]; (6 * m * m) as usize];
+    for face in 0..6 {
+        for y in 0..m {
+            for x in 0..m {
+                let mut acc = [0.0f32; 4];
+                for sy in 0..f {
+                    for sx in 0..f {
+                        let p = c.texels[(face * n * n + (y * f + sy).min(n - 1) * n + (x * f + sx).min(n - 1)) as usize];
+                        for k in 0..3 {
+                            acc[k] += p[k] / (f * f) as f32;
+                        }
+                    }
+                }
+                texels[(face * m * m + y * m + x) as usize] = acc;
+            }
+        }
+    }
+    Ok(EnvInput::Cube { size: m, texels })
+}
+
 /// Everything one instance of the method keeps on the GPU.
 pub struct HeightfieldGpu {
     pub settings: Settings,
@@ -230,7 +260,9 @@ pub struct HeightfieldGpu {
     image_size: Option<(u32, u32)>,
     decimated: Option<ImageId>,
     pub pyramid: Option<ImageId>,
-    env_map: ImageId,
+    /// The environment map as the SH projection takes it: its layout (equirect or cube) from the
+    /// image itself.
+    env_image: crate::sh::EnvImage,
     env_sh: BufferId,
     env_table: BufferId,
     local_table: BufferId,
@@ -323,8 +355,15 @@ impl HeightfieldGpu {
         };
         let env_map = match &inputs.environment {
             EnvInput::Map { width, height, texels } => texture(gpu, states, "hf environment map", RGBA32F, *width, *height, bytemuck::cast_slice(texels))?,
+            EnvInput::Cube { size, texels } => {
+                let id = gpu.create_image(&ImageDesc::new_cube("hf environment cube", RGBA32F, *size).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+                gpu.upload_image(id, 0, bytemuck::cast_slice(texels))?;
+                states.set_image(gpu, id, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+                id
+            }
             _ => texture(gpu, states, "hf environment map (none)", RGBA32F, 1, 1, bytemuck::cast_slice(&[0.0f32; 4]))?,
         };
+        let env_image = crate::sh::EnvImage::of(gpu, env_map)?;
         let env_sh = gpu.create_buffer(&BufferDesc { name: "hf environment SH".into(), size: 16 * 64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuOnly })?;
         let (nphi, nodes, bands) = (settings.nphi as usize, settings.table_size as usize, settings.bands as usize);
         let table_err = |e: crate::sh::ShError| Error::Usage(format!("wedge table: {e}"));
@@ -373,7 +412,7 @@ impl HeightfieldGpu {
             image_size,
             decimated,
             pyramid: pyramid_img,
-            env_map,
+            env_image,
             env_sh,
             env_table,
             local_table,
@@ -466,9 +505,8 @@ impl HeightfieldGpu {
                     ctx.rec.dispatch([64, 1, 1])
                 });
             }
-            EnvInput::Map { width, height, .. } => {
-                let env = crate::sh::EnvImage { image: self.env_map, layout: crate::sh::EnvLayout::Equirect, width: *width, height: *height };
-                p.env_project.add_passes(graph, "hf environment SH", env, self.settings.bands, self.env_sh)?;
+            EnvInput::Map { .. } | EnvInput::Cube { .. } => {
+                p.env_project.add_passes(graph, "hf environment SH", self.env_image, self.settings.bands, self.env_sh)?;
             }
         }
         if has_env {

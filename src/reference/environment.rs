@@ -6,14 +6,19 @@
 //! Mapping (as [`Environment::equirect_uv`](crate::scene::Environment::equirect_uv)): texel
 //! (i, j) of a W × H map covers u ∈ [i/W, (i+1)/W], v ∈ [j/H, (j+1)/H], with v = θ/π from straight
 //! up; a solid angle is dω = 2π² sin θ du dv.
+//!
+//! A cube map is held the same way, its six `size`² faces stacked top to bottom in layer order
+//! (+X, −X, +Y, −Y, +Z, −Z) as one `size` × 6·`size` map, so that one row/column CDF pair serves
+//! both; its texels are weighted by their exact solid angle, and a texel is sampled uniformly in
+//! face coordinates (s, t), where dω = ds dt / (1 + s² + t²)^{3/2}.
 
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use crate::backend::BackendError;
 use crate::error::{Error, Result};
-use crate::scene::Environment;
+use crate::scene::{CubeFaces, Environment, CUBE_FACE_KEYS};
 
 /// Texel data must fit a storage buffer of the range every Vulkan device supports (2^27 bytes).
 const MAX_TEXELS: usize = (1 << 27) / 16;
@@ -29,6 +34,8 @@ pub struct EnvironmentMap {
     pub cdf: Vec<f32>,
     /// False when the map is black: nothing to sample.
     pub has_power: bool,
+    /// A cube map (faces stacked in layer order, `height` = 6 · `width`), not an equirect one.
+    pub cube: bool,
 }
 
 fn luminance(c: [f32; 4]) -> f64 {
@@ -67,53 +74,92 @@ impl EnvironmentMap {
         Ok(EnvironmentMap::from_texels(width, height, texels))
     }
 
+    /// Loads a cube environment's six faces (see [`CubeFaces::load`]), multiplied by `scale`.
+    pub fn load_cube(faces: &[std::path::PathBuf; 6], scale: f32, source: &str) -> Result<EnvironmentMap> {
+        let c = load_cube_faces(faces, scale, source)?;
+        if 6 * (c.size as usize).pow(2) > MAX_TEXELS {
+            return Err(Error::Backend(BackendError::Unsupported(format!(
+                "{source}: environment: six {0}x{0} cube faces are more than the {MAX_TEXELS} texels the reference renderer can upload",
+                c.size
+            ))));
+        }
+        Ok(EnvironmentMap::from_cube(c.size, c.texels))
+    }
+
     pub fn from_texels(width: u32, height: u32, texels: Vec<[f32; 4]>) -> EnvironmentMap {
+        let h = height as f64;
+        EnvironmentMap::build(width, height, texels, false, |_, j| (std::f64::consts::PI * (j as f64 + 0.5) / h).sin())
+    }
+
+    /// A cube map from its six `size`² faces in layer order (as [`CubeFaces::texels`]).
+    pub fn from_cube(size: u32, texels: Vec<[f32; 4]>) -> EnvironmentMap {
+        let n = size as usize;
+        EnvironmentMap::build(size, 6 * size, texels, true, |i, j| crate::sh::cube_texel_solid_angle(i, j % n, n))
+    }
+
+    /// The CDFs of texel luminance × `solid_angle(i, j)` (anything proportional to it).
+    fn build(width: u32, height: u32, texels: Vec<[f32; 4]>, cube: bool, solid_angle: impl Fn(usize, usize) -> f64) -> EnvironmentMap {
         let (w, h) = (width as usize, height as usize);
         let mut rows = Vec::with_capacity(h);
         let mut columns = Vec::with_capacity(h * (w + 1));
         for j in 0..h {
-            let sin_theta = (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin();
-            let weights: Vec<f64> = texels[j * w..(j + 1) * w].iter().map(|&t| luminance(t).max(0.0) * sin_theta).collect();
+            let weights: Vec<f64> = texels[j * w..(j + 1) * w].iter().enumerate().map(|(i, &t)| luminance(t).max(0.0) * solid_angle(i, j)).collect();
             rows.push(weights.iter().sum::<f64>());
             columns.extend(cdf_of(&weights));
         }
         let has_power = rows.iter().sum::<f64>() > 0.0;
         let mut cdf = cdf_of(&rows);
         cdf.extend(columns);
-        EnvironmentMap { width, height, texels, cdf, has_power }
+        EnvironmentMap { width, height, texels, cdf, has_power, cube }
     }
 
-    fn texel_at(&self, uv: Vec2) -> (usize, usize) {
-        let i = ((uv.x * self.width as f32) as usize).min(self.width as usize - 1);
-        let j = ((uv.y * self.height as f32) as usize).min(self.height as usize - 1);
-        (i, j)
+    /// The texel `dir` falls in, as (column, row) of the stored map, and the density (per unit
+    /// solid angle) that sampling uniformly within that texel's parameter rectangle gives `dir`
+    /// per unit of the texel's probability.
+    fn texel_of(&self, dir: Vec3) -> ((usize, usize), f32) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        if self.cube {
+            let (face, s, t) = Environment::cube_face(dir);
+            let cell = |c: f32| (((c + 1.0) * 0.5 * w as f32) as usize).min(w - 1);
+            // A texel spans (2/w)² of (s, t); dω/ds dt = (1 + s² + t²)^(-3/2).
+            let density = (w * w) as f32 / 4.0 * (1.0 + s * s + t * t).powf(1.5);
+            ((cell(s), face * w + cell(t)), density)
+        } else {
+            let uv = Environment::equirect_uv(dir);
+            let i = ((uv.x * self.width as f32) as usize).min(w - 1);
+            let j = ((uv.y * self.height as f32) as usize).min(h - 1);
+            let sin_theta = (uv.y * std::f32::consts::PI).sin();
+            let density = if sin_theta > 0.0 { (w * h) as f32 / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_theta) } else { 0.0 };
+            ((i, j), density)
+        }
     }
 
     /// Radiance arriving from direction `dir` (the same nearest lookup as the shader).
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
-        let (i, j) = self.texel_at(Environment::equirect_uv(dir));
+        let ((i, j), _) = self.texel_of(dir);
         let t = self.texels[j * self.width as usize + i];
         Vec3::new(t[0], t[1], t[2])
     }
 
     /// Solid-angle density with which the shader samples `dir`.
     pub fn pdf(&self, dir: Vec3) -> f32 {
-        let uv = Environment::equirect_uv(dir);
-        let (i, j) = self.texel_at(uv);
+        let ((i, j), density) = self.texel_of(dir);
         let (w, h) = (self.width as usize, self.height as usize);
         let row = self.cdf[j + 1] - self.cdf[j];
         let col = &self.cdf[h + 1 + j * (w + 1)..];
-        let sin_theta = (uv.y * std::f32::consts::PI).sin();
-        if sin_theta <= 0.0 {
-            return 0.0;
-        }
-        row * (col[i + 1] - col[i]) * (w * h) as f32 / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_theta)
+        row * (col[i + 1] - col[i]) * density
     }
+}
+
+/// [`CubeFaces::load`] with its error as the renderer reports it: the scene file and the face's key.
+pub fn load_cube_faces(faces: &[std::path::PathBuf; 6], scale: f32, source: &str) -> Result<CubeFaces> {
+    CubeFaces::load(faces, scale).map_err(|(k, msg)| Error::Usage(format!("{source}: environment.{}: {msg}", CUBE_FACE_KEYS[k])))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
 
     fn map() -> EnvironmentMap {
         let (w, h) = (16, 8);
@@ -155,5 +201,49 @@ mod tests {
         let dim = Environment::equirect_dir(Vec2::new(6.5 / 16.0, 2.5 / 8.0));
         assert!(m.pdf(bright) > 50.0 * m.pdf(dim));
         assert_eq!(m.radiance(bright).x, 50.0);
+    }
+
+    /// Six 6² faces: face k is k + 1 everywhere but one bright texel on −Z.
+    fn cube() -> EnvironmentMap {
+        let n = 6;
+        let texels = (0..6 * n * n).map(|k| {
+            let v = if k == 5 * n * n + 2 * n + 4 { 40.0 } else { (k / (n * n)) as f32 + 1.0 };
+            [v, v, v, 0.0]
+        });
+        EnvironmentMap::from_cube(n as u32, texels.collect())
+    }
+
+    #[test]
+    fn cube_pdf_integrates_to_one_and_follows_the_texels() {
+        let m = cube();
+        assert_eq!((m.width, m.height, m.cdf.len()), (6, 36, 37 + 36 * 7));
+        // Quadrature over the sphere in equirect cells (the pdf is piecewise smooth).
+        let n = 600;
+        let mut sum = 0.0f64;
+        for a in 0..n {
+            for b in 0..2 * n {
+                let uv = Vec2::new((b as f32 + 0.5) / (2 * n) as f32, (a as f32 + 0.5) / n as f32);
+                let d_omega = 2.0 * std::f64::consts::PI.powi(2) * (uv.y as f64 * std::f64::consts::PI).sin() / (2 * n * n) as f64;
+                sum += m.pdf(Environment::equirect_dir(uv)) as f64 * d_omega;
+            }
+        }
+        assert!((sum - 1.0).abs() < 2e-3, "{sum}");
+        // Radiance is face k + 1 along each axis; the bright texel is -Z's (4, 2).
+        let axes = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
+        for (k, a) in axes.into_iter().enumerate() {
+            assert_eq!(m.radiance(a + Vec3::splat(0.01)).x, k as f32 + 1.0, "{a}");
+        }
+        let bright = Environment::cube_dir(5, 2.0 * 4.5 / 6.0 - 1.0, 2.0 * 2.5 / 6.0 - 1.0).normalize();
+        assert_eq!(m.radiance(bright).x, 40.0);
+        // A constant map picks texels by solid angle, so at texel centres the density is close
+        // to uniform 1/4π (not exactly: within a texel, sampling is uniform in (s, t)).
+        let n = 16;
+        let flat = EnvironmentMap::from_cube(n as u32, vec![[1.0, 1.0, 1.0, 0.0]; 6 * n * n]);
+        let mut worst = 0.0f32;
+        for (face, x, y) in [(2, 0, 0), (0, 7, 8), (5, 15, 3), (3, 15, 15)] {
+            let p = flat.pdf(crate::sh::cube_texel_dir_world(face, x, y, n).normalize()) * 4.0 * std::f32::consts::PI;
+            worst = worst.max((p - 1.0).abs());
+        }
+        assert!(worst < 0.01, "{worst}");
     }
 }

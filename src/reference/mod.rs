@@ -210,7 +210,7 @@ impl ReferenceRenderer {
             environment: traced.environment.extend(0.0).into(),
             counts: [traced.lights.len() as u32, traced.triangles.len() as u32, width, height],
             environment_map: match &traced.environment_map {
-                Some(m) => [m.width, m.height, m.has_power as u32, 0],
+                Some(m) => [m.width, m.height, m.has_power as u32, m.cube as u32],
                 None => [0; 4],
             },
         };

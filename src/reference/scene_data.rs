@@ -138,6 +138,7 @@ impl TracedScene {
             None => (Vec3::ZERO, None),
             Some(Environment::Constant { radiance }) => (*radiance, None),
             Some(Environment::Image { path, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load(path, *scale, src)?)),
+            Some(Environment::Cube { faces, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load_cube(faces, *scale, src)?)),
         };
         let mut textures = Vec::new();
         let mut loaded: Vec<(std::path::PathBuf, bool)> = Vec::new();

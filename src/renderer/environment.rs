@@ -1,6 +1,8 @@
 //! The scene's environment for the raster methods: its irradiance as 3-band SH (exact for a
 //! constant sky, Ramamoorthi–Hanrahan's approximation for a map; no visibility), and the map
-//! itself for the sky seen behind the geometry (nearest texel, as the reference looks it up).
+//! itself for the sky seen behind the geometry (nearest texel, as the reference looks it up). A
+//! cube map is uploaded as the reference holds it, its faces stacked into one 2D image
+//! (`glsl/common/cube.glsl`), so the sky pass keeps one binding for both layouts.
 
 use glam::Vec3;
 
@@ -13,14 +15,18 @@ use crate::scene::{Environment, Scene};
 pub struct EnvironmentLighting {
     /// Irradiance E(n) = Σ c_i·Y_i(n) in the SH frame (`sh::world_to_sh`), RGB in xyz.
     pub irradiance_sh: [[f32; 4]; 9],
-    /// RGBA32F equirectangular radiance (1×1 for a constant sky, black without environment).
+    /// RGBA32F equirectangular radiance (1×1 for a constant sky, black without environment), or
+    /// a cube map's faces stacked top to bottom in layer order.
     pub map: ImageId,
+    /// `map` is a stacked cube map.
+    pub cube: bool,
 }
 
 /// The environment as texels: a map, a 1×1 constant, or black.
 fn texels(scene: &Scene) -> Result<EnvironmentMap> {
     Ok(match &scene.environment {
         Some(Environment::Image { path, scale }) => EnvironmentMap::load(path, *scale, &scene.source)?,
+        Some(Environment::Cube { faces, scale }) => EnvironmentMap::load_cube(faces, *scale, &scene.source)?,
         Some(Environment::Constant { radiance }) => EnvironmentMap::from_texels(1, 1, vec![radiance.extend(0.0).into()]),
         None => EnvironmentMap::from_texels(1, 1, vec![[0.0; 4]]),
     })
@@ -38,11 +44,15 @@ pub fn constant_irradiance_sh(l: Vec3) -> Result<[[f32; 4]; 9]> {
     Ok(out)
 }
 
-/// Irradiance SH of an equirect radiance map (exact texel solid angles, 3 bands).
+/// Irradiance SH of an equirect or cube radiance map (exact texel solid angles, 3 bands).
 pub fn irradiance_sh(map: &EnvironmentMap) -> Result<[[f32; 4]; 9]> {
     let pixels: Vec<[f32; 3]> = map.texels.iter().map(|t| [t[0], t[1], t[2]]).collect();
     let sh_err = |e: crate::sh::ShError| Error::Usage(format!("environment SH projection: {e}"));
-    let radiance = crate::sh::project_equirect(&pixels, map.width as usize, map.height as usize, 3).map_err(sh_err)?;
+    let radiance = if map.cube {
+        crate::sh::project_cubemap(&pixels, map.width as usize, 3).map_err(sh_err)?
+    } else {
+        crate::sh::project_equirect(&pixels, map.width as usize, map.height as usize, 3).map_err(sh_err)?
+    };
     let e: Vec<Vec3> = crate::sh::irradiance(&radiance).map_err(sh_err)?;
     let mut out = [[0.0; 4]; 9];
     for (o, c) in out.iter_mut().zip(e) {
@@ -57,7 +67,7 @@ impl EnvironmentLighting {
         let irradiance_sh = match &scene.environment {
             // Exact: a constant is band 0 alone (∫Y00 = √(4π)), and one texel is no quadrature.
             Some(Environment::Constant { radiance }) => constant_irradiance_sh(*radiance)?,
-            Some(Environment::Image { .. }) => irradiance_sh(&map)?,
+            Some(Environment::Image { .. } | Environment::Cube { .. }) => irradiance_sh(&map)?,
             None => [[0.0; 4]; 9],
         };
         let image = gpu.create_image(
@@ -66,7 +76,7 @@ impl EnvironmentLighting {
         )?;
         gpu.upload_image(image, 0, bytemuck::cast_slice(&map.texels))?;
         states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        Ok(EnvironmentLighting { irradiance_sh, map: image })
+        Ok(EnvironmentLighting { irradiance_sh, map: image, cube: map.cube })
     }
 }
 

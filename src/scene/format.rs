@@ -1,7 +1,7 @@
 //! The scene file format (documented in `scenes/README.md`): reads the spanned TOML tree into a
 //! checked [`Scene`].
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
@@ -10,7 +10,7 @@ use super::doc::{Ctx, Field, Table};
 use super::error::SceneError;
 use super::generators;
 use super::methods::{self, MethodDecl};
-use super::types::{Animation, Camera, Environment, Light, Material, MeshSource, Object};
+use super::types::{Animation, Camera, CubeFaces, Environment, Light, Material, MeshSource, Object, CUBE_FACE_KEYS};
 use super::world_mesh::{self, WorldLevel};
 use crate::world::level_gen::RoomsParams;
 use super::Scene;
@@ -597,8 +597,8 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
 fn read_environment(f: &Field) -> Result<Environment, SceneError> {
     let t = f.table()?;
     let Some(kind_f) = t.get("type") else {
-        t.allow(&["type", "radiance", "path", "scale"])?;
-        return Err(t.missing("type", "constant or image"));
+        t.allow(&["type", "radiance", "path", "scale", "px", "nx", "py", "ny", "pz", "nz"])?;
+        return Err(t.missing("type", "constant, image or cube"));
     };
     match kind_f.string()? {
         "constant" => {
@@ -618,8 +618,26 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
                 scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
             })
         }
+        "cube" => {
+            let mut keys = vec!["type", "scale"];
+            keys.extend(CUBE_FACE_KEYS);
+            t.allow(&keys)?;
+            let mut fields = Vec::with_capacity(6);
+            for key in CUBE_FACE_KEYS {
+                let f = t.require(key, "a square .hdr or .exr cube face")?;
+                fields.push((f.existing_file()?, f));
+            }
+            let faces: [PathBuf; 6] = std::array::from_fn(|k| fields[k].0.clone());
+            // Load the faces now, so that a bad one is an error here, with its line, and not a
+            // surprise for whichever method reads it first.
+            CubeFaces::load(&faces, 1.0).map_err(|(k, msg)| fields[k].1.err(msg))?;
+            Ok(Environment::Cube {
+                faces,
+                scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
+            })
+        }
         other => Err(kind_f.err(format!(
-            "unknown environment type {other:?}; expected constant or image"
+            "unknown environment type {other:?}; expected constant, image or cube"
         ))),
     }
 }

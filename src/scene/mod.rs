@@ -35,7 +35,7 @@ pub use heightfield::{HeightImage, HeightShape, HeightfieldSource};
 pub use mesh::Mesh;
 pub use methods::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
 pub use obj::load_obj;
-pub use types::{Animation, Camera, Environment, Light, Material, MeshSource, Object};
+pub use types::{Animation, Camera, CubeFaces, Environment, Light, Material, MeshSource, Object, CUBE_FACE_KEYS};
 
 /// The name a scene is known by in error messages: the path it was read from, or
 /// [`DEFAULT_SOURCE`].

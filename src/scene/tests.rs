@@ -548,3 +548,66 @@ fn readme_examples_parse() {
         );
     }
 }
+
+/// Writes six `size`² EXR faces into `dir` (face k filled with k + 1, or `bad` at texel 0 of
+/// face `bad_face`) and returns the `[environment]` table that names them, from line 4.
+fn cube_env(dir: &Path, sizes: [(u32, u32); 6], poison: Option<(usize, f32)>) -> String {
+    let mut text = format!("{CAM}[environment]\ntype = \"cube\"\nscale = 2\n");
+    for (k, key) in CUBE_FACE_KEYS.into_iter().enumerate() {
+        let (w, h) = sizes[k];
+        let mut img = crate::image_io::HdrImage::new(w, h);
+        for p in &mut img.pixels {
+            *p = [k as f32 + 1.0, 0.5, 0.25, 1.0];
+        }
+        if let Some((face, v)) = poison {
+            if face == k {
+                img.pixels[w as usize + 1][1] = v;
+            }
+        }
+        let name = format!("{key}.exr");
+        img.write_exr(&dir.join(&name)).unwrap();
+        text += &format!("{key} = \"{name}\"\n");
+    }
+    text
+}
+
+#[test]
+fn cube_environment_loads_six_faces_in_layer_order() {
+    let dir = temp_dir("cube-ok");
+    let text = cube_env(&dir, [(4, 4); 6], None);
+    let s = Scene::from_str(&text, "cube.toml", &dir).unwrap();
+    let Some(Environment::Cube { faces, scale }) = &s.environment else { panic!("{:?}", s.environment) };
+    assert_eq!(*scale, 2.0);
+    let c = CubeFaces::load(faces, *scale).unwrap();
+    assert_eq!((c.size, c.texels.len()), (4, 96));
+    for k in 0..6 {
+        assert_eq!(c.texels[16 * k + 5], [2.0 * (k as f32 + 1.0), 1.0, 0.5, 0.0]);
+    }
+}
+
+#[test]
+fn bad_cube_faces_name_the_file_line_and_face() {
+    let dir = temp_dir("cube-bad");
+    let parse_in = |text: &str| Scene::from_str(text, "bad.toml", &dir).expect_err("scene should be rejected");
+    let check = |e: SceneError, line: usize, field: &str, says: &str| {
+        assert_eq!((e.file.as_str(), e.line, e.field.as_str()), ("bad.toml", Some(line), field), "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+        assert!(!e.to_string().contains('\n'), "error spans lines: {e}");
+    };
+    // Lines: 4 [environment], 5 type, 6 scale, 7 px, 8 nx, 9 py, 10 ny, 11 pz, 12 nz.
+    let mut sizes = [(4, 4); 6];
+    sizes[3] = (4, 3);
+    check(parse_in(&cube_env(&dir, sizes, None)), 10, "environment.ny", "ny.exr: a cube face must be square");
+    let mut sizes = [(4, 4); 6];
+    sizes[4] = (8, 8);
+    check(parse_in(&cube_env(&dir, sizes, None)), 11, "environment.pz", "pz.exr: is 8x8 but px is 4x4");
+    check(parse_in(&cube_env(&dir, [(4, 4); 6], Some((1, f32::NAN)))), 8, "environment.nx", "nx.exr: texel (1, 1) is not finite");
+    check(parse_in(&cube_env(&dir, [(4, 4); 6], Some((5, f32::INFINITY)))), 12, "environment.nz", "texel (1, 1) is not finite");
+    let good = cube_env(&dir, [(4, 4); 6], None);
+    check(parse_in(&good.replace("py.exr", "missing.exr")), 9, "environment.py", "file not found: missing.exr");
+    std::fs::write(dir.join("garbage.exr"), b"not an image").unwrap();
+    check(parse_in(&good.replace("ny.exr", "garbage.exr")), 10, "environment.ny", "garbage.exr: cannot load");
+    check(parse_in(&good.replace("pz = \"pz.exr\"\n", "")), 4, "environment.pz", "");
+    check(parse_in(&good.replace("scale = 2", "scale = -1")), 6, "environment.scale", "");
+    check(parse_in(&good.replace("type = \"cube\"", "type = \"cubes\"")), 5, "environment.type", "expected constant, image or cube");
+}

@@ -260,6 +260,52 @@ pub enum Environment {
     /// An equirectangular (latitude-longitude) `.hdr`/`.exr` image of radiance, multiplied by
     /// `scale`. See [`Environment::equirect_uv`] for the mapping.
     Image { path: PathBuf, scale: f32 },
+    /// A cube map: six square radiance images of one size, in Vulkan's layer order
+    /// (+X, −X, +Y, −Y, +Z, −Z; the scene keys [`CUBE_FACE_KEYS`]), multiplied by `scale`. See
+    /// [`Environment::cube_dir`] for the orientation of each face.
+    Cube { faces: [PathBuf; 6], scale: f32 },
+}
+
+/// The scene keys of a cube environment's faces, in Vulkan's layer order.
+pub const CUBE_FACE_KEYS: [&str; 6] = ["px", "nx", "py", "ny", "pz", "nz"];
+
+/// A cube environment's faces as loaded: `size`² texels per face, the six faces one after the
+/// other in layer order, each row-major from its top row; RGB radiance times `scale`, alpha 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CubeFaces {
+    pub size: u32,
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl CubeFaces {
+    /// Loads and checks the six faces: each must open, be square, have face 0's size and hold
+    /// finite texels. An error names the face (its index in layer order) and says why in one line.
+    pub fn load(faces: &[PathBuf; 6], scale: f32) -> Result<CubeFaces, (usize, String)> {
+        let mut size = 0;
+        let mut texels = Vec::new();
+        for (k, path) in faces.iter().enumerate() {
+            let img = image::open(path)
+                .map_err(|e| (k, format!("{}: cannot load: {e}", path.display())))?
+                .to_rgba32f();
+            let (w, h) = img.dimensions();
+            if w != h || w == 0 {
+                return Err((k, format!("{}: a cube face must be square and non-empty, this one is {w}x{h}", path.display())));
+            }
+            if k == 0 {
+                size = w;
+            } else if w != size {
+                return Err((k, format!("{}: is {w}x{w} but {} is {size}x{size}; all six faces must have one size", path.display(), CUBE_FACE_KEYS[0])));
+            }
+            for (i, p) in img.pixels().enumerate() {
+                if !p.0[..3].iter().all(|c| c.is_finite()) {
+                    let (x, y) = (i as u32 % w, i as u32 / w);
+                    return Err((k, format!("{}: texel ({x}, {y}) is not finite: {:?}", path.display(), &p.0[..3])));
+                }
+                texels.push([p.0[0] * scale, p.0[1] * scale, p.0[2] * scale, 0.0]);
+            }
+        }
+        Ok(CubeFaces { size, texels })
+    }
 }
 
 impl Environment {
@@ -282,6 +328,41 @@ impl Environment {
             theta.cos(),
             -theta.sin() * phi.cos(),
         )
+    }
+
+    /// The (un-normalised) world direction through face coordinates (s, t) ∈ [−1, 1]² of cube
+    /// face `face` (layer order +X, −X, +Y, −Y, +Z, −Z; clamped to 5). s runs with the face
+    /// image's columns (u = (s + 1)/2, left to right), t with its rows (v = (t + 1)/2, top to
+    /// bottom). This is the Vulkan spec's cube face selection table read backwards, so a
+    /// `samplerCube` and [`crate::sh::cube_texel_dir_world`] agree with it.
+    pub fn cube_dir(face: usize, s: f32, t: f32) -> Vec3 {
+        match face.min(5) {
+            0 => Vec3::new(1.0, -t, -s),
+            1 => Vec3::new(-1.0, -t, s),
+            2 => Vec3::new(s, 1.0, t),
+            3 => Vec3::new(s, -1.0, -t),
+            4 => Vec3::new(s, -t, 1.0),
+            _ => Vec3::new(-s, -t, -1.0),
+        }
+    }
+
+    /// Inverse of [`Environment::cube_dir`]: the face `dir` selects (the largest |component|;
+    /// ties go to x, then y) and its face coordinates (s, t) ∈ [−1, 1]².
+    pub fn cube_face(dir: Vec3) -> (usize, f32, f32) {
+        let a = dir.abs();
+        let (face, ma, sc, tc) = if a.x >= a.y && a.x >= a.z {
+            if dir.x >= 0.0 { (0, a.x, -dir.z, -dir.y) } else { (1, a.x, dir.z, -dir.y) }
+        } else if a.y >= a.z {
+            if dir.y >= 0.0 { (2, a.y, dir.x, dir.z) } else { (3, a.y, dir.x, -dir.z) }
+        } else if dir.z >= 0.0 {
+            (4, a.z, dir.x, -dir.y)
+        } else {
+            (5, a.z, -dir.x, -dir.y)
+        };
+        if ma <= 0.0 {
+            return (5, 0.0, 0.0);
+        }
+        (face, sc / ma, tc / ma)
     }
 }
 
@@ -363,5 +444,26 @@ mod tests {
             let back = Environment::equirect_dir(Environment::equirect_uv(d));
             assert!((back - d).length() < 1e-5, "{d} -> {back}");
         }
+    }
+
+    #[test]
+    fn cube_faces_round_trip_and_match_the_sh_cores_texel_directions() {
+        // Every face's centre is its axis, and (face, s, t) -> dir -> (face, s, t) is the identity.
+        let axes = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
+        for (face, axis) in axes.into_iter().enumerate() {
+            assert_eq!(Environment::cube_dir(face, 0.0, 0.0), axis);
+            for (s, t) in [(-0.9, 0.3), (0.5, -0.7), (0.99, 0.99)] {
+                let (f, s2, t2) = Environment::cube_face(Environment::cube_dir(face, s, t).normalize());
+                assert_eq!(f, face);
+                assert!((s2 - s).abs() < 1e-5 && (t2 - t).abs() < 1e-5, "{face}: ({s}, {t}) -> ({s2}, {t2})");
+            }
+            let n = 8;
+            for (x, y) in [(0, 0), (3, 6), (7, 7)] {
+                let (s, t) = (2.0 * (x as f32 + 0.5) / n as f32 - 1.0, 2.0 * (y as f32 + 0.5) / n as f32 - 1.0);
+                assert_eq!(Environment::cube_dir(face, s, t), crate::sh::cube_texel_dir_world(face, x, y, n));
+            }
+        }
+        // The +Y face's top row (t = -1) lies toward -z, its left column (s = -1) toward -x.
+        assert!(Environment::cube_dir(2, 0.0, -1.0).z < 0.0 && Environment::cube_dir(2, -1.0, 0.0).x < 0.0);
     }
 }
