@@ -275,3 +275,43 @@ fn heightfield_cube_and_equirect_skies_shade_alike() {
     assert!(worst <= 1.0, "{worst}");
     assert!(hi - lo > 0.1, "shading barely varies: {lo}..{hi}");
 }
+
+/// scenes/terrain_sky_cube.toml (the sky of tools/make_sky.py on six 32² faces) shades the
+/// mountains as scenes/terrain_sky.toml (the same sky, 128×64 equirect) does, within the same SH
+/// bound as above computed from the two scenes' own texels (which include each file's RGBE
+/// rounding); pyramid method, 4 bands, at 64².
+#[test]
+fn terrain_sky_cube_scene_matches_terrain_sky() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let (cube, equirect) = (Scene::from_file(dir.join("terrain_sky_cube.toml")).unwrap(), Scene::from_file(dir.join("terrain_sky.toml")).unwrap());
+    let Some(Environment::Cube { faces, scale }) = &cube.environment else { panic!("{:?}", cube.environment) };
+    let Some(Environment::Image { path, .. }) = &equirect.environment else { panic!("{:?}", equirect.environment) };
+    let faces = penumbra::scene::CubeFaces::load(faces, *scale).unwrap();
+    let rgb = |t: &[[f32; 4]]| t.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
+    let c_cube = sh::project_cubemap(&rgb(&faces.texels), faces.size as usize, 4).unwrap();
+    let eq = EnvironmentMap::load(path, 1.0, "terrain_sky.toml").unwrap();
+    let c_eq = sh::project_equirect(&rgb(&eq.texels), eq.width as usize, eq.height as usize, 4).unwrap();
+    let dc: Vec3 = c_cube.iter().zip(&c_eq).map(|(a, b)| (*a - *b) * (*a - *b)).sum::<Vec3>().powf(0.5);
+    let t_norm = (2.0 * std::f32::consts::PI / 3.0).sqrt() / std::f32::consts::PI;
+    let shade = |s: &Scene| {
+        let mut decl = s.methods[0].clone();
+        decl.params.push(("resolution".into(), toml::Value::Integer(64), 0));
+        decl.params.push(("bands".into(), toml::Value::Integer(4), 0));
+        let mut h = penumbra::heightfield::standalone::Standalone::new(common::test_gpu(), s, &decl).unwrap();
+        let img = h.shading(0.0).unwrap();
+        hf_common::clean(&h);
+        img
+    };
+    let (a, b) = (shade(&cube), shade(&equirect));
+    let mut worst = 0.0f32;
+    for (p, q) in a.iter().zip(&b) {
+        for c in 0..3 {
+            worst = worst.max((p[c] - q[c]).abs() / (t_norm * dc[c] + 1e-5 * q[c].abs().max(1.0)));
+        }
+    }
+    let c00 = c_eq[0];
+    eprintln!("terrain sky: |c_cube - c_equirect| = {dc} (c_00 {c00}), worst |cube - equirect| {worst:.3} of the bound");
+    assert!(worst <= 1.0, "{worst}");
+    // The bound is tight enough to mean something: a few per cent of the sky's mean.
+    assert!((dc / c00).max_element() < 0.05, "{dc} vs {c00}");
+}
