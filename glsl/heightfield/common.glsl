@@ -24,6 +24,7 @@ layout(set = 0, binding = 0) uniform HfParams {
     vec4 horizon;          // x: level offset lo, y: ln(s_r), z: march step (texels), w: march limit (texels, 0 = field)
     vec4 light_pos;        // xyz: sphere centre (world), w: radius (m)
     vec4 light_radiance;   // rgb: sphere radiance, w: world y of height 0 (the field's translation)
+    vec4 window[2];        // the transfer window's factor per band, bands 0-7 (1: none)
     vec4 dirs[HF_MAX_NPHI];          // x: cos phi, y: sin phi (SH frame)
     vec4 rot[HF_MAX_NPHI * 3];       // (cos m phi, sin m phi), m = 1..5, packed two per vec4
     vec4 samples[HF_MAX_LEVELS];     // x: distance d_i (texels), y: 1 / d_i, z: pyramid level of sample i

@@ -60,6 +60,11 @@ void main() {
     hf_transfer_cosine(hf_normal_sh(p));
     hf_product();
     int nc = params.dims.w * params.dims.w;
+    // The optional window on the transfer's bands (factors of 1 without one).
+    for (int l = 0; l < params.dims.w; ++l) {
+        float f = params.window[l / 4][l % 4];
+        for (int k = l * l; k < (l + 1) * (l + 1); ++k) hf_t[k] *= f;
+    }
     vec3 rgb = vec3(0.0);
 #ifdef HF_LIGHT
     // The sphere seen from the receiver: a cap of half-angle asin(r / d), d the 3D distance to

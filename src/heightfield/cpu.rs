@@ -154,7 +154,13 @@ pub fn transfer_cosine(n: DVec3, bands: usize) -> ShResult<Vec<f64>> {
 
 /// ∫ L V C as the SH pipeline computes it: T = V • C (truncated product), then L · T.
 pub fn shade(vis: &[f64], cosine: &[f64], light: &[f64], bands: usize) -> ShResult<f64> {
-    let t = sh::TripleProductTensor::shared(bands)?.product(vis, cosine, bands)?;
+    shade_windowed(vis, cosine, light, bands, &vec![1.0; bands])
+}
+
+/// [`shade`] with the transfer's bands scaled by `window` (the methods' `window` setting).
+pub fn shade_windowed(vis: &[f64], cosine: &[f64], light: &[f64], bands: usize, window: &[f64]) -> ShResult<f64> {
+    let mut t = sh::TripleProductTensor::shared(bands)?.product(vis, cosine, bands)?;
+    sh::apply_window(&mut t, window)?;
     Ok(t.iter().zip(light).map(|(a, b)| a * b).sum())
 }
 
@@ -171,12 +177,14 @@ pub fn sphere_light(dir: DVec3, sin_half_angle: f64, bands: usize) -> ShResult<V
     sh::zh_rotate(&zh, dir.normalize_or(DVec3::Z).as_vec3())
 }
 
-/// Shading (ρ = 1) of one receiver from horizons through the settings' table and lookup mode.
+/// Shading (ρ = 1) of one receiver from horizons through the settings' table, lookup mode and
+/// window.
 pub fn shade_horizons(horizons: &[f64], kind: TableKind, settings: &Settings, normal: DVec3, light: &[f64]) -> ShResult<f64> {
     let bands = settings.bands as usize;
     let table = WedgeTable::shared(kind, horizons.len(), settings.table_size as usize, bands)?;
     let v = wedge::visibility(horizons, WedgeSource::Table(&table, settings.mode == Mode::Corrected), bands)?;
-    shade(&v, &transfer_cosine(normal, bands)?, light, bands)
+    let window: Vec<f64> = settings.window_factors().iter().map(|&f| f as f64).collect();
+    shade_windowed(&v, &transfer_cosine(normal, bands)?, light, bands, &window)
 }
 
 /// The exact irradiance factor of an unoccluded sphere light on a receiver with normal +z:

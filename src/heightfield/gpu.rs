@@ -75,6 +75,8 @@ pub struct PassParams {
     pub horizon: [f32; 4],
     pub light_pos: [f32; 4],
     pub light_radiance: [f32; 4],
+    /// The transfer window's factor per band, bands 0–7.
+    pub window: [[f32; 4]; 2],
     pub dirs: Vec<[f32; 4]>,
     pub rot: Vec<[f32; 4]>,
     pub samples: Vec<[f32; 4]>,
@@ -85,7 +87,7 @@ impl PassParams {
         let mut out = Vec::with_capacity(16 * (6 + MAX_NPHI as usize * 4 + MAX_LEVELS as usize));
         out.extend_from_slice(bytemuck::cast_slice(&self.dims));
         out.extend_from_slice(bytemuck::cast_slice(&self.cfg));
-        for v in [self.grid, self.horizon, self.light_pos, self.light_radiance] {
+        for v in [self.grid, self.horizon, self.light_pos, self.light_radiance, self.window[0], self.window[1]] {
             out.extend_from_slice(bytemuck::cast_slice(&v));
         }
         let mut push = |v: &[[f32; 4]], n: usize| {
@@ -462,6 +464,10 @@ impl HeightfieldGpu {
             Some(l) => (l.center.extend(l.radius).into(), l.radiance.extend(base).into()),
             None => ([0.0; 4], [0.0, 0.0, 0.0, base]),
         };
+        let mut window = [[1.0f32; 4]; 2];
+        for (l, f) in s.window_factors().into_iter().enumerate().take(8) {
+            window[l / 4][l % 4] = f;
+        }
         PassParams {
             dims: [self.res as i32, self.levels as i32, s.nphi as i32, s.bands as i32],
             cfg: [s.table_size as i32, (s.mode == Mode::Corrected) as i32, self.product_count as i32, s.ls as i32],
@@ -469,6 +475,7 @@ impl HeightfieldGpu {
             horizon: [s.lo, std::f32::consts::LN_2 / s.ls as f32, s.march_step, s.max_distance],
             light_pos,
             light_radiance,
+            window,
             dirs,
             rot,
             samples,

@@ -45,7 +45,7 @@ use crate::renderer::{DrawPush, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::shaders::ShaderLibrary;
 pub use gpu::{FieldInputs, HeightfieldGpu, SphereLight};
-pub use settings::{Decimation, Horizon, Mode, Settings};
+pub use settings::{Decimation, Horizon, Mode, Settings, Window};
 
 pub const PYRAMID: &str = "heightfield_pyramid";
 pub const BRUTE_FORCE: &str = "heightfield_bruteforce";
@@ -74,8 +74,9 @@ fn push_unique(out: &mut Vec<(String, MethodDecl)>, decl: MethodDecl, horizon: H
 }
 
 /// The pyramid's sweep, one parameter at a time from the scene's declaration: nφ ∈ {4, 8, 16,
-/// 32}, ls ∈ {1, 2, 3, 4}, lo ∈ {0, 2, 4}, bands ∈ {2, 3, 4}, and the faithful and corrected
-/// modes (issue: chart sweep; thesis Tables 6.1–6.2 and Fig. 6.1–6.2).
+/// 32}, ls ∈ {1, 2, 3, 4}, lo ∈ {0, 2, 4}, bands ∈ {2, 3, 4}, the faithful and corrected
+/// modes (issue: chart sweep; thesis Tables 6.1–6.2 and Fig. 6.1–6.2), and a Hanning window on
+/// the transfer (not in the thesis: the digest's remedy for ringing).
 pub fn pyramid_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out = Vec::new();
     push_unique(&mut out, decl.clone(), Horizon::Pyramid);
@@ -94,6 +95,7 @@ pub fn pyramid_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     for m in ["faithful", "corrected"] {
         push_unique(&mut out, with(decl, "mode", m.into()), Horizon::Pyramid);
     }
+    push_unique(&mut out, with(decl, "window", "hanning".into()), Horizon::Pyramid);
     out
 }
 
@@ -282,7 +284,16 @@ mod tests {
         for want in ["pyramid nphi=4 ls=4 lo=4 bands=4 corrected", "pyramid nphi=32 ls=1 lo=4 bands=4 corrected", "pyramid nphi=32 ls=4 lo=0 bands=4 corrected", "pyramid nphi=32 ls=4 lo=4 bands=2 corrected", "pyramid nphi=32 ls=4 lo=4 bands=4 faithful"] {
             assert!(sweep.iter().any(|l| l == want), "{want} missing from {sweep:?}");
         }
-        assert_eq!(sweep.len(), 12, "{sweep:?}");
+        assert!(sweep.iter().any(|l| l == "pyramid nphi=32 ls=4 lo=4 bands=4 corrected hanning=5"), "{sweep:?}");
+        assert_eq!(sweep.len(), 13, "{sweep:?}");
+        let w = Settings::from_decl(&decl(&[("window", "lanczos".into()), ("window_width", 3.0.into())]), Horizon::Pyramid).unwrap();
+        assert_eq!(w.window, Window::Lanczos(3.0));
+        assert_eq!(w.window_factors()[0], 1.0);
+        assert_eq!(Settings::default().window_factors(), vec![1.0; 4]);
+        let e = Settings::from_decl(&decl(&[("window_width", 3.0.into())]), Horizon::Pyramid).unwrap_err().to_string();
+        assert!(e.contains("heightfield_pyramid.window_width: needs window"), "{e}");
+        let e = Settings::from_decl(&decl(&[("window", "box".into())]), Horizon::Pyramid).unwrap_err().to_string();
+        assert!(e.contains("heightfield_pyramid.window: expected one of \"none\", \"hanning\", \"lanczos\""), "{e}");
         let brute: Vec<String> = brute_sweep(&MethodDecl { name: BRUTE_FORCE.into(), line: 0, params: vec![] }).into_iter().map(|(l, _)| l).collect();
         assert!(brute.contains(&"brute nphi=32 step=2 bands=4 corrected".to_string()), "{brute:?}");
     }

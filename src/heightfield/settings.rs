@@ -46,6 +46,18 @@ pub enum Decimation {
     Bicubic,
 }
 
+/// A window on the transfer vector's bands (digest §3.2.2's optional fix, not in the thesis):
+/// it damps the ringing of the truncated products — the light leaking from below the surface
+/// and past a wall — at the cost of softer shading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Window {
+    None,
+    /// Hanning σ-factors of this width in bands.
+    Hanning(f32),
+    /// Lanczos σ-factors of this width in bands.
+    Lanczos(f32),
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub horizon: Horizon,
@@ -62,6 +74,7 @@ pub struct Settings {
     /// Wedge-table nodes per horizon angle.
     pub table_size: u32,
     pub decimation: Decimation,
+    pub window: Window,
     /// Brute force: march step and largest distance, texels (0: res texels for the environment,
     /// the pyramid's reach over the edge-clamped field, and 2·res toward a light).
     pub march_step: f32,
@@ -85,6 +98,7 @@ impl Default for Settings {
             bands: 4,
             table_size: 64,
             decimation: Decimation::Bilinear,
+            window: Window::None,
             march_step: 0.25,
             max_distance: 0.0,
             time_step: 1.0 / 60.0,
@@ -99,6 +113,8 @@ const fn p(name: &'static str, kind: ParamKind) -> ParamSchema {
 
 pub const PYRAMID_PARAMS: &[ParamSchema] = &[
     p("mode", ParamKind::String),
+    p("window", ParamKind::String),
+    p("window_width", ParamKind::Float),
     p("resolution", ParamKind::Int),
     p("ls", ParamKind::Int),
     p("lo", ParamKind::Float),
@@ -112,6 +128,8 @@ pub const PYRAMID_PARAMS: &[ParamSchema] = &[
 
 pub const BRUTE_PARAMS: &[ParamSchema] = &[
     p("mode", ParamKind::String),
+    p("window", ParamKind::String),
+    p("window_width", ParamKind::Float),
     p("resolution", ParamKind::Int),
     p("nphi", ParamKind::Int),
     p("bands", ParamKind::Int),
@@ -195,14 +213,38 @@ impl Settings {
         if let Some(b) = string("bilinear", &["hardware", "shader"])? {
             s.hardware_bilinear = b == "hardware";
         }
+        let width = num("window_width", "a number of bands from 0.5 to 16", &|x| (0.5..=16.0).contains(&x))?;
+        match string("window", &["none", "hanning", "lanczos"])?.as_deref() {
+            Some("hanning") => s.window = Window::Hanning(width.unwrap_or(s.bands as f32 + 1.0)),
+            Some("lanczos") => s.window = Window::Lanczos(width.unwrap_or(s.bands as f32 + 1.0)),
+            _ if width.is_some() => return Err(bad("window_width", "needs window = \"hanning\" or \"lanczos\"".into())),
+            _ => {}
+        }
         Ok(s)
+    }
+
+    /// The window's factor per band (1 without a window), `bands` values.
+    pub fn window_factors(&self) -> Vec<f32> {
+        let bands = self.bands as usize;
+        let f = match self.window {
+            Window::None => return vec![1.0; bands],
+            Window::Hanning(w) => crate::sh::hanning(bands, w as f64),
+            Window::Lanczos(w) => crate::sh::lanczos(bands, w as f64),
+        };
+        // The width was range-checked when read, so the window cannot fail.
+        f.map(|v| v.iter().map(|&x| x as f32).collect()).unwrap_or_else(|_| vec![1.0; bands])
     }
 
     /// The configuration as `key=value` pairs for labels (only what the horizon kind uses).
     pub fn label(&self) -> String {
         let mode = match self.mode {
-            Mode::Faithful => "faithful",
-            Mode::Corrected => "corrected",
+            Mode::Faithful => "faithful".to_string(),
+            Mode::Corrected => "corrected".to_string(),
+        };
+        let mode = match self.window {
+            Window::None => mode,
+            Window::Hanning(w) => format!("{mode} hanning={w}"),
+            Window::Lanczos(w) => format!("{mode} lanczos={w}"),
         };
         match self.horizon {
             Horizon::Pyramid => format!("nphi={} ls={} lo={} bands={} {mode}", self.nphi, self.ls, self.lo, self.bands),
