@@ -108,8 +108,11 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, spp
     Ok((image.mean, label))
 }
 
+/// One configuration's image, median frame time (ms), per-pass medians and device name.
+type Measured = (HdrImage, f64, Vec<(String, f64)>, String);
+
 /// Renders and times one configuration.
-fn measure(scene: &Scene, decl: &MethodDecl, opts: &ChartOptions) -> Result<(HdrImage, f64, Vec<(String, f64)>, String)> {
+fn measure(scene: &Scene, decl: &MethodDecl, opts: &ChartOptions) -> Result<Measured> {
     let mut scene = scene.clone();
     scene.methods = vec![decl.clone()];
     let mut renderer = Renderer::new(Gpu::new(&opts.gpu)?, scene, None, opts.size, 1)?;

@@ -307,7 +307,7 @@ impl<'a> RenderGraph<'a> {
             }
             let mut buffer_barriers = Vec::new();
             for u in &pass.buffers {
-                let state = states.buffers.entry(u.buffer).or_insert_with(BufferState::new);
+                let state = states.buffers.entry(u.buffer).or_default();
                 if let Some(b) = state.transition(u.access) {
                     buffer_barriers.push(BufferTransition {
                         buffer: u.buffer,
