@@ -1,7 +1,9 @@
 #version 460
 // The displaced height-field mesh, generated from the vertex index: two triangles per cell of
 // the res x res sample grid, vertex (i, j) at the sample's world position with this frame's
-// height; uv addresses the shading image at the same sample.
+// height; uv addresses the shading image at the same sample. It is also the scene mesh's uv,
+// ((i + 1/2)/res, (j + 1/2)/res): a function of the world position alone, so the material's
+// albedo map lands where the reference puts it whatever resolution the method works at.
 #include "common/frame.glsl"
 
 layout(set = 0, binding = 1) uniform sampler2D heights;

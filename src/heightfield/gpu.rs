@@ -140,6 +140,8 @@ pub struct FieldInputs {
     pub object: usize,
     pub source: HeightfieldSource,
     pub translation: Vec3,
+    /// Index of the field's material in `scene.materials` (and `SceneGpu::material_maps`).
+    pub material: usize,
     pub albedo: Vec3,
     pub emission: Vec3,
     pub lights: Vec<SphereLight>,
@@ -166,6 +168,15 @@ impl FieldInputs {
             )));
         }
         let material = scene.materials.get(obj.material).ok_or_else(|| Error::Usage(format!("{src}: objects[{object}]: material index out of range")))?;
+        // The shading comes from the field's own normals through the SH transfer, computed per
+        // texel before any material is known, so a normal map cannot be honoured; refusing it
+        // keeps the method from silently disagreeing with the reference, which applies it.
+        if material.normal_map.is_some() {
+            return Err(Error::Usage(format!(
+                "{src}: materials[{}] ({:?}).normal_map: {method} cannot apply a normal map (it shades with the height field's own normals); used by the height field objects[{object}] ({:?})",
+                obj.material, material.name, obj.name
+            )));
+        }
         let mut lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
             match l {
@@ -190,7 +201,7 @@ impl FieldInputs {
             Some(Environment::Image { path, scale }) => load_environment(path, *scale, src)?,
             Some(Environment::Cube { faces, scale }) => load_cube_environment(faces, *scale, src)?,
         };
-        Ok(FieldInputs { object, source: source.clone(), translation, albedo: material.albedo, emission: material.emission, lights, environment })
+        Ok(FieldInputs { object, source: source.clone(), translation, material: obj.material, albedo: material.albedo, emission: material.emission, lights, environment })
     }
 }
 

@@ -16,15 +16,17 @@
 //!    signed, the full-sphere table, the light as a cap ZH (half-angle asin(r/d)) rotated toward it;
 //! 6. **accumulation** — environment plus lights, clamped at 0;
 //!
-//! then the displaced mesh is drawn with that shading image times the albedo. Two methods share
-//! this code: `heightfield_pyramid` (the thesis) and `heightfield_bruteforce` (horizons ray-marched
-//! on the bilinear field, exact up to the march step, for error and speed comparison).
+//! then the displaced mesh is drawn with that shading image times the albedo (the material's
+//! colour times its albedo map at the mesh uv). Two methods share this code:
+//! `heightfield_pyramid` (the thesis) and `heightfield_bruteforce` (horizons ray-marched on the
+//! bilinear field, exact up to the march step, for error and speed comparison).
 //!
 //! Scope: the method draws the scene's first height field and, with their emission only, every
 //! other object (so sphere-light emitters look as in the reference); other objects neither cast
 //! shadows on the field nor are lit. Lights must be spheres; the environment constant or an
 //! equirectangular image (clear colour: the constant, black for images). Diffuse only: the
-//! material's specular lobe and texture maps are ignored.
+//! material's specular colour and map are ignored; a normal map is refused (the transfer uses the
+//! field's own normals).
 
 pub mod cpu;
 pub mod gpu;
@@ -195,6 +197,10 @@ impl LightingMethod for HeightfieldMethod {
         let push = terrain_push(core);
         let vertices = core.res.saturating_sub(1).pow(2) * 6;
         let terrain = self.terrain;
+        // The material's maps as the forward method binds them (uploaded once, never written).
+        let scene = inputs.scene;
+        let albedo_map = scene.material_maps.get(core.inputs.material).map(|m| m.albedo).ok_or_else(|| crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name)))?;
+        let map_sampler = scene.sampler;
         graph
             .pass("hf raster")
             .color_attachment(targets.radiance, SubresourceRange::mip(0), true)
@@ -208,14 +214,16 @@ impl LightingMethod for HeightfieldMethod {
                     depth_stencil: Some(RenderTarget::clear_depth(targets.depth_stencil, 1.0, 0)),
                 })?;
                 ctx.rec.bind_pipeline(terrain)?;
-                ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+                ctx.bind(&[
+                    ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
+                    ("albedo_map", Bind::Sampled { image: albedo_map, range: SubresourceRange::mip(0), sampler: map_sampler }),
+                ])?;
                 ctx.rec.push_constants(&push)?;
                 ctx.rec.draw(vertices, 1)?;
                 ctx.rec.end_rendering();
                 Ok(())
             });
         if !self.others.is_empty() {
-            let scene = inputs.scene;
             let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
             let emitter = self.emitter;
             let others = &self.others;
