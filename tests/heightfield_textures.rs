@@ -16,7 +16,7 @@ use penumbra::scene::Scene;
 /// Checker cells of `cell` texels on a `texels`² sRGB PNG, colours `a` (cell (0, 0)) and `b`.
 fn checker_png(name: &str, texels: u32, cell: u32, a: [u8; 3], b: [u8; 3]) -> PathBuf {
     let path = common::temp_path(name);
-    let img = image::RgbImage::from_fn(texels, texels, |x, y| image::Rgb(if (x / cell + y / cell) % 2 == 0 { a } else { b }));
+    let img = image::RgbImage::from_fn(texels, texels, |x, y| image::Rgb(if (x / cell + y / cell).is_multiple_of(2) { a } else { b }));
     img.save(&path).unwrap();
     path
 }
