@@ -454,6 +454,7 @@ const LIGHT_KEYS: [(&str, &[&str]); 5] = [
             "intensity",
             "inner_deg",
             "outer_deg",
+            "radius",
         ],
     ),
     ("directional", &["direction", "irradiance"]),
@@ -557,6 +558,7 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
                 });
             }
             let intensity = colour("intensity", "W/sr, a number or 3")?;
+            let radius = opt(t.get("radius"), non_negative)?.unwrap_or(0.0);
             Light::Spot {
                 name,
                 position,
@@ -564,6 +566,7 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
                 intensity,
                 inner_deg,
                 outer_deg,
+                radius,
             }
         }
         "directional" => Light::Directional {

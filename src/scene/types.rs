@@ -206,7 +206,8 @@ pub enum Light {
         radius: f32,
     },
     /// Spot light: `intensity` (W/sr) on the axis, full inside `inner_deg`, zero outside
-    /// `outer_deg` (half-angles from `direction`, a unit vector).
+    /// `outer_deg` (half-angles from `direction`, a unit vector). `radius` is an
+    /// influence/culling radius as a point light's (0 = infinite).
     Spot {
         name: String,
         position: Vec3,
@@ -214,6 +215,7 @@ pub enum Light {
         intensity: Vec3,
         inner_deg: f32,
         outer_deg: f32,
+        radius: f32,
     },
     /// Distant light. `direction` is the unit direction the light travels (from the light toward
     /// the scene); `irradiance` in W/m² on a surface facing it.
