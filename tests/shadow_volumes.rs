@@ -1,8 +1,9 @@
 //! Stencil shadow volumes where they fail: the analytic occluder (a square of side 2 at height 5
 //! under a light at height 10 casts a square of side 4), the camera inside a volume with the
 //! near plane cutting it (z-fail right, z-pass visibly wrong), volumes reaching past any finite
-//! far plane, more than 255 overlapping volumes, and open (non-manifold) occluders. Every
-//! rendered lit/shadowed mask is compared with a CPU ray cast of the same geometry.
+//! far plane, more than 255 overlapping volumes, open (non-manifold) occluders, and a spot light
+//! (the same shadow, no light outside its cone). Every rendered lit/shadowed mask is compared
+//! with a CPU ray cast of the same geometry.
 
 mod common;
 mod sv_common;
@@ -265,14 +266,64 @@ fn more_than_255_overlapping_volumes() {
     assert!(stats[1].interior_mismatches > 1000, "saturating stencil should fail here: {:?}", stats[1]);
 }
 
-/// Only point lights: any other kind is refused with one clear line.
+const POINT_LIGHT: &str = "type = \"point\"\nposition = [0, 10, 0]\nintensity = 100";
+
+/// Only point and spot lights: any other kind is refused with one clear line that names the
+/// light and says why.
 #[test]
 fn other_light_kinds_are_refused_clearly() {
-    let text = analytic_scene(TOP_DOWN, QUAD, &[]).replace("type = \"point\"\nposition = [0, 10, 0]\nintensity = 100", "type = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1");
-    let scene = penumbra::scene::Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap();
-    let err = match penumbra::renderer::Renderer::new(common::test_gpu(), scene, None, SIZE, 1) {
-        Ok(_) => panic!("a directional light must be refused"),
-        Err(e) => e.to_string(),
-    };
-    assert!(err.contains("point lights only") && err.contains("directional") && !err.contains('\n'), "{err}");
+    for (light, kind, why) in [
+        ("name = \"sun\"\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1", "directional", "no position to extrude"),
+        ("name = \"panel\"\ntype = \"quad\"\ncorner = [-1, 10, -1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, 2]\nradiance = 1", "quad", "soft shadows"),
+        ("name = \"globe\"\ntype = \"sphere\"\ncenter = [0, 10, 0]\nradius = 0.5\nradiance = 1", "sphere", "soft shadows"),
+    ] {
+        let text = analytic_scene(TOP_DOWN, QUAD, &[]).replace(POINT_LIGHT, light);
+        let scene = penumbra::scene::Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap();
+        let name = scene.lights[0].name().to_string();
+        let err = match penumbra::renderer::Renderer::new(common::test_gpu(), scene, None, SIZE, 1) {
+            Ok(_) => panic!("a {kind} light must be refused"),
+            Err(e) => e.to_string(),
+        };
+        println!("{err}");
+        assert!(err.contains("point and spot lights only") && err.contains(&format!("({name})")) && err.contains(kind) && err.contains(why) && !err.contains('\n'), "{err}");
+    }
+}
+
+/// A spot light straight down over the analytic occluder: the shadow is the point light's square
+/// of side 4 (the volumes are a point light's), the ground is lit only inside the outer cone
+/// (30°: 5.77 m from the axis) and exactly dark beyond it.
+#[test]
+fn spot_light_casts_the_same_square_and_nothing_outside_its_cone() {
+    let camera = "[camera]\nposition = [0, 25, 0]\ntarget = [0, 0, 0]\nup = [0, 0, -1]\nfov_y_deg = 40";
+    let spot = "type = \"spot\"\nposition = [0, 10, 0]\ndirection = [0, -1, 0]\nintensity = 100\ninner_deg = 20\nouter_deg = 30";
+    let (outer, inner) = (30f32.to_radians(), 20f32.to_radians());
+    let (point_img, _) = render(&analytic_scene(camera, QUAD, &[]), SIZE);
+    let (img, scene) = render(&analytic_scene(camera, QUAD, &[]).replace(POINT_LIGHT, spot), SIZE);
+    // The angle from the axis of the ground point under continuous pixel (px, py).
+    let ground_angle = |px: f32, py: f32| hit_plane_y(&scene.camera, px, py, SIZE, 0.0).map(|(p, _)| (p.x.hypot(p.z) / 10.0).atan());
+    let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 1e-6), |px, py| {
+        let lit = analytic_lit(&scene.camera, px, py, SIZE)?;
+        // The occluder's top is well inside the inner cone.
+        let on_top = hit_plane_y(&scene.camera, px, py, SIZE, 5.0).is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
+        Some(lit && (on_top || ground_angle(px, py)? < outer))
+    });
+    check(&c, "spot light");
+    // Inside the inner cone the spot is the point light, shadow included, pixel for pixel.
+    let (mut inside, mut same, mut outside, mut dark) = (0, 0, 0, 0);
+    for y in 0..SIZE.1 {
+        for x in 0..SIZE.0 {
+            let Some(a) = ground_angle(x as f32 + 0.5, y as f32 + 0.5) else { continue };
+            if a < inner - 0.01 {
+                inside += 1;
+                same += usize::from(img.get(x, y)[..3] == point_img.get(x, y)[..3]);
+            } else if a > outer + 0.01 {
+                outside += 1;
+                dark += usize::from(img.get(x, y)[..3].iter().all(|&v| v == 0.0));
+            }
+        }
+    }
+    println!("inside the inner cone {same} of {inside} pixels equal the point light's; outside the outer cone {dark} of {outside} exactly 0");
+    assert!(inside > 1000 && outside > 2000, "both regions are in view: {inside}, {outside}");
+    assert_eq!(same, inside, "inside the inner cone the spot equals the point light");
+    assert_eq!(dark, outside, "outside the outer cone nothing is lit");
 }

@@ -3,7 +3,9 @@
 //! albedo-mapped quad whose vertex normals fan out like a smoothing group — so the tangent-space
 //! light vector the shading uses differs from the world-space one the attenuation uses, and
 //! collapsing them would show — the radiometric (physical) mode, the two material paths (special-
-//! case pipelines, default 1×1 maps), and two lights being the sum of each alone.
+//! case pipelines, default 1×1 maps), two lights being the sum of each alone, and spot lights
+//! (both modes per pixel, and equal to the point light inside the inner cone, nothing beyond the
+//! outer one).
 
 mod common;
 mod sv_common;
@@ -12,7 +14,8 @@ use glam::{Vec2, Vec3, Vec4};
 use penumbra::forward::cpu::Surface;
 use penumbra::image_io::HdrImage;
 use penumbra::scene::{load_obj, Mesh, Scene};
-use penumbra::shadow_volumes::cpu::{attenuation, faithful_ambient, faithful_light, faithful_light_colour, physical_light};
+use penumbra::shadow_volumes::cpu::{attenuation, faithful_ambient, faithful_light, faithful_light_colour, physical_light, spot_factor};
+use penumbra::shadow_volumes::Spot;
 use sv_common::{hit_plane_y, method, render_in, render_scene};
 
 const SIZE: (u32, u32) = (64, 64);
@@ -75,6 +78,28 @@ material = "mapped"
 
 fn light_text() -> String {
     format!("[[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {INTENSITY}\nradius = {RADIUS}\n", LIGHT.x, LIGHT.y, LIGHT.z)
+}
+
+/// A spot at the point light's place, tilted off the vertical, whose cones cut the quad in view:
+/// full inside 25°, zero beyond 45°.
+const SPOT_AXIS: Vec3 = Vec3::new(0.25, -1.0, 0.1);
+const SPOT_DEG: (f32, f32) = (25.0, 45.0);
+
+fn spot_text() -> String {
+    format!(
+        "[[lights]]\ntype = \"spot\"\nposition = [{}, {}, {}]\ndirection = [{}, {}, {}]\nintensity = {INTENSITY}\ninner_deg = {}\nouter_deg = {}\nradius = {RADIUS}\n",
+        LIGHT.x, LIGHT.y, LIGHT.z, SPOT_AXIS.x, SPOT_AXIS.y, SPOT_AXIS.z, SPOT_DEG.0, SPOT_DEG.1
+    )
+}
+
+/// The cone as the method builds it from the scene (unit axis, cosines of the half-angles).
+fn spot() -> Spot {
+    Spot { direction: SPOT_AXIS.normalize(), cos_inner: SPOT_DEG.0.to_radians().cos(), cos_outer: SPOT_DEG.1.to_radians().cos() }
+}
+
+/// Angle (degrees) of `p` from the spot's axis.
+fn spot_angle(p: Vec3) -> f32 {
+    (p - LIGHT).normalize().dot(SPOT_AXIS.normalize()).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
 fn srgb_to_linear(b: u8) -> f32 {
@@ -167,30 +192,34 @@ fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
     let mesh = load_obj(&dir.join("quad.obj")).unwrap();
     let n_map = map_normal();
     let mut collapse_detected = false;
-    for atten in 1..=4u32 {
-        for nz in [true, false] {
-            let params = ["mode = \"faithful\"".to_string(), format!("atten = {atten}"), format!("ambient_nz = {nz}"), format!("lightmap = [{}, {}, {}]", LIGHTMAP.x, LIGHTMAP.y, LIGHTMAP.z)];
-            let params: Vec<&str> = params.iter().map(String::as_str).collect();
-            let (img, scene) = render_in(&scene_text(&params, &light_text()), &dir, SIZE);
-            let colour = faithful_light_colour(Vec3::splat(INTENSITY), RADIUS, atten);
-            let mut expected = Vec::new();
-            let mut collapsed = Vec::new();
-            for (x, y, i) in pixels(&scene, &mesh) {
-                let ambient = faithful_ambient(diffuse(), LIGHTMAP, n_map.z, nz, EMISSION);
-                let dist = LIGHT.distance(i.p);
-                let light = faithful_light(n_map, i.light_ts, i.eye_ts, dist, diffuse(), specular(), colour, atten, RADIUS);
-                expected.push((x, y, ambient + light));
-                // The same with the attenuation taken from the interpolated tangent-space vector.
-                let wrong = faithful_light(n_map, i.light_ts, i.eye_ts, i.light_ts.length(), diffuse(), specular(), colour, atten, RADIUS);
-                collapsed.push((x, y, ambient + wrong));
-            }
-            assert!(expected.len() > 1500, "the quad fills the view");
-            assert!(expected.iter().all(|e| e.2.max_element() <= 1.0), "values stay in [0, 1] for the UNORM8 comparison");
-            let err = max_error(&img, &expected);
-            println!("atten{atten} N_z {nz}: max |GPU − CPU| = {err:.2e}; collapsed vectors would be off by {:.2e}", max_error(&img, &collapsed));
-            assert!(err <= 2.0 / 255.0, "atten{atten}, N_z {nz}: max error {err} > 2/255");
-            collapse_detected |= max_error(&img, &collapsed) > 3.0 / 255.0;
+    // Every attenuation with the point light, then atten4 with the spot (the seed has no spot
+    // lights: Eq. 5 times the forward method's falloff is this renderer's extension).
+    let cases = (1..=4u32).flat_map(|a| [(a, true, false), (a, false, false)]).chain([(4, true, true)]);
+    for (atten, nz, is_spot) in cases {
+        let params = ["mode = \"faithful\"".to_string(), format!("atten = {atten}"), format!("ambient_nz = {nz}"), format!("lightmap = [{}, {}, {}]", LIGHTMAP.x, LIGHTMAP.y, LIGHTMAP.z)];
+        let params: Vec<&str> = params.iter().map(String::as_str).collect();
+        let (img, scene) = render_in(&scene_text(&params, &if is_spot { spot_text() } else { light_text() }), &dir, SIZE);
+        let colour = faithful_light_colour(Vec3::splat(INTENSITY), RADIUS, atten);
+        let cone = is_spot.then(spot);
+        let mut expected = Vec::new();
+        let mut collapsed = Vec::new();
+        for (x, y, i) in pixels(&scene, &mesh) {
+            let ambient = faithful_ambient(diffuse(), LIGHTMAP, n_map.z, nz, EMISSION);
+            let dist = LIGHT.distance(i.p);
+            let falloff = spot_factor(cone.as_ref(), LIGHT, i.p);
+            let light = falloff * faithful_light(n_map, i.light_ts, i.eye_ts, dist, diffuse(), specular(), colour, atten, RADIUS);
+            expected.push((x, y, ambient + light));
+            // The same with the attenuation taken from the interpolated tangent-space vector.
+            let wrong = falloff * faithful_light(n_map, i.light_ts, i.eye_ts, i.light_ts.length(), diffuse(), specular(), colour, atten, RADIUS);
+            collapsed.push((x, y, ambient + wrong));
         }
+        assert!(expected.len() > 1500, "the quad fills the view");
+        assert!(expected.iter().all(|e| e.2.max_element() <= 1.0), "values stay in [0, 1] for the UNORM8 comparison");
+        let err = max_error(&img, &expected);
+        let what = if is_spot { "spot, " } else { "" };
+        println!("{what}atten{atten} N_z {nz}: max |GPU − CPU| = {err:.2e}; collapsed vectors would be off by {:.2e}", max_error(&img, &collapsed));
+        assert!(err <= 2.0 / 255.0, "{what}atten{atten}, N_z {nz}: max error {err} > 2/255");
+        collapse_detected |= max_error(&img, &collapsed) > 3.0 / 255.0;
     }
     assert!(collapse_detected, "the fixture must be sensitive to collapsing the two light vectors");
     let _ = attenuation(4, 1.0, 2.0);
@@ -198,9 +227,16 @@ fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
 
 #[test]
 fn physical_mode_matches_the_cpu_per_pixel() {
+    for is_spot in [false, true] {
+        physical_case(is_spot);
+    }
+}
+
+fn physical_case(is_spot: bool) {
     let dir = fixture();
     let mesh = load_obj(&dir.join("quad.obj")).unwrap();
-    let (img, scene) = render_in(&scene_text(&["mode = \"physical\""], &light_text()), &dir, SIZE);
+    let (img, scene) = render_in(&scene_text(&["mode = \"physical\""], &if is_spot { spot_text() } else { light_text() }), &dir, SIZE);
+    let cone = is_spot.then(spot);
     let tn = map_normal();
     let surface = Surface { albedo: diffuse(), specular: specular(), exponent: 32.0, emission: EMISSION };
     let mut expected = Vec::new();
@@ -210,12 +246,13 @@ fn physical_mode_matches_the_cpu_per_pixel() {
         let t = (i.tangent.truncate() - n * n.dot(i.tangent.truncate())).normalize();
         let b = n.cross(t) * i.tangent.w;
         let nm = (t * tn.x + b * tn.y + n * tn.z).normalize();
-        expected.push((x, y, EMISSION + physical_light(i.p, nm, scene.camera.position, &surface, LIGHT, Vec3::splat(INTENSITY), RADIUS)));
+        let falloff = spot_factor(cone.as_ref(), LIGHT, i.p);
+        expected.push((x, y, EMISSION + falloff * physical_light(i.p, nm, scene.camera.position, &surface, LIGHT, Vec3::splat(INTENSITY), RADIUS)));
     }
     // Relative to the pixel's brightest channel (a dim channel of a lit pixel carries the
     // hardware sRGB decode's absolute rounding).
     let worst = expected.iter().map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element() / e.max_element().max(1e-3)).fold(0.0, f32::max);
-    println!("physical: max relative error {worst:.2e} over {} pixels", expected.len());
+    println!("physical{}: max relative error {worst:.2e} over {} pixels", if is_spot { ", spot" } else { "" }, expected.len());
     assert!(worst < 3e-3, "{worst}");
 }
 
@@ -290,4 +327,42 @@ material = "wall"
     assert!(lit_by_both > 500, "the lights overlap in view");
     assert!(worst <= 1.0 / 255.0, "{worst}");
     let _ = Vec2::ZERO;
+}
+
+/// A spot light is the point light where the falloff is 1 (inside the inner cone: the same
+/// arithmetic times 1.0, so bit-identical) and adds nothing beyond the outer cone (the image is
+/// the one without lights), in both modes; the fixture has pixels in all three zones.
+#[test]
+fn spot_equals_the_point_light_inside_the_inner_cone_and_nothing_outside_the_outer() {
+    let dir = fixture();
+    for mode in ["mode = \"faithful\"", "mode = \"physical\""] {
+        let render = |lights: &str| render_in(&scene_text(&[mode], lights), &dir, SIZE);
+        let ((spot_img, scene), (point_img, _), (dark_img, _)) = (render(&spot_text()), render(&light_text()), render(""));
+        let (mut inside, mut band, mut outside) = (Vec::new(), 0, Vec::new());
+        for y in 0..SIZE.1 {
+            for x in 0..SIZE.0 {
+                let Some((p, _)) = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 0.0) else { continue };
+                if p.x.abs() > 1.95 || p.z.abs() > 1.95 {
+                    continue;
+                }
+                // A 0.5° margin keeps pixels whose rasterised position rounds across a cone out.
+                let a = spot_angle(p);
+                if a < SPOT_DEG.0 - 0.5 {
+                    inside.push((x, y));
+                } else if a > SPOT_DEG.1 + 0.5 {
+                    outside.push((x, y));
+                } else {
+                    band += 1;
+                }
+            }
+        }
+        let diff = |a: &HdrImage, b: &HdrImage, set: &[(u32, u32)]| set.iter().map(|&(x, y)| (Vec3::from_slice(&a.get(x, y)[..3]) - Vec3::from_slice(&b.get(x, y)[..3])).abs().max_element()).fold(0.0, f32::max);
+        let (d_in, d_out) = (diff(&spot_img, &point_img, &inside), diff(&spot_img, &dark_img, &outside));
+        let point_outside = diff(&point_img, &dark_img, &outside);
+        println!("{mode}: {} pixels inside the inner cone, max |spot − point| = {d_in:.1e}; {band} in the falloff band; {} beyond the outer cone, max |spot − no light| = {d_out:.1e} (the point light adds up to {point_outside:.2e} there)", inside.len(), outside.len());
+        assert!(inside.len() > 200 && band > 300 && outside.len() > 300, "{} / {band} / {}", inside.len(), outside.len());
+        assert!(point_outside > 1e-3, "the point light lights the region beyond the cone");
+        assert_eq!(d_in, 0.0, "{mode}: the spot differs from the point light inside the inner cone");
+        assert_eq!(d_out, 0.0, "{mode}: the spot lights beyond its outer cone");
+    }
 }

@@ -1,7 +1,8 @@
 //! The stencil shadow volumes over a BSP/PVS world: every caster strategy gives the same image
 //! where the seed says it must (and the caster counts it should), the Fig. 8(c) shadow that only
-//! the PSCS finds, culling by PVS and radius changing draws but not pixels, the rendered shadows
-//! against CPU ray casts through the BSP, and `penumbra profile` naming every pass.
+//! the PSCS finds, culling by PVS, radius and a spot light's cone changing draws but not pixels,
+//! the rendered shadows against CPU ray casts through the BSP, and `penumbra profile` naming
+//! every pass.
 
 mod common;
 mod sv_common;
@@ -209,6 +210,40 @@ fn pvs_and_radius_culling_change_draws_not_pixels() {
     assert_eq!(differing(&images[0], &images[2]), 0, "radius culling changed pixels");
     assert!(draws[0].0 < draws[1].0, "the camera's PVS culls faces: {draws:?}");
     assert!(draws[0].1 < draws[2].1 && draws[0].2 < draws[2].2, "radii cull receivers and casters: {draws:?}");
+}
+
+/// Spot lights cull by their cone too (with `radius_culling`): receivers and casters wholly
+/// beyond the outer angle are not drawn, and no pixel changes — against the same spot drawn
+/// without culling, while the same lights as point lights draw more.
+#[test]
+fn spot_cone_culling_changes_draws_not_pixels() {
+    let crate_obj = "[[objects]]\nname = \"crate\"\nmesh = \"box\"\nsize = 0.7\ntranslate = [7.0, 0.36, -8.0]\nmaterial = \"wall\"\n";
+    // One spot on the crate, one on a far wall away from it.
+    let spots = "[[lights]]\ntype = \"spot\"\nposition = [5.2, 2.7, -8.6]\ntarget = [7.0, 0.0, -8.0]\nintensity = [9, 7, 4.5]\ninner_deg = 25\nouter_deg = 35\nradius = 8.0\n\
+                 [[lights]]\ntype = \"spot\"\nposition = [8.0, 2.2, -5.0]\ntarget = [3.0, 1.0, -4.0]\nintensity = [2, 4, 9]\ninner_deg = 20\nouter_deg = 30\nradius = 8.0\n";
+    let points = "[[lights]]\ntype = \"point\"\nposition = [5.2, 2.7, -8.6]\nintensity = [9, 7, 4.5]\nradius = 8.0\n\
+                  [[lights]]\ntype = \"point\"\nposition = [8.0, 2.2, -5.0]\nintensity = [2, 4, 9]\nradius = 8.0\n";
+    let mut images = Vec::new();
+    let mut draws = Vec::new();
+    for (lights, params) in [(spots, vec!["mode = \"faithful\""]), (spots, vec!["mode = \"faithful\"", "radius_culling = false"]), (points, vec!["mode = \"faithful\""])] {
+        let s = scene(CAMERAS[1], &format!("{WORLD}{crate_obj}{lights}"), &params);
+        let plan = Setup::new(&s, &s.methods[0]).unwrap().plan(s.camera.position, 0.0);
+        let count = |f: &dyn Fn(&penumbra::shadow_volumes::LightPlan) -> usize| plan.lights.iter().map(f).sum::<usize>();
+        let d = (count(&|l| l.receiver_faces.len()), count(&|l| l.caster_faces.len()), count(&|l| l.receiver_entities.len()), count(&|l| l.caster_entities.len()));
+        println!("{} {params:?}: receivers {}, casters {}, receiving entities {}, casting entities {}", if lights == spots { "spots" } else { "points" }, d.0, d.1, d.2, d.3);
+        draws.push(d);
+        if lights == spots {
+            images.push(render_scene(s, SIZE));
+        }
+    }
+    let lit_pixels = images[0].pixels.iter().filter(|p| p[0] > 0.05).count();
+    println!("{lit_pixels} pixels above 0.05");
+    assert!(lit_pixels > 500, "the spots light the view");
+    assert_eq!(differing(&images[0], &images[1]), 0, "cone culling changed pixels");
+    let (culled, points) = (draws[0], draws[2]);
+    assert!(culled.0 < points.0 && culled.1 < points.1, "the cones cull receivers and casters: {draws:?}");
+    assert!(culled.3 < points.3, "the spot aimed away does not extrude the crate: {draws:?}");
+    assert!(culled.0 < draws[1].0 && culled.1 < draws[1].1, "without culling the spots draw as much as the points: {draws:?}");
 }
 
 /// `penumbra profile` on the test level lists the ambient pass, each drawn light's volume and

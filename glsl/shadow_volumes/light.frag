@@ -1,5 +1,7 @@
 #version 460
-// One point light's additive pass where the stencil is 0 (outside every shadow volume).
+// One point or spot light's additive pass where the stencil is 0 (outside every shadow volume).
+// A spot light is a point light times the forward method's spot_falloff (common/lights.glsl), in
+// both modes; the seed has no spot lights, so in the faithful mode this is an extension.
 // faithful: Listing 1 / Eq. 5: atten(d) * L_C * (diffuse * N.L + specular * (N.H)^32), the
 //   specular gated on N.L > 0, N from the normal map, L and E in tangent space, d from the
 //   world-space light vector (the seed's two light vectors, never collapsed).
@@ -69,6 +71,14 @@ void main() {
     if (dot(ng, to_light) <= 0.0) {
         return;
     }
+    // Exactly 1 inside the inner cone, so a spot light there is bit-identical to a point light.
+    float spot = 1.0;
+    if (light.spot_direction.w > 0.5) {
+        spot = spot_falloff(light.cone.y, light.cone.x, dot(-to_light / max(dist, 1e-12), light.spot_direction.xyz));
+        if (spot <= 0.0) {
+            return;
+        }
+    }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
     vec3 specular = SPECULAR ? m.specular.rgb * texture(specular_map, in_uv).rgb : vec3(0.0);
     vec3 tn = NORMAL_MAP ? normalize(texture(normal_map, in_uv).xyz * 2.0 - 1.0) : vec3(0.0, 0.0, 1.0);
@@ -83,7 +93,7 @@ void main() {
             float spec = diff > 0.0 ? clamp(dot(tn, normalize(l + e)), 0.0, 1.0) : 0.0;
             c += pow(spec, 32.0) * specular;
         }
-        out_radiance.rgb = attenuation(dist, radius) * light.colour.rgb * c;
+        out_radiance.rgb = spot * attenuation(dist, radius) * light.colour.rgb * c;
         return;
     }
     if (radius > 0.0 && dist > radius) {
@@ -95,5 +105,5 @@ void main() {
         n = normalize(t * tn.x + b * tn.y + n * tn.z);
     }
     vec3 v = normalize(frame.camera_pos.xyz - in_world);
-    out_radiance.rgb = brdf_times_cos(n, v, to_light / dist, albedo, specular, m.specular.w) * light.colour.rgb / (dist * dist);
+    out_radiance.rgb = spot * brdf_times_cos(n, v, to_light / dist, albedo, specular, m.specular.w) * light.colour.rgb / (dist * dist);
 }

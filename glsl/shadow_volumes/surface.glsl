@@ -3,12 +3,13 @@
 #ifndef PENUMBRA_SV_SURFACE_GLSL
 #define PENUMBRA_SV_SURFACE_GLSL
 
-// One point light per lighting pass. The ambient pass binds zeros (its vertex shader is the
-// light pass's, so both write bit-identical depth).
+// One point or spot light per lighting pass. The ambient pass binds zeros (its vertex shader is
+// the light pass's, so both write bit-identical depth).
 layout(set = 0, binding = 1) uniform PointLightBlock {
-    vec4 position;  // xyz: world position; w: radius (0: infinite)
-    vec4 colour;    // rgb: faithful light colour L_C, or intensity I in W/sr (physical)
-    vec4 params;    // unused, reserved
+    vec4 position;        // xyz: world position; w: radius (0: infinite)
+    vec4 colour;          // rgb: faithful light colour L_C, or intensity I in W/sr (physical)
+    vec4 spot_direction;  // xyz: a spot light's unit axis; w: 1 spot, 0 point
+    vec4 cone;            // x: cos(inner), y: cos(outer) (spot)
 } light;
 
 struct Material {

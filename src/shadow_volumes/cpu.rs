@@ -1,10 +1,25 @@
 //! The method's shading on the CPU, mirroring `glsl/shadow_volumes/light.frag` and
 //! `ambient.frag`: the seed's attenuation functions, its lighting equation (Eq. 5, *faithful*)
-//! and the radiometric variant (*physical*). Used by the known-answer tests.
+//! and the radiometric variant (*physical*), and spot lights as point lights times the forward
+//! method's falloff. Used by the known-answer tests.
 
 use glam::Vec3;
 
-use crate::forward::cpu::{brdf_times_cos, Surface};
+use super::plan::Spot;
+use crate::forward::cpu::{brdf_times_cos, spot_falloff, Surface};
+
+/// The factor a light's cone puts on its contribution at `p`: 1 for a point light (`None`),
+/// else the forward method's `spot_falloff` of the angle from the axis — the same in both
+/// modes (the seed has no spot lights, so with Eq. 5 this is an extension).
+pub fn spot_factor(spot: Option<&Spot>, light_pos: Vec3, p: Vec3) -> f32 {
+    match spot {
+        None => 1.0,
+        Some(s) => {
+            let d = p - light_pos;
+            spot_falloff(s.cos_outer, s.cos_inner, d.dot(s.direction) / d.length().max(1e-12))
+        }
+    }
+}
 
 /// The seed's specular exponent (Listing 1: `pow(spec, 32)`).
 pub const FAITHFUL_EXPONENT: i32 = 32;

@@ -19,7 +19,8 @@
 //! extruded in the vertex shader). Receivers and casters are culled by the light's radius and
 //! the camera's PVS ([`plan`]). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
 //! (*physical*), in both of the seed's material paths: special-case pipelines per map
-//! combination, or one pipeline with 1×1 default maps.
+//! combination, or one pipeline with 1×1 default maps. Spot lights (not in the seed) are point
+//! lights times the forward method's cone falloff, with a point light's volumes.
 
 pub mod config;
 pub mod cpu;
@@ -44,7 +45,7 @@ use crate::shaders::ShaderLibrary;
 use crate::world::FaceId;
 
 pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
-pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, WorldFrame};
+pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, Spot, WorldFrame};
 
 /// The chart's sweep (see [`config::sweep`]).
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
@@ -72,18 +73,23 @@ impl Setup {
         let config = Config::from_decl(decl, scene)?;
         let mut lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
-            let kind = match l {
+            let why = match l {
                 Light::Point { name, position, intensity, radius } => {
-                    lights.push(PointLight { name: name.clone(), position: *position, intensity: *intensity, radius: *radius });
+                    lights.push(PointLight { name: name.clone(), position: *position, intensity: *intensity, radius: *radius, spot: None });
                     continue;
                 }
-                Light::Spot { .. } => "spot",
-                Light::Directional { .. } => "directional",
-                Light::Sphere { .. } => "sphere",
-                Light::Quad { .. } => "quad",
+                Light::Spot { name, position, direction, intensity, inner_deg, outer_deg, radius } => {
+                    // The same cosines as the forward method's lights (renderer::raster_lights).
+                    let spot = Spot { direction: direction.normalize(), cos_inner: inner_deg.to_radians().cos(), cos_outer: outer_deg.to_radians().cos() };
+                    lights.push(PointLight { name: name.clone(), position: *position, intensity: *intensity, radius: *radius, spot: Some(spot) });
+                    continue;
+                }
+                Light::Directional { .. } => "a directional light has no position to extrude shadow volumes from (volumes along a direction are not implemented)",
+                Light::Sphere { .. } => "a sphere light is an area light, whose soft shadows one stencil volume cannot represent",
+                Light::Quad { .. } => "a quad light is an area light, whose soft shadows one stencil volume cannot represent",
             };
             return Err(Error::Usage(format!(
-                "{}: lights[{i}] ({}): the {NAME} method lights with point lights only (the seed's model); this one is a {kind} light",
+                "{}: lights[{i}] ({}): the {NAME} method lights with point and spot lights only: {why}",
                 scene.source,
                 l.name()
             )));
@@ -140,7 +146,10 @@ impl Setup {
 struct LightBlock {
     position: [f32; 4],
     colour: [f32; 4],
-    params: [f32; 4],
+    /// xyz: a spot light's unit axis; w: 1 for a spot light, 0 for a point light.
+    spot_direction: [f32; 4],
+    /// x: cos(inner), y: cos(outer).
+    cone: [f32; 4],
 }
 
 /// `Volume` push constants of glsl/shadow_volumes/volume.vert.
@@ -438,7 +447,11 @@ impl ShadowVolumes {
             Mode::Faithful => cpu::faithful_light_colour(l.intensity, l.radius, c.atten),
             Mode::Physical => l.intensity,
         };
-        LightBlock { position: l.position.extend(l.radius).into(), colour: colour.extend(0.0).into(), params: [0.0; 4] }
+        let (spot_direction, cone) = match l.spot {
+            Some(s) => (s.direction.extend(1.0).into(), [s.cos_inner, s.cos_outer, 0.0, 0.0]),
+            None => ([0.0; 4], [0.0; 4]),
+        };
+        LightBlock { position: l.position.extend(l.radius).into(), colour: colour.extend(0.0).into(), spot_direction, cone }
     }
 }
 

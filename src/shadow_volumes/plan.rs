@@ -36,7 +36,7 @@ impl WorldFrame {
     }
 }
 
-/// A point light as the method uses it (scene coordinates).
+/// A point light as the method uses it (scene coordinates); a spot light is one with a cone.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointLight {
     pub name: String,
@@ -44,6 +44,39 @@ pub struct PointLight {
     pub intensity: Vec3,
     /// 0: infinite.
     pub radius: f32,
+    pub spot: Option<Spot>,
+}
+
+/// A spot light's cone: its contribution is scaled by `forward::cpu::spot_falloff` (the
+/// forward method's), and its shadow volumes are those of a point light at its position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    /// Unit axis, the direction the light travels (scene space).
+    pub direction: Vec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+}
+
+impl Spot {
+    /// Whether the cone (apex `apex`) may meet the ball of centre `c` and radius `r`: false
+    /// only when the ball lies wholly beyond the outer angle, where the falloff is 0. Nothing
+    /// outside the cone receives light, and a caster outside it can only shadow points along
+    /// rays from the apex through it, which are outside the cone too — so both can be culled.
+    pub fn may_reach(&self, apex: Vec3, c: Vec3, r: f32) -> bool {
+        let d = c - apex;
+        let dist = d.length();
+        if dist <= r {
+            return true;
+        }
+        let angle = (d.dot(self.direction) / dist).clamp(-1.0, 1.0).acos();
+        // A small slack keeps float rounding on the safe (drawn) side.
+        angle <= self.cos_outer.clamp(-1.0, 1.0).acos() + (r / dist).asin() + 1e-4
+    }
+
+    /// [`Spot::may_reach`] for a box (its bounding ball).
+    pub fn may_reach_box(&self, apex: Vec3, (lo, hi): (Vec3, Vec3)) -> bool {
+        self.may_reach(apex, 0.5 * (lo + hi), 0.5 * (hi - lo).length())
+    }
 }
 
 /// A scene object that is not part of the world: it receives light and casts volumes.
@@ -118,7 +151,26 @@ pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &PointLight)
         (Casters::Pvs, true) => reachable.clone(),
         (Casters::Pscs, true) => w.casters_with_pscs(p, r),
     };
-    LightWorldSets { leaf: Some(leaf), receivers: w.front_facing(&reachable, p), casters: w.back_facing(&candidates, p) }
+    let mut receivers = w.front_facing(&reachable, p);
+    let mut casters = w.back_facing(&candidates, p);
+    receivers.retain(|&f| face_in_cone(config, frame, light, f));
+    casters.retain(|&f| face_in_cone(config, frame, light, f));
+    LightWorldSets { leaf: Some(leaf), receivers, casters }
+}
+
+/// Whether world face `f` may be within the light's cone (always for a point light, and
+/// without culling).
+fn face_in_cone(config: &Config, frame: &WorldFrame, light: &PointLight, f: FaceId) -> bool {
+    let Some(spot) = cone_culling(config, light) else { return true };
+    let b = &frame.world.faces[f as usize].bounds;
+    let (a, c) = (frame.to_scene(b.min), frame.to_scene(b.max));
+    spot.may_reach_box(light.position, (a.min(c), a.max(c)))
+}
+
+/// The light's cone when culling by it (with `radius_culling`, which it goes with: both only
+/// drop what the light cannot reach).
+pub fn cone_culling(config: &Config, light: &PointLight) -> Option<Spot> {
+    light.spot.filter(|_| config.radius_culling)
 }
 
 /// One light's share of a frame.
@@ -239,6 +291,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
         let nearest = p.clamp(lo, hi);
         f64::from(nearest.distance_squared(p)) <= r * r
     };
+    let in_cone = |l: &PointLight, b: (Vec3, Vec3)| cone_culling(config, l).is_none_or(|s| s.may_reach_box(l.position, b));
     let Some(frame) = world else {
         // No world: every entity is drawn, lit within the radius and casts within it.
         let visible_entities: Vec<usize> = (0..entities.len()).collect();
@@ -247,7 +300,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
             .enumerate()
             .filter_map(|(i, l)| {
                 let r = culling_radius(config, l);
-                let near: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], l.position, r)).collect();
+                let near: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], l.position, r) && in_cone(l, entity_bounds[e])).collect();
                 (!near.is_empty()).then(|| LightPlan { light: i, receiver_entities: near.clone(), caster_entities: near, ..Default::default() })
             })
             .collect();
@@ -280,7 +333,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
         let receiver_entities: Vec<usize> = visible_entities
             .iter()
             .copied()
-            .filter(|&e| touches(entity_bounds[e], light.position, r))
+            .filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e]))
             .filter(|&e| !config.pvs || entity_leaves[e].iter().any(|&l| w.is_visible(light_leaf, l)))
             .collect();
         if receiver_faces.is_empty() && receiver_entities.is_empty() {
@@ -295,7 +348,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
             }
             for &e in &receiver_entities {
                 for f in entity_pyramid_casters(w, p, r, &world_aabb(frame, entity_bounds[e])) {
-                    if !taken[f as usize] {
+                    if !taken[f as usize] && face_in_cone(config, frame, light, f) {
                         taken[f as usize] = true;
                         caster_faces.push(f);
                         added += 1;
@@ -304,7 +357,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
             }
             caster_faces.sort_unstable();
         }
-        let caster_entities: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], light.position, r)).collect();
+        let caster_entities: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e])).collect();
         plans.push(LightPlan { light: i, receiver_faces, receiver_entities, caster_faces, caster_entities, added_by_entity_pyramids: added });
     }
     FramePlan { visible_faces, visible_entities, lights: plans, entity_transforms }
@@ -328,6 +381,18 @@ pub fn merge_ranges(ranges: impl IntoIterator<Item = (u32, u32)>) -> Vec<(u32, u
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_spot_cone_reaches_balls_that_meet_it_only() {
+        let s = Spot { direction: Vec3::NEG_Y, cos_inner: 20f32.to_radians().cos(), cos_outer: 30f32.to_radians().cos() };
+        let apex = Vec3::new(0.0, 10.0, 0.0);
+        // On the ground 10 m below: the outer edge is at 10 tan 30 = 5.77 m from the axis.
+        assert!(s.may_reach(apex, Vec3::new(5.5, 0.0, 0.0), 0.0));
+        assert!(!s.may_reach(apex, Vec3::new(6.0, 0.0, 0.0), 0.0));
+        assert!(s.may_reach(apex, Vec3::new(6.0, 0.0, 0.0), 0.3), "a ball straddling the edge");
+        assert!(!s.may_reach(apex, Vec3::new(0.0, 12.0, 0.0), 1.0), "behind the light");
+        assert!(s.may_reach(apex, Vec3::new(0.0, 10.5, 0.0), 1.0), "around the apex");
+    }
 
     #[test]
     fn ranges_merge_only_when_contiguous() {
