@@ -84,6 +84,9 @@ pub fn create(
     states: &mut ResourceStates,
     scene: &Scene,
 ) -> Result<Box<dyn LightingMethod>> {
+    if decl.name != crate::shadow_volumes::NAME {
+        scene.refuse_translucency(&format!("the {} method", decl.name)).map_err(Error::Usage)?;
+    }
     match decl.name.as_str() {
         "forward" => Ok(Box::new(Forward::new(gpu, shaders, decl)?)),
         crate::shadow_volumes::NAME => Ok(Box::new(crate::shadow_volumes::ShadowVolumes::new(gpu, shaders, states, scene, decl)?)),

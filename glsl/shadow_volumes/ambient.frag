@@ -1,6 +1,8 @@
 #version 460
 // The ambient/emissive pass of Eq. 5: diffuse * lightmap * N_z + luminance (faithful), or the
 // emission alone (physical: direct light only). Writes depth for the stencil and light passes.
+// Alpha is the opacity: the opaque pipelines do not blend (alpha 1 stays 1), the translucent
+// path's blend it over the opaque image.
 #include "common/frame.glsl"
 #include "surface.glsl"
 
@@ -28,7 +30,7 @@ void main() {
     Material m = materials.items[draw.material];
     vec3 emission = m.emission.rgb;
     if (MODE == 1u) {
-        out_radiance = vec4(emission, 1.0);
+        out_radiance = vec4(emission, m.albedo.w);
         return;
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
@@ -36,5 +38,5 @@ void main() {
     if (NORMAL_MAP && AMBIENT_NZ) {
         nz = normalize(texture(normal_map, in_uv).xyz * 2.0 - 1.0).z;
     }
-    out_radiance = vec4(albedo * ambient.lightmap.rgb * nz + emission, 1.0);
+    out_radiance = vec4(albedo * ambient.lightmap.rgb * nz + emission, m.albedo.w);
 }

@@ -6,6 +6,8 @@
 //   specular gated on N.L > 0, N from the normal map, L and E in tangent space, d from the
 //   world-space light vector (the seed's two light vectors, never collapsed).
 // physical: the renderer's BRDF (glsl/common/lights.glsl) * I / d^2 * cos, zero beyond the radius.
+// A translucent surface's light is scaled by its opacity (its share of the pixel), last, so an
+// opaque one (x * 1.0) is unchanged to the bit.
 // Either way a surface whose geometric normal faces away from the light gets nothing: it is the
 // near cap of its own shadow volume, where the stencil count is a depth tie.
 #include "common/frame.glsl"
@@ -93,7 +95,7 @@ void main() {
             float spec = diff > 0.0 ? clamp(dot(tn, normalize(l + e)), 0.0, 1.0) : 0.0;
             c += pow(spec, 32.0) * specular;
         }
-        out_radiance.rgb = spot * attenuation(dist, radius) * light.colour.rgb * c;
+        out_radiance.rgb = spot * attenuation(dist, radius) * light.colour.rgb * c * m.albedo.w;
         return;
     }
     if (radius > 0.0 && dist > radius) {
@@ -105,5 +107,5 @@ void main() {
         n = normalize(t * tn.x + b * tn.y + n * tn.z);
     }
     vec3 v = normalize(frame.camera_pos.xyz - in_world);
-    out_radiance.rgb = spot * brdf_times_cos(n, v, to_light / dist, albedo, specular, m.specular.w) * light.colour.rgb / (dist * dist);
+    out_radiance.rgb = spot * brdf_times_cos(n, v, to_light / dist, albedo, specular, m.specular.w) * light.colour.rgb / (dist * dist) * m.albedo.w;
 }

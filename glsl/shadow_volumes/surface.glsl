@@ -13,7 +13,7 @@ layout(set = 0, binding = 1) uniform PointLightBlock {
 } light;
 
 struct Material {
-    vec4 albedo;    // rgb: diffuse albedo
+    vec4 albedo;    // rgb: diffuse albedo; w: opacity (1 opaque, < 1 translucent)
     vec4 specular;  // rgb: specular colour; w: Blinn-Phong exponent (physical mode)
     vec4 emission;  // rgb: emitted radiance (the seed's luminance term)
     uvec4 maps;     // x: has a normal map

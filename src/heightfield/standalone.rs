@@ -22,6 +22,7 @@ pub struct Standalone {
 impl Standalone {
     /// `decl` names `heightfield_pyramid` or `heightfield_bruteforce` with its parameters.
     pub fn new(mut gpu: Gpu, scene: &Scene, decl: &MethodDecl) -> Result<Standalone> {
+        scene.refuse_translucency(&format!("the {} method", decl.name)).map_err(Error::Usage)?;
         let horizon = if decl.name == super::BRUTE_FORCE { Horizon::BruteForce } else { Horizon::Pyramid };
         let settings = Settings::from_decl(decl, horizon)?;
         let inputs = FieldInputs::from_scene(scene, &decl.name)?;

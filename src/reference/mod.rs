@@ -187,6 +187,9 @@ impl ReferenceRenderer {
         if width == 0 || height == 0 {
             return Err(Error::Usage(format!("image size {width}x{height} is empty")));
         }
+        // Stochastic transparency is not implemented in the tracer; refusing keeps a chart from
+        // measuring against a reference that draws the glass opaque.
+        scene.refuse_translucency("the reference path tracer").map_err(Error::Usage)?;
         let traced = TracedScene::build(scene)?;
         let buffers = traced.upload(&mut gpu)?;
         let pipeline = gpu.create_compute_pipeline(

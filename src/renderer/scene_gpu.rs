@@ -218,7 +218,7 @@ impl SceneGpu {
         let mut material_maps = Vec::new();
         for m in &scene.materials {
             gpu_materials.push(GpuMaterial {
-                albedo: m.albedo.extend(1.0).into(),
+                albedo: m.albedo.extend(m.opacity).into(),
                 specular: m.specular.extend(m.exponent).into(),
                 emission: m.emission.extend(0.0).into(),
                 maps: [m.normal_map.is_some() as u32, 0, 0, 0],

@@ -157,6 +157,7 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
         "specular_map",
         "transmittance",
         "emission",
+        "opacity",
     ])?;
     let name_f = t.require("name", "a unique material name")?;
     let name = name(&name_f)?;
@@ -185,6 +186,7 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
         specular_map: opt(t.get("specular_map"), |f| f.existing_file())?,
         transmittance,
         emission: opt(t.get("emission"), |f| f.colour())?.unwrap_or(Vec3::ZERO),
+        opacity: opt(t.get("opacity"), |f| f.number_where("a number in (0, 1]", |x| x > 0.0 && x <= 1.0))?.unwrap_or(1.0),
     })
 }
 

@@ -98,6 +98,24 @@ impl Scene {
         methods::check(&self.source, &self.methods, known)
     }
 
+    /// The first translucent material (opacity < 1) an object uses, with its index.
+    pub fn translucent_material(&self) -> Option<(usize, &Material)> {
+        self.objects.iter().filter_map(|o| self.materials.get(o.material).map(|m| (o.material, m))).find(|(_, m)| m.is_translucent())
+    }
+
+    /// Refuses translucent materials for a consumer (`who`) that draws opaque surfaces only:
+    /// one line naming the file, the material and the field, so an image is never silently
+    /// drawn as if the glass were opaque.
+    pub fn refuse_translucency(&self, who: &str) -> Result<(), String> {
+        match self.translucent_material() {
+            None => Ok(()),
+            Some((i, m)) => Err(format!(
+                "{}: materials[{i}] ({}).opacity = {}: {who} draws opaque surfaces only (translucent materials are drawn by the shadow_volumes method)",
+                self.source, m.name, m.opacity
+            )),
+        }
+    }
+
     /// The material of `object` (`None` only for a hand-built object with a bad index).
     pub fn material_of(&self, object: &Object) -> Option<&Material> {
         self.materials.get(object.material)

@@ -397,6 +397,8 @@ fn value_checks_name_their_field() {
     assert_eq!((e.line, e.field.as_str()), (Some(1), "camera"));
     let mat = |body: &str| format!("{CAM}[[materials]]\nname = \"a\"\n{body}");
     fails_at(&mat("albedo = [0.5, 1.2, 0.5]\n"), 6, "materials[0].albedo");
+    fails_at(&mat("opacity = 0\n"), 6, "materials[0].opacity");
+    fails_at(&mat("albedo = 0.5\nopacity = 1.5\n"), 7, "materials[0].opacity");
     fails_at(
         &mat("albedo = 0.7\ntransmittance = 0.5\n"),
         7,

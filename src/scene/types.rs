@@ -98,9 +98,16 @@ pub struct Material {
     pub transmittance: Vec3,
     /// Emitted radiance in W/(m²·sr), seen directly only (it lights nothing; use lights for that).
     pub emission: Vec3,
+    /// Coverage α in (0, 1]: 1 is opaque; below 1 the surface is translucent, seen as
+    /// `α·surface + (1 − α)·behind` (a pane of glass without refraction).
+    pub opacity: f32,
 }
 
 impl Material {
+    pub fn is_translucent(&self) -> bool {
+        self.opacity < 1.0
+    }
+
     /// The material used by objects that name none: grey, matte.
     pub fn default_grey(name: &str) -> Material {
         Material {
@@ -113,6 +120,7 @@ impl Material {
             specular_map: None,
             transmittance: Vec3::ZERO,
             emission: Vec3::ZERO,
+            opacity: 1.0,
         }
     }
 }

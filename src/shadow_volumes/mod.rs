@@ -98,7 +98,18 @@ impl Setup {
         let mut world_objects = Vec::new();
         let mut entities = Vec::new();
         for (i, obj) in scene.objects.iter().enumerate() {
+            let opacity = scene.material_of(obj).map_or(1.0, |m| m.opacity);
             if let MeshSource::World { level: l, .. } = &obj.mesh {
+                if opacity < 1.0 {
+                    // The BSP, its PVS and the PSCS are compiled from the world's faces as solid
+                    // walls, so a translucent world face would still hide what is behind it.
+                    return Err(Error::Usage(format!(
+                        "{}: objects[{i}] ({}): material {:?}.opacity = {opacity}: the {NAME} method draws translucent entities only; the BSP world is opaque (its PVS treats every face as a wall), so make the glass a separate object",
+                        scene.source,
+                        obj.name,
+                        scene.materials[obj.material].name
+                    )));
+                }
                 let translate = obj.transform.w_axis.truncate();
                 match &level {
                     Some((other, t)) if other != l || *t != translate => {
@@ -118,6 +129,7 @@ impl Setup {
                 topology,
                 base: obj.transform,
                 animation: obj.animation,
+                opacity,
             });
         }
         let world = match level {
@@ -222,6 +234,7 @@ pub struct ShadowVolumes {
     features: Vec<Features>,
     /// Ambient pipelines by normal map; light pipelines by (normal map, specular).
     ambient: [PipelineId; 2],
+    translucent_ambient: [PipelineId; 2],
     light: [[PipelineId; 2]; 2],
     volume: PipelineId,
     silhouette: PipelineId,
@@ -271,6 +284,15 @@ impl ShadowVolumes {
                 light.push(gpu.create_graphics_pipeline(&d, shaders)?);
             }
         }
+        // The translucent path's ambient pass: `α·surface + (1 − α)·behind` over the opaque
+        // image, with depth writes so the light passes after it find the nearest layer only.
+        let mut translucent_ambient = Vec::with_capacity(2);
+        for nm in [false, true] {
+            let mut d = surface(&format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }), "shadow_volumes/ambient.frag", vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)]);
+            d.color_targets[0].blend = BlendMode::Alpha;
+            translucent_ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
+        }
+        let translucent_ambient = [translucent_ambient[0], translucent_ambient[1]];
         let ambient = [ambient[0], ambient[1]];
         let light = [[light[0], light[1]], [light[2], light[3]]];
         let (inc, dec) = if c.stencil_wrap {
@@ -304,7 +326,7 @@ impl ShadowVolumes {
         gpu.upload_image(default_normal, 0, bytemuck::cast_slice(&[0.5f32, 0.5, 1.0, 1.0]))?;
         states.set_image(gpu, default_normal, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         let frames = Cell::new(0);
-        Ok(ShadowVolumes { setup, faces, templates, silhouettes, features, ambient, light, volume, silhouette, nudge_far: !depth_clamp, default_normal, frames, last_plan: RefCell::new(None) })
+        Ok(ShadowVolumes { setup, faces, templates, silhouettes, features, ambient, translucent_ambient, light, volume, silhouette, nudge_far: !depth_clamp, default_normal, frames, last_plan: RefCell::new(None) })
     }
 
     pub fn setup(&self) -> &Setup {
@@ -410,6 +432,14 @@ impl ShadowVolumes {
     /// The draws of a pass: world ranges and entities, each with its model matrix and
     /// material, sorted by pipeline (features) then material, as the seed pre-sorts meshes.
     fn draw_list(&self, scene: &SceneGpu, plan: &FramePlan, faces: &[FaceId], entities: &[usize]) -> Vec<DrawCall> {
+        let mut calls = self.draws_in_order(scene, plan, faces, entities);
+        calls.sort_by_key(|c| (self.features_of(c.material), c.material));
+        calls
+    }
+
+    /// The draws of a pass in the order given (world ranges first): the translucent path keeps
+    /// its back-to-front entity order.
+    fn draws_in_order(&self, scene: &SceneGpu, plan: &FramePlan, faces: &[FaceId], entities: &[usize]) -> Vec<DrawCall> {
         let mut calls = Vec::new();
         for (draw, ranges) in self.face_ranges(faces) {
             let d = &scene.draws[draw];
@@ -419,7 +449,6 @@ impl ShadowVolumes {
             let d = &scene.draws[self.setup.entities[e].draw];
             calls.push(DrawCall { material: d.material, model: plan.entity_transforms[e], vertex_offset: d.vertex_offset, ranges: vec![(d.first_index, d.index_count)] });
         }
-        calls.sort_by_key(|c| (self.features_of(c.material), c.material));
         calls
     }
 
@@ -555,104 +584,127 @@ impl LightingMethod for ShadowVolumes {
                 });
         }
 
-        // Ambient + emissive, and the depth every later pass tests against.
-        let ambient_calls = self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities);
-        let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
-        graph
-            .pass("ambient")
-            .color_attachment(t.radiance, whole, true)
-            .depth_stencil_write(t.depth_stencil, true)
-            .buffer(scene.vertices, Access::VertexRead, None)
-            .buffer(scene.indices, Access::IndexRead, None)
-            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                    colors: vec![RenderTarget::clear_color(t.radiance, [uniforms.ambient[0], uniforms.ambient[1], uniforms.ambient[2], 1.0])],
-                    depth_stencil: Some(RenderTarget::clear_depth(t.depth_stencil, 1.0, 0)),
-                })?;
-                let zero_light = LightBlock::zeroed();
-                let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
-                let extra = |albedo, normal, _specular| {
-                    vec![
-                        ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
-                        ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
-                        ("ambient", Bind::UniformData(ambient_bytes)),
-                    ]
-                };
-                record_surface(ctx, self, scene, &ambient_calls, |f| self.ambient[f.normal_map as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&zero_light))?;
-                ctx.rec.end_rendering();
-                Ok(())
-            });
-
-        for (li, lp) in plan.lights.iter().enumerate() {
-            // The silhouette pass wrote this light's entity volumes at slot `li`.
-            let li = li as u32;
-            let light_index = lp.light;
-            let light = &self.setup.lights[light_index];
-            let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| (self.faces[f as usize].template_first, self.faces[f as usize].template_count)));
-            let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
-                Some(s) => lp.caster_entities.iter().map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices)).collect(),
-                None => Vec::new(),
+        // The seed's path twice: opaque surfaces (translucent ones omitted from receivers and
+        // casters, so light shines through them), then the translucent entities alone, back to
+        // front, blended over the opaque image; their depth lets the second round of stencil
+        // volumes (opaque casters only) and light passes reach the nearest translucent layer.
+        for translucent in [false, true] {
+            if translucent && plan.translucent_entities.is_empty() {
+                break;
+            }
+            let prefix = if translucent { "translucent " } else { "" };
+            let ambient_calls = if translucent {
+                self.draws_in_order(scene, &plan, &[], &plan.translucent_entities)
+            } else {
+                self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities)
             };
-            let light_pos = light.position;
-            let nudge = self.nudge_far as u32;
-            let mut pass = graph.pass(&format!("light {light_index} volumes")).depth_stencil_write(t.depth_stencil, false);
-            if let Some(b) = self.templates {
-                pass = pass.buffer(b, Access::VertexRead, None);
-            }
-            if let Some(s) = &self.silhouettes {
-                pass = pass.buffer(s.volumes, Access::VertexRead, None);
-            }
-            let templates = self.templates;
-            let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
-            pass.record(move |ctx| {
-                let extent = ctx.rec.begin_rendering(&RenderingDesc { colors: Vec::new(), depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
-                ctx.rec.clear_stencil(extent, 0)?;
-                ctx.rec.bind_pipeline(self.volume)?;
-                ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
-                if let (Some(b), false) = (templates, world_ranges.is_empty()) {
-                    ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
-                    ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(1.0).into(), nudge_far: nudge }))?;
-                    for &(first, count) in &world_ranges {
-                        ctx.rec.draw_from(count, first)?;
-                    }
-                }
-                if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
-                    ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
-                    ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(0.0).into(), nudge_far: nudge }))?;
-                    for &(first, count) in &entity_ranges {
-                        ctx.rec.draw_from(count, first)?;
-                    }
-                }
-                ctx.rec.end_rendering();
-                Ok(())
-            });
-
-            let calls = self.draw_list(scene, &plan, &lp.receiver_faces, &lp.receiver_entities);
-            let block = self.light_block(light_index);
+            let ambient_pipelines = if translucent { self.translucent_ambient } else { self.ambient };
+            let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
             graph
-                .pass(&format!("light {light_index} lighting"))
-                .color_attachment(t.radiance, whole, false)
-                .depth_stencil_read(t.depth_stencil)
+                .pass(&format!("{prefix}ambient"))
+                .color_attachment(t.radiance, whole, !translucent)
+                .depth_stencil_write(t.depth_stencil, !translucent)
                 .buffer(scene.vertices, Access::VertexRead, None)
                 .buffer(scene.indices, Access::IndexRead, None)
                 .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
                 .record(move |ctx| {
-                    let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                        colors: vec![RenderTarget::load(t.radiance)],
-                        depth_stencil: Some(RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) }),
-                    })?;
-                    let extra = |albedo, normal, specular| {
+                    let (colors, depth_stencil) = if translucent {
+                        (vec![RenderTarget::load(t.radiance)], RenderTarget::load(t.depth_stencil))
+                    } else {
+                        (vec![RenderTarget::clear_color(t.radiance, [uniforms.ambient[0], uniforms.ambient[1], uniforms.ambient[2], 1.0])], RenderTarget::clear_depth(t.depth_stencil, 1.0, 0))
+                    };
+                    let _ = ctx.rec.begin_rendering(&RenderingDesc { colors, depth_stencil: Some(depth_stencil) })?;
+                    let zero_light = LightBlock::zeroed();
+                    let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
+                    let extra = |albedo, normal, _specular| {
                         vec![
                             ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
                             ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
-                            ("specular_map", Bind::Sampled { image: specular, range: whole, sampler }),
+                            ("ambient", Bind::UniformData(ambient_bytes)),
                         ]
                     };
-                    record_surface(ctx, self, scene, &calls, |f| self.light[f.normal_map as usize][f.specular as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&block))?;
+                    record_surface(ctx, self, scene, &ambient_calls, |f| ambient_pipelines[f.normal_map as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&zero_light))?;
                     ctx.rec.end_rendering();
                     Ok(())
                 });
+
+            for (li, lp) in plan.lights.iter().enumerate() {
+                let (receiver_faces, receiver_entities): (&[FaceId], &[usize]) = if translucent { (&[], &lp.translucent_receivers) } else { (&lp.receiver_faces, &lp.receiver_entities) };
+                if translucent && receiver_entities.is_empty() {
+                    continue;
+                }
+                // The silhouette pass wrote this light's entity volumes at slot `li`.
+                let li = li as u32;
+                let light_index = lp.light;
+                let light = &self.setup.lights[light_index];
+                let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| (self.faces[f as usize].template_first, self.faces[f as usize].template_count)));
+                let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
+                    Some(s) => lp.caster_entities.iter().map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices)).collect(),
+                    None => Vec::new(),
+                };
+                let light_pos = light.position;
+                let nudge = self.nudge_far as u32;
+                let mut pass = graph.pass(&format!("light {light_index} {prefix}volumes")).depth_stencil_write(t.depth_stencil, false);
+                if let Some(b) = self.templates {
+                    pass = pass.buffer(b, Access::VertexRead, None);
+                }
+                if let Some(s) = &self.silhouettes {
+                    pass = pass.buffer(s.volumes, Access::VertexRead, None);
+                }
+                let templates = self.templates;
+                let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
+                pass.record(move |ctx| {
+                    let extent = ctx.rec.begin_rendering(&RenderingDesc { colors: Vec::new(), depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                    ctx.rec.clear_stencil(extent, 0)?;
+                    ctx.rec.bind_pipeline(self.volume)?;
+                    ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+                    if let (Some(b), false) = (templates, world_ranges.is_empty()) {
+                        ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(1.0).into(), nudge_far: nudge }))?;
+                        for &(first, count) in &world_ranges {
+                            ctx.rec.draw_from(count, first)?;
+                        }
+                    }
+                    if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
+                        ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(0.0).into(), nudge_far: nudge }))?;
+                        for &(first, count) in &entity_ranges {
+                            ctx.rec.draw_from(count, first)?;
+                        }
+                    }
+                    ctx.rec.end_rendering();
+                    Ok(())
+                });
+
+                // Translucent receivers: the depth test (LESS_OR_EQUAL, no writes) passes only
+                // where a layer's depth is the stored one, i.e. the nearest translucent layer;
+                // light.frag scales the light by the material's opacity.
+                let calls = if translucent { self.draws_in_order(scene, &plan, receiver_faces, receiver_entities) } else { self.draw_list(scene, &plan, receiver_faces, receiver_entities) };
+                let block = self.light_block(light_index);
+                graph
+                    .pass(&format!("light {light_index} {prefix}lighting"))
+                    .color_attachment(t.radiance, whole, false)
+                    .depth_stencil_read(t.depth_stencil)
+                    .buffer(scene.vertices, Access::VertexRead, None)
+                    .buffer(scene.indices, Access::IndexRead, None)
+                    .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+                    .record(move |ctx| {
+                        let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                            colors: vec![RenderTarget::load(t.radiance)],
+                            depth_stencil: Some(RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) }),
+                        })?;
+                        let extra = |albedo, normal, specular| {
+                            vec![
+                                ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
+                                ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
+                                ("specular_map", Bind::Sampled { image: specular, range: whole, sampler }),
+                            ]
+                        };
+                        record_surface(ctx, self, scene, &calls, |f| self.light[f.normal_map as usize][f.specular as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&block))?;
+                        ctx.rec.end_rendering();
+                        Ok(())
+                    });
+            }
         }
         Ok(())
     }

@@ -90,6 +90,9 @@ pub struct Entity {
     pub bounds: (Vec3, Vec3),
     pub base: Mat4,
     pub animation: Option<Animation>,
+    /// Its material's opacity: below 1 the entity is translucent — neither lit nor shadowing in
+    /// the opaque path, drawn afterwards by the translucent path.
+    pub opacity: f32,
 }
 
 impl Entity {
@@ -186,6 +189,9 @@ pub struct LightPlan {
     pub caster_entities: Vec<usize>,
     /// Back-facing faces the entity pyramids added to the strategy's set.
     pub added_by_entity_pyramids: usize,
+    /// Translucent entities the light reaches, back to front (the translucent path's
+    /// receivers; they are in neither `receiver_entities` nor `caster_entities`).
+    pub translucent_receivers: Vec<usize>,
 }
 
 /// Everything one frame draws.
@@ -198,6 +204,8 @@ pub struct FramePlan {
     pub lights: Vec<LightPlan>,
     /// Entity transforms of this frame (scene space), by entity.
     pub entity_transforms: Vec<Mat4>,
+    /// Visible translucent entities, back to front (not in `visible_entities`).
+    pub translucent_entities: Vec<usize>,
 }
 
 /// The empty leaves an entity's box reaches: the leaves it is taken to occupy. The box is pulled
@@ -283,8 +291,36 @@ fn entity_pyramid_casters(w: &CompiledWorld, light: DVec3, r: f64, b: &Aabb) -> 
 }
 
 /// Plans a frame: `sets[i]` are light `i`'s world sets (from [`light_world_sets`]; ignored
-/// without a world), `camera` the eye (scene space), `t` the animation time.
+/// without a world), `camera` the eye (scene space), `t` the animation time. Translucent
+/// entities are taken out of the opaque path (the seed's compromise: light shines through
+/// them) and listed back to front for the translucent path.
 pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets], lights: &[PointLight], entities: &[Entity], camera: Vec3, t: f32) -> FramePlan {
+    let mut plan = plan_all(config, world, sets, lights, entities, camera, t);
+    if !entities.iter().any(|e| e.opacity < 1.0) {
+        return plan;
+    }
+    let translucent = |e: &usize| entities[*e].opacity < 1.0;
+    // Back to front by the distance of the bounding box's centre: one order per entity, which is
+    // exact for disjoint panes stacked along the view and the usual approximation otherwise
+    // (the world's faces are opaque, so the BSP order is not needed).
+    let depth: Vec<f32> = entities.iter().zip(&plan.entity_transforms).map(|(e, m)| {
+        let (lo, hi) = e.world_bounds(m);
+        (0.5 * (lo + hi)).distance(camera)
+    }).collect();
+    let back_to_front = |list: &mut Vec<usize>| list.sort_by(|a, b| depth[*b].total_cmp(&depth[*a]).then(a.cmp(b)));
+    plan.translucent_entities = plan.visible_entities.iter().copied().filter(translucent).collect();
+    back_to_front(&mut plan.translucent_entities);
+    plan.visible_entities.retain(|e| !translucent(e));
+    for lp in &mut plan.lights {
+        lp.translucent_receivers = lp.receiver_entities.iter().copied().filter(translucent).collect();
+        back_to_front(&mut lp.translucent_receivers);
+        lp.receiver_entities.retain(|e| !translucent(e));
+        lp.caster_entities.retain(|e| !translucent(e));
+    }
+    plan
+}
+
+fn plan_all(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets], lights: &[PointLight], entities: &[Entity], camera: Vec3, t: f32) -> FramePlan {
     let entity_transforms: Vec<Mat4> = entities.iter().map(|e| e.transform_at(t)).collect();
     let entity_bounds: Vec<(Vec3, Vec3)> = entities.iter().zip(&entity_transforms).map(|(e, m)| e.world_bounds(m)).collect();
     let touches = |(lo, hi): (Vec3, Vec3), p: Vec3, r: f64| {
@@ -304,7 +340,7 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
                 (!near.is_empty()).then(|| LightPlan { light: i, receiver_entities: near.clone(), caster_entities: near, ..Default::default() })
             })
             .collect();
-        return FramePlan { visible_faces: Vec::new(), visible_entities, lights: plans, entity_transforms };
+        return FramePlan { visible_faces: Vec::new(), visible_entities, lights: plans, entity_transforms, ..Default::default() };
     };
     let w = &frame.world;
     let cam_leaf = w.leaf_of(frame.to_world(camera));
@@ -358,9 +394,9 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
             caster_faces.sort_unstable();
         }
         let caster_entities: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e])).collect();
-        plans.push(LightPlan { light: i, receiver_faces, receiver_entities, caster_faces, caster_entities, added_by_entity_pyramids: added });
+        plans.push(LightPlan { light: i, receiver_faces, receiver_entities, caster_faces, caster_entities, added_by_entity_pyramids: added, ..Default::default() });
     }
-    FramePlan { visible_faces, visible_entities, lights: plans, entity_transforms }
+    FramePlan { visible_faces, visible_entities, lights: plans, entity_transforms, ..Default::default() }
 }
 
 /// Merges ascending `(first, count)` ranges that touch.
