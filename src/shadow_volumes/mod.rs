@@ -11,7 +11,12 @@
 //!    wrapping stencil ops, colour writes off, depth test on, no depth writes, z-fail (or z-pass
 //!    for comparison), the far caps at infinity (w = 0) kept by depth clamp where the device has
 //!    it and by the infinite projection otherwise; then **lighting** — the light's receivers
-//!    drawn again, added where the stencil is 0.
+//!    drawn again, added where the stencil is 0;
+//! 4. when translucent entities (material opacity < 1) are in view, the seed's compromise: they
+//!    were left out of 2–3 (neither lit nor casting, so light shines through them), and now are
+//!    drawn back to front over the image with depth writes (**translucent ambient**), then per
+//!    light the opaque casters' volumes again and the light times the opacity, which the depth
+//!    test lets reach the nearest translucent layer only.
 //!
 //! World casters are the back-facing faces (light behind their plane) of the caster strategy
 //! ([`config::Casters`]: every face, the light's PVS, or the PVS with the Potential
