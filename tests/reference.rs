@@ -735,3 +735,74 @@ fn image_environment_seen_directly_and_lighting_planes() {
         lit.assert();
     }
 }
+
+/// Stochastic transparency: a pane of opacity α over a lit plane. A pixel through the pane is
+/// `α·pane + (1 − α)·floor`, and the floor in the pane's shadow receives `1 − α` of the light
+/// (the physical truth the shadow_volumes method's "light shines through glass" departs from).
+#[test]
+fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacity() {
+    let (light, intensity, albedo) = (Vec3::new(0.2, 1.5, -0.3), 10.0, 0.9);
+    // No emission on the pane: an emissive pane would also light the floor below it (the tracer
+    // counts emission wherever a path meets it), which this closed form leaves out.
+    let (pane_y, half, alpha, pane_albedo, pane_emission) = (0.6, 0.5, 0.4, 0.5, 0.0);
+    let toml = format!(
+        "{LIT_PLANE}\n[[materials]]\nname = \"m\"\nalbedo = {albedo}\n\n[[materials]]\nname = \"glass\"\nalbedo = {pane_albedo}\nemission = {pane_emission}\nopacity = {alpha}\n\n\
+         [[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n\n\
+         [[objects]]\nmesh = \"quad\"\ncorner = [{}, {pane_y}, {}]\nedge_u = [0, 0, {}]\nedge_v = [{}, 0, 0]\nmaterial = \"glass\"\n\n\
+         [[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {intensity}\n",
+        -half, -half, 2.0 * half, 2.0 * half, light.x, light.y, light.z
+    );
+    let scene = parse(&toml);
+    let size = (32, 32);
+    let img = &render(&scene, size, &[settings(256, 0, LightPaths::Direct, 5)])[0];
+    let in_pane = |o: Vec3, d: Vec3, t_max: f32| {
+        let t = (pane_y - o.y) / d.y;
+        let p = o + d * t;
+        (t > 0.0 && t < t_max && p.x.abs() <= half && p.z.abs() <= half).then_some(p)
+    };
+    let lambert = |p: Vec3, rho: f32| {
+        let to_light = light - p;
+        let r2 = to_light.length_squared();
+        rho / std::f32::consts::PI * intensity * (to_light.y / r2.sqrt()) / r2
+    };
+    let mut transmitted = glam::DVec2::ZERO;
+    let (mut through, mut under_shadow, mut open) = (Agreement::new("seen through the pane"), Agreement::new("floor in the pane's shadow"), Agreement::new("floor in the open"));
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            // (through the pane, floor point behind the pane's shadow), uniform over the pixel.
+            let mut class = None;
+            let mut uniform = true;
+            let want = pixel_average(i, j, 8, |x, y| {
+                let (o, d) = scene.camera.ray(x, y, size.0, size.1);
+                let p = ground_point(&scene, x, y, size, 2.9)?;
+                let pane = in_pane(o, d, f32::MAX);
+                let shaded = in_pane(p, light - p, 1.0).is_some();
+                let c = (pane.is_some(), shaded);
+                uniform &= class.is_none_or(|k| k == c);
+                class = Some(c);
+                let floor = lambert(p, albedo) * if shaded { 1.0 - alpha } else { 1.0 };
+                Some(Vec3::splat(match pane {
+                    Some(q) => alpha * (pane_emission + lambert(q, pane_albedo)) + (1.0 - alpha) * floor,
+                    None => floor,
+                }))
+            });
+            let (Some(want), Some(c), true) = (want, class, uniform) else { continue };
+            if c == (false, true) {
+                // What the floor there would be without the pane (the raster compromise).
+                transmitted += glam::DVec2::new(img.mean.get(i, j)[0] as f64, (want.x / (1.0 - alpha)) as f64);
+            }
+            let a = match c {
+                (true, _) => &mut through,
+                (false, true) => &mut under_shadow,
+                (false, false) => &mut open,
+            };
+            a.check(img, i, j, want, want * 1e-3);
+        }
+    }
+    println!("{} pixels through the pane, {} of floor in its shadow, {} in the open; worst z: {:.2}, {:.2}, {:.2}; the pane's shadow gets {:.3} of the unshadowed light (1 − α = {})", through.pixels, under_shadow.pixels, open.pixels, through.worst.0, under_shadow.worst.0, open.worst.0, transmitted.x / transmitted.y, 1.0 - alpha);
+    assert!((transmitted.x / transmitted.y - (1.0 - alpha) as f64).abs() < 0.02, "{transmitted}");
+    assert!(through.pixels > 40 && under_shadow.pixels > 20 && open.pixels > 300, "{} / {} / {}", through.pixels, under_shadow.pixels, open.pixels);
+    through.assert();
+    under_shadow.assert();
+    open.assert();
+}

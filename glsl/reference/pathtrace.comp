@@ -63,6 +63,71 @@ layout(set = 0, binding = 11) readonly buffer Textures { uvec4 items[]; } textur
 #include "reference/trace.glsl"
 
 layout(set = 0, binding = 5) readonly buffer Materials { Material items[]; } materials;
+// Stochastic transparency: a surface of opacity a (its material's albedo.w) stops a ray with
+// probability a and otherwise lets it through unchanged, so the expected radiance is
+// a * surface + (1 - a) * behind, and each layer on a shadow ray blocks it with probability a.
+// Random numbers are drawn at translucent surfaces only, so opaque scenes trace as before.
+// Beyond MAX_LAYERS crossings the surface reached is kept.
+const uint MAX_LAYERS = 64u;
+
+float opacity_of(int triangle) {
+    return materials.items[shading.items[triangle].material].albedo.w;
+}
+
+// A ray origin just past the triangle's point at uv, on the side the ray travels to.
+vec3 beyond(int triangle, vec2 uv, vec3 d) {
+    Triangle tri = triangles.items[triangle];
+    vec3 p = tri.p0.xyz + uv.x * tri.e1.xyz + uv.y * tri.e2.xyz;
+    vec3 ng = normalize(cross(tri.e1.xyz, tri.e2.xyz));
+    return offset_origin(p, dot(ng, d) >= 0.0 ? ng : -ng);
+}
+
+// The surface (or area light) a ray stops at.
+Hit trace_visible(vec3 o, vec3 d, inout uint rng) {
+    Hit h = trace_closest(o, d);
+    for (uint k = 0u; k < MAX_LAYERS && h.triangle >= 0; ++k) {
+        float a = opacity_of(h.triangle);
+        if (a >= 1.0 || rand(rng) < a) {
+            break;
+        }
+        h = trace_closest(beyond(h.triangle, h.uv, d), d);
+    }
+    return h;
+}
+
+// `occluded` with translucent surfaces stopping the ray stochastically. The any-hit query
+// answers first; only when what it found is translucent are the layers walked nearest first.
+bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
+    for (uint i = 0u; i < params.counts.x; ++i) {
+        if (i != skip_light && hit_area_light(i, o, d) < t_max) {
+            return true;
+        }
+    }
+    int triangle;
+    vec2 uv;
+    float t = t_max;
+    if (!trace_triangles(o, d, true, t, triangle, uv)) {
+        return false;
+    }
+    if (opacity_of(triangle) >= 1.0) {
+        return true;
+    }
+    for (uint k = 0u; k < MAX_LAYERS; ++k) {
+        t = t_max;
+        if (!trace_triangles(o, d, false, t, triangle, uv)) {
+            return false;
+        }
+        float a = opacity_of(triangle);
+        if (a >= 1.0 || rand(rng) < a) {
+            return true;
+        }
+        vec3 next = beyond(triangle, uv, d);
+        t_max -= dot(next - o, d);
+        o = next;
+    }
+    return true;
+}
+
 layout(set = 0, binding = 6, rgba32f) uniform image2D mean_radiance;
 layout(set = 0, binding = 7, rgba32f) uniform image2D second_moment;
 
@@ -225,7 +290,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
             continue;
         }
         float t_max = dist == NO_HIT ? NO_HIT : dist * (1.0 - 1e-4);
-        if (!occluded(spawn_origin(s, l), l, t_max, i)) {
+        if (!blocked(spawn_origin(s, l), l, t_max, i, rng)) {
             sum += f * arriving;
         }
     }
@@ -237,7 +302,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
     float pdf;
     if (sample_environment(u, l, pdf)) {
         vec3 f = bsdf_times_cos(s, m, v, l);
-        if (any(greaterThan(f, vec3(0.0))) && !occluded(spawn_origin(s, l), l, NO_HIT, NO_LIGHT)) {
+        if (any(greaterThan(f, vec3(0.0))) && !blocked(spawn_origin(s, l), l, NO_HIT, NO_LIGHT, rng)) {
             float weight = mis_weight(pdf, bsdf_pdf(s, m, lobe_choice(m), v, l));
             sum += f * environment_radiance(l) * (weight / pdf);
         }
@@ -256,7 +321,7 @@ vec3 camera_ray(vec2 film) {
 vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
     bool skip_direct = (batch.flags & FLAG_INDIRECT_ONLY) != 0u;
     vec3 d = camera_ray(film);
-    Hit h = trace_closest(params.eye.xyz, d);
+    Hit h = trace_visible(params.eye.xyz, d, rng);
     if (h.triangle < 0) {
         if (skip_direct) {
             return vec3(0.0);
@@ -287,7 +352,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
         }
         throughput *= weight;
         d = l;
-        h = trace_closest(spawn_origin(s, l), d);
+        h = trace_visible(spawn_origin(s, l), d, rng);
         if (h.light >= 0) {
             break;  // area lights were sampled by next-event estimation
         }

@@ -16,6 +16,11 @@
 //!   camera rays. Area lights are opaque to all rays;
 //! - material emission is added wherever a path hits it (both sides), so an emissive mesh lights
 //!   the scene too;
+//! - a material's `opacity` α < 1 is stochastic transparency: every ray (camera, bounce and
+//!   shadow) stops at such a surface with probability α and otherwise passes through it
+//!   unchanged, so a pixel sees `α·surface + (1 − α)·behind` and a pane lets `1 − α` of a
+//!   light's power through — the physical counterpart of the `shadow_volumes` method's
+//!   compromise (light through glass unattenuated);
 //! - albedo, normal and specular maps as the raster methods apply them (see [`scene_data`]);
 //!   the raster methods sample each map at a pixel's centre, the reference averages it over the
 //!   pixel, so fine texture detail differs between them by aliasing alone (the maps have one
@@ -187,9 +192,6 @@ impl ReferenceRenderer {
         if width == 0 || height == 0 {
             return Err(Error::Usage(format!("image size {width}x{height} is empty")));
         }
-        // Stochastic transparency is not implemented in the tracer; refusing keeps a chart from
-        // measuring against a reference that draws the glass opaque.
-        scene.refuse_translucency("the reference path tracer").map_err(Error::Usage)?;
         let traced = TracedScene::build(scene)?;
         let buffers = traced.upload(&mut gpu)?;
         let pipeline = gpu.create_compute_pipeline(

@@ -57,6 +57,7 @@ pub struct TriangleShading {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct TracedMaterial {
+    /// rgb: diffuse albedo; w: opacity (stochastic transparency, see pathtrace.comp).
     pub albedo: [f32; 4],
     /// rgb: Blinn-Phong colour; w: exponent.
     pub specular: [f32; 4],
@@ -226,7 +227,7 @@ impl TracedScene {
             .iter()
             .zip(material_maps)
             .map(|(m, maps)| TracedMaterial {
-                albedo: m.albedo.extend(0.0).into(),
+                albedo: m.albedo.extend(m.opacity).into(),
                 specular: m.specular.extend(m.exponent).into(),
                 transmittance: m.transmittance.extend(0.0).into(),
                 emission: m.emission.extend(0.0).into(),
