@@ -228,6 +228,13 @@ fn opaque_only_consumers_refuse_translucent_materials_with_one_line() {
     let e = Renderer::new(common::test_gpu(), forward, None, (16, 16), 1).err().expect("forward must refuse").to_string();
     println!("{e}");
     assert!(!e.contains('\n') && e.contains("glass.toml") && e.contains("materials[1] (glass0).opacity") && e.contains("forward"), "{e}");
+    // The height-field methods, on a terrain whose ground material is made translucent.
+    let mut terrain = Scene::from_file(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/terrain_sine.toml")).unwrap();
+    let ground = terrain.materials.iter().position(|m| m.name == "ground").unwrap();
+    terrain.materials[ground].opacity = 0.5;
+    let e = Renderer::new(common::test_gpu(), terrain, None, (16, 16), 1).err().expect("the height-field method must refuse").to_string();
+    println!("{e}");
+    assert!(!e.contains('\n') && e.contains("terrain_sine.toml") && e.contains(&format!("materials[{ground}] (ground).opacity")) && e.contains("heightfield_pyramid"), "{e}");
     // A translucent BSP world: its PVS would still treat the glass as a wall.
     let world = format!("{}[camera]\nposition = [3, 1.7, -3]\ntarget = [6, 1, -6]\n\n[[materials]]\nname = \"glass\"\nopacity = 0.5\n\n[[objects]]\nname = \"world\"\nmesh = \"bsp_rooms\"\nseed = 1\nwall_material = \"glass\"\n", method(&[]));
     let scene = Scene::from_str(&world, "world.toml", std::path::Path::new(".")).unwrap();
