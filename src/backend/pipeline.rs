@@ -181,6 +181,9 @@ pub struct ComputePipelineDesc {
     pub specialization: Vec<SpecConstant>,
 }
 
+// One per pipeline, kept for hot reload: a few hundred bytes each, so boxing the graphics
+// description would save nothing worth an indirection.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) enum PipelineKind {
     Graphics(GraphicsPipelineDesc),

@@ -181,7 +181,7 @@ impl Renderer {
                     .pass("readback")
                     .transfer_read(t.radiance, SubresourceRange::mip(0))
                     .buffer(rb, Access::TransferWrite, None)
-                    .record(move |ctx| Ok(ctx.rec.copy_image_to_buffer(t.radiance, 0, 0, rb)?));
+                    .record(move |ctx| ctx.rec.copy_image_to_buffer(t.radiance, 0, 0, rb));
                 // Makes the copy visible to the host once the frame's fence has signalled.
                 graph.pass("host visibility").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
             }
@@ -207,7 +207,7 @@ impl Renderer {
                         .pass("screenshot readback")
                         .transfer_read(image, SubresourceRange::mip(0))
                         .buffer(rb, Access::TransferWrite, None)
-                        .record(move |ctx| Ok(ctx.rec.copy_image_to_buffer(image, 0, 0, rb)?));
+                        .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, rb));
                     graph.pass("screenshot host visibility").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
                 }
                 graph.pass("present").present(image).record(|_| Ok(()));
