@@ -194,7 +194,7 @@ radiance = 0.3
     ok(&penumbra(&args));
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let count = |m: &str| rows.iter().filter(|r| r.method == m).count();
-    assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (13, 7));
+    assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (14, 7));
     let err = |c: &str| rows.iter().find(|r| r.config == c).map(|r| r.rel_mse).unwrap_or_else(|| panic!("{c} missing"));
     let default = err("pyramid nphi=32 ls=4 lo=4 bands=4 corrected");
     println!("relative MSE: pyramid {default:.4}, nφ = 4 {:.4}, faithful {:.4}, 2 bands {:.4}, brute {:.4}", err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected"), err("pyramid nphi=32 ls=4 lo=4 bands=4 faithful"), err("pyramid nphi=32 ls=4 lo=4 bands=2 corrected"), err("brute nphi=32 step=0.5 bands=4 corrected"));

@@ -76,7 +76,7 @@ fn push_unique(out: &mut Vec<(String, MethodDecl)>, decl: MethodDecl, horizon: H
 }
 
 /// The pyramid's sweep, one parameter at a time from the scene's declaration: nφ ∈ {4, 8, 16,
-/// 32}, ls ∈ {1, 2, 3, 4}, lo ∈ {0, 2, 4}, bands ∈ {2, 3, 4}, the faithful and corrected
+/// 32}, ls ∈ {1, 2, 3, 4}, lo ∈ {0, 2, 4}, bands ∈ {2, 3, 4, 6}, the faithful and corrected
 /// modes (issue: chart sweep; thesis Tables 6.1–6.2 and Fig. 6.1–6.2), and a Hanning window on
 /// the transfer (not in the thesis: the digest's remedy for ringing).
 pub fn pyramid_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
@@ -91,7 +91,7 @@ pub fn pyramid_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     for lo in [0.0f64, 2.0, 4.0] {
         push_unique(&mut out, with(decl, "lo", lo.into()), Horizon::Pyramid);
     }
-    for b in [2i64, 3, 4] {
+    for b in [2i64, 3, 4, 6] {
         push_unique(&mut out, with(decl, "bands", b.into()), Horizon::Pyramid);
     }
     for m in ["faithful", "corrected"] {
@@ -293,7 +293,7 @@ mod tests {
             assert!(sweep.iter().any(|l| l == want), "{want} missing from {sweep:?}");
         }
         assert!(sweep.iter().any(|l| l == "pyramid nphi=32 ls=4 lo=4 bands=4 corrected hanning=5"), "{sweep:?}");
-        assert_eq!(sweep.len(), 13, "{sweep:?}");
+        assert_eq!(sweep.len(), 14, "{sweep:?}");
         let w = Settings::from_decl(&decl(&[("window", "lanczos".into()), ("window_width", 3.0.into())]), Horizon::Pyramid).unwrap();
         assert_eq!(w.window, Window::Lanczos(3.0));
         assert_eq!(w.window_factors()[0], 1.0);
