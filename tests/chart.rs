@@ -2,24 +2,10 @@
 
 mod common;
 
-use std::process::{Command, Output};
+use common::{ok, penumbra};
 
 use penumbra::image_io::HdrImage;
 
-fn penumbra(args: &[&str]) -> Output {
-    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
-    cmd.args(args).env("PENUMBRA_VALIDATION", "1");
-    if args[0] != "compare" {
-        cmd.args(["--device", &device]);
-    }
-    cmd.output().expect("run penumbra")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
 #[test]
 fn compare_prints_known_metrics_and_writes_a_diff_image() {

@@ -3,18 +3,9 @@
 
 mod common;
 
+use common::penumbra;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn penumbra(args: &[&str]) -> Output {
-    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-    Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .args(args)
-        .env("PENUMBRA_VALIDATION", "1")
-        .args(["--device", &device])
-        .output()
-        .expect("run penumbra")
-}
+use std::process::Output;
 
 fn path_str(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")

@@ -6,8 +6,8 @@
 
 mod common;
 
+use common::{ok, penumbra};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
@@ -161,20 +161,6 @@ fn normal_map_is_refused() {
     assert!(err.lines().count() == 1 && err.contains("bumpy.toml") && err.contains("\"ground\"") && err.contains("\"terrain\""), "{err}");
 }
 
-fn penumbra(args: &[&str]) -> Output {
-    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
-    cmd.args(args).env("PENUMBRA_VALIDATION", "1");
-    if args[0] != "compare" {
-        cmd.args(["--device", &device]);
-    }
-    cmd.output().expect("run penumbra")
-}
-
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
 /// `penumbra capture` of a textured flat field against `penumbra reference --direct-only`, as
 /// a user checks it: `penumbra compare` gives a small relative MSE (without the map the method

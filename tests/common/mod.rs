@@ -36,3 +36,21 @@ pub fn run_once(gpu: &Gpu, frame: penumbra::backend::Frame, graph: penumbra::gra
     rec.finish().unwrap();
     gpu.submit_and_wait(frame).unwrap();
 }
+
+/// Runs the `penumbra` binary as a user would: validation on, the test device chosen (`compare`
+/// takes no device).
+pub fn penumbra(args: &[&str]) -> std::process::Output {
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+    cmd.args(args).env("PENUMBRA_VALIDATION", "1");
+    if args.first() != Some(&"compare") {
+        cmd.args(["--device", &device]);
+    }
+    cmd.output().expect("run penumbra")
+}
+
+/// The command's standard output, failing the test with its standard error if it failed.
+pub fn ok(o: &std::process::Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
