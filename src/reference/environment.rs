@@ -183,10 +183,8 @@ mod tests {
         }
     }
 
-    #[test]
-    fn pdf_integrates_to_one_over_the_sphere() {
-        let m = map();
-        let n = 400;
+    /// ∫ pdf dω over the sphere by the midpoint rule in n × 2n equirect cells.
+    fn pdf_integral(m: &EnvironmentMap, n: usize) -> f64 {
         let mut sum = 0.0f64;
         for a in 0..n {
             for b in 0..2 * n {
@@ -195,6 +193,13 @@ mod tests {
                 sum += m.pdf(Environment::equirect_dir(uv)) as f64 * d_omega;
             }
         }
+        sum
+    }
+
+    #[test]
+    fn pdf_integrates_to_one_over_the_sphere() {
+        let m = map();
+        let sum = pdf_integral(&m, 400);
         assert!((sum - 1.0).abs() < 1e-3, "{sum}");
         // The bright texel is sampled far more often than its neighbours.
         let bright = Environment::equirect_dir(Vec2::new(5.5 / 16.0, 2.5 / 8.0));
@@ -218,15 +223,7 @@ mod tests {
         let m = cube();
         assert_eq!((m.width, m.height, m.cdf.len()), (6, 36, 37 + 36 * 7));
         // Quadrature over the sphere in equirect cells (the pdf is piecewise smooth).
-        let n = 600;
-        let mut sum = 0.0f64;
-        for a in 0..n {
-            for b in 0..2 * n {
-                let uv = Vec2::new((b as f32 + 0.5) / (2 * n) as f32, (a as f32 + 0.5) / n as f32);
-                let d_omega = 2.0 * std::f64::consts::PI.powi(2) * (uv.y as f64 * std::f64::consts::PI).sin() / (2 * n * n) as f64;
-                sum += m.pdf(Environment::equirect_dir(uv)) as f64 * d_omega;
-            }
-        }
+        let sum = pdf_integral(&m, 600);
         assert!((sum - 1.0).abs() < 2e-3, "{sum}");
         // Radiance is face k + 1 along each axis; the bright texel is -Z's (4, 2).
         let axes = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
