@@ -103,20 +103,31 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
     }
 }
 
-/// scenes/terrain_sky.toml (the chart's image-environment scene) loads, and one frame of the
-/// pyramid method at 64² is finite, lit and shadowed, under validation.
+/// scenes/terrain_sky.toml (the chart's image-environment scene) at 64²: the pyramid against the
+/// brute force (0.5-texel march) under the image sky — brighter on average (its horizons are
+/// biased low) and within 5% per texel on average (measured 0.8%; mean 1.950 against 1.932).
 #[test]
-fn the_sky_scene_renders() {
+fn the_sky_scene_pyramid_agrees_with_the_brute_force() {
     let s = Scene::from_file("scenes/terrain_sky.toml").unwrap();
     assert!(matches!(s.environment, Some(penumbra::scene::Environment::Image { .. })));
-    let mut decl = s.methods[0].clone();
-    decl.params.push(("resolution".into(), toml::Value::Integer(64), 0));
-    let mut h = Standalone::new(common::test_gpu(), &s, &decl).unwrap();
-    let img = h.shading(0.0).unwrap();
-    let m = h.validation_messages();
-    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
-    assert!(img.iter().all(|p| p[..3].iter().all(|v| v.is_finite() && *v >= 0.0)));
-    let max = img.iter().map(|p| p[2]).fold(0.0f32, f32::max);
-    let min = img.iter().map(|p| p[2]).fold(f32::MAX, f32::min);
-    assert!(max > 0.1 && min < 0.8 * max, "blue channel from {min} to {max}");
+    let run = |name: &str, extra: (&str, toml::Value)| {
+        let mut decl = penumbra::scene::MethodDecl { name: name.into(), line: 0, params: vec![] };
+        decl.params.push(("resolution".into(), toml::Value::Integer(64), 0));
+        decl.params.push((extra.0.into(), extra.1, 0));
+        let mut h = Standalone::new(common::test_gpu(), &s, &decl).unwrap();
+        let img = h.shading(0.0).unwrap();
+        clean(&h);
+        img
+    };
+    let pyr = run("heightfield_pyramid", ("lo", toml::Value::Float(4.0)));
+    let brute = run("heightfield_bruteforce", ("march_step", toml::Value::Float(0.5)));
+    let mean = |img: &[[f32; 4]]| img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / img.len() as f64;
+    let rel: f64 = pyr.iter().zip(&brute).map(|(a, b)| ((a[2] - b[2]).abs() / b[2].max(1e-3)) as f64).sum::<f64>() / pyr.len() as f64;
+    eprintln!("sky scene, 64²: mean shading pyramid {:.4}, brute force {:.4}; mean relative difference (blue) {rel:.4}", mean(&pyr), mean(&brute));
+    assert!(pyr.iter().chain(&brute).all(|p| p[..3].iter().all(|v| v.is_finite() && *v >= 0.0)));
+    // The pyramid underestimates horizons (E1), so it is brighter on average, and otherwise close.
+    assert!(mean(&pyr) > mean(&brute), "{} vs {}", mean(&pyr), mean(&brute));
+    assert!(rel < 0.05, "{rel}");
+    // A broken projection or rotation would not show in a pyramid/brute comparison (both read
+    // the same SH); the lopsided-sky test above pins the sky itself.
 }
