@@ -81,7 +81,13 @@ pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: 
     let text = std::fs::read_to_string(&table).map_err(|_| {
         Error::Usage(format!(
             "{}: no chart data for this scene at {}x{} in {}; run `penumbra chart {} --size {}x{}` first",
-            path.display(), opts.size.0, opts.size.1, cache_dir.display(), path.display(), opts.size.0, opts.size.1
+            path.display(),
+            opts.size.0,
+            opts.size.1,
+            cache_dir.display(),
+            path.display(),
+            opts.size.0,
+            opts.size.1
         ))
     })?;
     let configs = parse_csv(&text)?;
@@ -89,10 +95,16 @@ pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: 
         Some(Choice::Picked { config, rejected }) => {
             let why = Choice::Picked { config: config.clone(), rejected }.to_string();
             let info = crate::methods::info(&config.method)?;
-            let decl = scene.methods.iter().find(|d| d.name == config.method).ok_or_else(|| Error::Usage(format!("the chart names method `{}`, which the scene no longer enables; run `penumbra chart` again", config.method)))?;
-            let chosen = (info.sweep)(decl).into_iter().find(|(label, _)| *label == config.config).map(|(_, d)| d).ok_or_else(|| {
-                Error::Usage(format!("configuration `{}` is no longer in {}'s sweep; run `penumbra chart` again", config.config, config.method))
-            })?;
+            let decl = scene
+                .methods
+                .iter()
+                .find(|d| d.name == config.method)
+                .ok_or_else(|| Error::Usage(format!("the chart names method `{}`, which the scene no longer enables; run `penumbra chart` again", config.method)))?;
+            let chosen = (info.sweep)(decl)
+                .into_iter()
+                .find(|(label, _)| *label == config.config)
+                .map(|(_, d)| d)
+                .ok_or_else(|| Error::Usage(format!("configuration `{}` is no longer in {}'s sweep; run `penumbra chart` again", config.config, config.method)))?;
             Ok((chosen, why))
         }
         Some(none) => Err(Error::Usage(format!("--max-error {max_rel_mse}: {none}"))),

@@ -50,14 +50,7 @@ impl FlyCamera {
         let f = self.forward();
         let right = f.cross(Vec3::Y).normalize_or_zero();
         let mut v = Vec3::ZERO;
-        for (k, d) in [
-            (KeyCode::KeyW, f),
-            (KeyCode::KeyS, -f),
-            (KeyCode::KeyD, right),
-            (KeyCode::KeyA, -right),
-            (KeyCode::KeyE, Vec3::Y),
-            (KeyCode::KeyQ, -Vec3::Y),
-        ] {
+        for (k, d) in [(KeyCode::KeyW, f), (KeyCode::KeyS, -f), (KeyCode::KeyD, right), (KeyCode::KeyA, -right), (KeyCode::KeyE, Vec3::Y), (KeyCode::KeyQ, -Vec3::Y)] {
             if keys.contains(&k) {
                 v += d;
             }
@@ -105,12 +98,8 @@ impl App {
     fn start(&mut self, el: &ActiveEventLoop) -> Result<Running> {
         let scene = load_scene(self.opts.scene.as_deref())?;
         let (w, h) = self.opts.size;
-        let attrs = Window::default_attributes()
-            .with_title("penumbra")
-            .with_inner_size(PhysicalSize::new(w, h));
-        let window = el
-            .create_window(attrs)
-            .map_err(|e| Error::Usage(format!("cannot open a window: {e}")))?;
+        let attrs = Window::default_attributes().with_title("penumbra").with_inner_size(PhysicalSize::new(w, h));
+        let window = el.create_window(attrs).map_err(|e| Error::Usage(format!("cannot open a window: {e}")))?;
         let desc = self.opts.gpu.clone().with_display(el)?;
         let mut gpu = Gpu::new(&desc)?;
         let size = window.inner_size();
@@ -183,11 +172,7 @@ impl Running {
         let readback = self.grab_next;
         self.renderer.render(&camera, FrameOutput::Present { image: acquired.image, exposure: 1.0, readback })?;
         let gpu = &self.renderer.gpu;
-        gpu.submit_frame(
-            self.renderer.last_frame(),
-            Some((acquired.acquired, wait_stage)),
-            Some(acquired.rendered),
-        )?;
+        gpu.submit_frame(self.renderer.last_frame(), Some((acquired.acquired, wait_stage)), Some(acquired.rendered))?;
         let presented = gpu.present(&self.swapchain, &acquired)?;
         if readback {
             gpu.wait_frame(self.renderer.last_frame())?;
@@ -204,9 +189,7 @@ impl Running {
     /// Saves the last grabbed presented frame.
     fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
         let image = self.grabbed.take().ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
-        image
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
+        image.save_with_format(path, image::ImageFormat::Png).map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
     }
 }
 
@@ -306,9 +289,7 @@ pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
     let DemoScript { frames: max_frames, screenshot, resize_at } = script;
     let event_loop = EventLoop::new().map_err(|e| Error::Usage(format!("cannot connect to a display: {e}")))?;
     let mut app = App { opts: opts.clone(), max_frames, screenshot, resize_at, state: None, error: None };
-    event_loop
-        .run_app(&mut app)
-        .map_err(|e| Error::Usage(format!("event loop: {e}")))?;
+    event_loop.run_app(&mut app).map_err(|e| Error::Usage(format!("event loop: {e}")))?;
     if let Some(e) = app.error.take() {
         return Err(e);
     }

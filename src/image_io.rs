@@ -44,24 +44,15 @@ impl HdrImage {
 
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageIoError> {
         let raw: Vec<f32> = self.pixels.iter().flat_map(|p| *p).collect();
-        let img = image::Rgba32FImage::from_raw(self.width, self.height, raw).ok_or_else(|| ImageIoError::Io {
-            path: path.display().to_string(),
-            message: "pixel buffer does not match the size".into(),
-        })?;
-        img.save_with_format(path, image::ImageFormat::OpenExr).map_err(|e| ImageIoError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
+        let img =
+            image::Rgba32FImage::from_raw(self.width, self.height, raw).ok_or_else(|| ImageIoError::Io { path: path.display().to_string(), message: "pixel buffer does not match the size".into() })?;
+        img.save_with_format(path, image::ImageFormat::OpenExr).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
     }
 
     pub fn read_exr(path: &Path) -> Result<Self, ImageIoError> {
         let img = image::open(path).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })?;
         let rgba = img.to_rgba32f();
-        Ok(HdrImage {
-            width: rgba.width(),
-            height: rgba.height(),
-            pixels: rgba.pixels().map(|p| p.0).collect(),
-        })
+        Ok(HdrImage { width: rgba.width(), height: rgba.height(), pixels: rgba.pixels().map(|p| p.0).collect() })
     }
 
     /// The display image as 8-bit sRGB.
@@ -75,9 +66,7 @@ impl HdrImage {
     }
 
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), ImageIoError> {
-        self.to_display(exposure)
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
+        self.to_display(exposure).save_with_format(path, image::ImageFormat::Png).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
     }
 }
 

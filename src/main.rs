@@ -194,17 +194,7 @@ fn gpu_desc(d: &DeviceArgs) -> GpuDesc {
 }
 
 fn options(r: &RenderArgs) -> CaptureOptions {
-    CaptureOptions {
-        scene: r.scene.clone(),
-        png: None,
-        exr: None,
-        size: r.size,
-        frames: 1,
-        method: r.method.clone(),
-        exposure: 1.0,
-        gpu: gpu_desc(&r.device),
-        config: None,
-    }
+    CaptureOptions { scene: r.scene.clone(), png: None, exr: None, size: r.size, frames: 1, method: r.method.clone(), exposure: 1.0, gpu: gpu_desc(&r.device), config: None }
 }
 
 fn run(cli: Cli) -> penumbra::Result<()> {
@@ -267,7 +257,13 @@ fn run(cli: Cli) -> penumbra::Result<()> {
         }
         Command::Reference { scene, spp, size, bounces, direct_only, indirect_only, seed, output, device } => {
             use penumbra::reference::{Batching, LightPaths, ReferenceOptions, Settings};
-            let paths = if direct_only { LightPaths::Direct } else if indirect_only { LightPaths::Indirect } else { LightPaths::All };
+            let paths = if direct_only {
+                LightPaths::Direct
+            } else if indirect_only {
+                LightPaths::Indirect
+            } else {
+                LightPaths::All
+            };
             let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive };
             let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, gpu: gpu_desc(&device) })?;
             for p in &report.written {

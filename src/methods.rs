@@ -70,20 +70,11 @@ pub fn schemas() -> Vec<MethodSchema> {
 }
 
 pub fn info(name: &str) -> Result<MethodInfo> {
-    registry()
-        .into_iter()
-        .find(|m| m.schema.name == name)
-        .ok_or_else(|| Error::Usage(format!("method `{name}` is not implemented")))
+    registry().into_iter().find(|m| m.schema.name == name).ok_or_else(|| Error::Usage(format!("method `{name}` is not implemented")))
 }
 
 /// Creates the method a scene declared.
-pub fn create(
-    decl: &MethodDecl,
-    gpu: &mut Gpu,
-    shaders: &ShaderLibrary,
-    states: &mut ResourceStates,
-    scene: &Scene,
-) -> Result<Box<dyn LightingMethod>> {
+pub fn create(decl: &MethodDecl, gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, scene: &Scene) -> Result<Box<dyn LightingMethod>> {
     if decl.name != crate::shadow_volumes::NAME {
         scene.refuse_translucency(&format!("the {} method", decl.name)).map_err(Error::Usage)?;
     }

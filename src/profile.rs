@@ -69,10 +69,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
     let scene = load_scene(opts.scene.as_deref())?;
     let gpu = Gpu::new(&opts.gpu)?;
     if gpu.caps().timestamp_valid_bits == 0 {
-        return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!(
-            "{}: timestamps on the graphics queue (timestampValidBits = 0)",
-            gpu.caps().name
-        ))));
+        return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!("{}: timestamps on the graphics queue (timestampValidBits = 0)", gpu.caps().name))));
     }
     let mut renderer = Renderer::new(gpu, scene, opts.method.as_deref(), opts.size, 1)?;
     let camera = renderer.scene.camera.clone();
@@ -94,10 +91,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
 
 impl ProfileReport {
     pub fn table(&self) -> String {
-        let mut s = format!(
-            "{} ({}), {}x{}, {} frames\n{:<28} {:>10} {:>10} {:>10}\n",
-            self.device, self.driver, self.width, self.height, self.frames, "pass", "median ms", "min ms", "max ms"
-        );
+        let mut s = format!("{} ({}), {}x{}, {} frames\n{:<28} {:>10} {:>10} {:>10}\n", self.device, self.driver, self.width, self.height, self.frames, "pass", "median ms", "min ms", "max ms");
         for p in &self.passes {
             s += &format!("{:<28} {:>10.3} {:>10.3} {:>10.3}\n", p.name, p.median_ms, p.min_ms, p.max_ms);
         }

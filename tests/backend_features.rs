@@ -19,11 +19,7 @@ fn read_subresource(gpu: &mut Gpu, states: &mut ResourceStates, image: ImageId, 
     let buf = readback_buffer(gpu, texel * (e.width * e.height * e.depth) as u64);
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
-    graph
-        .pass("read")
-        .transfer_read(image, SubresourceRange::mip_layer(mip, layer))
-        .buffer(buf, Access::TransferWrite, None)
-        .record(move |ctx| ctx.rec.copy_image_to_buffer(image, mip, layer, buf));
+    graph.pass("read").transfer_read(image, SubresourceRange::mip_layer(mip, layer)).buffer(buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, mip, layer, buf));
     graph.pass("host").buffer(buf, Access::HostRead, None).record(|_| Ok(()));
     let mut rec = gpu.begin_frame(frame).unwrap();
     graph.execute(&mut rec, states).unwrap();
@@ -73,16 +69,12 @@ fn downsample_once(gpu: &mut Gpu, pipeline: PipelineId, value: f32) -> f32 {
     let frame = gpu.create_frame().unwrap();
     let c = vk::PipelineStageFlags2::COMPUTE_SHADER;
     let mut graph = RenderGraph::new();
-    graph
-        .pass("downsample")
-        .sample("src", img, SubresourceRange::mip(0), sampler, c)
-        .storage_write("dst", img, SubresourceRange::mip(1), c)
-        .record(move |ctx| {
-            ctx.rec.bind_pipeline(pipeline)?;
-            ctx.bind(&[])?;
-            ctx.rec.push_constants(&0u32.to_le_bytes())?;
-            ctx.rec.dispatch([1, 1, 1])
-        });
+    graph.pass("downsample").sample("src", img, SubresourceRange::mip(0), sampler, c).storage_write("dst", img, SubresourceRange::mip(1), c).record(move |ctx| {
+        ctx.rec.bind_pipeline(pipeline)?;
+        ctx.bind(&[])?;
+        ctx.rec.push_constants(&0u32.to_le_bytes())?;
+        ctx.rec.dispatch([1, 1, 1])
+    });
     graph.output_image(img);
     let mut rec = gpu.begin_frame(frame).unwrap();
     graph.execute(&mut rec, &mut states).unwrap();
@@ -96,11 +88,7 @@ fn downsample_once(gpu: &mut Gpu, pipeline: PipelineId, value: f32) -> f32 {
 fn specialization_constants_reach_the_shader() {
     let mut gpu = common::test_gpu();
     let lib = ShaderLibrary::Embedded;
-    let desc = |scale: f32| ComputePipelineDesc {
-        name: format!("downsample x{scale}"),
-        shader: "util/downsample.comp".into(),
-        specialization: vec![SpecConstant { id: 0, bits: scale.to_bits() }],
-    };
+    let desc = |scale: f32| ComputePipelineDesc { name: format!("downsample x{scale}"), shader: "util/downsample.comp".into(), specialization: vec![SpecConstant { id: 0, bits: scale.to_bits() }] };
     let plain = gpu.create_compute_pipeline(&ComputePipelineDesc { specialization: vec![], ..desc(1.0) }, &lib).unwrap();
     let tripled = gpu.create_compute_pipeline(&desc(3.0), &lib).unwrap();
     assert_eq!(downsample_once(&mut gpu, plain, 2.5), 2.5);
@@ -118,9 +106,7 @@ fn hot_reload_swaps_pipelines_and_keeps_the_old_one_on_errors() {
     std::fs::copy(ShaderLibrary::source_dir().join(rel), &dst).unwrap();
     let lib = ShaderLibrary::Directory(root.clone());
     let mut gpu = common::test_gpu();
-    let p = gpu
-        .create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &lib)
-        .unwrap();
+    let p = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &lib).unwrap();
     assert_eq!(downsample_once(&mut gpu, p, 1.0), 1.0);
 
     let file = root.join("util/downsample.comp");

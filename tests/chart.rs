@@ -6,7 +6,6 @@ use common::{ok, penumbra};
 
 use penumbra::image_io::HdrImage;
 
-
 #[test]
 fn compare_prints_known_metrics_and_writes_a_diff_image() {
     let (a, b, diff) = (common::temp_path("cmp-test.exr"), common::temp_path("cmp-ref.exr"), common::temp_path("cmp-diff.png"));
@@ -102,7 +101,9 @@ fn chart_measures_the_textured_shadow_volume_level() {
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let configs: Vec<&str> = rows.iter().map(|r| r.config.as_str()).collect();
     assert_eq!(rows.len(), 14, "{configs:?}");
-    for want in ["faithful pscs", "physical naive casters", "physical pvs-only casters", "physical pscs z-pass", "physical pscs default maps", "physical pscs PVS off", "faithful pscs default maps PVS off"] {
+    for want in
+        ["faithful pscs", "physical naive casters", "physical pvs-only casters", "physical pscs z-pass", "physical pscs default maps", "physical pscs PVS off", "faithful pscs default maps PVS off"]
+    {
         assert!(configs.iter().any(|c| c.ends_with(want)), "{want} missing from {configs:?}");
     }
     let err = |c: &str| rows.iter().find(|r| r.config.ends_with(c)).map(|r| r.rel_mse).unwrap();
@@ -176,14 +177,35 @@ radiance = 0.3
     )
     .unwrap();
     let (cache, csv, png) = (common::temp_path("hf-chart-cache"), common::temp_path("hf-chart.csv"), common::temp_path("hf-chart.png"));
-    let args = ["chart", scene.to_str().unwrap(), "--size", "32x32", "--reference-spp", "16", "--frames", "1", "--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()];
+    let args = [
+        "chart",
+        scene.to_str().unwrap(),
+        "--size",
+        "32x32",
+        "--reference-spp",
+        "16",
+        "--frames",
+        "1",
+        "--cache-dir",
+        cache.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ];
     ok(&penumbra(&args));
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let count = |m: &str| rows.iter().filter(|r| r.method == m).count();
     assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (14, 7));
     let err = |c: &str| rows.iter().find(|r| r.config == c).map(|r| r.rel_mse).unwrap_or_else(|| panic!("{c} missing"));
     let default = err("pyramid nphi=32 ls=4 lo=4 bands=4 corrected");
-    println!("relative MSE: pyramid {default:.4}, nφ = 4 {:.4}, faithful {:.4}, 2 bands {:.4}, brute {:.4}", err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected"), err("pyramid nphi=32 ls=4 lo=4 bands=4 faithful"), err("pyramid nphi=32 ls=4 lo=4 bands=2 corrected"), err("brute nphi=32 step=0.5 bands=4 corrected"));
+    println!(
+        "relative MSE: pyramid {default:.4}, nφ = 4 {:.4}, faithful {:.4}, 2 bands {:.4}, brute {:.4}",
+        err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected"),
+        err("pyramid nphi=32 ls=4 lo=4 bands=4 faithful"),
+        err("pyramid nphi=32 ls=4 lo=4 bands=2 corrected"),
+        err("brute nphi=32 step=0.5 bands=4 corrected")
+    );
     assert!(default < 0.05, "{default}");
     assert!(err("pyramid nphi=32 ls=4 lo=4 bands=4 faithful") > 3.0 * default);
     assert!(err("brute nphi=32 step=0.5 bands=4 faithful") > 3.0 * err("brute nphi=32 step=0.5 bands=4 corrected"));

@@ -144,7 +144,9 @@ fn reference(scene: &Scene, size: (u32, u32), s: Settings) -> penumbra::referenc
 fn reference_plane_under_a_constant_cube_sky_reflects_rho_l() {
     let l = Vec3::new(1.5, 1.0, 0.5);
     let env = cube_sky("ref-constant", 4, |_| l.into()).0;
-    let scene = parse(&format!("[camera]\nposition = [0, 2, 0]\ntarget = [1.0, 1.6, -1.0]\nfov_y_deg = 100\n[[materials]]\nname = \"m\"\nalbedo = 0.6\n[[objects]]\nmesh = \"plane\"\nsize = 400\nmaterial = \"m\"\n{env}"));
+    let scene = parse(&format!(
+        "[camera]\nposition = [0, 2, 0]\ntarget = [1.0, 1.6, -1.0]\nfov_y_deg = 100\n[[materials]]\nname = \"m\"\nalbedo = 0.6\n[[objects]]\nmesh = \"plane\"\nsize = 400\nmaterial = \"m\"\n{env}"
+    ));
     let size = (24, 24);
     let img = reference(&scene, size, settings(16, 3, LightPaths::All));
     let (mut ground, mut sky) = (Agreement::new("plane under a constant cube sky"), Agreement::new("constant cube sky seen directly"));

@@ -21,8 +21,7 @@ fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
             for x in 0..d {
                 for c in 0..4 {
                     let at = |xx: u32, yy: u32| prev[((yy * s + xx) * 4 + c) as usize];
-                    next[((y * d + x) * 4 + c) as usize] =
-                        0.25 * (at(2 * x, 2 * y) + at(2 * x + 1, 2 * y) + at(2 * x, 2 * y + 1) + at(2 * x + 1, 2 * y + 1));
+                    next[((y * d + x) * 4 + c) as usize] = 0.25 * (at(2 * x, 2 * y) + at(2 * x + 1, 2 * y) + at(2 * x, 2 * y + 1) + at(2 * x + 1, 2 * y + 1));
                 }
             }
         }
@@ -35,9 +34,7 @@ fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
 fn mip_pyramid_barriers_are_exact_and_values_correct() {
     let mut gpu = common::test_gpu();
     let shaders = ShaderLibrary::Embedded;
-    let pipeline = gpu
-        .create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &shaders)
-        .unwrap();
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &shaders).unwrap();
     let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
     let image = gpu.create_image(&ImageDesc::new_2d("pyramid", vk::Format::R32G32B32A32_SFLOAT, SIZE, SIZE).mips(MIPS).usage(usage)).unwrap();
     let base: Vec<f32> = (0..SIZE * SIZE * 4).map(|i| ((i * 7919) % 101) as f32 * 0.5).collect();
@@ -46,8 +43,7 @@ fn mip_pyramid_barriers_are_exact_and_values_correct() {
     let readbacks: Vec<_> = (1..MIPS)
         .map(|m| {
             let s = (SIZE >> m) as u64;
-            gpu.create_buffer(&BufferDesc { name: format!("mip {m}"), size: s * s * 16, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })
-                .unwrap()
+            gpu.create_buffer(&BufferDesc { name: format!("mip {m}"), size: s * s * 16, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu }).unwrap()
         })
         .collect();
     let mut states = ResourceStates::default();
@@ -57,37 +53,25 @@ fn mip_pyramid_barriers_are_exact_and_values_correct() {
     let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
     let mut graph = RenderGraph::new();
     for m in 1..MIPS {
-        graph
-            .pass(&format!("downsample {m}"))
-            .sample("src", image, SubresourceRange::mip(m - 1), sampler, compute)
-            .storage_write("dst", image, SubresourceRange::mip(m), compute)
-            .record(move |ctx| {
-                ctx.rec.bind_pipeline(pipeline)?;
-                ctx.bind(&[])?;
-                ctx.rec.push_constants(&0u32.to_le_bytes())?;
-                ctx.rec.dispatch([SIZE >> m, SIZE >> m, 1])
-            });
+        graph.pass(&format!("downsample {m}")).sample("src", image, SubresourceRange::mip(m - 1), sampler, compute).storage_write("dst", image, SubresourceRange::mip(m), compute).record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[])?;
+            ctx.rec.push_constants(&0u32.to_le_bytes())?;
+            ctx.rec.dispatch([SIZE >> m, SIZE >> m, 1])
+        });
     }
     for (i, &buf) in readbacks.iter().enumerate() {
         let m = i as u32 + 1;
-        graph
-            .pass(&format!("read mip {m}"))
-            .transfer_read(image, SubresourceRange::mip(m))
-            .buffer(buf, Access::TransferWrite, None)
-            .record(move |ctx| ctx.rec.copy_image_to_buffer(image, m, 0, buf));
+        graph.pass(&format!("read mip {m}")).transfer_read(image, SubresourceRange::mip(m)).buffer(buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, m, 0, buf));
         graph.pass(&format!("host {m}")).buffer(buf, Access::HostRead, None).record(|_| Ok(()));
     }
     // A pass whose output nothing reads must not be recorded.
     let unused = gpu.create_image(&ImageDesc::new_2d("unused", vk::Format::R32G32B32A32_SFLOAT, 4, 4).usage(usage)).unwrap();
-    graph
-        .pass("unused output")
-        .sample("src", image, SubresourceRange::mip(0), sampler, compute)
-        .storage_write("dst", unused, SubresourceRange::mip(0), compute)
-        .record(move |ctx| {
-            ctx.rec.bind_pipeline(pipeline)?;
-            ctx.bind(&[])?;
-            ctx.rec.dispatch([4, 4, 1])
-        });
+    graph.pass("unused output").sample("src", image, SubresourceRange::mip(0), sampler, compute).storage_write("dst", unused, SubresourceRange::mip(0), compute).record(move |ctx| {
+        ctx.rec.bind_pipeline(pipeline)?;
+        ctx.bind(&[])?;
+        ctx.rec.dispatch([4, 4, 1])
+    });
 
     let mut rec = gpu.begin_frame(frame).unwrap();
     let report = graph.execute(&mut rec, &mut states).unwrap();
@@ -121,9 +105,7 @@ fn mip_pyramid_barriers_are_exact_and_values_correct() {
 #[test]
 fn bindings_are_checked_against_reflection() {
     let mut gpu = common::test_gpu();
-    let pipeline = gpu
-        .create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded)
-        .unwrap();
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
     let refl = gpu.pipeline_reflection(pipeline).unwrap();
     assert_eq!(refl.local_size, Some([8, 8, 1]));
     assert_eq!(refl.push_constant_size, 4);
@@ -159,13 +141,9 @@ fn bindings_are_checked_against_reflection() {
 fn unsupported_capability_is_an_error_not_a_panic() {
     let mut gpu = common::test_gpu();
     let too_big = gpu.caps().max_image_dimension_2d + 1;
-    let e = gpu
-        .create_image(&ImageDesc::new_2d("huge", vk::Format::R8G8B8A8_UNORM, too_big, 1).usage(vk::ImageUsageFlags::SAMPLED))
-        .unwrap_err();
+    let e = gpu.create_image(&ImageDesc::new_2d("huge", vk::Format::R8G8B8A8_UNORM, too_big, 1).usage(vk::ImageUsageFlags::SAMPLED)).unwrap_err();
     assert!(matches!(e, penumbra::backend::BackendError::Unsupported(_)), "{e}");
-    let e = penumbra::backend::Gpu::new(&penumbra::backend::GpuDesc { device_name: Some("no such device 42".into()), ..common::test_gpu_desc() })
-        .err()
-        .expect("an unknown device name is an error");
+    let e = penumbra::backend::Gpu::new(&penumbra::backend::GpuDesc { device_name: Some("no such device 42".into()), ..common::test_gpu_desc() }).err().expect("an unknown device name is an error");
     assert!(e.to_string().contains("no such device 42") && e.to_string().contains("available"), "{e}");
     common::assert_clean(&gpu);
 }

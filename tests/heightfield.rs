@@ -318,10 +318,10 @@ fn leak_below_and_guards() {
     let (x2, z2) = texel_xz(16, 48, 64, 8.0);
     let (x3, z3) = texel_xz(48, 48, 64, 8.0);
     let lights = [
-        sphere(Vec3::new(x0, d, z0), d * a.sin(), 1.0),      // overhead
-        sphere(Vec3::new(x1, -d, z1), d * a.sin(), 1.0),     // below
-        sphere(Vec3::new(x2, 0.05, z2), 0.3, 1.0),           // the receiver is inside it
-        sphere(Vec3::new(x3, 1e-4, z3), 1e-5, 1.0),          // nearly touching, straight above
+        sphere(Vec3::new(x0, d, z0), d * a.sin(), 1.0),  // overhead
+        sphere(Vec3::new(x1, -d, z1), d * a.sin(), 1.0), // below
+        sphere(Vec3::new(x2, 0.05, z2), 0.3, 1.0),       // the receiver is inside it
+        sphere(Vec3::new(x3, 1e-4, z3), 1e-5, 1.0),      // nearly touching, straight above
     ]
     .concat();
     for method in [PYRAMID, r#"{ name = "heightfield_pyramid", mode = "faithful" }"#, BRUTE] {

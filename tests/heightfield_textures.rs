@@ -123,8 +123,7 @@ fn untextured_field_is_unchanged() {
     let white = common::temp_path("hf-white.png");
     image::RgbImage::from_pixel(4, 4, image::Rgb([255, 255, 255])).save(&white).unwrap();
     let lit = |material: &str| {
-        let text = flat_scene(r#""heightfield_pyramid""#, material)
-            .replace("generator = \"flat\"\nheight = 0", "generator = \"cones\"\ncount = 3\nradius = 1.5\nring_radius = 2\nheight = 1")
+        let text = flat_scene(r#""heightfield_pyramid""#, material).replace("generator = \"flat\"\nheight = 0", "generator = \"cones\"\ncount = 3\nradius = 1.5\nring_radius = 2\nheight = 1")
             + "[[lights]]\ntype = \"sphere\"\ncenter = [0.5, 2, 0.3]\nradius = 0.3\nradiance = 5\n";
         Scene::from_str(&text, "<test>", Path::new("/")).unwrap()
     };
@@ -150,7 +149,9 @@ fn normal_map_is_refused() {
             Ok(_) => panic!("{method}: a normal map on the field was accepted"),
             Err(e) => e.to_string(),
         };
-        let want = format!("bumpy.toml: materials[0] (\"ground\").normal_map: {method} cannot apply a normal map (it shades with the height field's own normals); used by the height field objects[0] (\"terrain\")");
+        let want = format!(
+            "bumpy.toml: materials[0] (\"ground\").normal_map: {method} cannot apply a normal map (it shades with the height field's own normals); used by the height field objects[0] (\"terrain\")"
+        );
         assert_eq!(e, want);
     }
     let path = dir.join("bumpy.toml");
@@ -160,7 +161,6 @@ fn normal_map_is_refused() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.lines().count() == 1 && err.contains("bumpy.toml") && err.contains("\"ground\"") && err.contains("\"terrain\""), "{err}");
 }
-
 
 /// `penumbra capture` of a textured flat field against `penumbra reference --direct-only`, as
 /// a user checks it: `penumbra compare` gives a small relative MSE (without the map the method

@@ -143,12 +143,7 @@ intensity = [5.0, 5.0, 5.0]
     );
     let (img, scene) = render(&toml);
     let surface = Surface { albedo: Vec3::splat(0.1), specular: Vec3::splat(0.6), exponent: 64.0, emission: Vec3::ZERO };
-    let light = penumbra::renderer::GpuLight {
-        position: [-0.4, 1.2, -0.6, penumbra::renderer::LIGHT_POINT],
-        direction: [0.0; 4],
-        intensity: [5.0; 4],
-        cone: [0.0; 4],
-    };
+    let light = penumbra::renderer::GpuLight { position: [-0.4, 1.2, -0.6, penumbra::renderer::LIGHT_POINT], direction: [0.0; 4], intensity: [5.0; 4], cone: [0.0; 4] };
     let (mut gpu_best, mut cpu_best) = ((0, 0, 0.0f32), (0, 0, 0.0f32));
     for j in 0..H {
         for i in 0..W {
@@ -274,7 +269,11 @@ irradiance = [3.0, 3.0, 3.0]
     common::assert_clean(&r.gpu);
     let srgb = |c: u8| {
         let c = c as f32 / 255.0;
-        if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
     };
     let (mut textured, mut bumped) = (0, 0);
     for j in 0..H {

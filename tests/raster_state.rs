@@ -4,7 +4,9 @@
 
 mod common;
 
-use penumbra::backend::{vk, BufferDesc, ColorTarget, DepthState, GraphicsPipelineDesc, ImageDesc, MemoryKind, RenderTarget, RenderingDesc, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout};
+use penumbra::backend::{
+    vk, BufferDesc, ColorTarget, DepthState, GraphicsPipelineDesc, ImageDesc, MemoryKind, RenderTarget, RenderingDesc, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout,
+};
 use penumbra::graph::{Access, RenderGraph};
 use penumbra::shaders::ShaderLibrary;
 
@@ -16,7 +18,11 @@ const H: u32 = 32;
 fn quad(x0: f32, x1: f32, z: f32, ccw: bool) -> Vec<[f32; 4]> {
     let (a, b, c, d) = ([x0, -1.0, z, 1.0], [x1, -1.0, z, 1.0], [x1, 1.0, z, 1.0], [x0, 1.0, z, 1.0]);
     // Screen y grows downward: a→d→c is counter-clockwise as seen on screen.
-    if ccw { vec![a, d, c, a, c, b] } else { vec![a, b, c, a, c, d] }
+    if ccw {
+        vec![a, d, c, a, c, b]
+    } else {
+        vec![a, b, c, a, c, d]
+    }
 }
 
 #[test]
@@ -67,34 +73,29 @@ fn two_sided_stencil_and_depth_clamp() {
     let rb = gpu.create_buffer(&BufferDesc { name: "rb".into(), size: (W * H * 16) as u64, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu }).unwrap();
 
     let mut graph = RenderGraph::new();
-    graph
-        .pass("stencil test scene")
-        .color_attachment(color, SubresourceRange::mip(0), true)
-        .depth_stencil_write(ds, true)
-        .buffer(vb, Access::VertexRead, None)
-        .record(move |ctx| {
-            let r = &mut *ctx.rec;
-            let _ = r.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(color, [0.0; 4])], depth_stencil: Some(RenderTarget::clear_depth(ds, 1.0, 0)) })?;
-            r.bind_vertex_buffers(&[(vb, 0)])?;
-            let solid = |rgba: [f32; 4]| bytemuck::cast::<[f32; 4], [u8; 16]>(rgba);
-            r.bind_pipeline(count)?;
-            r.push_constants(&solid([9.0; 4]))?; // must not appear: colour writes are off
-            r.draw(18, 1)?;
-            for (p, rgba) in [(eq2, [1.0, 0.0, 0.0, 1.0]), (eq255, [0.0, 1.0, 0.0, 1.0])] {
-                r.bind_pipeline(p)?;
-                r.push_constants(&solid(rgba))?;
-                // Vertices 18..24: the full-screen quad.
-                r.draw_from(6, 18)?;
-            }
-            r.bind_pipeline(unclamped)?;
-            r.push_constants(&solid([0.0, 0.0, 5.0, 1.0]))?;
-            r.draw_from(6, 24)?;
-            r.bind_pipeline(clamped)?;
-            r.push_constants(&solid([0.0, 0.0, 1.0, 1.0]))?;
-            r.draw_from(6, 24)?;
-            r.end_rendering();
-            Ok(())
-        });
+    graph.pass("stencil test scene").color_attachment(color, SubresourceRange::mip(0), true).depth_stencil_write(ds, true).buffer(vb, Access::VertexRead, None).record(move |ctx| {
+        let r = &mut *ctx.rec;
+        let _ = r.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(color, [0.0; 4])], depth_stencil: Some(RenderTarget::clear_depth(ds, 1.0, 0)) })?;
+        r.bind_vertex_buffers(&[(vb, 0)])?;
+        let solid = |rgba: [f32; 4]| bytemuck::cast::<[f32; 4], [u8; 16]>(rgba);
+        r.bind_pipeline(count)?;
+        r.push_constants(&solid([9.0; 4]))?; // must not appear: colour writes are off
+        r.draw(18, 1)?;
+        for (p, rgba) in [(eq2, [1.0, 0.0, 0.0, 1.0]), (eq255, [0.0, 1.0, 0.0, 1.0])] {
+            r.bind_pipeline(p)?;
+            r.push_constants(&solid(rgba))?;
+            // Vertices 18..24: the full-screen quad.
+            r.draw_from(6, 18)?;
+        }
+        r.bind_pipeline(unclamped)?;
+        r.push_constants(&solid([0.0, 0.0, 5.0, 1.0]))?;
+        r.draw_from(6, 24)?;
+        r.bind_pipeline(clamped)?;
+        r.push_constants(&solid([0.0, 0.0, 1.0, 1.0]))?;
+        r.draw_from(6, 24)?;
+        r.end_rendering();
+        Ok(())
+    });
     graph.pass("read").transfer_read(color, SubresourceRange::mip(0)).buffer(rb, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(color, 0, 0, rb));
     graph.pass("host").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
     let frame = gpu.create_frame().unwrap();
@@ -109,4 +110,3 @@ fn two_sided_stencil_and_depth_clamp() {
     }
     common::assert_clean(&gpu);
 }
-

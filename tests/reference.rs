@@ -12,10 +12,10 @@ use glam::Vec3;
 use penumbra::forward::cpu::{shade, Surface};
 use penumbra::image_io::HdrImage;
 use penumbra::reference::environment::EnvironmentMap;
-use reference_support::{ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance, reflected_environment, rmse, Agreement};
 use penumbra::reference::{Batching, LightPaths, ReferenceImage, ReferenceOptions, ReferenceRenderer, Settings};
 use penumbra::renderer::punctual_lights;
 use penumbra::scene::Scene;
+use reference_support::{ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance, reflected_environment, rmse, Agreement};
 
 fn scene_file(name: &str) -> Scene {
     Scene::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).expect("scene parses")
@@ -169,7 +169,13 @@ fn point_light_and_shadow_over_a_plane_direct_only() {
         "{LIT_PLANE}\n[[materials]]\nname = \"m\"\nalbedo = {albedo}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n\n\
          [[objects]]\nmesh = \"box\"\nsize = {}\ntranslate = [{}, {}, {}]\nmaterial = \"m\"\n\n\
          [[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {intensity}\n",
-        2.0 * half, box_center.x, box_center.y, box_center.z, light.x, light.y, light.z
+        2.0 * half,
+        box_center.x,
+        box_center.y,
+        box_center.z,
+        light.x,
+        light.y,
+        light.z
     );
     let scene = parse(&toml);
     let size = (32, 32);
@@ -387,12 +393,7 @@ fn error_falls_as_one_over_sqrt_spp() {
 fn direct_plus_indirect_is_everything_and_batching_changes_nothing() {
     let scene = scene_file("cornell.toml");
     let batched = |batching| Settings { batching, ..settings(6, 3, LightPaths::All, 9) };
-    let runs = [
-        batched(Batching::Fixed(1)),
-        batched(Batching::Fixed(4)),
-        settings(6, 3, LightPaths::Direct, 9),
-        settings(6, 3, LightPaths::Indirect, 9),
-    ];
+    let runs = [batched(Batching::Fixed(1)), batched(Batching::Fixed(4)), settings(6, 3, LightPaths::Direct, 9), settings(6, 3, LightPaths::Indirect, 9)];
     let imgs = render(&scene, (16, 16), &runs);
     assert_eq!(imgs[0].mean, imgs[1].mean, "samples do not depend on how they are batched");
     assert_eq!(imgs[0].standard_error, imgs[1].standard_error);
@@ -750,7 +751,13 @@ fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacit
          [[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n\n\
          [[objects]]\nmesh = \"quad\"\ncorner = [{}, {pane_y}, {}]\nedge_u = [0, 0, {}]\nedge_v = [{}, 0, 0]\nmaterial = \"glass\"\n\n\
          [[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {intensity}\n",
-        -half, -half, 2.0 * half, 2.0 * half, light.x, light.y, light.z
+        -half,
+        -half,
+        2.0 * half,
+        2.0 * half,
+        light.x,
+        light.y,
+        light.z
     );
     let scene = parse(&toml);
     let size = (32, 32);
@@ -799,7 +806,17 @@ fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacit
             a.check(img, i, j, want, want * 1e-3);
         }
     }
-    println!("{} pixels through the pane, {} of floor in its shadow, {} in the open; worst z: {:.2}, {:.2}, {:.2}; the pane's shadow gets {:.3} of the unshadowed light (1 − α = {})", through.pixels, under_shadow.pixels, open.pixels, through.worst.0, under_shadow.worst.0, open.worst.0, transmitted.x / transmitted.y, 1.0 - alpha);
+    println!(
+        "{} pixels through the pane, {} of floor in its shadow, {} in the open; worst z: {:.2}, {:.2}, {:.2}; the pane's shadow gets {:.3} of the unshadowed light (1 − α = {})",
+        through.pixels,
+        under_shadow.pixels,
+        open.pixels,
+        through.worst.0,
+        under_shadow.worst.0,
+        open.worst.0,
+        transmitted.x / transmitted.y,
+        1.0 - alpha
+    );
     assert!((transmitted.x / transmitted.y - (1.0 - alpha) as f64).abs() < 0.02, "{transmitted}");
     assert!(through.pixels > 40 && under_shadow.pixels > 20 && open.pixels > 300, "{} / {} / {}", through.pixels, under_shadow.pixels, open.pixels);
     through.assert();

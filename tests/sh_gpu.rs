@@ -17,9 +17,7 @@ use penumbra::shaders::ShaderLibrary;
 #[test]
 fn glsl_sh_matches_the_cpu_library() {
     let mut gpu = common::test_gpu();
-    let pipeline = gpu
-        .create_compute_pipeline(&ComputePipelineDesc { name: "sh check".into(), shader: "util/sh_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded)
-        .unwrap();
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh check".into(), shader: "util/sh_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
     let size = 128 * 128 * 4;
     let out = gpu.create_buffer(&BufferDesc { name: "sh check".into(), size, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
     let frame = gpu.create_frame().unwrap();
@@ -280,7 +278,8 @@ fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
     let terms = sh::product_terms(8).unwrap();
     let cases_buf = gpu.create_buffer_init("sh ops cases", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&input)).unwrap();
     let terms_buf = gpu.create_buffer_init("sh ops terms", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&terms)).unwrap();
-    let out = gpu.create_buffer(&BufferDesc { name: "sh ops result".into(), size: (OPS_CASES * OPS_STRIDE * 4) as u64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
+    let out =
+        gpu.create_buffer(&BufferDesc { name: "sh ops result".into(), size: (OPS_CASES * OPS_STRIDE * 4) as u64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
     let c = vk::PipelineStageFlags2::COMPUTE_SHADER;

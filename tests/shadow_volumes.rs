@@ -103,22 +103,24 @@ fn check(c: &MaskComparison, what: &str) {
 #[test]
 fn analytic_occluder_casts_the_square_of_side_4() {
     for (name, occluder) in [("open quad (per-triangle volumes)", QUAD), ("closed slab (silhouettes)", SLAB)] {
-        for camera in [
-            TOP_DOWN,
-            "[camera]\nposition = [7, 14, 9]\ntarget = [0, 0, 0]\nfov_y_deg = 35",
-        ] {
+        for camera in [TOP_DOWN, "[camera]\nposition = [7, 14, 9]\ntarget = [0, 0, 0]\nfov_y_deg = 35"] {
             let (img, scene) = render(&analytic_scene(camera, occluder, &[]), SIZE);
-            let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 1e-6), |px, py| {
-                if occluder == SLAB {
-                    // The slab's sides face away from the light: a ray that meets the slab is
-                    // lit only on its top.
-                    let (o, d) = scene.camera.ray(px, py, SIZE.0, SIZE.1);
-                    if let Some(top) = hit_box(o, d, Vec3::new(-1.0, 4.75, -1.0), Vec3::new(1.0, 5.0, 1.0)) {
-                        return Some(top);
+            let c = compare_masks(
+                SIZE.0,
+                SIZE.1,
+                |x, y| lit(&img, x, y, 1e-6),
+                |px, py| {
+                    if occluder == SLAB {
+                        // The slab's sides face away from the light: a ray that meets the slab is
+                        // lit only on its top.
+                        let (o, d) = scene.camera.ray(px, py, SIZE.0, SIZE.1);
+                        if let Some(top) = hit_box(o, d, Vec3::new(-1.0, 4.75, -1.0), Vec3::new(1.0, 5.0, 1.0)) {
+                            return Some(top);
+                        }
                     }
-                }
-                analytic_lit(&scene.camera, px, py, SIZE)
-            });
+                    analytic_lit(&scene.camera, px, py, SIZE)
+                },
+            );
             check(&c, name);
             assert!(c.cpu_shadow > 500, "the shadow is in view");
         }
@@ -134,10 +136,7 @@ fn shadow_area_is_16_square_metres() {
     for y in 0..SIZE.1 {
         for x in 0..SIZE.0 {
             // Ground area of the pixel (its footprint on y = 0), counted when unlit or occluder.
-            let corners: Vec<Vec3> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
-                .iter()
-                .map(|&(dx, dy)| hit_plane_y(&scene.camera, x as f32 + dx, y as f32 + dy, SIZE, 0.0).unwrap().0)
-                .collect();
+            let corners: Vec<Vec3> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].iter().map(|&(dx, dy)| hit_plane_y(&scene.camera, x as f32 + dx, y as f32 + dy, SIZE, 0.0).unwrap().0).collect();
             let a = 0.5 * ((corners[1] - corners[0]).cross(corners[2] - corners[0]).length() + (corners[2] - corners[0]).cross(corners[3] - corners[0]).length());
             let on_occluder = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 5.0).is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
             if on_occluder || !lit(&img, x, y, 1e-6) {
@@ -207,19 +206,24 @@ intensity = 20000
     };
     for clamp in [true, false] {
         let (img, scene) = render(&scene_text(clamp), SIZE);
-        let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 1e-9), |px, py| {
-            if let Some((p, _)) = hit_plane_y(&scene.camera, px, py, SIZE, 99.0) {
-                if p.x.abs() <= 0.6 && p.z.abs() <= 0.6 {
+        let c = compare_masks(
+            SIZE.0,
+            SIZE.1,
+            |x, y| lit(&img, x, y, 1e-9),
+            |px, py| {
+                if let Some((p, _)) = hit_plane_y(&scene.camera, px, py, SIZE, 99.0) {
+                    if p.x.abs() <= 0.6 && p.z.abs() <= 0.6 {
+                        return None;
+                    }
+                }
+                let (p, _) = hit_plane_y(&scene.camera, px, py, SIZE, 0.0)?;
+                if p.x.abs() > 199.0 || p.z.abs() > 199.0 {
                     return None;
                 }
-            }
-            let (p, _) = hit_plane_y(&scene.camera, px, py, SIZE, 0.0)?;
-            if p.x.abs() > 199.0 || p.z.abs() > 199.0 {
-                return None;
-            }
-            // Top of the slab at 99: shadow half-size 0.5 · 100 / 1 = 50.
-            Some(!(p.x.abs() <= 50.0 && p.z.abs() <= 50.0))
-        });
+                // Top of the slab at 99: shadow half-size 0.5 · 100 / 1 = 50.
+                Some(!(p.x.abs() <= 50.0 && p.z.abs() <= 50.0))
+            },
+        );
         check(&c, &format!("far shadow, depth clamp {clamp}"));
         assert!(c.cpu_shadow > 2000);
     }
@@ -247,15 +251,20 @@ fn more_than_255_overlapping_volumes() {
     for wrap in [true, false] {
         let text = analytic_scene(TOP_DOWN, stack, &[&format!("stencil_wrap = {wrap}")]);
         let (img, scene) = sv_common::render_in(&text, &dir, SIZE);
-        let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 1e-6), |px, py| {
-            // The top quad (height 6 − 1/300, half-size 0.8) hides the rest of the stack.
-            if let Some((p, _)) = hit_plane_y(&scene.camera, px, py, SIZE, 5.0) {
-                if p.x.abs() <= 1.0 && p.z.abs() <= 1.0 {
-                    return None;
+        let c = compare_masks(
+            SIZE.0,
+            SIZE.1,
+            |x, y| lit(&img, x, y, 1e-6),
+            |px, py| {
+                // The top quad (height 6 − 1/300, half-size 0.8) hides the rest of the stack.
+                if let Some((p, _)) = hit_plane_y(&scene.camera, px, py, SIZE, 5.0) {
+                    if p.x.abs() <= 1.0 && p.z.abs() <= 1.0 {
+                        return None;
+                    }
                 }
-            }
-            analytic_lit(&scene.camera, px, py, SIZE)
-        });
+                analytic_lit(&scene.camera, px, py, SIZE)
+            },
+        );
         println!("wrap {wrap}: {c:?}");
         stats.push(c);
     }
@@ -301,12 +310,17 @@ fn spot_light_casts_the_same_square_and_nothing_outside_its_cone() {
     let (img, scene) = render(&analytic_scene(camera, QUAD, &[]).replace(POINT_LIGHT, spot), SIZE);
     // The angle from the axis of the ground point under continuous pixel (px, py).
     let ground_angle = |px: f32, py: f32| hit_plane_y(&scene.camera, px, py, SIZE, 0.0).map(|(p, _)| (p.x.hypot(p.z) / 10.0).atan());
-    let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 1e-6), |px, py| {
-        let lit = analytic_lit(&scene.camera, px, py, SIZE)?;
-        // The occluder's top is well inside the inner cone.
-        let on_top = hit_plane_y(&scene.camera, px, py, SIZE, 5.0).is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
-        Some(lit && (on_top || ground_angle(px, py)? < outer))
-    });
+    let c = compare_masks(
+        SIZE.0,
+        SIZE.1,
+        |x, y| lit(&img, x, y, 1e-6),
+        |px, py| {
+            let lit = analytic_lit(&scene.camera, px, py, SIZE)?;
+            // The occluder's top is well inside the inner cone.
+            let on_top = hit_plane_y(&scene.camera, px, py, SIZE, 5.0).is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
+            Some(lit && (on_top || ground_angle(px, py)? < outer))
+        },
+    );
     check(&c, "spot light");
     // Inside the inner cone the spot is the point light, shadow included, pixel for pixel.
     let (mut inside, mut same, mut outside, mut dark) = (0, 0, 0, 0);

@@ -72,7 +72,15 @@ path = "quad.obj"
 material = "mapped"
 {lights}"#,
         method(params),
-        ALBEDO.x, ALBEDO.y, ALBEDO.z, SPECULAR.x, SPECULAR.y, SPECULAR.z, EMISSION.x, EMISSION.y, EMISSION.z
+        ALBEDO.x,
+        ALBEDO.y,
+        ALBEDO.z,
+        SPECULAR.x,
+        SPECULAR.y,
+        SPECULAR.z,
+        EMISSION.x,
+        EMISSION.y,
+        EMISSION.z
     )
 }
 
@@ -104,7 +112,11 @@ fn spot_angle(p: Vec3) -> f32 {
 
 fn srgb_to_linear(b: u8) -> f32 {
     let c = b as f32 / 255.0;
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// The vertex shader's outputs at a point of the quad, interpolated as the rasterizer does
@@ -142,13 +154,7 @@ fn interpolate(mesh: &Mesh, p: Vec3, eye: Vec3) -> Option<Interpolated> {
         };
         let v = [per_vertex(a), per_vertex(b), per_vertex(c)];
         let mix3 = |f: &dyn Fn(&VertexVectors) -> Vec3| f(&v[0]) * w[0] + f(&v[1]) * w[1] + f(&v[2]) * w[2];
-        return Some(Interpolated {
-            p,
-            normal: mix3(&|x| x.0),
-            tangent: v[0].1 * w[0] + v[1].1 * w[1] + v[2].1 * w[2],
-            light_ts: mix3(&|x| x.2),
-            eye_ts: mix3(&|x| x.3),
-        });
+        return Some(Interpolated { p, normal: mix3(&|x| x.0), tangent: v[0].1 * w[0] + v[1].1 * w[1] + v[2].1 * w[2], light_ts: mix3(&|x| x.2), eye_ts: mix3(&|x| x.3) });
     }
     None
 }
@@ -356,7 +362,9 @@ fn spot_equals_the_point_light_inside_the_inner_cone_and_nothing_outside_the_out
                 }
             }
         }
-        let diff = |a: &HdrImage, b: &HdrImage, set: &[(u32, u32)]| set.iter().map(|&(x, y)| (Vec3::from_slice(&a.get(x, y)[..3]) - Vec3::from_slice(&b.get(x, y)[..3])).abs().max_element()).fold(0.0, f32::max);
+        let diff = |a: &HdrImage, b: &HdrImage, set: &[(u32, u32)]| {
+            set.iter().map(|&(x, y)| (Vec3::from_slice(&a.get(x, y)[..3]) - Vec3::from_slice(&b.get(x, y)[..3])).abs().max_element()).fold(0.0, f32::max)
+        };
         let (d_in, d_out) = (diff(&spot_img, &point_img, &inside), diff(&spot_img, &dark_img, &outside));
         let point_outside = diff(&point_img, &dark_img, &outside);
         println!("{mode}: {} pixels inside the inner cone, max |spot − point| = {d_in:.1e}; {band} in the falloff band; {} beyond the outer cone, max |spot − no light| = {d_out:.1e} (the point light adds up to {point_outside:.2e} there)", inside.len(), outside.len());

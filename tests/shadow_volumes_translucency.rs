@@ -33,8 +33,10 @@ struct Pane {
     opacity: f32,
 }
 
-const PANE_A: Pane = Pane { y: 1.0, rect: [-1.0, 1.0, -1.0, 1.0], surface: Surface { albedo: Vec3::new(0.3, 0.6, 0.9), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::new(0.05, 0.08, 0.02) }, opacity: 0.4 };
-const PANE_B: Pane = Pane { y: 0.5, rect: [-1.2, 1.4, -1.2, 1.4], surface: Surface { albedo: Vec3::new(0.9, 0.4, 0.2), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::new(0.02, 0.03, 0.09) }, opacity: 0.6 };
+const PANE_A: Pane =
+    Pane { y: 1.0, rect: [-1.0, 1.0, -1.0, 1.0], surface: Surface { albedo: Vec3::new(0.3, 0.6, 0.9), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::new(0.05, 0.08, 0.02) }, opacity: 0.4 };
+const PANE_B: Pane =
+    Pane { y: 0.5, rect: [-1.2, 1.4, -1.2, 1.4], surface: Surface { albedo: Vec3::new(0.9, 0.4, 0.2), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::new(0.02, 0.03, 0.09) }, opacity: 0.6 };
 
 fn v3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)

@@ -84,7 +84,8 @@ fn caster_strategies_agree_on_generated_rooms() {
             // Back-facing casters: the strategies' volumes agree wherever the PSCS is complete.
             assert_eq!(differing(&naive.0, &pscs.0), 0, "naive and PVS+PSCS casters must give bit-identical images");
             // The PVS alone may miss casters (Fig. 8(c)): it can only add light, never remove it.
-            let brighter = naive.0.pixels.iter().zip(&pvs.0.pixels).filter(|(n, p)| n != p).inspect(|(n, p)| assert!((0..3).all(|c| p[c] >= n[c]), "PVS-only casters darkened a pixel: {n:?} -> {p:?}")).count();
+            let brighter =
+                naive.0.pixels.iter().zip(&pvs.0.pixels).filter(|(n, p)| n != p).inspect(|(n, p)| assert!((0..3).all(|c| p[c] >= n[c]), "PVS-only casters darkened a pixel: {n:?} -> {p:?}")).count();
             println!("radius culling {radius_culling}: PVS-only casters leave {brighter} shadowed pixels lit");
             for ((n, p), c) in naive.1.lights.iter().zip(&pvs.1.lights).zip(&pscs.1.lights) {
                 assert!(n.caster_faces.len() >= c.caster_faces.len() && c.caster_faces.len() >= p.caster_faces.len());
@@ -119,17 +120,22 @@ fn world_shadows_match_bsp_ray_casts() {
         };
         let img = render_scene(s.clone(), SIZE);
         let cam = s.camera.clone();
-        let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 0.0), |px, py| {
-            let (o, d) = cam.ray(px, py, SIZE.0, SIZE.1);
-            let hit = w.cast_ray(scene_to_world(o), scene_to_world(d), 1e3)?;
-            let face = &w.faces[hit.face? as usize];
-            let to_light = lpos - hit.point;
-            // Judge only points that face the light clearly and lie clearly inside its radius.
-            if face.polygon.plane.normal.dot(to_light.normalize()) < 0.05 || to_light.length() > radius - 0.05 {
-                return None;
-            }
-            Some(!w.occluded(lpos, hit.point + face.polygon.plane.normal * 1e-6))
-        });
+        let c = compare_masks(
+            SIZE.0,
+            SIZE.1,
+            |x, y| lit(&img, x, y, 0.0),
+            |px, py| {
+                let (o, d) = cam.ray(px, py, SIZE.0, SIZE.1);
+                let hit = w.cast_ray(scene_to_world(o), scene_to_world(d), 1e3)?;
+                let face = &w.faces[hit.face? as usize];
+                let to_light = lpos - hit.point;
+                // Judge only points that face the light clearly and lie clearly inside its radius.
+                if face.polygon.plane.normal.dot(to_light.normalize()) < 0.05 || to_light.length() > radius - 0.05 {
+                    return None;
+                }
+                Some(!w.occluded(lpos, hit.point + face.polygon.plane.normal * 1e-6))
+            },
+        );
         println!("light {light}: {c:?}");
         assert!(c.pixels > 2000 && c.cpu_shadow > 30, "{c:?}");
         assert!(c.iou >= 0.98, "{c:?}");
@@ -165,7 +171,15 @@ intensity = 10
 radius = 30
 "#,
             method(&["mode = \"physical\"", &format!("casters = \"{casters}\"")]),
-            eye.x, eye.y, eye.z, target.x, target.y, target.z, light.x, light.y, light.z
+            eye.x,
+            eye.y,
+            eye.z,
+            target.x,
+            target.y,
+            target.z,
+            light.x,
+            light.y,
+            light.z
         )
     };
     let mut images = Vec::new();
@@ -193,11 +207,7 @@ fn pvs_and_radius_culling_change_draws_not_pixels() {
     let with_entity = format!("{}\n[[objects]]\nname = \"crate\"\nmesh = \"box\"\nsize = 0.7\ntranslate = [7.0, 0.36, -8.0]\nmaterial = \"wall\"\n", rooms(&[0, 1]));
     let mut images = Vec::new();
     let mut draws = Vec::new();
-    for params in [
-        vec!["mode = \"faithful\""],
-        vec!["mode = \"faithful\"", "pvs = false"],
-        vec!["mode = \"faithful\"", "radius_culling = false"],
-    ] {
+    for params in [vec!["mode = \"faithful\""], vec!["mode = \"faithful\"", "pvs = false"], vec!["mode = \"faithful\"", "radius_culling = false"]] {
         let s = scene(CAMERAS[0], &with_entity, &params);
         let plan = Setup::new(&s, &s.methods[0]).unwrap().plan(s.camera.position, 0.0);
         let receivers: usize = plan.lights.iter().map(|l| l.receiver_faces.len()).sum();
@@ -251,17 +261,7 @@ fn spot_cone_culling_changes_draws_not_pixels() {
 #[test]
 fn profile_breaks_out_every_pass() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bsp_rooms.toml");
-    let opts = penumbra::capture::CaptureOptions {
-        scene: Some(path),
-        png: None,
-        exr: None,
-        size: (64, 48),
-        frames: 1,
-        method: None,
-        exposure: 1.0,
-        gpu: common::test_gpu_desc(),
-        config: None,
-    };
+    let opts = penumbra::capture::CaptureOptions { scene: Some(path), png: None, exr: None, size: (64, 48), frames: 1, method: None, exposure: 1.0, gpu: common::test_gpu_desc(), config: None };
     let report = penumbra::profile::run(&opts, 2).unwrap();
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
     println!("{}", report.table());

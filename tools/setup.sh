@@ -24,6 +24,12 @@ if ! command -v cargo >/dev/null; then
   echo "setup: cargo not found; install a Rust toolchain (1.88 or newer) first" >&2
   exit 1
 fi
+# The test script checks formatting and lints; rustup toolchains may lack the components.
+for c in rustfmt clippy; do
+  if ! cargo "${c/rustfmt/fmt}" --version >/dev/null 2>&1 && command -v rustup >/dev/null; then
+    rustup component add "$c" >&2
+  fi
+done
 # The image crate needs Rust 1.88 (Cargo.toml's rust-version); say so before a long build fails.
 rust_minor=$(rustc --version | sed -n 's/^rustc 1\.\([0-9]*\).*/\1/p')
 if [ -n "$rust_minor" ] && [ "$rust_minor" -lt 88 ]; then

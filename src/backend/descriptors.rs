@@ -12,9 +12,16 @@ use super::resources::{BufferId, ImageId, SamplerId, SubresourceRange};
 #[derive(Clone, Debug)]
 pub enum Bind<'a> {
     /// `sampler2D`/`sampler3D`/`samplerCube`…: read in SHADER_READ_ONLY_OPTIMAL.
-    Sampled { image: ImageId, range: SubresourceRange, sampler: SamplerId },
+    Sampled {
+        image: ImageId,
+        range: SubresourceRange,
+        sampler: SamplerId,
+    },
     /// `image2D`/`image3D`…: read or written in GENERAL.
-    StorageImage { image: ImageId, range: SubresourceRange },
+    StorageImage {
+        image: ImageId,
+        range: SubresourceRange,
+    },
     UniformBuffer(BufferId),
     StorageBuffer(BufferId),
     /// Bytes copied into this frame's upload buffer and bound as a uniform block.
@@ -56,11 +63,7 @@ impl Recorder<'_> {
         let pipeline_id = self.bound_pipeline()?;
         let gpu = self.gpu;
         let p = gpu.pipeline(pipeline_id)?;
-        let err = |binding: &str, message: String| BackendError::Binding {
-            pipeline: p.name.clone(),
-            binding: binding.into(),
-            message,
-        };
+        let err = |binding: &str, message: String| BackendError::Binding { pipeline: p.name.clone(), binding: binding.into(), message };
         for (i, (name, _)) in resources.iter().enumerate() {
             if p.reflection.binding(name).is_none() {
                 let declared: Vec<&str> = p.reflection.bindings.iter().map(|b| b.name.as_str()).collect();
@@ -88,11 +91,7 @@ impl Recorder<'_> {
                         return Err(err(&b.name, format!("image `{}` was not created with SAMPLED usage", img.desc.name)));
                     }
                     let view = gpu.image_view(*image, range.base_mip, range.mip_count, range.base_layer, range.layer_count, None)?;
-                    Info::Image(vk::DescriptorImageInfo {
-                        sampler: gpu.raw_sampler(*sampler)?,
-                        image_view: view,
-                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    })
+                    Info::Image(vk::DescriptorImageInfo { sampler: gpu.raw_sampler(*sampler)?, image_view: view, image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL })
                 }
                 Bind::StorageImage { image, range } => {
                     let img = gpu.image(*image)?;
@@ -100,19 +99,11 @@ impl Recorder<'_> {
                         return Err(err(&b.name, format!("image `{}` was not created with STORAGE usage", img.desc.name)));
                     }
                     let view = gpu.image_view(*image, range.base_mip, range.mip_count, range.base_layer, range.layer_count, None)?;
-                    Info::Image(vk::DescriptorImageInfo {
-                        sampler: vk::Sampler::null(),
-                        image_view: view,
-                        image_layout: vk::ImageLayout::GENERAL,
-                    })
+                    Info::Image(vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: view, image_layout: vk::ImageLayout::GENERAL })
                 }
                 Bind::UniformBuffer(id) | Bind::StorageBuffer(id) => {
                     let buf = gpu.buffer(*id)?;
-                    let needed = if matches!(res, Bind::UniformBuffer(_)) {
-                        vk::BufferUsageFlags::UNIFORM_BUFFER
-                    } else {
-                        vk::BufferUsageFlags::STORAGE_BUFFER
-                    };
+                    let needed = if matches!(res, Bind::UniformBuffer(_)) { vk::BufferUsageFlags::UNIFORM_BUFFER } else { vk::BufferUsageFlags::STORAGE_BUFFER };
                     if !buf.desc.usage.contains(needed) {
                         return Err(err(&b.name, format!("buffer `{}` lacks {needed:?} usage", buf.desc.name)));
                     }
@@ -120,11 +111,7 @@ impl Recorder<'_> {
                 }
                 Bind::UniformData(bytes) | Bind::StorageData(bytes) => {
                     let (buffer, offset) = self.upload(bytes)?;
-                    Info::Buffer(vk::DescriptorBufferInfo {
-                        buffer,
-                        offset,
-                        range: bytes.len().max(4) as u64,
-                    })
+                    Info::Buffer(vk::DescriptorBufferInfo { buffer, offset, range: bytes.len().max(4) as u64 })
                 }
             };
             infos.push((b, info));
@@ -133,22 +120,13 @@ impl Recorder<'_> {
             Vec::new()
         } else {
             let pool = self.frame.descriptor_pool;
-            unsafe {
-                gpu.device.allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(pool)
-                        .set_layouts(&p.set_layouts),
-                )
-            }
-            .map_err(|e| BackendError::Vulkan { call: "vkAllocateDescriptorSets", result: e })?
+            unsafe { gpu.device.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&p.set_layouts)) }
+                .map_err(|e| BackendError::Vulkan { call: "vkAllocateDescriptorSets", result: e })?
         };
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .map(|(b, info)| {
-                let w = vk::WriteDescriptorSet::default()
-                    .dst_set(sets[b.set as usize])
-                    .dst_binding(b.binding)
-                    .descriptor_type(b.ty);
+                let w = vk::WriteDescriptorSet::default().dst_set(sets[b.set as usize]).dst_binding(b.binding).descriptor_type(b.ty);
                 match info {
                     Info::Image(i) => w.image_info(std::slice::from_ref(i)),
                     Info::Buffer(i) => w.buffer_info(std::slice::from_ref(i)),
@@ -170,24 +148,14 @@ impl Recorder<'_> {
         let upload = self.frame.upload;
         let capacity = self.gpu.buffer(upload)?.desc.size;
         if offset + bytes.len() as u64 > capacity {
-            return Err(BackendError::Invalid(format!(
-                "per-frame upload buffer full ({capacity} bytes); upload large data once instead"
-            )));
+            return Err(BackendError::Invalid(format!("per-frame upload buffer full ({capacity} bytes); upload large data once instead")));
         }
         // SAFETY-free path: the upload buffer is host-visible and this frame's previous use was
         // waited for in begin_frame, so the CPU may write it.
         let buffer = self.gpu.buffer(upload)?;
-        let ptr = buffer
-            .allocation
-            .as_ref()
-            .and_then(|a| a.mapped_ptr())
-            .ok_or_else(|| BackendError::Invalid("upload buffer is not mapped".into()))?;
+        let ptr = buffer.allocation.as_ref().and_then(|a| a.mapped_ptr()).ok_or_else(|| BackendError::Invalid("upload buffer is not mapped".into()))?;
         unsafe {
-            std::ptr::copy_nonoverlapping(
-                bytes.as_ptr(),
-                (ptr.as_ptr() as *mut u8).add(offset as usize),
-                bytes.len(),
-            );
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), (ptr.as_ptr() as *mut u8).add(offset as usize), bytes.len());
         }
         self.frame.upload_offset = offset + bytes.len() as u64;
         Ok((buffer.raw, offset))

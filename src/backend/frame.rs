@@ -55,49 +55,19 @@ impl Gpu {
         let upload = self.create_buffer(&BufferDesc {
             name: format!("frame {} uploads", self.frames.len()),
             size: UPLOAD_BYTES,
-            usage: vk::BufferUsageFlags::UNIFORM_BUFFER
-                | vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::VERTEX_BUFFER
-                | vk::BufferUsageFlags::INDEX_BUFFER,
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::INDEX_BUFFER,
             memory: MemoryKind::CpuToGpu,
         })?;
-        let cb = unsafe {
-            self.device.allocate_command_buffers(
-                &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(self.command_pool)
-                    .level(vk::CommandBufferLevel::PRIMARY)
-                    .command_buffer_count(1),
-            )
-        }
-        .vk("vkAllocateCommandBuffers")?[0];
-        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }
-            .vk("vkCreateFence")?;
-        let sizes = [
-            (vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096),
-            (vk::DescriptorType::STORAGE_IMAGE, 2048),
-            (vk::DescriptorType::UNIFORM_BUFFER, 2048),
-            (vk::DescriptorType::STORAGE_BUFFER, 2048),
-        ]
-        .map(|(ty, n)| vk::DescriptorPoolSize { ty, descriptor_count: n });
-        let descriptor_pool = unsafe {
-            self.device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default().max_sets(2048).pool_sizes(&sizes),
-                None,
-            )
-        }
-        .vk("vkCreateDescriptorPool")?;
+        let cb =
+            unsafe { self.device.allocate_command_buffers(&vk::CommandBufferAllocateInfo::default().command_pool(self.command_pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1)) }
+                .vk("vkAllocateCommandBuffers")?[0];
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        let sizes =
+            [(vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096), (vk::DescriptorType::STORAGE_IMAGE, 2048), (vk::DescriptorType::UNIFORM_BUFFER, 2048), (vk::DescriptorType::STORAGE_BUFFER, 2048)]
+                .map(|(ty, n)| vk::DescriptorPoolSize { ty, descriptor_count: n });
+        let descriptor_pool = unsafe { self.device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(2048).pool_sizes(&sizes), None) }.vk("vkCreateDescriptorPool")?;
         let queries = if self.caps.timestamp_valid_bits > 0 {
-            Some(
-                unsafe {
-                    self.device.create_query_pool(
-                        &vk::QueryPoolCreateInfo::default()
-                            .query_type(vk::QueryType::TIMESTAMP)
-                            .query_count(MAX_QUERIES),
-                        None,
-                    )
-                }
-                .vk("vkCreateQueryPool")?,
-            )
+            Some(unsafe { self.device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(MAX_QUERIES), None) }.vk("vkCreateQueryPool")?)
         } else {
             None
         };
@@ -118,17 +88,12 @@ impl Gpu {
     }
 
     pub(crate) fn frame_data(&self, f: Frame) -> BackendResult<&RefCell<FrameData>> {
-        self.frames
-            .get(f.0 as usize)
-            .and_then(|x| x.as_ref())
-            .ok_or_else(|| BackendError::Invalid(format!("frame {f:?} does not exist")))
+        self.frames.get(f.0 as usize).and_then(|x| x.as_ref()).ok_or_else(|| BackendError::Invalid(format!("frame {f:?} does not exist")))
     }
 
     /// Waits for the frame's last submission (if any) and collects its timestamps.
     pub fn wait_frame(&self, f: Frame) -> BackendResult<()> {
-        let mut fd = self.frame_data(f)?.try_borrow_mut().map_err(|_| {
-            BackendError::Invalid("frame is being recorded".into())
-        })?;
+        let mut fd = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is being recorded".into()))?;
         if !fd.submitted {
             return Ok(());
         }
@@ -145,15 +110,7 @@ impl Gpu {
             return Ok(Some(Vec::new()));
         }
         let mut raw = vec![0u64; fd.next_query as usize];
-        unsafe {
-            self.device.get_query_pool_results(
-                pool,
-                0,
-                &mut raw,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
-        }
-        .vk("vkGetQueryPoolResults")?;
+        unsafe { self.device.get_query_pool_results(pool, 0, &mut raw, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }.vk("vkGetQueryPoolResults")?;
         let bits = self.caps.timestamp_valid_bits;
         let period = self.caps.timestamp_period_ns;
         Ok(Some(
@@ -161,10 +118,7 @@ impl Gpu {
                 .iter()
                 .filter_map(|(name, b, e)| {
                     let e = (*e)?;
-                    Some(PassTiming {
-                        name: name.clone(),
-                        ms: elapsed_ns(raw[*b as usize], raw[e as usize], bits, period) / 1e6,
-                    })
+                    Some(PassTiming { name: name.clone(), ms: elapsed_ns(raw[*b as usize], raw[e as usize], bits, period) / 1e6 })
                 })
                 .collect(),
         ))
@@ -178,30 +132,12 @@ impl Gpu {
 
     /// Submits the frame's recorded commands. `wait`/`signal` are binary semaphores for
     /// presentation.
-    pub fn submit_frame(
-        &self,
-        f: Frame,
-        wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>,
-        signal: Option<vk::Semaphore>,
-    ) -> BackendResult<()> {
+    pub fn submit_frame(&self, f: Frame, wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>, signal: Option<vk::Semaphore>) -> BackendResult<()> {
         let mut fd = self.frame_data(f)?.borrow_mut();
         let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(fd.cb)];
-        let waits: Vec<vk::SemaphoreSubmitInfo> = wait
-            .iter()
-            .map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage))
-            .collect();
-        let signals: Vec<vk::SemaphoreSubmitInfo> = signal
-            .iter()
-            .map(|&s| {
-                vk::SemaphoreSubmitInfo::default()
-                    .semaphore(s)
-                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            })
-            .collect();
-        let submit = [vk::SubmitInfo2::default()
-            .command_buffer_infos(&cbs)
-            .wait_semaphore_infos(&waits)
-            .signal_semaphore_infos(&signals)];
+        let waits: Vec<vk::SemaphoreSubmitInfo> = wait.iter().map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage)).collect();
+        let signals: Vec<vk::SemaphoreSubmitInfo> = signal.iter().map(|&s| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)).collect();
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbs).wait_semaphore_infos(&waits).signal_semaphore_infos(&signals)];
         unsafe { self.device.queue_submit2(self.queue, &submit, fd.fence) }.vk("vkQueueSubmit2")?;
         fd.submitted = true;
         Ok(())

@@ -21,9 +21,7 @@ impl Clear {
     fn raw(self) -> vk::ClearValue {
         match self {
             Clear::Color(c) => vk::ClearValue { color: vk::ClearColorValue { float32: c } },
-            Clear::DepthStencil { depth, stencil } => vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue { depth, stencil },
-            },
+            Clear::DepthStencil { depth, stencil } => vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth, stencil } },
         }
     }
 }
@@ -43,24 +41,10 @@ pub struct RenderTarget {
 
 impl RenderTarget {
     pub fn clear_color(image: ImageId, rgba: [f32; 4]) -> Self {
-        RenderTarget {
-            image,
-            mip: 0,
-            layer: 0,
-            clear: Some(Clear::Color(rgba)),
-            store: true,
-            read_only: false,
-        }
+        RenderTarget { image, mip: 0, layer: 0, clear: Some(Clear::Color(rgba)), store: true, read_only: false }
     }
     pub fn clear_depth(image: ImageId, depth: f32, stencil: u32) -> Self {
-        RenderTarget {
-            image,
-            mip: 0,
-            layer: 0,
-            clear: Some(Clear::DepthStencil { depth, stencil }),
-            store: true,
-            read_only: false,
-        }
+        RenderTarget { image, mip: 0, layer: 0, clear: Some(Clear::DepthStencil { depth, stencil }), store: true, read_only: false }
     }
     pub fn load(image: ImageId) -> Self {
         RenderTarget { image, mip: 0, layer: 0, clear: None, store: true, read_only: false }
@@ -109,25 +93,12 @@ impl Gpu {
     /// Waits for the frame's previous submission, resets its pools and begins recording.
     pub fn begin_frame(&self, f: Frame) -> BackendResult<Recorder<'_>> {
         self.wait_frame(f)?;
-        let mut frame = self
-            .frame_data(f)?
-            .try_borrow_mut()
-            .map_err(|_| BackendError::Invalid("frame is already being recorded".into()))?;
+        let mut frame = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is already being recorded".into()))?;
         let cb = frame.cb;
         unsafe {
-            self.device
-                .reset_descriptor_pool(frame.descriptor_pool, vk::DescriptorPoolResetFlags::empty())
-                .vk("vkResetDescriptorPool")?;
-            self.device
-                .reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())
-                .vk("vkResetCommandBuffer")?;
-            self.device
-                .begin_command_buffer(
-                    cb,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )
-                .vk("vkBeginCommandBuffer")?;
+            self.device.reset_descriptor_pool(frame.descriptor_pool, vk::DescriptorPoolResetFlags::empty()).vk("vkResetDescriptorPool")?;
+            self.device.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
+            self.device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT)).vk("vkBeginCommandBuffer")?;
             if let Some(q) = frame.queries {
                 self.device.cmd_reset_query_pool(cb, q, 0, MAX_QUERIES);
             }
@@ -198,9 +169,7 @@ impl<'g> Recorder<'g> {
         self.frame.next_query += 1;
         // ALL_COMMANDS: the timestamp is taken once every earlier command has finished, so a
         // scope measures its own commands (and the barriers recorded inside it).
-        unsafe {
-            self.gpu.device.cmd_write_timestamp2(self.cb, vk::PipelineStageFlags2::ALL_COMMANDS, pool, q)
-        };
+        unsafe { self.gpu.device.cmd_write_timestamp2(self.cb, vk::PipelineStageFlags2::ALL_COMMANDS, pool, q) };
         Some(q)
     }
 
@@ -253,11 +222,7 @@ impl<'g> Recorder<'g> {
         if self.rendering {
             return Err(BackendError::Invalid("nested begin_rendering".into()));
         }
-        let first = desc
-            .colors
-            .first()
-            .or(desc.depth_stencil.as_ref())
-            .ok_or_else(|| BackendError::Invalid("rendering without attachments".into()))?;
+        let first = desc.colors.first().or(desc.depth_stencil.as_ref()).ok_or_else(|| BackendError::Invalid("rendering without attachments".into()))?;
         let e = self.gpu.image(first.image)?.desc.mip_extent(first.mip);
         let extent = vk::Extent2D { width: e.width, height: e.height };
         let attach = |t: &RenderTarget, layout: vk::ImageLayout| -> BackendResult<vk::RenderingAttachmentInfo<'static>> {
@@ -272,22 +237,11 @@ impl<'g> Recorder<'g> {
             }
             Ok(a)
         };
-        let colors = desc
-            .colors
-            .iter()
-            .map(|t| attach(t, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL))
-            .collect::<BackendResult<Vec<_>>>()?;
-        let mut info = vk::RenderingInfo::default()
-            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-            .layer_count(1)
-            .color_attachments(&colors);
+        let colors = desc.colors.iter().map(|t| attach(t, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)).collect::<BackendResult<Vec<_>>>()?;
+        let mut info = vk::RenderingInfo::default().render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent }).layer_count(1).color_attachments(&colors);
         let ds;
         if let Some(t) = &desc.depth_stencil {
-            let layout = if t.read_only {
-                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
-            } else {
-                vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
-            };
+            let layout = if t.read_only { vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL } else { vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL };
             ds = attach(t, layout)?;
             let aspect = self.gpu.image(t.image)?.desc.aspect();
             if aspect.contains(vk::ImageAspectFlags::DEPTH) {
@@ -299,18 +253,7 @@ impl<'g> Recorder<'g> {
         }
         unsafe {
             self.gpu.device.cmd_begin_rendering(self.cb, &info);
-            self.gpu.device.cmd_set_viewport(
-                self.cb,
-                0,
-                &[vk::Viewport {
-                    x: 0.0,
-                    y: 0.0,
-                    width: extent.width as f32,
-                    height: extent.height as f32,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                }],
-            );
+            self.gpu.device.cmd_set_viewport(self.cb, 0, &[vk::Viewport { x: 0.0, y: 0.0, width: extent.width as f32, height: extent.height as f32, min_depth: 0.0, max_depth: 1.0 }]);
             self.gpu.device.cmd_set_scissor(self.cb, 0, &[vk::Rect2D { offset: vk::Offset2D::default(), extent }]);
         }
         self.rendering = true;
@@ -366,15 +309,9 @@ impl<'g> Recorder<'g> {
         let p = self.gpu.pipeline(self.bound_pipeline()?)?;
         let size = p.reflection.push_constant_size as usize;
         if bytes.len() != size {
-            return Err(BackendError::Binding {
-                pipeline: p.name.clone(),
-                binding: "push constants".into(),
-                message: format!("{} bytes given, the shaders declare {size}", bytes.len()),
-            });
+            return Err(BackendError::Binding { pipeline: p.name.clone(), binding: "push constants".into(), message: format!("{} bytes given, the shaders declare {size}", bytes.len()) });
         }
-        unsafe {
-            self.gpu.device.cmd_push_constants(self.cb, p.layout, p.reflection.push_constant_stages, 0, bytes)
-        };
+        unsafe { self.gpu.device.cmd_push_constants(self.cb, p.layout, p.reflection.push_constant_stages, 0, bytes) };
         Ok(())
     }
 
@@ -414,9 +351,7 @@ impl<'g> Recorder<'g> {
     /// workgroup size comes from the shader's reflected `local_size`).
     pub fn dispatch(&mut self, threads: [u32; 3]) -> BackendResult<()> {
         let p = self.gpu.pipeline(self.bound_pipeline()?)?;
-        let ls = p.reflection.local_size.ok_or_else(|| {
-            BackendError::Invalid(format!("pipeline `{}` is not a compute pipeline", p.name))
-        })?;
+        let ls = p.reflection.local_size.ok_or_else(|| BackendError::Invalid(format!("pipeline `{}` is not a compute pipeline", p.name)))?;
         let groups = [0, 1, 2].map(|i| threads[i].div_ceil(ls[i].max(1)));
         unsafe { self.gpu.device.cmd_dispatch(self.cb, groups[0], groups[1], groups[2]) };
         Ok(())
@@ -430,21 +365,14 @@ impl<'g> Recorder<'g> {
             buffer_offset: 0,
             buffer_row_length: 0,
             buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: img.desc.aspect(),
-                mip_level: mip,
-                base_array_layer: layer,
-                layer_count: 1,
-            },
+            image_subresource: vk::ImageSubresourceLayers { aspect_mask: img.desc.aspect(), mip_level: mip, base_array_layer: layer, layer_count: 1 },
             image_offset: vk::Offset3D::default(),
             image_extent: img.desc.mip_extent(mip),
         };
         if img.desc.aspect() != vk::ImageAspectFlags::COLOR {
             return Err(BackendError::Unsupported("readback of depth/stencil images".into()));
         }
-        unsafe {
-            self.gpu.device.cmd_copy_image_to_buffer(self.cb, img.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buf.raw, &[region])
-        };
+        unsafe { self.gpu.device.cmd_copy_image_to_buffer(self.cb, img.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buf.raw, &[region]) };
         Ok(())
     }
 
@@ -470,15 +398,7 @@ impl<'g> Recorder<'g> {
             base_array_layer: range.base_layer,
             layer_count: range.layer_count,
         };
-        unsafe {
-            self.gpu.device.cmd_clear_color_image(
-                self.cb,
-                raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &vk::ClearColorValue { float32: rgba },
-                &[r],
-            )
-        };
+        unsafe { self.gpu.device.cmd_clear_color_image(self.cb, raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &vk::ClearColorValue { float32: rgba }, &[r]) };
         Ok(())
     }
 
@@ -486,12 +406,7 @@ impl<'g> Recorder<'g> {
     pub fn blit(&mut self, src: ImageId, dst: ImageId) -> BackendResult<()> {
         let (s, d) = (self.gpu.image(src)?, self.gpu.image(dst)?);
         let corner = |e: vk::Extent3D| vk::Offset3D { x: e.width as i32, y: e.height as i32, z: 1 };
-        let layers = vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
+        let layers = vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 };
         let region = vk::ImageBlit2::default()
             .src_subresource(layers)
             .src_offsets([vk::Offset3D::default(), corner(s.desc.extent)])

@@ -35,41 +35,20 @@ pub struct AcquiredImage {
 
 impl Gpu {
     /// A swapchain for the window, with `slots` acquire semaphores (one per frame in flight).
-    pub fn create_swapchain<W: HasDisplayHandle + HasWindowHandle>(
-        &mut self,
-        window: &W,
-        size: (u32, u32),
-        slots: usize,
-    ) -> BackendResult<Swapchain> {
-        let display = window
-            .display_handle()
-            .map_err(|e| BackendError::Unsupported(format!("display handle: {e}")))?;
-        let win = window
-            .window_handle()
-            .map_err(|e| BackendError::Unsupported(format!("window handle: {e}")))?;
-        let surface = unsafe {
-            ash_window::create_surface(&self.entry, &self.instance, display.as_raw(), win.as_raw(), None)
-        }
-        .vk("vkCreateSurfaceKHR")?;
+    pub fn create_swapchain<W: HasDisplayHandle + HasWindowHandle>(&mut self, window: &W, size: (u32, u32), slots: usize) -> BackendResult<Swapchain> {
+        let display = window.display_handle().map_err(|e| BackendError::Unsupported(format!("display handle: {e}")))?;
+        let win = window.window_handle().map_err(|e| BackendError::Unsupported(format!("window handle: {e}")))?;
+        let surface = unsafe { ash_window::create_surface(&self.entry, &self.instance, display.as_raw(), win.as_raw(), None) }.vk("vkCreateSurfaceKHR")?;
         let surface_fn = ash::khr::surface::Instance::new(&self.entry, &self.instance);
-        let supported = unsafe {
-            surface_fn.get_physical_device_surface_support(self.physical, self.queue_family, surface)
-        }
-        .vk("vkGetPhysicalDeviceSurfaceSupportKHR")?;
+        let supported = unsafe { surface_fn.get_physical_device_surface_support(self.physical, self.queue_family, surface) }.vk("vkGetPhysicalDeviceSurfaceSupportKHR")?;
         if !supported {
             unsafe { surface_fn.destroy_surface(surface, None) };
-            return Err(BackendError::Unsupported(format!(
-                "{} cannot present to this window",
-                self.caps.name
-            )));
+            return Err(BackendError::Unsupported(format!("{} cannot present to this window", self.caps.name)));
         }
         let swapchain_fn = ash::khr::swapchain::Device::new(&self.instance, &self.device);
         let mut acquire_semaphores = Vec::new();
         for _ in 0..slots.max(1) {
-            acquire_semaphores.push(
-                unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
-                    .vk("vkCreateSemaphore")?,
-            );
+            acquire_semaphores.push(unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?);
         }
         let mut sc = Swapchain {
             surface_fn,
@@ -89,12 +68,8 @@ impl Gpu {
     /// Rebuilds the swapchain at a new size (after a resize or an out-of-date present).
     pub fn recreate_swapchain(&mut self, sc: &mut Swapchain, size: (u32, u32)) -> BackendResult<()> {
         self.wait_idle()?;
-        let caps = unsafe {
-            sc.surface_fn.get_physical_device_surface_capabilities(self.physical, sc.surface)
-        }
-        .vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
-        let formats = unsafe { sc.surface_fn.get_physical_device_surface_formats(self.physical, sc.surface) }
-            .vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
+        let caps = unsafe { sc.surface_fn.get_physical_device_surface_capabilities(self.physical, sc.surface) }.vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
+        let formats = unsafe { sc.surface_fn.get_physical_device_surface_formats(self.physical, sc.surface) }.vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
         let format = formats
             .iter()
             .find(|f| f.format == vk::Format::B8G8R8A8_SRGB || f.format == vk::Format::R8G8B8A8_SRGB)
@@ -104,10 +79,7 @@ impl Gpu {
         let extent = if caps.current_extent.width != u32::MAX {
             caps.current_extent
         } else {
-            vk::Extent2D {
-                width: size.0.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
-                height: size.1.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
-            }
+            vk::Extent2D { width: size.0.clamp(caps.min_image_extent.width, caps.max_image_extent.width), height: size.1.clamp(caps.min_image_extent.height, caps.max_image_extent.height) }
         };
         let mut count = caps.min_image_count + 1;
         if caps.max_image_count > 0 {
@@ -145,10 +117,7 @@ impl Gpu {
         for (i, r) in raws.into_iter().enumerate() {
             let desc = ImageDesc::new_2d(&format!("swapchain {i}"), format.format, extent.width, extent.height).usage(usage);
             sc.images.push(self.register_external_image(r, desc));
-            sc.present_semaphores.push(
-                unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
-                    .vk("vkCreateSemaphore")?,
-            );
+            sc.present_semaphores.push(unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?);
         }
         Ok(())
     }
@@ -166,12 +135,7 @@ impl Gpu {
     pub fn acquire(&self, sc: &Swapchain, slot: usize) -> BackendResult<Option<AcquiredImage>> {
         let acquired = sc.acquire_semaphores[slot % sc.acquire_semaphores.len()];
         match unsafe { sc.swapchain_fn.acquire_next_image(sc.raw, u64::MAX, acquired, vk::Fence::null()) } {
-            Ok((index, _suboptimal)) => Ok(Some(AcquiredImage {
-                index,
-                image: sc.images[index as usize],
-                acquired,
-                rendered: sc.present_semaphores[index as usize],
-            })),
+            Ok((index, _suboptimal)) => Ok(Some(AcquiredImage { index, image: sc.images[index as usize], acquired, rendered: sc.present_semaphores[index as usize] })),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(None),
             Err(e) => Err(BackendError::Vulkan { call: "vkAcquireNextImageKHR", result: e }),
         }
@@ -182,10 +146,7 @@ impl Gpu {
         let waits = [image.rendered];
         let chains = [sc.raw];
         let indices = [image.index];
-        let info = vk::PresentInfoKHR::default()
-            .wait_semaphores(&waits)
-            .swapchains(&chains)
-            .image_indices(&indices);
+        let info = vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&chains).image_indices(&indices);
         match unsafe { sc.swapchain_fn.queue_present(self.queue, &info) } {
             Ok(false) => Ok(true),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),

@@ -10,7 +10,9 @@ pub struct PassTiming {
 /// Whether this device/queue can time passes at all.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub enum TimestampSupport {
-    Supported { valid_bits: u32 },
+    Supported {
+        valid_bits: u32,
+    },
     /// `timestampValidBits` is 0 on the queue: no timings can be taken.
     Unsupported,
 }

@@ -118,10 +118,7 @@ fn measure(scene: &Scene, decl: &MethodDecl, opts: &ChartOptions) -> Result<Meas
     let mut renderer = Renderer::new(Gpu::new(&opts.gpu)?, scene, None, opts.size, 1)?;
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
-    let image = renderer
-        .render(&camera, FrameOutput::Readback)?
-        .image
-        .ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+    let image = renderer.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
     let timings = renderer.profile(&camera, opts.frames.max(1))?;
     let stats = summarise(&timings);
     let frame_ms = stats.iter().find(|s| s.name == "frame").map(|s| s.median_ms).unwrap_or(f64::NAN);
@@ -244,12 +241,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<MeasuredConfig>> {
     for (i, line) in lines.enumerate() {
         let f: Vec<&str> = line.split(',').collect();
         let num = |c: usize| f.get(c).and_then(|v| v.parse::<f64>().ok()).ok_or_else(|| Error::Usage(format!("chart table row {}: column {c} is not a number", i + 2)));
-        out.push(MeasuredConfig {
-            method: f.get(cm).unwrap_or(&"").to_string(),
-            config: f.get(cc).unwrap_or(&"").to_string(),
-            frame_ms: num(cf)?,
-            rel_mse: num(ce)?,
-        });
+        out.push(MeasuredConfig { method: f.get(cm).unwrap_or(&"").to_string(), config: f.get(cc).unwrap_or(&"").to_string(), frame_ms: num(cf)?, rel_mse: num(ce)? });
     }
     Ok(out)
 }
@@ -268,10 +260,7 @@ pub fn choose(configs: &[MeasuredConfig], max_rel_mse: f64) -> Option<Choice> {
     by_time.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     match by_time.iter().position(|c| c.rel_mse <= max_rel_mse) {
         Some(i) => Some(Choice::Picked { config: by_time[i].clone(), rejected: by_time[..i].iter().map(|c| (*c).clone()).collect() }),
-        None => configs
-            .iter()
-            .min_by(|a, b| a.rel_mse.total_cmp(&b.rel_mse))
-            .map(|c| Choice::NoneQualifies { closest: c.clone() }),
+        None => configs.iter().min_by(|a, b| a.rel_mse.total_cmp(&b.rel_mse)).map(|c| Choice::NoneQualifies { closest: c.clone() }),
     }
 }
 
@@ -285,11 +274,9 @@ impl std::fmt::Display for Choice {
                 }
                 Ok(())
             }
-            Choice::NoneQualifies { closest } => write!(
-                f,
-                "no configuration reaches the bound; the closest is `{}` with relative MSE {:.4} at {:.3} ms",
-                closest.config, closest.rel_mse, closest.frame_ms
-            ),
+            Choice::NoneQualifies { closest } => {
+                write!(f, "no configuration reaches the bound; the closest is `{}` with relative MSE {:.4} at {:.3} ms", closest.config, closest.rel_mse, closest.frame_ms)
+            }
         }
     }
 }

@@ -32,12 +32,7 @@ pub fn vertex_layout() -> VertexLayout {
     let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
     VertexLayout {
         buffers: vec![(0, std::mem::size_of::<Vertex>() as u32)],
-        attributes: vec![
-            attr(0, vk::Format::R32G32B32_SFLOAT, 0),
-            attr(1, vk::Format::R32G32B32_SFLOAT, 12),
-            attr(2, vk::Format::R32G32_SFLOAT, 24),
-            attr(3, vk::Format::R32G32B32A32_SFLOAT, 32),
-        ],
+        attributes: vec![attr(0, vk::Format::R32G32B32_SFLOAT, 0), attr(1, vk::Format::R32G32B32_SFLOAT, 12), attr(2, vk::Format::R32G32_SFLOAT, 24), attr(3, vk::Format::R32G32B32A32_SFLOAT, 32)],
     }
 }
 
@@ -109,10 +104,7 @@ impl LightingMethod for Forward {
                 }
                 // The sky last, on the far plane: it covers only pixels no geometry reached.
                 ctx.rec.bind_pipeline(self.sky)?;
-                ctx.rec.bind(&[(
-                    "environment_map",
-                    Bind::Sampled { image: scene.environment.map, range: SubresourceRange::mip(0), sampler: self.sky_sampler },
-                )])?;
+                ctx.rec.bind(&[("environment_map", Bind::Sampled { image: scene.environment.map, range: SubresourceRange::mip(0), sampler: self.sky_sampler })])?;
                 let inverse = glam::Mat4::from_cols_array(&uniforms.view_proj).inverse();
                 let mut push = [0u8; 68];
                 push[..64].copy_from_slice(bytemuck::bytes_of(&inverse.to_cols_array()));

@@ -12,10 +12,7 @@ pub mod state;
 
 use std::collections::{HashMap, HashSet};
 
-use crate::backend::{
-    vk, Bind, BackendError, BufferId, BufferTransition, Gpu, ImageId, ImageTransition, Recorder,
-    SamplerId, SubresourceRange,
-};
+use crate::backend::{vk, BackendError, Bind, BufferId, BufferTransition, Gpu, ImageId, ImageTransition, Recorder, SamplerId, SubresourceRange};
 pub use state::Access;
 use state::{BufferState, ImageState};
 
@@ -223,10 +220,7 @@ impl<'a> RenderGraph<'a> {
     }
 
     pub fn pass(&mut self, name: &str) -> PassBuilder<'_, 'a> {
-        PassBuilder {
-            graph: self,
-            node: PassNode { name: name.into(), images: Vec::new(), buffers: Vec::new(), side_effect: false, record: None },
-        }
+        PassBuilder { graph: self, node: PassNode { name: name.into(), images: Vec::new(), buffers: Vec::new(), side_effect: false, record: None } }
     }
 
     /// Keeps the passes producing this image (its contents are used after the frame).
@@ -244,12 +238,7 @@ impl<'a> RenderGraph<'a> {
         let mut needed: HashSet<Resource> = self.outputs.clone();
         let mut live = vec![false; self.passes.len()];
         for (i, p) in self.passes.iter().enumerate().rev() {
-            let writes = p
-                .images
-                .iter()
-                .filter(|u| u.access.is_write())
-                .map(|u| Resource::Image(u.image))
-                .chain(p.buffers.iter().filter(|u| u.access.is_write()).map(|u| Resource::Buffer(u.buffer)));
+            let writes = p.images.iter().filter(|u| u.access.is_write()).map(|u| Resource::Image(u.image)).chain(p.buffers.iter().filter(|u| u.access.is_write()).map(|u| Resource::Buffer(u.buffer)));
             let mut is_live = p.side_effect;
             for w in writes {
                 if needed.contains(&w) {
@@ -309,13 +298,7 @@ impl<'a> RenderGraph<'a> {
             for u in &pass.buffers {
                 let state = states.buffers.entry(u.buffer).or_default();
                 if let Some(b) = state.transition(u.access) {
-                    buffer_barriers.push(BufferTransition {
-                        buffer: u.buffer,
-                        src_stages: b.src_stages,
-                        src_access: b.src_access,
-                        dst_stages: b.dst_stages,
-                        dst_access: b.dst_access,
-                    });
+                    buffer_barriers.push(BufferTransition { buffer: u.buffer, src_stages: b.src_stages, src_access: b.src_access, dst_stages: b.dst_stages, dst_access: b.dst_access });
                 }
             }
             report.image_barriers += image_barriers.len();

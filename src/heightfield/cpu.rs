@@ -260,7 +260,11 @@ mod tests {
             let got = shade(&v, &cosine, &light, 4).unwrap();
             let exact = q.integrate(|d| {
                 let above = d.z.asin() > horizon(d.y.atan2(d.x));
-                if above && d.dot(axis) >= half.cos() { d.z.max(0.0) } else { 0.0 }
+                if above && d.dot(axis) >= half.cos() {
+                    d.z.max(0.0)
+                } else {
+                    0.0
+                }
             }) / PI;
             assert!((got - want_sh).abs() < 2e-4, "β {beta_deg}°: SH {got:.5}, digest {want_sh}");
             assert!((exact - want_exact).abs() < 3e-4, "β {beta_deg}°: exact {exact:.5}, digest {want_exact}");

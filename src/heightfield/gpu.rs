@@ -128,9 +128,16 @@ pub enum EnvInput {
     None,
     Constant(Vec3),
     /// An equirectangular map (already reduced), RGBA texels, rows from straight up.
-    Map { width: u32, height: u32, texels: Vec<[f32; 4]> },
+    Map {
+        width: u32,
+        height: u32,
+        texels: Vec<[f32; 4]>,
+    },
     /// A cube map (already reduced): six `size`² faces in layer order (as [`crate::scene::CubeFaces`]).
-    Cube { size: u32, texels: Vec<[f32; 4]> },
+    Cube {
+        size: u32,
+        texels: Vec<[f32; 4]>,
+    },
 }
 
 /// The height field, its lights and environment, as the method takes them from a scene.
@@ -529,10 +536,12 @@ impl HeightfieldGpu {
         }
         if has_env {
             let params = self.pass_params(None).bytes();
-            let pass = self
-                .lighting_pass(graph, "hf environment", Some(self.env_table))
-                .buffer(self.env_sh, Access::StorageRead { stages: COMPUTE }, Some("env_sh"))
-                .storage_write("out_radiance", self.env_radiance, SubresourceRange::mip(0), COMPUTE);
+            let pass = self.lighting_pass(graph, "hf environment", Some(self.env_table)).buffer(self.env_sh, Access::StorageRead { stages: COMPUTE }, Some("env_sh")).storage_write(
+                "out_radiance",
+                self.env_radiance,
+                SubresourceRange::mip(0),
+                COMPUTE,
+            );
             pass.record(move |ctx| {
                 ctx.rec.bind_pipeline(p.env)?;
                 ctx.bind(&[("params", Bind::UniformData(&params))])?;
@@ -542,13 +551,11 @@ impl HeightfieldGpu {
         for (k, light) in self.inputs.lights.iter().enumerate() {
             let params = self.pass_params(Some(light)).bytes();
             let name = format!("hf light {}", k + 1);
-            self.lighting_pass(graph, &name, Some(self.local_table))
-                .storage_write("out_radiance", self.light_radiance, SubresourceRange::mip_layer(0, k as u32), COMPUTE)
-                .record(move |ctx| {
-                    ctx.rec.bind_pipeline(p.light)?;
-                    ctx.bind(&[("params", Bind::UniformData(&params))])?;
-                    ctx.rec.dispatch([res, res, 1])
-                });
+            self.lighting_pass(graph, &name, Some(self.local_table)).storage_write("out_radiance", self.light_radiance, SubresourceRange::mip_layer(0, k as u32), COMPUTE).record(move |ctx| {
+                ctx.rec.bind_pipeline(p.light)?;
+                ctx.bind(&[("params", Bind::UniformData(&params))])?;
+                ctx.rec.dispatch([res, res, 1])
+            });
         }
         let layers = light_layers(self.inputs.lights.len());
         let mut push = [0u8; 12];
@@ -592,27 +599,20 @@ impl HeightfieldGpu {
             Decimation::Bicubic => 1,
         };
         for k in 0..self.levels {
-            let (src, src_range, src_size, kind) = if k == 0 {
-                (self.heights, SubresourceRange::mip(0), res, 2)
-            } else {
-                (dec, SubresourceRange::mip_layer(0, k - 1), self.level_sizes[k as usize - 1], filter)
-            };
+            let (src, src_range, src_size, kind) =
+                if k == 0 { (self.heights, SubresourceRange::mip(0), res, 2) } else { (dec, SubresourceRange::mip_layer(0, k - 1), self.level_sizes[k as usize - 1], filter) };
             let dst_size = self.level_sizes[k as usize];
             let mut push = [0u8; 12];
             push[..4].copy_from_slice(&(src_size as i32).to_le_bytes());
             push[4..8].copy_from_slice(&(dst_size as i32).to_le_bytes());
             push[8..12].copy_from_slice(&kind.to_le_bytes());
             let name = if k == 0 { "hf pyramid level 0".to_string() } else { format!("hf pyramid decimate {k}") };
-            graph
-                .pass(&name)
-                .sample("src", src, src_range, self.nearest, COMPUTE)
-                .storage_write("dst", dec, SubresourceRange::mip_layer(0, k), COMPUTE)
-                .record(move |ctx| {
-                    ctx.rec.bind_pipeline(p.decimate)?;
-                    ctx.bind(&[])?;
-                    ctx.rec.push_constants(&push)?;
-                    ctx.rec.dispatch([dst_size, dst_size, 1])
-                });
+            graph.pass(&name).sample("src", src, src_range, self.nearest, COMPUTE).storage_write("dst", dec, SubresourceRange::mip_layer(0, k), COMPUTE).record(move |ctx| {
+                ctx.rec.bind_pipeline(p.decimate)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(&push)?;
+                ctx.rec.dispatch([dst_size, dst_size, 1])
+            });
         }
         let levels = self.levels;
         let mut sizes = vec![0u8; 16 * MAX_LEVELS as usize];
@@ -640,9 +640,7 @@ impl HeightfieldGpu {
     fn lighting_pass<'g, 'a>(&'a self, graph: &'g mut RenderGraph<'a>, name: &str, table: Option<BufferId>) -> crate::graph::PassBuilder<'g, 'a> {
         let mut pass = graph.pass(name).sample("heights", self.heights, SubresourceRange::mip(0), self.height_sampler, COMPUTE);
         if let Some(table) = table {
-            pass = pass
-                .buffer(table, Access::StorageRead { stages: COMPUTE }, Some("wedge"))
-                .buffer(self.product, Access::StorageRead { stages: COMPUTE }, Some("product"));
+            pass = pass.buffer(table, Access::StorageRead { stages: COMPUTE }, Some("wedge")).buffer(self.product, Access::StorageRead { stages: COMPUTE }, Some("product"));
         }
         if let Some(pyr) = self.pyramid {
             pass = pass.sample("pyramid", pyr, SubresourceRange::new(0, 1, 0, self.levels), self.height_sampler, COMPUTE);

@@ -148,7 +148,18 @@ mod tests {
     #[test]
     fn table_groups_passes() {
         let p = |n: &str, ms: f64| PassStats { name: n.into(), median_ms: ms, min_ms: ms, max_ms: ms };
-        let passes = vec![p("frame", 10.0), p("hf height update", 0.5), p("hf pyramid level 0", 0.1), p("hf pyramid decimate 1", 0.2), p("hf pyramid reconstruct", 0.7), p("hf environment SH", 0.1), p("hf environment", 3.0), p("hf light 1", 4.0), p("hf accumulate", 0.2), p("hf raster", 1.0)];
+        let passes = vec![
+            p("frame", 10.0),
+            p("hf height update", 0.5),
+            p("hf pyramid level 0", 0.1),
+            p("hf pyramid decimate 1", 0.2),
+            p("hf pyramid reconstruct", 0.7),
+            p("hf environment SH", 0.1),
+            p("hf environment", 3.0),
+            p("hf light 1", 4.0),
+            p("hf accumulate", 0.2),
+            p("hf raster", 1.0),
+        ];
         let t = table_6_6(&passes).unwrap();
         assert!(t.contains("| 0.500 | 1.000 | 3.100 | 4.000 | 1.200 |"), "{t}");
         assert!(table_6_6(&[p("forward", 1.0)]).is_none());

@@ -199,7 +199,8 @@ impl LightingMethod for HeightfieldMethod {
         let terrain = self.terrain;
         // The material's maps as the forward method binds them (uploaded once, never written).
         let scene = inputs.scene;
-        let albedo_map = scene.material_maps.get(core.inputs.material).map(|m| m.albedo).ok_or_else(|| crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name)))?;
+        let albedo_map =
+            scene.material_maps.get(core.inputs.material).map(|m| m.albedo).ok_or_else(|| crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name)))?;
         let map_sampler = scene.sampler;
         graph
             .pass("hf raster")
@@ -214,10 +215,7 @@ impl LightingMethod for HeightfieldMethod {
                     depth_stencil: Some(RenderTarget::clear_depth(targets.depth_stencil, 1.0, 0)),
                 })?;
                 ctx.rec.bind_pipeline(terrain)?;
-                ctx.bind(&[
-                    ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
-                    ("albedo_map", Bind::Sampled { image: albedo_map, range: SubresourceRange::mip(0), sampler: map_sampler }),
-                ])?;
+                ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))), ("albedo_map", Bind::Sampled { image: albedo_map, range: SubresourceRange::mip(0), sampler: map_sampler })])?;
                 ctx.rec.push_constants(&push)?;
                 ctx.rec.draw(vertices, 1)?;
                 ctx.rec.end_rendering();
@@ -259,9 +257,7 @@ mod tests {
     use super::*;
 
     fn scene(extra: &str) -> Scene {
-        let text = format!(
-            "methods = [\"heightfield_pyramid\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\ngenerator = \"flat\"\n{extra}\n"
-        );
+        let text = format!("methods = [\"heightfield_pyramid\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\ngenerator = \"flat\"\n{extra}\n");
         Scene::from_str(&text, "t.toml", std::path::Path::new(".")).unwrap()
     }
 
@@ -289,7 +285,13 @@ mod tests {
         let e = Settings::from_decl(&decl(&[("resolution", 300.into())]), Horizon::Pyramid).unwrap_err().to_string();
         assert!(e.contains("resolution: expected a power of two"), "{e}");
         let sweep: Vec<String> = pyramid_sweep(&decl(&[])).into_iter().map(|(l, _)| l).collect();
-        for want in ["pyramid nphi=4 ls=4 lo=4 bands=4 corrected", "pyramid nphi=32 ls=1 lo=4 bands=4 corrected", "pyramid nphi=32 ls=4 lo=0 bands=4 corrected", "pyramid nphi=32 ls=4 lo=4 bands=2 corrected", "pyramid nphi=32 ls=4 lo=4 bands=4 faithful"] {
+        for want in [
+            "pyramid nphi=4 ls=4 lo=4 bands=4 corrected",
+            "pyramid nphi=32 ls=1 lo=4 bands=4 corrected",
+            "pyramid nphi=32 ls=4 lo=0 bands=4 corrected",
+            "pyramid nphi=32 ls=4 lo=4 bands=2 corrected",
+            "pyramid nphi=32 ls=4 lo=4 bands=4 faithful",
+        ] {
             assert!(sweep.iter().any(|l| l == want), "{want} missing from {sweep:?}");
         }
         assert!(sweep.iter().any(|l| l == "pyramid nphi=32 ls=4 lo=4 bands=4 corrected hanning=5"), "{sweep:?}");

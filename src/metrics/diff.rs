@@ -56,10 +56,6 @@ pub fn colorize(map: &FlipMap) -> image::RgbaImage {
 /// The false-colour FLIP difference image of `test` against `reference`. Fails on the same
 /// inputs as `compare`; use `compare_with_map` + [`colorize`] to get metrics and image from
 /// one FLIP evaluation.
-pub fn diff_image(
-    test: &HdrImage,
-    reference: &HdrImage,
-    opts: &CompareOptions,
-) -> Result<image::RgbaImage, MetricsError> {
+pub fn diff_image(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> Result<image::RgbaImage, MetricsError> {
     super::flip::flip_error_map(test, reference, opts).map(|m| colorize(&m))
 }

@@ -120,8 +120,7 @@ impl Metrics {
         ];
         let mut out = String::new();
         for (name, value, note) in rows {
-            let line =
-                if note.is_empty() { format!("{name:<15} {value}") } else { format!("{name:<15} {value:<14} {note}") };
+            let line = if note.is_empty() { format!("{name:<15} {value}") } else { format!("{name:<15} {value:<14} {note}") };
             out.push_str(line.trim_end());
             out.push('\n');
         }
@@ -154,23 +153,12 @@ pub fn compare(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> 
 
 /// [`compare`], also handing back the per-pixel FLIP map so that a caller writing a difference
 /// image (see [`colorize`]) does not run FLIP twice.
-pub fn compare_with_map(
-    test: &HdrImage,
-    reference: &HdrImage,
-    opts: &CompareOptions,
-) -> Result<(Metrics, FlipMap), MetricsError> {
+pub fn compare_with_map(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> Result<(Metrics, FlipMap), MetricsError> {
     validate(test, reference, opts)?;
     let s = stats::radiance_stats(&test.pixels, &reference.pixels);
     let map = flip::flip_map_unchecked(test, reference, opts);
-    let metrics = Metrics {
-        rmse: s.rmse,
-        rel_mse: s.rel_mse,
-        mean_bias: s.mean_bias,
-        p99_abs_error: s.p99_abs_error,
-        max_abs_error: s.max_abs_error,
-        flip_mean: map.mean(),
-        pixels: test.pixels.len(),
-    };
+    let metrics =
+        Metrics { rmse: s.rmse, rel_mse: s.rel_mse, mean_bias: s.mean_bias, p99_abs_error: s.p99_abs_error, max_abs_error: s.max_abs_error, flip_mean: map.mean(), pixels: test.pixels.len() };
     Ok((metrics, map))
 }
 
@@ -178,34 +166,19 @@ pub fn compare_with_map(
 /// numeric code below can index freely.
 pub(crate) fn validate(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> Result<(), MetricsError> {
     if !opts.exposure.is_finite() || opts.exposure < 0.0 {
-        return Err(MetricsError::InvalidOption(format!(
-            "exposure must be finite and non-negative, got {}",
-            opts.exposure
-        )));
+        return Err(MetricsError::InvalidOption(format!("exposure must be finite and non-negative, got {}", opts.exposure)));
     }
     // Above ~10⁴ ppd the FLIP kernels would span thousands of pixels; nobody views images so.
     if !opts.pixels_per_degree.is_finite() || opts.pixels_per_degree <= 0.0 || opts.pixels_per_degree > 1.0e4 {
-        return Err(MetricsError::InvalidOption(format!(
-            "pixels per degree must be in (0, 10000], got {}",
-            opts.pixels_per_degree
-        )));
+        return Err(MetricsError::InvalidOption(format!("pixels per degree must be in (0, 10000], got {}", opts.pixels_per_degree)));
     }
     if (test.width, test.height) != (reference.width, reference.height) {
-        return Err(MetricsError::SizeMismatch {
-            test: (test.width, test.height),
-            reference: (reference.width, reference.height),
-        });
+        return Err(MetricsError::SizeMismatch { test: (test.width, test.height), reference: (reference.width, reference.height) });
     }
     for (role, img) in [(Role::Test, test), (Role::Reference, reference)] {
         let expected = img.width as usize * img.height as usize;
         if img.pixels.len() != expected {
-            return Err(MetricsError::BufferSize {
-                role,
-                width: img.width,
-                height: img.height,
-                len: img.pixels.len(),
-                expected,
-            });
+            return Err(MetricsError::BufferSize { role, width: img.width, height: img.height, len: img.pixels.len(), expected });
         }
     }
     if test.pixels.is_empty() {

@@ -55,13 +55,7 @@ pub fn radiance_stats(test: &[[f32; 4]], reference: &[[f32; 4]]) -> RadianceStat
     }
     let samples = (3 * n) as f64;
     let max_abs_error = per_pixel.iter().copied().fold(0.0f64, f64::max);
-    RadianceStats {
-        rmse: (sum_sq / samples).sqrt(),
-        rel_mse: sum_rel / samples,
-        mean_bias: sum_diff / samples,
-        p99_abs_error: nearest_rank_percentile(&mut per_pixel, 99),
-        max_abs_error,
-    }
+    RadianceStats { rmse: (sum_sq / samples).sqrt(), rel_mse: sum_rel / samples, mean_bias: sum_diff / samples, p99_abs_error: nearest_rank_percentile(&mut per_pixel, 99), max_abs_error }
 }
 
 /// The nearest-rank `pct`-th percentile (0 < pct ≤ 100): the k-th smallest value for

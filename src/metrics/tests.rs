@@ -50,18 +50,7 @@ fn default_viewing_conditions_give_67_ppd() {
 fn identical_images_give_exactly_zero() {
     let img = noise(32, 24, 1, 0.0, 4.0);
     let m = compare(&img, &img, &opts()).unwrap();
-    assert_eq!(
-        m,
-        Metrics {
-            rmse: 0.0,
-            rel_mse: 0.0,
-            mean_bias: 0.0,
-            p99_abs_error: 0.0,
-            max_abs_error: 0.0,
-            flip_mean: 0.0,
-            pixels: 768
-        }
-    );
+    assert_eq!(m, Metrics { rmse: 0.0, rel_mse: 0.0, mean_bias: 0.0, p99_abs_error: 0.0, max_abs_error: 0.0, flip_mean: 0.0, pixels: 768 });
 }
 
 #[test]
@@ -240,11 +229,7 @@ fn flip_on_noise() {
     });
     let map = flip_error_map(&t, &r, &opts()).unwrap();
     assert_eq!(map.values.len(), 48 * 40);
-    assert!(
-        map.values.iter().all(|v| *v > 0.0 && *v <= 1.0),
-        "{:?}",
-        map.values.iter().fold((1f32, 0f32), |a, v| (a.0.min(*v), a.1.max(*v)))
-    );
+    assert!(map.values.iter().all(|v| *v > 0.0 && *v <= 1.0), "{:?}", map.values.iter().fold((1f32, 0f32), |a, v| (a.0.min(*v), a.1.max(*v))));
     let m = compare(&t, &r, &opts()).unwrap();
     assert!(close(m.flip_mean, map.mean(), 1e-12));
     // A larger perturbation of the same pattern is more visible.
@@ -280,15 +265,10 @@ fn flip_matches_nvidia_reference_implementation() {
     // hashed noise, a multiplicative ±15 % perturbation and a brighter 8×20 rectangle. Over the
     // whole map the per-pixel difference to that tool was ≤ 1.1e-5 (f32 rounding).
     fn h(x: u32, y: u32, c: u32, seed: u32) -> f32 {
-        let v = x.wrapping_mul(73_856_093)
-            ^ y.wrapping_mul(19_349_663)
-            ^ c.wrapping_mul(83_492_791)
-            ^ seed.wrapping_mul(2_654_435_761);
+        let v = x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663) ^ c.wrapping_mul(83_492_791) ^ seed.wrapping_mul(2_654_435_761);
         (v % 1024) as f32 / 1024.0
     }
-    let r = image(64, 48, |x, y| {
-        [0, 1, 2].map(|c| 0.3 + 0.8 * (((x / 8 + y / 8 + c) % 3) as f32 / 2.0) + 0.3 * h(x, y, c, 1))
-    });
+    let r = image(64, 48, |x, y| [0, 1, 2].map(|c| 0.3 + 0.8 * (((x / 8 + y / 8 + c) % 3) as f32 / 2.0) + 0.3 * h(x, y, c, 1)));
     let t = image(64, 48, |x, y| {
         let p = r.get(x, y);
         [0, 1, 2].map(|c| {
@@ -301,10 +281,7 @@ fn flip_matches_nvidia_reference_implementation() {
         })
     });
     // (ppd, mean, pixel (0, 0), pixel (25, 20), pixel (63, 47)) from the reference tool.
-    for (ppd, mean, p0, p1, p2) in [
-        (default_pixels_per_degree(), 0.073_484_41, 0.148_825_27, 0.394_243_4, 0.116_180_7),
-        (30.0, 0.118_434_28, 0.139_552_24, 0.428_181_5, 0.122_176_7),
-    ] {
+    for (ppd, mean, p0, p1, p2) in [(default_pixels_per_degree(), 0.073_484_41, 0.148_825_27, 0.394_243_4, 0.116_180_7), (30.0, 0.118_434_28, 0.139_552_24, 0.428_181_5, 0.122_176_7)] {
         let map = flip_error_map(&t, &r, &CompareOptions { pixels_per_degree: ppd, ..opts() }).unwrap();
         assert!(close(map.mean(), mean, 2e-6), "ppd {ppd}: mean {} vs {mean}", map.mean());
         for (i, want) in [(0, p0), (20 * 64 + 25, p1), (47 * 64 + 63, p2)] {
@@ -366,17 +343,10 @@ fn malformed_inputs_and_options_are_errors() {
     let good = constant(4, 4, 0.5);
     let mut short = good.clone();
     short.pixels.pop();
-    assert_eq!(
-        compare(&good, &short, &opts()).unwrap_err().to_string(),
-        "reference holds 15 pixels but its size 4x4 needs 16"
-    );
+    assert_eq!(compare(&good, &short, &opts()).unwrap_err().to_string(), "reference holds 15 pixels but its size 4x4 needs 16");
     let empty = HdrImage::new(0, 3);
     assert!(matches!(compare(&empty, &empty, &opts()), Err(MetricsError::Empty { .. })));
-    for bad in [
-        CompareOptions { exposure: f32::NAN, ..opts() },
-        CompareOptions { exposure: -1.0, ..opts() },
-        CompareOptions { pixels_per_degree: 0.0, ..opts() },
-    ] {
+    for bad in [CompareOptions { exposure: f32::NAN, ..opts() }, CompareOptions { exposure: -1.0, ..opts() }, CompareOptions { pixels_per_degree: 0.0, ..opts() }] {
         assert!(matches!(compare(&good, &good, &bad), Err(MetricsError::InvalidOption(_))));
     }
 }
@@ -403,15 +373,7 @@ fn diff_image_uses_magma() {
 
 #[test]
 fn table_and_json() {
-    let m = Metrics {
-        rmse: 0.1,
-        rel_mse: 0.105,
-        mean_bias: -0.02,
-        p99_abs_error: 0.3,
-        max_abs_error: 2.5e-6,
-        flip_mean: 0.25,
-        pixels: 64,
-    };
+    let m = Metrics { rmse: 0.1, rel_mse: 0.105, mean_bias: -0.02, p99_abs_error: 0.3, max_abs_error: 2.5e-6, flip_mean: 0.25, pixels: 64 };
     let t = m.table();
     assert_eq!(t.lines().count(), 7);
     assert!(t.lines().next().is_some_and(|l| l.starts_with("pixels") && l.ends_with("64")));

@@ -119,7 +119,13 @@ impl Builder<'_> {
         self.depth = self.depth.max(depth);
         let n = end - start;
         let extent = cent.hi - cent.lo;
-        let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
         if n == 1 || extent[axis] <= 0.0 {
             // One triangle, or all centroids coincide: no split can separate them.
             return id;
@@ -196,9 +202,7 @@ impl Builder<'_> {
     fn median_split(&mut self, start: usize, end: usize, axis: usize) -> usize {
         let mid = start + (end - start) / 2;
         let centroids = &self.centroids;
-        self.order[start..end].select_nth_unstable_by(mid - start, |a, b| {
-            centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis])
-        });
+        self.order[start..end].select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
         mid
     }
 }

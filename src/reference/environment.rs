@@ -60,9 +60,7 @@ impl EnvironmentMap {
     /// Loads an `.hdr`/`.exr` radiance map, multiplied by `scale`. `source` names the scene file
     /// in errors.
     pub fn load(path: &Path, scale: f32, source: &str) -> Result<EnvironmentMap> {
-        let img = image::open(path)
-            .map_err(|e| Error::Usage(format!("{source}: environment.path: {}: cannot load: {e}", path.display())))?
-            .to_rgba32f();
+        let img = image::open(path).map_err(|e| Error::Usage(format!("{source}: environment.path: {}: cannot load: {e}", path.display())))?.to_rgba32f();
         let (width, height) = img.dimensions();
         if (width as usize) * (height as usize) > MAX_TEXELS {
             return Err(Error::Backend(BackendError::Unsupported(format!(

@@ -194,10 +194,8 @@ impl ReferenceRenderer {
         }
         let traced = TracedScene::build(scene)?;
         let buffers = traced.upload(&mut gpu)?;
-        let pipeline = gpu.create_compute_pipeline(
-            &ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] },
-            &ShaderLibrary::Embedded,
-        )?;
+        let pipeline =
+            gpu.create_compute_pipeline(&ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded)?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
         let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
@@ -219,20 +217,7 @@ impl ReferenceRenderer {
                 None => [0; 4],
             },
         };
-        Ok(ReferenceRenderer {
-            gpu,
-            scene: traced,
-            pipeline,
-            buffers,
-            params,
-            mean,
-            second_moment,
-            readback,
-            frame,
-            states: ResourceStates::default(),
-            width,
-            height,
-        })
+        Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, frame, states: ResourceStates::default(), width, height })
     }
 
     /// Renders `settings.spp` samples per pixel, calling `progress(done, total)` after each batch.
@@ -282,10 +267,7 @@ impl ReferenceRenderer {
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
-        let mut pass = graph
-            .pass("path trace")
-            .storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute)
-            .storage_write("second_moment", m2, SubresourceRange::mip(0), compute);
+        let mut pass = graph.pass("path trace").storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute).storage_write("second_moment", m2, SubresourceRange::mip(0), compute);
         for (name, buffer) in self.buffers.bindings() {
             pass = pass.buffer(buffer, Access::StorageRead { stages: compute }, Some(name));
         }
@@ -297,11 +279,7 @@ impl ReferenceRenderer {
         });
         if read_back {
             for (name, image, buffer) in [("read back mean", mean, rb[0]), ("read back second moment", m2, rb[1])] {
-                graph
-                    .pass(name)
-                    .transfer_read(image, SubresourceRange::mip(0))
-                    .buffer(buffer, Access::TransferWrite, None)
-                    .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
+                graph.pass(name).transfer_read(image, SubresourceRange::mip(0)).buffer(buffer, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
             }
             graph.pass("host visibility").buffer(rb[0], Access::HostRead, None).buffer(rb[1], Access::HostRead, None).record(|_| Ok(()));
         } else {

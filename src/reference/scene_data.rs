@@ -152,9 +152,7 @@ impl TracedScene {
                 let index = match loaded.iter().position(|l| *l == key) {
                     Some(i) => i,
                     None => {
-                        textures.push(load_texture(path, srgb).map_err(|e| {
-                            Error::Usage(format!("{src}: material \"{}\": {field}: cannot load {}: {e}", m.name, path.display()))
-                        })?);
+                        textures.push(load_texture(path, srgb).map_err(|e| Error::Usage(format!("{src}: material \"{}\": {field}: cannot load {}: {e}", m.name, path.display())))?);
                         loaded.push(key);
                         textures.len() - 1
                     }
@@ -237,18 +235,12 @@ impl TracedScene {
         let mut lights = punctual_lights(scene);
         for l in &scene.lights {
             match l {
-                Light::Sphere { center, radius, radiance, .. } => lights.push(GpuLight {
-                    position: center.extend(LIGHT_SPHERE).into(),
-                    direction: [*radius, 0.0, 0.0, 0.0],
-                    intensity: radiance.extend(0.0).into(),
-                    cone: [0.0; 4],
-                }),
-                Light::Quad { corner, edge_u, edge_v, radiance, .. } => lights.push(GpuLight {
-                    position: corner.extend(LIGHT_QUAD).into(),
-                    direction: edge_u.extend(0.0).into(),
-                    intensity: radiance.extend(0.0).into(),
-                    cone: edge_v.extend(0.0).into(),
-                }),
+                Light::Sphere { center, radius, radiance, .. } => {
+                    lights.push(GpuLight { position: center.extend(LIGHT_SPHERE).into(), direction: [*radius, 0.0, 0.0, 0.0], intensity: radiance.extend(0.0).into(), cone: [0.0; 4] })
+                }
+                Light::Quad { corner, edge_u, edge_v, radiance, .. } => {
+                    lights.push(GpuLight { position: corner.extend(LIGHT_QUAD).into(), direction: edge_u.extend(0.0).into(), intensity: radiance.extend(0.0).into(), cone: edge_v.extend(0.0).into() })
+                }
                 Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => {}
             }
         }

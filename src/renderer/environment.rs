@@ -70,10 +70,8 @@ impl EnvironmentLighting {
             Some(Environment::Image { .. } | Environment::Cube { .. }) => irradiance_sh(&map)?,
             None => [[0.0; 4]; 9],
         };
-        let image = gpu.create_image(
-            &ImageDesc::new_2d("environment", vk::Format::R32G32B32A32_SFLOAT, map.width, map.height)
-                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
-        )?;
+        let image =
+            gpu.create_image(&ImageDesc::new_2d("environment", vk::Format::R32G32B32A32_SFLOAT, map.width, map.height).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
         gpu.upload_image(image, 0, bytemuck::cast_slice(&map.texels))?;
         states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         Ok(EnvironmentLighting { irradiance_sh, map: image, cube: map.cube })

@@ -7,7 +7,9 @@ mod scene_gpu;
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
-use crate::backend::{vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PassTiming, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SubresourceRange};
+use crate::backend::{
+    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PassTiming, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SubresourceRange,
+};
 use crate::error::{Error, Result};
 use crate::graph::{Access, ExecutionReport, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
@@ -133,12 +135,7 @@ impl Renderer {
         let uniforms = self.uniforms(camera);
         if matches!(output, FrameOutput::Readback) && self.readback.is_none() {
             let size = self.targets.width as u64 * self.targets.height as u64 * 16;
-            self.readback = Some(self.gpu.create_buffer(&BufferDesc {
-                name: "radiance readback".into(),
-                size,
-                usage: vk::BufferUsageFlags::TRANSFER_DST,
-                memory: MemoryKind::GpuToCpu,
-            })?);
+            self.readback = Some(self.gpu.create_buffer(&BufferDesc { name: "radiance readback".into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?);
         }
         if let FrameOutput::Present { image, readback, .. } = &output {
             let d = self.gpu.image_desc(*image)?;
@@ -149,12 +146,8 @@ impl Renderer {
                     self.gpu.destroy_buffer(old);
                     self.states.forget_buffer(old);
                 }
-                self.present_readback = Some(self.gpu.create_buffer(&BufferDesc {
-                    name: "presented pixels".into(),
-                    size: bytes,
-                    usage: vk::BufferUsageFlags::TRANSFER_DST,
-                    memory: MemoryKind::GpuToCpu,
-                })?);
+                self.present_readback =
+                    Some(self.gpu.create_buffer(&BufferDesc { name: "presented pixels".into(), size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?);
             }
             if self.tonemap.map(|t| t.1) != Some(format) {
                 let mut desc = GraphicsPipelineDesc::new("tonemap", "post/fullscreen.vert", Some("post/tonemap.frag"));
@@ -240,8 +233,7 @@ impl Renderer {
                 px.swap(0, 2);
             }
         }
-        image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes)
-            .ok_or_else(|| Error::Usage("presented pixels do not match the image size".into()))
+        image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes).ok_or_else(|| Error::Usage("presented pixels do not match the image size".into()))
     }
 
     /// The frame slot the next [`Renderer::render`] records into (for presenting).
@@ -283,13 +275,10 @@ fn create_targets(gpu: &mut Gpu, (width, height): (u32, u32)) -> Result<FrameTar
         return Err(Error::Usage(format!("image size {width}x{height} is empty")));
     }
     let radiance = gpu.create_image(
-        &ImageDesc::new_2d("radiance", RADIANCE_FORMAT, width, height).usage(
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::STORAGE,
-        ),
+        &ImageDesc::new_2d("radiance", RADIANCE_FORMAT, width, height)
+            .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::STORAGE),
     )?;
     let ds_format = gpu.caps().depth_stencil_format;
-    let depth_stencil = gpu.create_image(
-        &ImageDesc::new_2d("depth-stencil", ds_format, width, height).usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
-    )?;
+    let depth_stencil = gpu.create_image(&ImageDesc::new_2d("depth-stencil", ds_format, width, height).usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
     Ok(FrameTargets { radiance, depth_stencil, width, height })
 }

@@ -96,12 +96,9 @@ pub fn raster_lights(scene: &Scene) -> Vec<GpuLight> {
     let mut out = Vec::new();
     for l in &scene.lights {
         match l {
-            Light::Point { position, intensity, .. } => out.push(GpuLight {
-                position: position.extend(LIGHT_POINT).into(),
-                direction: [0.0; 4],
-                intensity: intensity.extend(0.0).into(),
-                cone: [0.0; 4],
-            }),
+            Light::Point { position, intensity, .. } => {
+                out.push(GpuLight { position: position.extend(LIGHT_POINT).into(), direction: [0.0; 4], intensity: intensity.extend(0.0).into(), cone: [0.0; 4] })
+            }
             Light::Spot { position, direction, intensity, inner_deg, outer_deg, .. } => out.push(GpuLight {
                 position: position.extend(LIGHT_SPOT).into(),
                 direction: direction.normalize().extend(0.0).into(),
@@ -154,28 +151,17 @@ fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
     out
 }
 
-fn load_texture(
-    gpu: &mut Gpu,
-    states: &mut ResourceStates,
-    path: Option<&std::path::Path>,
-    default: [u8; 4],
-    srgb: bool,
-    what: &str,
-) -> Result<ImageId> {
+fn load_texture(gpu: &mut Gpu, states: &mut ResourceStates, path: Option<&std::path::Path>, default: [u8; 4], srgb: bool, what: &str) -> Result<ImageId> {
     let (w, h, data) = match path {
         Some(p) => {
-            let img = image::open(p)
-                .map_err(|e| Error::Usage(format!("{}: {what}: cannot load: {e}", p.display())))?
-                .to_rgba8();
+            let img = image::open(p).map_err(|e| Error::Usage(format!("{}: {what}: cannot load: {e}", p.display())))?.to_rgba8();
             (img.width(), img.height(), img.into_raw())
         }
         None => (1, 1, default.to_vec()),
     };
     let format = if srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
     let name = path.map(|p| p.display().to_string()).unwrap_or_else(|| format!("default {what}"));
-    let id = gpu.create_image(
-        &ImageDesc::new_2d(&name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
-    )?;
+    let id = gpu.create_image(&ImageDesc::new_2d(&name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
     gpu.upload_image(id, 0, &data)?;
     states.set_image(gpu, id, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
     Ok(id)
@@ -204,14 +190,7 @@ impl SceneGpu {
             let vertex_offset = vertices.len() as i32;
             push_vertices(&mut vertices, &mesh);
             indices.extend_from_slice(&mesh.indices);
-            draws.push(DrawItem {
-                name: obj.name.clone(),
-                first_index,
-                index_count: mesh.indices.len() as u32,
-                vertex_offset,
-                model: obj.transform,
-                material: obj.material as u32,
-            });
+            draws.push(DrawItem { name: obj.name.clone(), first_index, index_count: mesh.indices.len() as u32, vertex_offset, model: obj.transform, material: obj.material as u32 });
             meshes.push(mesh);
         }
         let mut gpu_materials = Vec::new();
@@ -238,12 +217,7 @@ impl SceneGpu {
             };
             for (name, mesh, radiance) in emitters {
                 let material = gpu_materials.len() as u32;
-                gpu_materials.push(GpuMaterial {
-                    albedo: [0.0, 0.0, 0.0, 1.0],
-                    specular: [0.0, 0.0, 0.0, 1.0],
-                    emission: radiance.extend(0.0).into(),
-                    maps: [0, 1, 0, 0],
-                });
+                gpu_materials.push(GpuMaterial { albedo: [0.0, 0.0, 0.0, 1.0], specular: [0.0, 0.0, 0.0, 1.0], emission: radiance.extend(0.0).into(), maps: [0, 1, 0, 0] });
                 material_maps.push(defaults);
                 draws.push(DrawItem {
                     name: format!("{name} (emitter)"),

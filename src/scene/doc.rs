@@ -71,9 +71,7 @@ impl<'de> Visitor<'de> for NodeVisitor {
         Ok(plain(Val::Int(v)))
     }
     fn visit_u64<E>(self, v: u64) -> Result<Node, E> {
-        Ok(plain(
-            i64::try_from(v).map_or(Val::Float(v as f64), Val::Int),
-        ))
+        Ok(plain(i64::try_from(v).map_or(Val::Float(v as f64), Val::Int)))
     }
     fn visit_f64<E>(self, v: f64) -> Result<Node, E> {
         Ok(plain(Val::Float(v)))
@@ -102,10 +100,7 @@ impl<'de> Visitor<'de> for NodeVisitor {
                 let end: usize = map.next_value()?;
                 let _value_key = map.next_key::<Node>()?;
                 let inner: Node = map.next_value_seed(AnyNode)?;
-                Ok(Node {
-                    span: Some(start..end),
-                    val: inner.val,
-                })
+                Ok(Node { span: Some(start..end), val: inner.val })
             }
             Val::Str(k) if k == DATETIME_KEY => {
                 let text: Node = map.next_value()?;
@@ -156,10 +151,7 @@ impl Ctx<'_> {
     pub fn parse(&self) -> Result<Node, SceneError> {
         toml::from_str::<Node>(self.text).map_err(|e| {
             let (line, col) = match e.span() {
-                Some(s) => (
-                    Some(line_of(self.text, s.start)),
-                    Some(column_of(self.text, s.start)),
-                ),
+                Some(s) => (Some(line_of(self.text, s.start)), Some(column_of(self.text, s.start))),
                 None => (None, None),
             };
             let mut msg = e.message().to_owned();
@@ -228,28 +220,14 @@ pub(crate) struct Table<'a> {
 
 impl<'a> Table<'a> {
     /// `fallback_line` is used when the table itself has no span (implicit tables).
-    pub fn new(
-        ctx: &'a Ctx<'a>,
-        path: String,
-        node: &'a Node,
-        fallback_line: Option<usize>,
-    ) -> Result<Table<'a>, SceneError> {
+    pub fn new(ctx: &'a Ctx<'a>, path: String, node: &'a Node, fallback_line: Option<usize>) -> Result<Table<'a>, SceneError> {
         let line = ctx.line(&node.span).or(fallback_line);
         let Val::Table(entries) = &node.val else {
-            return Err(ctx.err(
-                line,
-                &path,
-                format!("expected a table, got {}", describe(node)),
-            ));
+            return Err(ctx.err(line, &path, format!("expected a table, got {}", describe(node))));
         };
         let mut entries: Vec<(&Node, &Node)> = entries.iter().map(|(k, v)| (k, v)).collect();
         entries.sort_by_key(|(k, _)| k.span.as_ref().map_or(usize::MAX, |s| s.start));
-        Ok(Table {
-            ctx,
-            path,
-            line,
-            entries,
-        })
+        Ok(Table { ctx, path, line, entries })
     }
 
     fn child_path(&self, key: &str) -> String {
@@ -293,21 +271,9 @@ impl<'a> Table<'a> {
 
     /// The field `key`, if present.
     pub fn get(&self, key: &str) -> Option<Field<'a>> {
-        let (k, v) = self
-            .entries
-            .iter()
-            .find(|(k, _)| matches!(&k.val, Val::Str(s) if s == key))?;
-        let line = self
-            .ctx
-            .line(&v.span)
-            .or(self.ctx.line(&k.span))
-            .or(self.line);
-        Some(Field {
-            ctx: self.ctx,
-            path: self.child_path(key),
-            line,
-            node: v,
-        })
+        let (k, v) = self.entries.iter().find(|(k, _)| matches!(&k.val, Val::Str(s) if s == key))?;
+        let line = self.ctx.line(&v.span).or(self.ctx.line(&k.span)).or(self.line);
+        Some(Field { ctx: self.ctx, path: self.child_path(key), line, node: v })
     }
 
     /// The field `key`, or an error naming it as missing.
@@ -317,11 +283,7 @@ impl<'a> Table<'a> {
 
     /// The error for a missing `key`; `what` says what it should be.
     pub fn missing(&self, key: &str, what: &str) -> SceneError {
-        self.ctx.err(
-            self.line,
-            &self.child_path(key),
-            format!("missing required field ({what})"),
-        )
+        self.ctx.err(self.line, &self.child_path(key), format!("missing required field ({what})"))
     }
 }
 
@@ -353,16 +315,7 @@ impl<'a> Field<'a> {
         let Val::Array(items) = &self.node.val else {
             return Err(self.expected("an array"));
         };
-        Ok(items
-            .iter()
-            .enumerate()
-            .map(|(i, n)| Field {
-                ctx: self.ctx,
-                path: format!("{}[{i}]", self.path),
-                line: self.ctx.line(&n.span).or(self.line),
-                node: n,
-            })
-            .collect())
+        Ok(items.iter().enumerate().map(|(i, n)| Field { ctx: self.ctx, path: format!("{}[{i}]", self.path), line: self.ctx.line(&n.span).or(self.line), node: n }).collect())
     }
 
     pub fn string(&self) -> Result<&'a str, SceneError> {
@@ -396,15 +349,8 @@ impl<'a> Field<'a> {
     }
 
     /// Exactly `N` finite numbers accepted by `ok`; with `scalar_ok`, one number stands for all.
-    fn numbers<const N: usize>(
-        &self,
-        what: &str,
-        scalar_ok: bool,
-        ok: impl Fn(f32) -> bool,
-    ) -> Result<[f32; N], SceneError> {
-        let good = |n: &Node| {
-            as_number(n).filter(|x| x.is_finite() && (*x as f32).is_finite() && ok(*x as f32))
-        };
+    fn numbers<const N: usize>(&self, what: &str, scalar_ok: bool, ok: impl Fn(f32) -> bool) -> Result<[f32; N], SceneError> {
+        let good = |n: &Node| as_number(n).filter(|x| x.is_finite() && (*x as f32).is_finite() && ok(*x as f32));
         match &self.node.val {
             Val::Array(items) if items.len() == N => {
                 let mut out = [0.0f32; N];
@@ -423,32 +369,27 @@ impl<'a> Field<'a> {
 
     /// A point or vector: 3 finite numbers.
     pub fn vec3(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 finite numbers", false, |_| true)
-            .map(Vec3::from)
+        self.numbers::<3>("3 finite numbers", false, |_| true).map(Vec3::from)
     }
 
     /// 3 positive numbers, or one for all three (sizes, scales).
     pub fn positive3(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 positive numbers", true, |x| x > 0.0)
-            .map(Vec3::from)
+        self.numbers::<3>("3 positive numbers", true, |x| x > 0.0).map(Vec3::from)
     }
 
     /// 2 positive numbers, or one for both.
     pub fn positive2(&self) -> Result<Vec2, SceneError> {
-        self.numbers::<2>("2 positive numbers", true, |x| x > 0.0)
-            .map(Vec2::from)
+        self.numbers::<2>("2 positive numbers", true, |x| x > 0.0).map(Vec2::from)
     }
 
     /// A linear RGB colour: 3 non-negative numbers (or one, meaning grey).
     pub fn colour(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 non-negative numbers", true, |x| x >= 0.0)
-            .map(Vec3::from)
+        self.numbers::<3>("3 non-negative numbers", true, |x| x >= 0.0).map(Vec3::from)
     }
 
     /// A reflectance-like colour: 3 numbers in [0, 1] (or one, meaning grey).
     pub fn unit_colour(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 numbers in [0, 1]", true, |x| (0.0..=1.0).contains(&x))
-            .map(Vec3::from)
+        self.numbers::<3>("3 numbers in [0, 1]", true, |x| (0.0..=1.0).contains(&x)).map(Vec3::from)
     }
 
     /// A path relative to the scene's directory that must name an existing file. Returns the
@@ -460,11 +401,7 @@ impl<'a> Field<'a> {
         }
         let joined = self.ctx.base_dir.join(raw);
         if !joined.is_file() {
-            let why = if joined.exists() {
-                "not a file"
-            } else {
-                "file not found"
-            };
+            let why = if joined.exists() { "not a file" } else { "file not found" };
             return Err(self.err(format!("{why}: {raw} (looked for {})", joined.display())));
         }
         Ok(std::path::absolute(&joined).unwrap_or(joined))
@@ -476,11 +413,7 @@ mod tests {
     use super::*;
 
     fn parse(text: &str) -> Node {
-        let ctx = Ctx {
-            file: "t.toml",
-            text,
-            base_dir: Path::new("."),
-        };
+        let ctx = Ctx { file: "t.toml", text, base_dir: Path::new(".") };
         ctx.parse().unwrap()
     }
 
@@ -488,29 +421,18 @@ mod tests {
     fn spans_cover_headers_keys_values_and_implicit_tables() {
         let text = "a = 1\n[camera]\npos = [1, 2.5, 3]\n[[l]]\nx = 1\n[[l]]\nd = 1979-05-27\n[t.u]\nk = { z = 'q' }\n";
         let root = parse(text);
-        let ctx = Ctx {
-            file: "t.toml",
-            text,
-            base_dir: Path::new("."),
-        };
+        let ctx = Ctx { file: "t.toml", text, base_dir: Path::new(".") };
         let t = Table::new(&ctx, String::new(), &root, None).unwrap();
         assert_eq!(t.get("a").unwrap().line, Some(1));
         let cam = t.get("camera").unwrap().table().unwrap();
         assert_eq!(cam.line, Some(2));
-        assert_eq!(
-            cam.get("pos").unwrap().vec3().unwrap(),
-            Vec3::new(1.0, 2.5, 3.0)
-        );
+        assert_eq!(cam.get("pos").unwrap().vec3().unwrap(), Vec3::new(1.0, 2.5, 3.0));
         let l = t.get("l").unwrap().array().unwrap();
         assert_eq!(l.len(), 2);
         let l1 = l[1].table().unwrap();
         let d = l1.get("d").unwrap();
         assert_eq!(d.line, Some(7));
-        assert!(d
-            .number_where("a number", |_| true)
-            .unwrap_err()
-            .to_string()
-            .contains("date-time 1979-05-27"));
+        assert!(d.number_where("a number", |_| true).unwrap_err().to_string().contains("date-time 1979-05-27"));
         let tt = t.get("t").unwrap().table().unwrap();
         let u = tt.get("u").unwrap().table().unwrap();
         let k = u.get("k").unwrap();
@@ -522,11 +444,7 @@ mod tests {
     fn unknown_keys_are_reported_in_file_order() {
         let text = "[c]\nb = 1\nzz = 2\naa = 3\n";
         let root = parse(text);
-        let ctx = Ctx {
-            file: "t.toml",
-            text,
-            base_dir: Path::new("."),
-        };
+        let ctx = Ctx { file: "t.toml", text, base_dir: Path::new(".") };
         let t = Table::new(&ctx, String::new(), &root, None).unwrap();
         let c = t.get("c").unwrap().table().unwrap();
         let e = c.allow(&["b", "q"]).unwrap_err();

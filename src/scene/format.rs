@@ -12,25 +12,14 @@ use super::generators;
 use super::methods::{self, MethodDecl};
 use super::types::{Animation, Camera, CubeFaces, Environment, Light, Material, MeshSource, Object, CUBE_FACE_KEYS};
 use super::world_mesh::{self, WorldLevel};
-use crate::world::level_gen::RoomsParams;
 use super::Scene;
+use crate::world::level_gen::RoomsParams;
 
 pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-    let ctx = Ctx {
-        file: source,
-        text,
-        base_dir,
-    };
+    let ctx = Ctx { file: source, text, base_dir };
     let root = ctx.parse()?;
     let top = Table::new(&ctx, String::new(), &root, None)?;
-    top.allow(&[
-        "camera",
-        "materials",
-        "objects",
-        "lights",
-        "environment",
-        "methods",
-    ])?;
+    top.allow(&["camera", "materials", "objects", "lights", "environment", "methods"])?;
 
     let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
     let mut materials: Vec<Material> = Vec::new();
@@ -48,10 +37,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         lights.push(read_light(&item)?);
     }
     lights.extend(extra_lights);
-    let environment = top
-        .get("environment")
-        .map(|f| read_environment(&f))
-        .transpose()?;
+    let environment = top.get("environment").map(|f| read_environment(&f)).transpose()?;
     let mut methods = match top.get("methods") {
         Some(f) => methods::read(&f)?,
         None => Vec::new(),
@@ -59,15 +45,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     if methods.is_empty() {
         methods.push(MethodDecl::implicit_forward());
     }
-    Ok(Scene {
-        source: source.to_owned(),
-        camera,
-        materials,
-        objects,
-        lights,
-        environment,
-        methods,
-    })
+    Ok(Scene { source: source.to_owned(), camera, materials, objects, lights, environment, methods })
 }
 
 /// Elements of an optional array field (absent = empty).
@@ -76,10 +54,7 @@ fn array<'a>(f: Option<Field<'a>>) -> Result<Vec<Field<'a>>, SceneError> {
 }
 
 /// Converts an optional field, keeping its error.
-fn opt<'a, T>(
-    f: Option<Field<'a>>,
-    conv: impl FnOnce(&Field<'a>) -> Result<T, SceneError>,
-) -> Result<Option<T>, SceneError> {
+fn opt<'a, T>(f: Option<Field<'a>>, conv: impl FnOnce(&Field<'a>) -> Result<T, SceneError>) -> Result<Option<T>, SceneError> {
     f.as_ref().map(conv).transpose()
 }
 
@@ -101,9 +76,7 @@ fn name(f: &Field) -> Result<String, SceneError> {
 
 /// A unit direction from a non-zero vector.
 fn direction(f: &Field) -> Result<Vec3, SceneError> {
-    f.vec3()?
-        .try_normalize()
-        .ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
+    f.vec3()?.try_normalize().ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
 }
 
 fn read_camera(f: &Field) -> Result<Camera, SceneError> {
@@ -114,12 +87,7 @@ fn read_camera(f: &Field) -> Result<Camera, SceneError> {
     let target = target_f.vec3()?;
     let up_f = t.get("up");
     let up = opt(up_f.clone(), |f| f.vec3())?.unwrap_or(Vec3::Y);
-    let fov_y_deg = opt(t.get("fov_y_deg"), |f| {
-        f.number_where("a vertical field of view in degrees, in (0, 180)", |x| {
-            x > 0.0 && x < 180.0
-        })
-    })?
-    .unwrap_or(60.0);
+    let fov_y_deg = opt(t.get("fov_y_deg"), |f| f.number_where("a vertical field of view in degrees, in (0, 180)", |x| x > 0.0 && x < 180.0))?.unwrap_or(60.0);
     let near = opt(t.get("near"), positive)?.unwrap_or(0.05);
 
     let Some(forward) = (target - position).try_normalize() else {
@@ -129,36 +97,15 @@ fn read_camera(f: &Field) -> Result<Camera, SceneError> {
         let msg = "must not be zero or parallel to the view direction (target - position)";
         return Err(match &up_f {
             Some(u) => u.err(msg),
-            None => t.ctx.err(
-                t.line,
-                "camera.up",
-                format!("the default [0, 1, 0] {msg}; set camera.up"),
-            ),
+            None => t.ctx.err(t.line, "camera.up", format!("the default [0, 1, 0] {msg}; set camera.up")),
         });
     }
-    Ok(Camera {
-        position,
-        target,
-        up,
-        fov_y_deg,
-        near,
-    })
+    Ok(Camera { position, target, up, fov_y_deg, near })
 }
 
 fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError> {
     let t = f.table()?;
-    t.allow(&[
-        "name",
-        "albedo",
-        "specular",
-        "exponent",
-        "albedo_map",
-        "normal_map",
-        "specular_map",
-        "transmittance",
-        "emission",
-        "opacity",
-    ])?;
+    t.allow(&["name", "albedo", "specular", "exponent", "albedo_map", "normal_map", "specular_map", "transmittance", "emission", "opacity"])?;
     let name_f = t.require("name", "a unique material name")?;
     let name = name(&name_f)?;
     if earlier.iter().any(|m| m.name == name) {
@@ -169,11 +116,7 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
     let transmittance = opt(transmittance_f.clone(), |f| f.unit_colour())?.unwrap_or(Vec3::ZERO);
     if let Some(tf) = &transmittance_f {
         if (albedo + transmittance).max_element() > 1.0 {
-            return Err(tf.err(format!(
-                "albedo + transmittance must not exceed 1 in any channel, got {} + {}",
-                fmt3(albedo),
-                fmt3(transmittance)
-            )));
+            return Err(tf.err(format!("albedo + transmittance must not exceed 1 in any channel, got {} + {}", fmt3(albedo), fmt3(transmittance))));
         }
     }
     Ok(Material {
@@ -194,28 +137,17 @@ fn fmt3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
-fn read_object(
-    f: &Field,
-    materials: &mut Vec<Material>,
-    objects: &mut Vec<Object>,
-    lights: &mut Vec<Light>,
-) -> Result<(), SceneError> {
+fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Object>, lights: &mut Vec<Light>) -> Result<(), SceneError> {
     let t = f.table()?;
     const PLACEMENT: [&str; 5] = ["name", "mesh", "translate", "rotate_deg", "scale"];
     let Some(mesh_f) = t.get("mesh") else {
         // Report a misspelt key before the missing `mesh`.
-        t.allow(&all_keys(
-            &[&PLACEMENT[..], &["material"]].concat(),
-            &MESH_KEYS,
-        ))?;
+        t.allow(&all_keys(&[&PLACEMENT[..], &["material"]].concat(), &MESH_KEYS))?;
         return Err(t.missing("mesh", &format!("one of: {}", type_names(&MESH_KEYS))));
     };
     let kind = mesh_f.string()?;
     let Some((_, mesh_extra)) = MESH_KEYS.iter().find(|(n, _)| *n == kind) else {
-        let msg = format!(
-            "unknown mesh type {kind:?}; expected one of: {}",
-            type_names(&MESH_KEYS)
-        );
+        let msg = format!("unknown mesh type {kind:?}; expected one of: {}", type_names(&MESH_KEYS));
         return Err(mesh_f.err(msg));
     };
     let expands = matches!(kind, "cornell_box" | "bsp_rooms" | "bsp_fig8c");
@@ -228,15 +160,9 @@ fn read_object(
     let rot = opt(t.get("rotate_deg"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
     let scale = opt(t.get("scale"), |f| f.positive3())?.unwrap_or(Vec3::ONE);
     // x rotation first, then y, then z.
-    let transform = Mat4::from_translation(translate)
-        * Mat4::from_rotation_z(rot.z.to_radians())
-        * Mat4::from_rotation_y(rot.y.to_radians())
-        * Mat4::from_rotation_x(rot.x.to_radians())
-        * Mat4::from_scale(scale);
-    let subdivisions = opt(t.get("subdivisions"), |f| {
-        f.int_in(1, generators::MAX_SUBDIVISIONS)
-    })?
-    .unwrap_or(1);
+    let transform =
+        Mat4::from_translation(translate) * Mat4::from_rotation_z(rot.z.to_radians()) * Mat4::from_rotation_y(rot.y.to_radians()) * Mat4::from_rotation_x(rot.x.to_radians()) * Mat4::from_scale(scale);
+    let subdivisions = opt(t.get("subdivisions"), |f| f.int_in(1, generators::MAX_SUBDIVISIONS))?.unwrap_or(1);
 
     if kind == "bsp_rooms" || kind == "bsp_fig8c" {
         return read_world(&t, kind, &obj_name, materials, objects);
@@ -260,38 +186,23 @@ fn read_object(
     }
 
     let mesh = match kind {
-        "plane" => MeshSource::Plane {
-            size: opt(t.get("size"), |f| f.positive2())?.unwrap_or(glam::Vec2::ONE),
-            subdivisions,
-        },
-        "box" => MeshSource::Box {
-            size: opt(t.get("size"), |f| f.positive3())?.unwrap_or(Vec3::ONE),
-            subdivisions,
-        },
+        "plane" => MeshSource::Plane { size: opt(t.get("size"), |f| f.positive2())?.unwrap_or(glam::Vec2::ONE), subdivisions },
+        "box" => MeshSource::Box { size: opt(t.get("size"), |f| f.positive3())?.unwrap_or(Vec3::ONE), subdivisions },
         "quad" => {
             let corner = t.require("corner", "3 numbers, metres")?.vec3()?;
             let edge_u = t.require("edge_u", "3 numbers, metres")?.vec3()?;
             let v_f = t.require("edge_v", "3 numbers, metres")?;
             let edge_v = v_f.vec3()?;
             check_quad_edges(&v_f, edge_u, edge_v)?;
-            MeshSource::Quad {
-                corner,
-                edge_u,
-                edge_v,
-                subdivisions,
-            }
+            MeshSource::Quad { corner, edge_u, edge_v, subdivisions }
         }
         "sphere" => MeshSource::Sphere {
             radius: opt(t.get("radius"), positive)?.unwrap_or(1.0),
-            segments: opt(t.get("segments"), |f| f.int_in(3, generators::MAX_SEGMENTS))?
-                .unwrap_or(48),
+            segments: opt(t.get("segments"), |f| f.int_in(3, generators::MAX_SEGMENTS))?.unwrap_or(48),
             rings: opt(t.get("rings"), |f| f.int_in(2, generators::MAX_RINGS))?.unwrap_or(24),
         },
         "heightfield" => MeshSource::Heightfield(super::heightfield::read(&t)?),
-        _ => MeshSource::Obj(
-            t.require("path", "an OBJ file relative to the scene file")?
-                .existing_file()?,
-        ),
+        _ => MeshSource::Obj(t.require("path", "an OBJ file relative to the scene file")?.existing_file()?),
     };
     let material = match t.get("material") {
         None => material_index(materials, "default").unwrap_or(0),
@@ -304,20 +215,11 @@ fn read_object(
                         names.push(b);
                     }
                 }
-                mf.err(format!(
-                    "unknown material {wanted:?}; defined materials: {}",
-                    names.join(", ")
-                ))
+                mf.err(format!("unknown material {wanted:?}; defined materials: {}", names.join(", ")))
             })?
         }
     };
-    objects.push(Object {
-        name: obj_name,
-        mesh,
-        material,
-        transform,
-        animation,
-    });
+    objects.push(Object { name: obj_name, mesh, material, transform, animation });
     Ok(())
 }
 
@@ -331,44 +233,17 @@ fn read_animation(t: &Table) -> Result<Option<Animation>, SceneError> {
     if spin.is_none() && amplitude.is_none() && period.is_none() {
         return Ok(None);
     }
-    Ok(Some(Animation {
-        spin_deg_per_s: spin.unwrap_or(Vec3::ZERO),
-        bob_amplitude: amplitude.unwrap_or(Vec3::ZERO),
-        bob_period_s: period.unwrap_or(4.0),
-    }))
+    Ok(Some(Animation { spin_deg_per_s: spin.unwrap_or(Vec3::ZERO), bob_amplitude: amplitude.unwrap_or(Vec3::ZERO), bob_period_s: period.unwrap_or(4.0) }))
 }
 
 /// Keys of the world meshes besides the placement: the generator's parameters, then one material
 /// per face class (`<class>_material`).
-const ROOMS_KEYS: [&str; 10] = [
-    "seed",
-    "columns",
-    "rows",
-    "pillars",
-    "floor_material",
-    "ceiling_material",
-    "wall_material",
-    "pillar_material",
-    "corridor_material",
-    "cell_size",
-];
-const FIG8C_KEYS: [&str; 5] = [
-    "floor_material",
-    "ceiling_material",
-    "wall_material",
-    "pillar_material",
-    "corridor_material",
-];
+const ROOMS_KEYS: [&str; 10] = ["seed", "columns", "rows", "pillars", "floor_material", "ceiling_material", "wall_material", "pillar_material", "corridor_material", "cell_size"];
+const FIG8C_KEYS: [&str; 5] = ["floor_material", "ceiling_material", "wall_material", "pillar_material", "corridor_material"];
 
 /// `bsp_rooms` / `bsp_fig8c`: one object per face class, like `cornell_box`. Only a translation
 /// is allowed (methods map lights into the world's frame with it).
-fn read_world(
-    t: &Table,
-    kind: &str,
-    obj_name: &str,
-    materials: &mut Vec<Material>,
-    objects: &mut Vec<Object>,
-) -> Result<(), SceneError> {
+fn read_world(t: &Table, kind: &str, obj_name: &str, materials: &mut Vec<Material>, objects: &mut Vec<Object>) -> Result<(), SceneError> {
     for key in ["rotate_deg", "scale"] {
         if let Some(f) = t.get(key) {
             return Err(f.err(format!("{kind} allows only `translate` (the world's axes are fixed)")));
@@ -415,13 +290,7 @@ fn read_world(
                 })?
             }
         };
-        objects.push(Object {
-            name: format!("{obj_name}.{suffix}"),
-            mesh: MeshSource::World { level: level.clone(), class },
-            material,
-            transform: Mat4::from_translation(translate),
-            animation: None,
-        });
+        objects.push(Object { name: format!("{obj_name}.{suffix}"), mesh: MeshSource::World { level: level.clone(), class }, material, transform: Mat4::from_translation(translate), animation: None });
     }
     Ok(())
 }
@@ -438,8 +307,7 @@ fn material_index(materials: &mut Vec<Material>, name: &str) -> Option<usize> {
 fn check_quad_edges(v_field: &Field, u: Vec3, v: Vec3) -> Result<(), SceneError> {
     let scale = u.length() * v.length();
     if scale.is_nan() || scale <= 0.0 || u.cross(v).length() <= 1e-6 * scale {
-        return Err(v_field
-            .err("edge_u and edge_v must be non-zero and not parallel (the quad has no area)"));
+        return Err(v_field.err("edge_u and edge_v must be non-zero and not parallel (the quad has no area)"));
     }
     Ok(())
 }
@@ -447,18 +315,7 @@ fn check_quad_edges(v_field: &Field, u: Vec3, v: Vec3) -> Result<(), SceneError>
 /// Each light type and its keys besides `type` and `name`.
 const LIGHT_KEYS: [(&str, &[&str]); 5] = [
     ("point", &["position", "intensity", "radius"]),
-    (
-        "spot",
-        &[
-            "position",
-            "direction",
-            "target",
-            "intensity",
-            "inner_deg",
-            "outer_deg",
-            "radius",
-        ],
-    ),
+    ("spot", &["position", "direction", "target", "intensity", "inner_deg", "outer_deg", "radius"]),
     ("directional", &["direction", "irradiance"]),
     ("sphere", &["center", "radius", "radiance"]),
     ("quad", &["corner", "edge_u", "edge_v", "radiance"]),
@@ -489,11 +346,7 @@ fn all_keys(common: &[&'static str], by_type: &[(&str, &[&'static str])]) -> Vec
 }
 
 fn type_names(by_type: &[(&str, &[&str])]) -> String {
-    by_type
-        .iter()
-        .map(|(n, _)| *n)
-        .collect::<Vec<_>>()
-        .join(", ")
+    by_type.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
 }
 
 fn read_light(f: &Field) -> Result<Light, SceneError> {
@@ -505,10 +358,7 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
     };
     let kind = kind_f.string()?;
     let Some((_, keys)) = LIGHT_KEYS.iter().find(|(n, _)| *n == kind) else {
-        let msg = format!(
-            "unknown light type {kind:?}; expected one of: {}",
-            type_names(&LIGHT_KEYS)
-        );
+        let msg = format!("unknown light type {kind:?}; expected one of: {}", type_names(&LIGHT_KEYS));
         return Err(kind_f.err(msg));
     };
     t.allow(&[&["type", "name"][..], keys].concat())?;
@@ -516,43 +366,21 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
     let point = |k: &str| t.require(k, "3 numbers, metres").and_then(|f| f.vec3());
     let colour = |k: &str, what: &str| t.require(k, what).and_then(|f| f.colour());
     Ok(match kind {
-        "point" => Light::Point {
-            name,
-            position: point("position")?,
-            intensity: colour("intensity", "W/sr, a number or 3")?,
-            radius: opt(t.get("radius"), non_negative)?.unwrap_or(0.0),
-        },
+        "point" => Light::Point { name, position: point("position")?, intensity: colour("intensity", "W/sr, a number or 3")?, radius: opt(t.get("radius"), non_negative)?.unwrap_or(0.0) },
         "spot" => {
             let position = point("position")?;
             let direction = match (t.get("direction"), t.get("target")) {
                 (Some(d), None) => direction(&d)?,
-                (None, Some(tg)) => (tg.vec3()? - position)
-                    .try_normalize()
-                    .ok_or_else(|| tg.err("must differ from position"))?,
-                (Some(_), Some(tg)) => {
-                    return Err(tg.err("give either direction or target, not both"))
-                }
-                (None, None) => {
-                    return Err(t.missing("direction", "3 numbers, or give target instead"))
-                }
+                (None, Some(tg)) => (tg.vec3()? - position).try_normalize().ok_or_else(|| tg.err("must differ from position"))?,
+                (Some(_), Some(tg)) => return Err(tg.err("give either direction or target, not both")),
+                (None, None) => return Err(t.missing("direction", "3 numbers, or give target instead")),
             };
             let outer_f = t.get("outer_deg");
-            let outer_deg = opt(outer_f.clone(), |f| {
-                f.number_where("a half-angle in degrees in (0, 90]", |x| {
-                    x > 0.0 && x <= 90.0
-                })
-            })?
-            .unwrap_or(30.0);
+            let outer_deg = opt(outer_f.clone(), |f| f.number_where("a half-angle in degrees in (0, 90]", |x| x > 0.0 && x <= 90.0))?.unwrap_or(30.0);
             let inner_f = t.get("inner_deg");
-            let inner_deg = opt(inner_f.clone(), |f| {
-                f.number_where("a half-angle in degrees in [0, 90]", |x| {
-                    (0.0..=90.0).contains(&x)
-                })
-            })?
-            .unwrap_or(0.8 * outer_deg);
+            let inner_deg = opt(inner_f.clone(), |f| f.number_where("a half-angle in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x)))?.unwrap_or(0.8 * outer_deg);
             if inner_deg > outer_deg {
-                let msg =
-                    format!("inner_deg ({inner_deg}) must not exceed outer_deg ({outer_deg})");
+                let msg = format!("inner_deg ({inner_deg}) must not exceed outer_deg ({outer_deg})");
                 let at = inner_f.or(outer_f);
                 return Err(match at {
                     Some(f) => f.err(msg),
@@ -561,40 +389,17 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
             }
             let intensity = colour("intensity", "W/sr, a number or 3")?;
             let radius = opt(t.get("radius"), non_negative)?.unwrap_or(0.0);
-            Light::Spot {
-                name,
-                position,
-                direction,
-                intensity,
-                inner_deg,
-                outer_deg,
-                radius,
-            }
+            Light::Spot { name, position, direction, intensity, inner_deg, outer_deg, radius }
         }
-        "directional" => Light::Directional {
-            name,
-            direction: direction(&t.require("direction", "the direction the light travels")?)?,
-            irradiance: colour("irradiance", "W/m², a number or 3")?,
-        },
-        "sphere" => Light::Sphere {
-            name,
-            center: point("center")?,
-            radius: positive(&t.require("radius", "metres, > 0")?)?,
-            radiance: colour("radiance", "W/(m²·sr), a number or 3")?,
-        },
+        "directional" => Light::Directional { name, direction: direction(&t.require("direction", "the direction the light travels")?)?, irradiance: colour("irradiance", "W/m², a number or 3")? },
+        "sphere" => Light::Sphere { name, center: point("center")?, radius: positive(&t.require("radius", "metres, > 0")?)?, radiance: colour("radiance", "W/(m²·sr), a number or 3")? },
         _ => {
             let corner = point("corner")?;
             let edge_u = point("edge_u")?;
             let v_f = t.require("edge_v", "3 numbers, metres")?;
             let edge_v = v_f.vec3()?;
             check_quad_edges(&v_f, edge_u, edge_v)?;
-            Light::Quad {
-                name,
-                corner,
-                edge_u,
-                edge_v,
-                radiance: colour("radiance", "W/(m²·sr), a number or 3")?,
-            }
+            Light::Quad { name, corner, edge_u, edge_v, radiance: colour("radiance", "W/(m²·sr), a number or 3")? }
         }
     })
 }
@@ -608,20 +413,11 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
     match kind_f.string()? {
         "constant" => {
             t.allow(&["type", "radiance"])?;
-            Ok(Environment::Constant {
-                radiance: t
-                    .require("radiance", "W/(m²·sr), a number or 3")?
-                    .colour()?,
-            })
+            Ok(Environment::Constant { radiance: t.require("radiance", "W/(m²·sr), a number or 3")?.colour()? })
         }
         "image" => {
             t.allow(&["type", "path", "scale"])?;
-            Ok(Environment::Image {
-                path: t
-                    .require("path", "an equirectangular .hdr or .exr file")?
-                    .existing_file()?,
-                scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
-            })
+            Ok(Environment::Image { path: t.require("path", "an equirectangular .hdr or .exr file")?.existing_file()?, scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0) })
         }
         "cube" => {
             let mut keys = vec!["type", "scale"];
@@ -636,13 +432,8 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
             // Load the faces now, so that a bad one is an error here, with its line, and not a
             // surprise for whichever method reads it first.
             CubeFaces::load(&faces, 1.0).map_err(|(k, msg)| fields[k].1.err(msg))?;
-            Ok(Environment::Cube {
-                faces,
-                scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
-            })
+            Ok(Environment::Cube { faces, scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0) })
         }
-        other => Err(kind_f.err(format!(
-            "unknown environment type {other:?}; expected constant, image or cube"
-        ))),
+        other => Err(kind_f.err(format!("unknown environment type {other:?}; expected constant, image or cube"))),
     }
 }

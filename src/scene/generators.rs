@@ -26,8 +26,7 @@ fn push_grid(mesh: &mut Mesh, nu: u32, nv: u32, normal: Vec3, pos: impl Fn(u32, 
         for i in 0..=nu {
             mesh.positions.push(pos(i, j));
             mesh.normals.push(normal);
-            mesh.uvs
-                .push(Vec2::new(i as f32 / nu as f32, 1.0 - j as f32 / nv as f32));
+            mesh.uvs.push(Vec2::new(i as f32 / nu as f32, 1.0 - j as f32 / nv as f32));
         }
     }
     let row = nu + 1;
@@ -58,13 +57,7 @@ pub fn plane(size: Vec2, subdivisions: u32) -> Mesh {
     let h = size * 0.5;
     let mut m = Mesh::default();
     // right = +x, up = −z: (+x) × (−z) = +y.
-    push_grid(&mut m, n, n, Vec3::Y, |i, j| {
-        Vec3::new(
-            lerp_exact(-h.x, h.x, i, n),
-            0.0,
-            lerp_exact(h.y, -h.y, j, n),
-        )
-    });
+    push_grid(&mut m, n, n, Vec3::Y, |i, j| Vec3::new(lerp_exact(-h.x, h.x, i, n), 0.0, lerp_exact(h.y, -h.y, j, n)));
     m.compute_tangents();
     m
 }
@@ -75,9 +68,7 @@ pub fn quad(corner: Vec3, edge_u: Vec3, edge_v: Vec3, subdivisions: u32) -> Mesh
     let n = subdivisions.clamp(1, MAX_SUBDIVISIONS);
     let normal = edge_u.cross(edge_v).try_normalize().unwrap_or(Vec3::Y);
     let mut m = Mesh::default();
-    push_grid(&mut m, n, n, normal, |i, j| {
-        corner + edge_u * (i as f32 / n as f32) + edge_v * (j as f32 / n as f32)
-    });
+    push_grid(&mut m, n, n, normal, |i, j| corner + edge_u * (i as f32 / n as f32) + edge_v * (j as f32 / n as f32));
     m.compute_tangents();
     m
 }
@@ -108,11 +99,7 @@ pub fn cuboid(size: Vec3, subdivisions: u32) -> Mesh {
             lattice[na] = if ns > 0.0 { n } else { 0 };
             lattice[ra] = if rs > 0.0 { i } else { n - i };
             lattice[ua] = if us > 0.0 { j } else { n - j };
-            Vec3::new(
-                coord(0, lattice[0]),
-                coord(1, lattice[1]),
-                coord(2, lattice[2]),
-            )
+            Vec3::new(coord(0, lattice[0]), coord(1, lattice[1]), coord(2, lattice[2]))
         });
     }
     m.compute_tangents();
@@ -136,16 +123,11 @@ pub fn sphere(radius: f32, segments: u32, rings: u32) -> Mesh {
             } else if r == rings {
                 Vec3::NEG_Y
             } else {
-                Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    -theta.sin() * phi.sin(),
-                )
+                Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin())
             };
             m.positions.push(n * radius);
             m.normals.push(n);
-            m.uvs
-                .push(Vec2::new(s as f32 / segs as f32, r as f32 / rings as f32));
+            m.uvs.push(Vec2::new(s as f32 / segs as f32, r as f32 / rings as f32));
         }
     }
     let row = segs + 1;
@@ -176,15 +158,9 @@ mod tests {
             let [a, b, c] = tri.map(|i| m.positions[i]);
             let face_n = (b - a).cross(c - a);
             for i in tri {
-                assert!(
-                    face_n.dot(m.normals[i]) > 0.0,
-                    "winding disagrees with normal"
-                );
+                assert!(face_n.dot(m.normals[i]) > 0.0, "winding disagrees with normal");
             }
-            assert!(
-                face_n.dot((a + b + c) / 3.0 - centre) > 0.0,
-                "face points inward"
-            );
+            assert!(face_n.dot((a + b + c) / 3.0 - centre) > 0.0, "face points inward");
         }
     }
 
@@ -198,25 +174,14 @@ mod tests {
         assert_outward(&m, Vec3::new(0.0, -1.0, 0.0));
         assert!(!m.is_closed_manifold());
         assert_eq!(m.boundary_edge_count(), 12);
-        assert_eq!(
-            m.bounds(),
-            Some((Vec3::new(-2.0, 0.0, -1.0), Vec3::new(2.0, 0.0, 1.0)))
-        );
+        assert_eq!(m.bounds(), Some((Vec3::new(-2.0, 0.0, -1.0), Vec3::new(2.0, 0.0, 1.0))));
         // Tangent along +x (u), bitangent toward −z (up in the image): w = +1.
-        assert!(m
-            .tangents
-            .iter()
-            .all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0));
+        assert!(m.tangents.iter().all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0));
     }
 
     #[test]
     fn quad_faces_edge_cross_product() {
-        let m = quad(
-            Vec3::new(1.0, 2.0, 0.0),
-            Vec3::new(0.0, 0.0, -2.0),
-            Vec3::new(0.0, 3.0, 0.0),
-            2,
-        );
+        let m = quad(Vec3::new(1.0, 2.0, 0.0), Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 3.0, 0.0), 2);
         assert_eq!((m.vertex_count(), m.triangle_count()), (9, 8));
         assert_well_formed(&m);
         assert!((m.area() - 6.0).abs() < 1e-4);
@@ -232,10 +197,7 @@ mod tests {
             assert_eq!(m.vertex_count(), 6 * ((n + 1) * (n + 1)) as usize);
             assert_eq!(m.triangle_count(), 12 * (n * n) as usize);
             assert_well_formed(&m);
-            assert!(
-                m.is_closed_manifold(),
-                "box with {n} subdivisions not closed"
-            );
+            assert!(m.is_closed_manifold(), "box with {n} subdivisions not closed");
             assert_outward(&m, Vec3::ZERO);
             assert!((m.area() - 2.0 * (2.0 + 3.0 + 6.0)).abs() < 1e-3);
             assert_eq!(m.bounds(), Some((-size * 0.5, size * 0.5)));
@@ -257,11 +219,7 @@ mod tests {
         let fine = sphere(1.5, 256, 128);
         assert!(fine.is_closed_manifold());
         let exact = 4.0 * PI * 1.5 * 1.5;
-        assert!(
-            (fine.area() - exact).abs() / exact < 0.01,
-            "{} vs {exact}",
-            fine.area()
-        );
+        assert!((fine.area() - exact).abs() / exact < 0.01, "{} vs {exact}", fine.area());
         // Minimal sphere is still a closed manifold.
         assert!(sphere(1.0, 3, 2).is_closed_manifold());
     }

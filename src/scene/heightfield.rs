@@ -384,11 +384,7 @@ pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
                 },
                 "fbm" => HeightShape::Fbm { wavelength: wavelength()?, octaves: t.get("octaves").map(|f| f.int_in(1, 12)).transpose()?.unwrap_or(5), seed: seed()? },
                 "eggtray" => HeightShape::EggTray { wavelength: wavelength()? },
-                "city" => HeightShape::City {
-                    wavelength: wavelength()?,
-                    seed: seed()?,
-                    street: opt_num("street", "a number in [0, 1)", &|x| (0.0..1.0).contains(&x))?.unwrap_or(0.3),
-                },
+                "city" => HeightShape::City { wavelength: wavelength()?, seed: seed()?, street: opt_num("street", "a number in [0, 1)", &|x| (0.0..1.0).contains(&x))?.unwrap_or(0.3) },
                 other => return Err(g.err(format!("unknown generator {other:?}; expected one of: {}", GENERATORS.join(", ")))),
             }
         }

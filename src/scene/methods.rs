@@ -19,19 +19,12 @@ pub struct MethodDecl {
 impl MethodDecl {
     /// The declaration used when a scene names no method.
     pub fn implicit_forward() -> MethodDecl {
-        MethodDecl {
-            name: "forward".into(),
-            line: 0,
-            params: Vec::new(),
-        }
+        MethodDecl { name: "forward".into(), line: 0, params: Vec::new() }
     }
 
     /// The value of parameter `name`, if given.
     pub fn param(&self, name: &str) -> Option<&toml::Value> {
-        self.params
-            .iter()
-            .find(|(n, _, _)| n == name)
-            .map(|(_, v, _)| v)
+        self.params.iter().find(|(n, _, _)| n == name).map(|(_, v, _)| v)
     }
 }
 
@@ -100,26 +93,13 @@ impl ParamKind {
 }
 
 /// Checks `methods` against `known`; the first problem is returned.
-pub(crate) fn check(
-    file: &str,
-    methods: &[MethodDecl],
-    known: &[MethodSchema],
-) -> Result<(), SceneError> {
+pub(crate) fn check(file: &str, methods: &[MethodDecl], known: &[MethodSchema]) -> Result<(), SceneError> {
     let line = |l: usize| (l > 0).then_some(l);
     for (i, m) in methods.iter().enumerate() {
         let Some(schema) = known.iter().find(|s| s.name == m.name) else {
             let names: Vec<&str> = known.iter().map(|s| s.name).collect();
-            let msg = format!(
-                "unknown method {:?}; known methods: {}",
-                m.name,
-                names.join(", ")
-            );
-            return Err(SceneError::new(
-                file,
-                line(m.line),
-                format!("methods[{i}]"),
-                msg,
-            ));
+            let msg = format!("unknown method {:?}; known methods: {}", m.name, names.join(", "));
+            return Err(SceneError::new(file, line(m.line), format!("methods[{i}]"), msg));
         };
         for (pname, value, pline) in &m.params {
             let field = format!("methods[{i}].{pname}");
@@ -127,25 +107,13 @@ pub(crate) fn check(
                 let msg = if schema.params.is_empty() {
                     format!("unknown parameter; method {:?} takes no parameters", m.name)
                 } else {
-                    let list: Vec<String> = schema
-                        .params
-                        .iter()
-                        .map(|p| format!("{} ({})", p.name, p.kind))
-                        .collect();
-                    format!(
-                        "unknown parameter of method {:?}; known parameters: {}",
-                        m.name,
-                        list.join(", ")
-                    )
+                    let list: Vec<String> = schema.params.iter().map(|p| format!("{} ({})", p.name, p.kind)).collect();
+                    format!("unknown parameter of method {:?}; known parameters: {}", m.name, list.join(", "))
                 };
                 return Err(SceneError::new(file, line(*pline), field, msg));
             };
             if !p.kind.accepts(value) {
-                let msg = format!(
-                    "expected {}, got {}",
-                    p.kind.expected(),
-                    describe_value(value)
-                );
+                let msg = format!("expected {}, got {}", p.kind.expected(), describe_value(value));
                 return Err(SceneError::new(file, line(*pline), field, msg));
             }
         }
@@ -162,11 +130,7 @@ fn describe_value(v: &toml::Value) -> String {
         toml::Value::Datetime(d) => format!("the date-time {d}"),
         toml::Value::Array(a) => {
             let parts: Vec<String> = a.iter().take(6).map(describe_value).collect();
-            format!(
-                "[{}{}]",
-                parts.join(", "),
-                if a.len() > 6 { ", …" } else { "" }
-            )
+            format!("[{}{}]", parts.join(", "), if a.len() > 6 { ", …" } else { "" })
         }
         toml::Value::Table(_) => "a table".into(),
     }
@@ -178,9 +142,7 @@ fn to_value(node: &Node) -> toml::Value {
         Val::Int(i) => toml::Value::Integer(*i),
         Val::Float(f) => toml::Value::Float(*f),
         Val::Bool(b) => toml::Value::Boolean(*b),
-        Val::Datetime(d) => d
-            .parse()
-            .map_or_else(|_| toml::Value::String(d.clone()), toml::Value::Datetime),
+        Val::Datetime(d) => d.parse().map_or_else(|_| toml::Value::String(d.clone()), toml::Value::Datetime),
         Val::Array(items) => toml::Value::Array(items.iter().map(to_value).collect()),
         Val::Table(entries) => toml::Value::Table(
             entries
@@ -200,11 +162,7 @@ pub(crate) fn read(field: &Field) -> Result<Vec<MethodDecl>, SceneError> {
     let mut out = Vec::new();
     for item in field.array()? {
         let decl = match &item.node.val {
-            Val::Str(_) => MethodDecl {
-                name: method_name(&item)?,
-                line: item.line.unwrap_or(0),
-                params: Vec::new(),
-            },
+            Val::Str(_) => MethodDecl { name: method_name(&item)?, line: item.line.unwrap_or(0), params: Vec::new() },
             Val::Table(_) => {
                 let t = item.table()?;
                 let name_field = t.require("name", "the method's name")?;
@@ -215,25 +173,12 @@ pub(crate) fn read(field: &Field) -> Result<Vec<MethodDecl>, SceneError> {
                     .filter(|(k, _)| *k != "name")
                     .filter_map(|(k, kline)| {
                         let f = t.get(k)?;
-                        Some((
-                            k.to_owned(),
-                            to_value(f.node),
-                            kline.or(f.line).unwrap_or(0),
-                        ))
+                        Some((k.to_owned(), to_value(f.node), kline.or(f.line).unwrap_or(0)))
                     })
                     .collect();
-                MethodDecl {
-                    name,
-                    line: name_field.line.unwrap_or(0),
-                    params,
-                }
+                MethodDecl { name, line: name_field.line.unwrap_or(0), params }
             }
-            _ => {
-                return Err(item.err(format!(
-                    "expected a method name or a table with `name`, got {}",
-                    super::doc::describe(item.node)
-                )))
-            }
+            _ => return Err(item.err(format!("expected a method name or a table with `name`, got {}", super::doc::describe(item.node)))),
         };
         out.push(decl);
     }

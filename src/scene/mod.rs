@@ -67,8 +67,7 @@ impl Scene {
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::new(&source, None, "file", format!("cannot read: {e}")))?;
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::new(&source, None, "file", format!("cannot read: {e}")))?;
         let base_dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -87,8 +86,7 @@ impl Scene {
     pub fn default_scene() -> Scene {
         // The text is ours and a unit test parses it, so failure here is a build defect, not a
         // user error.
-        Scene::from_str(DEFAULT_SCENE_TOML, DEFAULT_SOURCE, Path::new("."))
-            .unwrap_or_else(|e| panic!("the built-in default scene is invalid: {e}"))
+        Scene::from_str(DEFAULT_SCENE_TOML, DEFAULT_SOURCE, Path::new(".")).unwrap_or_else(|e| panic!("the built-in default scene is invalid: {e}"))
     }
 
     /// Checks every declared method and parameter against the renderer's `known` methods.
@@ -130,22 +128,11 @@ impl Object {
         let mesh = match &self.mesh {
             MeshSource::Obj(path) => return load_obj(&base_dir.join(path)),
             MeshSource::Plane { size, subdivisions } => generators::plane(*size, *subdivisions),
-            MeshSource::Quad {
-                corner,
-                edge_u,
-                edge_v,
-                subdivisions,
-            } => generators::quad(*corner, *edge_u, *edge_v, *subdivisions),
+            MeshSource::Quad { corner, edge_u, edge_v, subdivisions } => generators::quad(*corner, *edge_u, *edge_v, *subdivisions),
             MeshSource::Box { size, subdivisions } => generators::cuboid(*size, *subdivisions),
-            MeshSource::Sphere {
-                radius,
-                segments,
-                rings,
-            } => generators::sphere(*radius, *segments, *rings),
+            MeshSource::Sphere { radius, segments, rings } => generators::sphere(*radius, *segments, *rings),
             MeshSource::World { level, class } => {
-                let world = world_mesh::compiled(level).map_err(|e| {
-                    SceneError::new(format!("object {:?}", self.name), None, level.mesh_name(), format!("the world does not compile: {e}"))
-                })?;
+                let world = world_mesh::compiled(level).map_err(|e| SceneError::new(format!("object {:?}", self.name), None, level.mesh_name(), format!("the world does not compile: {e}")))?;
                 world_mesh::class_mesh(&world, *class).0
             }
             MeshSource::Heightfield(h) => h.mesh()?,

@@ -37,12 +37,7 @@ impl Camera {
     /// plane, → 1 at infinity). Use a `LESS` depth test cleared to 1.
     pub fn projection(&self, aspect: f32) -> Mat4 {
         let f = 1.0 / (0.5 * self.fov_y_deg.to_radians()).tan();
-        Mat4::from_cols(
-            Vec4::new(f / aspect, 0.0, 0.0, 0.0),
-            Vec4::new(0.0, -f, 0.0, 0.0),
-            Vec4::new(0.0, 0.0, -1.0, -1.0),
-            Vec4::new(0.0, 0.0, -self.near, 0.0),
-        )
+        Mat4::from_cols(Vec4::new(f / aspect, 0.0, 0.0, 0.0), Vec4::new(0.0, -f, 0.0, 0.0), Vec4::new(0.0, 0.0, -1.0, -1.0), Vec4::new(0.0, 0.0, -self.near, 0.0))
     }
 
     /// `projection(aspect) * view_matrix()`.
@@ -136,31 +131,19 @@ pub enum MeshSource {
     Plane { size: Vec2, subdivisions: u32 },
     /// A parallelogram `corner + s·edge_u + t·edge_v`, s, t ∈ [0, 1], facing
     /// `normalize(edge_u × edge_v)` (one-sided, like the quad light); `subdivisions` per side.
-    Quad {
-        corner: Vec3,
-        edge_u: Vec3,
-        edge_v: Vec3,
-        subdivisions: u32,
-    },
+    Quad { corner: Vec3, edge_u: Vec3, edge_v: Vec3, subdivisions: u32 },
     /// An axis-aligned box centred on the origin, each face split into `subdivisions²` cells.
     /// Closed 2-manifold.
     Box { size: Vec3, subdivisions: u32 },
     /// A UV sphere centred on the origin: `segments` around y, `rings` from pole to pole.
     /// Closed 2-manifold.
-    Sphere {
-        radius: f32,
-        segments: u32,
-        rings: u32,
-    },
+    Sphere { radius: f32, segments: u32, rings: u32 },
     /// A height field over a square in the xz-plane (see [`crate::scene::heightfield`]):
     /// generated or loaded from an image, traced and drawn at its time-0 shape.
     Heightfield(super::heightfield::HeightfieldSource),
     /// The faces of one material class (`class`, a [`crate::world::MaterialId`]) of a compiled
     /// BSP world, in scene axes: see [`crate::scene::world_mesh`].
-    World {
-        level: super::world_mesh::WorldLevel,
-        class: u32,
-    },
+    World { level: super::world_mesh::WorldLevel, class: u32 },
 }
 
 /// Simple rigid motion of an entity over time `t` (seconds): a spin about its own origin (in
@@ -180,9 +163,7 @@ impl Animation {
     /// The object → world transform at time `t` for placement `base`.
     pub fn transform_at(&self, base: Mat4, t: f32) -> Mat4 {
         let a = self.spin_deg_per_s * t;
-        let spin = Mat4::from_rotation_z(a.z.to_radians())
-            * Mat4::from_rotation_y(a.y.to_radians())
-            * Mat4::from_rotation_x(a.x.to_radians());
+        let spin = Mat4::from_rotation_z(a.z.to_radians()) * Mat4::from_rotation_y(a.y.to_radians()) * Mat4::from_rotation_x(a.x.to_radians());
         let phase = std::f32::consts::TAU * t / self.bob_period_s.max(1e-6);
         Mat4::from_translation(self.bob_amplitude * phase.sin()) * base * spin
     }
@@ -207,57 +188,25 @@ pub enum Light {
     /// Isotropic point light. `intensity` in W/sr; `radius` is an influence/culling radius in
     /// metres beyond which the renderer may ignore it (0 = infinite). It does not change the
     /// inverse-square falloff.
-    Point {
-        name: String,
-        position: Vec3,
-        intensity: Vec3,
-        radius: f32,
-    },
+    Point { name: String, position: Vec3, intensity: Vec3, radius: f32 },
     /// Spot light: `intensity` (W/sr) on the axis, full inside `inner_deg`, zero outside
     /// `outer_deg` (half-angles from `direction`, a unit vector). `radius` is an
     /// influence/culling radius as a point light's (0 = infinite).
-    Spot {
-        name: String,
-        position: Vec3,
-        direction: Vec3,
-        intensity: Vec3,
-        inner_deg: f32,
-        outer_deg: f32,
-        radius: f32,
-    },
+    Spot { name: String, position: Vec3, direction: Vec3, intensity: Vec3, inner_deg: f32, outer_deg: f32, radius: f32 },
     /// Distant light. `direction` is the unit direction the light travels (from the light toward
     /// the scene); `irradiance` in W/m² on a surface facing it.
-    Directional {
-        name: String,
-        direction: Vec3,
-        irradiance: Vec3,
-    },
+    Directional { name: String, direction: Vec3, irradiance: Vec3 },
     /// Spherical area light emitting uniform `radiance` (W/(m²·sr)) from its surface.
-    Sphere {
-        name: String,
-        center: Vec3,
-        radius: f32,
-        radiance: Vec3,
-    },
+    Sphere { name: String, center: Vec3, radius: f32, radiance: Vec3 },
     /// One-sided parallelogram area light `corner + s·edge_u + t·edge_v` emitting uniform
     /// `radiance` toward `normalize(edge_u × edge_v)`.
-    Quad {
-        name: String,
-        corner: Vec3,
-        edge_u: Vec3,
-        edge_v: Vec3,
-        radiance: Vec3,
-    },
+    Quad { name: String, corner: Vec3, edge_u: Vec3, edge_v: Vec3, radiance: Vec3 },
 }
 
 impl Light {
     pub fn name(&self) -> &str {
         match self {
-            Light::Point { name, .. }
-            | Light::Spot { name, .. }
-            | Light::Directional { name, .. }
-            | Light::Sphere { name, .. }
-            | Light::Quad { name, .. } => name,
+            Light::Point { name, .. } | Light::Spot { name, .. } | Light::Directional { name, .. } | Light::Sphere { name, .. } | Light::Quad { name, .. } => name,
         }
     }
 }
@@ -294,9 +243,7 @@ impl CubeFaces {
         let mut size = 0;
         let mut texels = Vec::new();
         for (k, path) in faces.iter().enumerate() {
-            let img = image::open(path)
-                .map_err(|e| (k, format!("{}: cannot load: {e}", path.display())))?
-                .to_rgba32f();
+            let img = image::open(path).map_err(|e| (k, format!("{}: cannot load: {e}", path.display())))?.to_rgba32f();
             let (w, h) = img.dimensions();
             if w != h || w == 0 {
                 return Err((k, format!("{}: a cube face must be square and non-empty, this one is {w}x{h}", path.display())));
@@ -333,11 +280,7 @@ impl Environment {
     pub fn equirect_dir(uv: Vec2) -> Vec3 {
         let phi = (uv.x - 0.5) * std::f32::consts::TAU;
         let theta = uv.y * std::f32::consts::PI;
-        Vec3::new(
-            theta.sin() * phi.sin(),
-            theta.cos(),
-            -theta.sin() * phi.cos(),
-        )
+        Vec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos())
     }
 
     /// The (un-normalised) world direction through face coordinates (s, t) ∈ [−1, 1]² of cube
@@ -361,9 +304,17 @@ impl Environment {
     pub fn cube_face(dir: Vec3) -> (usize, f32, f32) {
         let a = dir.abs();
         let (face, ma, sc, tc) = if a.x >= a.y && a.x >= a.z {
-            if dir.x >= 0.0 { (0, a.x, -dir.z, -dir.y) } else { (1, a.x, dir.z, -dir.y) }
+            if dir.x >= 0.0 {
+                (0, a.x, -dir.z, -dir.y)
+            } else {
+                (1, a.x, dir.z, -dir.y)
+            }
         } else if a.y >= a.z {
-            if dir.y >= 0.0 { (2, a.y, dir.x, dir.z) } else { (3, a.y, dir.x, -dir.z) }
+            if dir.y >= 0.0 {
+                (2, a.y, dir.x, dir.z)
+            } else {
+                (3, a.y, dir.x, -dir.z)
+            }
         } else if dir.z >= 0.0 {
             (4, a.z, dir.x, -dir.y)
         } else {
@@ -381,24 +332,14 @@ mod tests {
     use super::*;
 
     fn cam() -> Camera {
-        Camera {
-            position: Vec3::new(1.0, 2.0, 5.0),
-            target: Vec3::new(0.0, 0.5, 0.0),
-            up: Vec3::Y,
-            fov_y_deg: 50.0,
-            near: 0.1,
-        }
+        Camera { position: Vec3::new(1.0, 2.0, 5.0), target: Vec3::new(0.0, 0.5, 0.0), up: Vec3::Y, fov_y_deg: 50.0, near: 0.1 }
     }
 
     /// Projects a world point to continuous pixel coordinates and depth.
     fn to_pixel(c: &Camera, p: Vec3, w: u32, h: u32) -> (f32, f32, f32) {
         let clip = c.view_projection(w as f32 / h as f32) * p.extend(1.0);
         let ndc = clip.truncate() / clip.w;
-        (
-            (ndc.x + 1.0) * 0.5 * w as f32,
-            (ndc.y + 1.0) * 0.5 * h as f32,
-            ndc.z,
-        )
+        ((ndc.x + 1.0) * 0.5 * w as f32, (ndc.y + 1.0) * 0.5 * h as f32, ndc.z)
     }
 
     #[test]
@@ -445,11 +386,7 @@ mod tests {
         assert!((Environment::equirect_uv(Vec3::NEG_Z) - Vec2::new(0.5, 0.5)).length() < 1e-6);
         assert!((Environment::equirect_uv(Vec3::X) - Vec2::new(0.75, 0.5)).length() < 1e-6);
         assert!(Environment::equirect_uv(Vec3::Y).y.abs() < 1e-6);
-        for d in [
-            Vec3::new(0.3, 0.5, -0.8),
-            Vec3::new(-0.9, -0.2, 0.1),
-            Vec3::new(0.1, 0.9, 0.4),
-        ] {
+        for d in [Vec3::new(0.3, 0.5, -0.8), Vec3::new(-0.9, -0.2, 0.1), Vec3::new(0.1, 0.9, 0.4)] {
             let d = d.normalize();
             let back = Environment::equirect_dir(Environment::equirect_uv(d));
             assert!((back - d).length() < 1e-5, "{d} -> {back}");

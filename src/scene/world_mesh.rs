@@ -50,13 +50,8 @@ impl WorldLevel {
 }
 
 /// The material classes a world's faces carry, with the suffix of the object holding them.
-pub const CLASSES: [(&str, MaterialId); 5] = [
-    ("floor", materials::FLOOR),
-    ("ceiling", materials::CEILING),
-    ("wall", materials::WALL),
-    ("pillar", materials::PILLAR),
-    ("corridor", materials::CORRIDOR),
-];
+pub const CLASSES: [(&str, MaterialId); 5] =
+    [("floor", materials::FLOOR), ("ceiling", materials::CEILING), ("wall", materials::WALL), ("pillar", materials::PILLAR), ("corridor", materials::CORRIDOR)];
 
 /// World (z up) to scene (y up) coordinates, before the object's translation.
 pub fn world_to_scene(p: DVec3) -> Vec3 {
@@ -115,19 +110,12 @@ pub fn class_mesh(world: &CompiledWorld, class: MaterialId) -> (Mesh, Vec<FaceSp
         for &p in &poly.vertices {
             mesh.positions.push(world_to_scene(p));
             mesh.normals.push(world_to_scene(n).normalize_or_zero());
-            mesh.uvs.push(Vec2::new(
-                (p.dot(u_axis) / TEXTURE_METRES) as f32,
-                (p.dot(v_axis) / TEXTURE_METRES) as f32,
-            ));
+            mesh.uvs.push(Vec2::new((p.dot(u_axis) / TEXTURE_METRES) as f32, (p.dot(v_axis) / TEXTURE_METRES) as f32));
         }
         for k in 1..poly.vertices.len().saturating_sub(1) as u32 {
             mesh.indices.extend_from_slice(&[base, base + k, base + k + 1]);
         }
-        spans.push(FaceSpan {
-            face: id as FaceId,
-            first_index,
-            index_count: mesh.indices.len() as u32 - first_index,
-        });
+        spans.push(FaceSpan { face: id as FaceId, first_index, index_count: mesh.indices.len() as u32 - first_index });
     }
     mesh.compute_tangents();
     (mesh, spans)

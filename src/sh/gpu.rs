@@ -84,9 +84,7 @@ pub struct ShProjector {
 
 impl ShProjector {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, name: &str) -> Result<ShProjector> {
-        let mut pipeline = |suffix: &str, shader: &str| {
-            gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{name} {suffix}"), shader: shader.into(), specialization: vec![] }, shaders)
-        };
+        let mut pipeline = |suffix: &str, shader: &str| gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{name} {suffix}"), shader: shader.into(), specialization: vec![] }, shaders);
         let equirect = pipeline("equirect", "sh/project_equirect.comp")?;
         let cube = pipeline("cube", "sh/project_cube.comp")?;
         let reduce = pipeline("reduce", "sh/project_reduce.comp")?;
@@ -109,10 +107,7 @@ impl ShProjector {
         }
         let texels = env.texels();
         if env.width == 0 || env.height == 0 || texels > MAX_TEXELS || (env.layout == EnvLayout::Cube && env.width != env.height) {
-            return Err(Error::Usage(format!(
-                "SH projection `{name}`: a {}x{} {:?} image cannot be projected (non-empty, square cube faces, at most 2^30 texels)",
-                env.width, env.height, env.layout
-            )));
+            return Err(Error::Usage(format!("SH projection `{name}`: a {}x{} {:?} image cannot be projected (non-empty, square cube faces, at most 2^30 texels)", env.width, env.height, env.layout)));
         }
         let per_group = (texels.div_ceil(MAX_GROUPS as u64) as u32).max(TEXELS_PER_GROUP);
         let groups = texels.div_ceil(per_group as u64) as u32;
@@ -122,28 +117,22 @@ impl ShProjector {
             EnvLayout::Cube => (self.cube, SubresourceRange::new(0, 1, 0, 6)),
         };
         let partials = self.partials;
-        graph
-            .pass(name)
-            .sample("env_image", env.image, range, self.nearest, COMPUTE)
-            .buffer(partials, Access::StorageWrite { stages: COMPUTE }, Some("partials"))
-            .record(move |ctx| {
-                ctx.rec.bind_pipeline(pipeline)?;
-                ctx.bind(&[])?;
-                ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
-                ctx.rec.dispatch([groups * GROUP_SIZE, 1, 1])
-            });
+        graph.pass(name).sample("env_image", env.image, range, self.nearest, COMPUTE).buffer(partials, Access::StorageWrite { stages: COMPUTE }, Some("partials")).record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[])?;
+            ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
+            ctx.rec.dispatch([groups * GROUP_SIZE, 1, 1])
+        });
         let reduce = self.reduce;
         let push: [i32; 4] = [groups as i32, bands as i32, 0, 0];
-        graph
-            .pass(&format!("{name} reduce"))
-            .buffer(partials, Access::StorageRead { stages: COMPUTE }, Some("partials"))
-            .buffer(out, Access::StorageWrite { stages: COMPUTE }, Some("sh_out"))
-            .record(move |ctx| {
+        graph.pass(&format!("{name} reduce")).buffer(partials, Access::StorageRead { stages: COMPUTE }, Some("partials")).buffer(out, Access::StorageWrite { stages: COMPUTE }, Some("sh_out")).record(
+            move |ctx| {
                 ctx.rec.bind_pipeline(reduce)?;
                 ctx.bind(&[])?;
                 ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
                 ctx.rec.dispatch([GROUP_SIZE, 1, 1])
-            });
+            },
+        );
         Ok(())
     }
 }

@@ -61,9 +61,7 @@ impl TripleProductTensor {
             m if m > 0 => std::f64::consts::SQRT_2 * (m as f64 * phi).cos(),
             m => std::f64::consts::SQRT_2 * (-m as f64 * phi).sin(),
         };
-        let samples: Vec<Vec<f64>> = (0..mr)
-            .map(|a| (0..nphi).map(|t| phi_val(a as i32 - off, (t as f64 + 0.5) * TAU / nphi as f64)).collect())
-            .collect();
+        let samples: Vec<Vec<f64>> = (0..mr).map(|a| (0..nphi).map(|t| phi_val(a as i32 - off, (t as f64 + 0.5) * TAU / nphi as f64)).collect()).collect();
         let mut phi_int = vec![0.0; mr * mr * mr];
         for a in 0..mr {
             for b in a..mr {
@@ -253,11 +251,7 @@ impl<C: Coeff> ProductMatrix<C> {
         if b.len() != self.dim {
             return Err(ShError::Length { what: "product matrix operand", expected: self.dim, got: b.len() });
         }
-        Ok(self
-            .data
-            .chunks_exact(self.dim)
-            .map(|row| row.iter().zip(b).fold(C::default(), |acc, (m, x)| acc + m.scale((*x).into())))
-            .collect())
+        Ok(self.data.chunks_exact(self.dim).map(|row| row.iter().zip(b).fold(C::default(), |acc, (m, x)| acc + m.scale((*x).into()))).collect())
     }
 }
 

@@ -204,11 +204,7 @@ pub fn equirect_texel_solid_angle(y: usize, width: usize, height: usize) -> f64 
 /// in θ is second-order accurate; the φ sum is exact for band-limited content.
 pub fn project_equirect(pixels: &[[f32; 3]], width: usize, height: usize, bands: usize) -> ShResult<Vec<Vec3>> {
     check_bands(bands)?;
-    let expected = width.checked_mul(height).filter(|&n| n > 0).ok_or(ShError::Range {
-        what: "equirect size",
-        range: "width, height >= 1",
-        got: 0.0,
-    })?;
+    let expected = width.checked_mul(height).filter(|&n| n > 0).ok_or(ShError::Range { what: "equirect size", range: "width, height >= 1", got: 0.0 })?;
     if pixels.len() != expected {
         return Err(ShError::Length { what: "equirect texels", expected, got: pixels.len() });
     }
@@ -269,11 +265,7 @@ pub fn cube_texel_solid_angle(x: usize, y: usize, size: usize) -> f64 {
 /// exact solid angle. Coefficients are in the SH frame.
 pub fn project_cubemap(texels: &[[f32; 3]], size: usize, bands: usize) -> ShResult<Vec<Vec3>> {
     check_bands(bands)?;
-    let face_len = size.checked_mul(size).filter(|&n| n > 0).ok_or(ShError::Range {
-        what: "cube face size",
-        range: ">= 1",
-        got: 0.0,
-    })?;
+    let face_len = size.checked_mul(size).filter(|&n| n > 0).ok_or(ShError::Range { what: "cube face size", range: ">= 1", got: 0.0 })?;
     let expected = face_len.checked_mul(6).ok_or(ShError::Range { what: "cube face size", range: "not overflowing", got: size as f64 })?;
     if texels.len() != expected {
         return Err(ShError::Length { what: "cube map texels", expected, got: texels.len() });

@@ -44,9 +44,7 @@ fn check_width(width: f64) -> ShResult<()> {
 pub fn hanning(bands: usize, width: f64) -> ShResult<Vec<f64>> {
     check_bands(bands)?;
     check_width(width)?;
-    Ok((0..bands)
-        .map(|l| if (l as f64) < width { 0.5 * (1.0 + (PI * l as f64 / width).cos()) } else { 0.0 })
-        .collect())
+    Ok((0..bands).map(|l| if (l as f64) < width { 0.5 * (1.0 + (PI * l as f64 / width).cos()) } else { 0.0 }).collect())
 }
 
 /// Lanczos σ-factor window of width `width` (> 0, in bands) for `bands` bands.

@@ -60,11 +60,7 @@ pub fn clamped_cosine_zh(bands: usize) -> ShResult<Vec<f64>> {
 /// π, 2π/3, π/4, 0, −π/24, 0, π/64, … (Ramamoorthi–Hanrahan; seed 002 §5 test 1 `Â_l`).
 /// Irradiance is `E_lm = A_l L_lm`.
 pub fn lambert_kernel(bands: usize) -> ShResult<Vec<f64>> {
-    Ok(clamped_cosine_zh(bands)?
-        .into_iter()
-        .enumerate()
-        .map(|(l, z)| (4.0 * PI / (2 * l + 1) as f64).sqrt() * z)
-        .collect())
+    Ok(clamped_cosine_zh(bands)?.into_iter().enumerate().map(|(l, z)| (4.0 * PI / (2 * l + 1) as f64).sqrt() * z).collect())
 }
 
 /// ZH coefficients of the indicator of a spherical cap of half-angle `half_angle` (radians,

@@ -42,11 +42,7 @@ fn words(bytes: &[u8]) -> Vec<u32> {
 impl ShaderSource for ShaderLibrary {
     fn spirv(&self, path: &str) -> Result<Vec<u32>, String> {
         match self {
-            ShaderLibrary::Embedded => EMBEDDED
-                .iter()
-                .find(|(n, _)| *n == path)
-                .map(|(_, b)| words(b))
-                .ok_or_else(|| format!("no shader `{path}` is embedded (is it under glsl/?)")),
+            ShaderLibrary::Embedded => EMBEDDED.iter().find(|(n, _)| *n == path).map(|(_, b)| words(b)).ok_or_else(|| format!("no shader `{path}` is embedded (is it under glsl/?)")),
             ShaderLibrary::Directory(root) => compile::compile_glsl(root, path),
         }
     }

@@ -39,7 +39,10 @@ use std::rc::Rc;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::backend::{vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::backend::{
+    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
+    SpecConstant, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout,
+};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::methods::{FrameInputs, LightingMethod};
@@ -93,11 +96,7 @@ impl Setup {
                 Light::Sphere { .. } => "a sphere light is an area light, whose soft shadows one stencil volume cannot represent",
                 Light::Quad { .. } => "a quad light is an area light, whose soft shadows one stencil volume cannot represent",
             };
-            return Err(Error::Usage(format!(
-                "{}: lights[{i}] ({}): the {NAME} method lights with point and spot lights only: {why}",
-                scene.source,
-                l.name()
-            )));
+            return Err(Error::Usage(format!("{}: lights[{i}] ({}): the {NAME} method lights with point and spot lights only: {why}", scene.source, l.name())));
         }
         let mut level: Option<(WorldLevel, Vec3)> = None;
         let mut world_objects = Vec::new();
@@ -127,15 +126,7 @@ impl Setup {
             }
             let mesh = obj.load_mesh(std::path::Path::new("."))?;
             let topology = volumes::Topology::new(&mesh);
-            entities.push(Entity {
-                draw: i,
-                name: obj.name.clone(),
-                bounds: mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO)),
-                topology,
-                base: obj.transform,
-                animation: obj.animation,
-                opacity,
-            });
+            entities.push(Entity { draw: i, name: obj.name.clone(), bounds: mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO)), topology, base: obj.transform, animation: obj.animation, opacity });
         }
         let world = match level {
             None => None,
@@ -281,7 +272,11 @@ impl ShadowVolumes {
         let mut light = Vec::with_capacity(4);
         for nm in [false, true] {
             for sp in [false, true] {
-                let mut d = surface(&format!("{NAME} light{}{}", if nm { " normal-mapped" } else { "" }, if sp { " specular" } else { "" }), "shadow_volumes/light.frag", vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)]);
+                let mut d = surface(
+                    &format!("{NAME} light{}{}", if nm { " normal-mapped" } else { "" }, if sp { " specular" } else { "" }),
+                    "shadow_volumes/light.frag",
+                    vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)],
+                );
                 d.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
                 d.color_targets[0].blend = BlendMode::Additive;
                 let outside = StencilFace { compare_mask: 0xff, write_mask: 0, ..StencilFace::test(vk::CompareOp::EQUAL, 0) };
@@ -293,18 +288,18 @@ impl ShadowVolumes {
         // image, with depth writes so the light passes after it find the nearest layer only.
         let mut translucent_ambient = Vec::with_capacity(2);
         for nm in [false, true] {
-            let mut d = surface(&format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }), "shadow_volumes/ambient.frag", vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)]);
+            let mut d = surface(
+                &format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }),
+                "shadow_volumes/ambient.frag",
+                vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
+            );
             d.color_targets[0].blend = BlendMode::Alpha;
             translucent_ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
         }
         let translucent_ambient = [translucent_ambient[0], translucent_ambient[1]];
         let ambient = [ambient[0], ambient[1]];
         let light = [[light[0], light[1]], [light[2], light[3]]];
-        let (inc, dec) = if c.stencil_wrap {
-            (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
-        } else {
-            (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
-        };
+        let (inc, dec) = if c.stencil_wrap { (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP) } else { (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP) };
         let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace { pass, depth_fail, ..StencilFace::test(vk::CompareOp::ALWAYS, 0) };
         let keep = vk::StencilOp::KEEP;
         // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
@@ -322,16 +317,33 @@ impl ShadowVolumes {
         vd.stencil = Some(faces);
         vd.depth_format = Some(ds_format);
         let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
-        let silhouette = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} silhouettes"), shader: "shadow_volumes/silhouette.comp".into(), specialization: Vec::new() }, shaders)?;
+        let silhouette =
+            gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} silhouettes"), shader: "shadow_volumes/silhouette.comp".into(), specialization: Vec::new() }, shaders)?;
 
         let features = scene.materials.iter().map(|m| Features { normal_map: m.normal_map.is_some(), specular: m.specular.max_element() > 0.0 }).collect();
         let (faces, templates) = Self::world_geometry(gpu, scene, &setup)?;
         let silhouettes = Self::silhouette_buffers(gpu, &setup)?;
-        let default_normal = gpu.create_image(&ImageDesc::new_2d("flat normal (exact)", vk::Format::R32G32B32A32_SFLOAT, 1, 1).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        let default_normal =
+            gpu.create_image(&ImageDesc::new_2d("flat normal (exact)", vk::Format::R32G32B32A32_SFLOAT, 1, 1).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
         gpu.upload_image(default_normal, 0, bytemuck::cast_slice(&[0.5f32, 0.5, 1.0, 1.0]))?;
         states.set_image(gpu, default_normal, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         let frames = Cell::new(0);
-        Ok(ShadowVolumes { setup, faces, templates, silhouettes, features, ambient, translucent_ambient, light, volume, silhouette, nudge_far: !depth_clamp, default_normal, frames, last_plan: RefCell::new(None) })
+        Ok(ShadowVolumes {
+            setup,
+            faces,
+            templates,
+            silhouettes,
+            features,
+            ambient,
+            translucent_ambient,
+            light,
+            volume,
+            silhouette,
+            nudge_far: !depth_clamp,
+            default_normal,
+            frames,
+            last_plan: RefCell::new(None),
+        })
     }
 
     pub fn setup(&self) -> &Setup {
@@ -598,11 +610,8 @@ impl LightingMethod for ShadowVolumes {
                 break;
             }
             let prefix = if translucent { "translucent " } else { "" };
-            let ambient_calls = if translucent {
-                self.draws_in_order(scene, &plan, &[], &plan.translucent_entities)
-            } else {
-                self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities)
-            };
+            let ambient_calls =
+                if translucent { self.draws_in_order(scene, &plan, &[], &plan.translucent_entities) } else { self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities) };
             let ambient_pipelines = if translucent { self.translucent_ambient } else { self.ambient };
             let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
             graph

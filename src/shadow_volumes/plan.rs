@@ -303,10 +303,14 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
     // Back to front by the distance of the bounding box's centre: one order per entity, which is
     // exact for disjoint panes stacked along the view and the usual approximation otherwise
     // (the world's faces are opaque, so the BSP order is not needed).
-    let depth: Vec<f32> = entities.iter().zip(&plan.entity_transforms).map(|(e, m)| {
-        let (lo, hi) = e.world_bounds(m);
-        (0.5 * (lo + hi)).distance(camera)
-    }).collect();
+    let depth: Vec<f32> = entities
+        .iter()
+        .zip(&plan.entity_transforms)
+        .map(|(e, m)| {
+            let (lo, hi) = e.world_bounds(m);
+            (0.5 * (lo + hi)).distance(camera)
+        })
+        .collect();
     let back_to_front = |list: &mut Vec<usize>| list.sort_by(|a, b| depth[*b].total_cmp(&depth[*a]).then(a.cmp(b)));
     plan.translucent_entities = plan.visible_entities.iter().copied().filter(translucent).collect();
     back_to_front(&mut plan.translucent_entities);

@@ -211,10 +211,7 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec3) -> Ve
 /// For tests: replaces points at infinity by points at distance `k` along their direction from
 /// the light, making the volume finite so its closedness and orientation can be measured.
 pub fn finite(volume: &[Vec4], light: Vec3, k: f32) -> Vec<Vec3> {
-    volume
-        .iter()
-        .map(|v| if v.w == 0.0 { light + v.truncate() * k } else { v.truncate() })
-        .collect()
+    volume.iter().map(|v| if v.w == 0.0 { light + v.truncate() * k } else { v.truncate() }).collect()
 }
 
 /// Signed volume of a triangle list (positive when the triangles face outward) and whether its

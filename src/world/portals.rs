@@ -45,11 +45,7 @@ const COVER_TOLERANCE: f64 = 1e-6;
 /// the faces form. A piece between two cells is therefore covered by faces entirely (one cell
 /// inside, one outside) or nowhere (both on the same side), and its centre point tells which.
 /// Portals are kept between solid cells too; only the flood fill knows which cells are solid.
-pub fn make_portals(
-    tree: &Tree,
-    node_windings: &[Option<Polygon>],
-    face_polygons: &[&Polygon],
-) -> Vec<Portal> {
+pub fn make_portals(tree: &Tree, node_windings: &[Option<Polygon>], face_polygons: &[&Polygon]) -> Vec<Portal> {
     let mut portals = Vec::new();
     for (n, winding) in node_windings.iter().enumerate() {
         let Some(winding) = winding else { continue };
@@ -59,16 +55,10 @@ pub fn make_portals(
                 let center = piece.center();
                 let covered = node.faces.iter().any(|&f| {
                     let face = face_polygons[f as usize];
-                    face.bounds().expanded(COVER_TOLERANCE).contains(center)
-                        && face.contains_point(center, COVER_TOLERANCE)
+                    face.bounds().expanded(COVER_TOLERANCE).contains(center) && face.contains_point(center, COVER_TOLERANCE)
                 });
                 if !covered {
-                    portals.push(Portal {
-                        polygon: piece,
-                        front,
-                        back,
-                        node: n as NodeId,
-                    });
+                    portals.push(Portal { polygon: piece, front, back, node: n as NodeId });
                 }
             }
         }

@@ -54,11 +54,7 @@ pub struct PvsStats {
 impl Pvs {
     fn empty(leaf_count: usize) -> Pvs {
         let words = leaf_count.div_ceil(64);
-        Pvs {
-            leaf_count,
-            words,
-            bits: vec![0; words * leaf_count],
-        }
+        Pvs { leaf_count, words, bits: vec![0; words * leaf_count] }
     }
 
     /// Every empty leaf sees every empty leaf: the fallback without a PVS.
@@ -78,18 +74,12 @@ impl Pvs {
 
     pub fn is_visible(&self, a: LeafId, b: LeafId) -> bool {
         let (a, b) = (a as usize, b as usize);
-        a < self.leaf_count
-            && b < self.leaf_count
-            && self.bits[a * self.words + b / 64] & (1 << (b % 64)) != 0
+        a < self.leaf_count && b < self.leaf_count && self.bits[a * self.words + b / 64] & (1 << (b % 64)) != 0
     }
 
     /// The leaves `leaf` can see (itself included, unless solid), ascending.
     pub fn visible_leaves(&self, leaf: LeafId) -> impl Iterator<Item = LeafId> + '_ {
-        self.row(leaf).iter().enumerate().flat_map(|(w, &bits)| {
-            (0..64)
-                .filter(move |i| bits & (1 << i) != 0)
-                .map(move |i| (w * 64 + i) as LeafId)
-        })
+        self.row(leaf).iter().enumerate().flat_map(|(w, &bits)| (0..64).filter(move |i| bits & (1 << i) != 0).map(move |i| (w * 64 + i) as LeafId))
     }
 
     /// The packed row of `leaf`: bit `b` of word `b / 64` is `is_visible(leaf, b)`.
@@ -126,47 +116,27 @@ pub fn compute_pvs(tree: &Tree, portals: &[Portal]) -> (Pvs, PvsStats) {
     let words = leaf_count.div_ceil(64);
     let mut directed = Vec::with_capacity(portals.len() * 2);
     for p in portals {
-        directed.push(Directed {
-            winding: p.polygon.vertices.clone(),
-            plane: p.polygon.plane,
-            from: p.back,
-            to: p.front,
-        });
+        directed.push(Directed { winding: p.polygon.vertices.clone(), plane: p.polygon.plane, from: p.back, to: p.front });
         let flipped = p.polygon.flipped();
-        directed.push(Directed {
-            winding: flipped.vertices,
-            plane: flipped.plane,
-            from: p.front,
-            to: p.back,
-        });
+        directed.push(Directed { winding: flipped.vertices, plane: flipped.plane, from: p.front, to: p.back });
     }
     let mut leaving: Vec<Vec<usize>> = vec![Vec::new(); leaf_count];
     for (i, d) in directed.iter().enumerate() {
         leaving[d.from as usize].push(i);
     }
-    let might: Vec<Vec<u64>> = (0..directed.len())
-        .map(|s| might_see(s, &directed, &leaving, words))
-        .collect();
+    let might: Vec<Vec<u64>> = (0..directed.len()).map(|s| might_see(s, &directed, &leaving, words)).collect();
     let mut order: Vec<usize> = (0..directed.len()).collect();
     order.sort_by_key(|&s| might[s].iter().map(|w| w.count_ones()).sum::<u32>());
 
     let mut done: Vec<Option<Vec<u64>>> = vec![None; directed.len()];
     let mut steps = 0;
     for &s in &order {
-        let mut flow = Flow {
-            directed: &directed,
-            leaving: &leaving,
-            might: &might,
-            done: &done,
-            steps: 0,
-        };
+        let mut flow = Flow { directed: &directed, leaving: &leaving, might: &might, done: &done, steps: 0 };
         let mut vis = vec![0u64; words];
         let mut path = vec![0u64; words];
         set_bit(&mut path, directed[s].from as usize);
         let d = &directed[s];
-        flow.recurse(
-            d.to, &d.winding, &d.plane, None, &might[s], &mut vis, &mut path,
-        );
+        flow.recurse(d.to, &d.winding, &d.plane, None, &might[s], &mut vis, &mut path);
         steps += flow.steps;
         done[s] = Some(vis);
     }
@@ -183,27 +153,16 @@ pub fn compute_pvs(tree: &Tree, portals: &[Portal]) -> (Pvs, PvsStats) {
             pvs.bits[row + w] |= bits;
         }
     }
-    let mut stats = PvsStats {
-        directed_portals: directed.len(),
-        flow_steps: steps,
-        ..Default::default()
-    };
+    let mut stats = PvsStats { directed_portals: directed.len(), flow_steps: steps, ..Default::default() };
     for a in 0..leaf_count {
         for b in 0..leaf_count {
-            if pvs.is_visible(a as LeafId, b as LeafId) && !pvs.is_visible(b as LeafId, a as LeafId)
-            {
+            if pvs.is_visible(a as LeafId, b as LeafId) && !pvs.is_visible(b as LeafId, a as LeafId) {
                 pvs.set(b, a);
                 stats.added_by_symmetry += 1;
             }
         }
     }
-    stats.visible_pairs = (0..leaf_count)
-        .map(|a| {
-            pvs.visible_leaves(a as LeafId)
-                .filter(|&b| b as usize != a)
-                .count()
-        })
-        .sum();
+    stats.visible_pairs = (0..leaf_count).map(|a| pvs.visible_leaves(a as LeafId).filter(|&b| b as usize != a).count()).sum();
     (pvs, stats)
 }
 
@@ -226,10 +185,7 @@ fn might_see(s: usize, directed: &[Directed], leaving: &[Vec<usize>], words: usi
         for &p in &leaving[leaf as usize] {
             let d = &directed[p];
             let in_front = d.winding.iter().any(|&v| src.plane.distance(v) > VIS_SLACK);
-            let source_behind = src
-                .winding
-                .iter()
-                .any(|&v| d.plane.distance(v) < -VIS_SLACK);
+            let source_behind = src.winding.iter().any(|&v| d.plane.distance(v) < -VIS_SLACK);
             if in_front && source_behind && !get_bit(&seen, d.to as usize) {
                 set_bit(&mut seen, d.to as usize);
                 stack.push(d.to);
@@ -242,16 +198,7 @@ fn might_see(s: usize, directed: &[Directed], leaving: &[Vec<usize>], words: usi
 impl Flow<'_> {
     /// Light from `source` (in plane `source_plane`) has reached `leaf`, last through `pass`.
     #[allow(clippy::too_many_arguments)]
-    fn recurse(
-        &mut self,
-        leaf: LeafId,
-        source: &[DVec3],
-        source_plane: &Plane,
-        pass: Option<(&[DVec3], &Plane)>,
-        might: &[u64],
-        vis: &mut Vec<u64>,
-        path: &mut Vec<u64>,
-    ) {
+    fn recurse(&mut self, leaf: LeafId, source: &[DVec3], source_plane: &Plane, pass: Option<(&[DVec3], &Plane)>, might: &[u64], vis: &mut Vec<u64>, path: &mut Vec<u64>) {
         set_bit(vis, leaf as usize);
         set_bit(path, leaf as usize);
         for &p in &self.leaving[leaf as usize] {
@@ -259,10 +206,7 @@ impl Flow<'_> {
             let to = d.to as usize;
             // A straight line crosses a convex leaf once, and two portals of one plane only at
             // a graze.
-            if !get_bit(might, to)
-                || get_bit(path, to)
-                || d.plane.coplanar_facing(source_plane).is_some()
-            {
+            if !get_bit(might, to) || get_bit(path, to) || d.plane.coplanar_facing(source_plane).is_some() {
                 continue;
             }
             if pass.is_some_and(|(_, pp)| d.plane.coplanar_facing(pp).is_some()) {
@@ -300,15 +244,7 @@ impl Flow<'_> {
                     continue;
                 }
             }
-            self.recurse(
-                d.to,
-                &src,
-                source_plane,
-                Some((&target, &d.plane)),
-                &next_might,
-                vis,
-                path,
-            );
+            self.recurse(d.to, &src, source_plane, Some((&target, &d.plane)), &next_might, vis, path);
         }
         path[leaf as usize / 64] &= !(1 << (leaf as usize % 64));
     }
@@ -325,13 +261,7 @@ fn clip_to_separators(from: &[DVec3], through: &[DVec3], mut target: Vec<DVec3>)
                 let Some(mut plane) = Plane::from_points(e0, e1, v) else {
                     continue;
                 };
-                let range = |w: &[DVec3]| {
-                    w.iter()
-                        .map(|&p| plane.distance(p))
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
-                            (lo.min(d), hi.max(d))
-                        })
-                };
+                let range = |w: &[DVec3]| w.iter().map(|&p| plane.distance(p)).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
                 let ((from_lo, from_hi), (through_lo, through_hi)) = (range(from), range(through));
                 let flat = |lo: f64, hi: f64| lo > -SEPARATOR_EPSILON && hi < SEPARATOR_EPSILON;
                 if flat(from_lo, from_hi) && flat(through_lo, through_hi) {

@@ -5,11 +5,7 @@
 use penumbra::backend::{Gpu, GpuDesc};
 
 pub fn test_gpu_desc() -> GpuDesc {
-    GpuDesc {
-        validation: true,
-        device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())),
-        display: None,
-    }
+    GpuDesc { validation: true, device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())), display: None }
 }
 
 pub fn test_gpu() -> Gpu {

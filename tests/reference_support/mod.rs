@@ -40,7 +40,13 @@ impl Agreement {
         for c in 0..3 {
             let slack = slack[c] + 1e-5 * want[c].abs() + 1e-6;
             let excess = (got[c] - want[c]).abs() - slack;
-            let z = if excess <= 0.0 { 0.0 } else if se[c] > 0.0 { excess / se[c] } else { f32::INFINITY };
+            let z = if excess <= 0.0 {
+                0.0
+            } else if se[c] > 0.0 {
+                excess / se[c]
+            } else {
+                f32::INFINITY
+            };
             pixel_z = pixel_z.max(z);
             if z > self.worst.0 {
                 self.worst = (z, format!("pixel ({i},{j}) channel {c}: {} vs {} (s.e. {})", got[c], want[c], se[c]));

@@ -75,7 +75,7 @@ fn general_rotation_preserves_band_energy_and_inverse_undoes_it() {
     }
     let back = ShRotation::new(r.transpose(), MAX_BANDS).unwrap().rotate(&g).unwrap();
     assert!(max_diff(&back, &f) < 1e-6, "{}", max_diff(&back, &f)); // f32 input matrix
-    // Blocks are orthogonal to rounding at band 15.
+                                                                    // Blocks are orthogonal to rounding at band 15.
     let b = rot.band_matrix(15).unwrap();
     let w = 31;
     for i in 0..w {
