@@ -3,10 +3,12 @@
 use std::path::PathBuf;
 
 use crate::backend::{Gpu, GpuDesc};
+use crate::bake::Baker;
 use crate::error::Result;
 use crate::image_io::HdrImage;
+use crate::lighting::{registry, Configuration};
 use crate::renderer::{FrameOutput, Renderer};
-use crate::scene::{MethodDecl, Scene};
+use crate::scene::Scene;
 
 #[derive(Clone, Debug)]
 pub struct CaptureOptions {
@@ -18,8 +20,8 @@ pub struct CaptureOptions {
     pub method: Option<String>,
     pub exposure: f32,
     pub gpu: GpuDesc,
-    /// Render this configuration instead of the scene's own method declaration.
-    pub config: Option<MethodDecl>,
+    /// Render this configuration instead of the scene's own (`--max-error`'s choice).
+    pub config: Option<Configuration>,
 }
 
 /// Loads the scene (or the built-in default) as the CLI does.
@@ -32,12 +34,13 @@ pub fn load_scene(path: Option<&std::path::Path>) -> Result<Scene> {
 
 /// Renders `frames` frames and returns the last one's radiance.
 pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
-    let mut scene = load_scene(opts.scene.as_deref())?;
-    if let Some(decl) = &opts.config {
-        scene.methods = vec![decl.clone()];
-    }
+    let scene = load_scene(opts.scene.as_deref())?;
+    let config = match &opts.config {
+        Some(c) => c.clone(),
+        None => registry::configuration(&scene, opts.method.as_deref())?,
+    };
     let gpu = Gpu::new(&opts.gpu)?;
-    let mut renderer = Renderer::new(gpu, scene, opts.method.as_deref(), opts.size, 1)?;
+    let mut renderer = Renderer::with_configuration(gpu, scene, config, opts.size, 1, Baker::new(Some(Baker::default_dir())))?;
     let camera = renderer.scene.camera.clone();
     let mut image = None;
     for _ in 0..opts.frames.max(1) {
@@ -72,7 +75,7 @@ pub fn run(opts: &CaptureOptions) -> Result<Vec<String>> {
 
 /// `capture --max-error E`: the cheapest configuration within E (relative MSE) from the chart
 /// data cached for this scene and size, and a sentence saying why it was chosen.
-pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: &std::path::Path) -> Result<(MethodDecl, String)> {
+pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: &std::path::Path) -> Result<(Configuration, String)> {
     use crate::chart::{cached_table, choose, parse_csv, Choice};
     use crate::error::Error;
     let path = opts.scene.as_deref().ok_or_else(|| Error::Usage("--max-error needs a scene file (the chart is measured per scene)".into()))?;
@@ -94,13 +97,11 @@ pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: 
     match choose(&configs, max_rel_mse) {
         Some(Choice::Picked { config, rejected }) => {
             let why = Choice::Picked { config: config.clone(), rejected }.to_string();
-            let info = crate::methods::info(&config.method)?;
-            let decl = scene
-                .methods
-                .iter()
-                .find(|d| d.name == config.method)
+            let configuration = registry::configurations(&scene)?
+                .into_iter()
+                .find(|c| c.name == config.method)
                 .ok_or_else(|| Error::Usage(format!("the chart names method `{}`, which the scene no longer enables; run `penumbra chart` again", config.method)))?;
-            let chosen = (info.sweep)(decl)
+            let chosen = registry::sweep(&configuration)?
                 .into_iter()
                 .find(|(label, _)| *label == config.config)
                 .map(|(_, d)| d)

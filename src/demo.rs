@@ -74,6 +74,27 @@ struct Running {
     /// Copy the next presented frame back (F12, or the last frame with --screenshot).
     grab_next: bool,
     grabbed: Option<image::RgbaImage>,
+    /// The scene's methods and combinations (M cycles through them) and the one shown.
+    configurations: Vec<crate::lighting::Configuration>,
+    current: usize,
+}
+
+impl Running {
+    /// Switches to the next of the scene's configurations; a failure is printed and the current
+    /// one keeps running.
+    fn next_configuration(&mut self) {
+        if self.configurations.len() < 2 {
+            return;
+        }
+        let next = (self.current + 1) % self.configurations.len();
+        match self.renderer.set_configuration(self.configurations[next].clone()) {
+            Ok(()) => {
+                self.current = next;
+                println!("configuration: {}", self.configurations[next].name);
+            }
+            Err(e) => eprintln!("cannot switch to {}: {e}", self.configurations[next].name),
+        }
+    }
 }
 
 /// Scripted runs (tests, benchmarks): stop after a number of frames, save the last one, resize.
@@ -83,6 +104,8 @@ pub struct DemoScript {
     pub screenshot: Option<PathBuf>,
     /// After this many frames, ask the window system for this inner size.
     pub resize_at: Option<(u64, u32, u32)>,
+    /// Switch to the next configuration every this many frames (as the M key does).
+    pub cycle_every: Option<u64>,
 }
 
 struct App {
@@ -90,6 +113,7 @@ struct App {
     max_frames: Option<u64>,
     screenshot: Option<PathBuf>,
     resize_at: Option<(u64, u32, u32)>,
+    cycle_every: Option<u64>,
     state: Option<Running>,
     error: Option<Error>,
 }
@@ -105,7 +129,9 @@ impl App {
         let size = window.inner_size();
         let swapchain = gpu.create_swapchain(&window, (size.width.max(1), size.height.max(1)), FRAMES_IN_FLIGHT)?;
         let extent = swapchain.extent;
+        let configurations = crate::lighting::registry::configurations(&scene)?;
         let renderer = Renderer::new(gpu, scene, self.opts.method.as_deref(), (extent.width, extent.height), FRAMES_IN_FLIGHT)?;
+        let current = configurations.iter().position(|c| *c == renderer.configuration).unwrap_or(0);
         let camera = FlyCamera::new(renderer.scene.camera.clone());
         Ok(Running {
             window,
@@ -120,6 +146,8 @@ impl App {
             screenshots: 0,
             grab_next: false,
             grabbed: None,
+            configurations,
+            current,
         })
     }
 
@@ -158,7 +186,8 @@ impl Running {
         if self.title_at.elapsed().as_secs_f32() > 0.5 {
             if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
                 let parts: Vec<String> = t.iter().map(|p| format!("{} {:.2} ms", p.name, p.ms)).collect();
-                self.window.set_title(&format!("penumbra — {} — {}", self.renderer.method.name(), parts.join(" | ")));
+                let methods = self.renderer.method_names().join(" + ");
+                self.window.set_title(&format!("penumbra — {} ({methods}) — {}", self.renderer.configuration.name, parts.join(" | ")));
             }
             self.title_at = Instant::now();
         }
@@ -223,6 +252,8 @@ impl ApplicationHandler for App {
                                 KeyCode::Escape => el.exit(),
                                 // The next presented frame is copied back and saved.
                                 KeyCode::F12 if !event.repeat => s.grab_next = true,
+                                // The scene's next method or combination.
+                                KeyCode::KeyM if !event.repeat => s.next_configuration(),
                                 KeyCode::KeyR if !event.repeat => match s.renderer.reload_shaders() {
                                     Ok(n) => println!("reloaded {n} pipelines from glsl/"),
                                     // A broken shader is reported; the old pipelines keep running.
@@ -260,6 +291,9 @@ impl ApplicationHandler for App {
                             }
                         }
                     }
+                    if self.cycle_every.is_some_and(|n| n > 0 && s.frames % n == 0) {
+                        s.next_configuration();
+                    }
                     if self.max_frames.is_some_and(|n| s.frames >= n) {
                         el.exit();
                     } else {
@@ -286,9 +320,9 @@ impl ApplicationHandler for App {
 
 /// Runs the window until Esc, the close button, or `max_frames`.
 pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
-    let DemoScript { frames: max_frames, screenshot, resize_at } = script;
+    let DemoScript { frames: max_frames, screenshot, resize_at, cycle_every } = script;
     let event_loop = EventLoop::new().map_err(|e| Error::Usage(format!("cannot connect to a display: {e}")))?;
-    let mut app = App { opts: opts.clone(), max_frames, screenshot, resize_at, state: None, error: None };
+    let mut app = App { opts: opts.clone(), max_frames, screenshot, resize_at, cycle_every, state: None, error: None };
     event_loop.run_app(&mut app).map_err(|e| Error::Usage(format!("event loop: {e}")))?;
     if let Some(e) = app.error.take() {
         return Err(e);

@@ -6,15 +6,17 @@
 //! ([`capture`], [`profile`], [`demo`]).
 
 pub mod backend;
+pub mod bake;
+pub mod bake_scene;
 pub mod capture;
 pub mod chart;
 pub mod demo;
+pub mod environment;
 pub mod error;
-pub mod forward;
+pub mod gpu_scene;
 pub mod graph;
-pub mod heightfield;
 pub mod image_io;
-pub mod methods;
+pub mod lighting;
 pub mod metrics;
 pub mod profile;
 pub mod reference;
@@ -22,7 +24,7 @@ pub mod renderer;
 pub mod scene;
 pub mod sh;
 pub mod shaders;
-pub mod shadow_volumes;
+pub mod timing;
 pub mod world;
 
 pub use error::{Error, Result};

@@ -121,13 +121,20 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
     },
+    /// Run the bakes of the scene's methods and combinations (light-maps, transfer, visibility
+    /// tables) ahead of time into the bake cache (.penumbra-cache/bake, or $PENUMBRA_CACHE/bake),
+    /// and report each one's time and size.
+    Bake {
+        #[command(flatten)]
+        render: RenderArgs,
+    },
     /// Show the chosen device, its driver, and the features and limits penumbra uses.
     Info {
         #[command(flatten)]
         device: DeviceArgs,
     },
     /// Open a window: fly camera (WASD, mouse drag to look, Q/E down/up, Shift faster),
-    /// F12 saves a screenshot, R reloads shaders from glsl/, Esc quits. GPU pass times are shown in the title.
+    /// F12 saves a screenshot, R reloads shaders from glsl/, M switches to the scene's next method or combination, Esc quits. GPU pass times are shown in the title.
     Demo {
         #[command(flatten)]
         render: RenderArgs,
@@ -140,6 +147,10 @@ enum Command {
         /// Scripted resize, for tests: after FRAME frames resize the window to WxH (e.g. 10:320x200).
         #[arg(long, value_name = "FRAME:WxH", value_parser = parse_resize)]
         resize_at: Option<(u64, u32, u32)>,
+        /// Scripted method switching, for tests: the next method or combination every N frames
+        /// (as the M key does).
+        #[arg(long, value_name = "N")]
+        cycle_every: Option<u64>,
     },
     /// Ground truth: path-trace a scene (Monte Carlo, compute shader) and write the mean radiance
     /// EXR plus the per-pixel standard error of that mean as NAME.stderr.exr next to it.
@@ -219,6 +230,15 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 println!("wrote {}", p.display());
             }
         }
+        Command::Bake { render } => {
+            for (config, reports) in penumbra::bake_scene::run(&options(&render))? {
+                if reports.is_empty() {
+                    println!("{config}: nothing to bake");
+                } else {
+                    print!("{config}:\n{}", penumbra::bake::table(&reports));
+                }
+            }
+        }
         Command::Compare { test, reference, diff, exposure, json } => {
             use penumbra::image_io::HdrImage;
             use penumbra::metrics::{colorize, compare_with_map, CompareOptions};
@@ -251,9 +271,9 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 println!("{k:<38} {v}");
             }
         }
-        Command::Demo { render, frames, screenshot, resize_at } => {
+        Command::Demo { render, frames, screenshot, resize_at, cycle_every } => {
             let opts = options(&render);
-            penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at })?;
+            penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
         }
         Command::Reference { scene, spp, size, bounces, direct_only, indirect_only, seed, output, device } => {
             use penumbra::reference::{Batching, LightPaths, ReferenceOptions, Settings};

@@ -14,8 +14,8 @@ mod reference_support;
 use std::path::Path;
 
 use glam::Vec3;
+use penumbra::environment::EnvironmentMap;
 use penumbra::image_io::HdrImage;
-use penumbra::reference::environment::EnvironmentMap;
 use penumbra::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Environment, Scene, CUBE_FACE_KEYS};
@@ -299,7 +299,7 @@ fn terrain_sky_cube_scene_matches_terrain_sky() {
         let mut decl = s.methods[0].clone();
         decl.params.push(("resolution".into(), toml::Value::Integer(64), 0));
         decl.params.push(("bands".into(), toml::Value::Integer(4), 0));
-        let mut h = penumbra::heightfield::standalone::Standalone::new(common::test_gpu(), s, &decl).unwrap();
+        let mut h = penumbra::lighting::heightfield::standalone::Standalone::new(common::test_gpu(), s, &decl).unwrap();
         let img = h.shading(0.0).unwrap();
         hf_common::clean(&h);
         img

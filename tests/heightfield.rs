@@ -8,7 +8,7 @@ mod hf_common;
 
 use glam::Vec3;
 use hf_common::{clean, harness, scene};
-use penumbra::heightfield::standalone::Standalone;
+use penumbra::lighting::heightfield::standalone::Standalone;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{MeshSource, Scene};
 
@@ -347,9 +347,9 @@ fn leak_below_and_guards() {
 /// mirror computes it (the flat-plane test checks that a unit sky is untouched).
 #[test]
 fn hanning_window_damps_the_leak_below() {
-    use penumbra::heightfield::cpu::{shade_horizons, sphere_light};
-    use penumbra::heightfield::wedge::TableKind;
-    use penumbra::heightfield::{Settings, Window};
+    use penumbra::lighting::heightfield::cpu::{shade_horizons, sphere_light};
+    use penumbra::lighting::heightfield::wedge::TableKind;
+    use penumbra::lighting::heightfield::{Settings, Window};
     let a = 10f32.to_radians();
     let (x0, z0) = texel_xz(16, 16, 64, 8.0);
     let (x1, z1) = texel_xz(48, 16, 64, 8.0);
@@ -490,8 +490,8 @@ fn translated_field_moves_with_its_lights() {
 /// invocation), and a march that cannot fit is refused with a clear error there.
 #[test]
 fn long_marches_match_the_cpu_mirror() {
-    use penumbra::heightfield::cpu::{direction, BruteHorizon};
-    use penumbra::heightfield::pyramid::Grid;
+    use penumbra::lighting::heightfield::cpu::{direction, BruteHorizon};
+    use penumbra::lighting::heightfield::pyramid::Grid;
     let field = "size = 8\nresolution = 64\ngenerator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 1.5";
     let s = scene(field, r#"{ name = "heightfield_bruteforce", march_step = 0.03125 }"#, SKY);
     let MeshSource::Heightfield(src) = &s.objects[0].mesh else { unreachable!() };
@@ -565,9 +565,9 @@ fn azimuthal_sampling_of_a_cone() {
 /// in both modes, every 5th texel in all 32 directions of an fBm field.
 #[test]
 fn pyramid_horizons_match_the_cpu_mirror() {
-    use penumbra::heightfield::cpu::{direction, PyramidHorizon};
-    use penumbra::heightfield::pyramid::{build, Grid};
-    use penumbra::heightfield::settings::{Decimation, Mode};
+    use penumbra::lighting::heightfield::cpu::{direction, PyramidHorizon};
+    use penumbra::lighting::heightfield::pyramid::{build, Grid};
+    use penumbra::lighting::heightfield::settings::{Decimation, Mode};
     let field = "size = 8\nresolution = 64\ngenerator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 1.5";
     for (mode, m) in [("corrected", Mode::Corrected), ("faithful", Mode::Faithful)] {
         let s = scene(field, &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#), SKY);

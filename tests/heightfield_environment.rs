@@ -8,10 +8,10 @@ mod hf_common;
 
 use glam::{DVec3, Vec3};
 use hf_common::{clean, harness, scene};
-use penumbra::heightfield::cpu;
-use penumbra::heightfield::standalone::Standalone;
-use penumbra::heightfield::wedge::TableKind;
 use penumbra::image_io::HdrImage;
+use penumbra::lighting::heightfield::cpu;
+use penumbra::lighting::heightfield::standalone::Standalone;
+use penumbra::lighting::heightfield::wedge::TableKind;
 use penumbra::scene::Scene;
 use penumbra::sh;
 
@@ -74,14 +74,15 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
             return [0.0; 3];
         }
         let sun = (-(d - Vec3::new(0.8, 0.3, 0.0).normalize()).length_squared() / 0.08).exp();
-        let base = 1.0 + 0.8 * d.y + 0.9 * d.x - 0.5 * d.z;
+        // Clamped: environments refuse negative radiance.
+        let base = (1.0 + 0.8 * d.y + 0.9 * d.x - 0.5 * d.z).max(0.0);
         [base + 4.0 * sun, 0.6 * base + 2.0 * sun, 0.4 * base]
     });
     let bands = 4usize;
     let method = format!("{{ name = \"heightfield_pyramid\", bands = {bands} }}");
     let s = scene("size = 8\nresolution = 32\ngenerator = \"flat\"\nheight = 0", &method, &image_env(&path));
     let img = shading(&s);
-    let settings = penumbra::heightfield::Settings::from_decl(&s.methods[0], penumbra::heightfield::Horizon::Pyramid).unwrap();
+    let settings = penumbra::lighting::heightfield::Settings::from_decl(&s.methods[0], penumbra::lighting::heightfield::Horizon::Pyramid).unwrap();
     let light = sh::project_equirect(&rgb, w as usize, h as usize, bands).unwrap();
     let cosine = cpu::transfer_cosine(DVec3::Z, bands).unwrap();
     let scale = light[0].max_element() as f64 * sh::Y00;

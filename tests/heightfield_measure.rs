@@ -8,8 +8,8 @@ mod common;
 use std::fmt::Write as _;
 
 use penumbra::backend::Gpu;
-use penumbra::heightfield::measure::{self, brute_cost_at, temporal_stability, Point};
-use penumbra::heightfield::standalone::Standalone;
+use penumbra::lighting::heightfield::measure::{self, brute_cost_at, temporal_stability, Point};
+use penumbra::lighting::heightfield::standalone::Standalone;
 use penumbra::profile::summarise;
 use penumbra::scene::{MethodDecl, Scene};
 

@@ -4,8 +4,8 @@
 mod common;
 
 use glam::Vec3;
-use penumbra::forward::cpu::{shade, Surface};
 use penumbra::image_io::HdrImage;
+use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
 
@@ -143,7 +143,7 @@ intensity = [5.0, 5.0, 5.0]
     );
     let (img, scene) = render(&toml);
     let surface = Surface { albedo: Vec3::splat(0.1), specular: Vec3::splat(0.6), exponent: 64.0, emission: Vec3::ZERO };
-    let light = penumbra::renderer::GpuLight { position: [-0.4, 1.2, -0.6, penumbra::renderer::LIGHT_POINT], direction: [0.0; 4], intensity: [5.0; 4], cone: [0.0; 4] };
+    let light = penumbra::gpu_scene::GpuLight { position: [-0.4, 1.2, -0.6, penumbra::gpu_scene::LIGHT_POINT], direction: [0.0; 4], intensity: [5.0; 4], cone: [0.0; 4] };
     let (mut gpu_best, mut cpu_best) = ((0, 0, 0.0f32), (0, 0, 0.0f32));
     for j in 0..H {
         for i in 0..W {

@@ -9,11 +9,11 @@ mod reference_support;
 use std::path::Path;
 
 use glam::Vec3;
-use penumbra::forward::cpu::{shade, Surface};
+use penumbra::environment::EnvironmentMap;
+use penumbra::gpu_scene::punctual_lights;
 use penumbra::image_io::HdrImage;
-use penumbra::reference::environment::EnvironmentMap;
+use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::reference::{Batching, LightPaths, ReferenceImage, ReferenceOptions, ReferenceRenderer, Settings};
-use penumbra::renderer::punctual_lights;
 use penumbra::scene::Scene;
 use reference_support::{ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance, reflected_environment, rmse, Agreement};
 

@@ -10,11 +10,11 @@ mod common;
 mod sv_common;
 
 use glam::Vec3;
-use penumbra::forward::cpu::Surface;
 use penumbra::image_io::HdrImage;
+use penumbra::lighting::brdf::Surface;
+use penumbra::lighting::shadow_volumes::cpu::physical_light;
 use penumbra::renderer::Renderer;
 use penumbra::scene::{Camera, Scene};
-use penumbra::shadow_volumes::cpu::physical_light;
 use sv_common::{method, render, render_scene};
 
 const SIZE: (u32, u32) = (96, 96);

@@ -9,9 +9,9 @@ mod sv_common;
 
 use glam::{DVec3, Vec3};
 use penumbra::image_io::HdrImage;
+use penumbra::lighting::shadow_volumes::Setup;
 use penumbra::scene::world_mesh::{self, scene_to_world, WorldLevel};
 use penumbra::scene::Scene;
-use penumbra::shadow_volumes::Setup;
 use penumbra::world::level_gen::RoomsParams;
 use sv_common::{compare_masks, lit, method, render_scene};
 
@@ -238,7 +238,7 @@ fn spot_cone_culling_changes_draws_not_pixels() {
     for (lights, params) in [(spots, vec!["mode = \"faithful\""]), (spots, vec!["mode = \"faithful\"", "radius_culling = false"]), (points, vec!["mode = \"faithful\""])] {
         let s = scene(CAMERAS[1], &format!("{WORLD}{crate_obj}{lights}"), &params);
         let plan = Setup::new(&s, &s.methods[0]).unwrap().plan(s.camera.position, 0.0);
-        let count = |f: &dyn Fn(&penumbra::shadow_volumes::LightPlan) -> usize| plan.lights.iter().map(f).sum::<usize>();
+        let count = |f: &dyn Fn(&penumbra::lighting::shadow_volumes::LightPlan) -> usize| plan.lights.iter().map(f).sum::<usize>();
         let d = (count(&|l| l.receiver_faces.len()), count(&|l| l.caster_faces.len()), count(&|l| l.receiver_entities.len()), count(&|l| l.caster_entities.len()));
         println!("{} {params:?}: receivers {}, casters {}, receiving entities {}, casting entities {}", if lights == spots { "spots" } else { "points" }, d.0, d.1, d.2, d.3);
         draws.push(d);

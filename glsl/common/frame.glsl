@@ -1,4 +1,4 @@
-// Per-frame camera data (set 0). Matches `FrameUniforms` in src/forward/mod.rs.
+// Per-frame camera data (set 0). Matches `FrameUniforms` in src/lighting/mod.rs.
 #ifndef PENUMBRA_FRAME_GLSL
 #define PENUMBRA_FRAME_GLSL
 

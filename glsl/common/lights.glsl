@@ -1,5 +1,5 @@
 // Punctual lights in radiometric units and the energy-normalised Lambert + Blinn-Phong BRDF.
-// Matches `GpuLight` in src/forward/mod.rs and the CPU evaluation in src/forward/cpu.rs.
+// Matches `GpuLight` in src/gpu_scene/mod.rs and the CPU evaluation in src/lighting/brdf.rs.
 #ifndef PENUMBRA_LIGHTS_GLSL
 #define PENUMBRA_LIGHTS_GLSL
 

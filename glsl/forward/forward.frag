@@ -4,24 +4,16 @@
 #include "common/frame.glsl"
 #include "common/lights.glsl"
 #include "common/sh.glsl"
+#include "common/scene.glsl"
 
-struct Material {
-    vec4 albedo;        // rgb: diffuse albedo
-    vec4 specular;      // rgb: Blinn-Phong specular colour; w: exponent
-    vec4 emission;      // rgb: emitted radiance
-    uvec4 maps;         // x: has normal map; y: one-sided emitter (no emission from the back)
-};
+// The terms drawn (src/lighting/terms.rs): 1 base (emission + environment), 2 direct (lights).
+layout(constant_id = 0) const uint TERMS = 3u;
 
 layout(set = 0, binding = 1) readonly buffer Lights { Light items[]; } lights;
 layout(set = 0, binding = 2) readonly buffer Materials { Material items[]; } materials;
 layout(set = 0, binding = 3) uniform sampler2D albedo_map;
 layout(set = 0, binding = 4) uniform sampler2D normal_map;
 layout(set = 0, binding = 5) uniform sampler2D specular_map;
-
-layout(push_constant) uniform Draw {
-    mat4 model;
-    uint material;
-} draw;
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
@@ -65,8 +57,11 @@ void main() {
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
     vec3 specular = m.specular.rgb * texture(specular_map, in_uv).rgb;
-    vec3 radiance = emission + albedo / PI * environment_irradiance(n);
-    for (uint i = 0u; i < frame.counts.x; ++i) {
+    vec3 radiance = vec3(0.0);
+    if ((TERMS & 1u) != 0u) {
+        radiance = emission + albedo / PI * environment_irradiance(n);
+    }
+    for (uint i = 0u; (TERMS & 2u) != 0u && i < frame.counts.x; ++i) {
         vec3 l;
         vec3 e;
         light_incidence(lights.items[i], in_world, l, e);

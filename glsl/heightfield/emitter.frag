@@ -1,20 +1,9 @@
 #version 460
 // Emission of the material (one-sided emitters are black from behind), nothing else.
 #include "common/frame.glsl"
-
-struct Material {
-    vec4 albedo;
-    vec4 specular;
-    vec4 emission;
-    uvec4 maps;         // y: one-sided emitter
-};
+#include "common/scene.glsl"
 
 layout(set = 0, binding = 2) readonly buffer Materials { Material items[]; } materials;
-
-layout(push_constant) uniform Draw {
-    mat4 model;
-    uint material;
-} draw;
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;

@@ -1,16 +1,8 @@
 #version 460
 // Area-light emitters (and any other scene object) drawn with their emission only.
 #include "common/frame.glsl"
-
-layout(location = 0) in vec3 in_position;
-layout(location = 1) in vec3 in_normal;
-layout(location = 2) in vec2 in_uv;
-layout(location = 3) in vec4 in_tangent;
-
-layout(push_constant) uniform Draw {
-    mat4 model;
-    uint material;
-} draw;
+#define PENUMBRA_SCENE_VERTEX
+#include "common/scene.glsl"
 
 layout(location = 0) out vec3 out_world;
 layout(location = 1) out vec3 out_normal;

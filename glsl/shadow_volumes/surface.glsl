@@ -1,5 +1,5 @@
 // Shared by the ambient and light passes of the stencil shadow-volume method: the per-draw push
-// constants, the light block and the material record. Matches src/shadow_volumes/mod.rs.
+// constants, the light block and the material record. Matches src/lighting/shadow_volumes/mod.rs.
 #ifndef PENUMBRA_SV_SURFACE_GLSL
 #define PENUMBRA_SV_SURFACE_GLSL
 
@@ -12,16 +12,6 @@ layout(set = 0, binding = 1) uniform PointLightBlock {
     vec4 cone;            // x: cos(inner), y: cos(outer) (spot)
 } light;
 
-struct Material {
-    vec4 albedo;    // rgb: diffuse albedo; w: opacity (1 opaque, < 1 translucent)
-    vec4 specular;  // rgb: specular colour; w: Blinn-Phong exponent (physical mode)
-    vec4 emission;  // rgb: emitted radiance (the seed's luminance term)
-    uvec4 maps;     // x: has a normal map
-};
-
-layout(push_constant) uniform Draw {
-    mat4 model;
-    uint material;
-} draw;
+#include "common/scene.glsl"
 
 #endif

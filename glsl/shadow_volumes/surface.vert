@@ -3,12 +3,8 @@
 // vectors in tangent space (the seed's per-vertex tangent-space vectors; the fragment shader
 // keeps the world-space light vector for attenuation, as Listing 1 does).
 #include "common/frame.glsl"
+#define PENUMBRA_SCENE_VERTEX
 #include "surface.glsl"
-
-layout(location = 0) in vec3 in_position;
-layout(location = 1) in vec3 in_normal;
-layout(location = 2) in vec2 in_uv;
-layout(location = 3) in vec4 in_tangent;
 
 layout(location = 0) out vec3 out_world;
 layout(location = 1) out vec3 out_normal;

@@ -12,14 +12,15 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::backend::{Gpu, GpuDesc};
+use crate::bake::{BakeReport, Baker};
 use crate::error::{Error, Result};
 use crate::image_io::HdrImage;
-use crate::methods::{self, ReferenceKind};
+use crate::lighting::{registry, Configuration, ReferenceKind};
 use crate::metrics::{self, CompareOptions, Metrics};
-use crate::profile::summarise;
 use crate::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
 use crate::renderer::{FrameOutput, Renderer};
-use crate::scene::{MethodDecl, Scene};
+use crate::scene::Scene;
+use crate::timing::summarise;
 
 #[derive(Clone, Debug)]
 pub struct ChartOptions {
@@ -48,6 +49,10 @@ pub struct ChartRow {
     pub metrics: Metrics,
     /// The reference it was measured against (e.g. `direct, 256 spp`).
     pub reference: String,
+    /// Wall time of the configuration's bakes when it was created (from the cache when
+    /// already baked), and their size.
+    pub bake_ms: f64,
+    pub bake_bytes: u64,
 }
 
 pub struct Chart {
@@ -108,14 +113,13 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, spp
     Ok((image.mean, label))
 }
 
-/// One configuration's image, median frame time (ms), per-pass medians and device name.
-type Measured = (HdrImage, f64, Vec<(String, f64)>, String);
+/// One configuration's image, median frame time (ms), per-pass medians, device name and bakes.
+type Measured = (HdrImage, f64, Vec<(String, f64)>, String, Vec<BakeReport>);
 
 /// Renders and times one configuration.
-fn measure(scene: &Scene, decl: &MethodDecl, opts: &ChartOptions) -> Result<Measured> {
-    let mut scene = scene.clone();
-    scene.methods = vec![decl.clone()];
-    let mut renderer = Renderer::new(Gpu::new(&opts.gpu)?, scene, None, opts.size, 1)?;
+fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
+    let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
+    let mut renderer = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
     let image = renderer.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
@@ -123,29 +127,29 @@ fn measure(scene: &Scene, decl: &MethodDecl, opts: &ChartOptions) -> Result<Meas
     let stats = summarise(&timings);
     let frame_ms = stats.iter().find(|s| s.name == "frame").map(|s| s.median_ms).unwrap_or(f64::NAN);
     let passes = stats.into_iter().filter(|s| s.name != "frame").map(|s| (s.name, s.median_ms)).collect();
-    Ok((image, frame_ms, passes, device))
+    Ok((image, frame_ms, passes, device, renderer.bakes.clone()))
 }
 
 pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let scene = Scene::from_file(&opts.scene)?;
-    scene.check_methods(&methods::schemas())?;
     let mut rows = Vec::new();
     let mut references: BTreeMap<String, (HdrImage, String)> = BTreeMap::new();
     let mut device = String::new();
-    for decl in &scene.methods {
-        let info = methods::info(&decl.name)?;
-        let kind = info.reference;
+    for configuration in registry::configurations(&scene)? {
+        let kind = registry::reference_kind(&configuration)?;
         let key = format!("{kind:?}");
         if !references.contains_key(&key) {
             references.insert(key.clone(), reference_image(&scene, opts.size, kind, opts.reference_spp, &opts.cache_dir, &opts.gpu)?);
         }
         let (reference, reference_label) = &references[&key];
-        for (config, config_decl) in (info.sweep)(decl) {
+        for (config, point) in registry::sweep(&configuration)? {
             eprintln!("chart: {config}");
-            let (image, frame_ms, passes, dev) = measure(&scene, &config_decl, opts)?;
+            let (image, frame_ms, passes, dev, bakes) = measure(&scene, &point, opts)?;
             device = dev;
             let metrics = metrics::compare(&image, reference, &CompareOptions::default())?;
-            rows.push(ChartRow { method: decl.name.clone(), config, frame_ms, passes, metrics, reference: reference_label.clone() });
+            let bake_ms = bakes.iter().map(|b| b.ms).sum();
+            let bake_bytes = bakes.iter().map(|b| b.bytes).sum();
+            rows.push(ChartRow { method: configuration.name.clone(), config, frame_ms, passes, metrics, reference: reference_label.clone(), bake_ms, bake_bytes });
         }
     }
     let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, rows };
@@ -195,7 +199,7 @@ impl Chart {
                 }
             }
         }
-        let mut s = String::from("method,config,device,width,height,reference,frame_ms");
+        let mut s = String::from("method,config,device,width,height,reference,frame_ms,bake_ms,bake_bytes");
         for p in &pass_names {
             let _ = write!(s, ",pass:{}_ms", p.replace(',', ";"));
         }
@@ -204,7 +208,19 @@ impl Chart {
         }
         s.push('\n');
         for r in &self.rows {
-            let _ = write!(s, "{},{},{},{},{},{},{}", r.method, r.config.replace(',', ";"), self.device.replace(',', ";"), self.size.0, self.size.1, r.reference.replace(',', ";"), r.frame_ms);
+            let _ = write!(
+                s,
+                "{},{},{},{},{},{},{},{},{}",
+                r.method,
+                r.config.replace(',', ";"),
+                self.device.replace(',', ";"),
+                self.size.0,
+                self.size.1,
+                r.reference.replace(',', ";"),
+                r.frame_ms,
+                r.bake_ms,
+                r.bake_bytes
+            );
             for p in &pass_names {
                 match r.passes.iter().find(|(n, _)| n == p) {
                     Some((_, ms)) => {
@@ -312,7 +328,16 @@ mod tests {
     #[test]
     fn csv_round_trips_and_pareto_front_is_monotone() {
         let m = |e: f64| Metrics { rmse: e, rel_mse: e, mean_bias: 0.0, p99_abs_error: e, max_abs_error: e, flip_mean: e, pixels: 4 };
-        let row = |c: &str, ms: f64, e: f64| ChartRow { method: "m".into(), config: c.into(), frame_ms: ms, passes: vec![("p".into(), ms * 0.5)], metrics: m(e), reference: "direct, 4 spp".into() };
+        let row = |c: &str, ms: f64, e: f64| ChartRow {
+            method: "m".into(),
+            config: c.into(),
+            frame_ms: ms,
+            bake_ms: 0.0,
+            bake_bytes: 0,
+            passes: vec![("p".into(), ms * 0.5)],
+            metrics: m(e),
+            reference: "direct, 4 spp".into(),
+        };
         let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)] };
         assert_eq!(chart.pareto_front(), vec![0, 2]);
         let parsed = parse_csv(&chart.csv()).unwrap();

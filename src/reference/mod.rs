@@ -42,7 +42,7 @@
 //! small until enough of them have been drawn.
 
 pub mod bvh;
-pub mod environment;
+
 mod scene_data;
 
 use std::io::IsTerminal;

@@ -13,10 +13,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
 use super::bvh::{Bvh, BvhNode};
-use super::environment::EnvironmentMap;
 use crate::backend::{vk, BufferId, Gpu};
+use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
-use crate::renderer::{punctual_lights, GpuLight};
+use crate::gpu_scene::{punctual_lights, GpuLight};
 use crate::scene::{Environment, Light, Scene};
 
 /// Light types beyond the punctual ones of `glsl/common/lights.glsl` (stored in `position.w`).

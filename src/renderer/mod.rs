@@ -1,46 +1,25 @@
-//! Frame assembly: the scene on the GPU, the frame targets, the lighting method the scene asked
-//! for, and the passes around it (readback for captures, tone mapping for the window).
+//! Frame assembly: the scene on the GPU, the frame targets, the configuration's lighting methods
+//! and the passes around them. Every frame the renderer clears the targets to the sky (to black
+//! when no method supplies a base term, and then draws the scene's depth itself), lets the base
+//! term draw over it, adds the direct and indirect terms, then what the output needs (readback for captures,
+//! tone mapping for the window). One clock ([`FrameClock`]) drives every method's animation.
 
-pub mod environment;
-mod scene_gpu;
+mod frame_passes;
 
-use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
 use crate::backend::{
     vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PassTiming, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SubresourceRange,
 };
+use crate::bake::{BakeReport, Baker};
+use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
+use crate::gpu_scene::SceneGpu;
 use crate::graph::{Access, ExecutionReport, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
-use crate::methods::{self, FrameInputs, FrameTargets, LightingMethod};
+use crate::lighting::{registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod, Term, Terms, RADIANCE_FORMAT};
 use crate::scene::{Camera, Scene};
 use crate::shaders::ShaderLibrary;
-pub use scene_gpu::{punctual_lights, raster_lights, DrawItem, GpuLight, GpuMaterial, MaterialMaps, SceneGpu, Vertex, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_QUAD_FAR, LIGHT_SPOT};
-
-/// Linear radiance: 32-bit float so captures read back exactly what the shaders computed.
-pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-
-/// Matches `FrameUniforms` in glsl/common/frame.glsl.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct FrameUniforms {
-    pub view_proj: [f32; 16],
-    pub camera_pos: [f32; 4],
-    pub ambient: [f32; 4],
-    pub counts: [u32; 4],
-    /// Environment irradiance, 3-band SH (see `environment::EnvironmentLighting`).
-    pub env_irradiance: [[f32; 4]; 9],
-}
-
-/// Push constants of raster draws (`Draw` in glsl/forward/forward.vert); 68 bytes are pushed.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct DrawPush {
-    pub model: [f32; 16],
-    pub material: u32,
-    pub _pad: [u32; 3],
-}
 
 /// Where a frame goes besides the radiance target.
 pub enum FrameOutput {
@@ -64,35 +43,98 @@ pub struct Renderer {
     pub shaders: ShaderLibrary,
     pub scene: Scene,
     pub scene_gpu: SceneGpu,
-    pub method: Box<dyn LightingMethod>,
+    /// The scene's environment as loaded (once) for every consumer.
+    pub environment: EnvironmentMap,
+    /// What frames are drawn with, and its methods in frame order (one per part).
+    pub configuration: Configuration,
+    methods: Vec<Box<dyn LightingMethod>>,
+    /// The bakes the methods ran (or read from the cache) when they were created.
+    pub bakes: Vec<BakeReport>,
     pub states: ResourceStates,
     pub targets: FrameTargets,
     frames: Vec<Frame>,
     frame_index: usize,
+    /// Frames rendered with the current configuration (the clock).
+    clock_frame: u64,
+    passes: frame_passes::FramePasses,
     readback: Option<BufferId>,
     present_readback: Option<BufferId>,
     tonemap: Option<(PipelineId, vk::Format)>,
 }
 
 impl Renderer {
-    /// Uploads the scene and creates the method (`method`: one of the scene's, default its first).
-    pub fn new(mut gpu: Gpu, scene: Scene, method: Option<&str>, size: (u32, u32), frames_in_flight: usize) -> Result<Renderer> {
-        scene.check_methods(&methods::schemas())?;
-        let decl = match method {
-            Some(m) => scene.methods.iter().find(|d| d.name == m).ok_or_else(|| {
-                let names: Vec<&str> = scene.methods.iter().map(|d| d.name.as_str()).collect();
-                Error::Usage(format!("{}: method `{m}` is not enabled by the scene (it enables: {})", scene.source, names.join(", ")))
-            })?,
-            None => scene.methods.first().ok_or_else(|| Error::Usage(format!("{}: the scene enables no method", scene.source)))?,
-        }
-        .clone();
+    /// Uploads the scene and creates the configuration called `name` (a method or a
+    /// combination; default the scene's first method). Bakes are cached in
+    /// [`Baker::default_dir`].
+    pub fn new(gpu: Gpu, scene: Scene, name: Option<&str>, size: (u32, u32), frames_in_flight: usize) -> Result<Renderer> {
+        let configuration = registry::configuration(&scene, name)?;
+        Renderer::with_configuration(gpu, scene, configuration, size, frames_in_flight, Baker::new(Some(Baker::default_dir())))
+    }
+
+    /// Uploads the scene and creates `configuration`'s methods, baking through `bakes`.
+    pub fn with_configuration(mut gpu: Gpu, scene: Scene, configuration: Configuration, size: (u32, u32), frames_in_flight: usize, mut bakes: Baker) -> Result<Renderer> {
+        scene.check_methods(&registry::schemas())?;
         let shaders = ShaderLibrary::Embedded;
         let mut states = ResourceStates::default();
-        let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, &scene)?;
-        let method = methods::create(&decl, &mut gpu, &shaders, &mut states, &scene)?;
+        let environment = EnvironmentMap::of_scene(&scene)?;
+        let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, &scene, &environment)?;
+        let methods = {
+            let mut ctx =
+                CreateContext { gpu: &mut gpu, shaders: &shaders, states: &mut states, scene: &scene, scene_gpu: &scene_gpu, environment: &environment, bakes: &mut bakes, terms: Terms::NONE };
+            registry::create(&configuration, &mut ctx)?
+        };
+        let passes = frame_passes::FramePasses::new(&mut gpu, &shaders)?;
         let targets = create_targets(&mut gpu, size)?;
         let frames = (0..frames_in_flight.max(1)).map(|_| gpu.create_frame()).collect::<std::result::Result<Vec<_>, _>>()?;
-        Ok(Renderer { gpu, shaders, scene, scene_gpu, method, states, targets, frames, frame_index: 0, readback: None, present_readback: None, tonemap: None })
+        Ok(Renderer {
+            gpu,
+            shaders,
+            scene,
+            scene_gpu,
+            environment,
+            configuration,
+            methods,
+            bakes: bakes.take_reports(),
+            states,
+            targets,
+            frames,
+            frame_index: 0,
+            clock_frame: 0,
+            passes,
+            readback: None,
+            present_readback: None,
+            tonemap: None,
+        })
+    }
+
+    /// Switches to another of the scene's configurations (the demo's method key): the new
+    /// methods are created and the clock restarts.
+    pub fn set_configuration(&mut self, configuration: Configuration) -> Result<()> {
+        self.gpu.wait_idle()?;
+        let mut bakes = Baker::new(Some(Baker::default_dir()));
+        let methods = {
+            let mut ctx = CreateContext {
+                gpu: &mut self.gpu,
+                shaders: &self.shaders,
+                states: &mut self.states,
+                scene: &self.scene,
+                scene_gpu: &self.scene_gpu,
+                environment: &self.environment,
+                bakes: &mut bakes,
+                terms: Terms::NONE,
+            };
+            registry::create(&configuration, &mut ctx)?
+        };
+        self.methods = methods;
+        self.configuration = configuration;
+        self.bakes = bakes.take_reports();
+        self.clock_frame = 0;
+        Ok(())
+    }
+
+    /// The names of the configuration's methods, in frame order.
+    pub fn method_names(&self) -> Vec<&'static str> {
+        self.methods.iter().map(|m| m.name()).collect()
     }
 
     /// Recreates the size-dependent targets.
@@ -161,10 +203,26 @@ impl Renderer {
         let frame = self.frames[self.frame_index % self.frames.len()];
         self.frame_index += 1;
 
+        let clock = FrameClock::at(self.clock_frame);
+        self.clock_frame += 1;
+        let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
+        let has_base = terms.iter().any(|t| t.has(Term::Base));
+        for (method, &terms) in self.methods.iter_mut().zip(&terms) {
+            let ctx = FrameContext { gpu: &self.gpu, scene: &self.scene_gpu, targets: self.targets, uniforms, clock, terms };
+            method.prepare(&ctx)?;
+        }
         let gpu = &self.gpu;
-        let inputs = FrameInputs { gpu, scene: &self.scene_gpu, targets: self.targets, uniforms };
         let mut graph = RenderGraph::new();
-        self.method.add_passes(&mut graph, &inputs)?;
+        // The background: targets cleared and, under a base term, the sky everywhere (the base
+        // then draws over it, so the sky stays where no geometry is).
+        self.passes.add_background(&mut graph, &self.scene_gpu, self.targets, &uniforms, has_base);
+        if !has_base {
+            self.passes.add_depth(&mut graph, &self.scene_gpu, self.targets, &uniforms);
+        }
+        for (method, &terms) in self.methods.iter().zip(&terms) {
+            let ctx = FrameContext { gpu, scene: &self.scene_gpu, targets: self.targets, uniforms, clock, terms };
+            method.add_passes(&mut graph, &ctx)?;
+        }
         let t = self.targets;
         match &output {
             FrameOutput::None => graph.output_image(t.radiance),

@@ -19,7 +19,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     let ctx = Ctx { file: source, text, base_dir };
     let root = ctx.parse()?;
     let top = Table::new(&ctx, String::new(), &root, None)?;
-    top.allow(&["camera", "materials", "objects", "lights", "environment", "methods"])?;
+    top.allow(&["camera", "materials", "objects", "lights", "environment", "methods", "combinations"])?;
 
     let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
     let mut materials: Vec<Material> = Vec::new();
@@ -45,7 +45,11 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     if methods.is_empty() {
         methods.push(MethodDecl::implicit_forward());
     }
-    Ok(Scene { source: source.to_owned(), camera, materials, objects, lights, environment, methods })
+    let combinations = match top.get("combinations") {
+        Some(f) => methods::read_combinations(&f)?,
+        None => Vec::new(),
+    };
+    Ok(Scene { source: source.to_owned(), camera, materials, objects, lights, environment, methods, combinations })
 }
 
 /// Elements of an optional array field (absent = empty).

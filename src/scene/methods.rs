@@ -28,6 +28,16 @@ impl MethodDecl {
     }
 }
 
+/// A `[[combinations]]` entry: a named frame whose terms come from the scene's methods.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CombinationDecl {
+    pub name: String,
+    /// 1-based line of the name.
+    pub line: usize,
+    /// (term key: "base", "direct" or "indirect"; method name; 1-based line), in frame order.
+    pub terms: Vec<(&'static str, String, usize)>,
+}
+
 /// What a renderer's method accepts: its name and parameters (all optional; the method supplies
 /// defaults).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -191,4 +201,24 @@ fn method_name(f: &Field) -> Result<String, SceneError> {
         return Err(f.err("expected a method name, got an empty string"));
     }
     Ok(s.to_owned())
+}
+
+/// Reads the top-level `combinations` array of tables: `name` and any of `base`, `direct`,
+/// `indirect`, each the name of one of the scene's methods.
+pub(crate) fn read_combinations(field: &Field) -> Result<Vec<CombinationDecl>, SceneError> {
+    let mut out = Vec::new();
+    for item in field.array()? {
+        let t = item.table()?;
+        t.allow(&["name", "base", "direct", "indirect"])?;
+        let name_field = t.require("name", "the combination's name")?;
+        let name = method_name(&name_field)?;
+        let mut terms = Vec::new();
+        for key in ["base", "direct", "indirect"] {
+            if let Some(f) = t.get(key) {
+                terms.push((key, method_name(&f)?, f.line.unwrap_or(0)));
+            }
+        }
+        out.push(CombinationDecl { name, line: name_field.line.unwrap_or(0), terms });
+    }
+    Ok(out)
 }

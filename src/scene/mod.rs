@@ -33,7 +33,7 @@ pub use cornell::{builtin_material, BUILTIN_MATERIALS};
 pub use error::SceneError;
 pub use heightfield::{HeightImage, HeightShape, HeightfieldSource};
 pub use mesh::Mesh;
-pub use methods::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+pub use methods::{CombinationDecl, MethodDecl, MethodSchema, ParamKind, ParamSchema};
 pub use obj::load_obj;
 pub use types::{Animation, Camera, CubeFaces, Environment, Light, Material, MeshSource, Object, CUBE_FACE_KEYS};
 
@@ -59,6 +59,9 @@ pub struct Scene {
     pub environment: Option<Environment>,
     /// Requested lighting methods in file order; `[forward]` (line 0) when the file names none.
     pub methods: Vec<MethodDecl>,
+    /// Combinations of the methods' terms (`[[combinations]]`), in file order; checked against
+    /// what each method supplies by the lighting layer.
+    pub combinations: Vec<CombinationDecl>,
 }
 
 impl Scene {

@@ -286,11 +286,15 @@ fn truncated_and_mangled_input_never_panics() {
 fn readme_examples_parse() {
     let readme = std::fs::read_to_string(scenes_dir().join("README.md")).unwrap();
     let blocks: Vec<&str> = readme.split("```toml\n").skip(1).filter_map(|b| b.split("```").next()).collect();
-    assert_eq!(blocks.len(), 3);
+    assert_eq!(blocks.len(), 4);
     let dir = temp_dir("readme");
     std::fs::create_dir_all(dir.join("meshes")).unwrap();
     std::fs::write(dir.join("meshes/spot.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-    let example = Scene::from_str(blocks[2], "README.md", &dir).unwrap();
+    let example = Scene::from_str(blocks[3], "README.md", &dir).unwrap();
+    let combo = parse(&format!("{}\n{CAM}", blocks[2])).unwrap();
+    let c = &combo.combinations[0];
+    let terms: Vec<(&str, &str)> = c.terms.iter().map(|(k, m, _)| (*k, m.as_str())).collect();
+    assert_eq!((c.name.as_str(), terms), ("shadowed_over_forward", vec![("base", "forward"), ("direct", "shadow_volumes")]));
     assert_eq!((example.objects.len(), example.lights.len()), (2, 1));
     for methods in &blocks[..2] {
         let s = parse(&format!("{methods}\n{CAM}")).unwrap();

@@ -2,7 +2,7 @@
 //! its validation check.
 #![allow(dead_code)]
 
-use penumbra::heightfield::standalone::Standalone;
+use penumbra::lighting::heightfield::standalone::Standalone;
 use penumbra::scene::Scene;
 
 /// A scene with one height field (`field`: the keys after `mesh = "heightfield"`), the method

@@ -3,9 +3,9 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use penumbra::forward::cpu::Surface;
+use penumbra::environment::EnvironmentMap;
 use penumbra::image_io::HdrImage;
-use penumbra::reference::environment::EnvironmentMap;
+use penumbra::lighting::brdf::Surface;
 use penumbra::reference::ReferenceImage;
 use penumbra::scene::Scene;
 
@@ -106,7 +106,7 @@ pub fn hemispherical_reflectance(v: Vec3, s: &Surface) -> Vec3 {
         for b in 0..np {
             let phi = (b as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
             let l = Vec3::new(sin_t * phi.cos(), cos_t, sin_t * phi.sin());
-            sum += penumbra::forward::cpu::brdf_times_cos(Vec3::Y, v, l, s).as_dvec3();
+            sum += penumbra::lighting::brdf::brdf_times_cos(Vec3::Y, v, l, s).as_dvec3();
         }
     }
     (sum * (std::f64::consts::TAU / (nc * np) as f64)).as_vec3()
@@ -175,7 +175,7 @@ pub fn reflected_environment(map: &EnvironmentMap, v: Vec3, s: &Surface) -> Vec3
                     let uv = glam::Vec2::new((i as f32 + (b as f32 + 0.5) / n as f32) / w as f32, (j as f32 + (a as f32 + 0.5) / n as f32) / h as f32);
                     let d_omega = 2.0 * std::f64::consts::PI.powi(2) * (uv.y as f64 * std::f64::consts::PI).sin();
                     let l = penumbra::scene::Environment::equirect_dir(uv);
-                    texel += penumbra::forward::cpu::brdf_times_cos(Vec3::Y, v, l, s).as_dvec3() * d_omega;
+                    texel += penumbra::lighting::brdf::brdf_times_cos(Vec3::Y, v, l, s).as_dvec3() * d_omega;
                 }
             }
             sum += texel * glam::DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64) / (n * n * w * h) as f64;

@@ -1,4 +1,9 @@
-//! Image environments for the path tracer: an equirectangular radiance map taken as piecewise
+//! The scene's environment, loaded once and checked, for every consumer: the raster methods'
+//! sky and irradiance ([`raster`]), the height-field methods' SH projection ([`EnvironmentMap::reduced`])
+//! and the path tracer. Every texel is checked on the way in: a NaN, an infinity or a negative
+//! radiance is one error line naming the file and the pixel, never a silently wrong image.
+//!
+//! For the path tracer, an equirectangular radiance map taken as piecewise
 //! constant over its texels (nearest lookup), and the 2D distribution `glsl/reference/pathtrace.comp`
 //! samples it with, proportional to luminance × sin θ so that directions are drawn in proportion
 //! to the power arriving from them.
@@ -18,7 +23,9 @@ use glam::Vec3;
 
 use crate::backend::BackendError;
 use crate::error::{Error, Result};
-use crate::scene::{CubeFaces, Environment, CUBE_FACE_KEYS};
+use crate::scene::{CubeFaces, Environment, Scene, CUBE_FACE_KEYS};
+
+pub mod raster;
 
 /// Texel data must fit a storage buffer of the range every Vulkan device supports (2^27 bytes).
 const MAX_TEXELS: usize = (1 << 27) / 16;
@@ -68,6 +75,16 @@ impl EnvironmentMap {
                 path.display()
             ))));
         }
+        if let Some((i, p)) = img.pixels().enumerate().find(|(_, p)| p.0[..3].iter().any(|c| !c.is_finite() || *c < 0.0)) {
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            return Err(Error::Usage(format!(
+                "{source}: environment.path: {}: pixel ({x}, {y}) is ({}, {}, {}); radiance must be finite and not negative (fix or clamp the image)",
+                path.display(),
+                p[0],
+                p[1],
+                p[2]
+            )));
+        }
         let texels = img.pixels().map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 0.0]).collect();
         Ok(EnvironmentMap::from_texels(width, height, texels))
     }
@@ -82,6 +99,40 @@ impl EnvironmentMap {
             ))));
         }
         Ok(EnvironmentMap::from_cube(c.size, c.texels))
+    }
+
+    /// The scene's environment: its map, a 1×1 map of a constant, or one black texel.
+    pub fn of_scene(scene: &Scene) -> Result<EnvironmentMap> {
+        Ok(match &scene.environment {
+            Some(Environment::Image { path, scale }) => EnvironmentMap::load(path, *scale, &scene.source)?,
+            Some(Environment::Cube { faces, scale }) => EnvironmentMap::load_cube(faces, *scale, &scene.source)?,
+            Some(Environment::Constant { radiance }) => EnvironmentMap::from_texels(1, 1, vec![radiance.extend(0.0).into()]),
+            None => EnvironmentMap::from_texels(1, 1, vec![[0.0; 4]]),
+        })
+    }
+
+    /// The map box-filtered so that an equirect map is at most `max_width` wide and a cube face
+    /// at most `max_width / 4` a side (about the same texel count), as (width or face size,
+    /// texels). An SH projection needs no more.
+    pub fn reduced(&self, max_width: u32) -> (u32, Vec<[f32; 4]>) {
+        if self.cube {
+            let n = self.width;
+            let f = n.div_ceil((max_width / 4).max(1)).max(1);
+            let m = (n / f).max(1);
+            let mut out = vec![[0.0f32; 4]; (6 * m * m) as usize];
+            for face in 0..6 {
+                let src = &self.texels[(face * n * n) as usize..((face + 1) * n * n) as usize];
+                box_filter(src, n, n, f, m, m, &mut out[(face * m * m) as usize..((face + 1) * m * m) as usize]);
+            }
+            (m, out)
+        } else {
+            let (w, h) = (self.width, self.height);
+            let f = w.div_ceil(max_width.max(1)).max(1);
+            let (nw, nh) = ((w / f).max(1), (h / f).max(1));
+            let mut out = vec![[0.0f32; 4]; (nw * nh) as usize];
+            box_filter(&self.texels, w, h, f, nw, nh, &mut out);
+            (nw, out)
+        }
     }
 
     pub fn from_texels(width: u32, height: u32, texels: Vec<[f32; 4]>) -> EnvironmentMap {
@@ -149,6 +200,24 @@ impl EnvironmentMap {
     }
 }
 
+/// Averages `f`×`f` blocks of a `w`×`h` image into the `nw`×`nh` `out` (edges clamped).
+fn box_filter(src: &[[f32; 4]], w: u32, h: u32, f: u32, nw: u32, nh: u32, out: &mut [[f32; 4]]) {
+    for y in 0..nh {
+        for x in 0..nw {
+            let mut acc = [0.0f32; 4];
+            for sy in 0..f {
+                for sx in 0..f {
+                    let p = src[(((y * f + sy).min(h - 1)) * w + (x * f + sx).min(w - 1)) as usize];
+                    for c in 0..3 {
+                        acc[c] += p[c] / (f * f) as f32;
+                    }
+                }
+            }
+            out[(y * nw + x) as usize] = acc;
+        }
+    }
+}
+
 /// [`CubeFaces::load`] with its error as the renderer reports it: the scene file and the face's key.
 pub fn load_cube_faces(faces: &[std::path::PathBuf; 6], scale: f32, source: &str) -> Result<CubeFaces> {
     CubeFaces::load(faces, scale).map_err(|(k, msg)| Error::Usage(format!("{source}: environment.{}: {msg}", CUBE_FACE_KEYS[k])))
@@ -166,6 +235,19 @@ mod tests {
             [v, 0.5 * v, 0.1, 0.0]
         });
         EnvironmentMap::from_texels(w as u32, h as u32, texels.collect())
+    }
+
+    /// The scene's cube layout (`Environment::cube_dir`) and the SH core's texel directions agree
+    /// (the SH core cannot use the scene module: it sits below it).
+    #[test]
+    fn cube_texel_directions_match_the_sh_core() {
+        for face in 0..6 {
+            let n = 8;
+            for (x, y) in [(0, 0), (3, 6), (7, 7)] {
+                let (s, t) = (2.0 * (x as f32 + 0.5) / n as f32 - 1.0, 2.0 * (y as f32 + 0.5) / n as f32 - 1.0);
+                assert_eq!(Environment::cube_dir(face, s, t), crate::sh::cube_texel_dir_world(face, x, y, n));
+            }
+        }
     }
 
     #[test]

@@ -47,7 +47,7 @@ pub struct PointLight {
     pub spot: Option<Spot>,
 }
 
-/// A spot light's cone: its contribution is scaled by `forward::cpu::spot_falloff` (the
+/// A spot light's cone: its contribution is scaled by `brdf::spot_falloff` (the
 /// forward method's), and its shadow volumes are those of a point light at its position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Spot {

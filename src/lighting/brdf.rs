@@ -1,9 +1,10 @@
-//! The forward method's shading on the CPU, mirroring glsl/common/lights.glsl: used by the
+//! The shared BRDF and punctual-light shading on the CPU, mirroring glsl/common/lights.glsl (the
+//! forward method computes exactly this on the GPU): used by the
 //! known-answer tests and as the analytic check of what the GPU computed.
 
 use glam::Vec3;
 
-use crate::renderer::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_QUAD_FAR, LIGHT_SPOT};
+use crate::gpu_scene::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_QUAD_FAR, LIGHT_SPOT};
 
 /// Surface reflectance as the shaders see it.
 #[derive(Clone, Copy, Debug)]
@@ -71,7 +72,7 @@ pub fn shade(p: Vec3, n: Vec3, eye: Vec3, s: &Surface, lights: &[GpuLight], ambi
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::renderer::LIGHT_POINT;
+    use crate::gpu_scene::LIGHT_POINT;
 
     #[test]
     fn lambert_under_directional_light() {

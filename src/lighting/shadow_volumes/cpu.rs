@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::plan::Spot;
-use crate::forward::cpu::{brdf_times_cos, spot_falloff, Surface};
+use crate::lighting::brdf::{brdf_times_cos, spot_falloff, Surface};
 
 /// The factor a light's cone puts on its contribution at `p`: 1 for a point light (`None`),
 /// else the forward method's `spot_falloff` of the angle from the axis — the same in both

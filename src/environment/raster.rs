@@ -6,10 +6,10 @@
 
 use glam::Vec3;
 
+use super::EnvironmentMap;
 use crate::backend::{vk, Gpu, ImageDesc, ImageId};
 use crate::error::{Error, Result};
 use crate::graph::{Access, ResourceStates};
-use crate::reference::environment::EnvironmentMap;
 use crate::scene::{Environment, Scene};
 
 pub struct EnvironmentLighting {
@@ -20,16 +20,6 @@ pub struct EnvironmentLighting {
     pub map: ImageId,
     /// `map` is a stacked cube map.
     pub cube: bool,
-}
-
-/// The environment as texels: a map, a 1×1 constant, or black.
-fn texels(scene: &Scene) -> Result<EnvironmentMap> {
-    Ok(match &scene.environment {
-        Some(Environment::Image { path, scale }) => EnvironmentMap::load(path, *scale, &scene.source)?,
-        Some(Environment::Cube { faces, scale }) => EnvironmentMap::load_cube(faces, *scale, &scene.source)?,
-        Some(Environment::Constant { radiance }) => EnvironmentMap::from_texels(1, 1, vec![radiance.extend(0.0).into()]),
-        None => EnvironmentMap::from_texels(1, 1, vec![[0.0; 4]]),
-    })
 }
 
 /// Irradiance SH of a uniform sky of radiance `l`.
@@ -62,12 +52,12 @@ pub fn irradiance_sh(map: &EnvironmentMap) -> Result<[[f32; 4]; 9]> {
 }
 
 impl EnvironmentLighting {
-    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene) -> Result<EnvironmentLighting> {
-        let map = texels(scene)?;
+    /// Uploads `map`, the scene's environment as [`EnvironmentMap::of_scene`] loaded it.
+    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene, map: &EnvironmentMap) -> Result<EnvironmentLighting> {
         let irradiance_sh = match &scene.environment {
             // Exact: a constant is band 0 alone (∫Y00 = √(4π)), and one texel is no quadrature.
             Some(Environment::Constant { radiance }) => constant_irradiance_sh(*radiance)?,
-            Some(Environment::Image { .. } | Environment::Cube { .. }) => irradiance_sh(&map)?,
+            Some(Environment::Image { .. } | Environment::Cube { .. }) => irradiance_sh(map)?,
             None => [[0.0; 4]; 9],
         };
         let image =

@@ -36,16 +36,12 @@ pub mod settings;
 pub mod standalone;
 pub mod wedge;
 
-use std::cell::Cell;
-
-use crate::backend::{vk, Bind, ColorTarget, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::backend::{vk, Bind, ColorTarget, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
 use crate::error::Result;
-use crate::forward::vertex_layout;
-use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::methods::{FrameInputs, LightingMethod};
-use crate::renderer::{DrawPush, RADIANCE_FORMAT};
-use crate::scene::{MethodDecl, MethodSchema, Scene};
-use crate::shaders::ShaderLibrary;
+use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, RADIANCE_FORMAT};
+use crate::scene::{MethodDecl, MethodSchema};
 pub use gpu::{FieldInputs, HeightfieldGpu, SphereLight};
 pub use settings::{Decimation, Horizon, Mode, Settings, Window};
 
@@ -124,20 +120,21 @@ pub struct HeightfieldMethod {
     pub core: HeightfieldGpu,
     terrain: PipelineId,
     emitter: PipelineId,
-    /// Frames rendered so far; the animation time is frame × time_step (frame 0 is time 0, the
+    /// This frame's animation time: the renderer's frame × time_step (frame 0 is time 0, the
     /// shape the reference traces).
-    frame: Cell<u64>,
+    time: f32,
     /// Scene draws other than the height field (drawn with their emission only).
     others: Vec<usize>,
 }
 
 impl HeightfieldMethod {
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, scene: &Scene, decl: &MethodDecl) -> Result<Self> {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Self> {
+        let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         let (name, horizon) = if decl.name == BRUTE_FORCE { (BRUTE_FORCE, Horizon::BruteForce) } else { (PYRAMID, Horizon::Pyramid) };
         let settings = Settings::from_decl(decl, horizon)?;
-        let inputs = FieldInputs::from_scene(scene, name)?;
+        let inputs = FieldInputs::from_scene(cx.scene, cx.environment, name)?;
         let object = inputs.object;
-        let core = HeightfieldGpu::new(gpu, shaders, states, settings, inputs)?;
+        let core = HeightfieldGpu::new(gpu, shaders, cx.states, cx.bakes, settings, inputs)?;
         let mut desc = GraphicsPipelineDesc::new("hf terrain", "heightfield/terrain.vert", Some("heightfield/terrain.frag"));
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
@@ -149,15 +146,8 @@ impl HeightfieldMethod {
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(gpu.caps().depth_stencil_format);
         let emitter = gpu.create_graphics_pipeline(&desc, shaders)?;
-        // SceneGpu draws every object in order, then the area-light emitters.
-        let total = scene.objects.len() + scene.lights.iter().filter(|l| matches!(l, crate::scene::Light::Sphere { .. } | crate::scene::Light::Quad { .. })).count();
-        let others = (0..total).filter(|&i| i != object).collect();
-        Ok(HeightfieldMethod { name, core, terrain, emitter, frame: Cell::new(0), others })
-    }
-
-    /// The animation time of the next frame.
-    pub fn next_time(&self) -> f32 {
-        self.frame.get() as f32 * self.core.settings.time_step
+        let others = cx.scene_gpu.draws.iter().enumerate().filter(|(_, d)| d.object != Some(object)).map(|(i, _)| i).collect();
+        Ok(HeightfieldMethod { name, core, terrain, emitter, time: 0.0, others })
     }
 }
 
@@ -187,33 +177,32 @@ impl LightingMethod for HeightfieldMethod {
         self.name
     }
 
-    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, inputs: &FrameInputs<'a>) -> Result<()> {
-        let t = self.next_time();
-        self.frame.set(self.frame.get() + 1);
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        self.time = frame.clock.frame as f32 * self.core.settings.time_step;
+        Ok(())
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
         let core = &self.core;
-        core.add_compute_passes(graph, t)?;
-        let targets = inputs.targets;
-        let uniforms = inputs.uniforms;
+        core.add_compute_passes(graph, self.time)?;
+        let targets = frame.targets;
+        let uniforms = frame.uniforms;
         let push = terrain_push(core);
         let vertices = core.res.saturating_sub(1).pow(2) * 6;
         let terrain = self.terrain;
         // The material's maps as the forward method binds them (uploaded once, never written).
-        let scene = inputs.scene;
+        let scene = frame.scene;
         let albedo_map =
             scene.material_maps.get(core.inputs.material).map(|m| m.albedo).ok_or_else(|| crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name)))?;
         let map_sampler = scene.sampler;
         graph
             .pass("hf raster")
-            .color_attachment(targets.radiance, SubresourceRange::mip(0), true)
-            .depth_stencil_write(targets.depth_stencil, true)
+            .color_attachment(targets.radiance, SubresourceRange::mip(0), false)
+            .depth_stencil_write(targets.depth_stencil, false)
             .sample("heights", core.heights, SubresourceRange::mip(0), core.nearest, vk::PipelineStageFlags2::VERTEX_SHADER)
             .sample("shading", core.shading, SubresourceRange::mip(0), core.linear, vk::PipelineStageFlags2::FRAGMENT_SHADER)
             .record(move |ctx| {
-                let a = uniforms.ambient;
-                let _extent = ctx.rec.begin_rendering(&RenderingDesc {
-                    colors: vec![RenderTarget::clear_color(targets.radiance, [a[0], a[1], a[2], 1.0])],
-                    depth_stencil: Some(RenderTarget::clear_depth(targets.depth_stencil, 1.0, 0)),
-                })?;
+                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(targets.radiance)], depth_stencil: Some(RenderTarget::load(targets.depth_stencil)) })?;
                 ctx.rec.bind_pipeline(terrain)?;
                 ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))), ("albedo_map", Bind::Sampled { image: albedo_map, range: SubresourceRange::mip(0), sampler: map_sampler })])?;
                 ctx.rec.push_constants(&push)?;
@@ -236,14 +225,8 @@ impl LightingMethod for HeightfieldMethod {
                     let _extent = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(targets.radiance)], depth_stencil: Some(RenderTarget::load(targets.depth_stencil)) })?;
                     ctx.rec.bind_pipeline(emitter)?;
                     ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
-                    ctx.rec.bind_vertex_buffers(&[(scene.vertices, 0)])?;
-                    ctx.rec.bind_index_buffer(scene.indices, 0)?;
-                    for &i in others {
-                        let Some(d) = scene.draws.get(i) else { continue };
-                        let push = DrawPush { model: d.model.to_cols_array(), material: d.material, _pad: [0; 3] };
-                        ctx.rec.push_constants(&bytemuck::bytes_of(&push)[..68])?;
-                        ctx.rec.draw_indexed(d.index_count, d.first_index, d.vertex_offset)?;
-                    }
+                    let calls: Vec<DrawCall> = others.iter().filter_map(|&i| scene.draws.get(i)).map(DrawCall::whole).collect();
+                    record_draws(ctx, scene, &calls, |_, _| Ok(()))?;
                     ctx.rec.end_rendering();
                     Ok(())
                 });
@@ -255,6 +238,8 @@ impl LightingMethod for HeightfieldMethod {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::environment::EnvironmentMap;
+    use crate::scene::Scene;
 
     fn scene(extra: &str) -> Scene {
         let text = format!("methods = [\"heightfield_pyramid\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\ngenerator = \"flat\"\n{extra}\n");
@@ -264,14 +249,14 @@ mod tests {
     #[test]
     fn inputs_need_sphere_lights_and_a_translated_field() {
         let ok = scene("translate = [1, 0, 2]\n[[lights]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.1\nradiance = 2");
-        let inputs = FieldInputs::from_scene(&ok, PYRAMID).unwrap();
+        let inputs = FieldInputs::from_scene(&ok, &EnvironmentMap::of_scene(&ok).unwrap(), PYRAMID).unwrap();
         assert_eq!(inputs.lights.len(), 1);
         assert_eq!(inputs.translation, glam::Vec3::new(1.0, 0.0, 2.0));
         let point = scene("[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1");
-        let e = FieldInputs::from_scene(&point, PYRAMID).err().unwrap().to_string();
+        let e = FieldInputs::from_scene(&point, &EnvironmentMap::of_scene(&point).unwrap(), PYRAMID).err().unwrap().to_string();
         assert!(e.contains("t.toml: lights[0] (\"lights[0]\"): heightfield_pyramid lights with sphere lights and the environment only, not a point light"), "{e}");
         let rotated = scene("rotate_deg = [0, 30, 0]");
-        let e = FieldInputs::from_scene(&rotated, PYRAMID).err().unwrap().to_string();
+        let e = FieldInputs::from_scene(&rotated, &EnvironmentMap::of_scene(&rotated).unwrap(), PYRAMID).err().unwrap().to_string();
         assert!(e.contains("objects[0]") && e.contains("translate only"), "{e}");
     }
 

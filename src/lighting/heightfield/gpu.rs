@@ -12,6 +12,8 @@ use super::pyramid;
 use super::settings::{Decimation, Horizon, Mode, Settings, MAX_BANDS, MAX_LEVELS, MAX_LIGHTS, MAX_NPHI};
 use super::wedge::{TableKind, WedgeTable};
 use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, ImageDesc, ImageId, MemoryKind, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
+use crate::bake::{BakeKey, Baker};
+use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::scene::{Environment, HeightImage, HeightShape, HeightfieldSource, Light, MeshSource, Scene};
@@ -158,7 +160,8 @@ pub struct FieldInputs {
 impl FieldInputs {
     /// The first `mesh = "heightfield"` object, the scene's sphere lights and its environment.
     /// Other light types are errors (the method lights with spheres and the environment only).
-    pub fn from_scene(scene: &Scene, method: &str) -> Result<FieldInputs> {
+    /// `env`: the scene's environment as [`EnvironmentMap::of_scene`] loaded it.
+    pub fn from_scene(scene: &Scene, env: &EnvironmentMap, method: &str) -> Result<FieldInputs> {
         let src = &scene.source;
         let (object, obj) = scene
             .objects
@@ -205,62 +208,34 @@ impl FieldInputs {
         let environment = match &scene.environment {
             None => EnvInput::None,
             Some(Environment::Constant { radiance }) => EnvInput::Constant(*radiance),
-            Some(Environment::Image { path, scale }) => load_environment(path, *scale, src)?,
-            Some(Environment::Cube { faces, scale }) => load_cube_environment(faces, *scale, src)?,
+            Some(Environment::Image { .. }) => {
+                let (width, texels) = env.reduced(MAX_ENV_WIDTH);
+                EnvInput::Map { width, height: texels.len() as u32 / width, texels }
+            }
+            Some(Environment::Cube { .. }) => {
+                let (size, texels) = env.reduced(MAX_ENV_WIDTH);
+                EnvInput::Cube { size, texels }
+            }
         };
         Ok(FieldInputs { object, source: source.clone(), translation, material: obj.material, albedo: material.albedo, emission: material.emission, lights, environment })
     }
 }
 
-/// Loads an equirectangular map and box-filters it to at most [`MAX_ENV_WIDTH`] wide.
-fn load_environment(path: &std::path::Path, scale: f32, source: &str) -> Result<EnvInput> {
-    let img = image::open(path).map_err(|e| Error::Usage(format!("{source}: environment.path: {}: cannot load: {e}", path.display())))?.to_rgba32f();
-    let (w, h) = img.dimensions();
-    let f = w.div_ceil(MAX_ENV_WIDTH).max(1);
-    let (nw, nh) = ((w / f).max(1), (h / f).max(1));
-    let mut texels = vec![[0.0f32; 4]; (nw * nh) as usize];
-    for y in 0..nh {
-        for x in 0..nw {
-            let mut acc = [0.0f32; 4];
-            for sy in 0..f {
-                for sx in 0..f {
-                    let p = img.get_pixel((x * f + sx).min(w - 1), (y * f + sy).min(h - 1)).0;
-                    for c in 0..3 {
-                        acc[c] += p[c] * scale / (f * f) as f32;
-                    }
-                }
-            }
-            texels[(y * nw + x) as usize] = acc;
-        }
-    }
-    Ok(EnvInput::Map { width: nw, height: nh, texels })
-}
+/// Bumped whenever `wedge::exact_wedge` or the table layout changes: the bake key of CPU-built
+/// tables has no shader to hash.
+const WEDGE_TABLE_VERSION: u32 = 1;
 
-/// Loads a cube map's faces and box-filters them to at most [`MAX_ENV_WIDTH`]/4 a side (about the
-/// texel count of the largest equirect map; the SH projection needs no more).
-fn load_cube_environment(faces: &[std::path::PathBuf; 6], scale: f32, source: &str) -> Result<EnvInput> {
-    let c = crate::reference::environment::load_cube_faces(faces, scale, source)?;
-    let n = c.size;
-    let f = n.div_ceil(MAX_ENV_WIDTH / 4).max(1);
-    let m = (n / f).max(1);
-    let mut texels = vec![[0.0f32; 4]; (6 * m * m) as usize];
-    for face in 0..6 {
-        for y in 0..m {
-            for x in 0..m {
-                let mut acc = [0.0f32; 4];
-                for sy in 0..f {
-                    for sx in 0..f {
-                        let p = c.texels[(face * n * n + (y * f + sy).min(n - 1) * n + (x * f + sx).min(n - 1)) as usize];
-                        for k in 0..3 {
-                            acc[k] += p[k] / (f * f) as f32;
-                        }
-                    }
-                }
-                texels[(face * m * m + y * m + x) as usize] = acc;
-            }
-        }
+/// A wedge table through the bake stage (a precomputed visibility table, keyed by its settings).
+fn baked_wedge_table(bakes: &mut Baker, kind: TableKind, nphi: usize, nodes: usize, bands: usize) -> Result<WedgeTable> {
+    let key = BakeKey::new("heightfield wedge table").with("version", WEDGE_TABLE_VERSION).with("kind", kind).with("nphi", nphi).with("nodes", nodes).with("bands", bands);
+    let name = format!("hf wedge table {kind:?} nphi={nphi} nodes={nodes} bands={bands}");
+    let table_err = |e: crate::sh::ShError| Error::Usage(format!("wedge table: {e}"));
+    let data: Vec<f64> = bakes.bake(&name, &key, |_| Ok(WedgeTable::build(kind, nphi, nodes, bands).map_err(table_err)?.data))?;
+    let table = WedgeTable { kind, nphi, nodes: nodes.max(2), bands, data };
+    if table.data.len() != table.nodes * table.nodes * bands * bands {
+        return Err(Error::Usage(format!("{name}: the baked table has {} values, expected {}", table.data.len(), table.nodes * table.nodes * bands * bands)));
     }
-    Ok(EnvInput::Cube { size: m, texels })
+    Ok(table)
 }
 
 /// Everything one instance of the method keeps on the GPU.
@@ -330,7 +305,8 @@ fn texture(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, format: vk::F
 }
 
 impl HeightfieldGpu {
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, settings: Settings, inputs: FieldInputs) -> Result<HeightfieldGpu> {
+    /// The wedge tables come through `bakes` (cached on disk when it has a directory).
+    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, bakes: &mut Baker, settings: Settings, inputs: FieldInputs) -> Result<HeightfieldGpu> {
         let res = settings.resolution.unwrap_or(inputs.source.resolution);
         let levels = pyramid::level_count(res, settings.ls);
         if levels > MAX_LEVELS {
@@ -386,9 +362,8 @@ impl HeightfieldGpu {
         let env_image = crate::sh::EnvImage::of(gpu, env_map)?;
         let env_sh = gpu.create_buffer(&BufferDesc { name: "hf environment SH".into(), size: 16 * 64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuOnly })?;
         let (nphi, nodes, bands) = (settings.nphi as usize, settings.table_size as usize, settings.bands as usize);
-        let table_err = |e: crate::sh::ShError| Error::Usage(format!("wedge table: {e}"));
-        let env_t = WedgeTable::shared(TableKind::Environment, nphi, nodes, bands).map_err(table_err)?;
-        let local_t = WedgeTable::shared(TableKind::Local, nphi, nodes, bands).map_err(table_err)?;
+        let env_t = baked_wedge_table(bakes, TableKind::Environment, nphi, nodes, bands)?;
+        let local_t = baked_wedge_table(bakes, TableKind::Local, nphi, nodes, bands)?;
         let env_table = storage_buffer(gpu, states, "hf environment wedge table", bytemuck::cast_slice(&env_t.to_f32()))?;
         let local_table = storage_buffer(gpu, states, "hf local wedge table", bytemuck::cast_slice(&local_t.to_f32()))?;
         let entries = product_entries(settings.bands)?;

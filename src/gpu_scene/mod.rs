@@ -1,12 +1,16 @@
-//! The scene on the GPU: one vertex and one index buffer for every object, materials, lights and
-//! material textures. Shared by every lighting method.
+//! The scene on the GPU: one vertex and one index buffer for every object, materials, lights,
+//! material textures and the environment; the vertex layout, the per-draw push constants and one
+//! helper that records draws. Every lighting method draws the scene through this module; the GLSL
+//! side is `glsl/common/scene.glsl`.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::backend::{vk, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId};
+use crate::backend::{vk, BackendError, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, VertexAttribute, VertexLayout};
+use crate::environment::raster::EnvironmentLighting;
+use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
-use crate::graph::{Access, ResourceStates};
+use crate::graph::{Access, PassContext, ResourceStates};
 use crate::scene::{Light, Mesh, Scene};
 
 /// The vertex every raster pass reads: 48 bytes, interleaved.
@@ -19,7 +23,81 @@ pub struct Vertex {
     pub tangent: [f32; 4],
 }
 
-/// Matches `Material` in glsl/forward/forward.frag.
+/// The vertex layout of [`Vertex`] (`in_position` … `in_tangent` in glsl/common/scene.glsl).
+pub fn vertex_layout() -> VertexLayout {
+    let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
+    VertexLayout {
+        buffers: vec![(0, std::mem::size_of::<Vertex>() as u32)],
+        attributes: vec![attr(0, vk::Format::R32G32B32_SFLOAT, 0), attr(1, vk::Format::R32G32B32_SFLOAT, 12), attr(2, vk::Format::R32G32_SFLOAT, 24), attr(3, vk::Format::R32G32B32A32_SFLOAT, 32)],
+    }
+}
+
+/// Push constants of scene draws (`Draw` in glsl/common/scene.glsl): the model matrix and the
+/// material index, [`DrawPush::BYTES`] of them pushed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct DrawPush {
+    pub model: [f32; 16],
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+impl DrawPush {
+    /// The bytes the shaders declare (the padding is not pushed).
+    pub const BYTES: usize = 68;
+
+    pub fn new(model: Mat4, material: u32) -> DrawPush {
+        DrawPush { model: model.to_cols_array(), material, _pad: [0; 3] }
+    }
+
+    pub fn bytes(&self) -> &[u8] {
+        &bytemuck::bytes_of(self)[..Self::BYTES]
+    }
+}
+
+/// One draw of a pass: index ranges of one scene draw under one model matrix and material.
+#[derive(Clone, Debug)]
+pub struct DrawCall {
+    pub material: u32,
+    pub model: Mat4,
+    pub vertex_offset: i32,
+    /// (first index, index count) pairs.
+    pub ranges: Vec<(u32, u32)>,
+}
+
+impl DrawCall {
+    /// The whole of scene draw `d` at its placement.
+    pub fn whole(d: &DrawItem) -> DrawCall {
+        DrawCall { material: d.material, model: d.model, vertex_offset: d.vertex_offset, ranges: vec![(d.first_index, d.index_count)] }
+    }
+}
+
+/// Records `calls` from the scene's vertex and index buffers: `bind` runs before the first call
+/// and whenever the material changes (to bind the pipeline and the material's resources), then
+/// each call pushes its [`DrawPush`] and draws its ranges.
+pub fn record_draws(
+    ctx: &mut PassContext<'_, '_>,
+    scene: &SceneGpu,
+    calls: &[DrawCall],
+    mut bind: impl FnMut(&mut PassContext<'_, '_>, u32) -> std::result::Result<(), BackendError>,
+) -> std::result::Result<(), BackendError> {
+    ctx.rec.bind_vertex_buffers(&[(scene.vertices, 0)])?;
+    ctx.rec.bind_index_buffer(scene.indices, 0)?;
+    let mut bound = None;
+    for call in calls {
+        if bound != Some(call.material) {
+            bind(ctx, call.material)?;
+            bound = Some(call.material);
+        }
+        ctx.rec.push_constants(DrawPush::new(call.model, call.material).bytes())?;
+        for &(first, count) in &call.ranges {
+            ctx.rec.draw_indexed(count, first, call.vertex_offset)?;
+        }
+    }
+    Ok(())
+}
+
+/// Matches `Material` in glsl/common/scene.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -49,6 +127,8 @@ pub const LIGHT_QUAD_FAR: f32 = 3.0;
 #[derive(Clone, Debug)]
 pub struct DrawItem {
     pub name: String,
+    /// The scene object drawn (`scene.objects[i]`), or `None` for an area light's emitter.
+    pub object: Option<usize>,
     pub first_index: u32,
     pub index_count: u32,
     pub vertex_offset: i32,
@@ -74,7 +154,7 @@ pub struct SceneGpu {
     pub sampler: SamplerId,
     /// Object-space meshes, kept for CPU-side methods and tests.
     pub meshes: Vec<Mesh>,
-    pub environment: super::environment::EnvironmentLighting,
+    pub environment: EnvironmentLighting,
 }
 
 /// Point, spot and directional lights, exactly as given (area lights are left out).
@@ -179,7 +259,9 @@ fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
 }
 
 impl SceneGpu {
-    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene) -> Result<SceneGpu> {
+    /// Uploads the scene; `environment` is its environment as [`EnvironmentMap::of_scene`]
+    /// loaded it.
+    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene, environment: &EnvironmentMap) -> Result<SceneGpu> {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut draws = Vec::new();
@@ -190,7 +272,15 @@ impl SceneGpu {
             let vertex_offset = vertices.len() as i32;
             push_vertices(&mut vertices, &mesh);
             indices.extend_from_slice(&mesh.indices);
-            draws.push(DrawItem { name: obj.name.clone(), first_index, index_count: mesh.indices.len() as u32, vertex_offset, model: obj.transform, material: obj.material as u32 });
+            draws.push(DrawItem {
+                name: obj.name.clone(),
+                object: Some(draws.len()),
+                first_index,
+                index_count: mesh.indices.len() as u32,
+                vertex_offset,
+                model: obj.transform,
+                material: obj.material as u32,
+            });
             meshes.push(mesh);
         }
         let mut gpu_materials = Vec::new();
@@ -221,6 +311,7 @@ impl SceneGpu {
                 material_maps.push(defaults);
                 draws.push(DrawItem {
                     name: format!("{name} (emitter)"),
+                    object: None,
                     first_index: indices.len() as u32,
                     index_count: mesh.indices.len() as u32,
                     vertex_offset: vertices.len() as i32,
@@ -247,7 +338,7 @@ impl SceneGpu {
             states.forget_buffer(id);
         }
         let sampler = gpu.sampler(SamplerDesc::LINEAR_REPEAT)?;
-        let environment = super::environment::EnvironmentLighting::upload(gpu, states, scene)?;
+        let environment = EnvironmentLighting::upload(gpu, states, scene, environment)?;
         Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: raster_lights(scene), sampler, meshes, environment })
     }
 }

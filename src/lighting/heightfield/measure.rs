@@ -4,8 +4,8 @@
 
 use crate::backend::GpuDesc;
 use crate::error::Result;
-use crate::profile::PassStats;
 use crate::scene::{MethodDecl, Scene};
+use crate::timing::PassStats;
 
 use super::standalone::Standalone;
 

@@ -33,23 +33,21 @@ pub mod maps;
 pub mod plan;
 pub mod volumes;
 
-use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
 use crate::backend::{
     vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
     SpecConstant, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
-use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::methods::{FrameInputs, LightingMethod};
-use crate::renderer::{DrawPush, SceneGpu, RADIANCE_FORMAT};
+use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, SceneGpu};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::world_mesh::{self, WorldLevel};
 use crate::scene::{Light, MeshSource, MethodDecl, Scene};
-use crate::shaders::ShaderLibrary;
 use crate::world::FaceId;
 
 pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
@@ -59,9 +57,6 @@ pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, Spot, W
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     config::sweep(decl)
 }
-
-/// Animation step per rendered frame when `animate` is on.
-const FRAME_TIME_S: f32 = 1.0 / 60.0;
 
 /// Everything the method derives from the scene on the CPU: configuration, the world (if the
 /// scene has one), entities, lights and each light's static world sets. Tests build it without
@@ -77,7 +72,14 @@ pub struct Setup {
 }
 
 impl Setup {
+    /// The setup of a scene on the CPU alone (tests, tools): meshes are loaded from the scene.
     pub fn new(scene: &Scene, decl: &MethodDecl) -> Result<Setup> {
+        let meshes = scene.objects.iter().map(|o| o.load_mesh(std::path::Path::new("."))).collect::<std::result::Result<Vec<_>, _>>()?;
+        Setup::with_meshes(scene, &meshes, decl)
+    }
+
+    /// `meshes`: each scene object's object-space mesh, as uploaded (`SceneGpu::meshes`).
+    pub fn with_meshes(scene: &Scene, meshes: &[crate::scene::Mesh], decl: &MethodDecl) -> Result<Setup> {
         let config = Config::from_decl(decl, scene)?;
         let mut lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
@@ -124,8 +126,8 @@ impl Setup {
                 world_objects.push(i);
                 continue;
             }
-            let mesh = obj.load_mesh(std::path::Path::new("."))?;
-            let topology = volumes::Topology::new(&mesh);
+            let mesh = meshes.get(i).ok_or_else(|| Error::Usage(format!("{}: objects[{i}]: no uploaded mesh", scene.source)))?;
+            let topology = volumes::Topology::new(mesh);
             entities.push(Entity { draw: i, name: obj.name.clone(), bounds: mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO)), topology, base: obj.transform, animation: obj.animation, opacity });
         }
         let world = match level {
@@ -238,8 +240,8 @@ pub struct ShadowVolumes {
     /// The exact flat normal (0.5, 0.5, 1) in RGBA32F for the default-map path (8-bit 128 is
     /// not 0.5).
     default_normal: ImageId,
-    frames: Cell<u64>,
-    last_plan: RefCell<Option<FramePlan>>,
+    /// This frame's plan, made by `prepare`.
+    plan: Option<Rc<FramePlan>>,
 }
 
 fn spec(id: u32, bits: u32) -> SpecConstant {
@@ -247,8 +249,17 @@ fn spec(id: u32, bits: u32) -> SpecConstant {
 }
 
 impl ShadowVolumes {
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, scene: &Scene, decl: &MethodDecl) -> Result<ShadowVolumes> {
-        let setup = Setup::new(scene, decl)?;
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShadowVolumes> {
+        let (gpu, shaders, scene) = (&mut *cx.gpu, cx.shaders, cx.scene);
+        let setup = Setup::with_meshes(scene, &cx.scene_gpu.meshes, decl)?;
+        if cx.terms != crate::lighting::Terms::BASE_DIRECT {
+            if let Some(e) = setup.entities.iter().find(|e| e.opacity < 1.0) {
+                return Err(Error::Usage(format!(
+                    "{}: {} ({}): the {NAME} method draws translucent entities only when it supplies both the base and the direct term (it supplies {})",
+                    scene.source, e.name, "translucent", cx.terms
+                )));
+            }
+        }
         let c = &setup.config;
         let ds_format = gpu.caps().depth_stencil_format;
         let mode = match c.mode {
@@ -257,7 +268,7 @@ impl ShadowVolumes {
         };
         let surface = |name: &str, frag: &str, specs: Vec<SpecConstant>| {
             let mut d = GraphicsPipelineDesc::new(name, "shadow_volumes/surface.vert", Some(frag));
-            d.vertex_layout = crate::forward::vertex_layout();
+            d.vertex_layout = vertex_layout();
             d.raster.cull = vk::CullModeFlags::NONE;
             d.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
             d.depth_format = Some(ds_format);
@@ -321,50 +332,32 @@ impl ShadowVolumes {
             gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} silhouettes"), shader: "shadow_volumes/silhouette.comp".into(), specialization: Vec::new() }, shaders)?;
 
         let features = scene.materials.iter().map(|m| Features { normal_map: m.normal_map.is_some(), specular: m.specular.max_element() > 0.0 }).collect();
-        let (faces, templates) = Self::world_geometry(gpu, scene, &setup)?;
+        let (faces, templates) = Self::world_geometry(gpu, scene, cx.scene_gpu, &setup)?;
         let silhouettes = Self::silhouette_buffers(gpu, &setup)?;
         let default_normal =
             gpu.create_image(&ImageDesc::new_2d("flat normal (exact)", vk::Format::R32G32B32A32_SFLOAT, 1, 1).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
         gpu.upload_image(default_normal, 0, bytemuck::cast_slice(&[0.5f32, 0.5, 1.0, 1.0]))?;
-        states.set_image(gpu, default_normal, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        let frames = Cell::new(0);
-        Ok(ShadowVolumes {
-            setup,
-            faces,
-            templates,
-            silhouettes,
-            features,
-            ambient,
-            translucent_ambient,
-            light,
-            volume,
-            silhouette,
-            nudge_far: !depth_clamp,
-            default_normal,
-            frames,
-            last_plan: RefCell::new(None),
-        })
+        cx.states.set_image(gpu, default_normal, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        Ok(ShadowVolumes { setup, faces, templates, silhouettes, features, ambient, translucent_ambient, light, volume, silhouette, nudge_far: !depth_clamp, default_normal, plan: None })
     }
 
     pub fn setup(&self) -> &Setup {
         &self.setup
     }
 
-    /// The plan of the last frame recorded.
+    /// The plan of the last frame prepared.
     pub fn last_plan(&self) -> Option<FramePlan> {
-        self.last_plan.borrow().clone()
+        self.plan.as_deref().cloned()
     }
 
     /// Per world face: its draw and index range (the class meshes are built as in the scene),
     /// and the volume templates of every face in one vertex buffer.
-    fn world_geometry(gpu: &mut Gpu, scene: &Scene, setup: &Setup) -> Result<(Vec<FaceDraw>, Option<BufferId>)> {
+    fn world_geometry(gpu: &mut Gpu, scene: &Scene, scene_gpu: &SceneGpu, setup: &Setup) -> Result<(Vec<FaceDraw>, Option<BufferId>)> {
         let Some(frame) = &setup.world else { return Ok((Vec::new(), None)) };
         let w = &frame.world;
         let mut faces = vec![FaceDraw::default(); w.faces.len()];
-        // The renderer uploads objects in order, each mesh's indices after the previous ones.
-        let mut first_index = 0u32;
         for (i, obj) in scene.objects.iter().enumerate() {
-            let mesh = obj.load_mesh(std::path::Path::new("."))?;
+            let first_index = scene_gpu.draws[i].first_index;
             if let MeshSource::World { class, .. } = &obj.mesh {
                 for span in world_mesh::class_mesh(w, *class).1 {
                     let f = &mut faces[span.face as usize];
@@ -373,7 +366,6 @@ impl ShadowVolumes {
                     f.index_count = span.index_count;
                 }
             }
-            first_index += mesh.indices.len() as u32;
         }
         let mut data: Vec<Vec4> = Vec::new();
         for (id, face) in w.faces.iter().enumerate() {
@@ -422,10 +414,9 @@ impl ShadowVolumes {
         Ok(Some(SilhouetteBuffers { positions, triangles, edges, volumes, stride: out, slots }))
     }
 
-    fn time(&self) -> f32 {
-        let n = self.frames.get();
-        self.frames.set(n + 1);
-        self.setup.config.time_s + if self.setup.config.animate { n as f32 * FRAME_TIME_S } else { 0.0 }
+    /// The entities' animation time at renderer time `t`.
+    fn time(&self, t: f32) -> f32 {
+        self.setup.config.time_s + if self.setup.config.animate { t } else { 0.0 }
     }
 
     /// Index ranges (per draw, merged) of a set of world faces, in draw order.
@@ -501,15 +492,6 @@ impl ShadowVolumes {
     }
 }
 
-/// One draw of a pass: index ranges sharing a model matrix and material.
-#[derive(Clone, Debug)]
-struct DrawCall {
-    material: u32,
-    model: Mat4,
-    vertex_offset: i32,
-    ranges: Vec<(u32, u32)>,
-}
-
 /// Records the draws of a surface pass, binding the pipeline for each call's features and the
 /// material's maps (`extra` names them for the pass's shaders).
 #[allow(clippy::too_many_arguments)]
@@ -523,28 +505,20 @@ fn record_surface<'b>(
     frame_bytes: &'b [u8],
     light_bytes: &'b [u8],
 ) -> std::result::Result<(), crate::backend::BackendError> {
-    ctx.rec.bind_vertex_buffers(&[(scene.vertices, 0)])?;
-    ctx.rec.bind_index_buffer(scene.indices, 0)?;
-    let mut bound: Option<(PipelineId, u32)> = None;
-    for call in calls {
-        let pipeline = pipeline_of(method.features_of(call.material));
-        if bound != Some((pipeline, call.material)) {
-            if bound.map(|b| b.0) != Some(pipeline) {
-                ctx.rec.bind_pipeline(pipeline)?;
-            }
-            let (albedo, normal, specular) = method.maps(scene, call.material);
-            let mut binds: Vec<(&str, Bind<'b>)> = vec![("frame", Bind::UniformData(frame_bytes)), ("light", Bind::UniformData(light_bytes))];
-            binds.extend(extra(albedo, normal, specular));
-            ctx.bind(&binds)?;
-            bound = Some((pipeline, call.material));
+    // The pipeline follows the material (its features), so a material change is where both
+    // are bound.
+    let mut bound_pipeline = None;
+    record_draws(ctx, scene, calls, |ctx, material| {
+        let pipeline = pipeline_of(method.features_of(material));
+        if bound_pipeline != Some(pipeline) {
+            ctx.rec.bind_pipeline(pipeline)?;
+            bound_pipeline = Some(pipeline);
         }
-        let push = DrawPush { model: call.model.to_cols_array(), material: call.material, _pad: [0; 3] };
-        ctx.rec.push_constants(&bytemuck::bytes_of(&push)[..68])?;
-        for &(first, count) in &call.ranges {
-            ctx.rec.draw_indexed(count, first, call.vertex_offset)?;
-        }
-    }
-    Ok(())
+        let (albedo, normal, specular) = method.maps(scene, material);
+        let mut binds: Vec<(&str, Bind<'b>)> = vec![("frame", Bind::UniformData(frame_bytes)), ("light", Bind::UniformData(light_bytes))];
+        binds.extend(extra(albedo, normal, specular));
+        ctx.bind(&binds)
+    })
 }
 
 impl LightingMethod for ShadowVolumes {
@@ -552,20 +526,25 @@ impl LightingMethod for ShadowVolumes {
         NAME
     }
 
-    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, inputs: &FrameInputs<'a>) -> Result<()> {
-        let scene = inputs.scene;
-        let t = inputs.targets;
-        let uniforms = inputs.uniforms;
-        let camera = Vec3::from_slice(&uniforms.camera_pos[..3]);
-        let plan = Rc::new(self.setup.plan(camera, self.time()));
-        *self.last_plan.borrow_mut() = Some((*plan).clone());
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        let camera = Vec3::from_slice(&frame.uniforms.camera_pos[..3]);
+        self.plan = Some(Rc::new(self.setup.plan(camera, self.time(frame.clock.time_s))));
+        Ok(())
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        let scene = frame.scene;
+        let t = frame.targets;
+        let uniforms = frame.uniforms;
+        let (base, direct) = (frame.terms.has(Term::Base), frame.terms.has(Term::Direct));
+        let plan = self.plan.clone().ok_or_else(|| Error::Usage(format!("{NAME}: a frame was recorded before it was prepared")))?;
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let sampler = scene.sampler;
         let whole = SubresourceRange::mip(0);
 
         // Silhouettes of every entity for every light of the frame.
-        let silhouettes = self.silhouettes.as_ref().filter(|_| plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
+        let silhouettes = self.silhouettes.as_ref().filter(|_| direct && plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
         if let Some(s) = silhouettes {
             let p = plan.clone();
             graph
@@ -605,8 +584,10 @@ impl LightingMethod for ShadowVolumes {
         // casters, so light shines through them), then the translucent entities alone, back to
         // front, blended over the opaque image; their depth lets the second round of stencil
         // volumes (opaque casters only) and light passes reach the nearest translucent layer.
+        // The opaque ambient pass is the base term, the rest the direct term (the translucent path
+        // needs both: `new` refuses translucent entities otherwise).
         for translucent in [false, true] {
-            if translucent && plan.translucent_entities.is_empty() {
+            if translucent && (plan.translucent_entities.is_empty() || !direct) {
                 break;
             }
             let prefix = if translucent { "translucent " } else { "" };
@@ -614,33 +595,33 @@ impl LightingMethod for ShadowVolumes {
                 if translucent { self.draws_in_order(scene, &plan, &[], &plan.translucent_entities) } else { self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities) };
             let ambient_pipelines = if translucent { self.translucent_ambient } else { self.ambient };
             let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
-            graph
-                .pass(&format!("{prefix}ambient"))
-                .color_attachment(t.radiance, whole, !translucent)
-                .depth_stencil_write(t.depth_stencil, !translucent)
-                .buffer(scene.vertices, Access::VertexRead, None)
-                .buffer(scene.indices, Access::IndexRead, None)
-                .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-                .record(move |ctx| {
-                    let (colors, depth_stencil) = if translucent {
-                        (vec![RenderTarget::load(t.radiance)], RenderTarget::load(t.depth_stencil))
-                    } else {
-                        (vec![RenderTarget::clear_color(t.radiance, [uniforms.ambient[0], uniforms.ambient[1], uniforms.ambient[2], 1.0])], RenderTarget::clear_depth(t.depth_stencil, 1.0, 0))
-                    };
-                    let _ = ctx.rec.begin_rendering(&RenderingDesc { colors, depth_stencil: Some(depth_stencil) })?;
-                    let zero_light = LightBlock::zeroed();
-                    let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
-                    let extra = |albedo, normal, _specular| {
-                        vec![
-                            ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
-                            ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
-                            ("ambient", Bind::UniformData(ambient_bytes)),
-                        ]
-                    };
-                    record_surface(ctx, self, scene, &ambient_calls, |f| ambient_pipelines[f.normal_map as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&zero_light))?;
-                    ctx.rec.end_rendering();
-                    Ok(())
-                });
+            if translucent || base {
+                graph
+                    .pass(&format!("{prefix}ambient"))
+                    .color_attachment(t.radiance, whole, false)
+                    .depth_stencil_write(t.depth_stencil, false)
+                    .buffer(scene.vertices, Access::VertexRead, None)
+                    .buffer(scene.indices, Access::IndexRead, None)
+                    .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+                    .record(move |ctx| {
+                        let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                        let zero_light = LightBlock::zeroed();
+                        let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
+                        let extra = |albedo, normal, _specular| {
+                            vec![
+                                ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
+                                ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
+                                ("ambient", Bind::UniformData(ambient_bytes)),
+                            ]
+                        };
+                        record_surface(ctx, self, scene, &ambient_calls, |f| ambient_pipelines[f.normal_map as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&zero_light))?;
+                        ctx.rec.end_rendering();
+                        Ok(())
+                    });
+            }
+            if !direct {
+                continue;
+            }
 
             for (li, lp) in plan.lights.iter().enumerate() {
                 let (receiver_faces, receiver_entities): (&[FaceId], &[usize]) = if translucent { (&[], &lp.translucent_receivers) } else { (&lp.receiver_faces, &lp.receiver_entities) };

@@ -25,9 +25,11 @@ impl Standalone {
         scene.refuse_translucency(&format!("the {} method", decl.name)).map_err(Error::Usage)?;
         let horizon = if decl.name == super::BRUTE_FORCE { Horizon::BruteForce } else { Horizon::Pyramid };
         let settings = Settings::from_decl(decl, horizon)?;
-        let inputs = FieldInputs::from_scene(scene, &decl.name)?;
+        let env = crate::environment::EnvironmentMap::of_scene(scene)?;
+        let inputs = FieldInputs::from_scene(scene, &env, &decl.name)?;
         let mut states = ResourceStates::default();
-        let core = HeightfieldGpu::new(&mut gpu, &ShaderLibrary::Embedded, &mut states, settings, inputs)?;
+        let mut bakes = crate::bake::Baker::new(Some(crate::bake::Baker::default_dir()));
+        let core = HeightfieldGpu::new(&mut gpu, &ShaderLibrary::Embedded, &mut states, &mut bakes, settings, inputs)?;
         let frame = gpu.create_frame()?;
         let bytes = core.res as u64 * core.res as u64 * 16;
         let readback = gpu.create_buffer(&BufferDesc { name: "hf readback".into(), size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;

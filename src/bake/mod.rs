@@ -1,0 +1,236 @@
+//! The bake stage: precomputation (light-maps, SH transfer, per-light vertex colours, visibility
+//! tables) through one mechanism.
+//!
+//! A bake is named and keyed by everything it depends on ([`BakeKey`]: geometry, materials, the
+//! lights it bakes, parameters, the SPIR-V of the shaders it runs). Its result is cached on disk
+//! under `.penumbra-cache/bake/` (or `$PENUMBRA_CACHE/bake/`), written to a temporary file and
+//! renamed so a crash mid-write never leaves a file that looks complete. A file is checked on
+//! the way in (magic, key, length, checksum, decoding): a corrupt or truncated one is rebuilt
+//! with a one-line warning. Every bake's time, size and whether it came from the cache are
+//! reported ([`BakeReport`]) apart from frame time, for `profile`, `chart` and `penumbra bake`.
+
+mod progress;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::Result;
+pub use progress::Progress;
+
+/// FNV-1a: a stable content hash (std's hasher may change between releases).
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// Everything a bake depends on, as text that is hashed into the cache file's name.
+#[derive(Clone, Debug, Default)]
+pub struct BakeKey {
+    text: String,
+}
+
+impl BakeKey {
+    pub fn new(name: &str) -> BakeKey {
+        BakeKey { text: format!("bake:{name}") }
+    }
+
+    /// Adds an input by its `Debug` form (parameters, scene values).
+    pub fn with(mut self, label: &str, value: impl std::fmt::Debug) -> BakeKey {
+        let _ = write!(self.text, "|{label}={value:?}");
+        self
+    }
+
+    /// Adds raw bytes by their hash (geometry, images).
+    pub fn with_bytes(mut self, label: &str, bytes: &[u8]) -> BakeKey {
+        let _ = write!(self.text, "|{label}#{:016x}", fnv1a(bytes));
+        self
+    }
+
+    /// Adds the embedded SPIR-V of every shader whose name starts with `prefix`.
+    pub fn with_shaders(mut self, prefix: &str) -> BakeKey {
+        for (name, spirv) in crate::shaders::ShaderLibrary::embedded_names().zip(crate::shaders::embedded_bytes()) {
+            if name.starts_with(prefix) {
+                let _ = write!(self.text, "|{name}:{:016x}", fnv1a(spirv));
+            }
+        }
+        self
+    }
+
+    pub fn hash(&self) -> u64 {
+        fnv1a(self.text.as_bytes())
+    }
+}
+
+/// A bake's result as bytes on disk. `decode` returns `None` for anything it cannot read back
+/// exactly (the cache then rebuilds).
+pub trait BakeData: Sized {
+    fn encode(&self) -> Vec<u8>;
+    fn decode(bytes: &[u8]) -> Option<Self>;
+}
+
+impl BakeData for Vec<f64> {
+    fn encode(&self) -> Vec<u8> {
+        self.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+    fn decode(bytes: &[u8]) -> Option<Self> {
+        bytes.len().is_multiple_of(8).then(|| bytes.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8-byte chunk"))).collect())
+    }
+}
+
+impl BakeData for Vec<f32> {
+    fn encode(&self) -> Vec<u8> {
+        self.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+    fn decode(bytes: &[u8]) -> Option<Self> {
+        bytes.len().is_multiple_of(4).then(|| bytes.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().expect("4-byte chunk"))).collect())
+    }
+}
+
+/// How one bake went.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct BakeReport {
+    pub name: String,
+    /// The key's hash (the cache file's name).
+    pub key: String,
+    /// Wall time to build, or to read and check the cached file.
+    pub ms: f64,
+    /// Size of the result.
+    pub bytes: u64,
+    pub cached: bool,
+    /// Why a cached file was not used, when there was one.
+    pub rebuilt: Option<String>,
+}
+
+/// Runs bakes through the cache and keeps their reports.
+#[derive(Debug)]
+pub struct Baker {
+    dir: Option<PathBuf>,
+    reports: Vec<BakeReport>,
+}
+
+const MAGIC: &[u8; 8] = b"PNBAKE01";
+const HEADER: usize = 8 + 8 + 8 + 8;
+
+impl Baker {
+    /// A baker caching in `dir` (`None`: no cache, every bake runs).
+    pub fn new(dir: Option<PathBuf>) -> Baker {
+        Baker { dir, reports: Vec::new() }
+    }
+
+    /// `$PENUMBRA_CACHE/bake`, or `.penumbra-cache/bake` in the working directory.
+    pub fn default_dir() -> PathBuf {
+        std::env::var_os("PENUMBRA_CACHE").map_or_else(|| PathBuf::from(".penumbra-cache"), PathBuf::from).join("bake")
+    }
+
+    pub fn reports(&self) -> &[BakeReport] {
+        &self.reports
+    }
+
+    pub fn take_reports(&mut self) -> Vec<BakeReport> {
+        std::mem::take(&mut self.reports)
+    }
+
+    /// The file a key is cached in.
+    pub fn path(&self, name: &str, key: &BakeKey) -> Option<PathBuf> {
+        let safe: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
+        self.dir.as_ref().map(|d| d.join(format!("{safe}-{:016x}.bin", key.hash())))
+    }
+
+    /// The result of bake `name` for `key`: read from the cache, or built by `build` (given a
+    /// progress reporter) and cached.
+    pub fn bake<T: BakeData>(&mut self, name: &str, key: &BakeKey, build: impl FnOnce(&mut Progress) -> Result<T>) -> Result<T> {
+        let start = Instant::now();
+        let path = self.path(name, key);
+        let mut rebuilt = None;
+        if let Some(p) = &path {
+            match read_cached::<T>(p, key.hash()) {
+                Ok(Some((value, bytes))) => {
+                    self.reports.push(BakeReport { name: name.into(), key: format!("{:016x}", key.hash()), ms: ms_since(start), bytes, cached: true, rebuilt: None });
+                    return Ok(value);
+                }
+                Ok(None) => {}
+                Err(why) => {
+                    eprintln!("warning: {}: bake cache unusable ({why}); rebuilding {name}", p.display());
+                    rebuilt = Some(why);
+                }
+            }
+        }
+        let mut progress = Progress::new(name);
+        let value = build(&mut progress)?;
+        progress.finish();
+        let payload = value.encode();
+        if let Some(p) = &path {
+            // A cache that cannot be written costs the next run a rebuild, nothing else.
+            if let Err(e) = write_cached(p, key.hash(), &payload) {
+                eprintln!("warning: {}: cannot write the bake cache: {e}", p.display());
+            }
+        }
+        self.reports.push(BakeReport { name: name.into(), key: format!("{:016x}", key.hash()), ms: ms_since(start), bytes: payload.len() as u64, cached: false, rebuilt });
+        Ok(value)
+    }
+}
+
+fn ms_since(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// `Ok(None)`: no file. `Err(why)`: a file that is not a valid entry for `key`.
+fn read_cached<T: BakeData>(path: &Path, key: u64) -> std::result::Result<Option<(T, u64)>, String> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot read: {e}")),
+    };
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+        return Err("not a penumbra bake file".into());
+    }
+    let word = |i: usize| u64::from_le_bytes(bytes[8 + 8 * i..16 + 8 * i].try_into().expect("8 bytes"));
+    if word(0) != key {
+        return Err("written for another key".into());
+    }
+    let payload = &bytes[HEADER..];
+    if word(1) != payload.len() as u64 {
+        return Err(format!("truncated: {} of {} bytes", payload.len(), word(1)));
+    }
+    if word(2) != fnv1a(payload) {
+        return Err("checksum mismatch".into());
+    }
+    T::decode(payload).map(|v| Some((v, payload.len() as u64))).ok_or_else(|| "cannot decode".to_string())
+}
+
+fn write_cached(path: &Path, key: u64, payload: &[u8]) -> std::io::Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut bytes = Vec::with_capacity(HEADER + payload.len());
+    bytes.extend_from_slice(MAGIC);
+    for w in [key, payload.len() as u64, fnv1a(payload)] {
+        bytes.extend_from_slice(&w.to_le_bytes());
+    }
+    bytes.extend_from_slice(payload);
+    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    std::fs::write(&tmp, &bytes)?;
+    std::fs::rename(&tmp, path)
+}
+
+/// Prints bake reports as a table (for `profile` and `penumbra bake`).
+pub fn table(reports: &[BakeReport]) -> String {
+    if reports.is_empty() {
+        return String::new();
+    }
+    let mut s = format!("{:<48} {:>10} {:>12}  {}\n", "bake", "ms", "bytes", "source");
+    for r in reports {
+        let source = match (&r.rebuilt, r.cached) {
+            (_, true) => "cache".to_string(),
+            (Some(why), false) => format!("built (cache rebuilt: {why})"),
+            (None, false) => "built".to_string(),
+        };
+        s += &format!("{:<48} {:>10.3} {:>12}  {source}\n", r.name, r.ms, r.bytes);
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests;

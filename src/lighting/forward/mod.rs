@@ -1,0 +1,98 @@
+//! Forward direct lighting: Lambert plus energy-normalised Blinn-Phong from point, spot and
+//! directional lights, no shadows. One graphics pass writes linear radiance and depth.
+//!
+//! It supplies the base term (emission and the unshadowed environment irradiance) and the direct
+//! term (the lights), together in one pass or either alone: as a direct term it adds into the
+//! target over another method's base, testing against that base's depth.
+//!
+//! It is penumbra's first method and the baseline the others are measured against. Its CPU
+//! mirror is [`crate::lighting::brdf`].
+
+use crate::backend::{vk, Bind, BlendMode, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
+use crate::error::Result;
+use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::scene::{MethodDecl, MethodSchema};
+
+pub const SCHEMA: MethodSchema = MethodSchema { name: "forward", params: &[] };
+
+/// Forward has no quality settings: one configuration.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    vec![("forward".to_string(), decl.clone())]
+}
+
+/// The pipelines by the terms they draw: base + direct, base alone, direct alone.
+pub struct Forward {
+    both: PipelineId,
+    base: PipelineId,
+    direct: PipelineId,
+}
+
+impl Forward {
+    pub fn new(c: &mut CreateContext<'_>, _decl: &MethodDecl) -> Result<Self> {
+        let ds_format = c.gpu.caps().depth_stencil_format;
+        let mut pipeline = |terms: Terms| {
+            let mut desc = GraphicsPipelineDesc::new(&format!("forward {terms}"), "forward/forward.vert", Some("forward/forward.frag"));
+            desc.vertex_layout = vertex_layout();
+            // Thin surfaces (planes, leaves) are seen from both sides.
+            desc.raster.cull = vk::CullModeFlags::NONE;
+            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+            desc.depth_format = Some(ds_format);
+            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
+            if !terms.has(Term::Base) {
+                // Over another method's base: its depth decides what is seen; light adds.
+                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+                desc.color_targets[0].blend = BlendMode::Additive;
+            }
+            c.gpu.create_graphics_pipeline(&desc, c.shaders)
+        };
+        Ok(Forward { both: pipeline(Terms::BASE_DIRECT)?, base: pipeline(Terms::BASE)?, direct: pipeline(Terms::DIRECT)? })
+    }
+}
+
+impl LightingMethod for Forward {
+    fn name(&self) -> &'static str {
+        "forward"
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        let scene = frame.scene;
+        let t = frame.targets;
+        let uniforms = frame.uniforms;
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let base = frame.terms.has(Term::Base);
+        let pipeline = match (base, frame.terms.has(Term::Direct)) {
+            (true, true) => self.both,
+            (true, false) => self.base,
+            (false, true) => self.direct,
+            (false, false) => return Ok(()),
+        };
+        let mut pass = graph.pass(if base { "forward" } else { "forward direct" }).color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
+        pass.buffer(scene.vertices, Access::VertexRead, None).buffer(scene.indices, Access::IndexRead, None).buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials")).record(
+            move |ctx| {
+                let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
+                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+                ctx.rec.bind_pipeline(pipeline)?;
+                let lights: &[u8] = if scene.lights.is_empty() { &[0u8; 64] } else { bytemuck::cast_slice(&scene.lights) };
+                let uniform_bytes = bytemuck::bytes_of(&uniforms);
+                let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
+                record_draws(ctx, scene, &calls, |ctx, material| {
+                    let maps = scene.material_maps[material as usize];
+                    let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
+                    ctx.bind(&[
+                        ("frame", Bind::UniformData(uniform_bytes)),
+                        ("lights", Bind::StorageData(lights)),
+                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
+                        ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
+                        ("specular_map", Bind::Sampled { image: maps.specular, range: whole, sampler: s }),
+                    ])
+                })?;
+                ctx.rec.end_rendering();
+                Ok(())
+            },
+        );
+        Ok(())
+    }
+}

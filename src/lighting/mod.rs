@@ -1,0 +1,123 @@
+//! The lighting layer: what a lighting method is, how methods compose into a frame, and every
+//! technique in its own folder.
+//!
+//! A frame is the sum of three terms written into one radiance target that the renderer clears:
+//! the **base** term (depth, emission, ambient or light-map; the sky behind it is drawn by the
+//! renderer after the base), the **direct** term (light arriving straight from the light sources)
+//! and the **indirect** term (light after further bounces). A method supplies one or more terms
+//! ([`registry::MethodInfo::terms`]); a scene's configuration assigns each term to at most one
+//! method ([`Configuration`]). Methods after the base add into the target (additive blending) and
+//! test against the base's depth, so `shadow_volumes` can draw direct light over a baked
+//! light-map, or an LPV its indirect light over any direct method.
+//!
+//! Only [`registry`] names techniques; the commands above this layer go through it.
+
+pub mod brdf;
+pub mod registry;
+mod terms;
+
+pub mod forward;
+pub mod heightfield;
+pub mod shadow_volumes;
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::backend::{vk, Gpu, ImageId};
+use crate::bake::Baker;
+use crate::environment::EnvironmentMap;
+use crate::error::Result;
+use crate::gpu_scene::SceneGpu;
+use crate::graph::{RenderGraph, ResourceStates};
+use crate::scene::Scene;
+use crate::shaders::ShaderLibrary;
+
+pub use terms::{Configuration, Part, Term, Terms};
+
+/// Linear radiance: 32-bit float so captures read back exactly what the shaders computed.
+pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// Matches `FrameUniforms` in glsl/common/frame.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameUniforms {
+    pub view_proj: [f32; 16],
+    pub camera_pos: [f32; 4],
+    pub ambient: [f32; 4],
+    pub counts: [u32; 4],
+    /// Environment irradiance, 3-band SH (see `environment::raster`).
+    pub env_irradiance: [[f32; 4]; 9],
+}
+
+/// What a method writes into: linear HDR radiance plus a depth/stencil buffer.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameTargets {
+    pub radiance: ImageId,
+    pub depth_stencil: ImageId,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The renderer's clock, the one every method animates by.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameClock {
+    /// Frames rendered before this one (0 for the first).
+    pub frame: u64,
+    /// Animation time of this frame in seconds: `frame` × [`FrameClock::STEP_S`].
+    pub time_s: f32,
+}
+
+impl FrameClock {
+    /// Animation step per frame (a 60 Hz display).
+    pub const STEP_S: f32 = 1.0 / 60.0;
+
+    pub fn at(frame: u64) -> FrameClock {
+        FrameClock { frame, time_s: frame as f32 * Self::STEP_S }
+    }
+}
+
+/// Everything a method reads to build one frame.
+pub struct FrameContext<'a> {
+    pub gpu: &'a Gpu,
+    pub scene: &'a SceneGpu,
+    pub targets: FrameTargets,
+    pub uniforms: FrameUniforms,
+    pub clock: FrameClock,
+    /// The terms this method draws in this configuration. The target is cleared and, when this
+    /// method is not the base, holds the base's depth: a method without [`Term::Base`] must not
+    /// write depth and adds into the radiance.
+    pub terms: Terms,
+}
+
+/// What a method is created from: the device, the uploaded scene (vertex layout, draws with
+/// their object ids, materials, lights), the environment as loaded once, and the bake stage.
+pub struct CreateContext<'a> {
+    pub gpu: &'a mut Gpu,
+    pub shaders: &'a ShaderLibrary,
+    pub states: &'a mut ResourceStates,
+    pub scene: &'a Scene,
+    pub scene_gpu: &'a SceneGpu,
+    pub environment: &'a EnvironmentMap,
+    pub bakes: &'a mut Baker,
+    /// The terms this method will draw in the configuration being created.
+    pub terms: Terms,
+}
+
+pub trait LightingMethod {
+    /// The name scenes and `--method` use.
+    fn name(&self) -> &'static str;
+    /// Per-frame planning on the CPU (culling, animation) before any pass is recorded.
+    fn prepare(&mut self, _frame: &FrameContext<'_>) -> Result<()> {
+        Ok(())
+    }
+    /// Adds the passes that draw `frame.terms` into `frame.targets`.
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()>;
+}
+
+/// What the reference must contain for a method's error to mean something.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ReferenceKind {
+    /// Emission and light after one surface interaction (shadowed): direct-lighting methods.
+    Direct,
+    /// Up to this many bounces after the first hit (global illumination methods).
+    Bounces(u32),
+}

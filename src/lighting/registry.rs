@@ -1,0 +1,196 @@
+//! The registry: the only place that names techniques. Each entry says what the method accepts
+//! (its schema, checked when the scene is loaded), which terms it supplies, how `penumbra chart`
+//! sweeps it, what reference it is judged against, whether it draws translucent materials, how
+//! it is created, and what it adds to `profile`'s report.
+//!
+//! Adding a technique: a folder under `src/lighting/` with a type implementing
+//! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
+
+use super::terms::{self, Supply};
+use super::{forward, heightfield, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use crate::error::{Error, Result};
+use crate::scene::{MethodDecl, MethodSchema, Scene};
+use crate::timing::PassStats;
+
+/// Creates a method from its declaration.
+pub type CreateFn = fn(&mut CreateContext<'_>, &MethodDecl) -> Result<Box<dyn LightingMethod>>;
+
+/// Extra lines for `profile`'s report, from the frame's pass timings (`None`: nothing to add).
+pub type ReportFn = fn(&[PassStats]) -> Option<String>;
+
+/// One technique as the rest of penumbra sees it.
+pub struct MethodInfo {
+    pub schema: MethodSchema,
+    /// The terms it can supply, and whether it can supply a subset of them.
+    pub terms: Terms,
+    pub separable: bool,
+    /// The configurations to measure, as (label, declaration with the swept parameters set),
+    /// starting from the scene's declaration.
+    pub sweep: fn(&MethodDecl) -> Vec<(String, MethodDecl)>,
+    pub reference: ReferenceKind,
+    /// It draws materials with opacity < 1 (others refuse such scenes).
+    pub translucency: bool,
+    pub create: CreateFn,
+    /// Extra lines for `profile`'s report, from the frame's pass timings.
+    pub report: Option<ReportFn>,
+}
+
+/// Every method penumbra implements.
+pub fn registry() -> Vec<MethodInfo> {
+    vec![
+        MethodInfo {
+            schema: forward::SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: true,
+            sweep: forward::sweep,
+            reference: ReferenceKind::Direct,
+            translucency: false,
+            create: |c, d| Ok(Box::new(forward::Forward::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: shadow_volumes::SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: true,
+            sweep: shadow_volumes::sweep,
+            reference: ReferenceKind::Direct,
+            translucency: true,
+            create: |c, d| Ok(Box::new(shadow_volumes::ShadowVolumes::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: heightfield::PYRAMID_SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: false,
+            sweep: heightfield::pyramid_sweep,
+            reference: ReferenceKind::Direct,
+            translucency: false,
+            create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
+            report: Some(heightfield::measure::table_6_6),
+        },
+        MethodInfo {
+            schema: heightfield::BRUTE_FORCE_SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: false,
+            sweep: heightfield::brute_sweep,
+            reference: ReferenceKind::Direct,
+            translucency: false,
+            create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
+            report: Some(heightfield::measure::table_6_6),
+        },
+    ]
+}
+
+/// Every method scenes may declare, with its parameters.
+pub fn schemas() -> Vec<MethodSchema> {
+    registry().into_iter().map(|m| m.schema).collect()
+}
+
+pub fn info(name: &str) -> Result<MethodInfo> {
+    registry().into_iter().find(|m| m.schema.name == name).ok_or_else(|| Error::Usage(format!("method `{name}` is not implemented")))
+}
+
+fn supply() -> Vec<Supply> {
+    registry().iter().map(|m| Supply { name: m.schema.name, terms: m.terms, separable: m.separable }).collect()
+}
+
+/// Every configuration the scene declares: each method alone, then each combination.
+pub fn configurations(scene: &Scene) -> Result<Vec<Configuration>> {
+    scene.check_methods(&schemas())?;
+    Ok(terms::configurations(scene, &supply())?)
+}
+
+/// The configuration called `name` (a method or a combination), or the scene's first method.
+pub fn configuration(scene: &Scene, name: Option<&str>) -> Result<Configuration> {
+    let all = configurations(scene)?;
+    match name {
+        None => all.into_iter().next().ok_or_else(|| Error::Usage(format!("{}: the scene enables no method", scene.source))),
+        Some(n) => {
+            let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
+            all.into_iter().find(|c| c.name == n).ok_or_else(|| {
+                let known = schemas().iter().any(|s| s.name == n);
+                let why = if known { "is not enabled by the scene" } else { "is not a method or combination of the scene" };
+                Error::Usage(format!("{}: `{n}` {why} (it enables: {})", scene.source, names.join(", ")))
+            })
+        }
+    }
+}
+
+/// The configuration of one method declaration alone (the chart's sweep points).
+pub fn alone(decl: &MethodDecl) -> Configuration {
+    terms::alone(decl, &supply())
+}
+
+/// The reference a configuration is judged against: the most any of its parts models.
+pub fn reference_kind(config: &Configuration) -> Result<ReferenceKind> {
+    let mut kind = ReferenceKind::Direct;
+    for p in &config.parts {
+        kind = kind.max(info(&p.decl.name)?.reference);
+    }
+    Ok(kind)
+}
+
+/// Creates the methods of a configuration, in frame order, refusing translucent materials for
+/// methods that do not draw them.
+pub fn create(config: &Configuration, ctx: &mut CreateContext<'_>) -> Result<Vec<Box<dyn LightingMethod>>> {
+    let mut out = Vec::new();
+    for p in &config.parts {
+        let info = info(&p.decl.name)?;
+        if !info.translucency {
+            ctx.scene.refuse_translucency(&format!("the {} method", p.decl.name)).map_err(Error::Usage)?;
+        }
+        ctx.terms = p.terms;
+        out.push((info.create)(ctx, &p.decl)?);
+    }
+    Ok(out)
+}
+
+/// What the configuration's methods add to `profile`'s report.
+pub fn reports(config: &Configuration, passes: &[PassStats]) -> String {
+    let mut out = String::new();
+    let mut seen: Vec<usize> = Vec::new();
+    for p in &config.parts {
+        if let Ok(info) = info(&p.decl.name) {
+            if let Some(f) = info.report {
+                // Two parts with the same hook report once.
+                let id = f as usize;
+                if !seen.contains(&id) {
+                    seen.push(id);
+                    out += &f(passes).unwrap_or_default();
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The points `penumbra chart` measures for a configuration, as (label, configuration): a method
+/// alone is its own sweep; a combination is measured as declared, then with each part swept while
+/// the others stay as declared.
+pub fn sweep(config: &Configuration) -> Result<Vec<(String, Configuration)>> {
+    let part_sweep = |i: usize| -> Result<Vec<(String, Configuration)>> {
+        let p = &config.parts[i];
+        let info = info(&p.decl.name)?;
+        Ok((info.sweep)(&p.decl)
+            .into_iter()
+            .map(|(label, decl)| {
+                let mut c = config.clone();
+                c.parts[i].decl = decl;
+                (label, c)
+            })
+            .collect())
+    };
+    if config.parts.len() == 1 {
+        return part_sweep(0);
+    }
+    let mut out = vec![(config.name.clone(), config.clone())];
+    for i in 0..config.parts.len() {
+        for (label, c) in part_sweep(i)? {
+            let label = format!("{}: {label}", config.name);
+            if c != *config && !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, c));
+            }
+        }
+    }
+    Ok(out)
+}
