@@ -48,3 +48,22 @@ fn demo_survives_a_resize_under_validation() {
     let distinct: std::collections::HashSet<[u8; 4]> = window.pixels().map(|p| p.0).collect();
     assert!(distinct.len() > 50, "only {} distinct colours after the resize", distinct.len());
 }
+
+#[test]
+fn demo_cycles_through_the_scenes_methods_and_combinations() {
+    // The M key's switch, scripted: every 2 frames the next configuration; the window keeps
+    // presenting under validation through each switch, and wraps around.
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let scene = common::temp_path("demo-cycle.toml");
+    std::fs::write(
+        &scene,
+        "methods = [\"forward\", { name = \"shadow_volumes\", mode = \"physical\" }]\n[[combinations]]\nname = \"mixed\"\nbase = \"forward\"\ndirect = \"shadow_volumes\"\n[camera]\nposition = [0, 2, 4]\ntarget = [0, 0.3, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.5, 0.5, 0.5]\ntranslate = [0, 0.25, 0]\n[[lights]]\ntype = \"point\"\nposition = [1, 2, 1]\nintensity = 5\n",
+    )
+    .unwrap();
+    let o =
+        Command::new(env!("CARGO_BIN_EXE_penumbra")).arg("demo").arg(&scene).args(["--size", "64x48", "--frames", "9", "--cycle-every", "2", "--validation", "--device", &device]).output().unwrap();
+    assert!(o.status.success(), "demo failed:\n{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let switches: Vec<&str> = out.lines().filter_map(|l| l.strip_prefix("configuration: ")).collect();
+    assert_eq!(switches, ["shadow_volumes", "mixed", "forward", "shadow_volumes"], "{out}");
+}
