@@ -281,3 +281,31 @@ fn every_input_gives_a_value_or_one_error_line() {
 fn long_campaign() {
     campaign(20);
 }
+
+/// Property checks of the metrics on random images: identities any implementation must keep.
+#[test]
+fn metric_identities_hold_on_random_images() {
+    let mut rng = Rng(7);
+    let mut image = |w: u32, h: u32| HdrImage {
+        width: w,
+        height: h,
+        pixels: (0..w * h).map(|_| [0, 1, 2].map(|_| (rng.next() % 10_000) as f32 / 1000.0).into_iter().chain([1.0]).collect::<Vec<_>>().try_into().unwrap()).collect(),
+    };
+    for _ in 0..40 {
+        let (a, b) = (image(7, 5), image(7, 5));
+        let o = CompareOptions::default();
+        let same = compare(&a, &a, &o).unwrap();
+        assert_eq!((same.rmse, same.rel_mse, same.mean_bias, same.p99_abs_error, same.max_abs_error, same.flip_mean), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0));
+        let (ab, ba) = (compare(&a, &b, &o).unwrap(), compare(&b, &a, &o).unwrap());
+        assert!((ab.rmse - ba.rmse).abs() <= 1e-12 * ab.rmse.max(1.0), "RMSE is symmetric");
+        assert!((ab.mean_bias + ba.mean_bias).abs() <= 1e-9, "bias is antisymmetric");
+        assert!((ab.max_abs_error - ba.max_abs_error).abs() <= 1e-9 && ab.p99_abs_error <= ab.max_abs_error);
+        assert!(ab.mean_bias.abs() <= ab.rmse + 1e-12, "|bias| ≤ RMSE");
+        assert!((0.0..=1.0).contains(&ab.flip_mean));
+        // A constant offset c gives bias c and RMSE |c| exactly (up to rounding).
+        let c = 0.25f32;
+        let shifted = HdrImage { pixels: a.pixels.iter().map(|p| [p[0] + c, p[1] + c, p[2] + c, 1.0]).collect(), ..a.clone() };
+        let m = compare(&shifted, &a, &o).unwrap();
+        assert!((m.mean_bias - c as f64).abs() < 1e-5 && (m.rmse - c as f64).abs() < 1e-5, "{m:?}");
+    }
+}
