@@ -501,57 +501,112 @@ fn hanning_window_damps_the_leak_below() {
     assert!(under_w / over_w < 0.5 * under / over, "{under_w}/{over_w} vs {under}/{over}");
 }
 
+/// Pyramid − brute force horizon statistics in degrees over a set of differences.
+#[derive(Debug, Clone, Copy)]
+struct HorizonError {
+    bias: f64,
+    mae: f64,
+    /// 95th percentile of |Δ|.
+    p95: f64,
+    /// Largest Δ (overshoot above the true horizon).
+    max: f64,
+}
+
+fn horizon_error(pyr: &[f32], brute: &[f32], res: u32) -> HorizonError {
+    let mut diffs = Vec::new();
+    for dir in 0..32usize {
+        for j in (res / 4..3 * res / 4).step_by(3) {
+            for i in (res / 4..3 * res / 4).step_by(3) {
+                let k = dir * (res * res) as usize + (j * res + i) as usize;
+                diffs.push((pyr[k] - brute[k]).to_degrees() as f64);
+            }
+        }
+    }
+    let n = diffs.len() as f64;
+    let mut abs: Vec<f64> = diffs.iter().map(|d| d.abs()).collect();
+    abs.sort_by(|a, b| a.total_cmp(b));
+    HorizonError { bias: diffs.iter().sum::<f64>() / n, mae: abs.iter().sum::<f64>() / n, p95: abs[(0.95 * n) as usize], max: diffs.iter().cloned().fold(f64::MIN, f64::max) }
+}
+
 /// E1: the pyramid horizon against the ray-marched one (0.25-texel steps, marched 2·res so a wall
 /// just past the pyramid's reach counts) on the digest's fields (a wall, a sine grating, cones,
-/// fBm), ls = 4, lo = 4, every 3rd texel of the central quarter in all 32 directions: biased low
-/// by less than 2°, and nowhere above it by more than about 1° (1.25°: a coarse level spreads a
-/// cone sideways, so a ray grazing past it sees up to 1.1°). The faithful receiver height (each
-/// level's own) overshoots by 4.6° on the wall's plateau, which the corrected mode removes.
+/// fBm), every 3rd texel of the central quarter in all 32 directions, for ls ∈ {1, 2, 4} ×
+/// lo ∈ {0, 2, 4} (corrected mode) and the faithful mode at ls = 4, lo = 4. Measured on
+/// lavapipe (bias / MAE / p95 / largest overshoot, degrees, ls = 4, lo = 4): wall −1.35 / 1.35
+/// / 6.33 / 0; sine −1.03 / 1.03 / 2.86 / 0.16; cones −1.67 / 1.76 / 7.22 / 1.12; fBm −0.57 /
+/// 0.57 / 1.81 / 0.67. Asserted:
+/// - at ls = 4, lo = 4, the digest's expectation: bias in [−2°, 0], MAE ≤ 2°;
+/// - p95 within 10% above the measured value per field (lo = 2 has 10.9–16.3° on the wall, sine
+///   and cones, 3.5° on fBm, so a lost level offset fails);
+/// - the overshoot: the digest's "about 1°" as ≤ 1° on the wall, sine and fBm (0, 0.16, 0.67
+///   measured), and ≤ 1.25° on the cones (1.12 measured: a coarse level spreads a cone sideways,
+///   so a ray grazing past it sees its blurred skirt; the low-pass pyramid's own error, not a
+///   bug). The faithful receiver height (each level's own) overshoots 4.6° on the wall's plateau,
+///   which the corrected mode removes (checked: the faithful plateau overshoot is > 3°);
+/// - the sweep: the MAE falls with lo (0 → 2 → 4) at every ls, and with ls (1 → 2 → 4) at
+///   lo = 2 and lo = 4, on every field (the digest's "error falls monotonically with ls and lo").
+///   At lo = 0 the ls steps change the MAE by < 0.4° and not always downward (sine 8.06 → 8.12,
+///   cones 7.41 → 7.42 from ls = 2 to 4), so that row is printed, not asserted. The smallest
+///   asserted step is 0.05° (fBm, ls = 2 → 4 at lo = 2).
 #[test]
 fn pyramid_horizon_against_brute_force() {
     // The digest's §4.2 fields at 128² over 8 m (16 texels per metre): a wall 20 texels high, the
     // sine of wavelength 32 texels and amplitude 8, cones, fBm mountains up to 40 texels.
+    // (name, field, p95 bound, overshoot bound at ls = 4, lo = 4)
     let fields = [
-        ("step", "generator = \"step\"\nheight = 1.25\nposition = 0.3"),
-        ("sine", "generator = \"sine\"\nwavelength = 2\nheight = 1\npattern_rotate_deg = 20"),
-        ("cones", "generator = \"cones\"\ncount = 7\nradius = 0.8\nring_radius = 2.2\nsize_variation = 0.6\nheight = 1.4"),
-        ("fbm", "generator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 2.5"),
+        ("step", "generator = \"step\"\nheight = 1.25\nposition = 0.3", 7.0, 1.0),
+        ("sine", "generator = \"sine\"\nwavelength = 2\nheight = 1\npattern_rotate_deg = 20", 3.2, 1.0),
+        ("cones", "generator = \"cones\"\ncount = 7\nradius = 0.8\nring_radius = 2.2\nsize_variation = 0.6\nheight = 1.4", 8.0, 1.25),
+        ("fbm", "generator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 2.5", 2.0, 1.0),
     ];
+    // One validated device for every run (a device per run doubles the test's time).
+    let mut gpu = Some(common::test_gpu());
+    let mut horizons = |field: &str, method: &str| {
+        let s = scene(field, method, SKY);
+        let mut h = Standalone::new(gpu.take().unwrap(), &s, &s.methods[0]).unwrap();
+        let out = h.horizons(0.0, None).unwrap();
+        clean(&h);
+        gpu = Some(h.gpu);
+        out
+    };
     let mut failures = Vec::new();
-    for (name, gen) in fields {
+    for (name, gen, p95_bound, overshoot_bound) in fields {
         let field = format!("size = 8\nresolution = 128\n{gen}");
-        let mut hb = harness(&scene(&field, r#"{ name = "heightfield_bruteforce", march_step = 0.25, max_distance = 256 }"#, SKY));
-        let brute = hb.horizons(0.0, None).unwrap();
-        clean(&hb);
-        for mode in ["corrected", "faithful"] {
-            let mut hp = harness(&scene(&field, &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#), SKY));
-            let pyr = hp.horizons(0.0, None).unwrap();
-            clean(&hp);
-            let mut diffs = Vec::new();
-            for dir in 0..32usize {
-                for j in (32..96u32).step_by(3) {
-                    for i in (32..96u32).step_by(3) {
-                        let k = dir * 128 * 128 + (j * 128 + i) as usize;
-                        diffs.push((pyr[k] - brute[k]).to_degrees() as f64);
+        let brute = horizons(&field, r#"{ name = "heightfield_bruteforce", march_step = 0.25, max_distance = 256 }"#);
+        // mae[ls index][lo index]
+        let mut mae = [[0.0f64; 3]; 3];
+        for (a, ls) in [1u32, 2, 4].into_iter().enumerate() {
+            for (b, lo) in [0u32, 2, 4].into_iter().enumerate() {
+                let e = horizon_error(&horizons(&field, &format!(r#"{{ name = "heightfield_pyramid", ls = {ls}, lo = {lo} }}"#)), &brute, 128);
+                eprintln!("{name}, ls {ls}, lo {lo}: pyramid − brute force (degrees): bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}", e.bias, e.mae, e.p95, e.max);
+                mae[a][b] = e.mae;
+                if ls == 4 && lo == 4 {
+                    if !(-2.0..=0.0).contains(&e.bias) || e.mae > 2.0 {
+                        failures.push(format!("{name}: bias {:.3}, MAE {:.3} (digest: bias in [−2, 0], MAE ≤ 2)", e.bias, e.mae));
+                    }
+                    if e.p95 > p95_bound {
+                        failures.push(format!("{name}: p95 {:.3} > {p95_bound}", e.p95));
+                    }
+                    if e.max > overshoot_bound {
+                        failures.push(format!("{name}: overshoot {:.3}° > {overshoot_bound}°", e.max));
                     }
                 }
             }
-            let n = diffs.len() as f64;
-            let bias = diffs.iter().sum::<f64>() / n;
-            let mae = diffs.iter().map(|d| d.abs()).sum::<f64>() / n;
-            let mut sorted = diffs.clone();
-            sorted.sort_by(|a, b| a.total_cmp(b));
-            let (p99, max) = (sorted[(0.99 * n) as usize], sorted[sorted.len() - 1]);
-            eprintln!("{name}, {mode}: pyramid − brute force (degrees): bias {bias:.3}, MAE {mae:.3}, p99 {p99:.3}, max {max:.3}, p1 {:.3}", sorted[(0.01 * n) as usize]);
-            if !(-2.0..=0.0).contains(&bias) {
-                failures.push(format!("{name}, {mode}: bias {bias:.3}"));
+        }
+        for (a, ls) in [1, 2, 4].into_iter().enumerate() {
+            if !(mae[a][0] > mae[a][1] && mae[a][1] > mae[a][2]) {
+                failures.push(format!("{name}, ls {ls}: MAE does not fall with lo: {:?}", mae[a]));
             }
-            if mode == "corrected" && max > 1.25 {
-                failures.push(format!("{name}: overshoot {max:.3}°"));
+        }
+        for (b, lo) in [(1usize, 2), (2, 4)] {
+            if !(mae[0][b] > mae[1][b] && mae[1][b] > mae[2][b]) {
+                failures.push(format!("{name}, lo {lo}: MAE does not fall with ls: {:?}", [mae[0][b], mae[1][b], mae[2][b]]));
             }
-            if mode == "faithful" && name == "step" && max < 3.0 {
-                failures.push(format!("the faithful plateau overshoot is gone ({max:.3}°): is the mode switch applied?"));
-            }
+        }
+        let faithful = horizon_error(&horizons(&field, r#"{ name = "heightfield_pyramid", mode = "faithful" }"#), &brute, 128);
+        eprintln!("{name}, faithful: bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}", faithful.bias, faithful.mae, faithful.p95, faithful.max);
+        if name == "step" && faithful.max < 3.0 {
+            failures.push(format!("the faithful plateau overshoot is gone ({:.3}°): is the mode switch applied?", faithful.max));
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
