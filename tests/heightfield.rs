@@ -121,19 +121,107 @@ fn wall_against_one_plus_cos_beta() {
     }
 }
 
-/// C3: a plane of slope α (normal tilted by α, horizon atan(tan α cos φ) uphill, 0 downhill):
-/// (1 + cos α)/2 within 1%, for the pyramid and the brute force.
+/// Writes a `res`² EXR of heights (metres, row-major, row 0 at −z) for a `path` field with
+/// `height = 1`: texel (i, j) of the field reads `values[j·res + i]` exactly.
+fn write_heights(name: &str, res: u32, values: &[f32]) -> std::path::PathBuf {
+    let path = common::temp_path(name);
+    penumbra::image_io::HdrImage { width: res, height: res, pixels: values.iter().map(|&v| [v, v, v, 1.0]).collect() }.write_exr(&path).unwrap();
+    path
+}
+
+/// Exit radiance of texel `p` of a `res`² field (texel `spacing` metres) with normal `n` (world,
+/// y up) under a unit sky, ρ = 1, in the methods' model (the field bilinear between texel
+/// centres and edge-clamped, the environment horizon clamped at 0), by brute force and no SH:
+/// horizons marched at 1/16-texel steps to 2·res in 1440 azimuths, then (1/π) ∫∫ max(n·u, 0)
+/// over the sky above them by the midpoint rule (1000 elevations). Independent of the tables,
+/// the pyramid and the transfer product.
+fn sky_by_quadrature(h: &[f32], res: u32, spacing: f64, p: (u32, u32), n: glam::DVec3) -> f64 {
+    let at = |i: i64, j: i64| h[(j.clamp(0, res as i64 - 1) * res as i64 + i.clamp(0, res as i64 - 1)) as usize] as f64;
+    let bilinear = |x: f64, z: f64| {
+        let (i, j) = (x.floor(), z.floor());
+        let (tx, tz) = (x - i, z - j);
+        let (i, j) = (i as i64, j as i64);
+        let a = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
+        let b = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
+        a + (b - a) * tz
+    };
+    let h0 = at(p.0 as i64, p.1 as i64);
+    let (n_phi, n_theta, step) = (1440usize, 1000usize, 1.0 / 16.0);
+    let mut sum = 0.0;
+    for a in 0..n_phi {
+        let phi = std::f64::consts::TAU * (a as f64 + 0.5) / n_phi as f64;
+        let (sp, cp) = phi.sin_cos();
+        let mut slope = 0.0f64;
+        for m in 1..=(2 * res as usize * 16) {
+            let d = m as f64 * step;
+            slope = slope.max((bilinear(p.0 as f64 + d * cp, p.1 as f64 + d * sp) - h0) / (d * spacing));
+        }
+        let omega = slope.atan();
+        let dtheta = (std::f64::consts::FRAC_PI_2 - omega) / n_theta as f64;
+        for b in 0..n_theta {
+            let theta = omega + (b as f64 + 0.5) * dtheta;
+            let (st, ct) = theta.sin_cos();
+            let u = glam::DVec3::new(ct * cp, st, ct * sp);
+            sum += n.dot(u).max(0.0) * ct * dtheta;
+        }
+    }
+    sum * std::f64::consts::TAU / n_phi as f64 / std::f64::consts::PI
+}
+
+/// C3: a plane of slope α (normal tilted by α toward −x, horizon atan(tan α cos φ) uphill, 0
+/// downhill). Bare, it gives (1 + cos α)/2 (and the digest's §4.1 SH values, ±5e-4) — but so
+/// does a method that ignores occlusion, since the slope only hides sky behind the tangent
+/// plane, where the clamped cosine is 0. So the same plane also carries a ridge across the
+/// field downhill, where the tilted normal leans (a raised cosine 4 m high and 20 texels wide,
+/// centred 14 texels from the receiver, flat at the receiver so its normal stays the plane's),
+/// judged against the brute-force quadrature above. The ridge hides 0.29–0.45 of the light.
+/// Measured (lavapipe): the brute force within 0.54% of the quadrature (1.5% allowed, the SH
+/// stage's own error with exact horizons, digest §4.1: ≤ 0.8%); the pyramid brighter by 0.018
+/// (α = 15°) to 0.041 (α = 60°) — its horizons of the ridge are 1–6° low, the B-spline
+/// maximum pulled down by the steep plane's negative samples next to it (E1's bias, larger on
+/// a slope) — so 0.05 allowed, one-sided. Ignoring the ridge, or occlusion altogether, fails.
 #[test]
 fn tilted_plane_against_one_plus_cos_alpha() {
-    for alpha in [15.0f32, 30.0, 45.0, 60.0] {
-        for method in [PYRAMID, BRUTE] {
-            let s = scene(&format!("size = 4\nresolution = 32\ngenerator = \"slope\"\nslope_deg = {alpha}"), method, SKY);
-            let mut h = harness(&s);
-            let got = h.shading(0.0).unwrap()[16 * 32 + 16][0];
-            let exact = 0.5 * (1.0 + alpha.to_radians().cos());
-            eprintln!("slope α = {alpha}° {method}: {got:.4} (exact {exact:.4})");
-            assert!((got - exact).abs() / exact < 0.01, "α {alpha} {method}: {got} vs {exact}");
-            clean(&h);
+    let (res, spacing) = (64u32, 0.125f64);
+    let (ri, rj) = (40u32, 32u32);
+    for (alpha_deg, digest_sh) in [(15.0f64, 0.9747f64), (30.0, 0.9263), (45.0, 0.8517), (60.0, 0.7517)] {
+        let ta = alpha_deg.to_radians().tan();
+        let ridge = |i: f64| if (i - 26.0).abs() < 10.0 { 2.0 * (1.0 + (std::f64::consts::PI * (i - 26.0) / 10.0).cos()) } else { 0.0 };
+        let field = |with_ridge: bool| -> Vec<f32> {
+            (0..res * res)
+                .map(|k| {
+                    let i = (k % res) as f64;
+                    (i * spacing * ta + if with_ridge { ridge(i) } else { 0.0 }) as f32
+                })
+                .collect()
+        };
+        let n = glam::DVec3::new(-ta, 1.0, 0.0).normalize();
+        let closed_form = 0.5 * (1.0 + alpha_deg.to_radians().cos());
+        for with_ridge in [false, true] {
+            let heights = field(with_ridge);
+            let want = sky_by_quadrature(&heights, res, spacing, (ri, rj), n);
+            if !with_ridge {
+                // The quadrature itself against the closed form.
+                assert!((want - closed_form).abs() < 2e-4, "α {alpha_deg}: quadrature {want} vs (1 + cos α)/2 = {closed_form}");
+            } else {
+                assert!(closed_form - want > 0.25, "α {alpha_deg}: the ridge must hide far more than the tolerances: {want} vs {closed_form}");
+            }
+            let path = write_heights(&format!("slope_{alpha_deg}_{with_ridge}.exr"), res, &heights);
+            for method in [PYRAMID, BRUTE] {
+                let s = scene(&format!("size = 8\nresolution = {res}\npath = \"{}\"\nheight = 1", path.display()), method, SKY);
+                let mut h = harness(&s);
+                let got = h.shading(0.0).unwrap()[(rj * res + ri) as usize][0] as f64;
+                clean(&h);
+                eprintln!("slope α = {alpha_deg}°, ridge {with_ridge}, {method}: {got:.4} (quadrature {want:.4}, {:+.4}; (1 + cos α)/2 = {closed_form:.4})", got - want);
+                if !with_ridge {
+                    assert!((got - want).abs() / want < 0.01, "α {alpha_deg} {method}: {got} vs {want}");
+                    assert!((got - digest_sh).abs() < 5e-4, "α {alpha_deg} {method}: {got} vs the digest's SH value {digest_sh}");
+                } else if method == BRUTE {
+                    assert!((got - want).abs() / want < 0.015, "α {alpha_deg}, ridge, {method}: {got} vs {want}");
+                } else {
+                    assert!(got - want < 0.05 && got - want > -0.005, "α {alpha_deg}, ridge, {method}: {got} vs {want}");
+                }
+            }
         }
     }
 }
@@ -277,34 +365,77 @@ fn occluders_beyond_the_light_do_not_count() {
     }
 }
 
-/// D4: a wall between the receiver and the light: the light's contribution does not increase
-/// with the wall's height (after the clamp), and a wall far above the light leaves little.
+/// D4: a wall between the receiver and the light (θ_l = 10° at 30° elevation, 2 m away toward
+/// +x; the wall 0.5 m toward it, across the field, of elevation β). Each light value (before
+/// the accumulation's clamp) is judged against the SH pipeline with exact wedges and the
+/// wall's geometric horizons (atan(tan β cos φ) where the wall is nearer than the light's
+/// planar distance, 1.73 m, i.e. |φ| < 73°; 0 elsewhere), computed here on the CPU — whose
+/// infinite-wall values are the digest's (cpu.rs `umbra_leak_of_a_small_light_behind_a_wall`).
+/// Unoccluded it is the digest's 0.01398. The light's top is at 40°, so from β = 45° on it is
+/// fully hidden, yet the 16-coefficient product still lets 0.0036 through at 45° (the digest's
+/// value for the infinite wall; 0.0034 for this one) and goes negative further in (digest:
+/// about −0.0006 at 60°; here −0.0008 at 60° and −0.0038 at 78.7°). The shading clamps at 0, so
+/// the fully hidden light shades to exactly 0 (the old bound, 35% of the open value, let a
+/// method that dropped the clamp or half the occlusion through). Measured (lavapipe): the brute
+/// force within 9.4e-5 of the CPU values (1.5e-4 allowed; the walls' steps are ≥ 3e-3); the
+/// pyramid never darker than them and at most 1.1e-3 brighter (its wall horizons are low; 2e-3
+/// allowed). Values do not increase with the wall's height.
 #[test]
 fn occluder_in_front_darkens_monotonically() {
-    // Light at 30° elevation, 10° half-angle, 2 m away toward +x from texel (16, 32); wall at
-    // 0.5 m toward the light.
+    use penumbra::lighting::heightfield::cpu::{shade, sphere_light, transfer_cosine};
+    use penumbra::lighting::heightfield::wedge::{visibility, WedgeSource};
     let (rx, rz) = texel_xz(16, 32, 64, 8.0);
-    let dist = 2.0f32;
-    let c = Vec3::new(rx + dist * 30f32.to_radians().cos(), dist * 30f32.to_radians().sin(), rz);
-    let light = sphere(c, dist * 10f32.to_radians().sin(), 1.0);
-    let mut values = Vec::new();
-    for wall in [0.0f32, 0.25, 0.6, 2.5] {
-        for method in [PYRAMID, BRUTE] {
-            let mut h = harness(&scene(&format!("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = {}\nheight = {wall}", rx + 0.5 - 0.0625), method, &light));
-            let v = h.shading(0.0).unwrap()[32 * 64 + 16][0];
-            values.push((wall, method, v));
-            clean(&h);
-        }
-    }
+    let (dist, elev, half) = (2.0f64, 30f64.to_radians(), 10f64.to_radians());
+    let c = Vec3::new(rx + (dist * elev.cos()) as f32, (dist * elev.sin()) as f32, rz);
+    let light = sphere(c, (dist * half.sin()) as f32, 1.0);
+    let d_li = dist * elev.cos();
+    // The CPU value for a wall of height h (0: none), unclamped.
+    let cpu = |h: f64| {
+        let horizons: Vec<f64> = (0..32)
+            .map(|j| {
+                let cos_phi = (std::f64::consts::TAU * j as f64 / 32.0).cos();
+                if h > 0.0 && cos_phi > 1e-9 && 0.5 / cos_phi <= d_li {
+                    (h * cos_phi / 0.5).atan()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let v = visibility(&horizons, WedgeSource::Exact, 4).unwrap();
+        let l = sphere_light(glam::DVec3::new(elev.cos(), 0.0, elev.sin()), half.sin(), 4).unwrap();
+        shade(&v, &transfer_cosine(glam::DVec3::Z, 4).unwrap(), &l, 4).unwrap()
+    };
+    // Wall heights: none, β = 20°, 45°, 60° and 78.7° (2.5 m).
+    let walls = [0.0f64, 0.5 * 20f64.to_radians().tan(), 0.5, 0.5 * 60f64.to_radians().tan(), 2.5];
     for method in [PYRAMID, BRUTE] {
-        let seq: Vec<(f32, f32)> = values.iter().filter(|(_, m, _)| *m == method).map(|(w, _, v)| (*w, *v)).collect();
-        eprintln!("{method}: wall height → light: {seq:?}");
+        let mut seq = Vec::new();
+        for wall in walls {
+            let mut h = harness(&scene(&format!("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = {}\nheight = {wall}", rx + 0.5 - 0.0625), method, &light));
+            let k = 32 * 64 + 16;
+            let raw = h.light_radiance(0.0, 0).unwrap()[k][0] as f64;
+            let shaded = h.shading(0.0).unwrap()[k][0] as f64;
+            clean(&h);
+            let want = cpu(wall);
+            let beta = (wall / 0.5).atan().to_degrees();
+            eprintln!("{method}: wall β = {beta:.1}°: light {raw:.5} (CPU exact-horizon SH {want:.5}, {:+.1e}), shading {shaded:.5}", raw - want);
+            if method == BRUTE {
+                assert!((raw - want).abs() < 1.5e-4, "{method} β {beta:.1}°: {raw} vs {want}");
+            } else {
+                assert!(raw - want > -1e-4 && raw - want < 2e-3, "{method} β {beta:.1}°: {raw} vs {want}");
+            }
+            assert_eq!(shaded, raw.max(0.0) as f32 as f64, "{method} β {beta:.1}°: the shading is the light clamped at 0");
+            seq.push((wall, raw, shaded));
+        }
         for w in seq.windows(2) {
             assert!(w[1].1 <= w[0].1 + 1e-6, "{method}: {seq:?}");
         }
-        let (open, closed) = (seq[0].1, seq.last().unwrap().1);
-        assert!(closed < 0.35 * open, "{method}: a wall above the light leaves {closed} of {open}");
+        assert!((seq[0].1 - 0.01398).abs() < 1e-4, "{method}: unoccluded {} vs the digest's 0.01398", seq[0].1);
+        let hidden = seq.last().unwrap();
+        assert!(cpu(2.5) < -1e-3 && hidden.1 < 0.0, "{method}: the fully hidden light's SH value is negative before the clamp: {}", hidden.1);
+        assert_eq!(hidden.2, 0.0, "{method}: a wall above the light leaves {} of {}", hidden.2, seq[0].2);
     }
+    // The digest's infinite-wall residuals, for comparison: 0.0036 at 45°, about −0.0006 at 60°.
+    assert!((cpu(0.5) - 0.0036).abs() < 3e-4 && (cpu(0.5 * 60f64.to_radians().tan()) + 0.0006).abs() < 3e-4, "{} {}", cpu(0.5), cpu(0.5 * 60f64.to_radians().tan()));
 }
 
 /// D5 (a recorded metric) and D7 (guards): a light below a flat surface leaks through the
@@ -342,9 +473,46 @@ fn leak_below_and_guards() {
     }
 }
 
+/// A unit sphere light of half-angle `a` straight above (`up`) or below a flat receiver with an
+/// open horizon, as the 4-band pipeline computes it, from closed forms only (no tables, no
+/// triple-product terms, no SH library): everything is zonal about the normal, so with
+/// ỹ_l(z) = √((2l+1)/4π)·P_l(z) the visibility is the hemisphere [√π, √(3π)/2, 0, −√(7π)/8],
+/// the cosine (1/π)[√π/2, √(π/3), √(5π)/8, 0], the light the cap of the seed's Appendix A.1
+/// (times (−1)^l below), and the truncated product T_l = 2π ∫ V(z) C(z) ỹ_l(z) dz (the
+/// product of the two 4-band reconstructions projected on band l; midpoint rule, 20000 nodes),
+/// each band scaled by `window[l]`; the light is Σ_l T_l L_l.
+fn flat_receiver_light_closed_form(a: f64, up: bool, window: [f64; 4]) -> f64 {
+    use std::f64::consts::PI;
+    let sp = PI.sqrt();
+    let norm = |l: usize| ((2 * l + 1) as f64 / (4.0 * PI)).sqrt();
+    let legendre = |z: f64| [1.0, z, 0.5 * (3.0 * z * z - 1.0), 0.5 * (5.0 * z * z * z - 3.0 * z)];
+    let recon = |f: [f64; 4], z: f64| -> f64 { (0..4).map(|l| f[l] * norm(l) * legendre(z)[l]).sum() };
+    let vis = [sp, (3.0 * PI).sqrt() / 2.0, 0.0, -(7.0 * PI).sqrt() / 8.0];
+    let cosine = [sp / 2.0 / PI, (PI / 3.0).sqrt() / PI, (5.0 * PI).sqrt() / 8.0 / PI, 0.0];
+    let (c, s2) = (a.cos(), a.sin().powi(2));
+    let cap = [sp * (1.0 - c), (3.0 * PI).sqrt() / 2.0 * s2, (5.0 * PI).sqrt() / 2.0 * c * s2, (7.0 * PI).sqrt() / 8.0 * s2 * (5.0 * c * c - 1.0)];
+    let n = 20000;
+    let mut t = [0.0f64; 4];
+    for k in 0..n {
+        let z = -1.0 + (k as f64 + 0.5) * 2.0 / n as f64;
+        let vc = recon(vis, z) * recon(cosine, z);
+        for (l, tl) in t.iter_mut().enumerate() {
+            *tl += 2.0 * PI * vc * norm(l) * legendre(z)[l] * 2.0 / n as f64;
+        }
+    }
+    (0..4).map(|l| window[l] * t[l] * cap[l] * if up || l % 2 == 0 { 1.0 } else { -1.0 }).sum()
+}
+
 /// The `window` setting damps the 4-band ringing where the method fails: a light below the
-/// surface leaks 0.7% of its overhead value instead of 6.5%, on the GPU exactly as the CPU
-/// mirror computes it (the flat-plane test checks that a unit sky is untouched).
+/// surface (θ_l = 10°, on a flat field) leaks 6.51% of its overhead value without a window
+/// (the digest's 6.5%) and 0.70% with Hanning of width 5 (the README's claim), each judged
+/// against the closed form above (Hanning σ_l = (1 + cos(πl/5))/2) — independent of the tables
+/// and term lists — and against the CPU mirror. Measured (lavapipe): the GPU within 3.2e-4
+/// (relative) of the closed form overhead and 5.7e-6 below (the local table's bilinear lookup
+/// at 0°, where it has no node; 5e-4 and 1e-5 allowed — the window moves them by 4.5e-3 and
+/// 1.9e-3), and within 1e-7 of the mirror; the GPU's ratios within 0.003 percentage points of
+/// 6.51% and 0.70%, the closed form's 6.53% and 0.705% (0.02 allowed on the GPU's, 0.03 between
+/// them; by the closed form a width-6 window leaks 2.4%, width 4 goes negative, −2.0%).
 #[test]
 fn hanning_window_damps_the_leak_below() {
     use penumbra::lighting::heightfield::cpu::{shade_horizons, sphere_light};
@@ -360,67 +528,133 @@ fn hanning_window_damps_the_leak_below() {
         clean(&h);
         (images[0][16 * 64 + 16][0] as f64, images[1][16 * 64 + 48][0] as f64)
     };
-    let (over, under) = run(PYRAMID);
-    let (over_w, under_w) = run(r#"{ name = "heightfield_pyramid", window = "hanning" }"#);
-    let settings = Settings { window: Window::Hanning(5.0), ..Settings::default() };
-    let cpu = |dir: glam::DVec3| shade_horizons(&[0.0; 32], TableKind::Local, &settings, glam::DVec3::Z, &sphere_light(dir, (a as f64).sin(), 4).unwrap()).unwrap();
-    eprintln!("leak below / overhead: {:.2}% without a window, {:.2}% with Hanning (width 5)", 100.0 * under / over, 100.0 * under_w / over_w);
-    assert!((over_w - cpu(glam::DVec3::Z)).abs() < 1e-4 * over_w, "{over_w} vs {}", cpu(glam::DVec3::Z));
-    assert!((under_w - cpu(-glam::DVec3::Z)).abs() < 1e-6, "{under_w} vs {}", cpu(-glam::DVec3::Z));
-    assert!(under_w / over_w < 0.5 * under / over, "{under_w}/{over_w} vs {under}/{over}");
+    let hanning = |l: f64| 0.5 * (1.0 + (std::f64::consts::PI * l / 5.0).cos());
+    for (method, window, want_ratio) in [(PYRAMID, [1.0; 4], 0.0651), (r#"{ name = "heightfield_pyramid", window = "hanning" }"#, [hanning(0.0), hanning(1.0), hanning(2.0), hanning(3.0)], 0.0070)] {
+        let (over, under) = run(method);
+        let (over_cf, under_cf) = (flat_receiver_light_closed_form(a as f64, true, window), flat_receiver_light_closed_form(a as f64, false, window));
+        eprintln!(
+            "{method}: leak below / overhead {:.3}% (closed form {:.3}%); overhead {over:.6} vs {over_cf:.6}, below {under:.3e} vs {under_cf:.3e}",
+            100.0 * under / over,
+            100.0 * under_cf / over_cf
+        );
+        assert!((over - over_cf).abs() < 5e-4 * over_cf && (under - under_cf).abs() < 1e-5, "{method}: GPU ({over}, {under}) vs closed form ({over_cf}, {under_cf})");
+        assert!((under / over - want_ratio).abs() < 2e-4, "{method}: ratio {} vs {want_ratio}", under / over);
+        assert!((under / over - under_cf / over_cf).abs() < 3e-4, "{method}: ratio {} vs the closed form's {}", under / over, under_cf / over_cf);
+        if window[1] < 1.0 {
+            let settings = Settings { window: Window::Hanning(5.0), ..Settings::default() };
+            let cpu = |dir: glam::DVec3| shade_horizons(&[0.0; 32], TableKind::Local, &settings, glam::DVec3::Z, &sphere_light(dir, (a as f64).sin(), 4).unwrap()).unwrap();
+            assert!((over - cpu(glam::DVec3::Z)).abs() < 1e-4 * over, "{over} vs {}", cpu(glam::DVec3::Z));
+            assert!((under - cpu(-glam::DVec3::Z)).abs() < 1e-6, "{under} vs {}", cpu(-glam::DVec3::Z));
+        }
+    }
+}
+
+/// Pyramid − brute force horizon statistics in degrees over a set of differences.
+#[derive(Debug, Clone, Copy)]
+struct HorizonError {
+    bias: f64,
+    mae: f64,
+    /// 95th percentile of |Δ|.
+    p95: f64,
+    /// Largest Δ (overshoot above the true horizon).
+    max: f64,
+}
+
+fn horizon_error(pyr: &[f32], brute: &[f32], res: u32) -> HorizonError {
+    let mut diffs = Vec::new();
+    for dir in 0..32usize {
+        for j in (res / 4..3 * res / 4).step_by(3) {
+            for i in (res / 4..3 * res / 4).step_by(3) {
+                let k = dir * (res * res) as usize + (j * res + i) as usize;
+                diffs.push((pyr[k] - brute[k]).to_degrees() as f64);
+            }
+        }
+    }
+    let n = diffs.len() as f64;
+    let mut abs: Vec<f64> = diffs.iter().map(|d| d.abs()).collect();
+    abs.sort_by(|a, b| a.total_cmp(b));
+    HorizonError { bias: diffs.iter().sum::<f64>() / n, mae: abs.iter().sum::<f64>() / n, p95: abs[(0.95 * n) as usize], max: diffs.iter().cloned().fold(f64::MIN, f64::max) }
 }
 
 /// E1: the pyramid horizon against the ray-marched one (0.25-texel steps, marched 2·res so a wall
 /// just past the pyramid's reach counts) on the digest's fields (a wall, a sine grating, cones,
-/// fBm), ls = 4, lo = 4, every 3rd texel of the central quarter in all 32 directions: biased low
-/// by less than 2°, and nowhere above it by more than about 1° (1.25°: a coarse level spreads a
-/// cone sideways, so a ray grazing past it sees up to 1.1°). The faithful receiver height (each
-/// level's own) overshoots by 4.6° on the wall's plateau, which the corrected mode removes.
+/// fBm), every 3rd texel of the central quarter in all 32 directions, for ls ∈ {1, 2, 4} ×
+/// lo ∈ {0, 2, 4} (corrected mode) and the faithful mode at ls = 4, lo = 4. Measured on
+/// lavapipe (bias / MAE / p95 / largest overshoot, degrees, ls = 4, lo = 4): wall −1.35 / 1.35
+/// / 6.33 / 0; sine −1.03 / 1.03 / 2.86 / 0.16; cones −1.67 / 1.76 / 7.22 / 1.12; fBm −0.57 /
+/// 0.57 / 1.81 / 0.67. Asserted:
+/// - at ls = 4, lo = 4, the digest's expectation: bias in [−2°, 0], MAE ≤ 2°;
+/// - p95 within 10% above the measured value per field (lo = 2 has 10.9–16.3° on the wall, sine
+///   and cones, 3.5° on fBm, so a lost level offset fails);
+/// - the overshoot: the digest's "about 1°" as ≤ 1° on the wall, sine and fBm (0, 0.16, 0.67
+///   measured), and ≤ 1.25° on the cones (1.12 measured: a coarse level spreads a cone sideways,
+///   so a ray grazing past it sees its blurred skirt; the low-pass pyramid's own error, not a
+///   bug). The faithful receiver height (each level's own) overshoots 4.6° on the wall's plateau,
+///   which the corrected mode removes (checked: the faithful plateau overshoot is > 3°);
+/// - the sweep: the MAE falls with lo (0 → 2 → 4) at every ls, and with ls (1 → 2 → 4) at
+///   lo = 2 and lo = 4, on every field (the digest's "error falls monotonically with ls and lo").
+///   At lo = 0 the ls steps change the MAE by < 0.4° and not always downward (sine 8.06 → 8.12,
+///   cones 7.41 → 7.42 from ls = 2 to 4), so that row is printed, not asserted. The smallest
+///   asserted step is 0.05° (fBm, ls = 2 → 4 at lo = 2).
 #[test]
 fn pyramid_horizon_against_brute_force() {
     // The digest's §4.2 fields at 128² over 8 m (16 texels per metre): a wall 20 texels high, the
     // sine of wavelength 32 texels and amplitude 8, cones, fBm mountains up to 40 texels.
+    // (name, field, p95 bound, overshoot bound at ls = 4, lo = 4)
     let fields = [
-        ("step", "generator = \"step\"\nheight = 1.25\nposition = 0.3"),
-        ("sine", "generator = \"sine\"\nwavelength = 2\nheight = 1\npattern_rotate_deg = 20"),
-        ("cones", "generator = \"cones\"\ncount = 7\nradius = 0.8\nring_radius = 2.2\nsize_variation = 0.6\nheight = 1.4"),
-        ("fbm", "generator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 2.5"),
+        ("step", "generator = \"step\"\nheight = 1.25\nposition = 0.3", 7.0, 1.0),
+        ("sine", "generator = \"sine\"\nwavelength = 2\nheight = 1\npattern_rotate_deg = 20", 3.2, 1.0),
+        ("cones", "generator = \"cones\"\ncount = 7\nradius = 0.8\nring_radius = 2.2\nsize_variation = 0.6\nheight = 1.4", 8.0, 1.25),
+        ("fbm", "generator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 2.5", 2.0, 1.0),
     ];
+    // One validated device for every run (a device per run doubles the test's time).
+    let mut gpu = Some(common::test_gpu());
+    let mut horizons = |field: &str, method: &str| {
+        let s = scene(field, method, SKY);
+        let mut h = Standalone::new(gpu.take().unwrap(), &s, &s.methods[0]).unwrap();
+        let out = h.horizons(0.0, None).unwrap();
+        clean(&h);
+        gpu = Some(h.gpu);
+        out
+    };
     let mut failures = Vec::new();
-    for (name, gen) in fields {
+    for (name, gen, p95_bound, overshoot_bound) in fields {
         let field = format!("size = 8\nresolution = 128\n{gen}");
-        let mut hb = harness(&scene(&field, r#"{ name = "heightfield_bruteforce", march_step = 0.25, max_distance = 256 }"#, SKY));
-        let brute = hb.horizons(0.0, None).unwrap();
-        clean(&hb);
-        for mode in ["corrected", "faithful"] {
-            let mut hp = harness(&scene(&field, &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#), SKY));
-            let pyr = hp.horizons(0.0, None).unwrap();
-            clean(&hp);
-            let mut diffs = Vec::new();
-            for dir in 0..32usize {
-                for j in (32..96u32).step_by(3) {
-                    for i in (32..96u32).step_by(3) {
-                        let k = dir * 128 * 128 + (j * 128 + i) as usize;
-                        diffs.push((pyr[k] - brute[k]).to_degrees() as f64);
+        let brute = horizons(&field, r#"{ name = "heightfield_bruteforce", march_step = 0.25, max_distance = 256 }"#);
+        // mae[ls index][lo index]
+        let mut mae = [[0.0f64; 3]; 3];
+        for (a, ls) in [1u32, 2, 4].into_iter().enumerate() {
+            for (b, lo) in [0u32, 2, 4].into_iter().enumerate() {
+                let e = horizon_error(&horizons(&field, &format!(r#"{{ name = "heightfield_pyramid", ls = {ls}, lo = {lo} }}"#)), &brute, 128);
+                eprintln!("{name}, ls {ls}, lo {lo}: pyramid − brute force (degrees): bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}", e.bias, e.mae, e.p95, e.max);
+                mae[a][b] = e.mae;
+                if ls == 4 && lo == 4 {
+                    if !(-2.0..=0.0).contains(&e.bias) || e.mae > 2.0 {
+                        failures.push(format!("{name}: bias {:.3}, MAE {:.3} (digest: bias in [−2, 0], MAE ≤ 2)", e.bias, e.mae));
+                    }
+                    if e.p95 > p95_bound {
+                        failures.push(format!("{name}: p95 {:.3} > {p95_bound}", e.p95));
+                    }
+                    if e.max > overshoot_bound {
+                        failures.push(format!("{name}: overshoot {:.3}° > {overshoot_bound}°", e.max));
                     }
                 }
             }
-            let n = diffs.len() as f64;
-            let bias = diffs.iter().sum::<f64>() / n;
-            let mae = diffs.iter().map(|d| d.abs()).sum::<f64>() / n;
-            let mut sorted = diffs.clone();
-            sorted.sort_by(|a, b| a.total_cmp(b));
-            let (p99, max) = (sorted[(0.99 * n) as usize], sorted[sorted.len() - 1]);
-            eprintln!("{name}, {mode}: pyramid − brute force (degrees): bias {bias:.3}, MAE {mae:.3}, p99 {p99:.3}, max {max:.3}, p1 {:.3}", sorted[(0.01 * n) as usize]);
-            if !(-2.0..=0.0).contains(&bias) {
-                failures.push(format!("{name}, {mode}: bias {bias:.3}"));
+        }
+        for (a, ls) in [1, 2, 4].into_iter().enumerate() {
+            if !(mae[a][0] > mae[a][1] && mae[a][1] > mae[a][2]) {
+                failures.push(format!("{name}, ls {ls}: MAE does not fall with lo: {:?}", mae[a]));
             }
-            if mode == "corrected" && max > 1.25 {
-                failures.push(format!("{name}: overshoot {max:.3}°"));
+        }
+        for (b, lo) in [(1usize, 2), (2, 4)] {
+            if !(mae[0][b] > mae[1][b] && mae[1][b] > mae[2][b]) {
+                failures.push(format!("{name}, lo {lo}: MAE does not fall with ls: {:?}", [mae[0][b], mae[1][b], mae[2][b]]));
             }
-            if mode == "faithful" && name == "step" && max < 3.0 {
-                failures.push(format!("the faithful plateau overshoot is gone ({max:.3}°): is the mode switch applied?"));
-            }
+        }
+        let faithful = horizon_error(&horizons(&field, r#"{ name = "heightfield_pyramid", mode = "faithful" }"#), &brute, 128);
+        eprintln!("{name}, faithful: bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}", faithful.bias, faithful.mae, faithful.p95, faithful.max);
+        if name == "step" && faithful.max < 3.0 {
+            failures.push(format!("the faithful plateau overshoot is gone ({:.3}°): is the mode switch applied?", faithful.max));
         }
     }
     assert!(failures.is_empty(), "{failures:?}");

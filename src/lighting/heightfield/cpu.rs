@@ -297,7 +297,12 @@ mod tests {
         assert!((exact_cap_cosine(FRAC_PI_2, a) - a.sin().powi(2)).abs() < 2e-3);
     }
 
-    /// The brute-force march finds a wall's elevation: atan(H cos φ / D) toward it.
+    /// C2: the brute-force march finds a wall's elevation, atan(H cos φ / D) toward it and 0 away
+    /// from it, to < 0.1° (the digest's bound) in all 32 directions. The march's only error is
+    /// where its first position past the wall's top lands: up to one step beyond D/cos φ, so the
+    /// slope is low by at most step·cos φ/D relative — 0.19° at 0.125-texel steps (why the old
+    /// bound was 1.15°), 0.056° measured at the 1/32-texel steps used here. Distances 2% long
+    /// (a spacing slip) move the 31° horizon by 0.5°, which the old bound let through.
     #[test]
     fn brute_force_wall() {
         let res = 64u32;
@@ -305,13 +310,18 @@ mod tests {
         let wall_x = 32.0 + d;
         let values = (0..res * res).map(|i| if (i % res) as f64 >= wall_x { h } else { 0.0 }).collect();
         let g = Grid { size: res, values };
-        let b = BruteHorizon { heights: &g, step: 0.125, spacing: 1.0 };
-        for j in [0usize, 2, 5, 12, 20] {
+        let b = BruteHorizon { heights: &g, step: 1.0 / 32.0, spacing: 1.0 };
+        let mut worst = 0.0f64;
+        for j in 0..32 {
             let dir = direction(j, 32);
             let got = b.env((32, 32), dir);
-            // The bilinear step rises over the texel before the wall and tops out at distance d.
-            let want = if dir.0 > 0.0 { (h as f64 * dir.0 / d).atan() } else { 0.0 };
-            assert!((got - want).abs() < 0.02, "direction {j}: {got} vs {want}");
+            // The bilinear step rises over the texel before the wall and tops out at distance d;
+            // the wall spans every row (and the edge clamp continues it), so every direction
+            // toward it meets its top within the 64-texel march.
+            let want = if dir.0 > 1e-9 { (h as f64 * dir.0 / d).atan() } else { 0.0 };
+            worst = worst.max((got - want).abs());
+            assert!((got - want).abs().to_degrees() < 0.1, "direction {j}: {:.4}° vs {:.4}°", got.to_degrees(), want.to_degrees());
         }
+        eprintln!("brute-force wall: worst {:.4}°", worst.to_degrees());
     }
 }
