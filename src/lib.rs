@@ -19,6 +19,7 @@ pub mod image_io;
 pub mod lighting;
 pub mod metrics;
 pub mod profile;
+pub mod progress;
 pub mod reference;
 pub mod renderer;
 pub mod scene;

@@ -9,8 +9,6 @@
 //! with a one-line warning. Every bake's time, size and whether it came from the cache are
 //! reported ([`BakeReport`]) apart from frame time, for `profile`, `chart` and `penumbra bake`.
 
-mod progress;
-
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,7 +16,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::Result;
-pub use progress::Progress;
+pub use crate::progress::Progress;
 
 /// FNV-1a: a stable content hash (std's hasher may change between releases).
 pub fn fnv1a(bytes: &[u8]) -> u64 {

@@ -107,7 +107,9 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, spp
     }
     eprintln!("chart: rendering the reference ({label}) for {}", scene.source);
     let mut tracer = ReferenceRenderer::new(Gpu::new(gpu)?, scene, size)?;
-    let image = tracer.render(&settings, &mut |done, total| eprintln!("reference: {done}/{total} spp"))?;
+    let mut progress = crate::progress::Progress::new("reference (spp)");
+    let image = tracer.render(&settings, &mut |done, total| progress.update(done as u64, total as u64))?;
+    progress.finish();
     std::fs::create_dir_all(cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", cache_dir.display())))?;
     image.mean.write_exr(&path)?;
     Ok((image.mean, label))
@@ -142,8 +144,11 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             references.insert(key.clone(), reference_image(&scene, opts.size, kind, opts.reference_spp, &opts.cache_dir, &opts.gpu)?);
         }
         let (reference, reference_label) = &references[&key];
-        for (config, point) in registry::sweep(&configuration)? {
-            eprintln!("chart: {config}");
+        let points = registry::sweep(&configuration)?;
+        let mut progress = crate::progress::Progress::new(&format!("chart {}", configuration.name));
+        let total = points.len() as u64;
+        for (i, (config, point)) in points.into_iter().enumerate() {
+            progress.update(i as u64, total);
             let (image, frame_ms, passes, dev, bakes) = measure(&scene, &point, opts)?;
             device = dev;
             let metrics = metrics::compare(&image, reference, &CompareOptions::default())?;
@@ -151,6 +156,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             let bake_bytes = bakes.iter().map(|b| b.bytes).sum();
             rows.push(ChartRow { method: configuration.name.clone(), config, frame_ms, passes, metrics, reference: reference_label.clone(), bake_ms, bake_bytes });
         }
+        progress.finish();
     }
     let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, rows };
     let csv = chart.csv();

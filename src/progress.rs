@@ -1,5 +1,6 @@
-//! A progress line for long work: rate, elapsed and remaining time, on stderr only when stderr
-//! is a terminal and only once the work has taken more than a second.
+//! A progress line for long work (bakes, the reference, the chart): rate, elapsed and remaining
+//! time, on stderr only when stderr is a terminal and only once the work has taken more than a
+//! second.
 
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
