@@ -18,6 +18,7 @@ mod terms;
 
 pub mod forward;
 pub mod heightfield;
+pub mod radiosity;
 pub mod shadow_volumes;
 
 use bytemuck::{Pod, Zeroable};

@@ -1,0 +1,160 @@
+//! Patches (seed 000 §3, digest §1.2 step B): static triangles grouped into planar charts, each
+//! chart covered by a regular square grid of patches — one patch per light-map texel — with a
+//! one-patch border frame for bilinear filtering.
+
+use glam::{DVec2, DVec3};
+
+/// A static triangle as the baker sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Triangle {
+    pub p: [DVec3; 3],
+    /// The scene object (or emitter) it belongs to: charts never mix objects.
+    pub object: usize,
+    /// Diffuse reflectance, RGB.
+    pub albedo: DVec3,
+    /// Emitted radiance, RGB (W/(m²·sr)); emits toward its normal only.
+    pub emission: DVec3,
+}
+
+impl Triangle {
+    pub fn normal(&self) -> DVec3 {
+        (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).normalize_or_zero()
+    }
+    pub fn area(&self) -> f64 {
+        0.5 * (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).length()
+    }
+}
+
+/// A planar group of triangles of one object and material, with its patch grid.
+#[derive(Clone, Debug)]
+pub struct Chart {
+    pub object: usize,
+    pub normal: DVec3,
+    /// The grid's frame: patch (i, j) (border included) covers origin + [i, i+1)·size·u + [j, j+1)·size·v.
+    pub origin: DVec3,
+    pub u: DVec3,
+    pub v: DVec3,
+    /// Patches per side, border included.
+    pub width: usize,
+    pub height: usize,
+    /// First patch in [`Patches::patches`] (row-major).
+    pub first: usize,
+    pub triangles: Vec<usize>,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Patch {
+    pub chart: usize,
+    pub centre: DVec3,
+    pub normal: DVec3,
+    /// The area of the chart's polygon inside the patch (0 for border patches).
+    pub area: f64,
+    pub albedo: DVec3,
+    /// Emitted radiosity π·L_e.
+    pub emission: DVec3,
+    /// Radiosity (W/m²): emitted plus reflected.
+    pub total: DVec3,
+    /// Radiosity received but not yet shot.
+    pub unshot: DVec3,
+}
+
+impl Patch {
+    pub fn inside(&self) -> bool {
+        self.area > 0.0
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Patches {
+    pub size: f64,
+    pub charts: Vec<Chart>,
+    pub patches: Vec<Patch>,
+}
+
+/// Coverage of a patch by its chart's triangles is estimated on this many sub-samples per side.
+const COVERAGE_SAMPLES: usize = 4;
+
+impl Patches {
+    /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
+    /// of the scene's size) and lays a grid of `size` patches on each.
+    pub fn build(triangles: &[Triangle], size: f64) -> Patches {
+        let scale = triangles.iter().flat_map(|t| t.p).fold(0.0f64, |m, p| m.max(p.abs().max_element())).max(1.0);
+        let mut charts: Vec<Chart> = Vec::new();
+        for (ti, t) in triangles.iter().enumerate() {
+            let n = t.normal();
+            if n == DVec3::ZERO {
+                continue;
+            }
+            let d = n.dot(t.p[0]);
+            let same = charts.iter_mut().find(|c| {
+                let tc = &triangles[c.triangles[0]];
+                c.object == t.object
+                    && c.normal.dot(n) > 1.0 - 1e-4
+                    && (c.normal.dot(t.p[0]) - c.normal.dot(tc.p[0])).abs() < 1e-5 * scale
+                    && (tc.albedo - t.albedo).abs().max_element() < 1e-9
+                    && (tc.emission - t.emission).abs().max_element() < 1e-9
+            });
+            match same {
+                Some(c) => c.triangles.push(ti),
+                None => {
+                    let helper = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+                    let u = helper.cross(n).normalize();
+                    let v = n.cross(u);
+                    let _ = d;
+                    charts.push(Chart { object: t.object, normal: n, origin: DVec3::ZERO, u, v, width: 0, height: 0, first: 0, triangles: vec![ti] });
+                }
+            }
+        }
+        let mut patches = Vec::new();
+        for (ci, c) in charts.iter_mut().enumerate() {
+            let t0 = &triangles[c.triangles[0]];
+            let plane_point = t0.p[0];
+            let flat = |p: DVec3| DVec2::new((p - plane_point).dot(c.u), (p - plane_point).dot(c.v));
+            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+            for &ti in &c.triangles {
+                for p in triangles[ti].p {
+                    lo = lo.min(flat(p));
+                    hi = hi.max(flat(p));
+                }
+            }
+            let cells = ((hi - lo) / size).ceil().max(DVec2::ONE);
+            c.width = cells.x as usize + 2;
+            c.height = cells.y as usize + 2;
+            // One border patch on every side.
+            c.origin = plane_point + c.u * (lo.x - size) + c.v * (lo.y - size);
+            c.first = patches.len();
+            let tris2d: Vec<[DVec2; 3]> = c.triangles.iter().map(|&ti| triangles[ti].p.map(flat)).collect();
+            for j in 0..c.height {
+                for i in 0..c.width {
+                    let corner = DVec2::new(lo.x + (i as f64 - 1.0) * size, lo.y + (j as f64 - 1.0) * size);
+                    let mut covered = 0usize;
+                    for sj in 0..COVERAGE_SAMPLES {
+                        for si in 0..COVERAGE_SAMPLES {
+                            let q = corner + DVec2::new((si as f64 + 0.5) / COVERAGE_SAMPLES as f64, (sj as f64 + 0.5) / COVERAGE_SAMPLES as f64) * size;
+                            covered += usize::from(tris2d.iter().any(|t| inside_triangle(q, t)));
+                        }
+                    }
+                    let area = size * size * covered as f64 / (COVERAGE_SAMPLES * COVERAGE_SAMPLES) as f64;
+                    let centre = c.origin + c.u * ((i as f64 + 0.5) * size) + c.v * ((j as f64 + 0.5) * size);
+                    let emission = t0.emission * std::f64::consts::PI;
+                    let e = if area > 0.0 { emission } else { DVec3::ZERO };
+                    patches.push(Patch { chart: ci, centre, normal: c.normal, area, albedo: t0.albedo, emission: e, total: e, unshot: e });
+                }
+            }
+        }
+        Patches { size, charts, patches }
+    }
+
+    /// Σ area · radiosity: the power leaving every patch (W), per channel.
+    pub fn power(&self, f: impl Fn(&Patch) -> DVec3) -> DVec3 {
+        self.patches.iter().map(|p| f(p) * p.area).sum()
+    }
+}
+
+fn inside_triangle(q: DVec2, t: &[DVec2; 3]) -> bool {
+    let cross = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
+    let (d0, d1, d2) = (cross(t[0], t[1], q), cross(t[1], t[2], q), cross(t[2], t[0], q));
+    let neg = d0 < 0.0 || d1 < 0.0 || d2 < 0.0;
+    let pos = d0 > 0.0 || d1 > 0.0 || d2 > 0.0;
+    !(neg && pos)
+}

@@ -1,0 +1,206 @@
+//! Progressive-refinement radiosity (seed 000 §3, digest §1.2 step E): Southwell shooting of
+//! n×n blocks of patches, visibility by rays through a BVH of the static triangles.
+//!
+//! *Faithful* (CaLight): the shooter is the best of 10 random blocks per chart, a full search
+//! only when that falls below the threshold; the form factor is point-sampled with the near-field
+//! clamp ([`form_factor::point_sampled`]). *Corrected*: the largest unshot block every time and
+//! the exact differential-to-polygon form factor ([`form_factor::point_to_polygon`]) to the
+//! block's square, so that in a closed enclosure the energy closes.
+
+use glam::{DVec3, Vec3};
+
+use super::form_factor;
+use super::patches::{Patches, Triangle};
+use crate::progress::Progress;
+use crate::reference::bvh::Bvh;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Faithful,
+    Corrected,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub mode: Mode,
+    /// Patches per side of a shooting block (the seed's n, default 3).
+    pub block: usize,
+    /// Stop when no block has unshot power above this fraction of the emitted power.
+    pub threshold: f64,
+    /// A bound on the number of shots, whatever the threshold.
+    pub max_shots: usize,
+    /// The seed's random block samples per chart when choosing a shooter (faithful mode).
+    pub samples_per_chart: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { mode: Mode::Corrected, block: 3, threshold: 1e-3, max_shots: 100_000, samples_per_chart: 10 }
+    }
+}
+
+/// How a solve went.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    pub shots: usize,
+    /// Full searches for a shooter (faithful mode: when the random samples fell below the threshold).
+    pub full_searches: usize,
+    /// Unshot power (Σ over channels of area × unshot radiosity) before each shot.
+    pub unshot_power: Vec<f64>,
+    pub rays: u64,
+}
+
+/// The static triangles as occluders.
+pub struct Occluders {
+    tris: Vec<[Vec3; 3]>,
+    bvh: Bvh,
+}
+
+impl Occluders {
+    pub fn new(triangles: &[Triangle]) -> Occluders {
+        let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|p| p.as_vec3())).collect();
+        let bvh = Bvh::build(&tris);
+        Occluders { tris, bvh }
+    }
+
+    /// Nothing between `a` and `b` (both ends excluded by a small margin).
+    pub fn visible(&self, a: DVec3, b: DVec3) -> bool {
+        let d = b - a;
+        let len = d.length();
+        if len <= 0.0 {
+            return true;
+        }
+        let dir = (d / len).as_vec3();
+        match self.bvh.closest_hit(&self.tris, a.as_vec3(), dir) {
+            Some((t, _)) => t as f64 >= len * (1.0 - 1e-4) - 1e-5,
+            None => true,
+        }
+    }
+}
+
+/// One shooting block: patches of one chart, and its square.
+struct Block {
+    chart: usize,
+    members: Vec<usize>,
+    corners: [DVec3; 4],
+}
+
+fn blocks(p: &Patches, n: usize) -> Vec<Block> {
+    let mut out = Vec::new();
+    let s = p.size;
+    for (ci, c) in p.charts.iter().enumerate() {
+        for j0 in (0..c.height).step_by(n) {
+            for i0 in (0..c.width).step_by(n) {
+                let (i1, j1) = ((i0 + n).min(c.width), (j0 + n).min(c.height));
+                let members: Vec<usize> = (j0..j1).flat_map(|j| (i0..i1).map(move |i| c.first + j * c.width + i)).filter(|&k| p.patches[k].inside()).collect();
+                if members.is_empty() {
+                    continue;
+                }
+                // The block's rectangle is that of its patches inside the polygon: the border
+                // frame lies outside the surface and must not shoot.
+                let ij = |k: usize| ((k - c.first) % c.width, (k - c.first) / c.width);
+                let (lo_i, hi_i) = members.iter().map(|&k| ij(k).0).fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i + 1)));
+                let (lo_j, hi_j) = members.iter().map(|&k| ij(k).1).fold((usize::MAX, 0), |(a, b), j| (a.min(j), b.max(j + 1)));
+                let at = |i: usize, j: usize| c.origin + c.u * (i as f64 * s) + c.v * (j as f64 * s);
+                out.push(Block { chart: ci, members, corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)] });
+            }
+        }
+    }
+    out
+}
+
+fn magnitude(v: DVec3) -> f64 {
+    v.x.abs() + v.y.abs() + v.z.abs()
+}
+
+/// xorshift64*: the faithful mode's random block samples, reproducible.
+struct Rng(u64);
+
+impl Rng {
+    fn below(&mut self, n: usize) -> usize {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n.max(1) as u64) as usize
+    }
+}
+
+/// Shoots until no block's unshot power exceeds `threshold` × the initial unshot power.
+pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progress: &mut Progress) -> Report {
+    let blocks = blocks(p, settings.block.max(1));
+    let power = |p: &Patches, b: &Block| b.members.iter().map(|&k| magnitude(p.patches[k].unshot) * p.patches[k].area).sum::<f64>();
+    let initial: f64 = blocks.iter().map(|b| power(p, b)).sum();
+    let stop = settings.threshold * initial;
+    let mut report = Report::default();
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let by_chart: Vec<Vec<usize>> = (0..p.charts.len()).map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect()).collect();
+    let receivers: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
+    // Receivers start a hair in front of their surface, so that their own plane never occludes.
+    let eps = 1e-4 * p.size;
+    while report.shots < settings.max_shots {
+        let full = |p: &Patches| (0..blocks.len()).map(|b| (b, power(p, &blocks[b]))).fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a });
+        let (best, best_power) = match settings.mode {
+            Mode::Corrected => full(p),
+            Mode::Faithful => {
+                let mut cand = (0, -1.0);
+                for list in by_chart.iter().filter(|l| !l.is_empty()) {
+                    for _ in 0..settings.samples_per_chart {
+                        let b = list[rng.below(list.len())];
+                        let w = power(p, &blocks[b]);
+                        if w > cand.1 {
+                            cand = (b, w);
+                        }
+                    }
+                }
+                if cand.1 > stop {
+                    cand
+                } else {
+                    report.full_searches += 1;
+                    full(p)
+                }
+            }
+        };
+        report.unshot_power.push(blocks.iter().map(|b| power(p, b)).sum());
+        if best_power <= stop || best_power <= 0.0 {
+            break;
+        }
+        let b = &blocks[best];
+        let area: f64 = b.members.iter().map(|&k| p.patches[k].area).sum();
+        // The block shoots as one patch: its unshot power spread over its square.
+        let square = (b.corners[1] - b.corners[0]).length() * (b.corners[3] - b.corners[0]).length();
+        let flux: DVec3 = b.members.iter().map(|&k| p.patches[k].unshot * p.patches[k].area).sum();
+        let centre = b.members.iter().map(|&k| p.patches[k].centre * p.patches[k].area).sum::<DVec3>() / area;
+        let normal = p.charts[b.chart].normal;
+        for &k in &b.members {
+            p.patches[k].unshot = DVec3::ZERO;
+        }
+        for &r in &receivers {
+            let rp = p.patches[r];
+            if rp.chart == b.chart {
+                continue;
+            }
+            let f = match settings.mode {
+                // F from the receiver to the square times the square's mean unshot radiosity.
+                Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / square,
+                // CaLight: the block as one patch of its area at its centre.
+                Mode::Faithful => form_factor::point_sampled(rp.centre, rp.normal, centre, normal, area, p.size) / area,
+            };
+            if f <= 0.0 || rp.albedo == DVec3::ZERO {
+                continue;
+            }
+            report.rays += 1;
+            if !occluders.visible(rp.centre + rp.normal * eps, centre + normal * eps) {
+                continue;
+            }
+            let delta = rp.albedo * flux * f;
+            let q = &mut p.patches[r];
+            q.total += delta;
+            q.unshot += delta;
+        }
+        report.shots += 1;
+        let left = report.unshot_power.last().copied().unwrap_or(0.0);
+        progress.update(((1.0 - left / initial.max(1e-300)).clamp(0.0, 1.0) * 1000.0) as u64, 1000);
+    }
+    progress.finish();
+    report
+}
