@@ -14,6 +14,31 @@ use penumbra::graph::{Access, RenderGraph, ResourceStates};
 use penumbra::sh;
 use penumbra::shaders::ShaderLibrary;
 
+/// The real SH of bands 0–2 in the thesis convention (Condon–Shortley phase, m > 0 ↔ cos mφ,
+/// m < 0 ↔ sin |m|φ; digest §1.1), written out as polynomials of the unit direction (SH frame),
+/// index l(l+1) + m — independent of the library's recurrence.
+fn basis_closed_form(d: Vec3) -> [f64; 9] {
+    use std::f64::consts::PI;
+    let (x, y, z) = (d.x as f64, d.y as f64, d.z as f64);
+    let (c0, c1, c2, c20) = ((1.0 / (4.0 * PI)).sqrt(), (3.0 / (4.0 * PI)).sqrt(), (15.0 / (4.0 * PI)).sqrt(), (5.0 / (16.0 * PI)).sqrt());
+    [c0, -c1 * y, c1 * z, -c1 * x, c2 * x * y, -c2 * y * z, c20 * (3.0 * z * z - 1.0), -c2 * x * z, 0.5 * c2 * (x * x - y * y)]
+}
+
+/// The ZH of a cap of half-angle `a` (seed 001 Appendix A.1 as the digest writes it, unit
+/// radiance): √π(1 − c), (√(3π)/2)s², (√(5π)/2)c s², (√(7π)/8)s²(5c² − 1).
+fn cap_closed_form(a: f64) -> [f64; 4] {
+    use std::f64::consts::PI;
+    let (c, s2) = (a.cos(), a.sin().powi(2));
+    [PI.sqrt() * (1.0 - c), (3.0 * PI).sqrt() / 2.0 * s2, (5.0 * PI).sqrt() / 2.0 * c * s2, (7.0 * PI).sqrt() / 8.0 * s2 * (5.0 * c * c - 1.0)]
+}
+
+/// Besides the CPU library, two independent values per texel: the GPU's basis of bands 0–2
+/// against the closed-form polynomials above (measured 2.4e-7, 1e-5 allowed; cos and sin
+/// swapped between m > 0 and m < 0 in the GLSL and the CPU alike, which the CPU comparison
+/// cannot see, is off by 0.075 at the first texel, tried), and the GPU's rotated cap (half-angle 0.45) evaluated with
+/// the GPU's basis at its own axis against Σ_l z_l √((2l+1)/4π) from the Appendix A.1 closed
+/// form (the ZH rule leaves a cap's value on its axis unchanged; measured 6.2e-7 relative, 1e-5
+/// allowed).
 #[test]
 fn glsl_sh_matches_the_cpu_library() {
     let mut gpu = common::test_gpu();
@@ -32,11 +57,22 @@ fn glsl_sh_matches_the_cpu_library() {
     common::run_once(&gpu, frame, graph);
     let got: Vec<f32> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
 
-    let close = |a: f32, b: f64, tol: f64, what: &str| assert!((a as f64 - b).abs() <= tol * b.abs().max(1.0), "{what}: GPU {a} vs CPU {b}");
+    let close = |a: f32, b: f64, tol: f64, what: &str| assert!((a as f64 - b).abs() <= tol * b.abs().max(1.0), "{what}: GPU {a} vs {b}");
+    let (mut worst_basis, mut worst_cap) = (0.0f64, 0.0f64);
     for i in 0..128usize {
         let r = &got[i * 128..(i + 1) * 128];
         let (tx, ty) = (i % 16, (i / 16) % 8);
         let dir = sh::world_to_sh(sh::equirect_texel_dir_world(tx, ty, 16, 8));
+        // Independent values first, then the CPU library.
+        for (k, want) in basis_closed_form(dir).into_iter().enumerate() {
+            worst_basis = worst_basis.max((r[k] as f64 - want).abs());
+            close(r[k], want, 1e-5, &format!("texel {i} basis {k} against the closed form"));
+        }
+        let on_axis: f64 = (0..16).map(|k| r[96 + k] as f64 * r[k] as f64).sum();
+        let zh = cap_closed_form(0.45);
+        let want: f64 = (0..4).map(|l| zh[l] * ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt()).sum();
+        worst_cap = worst_cap.max((on_axis - want).abs() / want);
+        close(on_axis as f32, want, 1e-5, &format!("texel {i}: the cap on its axis against Appendix A.1"));
         let mut y = vec![0.0f32; 64];
         sh::eval_basis(dir, 8, &mut y).unwrap();
         for k in 0..64 {
@@ -65,6 +101,7 @@ fn glsl_sh_matches_the_cpu_library() {
         sh::rotate_z(&mut cc, 0.3).unwrap();
         close(r[117], sh::eval(&cc, Vec3::X).unwrap(), 1e-4, "rotated clamped cosine");
     }
+    eprintln!("against closed forms: basis (bands 0-2) {worst_basis:.1e}, cap on its axis {worst_cap:.1e} relative");
     common::assert_clean(&gpu);
 }
 
@@ -166,9 +203,38 @@ fn gpu_projection_recovers_a_band_limited_environment() {
     common::assert_clean(&gpu);
 }
 
+/// Bands 0 and 1 of a texel quadrature written out here, independent of the SH library's
+/// basis and solid angles: Ω of an equirect row from its edges' polar angles, (2π/w)(cos θ0 −
+/// cos θ1); of a cube texel from the corner formula atan2(uv, √(u² + v² + 1)); the closed-form
+/// y_00, y_1m (see `basis_closed_form`).
+fn bands01_by_quadrature(cube: bool, w: usize, h: usize, texels: &[[f32; 4]]) -> [[f64; 3]; 4] {
+    use std::f64::consts::{PI, TAU};
+    let mut c = [[0.0f64; 3]; 4];
+    for (i, d) in texel_dirs(cube, w, h).into_iter().enumerate() {
+        let omega = if cube {
+            let (x, y) = ((i % (w * w)) % w, (i % (w * w)) / w);
+            let a = |u: f64, v: f64| (u * v).atan2((u * u + v * v + 1.0).sqrt());
+            let e = |k: usize| 2.0 * k as f64 / w as f64 - 1.0;
+            a(e(x), e(y)) - a(e(x), e(y + 1)) - a(e(x + 1), e(y)) + a(e(x + 1), e(y + 1))
+        } else {
+            let row = i / w;
+            TAU / w as f64 * ((PI * row as f64 / h as f64).cos() - (PI * (row + 1) as f64 / h as f64).cos())
+        };
+        let y = basis_closed_form(sh::world_to_sh(d.normalize()));
+        for k in 0..4 {
+            for ch in 0..3 {
+                c[k][ch] += texels[i][ch] as f64 * omega * y[k];
+            }
+        }
+    }
+    c
+}
+
 /// (b) A random image (values in [0, 1), 8 bands): the GPU matches `project_equirect` /
 /// `project_cubemap` to 1e-5 of each coefficient's rounding scale Σ|L|Ω|y_k| (float summation
-/// over a few thousand texels, against the CPU's f64; measured ~1e-7 on lavapipe).
+/// over a few thousand texels, against the CPU's f64; measured ~1e-7 on lavapipe). Bands 0–1
+/// also against the quadrature written out above, independent of the library (same bound;
+/// measured 9e-8).
 #[test]
 fn gpu_projection_of_a_random_image_matches_the_cpu() {
     let mut gpu = common::test_gpu();
@@ -188,7 +254,16 @@ fn gpu_projection_of_a_random_image_matches_the_cpu() {
                 assert!(rel <= tol, "cube {cube} {w}x{h}: coefficient {k} channel {ch}: GPU {} vs CPU {} (scale {})", got[k][ch], cpu[k][ch], scale[k]);
             }
         }
-        eprintln!("cube {cube} {w}x{h}: largest |GPU - CPU| / scale {worst:.2e}");
+        let own = bands01_by_quadrature(cube, w, h, &texels);
+        let mut worst_own = 0.0f64;
+        for k in 0..4 {
+            for ch in 0..3 {
+                let rel = (got[k][ch] as f64 - own[k][ch]).abs() / scale[k];
+                worst_own = worst_own.max(rel);
+                assert!(rel <= tol, "cube {cube} {w}x{h}: coefficient {k} channel {ch}: GPU {} vs the test's quadrature {}", got[k][ch], own[k][ch]);
+            }
+        }
+        eprintln!("cube {cube} {w}x{h}: largest |GPU - CPU| / scale {worst:.2e}; bands 0-1 against the test's own quadrature {worst_own:.2e}");
     }
     common::assert_clean(&gpu);
 }
@@ -316,14 +391,24 @@ fn f64s(v: &[f32]) -> Vec<f64> {
 /// f32 recurrence measured (lavapipe) under the bound by the margin printed below.
 const ROTATION_TOL: f64 = 1e-5;
 
+/// The band-1 part of an SH vector as the vector a with f(d) = a·d: y_1,−1 = −√(3/4π) y,
+/// y_1,0 = √(3/4π) z, y_1,1 = −√(3/4π) x (see `basis_closed_form`).
+fn band1_lobe(c: &[f32]) -> glam::DVec3 {
+    glam::DVec3::new(-c[3] as f64, -c[1] as f64, c[2] as f64) * (3.0 / (4.0 * std::f64::consts::PI)).sqrt()
+}
+
 /// sh_rotate against ShRotation (f64) for 64 random rotations and vectors, 8 bands; a 4-band
 /// call leaves the higher bands alone; a world-frame rotation through sh_rotation_from_world
-/// equals ShRotation::from_world.
+/// equals ShRotation::from_world. Independent of the CPU recurrence: band 0 is unchanged and
+/// band 1 is a linear function a·d, which rotating by R turns into (R a)·d — checked for R1 (SH
+/// frame) and Rw (world frame, conjugated by the y-up ↔ z-up swap written out here); measured
+/// 2.0e-7, ROTATION_TOL allowed. The band-1 block transposed in the GLSL and the CPU alike
+/// (rotating by Rᵀ), which the CPU comparison cannot see, is off by 0.96 (tried).
 #[test]
 fn glsl_general_rotation_matches_the_cpu() {
     let cases = ops_cases();
     let got = run_ops_check("util/sh_ops_check.comp", &cases);
-    let (mut w8, mut w4, mut ww) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut w8, mut w4, mut ww, mut wl) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
         let a = f64s(&c.a);
         let cpu = sh::ShRotation::new(c.r1, 8).unwrap().rotate(&a).unwrap();
@@ -333,9 +418,18 @@ fn glsl_general_rotation_matches_the_cpu() {
         assert_eq!(&g[208..256], &c.a[16..], "case {i}: a 4-band rotation changed bands 4..7");
         let cpuw = sh::ShRotation::from_world(c.rw, 8).unwrap().rotate(&a).unwrap();
         ww = ww.max(worst(&g[256..320], &cpuw));
+        // Independent: band 0 kept, band 1 rotated as a vector.
+        let swap = glam::DMat3::from_cols(glam::DVec3::X, glam::DVec3::Z, -glam::DVec3::Y); // world (x, y, z) → SH (x, −z, y)
+        for (out, r) in [(0usize, c.r1.as_dmat3()), (256, swap * c.rw.as_dmat3() * swap.transpose())] {
+            let want = r * band1_lobe(&c.a);
+            let got = band1_lobe(&g[out..out + 4]);
+            wl = wl.max((got - want).abs().max_element()).max((g[out] - c.a[0]).abs() as f64);
+        }
     }
     eprintln!("sh_rotate vs ShRotation, largest |GPU - CPU|: 8 bands {w8:.2e}, 4 bands {w4:.2e}, world frame {ww:.2e}");
     assert!(w8 <= ROTATION_TOL && w4 <= ROTATION_TOL && ww <= ROTATION_TOL, "8 bands {w8:e}, 4 bands {w4:e}, world {ww:e}");
+    eprintln!("band 0 and 1 against the rotated vector: largest difference {wl:.2e}");
+    assert!(wl <= ROTATION_TOL, "band 1 is not the rotated vector: {wl:e}");
 }
 
 /// Rotation by the identity returns the vector; every rotation keeps each band's energy
@@ -393,6 +487,11 @@ fn glsl_rotation_with_4_band_scratch() {
 
 /// sh_hanning / sh_lanczos equal sh::hanning / sh::lanczos for widths 0.5..15.75 (below, at and
 /// above the band count), sh_apply_window scales each band; width 0 and NaN give all zeros.
+/// Independent of the CPU: at width 4 (case 14) the windows are the literal values of their
+/// definitions (Sloan, "Stupid SH tricks"): Hanning (1 + cos(πl/4))/2 = 1, 0.853553, 0.5,
+/// 0.146447, then 0; Lanczos sin(πl/4)/(πl/4) = 1, 0.900316, 0.636620, 0.300105, then 0
+/// (measured 4e-8, 1e-6 allowed; a Hanning one band wider in the GLSL and the CPU alike, which
+/// the CPU comparison cannot see, is off by 0.2, tried).
 #[test]
 fn glsl_windows_match_the_cpu() {
     let cases = ops_cases();
@@ -412,10 +511,19 @@ fn glsl_windows_match_the_cpu() {
     }
     eprintln!("windows: largest |GPU - CPU| {w:.2e}");
     assert!(w <= 1e-6, "{w:e}");
+    assert_eq!(cases[14].width, 4.0);
+    let hanning4 = [1.0, 0.853553390593, 0.5, 0.146446609407, 0.0, 0.0, 0.0, 0.0];
+    let lanczos4 = [1.0, 0.900316316157, std::f64::consts::FRAC_2_PI, 0.300105438719, 0.0, 0.0, 0.0, 0.0];
+    let literal = worst(&got[14][384..392], &hanning4).max(worst(&got[14][392..400], &lanczos4));
+    eprintln!("width 4 against the literal windows: {literal:.1e}");
+    assert!(literal <= 1e-6, "width-4 windows: {:?} {:?}", &got[14][384..392], &got[14][392..400]);
 }
 
 /// sh_product over sh::product_terms(8) equals sh::product (f64) to 1e-5 of each output's
-/// rounding scale sum |Gamma_ijk a_i b_j|.
+/// rounding scale sum |Gamma_ijk a_i b_j|. Independent of the term list: the product's c_00 is
+/// ∫ f g y_00 = y_00 Σ_k a_k b_k by orthonormality alone (both inputs have all 8 bands, and c_00
+/// needs no truncation), to 1e-5 of y_00 Σ|a_k b_k| (measured 6.5e-8; a tensor without band 7's
+/// terms, which the CPU shares, fails it, tried).
 #[test]
 fn glsl_triple_product_matches_the_cpu() {
     let cases = ops_cases();
@@ -437,4 +545,14 @@ fn glsl_triple_product_matches_the_cpu() {
         }
     }
     eprintln!("sh_product vs sh::product: largest |GPU - CPU| / scale {w:.2e}");
+    let mut w00 = 0.0f64;
+    for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
+        let dot: f64 = c.a.iter().zip(&c.b).map(|(x, y)| *x as f64 * *y as f64).sum();
+        let y00 = 0.5 / std::f64::consts::PI.sqrt();
+        let scale: f64 = c.a.iter().zip(&c.b).map(|(x, y)| (*x as f64 * *y as f64).abs()).sum::<f64>() * y00;
+        let rel = (g[320] as f64 - y00 * dot).abs() / scale;
+        w00 = w00.max(rel);
+        assert!(rel <= 1e-5, "case {i}: c_00 {} vs y_00·a·b {}", g[320], y00 * dot);
+    }
+    eprintln!("c_00 against y_00 Σ a_k b_k: largest difference / scale {w00:.2e}");
 }
