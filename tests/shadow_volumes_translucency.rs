@@ -12,7 +12,6 @@ mod sv_common;
 use glam::Vec3;
 use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::Surface;
-use penumbra::lighting::shadow_volumes::cpu::physical_light;
 use penumbra::renderer::Renderer;
 use penumbra::scene::{Camera, Scene};
 use sv_common::{method, render, render_scene};
