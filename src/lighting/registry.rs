@@ -7,7 +7,7 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{forward, heightfield, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{forward, heightfield, radiosity, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -77,6 +77,17 @@ pub fn registry() -> Vec<MethodInfo> {
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
             report: Some(heightfield::measure::table_6_6),
+        },
+        MethodInfo {
+            schema: radiosity::SCHEMA,
+            terms: Terms::BASE,
+            separable: false,
+            sweep: radiosity::sweep,
+            // The light-map holds every bounce the solve converged to.
+            reference: ReferenceKind::Bounces(16),
+            translucency: false,
+            create: |c, d| Ok(Box::new(radiosity::Radiosity::new(c, d)?)),
+            report: None,
         },
     ]
 }

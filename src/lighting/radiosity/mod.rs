@@ -3,9 +3,10 @@
 //! shooting ([`solve`]), faithful to CaLight or corrected (exact form factors, energy that
 //! closes).
 //!
-//! Status: the baker's core on the CPU, tested against closed forms (form factors, closed-box
-//! energy balance). The light-map atlas, the GPU shooting pass, the base term that draws
-//! `diffuse × lightmap` and its registry entry are still to come (issue 12).
+//! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
+//! light-map ([`lightmap`] bakes it through the bake stage's cache). Not yet (issue 12): the GPU
+//! shooting pass, the seed's surface-visibility matrix, sun, tone reproduction and border pass 2,
+//! charts grouped across objects, albedo maps in the bake (the baker uses the material's albedo).
 
 pub mod form_factor;
 pub mod patches;
@@ -13,3 +14,235 @@ pub mod solve;
 
 #[cfg(test)]
 mod tests;
+
+pub mod lightmap;
+
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+
+use crate::backend::{
+    vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SubresourceRange, VertexAttribute, VertexLayout,
+};
+use crate::bake::BakeKey;
+use crate::error::{Error, Result};
+use crate::gpu_scene::DrawPush;
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+use lightmap::Content;
+use solve::{Mode, Settings};
+
+pub const NAME: &str = "radiosity";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "mode", kind: ParamKind::String },
+        ParamSchema { name: "patch_size", kind: ParamKind::Float },
+        ParamSchema { name: "block", kind: ParamKind::Int },
+        ParamSchema { name: "threshold", kind: ParamKind::Float },
+        ParamSchema { name: "light", kind: ParamKind::String },
+    ],
+};
+
+/// Bumped whenever the baker's output for the same inputs changes (its code has no SPIR-V to hash).
+const BAKER_VERSION: u32 = 3;
+
+/// The method's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    pub settings: Settings,
+    /// Patch (light-map texel) size, metres.
+    pub patch_size: f64,
+    pub content: Content,
+}
+
+impl Config {
+    pub fn from_decl(decl: &MethodDecl) -> Result<Config> {
+        let bad = |p: &str, want: &str, got: &toml::Value| Error::Usage(format!("methods: {NAME}.{p}: expected {want}, got {got}"));
+        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All };
+        if let Some(v) = decl.param("mode") {
+            c.settings.mode = match v.as_str() {
+                Some("faithful") => Mode::Faithful,
+                Some("corrected") => Mode::Corrected,
+                _ => return Err(bad("mode", "\"faithful\" or \"corrected\"", v)),
+            };
+        }
+        if let Some(v) = decl.param("patch_size") {
+            c.patch_size = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| (0.005..=10.0).contains(x)).ok_or_else(|| bad("patch_size", "a size from 0.005 to 10 metres", v))?;
+        }
+        if let Some(v) = decl.param("block") {
+            c.settings.block = v.as_integer().filter(|b| (1..=16).contains(b)).ok_or_else(|| bad("block", "an integer from 1 to 16", v))? as usize;
+        }
+        if let Some(v) = decl.param("threshold") {
+            c.settings.threshold = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| bad("threshold", "a fraction in (0, 1)", v))?;
+        }
+        if let Some(v) = decl.param("light") {
+            c.content = match v.as_str() {
+                Some("all") => Content::All,
+                Some("bounces") => Content::Bounces,
+                _ => return Err(bad("light", "\"all\" or \"bounces\"", v)),
+            };
+        }
+        Ok(c)
+    }
+}
+
+/// The chart's sweep: patch sizes and both modes.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let with = |name: &str, v: toml::Value| {
+        let mut d = decl.clone();
+        d.params.retain(|(n, _, _)| n != name);
+        d.params.push((name.to_string(), v, 0));
+        d
+    };
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d) {
+            let label = format!("radiosity {:?} patch={} block={}", c.settings.mode, c.patch_size, c.settings.block).to_lowercase();
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    for s in [0.2, 0.1, 0.05] {
+        push(with("patch_size", s.into()));
+    }
+    push(with("mode", "faithful".into()));
+    out
+}
+
+/// `LightmapVertex` of glsl/radiosity/lightmap.vert.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct LightmapVertex {
+    world: [f32; 3],
+    normal: [f32; 3],
+    lightmap_uv: [f32; 2],
+    uv: [f32; 2],
+}
+
+/// The light-map base term: the scene's static triangles drawn with emission + albedo ×
+/// light-map.
+pub struct Radiosity {
+    pipeline: PipelineId,
+    vertices: BufferId,
+    /// (material, first vertex, vertex count) per scene draw.
+    draws: Vec<(u32, u32, u32)>,
+    lightmap: ImageId,
+    sampler: SamplerId,
+}
+
+impl Radiosity {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Radiosity> {
+        let config = Config::from_decl(decl)?;
+        let geometry = lightmap::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        if geometry.triangles.is_empty() {
+            return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
+        }
+        let mut key = BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", config).with("lights", &cx.scene.lights);
+        let geometry_bytes: Vec<f64> =
+            geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64])).collect();
+        key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
+        let scene = cx.scene;
+        let geo = &geometry;
+        // Baked: the atlas size, its texels, and each triangle corner's light-map coordinate.
+        let baked: Vec<f32> = cx.bakes.bake(&format!("{NAME} light-map patch={}", config.patch_size), &key, |progress| {
+            let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, progress);
+            let mut out = vec![atlas.width as f32, atlas.height as f32];
+            out.extend(texels.iter().flatten());
+            let mut uv = vec![[0.0f32; 2]; 3 * geo.triangles.len()];
+            for (ci, c) in patches.charts.iter().enumerate() {
+                let (ox, oy) = atlas.offsets[ci];
+                for &t in &c.triangles {
+                    for (k, p) in geo.triangles[t].p.iter().enumerate() {
+                        let d = *p - c.origin;
+                        let s = d.dot(c.u) / patches.size + ox as f64;
+                        let r = d.dot(c.v) / patches.size + oy as f64;
+                        uv[3 * t + k] = [(s / atlas.width as f64) as f32, (r / atlas.height as f64) as f32];
+                    }
+                }
+            }
+            out.extend(uv.iter().flatten());
+            Ok(out)
+        })?;
+        let (w, h) = (baked.first().copied().unwrap_or(0.0) as u32, baked.get(1).copied().unwrap_or(0.0) as u32);
+        let texel_floats = 4 * (w as usize) * (h as usize);
+        if w == 0 || h == 0 || baked.len() != 2 + texel_floats + 6 * geometry.triangles.len() {
+            return Err(Error::Usage(format!("{}: {NAME}: the baked light-map does not match the scene ({} values)", cx.scene.source, baked.len())));
+        }
+        let texels = &baked[2..2 + texel_floats];
+        let uvs = &baked[2 + texel_floats..];
+        // Vertices grouped by scene draw (static_geometry emits them in draw order).
+        let mut vertices = Vec::with_capacity(3 * geometry.triangles.len());
+        let mut draws: Vec<(u32, u32, u32)> = Vec::new();
+        for (t, tri) in geometry.triangles.iter().enumerate() {
+            let d = geometry.draw[t];
+            let material = cx.scene_gpu.draws[d].material;
+            match draws.last_mut() {
+                Some(last) if last.0 == material && last.1 + last.2 == vertices.len() as u32 => last.2 += 3,
+                _ => draws.push((material, vertices.len() as u32, 3)),
+            }
+            let n = tri.normal().as_vec3().to_array();
+            for k in 0..3 {
+                vertices.push(LightmapVertex { world: tri.p[k].as_vec3().to_array(), normal: n, lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]], uv: geometry.uvs[t][k] });
+            }
+        }
+        let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
+        cx.states.forget_buffer(vertices);
+        let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", vk::Format::R32G32B32A32_SFLOAT, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?;
+        cx.states.set_image(cx.gpu, lightmap, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
+        let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} light-map"), "radiosity/lightmap.vert", Some("radiosity/lightmap.frag"));
+        desc.vertex_layout = VertexLayout {
+            buffers: vec![(0, std::mem::size_of::<LightmapVertex>() as u32)],
+            attributes: vec![attr(0, vk::Format::R32G32B32_SFLOAT, 0), attr(1, vk::Format::R32G32B32_SFLOAT, 12), attr(2, vk::Format::R32G32_SFLOAT, 24), attr(3, vk::Format::R32G32_SFLOAT, 32)],
+        };
+        desc.raster.cull = vk::CullModeFlags::NONE;
+        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+        let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+        let sampler = cx.gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
+        Ok(Radiosity { pipeline, vertices, draws, lightmap, sampler })
+    }
+}
+
+impl LightingMethod for Radiosity {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        if !frame.terms.has(Term::Base) {
+            return Ok(());
+        }
+        let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        graph
+            .pass("light-map")
+            .color_attachment(t.radiance, SubresourceRange::mip(0), false)
+            .depth_stencil_write(t.depth_stencil, false)
+            .buffer(self.vertices, Access::VertexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .sample("lightmap", self.lightmap, SubresourceRange::mip(0), self.sampler, frag)
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                ctx.rec.bind_pipeline(self.pipeline)?;
+                ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
+                for &(material, first, count) in &self.draws {
+                    let maps = scene.material_maps[material as usize];
+                    ctx.bind(&[
+                        ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
+                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
+                    ])?;
+                    ctx.rec.push_constants(DrawPush::new(Mat4::IDENTITY, material).bytes())?;
+                    ctx.rec.draw_from(count, first)?;
+                }
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+        Ok(())
+    }
+}

@@ -141,6 +141,16 @@ impl Patches {
                     patches.push(Patch { chart: ci, centre, normal: c.normal, area, albedo: t0.albedo, emission: e, total: e, unshot: e });
                 }
             }
+            // The sub-sampled coverage is coarse for a polygon smaller than a few patches (a
+            // light a patch wide can be off by a third): scale it so that the chart's patches add
+            // up to its exact area, and the power it emits or receives is right.
+            let exact: f64 = c.triangles.iter().map(|&t| triangles[t].area()).sum();
+            let sampled: f64 = patches[c.first..].iter().map(|q| q.area).sum();
+            if sampled > 0.0 {
+                for q in &mut patches[c.first..] {
+                    q.area *= exact / sampled;
+                }
+            }
         }
         Patches { size, charts, patches }
     }

@@ -25,7 +25,8 @@ pub struct Settings {
     pub mode: Mode,
     /// Patches per side of a shooting block (the seed's n, default 3).
     pub block: usize,
-    /// Stop when no block has unshot power above this fraction of the emitted power.
+    /// Stop when the unshot power (corrected: all of it; faithful: the best shooter's) falls
+    /// below this fraction of the initial unshot power.
     pub threshold: f64,
     /// A bound on the number of shots, whatever the threshold.
     pub max_shots: usize,
@@ -160,8 +161,15 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
                 }
             }
         };
-        report.unshot_power.push(blocks.iter().map(|b| power(p, b)).sum());
-        if best_power <= stop || best_power <= 0.0 {
+        let unshot: f64 = blocks.iter().map(|b| power(p, b)).sum();
+        report.unshot_power.push(unshot);
+        // CaLight stops when no shooter is above its threshold, which leaves up to (blocks ×
+        // threshold) of the light unshot; the corrected solve stops on the total instead.
+        let done = match settings.mode {
+            Mode::Faithful => best_power <= stop,
+            Mode::Corrected => unshot <= stop,
+        };
+        if done || best_power <= 0.0 {
             break;
         }
         let b = &blocks[best];
@@ -176,7 +184,9 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
         }
         for &r in &receivers {
             let rp = p.patches[r];
-            if rp.chart == b.chart {
+            // Shooters emit toward their normal only: a receiver behind the shooter's plane gets
+            // nothing (the exact form factor looks from the receiver and cannot see that).
+            if rp.chart == b.chart || normal.dot(rp.centre - b.corners[0]) <= 0.0 {
                 continue;
             }
             let f = match settings.mode {

@@ -107,3 +107,24 @@ fn an_occluder_casts_a_shadow_and_a_closed_room_keeps_its_light() {
     let lit = p.patches.iter().filter(|q| q.inside() && p.charts[q.chart].object == 0).map(|q| q.total.x).fold(0.0, f64::max);
     assert!(lit > 0.1, "the first box's floor is lit: {lit}");
 }
+
+#[test]
+fn a_one_sided_emitter_lights_only_what_it_faces() {
+    // A small emitter facing down (-y) between a floor below and a ceiling above it.
+    let quad = |y: f64, s: f64, down: bool, object: usize, emission: f64, albedo: f64| {
+        let (a, b, c, d) = (DVec3::new(-s, y, -s), DVec3::new(s, y, -s), DVec3::new(s, y, s), DVec3::new(-s, y, s));
+        let tris = if down { [[a, b, c], [a, c, d]] } else { [[a, c, b], [a, d, c]] };
+        tris.map(|p| Triangle { p, object, albedo: DVec3::splat(albedo), emission: DVec3::splat(emission) })
+    };
+    let mut tris = Vec::new();
+    tris.extend(quad(0.0, 1.0, false, 0, 0.0, 0.5)); // floor, facing up
+    tris.extend(quad(1.0, 0.2, true, 1, 1.0, 0.0)); // emitter, facing down
+    tris.extend(quad(1.5, 1.0, true, 2, 0.0, 0.5)); // ceiling above it, facing down
+    assert!(tris[0].normal().y > 0.0 && tris[2].normal().y < 0.0 && tris[4].normal().y < 0.0);
+    let (p, _) = run(&tris, 0.1, &Settings { threshold: 1e-4, block: 1, ..Settings::default() });
+    let lit = |object: usize| p.patches.iter().filter(|q| q.inside() && p.charts[q.chart].object == object).map(|q| q.total.x).fold(0.0, f64::max);
+    assert!(lit(0) > 0.05, "the floor under the emitter: {}", lit(0));
+    // The ceiling is behind the emitter: only light bounced off the floor reaches it, far less
+    // than the floor gets.
+    assert!(lit(2) < 0.1 * lit(0), "ceiling {} vs floor {}", lit(2), lit(0));
+}

@@ -1,0 +1,28 @@
+#version 460
+// Seed 000's light-mapped surface: emission + albedo x albedo map x light-map, where the
+// light-map holds the baked irradiance / pi (linear, bilinear, clamped, no mips).
+#include "common/frame.glsl"
+#include "common/scene.glsl"
+
+layout(set = 0, binding = 1) readonly buffer Materials { Material items[]; } materials;
+layout(set = 0, binding = 2) uniform sampler2D albedo_map;
+layout(set = 0, binding = 3) uniform sampler2D lightmap;
+
+// draw.model is unused: the vertices are already in world space.
+layout(location = 0) in vec3 in_world;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_lightmap_uv;
+layout(location = 3) in vec2 in_uv;
+
+layout(location = 0) out vec4 out_radiance;
+
+void main() {
+    Material m = materials.items[draw.material];
+    vec3 emission = m.emission.rgb;
+    // Seen from behind (the triangle's own normal), a one-sided emitter is dark.
+    if (m.maps.y != 0u && dot(in_normal, frame.camera_pos.xyz - in_world) < 0.0) {
+        emission = vec3(0.0);
+    }
+    vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
+    out_radiance = vec4(emission + albedo * texture(lightmap, in_lightmap_uv).rgb, 1.0);
+}

@@ -1,0 +1,205 @@
+//! From a scene to a baked light-map: the static triangles the baker sees, direct light from the
+//! scene's punctual lights as initial energy, the solve, and the atlas (charts shelf-packed with
+//! one-texel gaps, border patches filled from their inside neighbours — the seed's pass 1 — so
+//! bilinear filtering never reads black at a polygon's edge).
+
+use glam::{DVec3, Mat4, Vec3};
+
+use super::patches::{Patches, Triangle};
+use super::solve::{self, Occluders, Settings};
+use crate::error::{Error, Result};
+use crate::gpu_scene::SceneGpu;
+use crate::progress::Progress;
+use crate::scene::{Light, Scene};
+
+/// What the light-map holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Content {
+    /// Direct light from the scene's lights and emitters, and every bounce: the whole static frame.
+    All,
+    /// Only light that bounced at least once (for drawing under a direct method).
+    Bounces,
+}
+
+/// One scene draw's triangles as the baker sees them, and what the renderer draws them with.
+pub struct StaticGeometry {
+    pub triangles: Vec<Triangle>,
+    /// Per triangle: the scene draw it came from, and its mesh uv at each corner.
+    pub draw: Vec<usize>,
+    pub uvs: Vec<[[f32; 2]; 3]>,
+}
+
+/// The scene's draws (objects and area-light emitters) in world space. Animated objects and
+/// sphere lights are refused: a light-map is static, and sphere emitters are not patched yet.
+pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<StaticGeometry> {
+    let src = &scene.source;
+    let mut emitters = Vec::new();
+    for (i, l) in scene.lights.iter().enumerate() {
+        match l {
+            Light::Quad { radiance, .. } => emitters.push(*radiance),
+            Light::Sphere { .. } => return Err(Error::Usage(format!("{src}: lights[{i}] ({:?}): {method} does not patch sphere lights yet (use a quad light)", l.name()))),
+            _ => {}
+        }
+    }
+    let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), uvs: Vec::new() };
+    let mut emitter = 0;
+    for (d, item) in gpu.draws.iter().enumerate() {
+        let (albedo, emission) = match item.object {
+            Some(o) => {
+                let obj = &scene.objects[o];
+                if obj.animation.is_some() {
+                    return Err(Error::Usage(format!("{src}: objects[{o}] ({:?}).animation: {method} bakes static geometry only", obj.name)));
+                }
+                let m = scene.materials.get(obj.material).ok_or_else(|| Error::Usage(format!("{src}: objects[{o}]: material index out of range")))?;
+                (m.albedo, m.emission)
+            }
+            None => {
+                let e = emitters.get(emitter).copied().unwrap_or(Vec3::ZERO);
+                emitter += 1;
+                (Vec3::ZERO, e)
+            }
+        };
+        let mesh = &gpu.meshes[d];
+        let m: Mat4 = item.model;
+        for t in mesh.indices.chunks_exact(3) {
+            let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]).as_dvec3());
+            let uv = [0, 1, 2].map(|k| mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()));
+            out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3() });
+            out.draw.push(d);
+            out.uvs.push(uv);
+        }
+    }
+    Ok(out)
+}
+
+/// Adds the reflected direct light of the scene's point, spot and directional lights (shadowed)
+/// to every patch's total and unshot radiosity; returns each patch's share.
+pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Vec<DVec3> {
+    let mut direct = vec![DVec3::ZERO; p.patches.len()];
+    let eps = 1e-4 * p.size;
+    for (k, q) in p.patches.iter_mut().enumerate() {
+        if !q.inside() {
+            continue;
+        }
+        let x = q.centre + q.normal * eps;
+        let mut e = DVec3::ZERO;
+        for l in &scene.lights {
+            let (to_light, irradiance, far) = match l {
+                Light::Point { position, intensity, .. } => {
+                    let d = position.as_dvec3() - x;
+                    (d.normalize_or_zero(), intensity.as_dvec3() / d.length_squared().max(1e-12), position.as_dvec3())
+                }
+                Light::Spot { position, direction, intensity, inner_deg, outer_deg, .. } => {
+                    let d = position.as_dvec3() - x;
+                    let l = d.normalize_or_zero();
+                    let falloff = crate::lighting::brdf::spot_falloff(outer_deg.to_radians().cos(), inner_deg.to_radians().cos(), (-l).as_vec3().dot(direction.normalize()));
+                    (l, intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12), position.as_dvec3())
+                }
+                Light::Directional { direction, irradiance, .. } => {
+                    let l = -direction.as_dvec3().normalize_or_zero();
+                    (l, irradiance.as_dvec3(), x + l * 1e6)
+                }
+                _ => continue,
+            };
+            let cos = q.normal.dot(to_light);
+            if cos <= 0.0 || !occluders.visible(x, far) {
+                continue;
+            }
+            e += irradiance * cos;
+        }
+        let b = q.albedo * e;
+        q.total += b;
+        q.unshot += b;
+        direct[k] = b;
+    }
+    direct
+}
+
+/// Where each chart lies in the atlas: its texel offset, and the atlas size.
+#[derive(Clone, Debug)]
+pub struct Atlas {
+    pub width: u32,
+    pub height: u32,
+    pub offsets: Vec<(u32, u32)>,
+}
+
+/// Shelf packing, tallest first, one empty texel between charts (bilinear filtering must not
+/// reach a neighbour: seed 000 §3.3.6).
+pub fn pack(p: &Patches) -> Atlas {
+    let area: usize = p.charts.iter().map(|c| (c.width + 1) * (c.height + 1)).sum();
+    let widest = p.charts.iter().map(|c| c.width + 1).max().unwrap_or(1);
+    let width = ((area as f64).sqrt().ceil() as usize).max(widest).next_power_of_two() as u32;
+    let mut order: Vec<usize> = (0..p.charts.len()).collect();
+    order.sort_by_key(|&c| (std::cmp::Reverse(p.charts[c].height), c));
+    let mut offsets = vec![(0, 0); p.charts.len()];
+    let (mut x, mut y, mut shelf) = (0u32, 0u32, 0u32);
+    for c in order {
+        let (w, h) = (p.charts[c].width as u32 + 1, p.charts[c].height as u32 + 1);
+        if x + w > width {
+            x = 0;
+            y += shelf;
+            shelf = 0;
+        }
+        offsets[c] = (x, y);
+        x += w;
+        shelf = shelf.max(h);
+    }
+    Atlas { width, height: (y + shelf).max(1), offsets }
+}
+
+/// The light-map texels (RGBA32F, row-major): each patch's irradiance / π — what the base term
+/// multiplies by the albedo — with border patches filled from their inside neighbours.
+pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec<[f32; 4]> {
+    let mut out = vec![[0.0f32; 4]; (atlas.width * atlas.height) as usize];
+    for (ci, c) in p.charts.iter().enumerate() {
+        let (ox, oy) = atlas.offsets[ci];
+        let at = |i: usize, j: usize| c.first + j * c.width + i;
+        for j in 0..c.height {
+            for i in 0..c.width {
+                let k = at(i, j);
+                let v = if p.patches[k].inside() {
+                    value(k)
+                } else {
+                    // Pass 1: the mean of the inside 8-neighbours.
+                    let mut sum = DVec3::ZERO;
+                    let mut n = 0;
+                    for dj in -1i64..=1 {
+                        for di in -1i64..=1 {
+                            let (ni, nj) = (i as i64 + di, j as i64 + dj);
+                            if (di, dj) != (0, 0) && ni >= 0 && nj >= 0 && (ni as usize) < c.width && (nj as usize) < c.height && p.patches[at(ni as usize, nj as usize)].inside() {
+                                sum += value(at(ni as usize, nj as usize));
+                                n += 1;
+                            }
+                        }
+                    }
+                    if n > 0 {
+                        sum / n as f64
+                    } else {
+                        DVec3::ZERO
+                    }
+                };
+                out[((oy + j as u32) * atlas.width + ox + i as u32) as usize] = [v.x as f32, v.y as f32, v.z as f32, 1.0];
+            }
+        }
+    }
+    out
+}
+
+/// Bakes the light-map of `geometry`: patches, direct light, the solve, the texels.
+pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings: &Settings, content: Content, progress: &mut Progress) -> (Patches, Atlas, Vec<[f32; 4]>, solve::Report) {
+    let mut p = Patches::build(&geometry.triangles, patch_size);
+    let occluders = Occluders::new(&geometry.triangles);
+    let direct = add_direct_light(&mut p, &occluders, scene);
+    let report = solve::solve(&mut p, &occluders, settings, progress);
+    let atlas = pack(&p);
+    let texels = texels(&p, &atlas, |k| {
+        let q = &p.patches[k];
+        let mut reflected = q.total - q.emission;
+        if content == Content::Bounces {
+            reflected -= direct[k];
+        }
+        let inv = |a: f64| if a > 0.0 { 1.0 / (a * std::f64::consts::PI) } else { 0.0 };
+        (reflected * DVec3::new(inv(q.albedo.x), inv(q.albedo.y), inv(q.albedo.z))).max(DVec3::ZERO)
+    });
+    (p, atlas, texels, report)
+}

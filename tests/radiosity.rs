@@ -1,0 +1,56 @@
+//! The radiosity light-map as a base term on the GPU (seed 000 §3): a closed box whose inside
+//! emits L_e and reflects ρ shows L_e/(1 − ρ) in every pixel (the furnace's geometric series,
+//! independent of the baker), and a bad parameter is one line naming file and field.
+
+mod common;
+
+use penumbra::renderer::{FrameOutput, Renderer};
+use penumbra::scene::Scene;
+
+/// Six inward-facing quads around [-1, 1]³, all of one material, the camera inside.
+fn furnace_box(method: &str, emission: f32, albedo: f32) -> String {
+    let faces = [
+        ([-1, -1, -1], [2, 0, 0], [0, 0, 2]),
+        ([-1, 1, -1], [0, 0, 2], [2, 0, 0]),
+        ([-1, -1, -1], [0, 0, 2], [0, 2, 0]),
+        ([1, -1, -1], [0, 2, 0], [0, 0, 2]),
+        ([-1, -1, -1], [0, 2, 0], [2, 0, 0]),
+        ([-1, -1, 1], [2, 0, 0], [0, 2, 0]),
+    ];
+    let mut s =
+        format!("methods = [{method}]\n[camera]\nposition = [0.1, -0.2, 0.3]\ntarget = [0.5, 0.3, -1]\nfov_y_deg = 90\n[[materials]]\nname = \"wall\"\nalbedo = {albedo}\nemission = {emission}\n");
+    for (c, u, v) in faces {
+        // Light-map patches are lit on their front (edge_u × edge_v) side: v × u faces inward.
+        s += &format!("[[objects]]\nmesh = \"quad\"\ncorner = {c:?}\nedge_u = {v:?}\nedge_v = {u:?}\nmaterial = \"wall\"\n");
+    }
+    s
+}
+
+fn render(text: &str, size: (u32, u32)) -> penumbra::image_io::HdrImage {
+    let scene = Scene::from_str(text, "box.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let mut r = Renderer::new(common::test_gpu(), scene, None, size, 1).unwrap_or_else(|e| panic!("{e}"));
+    let cam = r.scene.camera.clone();
+    let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+    common::assert_clean(&r.gpu);
+    img
+}
+
+#[test]
+fn a_closed_emitting_box_shows_the_furnace_series_everywhere() {
+    let (le, rho) = (0.5f32, 0.6f32);
+    let img = render(&furnace_box(r#"{ name = "radiosity", patch_size = 0.25, threshold = 1e-4 }"#, le, rho), (48, 32));
+    let want = le / (1.0 - rho);
+    let worst = img.pixels.iter().map(|p| (p[0] - want).abs() / want).fold(0.0f32, f32::max);
+    // The solve stops with 1e-4 of the light unshot; the form factors are exact.
+    assert!(worst < 2e-3, "worst pixel {worst:.2e} off L_e/(1 − ρ) = {want}");
+    // Without the light-map (a lookup of 0, or emission only) every pixel would be L_e: 2.5× less.
+    assert!(img.pixels.iter().all(|p| p[0] > 1.5 * le));
+}
+
+#[test]
+fn bad_parameters_name_the_field() {
+    let text = furnace_box(r#"{ name = "radiosity", patch_size = -1 }"#, 0.5, 0.5);
+    let scene = Scene::from_str(&text, "box.toml", std::path::Path::new(".")).unwrap();
+    let e = Renderer::new(common::test_gpu(), scene, None, (8, 8), 1).err().expect("refused").to_string();
+    assert!(e.contains("radiosity.patch_size: expected a size from 0.005 to 10 metres, got -1"), "{e}");
+}
