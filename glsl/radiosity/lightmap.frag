@@ -8,7 +8,6 @@ layout(set = 0, binding = 1) readonly buffer Materials { Material items[]; } mat
 layout(set = 0, binding = 2) uniform sampler2D albedo_map;
 layout(set = 0, binding = 3) uniform sampler2D lightmap;
 
-// draw.model is unused: the vertices are already in world space.
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_lightmap_uv;

@@ -90,6 +90,7 @@ fn reference_settings(kind: ReferenceKind, spp: u32) -> (Settings, String) {
     let (paths, bounces, label) = match kind {
         ReferenceKind::Direct => (LightPaths::Direct, 0, "direct"),
         ReferenceKind::Bounces(k) => (LightPaths::All, k, "bounces"),
+        ReferenceKind::Indirect(k) => (LightPaths::Indirect, k, "bounces (indirect only)"),
     };
     let label = if kind == ReferenceKind::Direct { format!("{label}, {spp} spp") } else { format!("{bounces} {label}, {spp} spp") };
     (Settings { spp, bounces, paths, seed: 0, batching: Batching::Adaptive }, label)

@@ -121,4 +121,19 @@ pub enum ReferenceKind {
     Direct,
     /// Up to this many bounces after the first hit (global illumination methods).
     Bounces(u32),
+    /// Light after 2 to this many + 1 interactions: only what bounced (an indirect term alone).
+    Indirect(u32),
+}
+
+impl ReferenceKind {
+    /// What two parts of a configuration model together.
+    pub fn combine(self, other: ReferenceKind) -> ReferenceKind {
+        use ReferenceKind::*;
+        match (self, other) {
+            (Direct, Direct) => Direct,
+            (Indirect(a), Indirect(b)) => Indirect(a.max(b)),
+            (Direct, Indirect(k)) | (Indirect(k), Direct) | (Direct, Bounces(k)) | (Bounces(k), Direct) => Bounces(k),
+            (Bounces(a) | Indirect(a), Bounces(b) | Indirect(b)) => Bounces(a.max(b)),
+        }
+    }
 }

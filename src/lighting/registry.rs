@@ -27,7 +27,7 @@ pub struct MethodInfo {
     /// The configurations to measure, as (label, declaration with the swept parameters set),
     /// starting from the scene's declaration.
     pub sweep: fn(&MethodDecl) -> Vec<(String, MethodDecl)>,
-    pub reference: ReferenceKind,
+    pub reference: fn(&MethodDecl) -> ReferenceKind,
     /// It draws materials with opacity < 1 (others refuse such scenes).
     pub translucency: bool,
     pub create: CreateFn,
@@ -43,7 +43,7 @@ pub fn registry() -> Vec<MethodInfo> {
             terms: Terms::BASE_DIRECT,
             separable: true,
             sweep: forward::sweep,
-            reference: ReferenceKind::Direct,
+            reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(forward::Forward::new(c, d)?)),
             report: None,
@@ -53,7 +53,7 @@ pub fn registry() -> Vec<MethodInfo> {
             terms: Terms::BASE_DIRECT,
             separable: true,
             sweep: shadow_volumes::sweep,
-            reference: ReferenceKind::Direct,
+            reference: |_| ReferenceKind::Direct,
             translucency: true,
             create: |c, d| Ok(Box::new(shadow_volumes::ShadowVolumes::new(c, d)?)),
             report: None,
@@ -63,7 +63,7 @@ pub fn registry() -> Vec<MethodInfo> {
             terms: Terms::BASE_DIRECT,
             separable: false,
             sweep: heightfield::pyramid_sweep,
-            reference: ReferenceKind::Direct,
+            reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
             report: Some(heightfield::measure::table_6_6),
@@ -73,7 +73,7 @@ pub fn registry() -> Vec<MethodInfo> {
             terms: Terms::BASE_DIRECT,
             separable: false,
             sweep: heightfield::brute_sweep,
-            reference: ReferenceKind::Direct,
+            reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
             report: Some(heightfield::measure::table_6_6),
@@ -83,8 +83,7 @@ pub fn registry() -> Vec<MethodInfo> {
             terms: Terms::BASE,
             separable: false,
             sweep: radiosity::sweep,
-            // The light-map holds every bounce the solve converged to.
-            reference: ReferenceKind::Bounces(16),
+            reference: radiosity::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(radiosity::Radiosity::new(c, d)?)),
             report: None,
@@ -134,11 +133,12 @@ pub fn alone(decl: &MethodDecl) -> Configuration {
 
 /// The reference a configuration is judged against: the most any of its parts models.
 pub fn reference_kind(config: &Configuration) -> Result<ReferenceKind> {
-    let mut kind = ReferenceKind::Direct;
+    let mut kind: Option<ReferenceKind> = None;
     for p in &config.parts {
-        kind = kind.max(info(&p.decl.name)?.reference);
+        let k = (info(&p.decl.name)?.reference)(&p.decl);
+        kind = Some(kind.map_or(k, |a| a.combine(k)));
     }
-    Ok(kind)
+    Ok(kind.unwrap_or(ReferenceKind::Direct))
 }
 
 /// Creates the methods of a configuration, in frame order, refusing translucent materials for

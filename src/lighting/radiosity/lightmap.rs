@@ -24,8 +24,10 @@ pub enum Content {
 /// One scene draw's triangles as the baker sees them, and what the renderer draws them with.
 pub struct StaticGeometry {
     pub triangles: Vec<Triangle>,
-    /// Per triangle: the scene draw it came from, and its mesh uv at each corner.
+    /// Per triangle: the scene draw it came from, its corners in object space (the renderer
+    /// transforms them exactly as every method does, so depths match) and its mesh uvs.
     pub draw: Vec<usize>,
+    pub object_space: Vec<[[f32; 3]; 3]>,
     pub uvs: Vec<[[f32; 2]; 3]>,
 }
 
@@ -41,7 +43,7 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
             _ => {}
         }
     }
-    let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), uvs: Vec::new() };
+    let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), object_space: Vec::new(), uvs: Vec::new() };
     let mut emitter = 0;
     for (d, item) in gpu.draws.iter().enumerate() {
         let (albedo, emission) = match item.object {
@@ -66,6 +68,7 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
             let uv = [0, 1, 2].map(|k| mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()));
             out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3() });
             out.draw.push(d);
+            out.object_space.push([0, 1, 2].map(|k| mesh.positions[t[k] as usize].to_array()));
             out.uvs.push(uv);
         }
     }

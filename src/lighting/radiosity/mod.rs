@@ -18,7 +18,6 @@ mod tests;
 pub mod lightmap;
 
 use bytemuck::{Pod, Zeroable};
-use glam::Mat4;
 
 use crate::backend::{
     vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SubresourceRange, VertexAttribute, VertexLayout,
@@ -88,6 +87,15 @@ impl Config {
     }
 }
 
+/// What the light-map models: every bounce (to 16, where the solve has converged), or only
+/// light that bounced. (Its emitters are drawn either way, which an indirect reference lacks.)
+pub fn reference(decl: &MethodDecl) -> crate::lighting::ReferenceKind {
+    match Config::from_decl(decl).map(|c| c.content) {
+        Ok(Content::Bounces) => crate::lighting::ReferenceKind::Indirect(16),
+        _ => crate::lighting::ReferenceKind::Bounces(16),
+    }
+}
+
 /// The chart's sweep: patch sizes and both modes.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let with = |name: &str, v: toml::Value| {
@@ -113,11 +121,12 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     out
 }
 
-/// `LightmapVertex` of glsl/radiosity/lightmap.vert.
+/// `LightmapVertex` of glsl/radiosity/lightmap.vert (object space: the draw's model matrix is
+/// pushed, so the depth is the one every other method computes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct LightmapVertex {
-    world: [f32; 3],
+    position: [f32; 3],
     normal: [f32; 3],
     lightmap_uv: [f32; 2],
     uv: [f32; 2],
@@ -128,8 +137,8 @@ struct LightmapVertex {
 pub struct Radiosity {
     pipeline: PipelineId,
     vertices: BufferId,
-    /// (material, first vertex, vertex count) per scene draw.
-    draws: Vec<(u32, u32, u32)>,
+    /// (scene draw, first vertex, vertex count).
+    draws: Vec<(usize, u32, u32)>,
     lightmap: ImageId,
     sampler: SamplerId,
 }
@@ -176,17 +185,17 @@ impl Radiosity {
         let uvs = &baked[2 + texel_floats..];
         // Vertices grouped by scene draw (static_geometry emits them in draw order).
         let mut vertices = Vec::with_capacity(3 * geometry.triangles.len());
-        let mut draws: Vec<(u32, u32, u32)> = Vec::new();
-        for (t, tri) in geometry.triangles.iter().enumerate() {
+        let mut draws: Vec<(usize, u32, u32)> = Vec::new();
+        for t in 0..geometry.triangles.len() {
             let d = geometry.draw[t];
-            let material = cx.scene_gpu.draws[d].material;
             match draws.last_mut() {
-                Some(last) if last.0 == material && last.1 + last.2 == vertices.len() as u32 => last.2 += 3,
-                _ => draws.push((material, vertices.len() as u32, 3)),
+                Some(last) if last.0 == d => last.2 += 3,
+                _ => draws.push((d, vertices.len() as u32, 3)),
             }
-            let n = tri.normal().as_vec3().to_array();
+            let o = geometry.object_space[t].map(glam::Vec3::from);
+            let n = (o[1] - o[0]).cross(o[2] - o[0]).normalize_or_zero().to_array();
             for k in 0..3 {
-                vertices.push(LightmapVertex { world: tri.p[k].as_vec3().to_array(), normal: n, lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]], uv: geometry.uvs[t][k] });
+                vertices.push(LightmapVertex { position: o[k].to_array(), normal: n, lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]], uv: geometry.uvs[t][k] });
             }
         }
         let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
@@ -231,13 +240,14 @@ impl LightingMethod for Radiosity {
                 let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
                 ctx.rec.bind_pipeline(self.pipeline)?;
                 ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
-                for &(material, first, count) in &self.draws {
-                    let maps = scene.material_maps[material as usize];
+                for &(d, first, count) in &self.draws {
+                    let item = &scene.draws[d];
+                    let maps = scene.material_maps[item.material as usize];
                     ctx.bind(&[
                         ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
                         ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
                     ])?;
-                    ctx.rec.push_constants(DrawPush::new(Mat4::IDENTITY, material).bytes())?;
+                    ctx.rec.push_constants(DrawPush::new(item.model, item.material).bytes())?;
                     ctx.rec.draw_from(count, first)?;
                 }
                 ctx.rec.end_rendering();
