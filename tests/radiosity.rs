@@ -85,3 +85,15 @@ fn bounced_light_under_shadow_volumes_approaches_the_path_tracer() {
     assert!(gi.mean_bias.abs() < 0.25 * direct.mean_bias.abs(), "bias: gi {} vs direct {}", gi.mean_bias, direct.mean_bias);
     assert!(bounces.mean_bias.abs() < 0.01, "the light-map's bounced light is unbiased against the tracer's: {}", bounces.mean_bias);
 }
+
+#[test]
+fn each_configuration_is_judged_against_what_it_models() {
+    use penumbra::lighting::{registry, ReferenceKind};
+    let scene = Scene::from_file("scenes/room_gi.toml").unwrap();
+    let kind = |name: &str| registry::reference_kind(&registry::configuration(&scene, Some(name)).unwrap()).unwrap();
+    assert_eq!(kind("radiosity"), ReferenceKind::Indirect(16));
+    assert_eq!(kind("shadow_volumes"), ReferenceKind::Direct);
+    assert_eq!(kind("gi"), ReferenceKind::Bounces(16));
+    assert_eq!(ReferenceKind::Bounces(3).combine(ReferenceKind::Indirect(8)), ReferenceKind::Bounces(8));
+    assert_eq!(ReferenceKind::Indirect(2).combine(ReferenceKind::Indirect(5)), ReferenceKind::Indirect(5));
+}
