@@ -224,9 +224,9 @@ impl ApplicationHandler for App {
                                 // The next presented frame is copied back and saved.
                                 KeyCode::F12 if !event.repeat => s.grab_next = true,
                                 KeyCode::KeyR if !event.repeat => match s.renderer.reload_shaders() {
-                                    Ok(n) => println!("reloaded {n} pipelines from glsl/"),
+                                    Ok(n) => crate::outln!("reloaded {n} pipelines from glsl/"),
                                     // A broken shader is reported; the old pipelines keep running.
-                                    Err(e) => eprintln!("shader reload failed, keeping the old pipelines: {e}"),
+                                    Err(e) => crate::errln!("shader reload failed, keeping the old pipelines: {e}"),
                                 },
                                 _ => {}
                             }
@@ -250,7 +250,7 @@ impl ApplicationHandler for App {
                             }
                         };
                         s.save_grab(&path)?;
-                        println!("saved {} after {} frames", path.display(), s.frames);
+                        crate::outln!("saved {} after {} frames", path.display(), s.frames);
                     }
                     if let Some((at, w, h)) = self.resize_at {
                         if s.frames == at {

@@ -8,6 +8,7 @@
 pub mod backend;
 pub mod capture;
 pub mod chart;
+pub mod console;
 pub mod demo;
 pub mod error;
 pub mod forward;

@@ -203,20 +203,20 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let mut opts = CaptureOptions { png: output, exr, frames, exposure, ..options(&render) };
             if let Some(e) = max_error {
                 let (decl, why) = penumbra::capture::choose_configuration(&opts, e, &cache_dir)?;
-                println!("{why}");
+                penumbra::outln!("{why}");
                 opts.config = Some(decl);
             }
             for path in penumbra::capture::run(&opts)? {
-                println!("wrote {path}");
+                penumbra::outln!("wrote {path}");
             }
         }
         Command::Profile { render, frames, json } => {
             let report = penumbra::profile::run(&options(&render), frames)?;
-            print!("{}", report.table());
+            penumbra::out!("{}", report.table());
             if let Some(p) = json {
                 let text = serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Usage(e.to_string()))?;
                 std::fs::write(&p, text).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
-                println!("wrote {}", p.display());
+                penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Compare { test, reference, diff, exposure, json } => {
@@ -225,30 +225,30 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let (t, r) = (HdrImage::read_exr(&test)?, HdrImage::read_exr(&reference)?);
             let (metrics, map) = compare_with_map(&t, &r, &CompareOptions { exposure, ..CompareOptions::default() })?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?);
+                penumbra::outln!("{}", serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?);
             } else {
-                print!("{}", metrics.table());
+                penumbra::out!("{}", metrics.table());
             }
             if let Some(p) = diff {
                 colorize(&map).save_with_format(&p, image::ImageFormat::Png).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
-                println!("wrote {}", p.display());
+                penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Chart { scene, output, csv, size, frames, reference_spp, cache_dir, device } => {
             let opts = penumbra::chart::ChartOptions { scene, size, frames, reference_spp, png: Some(output.clone()), csv: csv.clone(), cache_dir, gpu: gpu_desc(&device) };
             let chart = penumbra::chart::run(&opts)?;
             for r in &chart.rows {
-                println!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
+                penumbra::outln!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
             }
-            println!("wrote {}", output.display());
+            penumbra::outln!("wrote {}", output.display());
             if let Some(p) = csv {
-                println!("wrote {}", p.display());
+                penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Info { device } => {
             let gpu = Gpu::new(&gpu_desc(&device))?;
             for (k, v) in gpu.caps().report() {
-                println!("{k:<38} {v}");
+                penumbra::outln!("{k:<38} {v}");
             }
         }
         Command::Demo { render, frames, screenshot, resize_at } => {
@@ -267,10 +267,10 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive };
             let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, gpu: gpu_desc(&device) })?;
             for p in &report.written {
-                println!("wrote {}", p.display());
+                penumbra::outln!("wrote {}", p.display());
             }
             let img = &report.image;
-            println!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
+            penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
         }
     }
     Ok(())
@@ -279,9 +279,15 @@ fn run(cli: Cli) -> penumbra::Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => match penumbra::console::stdout_failure() {
+            None => ExitCode::SUCCESS,
+            Some(e) => {
+                penumbra::errln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Err(e) => {
-            eprintln!("error: {e}");
+            penumbra::errln!("error: {e}");
             ExitCode::FAILURE
         }
     }

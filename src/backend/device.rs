@@ -151,7 +151,7 @@ unsafe extern "system" fn debug_callback(
     };
     // Info/verbose chatter from the loader is not a validation finding.
     if severity.intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
-        eprintln!("vulkan: {msg}");
+        crate::errln!("vulkan: {msg}");
         if !user.is_null() {
             let log = unsafe { &*(user as *const ValidationLog) };
             log.push(msg);

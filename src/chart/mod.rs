@@ -100,9 +100,9 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, spp
             return Ok((img, label));
         }
     }
-    eprintln!("chart: rendering the reference ({label}) for {}", scene.source);
+    crate::errln!("chart: rendering the reference ({label}) for {}", scene.source);
     let mut tracer = ReferenceRenderer::new(Gpu::new(gpu)?, scene, size)?;
-    let image = tracer.render(&settings, &mut |done, total| eprintln!("reference: {done}/{total} spp"))?;
+    let image = tracer.render(&settings, &mut |done, total| crate::errln!("reference: {done}/{total} spp"))?;
     std::fs::create_dir_all(cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", cache_dir.display())))?;
     image.mean.write_exr(&path)?;
     Ok((image.mean, label))
@@ -141,7 +141,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         }
         let (reference, reference_label) = &references[&key];
         for (config, config_decl) in (info.sweep)(decl) {
-            eprintln!("chart: {config}");
+            crate::errln!("chart: {config}");
             let (image, frame_ms, passes, dev) = measure(&scene, &config_decl, opts)?;
             device = dev;
             let metrics = metrics::compare(&image, reference, &CompareOptions::default())?;

@@ -385,13 +385,13 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let terminal = std::io::stderr().is_terminal();
     let image = renderer.render(&opts.settings, &mut |done, total| {
         if terminal {
-            eprint!("\rreference: {done}/{total} spp");
+            crate::err!("\rreference: {done}/{total} spp");
         } else {
-            eprintln!("reference: {done}/{total} spp");
+            crate::errln!("reference: {done}/{total} spp");
         }
     })?;
     if terminal {
-        eprintln!();
+        crate::errln!();
     }
     let n = renderer.gpu.validation_log().count();
     if n > 0 {
