@@ -271,6 +271,8 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             }
             let img = &report.image;
             penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
+            let (mean, se) = img.average();
+            penumbra::outln!("average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}", mean[0], mean[1], mean[2], se[0], se[1], se[2]);
         }
     }
     Ok(())

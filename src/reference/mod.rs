@@ -174,6 +174,21 @@ pub struct ReferenceImage {
 }
 
 impl ReferenceImage {
+    /// The image's average radiance per RGB channel and the standard error of that average
+    /// (pixels are independent estimates: sqrt(Σ s.e.²) / pixels).
+    pub fn average(&self) -> ([f64; 3], [f64; 3]) {
+        let n = self.mean.pixels.len().max(1) as f64;
+        let mut mean = [0.0; 3];
+        let mut var = [0.0; 3];
+        for (m, e) in self.mean.pixels.iter().zip(&self.standard_error.pixels) {
+            for c in 0..3 {
+                mean[c] += m[c] as f64 / n;
+                var[c] += (e[c] as f64).powi(2) / (n * n);
+            }
+        }
+        (mean, var.map(f64::sqrt))
+    }
+
     /// Pixel samples per second.
     pub fn samples_per_second(&self) -> f64 {
         self.mean.width as f64 * self.mean.height as f64 * self.spp as f64 / self.seconds.max(1e-9)
