@@ -18,6 +18,95 @@ pub enum ImageIoError {
     Io { path: String, message: String },
 }
 
+/// The most pixels on a side of any image penumbra reads (textures, height images,
+/// environments; also the largest `--size`).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// The most memory one decoded image may take (a 16384² RGBA32F image is 4 GiB).
+const MAX_DECODE_BYTES: u64 = 4 << 30;
+
+/// The format and size of an image file from its header alone: a format penumbra reads (PNG,
+/// OpenEXR, Radiance HDR), and at most [`MAX_IMAGE_SIDE`] on a side. The message names no file.
+pub fn image_header(path: &Path) -> Result<(image::ImageFormat, u32, u32), String> {
+    let reader = image::ImageReader::open(path).map_err(|e| format!("cannot read: {e}"))?.with_guessed_format().map_err(|e| format!("cannot read: {e}"))?;
+    let Some(format) = reader.format().filter(|f| matches!(f, image::ImageFormat::Png | image::ImageFormat::OpenExr | image::ImageFormat::Hdr)) else {
+        return Err("not an image penumbra reads (PNG, OpenEXR or Radiance HDR)".into());
+    };
+    let (w, h) = reader.into_dimensions().map_err(describe_image_error)?;
+    if w == 0 || h == 0 {
+        return Err(format!("the header says {w}×{h} pixels"));
+    }
+    if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        return Err(format!("the header says {w}×{h} pixels; penumbra reads images of at most {MAX_IMAGE_SIDE} on a side"));
+    }
+    Ok((format, w, h))
+}
+
+/// Decodes an image file after checking its header ([`image_header`]). A failure is one line
+/// without the decoder's internals, naming no file (the caller says which file and field).
+pub fn open_image(path: &Path) -> Result<image::DynamicImage, String> {
+    image_header(path)?;
+    let mut reader = image::ImageReader::open(path).map_err(|e| format!("cannot read: {e}"))?.with_guessed_format().map_err(|e| format!("cannot read: {e}"))?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(MAX_DECODE_BYTES);
+    limits.max_image_width = Some(MAX_IMAGE_SIDE);
+    limits.max_image_height = Some(MAX_IMAGE_SIDE);
+    reader.limits(limits);
+    reader.decode().map_err(describe_image_error)
+}
+
+fn format_name(f: image::ImageFormat) -> &'static str {
+    match f {
+        image::ImageFormat::Png => "a PNG image",
+        image::ImageFormat::Hdr => "a Radiance HDR image",
+        image::ImageFormat::OpenExr => "an OpenEXR image",
+        _ => "another image format",
+    }
+}
+
+/// One line for a decoding failure: what is wrong, without Debug dumps of decoder state.
+fn describe_image_error(e: image::ImageError) -> String {
+    use image::ImageError;
+    let text = match &e {
+        ImageError::Decoding(d) => {
+            let format: &str = match d.format_hint() {
+                image::error::ImageFormatHint::Exact(image::ImageFormat::Png) => "PNG",
+                image::error::ImageFormatHint::Exact(image::ImageFormat::OpenExr) => "OpenEXR",
+                image::error::ImageFormatHint::Exact(image::ImageFormat::Hdr) => "Radiance HDR",
+                _ => "image",
+            };
+            let why = std::error::Error::source(d).map(|s| s.to_string()).unwrap_or_else(|| d.to_string());
+            format!("corrupt or truncated {format} data: {why}")
+        }
+        ImageError::Limits(_) => format!("too large to decode (more than {} GiB)", MAX_DECODE_BYTES >> 30),
+        ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => "truncated: the file ends early".into(),
+        other => other.to_string(),
+    };
+    without_debug_dumps(&text)
+}
+
+/// Removes `Name { … }` groups (Rust Debug output some decoders put in their messages), keeping
+/// a `type: X` inside one as X; folds the text onto one line.
+fn without_debug_dumps(text: &str) -> String {
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(open) = rest.find('{') {
+        let Some(close) = rest[open..].find('}').map(|c| open + c) else { break };
+        let before = &rest[..open];
+        // Drop the type name in front of the braces too.
+        let kept = before.trim_end().rsplit_once(' ').map_or("", |(k, _)| k);
+        out.push_str(kept);
+        if let Some(t) = rest[open + 1..close].trim().strip_prefix("type:") {
+            out.push(' ');
+            out.push_str(t.split(',').next().unwrap_or("").trim());
+        }
+        rest = &rest[close + 1..];
+    }
+    out.push_str(rest);
+    let one_line = out.split_whitespace().collect::<Vec<_>>().join(" ");
+    one_line.trim_end_matches('.').to_string()
+}
+
 impl HdrImage {
     pub fn new(width: u32, height: u32) -> Self {
         HdrImage { width, height, pixels: vec![[0.0; 4]; (width * height) as usize] }
@@ -49,8 +138,15 @@ impl HdrImage {
         img.save_with_format(path, image::ImageFormat::OpenExr).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
     }
 
+    /// Reads an OpenEXR image (linear radiance). Any other format is refused: an 8-bit PNG holds
+    /// display values, and reading it as radiance would compare the wrong quantities.
     pub fn read_exr(path: &Path) -> Result<Self, ImageIoError> {
-        let img = image::open(path).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })?;
+        let err = |message: String| ImageIoError::Io { path: path.display().to_string(), message };
+        let (format, _, _) = image_header(path).map_err(err)?;
+        if format != image::ImageFormat::OpenExr {
+            return Err(err(format!("is {}, not OpenEXR: linear radiance is read from EXR files only (a PNG holds tone-mapped display values)", format_name(format))));
+        }
+        let img = open_image(path).map_err(err)?;
         let rgba = img.to_rgba32f();
         Ok(HdrImage { width: rgba.width(), height: rgba.height(), pixels: rgba.pixels().map(|p| p.0).collect() })
     }

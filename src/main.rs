@@ -52,15 +52,15 @@ enum Command {
         #[arg(long, value_name = "EXR")]
         exr: Option<PathBuf>,
         /// Frames to render before capturing (the last is written).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
         /// Exposure multiplier applied before tone mapping the PNG.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
         exposure: f32,
         /// Render with the cheapest configuration (of every method the scene enables) whose
         /// relative MSE against the reference is at most E, from the data `penumbra chart` cached
         /// for this scene and size; says which it picked and why.
-        #[arg(long, value_name = "E")]
+        #[arg(long, value_name = "E", value_parser = parse_max_error)]
         max_error: Option<f64>,
         /// Where `chart` caches references and tables.
         #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
@@ -77,7 +77,7 @@ enum Command {
         #[arg(long, value_name = "PNG")]
         diff: Option<PathBuf>,
         /// Exposure applied to both images before tone mapping for FLIP.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
         exposure: f32,
         /// Print the metrics as JSON instead of a table.
         #[arg(long)]
@@ -99,7 +99,7 @@ enum Command {
         #[arg(long, default_value = "128x128", value_parser = parse_size)]
         size: (u32, u32),
         /// Frames timed per configuration (the median is reported).
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, default_value_t = 20, value_parser = parse_frames)]
         frames: usize,
         /// Samples per pixel of the reference.
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
@@ -115,7 +115,7 @@ enum Command {
         #[command(flatten)]
         render: RenderArgs,
         /// Frames to time.
-        #[arg(long, default_value_t = 30)]
+        #[arg(long, default_value_t = 30, value_parser = parse_frames)]
         frames: usize,
         /// Also write the report as JSON (with device and driver).
         #[arg(long, value_name = "FILE")]
@@ -132,7 +132,7 @@ enum Command {
         #[command(flatten)]
         render: RenderArgs,
         /// Quit by itself after this many frames (for tests and scripted runs).
-        #[arg(long)]
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         frames: Option<u64>,
         /// Save a screenshot (PNG) of the last frame when quitting.
         #[arg(long, value_name = "PNG")]
@@ -178,6 +178,30 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     match (p(w), p(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
         _ => Err(format!("`{s}`: width and height must be whole numbers from 1 to 16384")),
+    }
+}
+
+/// A frame count: a whole number of at least 1.
+fn parse_frames(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("`{s}`: expected a whole number of frames, at least 1")),
+    }
+}
+
+/// A relative-MSE bound: a finite number above 0.
+fn parse_max_error(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
+        _ => Err(format!("`{s}`: expected a relative MSE, a finite number above 0 (e.g. 0.01)")),
+    }
+}
+
+/// An exposure multiplier: a finite number above 0.
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
+        _ => Err(format!("`{s}`: expected an exposure multiplier, a finite number above 0")),
     }
 }
 

@@ -114,10 +114,84 @@ fn bad_command_line_values_are_reported() {
     assert!(stderr(&o).starts_with("error: no/such/scene.toml: file: cannot read"), "{}", stderr(&o));
     let o = penumbra(&["capture", "--size", "64by48"]);
     assert!(!o.status.success() && stderr(&o).contains("WIDTHxHEIGHT"), "{}", stderr(&o));
-    let o = penumbra(&["capture", "--method", "lpv", "--size", "8x8"]);
+    // A method the renderer knows but the scene does not enable, and one nobody knows.
+    let o = penumbra(&["capture", "--method", "shadow_volumes", "--size", "8x8"]);
     assert!(!o.status.success());
     let e = stderr(&o);
-    assert!(e.contains("method `lpv` is not enabled") && e.contains("forward"), "{e}");
+    assert!(e.contains("method `shadow_volumes` is not enabled") && e.contains("forward"), "{e}");
+    let o = penumbra(&["capture", "--method", "bogus", "--size", "8x8"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.starts_with("error: --method bogus: unknown method; known methods: forward, shadow_volumes"), "{e}");
+    // Numbers that mean nothing are refused before anything runs.
+    for (args, says) in [
+        (vec!["capture", "--frames", "0"], "--frames"),
+        (vec!["profile", "--frames", "0"], "--frames"),
+        (vec!["chart", "scenes/default.toml", "--frames", "0"], "--frames"),
+        (vec!["capture", "scenes/default.toml", "--max-error", "NaN"], "--max-error"),
+        (vec!["capture", "scenes/default.toml", "--max-error=-1"], "--max-error"),
+        (vec!["capture", "--exposure", "inf"], "--exposure"),
+    ] {
+        let o = penumbra(&args);
+        let e = stderr(&o);
+        assert!(!o.status.success() && e.starts_with("error: invalid value") && e.contains(says), "{args:?}: {e}");
+    }
+}
+
+/// Bad data in the files a scene names: one line with the scene file, the field (and its line
+/// where the scene parser finds it), and what is wrong, never a decoder's Debug dump.
+#[test]
+fn bad_images_and_parameters_name_the_scene_file_and_field() {
+    let dir = common::temp_path("bad-data");
+    std::fs::create_dir_all(&dir).unwrap();
+    let good_png = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textures/bricks_albedo.png")).unwrap();
+    // Header CRC broken; image data scrambled; the file cut short; a 99999² HDR header.
+    let mut crc = good_png.clone();
+    crc[29] ^= 0xff;
+    let mut scrambled = good_png.clone();
+    for b in &mut scrambled[200..260] {
+        *b ^= 0x5a;
+    }
+    std::fs::write(dir.join("crc.png"), crc).unwrap();
+    std::fs::write(dir.join("scrambled.png"), scrambled).unwrap();
+    std::fs::write(dir.join("short.png"), &good_png[..100]).unwrap();
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 99999 +X 99999\n".to_vec();
+    hdr.extend([7u8; 64]);
+    std::fs::write(dir.join("huge.hdr"), hdr).unwrap();
+    let texture = |file: &str| format!("{CAMERA}[[materials]]\nname = \"m\"\nalbedo_map = \"{}\"\n[[objects]]\nmesh = \"sphere\"\nmaterial = \"m\"\n", dir.join(file).display());
+    let field =
+        |extra: &str| format!("methods = [{{ name = \"heightfield_pyramid\"{extra} }}]\n{CAMERA}[[materials]]\nname = \"g\"\n[[objects]]\nmesh = \"heightfield\"\nmaterial = \"g\"\nresolution = 16\n");
+    let heights = |file: &str| format!("{}path = \"{}\"\n", field(""), dir.join(file).display());
+    let cases: Vec<(&str, String, &str, &str)> = vec![
+        ("tex_crc.toml", texture("crc.png"), ":6: materials[0].albedo_map", "CRC error"),
+        ("tex_scrambled.toml", texture("scrambled.png"), ": materials[0] (\"m\").albedo_map", "corrupt or truncated PNG data"),
+        ("tex_short.toml", texture("short.png"), ": materials[0] (\"m\").albedo_map", "truncated"),
+        ("hf_crc.toml", heights("crc.png"), ":11: objects[0].path", "CRC error"),
+        ("hf_scrambled.toml", heights("scrambled.png"), ":11: objects[0].path", "corrupt or truncated PNG data"),
+        ("env_huge.toml", format!("{CAMERA}[environment]\ntype = \"image\"\npath = \"{}\"\n", dir.join("huge.hdr").display()), ":6: environment.path", "99999×99999"),
+        ("bands.toml", format!("{}generator = \"sine\"\n", field(", bands = 99")), ":1: methods[0].bands", "from 1 to 6, got 99"),
+        ("far_camera.toml", "[camera]\nposition = [1e30, 1, 3]\ntarget = [0, 0, 0]\n".to_string(), ":2: camera.position", "too far from the origin"),
+    ];
+    for (name, content, location, detail) in cases {
+        let (line, path) = scene_error(name, &content);
+        assert!(line.starts_with(&format!("error: {}", path.display())), "{name}: {line}");
+        assert!(line.contains(location), "{name}: expected `{location}` in: {line}");
+        assert!(line.contains(detail), "{name}: expected `{detail}` in: {line}");
+        assert!(!line.contains('{') && !line.contains("Memory limit"), "{name}: a decoder's internals: {line}");
+    }
+}
+
+/// `compare` reads linear radiance: an 8-bit PNG is refused, not read as radiance.
+#[test]
+fn compare_refuses_a_png_as_radiance() {
+    let (png, exr) = (common::temp_path("cmp.png"), common::temp_path("cmp.exr"));
+    common::ok(&penumbra(&["capture", "--size", "16x16", "-o", path_str(&png), "--exr", path_str(&exr)]));
+    for (test, reference) in [(&png, &exr), (&exr, &png)] {
+        let o = penumbra(&["compare", path_str(test), path_str(reference)]);
+        let e = stderr(&o);
+        assert!(!o.status.success() && e.starts_with(&format!("error: {}: is a PNG image, not OpenEXR", png.display())), "{e}");
+    }
+    common::ok(&penumbra(&["compare", path_str(&exr), path_str(&exr)]));
 }
 
 /// `penumbra info | true`, `capture … | true` and `reference … | true` used to exit 101 with

@@ -675,10 +675,22 @@ fn normal_map_tilts_the_normal_in_the_meshs_tangent_frame() {
 fn an_unreadable_texture_map_is_an_error_naming_the_field() {
     let bad = common::temp_path("not-an-image.png");
     std::fs::write(&bad, "not a PNG").expect("write");
-    let texture = format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nspecular_map = {:?}\n", bad.display().to_string());
-    let e = penumbra::reference::TracedScene::build(&parse(&texture)).err().expect("an error").to_string();
-    assert!(e.contains("<test>") && e.contains("specular_map") && e.contains("\"wood\"") && e.contains("not-an-image.png"), "{e}");
-    assert_eq!(e.lines().count(), 1, "{e}");
+    let texture = |path: &Path| format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nspecular_map = {:?}\n", path.display().to_string());
+    // Not an image at all: refused when the scene is read, with the field's line.
+    let e = Scene::from_str(&texture(&bad), "<test>", Path::new(".")).err().expect("an error").to_string();
+    assert!(e.contains("<test>:") && e.contains("materials[0].specular_map") && e.contains("not-an-image.png"), "{e}");
+    // A valid header over corrupt image data: refused when the tracer decodes it.
+    let scrambled = common::temp_path("scrambled.png");
+    image::RgbaImage::from_fn(16, 16, |x, y| image::Rgba([(x * 16) as u8, (y * 16) as u8, 7, 255])).save(&scrambled).unwrap();
+    let mut bytes = std::fs::read(&scrambled).unwrap();
+    let n = bytes.len();
+    for b in &mut bytes[41..n - 12] {
+        *b ^= 0x5a;
+    }
+    std::fs::write(&scrambled, bytes).unwrap();
+    let e = penumbra::reference::TracedScene::build(&parse(&texture(&scrambled))).err().expect("an error").to_string();
+    assert!(e.contains("<test>") && e.contains("specular_map") && e.contains("\"wood\"") && e.contains("scrambled.png") && e.contains("corrupt"), "{e}");
+    assert!(e.lines().count() == 1 && !e.contains('{'), "{e}");
 }
 
 /// A 16 × 8 sky: a bright sun texel, a bluish gradient above the horizon, a dim ground below,

@@ -134,7 +134,7 @@ pub struct HeightfieldMethod {
 impl HeightfieldMethod {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, scene: &Scene, decl: &MethodDecl) -> Result<Self> {
         let (name, horizon) = if decl.name == BRUTE_FORCE { (BRUTE_FORCE, Horizon::BruteForce) } else { (PYRAMID, Horizon::Pyramid) };
-        let settings = Settings::from_decl(decl, horizon)?;
+        let settings = Settings::from_scene_decl(decl, horizon, scene)?;
         let inputs = FieldInputs::from_scene(scene, name)?;
         let object = inputs.object;
         let core = HeightfieldGpu::new(gpu, shaders, states, settings, inputs)?;

@@ -81,7 +81,12 @@ impl Renderer {
         let decl = match method {
             Some(m) => scene.methods.iter().find(|d| d.name == m).ok_or_else(|| {
                 let names: Vec<&str> = scene.methods.iter().map(|d| d.name.as_str()).collect();
-                Error::Usage(format!("{}: method `{m}` is not enabled by the scene (it enables: {})", scene.source, names.join(", ")))
+                let known: Vec<&str> = methods::schemas().iter().map(|s| s.name).collect();
+                if known.contains(&m) {
+                    Error::Usage(format!("{}: method `{m}` is not enabled by the scene (it enables: {})", scene.source, names.join(", ")))
+                } else {
+                    Error::Usage(format!("--method {m}: unknown method; known methods: {}", known.join(", ")))
+                }
             })?,
             None => scene.methods.first().ok_or_else(|| Error::Usage(format!("{}: the scene enables no method", scene.source)))?,
         }
