@@ -189,7 +189,7 @@ impl Running {
     /// Saves the last grabbed presented frame.
     fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
         let image = self.grabbed.take().ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
-        image.save_with_format(path, image::ImageFormat::Png).map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
+        Ok(crate::image_io::save_image(path, image.into(), image::ImageFormat::Png)?)
     }
 }
 

@@ -107,6 +107,48 @@ fn without_debug_dumps(text: &str) -> String {
     one_line.trim_end_matches('.').to_string()
 }
 
+/// Writes `bytes` to `path` so that no reader, and no crash, ever sees a partial file there: the
+/// bytes go to a hidden `.NAME.partial-PID` file in the same folder, are synced, and the file is
+/// renamed over `path` (atomic on one filesystem). On failure the partial file is removed and
+/// `path` keeps what it held before. Captures, references, the chart and its cache are written
+/// through here.
+///
+/// Fault injection for tests: `PENUMBRA_FAULT_ABORT_WRITE=N` aborts the process halfway
+/// through the N-th file written (1 = the first).
+pub fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static WRITES: AtomicUsize = AtomicUsize::new(0);
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let partial = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
+    let abort_at: Option<usize> = std::env::var("PENUMBRA_FAULT_ABORT_WRITE").ok().and_then(|v| v.parse().ok());
+    let nth = WRITES.fetch_add(1, Ordering::SeqCst) + 1;
+    let result = (|| {
+        let mut f = std::fs::File::create(&partial)?;
+        if abort_at == Some(nth) {
+            f.write_all(&bytes[..bytes.len() / 2])?;
+            f.sync_all()?;
+            std::process::abort();
+        }
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&partial, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    result
+}
+
+/// Encodes `image` in `format` in memory and writes it with [`write_file`].
+pub fn save_image(path: &Path, image: image::DynamicImage, format: image::ImageFormat) -> Result<(), ImageIoError> {
+    let err = |message: String| ImageIoError::Io { path: path.display().to_string(), message };
+    let mut out = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut out, format).map_err(|e| err(e.to_string()))?;
+    write_file(path, out.get_ref()).map_err(|e| err(e.to_string()))
+}
+
 impl HdrImage {
     pub fn new(width: u32, height: u32) -> Self {
         HdrImage { width, height, pixels: vec![[0.0; 4]; (width * height) as usize] }
@@ -135,7 +177,7 @@ impl HdrImage {
         let raw: Vec<f32> = self.pixels.iter().flat_map(|p| *p).collect();
         let img =
             image::Rgba32FImage::from_raw(self.width, self.height, raw).ok_or_else(|| ImageIoError::Io { path: path.display().to_string(), message: "pixel buffer does not match the size".into() })?;
-        img.save_with_format(path, image::ImageFormat::OpenExr).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
+        save_image(path, img.into(), image::ImageFormat::OpenExr)
     }
 
     /// Reads an OpenEXR image (linear radiance). Any other format is refused: an 8-bit PNG holds
@@ -162,7 +204,7 @@ impl HdrImage {
     }
 
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), ImageIoError> {
-        self.to_display(exposure).save_with_format(path, image::ImageFormat::Png).map_err(|e| ImageIoError::Io { path: path.display().to_string(), message: e.to_string() })
+        save_image(path, self.to_display(exposure).into(), image::ImageFormat::Png)
     }
 }
 

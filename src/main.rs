@@ -239,7 +239,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             penumbra::out!("{}", report.table());
             if let Some(p) = json {
                 let text = serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Usage(e.to_string()))?;
-                std::fs::write(&p, text).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
+                penumbra::image_io::write_file(&p, text.as_bytes()).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
                 penumbra::outln!("wrote {}", p.display());
             }
         }
@@ -254,7 +254,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::out!("{}", metrics.table());
             }
             if let Some(p) = diff {
-                colorize(&map).save_with_format(&p, image::ImageFormat::Png).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
+                penumbra::image_io::save_image(&p, colorize(&map).into(), image::ImageFormat::Png)?;
                 penumbra::outln!("wrote {}", p.display());
             }
         }

@@ -225,3 +225,55 @@ fn a_closed_pipe_loses_the_text_not_the_work() {
         }
     }
 }
+
+/// Outputs are written to a hidden partial file and renamed into place, so a capture or chart
+/// killed halfway through writing never leaves a truncated file under the real name, and the
+/// chart's cache stays usable. The kill is injected (PENUMBRA_FAULT_ABORT_WRITE=N aborts the
+/// process halfway through its N-th file).
+#[test]
+fn an_interrupted_write_never_leaves_a_truncated_output() {
+    let dir = common::temp_path("interrupted");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, exr) = (dir.join("shot.png"), dir.join("shot.exr"));
+    let capture = |abort: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args(["capture", "--size", "32x24", "--device", &std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())]);
+        cmd.args(["-o", path_str(&png), "--exr", path_str(&exr)]);
+        if let Some(n) = abort {
+            cmd.env("PENUMBRA_FAULT_ABORT_WRITE", n);
+        }
+        cmd.output().unwrap()
+    };
+    assert!(capture(None).status.success());
+    let (old_png, old_exr) = (std::fs::read(&png).unwrap(), std::fs::read(&exr).unwrap());
+    // Killed while writing the EXR (written first), then while writing the PNG: each output is
+    // the previous complete file or the new complete file, never a part.
+    for n in ["1", "2"] {
+        let o = capture(Some(n));
+        assert!(!o.status.success(), "the injected abort did not happen");
+        assert!(std::fs::read(&exr).unwrap() == old_exr, "abort in write {n}: shot.exr changed");
+        if n == "1" {
+            assert!(std::fs::read(&png).unwrap() == old_png, "abort in write {n}: shot.png changed");
+        }
+        assert!(image::open(&png).is_ok(), "abort in write {n}: shot.png does not decode");
+    }
+    // A chart killed while caching its reference leaves no cache entry; the next run renders it.
+    let cache = dir.join("cache");
+    let chart_png = dir.join("chart.png");
+    let chart = |abort: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args(["chart", "scenes/default.toml", "--size", "16x16", "--reference-spp", "4", "--frames", "1", "--cache-dir", path_str(&cache), "-o", path_str(&chart_png)]);
+        cmd.args(["--device", &std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())]);
+        if let Some(n) = abort {
+            cmd.env("PENUMBRA_FAULT_ABORT_WRITE", n);
+        }
+        cmd.output().unwrap()
+    };
+    assert!(!chart(Some("1")).status.success());
+    let visible: Vec<String> = std::fs::read_dir(&cache).unwrap().filter_map(|e| e.ok()?.file_name().into_string().ok()).filter(|n| !n.starts_with('.')).collect();
+    assert!(visible.is_empty(), "a killed chart left {visible:?} in its cache");
+    assert!(!chart_png.exists());
+    let o = chart(None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(image::open(&chart_png).is_ok());
+}
