@@ -677,7 +677,7 @@ fn an_unreadable_texture_map_is_an_error_naming_the_field() {
     std::fs::write(&bad, "not a PNG").expect("write");
     let texture = |path: &Path| format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nspecular_map = {:?}\n", path.display().to_string());
     // Not an image at all: refused when the scene is read, with the field's line.
-    let e = Scene::from_str(&texture(&bad), "<test>", Path::new(".")).err().expect("an error").to_string();
+    let e = Scene::from_str(&texture(&bad), "<test>", Path::new(".")).expect_err("an error").to_string();
     assert!(e.contains("<test>:") && e.contains("materials[0].specular_map") && e.contains("not-an-image.png"), "{e}");
     // A valid header over corrupt image data: refused when the tracer decodes it.
     let scrambled = common::temp_path("scrambled.png");
