@@ -90,9 +90,9 @@ impl Running {
         match self.renderer.set_configuration(self.configurations[next].clone()) {
             Ok(()) => {
                 self.current = next;
-                println!("configuration: {}", self.configurations[next].name);
+                crate::outln!("configuration: {}", self.configurations[next].name);
             }
-            Err(e) => eprintln!("cannot switch to {}: {e}", self.configurations[next].name),
+            Err(e) => crate::errln!("cannot switch to {}: {e}", self.configurations[next].name),
         }
     }
 }
@@ -218,7 +218,7 @@ impl Running {
     /// Saves the last grabbed presented frame.
     fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
         let image = self.grabbed.take().ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
-        image.save_with_format(path, image::ImageFormat::Png).map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
+        Ok(crate::image_io::save_image(path, image.into(), image::ImageFormat::Png)?)
     }
 }
 
@@ -255,9 +255,9 @@ impl ApplicationHandler for App {
                                 // The scene's next method or combination.
                                 KeyCode::KeyM if !event.repeat => s.next_configuration(),
                                 KeyCode::KeyR if !event.repeat => match s.renderer.reload_shaders() {
-                                    Ok(n) => println!("reloaded {n} pipelines from glsl/"),
+                                    Ok(n) => crate::outln!("reloaded {n} pipelines from glsl/"),
                                     // A broken shader is reported; the old pipelines keep running.
-                                    Err(e) => eprintln!("shader reload failed, keeping the old pipelines: {e}"),
+                                    Err(e) => crate::errln!("shader reload failed, keeping the old pipelines: {e}"),
                                 },
                                 _ => {}
                             }
@@ -281,7 +281,7 @@ impl ApplicationHandler for App {
                             }
                         };
                         s.save_grab(&path)?;
-                        println!("saved {} after {} frames", path.display(), s.frames);
+                        crate::outln!("saved {} after {} frames", path.display(), s.frames);
                     }
                     if let Some((at, w, h)) = self.resize_at {
                         if s.frames == at {

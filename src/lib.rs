@@ -10,6 +10,7 @@ pub mod bake;
 pub mod bake_scene;
 pub mod capture;
 pub mod chart;
+pub mod console;
 pub mod demo;
 pub mod environment;
 pub mod error;

@@ -52,15 +52,15 @@ enum Command {
         #[arg(long, value_name = "EXR")]
         exr: Option<PathBuf>,
         /// Frames to render before capturing (the last is written).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
         /// Exposure multiplier applied before tone mapping the PNG.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
         exposure: f32,
         /// Render with the cheapest configuration (of every method the scene enables) whose
         /// relative MSE against the reference is at most E, from the data `penumbra chart` cached
         /// for this scene and size; says which it picked and why.
-        #[arg(long, value_name = "E")]
+        #[arg(long, value_name = "E", value_parser = parse_max_error)]
         max_error: Option<f64>,
         /// Where `chart` caches references and tables.
         #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
@@ -77,7 +77,7 @@ enum Command {
         #[arg(long, value_name = "PNG")]
         diff: Option<PathBuf>,
         /// Exposure applied to both images before tone mapping for FLIP.
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
         exposure: f32,
         /// Print the metrics as JSON instead of a table.
         #[arg(long)]
@@ -99,7 +99,7 @@ enum Command {
         #[arg(long, default_value = "128x128", value_parser = parse_size)]
         size: (u32, u32),
         /// Frames timed per configuration (the median is reported).
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, default_value_t = 20, value_parser = parse_frames)]
         frames: usize,
         /// Samples per pixel of the reference.
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
@@ -115,7 +115,7 @@ enum Command {
         #[command(flatten)]
         render: RenderArgs,
         /// Frames to time.
-        #[arg(long, default_value_t = 30)]
+        #[arg(long, default_value_t = 30, value_parser = parse_frames)]
         frames: usize,
         /// Also write the report as JSON (with device and driver).
         #[arg(long, value_name = "FILE")]
@@ -139,7 +139,7 @@ enum Command {
         #[command(flatten)]
         render: RenderArgs,
         /// Quit by itself after this many frames (for tests and scripted runs).
-        #[arg(long)]
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         frames: Option<u64>,
         /// Save a screenshot (PNG) of the last frame when quitting.
         #[arg(long, value_name = "PNG")]
@@ -192,6 +192,30 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
+/// A frame count: a whole number of at least 1.
+fn parse_frames(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("`{s}`: expected a whole number of frames, at least 1")),
+    }
+}
+
+/// A relative-MSE bound: a finite number above 0.
+fn parse_max_error(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
+        _ => Err(format!("`{s}`: expected a relative MSE, a finite number above 0 (e.g. 0.01)")),
+    }
+}
+
+/// An exposure multiplier: a finite number above 0.
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
+        _ => Err(format!("`{s}`: expected an exposure multiplier, a finite number above 0")),
+    }
+}
+
 fn parse_resize(s: &str) -> Result<(u64, u32, u32), String> {
     let (frame, size) = s.split_once(':').ok_or_else(|| format!("`{s}`: expected FRAME:WxH, e.g. 10:320x200"))?;
     let frame = frame.trim().parse::<u64>().map_err(|_| format!("`{frame}`: expected a frame number"))?;
@@ -214,28 +238,28 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let mut opts = CaptureOptions { png: output, exr, frames, exposure, ..options(&render) };
             if let Some(e) = max_error {
                 let (decl, why) = penumbra::capture::choose_configuration(&opts, e, &cache_dir)?;
-                println!("{why}");
+                penumbra::outln!("{why}");
                 opts.config = Some(decl);
             }
             for path in penumbra::capture::run(&opts)? {
-                println!("wrote {path}");
+                penumbra::outln!("wrote {path}");
             }
         }
         Command::Profile { render, frames, json } => {
             let report = penumbra::profile::run(&options(&render), frames)?;
-            print!("{}", report.table());
+            penumbra::out!("{}", report.table());
             if let Some(p) = json {
                 let text = serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Usage(e.to_string()))?;
-                std::fs::write(&p, text).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
-                println!("wrote {}", p.display());
+                penumbra::image_io::write_file(&p, text.as_bytes()).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
+                penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Bake { render } => {
             for (config, reports) in penumbra::bake_scene::run(&options(&render))? {
                 if reports.is_empty() {
-                    println!("{config}: nothing to bake");
+                    penumbra::outln!("{config}: nothing to bake");
                 } else {
-                    print!("{config}:\n{}", penumbra::bake::table(&reports));
+                    penumbra::out!("{config}:\n{}", penumbra::bake::table(&reports));
                 }
             }
         }
@@ -245,30 +269,30 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let (t, r) = (HdrImage::read_exr(&test)?, HdrImage::read_exr(&reference)?);
             let (metrics, map) = compare_with_map(&t, &r, &CompareOptions { exposure, ..CompareOptions::default() })?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?);
+                penumbra::outln!("{}", serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?);
             } else {
-                print!("{}", metrics.table());
+                penumbra::out!("{}", metrics.table());
             }
             if let Some(p) = diff {
-                colorize(&map).save_with_format(&p, image::ImageFormat::Png).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
-                println!("wrote {}", p.display());
+                penumbra::image_io::save_image(&p, colorize(&map).into(), image::ImageFormat::Png)?;
+                penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Chart { scene, output, csv, size, frames, reference_spp, cache_dir, device } => {
             let opts = penumbra::chart::ChartOptions { scene, size, frames, reference_spp, png: Some(output.clone()), csv: csv.clone(), cache_dir, gpu: gpu_desc(&device) };
             let chart = penumbra::chart::run(&opts)?;
             for r in &chart.rows {
-                println!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
+                penumbra::outln!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
             }
-            println!("wrote {}", output.display());
+            penumbra::outln!("wrote {}", output.display());
             if let Some(p) = csv {
-                println!("wrote {}", p.display());
+                penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Info { device } => {
             let gpu = Gpu::new(&gpu_desc(&device))?;
             for (k, v) in gpu.caps().report() {
-                println!("{k:<38} {v}");
+                penumbra::outln!("{k:<38} {v}");
             }
         }
         Command::Demo { render, frames, screenshot, resize_at, cycle_every } => {
@@ -287,10 +311,12 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive };
             let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, gpu: gpu_desc(&device) })?;
             for p in &report.written {
-                println!("wrote {}", p.display());
+                penumbra::outln!("wrote {}", p.display());
             }
             let img = &report.image;
-            println!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
+            penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
+            let (mean, se) = img.average();
+            penumbra::outln!("average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}", mean[0], mean[1], mean[2], se[0], se[1], se[2]);
         }
     }
     Ok(())
@@ -299,9 +325,15 @@ fn run(cli: Cli) -> penumbra::Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => match penumbra::console::stdout_failure() {
+            None => ExitCode::SUCCESS,
+            Some(e) => {
+                penumbra::errln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Err(e) => {
-            eprintln!("error: {e}");
+            penumbra::errln!("error: {e}");
             ExitCode::FAILURE
         }
     }

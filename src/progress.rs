@@ -27,14 +27,14 @@ impl Progress {
         }
         self.last = Some(now);
         self.shown = true;
-        eprint!("\r{}", line(&self.name, done, total, elapsed));
+        crate::err!("\r{}", line(&self.name, done, total, elapsed));
         let _ = std::io::stderr().flush();
     }
 
     /// Ends the line if one was shown.
     pub fn finish(&mut self) {
         if self.shown {
-            eprintln!();
+            crate::errln!();
             self.shown = false;
         }
     }

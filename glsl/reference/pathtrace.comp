@@ -130,6 +130,8 @@ bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
 
 layout(set = 0, binding = 6, rgba32f) uniform image2D mean_radiance;
 layout(set = 0, binding = 7, rgba32f) uniform image2D second_moment;
+// Pixels whose batch did not run to the end (zeroed by the host before each dispatch).
+layout(set = 0, binding = 12) buffer Status { uint short_pixels; } status;
 
 layout(push_constant) uniform Batch {
     uint sample_offset;  // index of this dispatch's first sample (0: start afresh)
@@ -385,6 +387,7 @@ void main() {
         m2 = imageLoad(second_moment, ivec2(pixel));
     }
     uint pixel_index = pixel.y * size.x + pixel.x;
+    uint done = 0u;
     for (uint k = 0u; k < batch.sample_count; ++k) {
         uint index = batch.sample_offset + k;
         uint rng = rng_start(pixel_index, index, batch.seed);
@@ -395,9 +398,25 @@ void main() {
         vec3 delta = x - mean.rgb;
         mean.rgb += delta / float(index + 1u);
         m2.rgb += delta * (x - mean.rgb);
+        done += 1u;
+    }
+    // llvmpipe stops every loop of an invocation once all of them together have run 65,535
+    // iterations: a sample's ray traversal would end early and the batch would lose samples,
+    // silently. Once that budget is spent a loop runs its body once more and exits, so this one
+    // counts to lights + 2 only while budget remains (its bound comes from a buffer, so no
+    // compiler can unroll it). A batch cut short is not stored: the host sees the count in
+    // `status`, and runs it again with fewer samples per invocation.
+    uint canary = 0u;
+    for (uint i = 0u; i < params.counts.x + 2u; ++i) {
+        canary += 1u;
+    }
+    if (done != batch.sample_count || canary != params.counts.x + 2u) {
+        atomicAdd(status.short_pixels, 1u);
+        return;
     }
     mean.a = 1.0;
-    m2.a = float(batch.sample_offset + batch.sample_count);
+    // The samples this pixel holds: the host checks that every pixel holds all it asked for.
+    m2.a = float(batch.sample_offset + done);
     imageStore(mean_radiance, ivec2(pixel), mean);
     imageStore(second_moment, ivec2(pixel), m2);
 }

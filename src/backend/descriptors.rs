@@ -126,7 +126,7 @@ impl Recorder<'_> {
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .map(|(b, info)| {
-                let w = vk::WriteDescriptorSet::default().dst_set(sets[b.set as usize]).dst_binding(b.binding).descriptor_type(b.ty);
+                let w = vk::WriteDescriptorSet::default().dst_set(sets[b.set as usize]).dst_binding(b.binding).descriptor_type(gpu.driver_descriptor_type(b.ty));
                 match info {
                     Info::Image(i) => w.image_info(std::slice::from_ref(i)),
                     Info::Buffer(i) => w.buffer_info(std::slice::from_ref(i)),

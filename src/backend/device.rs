@@ -78,6 +78,9 @@ pub struct DeviceCaps {
     pub max_bound_descriptor_sets: u32,
     pub depth_stencil_format: vk::Format,
     pub validation: bool,
+    /// Uniform blocks are handed to the driver as read-only storage blocks (lavapipe; see
+    /// `backend/uniform_blocks.rs`). `PENUMBRA_UNIFORM_BLOCKS_AS_STORAGE=0` or `=1` overrides.
+    pub uniform_blocks_as_storage: bool,
 }
 
 impl DeviceCaps {
@@ -107,6 +110,7 @@ impl DeviceCaps {
             ("max compute work group".into(), format!("{:?}, {} invocations", self.max_compute_work_group_size, self.max_compute_work_group_invocations)),
             ("depth/stencil format".into(), format!("{:?}", self.depth_stencil_format)),
             ("validation".into(), yes(self.validation)),
+            ("uniform blocks bound as storage".into(), yes(self.uniform_blocks_as_storage)),
         ]
     }
 }
@@ -147,7 +151,7 @@ unsafe extern "system" fn debug_callback(
     };
     // Info/verbose chatter from the loader is not a validation finding.
     if severity.intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
-        eprintln!("vulkan: {msg}");
+        crate::errln!("vulkan: {msg}");
         if !user.is_null() {
             let log = unsafe { &*(user as *const ValidationLog) };
             log.push(msg);
@@ -380,6 +384,11 @@ impl Gpu {
             max_bound_descriptor_sets: limits.max_bound_descriptor_sets,
             depth_stencil_format,
             validation: false,
+            uniform_blocks_as_storage: match std::env::var("PENUMBRA_UNIFORM_BLOCKS_AS_STORAGE").as_deref() {
+                Ok("0") => false,
+                Ok("1") => true,
+                _ => driver.driver_id == vk::DriverId::MESA_LLVMPIPE,
+            },
         };
 
         // Enable only what is both used and present; methods check `caps` and fail with

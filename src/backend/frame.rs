@@ -63,7 +63,7 @@ impl Gpu {
                 .vk("vkAllocateCommandBuffers")?[0];
         let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
         let sizes =
-            [(vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096), (vk::DescriptorType::STORAGE_IMAGE, 2048), (vk::DescriptorType::UNIFORM_BUFFER, 2048), (vk::DescriptorType::STORAGE_BUFFER, 2048)]
+            [(vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096), (vk::DescriptorType::STORAGE_IMAGE, 2048), (vk::DescriptorType::UNIFORM_BUFFER, 2048), (vk::DescriptorType::STORAGE_BUFFER, 4096)]
                 .map(|(ty, n)| vk::DescriptorPoolSize { ty, descriptor_count: n });
         let descriptor_pool = unsafe { self.device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(2048).pool_sizes(&sizes), None) }.vk("vkCreateDescriptorPool")?;
         let queries = if self.caps.timestamp_valid_bits > 0 {

@@ -20,6 +20,7 @@ mod reflect;
 mod resources;
 mod swapchain;
 mod timestamps;
+mod uniform_blocks;
 
 pub use descriptors::Bind;
 pub use device::{DeviceCaps, Gpu, GpuDesc, ValidationLog};

@@ -260,6 +260,9 @@ impl Gpu {
         let stage = stage_of(path)?;
         let words = shaders.spirv(path).map_err(|m| BackendError::Shader { name: path.into(), message: m })?;
         reflections.push(ShaderReflection::from_spirv(path, stage, &words)?);
+        // Reflection keeps the declared types; the driver may see uniform blocks as storage.
+        let words =
+            if self.caps.uniform_blocks_as_storage { super::uniform_blocks::uniform_blocks_as_storage(&words).map_err(|m| BackendError::Shader { name: path.into(), message: m })? } else { words };
         let info = vk::ShaderModuleCreateInfo::default().code(&words);
         let module = unsafe { self.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
         Ok(LoadedStage { stage, module })
@@ -334,6 +337,16 @@ impl Gpu {
         result
     }
 
+    /// The descriptor type the driver sees for a declared one (uniform blocks may be storage
+    /// blocks on this device; see `backend/uniform_blocks.rs`).
+    pub(crate) fn driver_descriptor_type(&self, declared: vk::DescriptorType) -> vk::DescriptorType {
+        if self.caps.uniform_blocks_as_storage && declared == vk::DescriptorType::UNIFORM_BUFFER {
+            vk::DescriptorType::STORAGE_BUFFER
+        } else {
+            declared
+        }
+    }
+
     fn create_set_layouts(&self, r: &ShaderReflection) -> BackendResult<Vec<vk::DescriptorSetLayout>> {
         let mut layouts = Vec::new();
         for set in 0..r.set_count() {
@@ -341,7 +354,7 @@ impl Gpu {
                 .bindings
                 .iter()
                 .filter(|b| b.set == set)
-                .map(|b| vk::DescriptorSetLayoutBinding::default().binding(b.binding).descriptor_type(b.ty).descriptor_count(b.count).stage_flags(b.stages))
+                .map(|b| vk::DescriptorSetLayoutBinding::default().binding(b.binding).descriptor_type(self.driver_descriptor_type(b.ty)).descriptor_count(b.count).stage_flags(b.stages))
                 .collect();
             let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
             match unsafe { self.device.create_descriptor_set_layout(&info, None) } {

@@ -201,12 +201,17 @@ impl<'g> Recorder<'g> {
         let mut bb = Vec::with_capacity(buffers.len());
         for t in buffers {
             let buf = self.gpu.buffer(t.buffer)?;
+            // A uniform block read is a storage read where the driver sees storage blocks.
+            let mut dst_access = t.dst_access;
+            if self.gpu.caps.uniform_blocks_as_storage && dst_access.contains(vk::AccessFlags2::UNIFORM_READ) {
+                dst_access |= vk::AccessFlags2::SHADER_STORAGE_READ;
+            }
             bb.push(
                 vk::BufferMemoryBarrier2::default()
                     .src_stage_mask(t.src_stages)
                     .src_access_mask(t.src_access)
                     .dst_stage_mask(t.dst_stages)
-                    .dst_access_mask(t.dst_access)
+                    .dst_access_mask(dst_access)
                     .buffer(buf.raw)
                     .offset(0)
                     .size(vk::WHOLE_SIZE),

@@ -272,7 +272,12 @@ impl Gpu {
         if desc.size == 0 {
             return Err(BackendError::Invalid(format!("buffer `{}` has size 0", desc.name)));
         }
-        let info = vk::BufferCreateInfo::default().size(desc.size).usage(desc.usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let mut usage = desc.usage;
+        if self.caps.uniform_blocks_as_storage && usage.contains(vk::BufferUsageFlags::UNIFORM_BUFFER) {
+            // Bound as a storage buffer on this device (backend/uniform_blocks.rs).
+            usage |= vk::BufferUsageFlags::STORAGE_BUFFER;
+        }
+        let info = vk::BufferCreateInfo::default().size(desc.size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { self.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
         let location = match desc.memory {

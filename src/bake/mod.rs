@@ -150,7 +150,7 @@ impl Baker {
                 }
                 Ok(None) => {}
                 Err(why) => {
-                    eprintln!("warning: {}: bake cache unusable ({why}); rebuilding {name}", p.display());
+                    crate::errln!("warning: {}: bake cache unusable ({why}); rebuilding {name}", p.display());
                     rebuilt = Some(why);
                 }
             }
@@ -162,7 +162,7 @@ impl Baker {
         if let Some(p) = &path {
             // A cache that cannot be written costs the next run a rebuild, nothing else.
             if let Err(e) = write_cached(p, key.hash(), &payload) {
-                eprintln!("warning: {}: cannot write the bake cache: {e}", p.display());
+                crate::errln!("warning: {}: cannot write the bake cache: {e}", p.display());
             }
         }
         self.reports.push(BakeReport { name: name.into(), key: format!("{:016x}", key.hash()), ms: ms_since(start), bytes: payload.len() as u64, cached: false, rebuilt });

@@ -106,7 +106,7 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, spp
             return Ok((img, label));
         }
     }
-    eprintln!("chart: rendering the reference ({label}) for {}", scene.source);
+    crate::errln!("chart: rendering the reference ({label}) for {}", scene.source);
     let mut tracer = ReferenceRenderer::new(Gpu::new(gpu)?, scene, size)?;
     let mut progress = crate::progress::Progress::new("reference (spp)");
     let image = tracer.render(&settings, &mut |done, total| progress.update(done as u64, total as u64))?;
@@ -163,9 +163,9 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let csv = chart.csv();
     std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
     let cached = opts.cache_dir.join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
-    std::fs::write(&cached, &csv).map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
+    crate::image_io::write_file(&cached, csv.as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
     if let Some(p) = &opts.csv {
-        std::fs::write(p, &csv).map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
+        crate::image_io::write_file(p, csv.as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
     }
     if let Some(p) = &opts.png {
         plot::draw(&chart, p)?;

@@ -234,7 +234,7 @@ fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
 fn load_texture(gpu: &mut Gpu, states: &mut ResourceStates, path: Option<&std::path::Path>, default: [u8; 4], srgb: bool, what: &str) -> Result<ImageId> {
     let (w, h, data) = match path {
         Some(p) => {
-            let img = image::open(p).map_err(|e| Error::Usage(format!("{}: {what}: cannot load: {e}", p.display())))?.to_rgba8();
+            let img = crate::image_io::open_image(p).map_err(|e| Error::Usage(format!("{what}: {}: {e}", p.display())))?.to_rgba8();
             (img.width(), img.height(), img.into_raw())
         }
         None => (1, 1, default.to_vec()),
@@ -285,7 +285,8 @@ impl SceneGpu {
         }
         let mut gpu_materials = Vec::new();
         let mut material_maps = Vec::new();
-        for m in &scene.materials {
+        for (i, m) in scene.materials.iter().enumerate() {
+            let field = |key: &str| format!("{}: materials[{i}] ({:?}).{key}", scene.source, m.name);
             gpu_materials.push(GpuMaterial {
                 albedo: m.albedo.extend(m.opacity).into(),
                 specular: m.specular.extend(m.exponent).into(),
@@ -293,9 +294,9 @@ impl SceneGpu {
                 maps: [m.normal_map.is_some() as u32, 0, 0, 0],
             });
             material_maps.push(MaterialMaps {
-                albedo: load_texture(gpu, states, m.albedo_map.as_deref(), [255; 4], true, "albedo_map")?,
-                normal: load_texture(gpu, states, m.normal_map.as_deref(), [128, 128, 255, 255], false, "normal_map")?,
-                specular: load_texture(gpu, states, m.specular_map.as_deref(), [255; 4], false, "specular_map")?,
+                albedo: load_texture(gpu, states, m.albedo_map.as_deref(), [255; 4], true, &field("albedo_map"))?,
+                normal: load_texture(gpu, states, m.normal_map.as_deref(), [128, 128, 255, 255], false, &field("normal_map"))?,
+                specular: load_texture(gpu, states, m.specular_map.as_deref(), [255; 4], false, &field("specular_map"))?,
             });
         }
         let emitters = emitter_meshes(scene);

@@ -118,9 +118,17 @@ pub fn configuration(scene: &Scene, name: Option<&str>) -> Result<Configuration>
         Some(n) => {
             let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
             all.into_iter().find(|c| c.name == n).ok_or_else(|| {
-                let known = schemas().iter().any(|s| s.name == n);
-                let why = if known { "is not enabled by the scene" } else { "is not a method or combination of the scene" };
-                Error::Usage(format!("{}: `{n}` {why} (it enables: {})", scene.source, names.join(", ")))
+                let known: Vec<&str> = schemas().iter().map(|s| s.name).collect();
+                if known.contains(&n) {
+                    Error::Usage(format!("{}: method `{n}` is not enabled by the scene (it enables: {})", scene.source, names.join(", ")))
+                } else {
+                    let combinations = if scene.combinations.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; the scene's combinations: {}", scene.combinations.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "))
+                    };
+                    Error::Usage(format!("--method {n}: unknown method; known methods: {}{combinations}", known.join(", ")))
+                }
             })
         }
     }

@@ -100,6 +100,14 @@ impl Default for Settings {
 /// Enough for 0.6^17 ≈ 2e-4 of the light in a white-walled room to be cut off.
 pub const DEFAULT_BOUNCES: u32 = 16;
 
+/// Samples per pixel the shader counts exactly (its counts and means are 32-bit floats).
+pub const MAX_SPP: u32 = 1 << 24;
+
+/// The most samples one invocation adds in one dispatch. It bounds the work of an invocation
+/// (a 1×1 image would otherwise grow its batches to a quarter of a second of one thread), and
+/// a smaller cap is learnt when the device cuts a batch short (see `render`).
+pub const MAX_BATCH: u32 = 4096;
+
 impl Settings {
     fn check(&self) -> Result<()> {
         if self.spp == 0 {
@@ -110,6 +118,10 @@ impl Settings {
         }
         if let Batching::Fixed(0) = self.batching {
             return Err(Error::Usage("a batch must hold at least one sample".into()));
+        }
+        // The shader keeps each pixel's sample count and running mean in 32-bit floats.
+        if self.spp > MAX_SPP {
+            return Err(Error::Usage(format!("--spp {} is more than the tracer counts exactly ({MAX_SPP}, 2^24)", self.spp)));
         }
         Ok(())
     }
@@ -162,6 +174,21 @@ pub struct ReferenceImage {
 }
 
 impl ReferenceImage {
+    /// The image's average radiance per RGB channel and the standard error of that average
+    /// (pixels are independent estimates: sqrt(Σ s.e.²) / pixels).
+    pub fn average(&self) -> ([f64; 3], [f64; 3]) {
+        let n = self.mean.pixels.len().max(1) as f64;
+        let mut mean = [0.0; 3];
+        let mut var = [0.0; 3];
+        for (m, e) in self.mean.pixels.iter().zip(&self.standard_error.pixels) {
+            for c in 0..3 {
+                mean[c] += m[c] as f64 / n;
+                var[c] += (e[c] as f64).powi(2) / (n * n);
+            }
+        }
+        (mean, var.map(f64::sqrt))
+    }
+
     /// Pixel samples per second.
     pub fn samples_per_second(&self) -> f64 {
         self.mean.width as f64 * self.mean.height as f64 * self.spp as f64 / self.seconds.max(1e-9)
@@ -179,6 +206,8 @@ pub struct ReferenceRenderer {
     mean: ImageId,
     second_moment: ImageId,
     readback: [BufferId; 2],
+    /// How many pixels' batches were cut short in the last dispatch (host-visible).
+    status: BufferId,
     frame: Frame,
     states: ResourceStates,
     width: u32,
@@ -201,6 +230,12 @@ impl ReferenceRenderer {
         let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
         let bytes = width as u64 * height as u64 * 16;
         let readback = [readback_buffer(&mut gpu, "reference mean readback", bytes)?, readback_buffer(&mut gpu, "reference second moment readback", bytes)?];
+        let status = gpu.create_buffer(&BufferDesc {
+            name: "reference status".into(),
+            size: 4,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })?;
         let frame = gpu.create_frame()?;
         let cam = &scene.camera;
         let (right, up, forward) = cam.basis();
@@ -217,24 +252,41 @@ impl ReferenceRenderer {
                 None => [0; 4],
             },
         };
-        Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, frame, states: ResourceStates::default(), width, height })
+        Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, status, frame, states: ResourceStates::default(), width, height })
     }
 
     /// Renders `settings.spp` samples per pixel, calling `progress(done, total)` after each batch.
+    ///
+    /// A batch adds at most [`MAX_BATCH`] samples per pixel. A device may cut an invocation's
+    /// loops short (llvmpipe stops them after 65,535 iterations in all): the shader then stores
+    /// nothing for that pixel and counts it, and the batch is run again with half the samples,
+    /// which becomes the cap for the rest of the render. A single sample cut short is an error,
+    /// and so is any pixel that ends with fewer samples than asked for.
     pub fn render(&mut self, settings: &Settings, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
         settings.check()?;
         let start = Instant::now();
         let target = Duration::from_millis(250);
+        let mut cap = MAX_BATCH;
         let mut batch = match settings.batching {
             Batching::Adaptive => 1,
             Batching::Fixed(n) => n,
         };
         let mut done = 0;
         while done < settings.spp {
-            let count = batch.min(settings.spp - done);
+            let count = batch.min(cap).min(settings.spp - done);
             let last = done + count == settings.spp;
             let t0 = Instant::now();
-            self.dispatch(settings.push(done, count), last)?;
+            let short = self.dispatch(settings.push(done, count), last)?;
+            if short > 0 {
+                if count == 1 {
+                    return Err(Error::Usage(format!(
+                        "{}: one path-traced sample runs more loop iterations than the device allows one shader invocation ({short} pixel(s) cut short); lower --bounces",
+                        self.gpu.caps().name
+                    )));
+                }
+                cap = count / 2;
+                continue;
+            }
             done += count;
             progress(done, settings.spp);
             if settings.batching == Batching::Adaptive {
@@ -250,6 +302,11 @@ impl ReferenceRenderer {
         };
         let mean = read(self.readback[0])?;
         let mut standard_error = read(self.readback[1])?;
+        // Every pixel must hold exactly the samples asked for (the shader writes its count).
+        let short = standard_error.pixels.iter().filter(|p| p[3] != settings.spp as f32).count();
+        if short > 0 {
+            return Err(Error::Usage(format!("{short} pixel(s) of the reference hold fewer than {} samples: the device cut the tracer short", settings.spp)));
+        }
         let n = settings.spp as f64;
         for p in &mut standard_error.pixels {
             for c in &mut p[..3] {
@@ -261,13 +318,19 @@ impl ReferenceRenderer {
     }
 
     /// One submitted and waited-for batch; the last one also copies the results to the host.
-    fn dispatch(&mut self, push: BatchPush, read_back: bool) -> Result<()> {
+    /// Returns how many pixels' batches were cut short (and so left as they were).
+    fn dispatch(&mut self, push: BatchPush, read_back: bool) -> Result<u32> {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let (pipeline, mean, m2, rb) = (self.pipeline, self.mean, self.second_moment, self.readback);
+        let (pipeline, mean, m2, rb, status) = (self.pipeline, self.mean, self.second_moment, self.readback, self.status);
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
-        let mut pass = graph.pass("path trace").storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute).storage_write("second_moment", m2, SubresourceRange::mip(0), compute);
+        graph.pass("clear status").buffer(status, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status, 0));
+        let mut pass = graph.pass("path trace").storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute).storage_write("second_moment", m2, SubresourceRange::mip(0), compute).buffer(
+            status,
+            Access::StorageWrite { stages: compute },
+            Some("status"),
+        );
         for (name, buffer) in self.buffers.bindings() {
             pass = pass.buffer(buffer, Access::StorageRead { stages: compute }, Some(name));
         }
@@ -281,10 +344,11 @@ impl ReferenceRenderer {
             for (name, image, buffer) in [("read back mean", mean, rb[0]), ("read back second moment", m2, rb[1])] {
                 graph.pass(name).transfer_read(image, SubresourceRange::mip(0)).buffer(buffer, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
             }
-            graph.pass("host visibility").buffer(rb[0], Access::HostRead, None).buffer(rb[1], Access::HostRead, None).record(|_| Ok(()));
+            graph.pass("host visibility").buffer(rb[0], Access::HostRead, None).buffer(rb[1], Access::HostRead, None).buffer(status, Access::HostRead, None).record(|_| Ok(()));
         } else {
             graph.output_image(mean);
             graph.output_image(m2);
+            graph.pass("host visibility").buffer(status, Access::HostRead, None).record(|_| Ok(()));
         }
         let gpu = &self.gpu;
         let mut rec = gpu.begin_frame(self.frame)?;
@@ -293,7 +357,8 @@ impl ReferenceRenderer {
         rec.end_scope();
         rec.finish()?;
         gpu.submit_and_wait(self.frame)?;
-        Ok(())
+        let bytes = gpu.read_buffer(status)?;
+        Ok(bytes.get(..4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(u32::MAX))
     }
 }
 
@@ -335,13 +400,13 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let terminal = std::io::stderr().is_terminal();
     let image = renderer.render(&opts.settings, &mut |done, total| {
         if terminal {
-            eprint!("\rreference: {done}/{total} spp");
+            crate::err!("\rreference: {done}/{total} spp");
         } else {
-            eprintln!("reference: {done}/{total} spp");
+            crate::errln!("reference: {done}/{total} spp");
         }
     })?;
     if terminal {
-        eprintln!();
+        crate::errln!();
     }
     let n = renderer.gpu.validation_log().count();
     if n > 0 {

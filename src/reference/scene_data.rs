@@ -123,8 +123,8 @@ pub struct TracedScene {
 }
 
 /// A map as the raster methods upload it: 8 bits per channel, sRGB-decoded for albedo.
-fn load_texture(path: &std::path::Path, srgb: bool) -> std::result::Result<TracedTexture, image::ImageError> {
-    let img = image::open(path)?.to_rgba8();
+fn load_texture(path: &std::path::Path, srgb: bool) -> std::result::Result<TracedTexture, String> {
+    let img = crate::image_io::open_image(path)?.to_rgba8();
     let decode = |b: u8| if srgb { srgb_decode(b) } else { b as f32 / 255.0 };
     let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2]), p.0[3] as f32 / 255.0]).collect();
     Ok(TracedTexture { width: img.width(), height: img.height(), texels })

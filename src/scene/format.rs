@@ -83,10 +83,14 @@ fn direction(f: &Field) -> Result<Vec3, SceneError> {
     f.vec3()?.try_normalize().ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
 }
 
+/// The largest camera coordinate, metres.
+const MAX_CAMERA_COORDINATE: f32 = 1e6;
+
 fn read_camera(f: &Field) -> Result<Camera, SceneError> {
     let t = f.table()?;
     t.allow(&["position", "target", "up", "fov_y_deg", "near"])?;
-    let position = t.require("position", "3 numbers, metres")?.vec3()?;
+    let position_f = t.require("position", "3 numbers, metres")?;
+    let position = position_f.vec3()?;
     let target_f = t.require("target", "3 numbers, metres")?;
     let target = target_f.vec3()?;
     let up_f = t.get("up");
@@ -94,6 +98,14 @@ fn read_camera(f: &Field) -> Result<Camera, SceneError> {
     let fov_y_deg = opt(t.get("fov_y_deg"), |f| f.number_where("a vertical field of view in degrees, in (0, 180)", |x| x > 0.0 && x < 180.0))?.unwrap_or(60.0);
     let near = opt(t.get("near"), positive)?.unwrap_or(0.05);
 
+    // 32-bit floats keep about a centimetre at a thousand kilometres; farther, the view matrix
+    // (and the length of target − position) falls apart.
+    for (f, p) in [(&position_f, position), (&target_f, target)] {
+        if p.abs().max_element() > MAX_CAMERA_COORDINATE {
+            let coords: Vec<String> = p.to_array().iter().map(|c| if c.abs() >= 1e6 { format!("{c:e}") } else { c.to_string() }).collect();
+            return Err(f.err(format!("[{}] is too far from the origin: coordinates are limited to ±{MAX_CAMERA_COORDINATE:e} m", coords.join(", "))));
+        }
+    }
     let Some(forward) = (target - position).try_normalize() else {
         return Err(target_f.err("must differ from camera.position"));
     };
@@ -128,9 +140,9 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
         albedo,
         specular: opt(t.get("specular"), |f| f.unit_colour())?.unwrap_or(Vec3::ZERO),
         exponent: opt(t.get("exponent"), non_negative)?.unwrap_or(32.0),
-        albedo_map: opt(t.get("albedo_map"), |f| f.existing_file())?,
-        normal_map: opt(t.get("normal_map"), |f| f.existing_file())?,
-        specular_map: opt(t.get("specular_map"), |f| f.existing_file())?,
+        albedo_map: opt(t.get("albedo_map"), |f| f.existing_image())?,
+        normal_map: opt(t.get("normal_map"), |f| f.existing_image())?,
+        specular_map: opt(t.get("specular_map"), |f| f.existing_image())?,
         transmittance,
         emission: opt(t.get("emission"), |f| f.colour())?.unwrap_or(Vec3::ZERO),
         opacity: opt(t.get("opacity"), |f| f.number_where("a number in (0, 1]", |x| x > 0.0 && x <= 1.0))?.unwrap_or(1.0),
@@ -421,7 +433,7 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
         }
         "image" => {
             t.allow(&["type", "path", "scale"])?;
-            Ok(Environment::Image { path: t.require("path", "an equirectangular .hdr or .exr file")?.existing_file()?, scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0) })
+            Ok(Environment::Image { path: t.require("path", "an equirectangular .hdr or .exr file")?.existing_image()?, scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0) })
         }
         "cube" => {
             let mut keys = vec!["type", "scale"];
@@ -430,7 +442,7 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
             let mut fields = Vec::with_capacity(6);
             for key in CUBE_FACE_KEYS {
                 let f = t.require(key, "a square .hdr or .exr cube face")?;
-                fields.push((f.existing_file()?, f));
+                fields.push((f.existing_image()?, f));
             }
             let faces: [PathBuf; 6] = std::array::from_fn(|k| fields[k].0.clone());
             // Load the faces now, so that a bad one is an error here, with its line, and not a

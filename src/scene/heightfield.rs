@@ -101,7 +101,7 @@ impl HeightImage {
     /// EXR as stored.
     pub fn load(path: &Path) -> Result<HeightImage, SceneError> {
         let file = path.display().to_string();
-        let img = image::open(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
+        let img = crate::image_io::open_image(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
         let (width, height) = (img.width(), img.height());
         let values: Vec<f32> = match &img {
             image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => img.to_rgba32f().pixels().map(|p| p.0[0]).collect(),
@@ -359,8 +359,12 @@ pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
         (Some(_), Some(p)) => return Err(p.err("give either generator or path, not both")),
         (None, None) => return Err(t.missing("generator", &format!("one of: {}; or give path = a 16-bit PNG or EXR", GENERATORS.join(", ")))),
         (None, Some(p)) => {
-            let path = p.existing_file()?;
-            let img = HeightImage::load(&path)?;
+            let path = p.existing_image()?;
+            // The image is decoded here, so a corrupt one is an error with the field's line.
+            let img = HeightImage::load(&path).map_err(|e| {
+                let at = if e.field == "file" { String::new() } else { format!("{}: ", e.field) };
+                p.err(format!("{}: {at}{}", path.display(), e.message))
+            })?;
             if resolution.is_none() {
                 // An image's own size when it is a power of two, else the next one up.
                 resolution = Some(img.width.max(img.height).next_power_of_two().clamp(MIN_HEIGHTFIELD_RESOLUTION, MAX_HEIGHTFIELD_RESOLUTION));

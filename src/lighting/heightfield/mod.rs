@@ -131,7 +131,7 @@ impl HeightfieldMethod {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Self> {
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         let (name, horizon) = if decl.name == BRUTE_FORCE { (BRUTE_FORCE, Horizon::BruteForce) } else { (PYRAMID, Horizon::Pyramid) };
-        let settings = Settings::from_decl(decl, horizon)?;
+        let settings = Settings::from_scene_decl(decl, horizon, cx.scene)?;
         let inputs = FieldInputs::from_scene(cx.scene, cx.environment, name)?;
         let object = inputs.object;
         let core = HeightfieldGpu::new(gpu, shaders, cx.states, cx.bakes, settings, inputs)?;

@@ -2,7 +2,7 @@
 //! with the defaults of the thesis (digest §6): ls = 4, lo = 4, nφ = 32, 4 bands, 64² tables.
 
 use crate::error::{Error, Result};
-use crate::scene::{MethodDecl, ParamKind, ParamSchema};
+use crate::scene::{MethodDecl, ParamKind, ParamSchema, Scene, SceneError};
 
 /// Largest SH band count the shaders handle (36 coefficients).
 pub const MAX_BANDS: u32 = 6;
@@ -143,10 +143,28 @@ pub const BRUTE_PARAMS: &[ParamSchema] = &[
 impl Settings {
     /// Reads a declaration of `heightfield_pyramid` or `heightfield_bruteforce`. Types were
     /// checked against the schema when the scene was loaded; ranges are checked here, and an
-    /// error names the method and the parameter.
+    /// error names the method and the parameter (see [`Settings::from_scene_decl`] for the
+    /// scene's file, line and `methods[i]`).
     pub fn from_decl(decl: &MethodDecl, horizon: Horizon) -> Result<Settings> {
+        Self::read(decl, horizon, None)
+    }
+
+    /// [`Settings::from_decl`] for a declaration of `scene`: an out-of-range parameter is one
+    /// line naming the scene file, the parameter's line and `methods[i].name`.
+    pub fn from_scene_decl(decl: &MethodDecl, horizon: Horizon, scene: &Scene) -> Result<Settings> {
+        Self::read(decl, horizon, Some(scene))
+    }
+
+    fn read(decl: &MethodDecl, horizon: Horizon, scene: Option<&Scene>) -> Result<Settings> {
         let mut s = Settings { horizon, ..Settings::default() };
-        let bad = |name: &str, msg: String| Error::Usage(format!("methods: {}.{name}: {msg}", decl.name));
+        let bad = |name: &str, msg: String| match scene {
+            Some(scene) => {
+                let index = scene.methods.iter().position(|m| m == decl).unwrap_or(0);
+                let line = decl.params.iter().find(|(n, _, _)| n == name).map(|p| p.2).filter(|&l| l > 0);
+                Error::Scene(SceneError::new(&scene.source, line, format!("methods[{index}].{name}"), msg))
+            }
+            None => Error::Usage(format!("methods: {}.{name}: {msg}", decl.name)),
+        };
         let int = |name: &str, lo: i64, hi: i64| -> Result<Option<u32>> {
             match decl.param(name) {
                 None => Ok(None),

@@ -1,0 +1,60 @@
+//! Printing that never panics. `println!` panics when standard output is a closed pipe
+//! (`penumbra info | head -1`); these write through a handle instead. On standard output a
+//! closed pipe is not an error: the command still does its work (files are written), and what
+//! it would have printed simply has no reader. Any other write failure (a full disk behind a
+//! redirection) is remembered and reported by `main` as the command's error. Standard error
+//! (progress, validation messages, the error line itself) is best effort.
+
+use std::fmt;
+use std::io::{ErrorKind, Write};
+use std::sync::Mutex;
+
+static STDOUT_FAILURE: Mutex<Option<String>> = Mutex::new(None);
+
+/// Writes to standard output (see the module doc for failures).
+pub fn out(args: fmt::Arguments<'_>) {
+    let mut o = std::io::stdout().lock();
+    if let Err(e) = o.write_fmt(args).and_then(|_| o.flush()) {
+        if e.kind() != ErrorKind::BrokenPipe {
+            if let Ok(mut f) = STDOUT_FAILURE.lock() {
+                f.get_or_insert_with(|| format!("standard output: {e}"));
+            }
+        }
+    }
+}
+
+/// Writes to standard error, ignoring failures.
+pub fn err(args: fmt::Arguments<'_>) {
+    let _ = std::io::stderr().lock().write_fmt(args);
+}
+
+/// The first failure to write standard output other than a closed pipe.
+pub fn stdout_failure() -> Option<String> {
+    STDOUT_FAILURE.lock().ok().and_then(|f| f.clone())
+}
+
+/// `println!` to standard output without the panic on a closed pipe.
+#[macro_export]
+macro_rules! outln {
+    () => { $crate::console::out(format_args!("\n")) };
+    ($($t:tt)*) => { $crate::console::out(format_args!("{}\n", format_args!($($t)*))) };
+}
+
+/// `print!` to standard output without the panic on a closed pipe.
+#[macro_export]
+macro_rules! out {
+    ($($t:tt)*) => { $crate::console::out(format_args!($($t)*)) };
+}
+
+/// `eprintln!` without the panic on a closed standard error.
+#[macro_export]
+macro_rules! errln {
+    () => { $crate::console::err(format_args!("\n")) };
+    ($($t:tt)*) => { $crate::console::err(format_args!("{}\n", format_args!($($t)*))) };
+}
+
+/// `eprint!` without the panic on a closed standard error.
+#[macro_export]
+macro_rules! err {
+    ($($t:tt)*) => { $crate::console::err(format_args!($($t)*)) };
+}
