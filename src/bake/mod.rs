@@ -208,7 +208,10 @@ fn write_cached(path: &Path, key: u64, payload: &[u8]) -> std::io::Result<()> {
         bytes.extend_from_slice(&w.to_le_bytes());
     }
     bytes.extend_from_slice(payload);
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    // Unique per process and call: two threads baking the same key never share a temporary.
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = path.with_extension(format!("tmp{}-{n}", std::process::id()));
     std::fs::write(&tmp, &bytes)?;
     std::fs::rename(&tmp, path)
 }
