@@ -195,14 +195,27 @@ pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings:
     let direct = add_direct_light(&mut p, &occluders, scene);
     let report = solve::solve(&mut p, &occluders, settings, progress);
     let atlas = pack(&p);
-    let texels = texels(&p, &atlas, |k| {
-        let q = &p.patches[k];
-        let mut reflected = q.total - q.emission;
-        if content == Content::Bounces {
-            reflected -= direct[k];
+    let mut values: Vec<DVec3> = p
+        .patches
+        .iter()
+        .enumerate()
+        .map(|(k, q)| {
+            let mut reflected = q.total - q.emission;
+            if content == Content::Bounces {
+                reflected -= direct[k];
+            }
+            let inv = |a: f64| if a > 0.0 { 1.0 / (a * std::f64::consts::PI) } else { 0.0 };
+            (reflected * DVec3::new(inv(q.albedo.x), inv(q.albedo.y), inv(q.albedo.z))).max(DVec3::ZERO)
+        })
+        .collect();
+    if settings.mode == solve::Mode::Faithful {
+        // CaLight's light-maps are display values: tone reproduction, 8 bits, read as [0, 1].
+        let inside: Vec<usize> = (0..values.len()).filter(|&k| p.patches[k].inside()).collect();
+        let mapped = super::tone::reproduce(&inside.iter().map(|&k| values[k]).collect::<Vec<_>>());
+        for (&k, c) in inside.iter().zip(mapped) {
+            values[k] = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
         }
-        let inv = |a: f64| if a > 0.0 { 1.0 / (a * std::f64::consts::PI) } else { 0.0 };
-        (reflected * DVec3::new(inv(q.albedo.x), inv(q.albedo.y), inv(q.albedo.z))).max(DVec3::ZERO)
-    });
+    }
+    let texels = texels(&p, &atlas, |k| values[k]);
     (p, atlas, texels, report)
 }

@@ -5,12 +5,13 @@
 //!
 //! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
 //! light-map ([`lightmap`] bakes it through the bake stage's cache). Not yet (issue 12): the GPU
-//! shooting pass, the seed's surface-visibility matrix, sun, tone reproduction and border pass 2,
+//! shooting pass, the seed's surface-visibility matrix, sun and border pass 2,
 //! charts grouped across objects, albedo maps in the bake (the baker uses the material's albedo).
 
 pub mod form_factor;
 pub mod patches;
 pub mod solve;
+pub mod tone;
 
 #[cfg(test)]
 mod tests;
@@ -45,7 +46,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes (its code has no SPIR-V to hash).
-const BAKER_VERSION: u32 = 3;
+const BAKER_VERSION: u32 = 4;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
