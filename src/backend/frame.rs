@@ -138,6 +138,9 @@ impl Gpu {
         let waits: Vec<vk::SemaphoreSubmitInfo> = wait.iter().map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage)).collect();
         let signals: Vec<vk::SemaphoreSubmitInfo> = signal.iter().map(|&s| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)).collect();
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbs).wait_semaphore_infos(&waits).signal_semaphore_infos(&signals)];
+        if let Some(fault) = super::error::injected_submit_fault() {
+            return Err(BackendError::from_vk("vkQueueSubmit2", fault));
+        }
         unsafe { self.device.queue_submit2(self.queue, &submit, fd.fence) }.vk("vkQueueSubmit2")?;
         fd.submitted = true;
         Ok(())
