@@ -397,17 +397,10 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let scene = Scene::from_file(&opts.scene)?;
     let gpu = Gpu::new(&opts.gpu)?;
     let mut renderer = ReferenceRenderer::new(gpu, &scene, opts.size)?;
-    let terminal = std::io::stderr().is_terminal();
-    let image = renderer.render(&opts.settings, &mut |done, total| {
-        if terminal {
-            crate::err!("\rreference: {done}/{total} spp");
-        } else {
-            crate::errln!("reference: {done}/{total} spp");
-        }
-    })?;
-    if terminal {
-        crate::errln!();
-    }
+    // Progress (rate, elapsed, remaining) on a terminal only: a log or a pipe gets the summary.
+    let mut progress = crate::progress::Progress::new("reference (spp)");
+    let image = renderer.render(&opts.settings, &mut |done, total| progress.update(done as u64, total as u64))?;
+    progress.finish();
     let n = renderer.gpu.validation_log().count();
     if n > 0 {
         return Err(Error::Usage(format!("{n} validation message(s) (see above)")));
