@@ -45,7 +45,6 @@ pub mod bvh;
 
 mod scene_data;
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
