@@ -96,6 +96,9 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         ("shadow_volumes", shipped("bsp_rooms.toml"), 240),
         ("heightfield_pyramid", small_field("heightfield_pyramid"), 160),
         ("heightfield_bruteforce", small_field("heightfield_bruteforce"), 160),
+        ("radiosity", shipped("cornell_radiosity.toml"), 240),
+        // A combination: the light-map base under shadow volumes' direct term.
+        ("gi", shipped("room_gi.toml"), 240),
     ];
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {
