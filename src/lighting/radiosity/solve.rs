@@ -136,6 +136,7 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let by_chart: Vec<Vec<usize>> = (0..p.charts.len()).map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect()).collect();
     let receivers: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     // Receivers start a hair in front of their surface, so that their own plane never occludes.
     let eps = 1e-4 * p.size;
     while report.shots < settings.max_shots {
@@ -182,30 +183,43 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
         for &k in &b.members {
             p.patches[k].unshot = DVec3::ZERO;
         }
-        for &r in &receivers {
-            let rp = p.patches[r];
-            // Shooters emit toward their normal only: a receiver behind the shooter's plane gets
-            // nothing (the exact form factor looks from the receiver and cannot see that).
-            if rp.chart == b.chart || normal.dot(rp.centre - b.corners[0]) <= 0.0 {
-                continue;
-            }
-            let f = match settings.mode {
-                // F from the receiver to the square times the square's mean unshot radiosity.
-                Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / square,
-                // CaLight: the block as one patch of its area at its centre.
-                Mode::Faithful => form_factor::point_sampled(rp.centre, rp.normal, centre, normal, area, p.size) / area,
+        // Every receiver's share is independent of the others': the shot is split over the
+        // machine's cores (each thread casts its receivers' rays), then applied in order, so the
+        // result does not depend on the thread count.
+        let shares = {
+            let patches = &p.patches;
+            let shooter = |r: usize| -> Option<(usize, DVec3, bool)> {
+                let rp = patches[r];
+                // Shooters emit toward their normal only: a receiver behind the shooter's plane
+                // gets nothing (the exact form factor looks from the receiver and cannot see it).
+                if rp.chart == b.chart || normal.dot(rp.centre - b.corners[0]) <= 0.0 {
+                    return None;
+                }
+                let f = match settings.mode {
+                    // F from the receiver to the square times the square's mean unshot radiosity.
+                    Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / square,
+                    // CaLight: the block as one patch of its area at its centre.
+                    Mode::Faithful => form_factor::point_sampled(rp.centre, rp.normal, centre, normal, area, p.size) / area,
+                };
+                if f <= 0.0 || rp.albedo == DVec3::ZERO {
+                    return None;
+                }
+                let seen = occluders.visible(rp.centre + rp.normal * eps, centre + normal * eps);
+                Some((r, rp.albedo * flux * f, seen))
             };
-            if f <= 0.0 || rp.albedo == DVec3::ZERO {
-                continue;
-            }
+            let chunk = receivers.len().div_ceil(threads).max(1);
+            std::thread::scope(|scope| {
+                let handles: Vec<_> = receivers.chunks(chunk).map(|part| scope.spawn(move || part.iter().filter_map(|&r| shooter(r)).collect::<Vec<_>>())).collect();
+                handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect::<Vec<_>>()
+            })
+        };
+        for (r, delta, seen) in shares {
             report.rays += 1;
-            if !occluders.visible(rp.centre + rp.normal * eps, centre + normal * eps) {
-                continue;
+            if seen {
+                let q = &mut p.patches[r];
+                q.total += delta;
+                q.unshot += delta;
             }
-            let delta = rp.albedo * flux * f;
-            let q = &mut p.patches[r];
-            q.total += delta;
-            q.unshot += delta;
         }
         report.shots += 1;
         let left = report.unshot_power.last().copied().unwrap_or(0.0);
