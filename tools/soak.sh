@@ -12,4 +12,4 @@ cd "$(dirname "$0")/.."
 out="${1:-soak.csv}"
 bash tools/setup.sh
 export PENUMBRA_TEST_DEVICE="${PENUMBRA_TEST_DEVICE:-llvmpipe}"
-cargo test --quiet --test memory -- --ignored --nocapture --test-threads 1 soak_every_shipped_scene_and_method | grep -E '^(scene,|[a-z_0-9]+\.toml,)' | tee "$out"
+cargo test --quiet --test memory -- --ignored --nocapture --test-threads 1 soak_every_shipped_scene_and_method | grep --line-buffered -E '^(scene,|[a-z_0-9]+\.toml,)' | tee "$out"
