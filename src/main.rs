@@ -32,7 +32,7 @@ struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = parse_size)]
     size: (u32, u32),
-    /// Lighting method (one the scene enables; default: the scene's first).
+    /// Lighting method or combination (one the scene enables or declares in [[combinations]]; default: the scene's first method).
     #[arg(long, value_name = "M")]
     method: Option<String>,
     #[command(flatten)]
