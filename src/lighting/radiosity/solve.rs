@@ -80,13 +80,13 @@ impl Occluders {
 }
 
 /// One shooting block: patches of one chart, and its square.
-struct Block {
-    chart: usize,
-    members: Vec<usize>,
-    corners: [DVec3; 4],
+pub(super) struct Block {
+    pub chart: usize,
+    pub members: Vec<usize>,
+    pub corners: [DVec3; 4],
 }
 
-fn blocks(p: &Patches, n: usize) -> Vec<Block> {
+pub(super) fn blocks(p: &Patches, n: usize) -> Vec<Block> {
     let mut out = Vec::new();
     let s = p.size;
     for (ci, c) in p.charts.iter().enumerate() {
