@@ -8,19 +8,6 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-struct Node {
-    vec3 lo;
-    uint index;  // interior: second child (the first is the next node); leaf: first triangle
-    vec3 hi;
-    uint count;  // triangles in a leaf; 0 for interior nodes
-};
-
-struct Triangle {
-    vec4 p0;
-    vec4 e1;
-    vec4 e2;
-};
-
 struct Shading {
     vec3 n0;
     uint material;
@@ -47,8 +34,10 @@ layout(set = 0, binding = 0) uniform Params {
     uvec4 environment_map;  // x, y: size of the map (0 for the constant environment); z: sampled; w: cube
 } params;
 
-layout(set = 0, binding = 1) readonly buffer Nodes { Node items[]; } nodes;
-layout(set = 0, binding = 2) readonly buffer Triangles { Triangle items[]; } triangles;
+#define BVH_NODES_BINDING 1
+#define BVH_TRIANGLES_BINDING 2
+#define BVH_TRIANGLE_COUNT params.counts.y
+#include "common/bvh.glsl"
 layout(set = 0, binding = 3) readonly buffer TriangleShading { Shading items[]; } shading;
 layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
 layout(set = 0, binding = 8) readonly buffer EnvironmentMap { vec4 items[]; } environment_map;

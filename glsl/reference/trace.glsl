@@ -1,13 +1,12 @@
-// Ray queries against the scene: the BVH over triangles (built by src/reference/bvh.rs, whose
-// CPU traversal mirrors this one) and the area lights, which are opaque to every ray.
-// The including shader declares `params` (counts.x: lights, counts.y: triangles), `nodes`,
-// `triangles` and `lights` before including this file.
+// Ray queries against the scene: the BVH over triangles (common/bvh.glsl) and the area lights,
+// which are opaque to every ray.
+// The including shader declares `params` (counts.x: lights) and `lights`, and includes
+// common/bvh.glsl, before including this file.
 #ifndef PENUMBRA_REFERENCE_TRACE_GLSL
 #define PENUMBRA_REFERENCE_TRACE_GLSL
 
-const float NO_HIT = 3.0e38;
-// Matches bvh::MAX_DEPTH: the build bounds the tree's depth by it.
-const uint MAX_DEPTH = 64u;
+#include "common/bvh.glsl"
+
 const uint LIGHT_SPHERE = 3u;
 const uint LIGHT_QUAD = 4u;
 // A light index no light has: occlusion tests that skip none.
@@ -19,117 +18,6 @@ struct Hit {
     int light;     // index of the area light hit, or -1
     vec2 uv;       // barycentrics of p1 and p2 on the triangle
 };
-
-// Moller-Trumbore, the same arithmetic as bvh::intersect_triangle.
-bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out float t, out vec2 uv) {
-    t = NO_HIT;
-    uv = vec2(0.0);
-    vec3 pv = cross(d, e2);
-    float det = dot(e1, pv);
-    if (det == 0.0) {
-        return false;
-    }
-    float inv = 1.0 / det;
-    vec3 tv = o - p0;
-    uv.x = dot(tv, pv) * inv;
-    if (uv.x < 0.0 || uv.x > 1.0) {
-        return false;
-    }
-    vec3 qv = cross(tv, e1);
-    uv.y = dot(d, qv) * inv;
-    if (uv.y < 0.0 || uv.x + uv.y > 1.0) {
-        return false;
-    }
-    t = dot(e2, qv) * inv;
-    return t > 0.0 && t < t_max;
-}
-
-// Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it.
-float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
-    vec3 t0 = (nodes.items[i].lo - o) * inv_d;
-    vec3 t1 = (nodes.items[i].hi - o) * inv_d;
-    vec3 near = min(t0, t1);
-    vec3 far = max(t0, t1);
-    float enter = max(max(near.x, near.y), max(near.z, 0.0));
-    float exit = min(min(far.x, far.y), min(far.z, t_max));
-    return enter <= exit ? enter : NO_HIT;
-}
-
-// Closest triangle hit closer than t_max (which it lowers), or with `any_hit` the first found.
-bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
-    triangle = -1;
-    uv = vec2(0.0);
-    if (params.counts.y == 0u) {
-        return false;
-    }
-    // Zero components would give 0 * inf = NaN in the slab test.
-    vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
-    if (box_entry(0u, o, inv_d, t_max) == NO_HIT) {
-        return false;
-    }
-    uint stack_node[MAX_DEPTH];
-    float stack_t[MAX_DEPTH];
-    uint sp = 0u;
-    uint node = 0u;
-    while (true) {
-        Node n = nodes.items[node];
-        bool descended = false;
-        if (n.count > 0u) {
-            for (uint k = 0u; k < n.count; ++k) {
-                uint slot = n.index + k;
-                Triangle tri = triangles.items[slot];
-                float t;
-                vec2 b;
-                if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
-                    t_max = t;
-                    triangle = int(slot);
-                    uv = b;
-                    if (any_hit) {
-                        return true;
-                    }
-                }
-            }
-        } else {
-            // Nearer child first; the other waits on the stack with its entry distance.
-            uint a = node + 1u;
-            uint c = n.index;
-            float ta = box_entry(a, o, inv_d, t_max);
-            float tc = box_entry(c, o, inv_d, t_max);
-            if (tc < ta) {
-                uint swap_node = a;
-                a = c;
-                c = swap_node;
-                float swap_t = ta;
-                ta = tc;
-                tc = swap_t;
-            }
-            if (ta != NO_HIT) {
-                if (tc != NO_HIT && sp < MAX_DEPTH) {
-                    stack_node[sp] = c;
-                    stack_t[sp] = tc;
-                    ++sp;
-                }
-                node = a;
-                descended = true;
-            }
-        }
-        if (!descended) {
-            bool found = false;
-            while (sp > 0u) {
-                --sp;
-                if (stack_t[sp] < t_max) {
-                    node = stack_node[sp];
-                    found = true;
-                    break;
-                }
-            }
-            if (!found) {
-                break;
-            }
-        }
-    }
-    return triangle >= 0;
-}
 
 // Nearest positive distance to a sphere, NO_HIT if none.
 float hit_sphere(vec3 o, vec3 d, vec3 center, float radius) {

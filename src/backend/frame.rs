@@ -87,6 +87,20 @@ impl Gpu {
         Ok(Frame(self.frames.len() as u32 - 1))
     }
 
+    /// Waits for the frame's last submission and frees it (its command buffer, fence, pools and
+    /// upload buffer): for work that needs a frame only for a while, such as a bake.
+    pub fn destroy_frame(&mut self, f: Frame) -> BackendResult<()> {
+        self.wait_frame(f)?;
+        let Some(slot) = self.frames.get_mut(f.0 as usize).and_then(|x| x.take()) else { return Ok(()) };
+        let fd = slot.into_inner();
+        unsafe {
+            self.device.free_command_buffers(self.command_pool, &[fd.cb]);
+            fd.destroy(&self.device);
+        }
+        self.destroy_buffer(fd.upload);
+        Ok(())
+    }
+
     pub(crate) fn frame_data(&self, f: Frame) -> BackendResult<&RefCell<FrameData>> {
         self.frames.get(f.0 as usize).and_then(|x| x.as_ref()).ok_or_else(|| BackendError::Invalid(format!("frame {f:?} does not exist")))
     }

@@ -230,6 +230,16 @@ impl Gpu {
         Ok(PipelineId(self.arenas.pipelines.len() as u32 - 1))
     }
 
+    /// Destroys a pipeline once the device is idle (for pipelines used only for a while, such as
+    /// a bake's). Its id stays invalid.
+    pub fn destroy_pipeline(&mut self, id: PipelineId) -> BackendResult<()> {
+        self.wait_idle()?;
+        if let Some(old) = self.arenas.pipelines.get_mut(id.0 as usize).and_then(|p| p.take()) {
+            unsafe { old.destroy(&self.device) };
+        }
+        Ok(())
+    }
+
     /// Rebuilds a pipeline from fresh shaders. On any error the old pipeline stays in place and
     /// the error is returned, so a typo in a shader never takes the running demo down.
     pub fn reload_pipeline(&mut self, id: PipelineId, shaders: &dyn ShaderSource) -> BackendResult<()> {

@@ -101,6 +101,22 @@ impl Bvh {
     }
 }
 
+impl Bvh {
+    /// Per node, the index of the node that follows its subtree in storage order (preorder: an
+    /// interior node's first child is the next node), `nodes.len()` past the last one. With them a
+    /// shadow ray walks the tree without a stack: into a node whose box it enters, past its
+    /// subtree (to its skip link) when it misses (glsl/common/bvh.glsl's `occluded`).
+    pub fn skip_links(&self) -> Vec<u32> {
+        let mut skip = vec![0u32; self.nodes.len()];
+        for i in (0..self.nodes.len()).rev() {
+            let n = &self.nodes[i];
+            // The second child comes after the first child's subtree, so its link is known.
+            skip[i] = if n.is_leaf() { i as u32 + 1 } else { skip[n.index as usize] };
+        }
+        skip
+    }
+}
+
 impl Builder<'_> {
     fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
         let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
@@ -439,6 +455,56 @@ mod tests {
                 }
             }
             assert!(hits > 500, "enough rays hit something ({hits})");
+        }
+    }
+
+    /// The stackless walk of glsl/common/bvh.glsl's `occluded`, by the skip links.
+    fn occluded_by_skip_links(bvh: &Bvh, skip: &[u32], tris: &[[Vec3; 3]], o: Vec3, d: Vec3, t_max: f32) -> (bool, usize) {
+        let inv_d = safe_inverse(d);
+        let (mut node, mut visited) = (0usize, 0usize);
+        while node < bvh.nodes.len() {
+            visited += 1;
+            let n = &bvh.nodes[node];
+            if box_entry(n.lo.into(), n.hi.into(), o, inv_d, t_max).is_none() {
+                node = skip[node] as usize;
+                continue;
+            }
+            if n.is_leaf() {
+                for slot in n.index..n.index + n.count {
+                    let [a, b, c] = tris[bvh.order[slot as usize] as usize];
+                    if intersect_triangle(o, d, a, b - a, c - a, t_max).is_some() {
+                        return (true, visited);
+                    }
+                }
+                node = skip[node] as usize;
+            } else {
+                node += 1;
+            }
+        }
+        (false, visited)
+    }
+
+    #[test]
+    fn skip_links_walk_the_tree_once_and_find_what_brute_force_finds() {
+        let mut r = Lcg(7);
+        for tris in [soup(500, 11), structured()] {
+            let bvh = Bvh::build(&tris);
+            let skip = bvh.skip_links();
+            for (i, &s) in skip.iter().enumerate() {
+                assert!(s as usize > i && s as usize <= bvh.nodes.len(), "node {i}: skip {s}");
+            }
+            let mut blocked = 0;
+            for k in 0..3000 {
+                let (o, to) = (r.v(14.0), r.v(6.0));
+                let Some(d) = (to - o).try_normalize() else { continue };
+                let t_max = (to - o).length();
+                let truth = brute_force(&tris, o, d).is_some_and(|(t, _)| t < t_max);
+                let (hit, visited) = occluded_by_skip_links(&bvh, &skip, &tris, o, d, t_max);
+                assert_eq!(hit, truth, "ray {k} from {o} to {to}");
+                assert!(visited <= bvh.nodes.len());
+                blocked += usize::from(hit);
+            }
+            assert!(blocked > 300 && blocked < 2700, "a mix of blocked and free segments ({blocked})");
         }
     }
 

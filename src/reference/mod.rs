@@ -43,7 +43,7 @@
 
 pub mod bvh;
 
-mod scene_data;
+pub mod scene_data;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

@@ -7,10 +7,12 @@ use glam::{DVec3, Mat4, Vec3};
 
 use super::patches::{Patches, Triangle};
 use super::solve::{self, Occluders, Settings};
+use crate::backend::Gpu;
 use crate::error::{Error, Result};
 use crate::gpu_scene::SceneGpu;
 use crate::progress::Progress;
 use crate::scene::{Light, Scene};
+use crate::shaders::ShaderLibrary;
 
 /// What the light-map holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -188,12 +190,29 @@ pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec
     out
 }
 
+/// Where the shooting runs.
+pub enum Shooter<'a> {
+    Cpu,
+    Gpu(&'a mut Gpu, &'a ShaderLibrary),
+}
+
 /// Bakes the light-map of `geometry`: patches, direct light, the solve, the texels.
-pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings: &Settings, content: Content, progress: &mut Progress) -> (Patches, Atlas, Vec<[f32; 4]>, solve::Report) {
+pub fn bake(
+    geometry: &StaticGeometry,
+    scene: &Scene,
+    patch_size: f64,
+    settings: &Settings,
+    content: Content,
+    shooter: Shooter<'_>,
+    progress: &mut Progress,
+) -> Result<(Patches, Atlas, Vec<[f32; 4]>, solve::Report)> {
     let mut p = Patches::build(&geometry.triangles, patch_size);
     let occluders = Occluders::new(&geometry.triangles);
     let direct = add_direct_light(&mut p, &occluders, scene);
-    let report = solve::solve(&mut p, &occluders, settings, progress);
+    let report = match shooter {
+        Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),
+        Shooter::Gpu(gpu, shaders) => super::gpu::solve(gpu, shaders, &mut p, &geometry.triangles, settings, progress)?,
+    };
     let atlas = pack(&p);
     let mut values: Vec<DVec3> = p
         .patches
@@ -217,5 +236,5 @@ pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings:
         }
     }
     let texels = texels(&p, &atlas, |k| values[k]);
-    (p, atlas, texels, report)
+    Ok((p, atlas, texels, report))
 }

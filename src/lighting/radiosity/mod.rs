@@ -9,6 +9,7 @@
 //! charts grouped across objects, albedo maps in the bake (the baker uses the material's albedo).
 
 pub mod form_factor;
+pub mod gpu;
 pub mod patches;
 pub mod solve;
 pub mod tone;
@@ -42,6 +43,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "block", kind: ParamKind::Int },
         ParamSchema { name: "threshold", kind: ParamKind::Float },
         ParamSchema { name: "light", kind: ParamKind::String },
+        ParamSchema { name: "baker", kind: ParamKind::String },
     ],
 };
 
@@ -55,12 +57,14 @@ pub struct Config {
     /// Patch (light-map texel) size, metres.
     pub patch_size: f64,
     pub content: Content,
+    /// Shoot on the GPU (the default) or on the CPU's cores.
+    pub on_gpu: bool,
 }
 
 impl Config {
     pub fn from_decl(decl: &MethodDecl) -> Result<Config> {
         let bad = |p: &str, want: &str, got: &toml::Value| Error::Usage(format!("methods: {NAME}.{p}: expected {want}, got {got}"));
-        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All };
+        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, on_gpu: true };
         if let Some(v) = decl.param("mode") {
             c.settings.mode = match v.as_str() {
                 Some("faithful") => Mode::Faithful,
@@ -82,6 +86,13 @@ impl Config {
                 Some("all") => Content::All,
                 Some("bounces") => Content::Bounces,
                 _ => return Err(bad("light", "\"all\" or \"bounces\"", v)),
+            };
+        }
+        if let Some(v) = decl.param("baker") {
+            c.on_gpu = match v.as_str() {
+                Some("gpu") => true,
+                Some("cpu") => false,
+                _ => return Err(bad("baker", "\"gpu\" or \"cpu\"", v)),
             };
         }
         Ok(c)
@@ -157,9 +168,11 @@ impl Radiosity {
         key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
         let scene = cx.scene;
         let geo = &geometry;
+        let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         // Baked: the atlas size, its texels, and each triangle corner's light-map coordinate.
         let baked: Vec<f32> = cx.bakes.bake(&format!("{NAME} light-map patch={}", config.patch_size), &key, |progress| {
-            let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, progress);
+            let shooter = if config.on_gpu { lightmap::Shooter::Gpu(gpu, shaders) } else { lightmap::Shooter::Cpu };
+            let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, shooter, progress)?;
             let mut out = vec![atlas.width as f32, atlas.height as f32];
             out.extend(texels.iter().flatten());
             let mut uv = vec![[0.0f32; 2]; 3 * geo.triangles.len()];

@@ -1,0 +1,180 @@
+// Closest or any hit of a ray against a BVH over triangles, built by src/reference/bvh.rs
+// (whose CPU traversal mirrors this one). The including shader defines BVH_NODES_BINDING and
+// BVH_TRIANGLES_BINDING (set 0 bindings of `nodes` and of `triangles`: corner and two edges in
+// BVH leaf order) and BVH_TRIANGLE_COUNT before including this file.
+#ifndef PENUMBRA_COMMON_BVH_GLSL
+#define PENUMBRA_COMMON_BVH_GLSL
+
+const float NO_HIT = 3.0e38;
+// Matches bvh::MAX_DEPTH: the build bounds the tree's depth by it.
+const uint MAX_DEPTH = 64u;
+
+struct Node {
+    vec3 lo;
+    uint index;  // interior: second child (the first is the next node); leaf: first triangle
+    vec3 hi;
+    uint count;  // triangles in a leaf; 0 for interior nodes
+};
+
+struct Triangle {
+    vec4 p0;
+    vec4 e1;
+    vec4 e2;
+};
+
+layout(set = 0, binding = BVH_NODES_BINDING) readonly buffer Nodes { Node items[]; } nodes;
+layout(set = 0, binding = BVH_TRIANGLES_BINDING) readonly buffer Triangles { Triangle items[]; } triangles;
+
+// Moller-Trumbore, the same arithmetic as bvh::intersect_triangle.
+bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out float t, out vec2 uv) {
+    t = NO_HIT;
+    uv = vec2(0.0);
+    vec3 pv = cross(d, e2);
+    float det = dot(e1, pv);
+    if (det == 0.0) {
+        return false;
+    }
+    float inv = 1.0 / det;
+    vec3 tv = o - p0;
+    uv.x = dot(tv, pv) * inv;
+    if (uv.x < 0.0 || uv.x > 1.0) {
+        return false;
+    }
+    vec3 qv = cross(tv, e1);
+    uv.y = dot(d, qv) * inv;
+    if (uv.y < 0.0 || uv.x + uv.y > 1.0) {
+        return false;
+    }
+    t = dot(e2, qv) * inv;
+    return t > 0.0 && t < t_max;
+}
+
+// Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it.
+float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
+    vec3 t0 = (nodes.items[i].lo - o) * inv_d;
+    vec3 t1 = (nodes.items[i].hi - o) * inv_d;
+    vec3 near = min(t0, t1);
+    vec3 far = max(t0, t1);
+    float enter = max(max(near.x, near.y), max(near.z, 0.0));
+    float exit = min(min(far.x, far.y), min(far.z, t_max));
+    return enter <= exit ? enter : NO_HIT;
+}
+
+// Closest triangle hit closer than t_max (which it lowers), or with `any_hit` the first found.
+bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
+    triangle = -1;
+    uv = vec2(0.0);
+    if (BVH_TRIANGLE_COUNT == 0u) {
+        return false;
+    }
+    // Zero components would give 0 * inf = NaN in the slab test.
+    vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    if (box_entry(0u, o, inv_d, t_max) == NO_HIT) {
+        return false;
+    }
+    uint stack_node[MAX_DEPTH];
+    float stack_t[MAX_DEPTH];
+    uint sp = 0u;
+    uint node = 0u;
+    while (true) {
+        Node n = nodes.items[node];
+        bool descended = false;
+        if (n.count > 0u) {
+            for (uint k = 0u; k < n.count; ++k) {
+                uint slot = n.index + k;
+                Triangle tri = triangles.items[slot];
+                float t;
+                vec2 b;
+                if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
+                    t_max = t;
+                    triangle = int(slot);
+                    uv = b;
+                    if (any_hit) {
+                        return true;
+                    }
+                }
+            }
+        } else {
+            // Nearer child first; the other waits on the stack with its entry distance.
+            uint a = node + 1u;
+            uint c = n.index;
+            float ta = box_entry(a, o, inv_d, t_max);
+            float tc = box_entry(c, o, inv_d, t_max);
+            if (tc < ta) {
+                uint swap_node = a;
+                a = c;
+                c = swap_node;
+                float swap_t = ta;
+                ta = tc;
+                tc = swap_t;
+            }
+            if (ta != NO_HIT) {
+                if (tc != NO_HIT && sp < MAX_DEPTH) {
+                    stack_node[sp] = c;
+                    stack_t[sp] = tc;
+                    ++sp;
+                }
+                node = a;
+                descended = true;
+            }
+        }
+        if (!descended) {
+            bool found = false;
+            while (sp > 0u) {
+                --sp;
+                if (stack_t[sp] < t_max) {
+                    node = stack_node[sp];
+                    found = true;
+                    break;
+                }
+            }
+            if (!found) {
+                break;
+            }
+        }
+    }
+    return triangle >= 0;
+}
+
+#ifdef BVH_SKIPS_BINDING
+// Per node, the node after its subtree (Bvh::skip_links).
+layout(set = 0, binding = BVH_SKIPS_BINDING) readonly buffer Skips { uint items[]; } skips;
+
+// Whether a triangle lies on the ray closer than t_max: shadow rays, where the order of the
+// hits does not matter, walk the nodes in storage order without a stack, past a subtree whose
+// box the ray misses. `complete` is false when the walk was cut short (a device that bounds an
+// invocation's loop iterations), and the answer then means nothing.
+bool occluded(vec3 o, vec3 d, float t_max, out bool complete) {
+    complete = true;
+    if (BVH_TRIANGLE_COUNT == 0u) {
+        return false;
+    }
+    vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
+    uint end = skips.items[0];
+    uint node = 0u;
+    while (node < end) {
+        if (box_entry(node, o, inv_d, t_max) == NO_HIT) {
+            node = skips.items[node];
+            continue;
+        }
+        Node n = nodes.items[node];
+        if (n.count == 0u) {
+            node += 1u;
+            continue;
+        }
+        for (uint k = 0u; k < n.count; ++k) {
+            Triangle tri = triangles.items[n.index + k];
+            float t;
+            vec2 b;
+            if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
+                return true;
+            }
+        }
+        node = skips.items[node];
+    }
+    complete = node >= end;
+    return false;
+}
+#endif
+
+#endif

@@ -1,0 +1,343 @@
+//! The shooting step on the GPU (issue 12, deliverable 4): the same progressive refinement as
+//! [`solve`](super::solve) — the same blocks, selection rules, form factors and visibility rays
+//! through a BVH of the static triangles — with every shot run as three compute passes
+//! (`glsl/radiosity/`: block powers, the selection in one workgroup, the receivers' gather). Many
+//! shots go in one submission; the host reads back only the shot record between submissions (to
+//! stop and show progress) and the patches' radiosity at the end.
+//!
+//! It differs from the CPU solve in precision (fp32 against fp64) and, in faithful mode, in the
+//! random numbers that pick candidate shooters; tests/radiosity_gpu.rs checks that both converge
+//! to the same light-map.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::patches::{Patches, Triangle};
+use super::solve::{self, Mode, Report, Settings};
+use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::progress::Progress;
+use crate::reference::bvh::Bvh;
+use crate::reference::scene_data::TracedTriangle;
+use crate::shaders::ShaderLibrary;
+
+/// `Patch` in glsl/radiosity/shooting.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuPatch {
+    centre: [f32; 4],
+    normal: [f32; 4],
+    albedo: [f32; 4],
+    ids: [u32; 4],
+}
+
+/// `Radiosity`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuRadiosity {
+    total: [f32; 4],
+    unshot: [f32; 4],
+}
+
+/// `Block`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuBlock {
+    range: [u32; 4],
+    corners: [[f32; 4]; 4],
+}
+
+/// `Shot`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuShot {
+    centre: [f32; 4],
+    normal: [f32; 4],
+    flux: [f32; 4],
+    corners: [[f32; 4]; 4],
+    size: [f32; 4],
+    state: [u32; 4],
+    shots: [u32; 4],
+}
+
+/// `Push`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ShootPush {
+    patch_count: u32,
+    block_count: u32,
+    chart_count: u32,
+    triangle_count: u32,
+    mode: u32,
+    samples_per_chart: u32,
+    /// Every dispatch of a solve pushes the same constants: lavapipe compiles a shader anew for
+    /// each set of push-constant values it has not seen (it inlines them), so the shot's number
+    /// lives in the shot record instead.
+    unused: u32,
+    log_capacity: u32,
+    stop: f32,
+    epsilon: f32,
+    patch_size: f32,
+    max_shots: u32,
+}
+
+const NO_BLOCK: u32 = u32::MAX;
+/// Each shot is three passes and three descriptor sets; a frame's pool holds 2048 sets.
+const MAX_SHOTS_PER_SUBMISSION: usize = 512;
+/// A submission long enough that its fixed cost is small, short enough for a lively progress line.
+const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
+
+fn v4(v: glam::DVec3, w: f32) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w]
+}
+
+/// The device objects of one solve, freed when it ends (whether it succeeded or not).
+struct Resources {
+    buffers: Vec<BufferId>,
+    pipelines: Vec<PipelineId>,
+    frame: Option<crate::backend::Frame>,
+}
+
+impl Resources {
+    fn buffer(&mut self, gpu: &mut Gpu, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<BufferId> {
+        let id = gpu.create_buffer_init(name, usage | vk::BufferUsageFlags::STORAGE_BUFFER, data)?;
+        self.buffers.push(id);
+        Ok(id)
+    }
+
+    fn host_buffer(&mut self, gpu: &mut Gpu, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<BufferId> {
+        let id = gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory: MemoryKind::GpuToCpu })?;
+        self.buffers.push(id);
+        Ok(id)
+    }
+
+    fn free(self, gpu: &mut Gpu) -> Result<()> {
+        if let Some(f) = self.frame {
+            gpu.destroy_frame(f)?;
+        }
+        for p in self.pipelines {
+            gpu.destroy_pipeline(p)?;
+        }
+        for b in self.buffers {
+            gpu.destroy_buffer(b);
+        }
+        Ok(())
+    }
+}
+
+/// Shoots on the GPU until the settings' stop, then writes every patch's total and unshot
+/// radiosity back into `p`.
+pub fn solve(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress) -> Result<Report> {
+    let mut resources = Resources { buffers: Vec::new(), pipelines: Vec::new(), frame: None };
+    let result = run(gpu, shaders, p, triangles, settings, progress, &mut resources);
+    let freed = resources.free(gpu);
+    let report = result?;
+    freed?;
+    Ok(report)
+}
+
+fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress, res: &mut Resources) -> Result<Report> {
+    let blocks = solve::blocks(p, settings.block.max(1));
+    let mut report = Report::default();
+    if blocks.is_empty() {
+        progress.finish();
+        return Ok(report);
+    }
+    let mut block_of = vec![NO_BLOCK; p.patches.len()];
+    let mut members = Vec::new();
+    let mut gpu_blocks = Vec::with_capacity(blocks.len());
+    let mut charts = vec![[0u32; 2]; p.charts.len()];
+    for (b, block) in blocks.iter().enumerate() {
+        // solve::blocks lays blocks out chart by chart.
+        let c = &mut charts[block.chart];
+        if c[1] == 0 {
+            c[0] = b as u32;
+        }
+        c[1] += 1;
+        gpu_blocks.push(GpuBlock { range: [members.len() as u32, block.members.len() as u32, block.chart as u32, 0], corners: block.corners.map(|q| v4(q, 1.0)) });
+        for &k in &block.members {
+            block_of[k] = b as u32;
+            members.push(k as u32);
+        }
+    }
+    let patches: Vec<GpuPatch> = p
+        .patches
+        .iter()
+        .enumerate()
+        .map(|(k, q)| GpuPatch { centre: v4(q.centre, q.area as f32), normal: v4(q.normal, 0.0), albedo: v4(q.albedo, 0.0), ids: [q.chart as u32, block_of[k], 0, 0] })
+        .collect();
+    let state: Vec<GpuRadiosity> = p.patches.iter().map(|q| GpuRadiosity { total: v4(q.total, 0.0), unshot: v4(q.unshot, 0.0) }).collect();
+    let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
+    let bvh = Bvh::build(&tris);
+    let traced: Vec<TracedTriangle> = bvh
+        .order
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = tris[t as usize];
+            TracedTriangle { p0: a.extend(0.0).into(), e1: (b - a).extend(0.0).into(), e2: (c - a).extend(0.0).into() }
+        })
+        .collect();
+
+    let none = vk::BufferUsageFlags::empty();
+    let patches_buf = res.buffer(gpu, "radiosity patches", none, bytemuck::cast_slice(&patches))?;
+    let state_buf = res.buffer(gpu, "radiosity state", vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&state))?;
+    let blocks_buf = res.buffer(gpu, "radiosity blocks", none, bytemuck::cast_slice(&gpu_blocks))?;
+    let members_buf = res.buffer(gpu, "radiosity block members", none, bytemuck::cast_slice(&members))?;
+    let charts_buf = res.buffer(gpu, "radiosity charts", none, bytemuck::cast_slice(&charts))?;
+    let power_buf = res.buffer(gpu, "radiosity block power", none, &vec![0u8; 4 * blocks.len()])?;
+    let nodes_buf = res.buffer(gpu, "radiosity bvh nodes", none, bytemuck::cast_slice(&bvh.nodes))?;
+    let triangles_buf = res.buffer(gpu, "radiosity bvh triangles", none, bytemuck::cast_slice(&traced))?;
+    let skips_buf = res.buffer(gpu, "radiosity bvh skip links", none, bytemuck::cast_slice(&bvh.skip_links()))?;
+    let storage_host = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let shot_buf = res.host_buffer(gpu, "radiosity shot", std::mem::size_of::<GpuShot>() as u64, storage_host)?;
+    let status_buf = res.host_buffer(gpu, "radiosity status", 4, storage_host)?;
+    let log_capacity = settings.max_shots.saturating_add(1).min(1 << 22);
+    let log_buf = res.host_buffer(gpu, "radiosity unshot log", 4 * log_capacity as u64, storage_host)?;
+    let readback = res.host_buffer(gpu, "radiosity state readback", std::mem::size_of_val(state.as_slice()) as u64, vk::BufferUsageFlags::TRANSFER_DST)?;
+    let pipeline = |gpu: &mut Gpu, res: &mut Resources, name: &str, shader: &str| -> Result<PipelineId> {
+        let id = gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, shaders)?;
+        res.pipelines.push(id);
+        Ok(id)
+    };
+    let power_pipeline = pipeline(gpu, res, "radiosity block power", "radiosity/block_power.comp")?;
+    let select_pipeline = pipeline(gpu, res, "radiosity select", "radiosity/select.comp")?;
+    let shoot_pipeline = pipeline(gpu, res, "radiosity shoot", "radiosity/shoot.comp")?;
+    let frame = gpu.create_frame()?;
+    res.frame = Some(frame);
+
+    // The initial unshot power, as the CPU solve measures it (its stop is a fraction of it).
+    let initial: f64 = blocks.iter().flat_map(|b| &b.members).map(|&k| p.patches[k].unshot.abs().element_sum() * p.patches[k].area).sum();
+    let base = ShootPush {
+        patch_count: p.patches.len() as u32,
+        block_count: blocks.len() as u32,
+        chart_count: p.charts.len() as u32,
+        triangle_count: traced.len() as u32,
+        mode: match settings.mode {
+            Mode::Faithful => 0,
+            Mode::Corrected => 1,
+        },
+        samples_per_chart: settings.samples_per_chart as u32,
+        unused: 0,
+        log_capacity: log_capacity as u32,
+        stop: (settings.threshold * initial) as f32,
+        epsilon: (1e-4 * p.size) as f32,
+        patch_size: p.size as f32,
+        max_shots: settings.max_shots.min(u32::MAX as usize) as u32,
+    };
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let read = Access::StorageRead { stages: compute };
+    let write = Access::StorageWrite { stages: compute };
+    let mut states = ResourceStates::default();
+    let mut recorded = 0usize;
+    let mut batch = 4usize;
+    let shot = loop {
+        let t0 = std::time::Instant::now();
+        let mut graph = RenderGraph::new();
+        if recorded == 0 {
+            graph.pass("radiosity clear shot").buffer(shot_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(shot_buf, 0));
+            graph.pass("radiosity clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
+        }
+        for _ in 0..batch {
+            let push = base;
+            graph
+                .pass("radiosity block power")
+                .buffer(patches_buf, read, Some("patches"))
+                .buffer(state_buf, read, Some("radiosity"))
+                .buffer(blocks_buf, read, Some("blocks"))
+                .buffer(members_buf, read, Some("members"))
+                .buffer(shot_buf, read, Some("shots"))
+                .buffer(power_buf, write, Some("block_power"))
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(power_pipeline)?;
+                    ctx.bind(&[])?;
+                    ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                    ctx.rec.dispatch([push.block_count, 1, 1])
+                });
+            graph
+                .pass("radiosity select")
+                .buffer(patches_buf, read, Some("patches"))
+                .buffer(state_buf, read, Some("radiosity"))
+                .buffer(blocks_buf, read, Some("blocks"))
+                .buffer(members_buf, read, Some("members"))
+                .buffer(shot_buf, write, Some("shots"))
+                .buffer(power_buf, read, Some("block_power"))
+                .buffer(charts_buf, read, Some("charts"))
+                .buffer(log_buf, write, Some("unshot_log"))
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(select_pipeline)?;
+                    ctx.bind(&[])?;
+                    ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                    ctx.rec.dispatch([64, 1, 1])
+                });
+            graph
+                .pass("radiosity shoot")
+                .buffer(patches_buf, read, Some("patches"))
+                .buffer(state_buf, write, Some("radiosity"))
+                .buffer(shot_buf, read, Some("shots"))
+                .buffer(nodes_buf, read, Some("nodes"))
+                .buffer(triangles_buf, read, Some("triangles"))
+                .buffer(skips_buf, read, Some("skips"))
+                .buffer(status_buf, write, Some("status"))
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(shoot_pipeline)?;
+                    ctx.bind(&[])?;
+                    ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                    ctx.rec.dispatch([push.patch_count, 1, 1])
+                });
+        }
+        graph.output_buffer(state_buf);
+        graph.pass("radiosity host").buffer(shot_buf, Access::HostRead, None).buffer(log_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        let mut rec = gpu.begin_frame(frame)?;
+        rec.begin_scope("radiosity shooting");
+        graph.execute(&mut rec, &mut states)?;
+        rec.end_scope();
+        rec.finish()?;
+        gpu.submit_and_wait(frame)?;
+        recorded += batch;
+        let status = gpu.read_buffer(status_buf)?;
+        let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if cut > 0 {
+            return Err(Error::Usage(format!("{}: {cut} radiosity visibility ray(s) ran more loop iterations than the device allows one shader invocation; use baker = \"cpu\"", gpu.caps().name)));
+        }
+        let bytes = gpu.read_buffer(shot_buf)?;
+        let shot: GpuShot = bytemuck::pod_read_unaligned(bytes.get(..std::mem::size_of::<GpuShot>()).ok_or_else(|| Error::Usage("radiosity: the shot record read back short".into()))?);
+        let log = gpu.read_buffer(log_buf)?;
+        let logged = (shot.state[3] as usize).min(log.len() / 4);
+        let left = if logged > 0 { bytemuck::pod_read_unaligned::<f32>(&log[4 * (logged - 1)..4 * logged]) as f64 } else { initial };
+        progress.update(((1.0 - left / initial.max(1e-300)).clamp(0.0, 1.0) * 1000.0) as u64, 1000);
+        if shot.state[1] != 0 {
+            report.unshot_power = bytemuck::cast_slice::<u8, f32>(&log[..4 * logged]).iter().map(|&x| x as f64).collect();
+            break shot;
+        }
+        let seconds = t0.elapsed().as_secs_f64();
+        let fit = (SUBMISSION_TARGET_SECONDS / (seconds / batch as f64).max(1e-9)) as usize;
+        batch = fit.clamp(1, (2 * batch).min(MAX_SHOTS_PER_SUBMISSION));
+    };
+    report.shots = shot.shots[0] as usize;
+    report.full_searches = shot.state[2] as usize;
+    // Every inside receiver of another chart is considered per shot (rays are cast only where
+    // the form factor is positive; the GPU does not count them one by one).
+    report.rays = 0;
+
+    let state_bytes = std::mem::size_of_val(state.as_slice());
+    let mut graph = RenderGraph::new();
+    graph
+        .pass("radiosity read back")
+        .buffer(state_buf, Access::TransferRead, None)
+        .buffer(readback, Access::TransferWrite, None)
+        .record(move |ctx| ctx.rec.copy_buffer(state_buf, readback, state_bytes as u64));
+    graph.pass("radiosity host").buffer(readback, Access::HostRead, None).record(|_| Ok(()));
+    let mut rec = gpu.begin_frame(frame)?;
+    graph.execute(&mut rec, &mut states)?;
+    rec.finish()?;
+    gpu.submit_and_wait(frame)?;
+    let bytes = gpu.read_buffer(readback)?;
+    let solved: Vec<GpuRadiosity> = bytes.get(..state_bytes).map(bytemuck::pod_collect_to_vec).ok_or_else(|| Error::Usage("radiosity: the read-back state is short".into()))?;
+    for (q, s) in p.patches.iter_mut().zip(&solved) {
+        q.total = glam::DVec3::new(s.total[0] as f64, s.total[1] as f64, s.total[2] as f64);
+        q.unshot = glam::DVec3::new(s.unshot[0] as f64, s.unshot[1] as f64, s.unshot[2] as f64);
+    }
+    progress.finish();
+    Ok(report)
+}
