@@ -107,6 +107,9 @@ enum Command {
         /// Where references and tables are cached.
         #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
         cache_dir: PathBuf,
+        /// Chart only this method or combination (repeat for more; default: all of the scene's).
+        #[arg(long = "method", value_name = "M")]
+        methods: Vec<String>,
         #[command(flatten)]
         device: DeviceArgs,
     },
@@ -278,8 +281,8 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
         }
-        Command::Chart { scene, output, csv, size, frames, reference_spp, cache_dir, device } => {
-            let opts = penumbra::chart::ChartOptions { scene, size, frames, reference_spp, png: Some(output.clone()), csv: csv.clone(), cache_dir, gpu: gpu_desc(&device) };
+        Command::Chart { scene, output, csv, size, frames, reference_spp, cache_dir, methods, device } => {
+            let opts = penumbra::chart::ChartOptions { scene, size, frames, reference_spp, png: Some(output.clone()), csv: csv.clone(), cache_dir, gpu: gpu_desc(&device), methods };
             let chart = penumbra::chart::run(&opts)?;
             for r in &chart.rows {
                 penumbra::outln!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);

@@ -96,7 +96,24 @@ fn chart_measures_the_textured_shadow_volume_level() {
     let csv = common::temp_path("sv-chart.csv");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bsp_rooms.toml");
     let png = common::temp_path("sv-chart.png");
-    let args = ["chart", scene, "--size", "64x64", "--reference-spp", "16", "--frames", "1", "--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()];
+    let args = [
+        "chart",
+        scene,
+        "--method",
+        "shadow_volumes",
+        "--size",
+        "64x64",
+        "--reference-spp",
+        "16",
+        "--frames",
+        "1",
+        "--cache-dir",
+        cache.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ];
     ok(&penumbra(&args));
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let configs: Vec<&str> = rows.iter().map(|r| r.config.as_str()).collect();

@@ -180,6 +180,7 @@ fn chart_and_speedup_at_equal_error() {
             csv: Some(out_dir().join(format!("chart_{name}.csv"))),
             cache_dir: out_dir().join("cache"),
             gpu: measure_gpu(),
+            methods: Vec::new(),
         };
         let chart = penumbra::chart::run(&opts).unwrap();
         let points = |m: &str| -> Vec<Point> {

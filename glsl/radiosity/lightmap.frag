@@ -1,6 +1,7 @@
 #version 460
 // Seed 000's light-mapped surface: emission + albedo x albedo map x light-map, where the
-// light-map holds the baked irradiance / pi (linear, bilinear, clamped, no mips).
+// light-map holds the baked irradiance / pi (linear, bilinear, clamped, no mips). Entities get
+// their emission only: the seed's dynamic objects receive no light-map light.
 #include "common/frame.glsl"
 #include "common/scene.glsl"
 
@@ -23,5 +24,7 @@ void main() {
         emission = vec3(0.0);
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
-    out_radiance = vec4(emission + albedo * texture(lightmap, in_lightmap_uv).rgb, 1.0);
+    // Entities (animated objects) have no light-map: a negative coordinate.
+    vec3 light = in_lightmap_uv.x < 0.0 ? vec3(0.0) : texture(lightmap, in_lightmap_uv).rgb;
+    out_radiance = vec4(emission + albedo * light, 1.0);
 }

@@ -34,6 +34,8 @@ pub struct ChartOptions {
     pub csv: Option<PathBuf>,
     pub cache_dir: PathBuf,
     pub gpu: GpuDesc,
+    /// Only these methods or combinations (all of the scene's when empty).
+    pub methods: Vec<String>,
 }
 
 /// One configuration of one method, measured.
@@ -138,7 +140,14 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let mut rows = Vec::new();
     let mut references: BTreeMap<String, (HdrImage, String)> = BTreeMap::new();
     let mut device = String::new();
-    for configuration in registry::configurations(&scene)? {
+    let all = registry::configurations(&scene)?;
+    for name in &opts.methods {
+        if !all.iter().any(|c| c.name == *name) {
+            let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+            return Err(Error::Usage(format!("{}: --method {name}: the scene has no such method or combination (it has {})", opts.scene.display(), known.join(", "))));
+        }
+    }
+    for configuration in all.into_iter().filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name)) {
         let kind = registry::reference_kind(&configuration)?;
         let key = format!("{kind:?}");
         if !references.contains_key(&key) {

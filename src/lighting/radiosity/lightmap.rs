@@ -11,6 +11,7 @@ use crate::backend::Gpu;
 use crate::error::{Error, Result};
 use crate::gpu_scene::SceneGpu;
 use crate::progress::Progress;
+use crate::reference::scene_data::srgb_decode;
 use crate::scene::{Light, Scene};
 use crate::shaders::ShaderLibrary;
 
@@ -31,10 +32,14 @@ pub struct StaticGeometry {
     pub draw: Vec<usize>,
     pub object_space: Vec<[[f32; 3]; 3]>,
     pub uvs: Vec<[[f32; 2]; 3]>,
+    /// Scene draws of animated objects (the seed's entities): not patched and no occluders in
+    /// the bake — dynamic objects neither receive nor cast light-map light (digest §3, item 7) —
+    /// but drawn in the base pass, for their depth and emission.
+    pub entities: Vec<usize>,
 }
 
-/// The scene's draws (objects and area-light emitters) in world space. Animated objects and
-/// sphere lights are refused: a light-map is static, and sphere emitters are not patched yet.
+/// The scene's draws (objects and area-light emitters) in world space; animated objects are set
+/// apart as entities. Sphere lights are refused: sphere emitters are not patched yet.
 pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<StaticGeometry> {
     let src = &scene.source;
     let mut emitters = Vec::new();
@@ -45,17 +50,24 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
             _ => {}
         }
     }
-    let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), object_space: Vec::new(), uvs: Vec::new() };
+    let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), object_space: Vec::new(), uvs: Vec::new(), entities: Vec::new() };
     let mut emitter = 0;
     for (d, item) in gpu.draws.iter().enumerate() {
         let (albedo, emission) = match item.object {
             Some(o) => {
                 let obj = &scene.objects[o];
                 if obj.animation.is_some() {
-                    return Err(Error::Usage(format!("{src}: objects[{o}] ({:?}).animation: {method} bakes static geometry only", obj.name)));
+                    out.entities.push(d);
+                    continue;
                 }
                 let m = scene.materials.get(obj.material).ok_or_else(|| Error::Usage(format!("{src}: objects[{o}]: material index out of range")))?;
-                (m.albedo, m.emission)
+                // The light-map is multiplied by the albedo map texel by texel when drawn; a
+                // bounce reflects the map's mean (what qrad does with a texture's average).
+                let map_mean = match &m.albedo_map {
+                    Some(path) => mean_albedo(path).map_err(|e| Error::Usage(format!("{src}: material {:?}: albedo_map: cannot load {}: {e}", m.name, path.display())))?,
+                    None => Vec3::ONE,
+                };
+                (m.albedo * map_mean, m.emission)
             }
             None => {
                 let e = emitters.get(emitter).copied().unwrap_or(Vec3::ZERO);
@@ -75,6 +87,17 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
         }
     }
     Ok(out)
+}
+
+/// The mean of an albedo map's texels, sRGB-decoded as the raster methods decode them.
+fn mean_albedo(path: &std::path::Path) -> std::result::Result<Vec3, String> {
+    let img = crate::image_io::open_image(path)?.to_rgba8();
+    let n = (img.width() as f64 * img.height() as f64).max(1.0);
+    let mut sum = glam::DVec3::ZERO;
+    for p in img.pixels() {
+        sum += glam::DVec3::new(srgb_decode(p.0[0]) as f64, srgb_decode(p.0[1]) as f64, srgb_decode(p.0[2]) as f64);
+    }
+    Ok((sum / n).as_vec3())
 }
 
 /// Adds the reflected direct light of the scene's point, spot and directional lights (shadowed)

@@ -47,8 +47,9 @@ pub const SCHEMA: MethodSchema = MethodSchema {
     ],
 };
 
-/// Bumped whenever the baker's output for the same inputs changes (its code has no SPIR-V to hash).
-const BAKER_VERSION: u32 = 4;
+/// Bumped whenever the CPU baker's output for the same inputs changes (the GPU shooter's SPIR-V is
+/// hashed into the key).
+const BAKER_VERSION: u32 = 5;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,14 +58,15 @@ pub struct Config {
     /// Patch (light-map texel) size, metres.
     pub patch_size: f64,
     pub content: Content,
-    /// Shoot on the GPU (the default) or on the CPU's cores.
-    pub on_gpu: bool,
+    /// Where to shoot: `None` (auto) picks the GPU unless the device is a CPU implementation
+    /// (lavapipe), which runs the compute passes slower than the native solve on the same cores.
+    pub on_gpu: Option<bool>,
 }
 
 impl Config {
     pub fn from_decl(decl: &MethodDecl) -> Result<Config> {
         let bad = |p: &str, want: &str, got: &toml::Value| Error::Usage(format!("methods: {NAME}.{p}: expected {want}, got {got}"));
-        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, on_gpu: true };
+        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, on_gpu: None };
         if let Some(v) = decl.param("mode") {
             c.settings.mode = match v.as_str() {
                 Some("faithful") => Mode::Faithful,
@@ -90,9 +92,10 @@ impl Config {
         }
         if let Some(v) = decl.param("baker") {
             c.on_gpu = match v.as_str() {
-                Some("gpu") => true,
-                Some("cpu") => false,
-                _ => return Err(bad("baker", "\"gpu\" or \"cpu\"", v)),
+                Some("auto") => None,
+                Some("gpu") => Some(true),
+                Some("cpu") => Some(false),
+                _ => return Err(bad("baker", "\"auto\", \"gpu\" or \"cpu\"", v)),
             };
         }
         Ok(c)
@@ -108,7 +111,8 @@ pub fn reference(decl: &MethodDecl) -> crate::lighting::ReferenceKind {
     }
 }
 
-/// The chart's sweep: patch sizes and both modes.
+/// The chart's sweep: patch sizes around the declared one (twice, once and half), a looser stop,
+/// and the faithful mode.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let with = |name: &str, v: toml::Value| {
         let mut d = decl.clone();
@@ -119,16 +123,18 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d) {
-            let label = format!("radiosity {:?} patch={} block={}", c.settings.mode, c.patch_size, c.settings.block).to_lowercase();
+            let label = format!("radiosity {:?} patch={} block={} threshold={}", c.settings.mode, c.patch_size, c.settings.block, c.settings.threshold).to_lowercase();
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
             }
         }
     };
     push(decl.clone());
-    for s in [0.2, 0.1, 0.05] {
+    let declared = Config::from_decl(decl).map(|c| c.patch_size).unwrap_or(0.1);
+    for s in [2.0 * declared, declared, 0.5 * declared] {
         push(with("patch_size", s.into()));
     }
+    push(with("threshold", 1e-2.into()));
     push(with("mode", "faithful".into()));
     out
 }
@@ -151,6 +157,9 @@ pub struct Radiosity {
     vertices: BufferId,
     /// (scene draw, first vertex, vertex count).
     draws: Vec<(usize, u32, u32)>,
+    /// Per entry of `draws`: an entity's animation (placed at the frame clock's time, as the
+    /// direct methods place it).
+    animations: Vec<Option<crate::scene::Animation>>,
     lightmap: ImageId,
     sampler: SamplerId,
 }
@@ -162,7 +171,7 @@ impl Radiosity {
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
         }
-        let mut key = BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", config).with("lights", &cx.scene.lights);
+        let mut key = BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", config).with("lights", &cx.scene.lights).with_shaders("radiosity/");
         let geometry_bytes: Vec<f64> =
             geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64])).collect();
         key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
@@ -171,7 +180,8 @@ impl Radiosity {
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         // Baked: the atlas size, its texels, and each triangle corner's light-map coordinate.
         let baked: Vec<f32> = cx.bakes.bake(&format!("{NAME} light-map patch={}", config.patch_size), &key, |progress| {
-            let shooter = if config.on_gpu { lightmap::Shooter::Gpu(gpu, shaders) } else { lightmap::Shooter::Cpu };
+            let on_gpu = config.on_gpu.unwrap_or(gpu.caps().device_type != vk::PhysicalDeviceType::CPU);
+            let shooter = if on_gpu { lightmap::Shooter::Gpu(gpu, shaders) } else { lightmap::Shooter::Cpu };
             let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, shooter, progress)?;
             let mut out = vec![atlas.width as f32, atlas.height as f32];
             out.extend(texels.iter().flatten());
@@ -212,6 +222,21 @@ impl Radiosity {
                 vertices.push(LightmapVertex { position: o[k].to_array(), normal: n, lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]], uv: geometry.uvs[t][k] });
             }
         }
+        // Entities: their mesh as it is, outside the light-map (a negative coordinate reads as
+        // no light-map light).
+        for &d in &geometry.entities {
+            let mesh = &cx.scene_gpu.meshes[d];
+            let first = vertices.len() as u32;
+            for t in mesh.indices.chunks_exact(3) {
+                let o = [0, 1, 2].map(|k| mesh.positions[t[k] as usize]);
+                let n = (o[1] - o[0]).cross(o[2] - o[0]).normalize_or_zero().to_array();
+                for (k, p) in o.iter().enumerate() {
+                    vertices.push(LightmapVertex { position: p.to_array(), normal: n, lightmap_uv: [-1.0, -1.0], uv: mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()) });
+                }
+            }
+            draws.push((d, first, vertices.len() as u32 - first));
+        }
+        let animations = draws.iter().map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation.clone())).collect();
         let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
         cx.states.forget_buffer(vertices);
         let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", vk::Format::R32G32B32A32_SFLOAT, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
@@ -228,7 +253,7 @@ impl Radiosity {
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
         let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let sampler = cx.gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
-        Ok(Radiosity { pipeline, vertices, draws, lightmap, sampler })
+        Ok(Radiosity { pipeline, vertices, draws, animations, lightmap, sampler })
     }
 }
 
@@ -241,7 +266,7 @@ impl LightingMethod for Radiosity {
         if !frame.terms.has(Term::Base) {
             return Ok(());
         }
-        let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
+        let (scene, t, uniforms, time) = (frame.scene, frame.targets, frame.uniforms, frame.clock.time_s);
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         graph
             .pass("light-map")
@@ -254,14 +279,15 @@ impl LightingMethod for Radiosity {
                 let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
                 ctx.rec.bind_pipeline(self.pipeline)?;
                 ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
-                for &(d, first, count) in &self.draws {
+                for (&(d, first, count), animation) in self.draws.iter().zip(&self.animations) {
                     let item = &scene.draws[d];
+                    let model = animation.as_ref().map_or(item.model, |a| a.transform_at(item.model, time));
                     let maps = scene.material_maps[item.material as usize];
                     ctx.bind(&[
                         ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
                         ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
                     ])?;
-                    ctx.rec.push_constants(DrawPush::new(item.model, item.material).bytes())?;
+                    ctx.rec.push_constants(DrawPush::new(model, item.material).bytes())?;
                     ctx.rec.draw_from(count, first)?;
                 }
                 ctx.rec.end_rendering();

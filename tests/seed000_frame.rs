@@ -1,0 +1,56 @@
+//! Seed 000's frame on `scenes/bsp_rooms.toml` (the `seed000` combination): the radiosity
+//! light-map as the ambient base, per-pixel Phong with stencil shadow volumes as the direct term.
+//! The composed image is the sum of its parts, the light-map puts bounced light where the direct
+//! lights leave shadow, and the entities get none of it.
+
+mod common;
+
+use penumbra::image_io::HdrImage;
+use penumbra::renderer::{FrameOutput, Renderer};
+use penumbra::scene::Scene;
+
+/// bsp_rooms.toml with a coarser light-map (a quicker bake; the composition is the same) and the
+/// shadow volumes' constant ambient set to `ambient`.
+fn scene(ambient: f32) -> Scene {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("bsp_rooms.toml")).unwrap();
+    let text = text.replace("patch_size = 0.5", "patch_size = 1.0").replace("lightmap = [0.035, 0.035, 0.045]", &format!("lightmap = [{ambient:?}]"));
+    Scene::from_str(&text, "bsp_rooms.toml", &dir).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn render(scene: Scene, name: &str) -> HdrImage {
+    let mut r = Renderer::new(common::test_gpu(), scene, Some(name), (64, 36), 1).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let cam = r.scene.camera.clone();
+    let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+    common::assert_clean(&r.gpu);
+    img
+}
+
+fn luminance(p: &[f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+#[test]
+fn the_seed000_frame_is_the_light_map_under_the_direct_light() {
+    let composed = render(scene(0.0), "seed000");
+    let base = render(scene(0.0), "radiosity");
+    // shadow_volumes alone with no ambient: its direct light only.
+    let direct = render(scene(0.0), "shadow_volumes");
+    let mut worst = 0.0f32;
+    for ((c, b), d) in composed.pixels.iter().zip(&base.pixels).zip(&direct.pixels) {
+        for k in 0..3 {
+            worst = worst.max((c[k] - (b[k] + d[k])).abs() / (b[k] + d[k]).max(1e-3));
+        }
+    }
+    assert!(worst < 1e-3, "composed ≠ light-map + direct light: worst relative difference {worst}");
+    // The light-map carries light: in the pixels the direct lights leave in shadow (their direct
+    // term under 1% of the image's mean), the composed frame is lit by bounced light alone.
+    let mean = |img: &HdrImage| img.pixels.iter().map(luminance).sum::<f32>() / img.pixels.len() as f32;
+    let shadowed: Vec<usize> = (0..direct.pixels.len()).filter(|&i| luminance(&direct.pixels[i]) < 0.01 * mean(&direct)).collect();
+    assert!(shadowed.len() > 50, "the view has shadowed pixels ({})", shadowed.len());
+    let lit = shadowed.iter().filter(|&&i| luminance(&composed.pixels[i]) > 0.02 * mean(&composed)).count();
+    assert!(lit as f64 > 0.8 * shadowed.len() as f64, "bounced light reaches {lit} of {} shadowed pixels", shadowed.len());
+    // The constant ambient it replaces is gone: the composed frame does not depend on it.
+    let with_ambient = render(scene(0.5), "seed000");
+    assert_eq!(with_ambient.pixels, composed.pixels);
+}
