@@ -1,7 +1,7 @@
 //! From a scene to a baked light-map: the static triangles the baker sees, direct light from the
 //! scene's punctual lights as initial energy, the solve, and the atlas (charts shelf-packed with
-//! one-texel gaps, border patches filled from their inside neighbours — the seed's pass 1 — so
-//! bilinear filtering never reads black at a polygon's edge).
+//! one-texel gaps, border patches filled by the seed's passes 1 and 2, [`super::border`], so
+//! bilinear filtering never reads black at a polygon's edge nor steps at a seam).
 
 use glam::{DVec3, Mat4, Vec3};
 
@@ -34,6 +34,23 @@ pub struct StaticGeometry {
 /// The scene's draws (objects and area-light emitters) in world space. Animated objects and
 /// sphere lights are refused: a light-map is static, and sphere emitters are not patched yet.
 pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<StaticGeometry> {
+    from_draws(scene, gpu.draws.iter().zip(&gpu.meshes).map(|(item, mesh)| (item.object, item.model, mesh)), method)
+}
+
+/// [`static_geometry`] without a GPU: the scene's meshes loaded on the CPU, in the order the
+/// scene's upload draws them (objects, then area-light emitters). For tests and tools.
+pub fn scene_geometry(scene: &Scene, method: &str) -> Result<StaticGeometry> {
+    let mut meshes = Vec::new();
+    for o in &scene.objects {
+        meshes.push((Some(meshes.len()), o.transform, o.load_mesh(std::path::Path::new(".")).map_err(|e| Error::Usage(e.to_string()))?));
+    }
+    for (_, mesh, _) in crate::gpu_scene::emitter_meshes(scene) {
+        meshes.push((None, Mat4::IDENTITY, mesh));
+    }
+    from_draws(scene, meshes.iter().map(|(o, m, mesh)| (*o, *m, mesh)), method)
+}
+
+fn from_draws<'a>(scene: &Scene, draws: impl Iterator<Item = (Option<usize>, Mat4, &'a crate::scene::Mesh)>, method: &str) -> Result<StaticGeometry> {
     let src = &scene.source;
     let mut emitters = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
@@ -45,28 +62,27 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
     }
     let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), object_space: Vec::new(), uvs: Vec::new() };
     let mut emitter = 0;
-    for (d, item) in gpu.draws.iter().enumerate() {
-        let (albedo, emission) = match item.object {
+    for (d, (object, model, mesh)) in draws.enumerate() {
+        let (albedo, emission, sky) = match object {
             Some(o) => {
                 let obj = &scene.objects[o];
                 if obj.animation.is_some() {
                     return Err(Error::Usage(format!("{src}: objects[{o}] ({:?}).animation: {method} bakes static geometry only", obj.name)));
                 }
                 let m = scene.materials.get(obj.material).ok_or_else(|| Error::Usage(format!("{src}: objects[{o}]: material index out of range")))?;
-                (m.albedo, m.emission)
+                (m.albedo, m.emission, m.sky)
             }
             None => {
                 let e = emitters.get(emitter).copied().unwrap_or(Vec3::ZERO);
                 emitter += 1;
-                (Vec3::ZERO, e)
+                (Vec3::ZERO, e, false)
             }
         };
-        let mesh = &gpu.meshes[d];
-        let m: Mat4 = item.model;
+        let m: Mat4 = model;
         for t in mesh.indices.chunks_exact(3) {
             let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]).as_dvec3());
             let uv = [0, 1, 2].map(|k| mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()));
-            out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3() });
+            out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3(), sky });
             out.draw.push(d);
             out.object_space.push([0, 1, 2].map(|k| mesh.positions[t[k] as usize].to_array()));
             out.uvs.push(uv);
@@ -150,37 +166,15 @@ pub fn pack(p: &Patches) -> Atlas {
     Atlas { width, height: (y + shelf).max(1), offsets }
 }
 
-/// The light-map texels (RGBA32F, row-major): each patch's irradiance / π — what the base term
-/// multiplies by the albedo — with border patches filled from their inside neighbours.
+/// The light-map texels (RGBA32F, row-major): each patch's value (after the border passes,
+/// [`super::border`]) at its texel.
 pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec<[f32; 4]> {
     let mut out = vec![[0.0f32; 4]; (atlas.width * atlas.height) as usize];
     for (ci, c) in p.charts.iter().enumerate() {
         let (ox, oy) = atlas.offsets[ci];
-        let at = |i: usize, j: usize| c.first + j * c.width + i;
         for j in 0..c.height {
             for i in 0..c.width {
-                let k = at(i, j);
-                let v = if p.patches[k].inside() {
-                    value(k)
-                } else {
-                    // Pass 1: the mean of the inside 8-neighbours.
-                    let mut sum = DVec3::ZERO;
-                    let mut n = 0;
-                    for dj in -1i64..=1 {
-                        for di in -1i64..=1 {
-                            let (ni, nj) = (i as i64 + di, j as i64 + dj);
-                            if (di, dj) != (0, 0) && ni >= 0 && nj >= 0 && (ni as usize) < c.width && (nj as usize) < c.height && p.patches[at(ni as usize, nj as usize)].inside() {
-                                sum += value(at(ni as usize, nj as usize));
-                                n += 1;
-                            }
-                        }
-                    }
-                    if n > 0 {
-                        sum / n as f64
-                    } else {
-                        DVec3::ZERO
-                    }
-                };
+                let v = value(c.first + j * c.width + i);
                 out[((oy + j as u32) * atlas.width + ox + i as u32) as usize] = [v.x as f32, v.y as f32, v.z as f32, 1.0];
             }
         }
@@ -188,12 +182,33 @@ pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec
     out
 }
 
+/// Each triangle corner's light-map coordinate in the atlas (3 per triangle); a sky chart's
+/// triangles all read the centre of its one black texel.
+pub fn triangle_uvs(triangles: &[Triangle], p: &Patches, atlas: &Atlas) -> Vec<[f32; 2]> {
+    let mut uv = vec![[0.0f32; 2]; 3 * triangles.len()];
+    for (ci, c) in p.charts.iter().enumerate() {
+        let (ox, oy) = atlas.offsets[ci];
+        for &t in &c.triangles {
+            for (k, q) in triangles[t].p.iter().enumerate() {
+                let (s, r) = if c.sky {
+                    (ox as f64 + 0.5, oy as f64 + 0.5)
+                } else {
+                    let d = *q - c.origin;
+                    (d.dot(c.u) / p.size + ox as f64, d.dot(c.v) / p.size + oy as f64)
+                };
+                uv[3 * t + k] = [(s / atlas.width as f64) as f32, (r / atlas.height as f64) as f32];
+            }
+        }
+    }
+    uv
+}
+
 /// Bakes the light-map of `geometry`: patches, direct light, the solve, the texels.
 pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings: &Settings, content: Content, progress: &mut Progress) -> (Patches, Atlas, Vec<[f32; 4]>, solve::Report) {
     let mut p = Patches::build(&geometry.triangles, patch_size);
     let occluders = Occluders::new(&geometry.triangles);
     let direct = add_direct_light(&mut p, &occluders, scene);
-    let report = solve::solve(&mut p, &occluders, settings, progress);
+    let mut report = solve::solve(&mut p, &occluders, settings, progress);
     let atlas = pack(&p);
     let mut values: Vec<DVec3> = p
         .patches
@@ -216,6 +231,7 @@ pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings:
             values[k] = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
         }
     }
+    report.border_refused = super::border::apply(&p, &occluders, &mut values);
     let texels = texels(&p, &atlas, |k| values[k]);
     (p, atlas, texels, report)
 }

@@ -8,6 +8,7 @@
 //! shooting pass, the seed's surface-visibility matrix, sun and border pass 2,
 //! charts grouped across objects, albedo maps in the bake (the baker uses the material's albedo).
 
+pub mod border;
 pub mod form_factor;
 pub mod patches;
 pub mod solve;
@@ -46,7 +47,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes (its code has no SPIR-V to hash).
-const BAKER_VERSION: u32 = 4;
+const BAKER_VERSION: u32 = 5;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,8 +153,11 @@ impl Radiosity {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
         }
         let mut key = BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", config).with("lights", &cx.scene.lights);
-        let geometry_bytes: Vec<f64> =
-            geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64])).collect();
+        let geometry_bytes: Vec<f64> = geometry
+            .triangles
+            .iter()
+            .flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))]))
+            .collect();
         key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
         let scene = cx.scene;
         let geo = &geometry;
@@ -162,18 +166,7 @@ impl Radiosity {
             let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, progress);
             let mut out = vec![atlas.width as f32, atlas.height as f32];
             out.extend(texels.iter().flatten());
-            let mut uv = vec![[0.0f32; 2]; 3 * geo.triangles.len()];
-            for (ci, c) in patches.charts.iter().enumerate() {
-                let (ox, oy) = atlas.offsets[ci];
-                for &t in &c.triangles {
-                    for (k, p) in geo.triangles[t].p.iter().enumerate() {
-                        let d = *p - c.origin;
-                        let s = d.dot(c.u) / patches.size + ox as f64;
-                        let r = d.dot(c.v) / patches.size + oy as f64;
-                        uv[3 * t + k] = [(s / atlas.width as f64) as f32, (r / atlas.height as f64) as f32];
-                    }
-                }
-            }
+            let uv = lightmap::triangle_uvs(&geo.triangles, &patches, &atlas);
             out.extend(uv.iter().flatten());
             Ok(out)
         })?;

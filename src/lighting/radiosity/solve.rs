@@ -49,19 +49,33 @@ pub struct Report {
     /// Unshot power (Σ over channels of area × unshot radiosity) before each shot.
     pub unshot_power: Vec<f64>,
     pub rays: u64,
+    /// Border pass 2's contributions refused by the anti-bleeding ray (set by the bake).
+    pub border_refused: usize,
 }
 
-/// The static triangles as occluders.
+/// The static triangles as occluders (sky surfaces included: they are walls to everything but
+/// the sun).
 pub struct Occluders {
     tris: Vec<[Vec3; 3]>,
     bvh: Bvh,
+    /// The triangles as the baker sees them (the visibility matrix's hull test).
+    pub triangles: Vec<Triangle>,
 }
 
 impl Occluders {
     pub fn new(triangles: &[Triangle]) -> Occluders {
         let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|p| p.as_vec3())).collect();
         let bvh = Bvh::build(&tris);
-        Occluders { tris, bvh }
+        Occluders { tris, bvh, triangles: triangles.to_vec() }
+    }
+
+    /// The first triangle a ray from `a` along the unit `dir` hits: (distance, index).
+    pub fn first_hit(&self, a: DVec3, dir: DVec3) -> Option<(f64, usize)> {
+        self.bvh.closest_hit(&self.tris, a.as_vec3(), dir.as_vec3()).map(|(t, i)| (t as f64, i as usize))
+    }
+
+    pub fn has_sky(&self) -> bool {
+        self.triangles.iter().any(|t| t.sky)
     }
 
     /// Nothing between `a` and `b` (both ends excluded by a small margin).
