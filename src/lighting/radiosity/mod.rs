@@ -13,6 +13,7 @@ pub mod form_factor;
 pub mod patches;
 pub mod solve;
 pub mod tone;
+pub mod visibility;
 
 #[cfg(test)]
 mod tests;
@@ -43,6 +44,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "block", kind: ParamKind::Int },
         ParamSchema { name: "threshold", kind: ParamKind::Float },
         ParamSchema { name: "light", kind: ParamKind::String },
+        ParamSchema { name: "full_visibility", kind: ParamKind::Bool },
     ],
 };
 
@@ -77,6 +79,9 @@ impl Config {
         }
         if let Some(v) = decl.param("threshold") {
             c.settings.threshold = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| bad("threshold", "a fraction in (0, 1)", v))?;
+        }
+        if let Some(v) = decl.param("full_visibility") {
+            c.settings.full_visibility = v.as_bool().ok_or_else(|| bad("full_visibility", "true or false", v))?;
         }
         if let Some(v) = decl.param("light") {
             c.content = match v.as_str() {

@@ -1,6 +1,7 @@
 use glam::DVec3;
 
 mod border;
+mod visibility;
 
 use super::patches::{Patches, Triangle};
 use super::solve::{solve, Mode, Occluders, Settings};
