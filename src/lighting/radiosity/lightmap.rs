@@ -92,11 +92,17 @@ fn from_draws<'a>(scene: &Scene, draws: impl Iterator<Item = (Option<usize>, Mat
 }
 
 /// Adds the reflected direct light of the scene's point, spot and directional lights (shadowed)
-/// to every patch's total and unshot radiosity; returns each patch's share.
+/// to every patch's total and unshot radiosity; returns each patch's share. Directional lights
+/// are suns ([`super::sun`]) as the corrected mode treats them.
 pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Vec<DVec3> {
+    add_direct_light_in(p, occluders, scene, solve::Mode::Corrected)
+}
+
+/// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing).
+pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene, mode: solve::Mode) -> Vec<DVec3> {
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
     let eps = 1e-4 * p.size;
-    for (k, q) in p.patches.iter_mut().enumerate() {
+    for (k, q) in p.patches.iter().enumerate() {
         if !q.inside() {
             continue;
         }
@@ -114,10 +120,6 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
                     let falloff = crate::lighting::brdf::spot_falloff(outer_deg.to_radians().cos(), inner_deg.to_radians().cos(), (-l).as_vec3().dot(direction.normalize()));
                     (l, intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12), position.as_dvec3())
                 }
-                Light::Directional { direction, irradiance, .. } => {
-                    let l = -direction.as_dvec3().normalize_or_zero();
-                    (l, irradiance.as_dvec3(), x + l * 1e6)
-                }
                 _ => continue,
             };
             let cos = q.normal.dot(to_light);
@@ -126,10 +128,20 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
             }
             e += irradiance * cos;
         }
-        let b = q.albedo * e;
-        q.total += b;
-        q.unshot += b;
-        direct[k] = b;
+        direct[k] = q.albedo * e;
+    }
+    for l in &scene.lights {
+        if let Light::Directional { direction, irradiance, .. } = l {
+            let to_sun = -direction.as_dvec3().normalize_or_zero();
+            let lit = super::sun::lit_fraction(p, occluders, to_sun, mode);
+            for (k, q) in p.patches.iter().enumerate() {
+                direct[k] += q.albedo * irradiance.as_dvec3() * (q.normal.dot(to_sun).max(0.0) * lit[k]);
+            }
+        }
+    }
+    for (q, b) in p.patches.iter_mut().zip(&direct) {
+        q.total += *b;
+        q.unshot += *b;
     }
     direct
 }
@@ -207,7 +219,7 @@ pub fn triangle_uvs(triangles: &[Triangle], p: &Patches, atlas: &Atlas) -> Vec<[
 pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings: &Settings, content: Content, progress: &mut Progress) -> (Patches, Atlas, Vec<[f32; 4]>, solve::Report) {
     let mut p = Patches::build(&geometry.triangles, patch_size);
     let occluders = Occluders::new(&geometry.triangles);
-    let direct = add_direct_light(&mut p, &occluders, scene);
+    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode);
     let mut report = solve::solve(&mut p, &occluders, settings, progress);
     let atlas = pack(&p);
     let mut values: Vec<DVec3> = p

@@ -12,6 +12,7 @@ pub mod border;
 pub mod form_factor;
 pub mod patches;
 pub mod solve;
+pub mod sun;
 pub mod tone;
 pub mod visibility;
 
@@ -49,7 +50,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes (its code has no SPIR-V to hash).
-const BAKER_VERSION: u32 = 5;
+const BAKER_VERSION: u32 = 6;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]

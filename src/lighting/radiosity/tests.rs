@@ -1,6 +1,7 @@
 use glam::DVec3;
 
 mod border;
+mod sun;
 mod visibility;
 
 use super::patches::{Patches, Triangle};
