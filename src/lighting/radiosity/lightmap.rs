@@ -194,6 +194,11 @@ pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec
     out
 }
 
+/// Texels in [0, 1] as R8G8B8A8_UNORM bytes (alpha 255).
+pub fn to_rgb8(texels: &[f32]) -> Vec<u8> {
+    texels.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]].map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8).into_iter().chain([255])).collect()
+}
+
 /// Each triangle corner's light-map coordinate in the atlas (3 per triangle); a sky chart's
 /// triangles all read the centre of its one black texel.
 pub fn triangle_uvs(triangles: &[Triangle], p: &Patches, atlas: &Atlas) -> Vec<[f32; 2]> {
@@ -244,6 +249,13 @@ pub fn bake(geometry: &StaticGeometry, scene: &Scene, patch_size: f64, settings:
         }
     }
     report.border_refused = super::border::apply(&p, &occluders, &mut values);
+    if settings.mode == solve::Mode::Faithful {
+        // CaLight stores light-maps as RGB8: the border passes averaged display values, which
+        // are quantized again here, so the texels are exactly the bytes the texture holds.
+        for v in &mut values {
+            *v = (*v * 255.0).round().clamp(DVec3::ZERO, DVec3::splat(255.0)) / 255.0;
+        }
+    }
     let texels = texels(&p, &atlas, |k| values[k]);
     (p, atlas, texels, report)
 }

@@ -50,7 +50,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes (its code has no SPIR-V to hash).
-const BAKER_VERSION: u32 = 6;
+const BAKER_VERSION: u32 = 7;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,6 +129,15 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     out
 }
 
+/// The light-map's texture format: CaLight's 8-bit display values in faithful mode (the bake
+/// quantizes them, so the bytes are exact), linear radiometric floats in corrected mode.
+pub fn lightmap_format(mode: Mode) -> vk::Format {
+    match mode {
+        Mode::Faithful => vk::Format::R8G8B8A8_UNORM,
+        Mode::Corrected => vk::Format::R32G32B32A32_SFLOAT,
+    }
+}
+
 /// `LightmapVertex` of glsl/radiosity/lightmap.vert (object space: the draw's model matrix is
 /// pushed, so the depth is the one every other method computes).
 #[repr(C)]
@@ -200,8 +209,12 @@ impl Radiosity {
         }
         let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
         cx.states.forget_buffer(vertices);
-        let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", vk::Format::R32G32B32A32_SFLOAT, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
-        cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?;
+        let format = lightmap_format(config.settings.mode);
+        let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        match format {
+            vk::Format::R8G8B8A8_UNORM => cx.gpu.upload_image(lightmap, 0, &lightmap::to_rgb8(texels))?,
+            _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
+        }
         cx.states.set_image(cx.gpu, lightmap, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
         let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} light-map"), "radiosity/lightmap.vert", Some("radiosity/lightmap.frag"));

@@ -201,3 +201,24 @@ fn no_light_bleeds_through_a_thin_wall() {
         assert!(b.report.border_refused > 0, "the anti-bleeding check was never exercised");
     }
 }
+
+/// Faithful light-maps are CaLight's RGB8: every texel is a byte over 255 (what the
+/// R8G8B8A8_UNORM texture holds, bit for bit); corrected ones are linear floats.
+#[test]
+fn faithful_texels_are_bytes() {
+    use crate::backend::vk;
+    use crate::lighting::radiosity::{lightmap::to_rgb8, lightmap_format};
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/two_rooms.toml")).unwrap();
+    let b = bake_text(&text, 0.2, &faithful(1e-2));
+    let flat: Vec<f32> = b.texels.iter().flatten().copied().collect();
+    let bytes = to_rgb8(&flat);
+    let off = flat.chunks_exact(4).zip(bytes.chunks_exact(4)).map(|(t, c)| (0..3).map(|i| (t[i] - c[i] as f32 / 255.0).abs()).fold(0.0f32, f32::max)).fold(0.0f32, f32::max);
+    let levels: std::collections::BTreeSet<u8> = bytes.chunks_exact(4).map(|c| c[0]).collect();
+    eprintln!("faithful: {} distinct red bytes, largest texel-byte difference {off:e}", levels.len());
+    assert!(off < 1e-6, "a faithful texel is not a byte: {off}");
+    assert!(levels.len() > 20 && levels.contains(&0) && levels.contains(&255), "{levels:?}");
+    assert_eq!(lightmap_format(Mode::Faithful), vk::Format::R8G8B8A8_UNORM);
+    assert_eq!(lightmap_format(Mode::Corrected), vk::Format::R32G32B32A32_SFLOAT);
+    let c = bake_text(&text, 0.2, &corrected(1e-2));
+    assert!(c.texels.iter().any(|t| ((t[0] * 255.0).round() - t[0] * 255.0).abs() > 1e-3), "corrected texels are floats");
+}
