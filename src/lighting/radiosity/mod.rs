@@ -5,8 +5,8 @@
 //!
 //! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
 //! light-map ([`lightmap`] bakes it through the bake stage's cache). Not yet (issue 12): the GPU
-//! shooting pass, the seed's surface-visibility matrix, sun and border pass 2,
-//! charts grouped across objects, albedo maps in the bake (the baker uses the material's albedo).
+//! shooting pass, point lights through a PVS, charts grouped across objects, albedo maps in the
+//! bake (the baker uses the material's albedo).
 
 pub mod border;
 pub mod form_factor;
