@@ -97,3 +97,31 @@ fn each_configuration_is_judged_against_what_it_models() {
     assert_eq!(ReferenceKind::Bounces(3).combine(ReferenceKind::Indirect(8)), ReferenceKind::Bounces(8));
     assert_eq!(ReferenceKind::Indirect(2).combine(ReferenceKind::Indirect(5)), ReferenceKind::Indirect(5));
 }
+
+/// scenes/two_rooms.toml on the GPU, in both modes (faithful: the light-map as RGB8 bytes,
+/// corrected: floats): seen from room B, looking at the 5 cm wall and the floor along it, every
+/// pixel is exactly 0 — no texel of room B holds light and bilinear filtering reads none from
+/// room A; seen from room A the same light-map is lit.
+#[test]
+fn no_light_bleeds_into_the_dark_room_on_screen() {
+    let text = std::fs::read_to_string("scenes/two_rooms.toml").unwrap();
+    for mode in ["faithful", "corrected"] {
+        let methods = format!(r#"methods = [{{ name = "radiosity", mode = "{mode}", patch_size = 0.2, threshold = 1e-2 }}]"#);
+        let text = text.lines().map(|l| if l.starts_with("methods") { methods.as_str() } else { l }).collect::<Vec<_>>().join("\n");
+        let scene = Scene::from_str(&text, "two_rooms.toml", std::path::Path::new("scenes")).unwrap_or_else(|e| panic!("{e}"));
+        let mut r = Renderer::new(common::test_gpu(), scene, None, (48, 32), 1).unwrap_or_else(|e| panic!("{e}"));
+        let mut look = |from: [f32; 3], to: [f32; 3]| {
+            let mut cam = r.scene.camera.clone();
+            cam.position = from.into();
+            cam.target = to.into();
+            let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+            img.pixels.iter().map(|p| p[0].max(p[1]).max(p[2])).fold(0.0f32, f32::max)
+        };
+        let dark = look([1.6, 1.2, 1.6], [0.05, 0.2, -1.2]);
+        let lit = look([-0.5, 1.2, 1.6], [-2.5, 0.5, -1.0]);
+        common::assert_clean(&r.gpu);
+        eprintln!("{mode}: brightest pixel in room B {dark}, in room A {lit}");
+        assert_eq!(dark, 0.0, "{mode}: light on screen in room B");
+        assert!(lit > 0.05, "{mode}: room A is lit: {lit}");
+    }
+}

@@ -37,7 +37,7 @@ fn closed_box(le: f64, rho: f64) -> Vec<Triangle> {
     let mut out = Vec::new();
     for (object, (o, u, v)) in faces.into_iter().enumerate() {
         for p in [[o, o + u, o + u + v], [o, o + u + v, o + v]] {
-            out.push(Triangle { p, object, albedo: DVec3::splat(rho), emission: DVec3::splat(le) });
+            out.push(Triangle { p, object, albedo: DVec3::splat(rho), emission: DVec3::splat(le), sky: false });
         }
     }
     out
@@ -65,15 +65,22 @@ fn the_gpu_shooter_closes_the_furnace() {
     assert!(*log.last().unwrap() <= 1e-4 * log[0] * 1.0001);
 }
 
-/// The Cornell box's static triangles, patched at `size`, lit by its quad light.
-fn cornell(size: f64) -> (StaticGeometry, Patches) {
-    let scene = Scene::from_file("scenes/cornell_radiosity.toml").unwrap();
+/// A scene's static triangles patched at `size`, and each scene draw's object name.
+fn patched(path: &str, size: f64) -> (Scene, StaticGeometry, Patches, Vec<String>) {
+    let scene = Scene::from_file(path).unwrap();
     let mut device = common::test_gpu();
     let mut states = ResourceStates::default();
     let env = penumbra::environment::EnvironmentMap::of_scene(&scene).unwrap();
     let scene_gpu = penumbra::gpu_scene::SceneGpu::upload(&mut device, &mut states, &scene, &env).unwrap();
     let geometry = lightmap::static_geometry(&scene, &scene_gpu, "radiosity").unwrap();
     let p = Patches::build(&geometry.triangles, size);
+    let names = scene_gpu.draws.iter().map(|d| d.object.map_or(String::new(), |o| scene.objects[o].name.clone())).collect();
+    (scene, geometry, p, names)
+}
+
+/// The Cornell box's static triangles, patched at `size`, lit by its quad light.
+fn cornell(size: f64) -> (StaticGeometry, Patches) {
+    let (_, geometry, p, _) = patched("scenes/cornell_radiosity.toml", size);
     (geometry, p)
 }
 
@@ -108,4 +115,22 @@ fn gpu_and_cpu_shooters_agree_on_the_cornell_box() {
     eprintln!("faithful: relative RMS difference {faithful:.2e}; shots cpu {} gpu {}", c.shots, g.shots);
     // Measured 5.1e-4, from the different draws of candidate shooters.
     assert!(faithful < 5e-3, "faithful: {faithful}");
+}
+
+/// scenes/two_rooms.toml: a point light and a quad light in room A, a 5 cm wall, room B dark.
+/// Shot on the GPU, no patch of room B receives anything, in both modes, while room A is lit.
+#[test]
+fn the_gpu_shooter_keeps_the_dark_room_dark() {
+    for mode in [Mode::Corrected, Mode::Faithful] {
+        let (scene, geometry, mut p, names) = patched("scenes/two_rooms.toml", 0.2);
+        let occluders = Occluders::new(&geometry.triangles);
+        lightmap::add_direct_light_in(&mut p, &occluders, &scene, mode);
+        let settings = Settings { mode, threshold: 1e-3, ..Settings::default() };
+        gpu_solve(&mut p, &geometry.triangles, &settings);
+        let room = |prefix: &str| p.patches.iter().filter(|q| q.inside() && names[p.charts[q.chart].object].starts_with(prefix)).map(|q| q.total.max_element()).fold(0.0f64, f64::max);
+        let (a, b) = (room("A "), room("B "));
+        eprintln!("{mode:?}: brightest patch of room A {a:.3}, of room B {b}");
+        assert!(a > 0.1, "{mode:?}: room A is lit ({a})");
+        assert_eq!(b, 0.0, "{mode:?}: light reached room B");
+    }
 }

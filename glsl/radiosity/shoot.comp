@@ -11,6 +11,15 @@ layout(set = 0, binding = 0) readonly buffer Patches { Patch items[]; } patches;
 layout(set = 0, binding = 1) buffer State { Radiosity items[]; } radiosity;
 layout(set = 0, binding = 4) readonly buffer Shots { Shot shot; } shots;
 
+// The surface-visibility matrix (src/lighting/radiosity/visibility.rs): 2 bits per ordered
+// chart pair, NONE 0 (nothing passes), PARTIAL 1 (a ray decides), FULL 2 (no occluder: no ray).
+layout(set = 0, binding = 12) readonly buffer Visibility { uint items[]; } visibility;
+
+uint chart_visibility(uint i, uint j) {
+    uint k = i * push.chart_count + j;
+    return (visibility.items[k >> 4u] >> (2u * (k & 15u))) & 3u;
+}
+
 // Visibility rays cut short by the device, counted for the host (which refuses the result).
 layout(set = 0, binding = 10) buffer Status { uint cut_rays; } status;
 
@@ -98,6 +107,10 @@ void main() {
         radiosity.items[r].unshot = vec4(0.0);
         return;
     }
+    uint vis = chart_visibility(shot.shots.y, receiver.ids.x);
+    if (vis == 0u) {
+        return;
+    }
     vec3 normal = shot.normal.xyz;
     vec3 x = receiver.centre.xyz;
     // Shooters emit toward their normal only; a chart never lights itself (it is planar).
@@ -118,7 +131,7 @@ void main() {
     vec3 to = shot.centre.xyz + normal * push.epsilon;
     vec3 d = to - from;
     float len = length(d);
-    if (len > 0.0) {
+    if (len > 0.0 && vis != 2u) {
         float t_max = len * (1.0 - 1e-4) - 1e-5;
         bool complete;
         bool blocked = t_max > 0.0 && occluded(from, d / len, t_max, complete);

@@ -213,7 +213,7 @@ pub fn raster_lights(scene: &Scene) -> Vec<GpuLight> {
 
 /// Geometry for the area lights, so every method sees them as emissive surfaces (one-sided for
 /// quads, whose back does not emit).
-fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
+pub(crate) fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
     use crate::scene::generators;
     let mut out = Vec::new();
     for l in &scene.lights {

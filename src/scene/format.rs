@@ -121,7 +121,7 @@ fn read_camera(f: &Field) -> Result<Camera, SceneError> {
 
 fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError> {
     let t = f.table()?;
-    t.allow(&["name", "albedo", "specular", "exponent", "albedo_map", "normal_map", "specular_map", "transmittance", "emission", "opacity"])?;
+    t.allow(&["name", "albedo", "specular", "exponent", "albedo_map", "normal_map", "specular_map", "transmittance", "emission", "opacity", "sky"])?;
     let name_f = t.require("name", "a unique material name")?;
     let name = name(&name_f)?;
     if earlier.iter().any(|m| m.name == name) {
@@ -146,6 +146,7 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
         transmittance,
         emission: opt(t.get("emission"), |f| f.colour())?.unwrap_or(Vec3::ZERO),
         opacity: opt(t.get("opacity"), |f| f.number_where("a number in (0, 1]", |x| x > 0.0 && x <= 1.0))?.unwrap_or(1.0),
+        sky: opt(t.get("sky"), |f| f.boolean())?.unwrap_or(false),
     })
 }
 

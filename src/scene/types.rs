@@ -96,6 +96,9 @@ pub struct Material {
     /// Coverage α in (0, 1]: 1 is opaque; below 1 the surface is translucent, seen as
     /// `α·surface + (1 − α)·behind` (a pane of glass without refraction).
     pub opacity: f32,
+    /// A sky surface: `radiosity` neither lights nor patches it, and its sun counts only
+    /// where a ray toward the sun reaches one (seed 000 §3). Other methods draw it as usual.
+    pub sky: bool,
 }
 
 impl Material {
@@ -116,6 +119,7 @@ impl Material {
             transmittance: Vec3::ZERO,
             emission: Vec3::ZERO,
             opacity: 1.0,
+            sky: false,
         }
     }
 }

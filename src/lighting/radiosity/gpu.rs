@@ -14,6 +14,7 @@ use glam::Vec3;
 
 use super::patches::{Patches, Triangle};
 use super::solve::{self, Mode, Report, Settings};
+use super::visibility::Matrix;
 use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -168,6 +169,17 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         .map(|(k, q)| GpuPatch { centre: v4(q.centre, q.area as f32), normal: v4(q.normal, 0.0), albedo: v4(q.albedo, 0.0), ids: [q.chart as u32, block_of[k], 0, 0] })
         .collect();
     let state: Vec<GpuRadiosity> = p.patches.iter().map(|q| GpuRadiosity { total: v4(q.total, 0.0), unshot: v4(q.unshot, 0.0) }).collect();
+    // The CPU solve's visibility matrix, 2 bits per ordered chart pair (i·charts + j).
+    let matrix = Matrix::build(triangles, p, settings.full_visibility);
+    report.visibility = matrix.counts();
+    let n = p.charts.len();
+    let mut visibility = vec![0u32; (n * n).div_ceil(16)];
+    for i in 0..n {
+        for j in 0..n {
+            let k = i * n + j;
+            visibility[k / 16] |= (matrix.get(i, j) as u32) << (2 * (k % 16));
+        }
+    }
     let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
     let bvh = Bvh::build(&tris);
     let traced: Vec<TracedTriangle> = bvh
@@ -188,6 +200,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
     let power_buf = res.buffer(gpu, "radiosity block power", none, &vec![0u8; 4 * blocks.len()])?;
     let nodes_buf = res.buffer(gpu, "radiosity bvh nodes", none, bytemuck::cast_slice(&bvh.nodes))?;
     let triangles_buf = res.buffer(gpu, "radiosity bvh triangles", none, bytemuck::cast_slice(&traced))?;
+    let visibility_buf = res.buffer(gpu, "radiosity visibility matrix", none, bytemuck::cast_slice(&visibility))?;
     let skips_buf = res.buffer(gpu, "radiosity bvh skip links", none, bytemuck::cast_slice(&bvh.skip_links()))?;
     let storage_host = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
     let shot_buf = res.host_buffer(gpu, "radiosity shot", std::mem::size_of::<GpuShot>() as u64, storage_host)?;
@@ -278,6 +291,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
                 .buffer(nodes_buf, read, Some("nodes"))
                 .buffer(triangles_buf, read, Some("triangles"))
                 .buffer(skips_buf, read, Some("skips"))
+                .buffer(visibility_buf, read, Some("visibility"))
                 .buffer(status_buf, write, Some("status"))
                 .record(move |ctx| {
                     ctx.rec.bind_pipeline(shoot_pipeline)?;
@@ -316,9 +330,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
     };
     report.shots = shot.shots[0] as usize;
     report.full_searches = shot.state[2] as usize;
-    // Every inside receiver of another chart is considered per shot (rays are cast only where
-    // the form factor is positive; the GPU does not count them one by one).
-    report.rays = 0;
+    // The GPU does not count its rays one by one (report.rays and rays_saved stay 0).
 
     let state_bytes = std::mem::size_of_val(state.as_slice());
     let mut graph = RenderGraph::new();

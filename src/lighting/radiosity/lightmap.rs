@@ -1,7 +1,7 @@
 //! From a scene to a baked light-map: the static triangles the baker sees, direct light from the
 //! scene's punctual lights as initial energy, the solve, and the atlas (charts shelf-packed with
-//! one-texel gaps, border patches filled from their inside neighbours — the seed's pass 1 — so
-//! bilinear filtering never reads black at a polygon's edge).
+//! one-texel gaps, border patches filled by the seed's passes 1 and 2, [`super::border`], so
+//! bilinear filtering never reads black at a polygon's edge nor steps at a seam).
 
 use glam::{DVec3, Mat4, Vec3};
 
@@ -41,6 +41,23 @@ pub struct StaticGeometry {
 /// The scene's draws (objects and area-light emitters) in world space; animated objects are set
 /// apart as entities. Sphere lights are refused: sphere emitters are not patched yet.
 pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<StaticGeometry> {
+    from_draws(scene, gpu.draws.iter().zip(&gpu.meshes).map(|(item, mesh)| (item.object, item.model, mesh)), method)
+}
+
+/// [`static_geometry`] without a GPU: the scene's meshes loaded on the CPU, in the order the
+/// scene's upload draws them (objects, then area-light emitters). For tests and tools.
+pub fn scene_geometry(scene: &Scene, method: &str) -> Result<StaticGeometry> {
+    let mut meshes = Vec::new();
+    for o in &scene.objects {
+        meshes.push((Some(meshes.len()), o.transform, o.load_mesh(std::path::Path::new(".")).map_err(|e| Error::Usage(e.to_string()))?));
+    }
+    for (_, mesh, _) in crate::gpu_scene::emitter_meshes(scene) {
+        meshes.push((None, Mat4::IDENTITY, mesh));
+    }
+    from_draws(scene, meshes.iter().map(|(o, m, mesh)| (*o, *m, mesh)), method)
+}
+
+fn from_draws<'a>(scene: &Scene, draws: impl Iterator<Item = (Option<usize>, Mat4, &'a crate::scene::Mesh)>, method: &str) -> Result<StaticGeometry> {
     let src = &scene.source;
     let mut emitters = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
@@ -52,8 +69,8 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
     }
     let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), object_space: Vec::new(), uvs: Vec::new(), entities: Vec::new() };
     let mut emitter = 0;
-    for (d, item) in gpu.draws.iter().enumerate() {
-        let (albedo, emission) = match item.object {
+    for (d, (object, model, mesh)) in draws.enumerate() {
+        let (albedo, emission, sky) = match object {
             Some(o) => {
                 let obj = &scene.objects[o];
                 if obj.animation.is_some() {
@@ -67,20 +84,19 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
                     Some(path) => mean_albedo(path).map_err(|e| Error::Usage(format!("{src}: material {:?}: albedo_map: cannot load {}: {e}", m.name, path.display())))?,
                     None => Vec3::ONE,
                 };
-                (m.albedo * map_mean, m.emission)
+                (m.albedo * map_mean, m.emission, m.sky)
             }
             None => {
                 let e = emitters.get(emitter).copied().unwrap_or(Vec3::ZERO);
                 emitter += 1;
-                (Vec3::ZERO, e)
+                (Vec3::ZERO, e, false)
             }
         };
-        let mesh = &gpu.meshes[d];
-        let m: Mat4 = item.model;
+        let m: Mat4 = model;
         for t in mesh.indices.chunks_exact(3) {
             let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]).as_dvec3());
             let uv = [0, 1, 2].map(|k| mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()));
-            out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3() });
+            out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3(), sky });
             out.draw.push(d);
             out.object_space.push([0, 1, 2].map(|k| mesh.positions[t[k] as usize].to_array()));
             out.uvs.push(uv);
@@ -101,11 +117,17 @@ fn mean_albedo(path: &std::path::Path) -> std::result::Result<Vec3, String> {
 }
 
 /// Adds the reflected direct light of the scene's point, spot and directional lights (shadowed)
-/// to every patch's total and unshot radiosity; returns each patch's share.
+/// to every patch's total and unshot radiosity; returns each patch's share. Directional lights
+/// are suns ([`super::sun`]) as the corrected mode treats them.
 pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Vec<DVec3> {
+    add_direct_light_in(p, occluders, scene, solve::Mode::Corrected)
+}
+
+/// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing).
+pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene, mode: solve::Mode) -> Vec<DVec3> {
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
     let eps = 1e-4 * p.size;
-    for (k, q) in p.patches.iter_mut().enumerate() {
+    for (k, q) in p.patches.iter().enumerate() {
         if !q.inside() {
             continue;
         }
@@ -123,10 +145,6 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
                     let falloff = crate::lighting::brdf::spot_falloff(outer_deg.to_radians().cos(), inner_deg.to_radians().cos(), (-l).as_vec3().dot(direction.normalize()));
                     (l, intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12), position.as_dvec3())
                 }
-                Light::Directional { direction, irradiance, .. } => {
-                    let l = -direction.as_dvec3().normalize_or_zero();
-                    (l, irradiance.as_dvec3(), x + l * 1e6)
-                }
                 _ => continue,
             };
             let cos = q.normal.dot(to_light);
@@ -135,10 +153,20 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
             }
             e += irradiance * cos;
         }
-        let b = q.albedo * e;
-        q.total += b;
-        q.unshot += b;
-        direct[k] = b;
+        direct[k] = q.albedo * e;
+    }
+    for l in &scene.lights {
+        if let Light::Directional { direction, irradiance, .. } = l {
+            let to_sun = -direction.as_dvec3().normalize_or_zero();
+            let lit = super::sun::lit_fraction(p, occluders, to_sun, mode);
+            for (k, q) in p.patches.iter().enumerate() {
+                direct[k] += q.albedo * irradiance.as_dvec3() * (q.normal.dot(to_sun).max(0.0) * lit[k]);
+            }
+        }
+    }
+    for (q, b) in p.patches.iter_mut().zip(&direct) {
+        q.total += *b;
+        q.unshot += *b;
     }
     direct
 }
@@ -175,37 +203,15 @@ pub fn pack(p: &Patches) -> Atlas {
     Atlas { width, height: (y + shelf).max(1), offsets }
 }
 
-/// The light-map texels (RGBA32F, row-major): each patch's irradiance / π — what the base term
-/// multiplies by the albedo — with border patches filled from their inside neighbours.
+/// The light-map texels (RGBA32F, row-major): each patch's value (after the border passes,
+/// [`super::border`]) at its texel.
 pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec<[f32; 4]> {
     let mut out = vec![[0.0f32; 4]; (atlas.width * atlas.height) as usize];
     for (ci, c) in p.charts.iter().enumerate() {
         let (ox, oy) = atlas.offsets[ci];
-        let at = |i: usize, j: usize| c.first + j * c.width + i;
         for j in 0..c.height {
             for i in 0..c.width {
-                let k = at(i, j);
-                let v = if p.patches[k].inside() {
-                    value(k)
-                } else {
-                    // Pass 1: the mean of the inside 8-neighbours.
-                    let mut sum = DVec3::ZERO;
-                    let mut n = 0;
-                    for dj in -1i64..=1 {
-                        for di in -1i64..=1 {
-                            let (ni, nj) = (i as i64 + di, j as i64 + dj);
-                            if (di, dj) != (0, 0) && ni >= 0 && nj >= 0 && (ni as usize) < c.width && (nj as usize) < c.height && p.patches[at(ni as usize, nj as usize)].inside() {
-                                sum += value(at(ni as usize, nj as usize));
-                                n += 1;
-                            }
-                        }
-                    }
-                    if n > 0 {
-                        sum / n as f64
-                    } else {
-                        DVec3::ZERO
-                    }
-                };
+                let v = value(c.first + j * c.width + i);
                 out[((oy + j as u32) * atlas.width + ox + i as u32) as usize] = [v.x as f32, v.y as f32, v.z as f32, 1.0];
             }
         }
@@ -217,6 +223,32 @@ pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec
 pub enum Shooter<'a> {
     Cpu,
     Gpu(&'a mut Gpu, &'a ShaderLibrary),
+}
+
+/// Texels in [0, 1] as R8G8B8A8_UNORM bytes (alpha 255).
+pub fn to_rgb8(texels: &[f32]) -> Vec<u8> {
+    texels.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]].map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8).into_iter().chain([255])).collect()
+}
+
+/// Each triangle corner's light-map coordinate in the atlas (3 per triangle); a sky chart's
+/// triangles all read the centre of its one black texel.
+pub fn triangle_uvs(triangles: &[Triangle], p: &Patches, atlas: &Atlas) -> Vec<[f32; 2]> {
+    let mut uv = vec![[0.0f32; 2]; 3 * triangles.len()];
+    for (ci, c) in p.charts.iter().enumerate() {
+        let (ox, oy) = atlas.offsets[ci];
+        for &t in &c.triangles {
+            for (k, q) in triangles[t].p.iter().enumerate() {
+                let (s, r) = if c.sky {
+                    (ox as f64 + 0.5, oy as f64 + 0.5)
+                } else {
+                    let d = *q - c.origin;
+                    (d.dot(c.u) / p.size + ox as f64, d.dot(c.v) / p.size + oy as f64)
+                };
+                uv[3 * t + k] = [(s / atlas.width as f64) as f32, (r / atlas.height as f64) as f32];
+            }
+        }
+    }
+    uv
 }
 
 /// Bakes the light-map of `geometry`: patches, direct light, the solve, the texels.
@@ -231,8 +263,8 @@ pub fn bake(
 ) -> Result<(Patches, Atlas, Vec<[f32; 4]>, solve::Report)> {
     let mut p = Patches::build(&geometry.triangles, patch_size);
     let occluders = Occluders::new(&geometry.triangles);
-    let direct = add_direct_light(&mut p, &occluders, scene);
-    let report = match shooter {
+    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode);
+    let mut report = match shooter {
         Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),
         Shooter::Gpu(gpu, shaders) => super::gpu::solve(gpu, shaders, &mut p, &geometry.triangles, settings, progress)?,
     };
@@ -256,6 +288,14 @@ pub fn bake(
         let mapped = super::tone::reproduce(&inside.iter().map(|&k| values[k]).collect::<Vec<_>>());
         for (&k, c) in inside.iter().zip(mapped) {
             values[k] = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
+        }
+    }
+    report.border_refused = super::border::apply(&p, &occluders, &mut values);
+    if settings.mode == solve::Mode::Faithful {
+        // CaLight stores light-maps as RGB8: the border passes averaged display values, which
+        // are quantized again here, so the texels are exactly the bytes the texture holds.
+        for v in &mut values {
+            *v = (*v * 255.0).round().clamp(DVec3::ZERO, DVec3::splat(255.0)) / 255.0;
         }
     }
     let texels = texels(&p, &atlas, |k| values[k]);

@@ -5,14 +5,17 @@
 //!
 //! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
 //! light-map ([`lightmap`] bakes it through the bake stage's cache). Not yet (issue 12): the GPU
-//! shooting pass, the seed's surface-visibility matrix, sun and border pass 2,
-//! charts grouped across objects, albedo maps in the bake (the baker uses the material's albedo).
+//! shooting pass, point lights through a PVS, charts grouped across objects, albedo maps in the
+//! bake (the baker uses the material's albedo).
 
+pub mod border;
 pub mod form_factor;
 pub mod gpu;
 pub mod patches;
 pub mod solve;
+pub mod sun;
 pub mod tone;
+pub mod visibility;
 
 #[cfg(test)]
 mod tests;
@@ -44,12 +47,13 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "threshold", kind: ParamKind::Float },
         ParamSchema { name: "light", kind: ParamKind::String },
         ParamSchema { name: "baker", kind: ParamKind::String },
+        ParamSchema { name: "full_visibility", kind: ParamKind::Bool },
     ],
 };
 
 /// Bumped whenever the CPU baker's output for the same inputs changes (the GPU shooter's SPIR-V is
 /// hashed into the key).
-const BAKER_VERSION: u32 = 5;
+const BAKER_VERSION: u32 = 8;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,6 +86,9 @@ impl Config {
         }
         if let Some(v) = decl.param("threshold") {
             c.settings.threshold = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| bad("threshold", "a fraction in (0, 1)", v))?;
+        }
+        if let Some(v) = decl.param("full_visibility") {
+            c.settings.full_visibility = v.as_bool().ok_or_else(|| bad("full_visibility", "true or false", v))?;
         }
         if let Some(v) = decl.param("light") {
             c.content = match v.as_str() {
@@ -139,6 +146,15 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     out
 }
 
+/// The light-map's texture format: CaLight's 8-bit display values in faithful mode (the bake
+/// quantizes them, so the bytes are exact), linear radiometric floats in corrected mode.
+pub fn lightmap_format(mode: Mode) -> vk::Format {
+    match mode {
+        Mode::Faithful => vk::Format::R8G8B8A8_UNORM,
+        Mode::Corrected => vk::Format::R32G32B32A32_SFLOAT,
+    }
+}
+
 /// `LightmapVertex` of glsl/radiosity/lightmap.vert (object space: the draw's model matrix is
 /// pushed, so the depth is the one every other method computes).
 #[repr(C)]
@@ -172,8 +188,11 @@ impl Radiosity {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
         }
         let mut key = BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", config).with("lights", &cx.scene.lights).with_shaders("radiosity/");
-        let geometry_bytes: Vec<f64> =
-            geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64])).collect();
+        let geometry_bytes: Vec<f64> = geometry
+            .triangles
+            .iter()
+            .flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))]))
+            .collect();
         key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
         let scene = cx.scene;
         let geo = &geometry;
@@ -185,18 +204,7 @@ impl Radiosity {
             let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, shooter, progress)?;
             let mut out = vec![atlas.width as f32, atlas.height as f32];
             out.extend(texels.iter().flatten());
-            let mut uv = vec![[0.0f32; 2]; 3 * geo.triangles.len()];
-            for (ci, c) in patches.charts.iter().enumerate() {
-                let (ox, oy) = atlas.offsets[ci];
-                for &t in &c.triangles {
-                    for (k, p) in geo.triangles[t].p.iter().enumerate() {
-                        let d = *p - c.origin;
-                        let s = d.dot(c.u) / patches.size + ox as f64;
-                        let r = d.dot(c.v) / patches.size + oy as f64;
-                        uv[3 * t + k] = [(s / atlas.width as f64) as f32, (r / atlas.height as f64) as f32];
-                    }
-                }
-            }
+            let uv = lightmap::triangle_uvs(&geo.triangles, &patches, &atlas);
             out.extend(uv.iter().flatten());
             Ok(out)
         })?;
@@ -239,8 +247,12 @@ impl Radiosity {
         let animations = draws.iter().map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation.clone())).collect();
         let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
         cx.states.forget_buffer(vertices);
-        let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", vk::Format::R32G32B32A32_SFLOAT, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
-        cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?;
+        let format = lightmap_format(config.settings.mode);
+        let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        match format {
+            vk::Format::R8G8B8A8_UNORM => cx.gpu.upload_image(lightmap, 0, &lightmap::to_rgb8(texels))?,
+            _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
+        }
         cx.states.set_image(cx.gpu, lightmap, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
         let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} light-map"), "radiosity/lightmap.vert", Some("radiosity/lightmap.frag"));

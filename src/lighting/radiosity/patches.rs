@@ -1,6 +1,8 @@
 //! Patches (seed 000 §3, digest §1.2 step B): static triangles grouped into planar charts, each
 //! chart covered by a regular square grid of patches — one patch per light-map texel — with a
-//! one-patch border frame for bilinear filtering.
+//! one-patch border frame for bilinear filtering. Grids are aligned to the world origin (as
+//! CaLight's are), so the grids of coplanar charts overlap cell for cell, or not at all: border
+//! pass 2 ([`super::border`]) matches them up by index.
 
 use glam::{DVec2, DVec3};
 
@@ -14,6 +16,9 @@ pub struct Triangle {
     pub albedo: DVec3,
     /// Emitted radiance, RGB (W/(m²·sr)); emits toward its normal only.
     pub emission: DVec3,
+    /// A sky surface (the material's `sky` flag): it occludes, is never lit and never shoots,
+    /// and the sun reaches what sees it (digest §1.2 steps A and C).
+    pub sky: bool,
 }
 
 impl Triangle {
@@ -40,6 +45,11 @@ pub struct Chart {
     /// First patch in [`Patches::patches`] (row-major).
     pub first: usize,
     pub triangles: Vec<usize>,
+    /// The world grid's index of patch (0, 0): `origin = n·d + cell.0·size·u + cell.1·size·v`,
+    /// so coplanar charts' patches (i, j) and (i', j') coincide when their cell indices do.
+    pub cell: (i64, i64),
+    /// A sky chart: a single black texel, no patch inside.
+    pub sky: bool,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -49,6 +59,8 @@ pub struct Patch {
     pub normal: DVec3,
     /// The area of the chart's polygon inside the patch (0 for border patches).
     pub area: f64,
+    /// The fraction of the patch's sub-samples inside the polygon: 1 INNER, 0 OUTER, else PARTIAL.
+    pub coverage: f64,
     pub albedo: DVec3,
     /// Emitted radiosity π·L_e.
     pub emission: DVec3,
@@ -93,6 +105,7 @@ impl Patches {
                     && (c.normal.dot(t.p[0]) - c.normal.dot(tc.p[0])).abs() < 1e-5 * scale
                     && (tc.albedo - t.albedo).abs().max_element() < 1e-9
                     && (tc.emission - t.emission).abs().max_element() < 1e-9
+                    && tc.sky == t.sky
             });
             match same {
                 Some(c) => c.triangles.push(ti),
@@ -101,15 +114,17 @@ impl Patches {
                     let u = helper.cross(n).normalize();
                     let v = n.cross(u);
                     let _ = d;
-                    charts.push(Chart { object: t.object, normal: n, origin: DVec3::ZERO, u, v, width: 0, height: 0, first: 0, triangles: vec![ti] });
+                    charts.push(Chart { object: t.object, normal: n, origin: DVec3::ZERO, u, v, width: 0, height: 0, first: 0, triangles: vec![ti], cell: (0, 0), sky: t.sky });
                 }
             }
         }
         let mut patches = Vec::new();
         for (ci, c) in charts.iter_mut().enumerate() {
             let t0 = &triangles[c.triangles[0]];
-            let plane_point = t0.p[0];
-            let flat = |p: DVec3| DVec2::new((p - plane_point).dot(c.u), (p - plane_point).dot(c.v));
+            let plane = c.normal * c.normal.dot(t0.p[0]);
+            // Coordinates from the world origin's projection, so that every chart of a plane
+            // shares one grid.
+            let flat = |p: DVec3| DVec2::new(p.dot(c.u), p.dot(c.v));
             let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
             for &ti in &c.triangles {
                 for p in triangles[ti].p {
@@ -117,28 +132,54 @@ impl Patches {
                     hi = hi.max(flat(p));
                 }
             }
-            let cells = ((hi - lo) / size).ceil().max(DVec2::ONE);
+            c.origin = plane;
+            c.first = patches.len();
+            if c.sky {
+                // Sky is not patched: one black texel that its triangles all map to.
+                c.width = 1;
+                c.height = 1;
+                c.origin = plane + c.u * lo.x + c.v * lo.y;
+                patches.push(Patch { chart: ci, centre: c.origin, normal: c.normal, ..Patch::default() });
+                continue;
+            }
+            // Snap outward to the world grid (a vertex on a grid line within 1e-9 of a cell stays on it).
+            let lo_cell = (lo / size + 1e-9).floor();
+            let hi_cell = (hi / size - 1e-9).ceil();
+            let cells = (hi_cell - lo_cell).max(DVec2::ONE);
+            let lo = lo_cell * size;
             c.width = cells.x as usize + 2;
             c.height = cells.y as usize + 2;
             // One border patch on every side.
-            c.origin = plane_point + c.u * (lo.x - size) + c.v * (lo.y - size);
-            c.first = patches.len();
+            c.cell = (lo_cell.x as i64 - 1, lo_cell.y as i64 - 1);
+            c.origin = plane + c.u * (lo.x - size) + c.v * (lo.y - size);
             let tris2d: Vec<[DVec2; 3]> = c.triangles.iter().map(|&ti| triangles[ti].p.map(flat)).collect();
             for j in 0..c.height {
                 for i in 0..c.width {
                     let corner = DVec2::new(lo.x + (i as f64 - 1.0) * size, lo.y + (j as f64 - 1.0) * size);
-                    let mut covered = 0usize;
+                    let (mut covered, mut sum) = (0usize, DVec2::ZERO);
                     for sj in 0..COVERAGE_SAMPLES {
                         for si in 0..COVERAGE_SAMPLES {
                             let q = corner + DVec2::new((si as f64 + 0.5) / COVERAGE_SAMPLES as f64, (sj as f64 + 0.5) / COVERAGE_SAMPLES as f64) * size;
-                            covered += usize::from(tris2d.iter().any(|t| inside_triangle(q, t)));
+                            if tris2d.iter().any(|t| inside_triangle(q, t)) {
+                                covered += 1;
+                                sum += q;
+                            }
                         }
                     }
-                    let area = size * size * covered as f64 / (COVERAGE_SAMPLES * COVERAGE_SAMPLES) as f64;
-                    let centre = c.origin + c.u * ((i as f64 + 0.5) * size) + c.v * ((j as f64 + 0.5) * size);
+                    let coverage = covered as f64 / (COVERAGE_SAMPLES * COVERAGE_SAMPLES) as f64;
+                    let area = size * size * coverage;
+                    let mut centre = c.origin + c.u * ((i as f64 + 0.5) * size) + c.v * ((j as f64 + 0.5) * size);
+                    if covered > 0 && coverage < 1.0 {
+                        // A partial patch samples at the centroid of its covered part: its cell
+                        // centre may lie beyond a wall the polygon ends at (a light leak), and
+                        // every sample inside the polygon keeps shots inside the pair's convex
+                        // hull (the visibility matrix's FULL relies on it).
+                        let m = sum / covered as f64 - corner;
+                        centre = c.origin + c.u * (i as f64 * size + m.x) + c.v * (j as f64 * size + m.y);
+                    }
                     let emission = t0.emission * std::f64::consts::PI;
                     let e = if area > 0.0 { emission } else { DVec3::ZERO };
-                    patches.push(Patch { chart: ci, centre, normal: c.normal, area, albedo: t0.albedo, emission: e, total: e, unshot: e });
+                    patches.push(Patch { chart: ci, centre, normal: c.normal, area, coverage, albedo: t0.albedo, emission: e, total: e, unshot: e });
                 }
             }
             // The sub-sampled coverage is coarse for a polygon smaller than a few patches (a
@@ -161,7 +202,7 @@ impl Patches {
     }
 }
 
-fn inside_triangle(q: DVec2, t: &[DVec2; 3]) -> bool {
+pub(super) fn inside_triangle(q: DVec2, t: &[DVec2; 3]) -> bool {
     let cross = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
     let (d0, d1, d2) = (cross(t[0], t[1], q), cross(t[1], t[2], q), cross(t[2], t[0], q));
     let neg = d0 < 0.0 || d1 < 0.0 || d2 < 0.0;

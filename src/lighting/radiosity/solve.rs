@@ -11,6 +11,7 @@ use glam::{DVec3, Vec3};
 
 use super::form_factor;
 use super::patches::{Patches, Triangle};
+use super::visibility::{Matrix, Vis};
 use crate::progress::Progress;
 use crate::reference::bvh::Bvh;
 
@@ -32,11 +33,14 @@ pub struct Settings {
     pub max_shots: usize,
     /// The seed's random block samples per chart when choosing a shooter (faithful mode).
     pub samples_per_chart: usize,
+    /// Let the visibility matrix mark pairs FULL, whose rays are skipped (false: CaLight's
+    /// `-NoFullVis`, every visible pair ray-tested).
+    pub full_visibility: bool,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { mode: Mode::Corrected, block: 3, threshold: 1e-3, max_shots: 100_000, samples_per_chart: 10 }
+        Settings { mode: Mode::Corrected, block: 3, threshold: 1e-3, max_shots: 100_000, samples_per_chart: 10, full_visibility: true }
     }
 }
 
@@ -48,20 +52,38 @@ pub struct Report {
     pub full_searches: usize,
     /// Unshot power (Σ over channels of area × unshot radiosity) before each shot.
     pub unshot_power: Vec<f64>,
+    /// Visibility rays cast, and those the visibility matrix's FULL pairs made unnecessary.
     pub rays: u64,
+    pub rays_saved: u64,
+    /// Chart pairs (i ≤ j) NONE, PARTIAL and FULL in the visibility matrix.
+    pub visibility: (usize, usize, usize),
+    /// Border pass 2's contributions refused by the anti-bleeding ray (set by the bake).
+    pub border_refused: usize,
 }
 
-/// The static triangles as occluders.
+/// The static triangles as occluders (sky surfaces included: they are walls to everything but
+/// the sun).
 pub struct Occluders {
     tris: Vec<[Vec3; 3]>,
     bvh: Bvh,
+    /// The triangles as the baker sees them (the visibility matrix's hull test).
+    pub triangles: Vec<Triangle>,
 }
 
 impl Occluders {
     pub fn new(triangles: &[Triangle]) -> Occluders {
         let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|p| p.as_vec3())).collect();
         let bvh = Bvh::build(&tris);
-        Occluders { tris, bvh }
+        Occluders { tris, bvh, triangles: triangles.to_vec() }
+    }
+
+    /// The first triangle a ray from `a` along the unit `dir` hits: (distance, index).
+    pub fn first_hit(&self, a: DVec3, dir: DVec3) -> Option<(f64, usize)> {
+        self.bvh.closest_hit(&self.tris, a.as_vec3(), dir.as_vec3()).map(|(t, i)| (t as f64, i as usize))
+    }
+
+    pub fn has_sky(&self) -> bool {
+        self.triangles.iter().any(|t| t.sky)
     }
 
     /// Nothing between `a` and `b` (both ends excluded by a small margin).
@@ -133,6 +155,11 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
     let initial: f64 = blocks.iter().map(|b| power(p, b)).sum();
     let stop = settings.threshold * initial;
     let mut report = Report::default();
+    // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and in
+    // corrected mode only a block square's overhang beyond its polygon could reach them);
+    // FULL pairs need no rays. The same matrix in both modes.
+    let matrix = Matrix::build(&occluders.triangles, p, settings.full_visibility);
+    report.visibility = matrix.counts();
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let by_chart: Vec<Vec<usize>> = (0..p.charts.len()).map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect()).collect();
     let receivers: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
@@ -188,8 +215,13 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
         // result does not depend on the thread count.
         let shares = {
             let patches = &p.patches;
-            let shooter = |r: usize| -> Option<(usize, DVec3, bool)> {
+            let matrix = &matrix;
+            let shooter = |r: usize| -> Option<(usize, DVec3, bool, bool)> {
                 let rp = patches[r];
+                let vis = matrix.get(b.chart, rp.chart);
+                if vis == Vis::None {
+                    return None;
+                }
                 // Shooters emit toward their normal only: a receiver behind the shooter's plane
                 // gets nothing (the exact form factor looks from the receiver and cannot see it).
                 if rp.chart == b.chart || normal.dot(rp.centre - b.corners[0]) <= 0.0 {
@@ -204,8 +236,9 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
                 if f <= 0.0 || rp.albedo == DVec3::ZERO {
                     return None;
                 }
-                let seen = occluders.visible(rp.centre + rp.normal * eps, centre + normal * eps);
-                Some((r, rp.albedo * flux * f, seen))
+                let full = vis == Vis::Full;
+                let seen = full || occluders.visible(rp.centre + rp.normal * eps, centre + normal * eps);
+                Some((r, rp.albedo * flux * f, seen, full))
             };
             let chunk = receivers.len().div_ceil(threads).max(1);
             std::thread::scope(|scope| {
@@ -213,8 +246,12 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
                 handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect::<Vec<_>>()
             })
         };
-        for (r, delta, seen) in shares {
-            report.rays += 1;
+        for (r, delta, seen, full) in shares {
+            if full {
+                report.rays_saved += 1;
+            } else {
+                report.rays += 1;
+            }
             if seen {
                 let q = &mut p.patches[r];
                 q.total += delta;

@@ -1,5 +1,9 @@
 use glam::DVec3;
 
+mod border;
+mod sun;
+mod visibility;
+
 use super::patches::{Patches, Triangle};
 use super::solve::{solve, Mode, Occluders, Settings};
 use crate::progress::Progress;
@@ -20,7 +24,7 @@ fn closed_box(s: f64, albedo: f64, emit: impl Fn(usize) -> f64) -> Vec<Triangle>
     for (i, f) in faces.iter().enumerate() {
         let e = DVec3::splat(emit(i));
         for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            out.push(Triangle { p: t, object: i, albedo: DVec3::splat(albedo), emission: e });
+            out.push(Triangle { p: t, object: i, albedo: DVec3::splat(albedo), emission: e, sky: false });
         }
     }
     // Every face looks into the box (the corner lists above are not all wound alike).
@@ -114,7 +118,7 @@ fn a_one_sided_emitter_lights_only_what_it_faces() {
     let quad = |y: f64, s: f64, down: bool, object: usize, emission: f64, albedo: f64| {
         let (a, b, c, d) = (DVec3::new(-s, y, -s), DVec3::new(s, y, -s), DVec3::new(s, y, s), DVec3::new(-s, y, s));
         let tris = if down { [[a, b, c], [a, c, d]] } else { [[a, c, b], [a, d, c]] };
-        tris.map(|p| Triangle { p, object, albedo: DVec3::splat(albedo), emission: DVec3::splat(emission) })
+        tris.map(|p| Triangle { p, object, albedo: DVec3::splat(albedo), emission: DVec3::splat(emission), sky: false })
     };
     let mut tris = Vec::new();
     tris.extend(quad(0.0, 1.0, false, 0, 0.0, 0.5)); // floor, facing up

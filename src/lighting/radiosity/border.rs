@@ -1,0 +1,142 @@
+//! Border post-processing (seed 000 §3.3.6, digest §1.2 step G). The renderer filters light-maps
+//! bilinearly, so the texels around a polygon's edge are read too: those that no shot gave a
+//! value must not read black (pass 1), and where two coplanar charts meet, both must hold the
+//! same values near the seam or a shadow crossing it steps (pass 2). Pass 2 must not carry light
+//! through a wall thinner than a patch: a neighbour's patch counts only if a ray from inside the
+//! own polygon reaches it (the anti-bleeding check).
+
+use glam::DVec3;
+
+use super::patches::Patches;
+use super::solve::Occluders;
+
+/// Both passes over `values` (one per patch; those of patches outside their polygon are
+/// ignored and replaced). Returns how many contributions the anti-bleeding check refused.
+pub fn apply(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize {
+    pass1(p, values);
+    pass2(p, occluders, values)
+}
+
+/// Pass 1: every patch outside its polygon takes the mean of its inside 8-neighbours (0 without any).
+pub fn pass1(p: &Patches, values: &mut [DVec3]) {
+    for c in &p.charts {
+        let at = |i: usize, j: usize| c.first + j * c.width + i;
+        for j in 0..c.height {
+            for i in 0..c.width {
+                let k = at(i, j);
+                if p.patches[k].inside() {
+                    continue;
+                }
+                let (mut sum, mut n) = (DVec3::ZERO, 0);
+                for (ni, nj) in neighbours(i, j, c.width, c.height) {
+                    if p.patches[at(ni, nj)].inside() {
+                        sum += values[at(ni, nj)];
+                        n += 1;
+                    }
+                }
+                values[k] = if n > 0 { sum / n as f64 } else { DVec3::ZERO };
+            }
+        }
+    }
+}
+
+fn neighbours(i: usize, j: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
+    (-1i64..=1)
+        .flat_map(move |dj| (-1i64..=1).map(move |di| (i as i64 + di, j as i64 + dj)))
+        .filter(move |&(ni, nj)| (ni, nj) != (i as i64, j as i64) && ni >= 0 && nj >= 0 && (ni as usize) < w && (nj as usize) < h)
+        .map(|(ni, nj)| (ni as usize, nj as usize))
+}
+
+/// Two charts are coplanar when they face the same way within this cosine and their planes lie
+/// within this fraction of a patch: then their world-aligned grids coincide.
+const COPLANAR_COS: f64 = 1.0 - 1e-4;
+const COPLANAR_OFFSET: f64 = 1e-3;
+
+/// Pass 2 (CaLight's SHL version, which the light-maps' needs match): each OUTER or PARTIAL
+/// patch takes the area-weighted mean of the INNER or PARTIAL patches that cover the same world
+/// cell in coplanar charts (a PARTIAL one counting its own value too), each accepted only if a
+/// ray from a point of the own polygon near the patch reaches its sample point; the weights are
+/// renormalised over those accepted. Returns how many were refused.
+pub fn pass2(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize {
+    let size = p.size;
+    let eps = 1e-4 * size;
+    let source = values.to_vec();
+    let mut refused = 0;
+    let charts = &p.charts;
+    for (a, ca) in charts.iter().enumerate() {
+        if ca.sky {
+            continue;
+        }
+        let partners: Vec<usize> = (0..charts.len())
+            .filter(|&b| {
+                let cb = &charts[b];
+                b != a
+                    && !cb.sky
+                    && ca.normal.dot(cb.normal) > COPLANAR_COS
+                    && (ca.normal.dot(ca.origin) - ca.normal.dot(cb.origin)).abs() < COPLANAR_OFFSET * size
+                    && ca.cell.0 < cb.cell.0 + cb.width as i64
+                    && cb.cell.0 < ca.cell.0 + ca.width as i64
+                    && ca.cell.1 < cb.cell.1 + cb.height as i64
+                    && cb.cell.1 < ca.cell.1 + ca.height as i64
+            })
+            .collect();
+        if partners.is_empty() {
+            continue;
+        }
+        for j in 0..ca.height {
+            for i in 0..ca.width {
+                let k = ca.first + j * ca.width + i;
+                let own = &p.patches[k];
+                if own.coverage >= 1.0 {
+                    continue;
+                }
+                let (cx, cy) = (ca.cell.0 + i as i64, ca.cell.1 + j as i64);
+                let mut from: Option<DVec3> = None;
+                let (mut sum, mut weight) = if own.inside() { (source[k] * own.area, own.area) } else { (DVec3::ZERO, 0.0) };
+                let mut any = false;
+                for &b in &partners {
+                    let cb = &charts[b];
+                    let (bi, bj) = (cx - cb.cell.0, cy - cb.cell.1);
+                    if bi < 0 || bj < 0 || bi >= cb.width as i64 || bj >= cb.height as i64 {
+                        continue;
+                    }
+                    let kb = cb.first + bj as usize * cb.width + bi as usize;
+                    let other = &p.patches[kb];
+                    if !other.inside() {
+                        continue;
+                    }
+                    let start = *from.get_or_insert_with(|| near_inside(p, a, i, j));
+                    if occluders.visible(start + ca.normal * eps, other.centre + cb.normal * eps) {
+                        sum += source[kb] * other.area;
+                        weight += other.area;
+                        any = true;
+                    } else {
+                        refused += 1;
+                    }
+                }
+                if any && weight > 0.0 {
+                    values[k] = sum / weight;
+                }
+            }
+        }
+    }
+    refused
+}
+
+/// A point of chart `c`'s polygon close to its patch (i, j): the patch's own sample point if
+/// it is inside, else the nearest inside patch's.
+fn near_inside(p: &Patches, c: usize, i: usize, j: usize) -> DVec3 {
+    let ch = &p.charts[c];
+    let k = ch.first + j * ch.width + i;
+    let q = &p.patches[k];
+    if q.inside() {
+        return q.centre;
+    }
+    let cell_centre = q.centre;
+    p.patches[ch.first..ch.first + ch.width * ch.height]
+        .iter()
+        .filter(|o| o.inside())
+        .map(|o| o.centre)
+        .min_by(|x, y| (*x - cell_centre).length_squared().total_cmp(&(*y - cell_centre).length_squared()))
+        .unwrap_or(cell_centre)
+}

@@ -1,0 +1,243 @@
+//! CaLight's surface-to-surface visibility matrix (seed 000 §3.3.1, digest §1.2 step A): for
+//! every pair of charts NONE (they cannot exchange light: one lies wholly behind the other's
+//! plane, or one is sky), FULL (nothing intrudes into the convex hull of the two, so no ray
+//! between them can be blocked: the shooting skips its rays) or PARTIAL (ray-test each patch
+//! pair). Symmetric, stored as CaLight's packed lower triangle of 2-bit entries.
+//!
+//! penumbra has no PVS for arbitrary static geometry, so the seed's first step (pairs in each
+//! other's leaf PVS start PARTIAL) starts every pair PARTIAL.
+
+use glam::{DVec2, DVec3};
+
+use super::patches::{Patches, Triangle};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Vis {
+    None = 0,
+    Partial = 1,
+    Full = 2,
+}
+
+pub struct Matrix {
+    n: usize,
+    bits: Vec<u8>,
+}
+
+/// A chart's polygon as the test sees it: the convex hull of its vertices (in its plane), its
+/// plane, its triangles and bounds.
+struct Surface {
+    hull: Vec<DVec3>,
+    normal: DVec3,
+    offset: f64,
+    sky: bool,
+    triangles: Vec<usize>,
+    lo: DVec3,
+    hi: DVec3,
+}
+
+/// Hulls of two charts with more points than this together are left PARTIAL (the face search
+/// is cubic in the point count); real charts (quads, BSP faces) have a handful.
+const MAX_HULL_POINTS: usize = 24;
+
+impl Matrix {
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    fn index(i: usize, j: usize) -> usize {
+        let (a, b) = if i >= j { (i, j) } else { (j, i) };
+        a * (a + 1) / 2 + b
+    }
+
+    pub fn get(&self, i: usize, j: usize) -> Vis {
+        let k = Self::index(i, j);
+        match (self.bits[k / 4] >> (2 * (k % 4))) & 3 {
+            0 => Vis::None,
+            1 => Vis::Partial,
+            _ => Vis::Full,
+        }
+    }
+
+    fn set(&mut self, i: usize, j: usize, v: Vis) {
+        let k = Self::index(i, j);
+        let shift = 2 * (k % 4);
+        self.bits[k / 4] = (self.bits[k / 4] & !(3 << shift)) | ((v as u8) << shift);
+    }
+
+    /// Pairs (i ≤ j) in each state: (none, partial, full).
+    pub fn counts(&self) -> (usize, usize, usize) {
+        let mut c = (0, 0, 0);
+        for i in 0..self.n {
+            for j in 0..=i {
+                match self.get(i, j) {
+                    Vis::None => c.0 += 1,
+                    Vis::Partial => c.1 += 1,
+                    Vis::Full => c.2 += 1,
+                }
+            }
+        }
+        c
+    }
+
+    /// The matrix of `p`'s charts over the static `triangles` they were built from; `full`
+    /// false leaves every visible pair PARTIAL (CaLight's `-NoFullVis`).
+    pub fn build(triangles: &[Triangle], p: &Patches, full: bool) -> Matrix {
+        let n = p.charts.len();
+        let mut m = Matrix { n, bits: vec![0; (n * (n + 1) / 2).div_ceil(4)] };
+        let test = Tester::new(triangles, p);
+        for i in 0..n {
+            for j in 0..=i {
+                m.set(i, j, test.classify(i, j, full));
+            }
+        }
+        m
+    }
+}
+
+/// The pairwise classification, exposed so that tests can check it in both orders.
+pub struct Tester<'a> {
+    triangles: &'a [Triangle],
+    surfaces: Vec<Surface>,
+    /// Distances below this (a millionth of the scene's extent) are contact, not intrusion.
+    tol: f64,
+}
+
+impl<'a> Tester<'a> {
+    pub fn new(triangles: &'a [Triangle], p: &Patches) -> Tester<'a> {
+        let scale = triangles.iter().flat_map(|t| t.p).fold(0.0f64, |m, q| m.max(q.abs().max_element())).max(1.0);
+        let surfaces = p
+            .charts
+            .iter()
+            .map(|c| {
+                let pts: Vec<DVec3> = c.triangles.iter().flat_map(|&t| triangles[t].p).collect();
+                let flat: Vec<DVec2> = pts.iter().map(|q| DVec2::new(q.dot(c.u), q.dot(c.v))).collect();
+                let offset = c.normal.dot(pts.first().copied().unwrap_or_default());
+                let hull = hull_2d(flat).into_iter().map(|f| c.normal * offset + c.u * f.x + c.v * f.y).collect();
+                let lo = pts.iter().fold(DVec3::splat(f64::INFINITY), |a, &q| a.min(q));
+                let hi = pts.iter().fold(DVec3::splat(f64::NEG_INFINITY), |a, &q| a.max(q));
+                Surface { hull, normal: c.normal, offset, sky: c.sky, triangles: c.triangles.clone(), lo, hi }
+            })
+            .collect();
+        Tester { triangles, surfaces, tol: 1e-6 * scale }
+    }
+
+    pub fn classify(&self, i: usize, j: usize, full: bool) -> Vis {
+        let (a, b) = (&self.surfaces[i], &self.surfaces[j]);
+        let behind = |s: &Surface, o: &Surface| o.hull.iter().all(|q| s.normal.dot(*q) - s.offset <= self.tol);
+        if i == j || a.sky || b.sky || behind(a, b) || behind(b, a) {
+            return Vis::None;
+        }
+        if full && !self.intruded(a, b) {
+            Vis::Full
+        } else {
+            Vis::Partial
+        }
+    }
+
+    /// Whether a triangle of another chart reaches into the interior of the convex hull of `a`
+    /// and `b` (conservative: too many points counts as intruded).
+    fn intruded(&self, a: &Surface, b: &Surface) -> bool {
+        let pts: Vec<DVec3> = a.hull.iter().chain(&b.hull).copied().collect();
+        if pts.len() > MAX_HULL_POINTS {
+            return true;
+        }
+        let (lo, hi) = (a.lo.min(b.lo) + self.tol, a.hi.max(b.hi) - self.tol);
+        let own = |t: &usize| a.triangles.contains(t) || b.triangles.contains(t);
+        let mut axes: Option<Axes> = None;
+        for (ti, t) in self.triangles.iter().enumerate() {
+            let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
+            if thi.cmplt(lo).any() || tlo.cmpgt(hi).any() || own(&ti) || t.area() <= 0.0 {
+                continue;
+            }
+            let axes = axes.get_or_insert_with(|| hull_axes(&pts));
+            if !separated(&pts, &t.p, axes, self.tol) {
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// What the separating-axis test needs of the hull of `pts`: its face normals (every plane
+/// through three points with all points on one side) and the directions between point pairs (a
+/// superset of the hull's edges, crossed with the triangle's edges by [`separated`]).
+struct Axes {
+    faces: Vec<DVec3>,
+    edges: Vec<DVec3>,
+}
+
+fn hull_axes(pts: &[DVec3]) -> Axes {
+    let mut axes = Axes { faces: Vec::new(), edges: Vec::new() };
+    let n = pts.len();
+    for a in 0..n {
+        for b in a + 1..n {
+            let e = pts[b] - pts[a];
+            if e.length_squared() > 0.0 {
+                axes.edges.push(e);
+            }
+            for c in b + 1..n {
+                let f = e.cross(pts[c] - pts[a]);
+                if f.length_squared() <= 1e-24 * e.length_squared() * e.length_squared() {
+                    continue;
+                }
+                let f = f.normalize();
+                let d: Vec<f64> = pts.iter().map(|q| f.dot(*q - pts[a])).collect();
+                let (mn, mx) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| (l.min(x), h.max(x)));
+                if mn >= -1e-9 || mx <= 1e-9 {
+                    axes.faces.push(f);
+                }
+            }
+        }
+    }
+    axes
+}
+
+/// The separating-axis test with contact allowed: true when some axis puts the triangle and
+/// the hull on two sides, overlapping by at most `tol`. The axes are the hull's face normals,
+/// the triangle's normal and every edge direction of one crossed with one of the other, which
+/// suffices for two convex polytopes (a superset of them only finds more separations that are
+/// real).
+fn separated(pts: &[DVec3], tri: &[DVec3; 3], axes: &Axes, tol: f64) -> bool {
+    let apart = |axis: DVec3| {
+        let len = axis.length();
+        if len <= 1e-12 {
+            return false;
+        }
+        let axis = axis / len;
+        let (hl, hh) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(axis.dot(*q)), h.max(axis.dot(*q))));
+        let (tl, th) = tri.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(axis.dot(*q)), h.max(axis.dot(*q))));
+        th <= hl + tol || hh <= tl + tol
+    };
+    let edges = [tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]];
+    if apart(edges[0].cross(edges[1])) {
+        return true;
+    }
+    axes.faces.iter().any(|&f| apart(f)) || axes.edges.iter().any(|&h| edges.iter().any(|&e| apart(h.cross(e))))
+}
+
+/// Andrew's monotone chain: the convex hull, counter-clockwise, without collinear points.
+fn hull_2d(mut pts: Vec<DVec2>) -> Vec<DVec2> {
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.dedup_by(|a, b| (*a - *b).length_squared() < 1e-24);
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
+        for &q in iter {
+            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0 {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
