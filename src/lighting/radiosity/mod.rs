@@ -244,7 +244,7 @@ impl Radiosity {
             }
             draws.push((d, first, vertices.len() as u32 - first));
         }
-        let animations = draws.iter().map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation.clone())).collect();
+        let animations = draws.iter().map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation)).collect();
         let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
         cx.states.forget_buffer(vertices);
         let format = lightmap_format(config.settings.mode);
