@@ -134,3 +134,30 @@ fn the_gpu_shooter_keeps_the_dark_room_dark() {
         assert_eq!(b, 0.0, "{mode:?}: light reached room B");
     }
 }
+
+/// Bake cost against patch count, CPU solve and GPU shooter side by side in one run (the
+/// README's table): `cargo test --release --test radiosity_gpu -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn measure_bake_time_against_patch_count() {
+    let device = common::test_gpu();
+    let name = device.caps().name.clone();
+    drop(device);
+    println!("device: {name}; Cornell box, corrected, stop 1e-3, block 3");
+    println!("{:>6} {:>8} {:>6} {:>9} {:>9} {:>10} {:>14} {:>14}", "patch", "patches", "shots", "cpu s", "gpu s", "gpu/cpu", "cpu µs/(p·s)", "gpu µs/(p·s)");
+    for size in [0.2, 0.1, 0.05] {
+        let (geometry, mut cpu) = cornell(size);
+        let mut on_gpu = cpu.clone();
+        let settings = Settings { threshold: 1e-3, ..Settings::default() };
+        let inside = cpu.patches.iter().filter(|q| q.inside()).count();
+        let t0 = std::time::Instant::now();
+        let c = solve::solve(&mut cpu, &Occluders::new(&geometry.triangles), &settings, &mut Progress::new("cpu"));
+        let cpu_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let g = gpu_solve(&mut on_gpu, &geometry.triangles, &settings);
+        let gpu_s = t1.elapsed().as_secs_f64();
+        let per = |s: f64, shots: usize| 1e6 * s / (inside as f64 * shots as f64);
+        println!("{size:>6} {inside:>8} {:>6} {cpu_s:>9.2} {gpu_s:>9.2} {:>10.2} {:>14.3} {:>14.3}", c.shots, gpu_s / cpu_s, per(cpu_s, c.shots), per(gpu_s, g.shots));
+        assert!(c.shots.abs_diff(g.shots) <= c.shots / 50 + 2);
+    }
+}

@@ -20,6 +20,9 @@ use super::mesh::Mesh;
 pub const MAX_HEIGHTFIELD_RESOLUTION: u32 = 1024;
 /// Smallest accepted `resolution`.
 pub const MIN_HEIGHTFIELD_RESOLUTION: u32 = 8;
+/// Largest height image read, on a side: a field samples at most 1024², and an 8192² image took
+/// 125 s and 1 GB to decode and resample only to be reduced that far.
+pub const MAX_HEIGHT_IMAGE_SIDE: u32 = 4096;
 
 /// A height field: where its heights come from and how they move.
 #[derive(Debug, Clone, PartialEq)]
@@ -101,6 +104,15 @@ impl HeightImage {
     /// EXR as stored.
     pub fn load(path: &Path) -> Result<HeightImage, SceneError> {
         let file = path.display().to_string();
+        let (_, w, h) = crate::image_io::image_header(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
+        if w > MAX_HEIGHT_IMAGE_SIDE || h > MAX_HEIGHT_IMAGE_SIDE {
+            return Err(SceneError::new(
+                &file,
+                None,
+                "file",
+                format!("the height image is {w}×{h}; a height field samples at most {MAX_HEIGHTFIELD_RESOLUTION}² so penumbra reads height images of at most {MAX_HEIGHT_IMAGE_SIDE} on a side (downsample it)"),
+            ));
+        }
         let img = crate::image_io::open_image(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
         let (width, height) = (img.width(), img.height());
         let values: Vec<f32> = match &img {
@@ -452,6 +464,20 @@ fn offset2(f: &Field) -> Result<Vec2, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_height_image_beyond_the_limit_is_refused_before_decoding() {
+        let dir = std::env::temp_dir().join(format!("penumbra-height-limit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("wide.png");
+        image::GrayImage::new(MAX_HEIGHT_IMAGE_SIDE + 1, 2).save(&path).unwrap();
+        let e = HeightImage::load(&path).err().expect("refused").to_string();
+        assert!(e.contains("wide.png") && e.contains("4097×2") && e.contains("at most 4096 on a side"), "{e}");
+        let ok = dir.join("ok.png");
+        image::GrayImage::new(MAX_HEIGHT_IMAGE_SIDE, 2).save(&ok).unwrap();
+        assert!(HeightImage::load(&ok).is_ok());
+        let _ = std::fs::remove_dir_all(dir);
+    }
 
     fn src(shape: HeightShape) -> HeightfieldSource {
         HeightfieldSource { size: 4.0, resolution: 16, shape, height: 1.0, taper: 0.0, offset: Vec2::ZERO, pattern_rotate_deg: 0.0, speed: 0.0 }

@@ -135,6 +135,9 @@ impl HeightfieldMethod {
         let inputs = FieldInputs::from_scene(cx.scene, cx.environment, name)?;
         let object = inputs.object;
         let core = HeightfieldGpu::new(gpu, shaders, cx.states, cx.bakes, settings, inputs)?;
+        if let Some(warning) = slow_warning(core.res, gpu.caps().device_type, &gpu.caps().name) {
+            crate::errln!("{}: {name}: {warning}", cx.scene.source);
+        }
         let mut desc = GraphicsPipelineDesc::new("hf terrain", "heightfield/terrain.vert", Some("heightfield/terrain.frag"));
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
@@ -149,6 +152,15 @@ impl HeightfieldMethod {
         let others = cx.scene_gpu.draws.iter().enumerate().filter(|(_, d)| d.object != Some(object)).map(|(i, _)| i).collect();
         Ok(HeightfieldMethod { name, core, terrain, emitter, time: 0.0, others })
     }
+}
+
+/// What to say before a frame that will be slow: the passes' work grows as resolution² (and
+/// their loops as the resolution), so on a CPU implementation of Vulkan a large field takes
+/// minutes per frame (issue 10: 1024 took 167 s for one 64×36 frame on llvmpipe).
+pub fn slow_warning(resolution: u32, device_type: vk::PhysicalDeviceType, device: &str) -> Option<String> {
+    (device_type == vk::PhysicalDeviceType::CPU && resolution >= 512).then(|| {
+        format!("resolution {resolution} on {device}, a CPU implementation, is slow: 1024 measured 167 s for one 64×36 frame, and each halving divides the work by about 4 (e.g. resolution = 256)")
+    })
 }
 
 /// `Terrain` push constants of `terrain.vert`/`terrain.frag`.
@@ -244,6 +256,15 @@ mod tests {
     fn scene(extra: &str) -> Scene {
         let text = format!("methods = [\"heightfield_pyramid\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\ngenerator = \"flat\"\n{extra}\n");
         Scene::from_str(&text, "t.toml", std::path::Path::new(".")).unwrap()
+    }
+
+    #[test]
+    fn large_fields_on_a_cpu_device_are_announced_as_slow() {
+        let cpu = vk::PhysicalDeviceType::CPU;
+        assert!(slow_warning(256, cpu, "llvmpipe").is_none());
+        let w = slow_warning(512, cpu, "llvmpipe").expect("a warning");
+        assert!(w.contains("resolution 512 on llvmpipe") && w.contains("167 s"), "{w}");
+        assert!(slow_warning(1024, vk::PhysicalDeviceType::DISCRETE_GPU, "H200").is_none());
     }
 
     #[test]
