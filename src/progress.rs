@@ -11,11 +11,18 @@ pub struct Progress {
     last: Option<Instant>,
     shown: bool,
     terminal: bool,
+    /// Shown after the counts (e.g. a solve's remaining energy).
+    detail: String,
 }
 
 impl Progress {
     pub fn new(name: &str) -> Progress {
-        Progress { name: name.to_string(), start: Instant::now(), last: None, shown: false, terminal: std::io::stderr().is_terminal() }
+        Progress { name: name.to_string(), start: Instant::now(), last: None, shown: false, terminal: std::io::stderr().is_terminal(), detail: String::new() }
+    }
+
+    /// Text shown at the end of the line from the next update on.
+    pub fn set_detail(&mut self, detail: String) {
+        self.detail = detail;
     }
 
     /// `done` of `total` units finished.
@@ -27,7 +34,8 @@ impl Progress {
         }
         self.last = Some(now);
         self.shown = true;
-        crate::err!("\r{}", line(&self.name, done, total, elapsed));
+        let detail = if self.detail.is_empty() { String::new() } else { format!(", {}", self.detail) };
+        crate::err!("\r{}{detail}\x1b[K", line(&self.name, done, total, elapsed));
         let _ = std::io::stderr().flush();
     }
 

@@ -13,7 +13,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::patches::{Patches, Triangle};
-use super::solve::{self, Mode, Report, Settings};
+use super::solve::{self, show_progress, Mode, Report, Settings};
 use super::visibility::Matrix;
 use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
@@ -319,7 +319,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         let log = gpu.read_buffer(log_buf)?;
         let logged = (shot.state[3] as usize).min(log.len() / 4);
         let left = if logged > 0 { bytemuck::pod_read_unaligned::<f32>(&log[4 * (logged - 1)..4 * logged]) as f64 } else { initial };
-        progress.update(((1.0 - left / initial.max(1e-300)).clamp(0.0, 1.0) * 1000.0) as u64, 1000);
+        show_progress(progress, shot.shots[0] as usize, left, initial, settings.threshold);
         if shot.state[1] != 0 {
             report.unshot_power = bytemuck::cast_slice::<u8, f32>(&log[..4 * logged]).iter().map(|&x| x as f64).collect();
             break shot;

@@ -136,6 +136,14 @@ fn magnitude(v: DVec3) -> f64 {
     v.x.abs() + v.y.abs() + v.z.abs()
 }
 
+/// Shows a solve's progress: the unshot energy falls about geometrically, so the fraction done is
+/// taken on a log scale from the initial energy down to the stop, which keeps the time left honest.
+pub(super) fn show_progress(progress: &mut Progress, shots: usize, left: f64, initial: f64, threshold: f64) {
+    let fraction = if initial > 0.0 && left > 0.0 { ((initial / left).ln() / (1.0 / threshold).ln()).clamp(0.0, 1.0) } else { 1.0 };
+    progress.set_detail(format!("{shots} shots, unshot {:.2e} of the initial energy", if initial > 0.0 { left / initial } else { 0.0 }));
+    progress.update((fraction * 1000.0) as u64, 1000);
+}
+
 /// xorshift64*: the faithful mode's random block samples, reproducible.
 struct Rng(u64);
 
@@ -260,7 +268,7 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
         }
         report.shots += 1;
         let left = report.unshot_power.last().copied().unwrap_or(0.0);
-        progress.update(((1.0 - left / initial.max(1e-300)).clamp(0.0, 1.0) * 1000.0) as u64, 1000);
+        show_progress(progress, report.shots, left, initial, settings.threshold);
     }
     progress.finish();
     report
