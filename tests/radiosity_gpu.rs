@@ -124,7 +124,7 @@ fn the_gpu_shooter_keeps_the_dark_room_dark() {
     for mode in [Mode::Corrected, Mode::Faithful] {
         let (scene, geometry, mut p, names) = patched("scenes/two_rooms.toml", 0.2);
         let occluders = Occluders::new(&geometry.triangles);
-        lightmap::add_direct_light_in(&mut p, &occluders, &scene, mode);
+        lightmap::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
         let settings = Settings { mode, threshold: 1e-3, ..Settings::default() };
         gpu_solve(&mut p, &geometry.triangles, &settings);
         let room = |prefix: &str| p.patches.iter().filter(|q| q.inside() && names[p.charts[q.chart].object].starts_with(prefix)).map(|q| q.total.max_element()).fold(0.0f64, f64::max);

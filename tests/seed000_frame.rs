@@ -54,3 +54,58 @@ fn the_seed000_frame_is_the_light_map_under_the_direct_light() {
     let with_ambient = render(scene(0.5), "seed000");
     assert_eq!(with_ambient.pixels, composed.pixels);
 }
+
+/// CaLight's point lights (digest §1.2 step D): in faithful mode every patch in the light's PVS
+/// facing it receives I·cos θ/d² with no shadow ray; a patch outside the PVS receives nothing.
+/// The corrected mode's shadow rays light fewer patches (the level's pillars and door frames).
+#[test]
+fn faithful_point_lights_reach_every_patch_in_their_pvs() {
+    use glam::DVec3;
+    use penumbra::lighting::radiosity::{lightmap, patches::Patches, solve::Mode, solve::Occluders};
+    use penumbra::scene::{world_mesh, Light, MeshSource};
+    let mut scene = scene(0.0);
+    // One light: the warm one of room 0.
+    scene.lights.retain(|l| l.name() == "room 0 warm");
+    let Light::Point { position, intensity, .. } = scene.lights[0] else { panic!("a point light") };
+    let mut device = common::test_gpu();
+    let mut states = penumbra::graph::ResourceStates::default();
+    let env = penumbra::environment::EnvironmentMap::of_scene(&scene).unwrap();
+    let scene_gpu = penumbra::gpu_scene::SceneGpu::upload(&mut device, &mut states, &scene, &env).unwrap();
+    let geometry = lightmap::static_geometry(&scene, &scene_gpu, "radiosity").unwrap();
+    let occluders = Occluders::new(&geometry.triangles);
+    let (level, translate) = scene
+        .objects
+        .iter()
+        .find_map(|o| match &o.mesh {
+            MeshSource::World { level, .. } => Some((level.clone(), o.transform.w_axis.truncate())),
+            _ => None,
+        })
+        .unwrap();
+    let world = world_mesh::compiled(&level).unwrap();
+    let leaf = |x: DVec3| world.leaf_of(world_mesh::scene_to_world(x.as_vec3() - translate));
+    let light_leaf = leaf(position.as_dvec3());
+    let lit = |mode| {
+        let mut p = Patches::build(&geometry.triangles, 1.0);
+        let direct = lightmap::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
+        (p, direct)
+    };
+    let (p, faithful) = lit(Mode::Faithful);
+    let (mut in_pvs, mut outside) = (0, 0);
+    for (q, d) in p.patches.iter().zip(&faithful).filter(|(q, _)| q.inside()) {
+        let x = q.centre + q.normal * 1e-4 * p.size;
+        let to = position.as_dvec3() - x;
+        let cos = q.normal.dot(to.normalize());
+        let want = if world.is_visible(leaf(x), light_leaf) && cos > 0.0 { q.albedo * intensity.as_dvec3() * cos / to.length_squared() } else { DVec3::ZERO };
+        assert!((*d - want).abs().max_element() <= 1e-9 * want.max_element().max(1.0), "patch at {}: {d} against {want}", q.centre);
+        if want == DVec3::ZERO {
+            outside += 1;
+        } else {
+            in_pvs += 1;
+        }
+    }
+    let (_, corrected) = lit(Mode::Corrected);
+    let count = |v: &[DVec3]| v.iter().filter(|d| d.max_element() > 0.0).count();
+    eprintln!("faithful lights {in_pvs} patches ({outside} outside the PVS or facing away); corrected's shadow rays light {}", count(&corrected));
+    assert!(in_pvs > 50 && outside > 50, "{in_pvs} / {outside}");
+    assert!(count(&corrected) < in_pvs, "shadow rays light fewer patches than the PVS: {} vs {in_pvs}", count(&corrected));
+}

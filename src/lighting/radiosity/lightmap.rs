@@ -119,14 +119,30 @@ fn mean_albedo(path: &std::path::Path) -> std::result::Result<Vec3, String> {
 /// Adds the reflected direct light of the scene's point, spot and directional lights (shadowed)
 /// to every patch's total and unshot radiosity; returns each patch's share. Directional lights
 /// are suns ([`super::sun`]) as the corrected mode treats them.
-pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Vec<DVec3> {
+pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Result<Vec<DVec3>> {
     add_direct_light_in(p, occluders, scene, solve::Mode::Corrected)
 }
 
-/// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing).
-pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene, mode: solve::Mode) -> Vec<DVec3> {
+/// The scene's BSP world, if it has one, and where it sits (world point `w` is scene point
+/// `world_to_scene(w) + translate`).
+fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::CompiledWorld>, Vec3)>> {
+    for obj in &scene.objects {
+        if let crate::scene::MeshSource::World { level, .. } = &obj.mesh {
+            let compiled = crate::scene::world_mesh::compiled(level).map_err(|e| Error::Usage(format!("{}: {}: the world does not compile: {e}", scene.source, level.mesh_name())))?;
+            return Ok(Some((compiled, obj.transform.w_axis.truncate())));
+        }
+    }
+    Ok(None)
+}
+
+/// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing) and
+/// point lights (faithful, in a BSP world: CaLight lights every patch in the light's PVS, with no
+/// ray, so a pillar casts no shadow in the light-map; elsewhere, and corrected, a shadow ray).
+pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene, mode: solve::Mode) -> Result<Vec<DVec3>> {
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
     let eps = 1e-4 * p.size;
+    let pvs = if mode == solve::Mode::Faithful { bsp_world(scene)? } else { None };
+    let leaf = |x: DVec3| pvs.as_ref().map(|(w, translate)| w.leaf_of(crate::scene::world_mesh::scene_to_world(x.as_vec3() - *translate)));
     for (k, q) in p.patches.iter().enumerate() {
         if !q.inside() {
             continue;
@@ -148,7 +164,11 @@ pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene
                 _ => continue,
             };
             let cos = q.normal.dot(to_light);
-            if cos <= 0.0 || !occluders.visible(x, far) {
+            let seen = match (&pvs, leaf(x), leaf(far)) {
+                (Some((w, _)), Some(a), Some(b)) => w.is_visible(a, b),
+                _ => occluders.visible(x, far),
+            };
+            if cos <= 0.0 || !seen {
                 continue;
             }
             e += irradiance * cos;
@@ -168,7 +188,7 @@ pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene
         q.total += *b;
         q.unshot += *b;
     }
-    direct
+    Ok(direct)
 }
 
 /// Where each chart lies in the atlas: its texel offset, and the atlas size.
@@ -263,7 +283,7 @@ pub fn bake(
 ) -> Result<(Patches, Atlas, Vec<[f32; 4]>, solve::Report)> {
     let mut p = Patches::build(&geometry.triangles, patch_size);
     let occluders = Occluders::new(&geometry.triangles);
-    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode);
+    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode)?;
     let mut report = match shooter {
         Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),
         Shooter::Gpu(gpu, shaders) => super::gpu::solve(gpu, shaders, &mut p, &geometry.triangles, settings, progress)?,
