@@ -1,12 +1,14 @@
 //! Radiosity light-maps (seed 000 §3, CaLight; digest §1.2): patches on the static geometry, one
-//! per light-map texel ([`patches`]), form factors ([`form_factor`]) and progressive-refinement
-//! shooting ([`solve`]), faithful to CaLight or corrected (exact form factors, energy that
-//! closes).
+//! per light-map texel ([`patches`]), the surface-visibility matrix ([`visibility`]), direct
+//! light and the sun ([`lightmap`], [`sun`]), form factors ([`form_factor`]) and
+//! progressive-refinement shooting on the CPU ([`solve`]) or the GPU ([`gpu`]), border passes
+//! ([`border`]) and, in faithful mode, tone reproduction ([`tone`]); faithful to CaLight or
+//! corrected (exact form factors, energy that closes, radiometric light-maps).
 //!
 //! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
-//! light-map ([`lightmap`] bakes it through the bake stage's cache). Not yet (issue 12): the GPU
-//! shooting pass, point lights through a PVS, charts grouped across objects, albedo maps in the
-//! bake (the baker uses the material's albedo).
+//! light-map ([`lightmap`] bakes it through the bake stage's cache), entities with their emission
+//! only. Bounces reflect each material's albedo times its albedo map's mean, not the map texel by
+//! texel.
 
 pub mod border;
 pub mod form_factor;
