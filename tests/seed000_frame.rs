@@ -109,3 +109,25 @@ fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     assert!(in_pvs > 50 && outside > 50, "{in_pvs} / {outside}");
     assert!(count(&corrected) < in_pvs, "shadow rays light fewer patches than the PVS: {} vs {in_pvs}", count(&corrected));
 }
+
+/// Seed 000's ambient is light-map × N_z (the normal map's tangent-space z): with `ambient_nz`
+/// the light-map base is darker where the level's bricks and tiles are normal-mapped, never
+/// brighter, and the light-map itself is the same bake.
+#[test]
+fn the_ambient_term_is_scaled_by_the_normal_maps_n_z() {
+    let with = render(scene(0.0), "radiosity");
+    let mut flat = scene(0.0);
+    for m in &mut flat.methods {
+        m.params.retain(|(n, _, _)| n != "ambient_nz");
+    }
+    let without = render(flat, "radiosity");
+    let (mut darker, mut brighter) = (0, 0);
+    for (a, b) in with.pixels.iter().zip(&without.pixels) {
+        let (la, lb) = (luminance(a), luminance(b));
+        darker += usize::from(la < 0.98 * lb);
+        brighter += usize::from(la > lb * 1.0001 + 1e-6);
+    }
+    eprintln!("{darker} of {} pixels darker with N_z, {brighter} brighter", with.pixels.len());
+    assert_eq!(brighter, 0);
+    assert!(darker > with.pixels.len() / 10, "N_z darkens the normal-mapped surfaces: {darker} pixels");
+}

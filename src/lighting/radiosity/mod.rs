@@ -27,7 +27,8 @@ pub mod lightmap;
 use bytemuck::{Pod, Zeroable};
 
 use crate::backend::{
-    vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SpecConstant, SubresourceRange, VertexAttribute,
+    VertexLayout,
 };
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
@@ -50,6 +51,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "light", kind: ParamKind::String },
         ParamSchema { name: "baker", kind: ParamKind::String },
         ParamSchema { name: "full_visibility", kind: ParamKind::Bool },
+        ParamSchema { name: "ambient_nz", kind: ParamKind::Bool },
     ],
 };
 
@@ -64,6 +66,8 @@ pub struct Config {
     /// Patch (light-map texel) size, metres.
     pub patch_size: f64,
     pub content: Content,
+    /// Multiply the light-map by the normal map's N_z when drawing (seed 000's ambient term).
+    pub ambient_nz: bool,
     /// Where to shoot: `None` (auto) picks the GPU unless the device is a CPU implementation
     /// (lavapipe), which runs the compute passes slower than the native solve on the same cores.
     pub on_gpu: Option<bool>,
@@ -72,7 +76,7 @@ pub struct Config {
 impl Config {
     pub fn from_decl(decl: &MethodDecl) -> Result<Config> {
         let bad = |p: &str, want: &str, got: &toml::Value| Error::Usage(format!("methods: {NAME}.{p}: expected {want}, got {got}"));
-        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, on_gpu: None };
+        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, ambient_nz: false, on_gpu: None };
         if let Some(v) = decl.param("mode") {
             c.settings.mode = match v.as_str() {
                 Some("faithful") => Mode::Faithful,
@@ -98,6 +102,9 @@ impl Config {
                 Some("bounces") => Content::Bounces,
                 _ => return Err(bad("light", "\"all\" or \"bounces\"", v)),
             };
+        }
+        if let Some(v) = decl.param("ambient_nz") {
+            c.ambient_nz = v.as_bool().ok_or_else(|| bad("ambient_nz", "true or false", v))?;
         }
         if let Some(v) = decl.param("baker") {
             c.on_gpu = match v.as_str() {
@@ -189,7 +196,8 @@ impl Radiosity {
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
         }
-        let mut key = BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", config).with("lights", &cx.scene.lights).with_shaders("radiosity/");
+        let mut key =
+            BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", Config { ambient_nz: false, ..config }).with("lights", &cx.scene.lights).with_shaders("radiosity/");
         let geometry_bytes: Vec<f64> = geometry
             .triangles
             .iter()
@@ -265,6 +273,7 @@ impl Radiosity {
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+        desc.specialization = vec![SpecConstant { id: 0, bits: u32::from(config.ambient_nz) }];
         let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let sampler = cx.gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
         Ok(Radiosity { pipeline, vertices, draws, animations, lightmap, sampler })
@@ -300,6 +309,7 @@ impl LightingMethod for Radiosity {
                     ctx.bind(&[
                         ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
                         ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
+                        ("normal_map", Bind::Sampled { image: maps.normal, range: SubresourceRange::mip(0), sampler: scene.sampler }),
                     ])?;
                     ctx.rec.push_constants(DrawPush::new(model, item.material).bytes())?;
                     ctx.rec.draw_from(count, first)?;
