@@ -133,6 +133,8 @@ pub struct Gpu {
     pub(crate) caps: DeviceCaps,
     pub(crate) arenas: Arenas,
     pub(crate) frames: Vec<Option<std::cell::RefCell<super::frame::FrameData>>>,
+    /// Open resource scopes, innermost last.
+    pub(crate) scopes: Vec<super::resources::ResourceScope>,
     log: ValidationLog,
 }
 
@@ -280,6 +282,7 @@ impl Gpu {
             caps,
             arenas: Arenas::default(),
             frames: Vec::new(),
+            scopes: Vec::new(),
             log,
         })
     }

@@ -31,7 +31,7 @@ pub use pipeline::{
 };
 pub use recorder::{BufferTransition, Clear, ImageTransition, Recorder, RenderTarget, RenderingDesc};
 pub use reflect::{ReflectedBinding, ShaderReflection};
-pub use resources::{format_texel_size, BufferDesc, BufferId, ImageDesc, ImageId, MemoryKind, SamplerDesc, SamplerId, SubresourceRange};
+pub use resources::{format_texel_size, BufferDesc, BufferId, ImageDesc, ImageId, MemoryKind, ResourceScope, SamplerDesc, SamplerId, SubresourceRange};
 pub use swapchain::{AcquiredImage, Swapchain};
 pub use timestamps::{PassTiming, TimestampSupport};
 

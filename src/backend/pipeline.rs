@@ -221,13 +221,21 @@ impl Gpu {
     pub fn create_graphics_pipeline(&mut self, desc: &GraphicsPipelineDesc, shaders: &dyn ShaderSource) -> BackendResult<PipelineId> {
         let obj = self.build_pipeline(&PipelineKind::Graphics(desc.clone()), shaders)?;
         self.arenas.pipelines.push(Some(obj));
-        Ok(PipelineId(self.arenas.pipelines.len() as u32 - 1))
+        let id = PipelineId(self.arenas.pipelines.len() as u32 - 1);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.pipelines.push(id);
+        }
+        Ok(id)
     }
 
     pub fn create_compute_pipeline(&mut self, desc: &ComputePipelineDesc, shaders: &dyn ShaderSource) -> BackendResult<PipelineId> {
         let obj = self.build_pipeline(&PipelineKind::Compute(desc.clone()), shaders)?;
         self.arenas.pipelines.push(Some(obj));
-        Ok(PipelineId(self.arenas.pipelines.len() as u32 - 1))
+        let id = PipelineId(self.arenas.pipelines.len() as u32 - 1);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.pipelines.push(id);
+        }
+        Ok(id)
     }
 
     /// Destroys a pipeline once the device is idle (for pipelines used only for a while, such as

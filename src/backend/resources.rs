@@ -211,6 +211,16 @@ pub(crate) struct Image {
     pub views: RefCell<HashMap<ViewKey, vk::ImageView>>,
 }
 
+/// The buffers, images and pipelines created between [`Gpu::begin_resource_scope`] and
+/// [`Gpu::end_resource_scope`]: what one owner (a lighting method) holds, freed together by
+/// [`Gpu::destroy_scope`] when the owner goes (samplers are shared and cached, never scoped).
+#[derive(Debug, Default)]
+pub struct ResourceScope {
+    pub buffers: Vec<BufferId>,
+    pub images: Vec<ImageId>,
+    pub pipelines: Vec<super::PipelineId>,
+}
+
 /// Storage for every object the Gpu hands out ids for. Slots are never reused, so a stale id
 /// fails loudly instead of aliasing a newer object.
 #[derive(Default)]
@@ -295,10 +305,49 @@ impl Gpu {
         unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindBufferMemory")?;
         self.set_name(raw, &desc.name);
         self.arenas.buffers.push(Some(Buffer { raw, desc: desc.clone(), allocation: Some(allocation) }));
-        Ok(BufferId(self.arenas.buffers.len() as u32 - 1))
+        let id = BufferId(self.arenas.buffers.len() as u32 - 1);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.buffers.push(id);
+        }
+        Ok(id)
     }
 
     /// A device-local buffer filled with `data` (through a staging copy, waited for).
+    /// Starts recording what is created (scopes nest; the innermost records).
+    pub fn begin_resource_scope(&mut self) {
+        self.scopes.push(ResourceScope::default());
+    }
+
+    /// Ends the innermost scope and returns what it recorded.
+    pub fn end_resource_scope(&mut self) -> ResourceScope {
+        self.scopes.pop().unwrap_or_default()
+    }
+
+    /// Waits for the device, then destroys everything the scope recorded that still exists.
+    pub fn destroy_scope(&mut self, scope: &ResourceScope) -> BackendResult<()> {
+        self.wait_idle()?;
+        for &p in &scope.pipelines {
+            self.destroy_pipeline(p)?;
+        }
+        for &i in &scope.images {
+            self.destroy_image(i);
+        }
+        for &b in &scope.buffers {
+            self.destroy_buffer(b);
+        }
+        Ok(())
+    }
+
+    /// Buffers, images and pipelines alive now.
+    pub fn live_objects(&self) -> (usize, usize, usize) {
+        let count = |n: usize, alive: &dyn Fn(usize) -> bool| (0..n).filter(|&i| alive(i)).count();
+        (
+            count(self.arenas.buffers.len(), &|i| self.arenas.buffers[i].is_some()),
+            count(self.arenas.images.len(), &|i| self.arenas.images[i].is_some()),
+            count(self.arenas.pipelines.len(), &|i| self.arenas.pipelines[i].is_some()),
+        )
+    }
+
     pub fn create_buffer_init(&mut self, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> BackendResult<BufferId> {
         let id = self.create_buffer(&BufferDesc { name: name.into(), size: data.len().max(4) as u64, usage: usage | vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuOnly })?;
         self.upload_buffer(id, 0, data)?;
@@ -412,7 +461,11 @@ impl Gpu {
         desc.mip_levels = desc.mip_levels.max(1);
         desc.layers = desc.layers.max(1);
         self.arenas.images.push(Some(Image { raw, desc, allocation: Some(allocation), owned: true, views: RefCell::new(HashMap::new()) }));
-        Ok(ImageId(self.arenas.images.len() as u32 - 1))
+        let id = ImageId(self.arenas.images.len() as u32 - 1);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.images.push(id);
+        }
+        Ok(id)
     }
 
     /// Registers an image owned elsewhere (a swapchain image).

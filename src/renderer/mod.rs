@@ -9,7 +9,8 @@ mod frame_passes;
 use glam::Mat4;
 
 use crate::backend::{
-    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PassTiming, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SubresourceRange,
+    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PassTiming, PipelineId, RenderTarget, RenderingDesc, ResourceScope, SamplerDesc,
+    SubresourceRange,
 };
 use crate::bake::{BakeReport, Baker};
 use crate::environment::EnvironmentMap;
@@ -48,6 +49,8 @@ pub struct Renderer {
     /// What frames are drawn with, and its methods in frame order (one per part).
     pub configuration: Configuration,
     methods: Vec<Box<dyn LightingMethod>>,
+    /// What the methods created, freed when the configuration changes.
+    method_resources: ResourceScope,
     /// The bakes the methods ran (or read from the cache) when they were created.
     pub bakes: Vec<BakeReport>,
     pub states: ResourceStates,
@@ -60,6 +63,31 @@ pub struct Renderer {
     readback: Option<BufferId>,
     present_readback: Option<BufferId>,
     tonemap: Option<(PipelineId, vk::Format)>,
+}
+
+/// Creates a configuration's methods inside a resource scope; on failure, frees what the partial
+/// creation made.
+fn create_methods(configuration: &Configuration, ctx: &mut CreateContext<'_>) -> Result<(Vec<Box<dyn LightingMethod>>, ResourceScope)> {
+    ctx.gpu.begin_resource_scope();
+    let created = registry::create(configuration, ctx);
+    let scope = ctx.gpu.end_resource_scope();
+    match created {
+        Ok(methods) => Ok((methods, scope)),
+        Err(e) => {
+            ctx.gpu.destroy_scope(&scope)?;
+            forget(ctx.states, &scope);
+            Err(e)
+        }
+    }
+}
+
+fn forget(states: &mut ResourceStates, scope: &ResourceScope) {
+    for &b in &scope.buffers {
+        states.forget_buffer(b);
+    }
+    for &i in &scope.images {
+        states.forget_image(i);
+    }
 }
 
 impl Renderer {
@@ -78,10 +106,10 @@ impl Renderer {
         let mut states = ResourceStates::default();
         let environment = EnvironmentMap::of_scene(&scene)?;
         let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, &scene, &environment)?;
-        let methods = {
+        let (methods, method_resources) = {
             let mut ctx =
                 CreateContext { gpu: &mut gpu, shaders: &shaders, states: &mut states, scene: &scene, scene_gpu: &scene_gpu, environment: &environment, bakes: &mut bakes, terms: Terms::NONE };
-            registry::create(&configuration, &mut ctx)?
+            create_methods(&configuration, &mut ctx)?
         };
         let passes = frame_passes::FramePasses::new(&mut gpu, &shaders)?;
         let targets = create_targets(&mut gpu, size)?;
@@ -94,6 +122,7 @@ impl Renderer {
             environment,
             configuration,
             methods,
+            method_resources,
             bakes: bakes.take_reports(),
             states,
             targets,
@@ -112,7 +141,7 @@ impl Renderer {
     pub fn set_configuration(&mut self, configuration: Configuration) -> Result<()> {
         self.gpu.wait_idle()?;
         let mut bakes = Baker::new(Some(Baker::default_dir()));
-        let methods = {
+        let (methods, resources) = {
             let mut ctx = CreateContext {
                 gpu: &mut self.gpu,
                 shaders: &self.shaders,
@@ -123,9 +152,14 @@ impl Renderer {
                 bakes: &mut bakes,
                 terms: Terms::NONE,
             };
-            registry::create(&configuration, &mut ctx)?
+            create_methods(&configuration, &mut ctx)?
         };
+        // The old methods' objects go once nothing can use them (the device is idle, and the
+        // methods holding their ids are dropped first).
         self.methods = methods;
+        let old = std::mem::replace(&mut self.method_resources, resources);
+        self.gpu.destroy_scope(&old)?;
+        forget(&mut self.states, &old);
         self.configuration = configuration;
         self.bakes = bakes.take_reports();
         self.clock_frame = 0;
