@@ -114,9 +114,10 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
     assert!(failures.is_empty(), "memory grows:\n{}", failures.join("\n"));
 }
 
-/// Every shipped scene and every method it enables, `PENUMBRA_SOAK_FRAMES` frames each (default
-/// 10,000) at `PENUMBRA_SOAK_SIZE` (default 64x36), printing RssAnon every 100 frames as CSV
-/// lines `scene,method,frame,rss_anon_mib`. Run by tools/soak.sh.
+/// Every shipped scene with each of its configurations (every method it enables, then every
+/// combination it declares), `PENUMBRA_SOAK_FRAMES` frames each (default 10,000) at
+/// `PENUMBRA_SOAK_SIZE` (default 64x36), printing RssAnon every 100 frames as CSV lines
+/// `scene,method,frame,rss_anon_mib`. Run by tools/soak.sh.
 #[test]
 #[ignore]
 fn soak_every_shipped_scene_and_method() {
@@ -133,7 +134,8 @@ fn soak_every_shipped_scene_and_method() {
     println!("scene,method,frame,rss_anon_mib");
     for name in names {
         let scene = shipped(&name);
-        let methods: Vec<String> = if scene.methods.is_empty() { vec!["forward".into()] } else { scene.methods.iter().map(|m| m.name.clone()).collect() };
+        // Every configuration: each method alone, then each declared combination.
+        let methods: Vec<String> = penumbra::lighting::registry::configurations(&scene).unwrap().into_iter().map(|c| c.name).collect();
         for method in methods {
             let camera = scene.camera.clone();
             let mut r = Renderer::new(common::test_gpu(), scene.clone(), Some(&method), (w, h), 1).unwrap();
