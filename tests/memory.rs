@@ -65,22 +65,24 @@ radiance = [0.3, 0.35, 0.45]
 /// Renders `warmup` frames, then `frames` more, reading the counter every `every` frames; returns
 /// (frame, MiB) samples, the first taken after warm-up. Stops early once memory has grown by more
 /// than `limit_mib` (a leak of megabytes per frame would otherwise exhaust the machine).
-fn run(scene: Scene, method: &str, warmup: usize, frames: usize, every: usize, limit_mib: f64) -> Vec<(usize, f64)> {
+fn run(scene: Scene, method: &str, warmup: usize, frames: usize, every: usize, limit_mib: f64) -> (Vec<(usize, f64)>, Vec<u64>) {
     let camera = scene.camera.clone();
     let mut r = Renderer::new(common::test_gpu(), scene, Some(method), (48, 32), 1).unwrap();
     r.profile(&camera, warmup).unwrap();
     let mut samples = vec![(warmup, rss_anon_mib())];
+    let mut device = vec![r.gpu.device_memory().0];
     let mut done = 0;
     while done < frames {
         r.profile(&camera, every).unwrap();
         done += every;
         samples.push((warmup + done, rss_anon_mib()));
+        device.push(r.gpu.device_memory().0);
         if samples.last().unwrap().1 - samples[0].1 > limit_mib {
             break;
         }
     }
     common::assert_clean(&r.gpu);
-    samples
+    (samples, device)
 }
 
 /// Lavapipe recompiled (and leaked) a shader every time a uniform block steering a branch was
@@ -103,12 +105,16 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {
         let t = std::time::Instant::now();
-        let samples = run(scene, method, 40, frames, 40, LIMIT_MIB);
+        let (samples, device) = run(scene, method, 40, frames, 40, LIMIT_MIB);
         let growth = samples.last().unwrap().1 - samples[0].1;
         let trace: Vec<String> = samples.iter().map(|(f, m)| format!("{f}: {m:.1}")).collect();
-        eprintln!("{method}: RssAnon MiB by frame {} ({:.1} s)", trace.join(", "), t.elapsed().as_secs_f64());
+        eprintln!("{method}: RssAnon MiB by frame {} ({:.1} s); device memory allocated {:.2} MiB at every sample", trace.join(", "), t.elapsed().as_secs_f64(), device[0] as f64 / 1048576.0);
         if growth > LIMIT_MIB {
             failures.push(format!("{method}: +{growth:.1} MiB after warm-up ({})", trace.join(", ")));
+        }
+        // Device memory (live allocations) is allocated up front: a frame adds none.
+        if device.iter().any(|&d| d != device[0]) {
+            failures.push(format!("{method}: device memory changes after warm-up: {device:?} bytes"));
         }
     }
     assert!(failures.is_empty(), "memory grows:\n{}", failures.join("\n"));
@@ -117,7 +123,8 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
 /// Every shipped scene with each of its configurations (every method it enables, then every
 /// combination it declares), `PENUMBRA_SOAK_FRAMES` frames each (default 10,000) at
 /// `PENUMBRA_SOAK_SIZE` (default 64x36), printing RssAnon every 100 frames as CSV lines
-/// `scene,method,frame,rss_anon_mib`. Run by tools/soak.sh.
+/// `scene,method,frame,rss_anon_mib,device_mib` (device memory: live allocations). Run by
+/// tools/soak.sh.
 #[test]
 #[ignore]
 fn soak_every_shipped_scene_and_method() {
@@ -131,7 +138,7 @@ fn soak_every_shipped_scene_and_method() {
     if let Some(only) = &only {
         names.retain(|n| only.split(',').any(|o| n.starts_with(o)));
     }
-    println!("scene,method,frame,rss_anon_mib");
+    println!("scene,method,frame,rss_anon_mib,device_mib");
     for name in names {
         let scene = shipped(&name);
         // Every configuration: each method alone, then each declared combination.
@@ -139,13 +146,14 @@ fn soak_every_shipped_scene_and_method() {
         for method in methods {
             let camera = scene.camera.clone();
             let mut r = Renderer::new(common::test_gpu(), scene.clone(), Some(&method), (w, h), 1).unwrap();
-            println!("{name},{method},0,{:.1}", rss_anon_mib());
+            let device_mib = |r: &Renderer| r.gpu.device_memory().0 as f64 / 1048576.0;
+            println!("{name},{method},0,{:.1},{:.2}", rss_anon_mib(), device_mib(&r));
             let mut done = 0;
             while done < frames {
                 let n = 100.min(frames - done);
                 r.profile(&camera, n).unwrap();
                 done += n;
-                println!("{name},{method},{done},{:.1}", rss_anon_mib());
+                println!("{name},{method},{done},{:.1},{:.2}", rss_anon_mib(), device_mib(&r));
             }
             common::assert_clean(&r.gpu);
         }

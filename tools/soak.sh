@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Soak: every shipped scene with every method it enables and every combination it declares,
 # rendered for many frames on lavapipe under validation, with the process's resident anonymous
-# memory (RssAnon) recorded every 100 frames. Writes CSV (scene,method,frame,rss_anon_mib) to soak.csv, or to the file given.
+# memory (RssAnon) and device memory (live allocations) recorded every 100 frames. Writes
+# CSV (scene,method,frame,rss_anon_mib,device_mib) to soak.csv, or to the file given.
 #   PENUMBRA_SOAK_FRAMES  frames per scene and method (default 10000; a height-field frame
 #                         takes about a second on lavapipe, so that is hours)
 #   PENUMBRA_SOAK_SIZE    image size (default 64x36)

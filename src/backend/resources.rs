@@ -338,6 +338,18 @@ impl Gpu {
         Ok(())
     }
 
+    /// Device memory held through the allocator, in bytes: what live allocations use, and the
+    /// memory blocks they are carved from (the figure the driver sees).
+    pub fn device_memory(&self) -> (u64, u64) {
+        match self.allocator.lock() {
+            Ok(a) => {
+                let r = a.generate_report();
+                (r.total_allocated_bytes, r.total_capacity_bytes)
+            }
+            Err(_) => (0, 0),
+        }
+    }
+
     /// Buffers, images and pipelines alive now.
     pub fn live_objects(&self) -> (usize, usize, usize) {
         let count = |n: usize, alive: &dyn Fn(usize) -> bool| (0..n).filter(|&i| alive(i)).count();
