@@ -52,7 +52,7 @@ fn bad_parameters_name_the_field() {
     let text = furnace_box(r#"{ name = "radiosity", patch_size = -1 }"#, 0.5, 0.5);
     let scene = Scene::from_str(&text, "box.toml", std::path::Path::new(".")).unwrap();
     let e = Renderer::new(common::test_gpu(), scene, None, (8, 8), 1).err().expect("refused").to_string();
-    assert!(e.contains("radiosity.patch_size: expected a size from 0.005 to 10 metres, got -1"), "{e}");
+    assert!(e.contains("box.toml:") && e.contains("methods[0].patch_size: expected a size from 0.005 to 10 metres, got -1"), "{e}");
 }
 
 /// Seed 000's composition on `scenes/room_gi.toml`: the light-map's bounced light under shadow

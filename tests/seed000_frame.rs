@@ -67,11 +67,7 @@ fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     // One light: the warm one of room 0.
     scene.lights.retain(|l| l.name() == "room 0 warm");
     let Light::Point { position, intensity, .. } = scene.lights[0] else { panic!("a point light") };
-    let mut device = common::test_gpu();
-    let mut states = penumbra::graph::ResourceStates::default();
-    let env = penumbra::environment::EnvironmentMap::of_scene(&scene).unwrap();
-    let scene_gpu = penumbra::gpu_scene::SceneGpu::upload(&mut device, &mut states, &scene, &env).unwrap();
-    let geometry = lightmap::static_geometry(&scene, &scene_gpu, "radiosity").unwrap();
+    let geometry = lightmap::scene_geometry(&scene, "radiosity").unwrap();
     let occluders = Occluders::new(&geometry.triangles);
     let (level, translate) = scene
         .objects

@@ -65,6 +65,14 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// One line for a bad value of a method's parameter: the scene file, the parameter's line and
+    /// `methods[i].name` (what every method's parameter checks report).
+    pub fn method_param_error(&self, decl: &MethodDecl, name: &str, message: impl Into<String>) -> SceneError {
+        let index = self.methods.iter().position(|m| m == decl).unwrap_or(0);
+        let line = decl.params.iter().find(|(n, _, _)| n == name).map(|p| p.2).filter(|&l| l > 0);
+        SceneError::new(&self.source, line, format!("methods[{index}].{name}"), message)
+    }
+
     /// Reads and checks a scene file. Relative paths inside it are relative to its directory.
     /// Errors name the file as `path` was given.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {

@@ -35,7 +35,7 @@ use crate::error::{Error, Result};
 use crate::gpu_scene::DrawPush;
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
-use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use lightmap::Content;
 use solve::{Mode, Settings};
 
@@ -74,8 +74,20 @@ pub struct Config {
 }
 
 impl Config {
+    /// The parameters of `decl`; a bad value is one line naming the parameter (and the scene
+    /// file and line, given the scene).
     pub fn from_decl(decl: &MethodDecl) -> Result<Config> {
-        let bad = |p: &str, want: &str, got: &toml::Value| Error::Usage(format!("methods: {NAME}.{p}: expected {want}, got {got}"));
+        Config::from_decl_in(decl, None)
+    }
+
+    pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
+        let bad = |p: &str, want: &str, got: &toml::Value| -> Error {
+            let message = format!("expected {want}, got {got}");
+            match scene {
+                Some(scene) => scene.method_param_error(decl, p, message).into(),
+                None => Error::Usage(format!("methods: {NAME}.{p}: {message}")),
+            }
+        };
         let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, ambient_nz: false, on_gpu: None };
         if let Some(v) = decl.param("mode") {
             c.settings.mode = match v.as_str() {
@@ -191,7 +203,7 @@ pub struct Radiosity {
 
 impl Radiosity {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Radiosity> {
-        let config = Config::from_decl(decl)?;
+        let config = Config::from_decl_in(decl, Some(cx.scene))?;
         let geometry = lightmap::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));

@@ -99,11 +99,7 @@ pub struct Config {
 
 impl Config {
     pub fn from_decl(decl: &MethodDecl, scene: &Scene) -> Result<Config> {
-        let index = scene.methods.iter().position(|m| m == decl).unwrap_or(0);
-        let bad = |name: &str, msg: String| {
-            let line = decl.params.iter().find(|(n, _, _)| n == name).map(|p| p.2).filter(|&l| l > 0);
-            SceneError::new(&scene.source, line, format!("methods[{index}].{name}"), msg)
-        };
+        let bad = |name: &str, msg: String| scene.method_param_error(decl, name, msg);
         let string = |name: &str, allowed: &[&str], default: &str| -> std::result::Result<String, SceneError> {
             match decl.param(name).and_then(|v| v.as_str()) {
                 None => Ok(default.to_string()),
