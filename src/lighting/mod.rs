@@ -19,6 +19,7 @@ mod terms;
 pub mod forward;
 pub mod heightfield;
 pub mod radiosity;
+pub mod sh_lightmap;
 pub mod shadow_volumes;
 
 use bytemuck::{Pod, Zeroable};
