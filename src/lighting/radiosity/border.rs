@@ -13,12 +13,58 @@ use super::solve::Occluders;
 /// Both passes over `values` (one per patch; those of patches outside their polygon are
 /// ignored and replaced). Returns how many contributions the anti-bleeding check refused.
 pub fn apply(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize {
-    pass1(p, values);
-    pass2(p, occluders, values)
+    let plan = Plan::new(p, occluders);
+    for pass in &plan.passes {
+        let source = values.to_vec();
+        for (dst, sources) in pass {
+            values[*dst] = sources.iter().map(|&(k, w)| source[k] * w).sum();
+        }
+    }
+    plan.refused
+}
+
+/// Each pass as a linear map: the patches it replaces, each with its sources and weights (an
+/// empty list is 0). RGB light-maps and CaSHL's coefficient vectors (seed 000 §5.4.4) go through
+/// the same plan.
+/// One pass: each patch it replaces, with its sources and their weights.
+pub type Pass = Vec<(usize, Vec<(usize, f64)>)>;
+
+pub struct Plan {
+    pub passes: [Pass; 2],
+    /// Pass 2's contributions refused by the anti-bleeding ray.
+    pub refused: usize,
+}
+
+impl Plan {
+    pub fn new(p: &Patches, occluders: &Occluders) -> Plan {
+        let (second, refused) = pass2_plan(p, occluders);
+        Plan { passes: [pass1_plan(p), second], refused }
+    }
+
+    /// Applies pass 1 then pass 2 to `dim` values per patch (patch k's at `k·dim..`); each pass
+    /// reads the values as they were before it.
+    pub fn apply_flat(&self, values: &mut [f64], dim: usize) {
+        for pass in &self.passes {
+            let source = values.to_vec();
+            for (dst, sources) in pass {
+                for d in 0..dim {
+                    values[dst * dim + d] = sources.iter().map(|&(k, w)| source[k * dim + d] * w).sum();
+                }
+            }
+        }
+    }
 }
 
 /// Pass 1: every patch outside its polygon takes the mean of its inside 8-neighbours (0 without any).
 pub fn pass1(p: &Patches, values: &mut [DVec3]) {
+    // Pass 1 reads inside patches only and writes outside ones: in place is exact.
+    for (dst, sources) in pass1_plan(p) {
+        values[dst] = sources.iter().map(|&(k, w)| values[k] * w).sum();
+    }
+}
+
+fn pass1_plan(p: &Patches) -> Pass {
+    let mut out = Vec::new();
     for c in &p.charts {
         let at = |i: usize, j: usize| c.first + j * c.width + i;
         for j in 0..c.height {
@@ -27,17 +73,13 @@ pub fn pass1(p: &Patches, values: &mut [DVec3]) {
                 if p.patches[k].inside() {
                     continue;
                 }
-                let (mut sum, mut n) = (DVec3::ZERO, 0);
-                for (ni, nj) in neighbours(i, j, c.width, c.height) {
-                    if p.patches[at(ni, nj)].inside() {
-                        sum += values[at(ni, nj)];
-                        n += 1;
-                    }
-                }
-                values[k] = if n > 0 { sum / n as f64 } else { DVec3::ZERO };
+                let inside: Vec<usize> = neighbours(i, j, c.width, c.height).map(|(ni, nj)| at(ni, nj)).filter(|&n| p.patches[n].inside()).collect();
+                let w = 1.0 / inside.len().max(1) as f64;
+                out.push((k, inside.into_iter().map(|n| (n, w)).collect()));
             }
         }
     }
+    out
 }
 
 fn neighbours(i: usize, j: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
@@ -58,9 +100,18 @@ const COPLANAR_OFFSET: f64 = 1e-3;
 /// ray from a point of the own polygon near the patch reaches its sample point; the weights are
 /// renormalised over those accepted. Returns how many were refused.
 pub fn pass2(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize {
+    let (plan, refused) = pass2_plan(p, occluders);
+    let source = values.to_vec();
+    for (dst, sources) in plan {
+        values[dst] = sources.iter().map(|&(k, w)| source[k] * w).sum();
+    }
+    refused
+}
+
+fn pass2_plan(p: &Patches, occluders: &Occluders) -> (Pass, usize) {
     let size = p.size;
     let eps = 1e-4 * size;
-    let source = values.to_vec();
+    let mut out = Vec::new();
     let mut refused = 0;
     let charts = &p.charts;
     for (a, ca) in charts.iter().enumerate() {
@@ -92,7 +143,7 @@ pub fn pass2(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize 
                 }
                 let (cx, cy) = (ca.cell.0 + i as i64, ca.cell.1 + j as i64);
                 let mut from: Option<DVec3> = None;
-                let (mut sum, mut weight) = if own.inside() { (source[k] * own.area, own.area) } else { (DVec3::ZERO, 0.0) };
+                let mut sources: Vec<(usize, f64)> = if own.inside() { vec![(k, own.area)] } else { Vec::new() };
                 let mut any = false;
                 for &b in &partners {
                     let cb = &charts[b];
@@ -107,20 +158,20 @@ pub fn pass2(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize 
                     }
                     let start = *from.get_or_insert_with(|| near_inside(p, a, i, j));
                     if occluders.visible(start + ca.normal * eps, other.centre + cb.normal * eps) {
-                        sum += source[kb] * other.area;
-                        weight += other.area;
+                        sources.push((kb, other.area));
                         any = true;
                     } else {
                         refused += 1;
                     }
                 }
+                let weight: f64 = sources.iter().map(|s| s.1).sum();
                 if any && weight > 0.0 {
-                    values[k] = sum / weight;
+                    out.push((k, sources.into_iter().map(|(s, w)| (s, w / weight)).collect()));
                 }
             }
         }
     }
-    refused
+    (out, refused)
 }
 
 /// A point of chart `c`'s polygon close to its patch (i, j): the patch's own sample point if

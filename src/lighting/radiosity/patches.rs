@@ -202,7 +202,7 @@ impl Patches {
     }
 }
 
-pub(super) fn inside_triangle(q: DVec2, t: &[DVec2; 3]) -> bool {
+pub(crate) fn inside_triangle(q: DVec2, t: &[DVec2; 3]) -> bool {
     let cross = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
     let (d0, d1, d2) = (cross(t[0], t[1], q), cross(t[1], t[2], q), cross(t[2], t[0], q));
     let neg = d0 < 0.0 || d1 < 0.0 || d2 < 0.0;

@@ -101,14 +101,20 @@ impl Occluders {
     }
 }
 
-/// One shooting block: patches of one chart, and its square.
+/// One shooting block: patches of one chart, its square, and the normal it shoots along (the
+/// chart's, or with normal-mapped patches their renormalised mean: seed 000 §5.7).
 pub(super) struct Block {
     pub chart: usize,
     pub members: Vec<usize>,
     pub corners: [DVec3; 4],
+    pub normal: DVec3,
 }
 
 pub(super) fn blocks(p: &Patches, n: usize) -> Vec<Block> {
+    blocks_of(&Geometry::from(p), n)
+}
+
+fn blocks_of(p: &Geometry<'_>, n: usize) -> Vec<Block> {
     let mut out = Vec::new();
     let s = p.size;
     for (ci, c) in p.charts.iter().enumerate() {
@@ -125,7 +131,8 @@ pub(super) fn blocks(p: &Patches, n: usize) -> Vec<Block> {
                 let (lo_i, hi_i) = members.iter().map(|&k| ij(k).0).fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i + 1)));
                 let (lo_j, hi_j) = members.iter().map(|&k| ij(k).1).fold((usize::MAX, 0), |(a, b), j| (a.min(j), b.max(j + 1)));
                 let at = |i: usize, j: usize| c.origin + c.u * (i as f64 * s) + c.v * (j as f64 * s);
-                out.push(Block { chart: ci, members, corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)] });
+                let normal = members.iter().map(|&k| p.patches[k].normal).sum::<DVec3>().try_normalize().unwrap_or(c.normal);
+                out.push(Block { chart: ci, members, corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)], normal });
             }
         }
     }
@@ -156,34 +163,94 @@ impl Rng {
     }
 }
 
+/// What the shooting loop shoots: radiosity (RGB, [`solve`]) or SH transfer vectors (seed 000
+/// §5.4.3, `sh_lightmap`), kept outside [`Patches`] so that one loop serves both.
+pub trait Unshot {
+    /// The magnitude the seed selects shooters by (the L1 norm of patch `k`'s unshot value).
+    fn magnitude(&self, k: usize) -> f64;
+    /// Patch `k` reflects anything (receivers that cannot are skipped, and cast no ray).
+    fn reflects(&self, k: usize) -> bool;
+    /// The block `members` shoots: each receiver `r` of `shares` gains its reflectance × Σ
+    /// (unshot · area) of the members × `f`, and the members' unshot values are cleared.
+    fn shoot(&mut self, members: &[usize], area: &[f64], shares: &[(usize, f64)]);
+}
+
+/// Radiosity as the loop's payload: the patches' own total and unshot RGB radiosity.
+struct Radiosity<'a>(&'a mut [super::patches::Patch]);
+
+impl Unshot for Radiosity<'_> {
+    fn magnitude(&self, k: usize) -> f64 {
+        magnitude(self.0[k].unshot)
+    }
+    fn reflects(&self, k: usize) -> bool {
+        self.0[k].albedo != DVec3::ZERO
+    }
+    fn shoot(&mut self, members: &[usize], area: &[f64], shares: &[(usize, f64)]) {
+        let flux: DVec3 = members.iter().map(|&k| self.0[k].unshot * area[k]).sum();
+        for &k in members {
+            self.0[k].unshot = DVec3::ZERO;
+        }
+        for &(r, f) in shares {
+            let q = &mut self.0[r];
+            let delta = q.albedo * flux * f;
+            q.total += delta;
+            q.unshot += delta;
+        }
+    }
+}
+
 /// Shoots until no block's unshot power exceeds `threshold` × the initial unshot power.
 pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progress: &mut Progress) -> Report {
-    let blocks = blocks(p, settings.block.max(1));
-    let power = |p: &Patches, b: &Block| b.members.iter().map(|&k| magnitude(p.patches[k].unshot) * p.patches[k].area).sum::<f64>();
-    let initial: f64 = blocks.iter().map(|b| power(p, b)).sum();
+    // The loop reads the geometry while the payload (the same patches' radiosity) changes.
+    let geometry = p.patches.clone();
+    let g = Geometry { size: p.size, charts: &p.charts, patches: &geometry };
+    shoot(g, occluders, settings, progress, &mut Radiosity(&mut p.patches))
+}
+
+/// The patch geometry the loop reads.
+#[derive(Clone, Copy)]
+pub struct Geometry<'a> {
+    pub size: f64,
+    pub charts: &'a [super::patches::Chart],
+    pub patches: &'a [super::patches::Patch],
+}
+
+impl<'a> From<&'a Patches> for Geometry<'a> {
+    fn from(p: &'a Patches) -> Geometry<'a> {
+        Geometry { size: p.size, charts: &p.charts, patches: &p.patches }
+    }
+}
+
+/// The progressive-refinement loop over any [`Unshot`] payload: shooter selection (the seed's
+/// random block samples, or the largest), the stop, form factors and visibility.
+pub fn shoot(g: Geometry<'_>, occluders: &Occluders, settings: &Settings, progress: &mut Progress, energy: &mut dyn Unshot) -> Report {
+    let blocks = blocks_of(&g, settings.block.max(1));
+    let area: Vec<f64> = g.patches.iter().map(|q| q.area).collect();
+    let power = |e: &dyn Unshot, b: &Block| b.members.iter().map(|&k| e.magnitude(k) * area[k]).sum::<f64>();
+    let initial: f64 = blocks.iter().map(|b| power(energy, b)).sum();
     let stop = settings.threshold * initial;
     let mut report = Report::default();
     // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and in
     // corrected mode only a block square's overhang beyond its polygon could reach them);
     // FULL pairs need no rays. The same matrix in both modes.
-    let matrix = Matrix::build(&occluders.triangles, p, settings.full_visibility);
+    let matrix = Matrix::build_for(&occluders.triangles, g.charts, settings.full_visibility);
     report.visibility = matrix.counts();
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let by_chart: Vec<Vec<usize>> = (0..p.charts.len()).map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect()).collect();
-    let receivers: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
+    let by_chart: Vec<Vec<usize>> = (0..g.charts.len()).map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect()).collect();
+    let receivers: Vec<usize> = (0..g.patches.len()).filter(|&k| g.patches[k].inside()).collect();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     // Receivers start a hair in front of their surface, so that their own plane never occludes.
-    let eps = 1e-4 * p.size;
+    let eps = 1e-4 * g.size;
     while report.shots < settings.max_shots {
-        let full = |p: &Patches| (0..blocks.len()).map(|b| (b, power(p, &blocks[b]))).fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a });
+        let full = |e: &dyn Unshot| (0..blocks.len()).map(|b| (b, power(e, &blocks[b]))).fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a });
         let (best, best_power) = match settings.mode {
-            Mode::Corrected => full(p),
+            Mode::Corrected => full(energy),
             Mode::Faithful => {
                 let mut cand = (0, -1.0);
                 for list in by_chart.iter().filter(|l| !l.is_empty()) {
                     for _ in 0..settings.samples_per_chart {
                         let b = list[rng.below(list.len())];
-                        let w = power(p, &blocks[b]);
+                        let w = power(energy, &blocks[b]);
                         if w > cand.1 {
                             cand = (b, w);
                         }
@@ -193,11 +260,11 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
                     cand
                 } else {
                     report.full_searches += 1;
-                    full(p)
+                    full(energy)
                 }
             }
         };
-        let unshot: f64 = blocks.iter().map(|b| power(p, b)).sum();
+        let unshot: f64 = blocks.iter().map(|b| power(energy, b)).sum();
         report.unshot_power.push(unshot);
         // CaLight stops when no shooter is above its threshold, which leaves up to (blocks ×
         // threshold) of the light unshot; the corrected solve stops on the total instead.
@@ -209,23 +276,20 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
             break;
         }
         let b = &blocks[best];
-        let area: f64 = b.members.iter().map(|&k| p.patches[k].area).sum();
+        let block_area: f64 = b.members.iter().map(|&k| area[k]).sum();
         // The block shoots as one patch: its unshot power spread over its square.
         let square = (b.corners[1] - b.corners[0]).length() * (b.corners[3] - b.corners[0]).length();
-        let flux: DVec3 = b.members.iter().map(|&k| p.patches[k].unshot * p.patches[k].area).sum();
-        let centre = b.members.iter().map(|&k| p.patches[k].centre * p.patches[k].area).sum::<DVec3>() / area;
-        let normal = p.charts[b.chart].normal;
-        for &k in &b.members {
-            p.patches[k].unshot = DVec3::ZERO;
-        }
+        let centre = b.members.iter().map(|&k| g.patches[k].centre * area[k]).sum::<DVec3>() / block_area;
+        let normal = b.normal;
         // Every receiver's share is independent of the others': the shot is split over the
         // machine's cores (each thread casts its receivers' rays), then applied in order, so the
         // result does not depend on the thread count.
-        let shares = {
-            let patches = &p.patches;
-            let matrix = &matrix;
-            let shooter = |r: usize| -> Option<(usize, DVec3, bool, bool)> {
+        let found = {
+            let (patches, matrix, e) = (g.patches, &matrix, &*energy);
+            let reflects: Vec<bool> = receivers.iter().map(|&r| e.reflects(r)).collect();
+            let shooter = |(i, &r): (usize, &usize)| -> Option<(usize, f64, bool, bool)> {
                 let rp = patches[r];
+                let plane = g.charts[rp.chart].normal;
                 let vis = matrix.get(b.chart, rp.chart);
                 if vis == Vis::None {
                     return None;
@@ -239,33 +303,36 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
                     // F from the receiver to the square times the square's mean unshot radiosity.
                     Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / square,
                     // CaLight: the block as one patch of its area at its centre.
-                    Mode::Faithful => form_factor::point_sampled(rp.centre, rp.normal, centre, normal, area, p.size) / area,
+                    Mode::Faithful => form_factor::point_sampled(rp.centre, rp.normal, centre, normal, block_area, g.size) / block_area,
                 };
-                if f <= 0.0 || rp.albedo == DVec3::ZERO {
+                // With normal-mapped patches, both ends must also face each other's planes (the
+                // seed's four cosines); for plain patches these equal the tests above.
+                if f <= 0.0 || !reflects[i] || plane.dot(centre - rp.centre) <= 0.0 || g.charts[b.chart].normal.dot(rp.centre - centre) <= 0.0 {
                     return None;
                 }
                 let full = vis == Vis::Full;
-                let seen = full || occluders.visible(rp.centre + rp.normal * eps, centre + normal * eps);
-                Some((r, rp.albedo * flux * f, seen, full))
+                let seen = full || occluders.visible(rp.centre + plane * eps, centre + g.charts[b.chart].normal * eps);
+                Some((r, f, seen, full))
             };
             let chunk = receivers.len().div_ceil(threads).max(1);
+            let indexed: Vec<(usize, &usize)> = receivers.iter().enumerate().collect();
             std::thread::scope(|scope| {
-                let handles: Vec<_> = receivers.chunks(chunk).map(|part| scope.spawn(move || part.iter().filter_map(|&r| shooter(r)).collect::<Vec<_>>())).collect();
+                let handles: Vec<_> = indexed.chunks(chunk).map(|part| scope.spawn(move || part.iter().filter_map(|&x| shooter(x)).collect::<Vec<_>>())).collect();
                 handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect::<Vec<_>>()
             })
         };
-        for (r, delta, seen, full) in shares {
+        let mut shares = Vec::with_capacity(found.len());
+        for (r, f, seen, full) in found {
             if full {
                 report.rays_saved += 1;
             } else {
                 report.rays += 1;
             }
             if seen {
-                let q = &mut p.patches[r];
-                q.total += delta;
-                q.unshot += delta;
+                shares.push((r, f));
             }
         }
+        energy.shoot(&b.members, &area, &shares);
         report.shots += 1;
         let left = report.unshot_power.last().copied().unwrap_or(0.0);
         show_progress(progress, report.shots, left, initial, settings.threshold);

@@ -22,9 +22,15 @@ fn luminance(c: DVec3) -> f64 {
 /// display/world luminance ratio), black stays black.
 pub fn reproduce(values: &[DVec3]) -> Vec<[u8; 3]> {
     let lum: Vec<f64> = values.iter().map(|&v| luminance(v)).collect();
+    values.iter().zip(display_scale(&lum)).map(|(&v, scale)| [v.x, v.y, v.z].map(|c| (c * 255.0 * scale).round().clamp(0.0, 255.0) as u8)).collect()
+}
+
+/// Per world luminance, the factor that takes it to its display value in [0, 1] (0 for black):
+/// what [`reproduce`] scales RGB by, and CaSHL scales a transfer vector by (seed 000 §5.4.4).
+pub fn display_scale(lum: &[f64]) -> Vec<f64> {
     let max = lum.iter().copied().fold(0.0f64, f64::max);
     if max <= MIN_LUMINANCE {
-        return vec![[0; 3]; values.len()];
+        return vec![0.0; lum.len()];
     }
     let (lo, hi) = (MIN_LUMINANCE.ln(), max.ln());
     let width = ((hi - lo) / BINS as f64).max(1e-12);
@@ -66,17 +72,14 @@ pub fn reproduce(values: &[DVec3]) -> Vec<[u8; 3]> {
         acc += h;
         *c = acc / total;
     }
-    values
-        .iter()
-        .zip(&lum)
-        .map(|(&v, &l)| {
+    lum.iter()
+        .map(|&l| {
             if l <= MIN_LUMINANCE {
-                return [0; 3];
+                return 0.0;
             }
             let display = DISPLAY_MAX.powf(cdf[bin(l)]);
-            // The display range [1, 80] rescaled to [0, 255].
-            let scale = 255.0 * (display - 1.0) / (DISPLAY_MAX - 1.0) / l;
-            [v.x, v.y, v.z].map(|c| (c * scale).round().clamp(0.0, 255.0) as u8)
+            // The display range [1, 80] rescaled to [0, 1].
+            (display - 1.0) / (DISPLAY_MAX - 1.0) / l
         })
         .collect()
 }

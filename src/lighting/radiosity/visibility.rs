@@ -9,7 +9,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::patches::{Patches, Triangle};
+use super::patches::{Chart, Patches, Triangle};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Vis {
@@ -86,9 +86,14 @@ impl Matrix {
     /// The matrix of `p`'s charts over the static `triangles` they were built from; `full`
     /// false leaves every visible pair PARTIAL (CaLight's `-NoFullVis`).
     pub fn build(triangles: &[Triangle], p: &Patches, full: bool) -> Matrix {
-        let n = p.charts.len();
+        Matrix::build_for(triangles, &p.charts, full)
+    }
+
+    /// [`Matrix::build`] from the charts alone.
+    pub fn build_for(triangles: &[Triangle], charts: &[Chart], full: bool) -> Matrix {
+        let n = charts.len();
         let mut m = Matrix { n, bits: vec![0; (n * (n + 1) / 2).div_ceil(4)] };
-        let test = Tester::new(triangles, p);
+        let test = Tester::of_charts(triangles, charts);
         for i in 0..n {
             for j in 0..=i {
                 m.set(i, j, test.classify(i, j, full));
@@ -108,9 +113,12 @@ pub struct Tester<'a> {
 
 impl<'a> Tester<'a> {
     pub fn new(triangles: &'a [Triangle], p: &Patches) -> Tester<'a> {
+        Tester::of_charts(triangles, &p.charts)
+    }
+
+    pub fn of_charts(triangles: &'a [Triangle], charts: &[Chart]) -> Tester<'a> {
         let scale = triangles.iter().flat_map(|t| t.p).fold(0.0f64, |m, q| m.max(q.abs().max_element())).max(1.0);
-        let surfaces = p
-            .charts
+        let surfaces = charts
             .iter()
             .map(|c| {
                 let pts: Vec<DVec3> = c.triangles.iter().flat_map(|&t| triangles[t].p).collect();

@@ -2,5 +2,11 @@
 //! of its transfer function (shadowed diffuse plus interreflections), so that a distant light of
 //! any shape (sky, sun, an environment image) moves at run time for one dot product per texel.
 
+pub mod normals;
+pub mod samples;
 pub mod storage;
+pub mod transfer;
+
+#[cfg(test)]
+mod tests;
 pub mod vq;
