@@ -161,6 +161,7 @@ pub fn format_texel_size(format: vk::Format) -> Option<u64> {
         vk::Format::R8_UNORM | vk::Format::S8_UINT | vk::Format::R8_UINT => 1,
         vk::Format::R16_SFLOAT | vk::Format::R16_UNORM => 2,
         vk::Format::R8G8B8A8_UNORM
+        | vk::Format::R8G8B8A8_UINT
         | vk::Format::R8G8B8A8_SRGB
         | vk::Format::B8G8R8A8_UNORM
         | vk::Format::B8G8R8A8_SRGB

@@ -24,15 +24,9 @@ mod tests;
 
 pub mod lightmap;
 
-use bytemuck::{Pod, Zeroable};
-
-use crate::backend::{
-    vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SpecConstant, SubresourceRange, VertexAttribute,
-    VertexLayout,
-};
+use crate::backend::{vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
-use crate::gpu_scene::DrawPush;
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
@@ -176,27 +170,11 @@ pub fn lightmap_format(mode: Mode) -> vk::Format {
     }
 }
 
-/// `LightmapVertex` of glsl/radiosity/lightmap.vert (object space: the draw's model matrix is
-/// pushed, so the depth is the one every other method computes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct LightmapVertex {
-    position: [f32; 3],
-    normal: [f32; 3],
-    lightmap_uv: [f32; 2],
-    uv: [f32; 2],
-}
-
 /// The light-map base term: the scene's static triangles drawn with emission + albedo ×
 /// light-map.
 pub struct Radiosity {
     pipeline: PipelineId,
-    vertices: BufferId,
-    /// (scene draw, first vertex, vertex count).
-    draws: Vec<(usize, u32, u32)>,
-    /// Per entry of `draws`: an entity's animation (placed at the frame clock's time, as the
-    /// direct methods place it).
-    animations: Vec<Option<crate::scene::Animation>>,
+    mesh: lightmap::Mesh,
     lightmap: ImageId,
     sampler: SamplerId,
 }
@@ -236,39 +214,7 @@ impl Radiosity {
             return Err(Error::Usage(format!("{}: {NAME}: the baked light-map does not match the scene ({} values)", cx.scene.source, baked.len())));
         }
         let texels = &baked[2..2 + texel_floats];
-        let uvs = &baked[2 + texel_floats..];
-        // Vertices grouped by scene draw (static_geometry emits them in draw order).
-        let mut vertices = Vec::with_capacity(3 * geometry.triangles.len());
-        let mut draws: Vec<(usize, u32, u32)> = Vec::new();
-        for t in 0..geometry.triangles.len() {
-            let d = geometry.draw[t];
-            match draws.last_mut() {
-                Some(last) if last.0 == d => last.2 += 3,
-                _ => draws.push((d, vertices.len() as u32, 3)),
-            }
-            let o = geometry.object_space[t].map(glam::Vec3::from);
-            let n = (o[1] - o[0]).cross(o[2] - o[0]).normalize_or_zero().to_array();
-            for k in 0..3 {
-                vertices.push(LightmapVertex { position: o[k].to_array(), normal: n, lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]], uv: geometry.uvs[t][k] });
-            }
-        }
-        // Entities: their mesh as it is, outside the light-map (a negative coordinate reads as
-        // no light-map light).
-        for &d in &geometry.entities {
-            let mesh = &cx.scene_gpu.meshes[d];
-            let first = vertices.len() as u32;
-            for t in mesh.indices.chunks_exact(3) {
-                let o = [0, 1, 2].map(|k| mesh.positions[t[k] as usize]);
-                let n = (o[1] - o[0]).cross(o[2] - o[0]).normalize_or_zero().to_array();
-                for (k, p) in o.iter().enumerate() {
-                    vertices.push(LightmapVertex { position: p.to_array(), normal: n, lightmap_uv: [-1.0, -1.0], uv: mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()) });
-                }
-            }
-            draws.push((d, first, vertices.len() as u32 - first));
-        }
-        let animations = draws.iter().map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation)).collect();
-        let vertices = cx.gpu.create_buffer_init("radiosity vertices", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
-        cx.states.forget_buffer(vertices);
+        let mesh = lightmap::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
         let format = lightmap_format(config.settings.mode);
         let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
         match format {
@@ -276,19 +222,14 @@ impl Radiosity {
             _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
         }
         cx.states.set_image(cx.gpu, lightmap, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
-        let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} light-map"), "radiosity/lightmap.vert", Some("radiosity/lightmap.frag"));
-        desc.vertex_layout = VertexLayout {
-            buffers: vec![(0, std::mem::size_of::<LightmapVertex>() as u32)],
-            attributes: vec![attr(0, vk::Format::R32G32B32_SFLOAT, 0), attr(1, vk::Format::R32G32B32_SFLOAT, 12), attr(2, vk::Format::R32G32_SFLOAT, 24), attr(3, vk::Format::R32G32_SFLOAT, 32)],
-        };
+        let mut desc = lightmap::Mesh::pipeline_desc(&format!("{NAME} light-map"), "radiosity/lightmap.frag");
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
         desc.specialization = vec![SpecConstant { id: 0, bits: u32::from(config.ambient_nz) }];
         let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let sampler = cx.gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
-        Ok(Radiosity { pipeline, vertices, draws, animations, lightmap, sampler })
+        Ok(Radiosity { pipeline, mesh, lightmap, sampler })
     }
 }
 
@@ -301,34 +242,9 @@ impl LightingMethod for Radiosity {
         if !frame.terms.has(Term::Base) {
             return Ok(());
         }
-        let (scene, t, uniforms, time) = (frame.scene, frame.targets, frame.uniforms, frame.clock.time_s);
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
-        graph
-            .pass("light-map")
-            .color_attachment(t.radiance, SubresourceRange::mip(0), false)
-            .depth_stencil_write(t.depth_stencil, false)
-            .buffer(self.vertices, Access::VertexRead, None)
-            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .sample("lightmap", self.lightmap, SubresourceRange::mip(0), self.sampler, frag)
-            .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
-                ctx.rec.bind_pipeline(self.pipeline)?;
-                ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
-                for (&(d, first, count), animation) in self.draws.iter().zip(&self.animations) {
-                    let item = &scene.draws[d];
-                    let model = animation.as_ref().map_or(item.model, |a| a.transform_at(item.model, time));
-                    let maps = scene.material_maps[item.material as usize];
-                    ctx.bind(&[
-                        ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
-                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
-                        ("normal_map", Bind::Sampled { image: maps.normal, range: SubresourceRange::mip(0), sampler: scene.sampler }),
-                    ])?;
-                    ctx.rec.push_constants(DrawPush::new(model, item.material).bytes())?;
-                    ctx.rec.draw_from(count, first)?;
-                }
-                ctx.rec.end_rendering();
-                Ok(())
-            });
+        let pass = graph.pass("light-map").sample("lightmap", self.lightmap, SubresourceRange::mip(0), self.sampler, frag);
+        self.mesh.draw(pass, frame, self.pipeline, Vec::new());
         Ok(())
     }
 }

@@ -1,12 +1,346 @@
 //! SH light-maps (seed 000 §5, CaSHL; digest §1.5–1.8): per light-map texel, the SH coefficients
 //! of its transfer function (shadowed diffuse plus interreflections), so that a distant light of
 //! any shape (sky, sun, an environment image) moves at run time for one dot product per texel.
+//!
+//! The bake ([`transfer`]) runs on the radiosity method's patches, visibility matrix, shooting
+//! loop and border passes; it goes through the bake stage's cache. The coefficients are stored
+//! natively (⌈n²/4⌉ layers: the seed's range-encoded RGBA8, or half/single floats) or compressed
+//! by vector quantisation ([`vq`], [`storage`]: 16-bit indices and the seed's 256-row table),
+//! drawn by glsl/sh_lightmap/ with the band count as a specialisation constant. The light
+//! ([`light`]) is projected every frame.
 
+pub mod config;
+pub mod light;
 pub mod normals;
 pub mod samples;
 pub mod storage;
 pub mod transfer;
+pub mod vq;
 
 #[cfg(test)]
 mod tests;
-pub mod vq;
+
+use glam::DVec3;
+
+use crate::backend::{vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
+use crate::bake::BakeKey;
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::radiosity::lightmap::{self, StaticGeometry};
+use crate::lighting::radiosity::patches::Patches;
+use crate::lighting::radiosity::solve::{Mode, Occluders};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
+use crate::progress::Progress;
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
+use config::{Config, Storage, View};
+use normals::{NormalImage, Surfaces};
+use samples::SampleSet;
+
+pub const NAME: &str = "sh_lightmap";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "mode", kind: ParamKind::String },
+        ParamSchema { name: "bands", kind: ParamKind::Int },
+        ParamSchema { name: "samples", kind: ParamKind::Int },
+        ParamSchema { name: "patch_size", kind: ParamKind::Float },
+        ParamSchema { name: "block", kind: ParamKind::Int },
+        ParamSchema { name: "threshold", kind: ParamKind::Float },
+        ParamSchema { name: "bounces", kind: ParamKind::Bool },
+        ParamSchema { name: "tone", kind: ParamKind::Bool },
+        ParamSchema { name: "reps", kind: ParamKind::Int },
+        ParamSchema { name: "filter", kind: ParamKind::Bool },
+        ParamSchema { name: "storage", kind: ParamKind::String },
+        ParamSchema { name: "normal_samples", kind: ParamKind::Int },
+        ParamSchema { name: "sun_speed", kind: ParamKind::Float },
+        ParamSchema { name: "sky", kind: ParamKind::String },
+        ParamSchema { name: "cie_zenith", kind: ParamKind::Float },
+        ParamSchema { name: "view", kind: ParamKind::String },
+        ParamSchema { name: "baker", kind: ParamKind::String },
+    ],
+};
+
+/// Bumped whenever the baker's output for the same inputs changes.
+const BAKER_VERSION: u32 = 1;
+
+/// The reference: every bounce when the transfer bounces, direct light otherwise.
+pub fn reference(decl: &MethodDecl) -> ReferenceKind {
+    match Config::from_decl(decl, None) {
+        Ok(c) if !c.transfer.bounces => ReferenceKind::Direct,
+        _ => ReferenceKind::Bounces(16),
+    }
+}
+
+/// The chart's sweep: bands × compression (native, 4096 and 65536 representatives), and the
+/// faithful mode.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let with = |d: &MethodDecl, name: &str, v: toml::Value| {
+        let mut d = d.clone();
+        d.params.retain(|(n, _, _)| n != name);
+        d.params.push((name.to_string(), v, 0));
+        d
+    };
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d, None) {
+            let label = format!("sh_lightmap {:?} bands={} reps={}", c.transfer.solve.mode, c.transfer.bands, c.reps).to_lowercase();
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    for bands in [2i64, 3, 4, 6] {
+        for reps in [0i64, 4096] {
+            push(with(&with(decl, "bands", bands.into()), "reps", reps.into()));
+        }
+    }
+    push(with(decl, "mode", "faithful".into()));
+    out
+}
+
+/// What the bake produced: the atlas and its texels' coefficients, and each triangle corner's
+/// light-map coordinate.
+pub struct Baked {
+    pub width: u32,
+    pub height: u32,
+    pub bands: usize,
+    /// `bands²` per texel, row-major.
+    pub coeffs: Vec<f32>,
+    pub uvs: Vec<f32>,
+}
+
+impl Baked {
+    fn to_floats(&self) -> Vec<f32> {
+        let mut out = vec![self.width as f32, self.height as f32, self.bands as f32];
+        out.extend(&self.coeffs);
+        out.extend(&self.uvs);
+        out
+    }
+
+    fn from_floats(v: &[f32], triangles: usize) -> Option<Baked> {
+        let (w, h, b) = (*v.first()? as u32, *v.get(1)? as u32, *v.get(2)? as usize);
+        let n = (w as usize) * (h as usize) * b * b;
+        (v.len() == 3 + n + 6 * triangles && w > 0 && h > 0 && (2..=8).contains(&b)).then(|| Baked { width: w, height: h, bands: b, coeffs: v[3..3 + n].to_vec(), uvs: v[3 + n..].to_vec() })
+    }
+}
+
+/// Where the visibility rays are cast.
+pub enum Rays<'a> {
+    Cpu,
+    Gpu(&'a mut crate::backend::Gpu, &'a crate::shaders::ShaderLibrary),
+}
+
+/// Bakes `geometry`'s SH light-map: patches, normal-mapped normals, visibility, transfer, atlas.
+pub fn bake(geometry: &StaticGeometry, surfaces: Option<&Surfaces<'_>>, config: &Config, rays: Rays<'_>, progress: &mut Progress) -> Result<Baked> {
+    let mut p = Patches::build(&geometry.triangles, config.patch_size);
+    if let (Some(s), true) = (surfaces, config.normal_samples > 0) {
+        normals::perturb(&mut p, &geometry.triangles, s, config.normal_samples);
+    }
+    let samples = SampleSet::new(config.samples, config.transfer.bands)?;
+    let occluders = Occluders::new(&geometry.triangles);
+    let mode = config.transfer.solve.mode;
+    let bits = match rays {
+        Rays::Cpu => transfer::visibility_cpu(&p, &occluders, &samples, mode, progress),
+        Rays::Gpu(..) => return Err(Error::Usage(format!("{NAME}: the GPU visibility baker is not available in this build"))),
+    };
+    let t = transfer::bake(&p, &occluders, &samples, &bits, &config.transfer, progress);
+    let atlas = lightmap::pack(&p);
+    let dim = samples.dim();
+    let mut coeffs = vec![0.0f32; (atlas.width * atlas.height) as usize * dim];
+    for (ci, c) in p.charts.iter().enumerate() {
+        let (ox, oy) = atlas.offsets[ci];
+        for j in 0..c.height {
+            for i in 0..c.width {
+                let k = c.first + j * c.width + i;
+                let texel = ((oy + j as u32) * atlas.width + ox + i as u32) as usize;
+                for d in 0..dim {
+                    coeffs[texel * dim + d] = t.coeffs[k * dim + d] as f32;
+                }
+            }
+        }
+    }
+    let uvs = lightmap::triangle_uvs(&geometry.triangles, &p, &atlas).into_iter().flatten().collect();
+    Ok(Baked { width: atlas.width, height: atlas.height, bands: samples.bands, coeffs, uvs })
+}
+
+/// The scene's normal maps, decoded, per material.
+fn load_normal_maps(scene: &Scene) -> Result<Vec<Option<NormalImage>>> {
+    scene
+        .materials
+        .iter()
+        .map(|m| match &m.normal_map {
+            None => Ok(None),
+            Some(path) => {
+                let img = crate::image_io::open_image(path).map_err(|e| Error::Usage(format!("{}: material {:?}: normal_map: cannot load {}: {e}", scene.source, m.name, path.display())))?.to_rgb8();
+                Ok(Some(NormalImage::from_rgb8(img.width() as usize, img.height() as usize, img.as_raw())))
+            }
+        })
+        .collect()
+}
+
+/// The SH light-map base term.
+pub struct ShLightmap {
+    config: Config,
+    pipeline: PipelineId,
+    mesh: lightmap::Mesh,
+    /// Native: the coefficient layers. Compressed: the index map and the representative table.
+    images: Vec<(&'static str, ImageId)>,
+    sampler: SamplerId,
+    lights: light::Lights,
+    /// This frame's light uniform block.
+    light: Vec<f32>,
+}
+
+impl ShLightmap {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShLightmap> {
+        let config = Config::from_decl(decl, Some(cx.scene))?;
+        let geometry = lightmap::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        if geometry.triangles.is_empty() {
+            return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
+        }
+        let maps = load_normal_maps(cx.scene)?;
+        let surfaces = Surfaces { uvs: &geometry.uvs, maps: geometry.material.iter().map(|m| m.and_then(|m| maps.get(m).and_then(|x| x.as_ref()))).collect() };
+        let bake_config = Config { view: View::Final, filter: false, storage: Storage::Single, reps: 0, sun_speed: 0.0, sky: config::Sky::Scene, cie_zenith: 0.0, ..config };
+        let mut key = BakeKey::new("SH light-map").with("version", BAKER_VERSION).with("config", bake_config);
+        let geometry_bytes: Vec<f64> =
+            geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))])).collect();
+        key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
+        let uv_bytes: Vec<f32> = geometry.uvs.iter().flatten().flatten().copied().collect();
+        key = key.with_bytes("uvs", bytemuck::cast_slice(&uv_bytes));
+        for (i, m) in maps.iter().enumerate() {
+            if let Some(m) = m {
+                let texels: Vec<f64> = m.texels.iter().flat_map(|t| t.to_array()).collect();
+                key = key.with_bytes(&format!("normal map {i}"), bytemuck::cast_slice(&texels));
+            }
+        }
+        let (geo, surf) = (&geometry, &surfaces);
+        let floats: Vec<f32> = cx
+            .bakes
+            .bake(&format!("{NAME} bands={} patch={}", config.transfer.bands, config.patch_size), &key, |progress| Ok(bake(geo, Some(surf), &bake_config, Rays::Cpu, progress)?.to_floats()))?;
+        let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the baked SH light-map does not match the scene", cx.scene.source)))?;
+        let mesh = lightmap::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
+        let images = if config.reps == 0 { upload_native(cx, &baked, config.storage)? } else { upload_compressed(cx, &baked, &config, &key)? };
+        let (fragment, encoded) = match config.reps {
+            0 => ("sh_lightmap/native.frag", config.storage == Storage::Rgba8),
+            _ => ("sh_lightmap/compressed.frag", config.storage == Storage::Rgba8),
+        };
+        let mut desc = lightmap::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
+        desc.raster.cull = vk::CullModeFlags::NONE;
+        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+        let faithful = config.transfer.solve.mode == Mode::Faithful;
+        desc.specialization = vec![
+            SpecConstant { id: 0, bits: baked.bands as u32 },
+            SpecConstant { id: 1, bits: u32::from(encoded) },
+            SpecConstant { id: 2, bits: u32::from(faithful) },
+            SpecConstant { id: 3, bits: config.view as u32 },
+            SpecConstant { id: 4, bits: u32::from(config.filter) },
+        ];
+        let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+        let sampler = cx.gpu.sampler(if config.reps == 0 { SamplerDesc::LINEAR_CLAMP } else { SamplerDesc::NEAREST_CLAMP })?;
+        let lights = light::Lights::new(cx.scene, cx.environment, &config)?;
+        let light = lights.uniform(0.0, faithful);
+        Ok(ShLightmap { config, pipeline, mesh, images, sampler, lights, light })
+    }
+}
+
+fn storage_error(e: impl std::fmt::Display) -> Error {
+    Error::Usage(format!("{NAME}: {e}"))
+}
+
+fn upload_native(cx: &mut CreateContext<'_>, baked: &Baked, storage: Storage) -> Result<Vec<(&'static str, ImageId)>> {
+    let (w, h, bands) = (baked.width, baked.height, baked.bands);
+    let texels = (w * h) as usize;
+    let (format, mut bytes, zero): (vk::Format, Vec<u8>, Vec<u8>) = match storage {
+        // A zero coefficient encodes as 128 (the seed's range encoding has no exact zero).
+        Storage::Rgba8 => (vk::Format::R8G8B8A8_UNORM, storage::pack_layers_rgba8(&baked.coeffs, bands, w, h).map_err(storage_error)?, vec![storage::encode_range(0.0); 4 * texels]),
+        Storage::Half => (vk::Format::R16G16B16A16_SFLOAT, bytemuck::cast_slice(&storage::pack_layers_f16(&baked.coeffs, bands, w, h).map_err(storage_error)?).to_vec(), vec![0; 8 * texels]),
+        Storage::Single => (vk::Format::R32G32B32A32_SFLOAT, bytemuck::cast_slice(&storage::pack_layers_f32(&baked.coeffs, bands, w, h).map_err(storage_error)?).to_vec(), vec![0; 16 * texels]),
+    };
+    // At least two layers, so that the view is always an array (2 bands fill one).
+    let layers = storage::layers(bands).max(2) as u32;
+    if storage::layers(bands) < 2 {
+        bytes.extend(zero);
+    }
+    let image = cx.gpu.create_image(&ImageDesc::new_2d("SH light-map layers", format, w, h).layers(layers).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+    cx.gpu.upload_image(image, 0, &bytes)?;
+    cx.states.set_image(cx.gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    Ok(vec![("layers", image)])
+}
+
+/// The VQ of a bake (cached under the bake's key and the representative count): indices as
+/// floats (exact below 2^24), then the codebook.
+pub fn quantize(baked: &Baked, reps: usize, progress: &mut Progress) -> Result<vq::Quantized> {
+    let dim = baked.bands * baked.bands;
+    let settings = vq::VqSettings::new(reps);
+    vq::quantize(&baked.coeffs, dim, &settings, |iteration, max| {
+        progress.set_detail(format!("VQ iteration {iteration}, max nearest distance² {max:.3e}"));
+        progress.update(iteration as u64, settings.max_iterations as u64);
+    })
+    .map_err(storage_error)
+}
+
+fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config, key: &BakeKey) -> Result<Vec<(&'static str, ImageId)>> {
+    let dim = baked.bands * baked.bands;
+    let key = key.clone().with("reps", config.reps);
+    let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} VQ reps={}", config.reps), &key, |progress| {
+        let q = quantize(baked, config.reps, progress)?;
+        let mut out: Vec<f32> = q.indices.iter().map(|&i| i as f32).collect();
+        out.extend(&q.codebook);
+        Ok(out)
+    })?;
+    let texels = (baked.width * baked.height) as usize;
+    if floats.len() < texels || (floats.len() - texels) % dim != 0 {
+        return Err(Error::Usage(format!("{}: {NAME}: the cached VQ does not match the light-map", cx.scene.source)));
+    }
+    let indices: Vec<u16> = floats[..texels].iter().map(|&i| i as u16).collect();
+    let codebook = &floats[texels..];
+    let index_image = cx
+        .gpu
+        .create_image(&ImageDesc::new_2d("SH light-map indices", vk::Format::R8G8B8A8_UINT, baked.width, baked.height).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+    cx.gpu.upload_image(index_image, 0, &storage::pack_indices_rgba8(&indices))?;
+    let (table_format, (tw, th, table_bytes)) = match config.storage {
+        Storage::Rgba8 => (vk::Format::R8G8B8A8_UNORM, storage::pack_table_rgba8(codebook, baked.bands).map_err(storage_error)?),
+        _ => {
+            let (w, h, t) = storage::pack_table_f32(codebook, baked.bands).map_err(storage_error)?;
+            (vk::Format::R32G32B32A32_SFLOAT, (w, h, bytemuck::cast_slice(&t).to_vec()))
+        }
+    };
+    let table = cx.gpu.create_image(&ImageDesc::new_2d("SH light-map representatives", table_format, tw, th).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+    cx.gpu.upload_image(table, 0, &table_bytes)?;
+    for image in [index_image, table] {
+        cx.states.set_image(cx.gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    }
+    Ok(vec![("indices", index_image), ("table", table)])
+}
+
+impl LightingMethod for ShLightmap {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        self.light = self.lights.uniform(frame.clock.time_s as f64, self.config.transfer.solve.mode == Mode::Faithful);
+        Ok(())
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        if !frame.terms.has(Term::Base) {
+            return Ok(());
+        }
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let mut pass = graph.pass("SH light-map");
+        for &(name, image) in &self.images {
+            pass = pass.sample(name, image, SubresourceRange::full(), self.sampler, frag);
+        }
+        self.mesh.draw(pass, frame, self.pipeline, vec![("light", bytemuck::cast_slice(&self.light).to_vec())]);
+        Ok(())
+    }
+}
+
+/// The sun directions the method shades with at `time_s` (for tests and the chart's captions).
+pub fn sun_directions(lights: &light::Lights, time_s: f64) -> Vec<DVec3> {
+    lights.suns_at(time_s).into_iter().map(|s| s.0).collect()
+}
