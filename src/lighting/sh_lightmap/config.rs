@@ -96,7 +96,6 @@ impl Config {
         };
         let mut c = Config::defaults(mode);
         for (p, v, _) in &decl.params {
-            let v = v;
             match p.as_str() {
                 "mode" => {}
                 "bands" => c.transfer.bands = v.as_integer().filter(|b| (2..=8).contains(b)).ok_or_else(|| bad(p, "a band count from 2 to 8", v))? as usize,

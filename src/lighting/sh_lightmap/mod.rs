@@ -292,7 +292,7 @@ fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config,
         Ok(out)
     })?;
     let texels = (baked.width * baked.height) as usize;
-    if floats.len() < texels || (floats.len() - texels) % dim != 0 {
+    if floats.len() < texels || !(floats.len() - texels).is_multiple_of(dim) {
         return Err(Error::Usage(format!("{}: {NAME}: the cached VQ does not match the light-map", cx.scene.source)));
     }
     let indices: Vec<u16> = floats[..texels].iter().map(|&i| i as u16).collect();
