@@ -11,6 +11,7 @@
 
 pub mod config;
 pub mod light;
+pub mod measure;
 pub mod normals;
 pub mod samples;
 pub mod storage;
@@ -270,16 +271,25 @@ fn upload_native(cx: &mut CreateContext<'_>, baked: &Baked, storage: Storage) ->
     Ok(vec![("layers", image)])
 }
 
-/// The VQ of a bake (cached under the bake's key and the representative count): indices as
-/// floats (exact below 2^24), then the codebook.
+/// The VQ of a bake: the texels that hold a transfer are quantised (gap texels between charts,
+/// all zero and never drawn, would only crowd the seed's strided initial picks with duplicates);
+/// gap texels get index 0.
 pub fn quantize(baked: &Baked, reps: usize, progress: &mut Progress) -> Result<vq::Quantized> {
     let dim = baked.bands * baked.bands;
+    let used: Vec<usize> = (0..baked.coeffs.len() / dim).filter(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().any(|&c| c != 0.0)).collect();
+    let vectors: Vec<f32> = used.iter().flat_map(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().copied()).collect();
     let settings = vq::VqSettings::new(reps);
-    vq::quantize(&baked.coeffs, dim, &settings, |iteration, max| {
+    let mut q = vq::quantize(&vectors, dim, &settings, |iteration, max| {
         progress.set_detail(format!("VQ iteration {iteration}, max nearest distance² {max:.3e}"));
         progress.update(iteration as u64, settings.max_iterations as u64);
     })
-    .map_err(storage_error)
+    .map_err(storage_error)?;
+    let mut indices = vec![0u16; baked.coeffs.len() / dim];
+    for (&t, &i) in used.iter().zip(&q.indices) {
+        indices[t] = i;
+    }
+    q.indices = indices;
+    Ok(q)
 }
 
 fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config, key: &BakeKey) -> Result<Vec<(&'static str, ImageId)>> {

@@ -1,0 +1,55 @@
+//! What VQ compression of SH light-maps costs (issue 16, seed 000 §5.6.3): PSNR of bare-SHL
+//! shading over 64 random directional lights, compressed against native, and the seed storage
+//! model's compression ratio. The target (≥ 10× at ≥ 40 dB, 4 bands) is asserted on the
+//! courtyard; `psnr_table` (ignored, long) prints the README's table.
+
+use penumbra::lighting::radiosity::lightmap;
+use penumbra::lighting::sh_lightmap::{self, config::Config, measure, Rays};
+use penumbra::progress::Progress;
+use penumbra::scene::Scene;
+
+/// The courtyard's transfers at `patch` metres, `bands` bands, direct only (the bounces change
+/// the vectors' spread little and cost most of the bake).
+fn bake(patch: f64, bands: usize, samples: usize) -> sh_lightmap::Baked {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scene = Scene::from_file(dir.join("sh_courtyard.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let geometry = lightmap::scene_geometry(&scene, "sh_lightmap").unwrap();
+    let mut config = Config::defaults(penumbra::lighting::radiosity::solve::Mode::Corrected);
+    config.patch_size = patch;
+    config.samples = samples;
+    config.transfer.bands = bands;
+    config.transfer.bounces = false;
+    sh_lightmap::bake(&geometry, None, &config, Rays::Cpu, &mut Progress::new("bake")).unwrap()
+}
+
+fn quantized_row(baked: &sh_lightmap::Baked, reps: usize) -> measure::Row {
+    let dirs = measure::random_directions(64, 7);
+    let t = std::time::Instant::now();
+    let q = sh_lightmap::quantize(baked, reps, &mut Progress::new("vq")).unwrap();
+    measure::row(baked, &q, &dirs, t.elapsed().as_secs_f64(), reps)
+}
+
+#[test]
+fn ten_times_smaller_at_40_db_with_4_bands() {
+    let baked = bake(0.1, 4, 2500);
+    let row = quantized_row(&baked, 1024);
+    eprintln!("| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n{row}");
+    assert!(row.texels > 16_000, "{} texels: too few for the ratio to mean anything", row.texels);
+    assert!(row.ratio >= 10.0, "compression {:.2}×", row.ratio);
+    assert!(row.psnr_db >= 40.0, "PSNR {:.1} dB", row.psnr_db);
+    // Fewer representatives cost accuracy: the measure sees the codebook.
+    let coarse = quantized_row(&baked, 16);
+    assert!(coarse.psnr_db < row.psnr_db - 6.0, "16 representatives {:.1} dB against 1024's {:.1} dB", coarse.psnr_db, row.psnr_db);
+}
+
+#[test]
+#[ignore = "measurement: several minutes; prints the README's PSNR table"]
+fn psnr_table() {
+    println!("| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|");
+    for bands in [2, 3, 4, 6, 8] {
+        let baked = bake(0.1, bands, 10_000);
+        for reps in [1024, 4096, 16384, 65536] {
+            println!("{}", quantized_row(&baked, reps));
+        }
+    }
+}
