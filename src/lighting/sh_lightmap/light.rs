@@ -110,10 +110,6 @@ fn world_to_sh(d: DVec3) -> DVec3 {
 /// hemisphere (the ground below the horizon is black).
 pub fn cie_clear_sky(sun: DVec3, bands: usize, zenith: f64) -> Vec<f64> {
     let sun = sun.normalize();
-    let theta_s = sun.y.clamp(-1.0, 1.0).acos();
-    let gradation = |cos_t: f64| 1.0 - (-0.32 / cos_t.max(1e-3)).exp();
-    let indicatrix = |gamma: f64| 0.91 + 10.0 * (-3.0 * gamma).exp() + 0.45 * gamma.cos().powi(2);
-    let norm = indicatrix(theta_s) * gradation(1.0);
     let dim = bands * bands;
     let mut out = vec![0.0; dim];
     let mut y = vec![0.0; dim];
@@ -125,8 +121,7 @@ pub fn cie_clear_sky(sun: DVec3, bands: usize, zenith: f64) -> Vec<f64> {
         for j in 0..np {
             let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / np as f64;
             let d = DVec3::new(sin_t * phi.cos(), cos_t, sin_t * phi.sin());
-            let gamma = d.dot(sun).clamp(-1.0, 1.0).acos();
-            let l = zenith * indicatrix(gamma) * gradation(cos_t) / norm;
+            let l = cie_clear_sky_radiance(d, sun, zenith);
             if sh::eval_basis_f64(world_to_sh(d), bands, &mut y).is_ok() {
                 let w = 2.0 * std::f64::consts::PI / (nt * np) as f64;
                 for (o, yi) in out.iter_mut().zip(&y) {
@@ -136,4 +131,51 @@ pub fn cie_clear_sky(sun: DVec3, bands: usize, zenith: f64) -> Vec<f64> {
         }
     }
     out
+}
+
+/// The CIE clear sky's radiance toward the sky direction `d` (unit, world; 0 below the horizon):
+/// `L = L_z·f(γ)·φ(θ) / (f(θ_s)·φ(0))`, `f(γ) = 0.91 + 10·e^(−3γ) + 0.45·cos²γ` (the
+/// indicatrix), `φ(θ) = 1 − e^(−0.32/cos θ)` (the gradation), γ the angle to the sun.
+pub fn cie_clear_sky_radiance(d: DVec3, sun: DVec3, zenith: f64) -> f64 {
+    if d.y <= 0.0 {
+        return 0.0;
+    }
+    let gradation = |cos_t: f64| 1.0 - (-0.32 / cos_t.max(1e-3)).exp();
+    let indicatrix = |gamma: f64| 0.91 + 10.0 * (-3.0 * gamma).exp() + 0.45 * gamma.cos().powi(2);
+    let theta_s = sun.y.clamp(-1.0, 1.0).acos();
+    let gamma = d.dot(sun).clamp(-1.0, 1.0).acos();
+    zenith * indicatrix(gamma) * gradation(d.y) / (indicatrix(theta_s) * gradation(1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cie_sky_is_the_zenith_radiance_at_the_zenith_and_brightest_near_the_sun() {
+        let sun = DVec3::new(0.6, 0.5, 0.2).normalize();
+        assert!((cie_clear_sky_radiance(DVec3::Y, sun, 3.0) - 3.0).abs() < 1e-12);
+        // The circumsolar region outshines the zenith; the anti-solar sky above the horizon is
+        // darker than the zenith (0.68 here, from the formula by hand).
+        let near_sun = (sun + DVec3::new(0.0, 0.02, 0.0)).normalize();
+        assert!(cie_clear_sky_radiance(near_sun, sun, 1.0) > 2.0);
+        let away = DVec3::new(-0.6, 1.2, -0.2).normalize();
+        assert!((cie_clear_sky_radiance(away, sun, 1.0) - 0.6841).abs() < 1e-3);
+        assert_eq!(cie_clear_sky_radiance(DVec3::new(0.0, -0.1, 1.0).normalize(), sun, 1.0), 0.0);
+        // The projection's power (c₀₀·2√π = ∫L dω) against an independent quadrature of the
+        // same function (a finer θ-φ midpoint grid in sin θ dθ dφ).
+        let c = cie_clear_sky(sun, 4, 1.0);
+        let (nt, np) = (400usize, 800usize);
+        let mut power = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
+            for j in 0..np {
+                let p = (j as f64 + 0.5) / np as f64 * 2.0 * std::f64::consts::PI;
+                let d = DVec3::new(t.sin() * p.cos(), t.cos(), t.sin() * p.sin());
+                power += cie_clear_sky_radiance(d, sun, 1.0) * t.sin() * (std::f64::consts::FRAC_PI_2 / nt as f64) * (2.0 * std::f64::consts::PI / np as f64);
+            }
+        }
+        let projected = c[0] * sh::CONSTANT_ONE_C00;
+        assert!((projected / power - 1.0).abs() < 0.01, "projected {projected}, quadrature {power}");
+    }
 }
