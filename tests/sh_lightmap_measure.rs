@@ -55,3 +55,15 @@ fn psnr_table() {
         }
     }
 }
+
+#[test]
+#[ignore = "measurement: a few minutes; the README's large-map rows (4 bands, 5 cm, S ≈ 87k texels)"]
+fn psnr_large_map() {
+    let t = std::time::Instant::now();
+    let baked = bake(0.05, 4, 2500);
+    println!("bake, 4 bands, 5 cm, 2,500 samples: {:.1} s", t.elapsed().as_secs_f64());
+    println!("| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|");
+    for reps in [1024, 4096, 16384, 65536] {
+        println!("{}", quantized_row(&baked, reps));
+    }
+}
