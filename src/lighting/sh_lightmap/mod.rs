@@ -2,6 +2,7 @@
 //! of its transfer function (shadowed diffuse plus interreflections), so that a distant light of
 //! any shape (sky, sun, an environment image) moves at run time for one dot product per texel.
 
+pub mod gpu;
 pub mod normals;
 pub mod samples;
 pub mod storage;
