@@ -10,6 +10,7 @@
 //! ([`light`]) is projected every frame.
 
 pub mod config;
+pub mod gpu;
 pub mod light;
 pub mod measure;
 pub mod normals;

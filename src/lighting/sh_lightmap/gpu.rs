@@ -1,0 +1,253 @@
+//! CaSHL's direct visibility on the GPU: the bits of [`transfer::visibility_cpu`] from a compute
+//! pass (`glsl/sh_lightmap/visibility.comp`) over a BVH of the static triangles, the radiosity
+//! shooter's (`radiosity::gpu`). Each invocation traces the samples of one 32-sample word (or,
+//! where the device bounds an invocation's loop iterations and the BVH is deep, of a share of
+//! it) from one inside patch. The work goes in chunks of words, one submission each, whose
+//! output is read back and scattered into the patch-major bit rows between submissions (which
+//! also drives the progress line).
+//!
+//! The rays are the CPU's in fp32 (the CPU BVH is fp32 too), with the direction tests in fp32
+//! rather than fp64: bits may differ only where the last bit of the arithmetic decides, for rays
+//! through the seam between two triangles and for grazing directions (tests/sh_lightmap_gpu.rs:
+//! measured 7.6e-6 of the bits on the open box, all rays into its corner edges).
+//!
+//! [`transfer::visibility_cpu`]: super::transfer::visibility_cpu
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
+
+use super::samples::SampleSet;
+use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::lighting::radiosity::patches::{Patches, Triangle};
+use crate::lighting::radiosity::solve::Mode;
+use crate::progress::Progress;
+use crate::reference::bvh::Bvh;
+use crate::reference::scene_data::TracedTriangle;
+use crate::shaders::ShaderLibrary;
+
+/// `Patch` in glsl/sh_lightmap/visibility.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuPatch {
+    origin: [f32; 4],
+    plane: [f32; 4],
+    normal: [f32; 4],
+}
+
+/// `Push`: the same for every dispatch of a bake (lavapipe compiles a shader per push-constant
+/// set); the chunk's first word item and the lanes per word go through buffers.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    patch_count: u32,
+    word_items: u32,
+    sample_count: u32,
+    triangle_count: u32,
+    closest: u32,
+    escape: u32,
+}
+
+/// Word items (one patch, 32 samples) per submission: the first (small, so that a device that
+/// cuts loops short wastes little before the lanes grow), and the most.
+const FIRST_CHUNK: usize = 256;
+const MAX_CHUNK: usize = 1 << 20;
+/// Invocations per dispatch at most: the guaranteed 65,535 workgroups of the shader's 64.
+const MAX_INVOCATIONS: usize = 65_535 * 64;
+/// A submission long enough that its fixed cost is small, short enough for a lively progress line.
+const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
+/// Invocations per word at most: one sample each.
+const MAX_LANES: u32 = 32;
+
+fn v4(v: DVec3) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, 0.0]
+}
+
+/// The device objects of one call, freed when it ends (whether it succeeded or not).
+#[derive(Default)]
+struct Resources {
+    buffers: Vec<BufferId>,
+    pipelines: Vec<PipelineId>,
+    frame: Option<crate::backend::Frame>,
+}
+
+impl Resources {
+    fn buffer(&mut self, gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
+        let id = gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?;
+        self.buffers.push(id);
+        Ok(id)
+    }
+
+    fn buffer_with(&mut self, gpu: &mut Gpu, name: &str, size: u64, memory: MemoryKind) -> Result<BufferId> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let id = gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })?;
+        self.buffers.push(id);
+        Ok(id)
+    }
+
+    fn free(self, gpu: &mut Gpu) -> Result<()> {
+        if let Some(f) = self.frame {
+            gpu.destroy_frame(f)?;
+        }
+        for p in self.pipelines {
+            gpu.destroy_pipeline(p)?;
+        }
+        for b in self.buffers {
+            gpu.destroy_buffer(b);
+        }
+        Ok(())
+    }
+}
+
+/// Per inside patch, one bit per sample: the ray toward it reaches the sky, as
+/// [`super::transfer::visibility_cpu`] lays them out (`⌈N/32⌉` words per patch, patch-major;
+/// the rows of border patches stay 0). `triangles` are the occluders the CPU path builds its
+/// [`Occluders`](crate::lighting::radiosity::solve::Occluders) from.
+pub fn visibility_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Result<Vec<u32>> {
+    let mut resources = Resources::default();
+    let result = run(gpu, shaders, p, triangles, samples, mode, progress, &mut resources);
+    let freed = resources.free(gpu);
+    let bits = result?;
+    freed?;
+    Ok(bits)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress, res: &mut Resources) -> Result<Vec<u32>> {
+    let words = samples.len().div_ceil(32);
+    let mut bits = vec![0u32; p.patches.len() * words];
+    let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
+    let total = inside.len() * words;
+    if total == 0 {
+        progress.finish();
+        return Ok(bits);
+    }
+    if total > u32::MAX as usize {
+        return Err(Error::Usage(format!("SH light-map visibility: {} patches × {words} words are too many for one GPU bake", inside.len())));
+    }
+    let eps = 1e-4 * p.size;
+    let patches: Vec<GpuPatch> = inside
+        .iter()
+        .map(|&k| {
+            let q = &p.patches[k];
+            let plane = p.charts[q.chart].normal;
+            GpuPatch { origin: v4(q.centre + plane * eps), plane: v4(plane), normal: v4(q.normal) }
+        })
+        .collect();
+    let dirs: Vec<[f32; 4]> = samples.dirs.iter().map(|&d| v4(d)).collect();
+    let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
+    let bvh = Bvh::build(&tris);
+    let traced: Vec<TracedTriangle> = bvh
+        .order
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = tris[t as usize];
+            TracedTriangle { p0: a.extend(0.0).into(), e1: (b - a).extend(0.0).into(), e2: (c - a).extend(0.0).into() }
+        })
+        .collect();
+    let mut sky = vec![0u32; traced.len().div_ceil(32)];
+    for (slot, &t) in bvh.order.iter().enumerate() {
+        if triangles[t as usize].sky {
+            sky[slot / 32] |= 1 << (slot % 32);
+        }
+    }
+    let has_sky = triangles.iter().any(|t| t.sky);
+
+    let patches_buf = res.buffer(gpu, "sh visibility patches", bytemuck::cast_slice(&patches))?;
+    let samples_buf = res.buffer(gpu, "sh visibility samples", bytemuck::cast_slice(&dirs))?;
+    let sky_buf = res.buffer(gpu, "sh visibility sky flags", bytemuck::cast_slice(&sky))?;
+    let nodes_buf = res.buffer(gpu, "sh visibility bvh nodes", bytemuck::cast_slice(&bvh.nodes))?;
+    let triangles_buf = res.buffer(gpu, "sh visibility bvh triangles", bytemuck::cast_slice(&traced))?;
+    let skips_buf = res.buffer(gpu, "sh visibility bvh skip links", bytemuck::cast_slice(&bvh.skip_links()))?;
+    let max_chunk = MAX_CHUNK.min(total);
+    let out_buf = res.buffer_with(gpu, "sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
+    let status_buf = res.buffer_with(gpu, "sh visibility status", 4, MemoryKind::GpuToCpu)?;
+    let chunk_buf = res.buffer_with(gpu, "sh visibility chunk", 4, MemoryKind::GpuOnly)?;
+    let lanes_buf = res.buffer_with(gpu, "sh visibility lanes", 4, MemoryKind::GpuOnly)?;
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh visibility".into(), shader: "sh_lightmap/visibility.comp".into(), specialization: vec![] }, shaders)?;
+    res.pipelines.push(pipeline);
+    let frame = gpu.create_frame()?;
+    res.frame = Some(frame);
+
+    let push = Push {
+        patch_count: inside.len() as u32,
+        word_items: total as u32,
+        sample_count: samples.len() as u32,
+        triangle_count: traced.len() as u32,
+        // Without sky surfaces any hit blocks; with them the first hit decides (in both modes: a
+        // sky surface passes the ray, corrected mode's escaping rays pass too).
+        closest: u32::from(has_sky),
+        escape: u32::from(mode == Mode::Corrected || !has_sky),
+    };
+    let mut lanes = 1u32;
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let read = Access::StorageRead { stages: compute };
+    let write = Access::StorageWrite { stages: compute };
+    let mut states = ResourceStates::default();
+    let (mut base, mut chunk) = (0usize, FIRST_CHUNK.min(max_chunk));
+    while base < total {
+        let n = chunk.min(total - base).min(MAX_INVOCATIONS / lanes as usize);
+        let t0 = std::time::Instant::now();
+        let mut graph = RenderGraph::new();
+        let first = base as u32;
+        graph.pass("sh visibility chunk").buffer(chunk_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(chunk_buf, first));
+        graph.pass("sh visibility lanes").buffer(lanes_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(lanes_buf, lanes));
+        graph.pass("sh visibility clear bits").buffer(out_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(out_buf, 0));
+        graph.pass("sh visibility clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
+        graph
+            .pass("sh visibility")
+            .buffer(patches_buf, read, Some("patches"))
+            .buffer(samples_buf, read, Some("samples"))
+            .buffer(sky_buf, read, Some("sky"))
+            .buffer(out_buf, write, Some("bits"))
+            .buffer(status_buf, write, Some("status"))
+            .buffer(chunk_buf, read, Some("chunk"))
+            .buffer(lanes_buf, read, Some("lanes_per_word"))
+            .buffer(nodes_buf, read, Some("nodes"))
+            .buffer(triangles_buf, read, Some("triangles"))
+            .buffer(skips_buf, read, Some("skips"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                ctx.rec.dispatch([n as u32 * lanes, 1, 1])
+            });
+        graph.pass("sh visibility host").buffer(out_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        let mut rec = gpu.begin_frame(frame)?;
+        rec.begin_scope("sh light-map visibility");
+        graph.execute(&mut rec, &mut states)?;
+        rec.end_scope();
+        rec.finish()?;
+        gpu.submit_and_wait(frame)?;
+        let status = gpu.read_buffer(status_buf)?;
+        let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if cut > 0 {
+            if lanes >= MAX_LANES {
+                return Err(Error::Usage(format!(
+                    "{}: {cut} SH light-map visibility ray(s), traced one per shader invocation, ran more loop iterations than the device allows an invocation; bake on the CPU",
+                    gpu.caps().name
+                )));
+            }
+            // Fewer rays per invocation, and the same chunk again.
+            lanes *= 2;
+            chunk = chunk.div_ceil(2).max(64);
+            continue;
+        }
+        let out = gpu.read_buffer(out_buf)?;
+        let out = out.get(..4 * n).ok_or_else(|| Error::Usage("SH light-map visibility: the bits read back short".into()))?;
+        for (i, b) in out.chunks_exact(4).enumerate() {
+            let word_bits = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            let item = base + i;
+            let (w, j) = (item / inside.len(), item % inside.len());
+            bits[inside[j] * words + w] = word_bits;
+        }
+        base += n;
+        progress.update(base as u64, total as u64);
+        let seconds = t0.elapsed().as_secs_f64();
+        let fit = (SUBMISSION_TARGET_SECONDS * n as f64 / seconds.max(1e-9)) as usize;
+        chunk = fit.clamp(64, (2 * n).min(max_chunk));
+    }
+    progress.finish();
+    Ok(bits)
+}
