@@ -18,6 +18,7 @@ pub mod gpu_scene;
 pub mod graph;
 pub mod image_io;
 pub mod lighting;
+pub mod lightmap;
 pub mod metrics;
 pub mod profile;
 pub mod progress;

@@ -7,9 +7,10 @@ mod common;
 
 use glam::DVec3;
 use penumbra::lighting::radiosity::gpu;
-use penumbra::lighting::radiosity::lightmap::{self, StaticGeometry};
-use penumbra::lighting::radiosity::patches::{Patches, Triangle};
-use penumbra::lighting::radiosity::solve::{self, Mode, Occluders, Settings};
+use penumbra::lighting::radiosity::lightmap;
+use penumbra::lightmap::geometry::StaticGeometry;
+use penumbra::lightmap::patches::{Patches, Triangle};
+use penumbra::lightmap::solve::{self, Mode, Occluders, Settings};
 use penumbra::progress::Progress;
 use penumbra::scene::Scene;
 use penumbra::shaders::ShaderLibrary;
@@ -68,7 +69,7 @@ fn the_gpu_shooter_closes_the_furnace() {
 /// renderer draws them: objects, then emitters), and each draw's object name.
 fn patched(path: &str, size: f64) -> (Scene, StaticGeometry, Patches, Vec<String>) {
     let scene = Scene::from_file(path).unwrap();
-    let geometry = lightmap::scene_geometry(&scene, "radiosity").unwrap();
+    let geometry = penumbra::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
     let p = Patches::build(&geometry.triangles, size);
     let names = scene.objects.iter().map(|o| o.name.clone()).collect();
     (scene, geometry, p, names)

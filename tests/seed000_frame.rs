@@ -61,13 +61,14 @@ fn the_seed000_frame_is_the_light_map_under_the_direct_light() {
 #[test]
 fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     use glam::DVec3;
-    use penumbra::lighting::radiosity::{lightmap, patches::Patches, solve::Mode, solve::Occluders};
+    use penumbra::lighting::radiosity::lightmap;
+    use penumbra::lightmap::{patches::Patches, solve::Mode, solve::Occluders};
     use penumbra::scene::{world_mesh, Light, MeshSource};
     let mut scene = scene(0.0);
     // One light: the warm one of room 0.
     scene.lights.retain(|l| l.name() == "room 0 warm");
     let Light::Point { position, intensity, .. } = scene.lights[0] else { panic!("a point light") };
-    let geometry = lightmap::scene_geometry(&scene, "radiosity").unwrap();
+    let geometry = penumbra::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
     let occluders = Occluders::new(&geometry.triangles);
     let (level, translate) = scene
         .objects

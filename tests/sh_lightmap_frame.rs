@@ -93,7 +93,9 @@ fn the_open_box_floor_shows_the_view_factor_in_every_storage() {
     let want = 0.5 * 0.554126f32;
     let base = r#"name = "sh_lightmap", patch_size = 0.25, bands = 3, bounces = false"#;
     let mut native = None;
-    for extra in ["", r#", storage = "rgba8""#, r#", storage = "f32""#, r#", reps = 65536, storage = "f32""#, r#", reps = 65536, storage = "f32", filter = true"#, r#", reps = 64"#] {
+    for extra in
+        ["", r#", baker = "gpu""#, r#", storage = "rgba8""#, r#", storage = "f32""#, r#", reps = 65536, storage = "f32""#, r#", reps = 65536, storage = "f32", filter = true"#, r#", reps = 64"#]
+    {
         let img = render(scene(OPEN_BOX, &format!("{{ {base}{extra} }}")), 1);
         let c = centre(&img);
         // The range encoding's half step (2/255) against the floor's T₀₀ = F/(2√π) = 0.156 is up

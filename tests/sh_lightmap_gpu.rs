@@ -8,11 +8,11 @@ mod common;
 
 use glam::DVec3;
 use penumbra::backend::Gpu;
-use penumbra::lighting::radiosity::patches::{Patches, Triangle};
-use penumbra::lighting::radiosity::solve::{self, Mode, Occluders};
 use penumbra::lighting::sh_lightmap::gpu::visibility_gpu;
 use penumbra::lighting::sh_lightmap::samples::SampleSet;
 use penumbra::lighting::sh_lightmap::transfer::{self, Settings};
+use penumbra::lightmap::patches::{Patches, Triangle};
+use penumbra::lightmap::solve::{self, Mode, Occluders};
 use penumbra::progress::Progress;
 use penumbra::sh;
 use penumbra::shaders::ShaderLibrary;

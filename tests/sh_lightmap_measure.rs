@@ -3,7 +3,6 @@
 //! model's compression ratio. The target (≥ 10× at ≥ 40 dB, 4 bands) is asserted on the
 //! courtyard; `psnr_table` (ignored, long) prints the README's table.
 
-use penumbra::lighting::radiosity::lightmap;
 use penumbra::lighting::sh_lightmap::{self, config::Config, measure, Rays};
 use penumbra::progress::Progress;
 use penumbra::scene::Scene;
@@ -13,8 +12,8 @@ use penumbra::scene::Scene;
 fn bake(patch: f64, bands: usize, samples: usize) -> sh_lightmap::Baked {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let scene = Scene::from_file(dir.join("sh_courtyard.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let geometry = lightmap::scene_geometry(&scene, "sh_lightmap").unwrap();
-    let mut config = Config::defaults(penumbra::lighting::radiosity::solve::Mode::Corrected);
+    let geometry = penumbra::lightmap::geometry::scene_geometry(&scene, "sh_lightmap").unwrap();
+    let mut config = Config::defaults(penumbra::lightmap::solve::Mode::Corrected);
     config.patch_size = patch;
     config.samples = samples;
     config.transfer.bands = bands;

@@ -13,6 +13,7 @@
 //! Only [`registry`] names techniques; the commands above this layer go through it.
 
 pub mod brdf;
+pub mod lightmap_mesh;
 pub mod registry;
 mod terms;
 

@@ -1,5 +1,5 @@
 //! The shooting step on the GPU (issue 12, deliverable 4): the same progressive refinement as
-//! [`solve`](super::solve) — the same blocks, selection rules, form factors and visibility rays
+//! [`solve`](crate::lightmap::solve) — the same blocks, selection rules, form factors and visibility rays
 //! through a BVH of the static triangles — with every shot run as three compute passes
 //! (`glsl/radiosity/`: block powers, the selection in one workgroup, the receivers' gather). Many
 //! shots go in one submission; the host reads back only the shot record between submissions (to
@@ -12,12 +12,12 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::patches::{Patches, Triangle};
-use super::solve::{self, show_progress, Mode, Report, Settings};
-use super::visibility::Matrix;
 use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::lightmap::patches::{Patches, Triangle};
+use crate::lightmap::solve::{self, show_progress, Mode, Report, Settings};
+use crate::lightmap::visibility::Matrix;
 use crate::progress::Progress;
 use crate::reference::bvh::Bvh;
 use crate::reference::scene_data::TracedTriangle;

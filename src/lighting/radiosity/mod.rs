@@ -1,23 +1,16 @@
-//! Radiosity light-maps (seed 000 §3, CaLight; digest §1.2): patches on the static geometry, one
-//! per light-map texel ([`patches`]), the surface-visibility matrix ([`visibility`]), direct
-//! light and the sun ([`lightmap`], [`sun`]), form factors ([`form_factor`]) and
-//! progressive-refinement shooting on the CPU ([`solve`]) or the GPU ([`gpu`]), border passes
-//! ([`border`]) and, in faithful mode, tone reproduction ([`tone`]); faithful to CaLight or
-//! corrected (exact form factors, energy that closes, radiometric light-maps).
+//! Radiosity light-maps (seed 000 §3, CaLight; digest §1.2) on the light-map substrate
+//! ([`crate::lightmap`]: patches, the surface-visibility matrix, form factors, the shooting loop,
+//! border passes, tone reproduction): direct light and the sun ([`lightmap`], [`sun`]), and the
+//! shooting on the CPU or the GPU ([`gpu`]); faithful to CaLight or corrected (exact form factors,
+//! energy that closes, radiometric light-maps).
 //!
 //! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
 //! light-map ([`lightmap`] bakes it through the bake stage's cache), entities with their emission
 //! only. Bounces reflect each material's albedo times its albedo map's mean, not the map texel by
 //! texel.
 
-pub mod border;
-pub mod form_factor;
 pub mod gpu;
-pub mod patches;
-pub mod solve;
 pub mod sun;
-pub mod tone;
-pub mod visibility;
 
 #[cfg(test)]
 mod tests;
@@ -29,9 +22,9 @@ use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
+use crate::lightmap::solve::{Mode, Settings};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use lightmap::Content;
-use solve::{Mode, Settings};
 
 pub const NAME: &str = "radiosity";
 
@@ -174,7 +167,7 @@ pub fn lightmap_format(mode: Mode) -> vk::Format {
 /// light-map.
 pub struct Radiosity {
     pipeline: PipelineId,
-    mesh: lightmap::Mesh,
+    mesh: crate::lighting::lightmap_mesh::Mesh,
     lightmap: ImageId,
     sampler: SamplerId,
 }
@@ -182,7 +175,7 @@ pub struct Radiosity {
 impl Radiosity {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Radiosity> {
         let config = Config::from_decl_in(decl, Some(cx.scene))?;
-        let geometry = lightmap::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
         }
@@ -204,7 +197,7 @@ impl Radiosity {
             let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, shooter, progress)?;
             let mut out = vec![atlas.width as f32, atlas.height as f32];
             out.extend(texels.iter().flatten());
-            let uv = lightmap::triangle_uvs(&geo.triangles, &patches, &atlas);
+            let uv = crate::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
             out.extend(uv.iter().flatten());
             Ok(out)
         })?;
@@ -214,15 +207,15 @@ impl Radiosity {
             return Err(Error::Usage(format!("{}: {NAME}: the baked light-map does not match the scene ({} values)", cx.scene.source, baked.len())));
         }
         let texels = &baked[2..2 + texel_floats];
-        let mesh = lightmap::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
+        let mesh = crate::lighting::lightmap_mesh::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
         let format = lightmap_format(config.settings.mode);
         let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
         match format {
-            vk::Format::R8G8B8A8_UNORM => cx.gpu.upload_image(lightmap, 0, &lightmap::to_rgb8(texels))?,
+            vk::Format::R8G8B8A8_UNORM => cx.gpu.upload_image(lightmap, 0, &crate::lightmap::atlas::to_rgb8(texels))?,
             _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
         }
         cx.states.set_image(cx.gpu, lightmap, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        let mut desc = lightmap::Mesh::pipeline_desc(&format!("{NAME} light-map"), "radiosity/lightmap.frag");
+        let mut desc = crate::lighting::lightmap_mesh::Mesh::pipeline_desc(&format!("{NAME} light-map"), "radiosity/lightmap.frag");
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);

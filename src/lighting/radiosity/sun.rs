@@ -13,8 +13,8 @@
 
 use glam::{DVec2, DVec3};
 
-use super::patches::Patches;
-use super::solve::{Mode, Occluders};
+use crate::lightmap::patches::Patches;
+use crate::lightmap::solve::{Mode, Occluders};
 
 /// Sub-samples per patch side (as the coverage estimate's).
 const SAMPLES: usize = 4;
@@ -40,7 +40,7 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
                 for sj in 0..SAMPLES {
                     for si in 0..SAMPLES {
                         let q = DVec2::new(i as f64 + (si as f64 + 0.5) / SAMPLES as f64, j as f64 + (sj as f64 + 0.5) / SAMPLES as f64) * p.size;
-                        if !tris.iter().any(|t| super::patches::inside_triangle(q, t)) {
+                        if !tris.iter().any(|t| crate::lightmap::patches::inside_triangle(q, t)) {
                             continue;
                         }
                         inside += 1;

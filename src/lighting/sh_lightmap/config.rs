@@ -1,7 +1,7 @@
 //! The method's parameters, each checked with one error line naming the scene file, line and field.
 
 use crate::error::{Error, Result};
-use crate::lighting::radiosity::solve::{self, Mode};
+use crate::lightmap::solve::{self, Mode};
 use crate::scene::{MethodDecl, Scene};
 
 /// How the coefficients are stored on the GPU.

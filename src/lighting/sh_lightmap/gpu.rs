@@ -20,8 +20,8 @@ use super::samples::SampleSet;
 use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::lighting::radiosity::patches::{Patches, Triangle};
-use crate::lighting::radiosity::solve::Mode;
+use crate::lightmap::patches::{Patches, Triangle};
+use crate::lightmap::solve::Mode;
 use crate::progress::Progress;
 use crate::reference::bvh::Bvh;
 use crate::reference::scene_data::TracedTriangle;
@@ -103,7 +103,7 @@ impl Resources {
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky, as
 /// [`super::transfer::visibility_cpu`] lays them out (`⌈N/32⌉` words per patch, patch-major;
 /// the rows of border patches stay 0). `triangles` are the occluders the CPU path builds its
-/// [`Occluders`](crate::lighting::radiosity::solve::Occluders) from.
+/// [`Occluders`](crate::lightmap::solve::Occluders) from.
 pub fn visibility_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Result<Vec<u32>> {
     let mut resources = Resources::default();
     let result = run(gpu, shaders, p, triangles, samples, mode, progress, &mut resources);
@@ -225,7 +225,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
         if cut > 0 {
             if lanes >= MAX_LANES {
                 return Err(Error::Usage(format!(
-                    "{}: {cut} SH light-map visibility ray(s), traced one per shader invocation, ran more loop iterations than the device allows an invocation; bake on the CPU",
+                    "{}: {cut} SH light-map visibility ray(s), traced one per shader invocation, ran more loop iterations than the device allows an invocation; use baker = \"cpu\"",
                     gpu.caps().name
                 )));
             }

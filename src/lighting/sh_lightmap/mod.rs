@@ -28,10 +28,10 @@ use crate::backend::{vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDes
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
-use crate::lighting::radiosity::lightmap::{self, StaticGeometry};
-use crate::lighting::radiosity::patches::Patches;
-use crate::lighting::radiosity::solve::{Mode, Occluders};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
+use crate::lightmap::geometry::StaticGeometry;
+use crate::lightmap::patches::Patches;
+use crate::lightmap::solve::{Mode, Occluders};
 use crate::progress::Progress;
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use config::{Config, Storage, View};
@@ -145,10 +145,10 @@ pub fn bake(geometry: &StaticGeometry, surfaces: Option<&Surfaces<'_>>, config: 
     let mode = config.transfer.solve.mode;
     let bits = match rays {
         Rays::Cpu => transfer::visibility_cpu(&p, &occluders, &samples, mode, progress),
-        Rays::Gpu(..) => return Err(Error::Usage(format!("{NAME}: the GPU visibility baker is not available in this build"))),
+        Rays::Gpu(gpu, shaders) => gpu::visibility_gpu(gpu, shaders, &p, &geometry.triangles, &samples, mode, progress)?,
     };
     let t = transfer::bake(&p, &occluders, &samples, &bits, &config.transfer, progress);
-    let atlas = lightmap::pack(&p);
+    let atlas = crate::lightmap::atlas::pack(&p);
     let dim = samples.dim();
     let mut coeffs = vec![0.0f32; (atlas.width * atlas.height) as usize * dim];
     for (ci, c) in p.charts.iter().enumerate() {
@@ -163,7 +163,7 @@ pub fn bake(geometry: &StaticGeometry, surfaces: Option<&Surfaces<'_>>, config: 
             }
         }
     }
-    let uvs = lightmap::triangle_uvs(&geometry.triangles, &p, &atlas).into_iter().flatten().collect();
+    let uvs = crate::lightmap::atlas::triangle_uvs(&geometry.triangles, &p, &atlas).into_iter().flatten().collect();
     Ok(Baked { width: atlas.width, height: atlas.height, bands: samples.bands, coeffs, uvs })
 }
 
@@ -186,7 +186,7 @@ fn load_normal_maps(scene: &Scene) -> Result<Vec<Option<NormalImage>>> {
 pub struct ShLightmap {
     config: Config,
     pipeline: PipelineId,
-    mesh: lightmap::Mesh,
+    mesh: crate::lighting::lightmap_mesh::Mesh,
     /// Native: the coefficient layers. Compressed: the index map and the representative table.
     images: Vec<(&'static str, ImageId)>,
     sampler: SamplerId,
@@ -198,13 +198,13 @@ pub struct ShLightmap {
 impl ShLightmap {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShLightmap> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
-        let geometry = lightmap::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
         }
         let maps = load_normal_maps(cx.scene)?;
         let surfaces = Surfaces { uvs: &geometry.uvs, maps: geometry.material.iter().map(|m| m.and_then(|m| maps.get(m).and_then(|x| x.as_ref()))).collect() };
-        let bake_config = Config { view: View::Final, filter: false, storage: Storage::Single, reps: 0, sun_speed: 0.0, sky: config::Sky::Scene, cie_zenith: 0.0, ..config };
+        let bake_config = Config { view: View::Final, filter: false, storage: Storage::Single, reps: 0, sun_speed: 0.0, sky: config::Sky::Scene, cie_zenith: 0.0, on_gpu: None, ..config };
         let mut key = BakeKey::new("SH light-map").with("version", BAKER_VERSION).with("config", bake_config);
         let geometry_bytes: Vec<f64> =
             geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))])).collect();
@@ -217,18 +217,26 @@ impl ShLightmap {
                 key = key.with_bytes(&format!("normal map {i}"), bytemuck::cast_slice(&texels));
             }
         }
+        // The GPU's rays give the CPU's bits but for a few seam rays (tests/sh_lightmap_gpu.rs):
+        // one cache entry serves both.
+        key = key.with_shaders("sh_lightmap/visibility");
         let (geo, surf) = (&geometry, &surfaces);
-        let floats: Vec<f32> = cx
-            .bakes
-            .bake(&format!("{NAME} bands={} patch={}", config.transfer.bands, config.patch_size), &key, |progress| Ok(bake(geo, Some(surf), &bake_config, Rays::Cpu, progress)?.to_floats()))?;
+        let (device, shaders) = (&mut *cx.gpu, cx.shaders);
+        let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} bands={} patch={}", config.transfer.bands, config.patch_size), &key, |progress| {
+            // Auto: the GPU, unless it is a CPU implementation (lavapipe), where the native rays
+            // measured 5x faster (tests/sh_lightmap_gpu.rs, ignored measurement).
+            let on_gpu = config.on_gpu.unwrap_or(device.caps().device_type != vk::PhysicalDeviceType::CPU);
+            let rays = if on_gpu { Rays::Gpu(device, shaders) } else { Rays::Cpu };
+            Ok(bake(geo, Some(surf), &bake_config, rays, progress)?.to_floats())
+        })?;
         let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the baked SH light-map does not match the scene", cx.scene.source)))?;
-        let mesh = lightmap::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
+        let mesh = crate::lighting::lightmap_mesh::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
         let images = if config.reps == 0 { upload_native(cx, &baked, config.storage)? } else { upload_compressed(cx, &baked, &config, &key)? };
         let (fragment, encoded) = match config.reps {
             0 => ("sh_lightmap/native.frag", config.storage == Storage::Rgba8),
             _ => ("sh_lightmap/compressed.frag", config.storage == Storage::Rgba8),
         };
-        let mut desc = lightmap::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
+        let mut desc = crate::lighting::lightmap_mesh::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);

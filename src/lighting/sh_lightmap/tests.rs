@@ -6,8 +6,8 @@ use glam::{DVec3, Vec3};
 use super::normals::{self, NormalImage, Surfaces};
 use super::samples::SampleSet;
 use super::transfer::{self, Settings};
-use crate::lighting::radiosity::patches::{Patches, Triangle};
-use crate::lighting::radiosity::solve::{self, Mode, Occluders};
+use crate::lightmap::patches::{Patches, Triangle};
+use crate::lightmap::solve::{self, Mode, Occluders};
 use crate::progress::Progress;
 use crate::sh;
 

@@ -15,10 +15,10 @@
 use glam::DVec3;
 
 use super::samples::SampleSet;
-use crate::lighting::radiosity::border;
-use crate::lighting::radiosity::patches::Patches;
-use crate::lighting::radiosity::solve::{self, Geometry, Mode, Occluders, Unshot};
-use crate::lighting::radiosity::tone;
+use crate::lightmap::border;
+use crate::lightmap::patches::Patches;
+use crate::lightmap::solve::{self, Geometry, Mode, Occluders, Unshot};
+use crate::lightmap::tone;
 use crate::progress::Progress;
 
 /// The seed's bounce reflectance ([CAFU-SRC]: ρ = 0.3 for every surface).

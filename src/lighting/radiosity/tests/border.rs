@@ -5,9 +5,10 @@
 
 use glam::DVec3;
 
-use crate::lighting::radiosity::lightmap::{self, Atlas, Content};
-use crate::lighting::radiosity::patches::Patches;
-use crate::lighting::radiosity::solve::{Mode, Report, Settings};
+use crate::lighting::radiosity::lightmap::{self, Content};
+use crate::lightmap::atlas::Atlas;
+use crate::lightmap::patches::Patches;
+use crate::lightmap::solve::{Mode, Report, Settings};
 use crate::progress::Progress;
 use crate::scene::Scene;
 
@@ -20,7 +21,7 @@ pub(super) struct Baked {
 }
 
 pub(super) fn bake_scene(scene: Scene, size: f64, settings: &Settings) -> Baked {
-    let geo = lightmap::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
+    let geo = crate::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
     let (p, atlas, texels, report) = lightmap::bake(&geo, &scene, size, settings, Content::All, lightmap::Shooter::Cpu, &mut Progress::new("test")).unwrap();
     Baked { scene, p, atlas, texels, report }
 }
@@ -207,7 +208,8 @@ fn no_light_bleeds_through_a_thin_wall() {
 #[test]
 fn faithful_texels_are_bytes() {
     use crate::backend::vk;
-    use crate::lighting::radiosity::{lightmap::to_rgb8, lightmap_format};
+    use crate::lighting::radiosity::lightmap_format;
+    use crate::lightmap::atlas::to_rgb8;
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/two_rooms.toml")).unwrap();
     let b = bake_text(&text, 0.2, &faithful(1e-2));
     let flat: Vec<f32> = b.texels.iter().flatten().copied().collect();

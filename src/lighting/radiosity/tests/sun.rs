@@ -4,10 +4,10 @@
 use glam::DVec3;
 
 use super::border::bake_text;
-use crate::lighting::radiosity::lightmap;
-use crate::lighting::radiosity::patches::Patches;
-use crate::lighting::radiosity::solve::{Mode, Occluders, Settings};
+
 use crate::lighting::radiosity::sun;
+use crate::lightmap::patches::Patches;
+use crate::lightmap::solve::{Mode, Occluders, Settings};
 use crate::scene::Scene;
 
 const SUN: [f64; 3] = [0.35, -1.0, 0.2];
@@ -71,7 +71,7 @@ fn a_square_occluder_casts_the_analytic_shadow() {
     for (sky, mode) in [(true, Mode::Faithful), (true, Mode::Corrected), (false, Mode::Corrected), (false, Mode::Faithful)] {
         let text = scene(sky);
         let sc = Scene::from_str(&text, "sun.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
-        let geo = lightmap::scene_geometry(&sc, "radiosity").unwrap();
+        let geo = crate::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
         let p = Patches::build(&geo.triangles, size);
         let occ = Occluders::new(&geo.triangles);
         let to_sun = -DVec3::from_array(SUN).normalize();

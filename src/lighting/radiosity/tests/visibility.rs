@@ -4,16 +4,15 @@
 
 use glam::DVec3;
 
-use crate::lighting::radiosity::lightmap;
-use crate::lighting::radiosity::patches::{Patches, Triangle};
-use crate::lighting::radiosity::solve::{solve, Mode, Occluders, Report, Settings};
-use crate::lighting::radiosity::visibility::{Matrix, Tester, Vis};
+use crate::lightmap::patches::{Patches, Triangle};
+use crate::lightmap::solve::{solve, Mode, Occluders, Report, Settings};
+use crate::lightmap::visibility::{Matrix, Tester, Vis};
 use crate::progress::Progress;
 use crate::scene::Scene;
 
 fn triangles(file: &str) -> (Scene, Vec<Triangle>) {
     let scene = Scene::from_file(format!("{}/scenes/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("{e}"));
-    let geo = lightmap::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
+    let geo = crate::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
     (scene, geo.triangles)
 }
 

@@ -103,14 +103,14 @@ impl Occluders {
 
 /// One shooting block: patches of one chart, its square, and the normal it shoots along (the
 /// chart's, or with normal-mapped patches their renormalised mean: seed 000 §5.7).
-pub(super) struct Block {
+pub(crate) struct Block {
     pub chart: usize,
     pub members: Vec<usize>,
     pub corners: [DVec3; 4],
     pub normal: DVec3,
 }
 
-pub(super) fn blocks(p: &Patches, n: usize) -> Vec<Block> {
+pub(crate) fn blocks(p: &Patches, n: usize) -> Vec<Block> {
     blocks_of(&Geometry::from(p), n)
 }
 
@@ -145,7 +145,7 @@ fn magnitude(v: DVec3) -> f64 {
 
 /// Shows a solve's progress: the unshot energy falls about geometrically, so the fraction done is
 /// taken on a log scale from the initial energy down to the stop, which keeps the time left honest.
-pub(super) fn show_progress(progress: &mut Progress, shots: usize, left: f64, initial: f64, threshold: f64) {
+pub(crate) fn show_progress(progress: &mut Progress, shots: usize, left: f64, initial: f64, threshold: f64) {
     let fraction = if initial > 0.0 && left > 0.0 { ((initial / left).ln() / (1.0 / threshold).ln()).clamp(0.0, 1.0) } else { 1.0 };
     progress.set_detail(format!("{shots} shots, unshot {:.2e} of the initial energy", if initial > 0.0 { left / initial } else { 0.0 }));
     progress.update((fraction * 1000.0) as u64, 1000);
