@@ -304,13 +304,23 @@ pub fn quantize(baked: &Baked, reps: usize, progress: &mut Progress) -> Result<v
 fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config, key: &BakeKey) -> Result<Vec<(&'static str, ImageId)>> {
     let dim = baked.bands * baked.bands;
     let key = key.clone().with("reps", config.reps);
-    let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} VQ reps={}", config.reps), &key, |progress| {
+    // The seed's world-size accounting (Table 4) in the bake's name, so `penumbra bake` reports it.
+    let texels = (baked.width * baked.height) as usize;
+    let size = match (storage::StorageReport::uncompressed(texels, baked.bands), storage::StorageReport::compressed(texels, baked.bands, config.reps)) {
+        (Ok(u), Ok(c)) => format!(
+            "; {texels} texels, SH payload {:.0} kB against {:.0} kB native ({:.1}x)",
+            c.payload_bytes_model as f64 / storage::KB as f64,
+            u.payload_bytes_model as f64 / storage::KB as f64,
+            storage::compression_ratio(&u, &c)
+        ),
+        _ => String::new(),
+    };
+    let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} VQ reps={}{size}", config.reps), &key, |progress| {
         let q = quantize(baked, config.reps, progress)?;
         let mut out: Vec<f32> = q.indices.iter().map(|&i| i as f32).collect();
         out.extend(&q.codebook);
         Ok(out)
     })?;
-    let texels = (baked.width * baked.height) as usize;
     if floats.len() < texels || !(floats.len() - texels).is_multiple_of(dim) {
         return Err(Error::Usage(format!("{}: {NAME}: the cached VQ does not match the light-map", cx.scene.source)));
     }
