@@ -179,3 +179,25 @@ fn a_turning_sun_relights_every_frame_without_a_rebake() {
     assert!((values[15] - 0.0298).abs() < 5e-4, "frame 15: {}", values[15]);
     assert!(values.windows(2).all(|w| w[1] < w[0]), "the wall darkens frame by frame as the sun turns away: {values:?}");
 }
+
+#[test]
+fn the_debug_views_show_the_index_map_the_first_layer_and_the_bare_light() {
+    let base = r#"name = "sh_lightmap", patch_size = 0.25, bands = 2, bounces = false, storage = "f32""#;
+    let at = |extra: &str| centre(&render(scene(OPEN_BOX, &format!("{{ {base}{extra} }}")), 1));
+    let final_ = at("");
+    // Bare: the light without the diffuse colour (ρ = 0.5).
+    let bare = at(r#", view = "bare""#);
+    assert!((bare[0] - 2.0 * final_[0]).abs() < 1e-5, "bare {bare:?} against final {final_:?}");
+    // The first layer as stored: T₀₀ = F/(2√π) at the floor's centre (E/π = L₀·F, c₀₀ = 2√π·L₀).
+    let layer = at(r#", view = "first_layer""#);
+    let want = 0.554126 / (2.0 * std::f32::consts::PI.sqrt());
+    assert!((layer[0] / want - 1.0).abs() < 0.012, "first layer {layer:?}, want T00 = {want}");
+    // The index map: R the low byte, G the high byte (0 with 64 representatives).
+    let index = at(r#", reps = 64, view = "indices""#);
+    let low = (index[0] * 255.0).round();
+    assert!(index[1] == 0.0 && low < 64.0 && (index[0] * 255.0 - low).abs() < 1e-4, "{index:?}");
+    // Without representatives there is no index map: one error line naming the parameter.
+    let s = scene(OPEN_BOX, &format!("{{ {base}, view = \"indices\" }}"));
+    let e = Renderer::new(common::test_gpu(), s, Some("sh_lightmap"), (33, 33), 1).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("view") && e.contains("reps"), "{e}");
+}
