@@ -201,3 +201,17 @@ fn the_debug_views_show_the_index_map_the_first_layer_and_the_bare_light() {
     let e = Renderer::new(common::test_gpu(), s, Some("sh_lightmap"), (33, 33), 1).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("view") && e.contains("reps"), "{e}");
 }
+
+#[test]
+fn an_image_environment_is_projected_on_the_device_every_frame() {
+    // A constant image (128 × 64 equirect, radiance 1) projected by the SH core's pass lights the
+    // open box as the constant sky does: ρ·L₀·F. (The pass takes each texel's centre value times
+    // its exact solid angle: at 16 × 8 the aliasing into band 2 showed as +2.1%.)
+    let path = common::temp_path("sh_constant_sky.exr");
+    penumbra::image_io::HdrImage { width: 128, height: 64, pixels: vec![[1.0, 1.0, 1.0, 1.0]; 128 * 64] }.write_exr(&path).unwrap();
+    let text = OPEN_BOX.replace("type = \"constant\"\nradiance = 1.0", &format!("type = \"image\"\npath = {:?}", path.display().to_string()));
+    assert!(text.contains("type = \"image\""));
+    let c = centre(&render(scene(&text, r#"{ name = "sh_lightmap", patch_size = 0.25, bands = 3, bounces = false, storage = "f32" }"#), 2));
+    let want = 0.5 * 0.554126f32;
+    assert!((c[0] / want - 1.0).abs() < 0.012, "{c:?} want {want}");
+}

@@ -9,6 +9,9 @@ layout(set = 0, binding = 4) uniform sampler2D normal_map;
 
 // Per channel, 16 vec4 groups of radiance coefficients (faithful: the luminance in channel 0).
 layout(set = 0, binding = 5) uniform Light { vec4 coeffs[48]; } light;
+// An environment image's radiance coefficients (RGB per coefficient), projected on the device
+// every frame; zeros without one.
+layout(set = 0, binding = 7) readonly buffer EnvSh { vec4 items[]; } env_sh;
 
 layout(constant_id = 0) const int BANDS = 4;
 // The coefficients are the seed's 8-bit range encoding, decoded as 4 (t - 1/2).
@@ -32,12 +35,15 @@ vec4 decode(vec4 t) {
     return ENCODED ? 4.0 * (t - 0.5) : t;
 }
 
-// One group of 4 coefficients against the light: RGB (channel 0 only when faithful).
+// One group of 4 coefficients against the light: RGB (channel 0, the luminance, when faithful).
 vec3 shade_group(vec4 t, int k) {
+    vec3 e0 = env_sh.items[4 * k].rgb, e1 = env_sh.items[4 * k + 1].rgb, e2 = env_sh.items[4 * k + 2].rgb, e3 = env_sh.items[4 * k + 3].rgb;
     if (FAITHFUL) {
-        return vec3(dot(t, light.coeffs[k]));
+        const vec3 Y = vec3(0.2126, 0.7152, 0.0722);
+        return vec3(dot(t, light.coeffs[k] + vec4(dot(e0, Y), dot(e1, Y), dot(e2, Y), dot(e3, Y))));
     }
-    return vec3(dot(t, light.coeffs[k]), dot(t, light.coeffs[16 + k]), dot(t, light.coeffs[32 + k]));
+    vec3 env = vec3(dot(t, vec4(e0.r, e1.r, e2.r, e3.r)), dot(t, vec4(e0.g, e1.g, e2.g, e3.g)), dot(t, vec4(e0.b, e1.b, e2.b, e3.b)));
+    return env + vec3(dot(t, light.coeffs[k]), dot(t, light.coeffs[16 + k]), dot(t, light.coeffs[32 + k]));
 }
 
 // The frame's radiance from the light reflected (sum of the groups) and the material.

@@ -29,19 +29,13 @@ impl Lights {
     pub fn new(scene: &Scene, env: &EnvironmentMap, config: &Config) -> Result<Lights> {
         let bands = config.transfer.bands;
         let sh_err = |e: sh::ShError| Error::Usage(format!("{}: SH light-map light projection: {e}", scene.source));
-        let environment: Vec<DVec3> = if config.sky == Sky::Cie {
-            vec![DVec3::ZERO; bands * bands]
-        } else if env.width == 1 && env.height == 1 && !env.cube {
-            // A constant: only c₀₀ = 2√π·L.
-            let mut c = vec![DVec3::ZERO; bands * bands];
-            c[0] = Vec3::from_slice(&env.texels[0][..3]).as_dvec3() * sh::CONSTANT_ONE_C00;
-            c
-        } else {
-            let (w, texels) = env.reduced(256);
-            let pixels: Vec<[f32; 3]> = texels.iter().map(|t| [t[0], t[1], t[2]]).collect();
-            let c = if env.cube { sh::project_cubemap(&pixels, w as usize, bands) } else { sh::project_equirect(&pixels, w as usize, pixels.len() / w as usize, bands) }.map_err(sh_err)?;
-            c.into_iter().map(|v| v.as_dvec3()).collect()
-        };
+        let _ = sh_err;
+        // A constant is c₀₀ = 2√π·L exactly, here; an image is projected on the device every
+        // frame by the SH core's pass ([`super::EnvProjection`]) and added in the shader.
+        let mut environment = vec![DVec3::ZERO; bands * bands];
+        if config.sky == Sky::Scene && is_constant(env) {
+            environment[0] = Vec3::from_slice(&env.texels[0][..3]).as_dvec3() * sh::CONSTANT_ONE_C00;
+        }
         let suns = scene
             .lights
             .iter()
@@ -99,6 +93,11 @@ impl Lights {
         }
         out
     }
+}
+
+/// The scene's environment is one constant (a 1×1 equirect map), not an image.
+pub fn is_constant(env: &EnvironmentMap) -> bool {
+    env.width == 1 && env.height == 1 && !env.cube
 }
 
 fn world_to_sh(d: DVec3) -> DVec3 {

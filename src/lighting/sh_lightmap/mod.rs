@@ -24,7 +24,7 @@ mod tests;
 
 use glam::DVec3;
 
-use crate::backend::{vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
+use crate::backend::{vk, BufferId, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
@@ -182,6 +182,29 @@ fn load_normal_maps(scene: &Scene) -> Result<Vec<Option<NormalImage>>> {
         .collect()
 }
 
+/// An environment image projected to SH on the device every frame (the SH core's pass,
+/// [`crate::sh::ShProjector`]), into `coeffs`: bands² RGB vec4s in the SH frame, zero past them.
+pub struct EnvProjection {
+    projector: crate::sh::ShProjector,
+    image: crate::sh::EnvImage,
+    bands: u32,
+}
+
+impl EnvProjection {
+    fn new(cx: &mut CreateContext<'_>, bands: usize) -> Result<EnvProjection> {
+        let env = cx.environment;
+        // Box-filtered to at most 256 texels wide: an SH projection of ≤ 8 bands needs no more.
+        let (w, texels) = env.reduced(256);
+        let rgba32f = vk::Format::R32G32B32A32_SFLOAT;
+        let desc = if env.cube { ImageDesc::new_cube("SH light-map environment", rgba32f, w) } else { ImageDesc::new_2d("SH light-map environment", rgba32f, w, texels.len() as u32 / w) };
+        let image = cx.gpu.create_image(&desc.usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        cx.gpu.upload_image(image, 0, bytemuck::cast_slice(&texels))?;
+        cx.states.set_image(cx.gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        let image = crate::sh::EnvImage::of(cx.gpu, image)?;
+        Ok(EnvProjection { projector: crate::sh::ShProjector::new(cx.gpu, cx.shaders, "SH light-map environment")?, image, bands: bands as u32 })
+    }
+}
+
 /// The SH light-map base term.
 pub struct ShLightmap {
     config: Config,
@@ -193,6 +216,10 @@ pub struct ShLightmap {
     lights: light::Lights,
     /// This frame's light uniform block.
     light: Vec<f32>,
+    /// The environment image's projection (none for a constant or the CIE sky), and the buffer
+    /// the shader adds to the light (zeros without one).
+    env: Option<EnvProjection>,
+    env_coeffs: BufferId,
 }
 
 impl ShLightmap {
@@ -252,7 +279,11 @@ impl ShLightmap {
         let sampler = cx.gpu.sampler(if config.reps == 0 { SamplerDesc::LINEAR_CLAMP } else { SamplerDesc::NEAREST_CLAMP })?;
         let lights = light::Lights::new(cx.scene, cx.environment, &config)?;
         let light = lights.uniform(0.0, faithful);
-        Ok(ShLightmap { config, pipeline, mesh, images, sampler, lights, light })
+        let env = if config.sky == config::Sky::Scene && !light::is_constant(cx.environment) { Some(EnvProjection::new(cx, baked.bands)?) } else { None };
+        // 64 vec4 (8 bands), zero where the projection writes nothing.
+        let env_coeffs = cx.gpu.create_buffer_init("SH light-map environment SH", vk::BufferUsageFlags::STORAGE_BUFFER, &[0u8; 16 * 64])?;
+        cx.states.forget_buffer(env_coeffs);
+        Ok(ShLightmap { config, pipeline, mesh, images, sampler, lights, light, env, env_coeffs })
     }
 }
 
@@ -360,7 +391,10 @@ impl LightingMethod for ShLightmap {
             return Ok(());
         }
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
-        let mut pass = graph.pass("SH light-map");
+        if let Some(env) = &self.env {
+            env.projector.add_passes(graph, "SH light-map environment", env.image, env.bands, self.env_coeffs)?;
+        }
+        let mut pass = graph.pass("SH light-map").buffer(self.env_coeffs, Access::StorageRead { stages: frag }, Some("env_sh"));
         for &(name, image) in &self.images {
             pass = pass.sample(name, image, SubresourceRange::full(), self.sampler, frag);
         }
