@@ -101,6 +101,10 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         ("radiosity", shipped("cornell_radiosity.toml"), 240),
         // A combination: the light-map base under shadow volumes' direct term.
         ("gi", shipped("room_gi.toml"), 240),
+        // The SH light-map relit every frame by a turning sun, and by an image environment
+        // projected every frame.
+        ("sh_lightmap", shipped("sh_courtyard.toml"), 240),
+        ("sh_lightmap", shipped("sh_courtyard_sky.toml"), 240),
     ];
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {
