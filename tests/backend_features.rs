@@ -121,3 +121,36 @@ fn hot_reload_swaps_pipelines_and_keeps_the_old_one_on_errors() {
     assert_eq!(downsample_once(&mut gpu, p, 1.0), 4.0, "the previous pipeline keeps running");
     common::assert_clean(&gpu);
 }
+
+/// `Gpu::scoped` frees what its closure created — buffers, pipelines and frames (with their
+/// upload buffers) — when it succeeds and when it fails half-way (the bakes' compute passes rely
+/// on it for every exit path).
+#[test]
+fn a_scoped_computation_leaves_nothing_behind_on_success_or_error() {
+    use penumbra::backend::{vk, BackendError, ComputePipelineDesc};
+    let mut gpu = common::test_gpu();
+    let before = gpu.live_objects();
+    let frames = gpu.live_frames();
+    let made = |gpu: &mut penumbra::backend::Gpu| -> Result<(), BackendError> {
+        gpu.create_buffer_init("scoped", vk::BufferUsageFlags::STORAGE_BUFFER, &[0u8; 64])?;
+        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "scoped".into(), shader: "util/sh_check.comp".into(), specialization: vec![] }, &penumbra::shaders::ShaderLibrary::Embedded)?;
+        gpu.create_frame()?;
+        Ok(())
+    };
+    gpu.scoped(|gpu| made(gpu)).unwrap();
+    assert_eq!((gpu.live_objects(), gpu.live_frames()), (before, frames), "after a scoped success");
+    let failed: Result<(), BackendError> = gpu.scoped(|gpu| {
+        made(gpu)?;
+        Err(BackendError::Invalid("failed half-way".into()))
+    });
+    assert!(failed.is_err());
+    assert_eq!((gpu.live_objects(), gpu.live_frames()), (before, frames), "after a scoped failure");
+    // Inside, the objects were alive.
+    gpu.scoped(|gpu| -> Result<(), BackendError> {
+        made(gpu)?;
+        assert!(gpu.live_objects().0 >= before.0 + 2 && gpu.live_objects().2 == before.2 + 1 && gpu.live_frames() == frames + 1);
+        Ok(())
+    })
+    .unwrap();
+    common::assert_clean(&gpu);
+}

@@ -84,7 +84,11 @@ impl Gpu {
             upload,
             upload_offset: 0,
         })));
-        Ok(Frame(self.frames.len() as u32 - 1))
+        let frame = Frame(self.frames.len() as u32 - 1);
+        if let Some(scope) = self.scopes.last_mut() {
+            scope.frames.push(frame);
+        }
+        Ok(frame)
     }
 
     /// Waits for the frame's last submission and frees it (its command buffer, fence, pools and

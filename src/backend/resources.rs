@@ -220,6 +220,7 @@ pub struct ResourceScope {
     pub buffers: Vec<BufferId>,
     pub images: Vec<ImageId>,
     pub pipelines: Vec<super::PipelineId>,
+    pub frames: Vec<super::Frame>,
 }
 
 /// Storage for every object the Gpu hands out ids for. Slots are never reused, so a stale id
@@ -319,6 +320,19 @@ impl Gpu {
         self.scopes.push(ResourceScope::default());
     }
 
+    /// Runs `f` inside a resource scope and destroys everything it created, whether it succeeds
+    /// or fails: for one-off computations (a bake's compute passes) that must not leave objects
+    /// behind on any exit path. `f`'s error comes first.
+    pub fn scoped<T, E: From<BackendError>>(&mut self, f: impl FnOnce(&mut Gpu) -> Result<T, E>) -> Result<T, E> {
+        self.begin_resource_scope();
+        let result = f(self);
+        let scope = self.end_resource_scope();
+        let freed = self.destroy_scope(&scope);
+        let value = result?;
+        freed?;
+        Ok(value)
+    }
+
     /// Ends the innermost scope and returns what it recorded.
     pub fn end_resource_scope(&mut self) -> ResourceScope {
         self.scopes.pop().unwrap_or_default()
@@ -327,6 +341,11 @@ impl Gpu {
     /// Waits for the device, then destroys everything the scope recorded that still exists.
     pub fn destroy_scope(&mut self, scope: &ResourceScope) -> BackendResult<()> {
         self.wait_idle()?;
+        for &f in &scope.frames {
+            if self.frames.get(f.0 as usize).is_some_and(|x| x.is_some()) {
+                self.destroy_frame(f)?;
+            }
+        }
         for &p in &scope.pipelines {
             self.destroy_pipeline(p)?;
         }
@@ -349,6 +368,11 @@ impl Gpu {
             }
             Err(_) => (0, 0),
         }
+    }
+
+    /// Frames alive now (each with its command buffer, fence, pools and upload buffer).
+    pub fn live_frames(&self) -> usize {
+        self.frames.iter().filter(|f| f.is_some()).count()
     }
 
     /// Buffers, images and pipelines alive now.

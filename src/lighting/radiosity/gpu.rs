@@ -93,52 +93,24 @@ fn v4(v: glam::DVec3, w: f32) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w]
 }
 
-/// The device objects of one solve, freed when it ends (whether it succeeded or not).
-struct Resources {
-    buffers: Vec<BufferId>,
-    pipelines: Vec<PipelineId>,
-    frame: Option<crate::backend::Frame>,
+/// A storage buffer filled with `data` (`usage` added).
+fn storage_buffer(gpu: &mut Gpu, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<BufferId> {
+    Ok(gpu.create_buffer_init(name, usage | vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
 }
 
-impl Resources {
-    fn buffer(&mut self, gpu: &mut Gpu, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<BufferId> {
-        let id = gpu.create_buffer_init(name, usage | vk::BufferUsageFlags::STORAGE_BUFFER, data)?;
-        self.buffers.push(id);
-        Ok(id)
-    }
-
-    fn host_buffer(&mut self, gpu: &mut Gpu, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<BufferId> {
-        let id = gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory: MemoryKind::GpuToCpu })?;
-        self.buffers.push(id);
-        Ok(id)
-    }
-
-    fn free(self, gpu: &mut Gpu) -> Result<()> {
-        if let Some(f) = self.frame {
-            gpu.destroy_frame(f)?;
-        }
-        for p in self.pipelines {
-            gpu.destroy_pipeline(p)?;
-        }
-        for b in self.buffers {
-            gpu.destroy_buffer(b);
-        }
-        Ok(())
-    }
+/// A buffer the host reads back.
+fn host_buffer(gpu: &mut Gpu, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<BufferId> {
+    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory: MemoryKind::GpuToCpu })?)
 }
 
 /// Shoots on the GPU until the settings' stop, then writes every patch's total and unshot
 /// radiosity back into `p`.
 pub fn solve(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress) -> Result<Report> {
-    let mut resources = Resources { buffers: Vec::new(), pipelines: Vec::new(), frame: None };
-    let result = run(gpu, shaders, p, triangles, settings, progress, &mut resources);
-    let freed = resources.free(gpu);
-    let report = result?;
-    freed?;
-    Ok(report)
+    // Every buffer, pipeline and frame of the solve is freed on every exit path.
+    gpu.scoped(|gpu| run(gpu, shaders, p, triangles, settings, progress))
 }
 
-fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress, res: &mut Resources) -> Result<Report> {
+fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress) -> Result<Report> {
     let blocks = solve::blocks(p, settings.block.max(1));
     let mut report = Report::default();
     if blocks.is_empty() {
@@ -192,32 +164,29 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         .collect();
 
     let none = vk::BufferUsageFlags::empty();
-    let patches_buf = res.buffer(gpu, "radiosity patches", none, bytemuck::cast_slice(&patches))?;
-    let state_buf = res.buffer(gpu, "radiosity state", vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&state))?;
-    let blocks_buf = res.buffer(gpu, "radiosity blocks", none, bytemuck::cast_slice(&gpu_blocks))?;
-    let members_buf = res.buffer(gpu, "radiosity block members", none, bytemuck::cast_slice(&members))?;
-    let charts_buf = res.buffer(gpu, "radiosity charts", none, bytemuck::cast_slice(&charts))?;
-    let power_buf = res.buffer(gpu, "radiosity block power", none, &vec![0u8; 4 * blocks.len()])?;
-    let nodes_buf = res.buffer(gpu, "radiosity bvh nodes", none, bytemuck::cast_slice(&bvh.nodes))?;
-    let triangles_buf = res.buffer(gpu, "radiosity bvh triangles", none, bytemuck::cast_slice(&traced))?;
-    let visibility_buf = res.buffer(gpu, "radiosity visibility matrix", none, bytemuck::cast_slice(&visibility))?;
-    let skips_buf = res.buffer(gpu, "radiosity bvh skip links", none, bytemuck::cast_slice(&bvh.skip_links()))?;
+    let patches_buf = storage_buffer(gpu, "radiosity patches", none, bytemuck::cast_slice(&patches))?;
+    let state_buf = storage_buffer(gpu, "radiosity state", vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&state))?;
+    let blocks_buf = storage_buffer(gpu, "radiosity blocks", none, bytemuck::cast_slice(&gpu_blocks))?;
+    let members_buf = storage_buffer(gpu, "radiosity block members", none, bytemuck::cast_slice(&members))?;
+    let charts_buf = storage_buffer(gpu, "radiosity charts", none, bytemuck::cast_slice(&charts))?;
+    let power_buf = storage_buffer(gpu, "radiosity block power", none, &vec![0u8; 4 * blocks.len()])?;
+    let nodes_buf = storage_buffer(gpu, "radiosity bvh nodes", none, bytemuck::cast_slice(&bvh.nodes))?;
+    let triangles_buf = storage_buffer(gpu, "radiosity bvh triangles", none, bytemuck::cast_slice(&traced))?;
+    let visibility_buf = storage_buffer(gpu, "radiosity visibility matrix", none, bytemuck::cast_slice(&visibility))?;
+    let skips_buf = storage_buffer(gpu, "radiosity bvh skip links", none, bytemuck::cast_slice(&bvh.skip_links()))?;
     let storage_host = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let shot_buf = res.host_buffer(gpu, "radiosity shot", std::mem::size_of::<GpuShot>() as u64, storage_host)?;
-    let status_buf = res.host_buffer(gpu, "radiosity status", 4, storage_host)?;
+    let shot_buf = host_buffer(gpu, "radiosity shot", std::mem::size_of::<GpuShot>() as u64, storage_host)?;
+    let status_buf = host_buffer(gpu, "radiosity status", 4, storage_host)?;
     let log_capacity = settings.max_shots.saturating_add(1).min(1 << 22);
-    let log_buf = res.host_buffer(gpu, "radiosity unshot log", 4 * log_capacity as u64, storage_host)?;
-    let readback = res.host_buffer(gpu, "radiosity state readback", std::mem::size_of_val(state.as_slice()) as u64, vk::BufferUsageFlags::TRANSFER_DST)?;
-    let pipeline = |gpu: &mut Gpu, res: &mut Resources, name: &str, shader: &str| -> Result<PipelineId> {
-        let id = gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, shaders)?;
-        res.pipelines.push(id);
-        Ok(id)
+    let log_buf = host_buffer(gpu, "radiosity unshot log", 4 * log_capacity as u64, storage_host)?;
+    let readback = host_buffer(gpu, "radiosity state readback", std::mem::size_of_val(state.as_slice()) as u64, vk::BufferUsageFlags::TRANSFER_DST)?;
+    let pipeline = |gpu: &mut Gpu, name: &str, shader: &str| -> Result<PipelineId> {
+        Ok(gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, shaders)?)
     };
-    let power_pipeline = pipeline(gpu, res, "radiosity block power", "radiosity/block_power.comp")?;
-    let select_pipeline = pipeline(gpu, res, "radiosity select", "radiosity/select.comp")?;
-    let shoot_pipeline = pipeline(gpu, res, "radiosity shoot", "radiosity/shoot.comp")?;
+    let power_pipeline = pipeline(gpu, "radiosity block power", "radiosity/block_power.comp")?;
+    let select_pipeline = pipeline(gpu, "radiosity select", "radiosity/select.comp")?;
+    let shoot_pipeline = pipeline(gpu, "radiosity shoot", "radiosity/shoot.comp")?;
     let frame = gpu.create_frame()?;
-    res.frame = Some(frame);
 
     // The initial unshot power, as the CPU solve measures it (its stop is a fraction of it).
     let initial: f64 = blocks.iter().flat_map(|b| &b.members).map(|&k| p.patches[k].unshot.abs().element_sum() * p.patches[k].area).sum();

@@ -17,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::samples::SampleSet;
-use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
+use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lightmap::patches::{Patches, Triangle};
@@ -64,40 +64,15 @@ fn v4(v: DVec3) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, 0.0]
 }
 
-/// The device objects of one call, freed when it ends (whether it succeeded or not).
-#[derive(Default)]
-struct Resources {
-    buffers: Vec<BufferId>,
-    pipelines: Vec<PipelineId>,
-    frame: Option<crate::backend::Frame>,
+/// A storage buffer filled with `data`.
+fn storage_buffer(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
+    Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
 }
 
-impl Resources {
-    fn buffer(&mut self, gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
-        let id = gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?;
-        self.buffers.push(id);
-        Ok(id)
-    }
-
-    fn buffer_with(&mut self, gpu: &mut Gpu, name: &str, size: u64, memory: MemoryKind) -> Result<BufferId> {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let id = gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })?;
-        self.buffers.push(id);
-        Ok(id)
-    }
-
-    fn free(self, gpu: &mut Gpu) -> Result<()> {
-        if let Some(f) = self.frame {
-            gpu.destroy_frame(f)?;
-        }
-        for p in self.pipelines {
-            gpu.destroy_pipeline(p)?;
-        }
-        for b in self.buffers {
-            gpu.destroy_buffer(b);
-        }
-        Ok(())
-    }
+/// A storage buffer the passes fill (and the host may read, with `GpuToCpu`).
+fn buffer_with(gpu: &mut Gpu, name: &str, size: u64, memory: MemoryKind) -> Result<BufferId> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })?)
 }
 
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky, as
@@ -105,16 +80,12 @@ impl Resources {
 /// the rows of border patches stay 0). `triangles` are the occluders the CPU path builds its
 /// [`Occluders`](crate::lightmap::solve::Occluders) from.
 pub fn visibility_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Result<Vec<u32>> {
-    let mut resources = Resources::default();
-    let result = run(gpu, shaders, p, triangles, samples, mode, progress, &mut resources);
-    let freed = resources.free(gpu);
-    let bits = result?;
-    freed?;
-    Ok(bits)
+    // Every buffer, pipeline and frame of the pass is freed on every exit path.
+    gpu.scoped(|gpu| run(gpu, shaders, p, triangles, samples, mode, progress))
 }
 
 #[allow(clippy::too_many_arguments)]
-fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress, res: &mut Resources) -> Result<Vec<u32>> {
+fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Result<Vec<u32>> {
     let words = samples.len().div_ceil(32);
     let mut bits = vec![0u32; p.patches.len() * words];
     let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
@@ -154,21 +125,19 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
     }
     let has_sky = triangles.iter().any(|t| t.sky);
 
-    let patches_buf = res.buffer(gpu, "sh visibility patches", bytemuck::cast_slice(&patches))?;
-    let samples_buf = res.buffer(gpu, "sh visibility samples", bytemuck::cast_slice(&dirs))?;
-    let sky_buf = res.buffer(gpu, "sh visibility sky flags", bytemuck::cast_slice(&sky))?;
-    let nodes_buf = res.buffer(gpu, "sh visibility bvh nodes", bytemuck::cast_slice(&bvh.nodes))?;
-    let triangles_buf = res.buffer(gpu, "sh visibility bvh triangles", bytemuck::cast_slice(&traced))?;
-    let skips_buf = res.buffer(gpu, "sh visibility bvh skip links", bytemuck::cast_slice(&bvh.skip_links()))?;
+    let patches_buf = storage_buffer(gpu, "sh visibility patches", bytemuck::cast_slice(&patches))?;
+    let samples_buf = storage_buffer(gpu, "sh visibility samples", bytemuck::cast_slice(&dirs))?;
+    let sky_buf = storage_buffer(gpu, "sh visibility sky flags", bytemuck::cast_slice(&sky))?;
+    let nodes_buf = storage_buffer(gpu, "sh visibility bvh nodes", bytemuck::cast_slice(&bvh.nodes))?;
+    let triangles_buf = storage_buffer(gpu, "sh visibility bvh triangles", bytemuck::cast_slice(&traced))?;
+    let skips_buf = storage_buffer(gpu, "sh visibility bvh skip links", bytemuck::cast_slice(&bvh.skip_links()))?;
     let max_chunk = MAX_CHUNK.min(total);
-    let out_buf = res.buffer_with(gpu, "sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
-    let status_buf = res.buffer_with(gpu, "sh visibility status", 4, MemoryKind::GpuToCpu)?;
-    let chunk_buf = res.buffer_with(gpu, "sh visibility chunk", 4, MemoryKind::GpuOnly)?;
-    let lanes_buf = res.buffer_with(gpu, "sh visibility lanes", 4, MemoryKind::GpuOnly)?;
+    let out_buf = buffer_with(gpu, "sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
+    let status_buf = buffer_with(gpu, "sh visibility status", 4, MemoryKind::GpuToCpu)?;
+    let chunk_buf = buffer_with(gpu, "sh visibility chunk", 4, MemoryKind::GpuOnly)?;
+    let lanes_buf = buffer_with(gpu, "sh visibility lanes", 4, MemoryKind::GpuOnly)?;
     let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh visibility".into(), shader: "sh_lightmap/visibility.comp".into(), specialization: vec![] }, shaders)?;
-    res.pipelines.push(pipeline);
     let frame = gpu.create_frame()?;
-    res.frame = Some(frame);
 
     let push = Push {
         patch_count: inside.len() as u32,
