@@ -42,9 +42,6 @@ pub struct Config {
     pub patch_size: f64,
     /// VQ representatives (0: uncompressed).
     pub reps: usize,
-    /// Where VQ starts: the seed's strided picks over all texels (faithful), or over the
-    /// distinct transfers (corrected: no representative starts as a copy of another).
-    pub vq_init: super::vq::Init,
     /// The 4-tap "bilinear by multisampling" filter of the compressed path.
     pub filter: bool,
     pub storage: Storage,
@@ -68,7 +65,6 @@ impl Config {
             samples: 10_000,
             patch_size: 0.25,
             reps: 0,
-            vq_init: if faithful { super::vq::Init::Strided } else { super::vq::Init::Distinct },
             filter: false,
             storage: if faithful { Storage::Rgba8 } else { Storage::Half },
             normal_samples: 16,
@@ -115,13 +111,6 @@ impl Config {
                 "tone" => c.transfer.tone = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
                 "reps" => c.reps = v.as_integer().filter(|r| (0..=65_536).contains(r)).ok_or_else(|| bad(p, "0 (uncompressed) or a representative count up to 65536", v))? as usize,
                 "filter" => c.filter = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
-                "vq_init" => {
-                    c.vq_init = match v.as_str() {
-                        Some("strided") => super::vq::Init::Strided,
-                        Some("distinct") => super::vq::Init::Distinct,
-                        _ => return Err(bad(p, "\"strided\" or \"distinct\"", v)),
-                    }
-                }
                 "storage" => {
                     c.storage = match v.as_str() {
                         Some("rgba8") => Storage::Rgba8,

@@ -53,7 +53,6 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "tone", kind: ParamKind::Bool },
         ParamSchema { name: "reps", kind: ParamKind::Int },
         ParamSchema { name: "filter", kind: ParamKind::Bool },
-        ParamSchema { name: "vq_init", kind: ParamKind::String },
         ParamSchema { name: "storage", kind: ParamKind::String },
         ParamSchema { name: "normal_samples", kind: ParamKind::Int },
         ParamSchema { name: "sun_speed", kind: ParamKind::Float },
@@ -232,18 +231,7 @@ impl ShLightmap {
         }
         let maps = load_normal_maps(cx.scene)?;
         let surfaces = Surfaces { uvs: &geometry.uvs, maps: geometry.material.iter().map(|m| m.and_then(|m| maps.get(m).and_then(|x| x.as_ref()))).collect() };
-        let bake_config = Config {
-            view: View::Final,
-            filter: false,
-            storage: Storage::Single,
-            reps: 0,
-            vq_init: vq::Init::Strided,
-            sun_speed: 0.0,
-            sky: config::Sky::Scene,
-            cie_zenith: 0.0,
-            on_gpu: None,
-            ..config
-        };
+        let bake_config = Config { view: View::Final, filter: false, storage: Storage::Single, reps: 0, sun_speed: 0.0, sky: config::Sky::Scene, cie_zenith: 0.0, on_gpu: None, ..config };
         let mut key = BakeKey::new("SH light-map").with("version", BAKER_VERSION).with("config", bake_config);
         let geometry_bytes: Vec<f64> =
             geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))])).collect();
@@ -326,11 +314,11 @@ fn upload_native(cx: &mut CreateContext<'_>, baked: &Baked, storage: Storage) ->
 /// The VQ of a bake: the texels that hold a transfer are quantised (gap texels between charts,
 /// all zero and never drawn, would only crowd the seed's strided initial picks with duplicates);
 /// gap texels get index 0.
-pub fn quantize(baked: &Baked, reps: usize, init: vq::Init, progress: &mut Progress) -> Result<vq::Quantized> {
+pub fn quantize(baked: &Baked, reps: usize, progress: &mut Progress) -> Result<vq::Quantized> {
     let dim = baked.bands * baked.bands;
     let used: Vec<usize> = (0..baked.coeffs.len() / dim).filter(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().any(|&c| c != 0.0)).collect();
     let vectors: Vec<f32> = used.iter().flat_map(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().copied()).collect();
-    let settings = vq::VqSettings { init, ..vq::VqSettings::new(reps) };
+    let settings = vq::VqSettings::new(reps);
     let mut q = vq::quantize(&vectors, dim, &settings, |iteration, max| {
         progress.set_detail(format!("VQ iteration {iteration}, max nearest distance² {max:.3e}"));
         progress.update(iteration as u64, settings.max_iterations as u64);
@@ -346,7 +334,7 @@ pub fn quantize(baked: &Baked, reps: usize, init: vq::Init, progress: &mut Progr
 
 fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config, key: &BakeKey) -> Result<Vec<(&'static str, ImageId)>> {
     let dim = baked.bands * baked.bands;
-    let key = key.clone().with("reps", config.reps).with("vq_init", config.vq_init);
+    let key = key.clone().with("reps", config.reps);
     // The seed's world-size accounting (Table 4) in the bake's name, so `penumbra bake` reports it.
     let texels = (baked.width * baked.height) as usize;
     let size = match (storage::StorageReport::uncompressed(texels, baked.bands), storage::StorageReport::compressed(texels, baked.bands, config.reps)) {
@@ -359,7 +347,7 @@ fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config,
         _ => String::new(),
     };
     let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} VQ reps={}{size}", config.reps), &key, |progress| {
-        let q = quantize(baked, config.reps, config.vq_init, progress)?;
+        let q = quantize(baked, config.reps, progress)?;
         let mut out: Vec<f32> = q.indices.iter().map(|&i| i as f32).collect();
         out.extend(&q.codebook);
         Ok(out)

@@ -25,25 +25,12 @@ pub struct VqSettings {
     pub max_iterations: usize,
     /// Consecutive passes without a decrease of the error after which to stop (the seed: 3).
     pub strikes: usize,
-    pub init: Init,
-}
-
-/// Where Lloyd's iterations start when there are more distinct vectors than representatives.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Init {
-    /// The seed's ([CAFU-SRC]): evenly strided picks `O[k·⌊S/|R|⌋]` over all vectors. Where a
-    /// map repeats one vector over large regions (open ground), many picks are the same vector
-    /// and their clusters stay empty.
-    Strided,
-    /// Evenly strided picks over the distinct vectors (in first-occurrence order): every
-    /// representative starts as a different vector.
-    Distinct,
 }
 
 impl VqSettings {
-    /// The seed's termination (3 strikes) with a cap of 100 passes, the seed's start.
+    /// The seed's termination (3 strikes) with a cap of 100 passes.
     pub fn new(reps: usize) -> VqSettings {
-        VqSettings { reps, max_iterations: 100, strikes: 3, init: Init::Strided }
+        VqSettings { reps, max_iterations: 100, strikes: 3 }
     }
 }
 
@@ -126,10 +113,7 @@ pub fn quantize(vectors: &[f32], dim: usize, settings: &VqSettings, mut progress
         progress(0, 0.0);
         return Ok(Quantized { dim, codebook, indices, iterations: 1, max_distance: vec![0.0], sse: vec![0.0], unused: 0 });
     }
-    let mut codebook = match settings.init {
-        Init::Strided => strided_codebook(vectors, dim, settings.reps),
-        Init::Distinct => strided_codebook(&distinct_vectors(vectors, dim), dim, settings.reps),
-    };
+    let mut codebook = strided_codebook(vectors, dim, settings.reps);
     let mut q = Quantized { dim, codebook: Vec::new(), indices: Vec::new(), iterations: 0, max_distance: Vec::new(), sse: Vec::new(), unused: 0 };
     let (mut previous, mut strikes) = (INITIAL_PREVIOUS_ERROR, 0);
     loop {
@@ -220,19 +204,6 @@ fn distinct_codebook(vectors: &[f32], dim: usize, reps: usize) -> Option<(Vec<f3
 }
 
 /// The seed's initial codebook: `O[k·⌊S/|R|⌋]` for k < |R| = min(reps, S).
-/// Every distinct vector once, in first-occurrence order.
-fn distinct_vectors(vectors: &[f32], dim: usize) -> Vec<f32> {
-    let mut seen: HashMap<Key, ()> = HashMap::new();
-    let mut out = Vec::new();
-    for v in vectors.chunks_exact(dim) {
-        if let Entry::Vacant(e) = seen.entry(Key(v)) {
-            e.insert(());
-            out.extend_from_slice(v);
-        }
-    }
-    out
-}
-
 fn strided_codebook(vectors: &[f32], dim: usize, reps: usize) -> Vec<f32> {
     let count = vectors.len() / dim;
     let reps = reps.min(count);
@@ -406,7 +377,7 @@ mod tests {
         let centres: Vec<f32> = (0..64 * dim).map(|_| rng.signed()).collect();
         let vectors: Vec<f32> = (0..3000).flat_map(|i| centres[(i * 7 % 64) * dim..(i * 7 % 64 + 1) * dim].to_vec()).map(|c| c + 0.1 * rng.signed()).collect();
         // Many strikes so that SSE is followed well past the seed's stop.
-        let q = run(&vectors, dim, &VqSettings { reps: 48, max_iterations: 60, strikes: 20, init: Init::Strided });
+        let q = run(&vectors, dim, &VqSettings { reps: 48, max_iterations: 60, strikes: 20 });
         assert!(q.iterations >= 5, "only {} passes", q.iterations);
         for (i, pair) in q.sse.windows(2).enumerate() {
             assert!(pair[1] <= pair[0] * (1.0 + 1e-9), "SSE rose at pass {}: {} → {}", i + 1, pair[0], pair[1]);
@@ -427,7 +398,7 @@ mod tests {
             }
         }
         for reps in [2, 3, 4, 7, 16, 33] {
-            let settings = VqSettings { reps, max_iterations: 1000, strikes: 3, init: Init::Strided };
+            let settings = VqSettings { reps, max_iterations: 1000, strikes: 3 };
             let mut reported = Vec::new();
             let q = quantize(&vectors, 2, &settings, |pass, error| reported.push((pass, error))).unwrap();
             assert!(q.iterations <= 20, "reps {reps}: {} passes, errors {:?}", q.iterations, q.max_distance);
@@ -528,17 +499,5 @@ mod tests {
             let s = start.elapsed().as_secs_f64();
             println!("S 20000 dim 16 reps {reps}: {s:.2} s, {} passes ({:.3} s/pass), error {:.4}, unused {}", q.iterations, s / q.iterations as f64, q.error(), q.unused);
         }
-    }
-
-    #[test]
-    fn the_distinct_start_leaves_no_representative_unused_where_the_strided_one_does() {
-        // 90% of the vectors are one repeated vector (open ground), the rest all differ.
-        let mut v = vec![0.25f32; 2 * 900];
-        v.extend((0..100).flat_map(|i| [i as f32, -(i as f32)]));
-        let strided = quantize(&v, 2, &VqSettings::new(20), |_, _| {}).unwrap();
-        let distinct = quantize(&v, 2, &VqSettings { init: Init::Distinct, ..VqSettings::new(20) }, |_, _| {}).unwrap();
-        assert!(strided.unused > 0, "the strided start picks the repeated vector many times");
-        assert_eq!(distinct.unused, 0);
-        assert!(distinct.sse.last().unwrap() < strided.sse.last().unwrap(), "{:?} vs {:?}", distinct.sse, strided.sse);
     }
 }
