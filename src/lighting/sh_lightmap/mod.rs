@@ -22,8 +22,6 @@ pub mod vq;
 #[cfg(test)]
 mod tests;
 
-use glam::DVec3;
-
 use crate::backend::{vk, BufferId, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
@@ -401,9 +399,4 @@ impl LightingMethod for ShLightmap {
         self.mesh.draw(pass, frame, self.pipeline, vec![("light", bytemuck::cast_slice(&self.light).to_vec())]);
         Ok(())
     }
-}
-
-/// The sun directions the method shades with at `time_s` (for tests and the chart's captions).
-pub fn sun_directions(lights: &light::Lights, time_s: f64) -> Vec<DVec3> {
-    lights.suns_at(time_s).into_iter().map(|s| s.0).collect()
 }
