@@ -262,6 +262,17 @@ impl<'a> RenderGraph<'a> {
         live
     }
 
+    /// Records the graph on `frame` inside a timestamp scope named `scope`, submits it and
+    /// waits: how one-off work (a bake's compute passes, the reference's batches) runs.
+    pub fn run_and_wait(self, gpu: &Gpu, frame: crate::backend::Frame, states: &mut ResourceStates, scope: &str) -> Result<(), BackendError> {
+        let mut rec = gpu.begin_frame(frame)?;
+        rec.begin_scope(scope);
+        self.execute(&mut rec, states)?;
+        rec.end_scope();
+        rec.finish()?;
+        gpu.submit_and_wait(frame)
+    }
+
     /// Records every live pass into `rec`, deriving barriers from (and updating) `states`.
     pub fn execute(self, rec: &mut Recorder<'_>, states: &mut ResourceStates) -> Result<ExecutionReport, BackendError> {
         let live = self.live_passes();

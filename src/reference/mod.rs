@@ -350,12 +350,7 @@ impl ReferenceRenderer {
             graph.pass("host visibility").buffer(status, Access::HostRead, None).record(|_| Ok(()));
         }
         let gpu = &self.gpu;
-        let mut rec = gpu.begin_frame(self.frame)?;
-        rec.begin_scope("reference");
-        graph.execute(&mut rec, &mut self.states)?;
-        rec.end_scope();
-        rec.finish()?;
-        gpu.submit_and_wait(self.frame)?;
+        graph.run_and_wait(gpu, self.frame, &mut self.states, "reference")?;
         let bytes = gpu.read_buffer(status)?;
         Ok(bytes.get(..4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(u32::MAX))
     }

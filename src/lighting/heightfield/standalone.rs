@@ -173,11 +173,6 @@ impl Standalone {
 }
 
 fn run_graph(gpu: &Gpu, states: &mut ResourceStates, frame: Frame, graph: RenderGraph<'_>) -> Result<()> {
-    let mut rec = gpu.begin_frame(frame)?;
-    rec.begin_scope("frame");
-    graph.execute(&mut rec, states)?;
-    rec.end_scope();
-    rec.finish()?;
-    gpu.submit_and_wait(frame)?;
+    graph.run_and_wait(gpu, frame, states, "frame")?;
     Ok(())
 }

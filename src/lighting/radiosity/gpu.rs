@@ -271,12 +271,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         }
         graph.output_buffer(state_buf);
         graph.pass("radiosity host").buffer(shot_buf, Access::HostRead, None).buffer(log_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
-        let mut rec = gpu.begin_frame(frame)?;
-        rec.begin_scope("radiosity shooting");
-        graph.execute(&mut rec, &mut states)?;
-        rec.end_scope();
-        rec.finish()?;
-        gpu.submit_and_wait(frame)?;
+        graph.run_and_wait(gpu, frame, &mut states, "radiosity shooting")?;
         recorded += batch;
         let status = gpu.read_buffer(status_buf)?;
         let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
@@ -309,10 +304,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         .buffer(readback, Access::TransferWrite, None)
         .record(move |ctx| ctx.rec.copy_buffer(state_buf, readback, state_bytes as u64));
     graph.pass("radiosity host").buffer(readback, Access::HostRead, None).record(|_| Ok(()));
-    let mut rec = gpu.begin_frame(frame)?;
-    graph.execute(&mut rec, &mut states)?;
-    rec.finish()?;
-    gpu.submit_and_wait(frame)?;
+    graph.run_and_wait(gpu, frame, &mut states, "radiosity readback")?;
     let bytes = gpu.read_buffer(readback)?;
     let solved: Vec<GpuRadiosity> = bytes.get(..state_bytes).map(bytemuck::pod_collect_to_vec).ok_or_else(|| Error::Usage("radiosity: the read-back state is short".into()))?;
     for (q, s) in p.patches.iter_mut().zip(&solved) {

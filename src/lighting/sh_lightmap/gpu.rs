@@ -183,12 +183,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
                 ctx.rec.dispatch([n as u32 * lanes, 1, 1])
             });
         graph.pass("sh visibility host").buffer(out_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
-        let mut rec = gpu.begin_frame(frame)?;
-        rec.begin_scope("sh light-map visibility");
-        graph.execute(&mut rec, &mut states)?;
-        rec.end_scope();
-        rec.finish()?;
-        gpu.submit_and_wait(frame)?;
+        graph.run_and_wait(gpu, frame, &mut states, "sh light-map visibility")?;
         let status = gpu.read_buffer(status_buf)?;
         let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
         if cut > 0 {
