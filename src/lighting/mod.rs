@@ -20,6 +20,7 @@ mod terms;
 pub mod forward;
 pub mod heightfield;
 pub mod radiosity;
+pub mod prt;
 pub mod sh_lightmap;
 pub mod shadow_volumes;
 

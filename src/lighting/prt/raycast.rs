@@ -1,0 +1,1 @@
+//! The ray-cast truth (placeholder; being written).
