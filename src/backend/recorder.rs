@@ -346,6 +346,14 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// Non-indexed instanced draw: `instances` instances from `first_instance` (which
+    /// `gl_InstanceIndex` includes), each of `vertices` vertices from `first_vertex`.
+    pub fn draw_instanced(&mut self, vertices: u32, first_vertex: u32, instances: u32, first_instance: u32) -> BackendResult<()> {
+        self.bound_pipeline()?;
+        unsafe { self.gpu.device.cmd_draw(self.cb, vertices, instances, first_vertex, first_instance) };
+        Ok(())
+    }
+
     pub fn draw_indexed(&mut self, indices: u32, first_index: u32, vertex_offset: i32) -> BackendResult<()> {
         self.bound_pipeline()?;
         unsafe { self.gpu.device.cmd_draw_indexed(self.cb, indices, 1, first_index, vertex_offset, 0) };

@@ -165,3 +165,9 @@ pub fn tangent_frame(n: DVec3, twist: f64) -> (DVec3, DVec3) {
     let t = t0 * c + b0 * s;
     (t, n.cross(t))
 }
+
+/// The vertex camera's frame (tangent, bitangent, normal) for the unit normal `n`.
+pub fn frame(n: DVec3, twist: f64) -> (DVec3, DVec3, DVec3) {
+    let (t, b) = tangent_frame(n, twist);
+    (t, b, n)
+}

@@ -1,0 +1,25 @@
+#version 460
+// Phase 1's occluder value (src/lighting/prt/raster.rs): 0, or with the distance gradient of
+// the document's section 3.1 the depth (0 at near, 1 at far). The atlas is cleared to 1.
+
+layout(constant_id = 1) const int RADIAL = 0;
+layout(constant_id = 2) const int TILE = 32;
+layout(constant_id = 9) const int GRADIENT = 0;
+
+layout(location = 0) in float in_front;
+layout(location = 1) flat in ivec2 in_tile;
+
+layout(location = 0) out float out_visibility;
+
+void main() {
+    // A triangle projected across its tile's border belongs to this tile only.
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    if (any(lessThan(p, in_tile)) || any(greaterThanEqual(p, in_tile + TILE))) {
+        discard;
+    }
+    // Radial depth does not clip what lies behind the vertex (planar depth does).
+    if (RADIAL == 1 && in_front < 0.0) {
+        discard;
+    }
+    out_visibility = GRADIENT == 1 ? clamp(gl_FragCoord.z, 0.0, 1.0) : 0.0;
+}

@@ -1,0 +1,236 @@
+//! The method's parameters, each checked with one error line naming the scene file, line and field.
+
+use crate::error::{Error, Result};
+use crate::scene::{MethodDecl, Scene};
+
+/// The document's path (orthographic disk, planar depth, the 8-bit cosine texture and the
+/// 2π/1024 scale) or the corrected one (exact per-pixel weights cos·Ω for the mapping in use).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    Faithful,
+    Corrected,
+}
+
+/// How a hemisphere direction lands in the tile's unit disk (digest §1.4, §3.2 item 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mapping {
+    /// Listing 2.4 as written: `(d.x, d.y)`, the Nusselt analogue (the document calls it
+    /// stereographic).
+    Orthographic = 0,
+    /// True stereographic, `(d.x, d.y)/(1 + d.z)`: r = tan(θ/2).
+    Stereographic = 1,
+    /// Lambert azimuthal equal-area, r = √(1 − cos θ): every pixel the same solid angle.
+    EqualArea = 2,
+}
+
+/// What near and far clip (digest §1.4 item 3, §3.2 item 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Depth {
+    /// The document's: depth along the normal, linear (planes perpendicular to the normal).
+    Planar = 0,
+    /// Distance from the vertex (spheres): what a ray's t_min/t_max mean.
+    Radial = 1,
+}
+
+/// Per-pixel quadrature weight of the multiplicative stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Weights {
+    /// Listing 2.1's 8-bit cosine texture on its 2/(T−1) grid times hemisphere area / T².
+    Legacy,
+    /// cos θ · Ω_pixel for the mapping in use, in fp32, zero outside the disk.
+    Exact,
+}
+
+/// How each tile is summed to one texel of 4 coefficients.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Reduction {
+    /// The document's four ping-pong passes (8, 4, 8, 4 taps at 32²) with integer fetches.
+    Passes,
+    /// One compute workgroup per tile.
+    Compute,
+}
+
+/// Which baker computes the transfer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Baker {
+    /// The document's rasterised visibility atlas.
+    Raster,
+    /// The ray-cast truth on the GPU (compute, BVH).
+    Rays,
+    /// The ray-cast truth on the CPU.
+    RaysCpu,
+}
+
+/// How the coefficients are stored (digest §1.9, §3.2 storage).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Storage {
+    F32,
+    /// Shared exponent per group of coefficients of one band index across vertices (the document's suggestion).
+    SharedByBand,
+    /// Shared exponent per group of one vertex's coefficients.
+    SharedByVertex,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    pub mode: Mode,
+    pub baker: Baker,
+    pub mapping: Mapping,
+    pub depth: Depth,
+    pub weights: Weights,
+    pub reduction: Reduction,
+    /// Tile side (pixels per vertex = tile²).
+    pub tile: u32,
+    /// Vertices rendered per batch (tiles per atlas).
+    pub batch: u32,
+    /// Coefficients used at run time: 4, 9, 16 (complete bands) or the document's 8 and 12.
+    pub coefficients: usize,
+    pub near: f64,
+    /// `f64::INFINITY`: unbounded.
+    pub far: f64,
+    /// Occluders write a value growing with distance instead of 0 (§3.1).
+    pub gradient: bool,
+    /// The occluded/occluding rules as written (see `receivers::OccluderRules::parse`).
+    pub occluders: String,
+    /// Rays per vertex of the ray-cast bakers.
+    pub samples: usize,
+    /// The environment turns about world up at this rate (degrees per second): SH rotation.
+    pub env_spin: f64,
+    /// SH keys per second for scenes with animated objects (§3.3: 5–15).
+    pub key_rate: f64,
+    /// The loop length of the animation, seconds.
+    pub loop_s: f64,
+    pub storage: Storage,
+    /// Rotation of every vertex camera about its normal, radians (must not matter; tests).
+    pub twist: f64,
+}
+
+impl Config {
+    pub fn defaults(mode: Mode) -> Config {
+        let faithful = mode == Mode::Faithful;
+        Config {
+            mode,
+            baker: Baker::Raster,
+            mapping: if faithful { Mapping::Orthographic } else { Mapping::EqualArea },
+            depth: if faithful { Depth::Planar } else { Depth::Radial },
+            weights: if faithful { Weights::Legacy } else { Weights::Exact },
+            reduction: if faithful { Reduction::Passes } else { Reduction::Compute },
+            tile: 32,
+            batch: 1024,
+            coefficients: 16,
+            near: 1e-3,
+            far: f64::INFINITY,
+            gradient: false,
+            occluders: String::new(),
+            samples: 1024,
+            env_spin: 0.0,
+            key_rate: 10.0,
+            loop_s: 4.0,
+            storage: Storage::F32,
+            twist: 0.0,
+        }
+    }
+
+    /// Complete bands baked (the legacy 8 and 12 bake 3 and 4 bands and drop the rest).
+    pub fn bands(&self) -> usize {
+        match self.coefficients {
+            0..=4 => 2,
+            5..=9 => 3,
+            _ => 4,
+        }
+    }
+
+    /// What the bake depends on (the run-time parameters left out), as a cache key part.
+    pub fn bake_key(&self) -> String {
+        let far = if self.far.is_finite() { format!("{}", self.far) } else { "inf".into() };
+        match self.baker {
+            Baker::Raster => format!(
+                "raster {:?} {:?} {:?} {:?} tile={} batch={} bands={} near={} far={far} gradient={} twist={}",
+                self.mapping,
+                self.depth,
+                self.weights,
+                self.reduction,
+                self.tile,
+                self.batch,
+                self.bands(),
+                self.near,
+                self.gradient,
+                self.twist
+            ),
+            _ => format!("rays samples={} bands={} near={} far={far} twist={}", self.samples, self.bands(), self.near, self.twist),
+        }
+    }
+
+    pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
+        let name = &decl.name;
+        let bad = |p: &str, want: &str, got: &toml::Value| -> Error {
+            let message = format!("expected {want}, got {got}");
+            match scene {
+                Some(scene) => scene.method_param_error(decl, p, message).into(),
+                None => Error::Usage(format!("methods: {name}.{p}: {message}")),
+            }
+        };
+        let float = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
+        let mode = match decl.param("mode") {
+            None => Mode::Corrected,
+            Some(v) => match v.as_str() {
+                Some("faithful") => Mode::Faithful,
+                Some("corrected") => Mode::Corrected,
+                _ => return Err(bad("mode", "\"faithful\" or \"corrected\"", v)),
+            },
+        };
+        let mut c = Config::defaults(mode);
+        for (p, v, _) in &decl.params {
+            let word = |options: &[&str]| -> Result<usize> {
+                v.as_str().and_then(|s| options.iter().position(|o| *o == s)).ok_or_else(|| {
+                    let list: Vec<String> = options.iter().map(|o| format!("\"{o}\"")).collect();
+                    bad(p, &format!("one of {}", list.join(", ")), v)
+                })
+            };
+            match p.as_str() {
+                "mode" => {}
+                "baker" => c.baker = [Baker::Raster, Baker::Rays, Baker::RaysCpu][word(&["raster", "rays", "rays_cpu"])?],
+                "mapping" => c.mapping = [Mapping::Orthographic, Mapping::Stereographic, Mapping::EqualArea][word(&["orthographic", "stereographic", "equal_area"])?],
+                "depth" => c.depth = [Depth::Planar, Depth::Radial][word(&["planar", "radial"])?],
+                "weights" => c.weights = [Weights::Legacy, Weights::Exact][word(&["legacy", "exact"])?],
+                "reduction" => c.reduction = [Reduction::Passes, Reduction::Compute][word(&["passes", "compute"])?],
+                "storage" => c.storage = [Storage::F32, Storage::SharedByBand, Storage::SharedByVertex][word(&["f32", "shared_by_band", "shared_by_vertex"])?],
+                "tile" => c.tile = v.as_integer().filter(|t| [8, 16, 32, 64, 128].contains(t)).ok_or_else(|| bad(p, "a tile side of 8, 16, 32, 64 or 128", v))? as u32,
+                "batch" => c.batch = v.as_integer().filter(|b| (1..=4096).contains(b)).ok_or_else(|| bad(p, "a vertex count from 1 to 4096", v))? as u32,
+                "coefficients" => c.coefficients = v.as_integer().filter(|n| [4, 8, 9, 12, 16].contains(n)).ok_or_else(|| bad(p, "4, 9 or 16 (complete bands), or the document's 8 or 12", v))? as usize,
+                "near" => c.near = float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| bad(p, "a distance >= 0", v))?,
+                "far" => c.far = float(v).filter(|x| x.is_finite() && *x >= 0.0).map(|x| if x == 0.0 { f64::INFINITY } else { x }).ok_or_else(|| bad(p, "a distance > near, or 0 for none", v))?,
+                "gradient" => c.gradient = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
+                "occluders" => c.occluders = v.as_str().ok_or_else(|| bad(p, "a string of `receiver: occluders…` rules separated by `;`", v))?.to_string(),
+                "samples" => c.samples = v.as_integer().filter(|n| (16..=1 << 20).contains(n)).ok_or_else(|| bad(p, "a ray count from 16 to 1048576", v))? as usize,
+                "env_spin" => c.env_spin = float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
+                "key_rate" => c.key_rate = float(v).filter(|x| (1.0..=60.0).contains(x)).ok_or_else(|| bad(p, "keys per second from 1 to 60", v))?,
+                "loop_s" => c.loop_s = float(v).filter(|x| *x > 0.0 && *x <= 600.0).ok_or_else(|| bad(p, "seconds in (0, 600]", v))?,
+                _ => {}
+            }
+        }
+        if c.far <= c.near {
+            return Err(bad("far", "a distance greater than near", decl.param("far").unwrap_or(&toml::Value::from(0))));
+        }
+        let side = c.atlas_side();
+        if side > 16384 {
+            return Err(bad("batch", &format!("a batch whose atlas fits 16384 pixels (tile {} × ⌈√batch⌉ = {side})", c.tile), decl.param("batch").unwrap_or(&toml::Value::from(c.batch as i64))));
+        }
+        Ok(c)
+    }
+
+    /// Tiles per atlas row.
+    pub fn tiles_per_row(&self) -> u32 {
+        (self.batch as f64).sqrt().ceil() as u32
+    }
+
+    /// The atlas's side in pixels.
+    pub fn atlas_side(&self) -> u32 {
+        self.tiles_per_row() * self.tile
+    }
+
+    /// The document's incomplete band sets (8, 12 coefficients) are not rotation invariant.
+    pub fn legacy_coefficients(&self) -> bool {
+        matches!(self.coefficients, 8 | 12)
+    }
+}

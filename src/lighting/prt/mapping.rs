@@ -1,0 +1,145 @@
+//! The hemisphere-to-tile mappings of the raster baker and their quadrature weights (digest
+//! §1.3–1.4, §3.2 items 1–2). `glsl/prt/mapping.glsl` is the GPU twin of [`project`] and
+//! [`unproject`]; the weights are computed here and uploaded.
+//!
+//! A tile is T×T pixels over the square [−1, 1]²; pixel (i, j) has its centre at
+//! `s = −1 + (2i + 1)/T`, `t = −1 + (2j + 1)/T`. Directions are in the vertex camera's frame:
+//! x along the tangent, y along the bitangent, z along the normal.
+
+use glam::{DVec2, DVec3};
+
+use super::config::{Mapping, Weights};
+
+/// Where the unit direction `d` (z ≥ 0 in front) lands in the tile square.
+pub fn project(mapping: Mapping, d: DVec3) -> DVec2 {
+    let d = d.normalize_or_zero();
+    match mapping {
+        Mapping::Orthographic => DVec2::new(d.x, d.y),
+        Mapping::Stereographic => DVec2::new(d.x, d.y) / (1.0 + d.z).max(1e-12),
+        Mapping::EqualArea => {
+            let r_xy = (d.x * d.x + d.y * d.y).sqrt();
+            if r_xy <= 0.0 {
+                return DVec2::ZERO;
+            }
+            DVec2::new(d.x, d.y) / r_xy * (1.0 - d.z).max(0.0).sqrt()
+        }
+    }
+}
+
+/// The direction that lands at `st`, `None` outside the unit disk (no hemisphere direction).
+pub fn unproject(mapping: Mapping, st: DVec2) -> Option<DVec3> {
+    let r2 = st.length_squared();
+    if r2 >= 1.0 {
+        return None;
+    }
+    Some(match mapping {
+        Mapping::Orthographic => DVec3::new(st.x, st.y, (1.0 - r2).sqrt()),
+        Mapping::Stereographic => {
+            let k = 2.0 / (1.0 + r2);
+            DVec3::new(st.x * k, st.y * k, (1.0 - r2) / (1.0 + r2))
+        }
+        Mapping::EqualArea => {
+            let k = (2.0 - r2).sqrt();
+            DVec3::new(st.x * k, st.y * k, 1.0 - r2)
+        }
+    })
+}
+
+/// [`unproject`], with points outside the disk taken to the horizon in their direction (the
+/// legacy weights reach a little past the disk, digest §3.2 item 2).
+pub fn unproject_clamped(mapping: Mapping, st: DVec2) -> DVec3 {
+    unproject(mapping, st).unwrap_or_else(|| {
+        let r = st.length();
+        if r > 0.0 {
+            DVec3::new(st.x / r, st.y / r, 0.0)
+        } else {
+            DVec3::Z
+        }
+    })
+}
+
+/// The centre of pixel (i, j) of a T×T tile.
+pub fn pixel_center(tile: u32, i: u32, j: u32) -> DVec2 {
+    let t = tile as f64;
+    DVec2::new(-1.0 + (2.0 * i as f64 + 1.0) / t, -1.0 + (2.0 * j as f64 + 1.0) / t)
+}
+
+/// Solid angle per unit tile area at `st` (the mapping's Jacobian): 1/cos θ orthographic,
+/// 4/(1 + r²)² stereographic, 2 equal-area.
+pub fn solid_angle_density(mapping: Mapping, st: DVec2) -> f64 {
+    let r2 = st.length_squared();
+    match mapping {
+        Mapping::Orthographic => 1.0 / (1.0 - r2).max(1e-12).sqrt(),
+        Mapping::Stereographic => 4.0 / ((1.0 + r2) * (1.0 + r2)),
+        Mapping::EqualArea => 2.0,
+    }
+}
+
+/// Listing 2.1: `tex[j·T + i] = (u8)(√(1 − s² − t²)·255)` on the grid `s, t = −1 + 2k/(T − 1)`
+/// (both ends included), 0 where `1 − s² − t² < 0`.
+pub fn legacy_cosine_texture(tile: u32) -> Vec<u8> {
+    let step = 2.0 / (tile as f64 - 1.0).max(1.0);
+    let mut out = Vec::with_capacity((tile * tile) as usize);
+    for j in 0..tile {
+        for i in 0..tile {
+            let (s, t) = (-1.0 + step * i as f64, -1.0 + step * j as f64);
+            let u = 1.0 - s * s - t * t;
+            out.push(if u < 0.0 { 0 } else { (u.sqrt() * 255.0) as u8 });
+        }
+    }
+    out
+}
+
+/// Per pixel of a tile, the weight the multiplicative stage multiplies `V · y_i(ω)` by, so that
+/// the tile's sum is `∫ V max(0, n·ω) y_i dω`:
+/// * `Exact`: cos θ · Ω_pixel = cos θ · A_pixel · (dω/dA) at the pixel centre, 0 outside the disk;
+/// * `Legacy`: the 8-bit cosine texture / 255 × 2π / T² (Listing 2.1 and §2.2.4's scale).
+pub fn weights(mapping: Mapping, kind: Weights, tile: u32) -> Vec<f32> {
+    let area = (2.0 / tile as f64).powi(2);
+    match kind {
+        Weights::Legacy => {
+            let scale = 2.0 * std::f64::consts::PI / (tile * tile) as f64;
+            legacy_cosine_texture(tile).into_iter().map(|c| (c as f64 / 255.0 * scale) as f32).collect()
+        }
+        Weights::Exact => {
+            let mut out = Vec::with_capacity((tile * tile) as usize);
+            for j in 0..tile {
+                for i in 0..tile {
+                    let st = pixel_center(tile, i, j);
+                    out.push(match unproject(mapping, st) {
+                        Some(d) => (d.z * area * solid_angle_density(mapping, st)) as f32,
+                        None => 0.0,
+                    });
+                }
+            }
+            out
+        }
+    }
+}
+
+/// The transfer an unoccluded vertex with normal `n` (world) gets from the tile quadrature, with
+/// the tangent frame `(t, b)`: the CPU mirror of the multiplicative and integration stages for
+/// V ≡ 1 (digest §3.2's table, test 1).
+pub fn unoccluded_transfer(mapping: Mapping, kind: Weights, tile: u32, frame: (DVec3, DVec3, DVec3), bands: usize) -> Vec<f64> {
+    let w = weights(mapping, kind, tile);
+    let (t, b, n) = frame;
+    let dim = bands * bands;
+    let mut out = vec![0.0; dim];
+    let mut y = vec![0.0; dim];
+    for j in 0..tile {
+        for i in 0..tile {
+            let wk = w[(j * tile + i) as usize] as f64;
+            if wk == 0.0 {
+                continue;
+            }
+            let d = unproject_clamped(mapping, pixel_center(tile, i, j));
+            let world = t * d.x + b * d.y + n * d.z;
+            let sh = DVec3::new(world.x, -world.z, world.y);
+            crate::sh::eval_basis_f64(sh, bands, &mut y).expect("bands checked by the caller");
+            for (o, yi) in out.iter_mut().zip(&y) {
+                *o += wk * yi;
+            }
+        }
+    }
+    out
+}

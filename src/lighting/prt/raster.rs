@@ -1,0 +1,358 @@
+//! Seed 002's baker (digest §1.2–1.6): per batch of vertices, the occluders rendered from every
+//! vertex into its tile of a visibility atlas (`glsl/prt/visibility.*`), then per group of four
+//! coefficients the multiplicative stage (`multiply.comp`: V · weight · y_i) and the integration
+//! — the document's four ping-pong passes (`reduce_axis.comp`, `reduce_last.comp`) or one
+//! workgroup per tile (`reduce_tile.comp`) — into each receiver's slot of the coefficient buffer.
+//! The visibility atlas is rendered once per batch and reused by every group.
+//!
+//! Receivers are laid out per occluder set, each set's first slot a multiple of the batch size,
+//! so a batch holds the receivers of one set and an instance's tile is its slot modulo the batch;
+//! the slots past a set's last receiver are the document's empty vertices: rendered as nothing,
+//! never written back.
+
+use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
+
+use super::config::{Config, Depth, Reduction};
+use super::mapping;
+use super::receivers::{tangent_frame, Receivers};
+use crate::backend::{
+    vk, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant,
+    SubresourceRange, VertexAttribute, VertexLayout,
+};
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::progress::Progress;
+use crate::shaders::ShaderLibrary;
+
+/// `PrtReceiver` in glsl/prt/mapping.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuReceiver {
+    pub position: [f32; 4],
+    pub tangent: [f32; 4],
+    pub bitangent: [f32; 4],
+    pub normal: [f32; 4],
+}
+
+fn v4(v: DVec3, w: f32) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w]
+}
+
+/// The taps of the four reduction passes along one axis for a tile side (8 × 4 = 32, the
+/// document's schedule).
+pub fn taps(tile: u32) -> (u32, u32) {
+    match tile {
+        8 => (4, 2),
+        16 => (4, 4),
+        32 => (8, 4),
+        64 => (8, 8),
+        _ => (16, tile / 16),
+    }
+}
+
+/// The receivers' slots: per occluder set a run starting at a multiple of the batch size.
+pub struct Slots {
+    /// Per receiver, its slot.
+    pub slot: Vec<u32>,
+    /// Per batch: (occluder set, first slot, receivers in it).
+    pub batches: Vec<(usize, u32, u32)>,
+    pub total: u32,
+}
+
+impl Slots {
+    pub fn new(r: &Receivers, batch: u32) -> Slots {
+        let mut slot = vec![0u32; r.len()];
+        let mut batches = Vec::new();
+        let mut next = 0u32;
+        for s in 0..r.sets.len() {
+            let members = r.of_set(s);
+            for (k, &i) in members.iter().enumerate() {
+                slot[i] = next + k as u32;
+            }
+            for (b, chunk) in members.chunks(batch as usize).enumerate() {
+                batches.push((s, next + b as u32 * batch, chunk.len() as u32));
+            }
+            next += (members.len() as u32).div_ceil(batch) * batch;
+        }
+        Slots { slot, batches, total: next }
+    }
+}
+
+/// What one bake needs on the device.
+struct Bake {
+    receivers: BufferId,
+    weights: BufferId,
+    batch: BufferId,
+    coefficients: BufferId,
+    occluders: BufferId,
+    /// Per occluder set: (first vertex, vertex count) in `occluders`.
+    set_vertices: Vec<(u32, u32)>,
+    atlas: ImageId,
+    depth: ImageId,
+    product: ImageId,
+    /// The reduction's intermediate images (the document's framebuffers 1–3).
+    stages: [ImageId; 3],
+    visibility: PipelineId,
+    /// Per coefficient group: multiply, then the reduction's pipelines.
+    multiply: Vec<PipelineId>,
+    reduce: Vec<Vec<PipelineId>>,
+}
+
+/// Bakes the transfer of every receiver (`bands²` per receiver, receiver-major) on the device.
+pub fn bake(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, progress: &mut Progress) -> Result<Vec<f32>> {
+    gpu.scoped(|gpu| run(gpu, shaders, r, config, None, progress))
+}
+
+/// The integration stage alone over a given product atlas (RGBA per pixel, row-major, the
+/// atlas's size), for one batch of `config.batch` real receivers: the per-tile sums, 4 per tile
+/// (test 10, reduction exactness).
+pub fn reduce_only(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, product: &[f32]) -> Result<Vec<f32>> {
+    let n = config.batch as usize;
+    let r = Receivers::explicit(&vec![(DVec3::ZERO, DVec3::Y); n], Vec::new());
+    let cfg = Config { coefficients: 4, ..config.clone() };
+    gpu.scoped(|gpu| run(gpu, shaders, &r, &cfg, Some(product), &mut Progress::new("prt reduction")))
+}
+
+fn storage(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
+    Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
+}
+
+fn image(gpu: &mut Gpu, name: &str, format: vk::Format, w: u32, h: u32, usage: vk::ImageUsageFlags) -> Result<ImageId> {
+    Ok(gpu.create_image(&ImageDesc::new_2d(name, format, w, h).usage(usage))?)
+}
+
+fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, product_override: Option<&[f32]>, progress: &mut Progress) -> Result<Vec<f32>> {
+    let bands = config.bands();
+    let dim = bands * bands;
+    if r.is_empty() {
+        progress.finish();
+        return Ok(Vec::new());
+    }
+    let slots = Slots::new(r, config.batch);
+    let side = config.atlas_side();
+    let rows = config.batch.div_ceil(config.tiles_per_row());
+    let (w, h) = (side, rows * config.tile);
+    if w > gpu.caps().max_image_dimension_2d || h > gpu.caps().max_image_dimension_2d {
+        return Err(Error::Usage(format!("prt: a {w}x{h} visibility atlas exceeds the device's {} pixels; lower batch or tile", gpu.caps().max_image_dimension_2d)));
+    }
+    let mut receivers = vec![GpuReceiver::default(); slots.total as usize];
+    for i in 0..r.len() {
+        let (t, b) = tangent_frame(r.normals[i], config.twist);
+        receivers[slots.slot[i] as usize] = GpuReceiver { position: v4(r.positions[i], 1.0), tangent: v4(t, 0.0), bitangent: v4(b, 0.0), normal: v4(r.normals[i], 0.0) };
+    }
+    let mut vertices: Vec<[f32; 3]> = Vec::new();
+    let mut set_vertices = Vec::new();
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in &r.positions {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    for s in &r.sets {
+        set_vertices.push((vertices.len() as u32, 3 * s.triangles.len() as u32));
+        for t in &s.triangles {
+            for p in t {
+                lo = lo.min(p.as_dvec3());
+                hi = hi.max(p.as_dvec3());
+                vertices.push(p.to_array());
+            }
+        }
+    }
+    // An unbounded far plane becomes one past everything (depth only orders occluders).
+    let far = if config.far.is_finite() { config.far } else { config.near + 2.0 * (hi - lo).length().max(1.0) };
+    let weights = mapping::weights(config.mapping, config.weights, config.tile);
+
+    let usage_storage = vk::ImageUsageFlags::STORAGE;
+    let rgba = vk::Format::R32G32B32A32_SFLOAT;
+    let (ta, tb) = taps(config.tile);
+    let groups = dim.div_ceil(4);
+    let bake = Bake {
+        receivers: storage(gpu, "prt receivers", bytemuck::cast_slice(&receivers))?,
+        weights: storage(gpu, "prt weights", bytemuck::cast_slice(&weights))?,
+        batch: gpu.create_buffer(&BufferDesc { name: "prt batch".into(), size: 4, usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuOnly })?,
+        coefficients: gpu.create_buffer(&BufferDesc {
+            name: "prt coefficients".into(),
+            size: slots.total as u64 * 64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })?,
+        occluders: gpu.create_buffer_init("prt occluders", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(if vertices.is_empty() { &[[0.0f32; 3]][..] } else { &vertices }))?,
+        set_vertices,
+        atlas: image(gpu, "prt visibility atlas", vk::Format::R32_SFLOAT, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
+        depth: image(gpu, "prt visibility depth", vk::Format::D32_SFLOAT, w, h, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?,
+        product: image(gpu, "prt product", rgba, w, h, usage_storage | vk::ImageUsageFlags::TRANSFER_DST)?,
+        stages: [
+            image(gpu, "prt reduction 1", rgba, w / ta, h, usage_storage)?,
+            image(gpu, "prt reduction 2", rgba, w / config.tile, h, usage_storage)?,
+            image(gpu, "prt reduction 3", rgba, w / config.tile, h / ta, usage_storage)?,
+        ],
+        visibility: visibility_pipeline(gpu, shaders, config, w, h, far)?,
+        multiply: Vec::new(),
+        reduce: Vec::new(),
+    };
+    let mut bake = bake;
+    let common = |id: u32, bits: u32| SpecConstant { id, bits };
+    for g in 0..groups as u32 {
+        let base = vec![common(0, config.mapping as u32), common(2, config.tile), common(3, config.tiles_per_row()), common(4, config.batch), common(10, g)];
+        bake.multiply.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt multiply {g}"), shader: "prt/multiply.comp".into(), specialization: base.clone() }, shaders)?);
+        let mut reduce = Vec::new();
+        match config.reduction {
+            Reduction::Passes => {
+                for (i, (taps, axis)) in [(ta, 0), (tb, 0), (ta, 1)].into_iter().enumerate() {
+                    reduce.push(gpu.create_compute_pipeline(
+                        &ComputePipelineDesc { name: format!("prt reduce pass {} group {g}", i + 1), shader: "prt/reduce_axis.comp".into(), specialization: vec![common(11, taps), common(12, axis)] },
+                        shaders,
+                    )?);
+                }
+                let mut last = base.clone();
+                last.push(common(11, tb));
+                reduce.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt reduce pass 4 group {g}"), shader: "prt/reduce_last.comp".into(), specialization: last }, shaders)?);
+            }
+            Reduction::Compute => {
+                reduce.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt reduce tiles {g}"), shader: "prt/reduce_tile.comp".into(), specialization: base }, shaders)?);
+            }
+        }
+        bake.reduce.push(reduce);
+    }
+    if let Some(product) = product_override {
+        if product.len() != (w * h * 4) as usize {
+            return Err(Error::Usage(format!("prt: a product atlas of {} floats, expected {}", product.len(), w * h * 4)));
+        }
+        gpu.upload_image(bake.product, 0, bytemuck::cast_slice(product))?;
+    }
+
+    let frame = gpu.create_frame()?;
+    let mut states = ResourceStates::default();
+    if product_override.is_some() {
+        states.set_image(gpu, bake.product, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    }
+    let t_start = std::time::Instant::now();
+    for (k, &(set, first, count)) in slots.batches.iter().enumerate() {
+        let mut graph = RenderGraph::new();
+        record_batch(&mut graph, &bake, config, (set, first, count), (w, h), product_override.is_none());
+        graph.pass("prt readback").buffer(bake.coefficients, Access::HostRead, None).record(|_| Ok(()));
+        graph.run_and_wait(gpu, frame, &mut states, "prt raster bake")?;
+        progress.set_detail(format!("batch {}/{}, {:.0} vertices/s", k + 1, slots.batches.len(), (k + 1) as f64 * config.batch as f64 / t_start.elapsed().as_secs_f64().max(1e-9)));
+        progress.update(k as u64 + 1, slots.batches.len() as u64);
+    }
+    progress.finish();
+    let bytes = gpu.read_buffer(bake.coefficients)?;
+    let all: &[f32] = bytemuck::try_cast_slice(&bytes[..slots.total as usize * 64]).map_err(|e| Error::Usage(format!("prt: coefficient readback: {e}")))?;
+    let mut out = vec![0.0f32; r.len() * dim];
+    for i in 0..r.len() {
+        let s = slots.slot[i] as usize;
+        out[i * dim..(i + 1) * dim].copy_from_slice(&all[s * 16..s * 16 + dim]);
+    }
+    Ok(out)
+}
+
+fn visibility_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, w: u32, h: u32, far: f64) -> Result<PipelineId> {
+    let mut desc = GraphicsPipelineDesc::new("prt visibility", "prt/visibility.vert", Some("prt/visibility.frag"));
+    desc.vertex_layout = VertexLayout { buffers: vec![(0, 12)], attributes: vec![VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 }] };
+    // Occluders block from both sides.
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.depth = DepthState { test: true, write: true, compare: vk::CompareOp::LESS };
+    desc.color_targets = vec![ColorTarget::new(vk::Format::R32_SFLOAT)];
+    desc.depth_format = Some(vk::Format::D32_SFLOAT);
+    let c = |id: u32, bits: u32| SpecConstant { id, bits };
+    desc.specialization = vec![
+        c(0, config.mapping as u32),
+        c(1, u32::from(config.depth == Depth::Radial)),
+        c(2, config.tile),
+        c(3, config.tiles_per_row()),
+        c(4, config.batch),
+        c(5, w),
+        c(6, h),
+        c(7, (config.near as f32).to_bits()),
+        c(8, (far as f32).to_bits()),
+        c(9, u32::from(config.gradient)),
+    ];
+    Ok(gpu.create_graphics_pipeline(&desc, shaders)?)
+}
+
+/// One batch: its first slot into the batch buffer, the visibility atlas, then per group the
+/// multiplicative stage and the integration into the coefficient buffer.
+fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config, (set, first, count): (usize, u32, u32), (w, h): (u32, u32), render: bool) {
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let read = Access::StorageRead { stages: compute };
+    let write = Access::StorageWrite { stages: compute };
+    let full = SubresourceRange::full();
+    let batch = b.batch;
+    graph.pass("prt batch").buffer(batch, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(batch, first));
+    if render {
+        let (first_vertex, vertex_count) = b.set_vertices[set];
+        graph
+            .pass("prt visibility")
+            .color_attachment(b.atlas, full, true)
+            .depth_stencil_write(b.depth, true)
+            .buffer(b.receivers, Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER }, Some("receivers"))
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(b.atlas, [1.0; 4])], depth_stencil: Some(RenderTarget::clear_depth(b.depth, 1.0, 0)) })?;
+                if vertex_count > 0 {
+                    ctx.rec.bind_pipeline(b.visibility)?;
+                    ctx.bind(&[])?;
+                    ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
+                    ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
+                }
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+    }
+    for (g, &multiply) in b.multiply.iter().enumerate() {
+        if render {
+            graph
+                .pass("prt multiply")
+                .buffer(b.receivers, read, Some("receivers"))
+                .storage_read("visibility", b.atlas, full, compute)
+                .buffer(b.weights, read, Some("weights"))
+                .storage_write("product", b.product, full, compute)
+                .buffer(batch, read, Some("batch"))
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(multiply)?;
+                    ctx.bind(&[])?;
+                    ctx.rec.dispatch([w, h, 1])
+                });
+        }
+        let reduce = &b.reduce[g];
+        match config.reduction {
+            Reduction::Passes => {
+                let chain = [b.product, b.stages[0], b.stages[1], b.stages[2]];
+                for i in 0..3 {
+                    let (src, dst, p) = (chain[i], chain[i + 1], reduce[i]);
+                    graph.pass(&format!("prt reduce pass {}", i + 1)).storage_read("src", src, full, compute).storage_write("dst", dst, full, compute).record(move |ctx| {
+                        ctx.rec.bind_pipeline(p)?;
+                        ctx.bind(&[])?;
+                        ctx.rec.dispatch([w, h, 1])
+                    });
+                }
+                let p = reduce[3];
+                graph
+                    .pass("prt reduce pass 4")
+                    .storage_read("src", b.stages[2], full, compute)
+                    .buffer(b.receivers, read, Some("receivers"))
+                    .buffer(b.coefficients, write, Some("coefficients"))
+                    .buffer(batch, read, Some("batch"))
+                    .record(move |ctx| {
+                        ctx.rec.bind_pipeline(p)?;
+                        ctx.bind(&[])?;
+                        ctx.rec.dispatch([w / config.tile, h / config.tile, 1])
+                    });
+            }
+            Reduction::Compute => {
+                let p = reduce[0];
+                let tiles = (w / config.tile) * (h / config.tile);
+                graph
+                    .pass("prt reduce tiles")
+                    .storage_read("src", b.product, full, compute)
+                    .buffer(b.receivers, read, Some("receivers"))
+                    .buffer(b.coefficients, write, Some("coefficients"))
+                    .buffer(batch, read, Some("batch"))
+                    .record(move |ctx| {
+                        ctx.rec.bind_pipeline(p)?;
+                        ctx.bind(&[])?;
+                        ctx.rec.dispatch([64 * tiles, 1, 1])
+                    });
+            }
+        }
+    }
+}
