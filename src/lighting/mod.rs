@@ -19,8 +19,8 @@ mod terms;
 
 pub mod forward;
 pub mod heightfield;
-pub mod radiosity;
 pub mod prt;
+pub mod radiosity;
 pub mod sh_lightmap;
 pub mod shadow_volumes;
 

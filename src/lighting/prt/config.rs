@@ -50,6 +50,16 @@ pub enum Reduction {
     Compute,
 }
 
+/// How the raster baker decides which pixels a triangle covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Coverage {
+    /// The document's: corners projected, straight edges rasterised (curved edges missed).
+    Projected,
+    /// A conservative rectangle per triangle and the ray through each pixel centre tested
+    /// against it: exact coverage at the pixel centres.
+    Exact,
+}
+
 /// Which baker computes the transfer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Baker {
@@ -79,6 +89,7 @@ pub struct Config {
     pub depth: Depth,
     pub weights: Weights,
     pub reduction: Reduction,
+    pub coverage: Coverage,
     /// Tile side (pixels per vertex = tile²).
     pub tile: u32,
     /// Vertices rendered per batch (tiles per atlas).
@@ -115,6 +126,7 @@ impl Config {
             depth: if faithful { Depth::Planar } else { Depth::Radial },
             weights: if faithful { Weights::Legacy } else { Weights::Exact },
             reduction: if faithful { Reduction::Passes } else { Reduction::Compute },
+            coverage: if faithful { Coverage::Projected } else { Coverage::Exact },
             tile: 32,
             batch: 1024,
             coefficients: 16,
@@ -145,7 +157,8 @@ impl Config {
         let far = if self.far.is_finite() { format!("{}", self.far) } else { "inf".into() };
         match self.baker {
             Baker::Raster => format!(
-                "raster {:?} {:?} {:?} {:?} tile={} batch={} bands={} near={} far={far} gradient={} twist={}",
+                "raster {:?} {:?} {:?} {:?} {:?} tile={} batch={} bands={} near={} far={far} gradient={} twist={}",
+                self.coverage,
                 self.mapping,
                 self.depth,
                 self.weights,
@@ -194,10 +207,13 @@ impl Config {
                 "depth" => c.depth = [Depth::Planar, Depth::Radial][word(&["planar", "radial"])?],
                 "weights" => c.weights = [Weights::Legacy, Weights::Exact][word(&["legacy", "exact"])?],
                 "reduction" => c.reduction = [Reduction::Passes, Reduction::Compute][word(&["passes", "compute"])?],
+                "coverage" => c.coverage = [Coverage::Projected, Coverage::Exact][word(&["projected", "exact"])?],
                 "storage" => c.storage = [Storage::F32, Storage::SharedByBand, Storage::SharedByVertex][word(&["f32", "shared_by_band", "shared_by_vertex"])?],
                 "tile" => c.tile = v.as_integer().filter(|t| [8, 16, 32, 64, 128].contains(t)).ok_or_else(|| bad(p, "a tile side of 8, 16, 32, 64 or 128", v))? as u32,
                 "batch" => c.batch = v.as_integer().filter(|b| (1..=4096).contains(b)).ok_or_else(|| bad(p, "a vertex count from 1 to 4096", v))? as u32,
-                "coefficients" => c.coefficients = v.as_integer().filter(|n| [4, 8, 9, 12, 16].contains(n)).ok_or_else(|| bad(p, "4, 9 or 16 (complete bands), or the document's 8 or 12", v))? as usize,
+                "coefficients" => {
+                    c.coefficients = v.as_integer().filter(|n| [4, 8, 9, 12, 16].contains(n)).ok_or_else(|| bad(p, "4, 9 or 16 (complete bands), or the document's 8 or 12", v))? as usize
+                }
                 "near" => c.near = float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| bad(p, "a distance >= 0", v))?,
                 "far" => c.far = float(v).filter(|x| x.is_finite() && *x >= 0.0).map(|x| if x == 0.0 { f64::INFINITY } else { x }).ok_or_else(|| bad(p, "a distance > near, or 0 for none", v))?,
                 "gradient" => c.gradient = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,

@@ -13,7 +13,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 
-use super::config::{Config, Depth, Reduction};
+use super::config::{Config, Coverage, Depth, Reduction};
 use super::mapping;
 use super::receivers::{tangent_frame, Receivers};
 use crate::backend::{
@@ -86,6 +86,8 @@ struct Bake {
     batch: BufferId,
     coefficients: BufferId,
     occluders: BufferId,
+    /// The same triangles as corners (vec4 × 3), for exact coverage.
+    triangles: BufferId,
     /// Per occluder set: (first vertex, vertex count) in `occluders`.
     set_vertices: Vec<(u32, u32)>,
     atlas: ImageId,
@@ -158,6 +160,10 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
             }
         }
     }
+    let mut corners: Vec<[f32; 4]> = vertices.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+    if corners.is_empty() {
+        corners.push([0.0; 4]);
+    }
     // An unbounded far plane becomes one past everything (depth only orders occluders).
     let far = if config.far.is_finite() { config.far } else { config.near + 2.0 * (hi - lo).length().max(1.0) };
     let weights = mapping::weights(config.mapping, config.weights, config.tile);
@@ -177,10 +183,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
             memory: MemoryKind::GpuToCpu,
         })?,
         occluders: gpu.create_buffer_init("prt occluders", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(if vertices.is_empty() { &[[0.0f32; 3]][..] } else { &vertices }))?,
+        triangles: storage(gpu, "prt occluder triangles", bytemuck::cast_slice(&corners))?,
         set_vertices,
         atlas: image(gpu, "prt visibility atlas", vk::Format::R32_SFLOAT, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
         depth: image(gpu, "prt visibility depth", vk::Format::D32_SFLOAT, w, h, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?,
-        product: image(gpu, "prt product", rgba, w, h, usage_storage | vk::ImageUsageFlags::TRANSFER_DST)?,
+        product: image(gpu, "prt product", rgba, w, h, usage_storage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED)?,
         stages: [
             image(gpu, "prt reduction 1", rgba, w / ta, h, usage_storage)?,
             image(gpu, "prt reduction 2", rgba, w / config.tile, h, usage_storage)?,
@@ -247,8 +254,14 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
 }
 
 fn visibility_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, w: u32, h: u32, far: f64) -> Result<PipelineId> {
-    let mut desc = GraphicsPipelineDesc::new("prt visibility", "prt/visibility.vert", Some("prt/visibility.frag"));
-    desc.vertex_layout = VertexLayout { buffers: vec![(0, 12)], attributes: vec![VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 }] };
+    let mut desc = match config.coverage {
+        Coverage::Projected => {
+            let mut d = GraphicsPipelineDesc::new("prt visibility", "prt/visibility.vert", Some("prt/visibility.frag"));
+            d.vertex_layout = VertexLayout { buffers: vec![(0, 12)], attributes: vec![VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 }] };
+            d
+        }
+        Coverage::Exact => GraphicsPipelineDesc::new("prt visibility exact", "prt/visibility_exact.vert", Some("prt/visibility_exact.frag")),
+    };
     // Occluders block from both sides.
     desc.raster.cull = vk::CullModeFlags::NONE;
     desc.depth = DepthState { test: true, write: true, compare: vk::CompareOp::LESS };
@@ -281,22 +294,28 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
     graph.pass("prt batch").buffer(batch, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(batch, first));
     if render {
         let (first_vertex, vertex_count) = b.set_vertices[set];
-        graph
-            .pass("prt visibility")
-            .color_attachment(b.atlas, full, true)
-            .depth_stencil_write(b.depth, true)
-            .buffer(b.receivers, Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER }, Some("receivers"))
-            .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(b.atlas, [1.0; 4])], depth_stencil: Some(RenderTarget::clear_depth(b.depth, 1.0, 0)) })?;
-                if vertex_count > 0 {
-                    ctx.rec.bind_pipeline(b.visibility)?;
-                    ctx.bind(&[])?;
+        let exact = config.coverage == Coverage::Exact;
+        let vertex = Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER };
+        let mut pass = graph.pass("prt visibility").color_attachment(b.atlas, full, true).depth_stencil_write(b.depth, true).buffer(b.receivers, vertex, Some("receivers"));
+        if exact {
+            pass = pass.buffer(b.triangles, vertex, Some("triangles"));
+        }
+        pass.record(move |ctx| {
+            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(b.atlas, [1.0; 4])], depth_stencil: Some(RenderTarget::clear_depth(b.depth, 1.0, 0)) })?;
+            if vertex_count > 0 {
+                ctx.rec.bind_pipeline(b.visibility)?;
+                ctx.bind(&[])?;
+                if exact {
+                    // A rectangle (two triangles) per occluder triangle.
+                    ctx.rec.draw_instanced(2 * vertex_count, 2 * first_vertex, count, first)?;
+                } else {
                     ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
                     ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
                 }
-                ctx.rec.end_rendering();
-                Ok(())
-            });
+            }
+            ctx.rec.end_rendering();
+            Ok(())
+        });
     }
     for (g, &multiply) in b.multiply.iter().enumerate() {
         if render {
