@@ -7,7 +7,7 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{forward, heightfield, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{forward, heightfield, prt, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -96,6 +96,16 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: sh_lightmap::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(sh_lightmap::ShLightmap::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: prt::SCHEMA,
+            terms: Terms::BASE,
+            separable: false,
+            sweep: prt::sweep,
+            reference: prt::reference,
+            translucency: false,
+            create: |c, d| Ok(Box::new(prt::Prt::new(c, d)?)),
             report: None,
         },
     ]

@@ -8,3 +8,306 @@ pub mod mapping;
 pub mod raster;
 pub mod raycast;
 pub mod receivers;
+pub mod storage;
+pub mod light;
+
+#[cfg(test)]
+mod tests;
+
+use glam::Vec3;
+
+use crate::backend::{vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::bake::BakeKey;
+use crate::error::{Error, Result};
+use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
+use crate::progress::Progress;
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+use config::{Baker, Config};
+use receivers::{OccluderRules, Placed, Receivers};
+
+pub const NAME: &str = "prt";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "mode", kind: ParamKind::String },
+        ParamSchema { name: "baker", kind: ParamKind::String },
+        ParamSchema { name: "mapping", kind: ParamKind::String },
+        ParamSchema { name: "depth", kind: ParamKind::String },
+        ParamSchema { name: "weights", kind: ParamKind::String },
+        ParamSchema { name: "reduction", kind: ParamKind::String },
+        ParamSchema { name: "coverage", kind: ParamKind::String },
+        ParamSchema { name: "storage", kind: ParamKind::String },
+        ParamSchema { name: "tile", kind: ParamKind::Int },
+        ParamSchema { name: "batch", kind: ParamKind::Int },
+        ParamSchema { name: "coefficients", kind: ParamKind::Int },
+        ParamSchema { name: "near", kind: ParamKind::Float },
+        ParamSchema { name: "far", kind: ParamKind::Float },
+        ParamSchema { name: "gradient", kind: ParamKind::Bool },
+        ParamSchema { name: "occluders", kind: ParamKind::String },
+        ParamSchema { name: "samples", kind: ParamKind::Int },
+        ParamSchema { name: "env_spin", kind: ParamKind::Float },
+        ParamSchema { name: "key_rate", kind: ParamKind::Float },
+        ParamSchema { name: "loop_s", kind: ParamKind::Float },
+    ],
+};
+
+/// Bumped whenever a baker's output for the same inputs changes.
+const BAKER_VERSION: u32 = 1;
+
+/// The transfer models shadowed light from distant sources: the direct reference.
+pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
+    ReferenceKind::Direct
+}
+
+/// The chart's sweep: the declared configuration, the corrected baker under each mapping and
+/// at 16² and 64² tiles, 4 and 9 coefficients, the faithful (document) path, and the ray-cast
+/// truth.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let with = |d: &MethodDecl, name: &str, v: toml::Value| {
+        let mut d = d.clone();
+        d.params.retain(|(n, _, _)| n != name);
+        d.params.push((name.to_string(), v, 0));
+        d
+    };
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d, None) {
+            let label = match c.baker {
+                Baker::Raster => format!("prt {:?} {:?} {}² n={}", c.mode, c.mapping, c.tile, c.coefficients),
+                _ => format!("prt rays {} n={}", c.samples, c.coefficients),
+            }
+            .to_lowercase();
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    let corrected = with(decl, "mode", "corrected".into());
+    for m in ["orthographic", "stereographic", "equal_area"] {
+        push(with(&corrected, "mapping", m.into()));
+    }
+    for tile in [16i64, 64] {
+        push(with(&corrected, "tile", tile.into()));
+    }
+    for n in [4i64, 9] {
+        push(with(&corrected, "coefficients", n.into()));
+    }
+    push(with(decl, "mode", "faithful".into()));
+    push(with(&corrected, "baker", "rays".into()));
+    out
+}
+
+/// One scene draw the method shades: the object it draws (none for an area light's emitter).
+struct DrawInfo {
+    object: Option<usize>,
+}
+
+/// One scene draw as the bakers see it: the object (none for an area light's emitter, which
+/// is drawn with its emission and receives nothing), its placement at time 0, its mesh and its
+/// first vertex in the scene's vertex buffer.
+pub struct SceneMesh<'a> {
+    pub object: Option<usize>,
+    pub model: glam::Mat4,
+    pub mesh: &'a crate::scene::Mesh,
+    pub vertex_offset: u32,
+}
+
+/// The scene's draws as uploaded.
+fn scene_meshes<'a>(cx: &'a CreateContext<'_>) -> Vec<SceneMesh<'a>> {
+    cx.scene_gpu.draws.iter().zip(&cx.scene_gpu.meshes).map(|(d, mesh)| SceneMesh { object: d.object, model: d.model, mesh, vertex_offset: d.vertex_offset as u32 }).collect()
+}
+
+/// The receivers of the scene at animation time `t` (every object's vertices, animated objects
+/// where they are at `t`), with each receiver's global vertex index.
+pub fn receivers_at(scene: &crate::scene::Scene, meshes: &[SceneMesh<'_>], rules: &OccluderRules, t: f32) -> Result<(Receivers, Vec<u32>)> {
+    let mut placed = Vec::new();
+    let mut global = Vec::new();
+    for m in meshes {
+        let Some(o) = m.object else { continue };
+        let model = scene.objects[o].animation.map_or(m.model, |a| a.transform_at(m.model, t));
+        placed.push(Placed { object: o, model, mesh: m.mesh });
+        global.extend((0..m.mesh.vertex_count() as u32).map(|v| m.vertex_offset + v));
+    }
+    let r = receivers::gather(&placed, rules).map_err(|e| Error::Usage(format!("{}: {NAME}: {e}", scene.source)))?;
+    Ok((r, global))
+}
+
+/// The SH keys' times: one key for a static scene, `loop_s × key_rate` over the loop otherwise.
+pub fn key_times(scene: &crate::scene::Scene, config: &Config) -> Vec<f32> {
+    if scene.objects.iter().any(|o| o.animation.is_some()) {
+        let keys = ((config.loop_s * config.key_rate).round() as u32).max(1);
+        (0..keys).map(|k| (k as f64 / config.key_rate) as f32).collect()
+    } else {
+        vec![0.0]
+    }
+}
+
+/// The stored transfer as the run time reads it: fp32, or through the shared-exponent storage.
+pub fn stored(values: Vec<f32>, dim: usize, storage: config::Storage) -> Result<Vec<f32>> {
+    let grouping = match storage {
+        config::Storage::F32 => return Ok(values),
+        config::Storage::SharedByBand => storage::Grouping::ByBand,
+        config::Storage::SharedByVertex => storage::Grouping::ByVertex,
+    };
+    let n = values.len() / dim.max(1);
+    storage::decode(&storage::encode(&values, dim, grouping), n, dim, grouping).ok_or_else(|| Error::Usage(format!("{NAME}: the shared-exponent storage does not round-trip")))
+}
+
+/// Bakes one key with the configured baker.
+pub fn bake_transfer(gpu: &mut crate::backend::Gpu, shaders: &crate::shaders::ShaderLibrary, r: &Receivers, config: &Config, progress: &mut Progress) -> Result<Vec<f32>> {
+    let clip = receivers::Clip { near: config.near, far: config.far };
+    match config.baker {
+        Baker::Raster => raster::bake(gpu, shaders, r, config, progress),
+        Baker::Rays => raycast::bake_gpu(gpu, shaders, r, config.bands(), config.samples, clip, progress),
+        Baker::RaysCpu => raycast::bake_cpu(r, config.bands(), config.samples, clip, progress),
+    }
+}
+
+/// Per-vertex PRT: the base term lit by the scene's distant light.
+pub struct Prt {
+    config: Config,
+    pipeline: PipelineId,
+    /// keys × scene vertices × 16 coefficients.
+    transfer: BufferId,
+    light: Vec<Vec3>,
+    keys: u32,
+    vertices: u32,
+    draws: Vec<DrawInfo>,
+    animation: Vec<Option<crate::scene::Animation>>,
+    /// This frame's draws and light block.
+    calls: Vec<DrawCall>,
+    uniform: Vec<f32>,
+}
+
+impl Prt {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Prt> {
+        let config = Config::from_decl(decl, Some(cx.scene))?;
+        if config.legacy_coefficients() {
+            crate::errln!("warning: {}: {NAME}: {} coefficients is not a whole number of bands: shading changes as the light turns about a normal (digest §3.2 item 7)", cx.scene.source, config.coefficients);
+        }
+        let local = light::local_lights(cx.scene);
+        if !local.is_empty() {
+            crate::errln!("warning: {}: {NAME} lights with distant light only; it leaves out {}", cx.scene.source, local.join(", "));
+        }
+        let rules = OccluderRules::parse(&config.occluders, cx.scene, &format!("methods: {NAME}.occluders"))?;
+        let times = key_times(cx.scene, &config);
+        let keys = times.len() as u32;
+        let vertices = cx.scene_gpu.meshes.iter().map(|m| m.vertex_count()).sum::<usize>() as u32;
+        let dim = config.bands() * config.bands();
+
+        let mut key = BakeKey::new("PRT transfer").with("version", BAKER_VERSION).with("config", config.bake_key()).with("occluders", &rules).with("keys", (keys, config.key_rate));
+        let geometry: Vec<f32> = cx.scene_gpu.meshes.iter().flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array())).collect();
+        let placements: Vec<f32> = cx.scene_gpu.draws.iter().flat_map(|d| d.model.to_cols_array()).collect();
+        key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry)).with_bytes("placements", bytemuck::cast_slice(&placements)).with("animation", cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>());
+        key = key.with_shaders("prt/");
+        let meshes = scene_meshes(cx);
+        let all_keys: Vec<(Receivers, Vec<u32>)> = times.iter().map(|&t| receivers_at(cx.scene, &meshes, &rules, t)).collect::<Result<_>>()?;
+        let receivers = all_keys[0].0.len();
+        let label = format!("{NAME} {:?} {:?} {}² n={} ({receivers} vertices{})", config.mode, config.baker, config.tile, config.coefficients, if keys > 1 { format!(" × {keys} keys") } else { String::new() });
+        let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
+        let baked: Vec<f32> = cx.bakes.bake(&label, &key, |progress| {
+            let mut out = Vec::new();
+            for (r, _) in &all_keys {
+                out.extend(bake_transfer(gpu, shaders, r, &config, progress)?);
+            }
+            Ok(out)
+        })?;
+        let per_key = receivers * dim;
+        if baked.len() != per_key * keys as usize {
+            return Err(Error::Usage(format!("{}: {NAME}: the baked transfer does not match the scene (delete the cache entry)", cx.scene.source)));
+        }
+        let baked = stored(baked, dim, config.storage)?;
+        let mut transfer = vec![0.0f32; keys as usize * vertices as usize * 16];
+        for (k, (_, global)) in all_keys.iter().enumerate() {
+            for (i, &g) in global.iter().enumerate() {
+                let src = &baked[k * per_key + i * dim..k * per_key + (i + 1) * dim];
+                let dst = (k * vertices as usize + g as usize) * 16;
+                transfer[dst..dst + dim].copy_from_slice(src);
+            }
+        }
+        let transfer = cx.gpu.create_buffer_init("prt transfer", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&transfer))?;
+        cx.states.forget_buffer(transfer);
+        let light = light::project(cx.scene, cx.environment, 4)?;
+
+        let mut desc = GraphicsPipelineDesc::new("prt", "prt/shade.vert", Some("prt/shade.frag"));
+        desc.vertex_layout = vertex_layout();
+        desc.raster.cull = vk::CullModeFlags::NONE;
+        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+        let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+        let draws = cx.scene_gpu.draws.iter().map(|d| DrawInfo { object: d.object }).collect();
+        let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
+        let calls = cx.scene_gpu.draws.iter().map(DrawCall::whole).collect();
+        let uniform = light::uniform(&light, config.coefficients, (0, 0, 0.0), vertices);
+        Ok(Prt { config, pipeline, transfer, light, keys, vertices, draws, animation, calls, uniform })
+    }
+
+    /// The keys bound at time `t` and the blend between them.
+    pub fn keys_at(&self, t: f64) -> (u32, u32, f32) {
+        key_blend(t, self.keys, self.config.key_rate)
+    }
+}
+
+/// Two SH keys and the weight of the second at time `t` on a loop of `keys` keys at `rate`.
+pub fn key_blend(t: f64, keys: u32, rate: f64) -> (u32, u32, f32) {
+    if keys <= 1 {
+        return (0, 0, 0.0);
+    }
+    let x = (t * rate).rem_euclid(keys as f64);
+    let a = (x.floor() as u32).min(keys - 1);
+    (a, (a + 1) % keys, (x - a as f64) as f32)
+}
+
+impl LightingMethod for Prt {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        let t = frame.clock.time_s;
+        let light = if self.config.env_spin != 0.0 { light::rotate(&self.light, (self.config.env_spin * t as f64).to_radians())? } else { self.light.clone() };
+        self.uniform = light::uniform(&light, self.config.coefficients, self.keys_at(t as f64), self.vertices);
+        for (call, (d, item)) in self.calls.iter_mut().zip(self.draws.iter().zip(&frame.scene.draws)) {
+            let anim = d.object.and_then(|o| self.animation.get(o).copied().flatten());
+            call.model = anim.map_or(item.model, |a| a.transform_at(item.model, t));
+        }
+        Ok(())
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        if !frame.terms.has(Term::Base) {
+            return Ok(());
+        }
+        let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
+        let (vert, frag) = (vk::PipelineStageFlags2::VERTEX_SHADER, vk::PipelineStageFlags2::FRAGMENT_SHADER);
+        graph
+            .pass("prt")
+            .color_attachment(t.radiance, SubresourceRange::mip(0), false)
+            .depth_stencil_write(t.depth_stencil, false)
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .buffer(self.transfer, Access::StorageRead { stages: vert }, Some("transfer"))
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                ctx.rec.bind_pipeline(self.pipeline)?;
+                let uniform_bytes = bytemuck::bytes_of(&uniforms);
+                let light: &[u8] = bytemuck::cast_slice(&self.uniform);
+                record_draws(ctx, scene, &self.calls, |ctx, material| {
+                    let maps = scene.material_maps[material as usize];
+                    ctx.bind(&[
+                        ("frame", Bind::UniformData(uniform_bytes)),
+                        ("light", Bind::StorageData(light)),
+                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
+                    ])
+                })?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+        Ok(())
+    }
+}
