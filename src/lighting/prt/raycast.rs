@@ -1,7 +1,7 @@
 //! The ray-cast truth the raster baker is measured against (seed 002 §4, "Bake: reference and
 //! modern paths"): per receiver, the transfer `T_i = ∫ V(ω) max(0, n·ω) y_i(ω) dω` estimated
 //! with `N` stratified cosine-weighted directions, `T_i ≈ (π/N) Σ_k V(ω_k) y_i(ω_k)`, on the CPU
-//! ([`bake_cpu`]); a compute pass will follow.
+//! ([`bake_cpu`]) and in a compute pass (`glsl/prt/rays.comp`, [`bake_gpu`]).
 //!
 //! * Directions: the cell centres of a √N×√N grid on the unit square, mapped to the disk by
 //!   the polar map and lifted to the hemisphere (Malley's method; [`cosine_directions`]), in
@@ -19,12 +19,17 @@
 //! * Möller–Trumbore is not watertight: a ray exactly along an edge shared by two triangles may
 //!   pass between them (both paths alike).
 
+use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::receivers::{tangent_frame, Clip, Receivers};
+use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind};
 use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::progress::Progress;
 use crate::reference::bvh::{box_entry, intersect_triangle, safe_inverse, Bvh, BvhNode};
+use crate::reference::scene_data::TracedTriangle;
+use crate::shaders::ShaderLibrary;
 
 /// Most SH bands either path bakes (the shader's `SH_MAX_BANDS`).
 pub const MAX_BANDS: usize = 8;
@@ -203,6 +208,189 @@ pub fn bake_cpu(r: &Receivers, bands: usize, samples: usize, clip: Clip, progres
         });
         done += part.len() / dim;
         progress.update(done as u64, r.len() as u64);
+    }
+    progress.finish();
+    Ok(out)
+}
+
+/// `Receiver` in glsl/prt/rays.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuReceiver {
+    position: [f32; 4],
+    tangent: [f32; 4],
+    bitangent: [f32; 4],
+    normal: [f32; 4],
+    /// x: the root node of its occluder set's BVH among the concatenated ones, or [`NO_BVH`].
+    bvh: [u32; 4],
+}
+
+/// `Push`: the same for every dispatch of a bake (lavapipe compiles a shader per push-constant
+/// set); the chunk's first receiver, its size and the rays per invocation go through buffers.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Push {
+    receiver_count: u32,
+    sample_count: u32,
+    bands: u32,
+    triangle_count: u32,
+    near: f32,
+    t_max: f32,
+}
+
+const NO_BVH: u32 = u32::MAX;
+/// Rays per invocation to start with; halved (more invocations per receiver) whenever the device
+/// cuts an invocation's loops short.
+const FIRST_RAYS_PER_LANE: u32 = 64;
+/// Receivers in the first submission (small, so a device that cuts loops short wastes little).
+const FIRST_CHUNK: usize = 64;
+/// Invocations per dispatch at most: the guaranteed 65,535 workgroups of the shader's 64.
+const MAX_INVOCATIONS: usize = 65_535 * 64;
+/// The partial sums one submission writes, at most (bytes; more where one receiver's sums at one
+/// ray per invocation need more).
+const MAX_SUMS_BYTES: usize = 64 << 20;
+/// A submission long enough that its fixed cost is small, short enough for a lively progress line.
+const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
+
+fn v4(v: Vec3) -> [f32; 4] {
+    [v.x, v.y, v.z, 0.0]
+}
+
+/// A buffer the passes fill (and the host may read, with `GpuToCpu`).
+fn buffer_with(gpu: &mut Gpu, name: &str, size: u64, memory: MemoryKind) -> Result<BufferId> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })?)
+}
+
+fn storage_buffer(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
+    Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
+}
+
+/// [`bake_cpu`] in a compute pass (`glsl/prt/rays.comp`): the same rays, BVHs and layout. Each
+/// invocation traces a share of one receiver's rays and writes its partial sums, which the host
+/// adds up in a fixed order; where the device bounds an invocation's loop iterations (llvmpipe:
+/// 65,535) and a walk is cut short, the chunk is traced again with fewer rays per invocation,
+/// down to one, and then the bake is refused.
+pub fn bake_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
+    check_all(r, bands, samples, clip)?;
+    if r.is_empty() {
+        progress.finish();
+        return Ok(Vec::new());
+    }
+    // Every buffer, pipeline and frame of the pass is freed on every exit path.
+    gpu.scoped(|gpu| run(gpu, shaders, r, bands, samples, clip, progress))
+}
+
+fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
+    let dim = bands * bands;
+    let total = r.len();
+    // The sets' BVHs one after the other, their node and slot indices and skip links offset.
+    let (mut nodes, mut skips, mut traced) = (Vec::<BvhNode>::new(), Vec::<u32>::new(), Vec::<TracedTriangle>::new());
+    let roots: Vec<u32> = r
+        .sets
+        .iter()
+        .map(|s| {
+            let Some(b) = SetBvh::build(&s.triangles) else { return NO_BVH };
+            let (node_base, slot_base) = (nodes.len() as u32, traced.len() as u32);
+            nodes.extend(b.nodes.iter().map(|n| BvhNode { index: n.index + if n.is_leaf() { slot_base } else { node_base }, ..*n }));
+            skips.extend(b.skips.iter().map(|s| s + node_base));
+            traced.extend(b.triangles.iter().map(|t| TracedTriangle { p0: v4(t[0]), e1: v4(t[1]), e2: v4(t[2]) }));
+            node_base
+        })
+        .collect();
+    if nodes.len() >= NO_BVH as usize || traced.len() > u32::MAX as usize {
+        return Err(Error::Usage("PRT ray cast: the occluder sets are too large for one GPU bake".into()));
+    }
+    let receivers: Vec<GpuReceiver> = (0..total)
+        .map(|k| {
+            let f = frame(r.normals[k]);
+            GpuReceiver { position: v4(r.positions[k].as_vec3()), tangent: v4(f[0]), bitangent: v4(f[1]), normal: v4(f[2]), bvh: [roots[r.set[k] as usize], 0, 0, 0] }
+        })
+        .collect();
+    let local: Vec<[f32; 4]> = cosine_directions(samples).iter().map(|d| v4(d.as_vec3())).collect();
+
+    let receivers_buf = storage_buffer(gpu, "prt rays receivers", bytemuck::cast_slice(&receivers))?;
+    let directions_buf = storage_buffer(gpu, "prt rays directions", bytemuck::cast_slice(&local))?;
+    let nodes_buf = storage_buffer(gpu, "prt rays bvh nodes", bytemuck::cast_slice(&nodes))?;
+    let triangles_buf = storage_buffer(gpu, "prt rays bvh triangles", bytemuck::cast_slice(&traced))?;
+    let skips_buf = storage_buffer(gpu, "prt rays bvh skip links", bytemuck::cast_slice(&skips))?;
+    // Room for at least one receiver at one ray per invocation.
+    let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
+    let sums_buf = buffer_with(gpu, "prt rays partial sums", sums_bytes as u64, MemoryKind::GpuToCpu)?;
+    let status_buf = buffer_with(gpu, "prt rays status", 4, MemoryKind::GpuToCpu)?;
+    let base_buf = buffer_with(gpu, "prt rays chunk base", 4, MemoryKind::GpuOnly)?;
+    let count_buf = buffer_with(gpu, "prt rays chunk count", 4, MemoryKind::GpuOnly)?;
+    let per_buf = buffer_with(gpu, "prt rays per lane", 4, MemoryKind::GpuOnly)?;
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization: vec![] }, shaders)?;
+    let frame = gpu.create_frame()?;
+
+    let push = Push { receiver_count: total as u32, sample_count: samples as u32, bands: bands as u32, triangle_count: traced.len() as u32, near: clip.near as f32, t_max: ray_length(clip) };
+    let weight = std::f64::consts::PI / samples as f64;
+    let mut out = vec![0.0f32; total * dim];
+    let mut per = FIRST_RAYS_PER_LANE.min(samples as u32);
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let read = Access::StorageRead { stages: compute };
+    let write = Access::StorageWrite { stages: compute };
+    let mut states = ResourceStates::default();
+    let (mut base, mut chunk) = (0usize, FIRST_CHUNK);
+    while base < total {
+        let lanes = samples.div_ceil(per as usize);
+        let fits = (MAX_INVOCATIONS / lanes).min(sums_bytes / (4 * lanes * dim)).max(1);
+        let n = chunk.min(total - base).min(fits);
+        let t0 = std::time::Instant::now();
+        let mut graph = RenderGraph::new();
+        let (first, count) = (base as u32, n as u32);
+        graph.pass("prt rays chunk base").buffer(base_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(base_buf, first));
+        graph.pass("prt rays chunk count").buffer(count_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(count_buf, count));
+        graph.pass("prt rays per lane").buffer(per_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(per_buf, per));
+        graph.pass("prt rays clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
+        graph
+            .pass("prt rays")
+            .buffer(receivers_buf, read, Some("receivers"))
+            .buffer(directions_buf, read, Some("directions"))
+            .buffer(sums_buf, write, Some("sums"))
+            .buffer(status_buf, write, Some("status"))
+            .buffer(base_buf, read, Some("chunk_base"))
+            .buffer(count_buf, read, Some("chunk_count"))
+            .buffer(per_buf, read, Some("per_lane"))
+            .buffer(nodes_buf, read, Some("nodes"))
+            .buffer(triangles_buf, read, Some("triangles"))
+            .buffer(skips_buf, read, Some("skips"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                ctx.rec.dispatch([(n * lanes) as u32, 1, 1])
+            });
+        graph.pass("prt rays host").buffer(sums_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        graph.run_and_wait(gpu, frame, &mut states, "PRT ray cast")?;
+        let status = gpu.read_buffer(status_buf)?;
+        let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if cut > 0 {
+            if per == 1 {
+                return Err(Error::Usage(format!(
+                    "{}: {cut} PRT ray(s), traced one per shader invocation, ran more loop iterations than the device allows an invocation; use the CPU baker",
+                    gpu.caps().name
+                )));
+            }
+            // Fewer rays per invocation, and the same chunk again.
+            per = per.div_ceil(2);
+            chunk = chunk.div_ceil(2).max(16);
+            continue;
+        }
+        let sums = gpu.read_buffer(sums_buf)?;
+        let sums: &[f32] = sums.get(..4 * n * lanes * dim).map(bytemuck::cast_slice).ok_or_else(|| Error::Usage("PRT ray cast: the partial sums read back short".into()))?;
+        for (i, item) in sums.chunks_exact(lanes * dim).enumerate() {
+            let row = &mut out[(base + i) * dim..(base + i + 1) * dim];
+            for (c, o) in row.iter_mut().enumerate() {
+                *o = (item.iter().skip(c).step_by(dim).map(|&s| s as f64).sum::<f64>() * weight) as f32;
+            }
+        }
+        base += n;
+        progress.update(base as u64, total as u64);
+        let seconds = t0.elapsed().as_secs_f64();
+        let fit = (SUBMISSION_TARGET_SECONDS * n as f64 / seconds.max(1e-9)) as usize;
+        chunk = fit.clamp(16, (2 * n).max(16));
     }
     progress.finish();
     Ok(out)
