@@ -111,7 +111,9 @@ fn gpu_transfer_equals_the_cpu_through_a_deep_bvh() {
 }
 
 /// Receivers per second, CPU against GPU, on the floor, box and disk at N = 1024 (4 bands), the
-/// median of 3: `cargo test --release --test prt_rays -- --ignored --nocapture`.
+/// median of 3: `cargo test --release --test prt_rays -- --ignored --nocapture`. Measured in
+/// the dev profile (opt-level 1) on 2 cores shared with another build: 3,880 receivers, CPU
+/// 5,454 receivers/s (5.6e6 rays/s), llvmpipe (LLVM 15.0.6, 256 bits) 1,044 receivers/s.
 #[test]
 #[ignore]
 fn measure_receivers_per_second() {
