@@ -140,18 +140,17 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
 // Per node, the node after its subtree (Bvh::skip_links).
 layout(set = 0, binding = BVH_SKIPS_BINDING) readonly buffer Skips { uint items[]; } skips;
 
-// Whether a triangle lies on the ray closer than t_max: shadow rays, where the order of the
-// hits does not matter, walk the nodes in storage order without a stack, past a subtree whose
-// box the ray misses. `complete` is false when the walk was cut short (a device that bounds an
-// invocation's loop iterations), and the answer then means nothing.
-bool occluded(vec3 o, vec3 d, float t_max, out bool complete) {
-    complete = true;
-    if (BVH_TRIANGLE_COUNT == 0u) {
-        return false;
-    }
+// Whether a triangle of the tree rooted at node `root` lies on the ray closer than t_max: shadow
+// rays, where the order of the hits does not matter, walk the nodes in storage order without a
+// stack, past a subtree whose box the ray misses. Several trees may share the buffers, one
+// after the other, with their node and triangle indices and skip links counted from the start
+// of the buffers (glsl/prt/rays.comp); the walk ends at the root's skip link. `complete` is
+// false when the walk was cut short (a device that bounds an invocation's loop iterations), and
+// the answer then means nothing.
+bool occluded_in(uint root, vec3 o, vec3 d, float t_max, out bool complete) {
     vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
-    uint end = skips.items[0];
-    uint node = 0u;
+    uint end = skips.items[root];
+    uint node = root;
     while (node < end) {
         if (box_entry(node, o, inv_d, t_max) == NO_HIT) {
             node = skips.items[node];
@@ -167,6 +166,7 @@ bool occluded(vec3 o, vec3 d, float t_max, out bool complete) {
             float t;
             vec2 b;
             if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
+                complete = true;
                 return true;
             }
         }
@@ -174,6 +174,15 @@ bool occluded(vec3 o, vec3 d, float t_max, out bool complete) {
     }
     complete = node >= end;
     return false;
+}
+
+// occluded_in for the one tree of the buffers (rooted at node 0).
+bool occluded(vec3 o, vec3 d, float t_max, out bool complete) {
+    complete = true;
+    if (BVH_TRIANGLE_COUNT == 0u) {
+        return false;
+    }
+    return occluded_in(0u, o, d, t_max, complete);
 }
 #endif
 
