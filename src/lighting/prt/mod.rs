@@ -4,12 +4,12 @@
 //! shape shades it for one dot product, `L_o = ρ/π · Σ T_i L_i`.
 
 pub mod config;
+pub mod light;
 pub mod mapping;
 pub mod raster;
 pub mod raycast;
 pub mod receivers;
 pub mod storage;
-pub mod light;
 
 #[cfg(test)]
 mod tests;
@@ -187,7 +187,11 @@ impl Prt {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Prt> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
         if config.legacy_coefficients() {
-            crate::errln!("warning: {}: {NAME}: {} coefficients is not a whole number of bands: shading changes as the light turns about a normal (digest §3.2 item 7)", cx.scene.source, config.coefficients);
+            crate::errln!(
+                "warning: {}: {NAME}: {} coefficients is not a whole number of bands: shading changes as the light turns about a normal (digest §3.2 item 7)",
+                cx.scene.source,
+                config.coefficients
+            );
         }
         let local = light::local_lights(cx.scene);
         if !local.is_empty() {
@@ -202,12 +206,22 @@ impl Prt {
         let mut key = BakeKey::new("PRT transfer").with("version", BAKER_VERSION).with("config", config.bake_key()).with("occluders", &rules).with("keys", (keys, config.key_rate));
         let geometry: Vec<f32> = cx.scene_gpu.meshes.iter().flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array())).collect();
         let placements: Vec<f32> = cx.scene_gpu.draws.iter().flat_map(|d| d.model.to_cols_array()).collect();
-        key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry)).with_bytes("placements", bytemuck::cast_slice(&placements)).with("animation", cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>());
+        key = key
+            .with_bytes("geometry", bytemuck::cast_slice(&geometry))
+            .with_bytes("placements", bytemuck::cast_slice(&placements))
+            .with("animation", cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>());
         key = key.with_shaders("prt/");
         let meshes = scene_meshes(cx);
         let all_keys: Vec<(Receivers, Vec<u32>)> = times.iter().map(|&t| receivers_at(cx.scene, &meshes, &rules, t)).collect::<Result<_>>()?;
         let receivers = all_keys[0].0.len();
-        let label = format!("{NAME} {:?} {:?} {}² n={} ({receivers} vertices{})", config.mode, config.baker, config.tile, config.coefficients, if keys > 1 { format!(" × {keys} keys") } else { String::new() });
+        let label = format!(
+            "{NAME} {:?} {:?} {}² n={} ({receivers} vertices{})",
+            config.mode,
+            config.baker,
+            config.tile,
+            config.coefficients,
+            if keys > 1 { format!(" × {keys} keys") } else { String::new() }
+        );
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         let baked: Vec<f32> = cx.bakes.bake(&label, &key, |progress| {
             let mut out = Vec::new();

@@ -150,7 +150,7 @@ mod tests {
             x ^= x << 5;
             (x as f32 / u32::MAX as f32) * 2.0 - 1.0
         };
-        let values: Vec<f32> = (0..16 * 257).map(|i| next() * 10f32.powi((i % 7) as i32 - 3)).collect();
+        let values: Vec<f32> = (0..16 * 257).map(|i| next() * 10f32.powi((i % 7) - 3)).collect();
         for grouping in [Grouping::ByBand, Grouping::ByVertex] {
             let r = round_trip(&values, 16, grouping);
             assert!(r.max_over_group <= 1.0 / 128.0 + 1e-7, "{grouping:?}: {}", r.max_over_group);
