@@ -202,3 +202,53 @@ fn batch_padding_is_never_written_back() {
     let alone = bake(&mut gpu, &last, &c);
     assert_eq!(&all[1024 * 16..], &alone[..], "the 1025th vertex differs from its single-vertex run");
 }
+
+/// Bake throughput (digest test 16), one run: the first 1,024 vertices of
+/// scenes/prt_bunny_cow.toml (floor, bunny, cow: 14,053 occluder triangles) at 32² tiles — the
+/// raster baker with projected and exact coverage, the document's passes and the compute
+/// reduction — against the ray-cast bakers at 1,024 rays per vertex on the device and the CPU.
+/// `cargo test --release --test prt_raster -- --ignored --nocapture measure`.
+#[test]
+#[ignore]
+fn measure_bake_throughput() {
+    use penumbra::lighting::prt::receivers::{Clip, OccluderRules};
+    use penumbra::lighting::prt::{raycast, receivers_at, SceneMesh};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scene = penumbra::scene::Scene::from_file(dir.join("prt_bunny_cow.toml")).unwrap();
+    let meshes: Vec<penumbra::scene::Mesh> = scene.objects.iter().map(|o| o.load_mesh(&dir).unwrap()).collect();
+    let mut offset = 0;
+    let placed: Vec<SceneMesh> = scene
+        .objects
+        .iter()
+        .zip(&meshes)
+        .enumerate()
+        .map(|(i, (o, m))| {
+            let s = SceneMesh { object: Some(i), model: o.transform, mesh: m, vertex_offset: offset };
+            offset += m.vertex_count() as u32;
+            s
+        })
+        .collect();
+    let (all, _) = receivers_at(&scene, &placed, &OccluderRules::default(), 0.0).unwrap();
+    let n = 1024.min(all.len());
+    let step = all.len() / n;
+    let pick: Vec<usize> = (0..n).map(|k| k * step).collect();
+    let r = Receivers { positions: pick.iter().map(|&i| all.positions[i]).collect(), normals: pick.iter().map(|&i| all.normals[i]).collect(), set: vec![0; n], sets: all.sets.clone() };
+    println!("{} receivers, {} occluder triangles, device {}", n, r.sets[0].triangles.len(), common::test_gpu().caps().name);
+    let mut gpu = common::test_gpu();
+    let mut row = |label: &str, f: &mut dyn FnMut(&mut Gpu) -> Vec<f32>| {
+        let t = std::time::Instant::now();
+        let out = f(&mut gpu);
+        let s = t.elapsed().as_secs_f64();
+        println!("{label:40} {:8.1} s {:10.1} vertices/s", s, n as f64 / s);
+        out
+    };
+    let truth = row("rays, CPU, 1024", &mut |_| raycast::bake_cpu(&r, 4, 1024, Clip::default(), &mut Progress::new("m")).unwrap());
+    let rms = |t: &[f32]| (t.iter().zip(&truth).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / t.len() as f64).sqrt();
+    let g = row("rays, device, 1024", &mut |gpu| raycast::bake_gpu(gpu, &ShaderLibrary::Embedded, &r, 4, 1024, Clip::default(), &mut Progress::new("m")).unwrap());
+    println!("{:40} RMS against the CPU rays {:.2e}", "", rms(&g));
+    for (coverage, reduction) in [(Coverage::Projected, Reduction::Passes), (Coverage::Exact, Reduction::Passes), (Coverage::Exact, Reduction::Compute)] {
+        let c = Config { coverage, reduction, ..Config::defaults(Mode::Corrected) };
+        let t = row(&format!("raster {coverage:?} {reduction:?} 32²"), &mut |gpu| bake(gpu, &r, &c));
+        println!("{:40} RMS against the rays {:.4} (T00 0.886)", "", rms(&t));
+    }
+}

@@ -146,13 +146,10 @@ impl Config {
         }
     }
 
-    /// Complete bands baked (the legacy 8 and 12 bake 3 and 4 bands and drop the rest).
+    /// Bands baked: always 4 (16 coefficients); `coefficients` only chooses how many the run
+    /// time uses, so every count shares one bake.
     pub fn bands(&self) -> usize {
-        match self.coefficients {
-            0..=4 => 2,
-            5..=9 => 3,
-            _ => 4,
-        }
+        4
     }
 
     /// What the bake depends on (the run-time parameters left out), as a cache key part.

@@ -112,8 +112,10 @@ pub fn bake(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Conf
 pub fn reduce_only(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, product: &[f32]) -> Result<Vec<f32>> {
     let n = config.batch as usize;
     let r = Receivers::explicit(&vec![(DVec3::ZERO, DVec3::Y); n], Vec::new());
-    let cfg = Config { coefficients: 4, ..config.clone() };
-    gpu.scoped(|gpu| run(gpu, shaders, &r, &cfg, Some(product), &mut Progress::new("prt reduction")))
+    let all = gpu.scoped(|gpu| run(gpu, shaders, &r, config, Some(product), &mut Progress::new("prt reduction")))?;
+    // Every group reduces the same uploaded atlas: the first group's four are the sums.
+    let dim = config.bands() * config.bands();
+    Ok(all.chunks(dim).flat_map(|c| c[..4].to_vec()).collect())
 }
 
 fn storage(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
