@@ -31,6 +31,34 @@ fn shipped(name: &str) -> Scene {
 /// A 16² sine field that moves every frame (so the generator block is uploaded and bound every
 /// frame), one sphere light, a constant sky: the per-frame work of the height-field methods at a
 /// size that renders in milliseconds.
+/// A floor and a bobbing ball under the image sky, spinning: per-vertex PRT with SH keys blended
+/// and the light rotated every frame.
+fn small_prt() -> Scene {
+    let toml = r#"methods = [{ name = "prt", env_spin = 30, key_rate = 5, loop_s = 1 }]
+[camera]
+position = [0.0, 2.0, 3.0]
+target = [0.0, 0.3, 0.0]
+[environment]
+type = "image"
+path = "terrain/sky.hdr"
+[[objects]]
+name = "floor"
+mesh = "plane"
+size = 3
+subdivisions = 8
+[[objects]]
+name = "ball"
+mesh = "sphere"
+radius = 0.3
+segments = 12
+rings = 6
+translate = [0, 0.5, 0]
+bob_amplitude = [0, 0.2, 0]
+bob_period_s = 1
+"#;
+    Scene::from_str(toml, "<memory test>", &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")).unwrap()
+}
+
 fn small_field(method: &str) -> Scene {
     let toml = format!(
         r#"methods = [{{ name = "{method}" }}]
@@ -105,6 +133,8 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         // projected every frame.
         ("sh_lightmap", shipped("sh_courtyard.toml"), 240),
         ("sh_lightmap", shipped("sh_courtyard_sky.toml"), 240),
+        // Per-vertex PRT: SH keys blended and the light turned by SH rotation every frame.
+        ("prt", small_prt(), 240),
     ];
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {
