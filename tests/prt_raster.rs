@@ -252,3 +252,25 @@ fn measure_bake_throughput() {
         println!("{:40} RMS against the rays {:.4} (T00 0.886)", "", rms(&t));
     }
 }
+
+/// The distance gradient (§3.1): occluders write their depth between near and far instead of 0,
+/// so a disk at planar depth h leaves exactly the fraction g = (h − near)/(far − near) of the
+/// light it blocked: T = T_open − (1 − g)(T_open − T_disk), on the same pixels.
+#[test]
+fn the_distance_gradient_weighs_occluders_by_depth() {
+    let mut gpu = common::test_gpu();
+    let open = Receivers::explicit(&[(DVec3::ZERO, DVec3::Y)], Vec::new());
+    let covered = Receivers::explicit(&[(DVec3::ZERO, DVec3::Y)], disk(0.8, 1.0, 128));
+    for coverage in [Coverage::Projected, Coverage::Exact] {
+        let c = Config { depth: Depth::Planar, far: 2.0, coverage, ..config(Mapping::Orthographic, Weights::Exact, 32, 1) };
+        let t_open = bake(&mut gpu, &open, &c);
+        let t_disk = bake(&mut gpu, &covered, &c);
+        let t_grad = bake(&mut gpu, &covered, &Config { gradient: true, ..c.clone() });
+        let g = (1.0 - c.near) / (c.far - c.near);
+        for i in [0, 2, 6] {
+            let want = t_open[i] as f64 - (1.0 - g) * (t_open[i] - t_disk[i]) as f64;
+            assert!((t_grad[i] as f64 - want).abs() < 2e-3, "{coverage:?} coefficient {i}: {} against {want}", t_grad[i]);
+        }
+        assert!(t_disk[0] < t_grad[0] && t_grad[0] < t_open[0]);
+    }
+}
