@@ -132,7 +132,9 @@ fn report(label: &str, e: &Errors) {
 ///
 /// * Corrected: RMS 0.0022 (0.25 % of T00), every coefficient's RMS ≤ 0.0029 and max ≤ 0.017;
 ///   irradiance off by 0.32 % (constant sky), 0.42 % (a sun), 0.29 % (terrain/sky.hdr), RMS
-///   relative. Asserted: every coefficient's RMS ≤ 2 % of T00.
+///   relative. Asserted: every coefficient's RMS ≤ 2 % of T00 (the digest's bound) and ≤ 0.6 %
+///   (a regression bound: with the coverage rays shifted half a pixel, 0.0124 = 1.4 % of T00,
+///   which the 2 % lets through).
 /// * The document's path (orthographic, planar, the 8-bit cosine texture, projected coverage):
 ///   RMS 0.111 (12.6 % of T00; T20 and T30 0.26 RMS), irradiance 3.9 %, 17.4 %, 16.6 %.
 ///   Asserted: RMS ≥ 10 × the corrected path's, and worse irradiance under every light.
@@ -190,6 +192,9 @@ fn raster_matches_the_ray_cast_truth() {
 
     let worst = c.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max);
     assert!(worst <= 0.02 * T00, "corrected: a coefficient's RMS error is {worst} > 2 % of T00");
+    // The digest's 2 % lets a half-pixel shift of the coverage rays through (measured 0.0124);
+    // measured here 0.0029: held to 0.6 % of T00 as a regression bound.
+    assert!(worst <= 0.006 * T00, "corrected: a coefficient's RMS error is {worst} > 0.6 % of T00 (measured 0.0029)");
     assert!(f.rms >= 10.0 * c.rms, "the faithful path should be clearly worse: RMS {} against {}", f.rms, c.rms);
     assert!(f.irradiance.iter().zip(&c.irradiance).all(|(f, c)| f > c), "the faithful path's irradiance should be worse: {:?} against {:?}", f.irradiance, c.irradiance);
 }
