@@ -127,23 +127,21 @@ fn report(label: &str, e: &Errors) {
 
 /// Test 8: on a floor (21² vertices), a box (3² cells a face) standing on it and a floating
 /// sphere (24 × 12), 862 receivers and 1,436 triangles, every object shadowing every receiver,
-/// the corrected raster baker at 32² (equal-area mapping, radial depth, exact weights and
+/// the corrected raster baker at 32² (orthographic disk, radial depth, exact weights and
 /// coverage) against the ray-cast truth with 16,384 stratified rays a receiver.
 ///
-/// * Corrected: RMS 0.0022 (0.25 % of T00), every coefficient's RMS ≤ 0.0029 and max ≤ 0.017;
-///   irradiance off by 0.32 % (constant sky), 0.42 % (a sun), 0.29 % (terrain/sky.hdr), RMS
+/// * Corrected: RMS 0.0021 (0.24 % of T00), every coefficient's RMS ≤ 0.0032 and max ≤ 0.017;
+///   irradiance off by 0.28 % (constant sky), 0.48 % (a sun), 0.37 % (terrain/sky.hdr), RMS
 ///   relative. Asserted: every coefficient's RMS ≤ 2 % of T00 (the digest's bound) and ≤ 0.6 %
 ///   (a regression bound: with the coverage rays shifted half a pixel, 0.0124 = 1.4 % of T00,
-///   which the 2 % lets through).
+///   which the 2 % lets through; with the weights taken at the pixel centres only, 0.0072).
 /// * The document's path (orthographic, planar, the 8-bit cosine texture, projected coverage):
 ///   RMS 0.111 (12.6 % of T00; T20 and T30 0.26 RMS), irradiance 3.9 %, 17.4 %, 16.6 %.
 ///   Asserted: RMS ≥ 10 × the corrected path's, and worse irradiance under every light.
-/// * Corrected with projected coverage (reported): RMS 0.237, irradiance 75–81 % off, all of it
-///   on the floor and the box (sphere 0.0023). A vertex's coplanar neighbour triangles have
-///   depth along the normal exactly 0, so radial depth's "behind the vertex" discard
-///   (`in_front < 0`) keeps them, and their corner at the vertex (no direction) lands in the
-///   tile's centre: each draws a wedge from the zenith to the horizon. Exact coverage tests the
-///   ray and is immune; planar depth clips them at near.
+/// * Corrected with projected coverage (reported): RMS 0.0095 (1.07 % of T00), irradiance
+///   2.1 %, 1.9 %, 2.7 %: the straight edges between projected corners. (Before radial depth
+///   discarded the triangles in a vertex's tangent plane, whose corner at the vertex projects to
+///   the tile's centre and drew a wedge to the horizon, it was 0.237.)
 #[test]
 fn raster_matches_the_ray_cast_truth() {
     let objects = "[[materials]]\nname = \"m\"\nalbedo = [0.5, 0.5, 0.5]\n\
@@ -167,7 +165,7 @@ fn raster_matches_the_ray_cast_truth() {
     let mut gpu = common::test_gpu();
     let corrected = Config { tile: 32, batch: 1024, ..Config::defaults(Mode::Corrected) };
     let bakes = [
-        ("corrected (equal-area, radial, exact weights, exact coverage)", corrected.clone()),
+        ("corrected (orthographic, radial, exact weights, exact coverage)", corrected.clone()),
         ("corrected with projected coverage", Config { coverage: Coverage::Projected, ..corrected.clone() }),
         ("faithful (orthographic, planar, legacy weights, projected coverage)", Config { tile: 32, batch: 1024, ..Config::defaults(Mode::Faithful) }),
     ];
@@ -193,8 +191,8 @@ fn raster_matches_the_ray_cast_truth() {
     let worst = c.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max);
     assert!(worst <= 0.02 * T00, "corrected: a coefficient's RMS error is {worst} > 2 % of T00");
     // The digest's 2 % lets a half-pixel shift of the coverage rays through (measured 0.0124);
-    // measured here 0.0029: held to 0.6 % of T00 as a regression bound.
-    assert!(worst <= 0.006 * T00, "corrected: a coefficient's RMS error is {worst} > 0.6 % of T00 (measured 0.0029)");
+    // measured here 0.0032: held to 0.6 % of T00 as a regression bound.
+    assert!(worst <= 0.006 * T00, "corrected: a coefficient's RMS error is {worst} > 0.6 % of T00 (measured 0.0032)");
     assert!(f.rms >= 10.0 * c.rms, "the faithful path should be clearly worse: RMS {} against {}", f.rms, c.rms);
     assert!(f.irradiance.iter().zip(&c.irradiance).all(|(f, c)| f > c), "the faithful path's irradiance should be worse: {:?} against {:?}", f.irradiance, c.irradiance);
 }

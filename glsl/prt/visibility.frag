@@ -4,6 +4,7 @@
 
 layout(constant_id = 1) const int RADIAL = 0;
 layout(constant_id = 2) const int TILE = 32;
+layout(constant_id = 7) const float NEAR = 0.001;
 layout(constant_id = 9) const int GRADIENT = 0;
 
 layout(location = 0) in float in_front;
@@ -17,8 +18,10 @@ void main() {
     if (any(lessThan(p, in_tile)) || any(greaterThanEqual(p, in_tile + TILE))) {
         discard;
     }
-    // Radial depth does not clip what lies behind the vertex (planar depth does).
-    if (RADIAL == 1 && in_front < 0.0) {
+    // Radial depth does not clip what lies behind the vertex (planar depth does), nor the
+    // triangles around it in its tangent plane, whose corner at the vertex projects to the
+    // tile's centre and would cover a wedge out to the horizon.
+    if (RADIAL == 1 && in_front <= max(NEAR * 0.01, 1e-7)) {
         discard;
     }
     out_visibility = GRADIENT == 1 ? clamp(gl_FragCoord.z, 0.0, 1.0) : 0.0;

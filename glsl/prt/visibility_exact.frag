@@ -25,10 +25,9 @@ void main() {
     if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(TILE)))) {
         discard;
     }
+    // A rim pixel whose centre lies outside the disk still holds part of it (its weight is the
+    // part's integral): its direction is the horizon's there.
     vec2 st = -1.0 + (2.0 * vec2(q) + 1.0) / float(TILE);
-    if (dot(st, st) >= 1.0) {
-        discard;
-    }
     vec3 d = prt_unproject_clamped(MAPPING, st);
     vec3 e1 = in_b - in_a;
     vec3 e2 = in_c - in_a;

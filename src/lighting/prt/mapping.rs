@@ -92,7 +92,8 @@ pub fn legacy_cosine_texture(tile: u32) -> Vec<u8> {
 
 /// Per pixel of a tile, the weight the multiplicative stage multiplies `V · y_i(ω)` by, so that
 /// the tile's sum is `∫ V max(0, n·ω) y_i dω`:
-/// * `Exact`: cos θ · Ω_pixel = cos θ · A_pixel · (dω/dA) at the pixel centre, 0 outside the disk;
+/// * `Exact`: ∫ cos θ dω over the pixel's part of the disk (cos θ · Ω_pixel), by a midpoint rule
+///   of 8 × 8 points per pixel;
 /// * `Legacy`: the 8-bit cosine texture / 255 × 2π / T² (Listing 2.1 and §2.2.4's scale).
 pub fn weights(mapping: Mapping, kind: Weights, tile: u32) -> Vec<f32> {
     let area = (2.0 / tile as f64).powi(2);
@@ -102,14 +103,24 @@ pub fn weights(mapping: Mapping, kind: Weights, tile: u32) -> Vec<f32> {
             legacy_cosine_texture(tile).into_iter().map(|c| (c as f64 / 255.0 * scale) as f32).collect()
         }
         Weights::Exact => {
+            // ∫ cos θ dω over the part of the pixel inside the disk, by a SUB × SUB midpoint rule
+            // over the pixel: the rim pixels, partly outside the disk, get their share (at the
+            // pixel centre alone the orthographic disk's T00 is 1 % high, digest §3.2).
+            const SUB: u32 = 8;
+            let sub_area = area / (SUB * SUB) as f64;
             let mut out = Vec::with_capacity((tile * tile) as usize);
             for j in 0..tile {
                 for i in 0..tile {
-                    let st = pixel_center(tile, i, j);
-                    out.push(match unproject(mapping, st) {
-                        Some(d) => (d.z * area * solid_angle_density(mapping, st)) as f32,
-                        None => 0.0,
-                    });
+                    let mut w = 0.0;
+                    for b in 0..SUB {
+                        for a in 0..SUB {
+                            let st = pixel_center(tile * SUB, i * SUB + a, j * SUB + b);
+                            if let Some(d) = unproject(mapping, st) {
+                                w += d.z * solid_angle_density(mapping, st) * sub_area;
+                            }
+                        }
+                    }
+                    out.push(w as f32);
                 }
             }
             out

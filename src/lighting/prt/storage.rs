@@ -5,8 +5,10 @@
 //! of one vertex (where T00 ≈ 0.9 sets the exponent of band-3 values a tenth its size).
 //!
 //! A group with exponent e stores `m_k = round(v_k / 2^e · 128)`, |m_k| ≤ 127, where 2^e is the
-//! smallest power of two above the group's largest magnitude (clamped so that it rounds inside
-//! the range): every value comes back within 2^(e−8) ≤ 2^−7 × the group's largest magnitude.
+//! smallest power of two with the group's largest magnitude M at most 127.5/128 of it (so that
+//! it rounds inside the range): every value comes back within half a step, 2^(e−8) < M/127.5
+//! (a group whose M lies just below a power of two takes the next exponent; measured on the
+//! bunny: 0.0078157·M, just over 1/128, tests/prt_scenes.rs).
 //! The transfer is decoded when loaded; the GPU keeps fp32 (what is measured is the storage's
 //! error, which the chart shows in the image).
 
@@ -139,7 +141,7 @@ pub fn round_trip(values: &[f32], dim: usize, grouping: Grouping) -> RoundTrip {
 mod tests {
     use super::*;
 
-    /// Test 15: every value comes back within 2^−7 of its group's largest magnitude (8-bit
+    /// Test 15: every value comes back within 1/127.5 of its group's largest magnitude (8-bit
     /// signed mantissas), zeros exactly, and the sizes are 5 bytes per 4 coefficients.
     #[test]
     fn shared_exponent_error_is_bounded() {
@@ -153,7 +155,7 @@ mod tests {
         let values: Vec<f32> = (0..16 * 257).map(|i| next() * 10f32.powi((i % 7) - 3)).collect();
         for grouping in [Grouping::ByBand, Grouping::ByVertex] {
             let r = round_trip(&values, 16, grouping);
-            assert!(r.max_over_group <= 1.0 / 128.0 + 1e-7, "{grouping:?}: {}", r.max_over_group);
+            assert!(r.max_over_group <= 1.0 / 127.5, "{grouping:?}: {}", r.max_over_group);
             assert!(r.max_over_group > 1.0 / 1024.0, "{grouping:?}: a quantiser this fine is not 8 bits: {}", r.max_over_group);
             assert_eq!(r.bytes, if grouping == Grouping::ByBand { 16 * 257usize.div_ceil(4) } else { 257 * 4 } * GROUP_BYTES);
         }
