@@ -55,7 +55,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever a baker's output for the same inputs changes.
-const BAKER_VERSION: u32 = 2;
+const BAKER_VERSION: u32 = 3;
 
 /// The transfer models shadowed light from distant sources: the direct reference.
 pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
