@@ -189,3 +189,64 @@ fn exact_weights_integrate_the_cosine() {
         assert!((back - d).length() < 1e-12, "{m:?}");
     }
 }
+
+/// Test 6: the occluded/occluding rules — a concave bowl (an open hemisphere of radius 1, seen
+/// from inside) listed as `bowl: self` shadows its own vertices (mean T00 down: the rim hides
+/// part of the sky), `bowl:` leaves it unshadowed (exactly the clamped cosine), and a receiver
+/// not listed is shadowed by every object. The rules parse into occluder sets by object.
+#[test]
+fn occluder_rules_make_the_sets() {
+    let s = scene(
+        "[[objects]]\nname = \"bowl\"\nmesh = \"sphere\"\nradius = 1\nsegments = 24\nrings = 12\n\
+         [[objects]]\nname = \"lid\"\nmesh = \"quad\"\ncorner = [-3, 2, -3]\nedge_u = [6, 0, 0]\nedge_v = [0, 0, 6]\n",
+    );
+    let sphere = s.objects[0].load_mesh(std::path::Path::new(".")).unwrap();
+    let lid = s.objects[1].load_mesh(std::path::Path::new(".")).unwrap();
+    // The lower half of the sphere, its normals turned inward: a bowl opening upward.
+    let mut bowl = crate::scene::Mesh { positions: Vec::new(), normals: Vec::new(), uvs: Vec::new(), tangents: Vec::new(), indices: Vec::new() };
+    let keep: Vec<Option<u32>> = sphere
+        .positions
+        .iter()
+        .zip(&sphere.normals)
+        .map(|(p, n)| {
+            (p.y <= 1e-6).then(|| {
+                bowl.positions.push(*p);
+                bowl.normals.push(-*n);
+                bowl.positions.len() as u32 - 1
+            })
+        })
+        .collect();
+    for t in sphere.indices.chunks_exact(3) {
+        if let (Some(a), Some(b), Some(c)) = (keep[t[0] as usize], keep[t[1] as usize], keep[t[2] as usize]) {
+            bowl.indices.extend([a, c, b]);
+        }
+    }
+    let objects = [
+        super::receivers::Placed { object: 0, model: glam::Mat4::IDENTITY, mesh: &bowl },
+        super::receivers::Placed { object: 1, model: glam::Mat4::IDENTITY, mesh: &lid },
+    ];
+    let bake = |rules: &str| {
+        let rules = super::receivers::OccluderRules::parse(rules, &s, "occluders").unwrap();
+        let r = super::receivers::gather(&objects, &rules).unwrap();
+        let t = super::raycast::bake_cpu(&r, 2, 1024, super::receivers::Clip::default(), &mut crate::progress::Progress::new("test")).unwrap();
+        let n = bowl.positions.len();
+        let mean = (0..n).map(|i| t[i * 4] as f64).sum::<f64>() / n as f64;
+        (r, mean)
+    };
+    let (r_self, with_self) = bake("bowl: self; lid:");
+    let (r_open, unshadowed) = bake("bowl:; lid:");
+    assert_eq!(r_self.sets.len(), 2, "the bowl's set (itself) and the lid's (empty)");
+    assert_eq!(r_open.sets.len(), 1, "both unshadowed: one empty set");
+    assert!(r_open.sets[0].triangles.is_empty());
+    // Unshadowed: the clamped cosine exactly (T00 = 0.886 for every normal).
+    assert!((unshadowed - 0.886227).abs() < 2e-3, "unshadowed bowl: mean T00 {unshadowed}");
+    assert!(with_self < 0.9 * unshadowed, "self-shadowing must darken the bowl: {with_self} against {unshadowed}");
+    // Not listed: every object shadows it — here the lid above the bowl as well.
+    let (_, everything) = bake("lid:");
+    assert!(everything < with_self, "the lid must shadow a receiver not listed: {everything} against {with_self}");
+    // Unknown names and malformed entries are one error line naming the field.
+    for bad in ["cup: self", "bowl self", "bowl: self; bowl: lid"] {
+        let e = super::receivers::OccluderRules::parse(bad, &s, "methods[0].occluders").unwrap_err().to_string();
+        assert!(e.contains("occluders") && !e.contains('\n'), "{bad}: {e}");
+    }
+}
