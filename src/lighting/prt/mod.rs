@@ -212,14 +212,13 @@ impl Prt {
         let meshes = scene_meshes(cx);
         let all_keys: Vec<(Receivers, Vec<u32>)> = times.iter().map(|&t| receivers_at(cx.scene, &meshes, &rules, t)).collect::<Result<_>>()?;
         let receivers = all_keys[0].0.len();
-        let label = format!(
-            "{NAME} {:?} {:?} {}² n={} ({receivers} vertices{})",
-            config.mode,
-            config.baker,
-            config.tile,
-            config.coefficients,
-            if keys > 1 { format!(" × {keys} keys") } else { String::new() }
-        );
+        // The label names the cache entry: only what the bake depends on (not the run-time
+        // coefficient count, which every count's configuration shares).
+        let baker = match config.baker {
+            Baker::Raster => format!("raster {:?} {:?} {}²", config.mode, config.mapping, config.tile),
+            _ => format!("{:?} {} rays", config.baker, config.samples),
+        };
+        let label = format!("{NAME} {baker} ({receivers} vertices{})", if keys > 1 { format!(" × {keys} keys") } else { String::new() });
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         let baked: Vec<f32> = cx.bakes.bake(&label, &key, |progress| {
             let mut out = Vec::new();
