@@ -221,10 +221,7 @@ fn occluder_rules_make_the_sets() {
             bowl.indices.extend([a, c, b]);
         }
     }
-    let objects = [
-        super::receivers::Placed { object: 0, model: glam::Mat4::IDENTITY, mesh: &bowl },
-        super::receivers::Placed { object: 1, model: glam::Mat4::IDENTITY, mesh: &lid },
-    ];
+    let objects = [super::receivers::Placed { object: 0, model: glam::Mat4::IDENTITY, mesh: &bowl }, super::receivers::Placed { object: 1, model: glam::Mat4::IDENTITY, mesh: &lid }];
     let bake = |rules: &str| {
         let rules = super::receivers::OccluderRules::parse(rules, &s, "occluders").unwrap();
         let r = super::receivers::gather(&objects, &rules).unwrap();
