@@ -75,11 +75,19 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d, None) {
-            let label = match c.baker {
+            let mut label = match c.baker {
                 Baker::Raster => format!("prt {:?} {:?} {}² n={}", c.mode, c.mapping, c.tile, c.coefficients),
                 _ => format!("prt rays {} n={}", c.samples, c.coefficients),
             }
             .to_lowercase();
+            // Clip planes other than the defaults tell two declarations apart.
+            let defaults = Config::defaults(c.mode);
+            if c.near != defaults.near {
+                label += &format!(" near={}", c.near);
+            }
+            if c.far.is_finite() {
+                label += &format!(" far={}", c.far);
+            }
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
             }
