@@ -220,6 +220,9 @@ impl Prt {
         let meshes = scene_meshes(cx);
         let all_keys: Vec<(Receivers, Vec<u32>)> = times.iter().map(|&t| receivers_at(cx.scene, &meshes, &rules, t)).collect::<Result<_>>()?;
         let receivers = all_keys[0].0.len();
+        if receivers == 0 {
+            return Err(Error::Usage(format!("{}: {NAME}: the scene has no object whose vertices could carry a transfer", cx.scene.source)));
+        }
         // The label names the cache entry: only what the bake depends on (not the run-time
         // coefficient count, which every count's configuration shares).
         let baker = match config.baker {
