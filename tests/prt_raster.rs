@@ -6,7 +6,7 @@ mod common;
 
 use glam::{DVec3, Vec3};
 use penumbra::backend::Gpu;
-use penumbra::lighting::prt::config::{Config, Coverage, Depth, Mapping, Mode, Reduction, Weights};
+use penumbra::lighting::prt::config::{Config, Coverage, Depth, Directions, Mapping, Mode, Reduction, Weights};
 use penumbra::lighting::prt::receivers::Receivers;
 use penumbra::lighting::prt::{mapping, raster};
 use penumbra::progress::Progress;
@@ -49,15 +49,40 @@ fn unoccluded_vertex_is_the_clamped_cosine() {
             assert!(e <= tol, "{m:?} at {tile}²: max error {e}");
         }
     }
-    let t = bake(&mut gpu, &r, &config(Mapping::Orthographic, Weights::Legacy, 32, 4));
+    // The legacy weights with exact directions: the digest's table (T00 0.8659, T10 1.1596,
+    // T20 0.8518), and the device equals its CPU mirror (same weights and directions).
+    let legacy = Config { directions: Directions::Analytic, ..config(Mapping::Orthographic, Weights::Legacy, 32, 4) };
+    let t = bake(&mut gpu, &r, &legacy);
     let bias = t[6] as f64 / 0.495416 - 1.0;
     println!("legacy: T00 {:.4} T10 {:.4} T20 {:.4} ({:+.1} %)", t[0], t[2], t[6], 100.0 * bias);
     assert!(bias > 0.6, "the legacy weights should overshoot T20 by about 70 %, got {bias}");
-    // The device equals its CPU mirror (same weights, same directions) to fp32 rounding.
+    for (i, want) in [(0, 0.8659), (2, 1.1596), (6, 0.8518)] {
+        assert!((t[i] as f64 - want).abs() < 1e-3, "coefficient {i}: {} against the digest's {want}", t[i]);
+    }
     let cpu = mapping::unoccluded_transfer(Mapping::Orthographic, Weights::Legacy, 32, penumbra::lighting::prt::receivers::frame(DVec3::Y, 0.0), 4);
     for i in 0..16 {
         assert!((cpu[i] - t[i] as f64).abs() < 1e-4, "coefficient {i}: device {} CPU mirror {}", t[i], cpu[i]);
     }
+    // The whole document: the colour-coded sphere and Listing 2.2's textures add their
+    // half-texel errors (measured T10 1.1747, T20 0.9014, +82 %).
+    let t = bake(&mut gpu, &r, &config(Mapping::Orthographic, Weights::Legacy, 32, 4));
+    let bias = t[6] as f64 / 0.495416 - 1.0;
+    println!("document (sphere directions): T00 {:.4} T10 {:.4} T20 {:.4} ({:+.1} %)", t[0], t[2], t[6], 100.0 * bias);
+    assert!(bias > 0.6 && (t[0] as f64 - 0.8659).abs() < 0.01, "T00 {} T20 {}", t[0], t[6]);
+    // The sphere's lookups against the exact basis, with exact weights: the textures' error alone.
+    let sphere = bake(&mut gpu, &r, &Config { directions: Directions::Sphere, ..config(Mapping::Orthographic, Weights::Exact, 32, 4) });
+    let analytic = bake(&mut gpu, &r, &config(Mapping::Orthographic, Weights::Exact, 32, 4));
+    let worst = sphere.iter().zip(&analytic).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    println!("sphere against analytic directions, exact weights: max difference {worst:.4}");
+    assert!(worst > 1e-3 && worst < 0.2, "the sphere's lookups should differ a little from the exact basis: {worst}");
+    // A tilted normal: the sphere's angles are the SH frame's (a flipped or turned sphere gives
+    // errors of the coefficients' own size, ~0.5).
+    let tilted = Receivers::explicit(&[(DVec3::ZERO, DVec3::new(0.6, 0.7, -0.3))], Vec::new());
+    let sphere = bake(&mut gpu, &tilted, &Config { directions: Directions::Sphere, ..config(Mapping::Orthographic, Weights::Exact, 32, 4) });
+    let analytic = bake(&mut gpu, &tilted, &config(Mapping::Orthographic, Weights::Exact, 32, 4));
+    let rms = (sphere.iter().zip(&analytic).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / 16.0).sqrt();
+    println!("tilted normal: sphere against analytic RMS {rms:.4}");
+    assert!(rms < 0.05, "the sphere's directions disagree with the mapping's: RMS {rms}");
 }
 
 /// A disk of radius `radius` at height `h` over the origin, facing down, as a fan of `n` triangles.

@@ -135,8 +135,9 @@ fn report(label: &str, e: &Errors) {
 ///   relative. Asserted: every coefficient's RMS ≤ 2 % of T00 (the digest's bound) and ≤ 0.6 %
 ///   (a regression bound: with the coverage rays shifted half a pixel, 0.0124 = 1.4 % of T00,
 ///   which the 2 % lets through; with the weights taken at the pixel centres only, 0.0072).
-/// * The document's path (orthographic, planar, the 8-bit cosine texture, projected coverage):
-///   RMS 0.111 (12.6 % of T00; T20 and T30 0.26 RMS), irradiance 3.9 %, 17.4 %, 16.6 %.
+/// * The document's path (orthographic, planar, the 8-bit cosine texture, projected coverage,
+///   the colour-coded sphere's directions): RMS 0.126 (14.2 % of T00), irradiance 3.9 %, 15.8 %,
+///   20.1 % (with exact directions instead of the sphere: 0.111, 12.6 %; 3.9 %, 17.4 %, 16.6 %).
 ///   Asserted: RMS ≥ 10 × the corrected path's, and worse irradiance under every light.
 /// * Corrected with projected coverage (reported): RMS 0.0095 (1.07 % of T00), irradiance
 ///   2.1 %, 1.9 %, 2.7 %: the straight edges between projected corners. (Before radial depth
@@ -167,7 +168,7 @@ fn raster_matches_the_ray_cast_truth() {
     let bakes = [
         ("corrected (orthographic, radial, exact weights, exact coverage)", corrected.clone()),
         ("corrected with projected coverage", Config { coverage: Coverage::Projected, ..corrected.clone() }),
-        ("faithful (orthographic, planar, legacy weights, projected coverage)", Config { tile: 32, batch: 1024, ..Config::defaults(Mode::Faithful) }),
+        ("faithful (orthographic, planar, legacy weights, projected coverage, sphere directions)", Config { tile: 32, batch: 1024, ..Config::defaults(Mode::Faithful) }),
     ];
     let mut measured = Vec::new();
     for (label, config) in bakes {

@@ -10,7 +10,8 @@ layout(constant_id = 9) const int GRADIENT = 0;
 layout(location = 0) in float in_front;
 layout(location = 1) flat in ivec2 in_tile;
 
-layout(location = 0) out float out_visibility;
+// The atlas is RGBA: the pipeline writes only B (R and G are the colour-coded sphere's).
+layout(location = 0) out vec4 out_atlas;
 
 void main() {
     // A triangle projected across its tile's border belongs to this tile only.
@@ -24,5 +25,5 @@ void main() {
     if (RADIAL == 1 && in_front <= max(NEAR * 0.01, 1e-7)) {
         discard;
     }
-    out_visibility = GRADIENT == 1 ? clamp(gl_FragCoord.z, 0.0, 1.0) : 0.0;
+    out_atlas = vec4(0.0, 0.0, GRADIENT == 1 ? clamp(gl_FragCoord.z, 0.0, 1.0) : 0.0, 0.0);
 }

@@ -18,7 +18,8 @@ layout(location = 1) flat in vec3 in_b;
 layout(location = 2) flat in vec3 in_c;
 layout(location = 3) flat in ivec2 in_tile;
 
-layout(location = 0) out float out_visibility;
+// The atlas is RGBA: the pipeline writes only B (R and G are the colour-coded sphere's).
+layout(location = 0) out vec4 out_atlas;
 
 void main() {
     ivec2 q = ivec2(gl_FragCoord.xy) - in_tile;
@@ -51,5 +52,5 @@ void main() {
     }
     float depth = (metric - NEAR) / (FAR - NEAR);
     gl_FragDepth = depth;
-    out_visibility = GRADIENT == 1 ? depth : 0.0;
+    out_atlas = vec4(0.0, 0.0, GRADIENT == 1 ? depth : 0.0, 0.0);
 }

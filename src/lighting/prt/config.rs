@@ -60,6 +60,16 @@ pub enum Coverage {
     Exact,
 }
 
+/// Where the multiplicative stage gets each pixel's direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Directions {
+    /// The mapping's inverse and the basis evaluated exactly.
+    Analytic,
+    /// The document's: the colour-coded sphere of Listing 2.3 drawn into the tile, its colour
+    /// looking the basis up in Listing 2.2's 32 × 64 textures (half-texel misalignments included).
+    Sphere,
+}
+
 /// Which baker computes the transfer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Baker {
@@ -90,6 +100,7 @@ pub struct Config {
     pub weights: Weights,
     pub reduction: Reduction,
     pub coverage: Coverage,
+    pub directions: Directions,
     /// Tile side (pixels per vertex = tile²).
     pub tile: u32,
     /// Vertices rendered per batch (tiles per atlas).
@@ -130,6 +141,7 @@ impl Config {
             weights: if faithful { Weights::Legacy } else { Weights::Exact },
             reduction: if faithful { Reduction::Passes } else { Reduction::Compute },
             coverage: if faithful { Coverage::Projected } else { Coverage::Exact },
+            directions: if faithful { Directions::Sphere } else { Directions::Analytic },
             tile: 32,
             batch: 1024,
             coefficients: 16,
@@ -157,7 +169,8 @@ impl Config {
         let far = if self.far.is_finite() { format!("{}", self.far) } else { "inf".into() };
         match self.baker {
             Baker::Raster => format!(
-                "raster {:?} {:?} {:?} {:?} {:?} tile={} batch={} bands={} near={} far={far} gradient={} twist={}",
+                "raster {:?} {:?} {:?} {:?} {:?} {:?} tile={} batch={} bands={} near={} far={far} gradient={} twist={}",
+                self.directions,
                 self.coverage,
                 self.mapping,
                 self.depth,
@@ -207,6 +220,7 @@ impl Config {
                 "depth" => c.depth = [Depth::Planar, Depth::Radial][word(&["planar", "radial"])?],
                 "weights" => c.weights = [Weights::Legacy, Weights::Exact][word(&["legacy", "exact"])?],
                 "reduction" => c.reduction = [Reduction::Passes, Reduction::Compute][word(&["passes", "compute"])?],
+                "directions" => c.directions = [Directions::Analytic, Directions::Sphere][word(&["analytic", "sphere"])?],
                 "coverage" => c.coverage = [Coverage::Projected, Coverage::Exact][word(&["projected", "exact"])?],
                 "storage" => c.storage = [Storage::F32, Storage::SharedByBand, Storage::SharedByVertex][word(&["f32", "shared_by_band", "shared_by_vertex"])?],
                 "tile" => c.tile = v.as_integer().filter(|t| [8, 16, 32, 64, 128].contains(t)).ok_or_else(|| bad(p, "a tile side of 8, 16, 32, 64 or 128", v))? as u32,

@@ -154,3 +154,46 @@ pub fn unoccluded_transfer(mapping: Mapping, kind: Weights, tile: u32, frame: (D
     }
     out
 }
+
+/// Listing 2.3's colour-coded unit sphere as triangles: `SPHERE_THETA` = 16 rings of
+/// `SPHERE_PHI` = 32 quads, the φ seam column duplicated (17 × 33 grid vertices), each vertex
+/// its world-space direction and colour (φ/2π, θ/π) in the SH frame (θ from world up).
+pub fn colour_sphere() -> Vec<[f32; 5]> {
+    const PHI: usize = 32;
+    const THETA: usize = 16;
+    let vertex = |i: usize, j: usize| {
+        let (theta, phi) = (std::f64::consts::PI * i as f64 / THETA as f64, std::f64::consts::TAU * j as f64 / PHI as f64);
+        let sh = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+        // The SH frame's (x, y, z) is world (x, −z, y).
+        [sh.x as f32, sh.z as f32, -sh.y as f32, (j as f64 / PHI as f64) as f32, (i as f64 / THETA as f64) as f32]
+    };
+    let mut out = Vec::with_capacity(THETA * PHI * 6);
+    for i in 0..THETA {
+        for j in 0..PHI {
+            let (a, b, c, d) = (vertex(i, j), vertex(i, j + 1), vertex(i + 1, j + 1), vertex(i + 1, j));
+            out.extend([a, b, c, a, c, d]);
+        }
+    }
+    out
+}
+
+/// Listing 2.2's basis textures: 4 layers (coefficients 4g … 4g + 3 in RGBA) of 64 × 32 texels,
+/// texel (l, k) holding y_i at θ = kπ/31, φ = l·2π/63 (both ends included, as the listing has
+/// them), RGBA f32, layer-major, row-major.
+pub fn basis_textures() -> Vec<f32> {
+    let mut out = Vec::with_capacity(4 * 32 * 64 * 4);
+    let mut y = [0.0f64; 16];
+    for layer in 0..4 {
+        for k in 0..32 {
+            for l in 0..64 {
+                let (theta, phi) = (std::f64::consts::PI * k as f64 / 31.0, std::f64::consts::TAU * l as f64 / 63.0);
+                let sh = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                if crate::sh::eval_basis_f64(sh, 4, &mut y).is_err() {
+                    y = [0.0; 16];
+                }
+                out.extend((0..4).map(|c| y[4 * layer + c] as f32));
+            }
+        }
+    }
+    out
+}

@@ -39,6 +39,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "weights", kind: ParamKind::String },
         ParamSchema { name: "reduction", kind: ParamKind::String },
         ParamSchema { name: "coverage", kind: ParamKind::String },
+        ParamSchema { name: "directions", kind: ParamKind::String },
         ParamSchema { name: "storage", kind: ParamKind::String },
         ParamSchema { name: "tile", kind: ParamKind::Int },
         ParamSchema { name: "batch", kind: ParamKind::Int },
@@ -55,7 +56,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever a baker's output for the same inputs changes.
-const BAKER_VERSION: u32 = 3;
+const BAKER_VERSION: u32 = 4;
 
 /// The transfer models shadowed light from distant sources: the direct reference.
 pub fn reference(_decl: &MethodDecl) -> ReferenceKind {

@@ -13,12 +13,12 @@
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 
-use super::config::{Config, Coverage, Depth, Reduction};
+use super::config::{Config, Coverage, Depth, Directions, Reduction};
 use super::mapping;
 use super::receivers::{tangent_frame, Receivers};
 use crate::backend::{
-    vk, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant,
-    SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc,
+    SamplerId, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -96,6 +96,11 @@ struct Bake {
     /// The reduction's intermediate images (the document's framebuffers 1–3).
     stages: [ImageId; 3],
     visibility: PipelineId,
+    /// The document's directions: the colour-coded sphere's pipeline, vertices and count.
+    sphere: Option<(PipelineId, BufferId, u32)>,
+    /// Listing 2.2's basis textures (bound always; read with `directions = "sphere"`).
+    basis: ImageId,
+    sampler: SamplerId,
     /// Per coefficient group: multiply, then the reduction's pipelines.
     multiply: Vec<PipelineId>,
     reduce: Vec<Vec<PipelineId>>,
@@ -187,7 +192,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
         occluders: gpu.create_buffer_init("prt occluders", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(if vertices.is_empty() { &[[0.0f32; 3]][..] } else { &vertices }))?,
         triangles: storage(gpu, "prt occluder triangles", bytemuck::cast_slice(&corners))?,
         set_vertices,
-        atlas: image(gpu, "prt visibility atlas", vk::Format::R32_SFLOAT, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
+        atlas: image(gpu, "prt visibility atlas", rgba, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
         depth: image(gpu, "prt visibility depth", vk::Format::D32_SFLOAT, w, h, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?,
         product: image(gpu, "prt product", rgba, w, h, usage_storage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED)?,
         stages: [
@@ -196,6 +201,20 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
             image(gpu, "prt reduction 3", rgba, w / config.tile, h / ta, usage_storage)?,
         ],
         visibility: visibility_pipeline(gpu, shaders, config, w, h, far)?,
+        sphere: match config.directions {
+            Directions::Analytic => None,
+            Directions::Sphere => {
+                let vertices = mapping::colour_sphere();
+                let buffer = gpu.create_buffer_init("prt colour sphere", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
+                Some((sphere_pipeline(gpu, shaders, config, w, h)?, buffer, vertices.len() as u32))
+            }
+        },
+        basis: {
+            let basis = gpu.create_image(&ImageDesc::new_2d("prt SH basis textures", rgba, 64, 32).layers(4).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+            gpu.upload_image(basis, 0, bytemuck::cast_slice(&mapping::basis_textures()))?;
+            basis
+        },
+        sampler: gpu.sampler(SamplerDesc::LINEAR_CLAMP)?,
         multiply: Vec::new(),
         reduce: Vec::new(),
     };
@@ -203,7 +222,9 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
     let common = |id: u32, bits: u32| SpecConstant { id, bits };
     for g in 0..groups as u32 {
         let base = vec![common(0, config.mapping as u32), common(2, config.tile), common(3, config.tiles_per_row()), common(4, config.batch), common(10, g)];
-        bake.multiply.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt multiply {g}"), shader: "prt/multiply.comp".into(), specialization: base.clone() }, shaders)?);
+        let mut multiply = base.clone();
+        multiply.push(common(14, u32::from(config.directions == Directions::Sphere)));
+        bake.multiply.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt multiply {g}"), shader: "prt/multiply.comp".into(), specialization: multiply }, shaders)?);
         let mut reduce = Vec::new();
         match config.reduction {
             Reduction::Passes => {
@@ -232,6 +253,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
 
     let frame = gpu.create_frame()?;
     let mut states = ResourceStates::default();
+    states.set_image(gpu, bake.basis, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
     if product_override.is_some() {
         states.set_image(gpu, bake.product, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
     }
@@ -267,7 +289,8 @@ fn visibility_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, 
     // Occluders block from both sides.
     desc.raster.cull = vk::CullModeFlags::NONE;
     desc.depth = DepthState { test: true, write: true, compare: vk::CompareOp::LESS };
-    desc.color_targets = vec![ColorTarget::new(vk::Format::R32_SFLOAT)];
+    // Occluders write B only: R and G hold the colour-coded sphere's angles.
+    desc.color_targets = vec![ColorTarget { write_mask: vk::ColorComponentFlags::B, ..ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT) }];
     desc.depth_format = Some(vk::Format::D32_SFLOAT);
     let c = |id: u32, bits: u32| SpecConstant { id, bits };
     desc.specialization = vec![
@@ -300,13 +323,27 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
         let vertex = Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER };
         let mut pass = graph.pass("prt visibility").color_attachment(b.atlas, full, true).depth_stencil_write(b.depth, true).buffer(b.receivers, vertex, Some("receivers"));
         if exact {
-            pass = pass.buffer(b.triangles, vertex, Some("triangles"));
+            // Bound by name below: the sphere's pipeline, in the same pass, has no triangles.
+            pass = pass.buffer(b.triangles, vertex, None);
         }
         pass.record(move |ctx| {
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(b.atlas, [1.0; 4])], depth_stencil: Some(RenderTarget::clear_depth(b.depth, 1.0, 0)) })?;
+            // B (visibility) starts at 1; R and G (the sphere's angles) at 0, where the document
+            // leaves pixels the sphere does not reach.
+            let _ =
+                ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0])], depth_stencil: Some(RenderTarget::clear_depth(b.depth, 1.0, 0)) })?;
+            if let Some((pipeline, vertices, n)) = b.sphere {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[])?;
+                ctx.rec.bind_vertex_buffers(&[(vertices, 0)])?;
+                ctx.rec.draw_instanced(n, 0, count, first)?;
+            }
             if vertex_count > 0 {
                 ctx.rec.bind_pipeline(b.visibility)?;
-                ctx.bind(&[])?;
+                if exact {
+                    ctx.bind(&[("triangles", Bind::StorageBuffer(b.triangles))])?;
+                } else {
+                    ctx.bind(&[])?;
+                }
                 if exact {
                     // A rectangle (two triangles) per occluder triangle.
                     ctx.rec.draw_instanced(2 * vertex_count, 2 * first_vertex, count, first)?;
@@ -328,6 +365,7 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
                 .buffer(b.weights, read, Some("weights"))
                 .storage_write("product", b.product, full, compute)
                 .buffer(batch, read, Some("batch"))
+                .sample("sh_basis", b.basis, full, b.sampler, compute)
                 .record(move |ctx| {
                     ctx.rec.bind_pipeline(multiply)?;
                     ctx.bind(&[])?;
@@ -376,4 +414,23 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
             }
         }
     }
+}
+
+/// The colour-coded sphere (Listing 2.3) into R and G, with no depth test or write.
+fn sphere_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, w: u32, h: u32) -> Result<PipelineId> {
+    let mut desc = GraphicsPipelineDesc::new("prt colour sphere", "prt/sphere.vert", Some("prt/sphere.frag"));
+    desc.vertex_layout = VertexLayout {
+        buffers: vec![(0, 20)],
+        attributes: vec![
+            VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 },
+            VertexAttribute { location: 1, binding: 0, format: vk::Format::R32G32_SFLOAT, offset: 12 },
+        ],
+    };
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.depth = DepthState { test: false, write: false, compare: vk::CompareOp::ALWAYS };
+    desc.color_targets = vec![ColorTarget { write_mask: vk::ColorComponentFlags::R | vk::ColorComponentFlags::G, ..ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT) }];
+    desc.depth_format = Some(vk::Format::D32_SFLOAT);
+    let c = |id: u32, bits: u32| SpecConstant { id, bits };
+    desc.specialization = vec![c(0, config.mapping as u32), c(2, config.tile), c(3, config.tiles_per_row()), c(4, config.batch), c(5, w), c(6, h)];
+    Ok(gpu.create_graphics_pipeline(&desc, shaders)?)
 }
