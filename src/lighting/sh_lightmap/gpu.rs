@@ -210,7 +210,9 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
         progress.update(base as u64, total as u64);
         let seconds = t0.elapsed().as_secs_f64();
         let fit = (SUBMISSION_TARGET_SECONDS * n as f64 / seconds.max(1e-9)) as usize;
-        chunk = fit.clamp(64, (2 * n).min(max_chunk));
+        // A last, short chunk (or a bake of fewer than 32 words) must not bring the ceiling under
+        // the floor: clamp panics when max < min.
+        chunk = fit.clamp(64, (2 * n).min(max_chunk).max(64));
     }
     progress.finish();
     Ok(bits)
