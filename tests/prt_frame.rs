@@ -10,71 +10,21 @@ use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
 
-const OPEN_BOX: &str = r#"
-methods = [METHOD]
+use common::scenes::{scene_text, OPEN_BOX, WALL};
 
-[camera]
-position = [0.125, 3.0, 0.6]
-target = [0.125, 0.0, 0.125]
-fov_y_deg = 40
-
-[environment]
-type = "constant"
-radiance = 1.0
-
-[[materials]]
-name = "grey"
-albedo = 0.5
-
-[[objects]]
-name = "floor"
-mesh = "quad"
-corner = [-0.875, 0, -0.875]
-edge_u = [0, 0, 2]
-edge_v = [2, 0, 0]
-subdivisions = 16
-material = "grey"
-
-[[objects]]
-name = "wall -x"
-mesh = "quad"
-corner = [-0.875, 0, -0.875]
-edge_u = [0, 1, 0]
-edge_v = [0, 0, 2]
-subdivisions = 4
-material = "grey"
-
-[[objects]]
-name = "wall +x"
-mesh = "quad"
-corner = [1.125, 0, -0.875]
-edge_u = [0, 0, 2]
-edge_v = [0, 1, 0]
-subdivisions = 4
-material = "grey"
-
-[[objects]]
-name = "wall -z"
-mesh = "quad"
-corner = [-0.875, 0, -0.875]
-edge_u = [2, 0, 0]
-edge_v = [0, 1, 0]
-subdivisions = 4
-material = "grey"
-
-[[objects]]
-name = "wall +z"
-mesh = "quad"
-corner = [-0.875, 0, 1.125]
-edge_u = [0, 1, 0]
-edge_v = [2, 0, 0]
-subdivisions = 4
-material = "grey"
-"#;
-
-fn scene(text: &str, method: &str) -> Scene {
+/// `template` with its quads subdivided into `floor` and `wall` cells a side: the transfer
+/// lives on vertices (the floor's centre is one).
+fn scene(template: &str, method: &str, (floor, wall): (u32, u32)) -> Scene {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    Scene::from_str(&text.replace("METHOD", method), "prt test", &dir).unwrap_or_else(|e| panic!("{method}: {e}"))
+    Scene::from_str(&scene_text(template, method, floor, wall), "prt test", &dir).unwrap_or_else(|e| panic!("{method}: {e}"))
+}
+
+fn open_box(method: &str) -> Scene {
+    scene(OPEN_BOX, method, (16, 4))
+}
+
+fn wall(method: &str) -> Scene {
+    scene(WALL, method, (1, 2))
 }
 
 fn renderer(scene: Scene) -> Renderer {
@@ -102,7 +52,7 @@ fn the_open_box_floor_shows_the_view_factor() {
         (r#"{ name = "prt", baker = "rays_cpu", samples = 4096 }"#, 0.015),
         (r#"{ name = "prt", baker = "rays", samples = 4096 }"#, 0.015),
     ] {
-        let mut r = renderer(scene(OPEN_BOX, method));
+        let mut r = renderer(open_box(method));
         let cam = r.scene.camera.clone();
         let c = centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
         common::assert_clean(&r.gpu);
@@ -111,40 +61,12 @@ fn the_open_box_floor_shows_the_view_factor() {
             assert!((c[k] / want - 1.0).abs() < tolerance, "{method}: centre {c:?}, want {want}");
         }
     }
-    let mut r = renderer(scene(OPEN_BOX, r#"{ name = "prt", mode = "faithful" }"#));
+    let mut r = renderer(open_box(r#"{ name = "prt", mode = "faithful" }"#));
     let cam = r.scene.camera.clone();
     let c = centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
     println!("faithful: centre {:.5} ({:+.1} %)", c[0], 100.0 * (c[0] / want - 1.0));
     assert!((c[0] / want - 1.0).abs() > 0.05, "the document's path should be visibly off: {c:?}");
 }
-
-const WALL: &str = r#"
-methods = [METHOD]
-
-[camera]
-position = [0.0, 1.0, 3.0]
-target = [0.0, 1.0, 0.0]
-fov_y_deg = 40
-
-[[lights]]
-name = "sun"
-type = "directional"
-direction = [0.0, 0.0, -1.0]
-irradiance = 2.0
-
-[[materials]]
-name = "grey"
-albedo = 0.5
-
-[[objects]]
-name = "wall"
-mesh = "quad"
-corner = [-1, 0, 0]
-edge_u = [2, 0, 0]
-edge_v = [0, 2, 0]
-subdivisions = 2
-material = "grey"
-"#;
 
 /// 360°/s of environment spin: frame 0 has the sun on the wall's normal, frame 15 (a quarter
 /// turn) at grazing. A delta light against the 4-band clamped cosine gives
@@ -153,7 +75,7 @@ material = "grey"
 fn a_spinning_light_relights_by_sh_rotation() {
     // Equal-area: its tiles integrate an unoccluded vertex within 1.3e-3 at 32², the orthographic
     // disk within 3.7e-3 (tests/prt_raster.rs).
-    let mut r = renderer(scene(WALL, r#"{ name = "prt", env_spin = 360, mapping = "equal_area" }"#));
+    let mut r = renderer(wall(r#"{ name = "prt", env_spin = 360, mapping = "equal_area" }"#));
     let cam = r.scene.camera.clone();
     let values: Vec<f32> = (0..16).map(|_| centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap())[0]).collect();
     common::assert_clean(&r.gpu);
@@ -174,7 +96,7 @@ fn bad_parameters_name_the_field() {
         (r#"{ name = "prt", occluders = "wall" }"#, "prt.occluders"),
         (r#"{ name = "prt", baker = "rays_cpu", samples = 1000 }"#, "samples"),
     ] {
-        let err = match Renderer::new(common::test_gpu(), scene(WALL, method), Some("prt"), (8, 8), 1) {
+        let err = match Renderer::new(common::test_gpu(), wall(method), Some("prt"), (8, 8), 1) {
             Ok(_) => panic!("{method}: accepted"),
             Err(e) => e.to_string(),
         };

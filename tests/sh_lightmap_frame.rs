@@ -9,66 +9,11 @@ use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
 
-const OPEN_BOX: &str = r#"
-methods = [METHOD]
-
-[camera]
-position = [0.125, 3.0, 0.6]
-target = [0.125, 0.0, 0.125]
-fov_y_deg = 40
-
-[environment]
-type = "constant"
-radiance = 1.0
-
-[[materials]]
-name = "grey"
-albedo = 0.5
-
-[[objects]]
-name = "floor"
-mesh = "quad"
-corner = [-0.875, 0, -0.875]
-edge_u = [0, 0, 2]
-edge_v = [2, 0, 0]
-material = "grey"
-
-[[objects]]
-name = "wall -x"
-mesh = "quad"
-corner = [-0.875, 0, -0.875]
-edge_u = [0, 1, 0]
-edge_v = [0, 0, 2]
-material = "grey"
-
-[[objects]]
-name = "wall +x"
-mesh = "quad"
-corner = [1.125, 0, -0.875]
-edge_u = [0, 0, 2]
-edge_v = [0, 1, 0]
-material = "grey"
-
-[[objects]]
-name = "wall -z"
-mesh = "quad"
-corner = [-0.875, 0, -0.875]
-edge_u = [2, 0, 0]
-edge_v = [0, 1, 0]
-material = "grey"
-
-[[objects]]
-name = "wall +z"
-mesh = "quad"
-corner = [-0.875, 0, 1.125]
-edge_u = [0, 1, 0]
-edge_v = [2, 0, 0]
-material = "grey"
-"#;
+use common::scenes::{scene_text, OPEN_BOX, WALL};
 
 fn scene(text: &str, method: &str) -> Scene {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    Scene::from_str(&text.replace("METHOD", method), "sh test", &dir).unwrap_or_else(|e| panic!("{method}: {e}"))
+    Scene::from_str(&scene_text(text, method, 1, 1), "sh test", &dir).unwrap_or_else(|e| panic!("{method}: {e}"))
 }
 
 /// Renders `frames` frames (33 × 33) and returns the last.
@@ -132,33 +77,6 @@ fn the_bounces_brighten_the_box_and_the_faithful_mode_tone_maps() {
     assert!(faithful[0] > 0.0 && faithful[0] <= 0.5 + 1e-6 && faithful[0] == faithful[1], "{faithful:?}");
 }
 
-const WALL: &str = r#"
-methods = [METHOD]
-
-[camera]
-position = [0.0, 1.0, 3.0]
-target = [0.0, 1.0, 0.0]
-fov_y_deg = 40
-
-[[lights]]
-name = "sun"
-type = "directional"
-direction = [0.0, 0.0, -1.0]
-irradiance = 2.0
-
-[[materials]]
-name = "grey"
-albedo = 0.5
-
-[[objects]]
-name = "wall"
-mesh = "quad"
-corner = [-1, 0, 0]
-edge_u = [2, 0, 0]
-edge_v = [0, 2, 0]
-material = "grey"
-"#;
-
 #[test]
 fn a_turning_sun_relights_every_frame_without_a_rebake() {
     // 360°/s: frame 0 has the sun on the wall's normal, frame 15 (a quarter turn) at grazing.
@@ -166,7 +84,7 @@ fn a_turning_sun_relights_every_frame_without_a_rebake() {
     // times ρ·E = 1.
     let method = r#"{ name = "sh_lightmap", patch_size = 0.5, bands = 4, bounces = false, sun_speed = 360, storage = "f32" }"#;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let s = Scene::from_str(&WALL.replace("METHOD", method), "sh wall", &dir).unwrap();
+    let s = Scene::from_str(&scene_text(WALL, method, 1, 1), "sh wall", &dir).unwrap();
     let mut r = Renderer::new(common::test_gpu(), s, Some("sh_lightmap"), (33, 33), 1).unwrap_or_else(|e| panic!("{e}"));
     let cam = r.scene.camera.clone();
     let mut values = Vec::new();

@@ -391,6 +391,18 @@ impl Gpu {
         Ok(id)
     }
 
+    /// A storage buffer holding `data` (compute passes' inputs).
+    pub fn create_storage_buffer(&mut self, name: &str, data: &[u8]) -> BackendResult<BufferId> {
+        self.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)
+    }
+
+    /// A storage buffer of `size` bytes (at least 4) that passes write and the host may clear or
+    /// fill (`GpuToCpu` memory to read it back): compute passes' outputs.
+    pub fn create_storage_output(&mut self, name: &str, size: u64, memory: MemoryKind) -> BackendResult<BufferId> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        self.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })
+    }
+
     pub(crate) fn buffer(&self, id: BufferId) -> BackendResult<&Buffer> {
         self.arenas.buffers.get(id.0 as usize).and_then(|b| b.as_ref()).ok_or_else(|| BackendError::Invalid(format!("buffer {id:?} was destroyed")))
     }

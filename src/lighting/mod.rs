@@ -14,6 +14,7 @@
 
 pub mod brdf;
 pub mod lightmap_mesh;
+pub mod params;
 pub mod registry;
 mod terms;
 

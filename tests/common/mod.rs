@@ -50,3 +50,107 @@ pub fn ok(o: &std::process::Output) -> String {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
+
+/// Scenes the frame tests share (tests/sh_lightmap_frame.rs, tests/prt_frame.rs). `METHOD` is
+/// the method declaration; `FLOOR_CELLS` and `WALL_CELLS` the quads' subdivisions (per-vertex
+/// methods need vertices where the light-map methods need none). Replace them with
+/// [`scene_text`].
+pub mod scenes {
+    /// An open box, 2 × 1 × 2, under a constant sky of radiance 1, seen from above: its floor's
+    /// centre sees the sky through the opening with view factor 0.554126.
+    pub const OPEN_BOX: &str = r#"
+methods = [METHOD]
+
+[camera]
+position = [0.125, 3.0, 0.6]
+target = [0.125, 0.0, 0.125]
+fov_y_deg = 40
+
+[environment]
+type = "constant"
+radiance = 1.0
+
+[[materials]]
+name = "grey"
+albedo = 0.5
+
+[[objects]]
+name = "floor"
+mesh = "quad"
+corner = [-0.875, 0, -0.875]
+edge_u = [0, 0, 2]
+edge_v = [2, 0, 0]
+subdivisions = FLOOR_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall -x"
+mesh = "quad"
+corner = [-0.875, 0, -0.875]
+edge_u = [0, 1, 0]
+edge_v = [0, 0, 2]
+subdivisions = WALL_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall +x"
+mesh = "quad"
+corner = [1.125, 0, -0.875]
+edge_u = [0, 0, 2]
+edge_v = [0, 1, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall -z"
+mesh = "quad"
+corner = [-0.875, 0, -0.875]
+edge_u = [2, 0, 0]
+edge_v = [0, 1, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall +z"
+mesh = "quad"
+corner = [-0.875, 0, 1.125]
+edge_u = [0, 1, 0]
+edge_v = [2, 0, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+"#;
+
+    /// A 2 × 2 wall facing +z, lit by a sun along −z of irradiance 2, ρ = 0.5.
+    pub const WALL: &str = r#"
+methods = [METHOD]
+
+[camera]
+position = [0.0, 1.0, 3.0]
+target = [0.0, 1.0, 0.0]
+fov_y_deg = 40
+
+[[lights]]
+name = "sun"
+type = "directional"
+direction = [0.0, 0.0, -1.0]
+irradiance = 2.0
+
+[[materials]]
+name = "grey"
+albedo = 0.5
+
+[[objects]]
+name = "wall"
+mesh = "quad"
+corner = [-1, 0, 0]
+edge_u = [2, 0, 0]
+edge_v = [0, 2, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+"#;
+
+    /// `template` with the method and the subdivisions filled in.
+    pub fn scene_text(template: &str, method: &str, floor_cells: u32, wall_cells: u32) -> String {
+        template.replace("METHOD", method).replace("FLOOR_CELLS", &floor_cells.to_string()).replace("WALL_CELLS", &wall_cells.to_string())
+    }
+}

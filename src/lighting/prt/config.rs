@@ -1,6 +1,7 @@
 //! The method's parameters, each checked with one error line naming the scene file, line and field.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::lighting::params::Params;
 use crate::scene::{MethodDecl, Scene};
 
 /// The document's path (orthographic disk, planar depth, the 8-bit cosine texture and the
@@ -188,41 +189,23 @@ impl Config {
     }
 
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
-        let name = &decl.name;
-        let bad = |p: &str, want: &str, got: &toml::Value| -> Error {
-            let message = format!("expected {want}, got {got}");
-            match scene {
-                Some(scene) => scene.method_param_error(decl, p, message).into(),
-                None => Error::Usage(format!("methods: {name}.{p}: {message}")),
-            }
-        };
-        let float = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
-        let mode = match decl.param("mode") {
-            None => Mode::Corrected,
-            Some(v) => match v.as_str() {
-                Some("faithful") => Mode::Faithful,
-                Some("corrected") => Mode::Corrected,
-                _ => return Err(bad("mode", "\"faithful\" or \"corrected\"", v)),
-            },
-        };
+        let params = Params::new(decl, scene);
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
+        let float = Params::float;
+        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
         let mut c = Config::defaults(mode);
         for (p, v, _) in &decl.params {
-            let word = |options: &[&str]| -> Result<usize> {
-                v.as_str().and_then(|s| options.iter().position(|o| *o == s)).ok_or_else(|| {
-                    let list: Vec<String> = options.iter().map(|o| format!("\"{o}\"")).collect();
-                    bad(p, &format!("one of {}", list.join(", ")), v)
-                })
-            };
-            match p.as_str() {
+            let p = p.as_str();
+            match p {
                 "mode" => {}
-                "baker" => c.baker = [Baker::Raster, Baker::Rays, Baker::RaysCpu][word(&["raster", "rays", "rays_cpu"])?],
-                "mapping" => c.mapping = [Mapping::Orthographic, Mapping::Stereographic, Mapping::EqualArea][word(&["orthographic", "stereographic", "equal_area"])?],
-                "depth" => c.depth = [Depth::Planar, Depth::Radial][word(&["planar", "radial"])?],
-                "weights" => c.weights = [Weights::Legacy, Weights::Exact][word(&["legacy", "exact"])?],
-                "reduction" => c.reduction = [Reduction::Passes, Reduction::Compute][word(&["passes", "compute"])?],
-                "directions" => c.directions = [Directions::Analytic, Directions::Sphere][word(&["analytic", "sphere"])?],
-                "coverage" => c.coverage = [Coverage::Projected, Coverage::Exact][word(&["projected", "exact"])?],
-                "storage" => c.storage = [Storage::F32, Storage::SharedByBand, Storage::SharedByVertex][word(&["f32", "shared_by_band", "shared_by_vertex"])?],
+                "baker" => c.baker = params.choice(p, v, &[("raster", Baker::Raster), ("rays", Baker::Rays), ("rays_cpu", Baker::RaysCpu)])?,
+                "mapping" => c.mapping = params.choice(p, v, &[("orthographic", Mapping::Orthographic), ("stereographic", Mapping::Stereographic), ("equal_area", Mapping::EqualArea)])?,
+                "depth" => c.depth = params.choice(p, v, &[("planar", Depth::Planar), ("radial", Depth::Radial)])?,
+                "weights" => c.weights = params.choice(p, v, &[("legacy", Weights::Legacy), ("exact", Weights::Exact)])?,
+                "reduction" => c.reduction = params.choice(p, v, &[("passes", Reduction::Passes), ("compute", Reduction::Compute)])?,
+                "directions" => c.directions = params.choice(p, v, &[("analytic", Directions::Analytic), ("sphere", Directions::Sphere)])?,
+                "coverage" => c.coverage = params.choice(p, v, &[("projected", Coverage::Projected), ("exact", Coverage::Exact)])?,
+                "storage" => c.storage = params.choice(p, v, &[("f32", Storage::F32), ("shared_by_band", Storage::SharedByBand), ("shared_by_vertex", Storage::SharedByVertex)])?,
                 "tile" => c.tile = v.as_integer().filter(|t| [8, 16, 32, 64, 128].contains(t)).ok_or_else(|| bad(p, "a tile side of 8, 16, 32, 64 or 128", v))? as u32,
                 "batch" => c.batch = v.as_integer().filter(|b| (1..=4096).contains(b)).ok_or_else(|| bad(p, "a vertex count from 1 to 4096", v))? as u32,
                 "coefficients" => {

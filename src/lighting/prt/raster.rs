@@ -17,8 +17,8 @@ use super::config::{Config, Coverage, Depth, Directions, Reduction};
 use super::mapping;
 use super::receivers::{tangent_frame, Receivers};
 use crate::backend::{
-    vk, Bind, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc,
-    SamplerId, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId,
+    SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -123,10 +123,6 @@ pub fn reduce_only(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, prod
     Ok(all.chunks(dim).flat_map(|c| c[..4].to_vec()).collect())
 }
 
-fn storage(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
-    Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
-}
-
 fn image(gpu: &mut Gpu, name: &str, format: vk::Format, w: u32, h: u32, usage: vk::ImageUsageFlags) -> Result<ImageId> {
     Ok(gpu.create_image(&ImageDesc::new_2d(name, format, w, h).usage(usage))?)
 }
@@ -180,17 +176,12 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
     let (ta, tb) = taps(config.tile);
     let groups = dim.div_ceil(4);
     let bake = Bake {
-        receivers: storage(gpu, "prt receivers", bytemuck::cast_slice(&receivers))?,
-        weights: storage(gpu, "prt weights", bytemuck::cast_slice(&weights))?,
-        batch: gpu.create_buffer(&BufferDesc { name: "prt batch".into(), size: 4, usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuOnly })?,
-        coefficients: gpu.create_buffer(&BufferDesc {
-            name: "prt coefficients".into(),
-            size: slots.total as u64 * 64,
-            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            memory: MemoryKind::GpuToCpu,
-        })?,
+        receivers: gpu.create_storage_buffer("prt receivers", bytemuck::cast_slice(&receivers))?,
+        weights: gpu.create_storage_buffer("prt weights", bytemuck::cast_slice(&weights))?,
+        batch: gpu.create_storage_output("prt batch", 4, MemoryKind::GpuOnly)?,
+        coefficients: gpu.create_storage_output("prt coefficients", slots.total as u64 * 64, MemoryKind::GpuToCpu)?,
         occluders: gpu.create_buffer_init("prt occluders", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(if vertices.is_empty() { &[[0.0f32; 3]][..] } else { &vertices }))?,
-        triangles: storage(gpu, "prt occluder triangles", bytemuck::cast_slice(&corners))?,
+        triangles: gpu.create_storage_buffer("prt occluder triangles", bytemuck::cast_slice(&corners))?,
         set_vertices,
         atlas: image(gpu, "prt visibility atlas", rgba, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
         depth: image(gpu, "prt visibility depth", vk::Format::D32_SFLOAT, w, h, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?,
@@ -356,6 +347,20 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
             Ok(())
         });
     }
+    // The reduction's last step: `src` summed per tile into the batch's receiver slots.
+    let to_slots = |graph: &mut RenderGraph<'a>, name: &str, src: ImageId, p: PipelineId, threads: [u32; 3]| {
+        graph
+            .pass(name)
+            .storage_read("src", src, full, compute)
+            .buffer(b.receivers, read, Some("receivers"))
+            .buffer(b.coefficients, write, Some("coefficients"))
+            .buffer(batch, read, Some("batch"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(p)?;
+                ctx.bind(&[])?;
+                ctx.rec.dispatch(threads)
+            });
+    };
     for (g, &multiply) in b.multiply.iter().enumerate() {
         if render {
             graph
@@ -384,33 +389,11 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
                         ctx.rec.dispatch([w, h, 1])
                     });
                 }
-                let p = reduce[3];
-                graph
-                    .pass("prt reduce pass 4")
-                    .storage_read("src", b.stages[2], full, compute)
-                    .buffer(b.receivers, read, Some("receivers"))
-                    .buffer(b.coefficients, write, Some("coefficients"))
-                    .buffer(batch, read, Some("batch"))
-                    .record(move |ctx| {
-                        ctx.rec.bind_pipeline(p)?;
-                        ctx.bind(&[])?;
-                        ctx.rec.dispatch([w / config.tile, h / config.tile, 1])
-                    });
+                to_slots(graph, "prt reduce pass 4", b.stages[2], reduce[3], [w / config.tile, h / config.tile, 1]);
             }
             Reduction::Compute => {
-                let p = reduce[0];
                 let tiles = (w / config.tile) * (h / config.tile);
-                graph
-                    .pass("prt reduce tiles")
-                    .storage_read("src", b.product, full, compute)
-                    .buffer(b.receivers, read, Some("receivers"))
-                    .buffer(b.coefficients, write, Some("coefficients"))
-                    .buffer(batch, read, Some("batch"))
-                    .record(move |ctx| {
-                        ctx.rec.bind_pipeline(p)?;
-                        ctx.bind(&[])?;
-                        ctx.rec.dispatch([64 * tiles, 1, 1])
-                    });
+                to_slots(graph, "prt reduce tiles", b.product, reduce[0], [64 * tiles, 1, 1]);
             }
         }
     }

@@ -23,7 +23,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::receivers::{tangent_frame, Clip, Receivers};
-use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind};
+use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::progress::Progress;
@@ -256,16 +256,6 @@ fn v4(v: Vec3) -> [f32; 4] {
     [v.x, v.y, v.z, 0.0]
 }
 
-/// A buffer the passes fill (and the host may read, with `GpuToCpu`).
-fn buffer_with(gpu: &mut Gpu, name: &str, size: u64, memory: MemoryKind) -> Result<BufferId> {
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })?)
-}
-
-fn storage_buffer(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
-    Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
-}
-
 /// [`bake_cpu`] in a compute pass (`glsl/prt/rays.comp`): the same rays, BVHs and layout. Each
 /// invocation traces a share of one receiver's rays and writes its partial sums, which the host
 /// adds up in a fixed order; where the device bounds an invocation's loop iterations (llvmpipe:
@@ -309,18 +299,18 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
         .collect();
     let local: Vec<[f32; 4]> = cosine_directions(samples).iter().map(|d| v4(d.as_vec3())).collect();
 
-    let receivers_buf = storage_buffer(gpu, "prt rays receivers", bytemuck::cast_slice(&receivers))?;
-    let directions_buf = storage_buffer(gpu, "prt rays directions", bytemuck::cast_slice(&local))?;
-    let nodes_buf = storage_buffer(gpu, "prt rays bvh nodes", bytemuck::cast_slice(&nodes))?;
-    let triangles_buf = storage_buffer(gpu, "prt rays bvh triangles", bytemuck::cast_slice(&traced))?;
-    let skips_buf = storage_buffer(gpu, "prt rays bvh skip links", bytemuck::cast_slice(&skips))?;
+    let receivers_buf = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(&receivers))?;
+    let directions_buf = gpu.create_storage_buffer("prt rays directions", bytemuck::cast_slice(&local))?;
+    let nodes_buf = gpu.create_storage_buffer("prt rays bvh nodes", bytemuck::cast_slice(&nodes))?;
+    let triangles_buf = gpu.create_storage_buffer("prt rays bvh triangles", bytemuck::cast_slice(&traced))?;
+    let skips_buf = gpu.create_storage_buffer("prt rays bvh skip links", bytemuck::cast_slice(&skips))?;
     // Room for at least one receiver at one ray per invocation.
     let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
-    let sums_buf = buffer_with(gpu, "prt rays partial sums", sums_bytes as u64, MemoryKind::GpuToCpu)?;
-    let status_buf = buffer_with(gpu, "prt rays status", 4, MemoryKind::GpuToCpu)?;
-    let base_buf = buffer_with(gpu, "prt rays chunk base", 4, MemoryKind::GpuOnly)?;
-    let count_buf = buffer_with(gpu, "prt rays chunk count", 4, MemoryKind::GpuOnly)?;
-    let per_buf = buffer_with(gpu, "prt rays per lane", 4, MemoryKind::GpuOnly)?;
+    let sums_buf = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuToCpu)?;
+    let status_buf = gpu.create_storage_output("prt rays status", 4, MemoryKind::GpuToCpu)?;
+    let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
+    let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
+    let per_buf = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
     let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization: vec![] }, shaders)?;
     let frame = gpu.create_frame()?;
 

@@ -68,20 +68,11 @@ impl Config {
     }
 
     pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
-        let bad = |p: &str, want: &str, got: &toml::Value| -> Error {
-            let message = format!("expected {want}, got {got}");
-            match scene {
-                Some(scene) => scene.method_param_error(decl, p, message).into(),
-                None => Error::Usage(format!("methods: {NAME}.{p}: {message}")),
-            }
-        };
+        let params = crate::lighting::params::Params::new(decl, scene);
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, ambient_nz: false, on_gpu: None };
-        if let Some(v) = decl.param("mode") {
-            c.settings.mode = match v.as_str() {
-                Some("faithful") => Mode::Faithful,
-                Some("corrected") => Mode::Corrected,
-                _ => return Err(bad("mode", "\"faithful\" or \"corrected\"", v)),
-            };
+        if let Some(mode) = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])? {
+            c.settings.mode = mode;
         }
         if let Some(v) = decl.param("patch_size") {
             c.patch_size = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| (0.005..=10.0).contains(x)).ok_or_else(|| bad("patch_size", "a size from 0.005 to 10 metres", v))?;

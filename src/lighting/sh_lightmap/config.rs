@@ -1,6 +1,7 @@
 //! The method's parameters, each checked with one error line naming the scene file, line and field.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::lighting::params::Params;
 use crate::lightmap::solve::{self, Mode};
 use crate::scene::{MethodDecl, Scene};
 
@@ -77,23 +78,10 @@ impl Config {
     }
 
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
-        let name = &decl.name;
-        let bad = |p: &str, want: &str, got: &toml::Value| -> Error {
-            let message = format!("expected {want}, got {got}");
-            match scene {
-                Some(scene) => scene.method_param_error(decl, p, message).into(),
-                None => Error::Usage(format!("methods: {name}.{p}: {message}")),
-            }
-        };
-        let float = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
-        let mode = match decl.param("mode") {
-            None => Mode::Corrected,
-            Some(v) => match v.as_str() {
-                Some("faithful") => Mode::Faithful,
-                Some("corrected") => Mode::Corrected,
-                _ => return Err(bad("mode", "\"faithful\" or \"corrected\"", v)),
-            },
-        };
+        let params = Params::new(decl, scene);
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
+        let float = Params::float;
+        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
         let mut c = Config::defaults(mode);
         for (p, v, _) in &decl.params {
             match p.as_str() {

@@ -17,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::samples::SampleSet;
-use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind};
+use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lightmap::patches::{Patches, Triangle};
@@ -62,17 +62,6 @@ const MAX_LANES: u32 = 32;
 
 fn v4(v: DVec3) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, 0.0]
-}
-
-/// A storage buffer filled with `data`.
-fn storage_buffer(gpu: &mut Gpu, name: &str, data: &[u8]) -> Result<BufferId> {
-    Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
-}
-
-/// A storage buffer the passes fill (and the host may read, with `GpuToCpu`).
-fn buffer_with(gpu: &mut Gpu, name: &str, size: u64, memory: MemoryKind) -> Result<BufferId> {
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })?)
 }
 
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky, as
@@ -125,17 +114,17 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
     }
     let has_sky = triangles.iter().any(|t| t.sky);
 
-    let patches_buf = storage_buffer(gpu, "sh visibility patches", bytemuck::cast_slice(&patches))?;
-    let samples_buf = storage_buffer(gpu, "sh visibility samples", bytemuck::cast_slice(&dirs))?;
-    let sky_buf = storage_buffer(gpu, "sh visibility sky flags", bytemuck::cast_slice(&sky))?;
-    let nodes_buf = storage_buffer(gpu, "sh visibility bvh nodes", bytemuck::cast_slice(&bvh.nodes))?;
-    let triangles_buf = storage_buffer(gpu, "sh visibility bvh triangles", bytemuck::cast_slice(&traced))?;
-    let skips_buf = storage_buffer(gpu, "sh visibility bvh skip links", bytemuck::cast_slice(&bvh.skip_links()))?;
+    let patches_buf = gpu.create_storage_buffer("sh visibility patches", bytemuck::cast_slice(&patches))?;
+    let samples_buf = gpu.create_storage_buffer("sh visibility samples", bytemuck::cast_slice(&dirs))?;
+    let sky_buf = gpu.create_storage_buffer("sh visibility sky flags", bytemuck::cast_slice(&sky))?;
+    let nodes_buf = gpu.create_storage_buffer("sh visibility bvh nodes", bytemuck::cast_slice(&bvh.nodes))?;
+    let triangles_buf = gpu.create_storage_buffer("sh visibility bvh triangles", bytemuck::cast_slice(&traced))?;
+    let skips_buf = gpu.create_storage_buffer("sh visibility bvh skip links", bytemuck::cast_slice(&bvh.skip_links()))?;
     let max_chunk = MAX_CHUNK.min(total);
-    let out_buf = buffer_with(gpu, "sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
-    let status_buf = buffer_with(gpu, "sh visibility status", 4, MemoryKind::GpuToCpu)?;
-    let chunk_buf = buffer_with(gpu, "sh visibility chunk", 4, MemoryKind::GpuOnly)?;
-    let lanes_buf = buffer_with(gpu, "sh visibility lanes", 4, MemoryKind::GpuOnly)?;
+    let out_buf = gpu.create_storage_output("sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
+    let status_buf = gpu.create_storage_output("sh visibility status", 4, MemoryKind::GpuToCpu)?;
+    let chunk_buf = gpu.create_storage_output("sh visibility chunk", 4, MemoryKind::GpuOnly)?;
+    let lanes_buf = gpu.create_storage_output("sh visibility lanes", 4, MemoryKind::GpuOnly)?;
     let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh visibility".into(), shader: "sh_lightmap/visibility.comp".into(), specialization: vec![] }, shaders)?;
     let frame = gpu.create_frame()?;
 
