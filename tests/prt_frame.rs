@@ -84,6 +84,18 @@ fn a_spinning_light_relights_by_sh_rotation() {
     assert!(values.windows(2).all(|w| w[1] < w[0]), "the wall darkens as the light turns away: {values:?}");
 }
 
+/// A scene without objects has no vertex to carry a transfer: one error line, no panic.
+#[test]
+fn a_scene_without_objects_is_refused() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let s = Scene::from_str("methods = [\"prt\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n", "empty.toml", &dir).unwrap();
+    let err = match Renderer::new(common::test_gpu(), s, Some("prt"), (8, 8), 1) {
+        Ok(_) => panic!("a scene without objects was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(!err.contains('\n') && err.contains("empty.toml") && err.contains("no object"), "{err}");
+}
+
 /// Out-of-range parameters and unknown occluders: one error line naming the file and field.
 #[test]
 fn bad_parameters_name_the_field() {

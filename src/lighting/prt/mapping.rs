@@ -131,7 +131,8 @@ pub fn weights(mapping: Mapping, kind: Weights, tile: u32) -> Vec<f32> {
 /// The transfer an unoccluded vertex with normal `n` (world) gets from the tile quadrature, with
 /// the tangent frame `(t, b)`: the CPU mirror of the multiplicative and integration stages for
 /// V ≡ 1 (digest §3.2's table, test 1).
-pub fn unoccluded_transfer(mapping: Mapping, kind: Weights, tile: u32, frame: (DVec3, DVec3, DVec3), bands: usize) -> Vec<f64> {
+pub fn unoccluded_transfer(mapping: Mapping, kind: Weights, tile: u32, frame: (DVec3, DVec3, DVec3), bands: usize) -> crate::sh::ShResult<Vec<f64>> {
+    crate::sh::check_bands(bands)?;
     let w = weights(mapping, kind, tile);
     let (t, b, n) = frame;
     let dim = bands * bands;
@@ -146,13 +147,13 @@ pub fn unoccluded_transfer(mapping: Mapping, kind: Weights, tile: u32, frame: (D
             let d = unproject_clamped(mapping, pixel_center(tile, i, j));
             let world = t * d.x + b * d.y + n * d.z;
             let sh = DVec3::new(world.x, -world.z, world.y);
-            crate::sh::eval_basis_f64(sh, bands, &mut y).expect("bands checked by the caller");
+            crate::sh::eval_basis_f64(sh, bands, &mut y)?;
             for (o, yi) in out.iter_mut().zip(&y) {
                 *o += wk * yi;
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// Listing 2.3's colour-coded unit sphere as triangles: `SPHERE_THETA` = 16 rings of
