@@ -20,6 +20,7 @@ mod terms;
 
 pub mod forward;
 pub mod heightfield;
+pub mod lpv;
 pub mod prt;
 pub mod radiosity;
 pub mod sh_lightmap;

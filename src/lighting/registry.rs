@@ -7,7 +7,7 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{forward, heightfield, prt, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -106,6 +106,16 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: prt::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(prt::Prt::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: lpv::SCHEMA,
+            terms: Terms::INDIRECT,
+            separable: true,
+            sweep: lpv::sweep,
+            reference: lpv::reference,
+            translucency: false,
+            create: |c, d| Ok(Box::new(lpv::Lpv::new(c, d)?)),
             report: None,
         },
     ]

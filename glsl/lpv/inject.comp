@@ -1,0 +1,65 @@
+#version 460
+// Scatter injection (corrected): every valid RSM texel is a VPL added, as a cosine lobe of its
+// reflected flux Phi/pi * coslobe(n) (and of its transmitted flux along -n), into the cell that
+// holds p + cell/2 * n; and, as blocking potential (A_s / cell^2) * coslobe(n) * (1 - tau), into
+// the geometry volume's corner nearest p. Sums are fixed-point integer atomics (no float
+// atomics needed), made floats again by resolve.comp.
+#include "lpv/volume.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 1) uniform sampler2D rsm_flux;         // rgb reflected flux (W), a: surfel area (m^2)
+layout(set = 0, binding = 2) uniform sampler2D rsm_transmitted;  // rgb transmitted flux (W), a: 1 - mean transmittance
+layout(set = 0, binding = 3) uniform sampler2D rsm_position;     // xyz world position, a: 1 where a surface was drawn
+layout(set = 0, binding = 4) uniform sampler2D rsm_normal;       // xyz normal facing the light
+layout(set = 0, binding = 5) buffer FixedLight { int v[]; } fixed_light;
+layout(set = 0, binding = 6) buffer FixedBlocking { int v[]; } fixed_blocking;
+
+void add_lobe(uint cell, uint ch, vec4 c) {
+    for (uint k = 0u; k < 4u; ++k) {
+        int q = int(round(c[k] * volume.units.x));
+        if (q != 0) {
+            atomicAdd(fixed_light.v[(cell * 3u + ch) * 4u + k], q);
+        }
+    }
+}
+
+void main() {
+    ivec2 t = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(t, ivec2(volume.rsm.x)))) {
+        return;
+    }
+    vec4 position = texelFetch(rsm_position, t, 0);
+    if (position.w < 0.5) {
+        return;
+    }
+    vec4 flux = texelFetch(rsm_flux, t, 0);
+    vec4 transmitted = texelFetch(rsm_transmitted, t, 0);
+    vec3 n = normalize(texelFetch(rsm_normal, t, 0).xyz);
+    float cell_size = volume.origin.w;
+    vec3 p = (position.xyz - volume.origin.xyz) / cell_size;
+    // Reflected light leaves on the lit side, transmitted light on the back: each half a cell
+    // off the surface along its own direction, so neither lights its own surfel.
+    ivec3 front = ivec3(floor(p + 0.5 * n));
+    ivec3 back = ivec3(floor(p - 0.5 * n));
+    vec4 lobe = cosine_lobe(n) / LPV_PI;
+    vec4 back_lobe = cosine_lobe(-n) / LPV_PI;
+    for (uint ch = 0u; ch < 3u; ++ch) {
+        if (inside(front) && flux[ch] > 0.0) {
+            add_lobe(cell_index(front), ch, flux[ch] * lobe);
+        }
+        if (inside(back) && transmitted[ch] > 0.0) {
+            add_lobe(cell_index(back), ch, transmitted[ch] * back_lobe);
+        }
+    }
+    ivec3 corner = ivec3(floor(p + 0.5));
+    if (inside(corner)) {
+        vec4 b = cosine_lobe(n) * (flux.w / (cell_size * cell_size) * transmitted.w);
+        for (uint k = 0u; k < 4u; ++k) {
+            int q = int(round(b[k] * volume.units.z));
+            if (q != 0) {
+                atomicAdd(fixed_blocking.v[cell_index(corner) * 4u + k], q);
+            }
+        }
+    }
+}

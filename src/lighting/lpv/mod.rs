@@ -1,0 +1,232 @@
+//! Light propagation volumes (seed 004, digest `seed-004-lpv-leaves.md`): one bounce of light
+//! from a reflective shadow map, injected into a grid of 2-band SH, propagated cell to cell and
+//! looked up per pixel — the indirect term over any direct method.
+//!
+//! Passes per frame: **rsm** (the scene from the light: reflected and transmitted flux, surfel
+//! area, position, normal); **inject** and **resolve** (every texel scattered as a cosine lobe
+//! into fixed-point sums, then floats; the geometry volume from the same surfels) or the
+//! document's **gather**; **propagate** ×K (one compute dispatch each); **composite** (the
+//! scene's surfaces drawn again, the volume looked up, added into the radiance).
+//!
+//! *Corrected* is Kaplanyan & Dachsbacher's LPV with leaf transmission; *faithful* is the
+//! document's: gather with the compounding transform, delta lobes and the 0.75 fudge,
+//! 18-neighbour propagation that accumulates in place, and the point look-up of SH(−n).
+
+pub mod config;
+pub mod grid;
+pub mod rsm;
+pub mod sh;
+pub mod volume;
+
+#[cfg(test)]
+mod tests;
+
+use glam::Vec3;
+
+use crate::backend::{vk, Bind, BlendMode, BufferId, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
+use crate::error::{Error, Result};
+use crate::gpu_scene::{punctual_lights, record_draws, vertex_layout, DrawCall};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+use config::{Config, Lookup, Mode};
+use rsm::{LightCamera, Rsm};
+use volume::{Placement, VolumeBlock, VolumeGpu};
+
+pub const NAME: &str = "lpv";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "mode", kind: ParamKind::String },
+        ParamSchema { name: "grid", kind: ParamKind::Int },
+        ParamSchema { name: "iterations", kind: ParamKind::Int },
+        ParamSchema { name: "rsm", kind: ParamKind::Int },
+        ParamSchema { name: "injection", kind: ParamKind::String },
+        ParamSchema { name: "lookup", kind: ParamKind::String },
+        ParamSchema { name: "geometry_volume", kind: ParamKind::Bool },
+        ParamSchema { name: "clamp", kind: ParamKind::Bool },
+        ParamSchema { name: "storage", kind: ParamKind::String },
+        ParamSchema { name: "samples", kind: ParamKind::Int },
+        ParamSchema { name: "transform_bug", kind: ParamKind::Bool },
+        ParamSchema { name: "published_omega", kind: ParamKind::Bool },
+        ParamSchema { name: "light", kind: ParamKind::Int },
+    ],
+};
+
+/// An LPV computes the first bounce only.
+pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
+    ReferenceKind::Indirect(1)
+}
+
+/// The chart's sweep: as declared; corrected at 16³, 32³ and 64³, with 4, 8 and 16
+/// iterations, at RSM 128² and 512², without the geometry volume; the document's mode.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let with = |d: &MethodDecl, name: &str, v: toml::Value| {
+        let mut d = d.clone();
+        d.params.retain(|(n, _, _)| n != name);
+        d.params.push((name.to_string(), v, 0));
+        d
+    };
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d, None) {
+            let mut label = format!("lpv {:?} {}³ k={} rsm {}²", c.mode, c.grid, c.iterations, c.rsm).to_lowercase();
+            if c.mode == Mode::Corrected && !c.occlusion {
+                label += " no gv";
+            }
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    let corrected = with(decl, "mode", "corrected".into());
+    for g in [16i64, 32, 64] {
+        push(with(&corrected, "grid", g.into()));
+    }
+    for k in [4i64, 8, 16] {
+        push(with(&corrected, "iterations", k.into()));
+    }
+    for r in [128i64, 512] {
+        push(with(&corrected, "rsm", r.into()));
+    }
+    push(with(&corrected, "geometry_volume", false.into()));
+    push(with(decl, "mode", "faithful".into()));
+    push(with(&with(decl, "mode", "faithful".into()), "transform_bug", false.into()));
+    out
+}
+
+/// The volume over the scene's objects (emitters left out) at their placement.
+fn scene_bounds(cx: &CreateContext<'_>) -> Option<(Vec3, Vec3)> {
+    let mut min = Vec3::splat(f32::INFINITY);
+    let mut max = Vec3::splat(f32::NEG_INFINITY);
+    for (d, mesh) in cx.scene_gpu.draws.iter().zip(&cx.scene_gpu.meshes) {
+        if d.object.is_none() {
+            continue;
+        }
+        for p in &mesh.positions {
+            let w = d.model.transform_point3(*p);
+            min = min.min(w);
+            max = max.max(w);
+        }
+    }
+    min.is_finite().then_some((min, max))
+}
+
+/// The LPV as the indirect term.
+pub struct Lpv {
+    config: Config,
+    pub placement: Placement,
+    camera: LightCamera,
+    block: VolumeBlock,
+    pub volume: VolumeGpu,
+    rsm: Rsm,
+    /// Per material: the diffuse transmittance (rgb).
+    transmittance: BufferId,
+    composite: PipelineId,
+    /// The objects' draws (emitters neither reflect nor receive).
+    calls: Vec<DrawCall>,
+    objects: Vec<Option<usize>>,
+    animation: Vec<Option<crate::scene::Animation>>,
+}
+
+impl Lpv {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Lpv> {
+        let config = Config::from_decl(decl, Some(cx.scene))?;
+        let lights = punctual_lights(cx.scene);
+        let light = lights.get(config.light).ok_or_else(|| {
+            let msg = format!("light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one", config.light, lights.len());
+            Error::from(cx.scene.method_param_error(decl, "light", msg))
+        })?;
+        let (min, max) = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
+        let placement = Placement::fit(min, max, config.grid);
+        let camera = LightCamera::new(light, &placement, config.rsm).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
+        let block = camera.block(&placement, &config);
+        let volume = VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config)?;
+        let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
+        let mut tau: Vec<[f32; 4]> = cx.scene.materials.iter().map(|m| m.transmittance.extend(0.0).into()).collect();
+        // Emitters' materials come after the scene's: they transmit nothing.
+        tau.resize(tau.len().max(cx.scene_gpu.material_maps.len()).max(1), [0.0; 4]);
+        let transmittance = cx.gpu.create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
+        cx.states.forget_buffer(transmittance);
+
+        let mut desc = GraphicsPipelineDesc::new("lpv composite", "lpv/surface.vert", Some("lpv/composite.frag"));
+        desc.vertex_layout = vertex_layout();
+        desc.raster.cull = vk::CullModeFlags::NONE;
+        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+        desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+        desc.color_targets[0].blend = BlendMode::Additive;
+        desc.specialization = vec![SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 }, SpecConstant { id: 10, bits: config.half as u32 }];
+        let composite = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+        let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
+        let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
+        let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
+        Ok(Lpv { config, placement, camera, block, volume, rsm, transmittance, composite, calls, objects, animation })
+    }
+
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    pub fn camera(&self) -> &LightCamera {
+        &self.camera
+    }
+}
+
+impl LightingMethod for Lpv {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        let t = frame.clock.time_s;
+        let items = frame.scene.draws.iter().zip(&self.objects).filter(|(_, o)| o.is_some());
+        for (call, (item, object)) in self.calls.iter_mut().zip(items) {
+            let anim = object.and_then(|o| self.animation.get(o).copied().flatten());
+            call.model = anim.map_or(item.model, |a| a.transform_at(item.model, t));
+        }
+        Ok(())
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        if !frame.terms.has(Term::Indirect) {
+            return Ok(());
+        }
+        let scene = frame.scene;
+        self.rsm.add_passes(graph, scene, &self.calls, self.transmittance, &self.volume, &self.block);
+        self.volume.add_propagation(graph, &self.block);
+        let (t, uniforms) = (frame.targets, frame.uniforms);
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let light = self.volume.result();
+        graph
+            .pass("lpv composite")
+            .color_attachment(t.radiance, SubresourceRange::mip(0), false)
+            .depth_stencil_read(t.depth_stencil)
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"))
+            .buffer(light, Access::StorageRead { stages: frag }, Some("light"))
+            .record(move |ctx| {
+                let depth = RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) };
+                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+                ctx.rec.bind_pipeline(self.composite)?;
+                let uniform_bytes = bytemuck::bytes_of(&uniforms);
+                let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
+                record_draws(ctx, scene, &self.calls, |ctx, material| {
+                    let maps = scene.material_maps[material as usize];
+                    ctx.bind(&[
+                        ("frame", Bind::UniformData(uniform_bytes)),
+                        ("volume", Bind::UniformData(bytemuck::bytes_of(&self.block))),
+                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
+                        ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
+                    ])
+                })?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+        Ok(())
+    }
+}
