@@ -218,6 +218,13 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
             segments: opt(t.get("segments"), |f| f.int_in(3, generators::MAX_SEGMENTS))?.unwrap_or(48),
             rings: opt(t.get("rings"), |f| f.int_in(2, generators::MAX_RINGS))?.unwrap_or(24),
         },
+        "bush" => MeshSource::Bush {
+            leaves: opt(t.get("leaves"), |f| f.int_in(1, generators::MAX_LEAVES))?.unwrap_or(5500),
+            seed: opt(t.get("seed"), |f| f.int_in(0, u32::MAX))?.unwrap_or(1),
+            radius: opt(t.get("radius"), positive)?.unwrap_or(1.0),
+            height: opt(t.get("height"), positive)?.unwrap_or(1.2),
+            leaf_size: opt(t.get("leaf_size"), positive)?.unwrap_or(0.12),
+        },
         "heightfield" => MeshSource::Heightfield(super::heightfield::read(&t)?),
         _ => MeshSource::Obj(t.require("path", "an OBJ file relative to the scene file")?.existing_file()?),
     };
@@ -339,11 +346,12 @@ const LIGHT_KEYS: [(&str, &[&str]); 5] = [
 ];
 
 /// Each mesh type and its keys besides the placement ones and `material`.
-const MESH_KEYS: [(&str, &[&str]); 9] = [
+const MESH_KEYS: [(&str, &[&str]); 10] = [
     ("plane", &["size", "subdivisions"]),
     ("quad", &["corner", "edge_u", "edge_v", "subdivisions"]),
     ("box", &["size", "subdivisions"]),
     ("sphere", &["radius", "segments", "rings"]),
+    ("bush", &["leaves", "seed", "radius", "height", "leaf_size"]),
     ("obj", &["path"]),
     ("cornell_box", &["subdivisions", "light"]),
     ("heightfield", super::heightfield::HEIGHTFIELD_KEYS),

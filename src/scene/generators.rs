@@ -147,6 +147,222 @@ pub fn sphere(radius: f32, segments: u32, rings: u32) -> Mesh {
     m
 }
 
+/// Largest accepted bush `leaves` (larger values are clamped).
+pub const MAX_LEAVES: u32 = 100_000;
+/// Triangles of a bush's wood (trunk and branches), whatever its keys: seven tapered hexagonal
+/// prisms with capped tips.
+pub const BUSH_WOOD_TRIANGLES: usize = BUSH_PRISMS * (2 * PRISM_SIDES + PRISM_SIDES - 2);
+/// Vertices and triangles of one leaf.
+pub const LEAF_VERTICES: usize = 5;
+pub const LEAF_TRIANGLES: usize = 4;
+/// The crown's vertical semi-axis as a fraction of its horizontal radius.
+pub const CROWN_FLATTENING: f32 = 0.75;
+/// The trunk and the branches.
+const BUSH_PRISMS: usize = 7;
+const PRISM_SIDES: usize = 6;
+/// Where the wood's uvs lie in the leaf texture: a bark patch in its lower-left corner, away
+/// from the leaf's outline (`tools/make_leaf_textures.py` paints it).
+const BARK_UV: (Vec2, Vec2) = (Vec2::new(0.03, 0.88), Vec2::new(0.17, 0.97));
+/// A leaf's outline in its own frame (x toward +u, y toward the tip, units of leaf length):
+/// the tip at y = 0.6, the stem at y = −0.4, the widest point at the centre (y = 0), where the
+/// uvs have v = 0.6.
+const LEAF_TIP: f32 = 0.6;
+const LEAF_STEM: f32 = 0.4;
+
+/// PCG32 (O'Neill's `pcg32`, XSH RR): a bush depends on its seed alone, not on a platform RNG.
+struct Pcg32 {
+    state: u64,
+    inc: u64,
+}
+
+impl Pcg32 {
+    const MUL: u64 = 6_364_136_223_846_793_005;
+
+    fn new(seed: u64, stream: u64) -> Pcg32 {
+        let mut rng = Pcg32 { state: 0, inc: (stream << 1) | 1 };
+        rng.next_u32();
+        rng.state = rng.state.wrapping_add(seed);
+        rng.next_u32();
+        rng
+    }
+
+    fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old.wrapping_mul(Self::MUL).wrapping_add(self.inc);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 / 16_777_216.0
+    }
+
+    /// Uniform in [lo, hi).
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    /// A uniformly distributed unit vector.
+    fn direction(&mut self) -> Vec3 {
+        let y = self.range(-1.0, 1.0);
+        let phi = TAU * self.unit();
+        let r = (1.0 - y * y).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), y, r * phi.sin())
+    }
+}
+
+/// A leafy bush standing on the origin, y up, deterministic in `seed` (its own PCG32, no platform
+/// RNG).
+///
+/// The crown is the ellipsoid of horizontal radius `radius` and vertical semi-axis
+/// [`CROWN_FLATTENING`]·`radius` centred at (0, `height`, 0). Each of the `leaves` (1 to
+/// [`MAX_LEAVES`]) leaves has its centre inside it (mostly toward its surface, as on a real bush),
+/// a length of 0.8–1.2 × `leaf_size` and a width of 0.5–0.65 × its length, and every point of a
+/// leaf lies within 0.63 × its length (so 0.76 × `leaf_size`) of its centre. A leaf is a diamond
+/// of 4 triangles around its centre vertex — tip, the two widest points, stem — slightly bent:
+/// the halves fold up along the midrib and the tip droops. Its normal leans from +y by 0–65° (toward the outside
+/// of the crown, more often a little than much), the tip points roughly outward. The leaf's uvs
+/// map the leaf texture's [0, 1]²: tip at (0.5, 0), stem at (0.5, 1), the widest points at
+/// (0, 0.6) and (1, 0.6). Leaf `i` is vertices `5i..5i + 5` (centre, tip, left, stem, right) and
+/// triangles `4i..4i + 4`; every surface is two-sided, so there are no back faces.
+///
+/// Then the wood, [`BUSH_WOOD_TRIANGLES`] triangles: a trunk from the origin to the crown's
+/// centre and six branches from it into the crown, tapered hexagonal prisms open at the base
+/// and capped at the tip, their uvs in a bark patch of the leaf texture's lower-left corner.
+/// Sizes the scene format refuses (zero, negative, non-finite) never panic: non-finite ones give
+/// non-finite positions, which [`Mesh::validate`] rejects.
+pub fn bush(leaves: u32, seed: u32, radius: f32, height: f32, leaf_size: f32) -> Mesh {
+    let leaves = leaves.clamp(1, MAX_LEAVES) as usize;
+    let centre = Vec3::new(0.0, height, 0.0);
+    let semi = Vec3::new(radius, CROWN_FLATTENING * radius, radius);
+    let mut m = Mesh::default();
+    m.positions.reserve(leaves * LEAF_VERTICES);
+    m.indices.reserve(leaves * LEAF_TRIANGLES * 3 + BUSH_WOOD_TRIANGLES * 3);
+    let mut rng = Pcg32::new(u64::from(seed), 0x9e37_79b9_7f4a_7c15);
+    // A per-seed phase for the crown's lobes.
+    let lobe_phase = TAU * rng.unit();
+    for _ in 0..leaves {
+        // Centre: a direction, then a radial fraction in [0.35, 1) biased toward the surface,
+        // times a gentle lobing so the crown is not a perfect ellipsoid (never beyond it).
+        let dir = rng.direction();
+        let azimuth = dir.z.atan2(dir.x);
+        let lobes = 0.92 + 0.08 * (3.0 * azimuth + lobe_phase).sin() * (1.0 - dir.y * dir.y);
+        let r = (0.35 + 0.65 * rng.unit().cbrt()) * lobes;
+        let c = centre + semi * dir * r;
+        // Normal: tilted from +y by up to 65° (small tilts likelier), toward the outside of the
+        // crown give or take 90°.
+        let tilt = 65f32.to_radians() * rng.unit().powf(1.5);
+        let lean = azimuth + (rng.unit() - 0.5) * PI;
+        let n = Vec3::new(tilt.sin() * lean.cos(), tilt.cos(), tilt.sin() * lean.sin());
+        // Tip direction: outward and a little random, in the leaf's plane.
+        let outward = Vec3::new(dir.x, 0.0, dir.z).normalize_or_zero() + rng.direction() * 0.7;
+        let a = (outward - n * n.dot(outward)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+        let t = a.cross(n); // toward +u; n × t = a points to the tip (−v)
+        let length = leaf_size * rng.range(0.8, 1.2);
+        let width = rng.range(0.5, 0.65);
+        let fold = rng.range(0.0, 0.35) * 0.5 * width;
+        let droop = rng.range(0.0, 0.3) * LEAF_TIP;
+        push_leaf(&mut m, c, [t, a, n], length, width, fold, droop);
+    }
+
+    // The wood (its own stream, so it does not change with the leaf count): the trunk, then six
+    // branches leaving it between half and 90% of its height toward points 70% of the way out
+    // to the crown's surface.
+    let mut rng = Pcg32::new(u64::from(seed), 0x2545_f491_4f6c_dd1d);
+    let trunk_r = 0.05 * radius;
+    push_prism(&mut m, Vec3::ZERO, centre, trunk_r, 0.4 * trunk_r);
+    for k in 0..BUSH_PRISMS - 1 {
+        let phi = TAU * (k as f32 + rng.range(-0.3, 0.3)) / (BUSH_PRISMS - 1) as f32;
+        let up = rng.range(0.2, 0.7);
+        let d = Vec3::new(phi.cos(), up, phi.sin()).normalize();
+        let start = Vec3::new(0.0, height * rng.range(0.5, 0.9), 0.0);
+        push_prism(&mut m, start, centre + semi * d * 0.7, 0.4 * trunk_r, 0.15 * trunk_r);
+    }
+    m.compute_tangents();
+    m
+}
+
+/// Appends one leaf centred at `c` with frame `[t, a, n]` (toward +u, toward the tip, normal):
+/// in leaf units its tip lies at (0, 0.6, −droop), its stem at (0, −0.4, 0) and its widest
+/// points at (±width/2, 0, fold). Normals are each vertex's average of its faces' normals,
+/// computed in leaf units so that a tiny leaf still gets unit normals.
+fn push_leaf(m: &mut Mesh, c: Vec3, [t, a, n]: [Vec3; 3], length: f32, width: f32, fold: f32, droop: f32) {
+    let base = m.positions.len() as u32;
+    let local = [
+        Vec3::ZERO,                         // centre
+        Vec3::new(0.0, LEAF_TIP, -droop),   // tip
+        Vec3::new(-0.5 * width, 0.0, fold), // left (u = 0)
+        Vec3::new(0.0, -LEAF_STEM, 0.0),    // stem
+        Vec3::new(0.5 * width, 0.0, fold),  // right (u = 1)
+    ];
+    let uvs = [Vec2::new(0.5, LEAF_TIP), Vec2::new(0.5, 0.0), Vec2::new(0.0, LEAF_TIP), Vec2::new(0.5, 1.0), Vec2::new(1.0, LEAF_TIP)];
+    // Counter-clockwise seen from +n: (tip, left, centre), (tip, centre, right), (stem, centre,
+    // left), (stem, right, centre).
+    const TRIS: [[usize; 3]; 4] = [[1, 2, 0], [1, 0, 4], [3, 0, 2], [3, 4, 0]];
+    let mut normals = [Vec3::ZERO; 5];
+    for tri in TRIS {
+        let [p0, p1, p2] = tri.map(|i| local[i]);
+        let face = (p1 - p0).cross(p2 - p0).normalize();
+        for i in tri {
+            normals[i] += face;
+        }
+    }
+    let to_world = |v: Vec3| t * v.x + a * v.y + n * v.z;
+    for ((p, nrm), uv) in local.iter().zip(normals).zip(uvs) {
+        m.positions.push(c + to_world(*p) * length);
+        m.normals.push(to_world(nrm).normalize());
+        m.uvs.push(uv);
+    }
+    for tri in TRIS {
+        m.indices.extend(tri.map(|i| base + i as u32));
+    }
+}
+
+/// Appends a tapered prism of [`PRISM_SIDES`] sides from `b0` (radius `r0`, open) to `b1`
+/// (radius `r1`, capped), with smooth side normals and uvs in [`BARK_UV`].
+fn push_prism(m: &mut Mesh, b0: Vec3, b1: Vec3, r0: f32, r1: f32) {
+    let axis_v = b1 - b0;
+    let len = axis_v.length();
+    let axis = axis_v.try_normalize().unwrap_or(Vec3::Y);
+    let e1 = axis.any_orthonormal_vector();
+    let e2 = axis.cross(e1); // e1 × e2 = axis: increasing angle is counter-clockwise from the tip
+    let (lo, hi) = BARK_UV;
+    let ring = |k: usize| {
+        let phi = TAU * (k % PRISM_SIDES) as f32 / PRISM_SIDES as f32;
+        e1 * phi.cos() + e2 * phi.sin()
+    };
+    let base = m.positions.len() as u32;
+    let sides = PRISM_SIDES as u32;
+    // Sides: a column per corner (the seam column repeated for the uvs), bottom then top.
+    for k in 0..=PRISM_SIDES {
+        let d = ring(k);
+        let normal = (d * len + axis * (r0 - r1)).try_normalize().unwrap_or(d);
+        let u = lo.x + (hi.x - lo.x) * k as f32 / PRISM_SIDES as f32;
+        for (p, r, v) in [(b0, r0, hi.y), (b1, r1, lo.y)] {
+            m.positions.push(p + d * r);
+            m.normals.push(normal);
+            m.uvs.push(Vec2::new(u, v));
+        }
+    }
+    for k in 0..sides {
+        let (a, b, c, d) = (base + 2 * k, base + 2 * k + 2, base + 2 * k + 3, base + 2 * k + 1);
+        m.indices.extend_from_slice(&[a, b, c, a, c, d]);
+    }
+    // The cap: a fan facing along the axis.
+    let cap = m.positions.len() as u32;
+    for k in 0..PRISM_SIDES {
+        let d = ring(k);
+        m.positions.push(b1 + d * r1);
+        m.normals.push(axis);
+        let phi = TAU * k as f32 / PRISM_SIDES as f32;
+        m.uvs.push(lo.lerp(hi, 0.5) + Vec2::new(phi.cos(), -phi.sin()) * 0.5 * (hi - lo));
+    }
+    for k in 1..sides - 1 {
+        m.indices.extend_from_slice(&[cap, cap + k, cap + k + 1]);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -142,6 +142,7 @@ impl Object {
             MeshSource::Quad { corner, edge_u, edge_v, subdivisions } => generators::quad(*corner, *edge_u, *edge_v, *subdivisions),
             MeshSource::Box { size, subdivisions } => generators::cuboid(*size, *subdivisions),
             MeshSource::Sphere { radius, segments, rings } => generators::sphere(*radius, *segments, *rings),
+            MeshSource::Bush { leaves, seed, radius, height, leaf_size } => generators::bush(*leaves, *seed, *radius, *height, *leaf_size),
             MeshSource::World { level, class } => {
                 let world = world_mesh::compiled(level).map_err(|e| SceneError::new(format!("object {:?}", self.name), None, level.mesh_name(), format!("the world does not compile: {e}")))?;
                 world_mesh::class_mesh(&world, *class).0

@@ -231,6 +231,39 @@ fn value_checks_name_their_field() {
 }
 
 #[test]
+fn bush_keys_default_and_bad_values_name_their_field() {
+    let s = parse(&format!("{CAM}[[objects]]\nmesh = \"bush\"\n")).unwrap();
+    assert_eq!(s.objects[0].mesh, MeshSource::Bush { leaves: 5500, seed: 1, radius: 1.0, height: 1.2, leaf_size: 0.12 });
+    let s = parse(&format!("{CAM}[[objects]]\nmesh = \"bush\"\nleaves = 12\nseed = 0\nradius = 0.5\nheight = 2\nleaf_size = 0.05\n")).unwrap();
+    assert_eq!(s.objects[0].mesh, MeshSource::Bush { leaves: 12, seed: 0, radius: 0.5, height: 2.0, leaf_size: 0.05 });
+    assert_eq!(load_all(&s)[0].triangle_count(), 4 * 12 + generators::BUSH_WOOD_TRIANGLES);
+
+    // Lines: 4 [[objects]], 5 mesh, 6 the key under test.
+    let bush = |body: &str| format!("{CAM}[[objects]]\nmesh = \"bush\"\n{body}");
+    let e = fails_at(&bush("leaves = 0\n"), 6, "objects[0].leaves");
+    assert_eq!(e.to_string(), "bad.toml:6: objects[0].leaves: expected an integer from 1 to 100000, got 0");
+    fails_at(&bush("leaves = 100001\n"), 6, "objects[0].leaves");
+    fails_at(&bush("leaves = 5.5\n"), 6, "objects[0].leaves");
+    let e = fails_at(&bush("seed = -1\n"), 6, "objects[0].seed");
+    assert_eq!(e.message, "expected an integer from 0 to 4294967295, got -1");
+    let e = fails_at(&bush("radius = -1\n"), 6, "objects[0].radius");
+    assert_eq!(e.to_string(), "bad.toml:6: objects[0].radius: expected a positive number, got -1");
+    fails_at(&bush("radius = nan\n"), 6, "objects[0].radius");
+    fails_at(&bush("height = 0\n"), 6, "objects[0].height");
+    fails_at(&bush("leaves = 10\nleaf_size = -0.1\n"), 7, "objects[0].leaf_size");
+    // A string where each number belongs.
+    for key in ["leaves", "seed", "radius", "height", "leaf_size"] {
+        let e = fails_at(&bush(&format!("{key} = \"big\"\n")), 6, &format!("objects[0].{key}"));
+        assert!(e.message.ends_with("got \"big\""), "{e}");
+    }
+    // Keys of other meshes are not the bush's.
+    let e = fails_at(&bush("subdivisions = 4\n"), 6, "objects[0].subdivisions");
+    assert!(e.message.contains("leaves, seed, radius, height, leaf_size"), "{e}");
+    let e = fails_at(&format!("{CAM}[[objects]]\nmesh = \"bushes\"\n"), 5, "objects[0].mesh");
+    assert!(e.message.contains("sphere, bush, obj"), "{e}");
+}
+
+#[test]
 fn unknown_material_reference_lists_defined_ones() {
     let text = format!("{CAM}[[materials]]\nname = \"red\"\nalbedo = [0.8, 0.1, 0.1]\n\n[[objects]]\nmesh = \"sphere\"\nmaterial = \"blue\"\n");
     let e = fails_at(&text, 10, "objects[0].material");

@@ -142,6 +142,11 @@ pub enum MeshSource {
     /// A UV sphere centred on the origin: `segments` around y, `rings` from pole to pole.
     /// Closed 2-manifold.
     Sphere { radius: f32, segments: u32, rings: u32 },
+    /// A generated leafy bush standing on the origin (y up): `leaves` bent four-triangle leaves
+    /// of length about `leaf_size` scattered over an ellipsoidal crown of horizontal radius
+    /// `radius` centred at height `height`, on a trunk and a few branches; deterministic in
+    /// `seed`. See [`crate::scene::generators::bush`].
+    Bush { leaves: u32, seed: u32, radius: f32, height: f32, leaf_size: f32 },
     /// A height field over a square in the xz-plane (see [`crate::scene::heightfield`]):
     /// generated or loaded from an image, traced and drawn at its time-0 shape.
     Heightfield(super::heightfield::HeightfieldSource),
