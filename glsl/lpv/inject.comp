@@ -1,7 +1,8 @@
 #version 460
 // Scatter injection (corrected): every valid RSM texel is a VPL added, as a cosine lobe of its
 // reflected flux Phi/pi * coslobe(n) (and of its transmitted flux along -n), into the cell that
-// holds p + cell/2 * n; and, as blocking potential (A_s / cell^2) * coslobe(n) * (1 - tau), into
+// holds p + cell/2 * n; and, as blocking potential (A_s / cell^2) * coslobe(n) * (1 - tau) (peak
+// normalised to 1), into
 // the geometry volume's corner nearest p. Sums are fixed-point integer atomics (no float
 // atomics needed), made floats again by resolve.comp.
 #include "lpv/volume.glsl"
@@ -54,7 +55,11 @@ void main() {
     }
     ivec3 corner = ivec3(floor(p + 0.5));
     if (inside(corner)) {
-        vec4 b = cosine_lobe(n) * (flux.w / (cell_size * cell_size) * transmitted.w);
+        // The 2-band lobe of max(0, n.w) peaks at 0.75 (SH_COS0 * SH_Y00 + SH_COS1 * SH_Y1):
+        // scaled by 4/3 so that a surface filling the cell blocks light meeting it head-on
+        // completely, as max(0, n.w) itself would.
+        float peak = SH_COS0 * SH_Y00 + SH_COS1 * SH_Y1;
+        vec4 b = cosine_lobe(n) * (flux.w / (cell_size * cell_size) * transmitted.w / peak);
         for (uint k = 0u; k < 4u; ++k) {
             int q = int(round(b[k] * volume.units.z));
             if (q != 0) {

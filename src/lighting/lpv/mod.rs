@@ -173,6 +173,13 @@ impl Lpv {
     pub fn camera(&self) -> &LightCamera {
         &self.camera
     }
+
+    /// The RSM, the injection and the propagation: the volume the composite reads
+    /// ([`VolumeGpu::result`]).
+    pub fn add_volume_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a crate::gpu_scene::SceneGpu) {
+        self.rsm.add_passes(graph, scene, &self.calls, self.transmittance, &self.volume, &self.block);
+        self.volume.add_propagation(graph, &self.block);
+    }
 }
 
 impl LightingMethod for Lpv {
@@ -195,8 +202,7 @@ impl LightingMethod for Lpv {
             return Ok(());
         }
         let scene = frame.scene;
-        self.rsm.add_passes(graph, scene, &self.calls, self.transmittance, &self.volume, &self.block);
-        self.volume.add_propagation(graph, &self.block);
+        self.add_volume_passes(graph, scene);
         let (t, uniforms) = (frame.targets, frame.uniforms);
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let light = self.volume.result();

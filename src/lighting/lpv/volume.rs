@@ -262,6 +262,7 @@ pub fn propagate_standalone(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Con
     let frame = gpu.create_frame()?;
     let mut graph = RenderGraph::new();
     volume.add_propagation(&mut graph, &block);
+    graph.output_buffer(volume.result());
     graph.run_and_wait(gpu, frame, &mut states, "LPV propagation")?;
     gpu.destroy_frame(frame)?;
     volume.read_set(gpu, volume.result())
