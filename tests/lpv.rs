@@ -131,7 +131,7 @@ fn volume_of(scene: &Scene) -> ([Grid; 3], Placement, LightCamera) {
 /// of 2 W/m², and a small box to give the volume height.
 fn leaf(method: &str) -> Scene {
     scene(&format!(
-        "methods = [{method}]\n[camera]\nposition = [0, 2, 3]\ntarget = [0, 0, 0]\n\
+        "methods = [{method}]\n[camera]\nposition = [0, 2, 3]\ntarget = [0, 0.37, 0]\n\
          [[materials]]\nname = \"leaf\"\nalbedo = 0.5\ntransmittance = 0.3\n\
          [[objects]]\nmesh = \"quad\"\nmaterial = \"leaf\"\ncorner = [-0.5, 0.37, 0.5]\nedge_u = [1, 0, 0]\nedge_v = [0, 0, -1]\n\
          [[objects]]\nmesh = \"box\"\nsize = 0.05\ntranslate = [0.9, 0.9, 0.9]\n\
@@ -248,4 +248,83 @@ fn cornell_indirect_light_is_within_a_quarter_of_the_path_tracer_in_mean() {
     }
     assert!(ratios[0] > 0.8 && ratios[0] < 1.25, "corrected/path tracer {}", ratios[0]);
     assert!(!(0.8..1.25).contains(&ratios[1]), "the document's mode should be off in mean: {}", ratios[1]);
+}
+
+/// Mean and 99th percentile over pixels of |ΔI|/I between consecutive frames of the indirect
+/// term, where I is above 1 % of the frame's mean.
+fn flicker(frames: &[Vec<f32>]) -> (f64, f64) {
+    let mut rel = Vec::new();
+    let (mut diff, mut total) = (0.0, 0.0);
+    for w in frames.windows(2) {
+        let mean = w[0].iter().map(|x| *x as f64).sum::<f64>() / w[0].len() as f64;
+        for (a, b) in w[0].iter().zip(&w[1]) {
+            diff += (b - a).abs() as f64;
+            total += *a as f64;
+            if *a as f64 > 0.01 * mean {
+                rel.push(((b - a) / a).abs() as f64);
+            }
+        }
+    }
+    rel.sort_by(f64::total_cmp);
+    (diff / total, rel[(rel.len() as f64 * 0.99) as usize])
+}
+
+/// T13: the bush's indirect light while the sun turns 0.1° per frame, frame to frame: the
+/// scatter injection is several times steadier than the document's gather.
+#[test]
+fn scatter_injection_is_steadier_than_the_documents_gather() {
+    use penumbra::renderer::{FrameOutput, Renderer};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("lpv_bush.toml")).unwrap();
+    let region = r#"centre = [0.0, 1.2, 0.0], size = 3.2"#;
+    let mut results = Vec::new();
+    for (label, params) in [
+        ("scatter", "light_spin = 6.0"),
+        ("scatter, no snapping", "light_spin = 6.0, snap = false"),
+        ("the document's gather", "mode = \"faithful\", light_spin = 6.0"),
+        ("gather without the transform bug", "mode = \"faithful\", transform_bug = false, light_spin = 6.0"),
+    ] {
+        let decl = format!("{{ name = \"lpv\", {region}, {params} }}");
+        let text = text.replace(&format!("{{ name = \"lpv\", {region} }}"), &decl);
+        let scene = Scene::from_str(&text, "lpv_bush.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
+        let mut r = Renderer::new(common::test_gpu(), scene, Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let frames: Vec<Vec<f32>> = (0..6)
+            .map(|_| {
+                let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+                img.pixels.iter().map(|p| (p[0] + p[1] + p[2]) / 3.0).collect()
+            })
+            .collect();
+        common::assert_clean(&r.gpu);
+        let (mean, p99) = flicker(&frames);
+        println!("{label}: mean |ΔI|/I {:.4}, p99 {:.4}", mean, p99);
+        results.push(mean);
+    }
+    assert!(results[0] * 3.0 < results[2], "scatter {:.4} vs gather {:.4}", results[0], results[2]);
+}
+
+/// The debug views draw what they name: the RSM's reflected flux per unit area over the leaf is
+/// ρ·E⊥ = 1 W/m² (and its transmitted τ·E⊥ = 0.6), its normal faces the sun, the slices show
+/// light, and the surface views show the albedo.
+#[test]
+fn debug_views_show_the_rsm_and_the_volume() {
+    use penumbra::renderer::{FrameOutput, Renderer};
+    let centre = |view: &str| {
+        let mut r = Renderer::new(common::test_gpu(), leaf(&format!("{{ name = \"lpv\", view = \"{view}\" }}")), Some("lpv"), (33, 33), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        common::assert_clean(&r.gpu);
+        let total: f32 = img.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum();
+        (img.pixels[(img.height / 2 * img.width + img.width / 2) as usize], total)
+    };
+    let (flux, _) = centre("rsm_flux");
+    assert!((flux[0] - 1.0).abs() < 1e-3, "RSM flux per area {flux:?}");
+    let (transmitted, _) = centre("rsm_transmitted");
+    assert!((transmitted[0] - 0.6).abs() < 1e-3, "RSM transmitted flux per area {transmitted:?}");
+    let (normal, _) = centre("rsm_normal");
+    assert!((normal[1] - 1.0).abs() < 1e-3 && (normal[0] - 0.5).abs() < 1e-3, "RSM normal {normal:?}");
+    let (_, slices) = centre("slices");
+    assert!(slices > 0.0, "the slices are black");
+    let (albedo, _) = centre("albedo");
+    assert!((albedo[0] - 0.5).abs() < 1e-3, "albedo {albedo:?}");
 }

@@ -12,6 +12,9 @@
 #include "lpv/volume.glsl"
 
 layout(constant_id = 0) const uint FAITHFUL = 0u;
+// 0: the indirect term; debug views of what the look-up sees: 6 albedo, 7 shading normal,
+// 8 position in the volume (the G-buffer's layers of a deferred renderer).
+layout(constant_id = 1) const uint VIEW = 0u;
 
 layout(set = 0, binding = 2) readonly buffer Materials { Material items[]; } materials;
 layout(set = 0, binding = 3) uniform sampler2D albedo_map;
@@ -64,6 +67,11 @@ void main() {
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
     float cell = volume.origin.w;
+    if (VIEW != 0u) {
+        vec3 inside_volume = (in_world - volume.origin.xyz) / (cell * float(volume.size.x));
+        out_radiance = vec4(VIEW == 6u ? albedo : (VIEW == 7u ? n * 0.5 + 0.5 : inside_volume), 1.0);
+        return;
+    }
     vec4 c[3];
     vec3 radiance = vec3(0.0);
     if (FAITHFUL != 0u) {

@@ -29,6 +29,43 @@ pub enum Lookup {
     Point,
 }
 
+/// What the method draws: its indirect term, or a debug view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum View {
+    Indirect,
+    /// Full screen: an RSM layer, or the volume's slices.
+    RsmFlux,
+    RsmTransmitted,
+    RsmNormal,
+    RsmPosition,
+    Slices,
+    /// On the surfaces: what the look-up reads there.
+    Albedo,
+    Normal,
+    Position,
+}
+
+impl View {
+    /// The shaders' `VIEW` constant.
+    pub fn id(self) -> u32 {
+        match self {
+            View::Indirect => 0,
+            View::RsmFlux => 1,
+            View::RsmTransmitted => 2,
+            View::RsmNormal => 3,
+            View::RsmPosition => 4,
+            View::Slices => 5,
+            View::Albedo => 6,
+            View::Normal => 7,
+            View::Position => 8,
+        }
+    }
+
+    pub fn full_screen(self) -> bool {
+        (1..=5).contains(&self.id())
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
     pub mode: Mode,
@@ -53,6 +90,20 @@ pub struct Config {
     pub published_omega: bool,
     /// Which of the scene's lights (point, spot, directional, in order) lights the RSM.
     pub light: usize,
+    /// The light turns about the vertical at this many degrees per second (the LPV's light
+    /// only: for measuring stability, T13).
+    pub light_spin: f64,
+    /// Snap the RSM's window to whole texels across the light.
+    pub snap: bool,
+    /// The volume's centre and side (metres); `None`: the cube over the scene's objects.
+    pub region: Option<([f32; 3], f32)>,
+    pub view: View,
+}
+
+fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
+    let a = v.as_array().filter(|a| a.len() == 3)?;
+    let x: Vec<f32> = a.iter().filter_map(Params::float).filter(|x| x.is_finite()).map(|x| x as f32).collect();
+    (x.len() == 3).then(|| [x[0], x[1], x[2]])
 }
 
 impl Config {
@@ -73,6 +124,10 @@ impl Config {
             transform_bug: !corrected,
             published_omega: false,
             light: 0,
+            light_spin: 0.0,
+            snap: true,
+            region: None,
+            view: View::Indirect,
         }
     }
 
@@ -99,9 +154,34 @@ impl Config {
                 "transform_bug" => c.transform_bug = flag(p, v)?,
                 "published_omega" => c.published_omega = flag(p, v)?,
                 "light" => c.light = int(p, v, 0..=65535, "the index of a point, spot or directional light")? as usize,
+                "light_spin" => c.light_spin = Params::float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
+                "snap" => c.snap = flag(p, v)?,
+                "view" => {
+                    let views = [
+                        ("indirect", View::Indirect),
+                        ("rsm_flux", View::RsmFlux),
+                        ("rsm_transmitted", View::RsmTransmitted),
+                        ("rsm_normal", View::RsmNormal),
+                        ("rsm_position", View::RsmPosition),
+                        ("slices", View::Slices),
+                        ("albedo", View::Albedo),
+                        ("normal", View::Normal),
+                        ("position", View::Position),
+                    ];
+                    c.view = params.choice(p, v, &views)?
+                }
+                "centre" | "size" => {}
                 _ => {}
             }
         }
+        let centre = decl.param("centre").map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v))).transpose()?;
+        let size = decl.param("size").map(|v| Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| bad("size", "a side > 0 (metres)", v))).transpose()?;
+        c.region = match (centre, size) {
+            (Some(c), Some(s)) => Some((c, s as f32)),
+            (None, None) => None,
+            (Some(_), None) => return Err(bad("size", "a side with `centre`", &toml::Value::from("nothing"))),
+            (None, Some(s)) => return Err(bad("centre", "a centre with `size`", &toml::Value::from(s))),
+        };
         Ok(c)
     }
 

@@ -25,7 +25,7 @@ use glam::Vec3;
 
 use crate::backend::{vk, Bind, BlendMode, BufferId, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
 use crate::error::{Error, Result};
-use crate::gpu_scene::{punctual_lights, record_draws, vertex_layout, DrawCall};
+use crate::gpu_scene::{punctual_lights, record_draws, vertex_layout, DrawCall, GpuLight};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
@@ -51,6 +51,11 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "transform_bug", kind: ParamKind::Bool },
         ParamSchema { name: "published_omega", kind: ParamKind::Bool },
         ParamSchema { name: "light", kind: ParamKind::Int },
+        ParamSchema { name: "light_spin", kind: ParamKind::Float },
+        ParamSchema { name: "snap", kind: ParamKind::Bool },
+        ParamSchema { name: "centre", kind: ParamKind::FloatArray },
+        ParamSchema { name: "size", kind: ParamKind::Float },
+        ParamSchema { name: "view", kind: ParamKind::String },
     ],
 };
 
@@ -118,6 +123,8 @@ fn scene_bounds(cx: &CreateContext<'_>) -> Option<(Vec3, Vec3)> {
 pub struct Lpv {
     config: Config,
     pub placement: Placement,
+    /// The light as the scene places it (turned by `light_spin`).
+    light: GpuLight,
     camera: LightCamera,
     block: VolumeBlock,
     pub volume: VolumeGpu,
@@ -125,6 +132,8 @@ pub struct Lpv {
     /// Per material: the diffuse transmittance (rgb).
     transmittance: BufferId,
     composite: PipelineId,
+    /// The full-screen debug view's pipeline, when one is chosen.
+    debug: Option<PipelineId>,
     /// The objects' draws (emitters neither reflect nor receive).
     calls: Vec<DrawCall>,
     objects: Vec<Option<usize>>,
@@ -139,9 +148,18 @@ impl Lpv {
             let msg = format!("light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one", config.light, lights.len());
             Error::from(cx.scene.method_param_error(decl, "light", msg))
         })?;
-        let (min, max) = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
-        let placement = Placement::fit(min, max, config.grid);
-        let camera = LightCamera::new(light, &placement, config.rsm).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
+        let placement = match config.region {
+            Some((centre, size)) => {
+                let half = glam::Vec3::splat(0.5 * size);
+                Placement::fit(glam::Vec3::from(centre) - half, glam::Vec3::from(centre) + half, config.grid)
+            }
+            None => {
+                let (min, max) = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
+                Placement::fit(min, max, config.grid)
+            }
+        };
+        let light = *light;
+        let camera = LightCamera::new(&light, &placement, config.rsm, config.snap).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
         let block = camera.block(&placement, &config);
         let volume = VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config)?;
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
@@ -158,12 +176,23 @@ impl Lpv {
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
         desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
         desc.color_targets[0].blend = BlendMode::Additive;
-        desc.specialization = vec![SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 }, SpecConstant { id: 10, bits: config.half as u32 }];
+        let view = if config.view.full_screen() { 0 } else { config.view.id() };
+        desc.specialization = vec![SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 }, SpecConstant { id: 1, bits: view }, SpecConstant { id: 10, bits: config.half as u32 }];
         let composite = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+        let debug = if config.view.full_screen() {
+            let mut desc = GraphicsPipelineDesc::new("lpv debug view", "post/fullscreen.vert", Some("lpv/debug.frag"));
+            desc.raster.cull = vk::CullModeFlags::NONE;
+            desc.depth = DepthState { test: false, write: false, compare: vk::CompareOp::ALWAYS };
+            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+            desc.specialization = vec![SpecConstant { id: 0, bits: config.view.id() }, SpecConstant { id: 10, bits: config.half as u32 }];
+            Some(cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?)
+        } else {
+            None
+        };
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
         let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        Ok(Lpv { config, placement, camera, block, volume, rsm, transmittance, composite, calls, objects, animation })
+        Ok(Lpv { config, placement, light, camera, block, volume, rsm, transmittance, composite, debug, calls, objects, animation })
     }
 
     pub fn config(&self) -> &Config {
@@ -182,6 +211,40 @@ impl Lpv {
     }
 }
 
+impl Lpv {
+    /// A full-screen debug view in place of the frame.
+    fn add_debug_view<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>, pipeline: PipelineId) {
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let mip = SubresourceRange::mip(0);
+        let layer = match self.config.view {
+            config::View::RsmTransmitted => self.rsm.layers[1],
+            config::View::RsmNormal => self.rsm.layers[3],
+            config::View::RsmPosition => self.rsm.layers[2],
+            _ => self.rsm.layers[0],
+        };
+        let (t, s) = (frame.targets, frame.scene.sampler);
+        let mut pass = graph.pass("lpv debug view").color_attachment(t.radiance, mip, false).sample("rsm_flux", self.rsm.layers[0], mip, s, frag);
+        // The flux layer is declared once; another layer is declared by its own name.
+        let same = layer == self.rsm.layers[0];
+        if !same {
+            pass = pass.sample("rsm_layer", layer, mip, s, frag);
+        }
+        pass.buffer(self.volume.result(), Access::StorageRead { stages: frag }, Some("light")).record(move |ctx| {
+            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: None })?;
+            ctx.rec.bind_pipeline(pipeline)?;
+            let volume = ("volume", Bind::UniformData(bytemuck::bytes_of(&self.block)));
+            if same {
+                ctx.bind(&[volume, ("rsm_layer", Bind::Sampled { image: layer, range: mip, sampler: s })])?;
+            } else {
+                ctx.bind(&[volume])?;
+            }
+            ctx.rec.draw(3, 1)?;
+            ctx.rec.end_rendering();
+            Ok(())
+        });
+    }
+}
+
 impl LightingMethod for Lpv {
     fn name(&self) -> &'static str {
         NAME
@@ -194,6 +257,14 @@ impl LightingMethod for Lpv {
             let anim = object.and_then(|o| self.animation.get(o).copied().flatten());
             call.model = anim.map_or(item.model, |a| a.transform_at(item.model, t));
         }
+        if self.config.light_spin != 0.0 {
+            let turn = glam::Quat::from_rotation_y((self.config.light_spin * t as f64).to_radians() as f32);
+            let mut light = self.light;
+            let d = turn * Vec3::from_slice(&light.direction[..3]);
+            light.direction = d.extend(0.0).into();
+            self.camera = LightCamera::new(&light, &self.placement, self.config.rsm, self.config.snap)?;
+            self.block = self.camera.block(&self.placement, &self.config);
+        }
         Ok(())
     }
 
@@ -203,6 +274,10 @@ impl LightingMethod for Lpv {
         }
         let scene = frame.scene;
         self.add_volume_passes(graph, scene);
+        if let Some(pipeline) = self.debug {
+            self.add_debug_view(graph, frame, pipeline);
+            return Ok(());
+        }
         let (t, uniforms) = (frame.targets, frame.uniforms);
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let light = self.volume.result();

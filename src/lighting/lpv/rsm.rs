@@ -39,8 +39,8 @@ pub struct LightCamera {
 
 impl LightCamera {
     /// The camera of the scene's light `light` (a punctual light as uploaded) over `placement`,
-    /// the RSM `size` texels per side, its window snapped to whole texels.
-    pub fn new(light: &GpuLight, placement: &Placement, size: u32) -> Result<LightCamera> {
+    /// the RSM `size` texels per side, its window snapped to whole texels when `snap`.
+    pub fn new(light: &GpuLight, placement: &Placement, size: u32, snap: bool) -> Result<LightCamera> {
         let kind = light.position[3];
         let direction = Vec3::from_slice(&light.direction[..3]).normalize_or_zero();
         let intensity = Vec3::from_slice(&light.intensity[..3]);
@@ -54,7 +54,7 @@ impl LightCamera {
             let texel = 2.0 * radius / size as f32;
             // Snap the window's centre to whole texels across the light so a moving volume
             // does not make the RSM's texels crawl.
-            let snap = |x: f32| (x / texel).round() * texel;
+            let snap = |x: f32| if snap { (x / texel).round() * texel } else { x };
             let depth = 2.0 * radius + 2.0 * placement.cell;
             let eye = right * snap(centre.dot(right)) + up * snap(centre.dot(up)) + direction * (centre.dot(direction) - 0.5 * depth);
             let view = Mat4::look_to_rh(eye, direction, up);
