@@ -19,27 +19,76 @@ layout(constant_id = 4) const float OMEGA_SIDE = 0.4234313544;
 layout(set = 0, binding = 1) readonly buffer Source { uint w[]; } source;
 layout(set = 0, binding = 2) writeonly buffer Destination { uint w[]; } destination;
 layout(set = 0, binding = 3) buffer Accumulation { uint w[]; } accumulation;
-// Blocking potential (one SH per cell corner, fp32).
-layout(set = 0, binding = 4) readonly buffer Blocking { vec4 b[]; } blocking;
-
-vec4 blocking_at(vec3 corner) {
-    vec3 base = floor(corner);
-    vec3 f = corner - base;
-    ivec3 b = ivec3(base);
-    vec4 sum = vec4(0.0);
-    for (int k = 0; k < 8; ++k) {
-        ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-        ivec3 c = b + o;
-        if (!inside(c)) {
-            continue;
-        }
-        vec3 w3 = mix(1.0 - f, f, vec3(o));
-        sum += w3.x * w3.y * w3.z * blocking.b[cell_index(c)];
-    }
-    return sum;
-}
+// The geometry volume at each cell's three low faces (blocking_faces.comp).
+layout(set = 0, binding = 4) readonly buffer Faces { vec4 b[]; } faces;
 
 const ivec3 AXES[6] = ivec3[6](ivec3(1, 0, 0), ivec3(-1, 0, 0), ivec3(0, 1, 0), ivec3(0, -1, 0), ivec3(0, 0, 1), ivec3(0, 0, -1));
+
+// The 30 faces crossed from the 6 face neighbours (generated: for each axis d, the front face
+// then the side faces toward the 4 axes perpendicular to d in the order +x -x +y -y +z -z):
+// the direction from the source cell's centre through the face, and the face's normal.
+const vec3 FACE_DIRECTION[30] = vec3[30](
+    vec3(1.0, 0.0, 0.0),
+    vec3(0.894427191, 0.447213595, 0.000000000),
+    vec3(0.894427191, -0.447213595, 0.000000000),
+    vec3(0.894427191, 0.000000000, 0.447213595),
+    vec3(0.894427191, 0.000000000, -0.447213595),
+    vec3(-1.0, 0.0, 0.0),
+    vec3(-0.894427191, 0.447213595, 0.000000000),
+    vec3(-0.894427191, -0.447213595, 0.000000000),
+    vec3(-0.894427191, 0.000000000, 0.447213595),
+    vec3(-0.894427191, 0.000000000, -0.447213595),
+    vec3(0.0, 1.0, 0.0),
+    vec3(0.447213595, 0.894427191, 0.000000000),
+    vec3(-0.447213595, 0.894427191, 0.000000000),
+    vec3(0.000000000, 0.894427191, 0.447213595),
+    vec3(0.000000000, 0.894427191, -0.447213595),
+    vec3(0.0, -1.0, 0.0),
+    vec3(0.447213595, -0.894427191, 0.000000000),
+    vec3(-0.447213595, -0.894427191, 0.000000000),
+    vec3(0.000000000, -0.894427191, 0.447213595),
+    vec3(0.000000000, -0.894427191, -0.447213595),
+    vec3(0.0, 0.0, 1.0),
+    vec3(0.447213595, 0.000000000, 0.894427191),
+    vec3(-0.447213595, 0.000000000, 0.894427191),
+    vec3(0.000000000, 0.447213595, 0.894427191),
+    vec3(0.000000000, -0.447213595, 0.894427191),
+    vec3(0.0, 0.0, -1.0),
+    vec3(0.447213595, 0.000000000, -0.894427191),
+    vec3(-0.447213595, 0.000000000, -0.894427191),
+    vec3(0.000000000, 0.447213595, -0.894427191),
+    vec3(0.000000000, -0.447213595, -0.894427191));
+const vec3 FACE_NORMAL[30] = vec3[30](
+    vec3(1.0, 0.0, 0.0),
+    vec3(0.0, 1.0, 0.0),
+    vec3(0.0, -1.0, 0.0),
+    vec3(0.0, 0.0, 1.0),
+    vec3(0.0, 0.0, -1.0),
+    vec3(-1.0, 0.0, 0.0),
+    vec3(0.0, 1.0, 0.0),
+    vec3(0.0, -1.0, 0.0),
+    vec3(0.0, 0.0, 1.0),
+    vec3(0.0, 0.0, -1.0),
+    vec3(0.0, 1.0, 0.0),
+    vec3(1.0, 0.0, 0.0),
+    vec3(-1.0, 0.0, 0.0),
+    vec3(0.0, 0.0, 1.0),
+    vec3(0.0, 0.0, -1.0),
+    vec3(0.0, -1.0, 0.0),
+    vec3(1.0, 0.0, 0.0),
+    vec3(-1.0, 0.0, 0.0),
+    vec3(0.0, 0.0, 1.0),
+    vec3(0.0, 0.0, -1.0),
+    vec3(0.0, 0.0, 1.0),
+    vec3(1.0, 0.0, 0.0),
+    vec3(-1.0, 0.0, 0.0),
+    vec3(0.0, 1.0, 0.0),
+    vec3(0.0, -1.0, 0.0),
+    vec3(0.0, 0.0, -1.0),
+    vec3(1.0, 0.0, 0.0),
+    vec3(-1.0, 0.0, 0.0),
+    vec3(0.0, 1.0, 0.0),
+    vec3(0.0, -1.0, 0.0));
 
 void corrected(ivec3 x, uint cell) {
     vec4 acc[3] = vec4[3](vec4(0.0), vec4(0.0), vec4(0.0));
@@ -53,39 +102,18 @@ void corrected(ivec3 x, uint cell) {
         vec4 src[3] = vec4[3](SET_LOAD(source, slot(sc, 0u)), SET_LOAD(source, slot(sc, 1u)), SET_LOAD(source, slot(sc, 2u)));
         vec4 b = vec4(0.0);
         if (OCCLUSION != 0u) {
-            // The face between the cells, in corner coordinates.
-            b = blocking_at(vec3(x) + 0.5 - 0.5 * vec3(d));
+            // The face between the cells is the low face, on d's axis, of the one further along d.
+            int axis = a / 2;
+            b = faces.b[cell_index((a & 1) == 0 ? x : s) * 3u + uint(axis)];
         }
         for (int f = 0; f < 5; ++f) {
-            vec3 dir;
-            vec3 normal;
-            float omega;
-            if (f == 0) {
-                dir = vec3(d);
-                normal = vec3(d);
-                omega = OMEGA_FRONT;
-            } else {
-                // The four axes perpendicular to d, in a fixed order.
-                int k = 0;
-                ivec3 side = ivec3(0);
-                for (int e = 0; e < 6; ++e) {
-                    if (dot(AXES[e], d) == 0) {
-                        ++k;
-                        if (k == f) {
-                            side = AXES[e];
-                        }
-                    }
-                }
-                dir = normalize(vec3(d) + 0.5 * vec3(side));
-                normal = vec3(side);
-                omega = OMEGA_SIDE;
-            }
+            vec3 dir = FACE_DIRECTION[a * 5 + f];
             vec4 y = sh_basis(dir);
             float transmit = 1.0;
             if (OCCLUSION != 0u) {
                 transmit = 1.0 - clamp(dot(b, sh_basis(-dir)), 0.0, 1.0);
             }
-            vec4 lobe = cosine_lobe(normal) * (omega / LPV_PI * transmit);
+            vec4 lobe = cosine_lobe(FACE_NORMAL[a * 5 + f]) * ((f == 0 ? OMEGA_FRONT : OMEGA_SIDE) / LPV_PI * transmit);
             for (uint ch = 0u; ch < 3u; ++ch) {
                 float intensity = dot(src[ch], y);
                 if (CLAMP != 0u) {

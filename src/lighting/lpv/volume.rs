@@ -121,7 +121,11 @@ pub struct VolumeGpu {
     pub fixed_blocking: BufferId,
     /// Blocking potential per cell corner (fp32 SH).
     pub blocking: BufferId,
+    /// The blocking potential at each cell's three low faces.
+    blocking_faces: BufferId,
     propagate: PipelineId,
+    faces: PipelineId,
+    occlusion: bool,
     resolve: PipelineId,
     iterations: u32,
     faithful: bool,
@@ -144,6 +148,7 @@ impl VolumeGpu {
         let fixed_light = storage(gpu, states, "lpv injection sums", cells * 12 * 4)?;
         let fixed_blocking = storage(gpu, states, "lpv blocking sums", cells * 4 * 4)?;
         let blocking = storage(gpu, states, "lpv geometry volume", cells * 16)?;
+        let blocking_faces = storage(gpu, states, "lpv geometry volume faces", cells * 3 * 16)?;
         let half = SpecConstant { id: 10, bits: config.half as u32 };
         let side = if config.published_omega { grid::OMEGA_SIDE_PUBLISHED } else { grid::omega_side() };
         let propagate = gpu.create_compute_pipeline(
@@ -162,7 +167,23 @@ impl VolumeGpu {
             shaders,
         )?;
         let resolve = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv resolve".into(), shader: "lpv/resolve.comp".into(), specialization: vec![half] }, shaders)?;
-        Ok(VolumeGpu { n, half: config.half, sets, accumulation, fixed_light, fixed_blocking, blocking, propagate, resolve, iterations: config.iterations, faithful: config.faithful_propagation() })
+        let faces = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv blocking faces".into(), shader: "lpv/blocking_faces.comp".into(), specialization: vec![half] }, shaders)?;
+        Ok(VolumeGpu {
+            n,
+            half: config.half,
+            sets,
+            accumulation,
+            fixed_light,
+            fixed_blocking,
+            blocking,
+            blocking_faces,
+            propagate,
+            faces,
+            occlusion: config.occlusion && !config.faithful_propagation(),
+            resolve,
+            iterations: config.iterations,
+            faithful: config.faithful_propagation(),
+        })
     }
 
     /// The set the look-up reads: the accumulation, or the document's last iteration.
@@ -198,6 +219,13 @@ impl VolumeGpu {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let (read, write) = (Access::StorageRead { stages: compute }, Access::StorageWrite { stages: compute });
         let n = self.n;
+        if self.occlusion && self.iterations > 0 {
+            graph.pass("lpv blocking faces").buffer(self.blocking, read, Some("blocking")).buffer(self.blocking_faces, write, Some("faces")).record(move |ctx| {
+                ctx.rec.bind_pipeline(self.faces)?;
+                ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
+                ctx.rec.dispatch([n, n, n])
+            });
+        }
         for k in 0..self.iterations {
             let (src, dst) = (self.sets[(k % 2) as usize], self.sets[((k + 1) % 2) as usize]);
             graph
@@ -205,7 +233,7 @@ impl VolumeGpu {
                 .buffer(src, read, Some("source"))
                 .buffer(dst, write, Some("destination"))
                 .buffer(self.accumulation, write, Some("accumulation"))
-                .buffer(self.blocking, read, Some("blocking"))
+                .buffer(self.blocking_faces, read, Some("faces"))
                 .record(move |ctx| {
                     ctx.rec.bind_pipeline(self.propagate)?;
                     ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
