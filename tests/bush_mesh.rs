@@ -162,7 +162,9 @@ fn scene_loads_with_the_bush_the_ground_and_the_leaf_maps() {
     assert!(leaf.normal_map.as_ref().is_some_and(|p| p.ends_with("textures/leaf_normal.png")));
     assert!(leaf.transmittance.min_element() > 0.0 && (leaf.albedo + leaf.transmittance).max_element() <= 1.0);
     let names: Vec<&str> = s.methods.iter().map(|m| m.name.as_str()).collect();
-    assert_eq!(names, ["forward"]);
+    assert_eq!(names, ["forward", "lpv"]);
+    let combinations: Vec<&str> = s.combinations.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(combinations, ["lpv_over_forward"]);
     let [Light::Directional { direction, irradiance, .. }] = s.lights.as_slice() else { panic!("expected one sun, got {:?}", s.lights) };
     let zenith = (-direction.y).acos().to_degrees();
     assert!((zenith - 35.0).abs() < 0.5 && *irradiance == Vec3::splat(3.0), "sun {zenith}° from the zenith, {irradiance}");
