@@ -386,3 +386,33 @@ fn one_bounce_through_and_under_a_leaf_against_the_closed_forms() {
     assert!(under_ratio.iter().all(|q| (0.3..=2.0).contains(q)), "reflected ratios {under_ratio:?}");
     assert!(under[0] < under[1] && under[1] < under[2], "the leaf's shadow should dim the centre most: {under:?}");
 }
+
+/// Bad parameters and scenes the LPV cannot light are one error line naming the field.
+#[test]
+fn bad_parameters_name_the_field() {
+    use penumbra::renderer::Renderer;
+    for (method, field) in [
+        (r#"{ name = "lpv", grid = 1 }"#, "methods[0].grid"),
+        (r#"{ name = "lpv", iterations = -1 }"#, "methods[0].iterations"),
+        (r#"{ name = "lpv", rsm = 8 }"#, "methods[0].rsm"),
+        (r#"{ name = "lpv", storage = "f8" }"#, "methods[0].storage"),
+        (r#"{ name = "lpv", mode = "exact" }"#, "methods[0].mode"),
+        (r#"{ name = "lpv", view = "everything" }"#, "methods[0].view"),
+        (r#"{ name = "lpv", light = 3 }"#, "methods[0].light"),
+        (r#"{ name = "lpv", centre = [0, 1, 0] }"#, "methods[0].size"),
+        (r#"{ name = "lpv", size = 2 }"#, "methods[0].centre"),
+        (r#"{ name = "lpv", centre = [0, 1], size = 2 }"#, "methods[0].centre"),
+        (r#"{ name = "lpv", size = -2, centre = [0, 0, 0] }"#, "methods[0].size"),
+        (r#"{ name = "lpv", light_spin = 1e9 }"#, "methods[0].light_spin"),
+    ] {
+        let err = match Renderer::new(common::test_gpu(), leaf(method), Some("lpv"), (8, 8), 1) {
+            Ok(_) => panic!("{method}: accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(!err.contains('\n') && err.contains(field) && err.contains("lpv test"), "{method}: {err}");
+    }
+    // A point light would need a cube RSM.
+    let text = "methods = [\"lpv\"]\n[camera]\nposition = [0, 2, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1\n";
+    let err = Renderer::new(common::test_gpu(), scene(text), Some("lpv"), (8, 8), 1).err().expect("a point light is refused").to_string();
+    assert!(!err.contains('\n') && err.contains("point light") && err.contains("lpv test"), "{err}");
+}
