@@ -120,11 +120,11 @@ fn volume_of(scene: &Scene) -> ([Grid; 3], Placement, LightCamera) {
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
     lpv.add_volume_passes(&mut graph, &scene_gpu);
-    graph.output_buffer(lpv.volume.result());
+    graph.output_buffer(lpv.volumes[0].result());
     graph.run_and_wait(&gpu, frame, &mut states, "lpv test").unwrap();
-    let result = lpv.volume.read_set(&mut gpu, lpv.volume.result()).unwrap();
+    let result = lpv.volumes[0].read_set(&mut gpu, lpv.volumes[0].result()).unwrap();
     common::assert_clean(&gpu);
-    (result, lpv.placement, *lpv.camera())
+    (result, lpv.placements[0], *lpv.camera())
 }
 
 /// A 1 m² quad of albedo 0.5 and transmittance 0.3 facing up at y = 0.37 under an overhead sun
@@ -415,4 +415,27 @@ fn bad_parameters_name_the_field() {
     let text = "methods = [\"lpv\"]\n[camera]\nposition = [0, 2, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1\n";
     let err = Renderer::new(common::test_gpu(), scene(text), Some("lpv"), (8, 8), 1).err().expect("a point light is refused").to_string();
     assert!(!err.contains('\n') && err.contains("point light") && err.contains("lpv test"), "{err}");
+}
+
+/// Cascades: three nested volumes around the camera (the finest 1.6 m wide, 5 cm cells) light
+/// the bush as the one 3.2 m volume around it does, within 10 % in mean (measured: 3 %), with
+/// every pass validated; a cell-size slip between cascades would be a factor of 4.
+#[test]
+fn cascades_around_the_camera_agree_with_one_volume() {
+    use penumbra::renderer::{FrameOutput, Renderer};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("lpv_bush.toml")).unwrap();
+    let mean_of = |decl: &str| {
+        let text = text.replace(r#"{ name = "lpv", centre = [0.0, 1.2, 0.0], size = 3.2 }"#, decl);
+        let scene = Scene::from_str(&text, "lpv_bush.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
+        let mut r = Renderer::new(common::test_gpu(), scene, Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        common::assert_clean(&r.gpu);
+        img.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / img.pixels.len() as f64
+    };
+    let one = mean_of(r#"{ name = "lpv", centre = [0.0, 1.2, 0.0], size = 3.2 }"#);
+    let three = mean_of(r#"{ name = "lpv", cascades = 3, size = 1.6 }"#);
+    println!("one volume {one:.5}, three cascades {three:.5}: {:+.1} %", 100.0 * (three / one - 1.0));
+    assert!((three / one - 1.0).abs() < 0.1, "one volume {one}, three cascades {three}");
 }

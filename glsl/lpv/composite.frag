@@ -6,21 +6,30 @@
 // surfaces tau/pi times the irradiance arriving at the back.
 // Faithful (defCompositor.glsl's GI term): albedo * clamp(SH(-n), 0, 1) at p + 0.001 of the
 // volume along n, no 1/pi.
+// With cascades (nested volumes around the camera), the finest one holding the point with a
+// cell to spare, blended into the next over its last two cells.
 #include "common/frame.glsl"
 #include "common/scene.glsl"
 #define LPV_VOLUME_BINDING 1
 #include "lpv/volume.glsl"
 
 layout(constant_id = 0) const uint FAITHFUL = 0u;
-// 0: the indirect term; debug views of what the look-up sees: 6 albedo, 7 shading normal,
-// 8 position in the volume (the G-buffer's layers of a deferred renderer).
+// 0: the indirect term; debug views of what the look-up reads: 6 albedo, 7 shading normal,
+// 8 position in the (finest) volume (the G-buffer's layers of a deferred renderer).
 layout(constant_id = 1) const uint VIEW = 0u;
 
 layout(set = 0, binding = 2) readonly buffer Materials { Material items[]; } materials;
 layout(set = 0, binding = 3) uniform sampler2D albedo_map;
 layout(set = 0, binding = 4) uniform sampler2D normal_map;
 layout(set = 0, binding = 5) readonly buffer Transmittance { vec4 t[]; } transmittance;
-layout(set = 0, binding = 6) readonly buffer Light { uint w[]; } light;
+layout(set = 0, binding = 6) readonly buffer Light0 { uint w[]; } light0;
+layout(set = 0, binding = 7) readonly buffer Light1 { uint w[]; } light1;
+layout(set = 0, binding = 8) readonly buffer Light2 { uint w[]; } light2;
+layout(set = 0, binding = 9) readonly buffer Light3 { uint w[]; } light3;
+layout(set = 0, binding = 10) uniform Cascades {
+    uvec4 count;     // x: cascades in use
+    vec4 origin[4];  // xyz: a cascade's corner; w: its cell size
+} cascades;
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
@@ -29,16 +38,28 @@ layout(location = 3) in vec4 in_tangent;
 
 layout(location = 0) out vec4 out_radiance;
 
-// The volume at a point in cell coordinates (cell centres at integers), zero beyond the border.
-void lookup(vec3 p, out vec4 c[3]) {
+vec4 load(int k, uint s) {
+    if (k == 0) {
+        return SET_LOAD(light0, s);
+    } else if (k == 1) {
+        return SET_LOAD(light1, s);
+    } else if (k == 2) {
+        return SET_LOAD(light2, s);
+    }
+    return SET_LOAD(light3, s);
+}
+
+// Cascade k at a point in its cell coordinates (cell centres at integers), zero beyond the
+// border.
+void lookup(int k, vec3 p, out vec4 c[3]) {
     vec3 base = floor(p);
     vec3 f = p - base;
     ivec3 b = ivec3(base);
     c[0] = vec4(0.0);
     c[1] = vec4(0.0);
     c[2] = vec4(0.0);
-    for (int k = 0; k < 8; ++k) {
-        ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+    for (int corner = 0; corner < 8; ++corner) {
+        ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
         ivec3 q = b + o;
         if (!inside(q)) {
             continue;
@@ -47,9 +68,49 @@ void lookup(vec3 p, out vec4 c[3]) {
         float w = w3.x * w3.y * w3.z;
         uint cell = cell_index(q);
         for (uint ch = 0u; ch < 3u; ++ch) {
-            c[ch] += w * SET_LOAD(light, slot(cell, ch));
+            c[ch] += w * load(k, slot(cell, ch));
         }
     }
+}
+
+// The indirect light cascade k gives the point.
+vec3 shade(int k, vec3 n, vec3 albedo, vec3 tau) {
+    float cell = cascades.origin[k].w;
+    vec3 origin = cascades.origin[k].xyz;
+    vec4 c[3];
+    vec3 radiance = vec3(0.0);
+    if (FAITHFUL != 0u) {
+        vec3 p = (in_world + n * (0.001 * cell * float(volume.size.x)) - origin) / cell - 0.5;
+        lookup(k, p, c);
+        vec4 y = sh_basis(-n);
+        for (int ch = 0; ch < 3; ++ch) {
+            radiance[ch] = albedo[ch] * clamp(dot(c[ch], y), 0.0, 1.0);
+        }
+        return radiance;
+    }
+    vec3 p = (in_world - origin) / cell - 0.5;
+    lookup(k, p + 0.5 * n, c);
+    vec4 front = cosine_lobe(-n);
+    for (int ch = 0; ch < 3; ++ch) {
+        radiance[ch] = albedo[ch] * max(dot(c[ch], front), 0.0) / (cell * cell * LPV_PI);
+    }
+    if (any(greaterThan(tau, vec3(0.0)))) {
+        // Light reaching the back of a thin surface, looked up half a cell behind it.
+        lookup(k, p - 0.5 * n, c);
+        vec4 back = cosine_lobe(n);
+        for (int ch = 0; ch < 3; ++ch) {
+            radiance[ch] += tau[ch] * max(dot(c[ch], back), 0.0) / (cell * cell * LPV_PI);
+        }
+    }
+    return radiance;
+}
+
+// Cells between the point and cascade k's border, less the one cell the look-up needs.
+float room(int k) {
+    vec3 q = (in_world - cascades.origin[k].xyz) / cascades.origin[k].w;
+    float n = float(volume.size.x);
+    vec3 d = min(q, vec3(n) - q) - 1.0;
+    return min(d.x, min(d.y, d.z));
 }
 
 void main() {
@@ -66,37 +127,24 @@ void main() {
         n = normalize(t * tn.x + b * tn.y + n * tn.z);
     }
     vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
-    float cell = volume.origin.w;
     if (VIEW != 0u) {
-        vec3 inside_volume = (in_world - volume.origin.xyz) / (cell * float(volume.size.x));
+        vec3 inside_volume = (in_world - cascades.origin[0].xyz) / (cascades.origin[0].w * float(volume.size.x));
         out_radiance = vec4(VIEW == 6u ? albedo : (VIEW == 7u ? n * 0.5 + 0.5 : inside_volume), 1.0);
         return;
     }
-    vec4 c[3];
+    vec3 tau = transmittance.t[draw.material].rgb;
+    int count = int(cascades.count.x);
     vec3 radiance = vec3(0.0);
-    if (FAITHFUL != 0u) {
-        vec3 p = (in_world + n * (0.001 * cell * float(volume.size.x)) - volume.origin.xyz) / cell - 0.5;
-        lookup(p, c);
-        vec4 y = sh_basis(-n);
-        for (int ch = 0; ch < 3; ++ch) {
-            radiance[ch] = albedo[ch] * clamp(dot(c[ch], y), 0.0, 1.0);
+    for (int k = 0; k < count; ++k) {
+        float r = room(k);
+        if (r < 0.0 && k + 1 < count) {
+            continue;
         }
-    } else {
-        vec3 p = (in_world - volume.origin.xyz) / cell - 0.5;
-        lookup(p + 0.5 * n, c);
-        vec4 front = cosine_lobe(-n);
-        for (int ch = 0; ch < 3; ++ch) {
-            radiance[ch] = albedo[ch] * max(dot(c[ch], front), 0.0) / (cell * cell * LPV_PI);
+        radiance = shade(k, n, albedo, tau);
+        if (r < 2.0 && k + 1 < count) {
+            radiance = mix(shade(k + 1, n, albedo, tau), radiance, r / 2.0);
         }
-        vec3 tau = transmittance.t[draw.material].rgb;
-        if (any(greaterThan(tau, vec3(0.0)))) {
-            // Light reaching the back of a thin surface, looked up half a cell behind it.
-            lookup(p - 0.5 * n, c);
-            vec4 back = cosine_lobe(n);
-            for (int ch = 0; ch < 3; ++ch) {
-                radiance[ch] += tau[ch] * max(dot(c[ch], back), 0.0) / (cell * cell * LPV_PI);
-            }
-        }
+        break;
     }
     out_radiance = vec4(radiance, 1.0);
 }

@@ -95,9 +95,13 @@ pub struct Config {
     pub light_spin: f64,
     /// Snap the RSM's window to whole texels across the light.
     pub snap: bool,
-    /// The volume's centre and side (metres); `None`: the cube over the scene's objects.
+    /// The volume's centre and side (metres); `None`: the cube over the scene's objects. With
+    /// cascades the centre is the camera's and the side the finest cascade's.
     pub region: Option<([f32; 3], f32)>,
     pub view: View,
+    /// Nested volumes around the camera, each twice the previous one's side (1: one volume over
+    /// the scene or the region).
+    pub cascades: u32,
 }
 
 fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
@@ -128,6 +132,7 @@ impl Config {
             snap: true,
             region: None,
             view: View::Indirect,
+            cascades: 1,
         }
     }
 
@@ -156,6 +161,7 @@ impl Config {
                 "light" => c.light = int(p, v, 0..=65535, "the index of a point, spot or directional light")? as usize,
                 "light_spin" => c.light_spin = Params::float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
                 "snap" => c.snap = flag(p, v)?,
+                "cascades" => c.cascades = int(p, v, 1..=4, "a cascade count from 1 to 4")?,
                 "view" => {
                     let views = [
                         ("indirect", View::Indirect),
@@ -176,11 +182,13 @@ impl Config {
         }
         let centre = decl.param("centre").map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v))).transpose()?;
         let size = decl.param("size").map(|v| Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| bad("size", "a side > 0 (metres)", v))).transpose()?;
-        c.region = match (centre, size) {
-            (Some(c), Some(s)) => Some((c, s as f32)),
-            (None, None) => None,
-            (Some(_), None) => return Err(bad("size", "a side with `centre`", &toml::Value::from("nothing"))),
-            (None, Some(s)) => return Err(bad("centre", "a centre with `size`", &toml::Value::from(s))),
+        c.region = match (centre, size, c.cascades) {
+            (Some(_), _, 2..) => return Err(bad("centre", "no centre: cascades follow the camera (`size` sets the finest one's side)", decl.param("centre").unwrap_or(&toml::Value::from(0)))),
+            (None, Some(s), 2..) => Some(([0.0; 3], s as f32)),
+            (Some(c), Some(s), _) => Some((c, s as f32)),
+            (None, None, _) => None,
+            (Some(_), None, _) => return Err(bad("size", "a side with `centre`", &toml::Value::from("nothing"))),
+            (None, Some(s), _) => return Err(bad("centre", "a centre with `size`", &toml::Value::from(s))),
         };
         Ok(c)
     }

@@ -56,6 +56,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "centre", kind: ParamKind::FloatArray },
         ParamSchema { name: "size", kind: ParamKind::Float },
         ParamSchema { name: "view", kind: ParamKind::String },
+        ParamSchema { name: "cascades", kind: ParamKind::Int },
     ],
 };
 
@@ -65,7 +66,8 @@ pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
 }
 
 /// The chart's sweep: as declared; corrected at 16³, 32³ and 64³, with 4, 8 and 16
-/// iterations, at RSM 128² and 512², without the geometry volume; the document's mode.
+/// iterations, at RSM 128² and 512², without the geometry volume, with 3 cascades around the
+/// camera; the document's mode, and with its transform bug fixed.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let with = |d: &MethodDecl, name: &str, v: toml::Value| {
         let mut d = d.clone();
@@ -79,6 +81,9 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
             let mut label = format!("lpv {:?} {}³ k={} rsm {}²", c.mode, c.grid, c.iterations, c.rsm).to_lowercase();
             if c.mode == Mode::Corrected && !c.occlusion {
                 label += " no gv";
+            }
+            if c.cascades > 1 {
+                label += &format!(" {} cascades", c.cascades);
             }
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
@@ -97,6 +102,10 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         push(with(&corrected, "rsm", r.into()));
     }
     push(with(&corrected, "geometry_volume", false.into()));
+    // Cascades follow the camera: only a region's side carries over.
+    let mut cascaded = with(&corrected, "cascades", 3i64.into());
+    cascaded.params.retain(|(n, _, _)| n != "centre");
+    push(cascaded);
     push(with(decl, "mode", "faithful".into()));
     push(with(&with(decl, "mode", "faithful".into()), "transform_bug", false.into()));
     out
@@ -119,15 +128,43 @@ fn scene_bounds(cx: &CreateContext<'_>) -> Option<(Vec3, Vec3)> {
     min.is_finite().then_some((min, max))
 }
 
+/// Matches `Cascades` in glsl/lpv/composite.frag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct CascadeBlock {
+    count: [u32; 4],
+    /// xyz: corner; w: cell size.
+    origin: [[f32; 4]; 4],
+}
+
+/// The cascades around `eye`: the finest of side `finest`, each next twice as wide, each snapped
+/// to its own cells.
+fn cascade_placements(eye: Vec3, finest: f32, config: &Config) -> Vec<Placement> {
+    (0..config.cascades).map(|k| Placement::around(eye, finest * (1 << k) as f32, config.grid)).collect()
+}
+
+fn cascade_block(placements: &[Placement]) -> CascadeBlock {
+    let mut b = CascadeBlock { count: [placements.len() as u32, 0, 0, 0], ..Default::default() };
+    for (o, p) in b.origin.iter_mut().zip(placements) {
+        *o = p.origin.extend(p.cell).into();
+    }
+    b
+}
+
 /// The LPV as the indirect term.
 pub struct Lpv {
     config: Config,
-    pub placement: Placement,
+    /// One volume, or the cascades from the finest.
+    pub placements: Vec<Placement>,
+    /// The finest cascade's side when the cascades follow the camera.
+    finest: Option<f32>,
     /// The light as the scene places it (turned by `light_spin`).
     light: GpuLight,
+    /// Over the largest volume.
     camera: LightCamera,
-    block: VolumeBlock,
-    pub volume: VolumeGpu,
+    blocks: Vec<VolumeBlock>,
+    cascade_block: CascadeBlock,
+    pub volumes: Vec<VolumeGpu>,
     rsm: Rsm,
     /// Per material: the diffuse transmittance (rgb).
     transmittance: BufferId,
@@ -148,20 +185,29 @@ impl Lpv {
             let msg = format!("light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one", config.light, lights.len());
             Error::from(cx.scene.method_param_error(decl, "light", msg))
         })?;
-        let placement = match config.region {
-            Some((centre, size)) => {
+        let bounds = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
+        let finest = (config.cascades > 1).then(|| {
+            // Without a size, the largest cascade spans the scene's objects.
+            config.region.map_or((bounds.1 - bounds.0).max_element() / (1 << (config.cascades - 1)) as f32, |r| r.1)
+        });
+        let placements = match (config.region, finest) {
+            (_, Some(side)) => cascade_placements(cx.scene.camera.position, side, &config),
+            (Some((centre, size)), None) => {
                 let half = glam::Vec3::splat(0.5 * size);
-                Placement::fit(glam::Vec3::from(centre) - half, glam::Vec3::from(centre) + half, config.grid)
+                vec![Placement::fit(glam::Vec3::from(centre) - half, glam::Vec3::from(centre) + half, config.grid)]
             }
-            None => {
-                let (min, max) = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
-                Placement::fit(min, max, config.grid)
-            }
+            (None, None) => vec![Placement::fit(bounds.0, bounds.1, config.grid)],
         };
         let light = *light;
-        let camera = LightCamera::new(&light, &placement, config.rsm, config.snap).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
-        let block = camera.block(&placement, &config);
-        let volume = VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config)?;
+        let largest = placements[placements.len() - 1];
+        let camera = LightCamera::new(&light, &largest, config.rsm, config.snap).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
+        let blocks: Vec<VolumeBlock> = placements.iter().map(|p| camera.block(p, &config)).collect();
+        let mut volumes = Vec::new();
+        for k in 0..placements.len() {
+            let label = if k == 0 { NAME.to_string() } else { format!("{NAME} cascade {k}") };
+            volumes.push(VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config, &label)?);
+        }
+        let cascade_block = cascade_block(&placements);
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
         let mut tau: Vec<[f32; 4]> = cx.scene.materials.iter().map(|m| m.transmittance.extend(0.0).into()).collect();
         // Emitters' materials come after the scene's: they transmit nothing.
@@ -192,7 +238,7 @@ impl Lpv {
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
         let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        Ok(Lpv { config, placement, light, camera, block, volume, rsm, transmittance, composite, debug, calls, objects, animation })
+        Ok(Lpv { config, placements, finest, light, camera, blocks, cascade_block, volumes, rsm, transmittance, composite, debug, calls, objects, animation })
     }
 
     pub fn config(&self) -> &Config {
@@ -206,8 +252,12 @@ impl Lpv {
     /// The RSM, the injection and the propagation: the volume the composite reads
     /// ([`VolumeGpu::result`]).
     pub fn add_volume_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a crate::gpu_scene::SceneGpu) {
-        self.rsm.add_passes(graph, scene, &self.calls, self.transmittance, &self.volume, &self.block);
-        self.volume.add_propagation(graph, &self.block);
+        let largest = self.blocks.len() - 1;
+        self.rsm.add_raster(graph, scene, &self.calls, self.transmittance, &self.blocks[largest]);
+        for (volume, block) in self.volumes.iter().zip(&self.blocks) {
+            self.rsm.add_injection(graph, volume, block);
+            volume.add_propagation(graph, block);
+        }
     }
 }
 
@@ -229,10 +279,10 @@ impl Lpv {
         if !same {
             pass = pass.sample("rsm_layer", layer, mip, s, frag);
         }
-        pass.buffer(self.volume.result(), Access::StorageRead { stages: frag }, Some("light")).record(move |ctx| {
+        pass.buffer(self.volumes[0].result(), Access::StorageRead { stages: frag }, Some("light")).record(move |ctx| {
             let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: None })?;
             ctx.rec.bind_pipeline(pipeline)?;
-            let volume = ("volume", Bind::UniformData(bytemuck::bytes_of(&self.block)));
+            let volume = ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0])));
             if same {
                 ctx.bind(&[volume, ("rsm_layer", Bind::Sampled { image: layer, range: mip, sampler: s })])?;
             } else {
@@ -257,13 +307,24 @@ impl LightingMethod for Lpv {
             let anim = object.and_then(|o| self.animation.get(o).copied().flatten());
             call.model = anim.map_or(item.model, |a| a.transform_at(item.model, t));
         }
-        if self.config.light_spin != 0.0 {
+        let moved = match self.finest {
+            Some(side) => {
+                let eye = Vec3::from_slice(&frame.uniforms.camera_pos[..3]);
+                let placements = cascade_placements(eye, side, &self.config);
+                let moved = placements != self.placements;
+                self.placements = placements;
+                moved
+            }
+            None => false,
+        };
+        if self.config.light_spin != 0.0 || moved {
             let turn = glam::Quat::from_rotation_y((self.config.light_spin * t as f64).to_radians() as f32);
             let mut light = self.light;
             let d = turn * Vec3::from_slice(&light.direction[..3]);
             light.direction = d.extend(0.0).into();
-            self.camera = LightCamera::new(&light, &self.placement, self.config.rsm, self.config.snap)?;
-            self.block = self.camera.block(&self.placement, &self.config);
+            self.camera = LightCamera::new(&light, &self.placements[self.placements.len() - 1], self.config.rsm, self.config.snap)?;
+            self.blocks = self.placements.iter().map(|p| self.camera.block(p, &self.config)).collect();
+            self.cascade_block = cascade_block(&self.placements);
         }
         Ok(())
     }
@@ -280,34 +341,42 @@ impl LightingMethod for Lpv {
         }
         let (t, uniforms) = (frame.targets, frame.uniforms);
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
-        let light = self.volume.result();
-        graph
+        const NAMES: [&str; 4] = ["light0", "light1", "light2", "light3"];
+        let mut pass = graph
             .pass("lpv composite")
             .color_attachment(t.radiance, SubresourceRange::mip(0), false)
             .depth_stencil_read(t.depth_stencil)
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"))
-            .buffer(light, Access::StorageRead { stages: frag }, Some("light"))
-            .record(move |ctx| {
-                let depth = RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) };
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
-                ctx.rec.bind_pipeline(self.composite)?;
-                let uniform_bytes = bytemuck::bytes_of(&uniforms);
-                let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
-                record_draws(ctx, scene, &self.calls, |ctx, material| {
-                    let maps = scene.material_maps[material as usize];
-                    ctx.bind(&[
-                        ("frame", Bind::UniformData(uniform_bytes)),
-                        ("volume", Bind::UniformData(bytemuck::bytes_of(&self.block))),
-                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
-                        ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
-                    ])
-                })?;
-                ctx.rec.end_rendering();
-                Ok(())
-            });
+            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"));
+        for (volume, name) in self.volumes.iter().zip(NAMES) {
+            pass = pass.buffer(volume.result(), Access::StorageRead { stages: frag }, Some(name));
+        }
+        // Unused cascade slots read the finest volume.
+        let spare = self.volumes[0].result();
+        let used = self.volumes.len();
+        pass.record(move |ctx| {
+            let depth = RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            ctx.rec.bind_pipeline(self.composite)?;
+            let uniform_bytes = bytemuck::bytes_of(&uniforms);
+            let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
+            record_draws(ctx, scene, &self.calls, |ctx, material| {
+                let maps = scene.material_maps[material as usize];
+                let mut binds = vec![
+                    ("frame", Bind::UniformData(uniform_bytes)),
+                    ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0]))),
+                    ("cascades", Bind::UniformData(bytemuck::bytes_of(&self.cascade_block))),
+                    ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
+                    ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
+                ];
+                binds.extend(NAMES[used..].iter().map(|&n| (n, Bind::StorageBuffer(spare))));
+                ctx.bind(&binds)
+            })?;
+            ctx.rec.end_rendering();
+            Ok(())
+        });
         Ok(())
     }
 }

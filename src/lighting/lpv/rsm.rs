@@ -157,11 +157,9 @@ impl Rsm {
         Ok(Rsm { size, layers, depth, raster, inject, gather, nearest, offsets, injection: config.injection })
     }
 
-    /// Draws the RSM, then injects it into the volume: scatter into the fixed-point sums, then
-    /// resolve; or the document's gather straight into the first wavefront.
-    pub fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, volume: &'a VolumeGpu, block: &'a VolumeBlock) {
+    /// Draws the RSM (`block`: the light's camera over the largest volume).
+    pub fn add_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
-        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let mip = SubresourceRange::mip(0);
         let mut pass = graph.pass("lpv rsm");
         for l in self.layers {
@@ -184,13 +182,21 @@ impl Rsm {
                 ctx.rec.end_rendering();
                 Ok(())
             });
+    }
+
+    /// Injects the RSM into `volume`: scatter into the fixed-point sums, then resolve; or the
+    /// document's gather straight into the first wavefront.
+    pub fn add_injection<'a>(&'a self, graph: &mut RenderGraph<'a>, volume: &'a VolumeGpu, block: &'a VolumeBlock) {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let mip = SubresourceRange::mip(0);
+        let layers = self.layers;
         let size = self.size;
         let write = Access::StorageWrite { stages: compute };
         let s = self.nearest;
         match self.injection {
             Injection::Scatter => {
                 graph
-                    .pass("lpv inject")
+                    .pass(&format!("{} inject", volume.label))
                     .sample("rsm_flux", layers[0], mip, s, compute)
                     .sample("rsm_transmitted", layers[1], mip, s, compute)
                     .sample("rsm_position", layers[2], mip, s, compute)
@@ -207,7 +213,7 @@ impl Rsm {
             Injection::Gather => {
                 let n = volume.n;
                 graph
-                    .pass("lpv gather")
+                    .pass(&format!("{} gather", volume.label))
                     .sample("rsm_flux", layers[0], mip, s, compute)
                     .sample("rsm_position", layers[2], mip, s, compute)
                     .sample("rsm_normal", layers[3], mip, s, compute)

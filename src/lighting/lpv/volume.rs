@@ -50,6 +50,14 @@ impl Placement {
         Placement { origin, cell, n }
     }
 
+    /// The cube of side `side` around `centre`, its corner snapped to the lattice of its cells
+    /// (a cascade following the camera moves in whole cells).
+    pub fn around(centre: Vec3, side: f32, n: u32) -> Placement {
+        let cell = side / n as f32;
+        let origin = ((centre - Vec3::splat(0.5 * side)) / cell).round() * cell;
+        Placement { origin, cell, n }
+    }
+
     pub fn centre(&self) -> Vec3 {
         self.origin + Vec3::splat(0.5 * self.n as f32 * self.cell)
     }
@@ -112,6 +120,8 @@ fn unpack_half(w: u32) -> (f32, f32) {
 
 /// The volume's buffers and its compute pipelines.
 pub struct VolumeGpu {
+    /// Names its passes: "lpv", or "lpv cascade k".
+    pub label: String,
     pub n: u32,
     pub half: bool,
     /// Wavefronts, ping-ponged by the propagation (the document's scheme: the whole volume).
@@ -139,7 +149,7 @@ fn storage(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, bytes: u64) -
 }
 
 impl VolumeGpu {
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config) -> Result<VolumeGpu> {
+    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config, label: &str) -> Result<VolumeGpu> {
         let n = config.grid;
         let cells = (n as u64).pow(3);
         let bytes = set_bytes(n, config.half);
@@ -169,6 +179,7 @@ impl VolumeGpu {
         let resolve = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv resolve".into(), shader: "lpv/resolve.comp".into(), specialization: vec![half] }, shaders)?;
         let faces = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv blocking faces".into(), shader: "lpv/blocking_faces.comp".into(), specialization: vec![half] }, shaders)?;
         Ok(VolumeGpu {
+            label: label.to_string(),
             n,
             half: config.half,
             sets,
@@ -201,7 +212,7 @@ impl VolumeGpu {
         let write = Access::StorageWrite { stages: compute };
         let cells = self.n.pow(3);
         graph
-            .pass("lpv resolve")
+            .pass(&format!("{} resolve", self.label))
             .buffer(self.fixed_light, write, Some("fixed_light"))
             .buffer(self.fixed_blocking, write, Some("fixed_blocking"))
             .buffer(self.sets[0], write, Some("wavefront"))
@@ -220,7 +231,7 @@ impl VolumeGpu {
         let (read, write) = (Access::StorageRead { stages: compute }, Access::StorageWrite { stages: compute });
         let n = self.n;
         if self.occlusion && self.iterations > 0 {
-            graph.pass("lpv blocking faces").buffer(self.blocking, read, Some("blocking")).buffer(self.blocking_faces, write, Some("faces")).record(move |ctx| {
+            graph.pass(&format!("{} blocking faces", self.label)).buffer(self.blocking, read, Some("blocking")).buffer(self.blocking_faces, write, Some("faces")).record(move |ctx| {
                 ctx.rec.bind_pipeline(self.faces)?;
                 ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
                 ctx.rec.dispatch([n, n, n])
@@ -229,7 +240,7 @@ impl VolumeGpu {
         for k in 0..self.iterations {
             let (src, dst) = (self.sets[(k % 2) as usize], self.sets[((k + 1) % 2) as usize]);
             graph
-                .pass(&format!("lpv propagate {}", k + 1))
+                .pass(&format!("{} propagate {}", self.label, k + 1))
                 .buffer(src, read, Some("source"))
                 .buffer(dst, write, Some("destination"))
                 .buffer(self.accumulation, write, Some("accumulation"))
@@ -277,7 +288,7 @@ pub fn propagate_standalone(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Con
         return Err(Error::Usage(format!("lpv: the injected grids are not {}³", config.grid)));
     }
     let mut states = ResourceStates::default();
-    let volume = VolumeGpu::new(gpu, shaders, &mut states, config)?;
+    let volume = VolumeGpu::new(gpu, shaders, &mut states, config, "lpv")?;
     let words = encode(injected, config.half);
     volume.upload(gpu, volume.sets[0], &words)?;
     volume.upload(gpu, volume.accumulation, &words)?;
