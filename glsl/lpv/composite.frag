@@ -4,8 +4,8 @@
 // Corrected: trilinear (zero beyond the border) half a cell along the normal, irradiance
 // E = max(0, c . coslobe(-n)) / cell^2, radiance rho/pi * E, plus for thin transmitting
 // surfaces tau/pi times the irradiance arriving at the back.
-// Faithful (defCompositor.glsl's GI term): albedo * clamp(SH(-n), 0, 1) at p + 0.001 of the
-// volume along n, no 1/pi.
+// Faithful (defCompositor.glsl's GI and TI terms): albedo * clamp(SH(-n), 0, 1) at p + 0.001 of
+// the volume along n, no 1/pi, and on translucent surfaces the TI term below.
 // With cascades (nested volumes around the camera), the finest one holding the point with a
 // cell to spare, blended into the next over its last two cells.
 #include "common/frame.glsl"
@@ -85,6 +85,19 @@ vec3 shade(int k, vec3 n, vec3 albedo, vec3 tau) {
         vec4 y = sh_basis(-n);
         for (int ch = 0; ch < 3; ++ch) {
             radiance[ch] = albedo[ch] * clamp(dot(c[ch], y), 0.0, 1.0);
+        }
+        if (any(greaterThan(tau, vec3(0.0)))) {
+            // The document's TI term on translucent surfaces: the volume along the light's
+            // travel, (0.05 + min(2, max(n.L, 0) / max(0.1, 1 - T))) times it, added where
+            // its screen blend adds it in full (no direct light: the back faces it is for);
+            // no shadow factor (there is no shadow map here).
+            vec3 l = volume.light.w > 0.5 ? normalize(in_world - volume.light_pos.xyz) : volume.light.xyz;
+            float t = (tau.r + tau.g + tau.b) / 3.0;
+            float back = 0.05 + min(2.0, max(dot(n, l), 0.0) / max(0.1, 1.0 - t));
+            vec4 yl = sh_basis(l);
+            for (int ch = 0; ch < 3; ++ch) {
+                radiance[ch] += albedo[ch] * back * clamp(dot(c[ch], yl), 0.0, 1.0);
+            }
         }
         return radiance;
     }

@@ -259,3 +259,26 @@ fn t10a_a_reflected_lobe_lights_above_its_surface_not_itself() {
     assert!(above > 0.01, "above {above}");
     assert!(below.abs() < 0.05 * above, "below {below} vs above {above}");
 }
+
+#[test]
+fn a_lit_plane_lights_itself_through_the_two_band_lobe() {
+    // Where the LPV breaks (README): a plane of VPLs facing up, 25 × 25 cells, exitance M = 1
+    // per cell area, 8 steps. Its own surface, looked up half a cell along its normal (the
+    // centre of the VPLs' cell), reads 0.58·M facing up where the truth is 0: the 2-band lobe's
+    // sideways intensity (0.25/π·Φ at 90°) spreads along the plane and back onto it. One cell
+    // above, the light facing down is 0.81·M where the plane gives 0.99·M.
+    let (n, y0) = (25, 4);
+    let mut g = Grid::new([n, 16, n]);
+    for x in 0..n as i32 {
+        for z in 0..n as i32 {
+            g.add(IVec3::new(x, y0, z), &sh::vpl(1.0, DVec3::Y));
+        }
+    }
+    let (acc, _) = grid::propagate_corrected(&g, 8, &Corrected::default());
+    let c = IVec3::new(n as i32 / 2, y0, n as i32 / 2);
+    let own = sh::incident(&acc.at(c), DVec3::Y).max(0.0);
+    let above = sh::incident(&acc.at(c + IVec3::Y), DVec3::NEG_Y).max(0.0);
+    println!("own surface facing up {own:.4}, one cell above facing down {above:.4} (of M)");
+    assert!((own - 0.576).abs() < 0.01, "self-illumination {own}");
+    assert!((above - 0.814).abs() < 0.01, "light above the plane {above}");
+}
