@@ -439,3 +439,28 @@ fn cascades_around_the_camera_agree_with_one_volume() {
     println!("one volume {one:.5}, three cascades {three:.5}: {:+.1} %", 100.0 * (three / one - 1.0));
     assert!((three / one - 1.0).abs() < 0.1, "one volume {one}, three cascades {three}");
 }
+
+/// A wall along the sun's path (edge-on, so absent from the RSM) between a lit floor and a
+/// receiver: only the camera's surfels put it into the geometry volume (`camera_surfels`).
+fn edge_on_wall(surfels: u32) -> Scene {
+    scene(&format!(
+        "methods = [{{ name = \"lpv\", grid = 24, iterations = 24, camera_surfels = {surfels} }}]\n[camera]\nposition = [-2.5, 1.2, 0.3]\ntarget = [0, 0.6, 0]\n\
+         [[objects]]\nmesh = \"plane\"\nsize = 3\n\
+         [[objects]]\nmesh = \"quad\"\ncorner = [0, 0, 1.5]\nedge_u = [0, 0, -3]\nedge_v = [0, 1.5, 0]\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0.4]\nirradiance = 3\n"
+    ))
+}
+
+/// The camera's surfels block what the RSM cannot see: the wall at x = 0 is edge-on to a sun
+/// that lights both halves of the floor; light from the +x half reaching the −x side of the wall
+/// (facing +x, 0.2 m from it) drops when the camera (on the −x side) adds the wall.
+#[test]
+fn camera_surfels_add_what_the_light_cannot_see_to_the_geometry_volume() {
+    let mut reaching = [0.0; 2];
+    for (k, surfels) in [0, 128].into_iter().enumerate() {
+        let (g, placement, _) = volume_of(&edge_on_wall(surfels));
+        reaching[k] = irradiance(&g[0], &placement, DVec3::new(-0.2, 0.6, 0.0), DVec3::X);
+        println!("camera surfels {surfels}: irradiance on the wall's −x side {:.4} W/m²", reaching[k]);
+    }
+    assert!(reaching[1] < 0.8 * reaching[0], "the camera's surfels changed little: {reaching:?}");
+}

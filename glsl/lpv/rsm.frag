@@ -2,7 +2,8 @@
 // One RSM texel: the flux the surfel it sees reflects (rho * E_perp * texel area for the sun,
 // rho * I * texel solid angle for a spot light: the N.L is in the surfel's footprint, so the
 // sum over texels does not depend on the RSM's resolution), the flux it transmits, its area,
-// position and normal (turned toward the light: surfaces are two-sided).
+// position and normal (turned toward the light: surfaces are two-sided). Drawn from the camera
+// (light.w = 2) it is the camera's surfels: no flux, the area of the pixel's footprint.
 #include "lpv/volume.glsl"
 #include "common/scene.glsl"
 #include "common/lights.glsl"
@@ -29,7 +30,12 @@ void main() {
     vec3 power;  // flux reaching this texel's surfel
     float area;  // the surfel's area
     float size = float(volume.rsm.x);
-    if (volume.light.w < 0.5) {
+    if (volume.light.w > 1.5) {
+        // The camera's surfels (for the geometry volume): no flux; the area the pixel covers.
+        l = normalize(in_world - volume.light_pos.xyz);
+        power = vec3(0.0);
+        area = length(cross(dFdx(in_world), dFdy(in_world)));
+    } else if (volume.light.w < 0.5) {
         l = volume.light.xyz;
         power = volume.light_intensity.rgb * volume.light_intensity.w;
         area = volume.light_intensity.w / max(abs(dot(n, l)), 0.1);

@@ -102,6 +102,9 @@ pub struct Config {
     /// Nested volumes around the camera, each twice the previous one's side (1: one volume over
     /// the scene or the region).
     pub cascades: u32,
+    /// Texels per side of the camera's surfel map that adds to the geometry volume (0: the
+    /// RSM's surfels only).
+    pub camera_surfels: u32,
 }
 
 fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
@@ -133,6 +136,7 @@ impl Config {
             region: None,
             view: View::Indirect,
             cascades: 1,
+            camera_surfels: 0,
         }
     }
 
@@ -162,6 +166,7 @@ impl Config {
                 "light_spin" => c.light_spin = Params::float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
                 "snap" => c.snap = flag(p, v)?,
                 "cascades" => c.cascades = int(p, v, 1..=4, "a cascade count from 1 to 4")?,
+                "camera_surfels" => c.camera_surfels = int(p, v, 0..=4096, "texels per side from 16 to 4096, or 0 for none")?,
                 "view" => {
                     let views = [
                         ("indirect", View::Indirect),
@@ -182,6 +187,9 @@ impl Config {
         }
         let centre = decl.param("centre").map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v))).transpose()?;
         let size = decl.param("size").map(|v| Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| bad("size", "a side > 0 (metres)", v))).transpose()?;
+        if (1..16).contains(&c.camera_surfels) {
+            return Err(bad("camera_surfels", "texels per side from 16 to 4096, or 0 for none", decl.param("camera_surfels").unwrap_or(&toml::Value::from(0))));
+        }
         c.region = match (centre, size, c.cascades) {
             (Some(_), _, 2..) => return Err(bad("centre", "no centre: cascades follow the camera (`size` sets the finest one's side)", decl.param("centre").unwrap_or(&toml::Value::from(0)))),
             (None, Some(s), 2..) => Some(([0.0; 3], s as f32)),

@@ -57,6 +57,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "size", kind: ParamKind::Float },
         ParamSchema { name: "view", kind: ParamKind::String },
         ParamSchema { name: "cascades", kind: ParamKind::Int },
+        ParamSchema { name: "camera_surfels", kind: ParamKind::Int },
     ],
 };
 
@@ -163,6 +164,9 @@ pub struct Lpv {
     /// Over the largest volume.
     camera: LightCamera,
     blocks: Vec<VolumeBlock>,
+    /// The camera's surfels: drawing them, and injecting them into each volume.
+    camera_raster: VolumeBlock,
+    camera_blocks: Vec<VolumeBlock>,
     cascade_block: CascadeBlock,
     pub volumes: Vec<VolumeGpu>,
     rsm: Rsm,
@@ -208,6 +212,11 @@ impl Lpv {
             volumes.push(VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config, &label)?);
         }
         let cascade_block = cascade_block(&placements);
+        // The scene's camera until the first frame says where the camera is.
+        let eye = cx.scene.camera.position.extend(1.0).into();
+        let view_proj = cx.scene.camera.view_projection(1.0).to_cols_array();
+        let camera_raster = rsm::camera_block(&blocks[0], view_proj, eye, config.camera_surfels);
+        let camera_blocks = blocks.iter().map(|b| rsm::camera_block(b, view_proj, eye, config.camera_surfels)).collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
         let mut tau: Vec<[f32; 4]> = cx.scene.materials.iter().map(|m| m.transmittance.extend(0.0).into()).collect();
         // Emitters' materials come after the scene's: they transmit nothing.
@@ -238,7 +247,7 @@ impl Lpv {
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
         let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        Ok(Lpv { config, placements, finest, light, camera, blocks, cascade_block, volumes, rsm, transmittance, composite, debug, calls, objects, animation })
+        Ok(Lpv { config, placements, finest, light, camera, blocks, camera_raster, camera_blocks, cascade_block, volumes, rsm, transmittance, composite, debug, calls, objects, animation })
     }
 
     pub fn config(&self) -> &Config {
@@ -254,8 +263,9 @@ impl Lpv {
     pub fn add_volume_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a crate::gpu_scene::SceneGpu) {
         let largest = self.blocks.len() - 1;
         self.rsm.add_raster(graph, scene, &self.calls, self.transmittance, &self.blocks[largest]);
-        for (volume, block) in self.volumes.iter().zip(&self.blocks) {
-            self.rsm.add_injection(graph, volume, block);
+        self.rsm.add_camera_raster(graph, scene, &self.calls, self.transmittance, &self.camera_raster);
+        for ((volume, block), camera) in self.volumes.iter().zip(&self.blocks).zip(&self.camera_blocks) {
+            self.rsm.add_injection(graph, volume, block, camera);
             volume.add_propagation(graph, block);
         }
     }
@@ -325,6 +335,11 @@ impl LightingMethod for Lpv {
             self.camera = LightCamera::new(&light, &self.placements[self.placements.len() - 1], self.config.rsm, self.config.snap)?;
             self.blocks = self.placements.iter().map(|p| self.camera.block(p, &self.config)).collect();
             self.cascade_block = cascade_block(&self.placements);
+        }
+        if self.config.camera_surfels > 0 {
+            let (view_proj, eye, size) = (frame.uniforms.view_proj, frame.uniforms.camera_pos, self.config.camera_surfels);
+            self.camera_raster = rsm::camera_block(&self.blocks[0], view_proj, eye, size);
+            self.camera_blocks = self.blocks.iter().map(|b| rsm::camera_block(b, view_proj, eye, size)).collect();
         }
         Ok(())
     }

@@ -113,13 +113,34 @@ impl LightCamera {
     }
 }
 
+/// Surfels drawn from a viewpoint: reflected flux (a: surfel area), transmitted flux (a: 1 −
+/// mean τ), position (a: 1 where drawn), normal.
+pub struct SurfelMap {
+    pub size: u32,
+    pub layers: [ImageId; 4],
+    depth: ImageId,
+}
+
+impl SurfelMap {
+    fn new(gpu: &mut Gpu, name: &str, size: u32) -> Result<SurfelMap> {
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
+        let mut made = Vec::new();
+        for layer in ["flux", "transmitted", "position", "normal"] {
+            made.push(gpu.create_image(&ImageDesc::new_2d(&format!("{name} {layer}"), RADIANCE_FORMAT, size, size).usage(usage))?);
+        }
+        let ds = gpu.caps().depth_stencil_format;
+        let depth = gpu.create_image(&ImageDesc::new_2d(&format!("{name} depth"), ds, size, size).usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
+        Ok(SurfelMap { size, layers: [made[0], made[1], made[2], made[3]], depth })
+    }
+}
+
 /// The RSM's layers, pipelines and the injection.
 pub struct Rsm {
     pub size: u32,
-    /// Reflected flux (a: surfel area), transmitted flux (a: 1 − mean τ), position (a: 1 where
-    /// drawn), normal.
     pub layers: [ImageId; 4],
     depth: ImageId,
+    /// The camera's surfels for the geometry volume (`camera_surfels`).
+    pub camera: Option<SurfelMap>,
     raster: PipelineId,
     inject: PipelineId,
     gather: PipelineId,
@@ -132,15 +153,9 @@ pub struct Rsm {
 impl Rsm {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config) -> Result<Rsm> {
         let size = config.rsm;
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
-        let names = ["lpv rsm flux", "lpv rsm transmitted", "lpv rsm position", "lpv rsm normal"];
-        let mut made = Vec::new();
-        for name in names {
-            made.push(gpu.create_image(&ImageDesc::new_2d(name, RADIANCE_FORMAT, size, size).usage(usage))?);
-        }
-        let layers = [made[0], made[1], made[2], made[3]];
+        let SurfelMap { layers, depth, .. } = SurfelMap::new(gpu, "lpv rsm", size)?;
+        let camera = if config.camera_surfels > 0 { Some(SurfelMap::new(gpu, "lpv camera surfels", config.camera_surfels)?) } else { None };
         let ds = gpu.caps().depth_stencil_format;
-        let depth = gpu.create_image(&ImageDesc::new_2d("lpv rsm depth", ds, size, size).usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
         let mut desc = GraphicsPipelineDesc::new("lpv rsm", "lpv/rsm.vert", Some("lpv/rsm.frag"));
         desc.vertex_layout = vertex_layout();
         desc.raster.cull = vk::CullModeFlags::NONE;
@@ -154,18 +169,38 @@ impl Rsm {
         let offsets: Vec<[f32; 4]> = offset_table().iter().map(|o| [o[0], o[1], o[2], 0.0]).collect();
         let offsets = gpu.create_storage_buffer("lpv gather offsets", bytemuck::cast_slice(&offsets))?;
         states.forget_buffer(offsets);
-        Ok(Rsm { size, layers, depth, raster, inject, gather, nearest, offsets, injection: config.injection })
+        Ok(Rsm { size, layers, depth, camera, raster, inject, gather, nearest, offsets, injection: config.injection })
     }
 
     /// Draws the RSM (`block`: the light's camera over the largest volume).
     pub fn add_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
+        self.add_surfels(graph, "lpv rsm", (self.layers, self.depth), scene, calls, transmittance, block);
+    }
+
+    /// Draws the camera's surfels (`block`: the camera as the viewpoint, no light).
+    pub fn add_camera_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
+        if let Some(map) = &self.camera {
+            self.add_surfels(graph, "lpv camera surfels", (map.layers, map.depth), scene, calls, transmittance, block);
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_surfels<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        name: &str,
+        (layers, depth): ([ImageId; 4], ImageId),
+        scene: &'a SceneGpu,
+        calls: &'a [DrawCall],
+        transmittance: BufferId,
+        block: &'a VolumeBlock,
+    ) {
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let mip = SubresourceRange::mip(0);
-        let mut pass = graph.pass("lpv rsm");
-        for l in self.layers {
+        let mut pass = graph.pass(name);
+        for l in layers {
             pass = pass.color_attachment(l, mip, true);
         }
-        let (layers, depth) = (self.layers, self.depth);
         pass.depth_stencil_write(depth, true)
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
@@ -184,9 +219,10 @@ impl Rsm {
             });
     }
 
-    /// Injects the RSM into `volume`: scatter into the fixed-point sums, then resolve; or the
-    /// document's gather straight into the first wavefront.
-    pub fn add_injection<'a>(&'a self, graph: &mut RenderGraph<'a>, volume: &'a VolumeGpu, block: &'a VolumeBlock) {
+    /// Injects the RSM into `volume`: scatter into the fixed-point sums (and the camera's
+    /// surfels' blocking, with `camera_block`), then resolve; or the document's gather straight
+    /// into the first wavefront.
+    pub fn add_injection<'a>(&'a self, graph: &mut RenderGraph<'a>, volume: &'a VolumeGpu, block: &'a VolumeBlock, camera_block: &'a VolumeBlock) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let mip = SubresourceRange::mip(0);
         let layers = self.layers;
@@ -208,6 +244,23 @@ impl Rsm {
                         ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
                         ctx.rec.dispatch([size, size, 1])
                     });
+                if let Some(map) = &self.camera {
+                    // Only blocking: the camera's surfels carry no flux.
+                    let (cl, csize) = (map.layers, map.size);
+                    graph
+                        .pass(&format!("{} inject camera surfels", volume.label))
+                        .sample("rsm_flux", cl[0], mip, s, compute)
+                        .sample("rsm_transmitted", cl[1], mip, s, compute)
+                        .sample("rsm_position", cl[2], mip, s, compute)
+                        .sample("rsm_normal", cl[3], mip, s, compute)
+                        .buffer(volume.fixed_light, write, Some("fixed_light"))
+                        .buffer(volume.fixed_blocking, write, Some("fixed_blocking"))
+                        .record(move |ctx| {
+                            ctx.rec.bind_pipeline(self.inject)?;
+                            ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(camera_block)))])?;
+                            ctx.rec.dispatch([csize, csize, 1])
+                        });
+                }
                 volume.add_resolve(graph, block);
             }
             Injection::Gather => {
@@ -226,6 +279,20 @@ impl Rsm {
                     });
             }
         }
+    }
+}
+
+/// The block that draws the camera's surfels (`light.w` = 2: the area from the pixel's
+/// footprint, no flux) and injects them into the volume `block` places.
+pub fn camera_block(block: &VolumeBlock, view_proj: [f32; 16], eye: [f32; 4], size: u32) -> VolumeBlock {
+    VolumeBlock {
+        rsm: [size as i32, 0, 0, 0],
+        light_view_proj: view_proj,
+        light: [0.0, 0.0, 0.0, 2.0],
+        light_pos: [eye[0], eye[1], eye[2], 0.0],
+        light_intensity: [0.0; 4],
+        light_cone: [0.0; 4],
+        ..*block
     }
 }
 
