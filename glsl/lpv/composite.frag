@@ -105,14 +105,14 @@ vec3 shade(int k, vec3 n, vec3 albedo, vec3 tau) {
     lookup(k, p + 0.5 * n, c);
     vec4 front = cosine_lobe(-n);
     for (int ch = 0; ch < 3; ++ch) {
-        radiance[ch] = albedo[ch] * max(dot(c[ch], front), 0.0) / (cell * cell * LPV_PI);
+        radiance[ch] = albedo[ch] * max(dot(c[ch], front), 0.0) / (cell * cell * SH_PI);
     }
     if (any(greaterThan(tau, vec3(0.0)))) {
         // Light reaching the back of a thin surface, looked up half a cell behind it.
         lookup(k, p - 0.5 * n, c);
         vec4 back = cosine_lobe(n);
         for (int ch = 0; ch < 3; ++ch) {
-            radiance[ch] += tau[ch] * max(dot(c[ch], back), 0.0) / (cell * cell * LPV_PI);
+            radiance[ch] += tau[ch] * max(dot(c[ch], back), 0.0) / (cell * cell * SH_PI);
         }
     }
     return radiance;

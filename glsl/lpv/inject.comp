@@ -43,8 +43,8 @@ void main() {
     // off the surface along its own direction, so neither lights its own surfel.
     ivec3 front = ivec3(floor(p + 0.5 * n));
     ivec3 back = ivec3(floor(p - 0.5 * n));
-    vec4 lobe = cosine_lobe(n) / LPV_PI;
-    vec4 back_lobe = cosine_lobe(-n) / LPV_PI;
+    vec4 lobe = cosine_lobe(n) / SH_PI;
+    vec4 back_lobe = cosine_lobe(-n) / SH_PI;
     for (uint ch = 0u; ch < 3u; ++ch) {
         if (inside(front) && flux[ch] > 0.0) {
             add_lobe(cell_index(front), ch, flux[ch] * lobe);
@@ -55,10 +55,10 @@ void main() {
     }
     ivec3 corner = ivec3(floor(p + 0.5));
     if (inside(corner)) {
-        // The 2-band lobe of max(0, n.w) peaks at 0.75 (SH_COS0 * SH_Y00 + SH_COS1 * SH_Y1):
+        // The 2-band lobe of max(0, n.w) peaks at 0.75 (LPV_COS0 * SH_Y00 + LPV_COS1 * SH_C1):
         // scaled by 4/3 so that a surface filling the cell blocks light meeting it head-on
         // completely, as max(0, n.w) itself would.
-        float peak = SH_COS0 * SH_Y00 + SH_COS1 * SH_Y1;
+        float peak = LPV_COS0 * SH_Y00 + LPV_COS1 * SH_C1;
         vec4 b = cosine_lobe(n) * (flux.w / (cell_size * cell_size) * transmitted.w / peak);
         for (uint k = 0u; k < 4u; ++k) {
             int q = int(round(b[k] * volume.units.z));

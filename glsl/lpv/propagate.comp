@@ -113,7 +113,7 @@ void corrected(ivec3 x, uint cell) {
             if (OCCLUSION != 0u) {
                 transmit = 1.0 - clamp(dot(b, sh_basis(-dir)), 0.0, 1.0);
             }
-            vec4 lobe = cosine_lobe(FACE_NORMAL[a * 5 + f]) * ((f == 0 ? OMEGA_FRONT : OMEGA_SIDE) / LPV_PI * transmit);
+            vec4 lobe = cosine_lobe(FACE_NORMAL[a * 5 + f]) * ((f == 0 ? OMEGA_FRONT : OMEGA_SIDE) / SH_PI * transmit);
             for (uint ch = 0u; ch < 3u; ++ch) {
                 float intensity = dot(src[ch], y);
                 if (CLAMP != 0u) {

@@ -4,11 +4,13 @@
 #ifndef PENUMBRA_LPV_VOLUME_GLSL
 #define PENUMBRA_LPV_VOLUME_GLSL
 
-const float LPV_PI = 3.14159265358979323846;
-const float SH_Y00 = 0.28209479177387814;
-const float SH_Y1 = 0.4886025119029199;
-const float SH_COS0 = 0.886226925452758;
-const float SH_COS1 = 1.0233267079464885;
+// The basis constants (SH_Y00, SH_C1, SH_PI) are the SH core's; the LPV orders band 1 as
+// (x, y, z) in world space, its own convention (digest section 2.2).
+#include "common/sh.glsl"
+
+// The clamped cosine's 2-band projection: sqrt(pi)/2 and sqrt(pi/3).
+const float LPV_COS0 = 0.886226925452758;
+const float LPV_COS1 = 1.0233267079464885;
 
 // A set stores fp16 (2 words per channel and cell, as the document's RGBA16F) or fp32 (4).
 layout(constant_id = 10) const uint HALF = 1u;
@@ -30,11 +32,11 @@ layout(set = 0, binding = LPV_VOLUME_BINDING) uniform VolumeBlock {
 } volume;
 
 vec4 sh_basis(vec3 d) {
-    return vec4(SH_Y00, SH_Y1 * d);
+    return vec4(SH_Y00, SH_C1 * d);
 }
 
 vec4 cosine_lobe(vec3 n) {
-    return vec4(SH_COS0, SH_COS1 * n);
+    return vec4(LPV_COS0, LPV_COS1 * n);
 }
 
 uint cell_index(ivec3 c) {

@@ -26,6 +26,15 @@ impl MethodDecl {
     pub fn param(&self, name: &str) -> Option<&toml::Value> {
         self.params.iter().find(|(n, _, _)| n == name).map(|(_, v, _)| v)
     }
+
+    /// A copy with parameter `name` set to `value`, replacing any the scene gave (a point of a
+    /// chart's sweep).
+    pub fn with(&self, name: &str, value: toml::Value) -> MethodDecl {
+        let mut d = self.clone();
+        d.params.retain(|(n, _, _)| n != name);
+        d.params.push((name.to_string(), value, 0));
+        d
+    }
 }
 
 /// A `[[combinations]]` entry: a named frame whose terms come from the scene's methods.

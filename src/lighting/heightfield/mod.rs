@@ -51,14 +51,6 @@ pub const BRUTE_FORCE: &str = "heightfield_bruteforce";
 pub const PYRAMID_SCHEMA: MethodSchema = MethodSchema { name: PYRAMID, params: settings::PYRAMID_PARAMS };
 pub const BRUTE_FORCE_SCHEMA: MethodSchema = MethodSchema { name: BRUTE_FORCE, params: settings::BRUTE_PARAMS };
 
-/// `decl` with parameter `name` set to `value` (replaced if present).
-fn with(decl: &MethodDecl, name: &str, value: toml::Value) -> MethodDecl {
-    let mut d = decl.clone();
-    d.params.retain(|(n, _, _)| n != name);
-    d.params.push((name.to_string(), value, 0));
-    d
-}
-
 fn push_unique(out: &mut Vec<(String, MethodDecl)>, decl: MethodDecl, horizon: Horizon) {
     let Ok(s) = Settings::from_decl(&decl, horizon) else { return };
     let prefix = match horizon {
@@ -79,21 +71,21 @@ pub fn pyramid_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out = Vec::new();
     push_unique(&mut out, decl.clone(), Horizon::Pyramid);
     for n in [4i64, 8, 16, 32] {
-        push_unique(&mut out, with(decl, "nphi", n.into()), Horizon::Pyramid);
+        push_unique(&mut out, decl.with("nphi", n.into()), Horizon::Pyramid);
     }
     for ls in [1i64, 2, 3, 4] {
-        push_unique(&mut out, with(decl, "ls", ls.into()), Horizon::Pyramid);
+        push_unique(&mut out, decl.with("ls", ls.into()), Horizon::Pyramid);
     }
     for lo in [0.0f64, 2.0, 4.0] {
-        push_unique(&mut out, with(decl, "lo", lo.into()), Horizon::Pyramid);
+        push_unique(&mut out, decl.with("lo", lo.into()), Horizon::Pyramid);
     }
     for b in [2i64, 3, 4, 6] {
-        push_unique(&mut out, with(decl, "bands", b.into()), Horizon::Pyramid);
+        push_unique(&mut out, decl.with("bands", b.into()), Horizon::Pyramid);
     }
     for m in ["faithful", "corrected"] {
-        push_unique(&mut out, with(decl, "mode", m.into()), Horizon::Pyramid);
+        push_unique(&mut out, decl.with("mode", m.into()), Horizon::Pyramid);
     }
-    push_unique(&mut out, with(decl, "window", "hanning".into()), Horizon::Pyramid);
+    push_unique(&mut out, decl.with("window", "hanning".into()), Horizon::Pyramid);
     out
 }
 
@@ -103,13 +95,13 @@ pub fn brute_sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out = Vec::new();
     push_unique(&mut out, decl.clone(), Horizon::BruteForce);
     for step in [2.0f64, 1.0, 0.5, 0.25] {
-        push_unique(&mut out, with(decl, "march_step", step.into()), Horizon::BruteForce);
+        push_unique(&mut out, decl.with("march_step", step.into()), Horizon::BruteForce);
     }
     for n in [8i64, 16, 32] {
-        push_unique(&mut out, with(decl, "nphi", n.into()), Horizon::BruteForce);
+        push_unique(&mut out, decl.with("nphi", n.into()), Horizon::BruteForce);
     }
     for m in ["faithful", "corrected"] {
-        push_unique(&mut out, with(decl, "mode", m.into()), Horizon::BruteForce);
+        push_unique(&mut out, decl.with("mode", m.into()), Horizon::BruteForce);
     }
     out
 }

@@ -70,12 +70,6 @@ pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
 /// iterations, at RSM 128² and 512², without the geometry volume, with 3 cascades around the
 /// camera; the document's mode, and with its transform bug fixed.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
-    let with = |d: &MethodDecl, name: &str, v: toml::Value| {
-        let mut d = d.clone();
-        d.params.retain(|(n, _, _)| n != name);
-        d.params.push((name.to_string(), v, 0));
-        d
-    };
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d, None) {
@@ -92,23 +86,23 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         }
     };
     push(decl.clone());
-    let corrected = with(decl, "mode", "corrected".into());
+    let corrected = decl.with("mode", "corrected".into());
     for g in [16i64, 32, 64] {
-        push(with(&corrected, "grid", g.into()));
+        push(corrected.with("grid", g.into()));
     }
     for k in [4i64, 8, 16] {
-        push(with(&corrected, "iterations", k.into()));
+        push(corrected.with("iterations", k.into()));
     }
     for r in [128i64, 512] {
-        push(with(&corrected, "rsm", r.into()));
+        push(corrected.with("rsm", r.into()));
     }
-    push(with(&corrected, "geometry_volume", false.into()));
+    push(corrected.with("geometry_volume", false.into()));
     // Cascades follow the camera: only a region's side carries over.
-    let mut cascaded = with(&corrected, "cascades", 3i64.into());
+    let mut cascaded = corrected.with("cascades", 3i64.into());
     cascaded.params.retain(|(n, _, _)| n != "centre");
     push(cascaded);
-    push(with(decl, "mode", "faithful".into()));
-    push(with(&with(decl, "mode", "faithful".into()), "transform_bug", false.into()));
+    push(decl.with("mode", "faithful".into()));
+    push(decl.with("mode", "faithful".into()).with("transform_bug", false.into()));
     out
 }
 
@@ -192,7 +186,7 @@ impl Lpv {
         let bounds = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
         let finest = (config.cascades > 1).then(|| {
             // Without a size, the largest cascade spans the scene's objects.
-            config.region.map_or((bounds.1 - bounds.0).max_element() / (1 << (config.cascades - 1)) as f32, |r| r.1)
+            config.region.map_or((bounds.1 - bounds.0).max_element() / (1 << (config.cascades - 1)) as f32, |r| r.1).max(1e-3)
         });
         let placements = match (config.region, finest) {
             (_, Some(side)) => cascade_placements(cx.scene.camera.position, side, &config),
@@ -277,15 +271,15 @@ impl Lpv {
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let mip = SubresourceRange::mip(0);
         let layer = match self.config.view {
-            config::View::RsmTransmitted => self.rsm.layers[1],
-            config::View::RsmNormal => self.rsm.layers[3],
-            config::View::RsmPosition => self.rsm.layers[2],
-            _ => self.rsm.layers[0],
+            config::View::RsmTransmitted => self.rsm.map.layers[1],
+            config::View::RsmNormal => self.rsm.map.layers[3],
+            config::View::RsmPosition => self.rsm.map.layers[2],
+            _ => self.rsm.map.layers[0],
         };
         let (t, s) = (frame.targets, frame.scene.sampler);
-        let mut pass = graph.pass("lpv debug view").color_attachment(t.radiance, mip, false).sample("rsm_flux", self.rsm.layers[0], mip, s, frag);
+        let mut pass = graph.pass("lpv debug view").color_attachment(t.radiance, mip, false).sample("rsm_flux", self.rsm.map.layers[0], mip, s, frag);
         // The flux layer is declared once; another layer is declared by its own name.
-        let same = layer == self.rsm.layers[0];
+        let same = layer == self.rsm.map.layers[0];
         if !same {
             pass = pass.sample("rsm_layer", layer, mip, s, frag);
         }

@@ -136,9 +136,8 @@ impl SurfelMap {
 
 /// The RSM's layers, pipelines and the injection.
 pub struct Rsm {
-    pub size: u32,
-    pub layers: [ImageId; 4],
-    depth: ImageId,
+    /// The RSM itself.
+    pub map: SurfelMap,
     /// The camera's surfels for the geometry volume (`camera_surfels`).
     pub camera: Option<SurfelMap>,
     raster: PipelineId,
@@ -152,8 +151,7 @@ pub struct Rsm {
 
 impl Rsm {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config) -> Result<Rsm> {
-        let size = config.rsm;
-        let SurfelMap { layers, depth, .. } = SurfelMap::new(gpu, "lpv rsm", size)?;
+        let map = SurfelMap::new(gpu, "lpv rsm", config.rsm)?;
         let camera = if config.camera_surfels > 0 { Some(SurfelMap::new(gpu, "lpv camera surfels", config.camera_surfels)?) } else { None };
         let ds = gpu.caps().depth_stencil_format;
         let mut desc = GraphicsPipelineDesc::new("lpv rsm", "lpv/rsm.vert", Some("lpv/rsm.frag"));
@@ -169,34 +167,26 @@ impl Rsm {
         let offsets: Vec<[f32; 4]> = offset_table().iter().map(|o| [o[0], o[1], o[2], 0.0]).collect();
         let offsets = gpu.create_storage_buffer("lpv gather offsets", bytemuck::cast_slice(&offsets))?;
         states.forget_buffer(offsets);
-        Ok(Rsm { size, layers, depth, camera, raster, inject, gather, nearest, offsets, injection: config.injection })
+        Ok(Rsm { map, camera, raster, inject, gather, nearest, offsets, injection: config.injection })
     }
 
     /// Draws the RSM (`block`: the light's camera over the largest volume).
     pub fn add_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
-        self.add_surfels(graph, "lpv rsm", (self.layers, self.depth), scene, calls, transmittance, block);
+        self.add_surfels(graph, "lpv rsm", &self.map, scene, calls, transmittance, block);
     }
 
     /// Draws the camera's surfels (`block`: the camera as the viewpoint, no light).
     pub fn add_camera_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
         if let Some(map) = &self.camera {
-            self.add_surfels(graph, "lpv camera surfels", (map.layers, map.depth), scene, calls, transmittance, block);
+            self.add_surfels(graph, "lpv camera surfels", map, scene, calls, transmittance, block);
         }
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn add_surfels<'a>(
-        &'a self,
-        graph: &mut RenderGraph<'a>,
-        name: &str,
-        (layers, depth): ([ImageId; 4], ImageId),
-        scene: &'a SceneGpu,
-        calls: &'a [DrawCall],
-        transmittance: BufferId,
-        block: &'a VolumeBlock,
-    ) {
+    fn add_surfels<'a>(&'a self, graph: &mut RenderGraph<'a>, name: &str, map: &SurfelMap, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let mip = SubresourceRange::mip(0);
+        let (layers, depth) = (map.layers, map.depth);
         let mut pass = graph.pass(name);
         for l in layers {
             pass = pass.color_attachment(l, mip, true);
@@ -219,47 +209,42 @@ impl Rsm {
             });
     }
 
+    /// Scatters the surfels of `map` into `volume`'s fixed-point sums.
+    fn add_scatter<'a>(&'a self, graph: &mut RenderGraph<'a>, name: &str, map: &SurfelMap, volume: &'a VolumeGpu, block: &'a VolumeBlock) {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let (mip, s) = (SubresourceRange::mip(0), self.nearest);
+        let write = Access::StorageWrite { stages: compute };
+        let (layers, size) = (map.layers, map.size);
+        graph
+            .pass(name)
+            .sample("rsm_flux", layers[0], mip, s, compute)
+            .sample("rsm_transmitted", layers[1], mip, s, compute)
+            .sample("rsm_position", layers[2], mip, s, compute)
+            .sample("rsm_normal", layers[3], mip, s, compute)
+            .buffer(volume.fixed_light, write, Some("fixed_light"))
+            .buffer(volume.fixed_blocking, write, Some("fixed_blocking"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(self.inject)?;
+                ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
+                ctx.rec.dispatch([size, size, 1])
+            });
+    }
+
     /// Injects the RSM into `volume`: scatter into the fixed-point sums (and the camera's
     /// surfels' blocking, with `camera_block`), then resolve; or the document's gather straight
     /// into the first wavefront.
     pub fn add_injection<'a>(&'a self, graph: &mut RenderGraph<'a>, volume: &'a VolumeGpu, block: &'a VolumeBlock, camera_block: &'a VolumeBlock) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let mip = SubresourceRange::mip(0);
-        let layers = self.layers;
-        let size = self.size;
+        let layers = self.map.layers;
         let write = Access::StorageWrite { stages: compute };
         let s = self.nearest;
         match self.injection {
             Injection::Scatter => {
-                graph
-                    .pass(&format!("{} inject", volume.label))
-                    .sample("rsm_flux", layers[0], mip, s, compute)
-                    .sample("rsm_transmitted", layers[1], mip, s, compute)
-                    .sample("rsm_position", layers[2], mip, s, compute)
-                    .sample("rsm_normal", layers[3], mip, s, compute)
-                    .buffer(volume.fixed_light, write, Some("fixed_light"))
-                    .buffer(volume.fixed_blocking, write, Some("fixed_blocking"))
-                    .record(move |ctx| {
-                        ctx.rec.bind_pipeline(self.inject)?;
-                        ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
-                        ctx.rec.dispatch([size, size, 1])
-                    });
+                self.add_scatter(graph, &format!("{} inject", volume.label), &self.map, volume, block);
                 if let Some(map) = &self.camera {
                     // Only blocking: the camera's surfels carry no flux.
-                    let (cl, csize) = (map.layers, map.size);
-                    graph
-                        .pass(&format!("{} inject camera surfels", volume.label))
-                        .sample("rsm_flux", cl[0], mip, s, compute)
-                        .sample("rsm_transmitted", cl[1], mip, s, compute)
-                        .sample("rsm_position", cl[2], mip, s, compute)
-                        .sample("rsm_normal", cl[3], mip, s, compute)
-                        .buffer(volume.fixed_light, write, Some("fixed_light"))
-                        .buffer(volume.fixed_blocking, write, Some("fixed_blocking"))
-                        .record(move |ctx| {
-                            ctx.rec.bind_pipeline(self.inject)?;
-                            ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(camera_block)))])?;
-                            ctx.rec.dispatch([csize, csize, 1])
-                        });
+                    self.add_scatter(graph, &format!("{} inject camera surfels", volume.label), map, volume, camera_block);
                 }
                 volume.add_resolve(graph, block);
             }

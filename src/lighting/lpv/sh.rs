@@ -4,8 +4,8 @@
 
 use glam::DVec3;
 
-/// Y00 = 1/(2√π).
-pub const Y00: f64 = 0.282_094_791_773_878_14;
+/// Y00 = 1/(2√π), the SH core's.
+pub const Y00: f64 = crate::sh::Y00;
 /// The band-1 factor √(3/(4π)).
 pub const Y1: f64 = 0.488_602_511_902_919_9;
 /// The clamped cosine's projection: √π/2 and √(π/3).

@@ -67,12 +67,6 @@ pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
 /// at 16² tiles, 4 and 9 coefficients (one bake: the run time truncates), the faithful
 /// (document) path, and the ray-cast truth on the CPU.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
-    let with = |d: &MethodDecl, name: &str, v: toml::Value| {
-        let mut d = d.clone();
-        d.params.retain(|(n, _, _)| n != name);
-        d.params.push((name.to_string(), v, 0));
-        d
-    };
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d, None) {
@@ -95,16 +89,16 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         }
     };
     push(decl.clone());
-    let corrected = with(decl, "mode", "corrected".into());
+    let corrected = decl.with("mode", "corrected".into());
     for m in ["orthographic", "stereographic", "equal_area"] {
-        push(with(&corrected, "mapping", m.into()));
+        push(corrected.with("mapping", m.into()));
     }
-    push(with(&corrected, "tile", 16i64.into()));
+    push(corrected.with("tile", 16i64.into()));
     for n in [4i64, 9] {
-        push(with(&corrected, "coefficients", n.into()));
+        push(corrected.with("coefficients", n.into()));
     }
-    push(with(decl, "mode", "faithful".into()));
-    push(with(&corrected, "baker", "rays_cpu".into()));
+    push(decl.with("mode", "faithful".into()));
+    push(corrected.with("baker", "rays_cpu".into()));
     out
 }
 

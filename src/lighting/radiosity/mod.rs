@@ -120,12 +120,6 @@ pub fn reference(decl: &MethodDecl) -> crate::lighting::ReferenceKind {
 /// The chart's sweep: patch sizes around the declared one (twice, once and half), a looser stop,
 /// and the faithful mode.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
-    let with = |name: &str, v: toml::Value| {
-        let mut d = decl.clone();
-        d.params.retain(|(n, _, _)| n != name);
-        d.params.push((name.to_string(), v, 0));
-        d
-    };
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d) {
@@ -138,10 +132,10 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     push(decl.clone());
     let declared = Config::from_decl(decl).map(|c| c.patch_size).unwrap_or(0.1);
     for s in [2.0 * declared, declared, 0.5 * declared] {
-        push(with("patch_size", s.into()));
+        push(decl.with("patch_size", s.into()));
     }
-    push(with("threshold", 1e-2.into()));
-    push(with("mode", "faithful".into()));
+    push(decl.with("threshold", 1e-2.into()));
+    push(decl.with("mode", "faithful".into()));
     out
 }
 

@@ -75,12 +75,6 @@ pub fn reference(decl: &MethodDecl) -> ReferenceKind {
 /// The chart's sweep: bands × compression (native, 4096 and 65536 representatives), and the
 /// faithful mode.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
-    let with = |d: &MethodDecl, name: &str, v: toml::Value| {
-        let mut d = d.clone();
-        d.params.retain(|(n, _, _)| n != name);
-        d.params.push((name.to_string(), v, 0));
-        d
-    };
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d, None) {
@@ -93,10 +87,10 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     push(decl.clone());
     for bands in [2i64, 3, 4, 6] {
         for reps in [0i64, 4096] {
-            push(with(&with(decl, "bands", bands.into()), "reps", reps.into()));
+            push(decl.with("bands", bands.into()).with("reps", reps.into()));
         }
     }
-    push(with(decl, "mode", "faithful".into()));
+    push(decl.with("mode", "faithful".into()));
     out
 }
 

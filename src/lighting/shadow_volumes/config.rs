@@ -165,12 +165,7 @@ impl Config {
 
 /// A copy of `decl` with `params` set (replacing any the scene gave).
 pub fn with_params(decl: &MethodDecl, params: &[(&str, toml::Value)]) -> MethodDecl {
-    let mut d = decl.clone();
-    for (name, value) in params {
-        d.params.retain(|(n, _, _)| n != name);
-        d.params.push((name.to_string(), value.clone(), 0));
-    }
-    d
+    params.iter().fold(decl.clone(), |d, (name, value)| d.with(name, value.clone()))
 }
 
 /// The chart's sweep: for each mode, the three caster strategies (z-fail, special-case
