@@ -19,6 +19,7 @@ pub mod graph;
 pub mod image_io;
 pub mod lighting;
 pub mod lightmap;
+pub mod many_lights;
 pub mod metrics;
 pub mod profile;
 pub mod progress;

@@ -1,0 +1,36 @@
+//! The static scene as convex polygons with their diffuse reflectance: what both of seed 003's
+//! systems light. Mesh triangles are the polygons (every triangle is convex); the thesis's own
+//! scenes were quads, which penumbra's meshes store as two triangles.
+
+use glam::DVec3;
+
+use crate::error::{Error, Result};
+use crate::lightmap::geometry::StaticGeometry;
+use crate::world::Polygon;
+
+/// One convex polygon of the scene, counter-clockwise seen from the side its normal points to.
+#[derive(Clone, Debug)]
+pub struct ScenePolygon {
+    pub polygon: Polygon,
+    /// Diffuse reflectance, RGB (the material's albedo times its map's mean).
+    pub albedo: DVec3,
+    /// The scene draw it came from (so a method can draw its segments with the draw's
+    /// material and model matrix).
+    pub draw: usize,
+}
+
+/// The scene's static triangles as polygons. Degenerate triangles (area under 1 mm²) are left
+/// out: they can neither receive nor cast a visible shadow. Animated objects are refused: both
+/// systems precompute per-light lighting for a static scene (the thesis's first requirement).
+pub fn scene_polygons(scene_source: &str, geometry: &StaticGeometry, method: &str) -> Result<Vec<ScenePolygon>> {
+    if let Some(&d) = geometry.entities.first() {
+        return Err(Error::Usage(format!("{scene_source}: draw {d} is animated: {method} precomputes lighting for a static scene (seed 003's requirement)")));
+    }
+    let mut out = Vec::with_capacity(geometry.triangles.len());
+    for (t, tri) in geometry.triangles.iter().enumerate() {
+        if let Some(polygon) = Polygon::from_vertices(tri.p.to_vec()) {
+            out.push(ScenePolygon { polygon, albedo: tri.albedo, draw: geometry.draw[t] });
+        }
+    }
+    Ok(out)
+}
