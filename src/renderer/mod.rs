@@ -15,7 +15,7 @@ use crate::backend::{
 use crate::bake::{BakeReport, Baker};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
-use crate::gpu_scene::SceneGpu;
+use crate::gpu_scene::{GpuLight, SceneGpu};
 use crate::graph::{Access, ExecutionReport, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod, Term, Terms, RADIANCE_FORMAT};
@@ -44,6 +44,8 @@ pub struct Renderer {
     pub shaders: ShaderLibrary,
     pub scene: Scene,
     pub scene_gpu: SceneGpu,
+    /// `scene_gpu.lights` as uploaded: the light board scales these each frame.
+    static_lights: Vec<GpuLight>,
     /// The scene's environment as loaded (once) for every consumer.
     pub environment: EnvironmentMap,
     /// What frames are drawn with, and its methods in frame order (one per part).
@@ -114,11 +116,13 @@ impl Renderer {
         let passes = frame_passes::FramePasses::new(&mut gpu, &shaders)?;
         let targets = create_targets(&mut gpu, size)?;
         let frames = (0..frames_in_flight.max(1)).map(|_| gpu.create_frame()).collect::<std::result::Result<Vec<_>, _>>()?;
+        let static_lights = scene_gpu.lights.clone();
         Ok(Renderer {
             gpu,
             shaders,
             scene,
             scene_gpu,
+            static_lights,
             environment,
             configuration,
             methods,
@@ -239,6 +243,14 @@ impl Renderer {
 
         let clock = FrameClock::at(self.clock_frame);
         self.clock_frame += 1;
+        if self.scene.light_board.is_some() {
+            // Before `prepare`, so every method that reads the lights per frame sees this
+            // frame's intensities; `raster_lights` keeps one entry per scene light, in order.
+            let factors = self.scene.light_factors(clock.time_s);
+            for ((light, base), f) in self.scene_gpu.lights.iter_mut().zip(&self.static_lights).zip(factors) {
+                light.intensity = [base.intensity[0] * f, base.intensity[1] * f, base.intensity[2] * f, base.intensity[3]];
+            }
+        }
         let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
         let has_base = terms.iter().any(|t| t.has(Term::Base));
         for (method, &terms) in self.methods.iter_mut().zip(&terms) {

@@ -377,6 +377,11 @@ impl<'a> Field<'a> {
         self.numbers::<3>("3 positive numbers", true, |x| x > 0.0).map(Vec3::from)
     }
 
+    /// 3 non-negative numbers (extents that may be zero).
+    pub fn non_negative3(&self) -> Result<Vec3, SceneError> {
+        self.numbers::<3>("3 non-negative numbers", false, |x| x >= 0.0).map(Vec3::from)
+    }
+
     /// 2 positive numbers, or one for both.
     pub fn positive2(&self) -> Result<Vec2, SceneError> {
         self.numbers::<2>("2 positive numbers", true, |x| x > 0.0).map(Vec2::from)

@@ -9,6 +9,7 @@ use std::f32::consts::{PI, TAU};
 use glam::{Vec2, Vec3};
 
 use super::mesh::Mesh;
+use super::types::Light;
 
 /// Largest accepted `subdivisions` of planes, quads and boxes (larger values are clamped).
 pub const MAX_SUBDIVISIONS: u32 = 512;
@@ -169,7 +170,8 @@ const BARK_UV: (Vec2, Vec2) = (Vec2::new(0.03, 0.88), Vec2::new(0.17, 0.97));
 const LEAF_TIP: f32 = 0.6;
 const LEAF_STEM: f32 = 0.4;
 
-/// PCG32 (O'Neill's `pcg32`, XSH RR): a bush depends on its seed alone, not on a platform RNG.
+/// PCG32 (O'Neill's `pcg32`, XSH RR): a bush or a light array depends on its seed alone, not on a
+/// platform RNG.
 struct Pcg32 {
     state: u64,
     inc: u64,
@@ -360,6 +362,127 @@ fn push_prism(m: &mut Mesh, b0: Vec3, b1: Vec3, r0: f32, r1: f32) {
     }
     for k in 1..sides - 1 {
         m.indices.extend_from_slice(&[cap, cap + k, cap + k + 1]);
+    }
+}
+
+/// Most lights the `[[light_arrays]]` of one scene may generate, all arrays together. Every
+/// method uploads and loops over `scene.lights`, and the stress scenes need 4,096; 65,536 keeps a
+/// typo (`grid = [1000, 1, 1000]`) from asking for gigabytes.
+pub const MAX_ARRAY_LIGHTS: u32 = 65_536;
+
+/// What kind of light every member of an array is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArrayKind {
+    Point,
+    Spot,
+}
+
+/// Where an array's lights sit inside its box `min`..`max`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArrayLayout {
+    /// The centres of an `nx × ny × nz` lattice of equal cells filling the box, x fastest, then
+    /// y, then z.
+    Grid([u32; 3]),
+    /// This many points drawn uniformly in the box from the array's seed.
+    Scatter(u32),
+}
+
+/// Where an array's spot lights point before the jitter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ArrayAim {
+    /// Every axis parallel to this unit vector.
+    Direction(Vec3),
+    /// Every axis through this point.
+    Target(Vec3),
+}
+
+/// One `[[light_arrays]]` entry as read from the scene (see `scenes/README.md`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LightArray {
+    pub name: String,
+    pub kind: ArrayKind,
+    pub layout: ArrayLayout,
+    /// Corners of the axis-aligned box the lights fill (an extent may be zero: a rectangle, a
+    /// line).
+    pub min: Vec3,
+    pub max: Vec3,
+    pub aim: ArrayAim,
+    /// Largest tilt of a spot's axis away from its aim, degrees; uniform over that cone.
+    pub jitter_deg: f32,
+    pub seed: u32,
+    /// W/sr, times `colours[i % colours.len()]` for light `i` when `colours` is not empty.
+    pub intensity: Vec3,
+    pub colours: Vec<Vec3>,
+    pub inner_deg: f32,
+    pub outer_deg: f32,
+    pub radius: f32,
+}
+
+impl ArrayLayout {
+    /// How many lights the layout places (u64: a grid's product may not fit a u32).
+    pub fn count(&self) -> u64 {
+        match *self {
+            ArrayLayout::Grid(n) => n.iter().map(|&k| u64::from(k)).product(),
+            ArrayLayout::Scatter(n) => u64::from(n),
+        }
+    }
+}
+
+impl LightArray {
+    /// The array's lights, named `"<name>[i]"`. Deterministic in the seed; positions and aims
+    /// draw from separate streams, so changing the jitter does not move the lights. Fails (with
+    /// the light's index) only when a spot sits exactly on its target.
+    pub fn expand(&self) -> Result<Vec<Light>, String> {
+        let positions = self.positions();
+        let mut aim_rng = Pcg32::new(u64::from(self.seed), 0x5851_f42d_4c95_7f2d);
+        let max_tilt = self.jitter_deg.clamp(0.0, 180.0).to_radians();
+        let mut out = Vec::with_capacity(positions.len());
+        for (i, position) in positions.into_iter().enumerate() {
+            let name = format!("{}[{i}]", self.name);
+            let tint = if self.colours.is_empty() { Vec3::ONE } else { self.colours[i % self.colours.len()] };
+            let intensity = self.intensity * tint;
+            let light = match self.kind {
+                ArrayKind::Point => Light::Point { name, position, intensity, radius: self.radius },
+                ArrayKind::Spot => {
+                    let axis = match self.aim {
+                        ArrayAim::Direction(d) => d.normalize(),
+                        ArrayAim::Target(t) => (t - position).try_normalize().ok_or_else(|| format!("light {i} of the array sits exactly on the target"))?,
+                    };
+                    // Uniform over the spherical cap of half-angle max_tilt: cos θ uniform.
+                    let (u, v) = (aim_rng.unit(), aim_rng.unit());
+                    let cos_t = 1.0 - u * (1.0 - max_tilt.cos());
+                    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+                    let (e1, e2) = axis.any_orthonormal_pair();
+                    let phi = TAU * v;
+                    let direction = (axis * cos_t + (e1 * phi.cos() + e2 * phi.sin()) * sin_t).normalize();
+                    Light::Spot { name, position, direction, intensity, inner_deg: self.inner_deg, outer_deg: self.outer_deg, radius: self.radius }
+                }
+            };
+            out.push(light);
+        }
+        Ok(out)
+    }
+
+    fn positions(&self) -> Vec<Vec3> {
+        let extent = self.max - self.min;
+        match self.layout {
+            ArrayLayout::Grid([nx, ny, nz]) => {
+                let at = |k: u32, n: u32| (k as f32 + 0.5) / n as f32;
+                let mut out = Vec::with_capacity(self.layout.count() as usize);
+                for z in 0..nz {
+                    for y in 0..ny {
+                        for x in 0..nx {
+                            out.push(self.min + extent * Vec3::new(at(x, nx), at(y, ny), at(z, nz)));
+                        }
+                    }
+                }
+                out
+            }
+            ArrayLayout::Scatter(n) => {
+                let mut rng = Pcg32::new(u64::from(self.seed), 0x1405_7b7e_f767_814f);
+                (0..n).map(|_| self.min + extent * Vec3::new(rng.unit(), rng.unit(), rng.unit())).collect()
+            }
+        }
     }
 }
 

@@ -19,6 +19,8 @@ mod error;
 mod format;
 pub mod generators;
 pub mod heightfield;
+#[cfg(test)]
+mod light_tests;
 mod mesh;
 mod methods;
 mod obj;
@@ -35,7 +37,7 @@ pub use heightfield::{HeightImage, HeightShape, HeightfieldSource};
 pub use mesh::Mesh;
 pub use methods::{CombinationDecl, MethodDecl, MethodSchema, ParamKind, ParamSchema};
 pub use obj::load_obj;
-pub use types::{Animation, Camera, CubeFaces, Environment, Light, Material, MeshSource, Object, CUBE_FACE_KEYS};
+pub use types::{Animation, Camera, CubeFaces, Environment, Light, LightBoard, Material, MeshSource, Object, CUBE_FACE_KEYS};
 
 /// The name a scene is known by in error messages: the path it was read from, or
 /// [`DEFAULT_SOURCE`].
@@ -62,6 +64,8 @@ pub struct Scene {
     /// Combinations of the methods' terms (`[[combinations]]`), in file order; checked against
     /// what each method supplies by the lighting layer.
     pub combinations: Vec<CombinationDecl>,
+    /// Per-frame intensity factors of the point and spot lights (`[light_board]`); none: static.
+    pub light_board: Option<LightBoard>,
 }
 
 impl Scene {
@@ -123,6 +127,20 @@ impl Scene {
                 self.source, m.name, m.opacity
             )),
         }
+    }
+
+    /// Each light's intensity factor at `time_s` (one per [`Scene::lights`], same order): the
+    /// light board's f_l(t) for point and spot lights, 1 for the rest and for every light when
+    /// the scene has no board. All 1 at `time_s = 0`.
+    pub fn light_factors(&self, time_s: f32) -> Vec<f32> {
+        self.lights
+            .iter()
+            .enumerate()
+            .map(|(l, light)| match (&self.light_board, light) {
+                (Some(board), Light::Point { .. } | Light::Spot { .. }) => board.factor(l, time_s),
+                _ => 1.0,
+            })
+            .collect()
     }
 
     /// The material of `object` (`None` only for a hand-built object with a bad index).

@@ -220,6 +220,45 @@ impl Light {
     }
 }
 
+/// The light board (`[light_board]`): every point and spot light's intensity is multiplied by
+///
+/// ```text
+/// f_l(t) = 1 − depth · sin²(π · r_l · t),   r_l = rate_hz · (0.5 + u_l)
+/// ```
+///
+/// where `u_l` ∈ [0, 1) hashes (`seed`, l) for scene light l. So f_l(0) = 1 for every light (frame
+/// 0 is the scene's static lights, what the path-traced reference renders), each factor stays in
+/// [1 − depth, 1] and returns to 1 every 1/r_l seconds, and the lights drift out of step because
+/// their rates differ. Directional and area lights keep factor 1: area lights are also emitting
+/// geometry, which no method rescales per frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightBoard {
+    /// Deepest dimming, in [0, 1].
+    pub depth: f32,
+    /// Mean dimming rate; each light's is 0.5–1.5 times it, Hz.
+    pub rate_hz: f32,
+    pub seed: u32,
+}
+
+impl LightBoard {
+    /// Light `l`'s rate r_l in Hz.
+    pub fn rate_of(&self, l: usize) -> f64 {
+        // SplitMix64's finaliser: consecutive indices get unrelated rates.
+        let mut z = ((u64::from(self.seed) << 32) ^ l as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        let u = (z >> 11) as f64 / (1u64 << 53) as f64;
+        f64::from(self.rate_hz) * (0.5 + u)
+    }
+
+    /// f_l(t) for light `l` at `time_s` seconds.
+    pub fn factor(&self, l: usize, time_s: f32) -> f32 {
+        let s = (std::f64::consts::PI * self.rate_of(l) * f64::from(time_s)).sin();
+        (1.0 - f64::from(self.depth) * s * s) as f32
+    }
+}
+
 /// Radiance arriving from infinitely far away where no geometry is hit.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Environment {

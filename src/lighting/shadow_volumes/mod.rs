@@ -477,12 +477,15 @@ impl ShadowVolumes {
         (m.albedo, normal, m.specular)
     }
 
-    fn light_block(&self, light: usize) -> LightBlock {
+    /// `scene`: this frame's lights, whose intensities the light board changes; setup.lights[i]
+    /// is scene light i (setup refuses every other kind), so the index is shared.
+    fn light_block(&self, light: usize, scene: &SceneGpu) -> LightBlock {
         let l = &self.setup.lights[light];
         let c = &self.setup.config;
+        let intensity = scene.lights.get(light).map_or(l.intensity, |g| Vec3::new(g.intensity[0], g.intensity[1], g.intensity[2]));
         let colour = match c.mode {
-            Mode::Faithful => cpu::faithful_light_colour(l.intensity, l.radius, c.atten),
-            Mode::Physical => l.intensity,
+            Mode::Faithful => cpu::faithful_light_colour(intensity, l.radius, c.atten),
+            Mode::Physical => intensity,
         };
         let (spot_direction, cone) = match l.spot {
             Some(s) => (s.direction.extend(1.0).into(), [s.cos_inner, s.cos_outer, 0.0, 0.0]),
@@ -675,7 +678,7 @@ impl LightingMethod for ShadowVolumes {
                 // where a layer's depth is the stored one, i.e. the nearest translucent layer;
                 // light.frag scales the light by the material's opacity.
                 let calls = if translucent { self.draws_in_order(scene, &plan, receiver_faces, receiver_entities) } else { self.draw_list(scene, &plan, receiver_faces, receiver_entities) };
-                let block = self.light_block(light_index);
+                let block = self.light_block(light_index, scene);
                 graph
                     .pass(&format!("light {light_index} {prefix}lighting"))
                     .color_attachment(t.radiance, whole, false)
