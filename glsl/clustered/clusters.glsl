@@ -46,4 +46,32 @@ uint cluster_at(vec2 frag, float d) {
     return x + clusters.grid.x * (y + clusters.grid.y * k);
 }
 
+// The four side planes of tile `t`'s column through the eye (view space, unit normals pointing
+// inward, w unused).
+vec4[4] column_planes(uvec2 t) {
+    vec2 ndc0 = vec2(t) / vec2(clusters.grid.xy) * 2.0 - 1.0;
+    vec2 ndc1 = vec2(t + 1u) / vec2(clusters.grid.xy) * 2.0 - 1.0;
+    float sx = clusters.screen.z;
+    float sy = clusters.screen.w;
+    // View x = ndc x * depth * sx and view y = -ndc y * depth * sy, with depth = -view z.
+    return vec4[4](vec4(normalize(vec3(1.0, 0.0, ndc0.x * sx)), 0.0), vec4(normalize(vec3(-1.0, 0.0, -ndc1.x * sx)), 0.0),
+                   vec4(normalize(vec3(0.0, 1.0, -ndc1.y * sy)), 0.0), vec4(normalize(vec3(0.0, -1.0, ndc0.y * sy)), 0.0));
+}
+
+// Whether a bounding sphere reaches the column between the near and far depths: not wholly
+// outside any side plane or depth. Conservative (a sphere near a corner may pass), and grown by
+// 1e-4 of its distance, like the cluster boxes, for fragments on an edge.
+bool reaches_column(vec4 s, vec4 planes[4]) {
+    if (s.w < 0.0) {
+        return false;
+    }
+    float r = s.w + 1e-4 * length(s.xyz);
+    for (int p = 0; p < 4; ++p) {
+        if (dot(planes[p].xyz, s.xyz) < -r) {
+            return false;
+        }
+    }
+    return -s.z + r >= clusters.depth.x && -s.z - r <= clusters.depth.y;
+}
+
 #endif

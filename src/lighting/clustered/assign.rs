@@ -177,13 +177,33 @@ pub fn touches(volume: &LightVolume, min: Vec3, max: Vec3) -> bool {
     d.length_squared() <= r * r
 }
 
-/// The GPU's assignment computed on the CPU: per cluster, the lights touching it (uncapped).
+/// Whether `volume` reaches the column of tile (`x`, `y`) between the near and far depths, as
+/// `reaches_column` in glsl/clustered/clusters.glsl: not wholly outside one of the column's side
+/// planes through the eye, nor before the near or past the far depth.
+pub fn reaches_column(block: &ClusterBlock, x: u32, y: u32, volume: &LightVolume) -> bool {
+    let s = volume.sphere;
+    if s[3] < 0.0 {
+        return false;
+    }
+    let [cols, rows, _, _] = block.grid;
+    let [_, _, sx, sy] = block.screen;
+    let (x0, x1) = (x as f32 / cols as f32 * 2.0 - 1.0, (x + 1) as f32 / cols as f32 * 2.0 - 1.0);
+    let (y0, y1) = (y as f32 / rows as f32 * 2.0 - 1.0, (y + 1) as f32 / rows as f32 * 2.0 - 1.0);
+    let c = Vec3::from_slice(&s[..3]);
+    let r = s[3] + 1e-4 * c.length();
+    let planes = [Vec3::new(1.0, 0.0, x0 * sx), Vec3::new(-1.0, 0.0, -x1 * sx), Vec3::new(0.0, 1.0, -y1 * sy), Vec3::new(0.0, -1.0, y0 * sy)];
+    planes.iter().all(|p| p.normalize().dot(c) >= -r) && -c.z + r >= block.depth[0] && -c.z - r <= block.depth[1]
+}
+
+/// The GPU's assignment computed on the CPU: per cluster, the lights that reach its tile's
+/// column and touch its box, in light order (uncapped).
 pub fn assign_cpu(block: &ClusterBlock, volumes: &[LightVolume]) -> Vec<Vec<u32>> {
     let clusters = block.grid[0] * block.grid[1] * block.grid[2];
     (0..clusters)
         .map(|c| {
+            let (x, y) = (c % block.grid[0], (c / block.grid[0]) % block.grid[1]);
             let (min, max) = froxel_bounds(block, c);
-            volumes.iter().enumerate().filter(|(_, v)| touches(v, min, max)).map(|(i, _)| i as u32).collect()
+            volumes.iter().enumerate().filter(|(_, v)| reaches_column(block, x, y, v) && touches(v, min, max)).map(|(i, _)| i as u32).collect()
         })
         .collect()
 }

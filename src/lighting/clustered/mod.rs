@@ -37,9 +37,10 @@ pub const SCHEMA: MethodSchema = MethodSchema {
     ],
 };
 
-/// The most lights a scene may have: the assignment loops over every light in one invocation,
-/// and llvmpipe stops an invocation after 65,535 loop iterations.
-pub const MAX_LIGHTS: usize = 16384;
+/// The most lights a scene may have: the assignment keeps a tile's lights in a shared bit mask
+/// of this many bits, and an invocation may loop over all of them for each of up to 4 slices,
+/// under llvmpipe's 65,535 loop iterations per invocation. Matches glsl/clustered/assign.comp.
+pub const MAX_LIGHTS: usize = 8192;
 
 /// The chart's sweep: as declared, then a coarse, the default and a fine grid.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
@@ -187,6 +188,7 @@ impl Clustered {
             ctx.rec.dispatch([clusters, 1, 1])
         });
         let volumes = self.volume_bytes();
+        let tiles = self.config.tiles[0] * self.config.tiles[1];
         graph
             .pass("clustered assign")
             .buffer(self.bounds, read, Some("bounds"))
@@ -195,7 +197,8 @@ impl Clustered {
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(self.assign_pipeline)?;
                 ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
-                ctx.rec.dispatch([clusters, 1, 1])
+                // One workgroup of 64 per tile.
+                ctx.rec.dispatch([tiles * 64, 1, 1])
             });
     }
 
