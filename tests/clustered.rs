@@ -271,3 +271,19 @@ fn bad_parameters_are_refused() {
     };
     assert!(e.contains("clustered types") && e.contains("slices"), "{e}");
 }
+
+/// As the direct term over forward's base (under a constant sky, so the base is not black), the
+/// clustered pass adds its lights over the base's depth: the same image as clustered alone.
+#[test]
+fn direct_term_over_another_base() {
+    let combination = "[environment]\ntype = \"constant\"\nradiance = 0.3\n\n[[combinations]]\nname = \"mixed\"\nbase = \"forward\"\ndirect = \"clustered\"\n\n";
+    let scene = floor_scene("\"clustered\", \"forward\"", &format!("{combination}{}", lights(24, 8, 3)));
+    let (alone, mixed) = (render(&scene, "clustered"), render(&scene, "mixed"));
+    let mut lit = 0;
+    for (k, (a, m)) in alone.pixels.iter().zip(&mixed.pixels).enumerate() {
+        let (a, m) = (Vec3::from_slice(&a[..3]), Vec3::from_slice(&m[..3]));
+        assert!(close(a, m, 1e-4, 1e-6), "pixel {k}: clustered alone {a}, over forward's base {m}");
+        lit += (a.max_element() > 0.0) as usize;
+    }
+    assert!(lit > alone.pixels.len() / 2, "{lit} lit pixels");
+}

@@ -44,7 +44,9 @@ pub fn decompose(view_proj: &[f32; 16]) -> Option<(Mat4, f32, f32, f32)> {
     let (r0, r1, r2, r3) = (vp.row(0), vp.row(1), vp.row(2), vp.row(3));
     let (sx, sy) = (r0.truncate().length(), r1.truncate().length());
     let near = r3.w - r2.w;
-    if !(sx > 0.0 && sy > 0.0 && near > 0.0 && sx.is_finite() && sy.is_finite()) {
+    // The last row is a unit view axis for this projection and nothing else.
+    let unit_axis = (r3.truncate().length() - 1.0).abs() < 1e-3;
+    if !(unit_axis && sx > 0.0 && sy > 0.0 && near > 0.0 && sx.is_finite() && sy.is_finite()) {
         return None;
     }
     let view = Mat4::from_cols(r0 / sx, -r1 / sy, -r3, Vec4::W).transpose();

@@ -14,6 +14,9 @@
 pub mod assign;
 pub mod config;
 
+#[cfg(test)]
+mod tests;
+
 use glam::Vec3;
 
 use crate::backend::{vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
