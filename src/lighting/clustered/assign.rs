@@ -151,7 +151,15 @@ pub fn froxel_bounds(block: &ClusterBlock, c: u32) -> (Vec3, Vec3) {
     let [near, far, log_ratio, _] = block.depth;
     let ndc_x = |t: u32| t as f32 / cols as f32 * 2.0 - 1.0;
     let ndc_y = |t: u32| t as f32 / rows as f32 * 2.0 - 1.0;
-    let depth = |k: u32| if k == 0 { near } else if k >= slices { far } else { near * (log_ratio * k as f32 / slices as f32).exp() };
+    let depth = |k: u32| {
+        if k == 0 {
+            near
+        } else if k >= slices {
+            far
+        } else {
+            near * (log_ratio * k as f32 / slices as f32).exp()
+        }
+    };
     let (d0, d1) = (depth(k), depth(k + 1));
     let mut min = Vec3::splat(f32::INFINITY);
     let mut max = Vec3::splat(f32::NEG_INFINITY);

@@ -19,7 +19,10 @@ mod tests;
 
 use glam::Vec3;
 
-use crate::backend::{vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
+use crate::backend::{
+    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant,
+    SubresourceRange,
+};
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -142,21 +145,8 @@ impl Clustered {
             cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
         let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
-        let mut method = Clustered {
-            config,
-            radii,
-            scene_box: scene_box(cx),
-            block: ClusterBlock::default(),
-            volumes: Vec::new(),
-            bounds,
-            counts,
-            indices,
-            bounds_pipeline,
-            assign_pipeline,
-            both,
-            base,
-            direct,
-        };
+        let mut method =
+            Clustered { config, radii, scene_box: scene_box(cx), block: ClusterBlock::default(), volumes: Vec::new(), bounds, counts, indices, bounds_pipeline, assign_pipeline, both, base, direct };
         // The scene's camera until the first frame says where the camera is.
         let view_proj = cx.scene.camera.view_projection(16.0 / 9.0).to_cols_array();
         method.plan(&view_proj, &cx.scene_gpu.lights, 1280, 720)?;
@@ -192,17 +182,12 @@ impl Clustered {
         });
         let volumes = self.volume_bytes();
         let tiles = self.config.tiles[0] * self.config.tiles[1];
-        graph
-            .pass("clustered assign")
-            .buffer(self.bounds, read, Some("bounds"))
-            .buffer(self.counts, write, Some("counts"))
-            .buffer(self.indices, write, Some("indices"))
-            .record(move |ctx| {
-                ctx.rec.bind_pipeline(self.assign_pipeline)?;
-                ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
-                // One workgroup of 64 per tile.
-                ctx.rec.dispatch([tiles * 64, 1, 1])
-            });
+        graph.pass("clustered assign").buffer(self.bounds, read, Some("bounds")).buffer(self.counts, write, Some("counts")).buffer(self.indices, write, Some("indices")).record(move |ctx| {
+            ctx.rec.bind_pipeline(self.assign_pipeline)?;
+            ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
+            // One workgroup of 64 per tile.
+            ctx.rec.dispatch([tiles * 64, 1, 1])
+        });
     }
 
     fn volume_bytes(&self) -> &[u8] {
