@@ -49,17 +49,6 @@ pub fn registry() -> Vec<MethodInfo> {
             report: None,
         },
         MethodInfo {
-            schema: clustered::SCHEMA,
-            terms: Terms::BASE_DIRECT,
-            separable: true,
-            sweep: clustered::sweep,
-            // Unshadowed: judged against the shadowed direct reference, its shadows are error.
-            reference: |_| ReferenceKind::Direct,
-            translucency: false,
-            create: |c, d| Ok(Box::new(clustered::Clustered::new(c, d)?)),
-            report: None,
-        },
-        MethodInfo {
             schema: shadow_volumes::SCHEMA,
             terms: Terms::BASE_DIRECT,
             separable: true,
@@ -127,6 +116,17 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: lpv::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(lpv::Lpv::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: clustered::SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: true,
+            sweep: clustered::sweep,
+            // Unshadowed: judged against the shadowed direct reference, its shadows are error.
+            reference: |_| ReferenceKind::Direct,
+            translucency: false,
+            create: |c, d| Ok(Box::new(clustered::Clustered::new(c, d)?)),
             report: None,
         },
     ]
