@@ -141,14 +141,16 @@ fn close(a: Vec3, b: Vec3, rel: f32, abs: f32) -> bool {
     (0..3).all(|c| (a[c] - b[c]).abs() <= rel * a[c].abs().max(b[c].abs()) + abs)
 }
 
-/// 64 point and 32 spot lights with finite ranges: at every floor pixel the clustered image is
+/// 64 point and 32 spot lights with finite ranges, and a sun: at every floor pixel the clustered image is
 /// the closed form summed over the lights within their range, and the forward image is the
 /// closed form over every light; so clustered = forward − (the lights beyond their range), pixel
 /// by pixel. Pixels within 0.2% of some light's range are left out (there the cut-off is decided
 /// by rounding of the interpolated position); they must be a minority.
 #[test]
 fn matches_forward_within_each_lights_range() {
-    let scene = floor_scene("\"clustered\", \"forward\"", &lights(64, 32, 7));
+    // A dim sun too: a directional light reaches every cluster.
+    let sun = "[[lights]]\ntype = \"directional\"\ndirection = [0.3, -1, 0.2]\nirradiance = 0.05\n\n";
+    let scene = floor_scene("\"clustered\", \"forward\"", &format!("{}{sun}", lights(64, 32, 7)));
     let clustered = render(&scene, "clustered");
     let forward = render(&scene, "forward");
     let mut gpu = common::test_gpu();
