@@ -255,7 +255,9 @@ fn bad_parameters_are_refused() {
         ("max_per_cluster = 5000", "max_per_cluster", "from 1 to 1024"),
         ("cutoff = -1", "cutoff", "irradiance > 0"),
         ("cutoff = 0", "cutoff", "irradiance > 0"),
-        ("tiles = [256, 256], max_per_cluster = 1024", "max_per_cluster", "MiB"),
+        ("tiles = [128, 128], slices = 16, max_per_cluster = 1024", "max_per_cluster", "MiB"),
+        ("tiles = [256, 256]", "tiles", "at most 16384 tiles"),
+        ("tiles = [128, 128], slices = 256", "slices", "at most 1048576 clusters"),
     ];
     for (params, param, want) in cases {
         let scene = floor_scene(&format!("{{ name = \"clustered\", {params} }}"), "");

@@ -5,9 +5,15 @@ use crate::error::Result;
 use crate::lighting::params::Params;
 use crate::scene::{MethodDecl, Scene};
 
-/// The grid's memory cap: per-cluster index slots are `columns × rows × slices ×
-/// max_per_cluster` 32-bit words.
-pub const MAX_INDEX_BYTES: u64 = 256 << 20;
+/// The grid's memory cap: per cluster a 32-byte box, a count and `max_per_cluster` 32-bit
+/// index slots.
+pub const MAX_GRID_BYTES: u64 = 256 << 20;
+
+/// Tiles in all: one assignment workgroup each, under the 65,535 workgroups a dispatch may have.
+pub const MAX_TILES: u32 = 16384;
+
+/// Clusters in all: one bounds invocation each, in workgroups of 64.
+pub const MAX_CLUSTERS: u32 = 1 << 20;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
@@ -39,6 +45,11 @@ impl Config {
         self.clusters() as u64 * self.max_per_cluster as u64 * 4
     }
 
+    /// The boxes, counts and index slots together.
+    pub fn grid_bytes(&self) -> u64 {
+        self.clusters() as u64 * (32 + 4) + self.index_bytes()
+    }
+
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
@@ -59,10 +70,22 @@ impl Config {
                 _ => {}
             }
         }
-        if c.index_bytes() > MAX_INDEX_BYTES {
-            let p = ["max_per_cluster", "slices", "tiles"].into_iter().find(|p| decl.param(p).is_some()).unwrap_or("max_per_cluster");
-            let got = decl.param(p).cloned().unwrap_or(toml::Value::from(c.max_per_cluster as i64));
-            let want = format!("a grid whose index slots fit in {} MiB (columns × rows × slices × max_per_cluster × 4 bytes is {} MiB)", MAX_INDEX_BYTES >> 20, c.index_bytes() >> 20);
+        // Blame the last of the grid's parameters the scene gives.
+        let blame = |order: &[&'static str]| {
+            let p = order.iter().copied().find(|p| decl.param(p).is_some()).unwrap_or(order[0]);
+            (p, decl.param(p).cloned().unwrap_or(toml::Value::from("the default")))
+        };
+        if c.tiles[0] * c.tiles[1] > MAX_TILES {
+            let (p, got) = blame(&["tiles"]);
+            return Err(bad(p, &format!("at most {MAX_TILES} tiles in all (one workgroup each)"), &got));
+        }
+        if c.clusters() > MAX_CLUSTERS {
+            let (p, got) = blame(&["slices", "tiles"]);
+            return Err(bad(p, &format!("at most {MAX_CLUSTERS} clusters (columns × rows × slices is {})", c.clusters()), &got));
+        }
+        if c.grid_bytes() > MAX_GRID_BYTES {
+            let (p, got) = blame(&["max_per_cluster", "slices", "tiles"]);
+            let want = format!("a grid that fits in {} MiB (boxes, counts and max_per_cluster index slots per cluster: {} MiB)", MAX_GRID_BYTES >> 20, c.grid_bytes() >> 20);
             return Err(bad(p, &want, &got));
         }
         Ok(c)
