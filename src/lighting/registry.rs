@@ -7,7 +7,7 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -116,6 +116,17 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: lpv::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(lpv::Lpv::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: clustered::SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: true,
+            sweep: clustered::sweep,
+            // Unshadowed: judged against the shadowed direct reference, its shadows are error.
+            reference: |_| ReferenceKind::Direct,
+            translucency: false,
+            create: |c, d| Ok(Box::new(clustered::Clustered::new(c, d)?)),
             report: None,
         },
     ]

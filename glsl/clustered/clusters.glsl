@@ -1,0 +1,77 @@
+// The cluster grid every clustered pass shares: screen tiles times exponential depth slices.
+// Matches `ClusterBlock` and `LightVolume` in src/lighting/clustered/assign.rs. Define
+// CLUSTERS_BINDING before including.
+#ifndef PENUMBRA_CLUSTERS_GLSL
+#define PENUMBRA_CLUSTERS_GLSL
+
+struct LightVolume {
+    vec4 sphere;  // view-space bounding sphere; w < 0: reaches nowhere, infinite: everywhere
+    vec4 range;   // x: distance from the light's position past which it is not summed
+};
+
+layout(set = 0, binding = CLUSTERS_BINDING) uniform ClusterBlock {
+    mat4 view;      // world to view
+    uvec4 grid;     // columns, rows, slices, index slots per cluster
+    uvec4 lights;   // x: light count
+    vec4 screen;    // width, height (pixels); aspect/f, 1/f
+    vec4 depth;     // near, far, ln(far/near), slices/ln(far/near)
+} clusters;
+
+uint cluster_count() {
+    return clusters.grid.x * clusters.grid.y * clusters.grid.z;
+}
+
+uvec3 cluster_coords(uint c) {
+    return uvec3(c % clusters.grid.x, (c / clusters.grid.x) % clusters.grid.y, c / (clusters.grid.x * clusters.grid.y));
+}
+
+// The view depth where slice k starts; the first starts at the near plane, the last ends at far.
+float slice_start(uint k) {
+    if (k == 0u) {
+        return clusters.depth.x;
+    }
+    if (k >= clusters.grid.z) {
+        return clusters.depth.y;
+    }
+    return clusters.depth.x * exp(clusters.depth.z * float(k) / float(clusters.grid.z));
+}
+
+// The cluster of a fragment at window position `frag` and view depth `d`; depths past the far
+// end fall in the last slice.
+uint cluster_at(vec2 frag, float d) {
+    uint x = min(uint(frag.x * float(clusters.grid.x) / clusters.screen.x), clusters.grid.x - 1u);
+    uint y = min(uint(frag.y * float(clusters.grid.y) / clusters.screen.y), clusters.grid.y - 1u);
+    float s = floor(log(max(d, clusters.depth.x) / clusters.depth.x) * clusters.depth.w);
+    uint k = uint(clamp(s, 0.0, float(clusters.grid.z - 1u)));
+    return x + clusters.grid.x * (y + clusters.grid.y * k);
+}
+
+// The four side planes of tile `t`'s column through the eye (view space, unit normals pointing
+// inward, w unused).
+vec4[4] column_planes(uvec2 t) {
+    vec2 ndc0 = vec2(t) / vec2(clusters.grid.xy) * 2.0 - 1.0;
+    vec2 ndc1 = vec2(t + 1u) / vec2(clusters.grid.xy) * 2.0 - 1.0;
+    float sx = clusters.screen.z;
+    float sy = clusters.screen.w;
+    // View x = ndc x * depth * sx and view y = -ndc y * depth * sy, with depth = -view z.
+    return vec4[4](vec4(normalize(vec3(1.0, 0.0, ndc0.x * sx)), 0.0), vec4(normalize(vec3(-1.0, 0.0, -ndc1.x * sx)), 0.0),
+                   vec4(normalize(vec3(0.0, 1.0, -ndc1.y * sy)), 0.0), vec4(normalize(vec3(0.0, -1.0, ndc0.y * sy)), 0.0));
+}
+
+// Whether a bounding sphere reaches the column between the near and far depths: not wholly
+// outside any side plane or depth. Conservative (a sphere near a corner may pass), and grown by
+// 1e-4 of its distance, like the cluster boxes, for fragments on an edge.
+bool reaches_column(vec4 s, vec4 planes[4]) {
+    if (s.w < 0.0) {
+        return false;
+    }
+    float r = s.w + 1e-4 * length(s.xyz);
+    for (int p = 0; p < 4; ++p) {
+        if (dot(planes[p].xyz, s.xyz) < -r) {
+            return false;
+        }
+    }
+    return -s.z + r >= clusters.depth.x && -s.z - r <= clusters.depth.y;
+}
+
+#endif

@@ -1,0 +1,288 @@
+//! Clustered shading (Olsson, Billeter & Assarsson 2012) for many unshadowed lights: the view
+//! frustum is cut into a grid of clusters (screen tiles × exponential depth slices); a compute
+//! pass lists, per cluster, the lights whose bounding sphere touches it; the scene is then
+//! drawn like the forward method, each fragment summing only its cluster's lights.
+//!
+//! Passes per frame: **clustered bounds** (each cluster's view-space box), **clustered assign**
+//! (each cluster's lights into fixed slots, with the uncapped count so overflow can be read back)
+//! and **clustered** (the shading; **clustered direct** over another method's base).
+//!
+//! Each light has a range: the scene's `radius`, or where its irradiance falls to `cutoff`
+//! ([`assign::range`]). The shading sums a light only within its range, so the image is the
+//! forward method's with each light cut off at its range, whatever the grid.
+
+pub mod assign;
+pub mod config;
+
+#[cfg(test)]
+mod tests;
+
+use glam::Vec3;
+
+use crate::backend::{
+    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant,
+    SubresourceRange,
+};
+use crate::error::{Error, Result};
+use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::scene::{Light, MethodDecl, MethodSchema, ParamKind, ParamSchema};
+use assign::{Assignment, ClusterBlock, LightVolume};
+use config::Config;
+
+pub const NAME: &str = "clustered";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "tiles", kind: ParamKind::FloatArray },
+        ParamSchema { name: "slices", kind: ParamKind::Int },
+        ParamSchema { name: "max_per_cluster", kind: ParamKind::Int },
+        ParamSchema { name: "cutoff", kind: ParamKind::Float },
+    ],
+};
+
+/// The most lights a scene may have: the assignment keeps a tile's lights in a shared bit mask
+/// of this many bits, and an invocation may loop over all of them for each of up to 4 slices,
+/// under llvmpipe's 65,535 loop iterations per invocation. Matches glsl/clustered/assign.comp.
+pub const MAX_LIGHTS: usize = 8192;
+
+/// The chart's sweep: as declared, then a coarse, the default and a fine grid.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d, None) {
+            let label = format!("{NAME} {}x{}x{} cap {}", c.tiles[0], c.tiles[1], c.slices, c.max_per_cluster);
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    let grid = |x: i64, y: i64| toml::Value::Array(vec![x.into(), y.into()]);
+    push(decl.with("tiles", grid(16, 9)).with("slices", 16i64.into()));
+    push(decl.with("tiles", grid(32, 18)).with("slices", 24i64.into()));
+    push(decl.with("tiles", grid(64, 36)).with("slices", 32i64.into()));
+    out
+}
+
+/// The scene's geometry (emitters included) at its placement: where the slices must reach.
+fn scene_box(cx: &CreateContext<'_>) -> Option<(Vec3, Vec3)> {
+    let mut min = Vec3::splat(f32::INFINITY);
+    let mut max = Vec3::splat(f32::NEG_INFINITY);
+    for (d, mesh) in cx.scene_gpu.draws.iter().zip(&cx.scene_gpu.meshes) {
+        for p in &mesh.positions {
+            let w = d.model.transform_point3(*p);
+            min = min.min(w);
+            max = max.max(w);
+        }
+    }
+    min.is_finite().then_some((min, max))
+}
+
+pub struct Clustered {
+    config: Config,
+    /// The scene's `radius` of each light as the GPU scene lists them (0: none given).
+    radii: Vec<f32>,
+    scene_box: Option<(Vec3, Vec3)>,
+    /// This frame's grid and light volumes ([`Clustered::plan`]).
+    pub block: ClusterBlock,
+    pub volumes: Vec<LightVolume>,
+    /// Per cluster: its view-space box (two vec4), its light count, its index slots.
+    bounds: BufferId,
+    pub counts: BufferId,
+    pub indices: BufferId,
+    bounds_pipeline: PipelineId,
+    assign_pipeline: PipelineId,
+    both: PipelineId,
+    base: PipelineId,
+    direct: PipelineId,
+}
+
+fn cluster_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(16), usage, memory: MemoryKind::GpuOnly })?)
+}
+
+impl Clustered {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Clustered> {
+        let config = Config::from_decl(decl, Some(cx.scene))?;
+        if cx.scene_gpu.lights.len() > MAX_LIGHTS {
+            return Err(Error::Usage(format!("{}: {NAME}: the scene has {} lights; the cluster assignment handles at most {MAX_LIGHTS}", cx.scene.source, cx.scene_gpu.lights.len())));
+        }
+        // The GPU scene lists the scene's lights one for one, in order.
+        let radii = cx
+            .scene
+            .lights
+            .iter()
+            .map(|l| match l {
+                Light::Point { radius, .. } | Light::Spot { radius, .. } => *radius,
+                _ => 0.0,
+            })
+            .collect();
+        let clusters = config.clusters() as u64;
+        let bounds = cluster_buffer(cx.gpu, "clustered bounds", clusters * 32)?;
+        let counts = cluster_buffer(cx.gpu, "clustered counts", clusters * 4)?;
+        let indices = cluster_buffer(cx.gpu, "clustered indices", config.index_bytes())?;
+        let compute = |gpu: &mut Gpu, name: &str, shader: &str| gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, cx.shaders);
+        let bounds_pipeline = compute(cx.gpu, "clustered bounds", "clustered/bounds.comp")?;
+        let assign_pipeline = compute(cx.gpu, "clustered assign", "clustered/assign.comp")?;
+        let ds_format = cx.gpu.caps().depth_stencil_format;
+        let mut pipeline = |terms: Terms| {
+            let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} {terms}"), "clustered/clustered.vert", Some("clustered/clustered.frag"));
+            desc.vertex_layout = vertex_layout();
+            // Thin surfaces (planes, leaves) are seen from both sides.
+            desc.raster.cull = vk::CullModeFlags::NONE;
+            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+            desc.depth_format = Some(ds_format);
+            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
+            if !terms.has(Term::Base) {
+                // Over another method's base: its depth decides what is seen; light adds.
+                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+                desc.color_targets[0].blend = BlendMode::Additive;
+            }
+            cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
+        };
+        let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
+        let mut method =
+            Clustered { config, radii, scene_box: scene_box(cx), block: ClusterBlock::default(), volumes: Vec::new(), bounds, counts, indices, bounds_pipeline, assign_pipeline, both, base, direct };
+        // The scene's camera until the first frame says where the camera is.
+        let view_proj = cx.scene.camera.view_projection(16.0 / 9.0).to_cols_array();
+        method.plan(&view_proj, &cx.scene_gpu.lights, 1280, 720)?;
+        Ok(method)
+    }
+
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The grid and the light volumes for a frame seen through `view_proj` into a `width ×
+    /// height` target, with the lights as they are this frame.
+    pub fn plan(&mut self, view_proj: &[f32; 16], lights: &[crate::gpu_scene::GpuLight], width: u32, height: u32) -> Result<()> {
+        let (view, _, _, near) = assign::decompose(view_proj).ok_or_else(|| Error::Usage(format!("{NAME}: the frame's projection is not a perspective with a near plane")))?;
+        let far = self.scene_box.map_or(2.0 * near, |(min, max)| assign::far_depth(&view, min, max) * 1.01);
+        let lights_len = lights.len().min(MAX_LIGHTS);
+        self.block = assign::block(&self.config, view_proj, width, height, far, lights_len as u32).ok_or_else(|| Error::Usage(format!("{NAME}: degenerate projection")))?;
+        self.volumes = assign::light_volumes(&lights[..lights_len], &self.radii, self.config.cutoff, &view);
+        Ok(())
+    }
+
+    /// The bounds and assignment passes: they write [`Clustered::counts`] and
+    /// [`Clustered::indices`].
+    pub fn add_assignment_passes<'a>(&'a self, graph: &mut RenderGraph<'a>) {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let (read, write) = (Access::StorageRead { stages: compute }, Access::StorageWrite { stages: compute });
+        let clusters = self.config.clusters();
+        let block = bytemuck::bytes_of(&self.block);
+        graph.pass("clustered bounds").buffer(self.bounds, write, Some("bounds")).record(move |ctx| {
+            ctx.rec.bind_pipeline(self.bounds_pipeline)?;
+            ctx.bind(&[("clusters", Bind::UniformData(block))])?;
+            ctx.rec.dispatch([clusters, 1, 1])
+        });
+        let volumes = self.volume_bytes();
+        let tiles = self.config.tiles[0] * self.config.tiles[1];
+        graph.pass("clustered assign").buffer(self.bounds, read, Some("bounds")).buffer(self.counts, write, Some("counts")).buffer(self.indices, write, Some("indices")).record(move |ctx| {
+            ctx.rec.bind_pipeline(self.assign_pipeline)?;
+            ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
+            // One workgroup of 64 per tile.
+            ctx.rec.dispatch([tiles * 64, 1, 1])
+        });
+    }
+
+    fn volume_bytes(&self) -> &[u8] {
+        if self.volumes.is_empty() {
+            &[0u8; std::mem::size_of::<LightVolume>()]
+        } else {
+            bytemuck::cast_slice(&self.volumes)
+        }
+    }
+
+    /// The last frame's assignment, read back (after it finished).
+    pub fn read_assignment(&self, gpu: &mut Gpu) -> Result<Assignment> {
+        let clusters = self.config.clusters() as usize;
+        let counts = read_words(gpu, self.counts)?;
+        let indices = read_words(gpu, self.indices)?;
+        Ok(Assignment::from_words(&counts[..clusters], &indices, self.config.max_per_cluster))
+    }
+}
+
+fn read_words(gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
+    let size = gpu.buffer_desc(buffer)?.size;
+    let host = gpu.create_buffer(&BufferDesc { name: "clustered readback".into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;
+    let frame = gpu.create_frame()?;
+    let mut graph = RenderGraph::new();
+    graph.pass("clustered readback").buffer(buffer, Access::TransferRead, None).buffer(host, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
+    graph.pass("clustered readback host").buffer(host, Access::HostRead, None).record(|_| Ok(()));
+    let mut states = ResourceStates::default();
+    graph.run_and_wait(gpu, frame, &mut states, "clustered readback")?;
+    let bytes = gpu.read_buffer(host)?;
+    gpu.destroy_buffer(host);
+    gpu.destroy_frame(frame)?;
+    Ok(bytemuck::cast_slice(&bytes[..size as usize]).to_vec())
+}
+
+impl LightingMethod for Clustered {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        self.plan(&frame.uniforms.view_proj, &frame.scene.lights, frame.targets.width, frame.targets.height)
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        let scene = frame.scene;
+        let t = frame.targets;
+        let uniforms = frame.uniforms;
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let base = frame.terms.has(Term::Base);
+        let direct = frame.terms.has(Term::Direct);
+        let pipeline = match (base, direct) {
+            (true, true) => self.both,
+            (true, false) => self.base,
+            (false, true) => self.direct,
+            (false, false) => return Ok(()),
+        };
+        if direct {
+            self.add_assignment_passes(graph);
+        }
+        let mut pass = graph.pass(if base { NAME } else { "clustered direct" }).color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
+        pass = pass.buffer(scene.vertices, Access::VertexRead, None).buffer(scene.indices, Access::IndexRead, None).buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"));
+        if direct {
+            pass = pass.buffer(self.counts, Access::StorageRead { stages: frag }, Some("counts")).buffer(self.indices, Access::StorageRead { stages: frag }, Some("indices"));
+        }
+        let volumes = self.volume_bytes();
+        let block = bytemuck::bytes_of(&self.block);
+        pass.record(move |ctx| {
+            let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            ctx.rec.bind_pipeline(pipeline)?;
+            let lights: &[u8] = if scene.lights.is_empty() { &[0u8; 64] } else { bytemuck::cast_slice(&scene.lights) };
+            let uniform_bytes = bytemuck::bytes_of(&uniforms);
+            let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
+            record_draws(ctx, scene, &calls, |ctx, material| {
+                let maps = scene.material_maps[material as usize];
+                let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
+                let mut binds = vec![
+                    ("frame", Bind::UniformData(uniform_bytes)),
+                    ("lights", Bind::StorageData(lights)),
+                    ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
+                    ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
+                    ("specular_map", Bind::Sampled { image: maps.specular, range: whole, sampler: s }),
+                    ("clusters", Bind::UniformData(block)),
+                    ("volumes", Bind::StorageData(volumes)),
+                ];
+                if !direct {
+                    // The base alone reads no cluster (the shader's branch is off).
+                    binds.extend([("counts", Bind::StorageData(&[0u8; 16])), ("indices", Bind::StorageData(&[0u8; 16]))]);
+                }
+                ctx.bind(&binds)
+            })?;
+            ctx.rec.end_rendering();
+            Ok(())
+        });
+        Ok(())
+    }
+}
