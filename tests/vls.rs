@@ -38,7 +38,10 @@ edge_v = [4, 0, 0]
 material = "grey"
 "#;
 
-fn lights_text(lights: &[(Vec3, Option<(Vec3, f32, f32)>, Vec3)]) -> String {
+/// A light as the tests write it: position, spot (target, inner and outer degrees), intensity.
+type TestLight = (Vec3, Option<(Vec3, f32, f32)>, Vec3);
+
+fn lights_text(lights: &[TestLight]) -> String {
     let mut s = String::new();
     for (i, (p, spot, intensity)) in lights.iter().enumerate() {
         s += &format!("\n[[lights]]\nname = \"l{i}\"\nposition = [{}, {}, {}]\nintensity = [{}, {}, {}]\n", p.x, p.y, p.z, intensity.x, intensity.y, intensity.z);
@@ -151,6 +154,30 @@ fn physical_vls_equals_forward_without_dropped_lights() {
         }
     }
     println!("vls against forward over {} floor pixels: worst relative difference {worst:.2e}", pixels.len());
+}
+
+/// As a direct term over another method's base (`forward`'s, under a constant sky), VLS adds
+/// its light to every floor pixel despite drawing other triangles than the base (its depth bias
+/// lets it pass the base's depth): the frame equals VLS drawing both terms itself, and without
+/// any base (the renderer's own depth pass) it is that frame less the sky's light.
+#[test]
+fn as_a_direct_term_it_adds_over_another_base() {
+    let methods = r#"{ name = "vls", selection = "closest", can_illuminate = false }, "forward""#;
+    let extra = "\n[environment]\ntype = \"constant\"\nradiance = 0.3\n\n[[combinations]]\nname = \"over_forward\"\nbase = \"forward\"\ndirect = \"vls\"\n\n[[combinations]]\nname = \"direct_alone\"\ndirect = \"vls\"\n";
+    let s = scene(methods, &(three_lights() + extra));
+    let pixels = floor_pixels(&s);
+    let alone = render(s.clone(), "vls");
+    let over = render(s.clone(), "over_forward");
+    let direct = render(s, "direct_alone");
+    // The floor's sky light: rho/pi * E with E = pi * 0.3 for a constant sky over a plane.
+    let sky = 0.5 * 0.3;
+    for &(i, p) in &pixels {
+        let (a, b, d) = (alone.pixels[i], over.pixels[i], direct.pixels[i]);
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() <= 1e-4 * a[c].abs() + 1e-6, "pixel {i} at {p}: vls {a:?}, vls over forward {b:?}");
+            assert!((d[c] + sky - a[c]).abs() <= 2e-3 * a[c].abs() + 1e-4, "pixel {i} at {p}: direct alone {d:?} + sky {sky} vs {a:?}");
+        }
+    }
 }
 
 /// With 12 lights and K = 3, each pixel shows exactly the sum over its segment's baked set (the

@@ -180,7 +180,7 @@ pub fn select(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLigh
         // The caller's progress line, fed from the workers' count until all have finished.
         while !handles.iter().all(|h| h.is_finished()) {
             progress.update(done.load(Ordering::Relaxed), count as u64);
-            std::thread::sleep(std::time::Duration::from_millis(50));
+            std::thread::sleep(std::time::Duration::from_millis(2));
         }
     });
     progress.update(count as u64, count as u64);

@@ -425,7 +425,7 @@ fn the_setup_is_a_cached_bake() {
     let b = baker.bake("vls", &key, |_| panic!("should come from the cache")).unwrap();
     assert_eq!(a, b);
     assert_eq!(a.segments(), layout.segments.triangles.len());
-    assert!(a.indices.iter().any(|&i| i == 0) && a.indices.iter().any(|&i| i == EMPTY));
+    assert!(a.indices.contains(&0) && a.indices.contains(&EMPTY));
     assert_eq!(baker.reports().iter().map(|r| r.cached).collect::<Vec<_>>(), vec![false, true]);
     let other = Config { setup: SetupParams { k: 4, ..config.setup }, ..config };
     assert_ne!(layout.key(&other).hash(), key.hash());
