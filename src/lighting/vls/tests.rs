@@ -448,7 +448,7 @@ fn the_sweep_covers_k_selection_and_area() {
 #[ignore]
 fn setup_time() {
     println!("{:>8} {:>7} {:>9} {:>8} {:>12} {:>10}", "segments", "lights", "polygons", "feeler", "S·L·P", "ms");
-    for (area, side, occluders) in [(0.08, 5, 8), (0.02, 5, 8), (0.02, 10, 8), (0.02, 10, 32), (0.005, 10, 32)] {
+    for (area, side, occluders) in [(0.08, 5, 8), (0.02, 5, 8), (0.02, 10, 8), (0.02, 10, 32), (0.02, 10, 128), (0.005, 10, 32)] {
         let (mut polygons, lights, _) = theatre(side, 4.0, 20.0, 30.0, 3);
         let mut r = Lcg(1);
         for _ in 0..occluders / 2 {
