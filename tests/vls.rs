@@ -181,8 +181,9 @@ fn as_a_direct_term_it_adds_over_another_base() {
 }
 
 /// With 12 lights and K = 3, each pixel shows exactly the sum over its segment's baked set (the
-/// CPU recomputes the same sets), so the index buffer, the unshared vertices' segment ids and the
-/// shader agree; some neighbouring segments differ (the seams are drawn).
+/// CPU recomputes the same sets) at the frame's intensities, changed every frame, so the index
+/// buffer, the unshared vertices' segment ids and the shader agree; some neighbouring segments
+/// differ (the seams are drawn).
 #[test]
 fn a_segment_shades_with_exactly_its_light_set() {
     let decl = r#"{ name = "vls", mode = "faithful", k = 3, feeler = "bvh", max_segment_area = 0.1 }"#;
@@ -193,29 +194,55 @@ fn a_segment_shades_with_exactly_its_light_set() {
     let sets = layout.select(&config.setup, &mut penumbra::progress::Progress::new("test"));
     let (segments, lights) = (&layout.segments, &layout.lights);
     let pixels = floor_pixels(&s);
-    let img = render(s, "vls");
     let model = LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 };
-    let (mut checked, mut distinct) = (0, std::collections::BTreeSet::new());
-    for &(i, p) in &pixels {
-        // The segment holding p, away from its edges (a pixel on an edge may go to either side).
-        let found = (0..segments.triangles.len()).find_map(|t| {
-            let [a, b, c] = segments.triangles[t].map(|k| segments.positions[k as usize]);
-            let n = (b - a).cross(c - a);
-            let w = [(c - b).cross(p - b).dot(n), (a - c).cross(p - c).dot(n), (b - a).cross(p - a).dot(n)].map(|x| x / n.length_squared());
-            (w.iter().all(|&x| x > 0.0)).then_some((t, w.iter().cloned().fold(f64::MAX, f64::min)))
-        });
-        let Some((t, margin)) = found else { continue };
-        if margin < 0.02 {
-            continue;
+    // The segment holding each pixel's point, away from its edges (a pixel on an edge may go to
+    // either side).
+    let owners: Vec<Option<usize>> = pixels
+        .iter()
+        .map(|&(_, p)| {
+            (0..segments.triangles.len()).find(|&t| {
+                let [a, b, c] = segments.triangles[t].map(|k| segments.positions[k as usize]);
+                let n = (b - a).cross(c - a);
+                let w = [(c - b).cross(p - b).dot(n), (a - c).cross(p - c).dot(n), (b - a).cross(p - a).dot(n)].map(|x| x / n.length_squared());
+                w.iter().all(|&x| x > 0.02)
+            })
+        })
+        .collect();
+    let mut r = Renderer::new(common::test_gpu(), s, Some("vls"), SIZE, 1).unwrap_or_else(|e| panic!("{e}"));
+    let cam = r.scene.camera.clone();
+    let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
+    // Item 19 on the GPU: new intensities every frame (as a light board sets them), the same
+    // sets, and every pixel the sum over its set at this frame's intensities.
+    let mut seed = 12345u64;
+    for frame in 0..3 {
+        let scale: Vec<f64> = (0..full.len())
+            .map(|_| {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                if frame == 0 {
+                    1.0
+                } else {
+                    (seed >> 40) as f64 / (1u64 << 24) as f64
+                }
+            })
+            .collect();
+        for ((l, f), &k) in r.scene_gpu.lights.iter_mut().zip(&full).zip(&scale) {
+            let k = k as f32;
+            l.intensity = [f[0] * k, f[1] * k, f[2] * k, f[3]];
         }
-        let set: Vec<usize> = sets.of(t).collect();
-        distinct.insert(set.clone());
-        let want: DVec3 = set.iter().map(|&l| lights[l].shade(&model, p, DVec3::Y, DVec3::splat(0.5))).sum();
-        assert!(close(img.pixels[i], want, 2e-3), "pixel {i} in segment {t} (lights {set:?}): {:?}, CPU {want}", img.pixels[i]);
-        checked += 1;
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        let (mut checked, mut distinct) = (0, std::collections::BTreeSet::new());
+        for (&(i, p), owner) in pixels.iter().zip(&owners) {
+            let Some(t) = *owner else { continue };
+            let set: Vec<usize> = sets.of(t).collect();
+            distinct.insert(set.clone());
+            let want: DVec3 = set.iter().map(|&l| lights[l].shade(&model, p, DVec3::Y, DVec3::splat(0.5)) * (scale[l] as f32) as f64).sum();
+            assert!(close(img.pixels[i], want, 2e-3), "frame {frame}: pixel {i} in segment {t} (lights {set:?}): {:?}, CPU {want}", img.pixels[i]);
+            checked += 1;
+        }
+        println!("frame {frame}: {checked} pixels checked against their segment's set; {} distinct sets", distinct.len());
+        assert!(checked > pixels.len() / 2 && distinct.len() > 3, "{checked} pixels, {} sets", distinct.len());
     }
-    println!("{checked} pixels checked against their segment's set; {} distinct sets", distinct.len());
-    assert!(checked > pixels.len() / 2 && distinct.len() > 3, "{checked} pixels, {} sets", distinct.len());
+    common::assert_clean(&r.gpu);
 }
 
 /// Item 23: static intensities give the same bytes every frame, for 100 frames.
