@@ -245,6 +245,38 @@ fn a_segment_shades_with_exactly_its_light_set() {
     common::assert_clean(&r.gpu);
 }
 
+/// `point = "vertex"`: light sets at the segment vertices, shaded per vertex and interpolated
+/// (fixed-function OpenGL's Gouraud): with every light kept each pixel is the barycentric blend
+/// of Σ `ManyLight::shade` at its segment's corners.
+#[test]
+fn per_vertex_sets_shade_at_the_vertices() {
+    let decl = r#"{ name = "vls", point = "vertex", selection = "closest", can_illuminate = false, max_segment_area = 0.1 }"#;
+    let s = scene(decl, &three_lights());
+    let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
+    let geometry = scene_geometry(&s, "vls").unwrap();
+    let layout = Layout::new(&s, &geometry, &s.methods[0], &config).unwrap();
+    let (segments, lights) = (&layout.segments, &layout.lights);
+    let pixels = floor_pixels(&s);
+    let img = render(s, "vls");
+    let at = |q: DVec3| -> DVec3 { lights.iter().map(|l| l.shade(&LightModel::Physical, q, DVec3::Y, DVec3::splat(0.5))).sum() };
+    let (mut checked, mut off_per_pixel) = (0, 0.0f64);
+    for &(i, p) in &pixels {
+        let found = (0..segments.triangles.len()).find_map(|t| {
+            let [a, b, c] = segments.triangles[t].map(|k| segments.positions[k as usize]);
+            let n = (b - a).cross(c - a);
+            let w = [(c - b).cross(p - b).dot(n), (a - c).cross(p - c).dot(n), (b - a).cross(p - a).dot(n)].map(|x| x / n.length_squared());
+            w.iter().all(|&x| x >= 0.0).then_some(([a, b, c], w))
+        });
+        let Some((corners, w)) = found else { continue };
+        let want = at(corners[0]) * w[0] + at(corners[1]) * w[1] + at(corners[2]) * w[2];
+        assert!(close(img.pixels[i], want, 2e-3), "pixel {i} at {p}: {:?}, interpolated CPU {want}", img.pixels[i]);
+        off_per_pixel = off_per_pixel.max((want.x - at(p).x).abs() / at(p).x.max(1e-6));
+        checked += 1;
+    }
+    println!("{checked} pixels equal the interpolated vertex sums; per-pixel shading differs by up to {:.1} %", 100.0 * off_per_pixel);
+    assert!(checked > pixels.len() / 2 && off_per_pixel > 1e-3, "{checked} pixels, {off_per_pixel}");
+}
+
 /// Item 23: static intensities give the same bytes every frame, for 100 frames.
 #[test]
 fn frames_are_bit_identical_with_static_intensities() {

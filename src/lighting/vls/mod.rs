@@ -32,7 +32,7 @@ use crate::lighting::params::Params;
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
 use crate::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
-use setup::{Feeler, LightSets, Selection, SetupParams};
+use setup::{Feeler, LightSets, Point, Selection, SetupParams};
 
 pub const NAME: &str = "vls";
 
@@ -45,6 +45,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "can_illuminate", kind: ParamKind::Bool },
         ParamSchema { name: "feeler", kind: ParamKind::String },
         ParamSchema { name: "max_segment_area", kind: ParamKind::Float },
+        ParamSchema { name: "point", kind: ParamKind::String },
         ParamSchema { name: "model", kind: ParamKind::String },
         ParamSchema { name: "seed_k", kind: ParamKind::Float },
         ParamSchema { name: "kc", kind: ParamKind::Float },
@@ -86,12 +87,21 @@ impl Config {
         let mut c = match mode {
             Mode::Faithful => Config {
                 mode,
-                setup: SetupParams { k: 8, selection: Selection::Closest, can_illuminate: false, feeler: Feeler::Thesis, model: LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 } },
+                setup: SetupParams {
+                    k: 8,
+                    selection: Selection::Closest,
+                    can_illuminate: false,
+                    feeler: Feeler::Thesis,
+                    model: LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 },
+                    point: Point::Centroid,
+                },
                 max_segment_area: 0.05,
             },
-            Mode::Corrected => {
-                Config { mode, setup: SetupParams { k: 8, selection: Selection::Contribution, can_illuminate: true, feeler: Feeler::Bvh, model: LightModel::Physical }, max_segment_area: 0.05 }
-            }
+            Mode::Corrected => Config {
+                mode,
+                setup: SetupParams { k: 8, selection: Selection::Contribution, can_illuminate: true, feeler: Feeler::Bvh, model: LightModel::Physical, point: Point::Centroid },
+                max_segment_area: 0.05,
+            },
         };
         if let Some(v) = decl.param("k") {
             c.setup.k = v.as_integer().filter(|k| (1..=MAX_K).contains(k)).ok_or_else(|| params.error("k", &format!("an integer from 1 to {MAX_K}"), v))? as usize;
@@ -104,6 +114,9 @@ impl Config {
         }
         if let Some(f) = params.get_choice("feeler", &[("thesis", Feeler::Thesis), ("bvh", Feeler::Bvh), ("none", Feeler::None)])? {
             c.setup.feeler = f;
+        }
+        if let Some(p) = params.get_choice("point", &[("centroid", Point::Centroid), ("vertex", Point::Vertex)])? {
+            c.setup.point = p;
         }
         if let Some(v) = decl.param("max_segment_area") {
             c.max_segment_area =
@@ -140,7 +153,8 @@ impl Config {
     /// The label the chart and the bake report use.
     pub fn label(&self) -> String {
         let s = &self.setup;
-        format!("vls {:?} k={} {:?} feeler={:?} area={}", self.mode, s.k, s.selection, s.feeler, self.max_segment_area).to_lowercase()
+        let point = if s.point == Point::Vertex { " per-vertex" } else { "" };
+        format!("vls {:?} k={} {:?} feeler={:?} area={}{point}", self.mode, s.k, s.selection, s.feeler, self.max_segment_area).to_lowercase()
     }
 }
 
@@ -247,11 +261,11 @@ impl Vls {
         let layout = Layout::new(cx.scene, &geometry, decl, &config)?;
         let key = layout.key(&config);
         let sets = cx.bakes.bake(&config.label(), &key, |progress| Ok(layout.select(&config.setup, progress)))?;
-        let count = layout.segments.triangles.len();
+        let count = setup::points(&layout.segments, config.setup.point).len();
         if sets.k != config.setup.k || sets.segments() != count {
-            return Err(Error::Usage(format!("{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} segments)", cx.scene.source, sets.segments(), sets.k)));
+            return Err(Error::Usage(format!("{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} points)", cx.scene.source, sets.segments(), sets.k)));
         }
-        let vertices = segment_vertices(&layout);
+        let vertices = segment_vertices(&layout, config.setup.point);
         let vertex_count = vertices.len() as u32;
         let vertex_bytes: &[u8] = if vertices.is_empty() { &[0u8; std::mem::size_of::<SegmentVertex>()] } else { bytemuck::cast_slice(&vertices) };
         let vertices = cx.gpu.create_buffer_init("vls segments", vk::BufferUsageFlags::VERTEX_BUFFER, vertex_bytes)?;
@@ -271,7 +285,7 @@ impl Vls {
             desc.raster.cull = vk::CullModeFlags::NONE;
             desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
             desc.depth_format = Some(ds_format);
-            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
+            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }, SpecConstant { id: 1, bits: u32::from(config.setup.point == Point::Vertex) }];
             if !terms.has(Term::Base) {
                 // Over another method's base, whose triangles are not these segments: a pull
                 // towards the eye lets the segments pass the base's equal depth.
@@ -287,15 +301,17 @@ impl Vls {
     }
 }
 
-/// Three vertices per segment, never shared.
-fn segment_vertices(layout: &Layout) -> Vec<SegmentVertex> {
+/// Three vertices per segment, never shared, each with the index of its light set: the
+/// segment's, or (per vertex) the segment vertex's.
+fn segment_vertices(layout: &Layout, point: Point) -> Vec<SegmentVertex> {
     let s = &layout.segments;
     let f = |v: DVec3| v.as_vec3().to_array();
     let mut out = Vec::with_capacity(3 * s.triangles.len());
     for (t, tri) in s.triangles.iter().enumerate() {
         let p = &layout.polygons[s.triangle_polygon[t] as usize];
         for &i in tri {
-            out.push(SegmentVertex { position: f(s.positions[i as usize]), normal: f(p.polygon.plane.normal), albedo: f(p.albedo), emission: f(p.emission), segment: t as u32 });
+            let set = if point == Point::Vertex { i } else { t as u32 };
+            out.push(SegmentVertex { position: f(s.positions[i as usize]), normal: f(p.polygon.plane.normal), albedo: f(p.albedo), emission: f(p.emission), segment: set });
         }
     }
     out
@@ -308,7 +324,7 @@ impl LightingMethod for Vls {
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
         let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
-        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let stages = vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let base = frame.terms.has(Term::Base);
         let pipeline = match (base, frame.terms.has(Term::Direct)) {
             (true, true) => self.pipelines[0],
@@ -320,7 +336,7 @@ impl LightingMethod for Vls {
         pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
         let vertex_count = self.vertex_count;
         let params = self.params;
-        pass.buffer(self.vertices, Access::VertexRead, None).buffer(self.sets, Access::StorageRead { stages: frag }, Some("sets")).record(move |ctx| {
+        pass.buffer(self.vertices, Access::VertexRead, None).buffer(self.sets, Access::StorageRead { stages }, Some("sets")).record(move |ctx| {
             let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
             let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
             ctx.rec.bind_pipeline(pipeline)?;

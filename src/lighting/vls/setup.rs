@@ -35,6 +35,16 @@ pub enum Feeler {
     None,
 }
 
+/// Where a segment's light sets are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Point {
+    /// One set per segment, from its centroid (the thesis's "segment as a point").
+    Centroid,
+    /// One set per segment vertex (shared by the segments of a polygon meeting there), shaded
+    /// per vertex and interpolated: OpenGL's per-vertex lighting, which the thesis drew with.
+    Vertex,
+}
+
 /// What the set-up depends on besides the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SetupParams {
@@ -46,9 +56,10 @@ pub struct SetupParams {
     pub feeler: Feeler,
     /// The model `contribution` ranks by (and `can_illuminate` asks about the cone of).
     pub model: LightModel,
+    pub point: Point,
 }
 
-/// Per segment, K light indices (into the scene's lights), [`EMPTY`] after the last.
+/// Per point (segment or segment vertex, see [`Point`]), K light indices (into the scene's lights), [`EMPTY`] after the last.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LightSets {
     pub k: usize,
@@ -118,9 +129,12 @@ impl<'a> ThesisFeeler<'a> {
     }
 }
 
-/// The segment point the set-up reasons about: its centroid (the thesis's "segment as a point").
-pub fn segment_point(segments: &Segments, s: usize) -> DVec3 {
-    segments.centroid(s)
+/// The points the set-up chooses lights for, as (point, its polygon's normal, its polygon).
+pub fn points(segments: &Segments, point: Point) -> Vec<(DVec3, DVec3, usize)> {
+    match point {
+        Point::Centroid => (0..segments.triangles.len()).map(|t| (segments.centroid(t), segments.normals[segments.triangles[t][0] as usize], segments.triangle_polygon[t] as usize)).collect(),
+        Point::Vertex => (0..segments.positions.len()).map(|i| (segments.positions[i], segments.normals[i], segments.vertex_polygon[i] as usize)).collect(),
+    }
 }
 
 /// Whether `light` can reach the front of a surface at `p` with normal `n`: N·L > 0 and inside
@@ -144,10 +158,12 @@ pub fn potential(model: &LightModel, light: &ManyLight, p: DVec3, n: DVec3) -> f
     light.shade(model, p, n, DVec3::ONE).dot(DVec3::new(0.2126, 0.7152, 0.0722))
 }
 
-/// The light sets of every segment. `polygons` are the scene polygons the segments were built
-/// from (`segments.triangle_polygon` indexes them); `occluders` is used by the BVH feeler.
+/// The light sets of every segment (or segment vertex, per `params.point`). `polygons` are the
+/// scene polygons the segments were built from (`segments.triangle_polygon` indexes them);
+/// `occluders` is used by the BVH feeler.
 pub fn select(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLight], params: &SetupParams, occluders: Option<&Occluders>, progress: &mut Progress) -> LightSets {
-    let count = segments.triangles.len();
+    let points = points(segments, params.point);
+    let count = points.len();
     let k = params.k.max(1);
     let mut indices = vec![EMPTY; count * k];
     let thesis = ThesisFeeler::new(polygons);
@@ -157,13 +173,11 @@ pub fn select(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLigh
     std::thread::scope(|scope| {
         let mut handles = Vec::new();
         for (c, out) in indices.chunks_mut(chunk * k).enumerate() {
-            let (thesis, done) = (&thesis, &done);
+            let (thesis, done, points) = (&thesis, &done, &points);
             handles.push(scope.spawn(move || {
                 for (j, slots) in out.chunks_mut(k).enumerate() {
                     let s = c * chunk + j;
-                    let own = segments.triangle_polygon[s] as usize;
-                    let p = segment_point(segments, s);
-                    let n = polygons.get(own).map_or(DVec3::Z, |q| q.polygon.plane.normal);
+                    let (p, n, own) = points[s];
                     let blocked = |l: &ManyLight| match params.feeler {
                         Feeler::Thesis => thesis.blocked(own, p, l.position),
                         Feeler::Bvh => occluders.is_some_and(|o| o.blocked(p, l.position)),

@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 
-use super::setup::{self, choose, Feeler, LightSets, Selection, SetupParams, ThesisFeeler, EMPTY};
+use super::setup::{self, choose, Feeler, LightSets, Point, Selection, SetupParams, ThesisFeeler, EMPTY};
 use super::{Config, Layout};
 use crate::bake::{Baker, Progress};
 use crate::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon, Segments};
@@ -36,7 +36,7 @@ fn square(cx: f64, cy: f64, z: f64, side: f64) -> Vec<ScenePolygon> {
 }
 
 fn params(k: usize, selection: Selection, feeler: Feeler, model: LightModel) -> SetupParams {
-    SetupParams { k, selection, can_illuminate: false, feeler, model }
+    SetupParams { k, selection, can_illuminate: false, feeler, model, point: Point::Centroid }
 }
 
 fn sets(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLight], p: &SetupParams) -> LightSets {
@@ -80,7 +80,7 @@ fn small_scene() -> (Vec<ScenePolygon>, Vec<ManyLight>) {
 }
 
 /// Item 17 with ≤ K lights: every segment's VLS sum is the full sum with the same feeler's
-/// shadows, bit for bit, for every selection, feeler and model.
+/// shadows, bit for bit, for every selection, feeler and model, per segment and per vertex.
 #[test]
 fn with_at_most_k_lights_vls_is_the_full_sum() {
     let (polygons, lights) = small_scene();
@@ -90,17 +90,15 @@ fn with_at_most_k_lights_vls_is_the_full_sum() {
     let mut shadowed = 0;
     for model in [LightModel::Physical, LightModel::Seed { k: 1.0 }, LightModel::OpenGl { kc: 1.0, kl: 0.2, kq: 0.5 }] {
         for selection in [Selection::Closest, Selection::Contribution] {
-            for feeler in [Feeler::Thesis, Feeler::Bvh] {
-                let p = params(8, selection, feeler, model);
+            for (feeler, point) in [(Feeler::Thesis, Point::Centroid), (Feeler::Bvh, Point::Centroid), (Feeler::Bvh, Point::Vertex)] {
+                let p = SetupParams { point, ..params(8, selection, feeler, model) };
                 let s = sets(&polygons, &segs, &lights, &p);
-                for t in 0..segs.triangles.len() {
-                    let own = segs.triangle_polygon[t] as usize;
-                    let (c, n) = (segs.centroid(t), polygons[own].polygon.plane.normal);
+                for (t, &(c, n, _)) in setup::points(&segs, point).iter().enumerate() {
                     let unblocked: Vec<usize> = (0..lights.len()).filter(|&i| !occluders.blocked(c, lights[i].position)).collect();
                     shadowed += lights.len() - unblocked.len();
                     let full = sum(&model, &lights, unblocked.into_iter(), &ones, c, n);
                     let vls = sum(&model, &lights, s.of(t), &ones, c, n);
-                    assert_eq!(vls, full, "segment {t} ({selection:?}, {feeler:?}, {model:?}): {:?}", s.of(t).collect::<Vec<_>>());
+                    assert_eq!(vls, full, "{point:?} {t} ({selection:?}, {feeler:?}, {model:?}): {:?}", s.of(t).collect::<Vec<_>>());
                 }
             }
         }
