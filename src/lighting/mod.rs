@@ -26,6 +26,7 @@ pub mod prt;
 pub mod radiosity;
 pub mod sh_lightmap;
 pub mod shadow_volumes;
+pub mod vls;
 
 use bytemuck::{Pod, Zeroable};
 

@@ -7,7 +7,7 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, vls, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -127,6 +127,16 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(clustered::Clustered::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: vls::SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: true,
+            sweep: vls::sweep,
+            reference: vls::reference,
+            translucency: false,
+            create: |c, d| Ok(Box::new(vls::Vls::new(c, d)?)),
             report: None,
         },
     ]

@@ -14,6 +14,8 @@ pub struct ScenePolygon {
     pub polygon: Polygon,
     /// Diffuse reflectance, RGB (the material's albedo times its map's mean).
     pub albedo: DVec3,
+    /// Emitted radiance, RGB (a method drawing the segments draws their emission too).
+    pub emission: DVec3,
     /// The scene draw it came from (so a method can draw its segments with the draw's
     /// material and model matrix).
     pub draw: usize,
@@ -29,7 +31,7 @@ pub fn scene_polygons(scene_source: &str, geometry: &StaticGeometry, method: &st
     let mut out = Vec::with_capacity(geometry.triangles.len());
     for (t, tri) in geometry.triangles.iter().enumerate() {
         if let Some(polygon) = Polygon::from_vertices(tri.p.to_vec()) {
-            out.push(ScenePolygon { polygon, albedo: tri.albedo, draw: geometry.draw[t] });
+            out.push(ScenePolygon { polygon, albedo: tri.albedo, emission: tri.emission, draw: geometry.draw[t] });
         }
     }
     Ok(out)

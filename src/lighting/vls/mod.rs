@@ -1,0 +1,354 @@
+//! Virtualised light sources (seed 003, digest §1.4): the scene's polygons cut into small
+//! triangles ("segments"); at set-up each segment keeps the ≤ K lights it will ever shade with —
+//! the closest (the thesis) or the most contributing that pass a shadow feeler from the segment's
+//! centroid; at run time each segment sums only those lights, at their current intensities.
+//!
+//! The set-up is a bake ([`setup`], cached through the bake stage). The run time is one graphics
+//! pass: the segments drawn with unshared vertices carrying the segment's id (so a boundary
+//! between different light sets shows, the thesis's Fig. 6-3), the fragment shader looping over
+//! the segment's light indices with `glsl/common/many_lights.glsl`. Shadows are the feeler's
+//! only: a blocked light is not in the set, an unblocked one lights the whole segment.
+//!
+//! Modes: `faithful` is the thesis — closest lights, its plane-and-polygon feeler, the OpenGL
+//! fixed-function model (`1/(kc + kl·d + kq·d²)`, default `1/(1 + d²)`: the thesis gives no
+//! constants); `corrected` ranks by potential contribution, casts feelers over the BVH and
+//! shades with the physical model, so its frames are radiance and compare with the reference.
+//! Every choice is a parameter of its own as well.
+
+pub mod setup;
+
+#[cfg(test)]
+mod tests;
+
+use glam::DVec3;
+
+use crate::backend::{
+    vk, Bind, BlendMode, BufferId, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+};
+use crate::bake::BakeKey;
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::params::Params;
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
+use setup::{Feeler, LightSets, Point, Selection, SetupParams};
+
+pub const NAME: &str = "vls";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "mode", kind: ParamKind::String },
+        ParamSchema { name: "k", kind: ParamKind::Int },
+        ParamSchema { name: "selection", kind: ParamKind::String },
+        ParamSchema { name: "can_illuminate", kind: ParamKind::Bool },
+        ParamSchema { name: "feeler", kind: ParamKind::String },
+        ParamSchema { name: "max_segment_area", kind: ParamKind::Float },
+        ParamSchema { name: "point", kind: ParamKind::String },
+        ParamSchema { name: "model", kind: ParamKind::String },
+        ParamSchema { name: "seed_k", kind: ParamKind::Float },
+        ParamSchema { name: "kc", kind: ParamKind::Float },
+        ParamSchema { name: "kl", kind: ParamKind::Float },
+        ParamSchema { name: "kq", kind: ParamKind::Float },
+    ],
+};
+
+/// The most lights a segment keeps: the shader's loop and the index buffer grow with it.
+pub const MAX_K: i64 = 32;
+
+/// Bumped whenever the set-up's output for the same inputs changes.
+const SETUP_VERSION: u32 = 1;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Faithful,
+    Corrected,
+}
+
+/// The method's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    pub mode: Mode,
+    pub setup: SetupParams,
+    /// World units²: segments are no larger.
+    pub max_segment_area: f64,
+}
+
+impl Config {
+    pub fn from_decl(decl: &MethodDecl) -> Result<Config> {
+        Config::from_decl_in(decl, None)
+    }
+
+    /// The parameters of `decl`; a bad value is one line naming the scene file and parameter.
+    pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
+        let params = Params::new(decl, scene);
+        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
+        let mut c = match mode {
+            Mode::Faithful => Config {
+                mode,
+                setup: SetupParams {
+                    k: 8,
+                    selection: Selection::Closest,
+                    can_illuminate: false,
+                    feeler: Feeler::Thesis,
+                    model: LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 },
+                    point: Point::Centroid,
+                },
+                max_segment_area: 0.05,
+            },
+            Mode::Corrected => Config {
+                mode,
+                setup: SetupParams { k: 8, selection: Selection::Contribution, can_illuminate: true, feeler: Feeler::Bvh, model: LightModel::Physical, point: Point::Centroid },
+                max_segment_area: 0.05,
+            },
+        };
+        if let Some(v) = decl.param("k") {
+            c.setup.k = v.as_integer().filter(|k| (1..=MAX_K).contains(k)).ok_or_else(|| params.error("k", &format!("an integer from 1 to {MAX_K}"), v))? as usize;
+        }
+        if let Some(s) = params.get_choice("selection", &[("closest", Selection::Closest), ("contribution", Selection::Contribution)])? {
+            c.setup.selection = s;
+        }
+        if let Some(v) = decl.param("can_illuminate") {
+            c.setup.can_illuminate = v.as_bool().ok_or_else(|| params.error("can_illuminate", "true or false", v))?;
+        }
+        if let Some(f) = params.get_choice("feeler", &[("thesis", Feeler::Thesis), ("bvh", Feeler::Bvh), ("none", Feeler::None)])? {
+            c.setup.feeler = f;
+        }
+        if let Some(p) = params.get_choice("point", &[("centroid", Point::Centroid), ("vertex", Point::Vertex)])? {
+            c.setup.point = p;
+        }
+        if let Some(v) = decl.param("max_segment_area") {
+            c.max_segment_area =
+                Params::float(v).filter(|a| a.is_finite() && (1e-6..=1e4).contains(a)).ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 (world units²)", v))?;
+        }
+        let number = |p: &str, default: f64| -> Result<f64> {
+            match decl.param(p) {
+                None => Ok(default),
+                Some(v) => Params::float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| params.error(p, "a number ≥ 0", v)),
+            }
+        };
+        if let Some(m) = params.get_choice("model", &[("physical", 0u8), ("seed", 1), ("opengl", 2)])? {
+            c.setup.model = match m {
+                0 => LightModel::Physical,
+                1 => LightModel::Seed { k: 1.0 },
+                _ => LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 },
+            };
+        }
+        c.setup.model = match c.setup.model {
+            LightModel::Physical => LightModel::Physical,
+            LightModel::Seed { k } => LightModel::Seed { k: number("seed_k", k)? },
+            LightModel::OpenGl { kc, kl, kq } => {
+                let (kc, kl, kq) = (number("kc", kc)?, number("kl", kl)?, number("kq", kq)?);
+                if kc + kl + kq <= 0.0 {
+                    let v = decl.param("kc").cloned().unwrap_or(toml::Value::Float(kc));
+                    return Err(params.error("kc", "kc, kl and kq not all zero (the attenuation would divide by zero)", &v));
+                }
+                LightModel::OpenGl { kc, kl, kq }
+            }
+        };
+        Ok(c)
+    }
+
+    /// The label the chart and the bake report use.
+    pub fn label(&self) -> String {
+        let s = &self.setup;
+        let point = if s.point == Point::Vertex { " per-vertex" } else { "" };
+        format!("vls {:?} k={} {:?} feeler={:?} area={}{point}", self.mode, s.k, s.selection, s.feeler, self.max_segment_area).to_lowercase()
+    }
+}
+
+/// Judged against direct light: the feeler's shadows are hard shadows of point lights.
+pub fn reference(_decl: &MethodDecl) -> crate::lighting::ReferenceKind {
+    crate::lighting::ReferenceKind::Direct
+}
+
+/// The chart's sweep: as declared, K from 1 to 32, the other selection, and segments 4× larger
+/// and smaller.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d) {
+            let label = c.label();
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    let declared = Config::from_decl(decl).ok();
+    for k in [1i64, 4, 8, 16, 32] {
+        push(decl.with("k", k.into()));
+    }
+    for s in ["closest", "contribution"] {
+        push(decl.with("selection", s.into()));
+    }
+    let area = declared.map_or(0.05, |c| c.max_segment_area);
+    for a in [4.0 * area, area / 4.0] {
+        push(decl.with("max_segment_area", a.into()));
+    }
+    out
+}
+
+/// The scene as VLS lights it: its polygons, their segments and its lights.
+pub struct Layout {
+    pub polygons: Vec<ScenePolygon>,
+    pub segments: Segments,
+    pub lights: Vec<ManyLight>,
+}
+
+impl Layout {
+    /// `geometry` is the scene's static geometry (`static_geometry` or `scene_geometry`).
+    pub fn new(scene: &Scene, geometry: &crate::lightmap::geometry::StaticGeometry, decl: &MethodDecl, config: &Config) -> Result<Layout> {
+        let lights = ManyLight::from_scene(scene, NAME)?;
+        let polygons = scene_polygons(&scene.source, geometry, NAME)?;
+        let segments = Segments::build(polygons.iter().map(|p| &p.polygon), config.max_segment_area).map_err(|why| {
+            let v = decl.param("max_segment_area").cloned().unwrap_or(toml::Value::Float(config.max_segment_area));
+            Params::new(decl, Some(scene)).error("max_segment_area", &format!("an area giving fewer segments ({why})"), &v)
+        })?;
+        Ok(Layout { polygons, segments, lights })
+    }
+
+    /// Everything the light sets depend on.
+    pub fn key(&self, config: &Config) -> BakeKey {
+        let geometry: Vec<f64> = self.polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array())).collect();
+        BakeKey::new("vls light sets")
+            .with("version", SETUP_VERSION)
+            .with("setup", config.setup)
+            .with("area", config.max_segment_area)
+            .with("lights", &self.lights)
+            .with_bytes("polygons", bytemuck::cast_slice(&geometry))
+    }
+
+    /// The light sets (the bake's work).
+    pub fn select(&self, setup: &SetupParams, progress: &mut crate::bake::Progress) -> LightSets {
+        let occluders = (setup.feeler == Feeler::Bvh).then(|| Occluders::new(self.polygons.iter().map(|p| &p.polygon)));
+        setup::select(&self.polygons, &self.segments, &self.lights, setup, occluders.as_ref(), progress)
+    }
+}
+
+/// `SegmentVertex` of glsl/vls/vls.vert.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct SegmentVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    albedo: [f32; 3],
+    emission: [f32; 3],
+    segment: u32,
+}
+
+/// `VlsParams` of glsl/vls/vls.frag.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct ShaderParams {
+    info: [u32; 4],
+    constants: [f32; 4],
+}
+
+pub struct Vls {
+    pipelines: [PipelineId; 3],
+    vertices: BufferId,
+    vertex_count: u32,
+    sets: BufferId,
+    params: ShaderParams,
+}
+
+impl Vls {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Vls> {
+        let config = Config::from_decl_in(decl, Some(cx.scene))?;
+        let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let layout = Layout::new(cx.scene, &geometry, decl, &config)?;
+        let key = layout.key(&config);
+        let sets = cx.bakes.bake(&config.label(), &key, |progress| Ok(layout.select(&config.setup, progress)))?;
+        let count = setup::points(&layout.segments, config.setup.point).len();
+        if sets.k != config.setup.k || sets.segments() != count {
+            return Err(Error::Usage(format!("{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} points)", cx.scene.source, sets.segments(), sets.k)));
+        }
+        let vertices = segment_vertices(&layout, config.setup.point);
+        let vertex_count = vertices.len() as u32;
+        let vertex_bytes: &[u8] = if vertices.is_empty() { &[0u8; std::mem::size_of::<SegmentVertex>()] } else { bytemuck::cast_slice(&vertices) };
+        let vertices = cx.gpu.create_buffer_init("vls segments", vk::BufferUsageFlags::VERTEX_BUFFER, vertex_bytes)?;
+        cx.states.forget_buffer(vertices);
+        let set_bytes: &[u8] = if sets.indices.is_empty() { &[0xffu8; 4] } else { bytemuck::cast_slice(&sets.indices) };
+        let sets_buffer = cx.gpu.create_buffer_init("vls light sets", vk::BufferUsageFlags::STORAGE_BUFFER, set_bytes)?;
+        cx.states.forget_buffer(sets_buffer);
+        let ds_format = cx.gpu.caps().depth_stencil_format;
+        let mut pipeline = |terms: Terms| {
+            let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
+            let mut desc = GraphicsPipelineDesc::new(&format!("vls {terms}"), "vls/vls.vert", Some("vls/vls.frag"));
+            let f3 = vk::Format::R32G32B32_SFLOAT;
+            desc.vertex_layout = VertexLayout {
+                buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)],
+                attributes: vec![attr(0, f3, 0), attr(1, f3, 12), attr(2, f3, 24), attr(3, f3, 36), attr(4, vk::Format::R32_UINT, 48)],
+            };
+            desc.raster.cull = vk::CullModeFlags::NONE;
+            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+            desc.depth_format = Some(ds_format);
+            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }, SpecConstant { id: 1, bits: u32::from(config.setup.point == Point::Vertex) }];
+            if !terms.has(Term::Base) {
+                // Over another method's base, whose triangles are not these segments: a pull
+                // towards the eye lets the segments pass the base's equal depth.
+                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+                desc.raster.depth_bias = Some((-4.0, -1.0));
+                desc.color_targets[0].blend = BlendMode::Additive;
+            }
+            cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
+        };
+        let pipelines = [pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?];
+        let params = ShaderParams { info: [config.setup.model.code(), config.setup.k as u32, 0, 0], constants: config.setup.model.constants() };
+        Ok(Vls { pipelines, vertices, vertex_count, sets: sets_buffer, params })
+    }
+}
+
+/// Three vertices per segment, never shared, each with the index of its light set: the
+/// segment's, or (per vertex) the segment vertex's.
+fn segment_vertices(layout: &Layout, point: Point) -> Vec<SegmentVertex> {
+    let s = &layout.segments;
+    let f = |v: DVec3| v.as_vec3().to_array();
+    let mut out = Vec::with_capacity(3 * s.triangles.len());
+    for (t, tri) in s.triangles.iter().enumerate() {
+        let p = &layout.polygons[s.triangle_polygon[t] as usize];
+        for &i in tri {
+            let set = if point == Point::Vertex { i } else { t as u32 };
+            out.push(SegmentVertex { position: f(s.positions[i as usize]), normal: f(p.polygon.plane.normal), albedo: f(p.albedo), emission: f(p.emission), segment: set });
+        }
+    }
+    out
+}
+
+impl LightingMethod for Vls {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
+        let stages = vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let base = frame.terms.has(Term::Base);
+        let pipeline = match (base, frame.terms.has(Term::Direct)) {
+            (true, true) => self.pipelines[0],
+            (true, false) => self.pipelines[1],
+            (false, true) => self.pipelines[2],
+            (false, false) => return Ok(()),
+        };
+        let mut pass = graph.pass(if base { "vls" } else { "vls direct" }).color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
+        let vertex_count = self.vertex_count;
+        let params = self.params;
+        pass.buffer(self.vertices, Access::VertexRead, None).buffer(self.sets, Access::StorageRead { stages }, Some("sets")).record(move |ctx| {
+            let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            ctx.rec.bind_pipeline(pipeline)?;
+            let lights: &[u8] = if scene.lights.is_empty() { &[0u8; 64] } else { bytemuck::cast_slice(&scene.lights) };
+            ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))), ("lights", Bind::StorageData(lights)), ("params", Bind::UniformData(bytemuck::bytes_of(&params)))])?;
+            if vertex_count > 0 {
+                ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
+                ctx.rec.draw(vertex_count, 1)?;
+            }
+            ctx.rec.end_rendering();
+            Ok(())
+        });
+        Ok(())
+    }
+}
