@@ -24,7 +24,10 @@ mod tests;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::backend::{vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::backend::{
+    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange,
+    VertexAttribute, VertexLayout,
+};
 use crate::bake::{BakeData, BakeKey};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -241,7 +244,12 @@ fn check_matrix(vertices: usize, lights: usize, storage: Storage) -> std::result
 }
 
 /// The full set-up of `scene`'s polygons and lights on the CPU, as the bake runs it.
-pub fn bake_scene(scene: &Scene, geometry: &crate::lightmap::geometry::StaticGeometry, config: &Config, progress: &mut crate::progress::Progress) -> Result<(setup::Setup, Vec<crate::many_lights::ScenePolygon>)> {
+pub fn bake_scene(
+    scene: &Scene,
+    geometry: &crate::lightmap::geometry::StaticGeometry,
+    config: &Config,
+    progress: &mut crate::progress::Progress,
+) -> Result<(setup::Setup, Vec<crate::many_lights::ScenePolygon>)> {
     let lights = ManyLight::from_scene(scene, NAME)?;
     let polygons = scene_polygons(&scene.source, geometry, NAME)?;
     let settings = setup::Settings {
@@ -330,10 +338,8 @@ impl BspLights {
         if polygons.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static polygons to light", scene.source)));
         }
-        let geometry_floats: Vec<f64> = polygons
-            .iter()
-            .flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array()).chain(geometry.triangles[p.triangle].emission.to_array()))
-            .collect();
+        let geometry_floats: Vec<f64> =
+            polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array()).chain(geometry.triangles[p.triangle].emission.to_array())).collect();
         let key = BakeKey::new("bsp_lights set-up")
             .with("version", SETUP_VERSION)
             .with("model", config.model())
@@ -372,7 +378,9 @@ impl BspLights {
         let indices = gpu.create_buffer_init(&format!("{NAME} indices"), vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&baked.indices))?;
         let matrix_words: Vec<u32> = match config.storage {
             Storage::F32 => baked.colours.iter().map(|c| c.to_bits()).collect(),
-            Storage::F16 => baked.colours.chunks(2).map(|p| u32::from(half::f16::from_f32(p[0]).to_bits()) | u32::from(half::f16::from_f32(p.get(1).copied().unwrap_or(0.0)).to_bits()) << 16).collect(),
+            Storage::F16 => {
+                baked.colours.chunks(2).map(|p| u32::from(half::f16::from_f32(p[0]).to_bits()) | u32::from(half::f16::from_f32(p.get(1).copied().unwrap_or(0.0)).to_bits()) << 16).collect()
+            }
         };
         let matrix = gpu.create_storage_buffer(&format!("{NAME} matrix"), bytemuck::cast_slice(&matrix_words))?;
         let colours = gpu.create_buffer(&BufferDesc {
@@ -442,13 +450,15 @@ impl BspLights {
     pub fn add_gemv<'a>(&'a self, graph: &mut RenderGraph<'a>) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let n = self.baked.vertices.len() as u32;
-        graph.pass(&format!("{NAME} gemv")).buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix")).buffer(self.colours, Access::StorageWrite { stages: compute }, Some("colours")).record(
-            move |ctx| {
+        graph
+            .pass(&format!("{NAME} gemv"))
+            .buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix"))
+            .buffer(self.colours, Access::StorageWrite { stages: compute }, Some("colours"))
+            .record(move |ctx| {
                 ctx.rec.bind_pipeline(self.gemv)?;
                 ctx.bind(&[("enabled", Bind::StorageData(bytemuck::cast_slice(&self.active)))])?;
                 ctx.rec.dispatch([n, 1, 1])
-            },
-        );
+            });
     }
 
     /// Reads the vertex colour buffer back (after the frames that wrote it finished).

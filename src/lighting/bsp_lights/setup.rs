@@ -295,7 +295,9 @@ pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Pro
         }
         out.push(light + (x - light) * (h_light / denom));
     }
-    (shadow_area(&out, target.normal) > MIN_SHADOW_AREA).then_some(out)
+    // Only the valid projection is a simple polygon whose area means something: the thesis's
+    // can be a bow-tie through infinity, whose lobes cancel.
+    (projection == Projection::Thesis || shadow_area(&out, target.normal) > MIN_SHADOW_AREA).then_some(out)
 }
 
 /// Area of a planar vertex loop (absolute value of its vector area along the normal).
