@@ -106,6 +106,9 @@ pub fn build_tree(polygons: &[ScenePolygon]) -> Tree {
     Tree::build(fragments, SplitHeuristic::FirstFace)
 }
 
+/// One thread's columns (light, `C_l`) and its colouring and shadow CPU times.
+type ThreadResult = (Vec<(usize, Vec<[f32; 3]>)>, f64, f64);
+
 /// Runs the whole set-up. Errors are one sentence (the caller names the file and field).
 pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings, progress: &mut Progress) -> Result<Setup, String> {
     let start = Instant::now();
@@ -126,7 +129,7 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
     let done = AtomicUsize::new(0);
     let fragments: Vec<&Polygon> = tree.fragments.iter().map(|(f, _)| &f.polygon).collect();
     let shared = Shared { fragments: &fragments, tree: &tree, segments: &segments, fragment_vertices: &fragment_vertices, albedo: &albedo, model: settings.model, projection: settings.projection };
-    let per_thread: Vec<(Vec<(usize, Vec<[f32; 3]>)>, f64, f64)> = std::thread::scope(|s| {
+    let per_thread: Vec<ThreadResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
                 let (shared, done) = (&shared, &done);
