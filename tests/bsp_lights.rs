@@ -273,10 +273,18 @@ fn the_direct_term_adds_over_another_methods_base() {
         + "[environment]\ntype = \"constant\"\nradiance = 0.2\n";
     let sc = scene(&text);
     let mut images = Vec::new();
+    let mean = |img: &penumbra::image_io::HdrImage| img.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / img.pixels.len() as f64;
     for config in ["bsp_lights", "bsp_over_forward"] {
         let mut r = Renderer::new(common::test_gpu(), sc.clone(), Some(config), (40, 30), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         images.push(r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
+        if config == "bsp_over_forward" {
+            // The lights off: the base alone, which the direct term must have added to.
+            r.scene_gpu.lights.iter_mut().for_each(|l| l.intensity = [0.0; 4]);
+            let base = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+            println!("mean red: base {:.5}, base + direct {:.5}", mean(&base), mean(&images[1]));
+            assert!(mean(&images[1]) > 1.2 * mean(&base), "the direct term adds nothing");
+        }
         common::assert_clean(&r.gpu);
     }
     let n = images[0].pixels.len();
