@@ -308,23 +308,48 @@ fn bad_parameters_are_one_line_through_the_renderer() {
     }
 }
 
+/// The floor and `n` unit boxes turned every which way (their planes cut each other: the
+/// first-polygon BSP splits), under `lights` lights.
+fn tilted_boxes(n: usize, lights: usize) -> String {
+    let mut text = scene_text("{ name = \"bsp_lights\", max_segment_area = 0.005 }", lights, 1);
+    let mut rng = Rng(17);
+    for i in 0..n {
+        let a = i as f32 / n as f32 * std::f32::consts::TAU;
+        text += &format!(
+            "[[objects]]\nmesh = \"box\"\nsize = 0.4\ntranslate = [{:.3}, {:.3}, {:.3}]\nrotate_deg = [{:.1}, {:.1}, {:.1}]\n",
+            1.2 * a.cos(),
+            0.4 + 0.3 * rng.next(),
+            1.2 * a.sin(),
+            90.0 * rng.next(),
+            90.0 * rng.next(),
+            90.0 * rng.next()
+        );
+    }
+    text
+}
+
 /// Set-up time by phase and memory against polygons and lights, and the GEMV's time against
 /// active lights (lavapipe; `cargo test --release --test bsp_lights -- --ignored --nocapture`).
 #[test]
 #[ignore]
 fn measure_setup_and_gemv() {
     use penumbra::lighting::bsp_lights::{bake_scene, Config};
-    println!("| box subdivisions | lights | polygons | BSP fragments | vertices | BSP ms | segmentation ms | colouring ms (CPU) | shadows ms (CPU) | lights wall ms | MiB (f32) | bytes/light |");
+    println!("| scene | lights | polygons | BSP fragments | vertices | BSP ms | segmentation ms | colouring ms (CPU) | shadows ms (CPU) | lights wall ms | MiB (f32) | bytes/light |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for (subdivisions, lights) in [(2u32, 10usize), (4, 10), (8, 10), (8, 50), (8, 100), (16, 10)] {
-        let sc = scene(&scene_text("{ name = \"bsp_lights\", max_segment_area = 0.005 }", lights, subdivisions));
+    let rows: Vec<(String, usize, String)> = [(2u32, 10usize), (4, 10), (8, 10), (8, 50), (8, 100), (16, 10)]
+        .into_iter()
+        .map(|(subdivisions, lights)| (format!("box, {subdivisions} subdivisions"), lights, scene_text("{ name = \"bsp_lights\", max_segment_area = 0.005 }", lights, subdivisions)))
+        .chain([4usize, 8, 16].into_iter().map(|n| (format!("{n} tilted boxes"), 10, tilted_boxes(n, 10))))
+        .collect();
+    for (label, lights, text) in rows {
+        let sc = scene(&text);
         let geometry = penumbra::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
         let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
         let (s, polygons) = bake_scene(&sc, &geometry, &config, &mut penumbra::progress::Progress::new("measure")).unwrap();
         let p = s.phases;
         let bytes = 12 * s.vertices() as u64;
         println!(
-            "| {subdivisions} | {lights} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {bytes} |",
+            "| {label} | {lights} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {bytes} |",
             polygons.len(),
             s.tree.fragments.len(),
             s.vertices(),
@@ -336,24 +361,26 @@ fn measure_setup_and_gemv() {
             (bytes * lights as u64) as f64 / (1 << 20) as f64
         );
     }
-    // 1,000 lights over ~9k vertices in f16 (the f32 matrix would be over the limit).
-    let sc = scene(&scene_text("{ name = \"bsp_lights\", max_segment_area = 0.002, storage = \"f16\" }", 1000, 8));
-    let geometry = penumbra::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
-    let polygons = penumbra::many_lights::scene_polygons(&sc.source, &geometry, "bsp_lights").unwrap();
-    let tree = penumbra::lighting::bsp_lights::setup::build_tree(&polygons);
-    let vertices = penumbra::many_lights::Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), 0.002).unwrap().positions.len();
-    let mut r = Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (64, 48), 1).unwrap_or_else(|e| panic!("{e}"));
-    let cam = r.scene.camera.clone();
-    let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
-    println!("\n| active lights | vertices | GEMV ms (median of 7) |\n|---|---|---|");
-    for active in [1usize, 10, 100, 250, 500, 1000] {
-        for (l, light) in r.scene_gpu.lights.iter_mut().enumerate() {
-            light.intensity = if l < active { full[l] } else { [0.0; 4] };
+    // 500 lights over ~9k vertices, the matrix in f32 (51 MiB) and in f16.
+    println!("\n| storage | active lights | vertices | GEMV ms (median of 7) |\n|---|---|---|---|");
+    for storage in ["f32", "f16"] {
+        let sc = scene(&scene_text(&format!("{{ name = \"bsp_lights\", max_segment_area = 0.002, storage = \"{storage}\" }}"), 500, 8));
+        let geometry = penumbra::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
+        let polygons = penumbra::many_lights::scene_polygons(&sc.source, &geometry, "bsp_lights").unwrap();
+        let tree = penumbra::lighting::bsp_lights::setup::build_tree(&polygons);
+        let vertices = penumbra::many_lights::Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), 0.002).unwrap().positions.len();
+        let mut r = Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (64, 48), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
+        for active in [1usize, 10, 100, 250, 500] {
+            for (l, light) in r.scene_gpu.lights.iter_mut().enumerate() {
+                light.intensity = if l < active { full[l] } else { [0.0; 4] };
+            }
+            let frames = r.profile(&cam, 7).unwrap();
+            let stats = penumbra::timing::summarise(&frames);
+            let ms = stats.iter().find(|s| s.name == "bsp_lights gemv").map_or(f64::NAN, |s| s.median_ms);
+            println!("| {storage} | {active} | {vertices} | {ms:.3} |");
         }
-        let frames = r.profile(&cam, 7).unwrap();
-        let stats = penumbra::timing::summarise(&frames);
-        let ms = stats.iter().find(|s| s.name == "bsp_lights gemv").map_or(f64::NAN, |s| s.median_ms);
-        println!("| {active} | {vertices} | {ms:.3} |");
+        common::assert_clean(&r.gpu);
     }
-    common::assert_clean(&r.gpu);
 }

@@ -352,12 +352,14 @@ impl BspLights {
         let baked: Baked = cx.bakes.bake(&name, &key, |progress| {
             let (s, polygons) = bake_scene(scene, geo, &config, progress)?;
             let p = s.phases;
+            let per_light = s.vertices() as u64 * config.storage.bytes_per_entry();
             crate::errln!(
-                "{NAME} set-up: {} polygons -> {} BSP fragments -> {} vertices; {} lights; BSP {:.1} ms, segmentation {:.1} ms, colouring {:.1} ms CPU, shadows {:.1} ms CPU ({:.1} ms wall for the lights)",
+                "{NAME} set-up: {} polygons -> {} BSP fragments -> {} vertices; {} lights at {per_light} bytes each ({:.2} MiB); BSP {:.1} ms, segmentation {:.1} ms, colouring {:.1} ms CPU, shadows {:.1} ms CPU ({:.1} ms wall for the lights)",
                 polygons.len(),
                 s.tree.fragments.len(),
                 s.vertices(),
                 s.lights,
+                (per_light * s.lights as u64) as f64 / (1u64 << 20) as f64,
                 p.bsp_ms,
                 p.segment_ms,
                 p.colour_cpu_ms,
