@@ -151,7 +151,8 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
             .collect();
         while handles.iter().any(|h| !h.is_finished()) {
             progress.update(done.load(Ordering::Relaxed) as u64, lights.len() as u64);
-            std::thread::sleep(std::time::Duration::from_millis(20));
+            // Short: a small set-up finishes within a few of these.
+            std::thread::sleep(std::time::Duration::from_millis(2));
         }
         handles.into_iter().map(|h| h.join().unwrap_or_default()).collect()
     });
