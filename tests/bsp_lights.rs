@@ -384,3 +384,24 @@ fn measure_setup_and_gemv() {
         common::assert_clean(&r.gpu);
     }
 }
+
+/// The set-up is a bake: a second renderer over the same scene reads it from the cache and
+/// draws the same image; a changed segment area is a different key.
+#[test]
+fn the_set_up_is_cached_by_the_bake_stage() {
+    let dir = common::temp_path("bsp_lights_bakes");
+    let mut images = Vec::new();
+    for (area, want_cached) in [(0.02, false), (0.02, true), (0.03, false)] {
+        let sc = scene(&scene_text(&format!("{{ name = \"bsp_lights\", max_segment_area = {area} }}"), 3, 2));
+        let config = penumbra::lighting::registry::configuration(&sc, Some("bsp_lights")).unwrap();
+        let mut r = Renderer::with_configuration(common::test_gpu(), sc, config, (32, 24), 1, Baker::new(Some(dir.clone()))).unwrap_or_else(|e| panic!("{e}"));
+        let report = r.bakes.iter().find(|b| b.name.starts_with("bsp_lights set-up")).expect("the set-up is reported as a bake").clone();
+        println!("{}: {:.1} ms, {} bytes, cached {}", report.name, report.ms, report.bytes, report.cached);
+        assert_eq!(report.cached, want_cached, "area {area}");
+        let cam = r.scene.camera.clone();
+        images.push(r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
+        common::assert_clean(&r.gpu);
+    }
+    assert_eq!(images[0].pixels, images[1].pixels, "the cached set-up draws the same image");
+    let _ = std::fs::remove_dir_all(&dir);
+}

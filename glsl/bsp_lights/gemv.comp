@@ -29,7 +29,8 @@ void main() {
         return;
     }
     vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < enabled.header.x; ++i) {
+    uint count = enabled.header.x;
+    for (uint i = 0u; i < count; ++i) {
         uvec2 item = enabled.items[i];
         uint e = 3u * (item.x * vertices + v);
         // Channels written out: a loop here would count against llvmpipe's iteration limit.
