@@ -405,3 +405,42 @@ fn the_set_up_is_cached_by_the_bake_stage() {
     assert_eq!(images[0].pixels, images[1].pixels, "the cached set-up draws the same image");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The most lights the method takes (8,192) all active: the GEMV's loop stays under llvmpipe's
+/// 65,535 iterations per invocation and still equals the CPU sum; one more light is refused.
+#[test]
+fn the_largest_light_count_relights_in_one_pass_and_one_more_is_refused() {
+    let max = penumbra::lighting::bsp_lights::MAX_LIGHTS;
+    // The lights are added to the parsed scene: parsing 8,192 lights from TOML takes ~19 s.
+    let with_lights = |n: usize, decl: &str| {
+        let mut sc = scene(&scene_text(decl, 1, 1));
+        let base = sc.lights[0].clone();
+        sc.lights = (0..n)
+            .map(|i| {
+                let mut l = base.clone();
+                if let penumbra::scene::Light::Point { position, intensity, .. } = &mut l {
+                    *position = glam::Vec3::new(-1.5 + 3.0 * (i as f32 + 0.5) / n as f32, 2.5, 0.3 * (i % 5) as f32 - 0.6);
+                    *intensity = glam::Vec3::new(1.0 + (i % 3) as f32, 2.0, 3.0 - (i % 2) as f32);
+                }
+                l
+            })
+            .collect();
+        sc
+    };
+    let sc = with_lights(max, "{ name = \"bsp_lights\", max_segment_area = 1, threshold = 0 }");
+    let (mut setup, mut bsp) = create(&sc);
+    let scales: Vec<f32> = (0..max).map(|l| 0.1 + 0.9 * ((l * 37) % 101) as f32 / 101.0).collect();
+    let got = gemv(&mut setup, &mut bsp, &scales);
+    let want = cpu_sum(&bsp, &scales, 0.0);
+    let largest = want.iter().flatten().fold(0.0f64, |m, &x| m.max(x));
+    let worst = got.iter().zip(&want).flat_map(|(g, w)| (0..3).map(move |c| (g[c] as f64 - w[c]).abs())).fold(0.0, f64::max);
+    println!("{max} lights over {} vertices: max |GPU − CPU| = {:.2e} of the largest sum", want.len(), worst / largest);
+    assert!(largest > 0.0 && worst <= 1e-4 * largest, "{worst} of {largest}");
+    common::assert_clean(&setup.gpu);
+    let sc = with_lights(max + 1, "{ name = \"bsp_lights\", max_segment_area = 1 }");
+    let err = match Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (8, 8), 1) {
+        Ok(_) => panic!("{} lights accepted", max + 1),
+        Err(e) => e.to_string(),
+    };
+    assert!(!err.contains('\n') && err.contains("bsp_lights test") && err.contains("8193 lights"), "{err}");
+}
