@@ -264,17 +264,19 @@ fn the_corrected_mode_matches_the_path_tracer_direct_light() {
 }
 
 /// As a direct term over forward's base (a combination), the segments add their light where the
-/// base's depth says they are seen, with every pass validated: the same image as the method
-/// alone to within the depth-bias edge.
+/// base's depth says they are seen: the same image as the method alone to within the depth-bias
+/// edge. As the base under forward's direct term, the same image as forward alone. Every pass
+/// validated.
 #[test]
 fn the_direct_term_adds_over_another_methods_base() {
     let text = scene_text("\"forward\", { name = \"bsp_lights\", max_segment_area = 0.02 }", 3, 2)
         + "[[combinations]]\nname = \"bsp_over_forward\"\nbase = \"forward\"\ndirect = \"bsp_lights\"\n"
+        + "[[combinations]]\nname = \"forward_over_bsp\"\nbase = \"bsp_lights\"\ndirect = \"forward\"\n"
         + "[environment]\ntype = \"constant\"\nradiance = 0.2\n";
     let sc = scene(&text);
     let mut images = Vec::new();
     let mean = |img: &penumbra::image_io::HdrImage| img.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / img.pixels.len() as f64;
-    for config in ["bsp_lights", "bsp_over_forward"] {
+    for config in ["bsp_lights", "bsp_over_forward", "forward", "forward_over_bsp"] {
         let mut r = Renderer::new(common::test_gpu(), sc.clone(), Some(config), (40, 30), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         images.push(r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
@@ -287,6 +289,11 @@ fn the_direct_term_adds_over_another_methods_base() {
         }
         common::assert_clean(&r.gpu);
     }
+    // The base term alone (under forward's direct light) is forward's base.
+    let n = images[2].pixels.len();
+    let same_base = images[2].pixels.iter().zip(&images[3].pixels).filter(|(a, b)| (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-3 + 1e-3 * a[c].abs())).count();
+    println!("forward over the bsp_lights base: {same_base} of {n} pixels as forward alone");
+    assert!(same_base as f64 >= 0.97 * n as f64, "{same_base} of {n}");
     let n = images[0].pixels.len();
     let close = images[0].pixels.iter().zip(&images[1].pixels).filter(|(a, b)| (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-3 + 1e-3 * a[c].abs())).count();
     println!("{close} of {n} pixels agree");
