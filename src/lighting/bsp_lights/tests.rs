@@ -614,3 +614,10 @@ fn item_9_the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_do
     assert!(bsp_wrong as f64 <= 1e-3 * covered as f64, "BSP painter's order differs from the depth buffer at {bsp_wrong} of {covered} pixels");
     assert!(sort_wrong > 10 * bsp_wrong.max(1), "the scene should defeat a centroid sort ({sort_wrong})");
 }
+
+#[test]
+fn the_sweep_covers_segment_areas_and_both_modes() {
+    let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.02 }", 1);
+    let labels: Vec<String> = super::sweep(&sc.methods[0]).into_iter().map(|(l, _)| l).collect();
+    assert_eq!(labels, ["bsp_lights corrected area=0.02", "bsp_lights corrected area=0.08", "bsp_lights corrected area=0.005 f16", "bsp_lights faithful area=0.02"]);
+}
