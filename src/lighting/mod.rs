@@ -18,6 +18,7 @@ pub mod params;
 pub mod registry;
 mod terms;
 
+pub mod bsp_lights;
 pub mod clustered;
 pub mod forward;
 pub mod heightfield;

@@ -7,7 +7,7 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, vls, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{bsp_lights, clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, vls, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -137,6 +137,16 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: vls::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(vls::Vls::new(c, d)?)),
+            report: None,
+        },
+        MethodInfo {
+            schema: bsp_lights::SCHEMA,
+            terms: Terms::BASE_DIRECT,
+            separable: true,
+            sweep: bsp_lights::sweep,
+            reference: bsp_lights::reference,
+            translucency: false,
+            create: |c, d| Ok(Box::new(bsp_lights::BspLights::new(c, d)?)),
             report: None,
         },
     ]

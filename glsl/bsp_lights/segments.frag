@@ -1,0 +1,43 @@
+#version 460
+// The BSP shadow system's segments: the base term as forward draws it (emission + unshadowed
+// environment irradiance, the material's mean albedo) and the baked, relit direct term.
+#include "common/frame.glsl"
+#include "common/sh.glsl"
+
+// The terms drawn (src/lighting/terms.rs): 1 base, 2 direct.
+layout(constant_id = 0) const uint TERMS = 3u;
+
+layout(location = 0) in vec3 in_world;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec3 in_albedo;
+layout(location = 3) in vec3 in_emission;
+layout(location = 4) in vec3 in_direct;
+
+layout(location = 0) out vec4 out_radiance;
+
+// Unshadowed irradiance from the environment (clamped: a 3-band fit can dip below zero).
+vec3 environment_irradiance(vec3 n) {
+    float y[16];
+    sh_eval16(sh_world_to_sh(n), y);
+    vec3 e = vec3(0.0);
+    for (int i = 0; i < 9; ++i) {
+        e += frame.env_irradiance[i].rgb * y[i];
+    }
+    return max(e, vec3(0.0));
+}
+
+void main() {
+    vec3 n = normalize(in_normal);
+    // Thin surfaces take the environment on the side the viewer sees, as forward does.
+    if (dot(n, frame.camera_pos.xyz - in_world) < 0.0) {
+        n = -n;
+    }
+    vec3 radiance = vec3(0.0);
+    if ((TERMS & 1u) != 0u) {
+        radiance = in_emission + in_albedo / SH_PI * environment_irradiance(n);
+    }
+    if ((TERMS & 2u) != 0u) {
+        radiance += in_direct;
+    }
+    out_radiance = vec4(radiance, 1.0);
+}

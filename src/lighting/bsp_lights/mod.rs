@@ -1,0 +1,531 @@
+//! Seed 003's BSP shadow system (digest §1.5, §4 "BSP"): per-light vertex colours with exact
+//! hard shadows baked once, relit every frame by the lights' current intensities.
+//!
+//! - **Set-up** ([`setup`], through the bake stage): the BSP of the scene polygons with the
+//!   first polygon as splitter, its fragments segmented to `max_segment_area`, and per light the
+//!   full-intensity colour `C_l(v)` of every segment vertex with the painter's shadow pass from
+//!   the light. Stored as a vertices × lights matrix (f32 RGB, or f16 with `storage = "f16"`).
+//! - **Run time**: each light's scale `s_l` is its current intensity over the baked one (the
+//!   ratio of their largest channels: the thesis's lights are dimmers, a scalar per light, and a
+//!   light board dims every channel alike; a change of hue is not representable in a per-light
+//!   scalar and is not modelled). Lights with `s_l` below `threshold` are skipped; a compute
+//!   pass forms `colour(v) = Σ s_l·C_l(v)` over the active ones (a GEMV) into a vertex colour
+//!   buffer, and a graphics pass draws the segments with it, Gouraud-interpolated, as the direct
+//!   term. The base term is forward's: emission plus the unshadowed environment irradiance.
+//!
+//! `mode = "corrected"` (default) uses the physical light model (radiance, comparable with the
+//! path tracer) and the projection's validity checks; `mode = "faithful"` uses the thesis's
+//! `k·ρ·cos/d` model with its linear spot ramp and projects every occluder vertex as written.
+
+pub mod setup;
+
+#[cfg(test)]
+mod tests;
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::backend::{
+    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange,
+    VertexAttribute, VertexLayout,
+};
+use crate::bake::{BakeData, BakeKey};
+use crate::error::{Error, Result};
+use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::lighting::params::Params;
+use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms, RADIANCE_FORMAT};
+use crate::many_lights::{scene_polygons, LightModel, ManyLight};
+use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
+use setup::Projection;
+
+pub const NAME: &str = "bsp_lights";
+
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: NAME,
+    params: &[
+        ParamSchema { name: "mode", kind: ParamKind::String },
+        ParamSchema { name: "max_segment_area", kind: ParamKind::Float },
+        ParamSchema { name: "k", kind: ParamKind::Float },
+        ParamSchema { name: "threshold", kind: ParamKind::Float },
+        ParamSchema { name: "storage", kind: ParamKind::String },
+    ],
+};
+
+/// Bumped whenever the set-up's output for the same inputs changes.
+const SETUP_VERSION: u32 = 1;
+
+/// The matrix is bound whole as one storage buffer by the GEMV: Vulkan guarantees a storage
+/// buffer range of 2²⁷ bytes (`maxStorageBufferRange`'s required minimum) and no more.
+pub const MAX_MATRIX_BYTES: u64 = 1 << 27;
+
+/// Lights one GEMV invocation loops over at most: llvmpipe ends any invocation after 65,535 loop
+/// iterations, and the stress scene has 4,096 lights.
+pub const MAX_LIGHTS: usize = 8192;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Corrected,
+    Faithful,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Storage {
+    F32,
+    F16,
+}
+
+impl Storage {
+    /// Bytes of one vertex's RGB colour for one light.
+    pub fn bytes_per_entry(self) -> u64 {
+        match self {
+            Storage::F32 => 12,
+            Storage::F16 => 6,
+        }
+    }
+}
+
+/// The method's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    pub mode: Mode,
+    /// Largest segment, m².
+    pub max_segment_area: f64,
+    /// The thesis's arbitrary attenuation constant (faithful mode).
+    pub k: f64,
+    /// Lights scaled below this fraction of their baked intensity are skipped.
+    pub threshold: f64,
+    pub storage: Storage,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config { mode: Mode::Corrected, max_segment_area: 0.01, k: 1.0, threshold: 0.05, storage: Storage::F32 }
+    }
+}
+
+impl Config {
+    pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
+        let params = Params::new(decl, scene);
+        let mut c = Config::default();
+        if let Some(mode) = params.get_choice("mode", &[("corrected", Mode::Corrected), ("faithful", Mode::Faithful)])? {
+            c.mode = mode;
+        }
+        if let Some(storage) = params.get_choice("storage", &[("f32", Storage::F32), ("f16", Storage::F16)])? {
+            c.storage = storage;
+        }
+        if let Some(v) = decl.param("max_segment_area") {
+            c.max_segment_area = Params::float(v).filter(|x| *x >= 1e-6 && *x <= 1e4).ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 m²", v))?;
+        }
+        if let Some(v) = decl.param("k") {
+            c.k = Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| params.error("k", "a positive number", v))?;
+        }
+        if let Some(v) = decl.param("threshold") {
+            c.threshold = Params::float(v).filter(|x| (0.0..1.0).contains(x)).ok_or_else(|| params.error("threshold", "a fraction in [0, 1)", v))?;
+        }
+        Ok(c)
+    }
+
+    pub fn model(&self) -> LightModel {
+        match self.mode {
+            Mode::Corrected => LightModel::Physical,
+            Mode::Faithful => LightModel::Seed { k: self.k },
+        }
+    }
+
+    pub fn projection(&self) -> Projection {
+        match self.mode {
+            Mode::Corrected => Projection::Valid,
+            Mode::Faithful => Projection::Thesis,
+        }
+    }
+}
+
+/// The chart's sweep: as declared; the segment area at 4×, 1× and ¼ of the declared one, the
+/// last in f16 (four times the vertices in twice the bytes each would be 8× the declared
+/// matrix, and one point over the memory limit stops the whole chart); the faithful mode.
+pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
+    let mut out: Vec<(String, MethodDecl)> = Vec::new();
+    let mut push = |d: MethodDecl| {
+        if let Ok(c) = Config::from_decl(&d, None) {
+            let storage = if c.storage == Storage::F16 { " f16" } else { "" };
+            let label = format!("bsp_lights {:?} area={}{storage}", c.mode, c.max_segment_area).to_lowercase();
+            if !out.iter().any(|(l, _)| *l == label) {
+                out.push((label, d));
+            }
+        }
+    };
+    push(decl.clone());
+    let declared = Config::from_decl(decl, None).map(|c| c.max_segment_area).unwrap_or(Config::default().max_segment_area);
+    for a in [4.0 * declared, declared] {
+        push(decl.with("max_segment_area", a.into()));
+    }
+    push(decl.with("max_segment_area", (0.25 * declared).into()).with("storage", "f16".into()));
+    push(decl.with("mode", "faithful".into()));
+    out
+}
+
+pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
+    ReferenceKind::Direct
+}
+
+/// A segment vertex as `glsl/bsp_lights/segments.vert` reads it (world space).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct SegmentVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub albedo: [f32; 3],
+    pub emission: [f32; 3],
+}
+
+/// The baked set-up as the run time needs it (and the cache stores it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Baked {
+    pub vertices: Vec<SegmentVertex>,
+    pub indices: Vec<u32>,
+    pub lights: usize,
+    /// `C_l(v)` light-major, RGB: `3·(l·V + v) + channel`.
+    pub colours: Vec<f32>,
+    /// The set-up's times as it ran (a cached bake keeps them).
+    pub phases: setup::Phases,
+    pub polygons: usize,
+    pub fragments: usize,
+}
+
+impl Baked {
+    /// Bytes of one light's column in `storage`.
+    pub fn bytes_per_light(&self, storage: Storage) -> u64 {
+        self.vertices.len() as u64 * storage.bytes_per_entry()
+    }
+}
+
+const BAKED_MAGIC: u32 = 0x4253_504c;
+
+impl BakeData for Baked {
+    fn encode(&self) -> Vec<u8> {
+        let p = &self.phases;
+        let mut out = Vec::new();
+        for w in [BAKED_MAGIC, self.vertices.len() as u32, self.indices.len() as u32, self.lights as u32, self.polygons as u32, self.fragments as u32] {
+            out.extend_from_slice(&w.to_le_bytes());
+        }
+        for t in [p.bsp_ms, p.segment_ms, p.colour_cpu_ms, p.shadow_cpu_ms, p.lights_wall_ms] {
+            out.extend_from_slice(&t.to_le_bytes());
+        }
+        out.extend_from_slice(bytemuck::cast_slice(&self.vertices));
+        out.extend_from_slice(bytemuck::cast_slice(&self.indices));
+        out.extend_from_slice(bytemuck::cast_slice(&self.colours));
+        out
+    }
+
+    fn decode(bytes: &[u8]) -> Option<Self> {
+        let word = |i: usize| Some(u32::from_le_bytes(bytes.get(4 * i..4 * i + 4)?.try_into().ok()?) as usize);
+        let time = |i: usize| Some(f64::from_le_bytes(bytes.get(24 + 8 * i..32 + 8 * i)?.try_into().ok()?));
+        if word(0)? != BAKED_MAGIC as usize {
+            return None;
+        }
+        let (v, i, l) = (word(1)?, word(2)?, word(3)?);
+        let head = 24 + 40;
+        let vertex_bytes = v * std::mem::size_of::<SegmentVertex>();
+        let (vb, ib, cb) = (head..head + vertex_bytes, head + vertex_bytes..head + vertex_bytes + 4 * i, head + vertex_bytes + 4 * i..head + vertex_bytes + 4 * i + 12 * v * l);
+        if bytes.len() != cb.end {
+            return None;
+        }
+        Some(Baked {
+            vertices: bytemuck::pod_collect_to_vec(&bytes[vb]),
+            indices: bytemuck::pod_collect_to_vec(&bytes[ib]),
+            lights: l,
+            colours: bytemuck::pod_collect_to_vec(&bytes[cb]),
+            phases: setup::Phases { bsp_ms: time(0)?, segment_ms: time(1)?, colour_cpu_ms: time(2)?, shadow_cpu_ms: time(3)?, lights_wall_ms: time(4)? },
+            polygons: word(4)?,
+            fragments: word(5)?,
+        })
+    }
+}
+
+/// `V·L·bytes` against [`MAX_MATRIX_BYTES`], as the set-up checks it.
+fn check_matrix(vertices: usize, lights: usize, storage: Storage) -> std::result::Result<(), String> {
+    setup::check_matrix(vertices, lights, storage.bytes_per_entry(), MAX_MATRIX_BYTES)
+}
+
+/// The full set-up of `scene`'s polygons and lights on the CPU, as the bake runs it.
+pub fn bake_scene(
+    scene: &Scene,
+    geometry: &crate::lightmap::geometry::StaticGeometry,
+    config: &Config,
+    progress: &mut crate::progress::Progress,
+) -> Result<(setup::Setup, Vec<crate::many_lights::ScenePolygon>)> {
+    let lights = ManyLight::from_scene(scene, NAME)?;
+    let polygons = scene_polygons(&scene.source, geometry, NAME)?;
+    let settings = setup::Settings {
+        model: config.model(),
+        projection: config.projection(),
+        max_segment_area: config.max_segment_area,
+        threads: 0,
+        max_matrix_bytes: MAX_MATRIX_BYTES,
+        bytes_per_entry: config.storage.bytes_per_entry(),
+    };
+    let s = setup::run(&polygons, &lights, &settings, progress).map_err(|m| field_error(scene, "max_segment_area", m))?;
+    Ok((s, polygons))
+}
+
+/// One line naming the scene file and the method's field.
+fn field_error(scene: &Scene, field: &str, message: String) -> Error {
+    match scene.methods.iter().find(|d| d.name == NAME) {
+        Some(decl) => scene.method_param_error(decl, field, message).into(),
+        None => Error::Usage(format!("{}: {NAME}.{field}: {message}", scene.source)),
+    }
+}
+
+impl Baked {
+    pub fn from_setup(s: &setup::Setup, polygons: &[crate::many_lights::ScenePolygon], geometry: &crate::lightmap::geometry::StaticGeometry) -> Baked {
+        let seg = &s.segments;
+        let vertices = (0..seg.positions.len())
+            .map(|v| {
+                let p = &polygons[s.fragment_source[seg.vertex_polygon[v] as usize] as usize];
+                SegmentVertex {
+                    position: seg.positions[v].as_vec3().to_array(),
+                    normal: seg.normals[v].as_vec3().to_array(),
+                    albedo: p.albedo.as_vec3().to_array(),
+                    emission: geometry.triangles[p.triangle].emission.as_vec3().to_array(),
+                }
+            })
+            .collect();
+        Baked {
+            vertices,
+            indices: seg.triangles.iter().flatten().copied().collect(),
+            lights: s.lights,
+            colours: s.colours.iter().flatten().copied().collect(),
+            phases: s.phases,
+            polygons: polygons.len(),
+            fragments: s.tree.fragments.len(),
+        }
+    }
+}
+
+/// Matches `Active` in glsl/bsp_lights/gemv.comp: the count and vertex count, then (light,
+/// scale bits) pairs.
+fn active_words(active: &[(u32, f32)], vertices: usize) -> Vec<u32> {
+    let mut words = vec![active.len() as u32, vertices as u32, 0, 0];
+    for &(l, s) in active {
+        words.extend([l, s.to_bits()]);
+    }
+    words
+}
+
+pub struct BspLights {
+    pub config: Config,
+    pub baked: Baked,
+    /// Largest channel of each light's baked intensity.
+    full: Vec<f32>,
+    vertices: BufferId,
+    indices: BufferId,
+    matrix: BufferId,
+    colours: BufferId,
+    gemv: PipelineId,
+    both: PipelineId,
+    base: PipelineId,
+    direct: PipelineId,
+    /// This frame's active lights (index, scale), as `active_words` lays them out.
+    active: Vec<u32>,
+}
+
+impl BspLights {
+    pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<BspLights> {
+        let scene = cx.scene;
+        let config = Config::from_decl(decl, Some(scene))?;
+        let lights = ManyLight::from_scene(scene, NAME)?;
+        if lights.len() > MAX_LIGHTS {
+            return Err(Error::Usage(format!("{}: lights: {} lights, over the {MAX_LIGHTS} {NAME} relights in one pass", scene.source, lights.len())));
+        }
+        let geometry = crate::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
+        let polygons = scene_polygons(&scene.source, &geometry, NAME)?;
+        if polygons.is_empty() {
+            return Err(Error::Usage(format!("{}: {NAME}: the scene has no static polygons to light", scene.source)));
+        }
+        let geometry_floats: Vec<f64> =
+            polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array()).chain(geometry.triangles[p.triangle].emission.to_array())).collect();
+        let key = BakeKey::new("bsp_lights set-up")
+            .with("version", SETUP_VERSION)
+            .with("model", config.model())
+            .with("projection", config.projection())
+            .with("max_segment_area", config.max_segment_area)
+            .with("lights", &lights)
+            .with_bytes("geometry", bytemuck::cast_slice(&geometry_floats));
+        let name = format!("{NAME} set-up {:?} area={} lights={}", config.mode, config.max_segment_area, lights.len()).to_lowercase();
+        let geo = &geometry;
+        let baked: Baked = cx.bakes.bake(&name, &key, |progress| {
+            let (s, polygons) = bake_scene(scene, geo, &config, progress)?;
+            let p = s.phases;
+            let per_light = s.vertices() as u64 * config.storage.bytes_per_entry();
+            crate::errln!(
+                "{NAME} set-up: {} polygons -> {} BSP fragments -> {} vertices; {} lights at {per_light} bytes each ({:.2} MiB); BSP {:.1} ms, segmentation {:.1} ms, colouring {:.1} ms CPU, shadows {:.1} ms CPU ({:.1} ms wall for the lights)",
+                polygons.len(),
+                s.tree.fragments.len(),
+                s.vertices(),
+                s.lights,
+                (per_light * s.lights as u64) as f64 / (1u64 << 20) as f64,
+                p.bsp_ms,
+                p.segment_ms,
+                p.colour_cpu_ms,
+                p.shadow_cpu_ms,
+                p.lights_wall_ms
+            );
+            Ok(Baked::from_setup(&s, &polygons, geo))
+        })?;
+        // A cached bake may have been made for the other storage: check the limit again.
+        check_matrix(baked.vertices.len(), baked.lights, config.storage).map_err(|m| field_error(scene, "max_segment_area", m))?;
+        if baked.lights != lights.len() || baked.colours.len() != 3 * baked.vertices.len() * baked.lights || baked.vertices.is_empty() {
+            return Err(Error::Usage(format!("{}: {NAME}: the baked set-up does not match the scene", scene.source)));
+        }
+        let full = lights.iter().map(|l| l.intensity.max_element() as f32).collect();
+
+        let gpu = &mut *cx.gpu;
+        let vertices = gpu.create_buffer_init(&format!("{NAME} vertices"), vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&baked.vertices))?;
+        let indices = gpu.create_buffer_init(&format!("{NAME} indices"), vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&baked.indices))?;
+        let matrix_words: Vec<u32> = match config.storage {
+            Storage::F32 => baked.colours.iter().map(|c| c.to_bits()).collect(),
+            Storage::F16 => {
+                baked.colours.chunks(2).map(|p| u32::from(half::f16::from_f32(p[0]).to_bits()) | u32::from(half::f16::from_f32(p.get(1).copied().unwrap_or(0.0)).to_bits()) << 16).collect()
+            }
+        };
+        let matrix = gpu.create_storage_buffer(&format!("{NAME} matrix"), bytemuck::cast_slice(&matrix_words))?;
+        let colours = gpu.create_buffer(&BufferDesc {
+            name: format!("{NAME} vertex colours"),
+            size: 16 * baked.vertices.len() as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuOnly,
+        })?;
+        for b in [vertices, indices, matrix, colours] {
+            cx.states.forget_buffer(b);
+        }
+        let half = SpecConstant { id: 0, bits: u32::from(config.storage == Storage::F16) };
+        let gemv = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} gemv"), shader: "bsp_lights/gemv.comp".into(), specialization: vec![half] }, cx.shaders)?;
+        let ds_format = gpu.caps().depth_stencil_format;
+        let mut pipeline = |terms: Terms| {
+            let vert = if terms.has(Term::Direct) { "bsp_lights/segments.vert" } else { "bsp_lights/segments_base.vert" };
+            let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} {terms}"), vert, Some("bsp_lights/segments.frag"));
+            let attr = |location: u32| VertexAttribute { location, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 12 * location };
+            desc.vertex_layout = VertexLayout { buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)], attributes: (0..4).map(attr).collect() };
+            // Thin surfaces are seen from both sides (as forward draws them).
+            desc.raster.cull = vk::CullModeFlags::NONE;
+            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+            desc.depth_format = Some(ds_format);
+            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
+            if !terms.has(Term::Base) {
+                // Over another method's base: the segments' interior vertices are not the
+                // base's, so their depths differ by rounding; a small bias toward the eye keeps
+                // the base's depth deciding what is seen without the surfaces fighting.
+                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+                desc.raster.depth_bias = Some((-16.0, -1.0));
+                desc.color_targets[0].blend = BlendMode::Additive;
+            }
+            gpu.create_graphics_pipeline(&desc, cx.shaders)
+        };
+        let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
+        let all: Vec<(u32, f32)> = (0..baked.lights as u32).map(|l| (l, 1.0)).collect();
+        let active = active_words(&all, baked.vertices.len());
+        Ok(BspLights { config, baked, full, vertices, indices, matrix, colours, gemv, both, base, direct, active })
+    }
+
+    /// Sets each light's scale from its current intensity (RGB, as the frame's lights carry
+    /// it): `s_l` = largest current channel / largest baked channel; lights below the threshold
+    /// are left out of the GEMV.
+    pub fn set_intensities(&mut self, current: &[[f32; 3]]) {
+        let scales: Vec<f32> = self.full.iter().enumerate().map(|(l, &full)| current.get(l).map_or(0.0, |c| if full > 0.0 { c[0].max(c[1]).max(c[2]) / full } else { 0.0 })).collect();
+        self.set_scales(&scales);
+    }
+
+    /// Sets the lights' scales `s_l` directly (lights below the threshold skipped).
+    pub fn set_scales(&mut self, scales: &[f32]) {
+        let threshold = self.config.threshold as f32;
+        let active: Vec<(u32, f32)> = scales.iter().enumerate().filter(|(_, &s)| s >= threshold && s > 0.0).map(|(l, &s)| (l as u32, s)).collect();
+        self.active = active_words(&active, self.baked.vertices.len());
+    }
+
+    /// Lights in this frame's GEMV.
+    pub fn active_lights(&self) -> usize {
+        self.active[0] as usize
+    }
+
+    /// The per-vertex colour buffer the GEMV writes (`vec4` per segment vertex).
+    pub fn colour_buffer(&self) -> BufferId {
+        self.colours
+    }
+
+    /// The GEMV pass: `colour(v) = Σ_active s_l·C_l(v)`, one invocation per vertex.
+    pub fn add_gemv<'a>(&'a self, graph: &mut RenderGraph<'a>) {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let n = self.baked.vertices.len() as u32;
+        graph
+            .pass(&format!("{NAME} gemv"))
+            .buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix"))
+            .buffer(self.colours, Access::StorageWrite { stages: compute }, Some("colours"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(self.gemv)?;
+                ctx.bind(&[("enabled", Bind::StorageData(bytemuck::cast_slice(&self.active)))])?;
+                ctx.rec.dispatch([n, 1, 1])
+            });
+    }
+
+    /// Reads the vertex colour buffer back (after the frames that wrote it finished).
+    pub fn read_colours(&self, gpu: &mut crate::backend::Gpu) -> Result<Vec<[f32; 4]>> {
+        let size = 16 * self.baked.vertices.len() as u64;
+        let host = gpu.create_buffer(&BufferDesc { name: format!("{NAME} readback"), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;
+        let frame = gpu.create_frame()?;
+        let mut graph = RenderGraph::new();
+        let colours = self.colours;
+        graph.pass("bsp_lights readback").buffer(colours, Access::TransferRead, None).buffer(host, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_buffer(colours, host, size));
+        graph.pass("bsp_lights readback host").buffer(host, Access::HostRead, None).record(|_| Ok(()));
+        let mut states = ResourceStates::default();
+        graph.run_and_wait(gpu, frame, &mut states, "bsp_lights readback")?;
+        let bytes = gpu.read_buffer(host)?;
+        gpu.destroy_buffer(host);
+        gpu.destroy_frame(frame)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..size as usize]))
+    }
+}
+
+impl LightingMethod for BspLights {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
+        let current: Vec<[f32; 3]> = frame.scene.lights.iter().map(|l| [l.intensity[0], l.intensity[1], l.intensity[2]]).collect();
+        self.set_intensities(&current);
+        Ok(())
+    }
+
+    fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
+        let (base, direct) = (frame.terms.has(Term::Base), frame.terms.has(Term::Direct));
+        let pipeline = match (base, direct) {
+            (true, true) => self.both,
+            (true, false) => self.base,
+            (false, true) => self.direct,
+            (false, false) => return Ok(()),
+        };
+        if direct {
+            self.add_gemv(graph);
+        }
+        let t = frame.targets;
+        let uniforms = frame.uniforms;
+        let count = self.baked.indices.len() as u32;
+        let mut pass = graph.pass(&format!("{NAME} segments")).color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
+        pass = pass.buffer(self.vertices, Access::VertexRead, None).buffer(self.indices, Access::IndexRead, None);
+        if direct {
+            pass = pass.buffer(self.colours, Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER }, Some("colours"));
+        }
+        pass.record(move |ctx| {
+            let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+            ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
+            ctx.rec.bind_index_buffer(self.indices, 0)?;
+            ctx.rec.draw_indexed(count, 0, 0)?;
+            ctx.rec.end_rendering();
+            Ok(())
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,314 @@
+//! The BSP shadow system's set-up (seed 003 §1.5), pure CPU: the BSP of the scene polygons with
+//! the first polygon as splitter, the fragments segmented after the build (the thesis's order),
+//! and per light the full-intensity vertex colours `C_l(v)` with the painter's shadow pass from
+//! the light: polygons back to front, each projected centrally from the light onto the plane of
+//! every polygon before it, the target's segment vertices inside the projection zeroed.
+//!
+//! The result is a vertices × lights matrix, light-major (one column of `V` RGB values per
+//! light): the modern form of the thesis's per-light tree clones, which shared positions and
+//! topology and copied only the colours ("fast clone", §5.5).
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use glam::DVec3;
+
+use crate::many_lights::geometry::point_in_convex_polygon;
+use crate::many_lights::{LightModel, ManyLight, ScenePolygon, Segments};
+use crate::progress::Progress;
+use crate::world::bsp::{Fragment, Tree};
+use crate::world::polygon::clip_points_front;
+use crate::world::{Plane, Polygon, Side, SplitHeuristic};
+
+/// Which projection the shadow pass uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// The digest's validity checks (§3.3 item 1): the occluder clipped to the slab between the
+    /// target's plane and the plane through the light parallel to it, so only points with
+    /// `t ≥ 1` (between the light and the target) cast, and nothing is projected through the
+    /// light (no inverted shadow).
+    Valid,
+    /// The thesis as written: every vertex projected, whatever side of the light it is on.
+    Thesis,
+}
+
+/// How far short of the plane through the light (parallel to the target) the valid projection
+/// stops, as a fraction of the light's height over the target: points closer to that plane
+/// would project beyond `1e6` times the light's height, i.e. to infinity for any scene.
+const PARALLEL_SLACK: f64 = 1e-6;
+
+/// A projected polygon smaller than this (m²) shadows nothing: it is an occluder touching the
+/// target along an edge or a point, whose clipped part has no area (the thesis's "zero-width
+/// slivers").
+const MIN_SHADOW_AREA: f64 = 1e-12;
+
+/// Wall and CPU times of the set-up's phases, milliseconds. Colouring and shadowing run per
+/// light on every core: their CPU time is summed over threads, and `lights_wall_ms` is the wall
+/// time of both together.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Phases {
+    pub bsp_ms: f64,
+    pub segment_ms: f64,
+    pub colour_cpu_ms: f64,
+    pub shadow_cpu_ms: f64,
+    pub lights_wall_ms: f64,
+}
+
+/// The set-up's inputs besides the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub model: LightModel,
+    pub projection: Projection,
+    pub max_segment_area: f64,
+    /// Threads for the per-light phase (0: every core).
+    pub threads: usize,
+    /// Bytes the matrix may take at `bytes_per_entry` per vertex and light: checked after the
+    /// segmentation, before any light is shaded.
+    pub max_matrix_bytes: u64,
+    pub bytes_per_entry: u64,
+}
+
+/// The set-up's result.
+pub struct Setup {
+    pub tree: Tree,
+    /// Segments of the tree's fragments (`vertex_polygon` and `triangle_polygon` index
+    /// `tree.fragments`).
+    pub segments: Segments,
+    /// Per fragment: the scene polygon it was cut from.
+    pub fragment_source: Vec<u32>,
+    /// Per fragment: its segment vertices (contiguous: `Segments` adds a polygon's vertices
+    /// together).
+    pub fragment_vertices: Vec<Range<u32>>,
+    pub lights: usize,
+    /// `C_l(v)` light-major: entry `l · V + v`.
+    pub colours: Vec<[f32; 3]>,
+    pub phases: Phases,
+}
+
+impl Setup {
+    pub fn vertices(&self) -> usize {
+        self.segments.positions.len()
+    }
+
+    pub fn colour(&self, light: usize, vertex: usize) -> [f32; 3] {
+        self.colours[light * self.vertices() + vertex]
+    }
+}
+
+fn ms(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+/// The BSP tree over the scene polygons, first polygon as splitter (§1.5, "no heuristic").
+pub fn build_tree(polygons: &[ScenePolygon]) -> Tree {
+    let fragments = polygons.iter().enumerate().map(|(i, p)| Fragment { polygon: p.polygon.clone(), source: i }).collect();
+    Tree::build(fragments, SplitHeuristic::FirstFace)
+}
+
+/// One thread's columns (light, `C_l`) and its colouring and shadow CPU times.
+type ThreadResult = (Vec<(usize, Vec<[f32; 3]>)>, f64, f64);
+
+/// Runs the whole set-up. Errors are one sentence (the caller names the file and field).
+pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings, progress: &mut Progress) -> Result<Setup, String> {
+    let start = Instant::now();
+    let tree = build_tree(polygons);
+    let bsp_ms = ms(start);
+
+    let start = Instant::now();
+    let segments = Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), settings.max_segment_area)?;
+    let fragment_vertices = vertex_ranges(&segments, tree.fragments.len());
+    let segment_ms = ms(start);
+
+    check_matrix(segments.positions.len(), lights.len(), settings.bytes_per_entry, settings.max_matrix_bytes)?;
+    let fragment_source: Vec<u32> = tree.fragments.iter().map(|(f, _)| f.source as u32).collect();
+    let albedo: Vec<DVec3> = segments.vertex_polygon.iter().map(|&f| polygons[fragment_source[f as usize] as usize].albedo).collect();
+
+    let start = Instant::now();
+    let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads }.clamp(1, lights.len().max(1));
+    let done = AtomicUsize::new(0);
+    let fragments: Vec<&Polygon> = tree.fragments.iter().map(|(f, _)| &f.polygon).collect();
+    let shared = Shared { fragments: &fragments, tree: &tree, segments: &segments, fragment_vertices: &fragment_vertices, albedo: &albedo, model: settings.model, projection: settings.projection };
+    let per_thread: Vec<ThreadResult> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let (shared, done) = (&shared, &done);
+                s.spawn(move || {
+                    let (mut out, mut colour_ms, mut shadow_ms) = (Vec::new(), 0.0, 0.0);
+                    for (l, light) in lights.iter().enumerate().skip(t).step_by(threads) {
+                        let start = Instant::now();
+                        let mut column = shared.colour(light);
+                        colour_ms += ms(start);
+                        let start = Instant::now();
+                        shared.shadow(light.position, &mut column);
+                        shadow_ms += ms(start);
+                        out.push((l, column));
+                        done.fetch_add(1, Ordering::Relaxed);
+                    }
+                    (out, colour_ms, shadow_ms)
+                })
+            })
+            .collect();
+        while handles.iter().any(|h| !h.is_finished()) {
+            progress.update(done.load(Ordering::Relaxed) as u64, lights.len() as u64);
+            // Short: a small set-up finishes within a few of these.
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        handles.into_iter().map(|h| h.join().unwrap_or_default()).collect()
+    });
+    let lights_wall_ms = ms(start);
+    let mut colours = vec![[0.0f32; 3]; segments.positions.len() * lights.len()];
+    let mut phases = Phases { bsp_ms, segment_ms, lights_wall_ms, ..Phases::default() };
+    let mut filled = 0;
+    for (columns, colour_ms, shadow_ms) in per_thread {
+        phases.colour_cpu_ms += colour_ms;
+        phases.shadow_cpu_ms += shadow_ms;
+        for (l, column) in columns {
+            colours[l * column.len()..(l + 1) * column.len()].copy_from_slice(&column);
+            filled += 1;
+        }
+    }
+    if filled != lights.len() {
+        return Err(format!("a set-up thread failed ({filled} of {} lights shaded)", lights.len()));
+    }
+    Ok(Setup { tree, segments, fragment_source, fragment_vertices, lights: lights.len(), colours, phases })
+}
+
+/// `V·L·bytes` of vertex colours against the limit, as one sentence when over it.
+pub fn check_matrix(vertices: usize, lights: usize, bytes_per_entry: u64, max_bytes: u64) -> Result<(), String> {
+    let bytes = vertices as u64 * lights as u64 * bytes_per_entry;
+    if bytes > max_bytes {
+        return Err(format!(
+            "{vertices} vertices × {lights} lights × {bytes_per_entry} bytes = {} MiB of vertex colours, over the {} MiB limit: raise max_segment_area, use storage = \"f16\" or fewer lights",
+            bytes.div_ceil(1 << 20),
+            max_bytes >> 20
+        ));
+    }
+    Ok(())
+}
+
+/// Each fragment's contiguous range of segment vertices.
+fn vertex_ranges(segments: &Segments, fragments: usize) -> Vec<Range<u32>> {
+    let mut ranges = vec![0u32..0u32; fragments];
+    let mut v = 0usize;
+    while v < segments.vertex_polygon.len() {
+        let f = segments.vertex_polygon[v];
+        let first = v;
+        while v < segments.vertex_polygon.len() && segments.vertex_polygon[v] == f {
+            v += 1;
+        }
+        ranges[f as usize] = first as u32..v as u32;
+    }
+    ranges
+}
+
+/// What every light's pass reads.
+struct Shared<'a> {
+    fragments: &'a [&'a Polygon],
+    tree: &'a Tree,
+    segments: &'a Segments,
+    fragment_vertices: &'a [Range<u32>],
+    albedo: &'a [DVec3],
+    model: LightModel,
+    projection: Projection,
+}
+
+impl Shared<'_> {
+    /// `C_l(v)` at full intensity, unshadowed.
+    fn colour(&self, light: &ManyLight) -> Vec<[f32; 3]> {
+        let s = self.segments;
+        (0..s.positions.len()).map(|v| light.shade(&self.model, s.positions[v], s.normals[v], self.albedo[v]).as_vec3().to_array()).collect()
+    }
+
+    /// The painter's pass from the light: every fragment, in back-to-front order, projected
+    /// onto each fragment before it; that target's lit vertices inside the projection go dark.
+    fn shadow(&self, light: DVec3, column: &mut [[f32; 3]]) {
+        let order: Vec<usize> = self.tree.faces_back_to_front(light).into_iter().map(|f| f as usize).collect();
+        let positions = &self.segments.positions;
+        // Lit vertices left per fragment: a target gone dark is never projected onto again.
+        let mut lit: Vec<usize> = self.fragment_vertices.iter().map(|r| r.clone().filter(|&v| column[v as usize] != [0.0; 3]).count()).collect();
+        for (i, &o) in order.iter().enumerate() {
+            let occluder = self.fragments[o];
+            for &t in &order[..i] {
+                if lit[t] == 0 {
+                    continue;
+                }
+                let target = self.fragments[t];
+                let Some(shadow) = project(light, &occluder.vertices, &target.plane, self.projection) else { continue };
+                // The test on the projected polygon's bounds first: most pairs miss entirely.
+                let (lo, hi) = bounds(&shadow);
+                for v in self.fragment_vertices[t].clone() {
+                    let (v, p) = (v as usize, positions[v as usize]);
+                    if column[v] == [0.0; 3] || p.cmplt(lo).any() || p.cmpgt(hi).any() {
+                        continue;
+                    }
+                    if point_in_convex_polygon(p, &shadow, target.plane.normal) {
+                        column[v] = [0.0; 3];
+                        lit[t] -= 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
+    let pad = DVec3::splat(1e-9);
+    let lo = points.iter().fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
+    let hi = points.iter().fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
+    (lo - pad, hi + pad)
+}
+
+/// The occluder's shadow on the target's plane: its vertices projected centrally from the light
+/// (`P = L + t·(x − L)`, `t = h_L / (h_L − h_x)` with `h` the signed heights over the plane), or
+/// `None` where it casts nothing there. An occluder lying in the target's plane casts nothing in
+/// either mode (it is beside the target, not in front of it; the thesis's rounding served the
+/// same end).
+pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Projection) -> Option<Vec<DVec3>> {
+    let h_light = target.distance(light);
+    if h_light.abs() <= crate::world::PLANE_EPSILON {
+        return None;
+    }
+    let on_plane = occluder.iter().all(|&x| target.side_of_point(x) == Side::On);
+    if on_plane {
+        return None;
+    }
+    let points = match projection {
+        Projection::Thesis => occluder.to_vec(),
+        Projection::Valid => {
+            // Keep s·h_x ∈ [0, |h_L|·(1 − slack)]: on the light's side of the target, and short
+            // of the plane through the light.
+            let s = h_light.signum();
+            let toward_light = Plane { normal: target.normal * s, dist: target.dist * s };
+            let short_of_light = Plane { normal: -target.normal * s, dist: -(target.dist * s + h_light.abs() * (1.0 - PARALLEL_SLACK)) };
+            let clipped = clip_points_front(occluder, &toward_light, 0.0);
+            let clipped = clip_points_front(&clipped, &short_of_light, 0.0);
+            if clipped.len() < 3 {
+                return None;
+            }
+            clipped
+        }
+    };
+    let mut out = Vec::with_capacity(points.len());
+    for x in points {
+        let denom = h_light - target.distance(x);
+        if denom.abs() <= 1e-12 * h_light.abs() {
+            // A vertex in the plane through the light projects to infinity: the thesis's pass
+            // has no answer for it either, so the occluder casts nothing.
+            return None;
+        }
+        out.push(light + (x - light) * (h_light / denom));
+    }
+    // Only the valid projection is a simple polygon whose area means something: the thesis's
+    // can be a bow-tie through infinity, whose lobes cancel.
+    (projection == Projection::Thesis || shadow_area(&out, target.normal) > MIN_SHADOW_AREA).then_some(out)
+}
+
+/// Area of a planar vertex loop (absolute value of its vector area along the normal).
+fn shadow_area(points: &[DVec3], normal: DVec3) -> f64 {
+    let mut sum = DVec3::ZERO;
+    for (i, a) in points.iter().enumerate() {
+        sum += a.cross(points[(i + 1) % points.len()]);
+    }
+    0.5 * sum.dot(normal).abs()
+}
