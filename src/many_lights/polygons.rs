@@ -19,8 +19,6 @@ pub struct ScenePolygon {
     /// The scene draw it came from (so a method can draw its segments with the draw's
     /// material and model matrix).
     pub draw: usize,
-    /// Its triangle in the [`StaticGeometry`] it was made from (emission, material).
-    pub triangle: usize,
 }
 
 /// The scene's static triangles as polygons. Degenerate triangles (area under 1 mm²) are left
@@ -33,7 +31,7 @@ pub fn scene_polygons(scene_source: &str, geometry: &StaticGeometry, method: &st
     let mut out = Vec::with_capacity(geometry.triangles.len());
     for (t, tri) in geometry.triangles.iter().enumerate() {
         if let Some(polygon) = Polygon::from_vertices(tri.p.to_vec()) {
-            out.push(ScenePolygon { polygon, albedo: tri.albedo, emission: tri.emission, draw: geometry.draw[t], triangle: t });
+            out.push(ScenePolygon { polygon, albedo: tri.albedo, emission: tri.emission, draw: geometry.draw[t] });
         }
     }
     Ok(out)

@@ -276,7 +276,7 @@ fn field_error(scene: &Scene, field: &str, message: String) -> Error {
 }
 
 impl Baked {
-    pub fn from_setup(s: &setup::Setup, polygons: &[crate::many_lights::ScenePolygon], geometry: &crate::lightmap::geometry::StaticGeometry) -> Baked {
+    pub fn from_setup(s: &setup::Setup, polygons: &[crate::many_lights::ScenePolygon]) -> Baked {
         let seg = &s.segments;
         let vertices = (0..seg.positions.len())
             .map(|v| {
@@ -285,7 +285,7 @@ impl Baked {
                     position: seg.positions[v].as_vec3().to_array(),
                     normal: seg.normals[v].as_vec3().to_array(),
                     albedo: p.albedo.as_vec3().to_array(),
-                    emission: geometry.triangles[p.triangle].emission.as_vec3().to_array(),
+                    emission: p.emission.as_vec3().to_array(),
                 }
             })
             .collect();
@@ -341,8 +341,7 @@ impl BspLights {
         if polygons.is_empty() {
             return Err(Error::Usage(format!("{}: {NAME}: the scene has no static polygons to light", scene.source)));
         }
-        let geometry_floats: Vec<f64> =
-            polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array()).chain(geometry.triangles[p.triangle].emission.to_array())).collect();
+        let geometry_floats: Vec<f64> = polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array()).chain(p.emission.to_array())).collect();
         let key = BakeKey::new("bsp_lights set-up")
             .with("version", SETUP_VERSION)
             .with("model", config.model())
@@ -369,7 +368,7 @@ impl BspLights {
                 p.shadow_cpu_ms,
                 p.lights_wall_ms
             );
-            Ok(Baked::from_setup(&s, &polygons, geo))
+            Ok(Baked::from_setup(&s, &polygons))
         })?;
         // A cached bake may have been made for the other storage: check the limit again.
         check_matrix(baked.vertices.len(), baked.lights, config.storage).map_err(|m| field_error(scene, "max_segment_area", m))?;

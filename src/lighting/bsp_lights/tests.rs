@@ -39,7 +39,7 @@ impl Lcg {
 /// The quad `corner, corner + u, corner + u + w, corner + w` (front where `u × w` points).
 fn quad(corner: DVec3, u: DVec3, w: DVec3) -> ScenePolygon {
     let polygon = Polygon::from_vertices(vec![corner, corner + u, corner + u + w, corner + w]).expect("a quad");
-    ScenePolygon { polygon, albedo: DVec3::splat(0.5), draw: 0, triangle: 0 }
+    ScenePolygon { polygon, albedo: DVec3::splat(0.5), emission: DVec3::ZERO, draw: 0 }
 }
 
 /// A floor at y = 0 of side `side` centred on the origin, facing up.
@@ -201,7 +201,7 @@ fn check_sides(tree: &Tree, child: Child, path: &mut Vec<(Plane, bool)>, visited
 fn item_8_the_first_polygon_tree_conserves_area_and_keeps_fragments_on_their_side() {
     let mut rng = Lcg(11);
     for scene in 0..5 {
-        let polygons: Vec<ScenePolygon> = (0..40).map(|_| ScenePolygon { polygon: random_convex(&mut rng), albedo: DVec3::ONE, draw: 0, triangle: 0 }).collect();
+        let polygons: Vec<ScenePolygon> = (0..40).map(|_| ScenePolygon { polygon: random_convex(&mut rng), albedo: DVec3::ONE, emission: DVec3::ZERO, draw: 0 }).collect();
         let tree = build_tree(&polygons);
         let before: f64 = polygons.iter().map(|p| p.polygon.area()).sum();
         let after: f64 = tree.fragments.iter().map(|(f, _)| f.polygon.area()).sum();
@@ -491,7 +491,7 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     let geometry = crate::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
     let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
     let (s, polygons) = super::bake_scene(&sc, &geometry, &config, &mut Progress::new("test")).unwrap();
-    let baked = Baked::from_setup(&s, &polygons, &geometry);
+    let baked = Baked::from_setup(&s, &polygons);
     assert_eq!(Baked::decode(&baked.encode()), Some(baked.clone()));
     assert!(Baked::decode(&baked.encode()[..100]).is_none());
     assert_eq!(baked.bytes_per_light(Storage::F32), 12 * baked.vertices.len() as u64);
@@ -579,7 +579,7 @@ fn item_9_the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_do
     let mut rng = Lcg(21);
     // Random polygons crossing each other (cyclic overlaps a sort cannot resolve), and the
     // thesis's two intersecting polygons (Fig. 6-8).
-    let mut polygons: Vec<ScenePolygon> = (0..12).map(|_| ScenePolygon { polygon: random_convex(&mut rng), albedo: DVec3::ONE, draw: 0, triangle: 0 }).collect();
+    let mut polygons: Vec<ScenePolygon> = (0..12).map(|_| ScenePolygon { polygon: random_convex(&mut rng), albedo: DVec3::ONE, emission: DVec3::ZERO, draw: 0 }).collect();
     polygons.push(quad(v(-1.0, -0.5, 0.0), v(2.0, 0.0, 0.0), v(0.0, 1.0, 0.3)));
     polygons.push(quad(v(-1.0, -0.5, 0.3), v(2.0, 0.0, 0.0), v(0.0, 1.0, -0.3)));
     let tree = build_tree(&polygons);
