@@ -138,7 +138,8 @@ fn every_shipped_scene_loads_and_the_many_light_scenes_are_as_promised() {
         assert_eq!(tris, triangles, "{name}");
         assert!(s.materials.iter().all(|m| m.specular == glam::Vec3::ZERO), "{name}: the seed's scenes are diffuse");
         let methods: Vec<&str> = s.methods.iter().map(|m| m.name.as_str()).collect();
-        assert_eq!(methods, ["forward", "shadow_volumes"], "{name}");
+        // The seed's two systems, the two baselines a user would pick today and the naive loop.
+        assert_eq!(methods, ["bsp_lights", "vls", "clustered", "forward", "shadow_volumes"], "{name}");
         assert_eq!(s.light_board.is_some(), lights >= 50, "{name}: the theatres and the stress scene have a light board");
     }
 }
