@@ -293,3 +293,42 @@ fn entities_move_between_frames_without_validation_messages() {
     let moved = differing(&moving[0], &moving[29]);
     assert!(moved > 20, "half a second later the ball and crate have moved ({moved} pixels differ)");
 }
+
+/// A frame with more passes than the timestamp pool holds (a volume and a lighting pass per
+/// light for 2,100 lights) still reports the whole frame's time: the inner passes beyond the
+/// pool go untimed, never the frame around them.
+#[test]
+fn profile_times_the_frame_when_passes_outnumber_the_queries() {
+    let text = r#"
+methods = [{ name = "shadow_volumes", mode = "physical", animate = false }]
+materials = [{ name = "grey", albedo = 0.5, specular = 0 }]
+objects = [
+    { name = "floor", mesh = "plane", size = 8, material = "grey" },
+    { name = "crate", mesh = "box", size = 1, translate = [0, 0.6, 0], material = "grey" },
+]
+[camera]
+position = [0, 6, 8]
+target = [0, 0, 0]
+[[light_arrays]]
+name = "rig"
+type = "point"
+grid = [42, 1, 50]
+min = [-4, 3, -4]
+max = [4, 3, 4]
+intensity = 0.01
+"#;
+    let dir = std::env::temp_dir().join(format!("penumbra-queries-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("many_passes.toml");
+    std::fs::write(&path, text).unwrap();
+    let opts = penumbra::capture::CaptureOptions { scene: Some(path), png: None, exr: None, size: (16, 16), frames: 1, method: None, exposure: 1.0, gpu: common::test_gpu_desc(), config: None };
+    let report = penumbra::profile::run(&opts, 1).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
+    let lighting = names.iter().filter(|n| n.ends_with(" lighting")).count();
+    println!("{} passes timed, {lighting} light passes", names.len());
+    assert!(lighting > 100 && lighting < 2100, "the pool times some light passes but not all 2,100 ({lighting})");
+    let frame = report.passes.iter().find(|p| p.name == "frame").expect("the frame's time is kept");
+    let sum: f64 = report.passes.iter().filter(|p| p.name.starts_with("light ")).map(|p| p.median_ms).sum();
+    assert!(frame.median_ms > sum, "the frame ({} ms) covers more than the timed light passes ({sum} ms)", frame.median_ms);
+}

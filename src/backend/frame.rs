@@ -17,7 +17,7 @@ use super::Gpu;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Frame(pub(crate) u32);
 
-pub(crate) const MAX_QUERIES: u32 = 512;
+pub(crate) const MAX_QUERIES: u32 = 4096;
 const UPLOAD_BYTES: u64 = 4 << 20;
 /// Conservative for every device (the spec allows up to 256 for minUniformBufferOffsetAlignment).
 pub(crate) const UPLOAD_ALIGN: u64 = 256;

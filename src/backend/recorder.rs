@@ -135,7 +135,11 @@ impl<'g> Recorder<'g> {
                 unsafe { dd.cmd_begin_debug_utils_label(self.cb, &label) };
             }
         }
-        let query = self.write_timestamp();
+        // Room for this scope's start and end and for the end of every timed scope still open:
+        // when a frame has more passes than queries (a stencil volume per light of thousands),
+        // the inner scopes go untimed and the outer ones (the whole frame) keep their time.
+        let timed_open = self.frame.open_scopes.iter().filter(|&&i| i != usize::MAX).count() as u32;
+        let query = if self.frame.next_query + 2 + timed_open <= MAX_QUERIES { self.write_timestamp() } else { None };
         let idx = self.frame.scopes.len();
         self.frame.scopes.push((name.to_string(), query.unwrap_or(0), None));
         if query.is_none() {
