@@ -430,12 +430,12 @@ fn the_setup_is_a_cached_bake() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// The chart's sweep covers K, both selections and three segment sizes.
+/// The chart's sweep covers K, both selections, three segment sizes and the faithful mode.
 #[test]
 fn the_sweep_covers_k_selection_and_area() {
     let decl = MethodDecl { name: "vls".into(), line: 1, params: Vec::new() };
     let labels: Vec<String> = super::sweep(&decl).into_iter().map(|(l, _)| l).collect();
-    for want in ["k=1 ", "k=32 ", "closest", "contribution", "area=0.2", "area=0.0125"] {
+    for want in ["k=1 ", "k=32 ", "closest", "contribution", "area=0.2", "area=0.0125", "faithful"] {
         assert!(labels.iter().any(|l| l.contains(want)), "{want} missing from {labels:?}");
     }
 }
