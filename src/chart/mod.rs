@@ -62,6 +62,8 @@ pub struct Chart {
     pub device: String,
     pub size: (u32, u32),
     pub rows: Vec<ChartRow>,
+    /// Swept points left out, with why (a limit of the method on this scene).
+    pub skipped: Vec<String>,
 }
 
 /// FNV-1a: a stable content hash for cache keys (std's hasher may change between releases).
@@ -140,6 +142,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let mut rows = Vec::new();
     let mut references: BTreeMap<String, (HdrImage, String)> = BTreeMap::new();
     let mut device = String::new();
+    let mut skipped: Vec<String> = Vec::new();
     let all = registry::configurations(&scene)?;
     for name in &opts.methods {
         if !all.iter().any(|c| c.name == *name) {
@@ -159,7 +162,18 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         let total = points.len() as u64;
         for (i, (config, point)) in points.into_iter().enumerate() {
             progress.update(i as u64, total);
-            let (image, frame_ms, passes, dev, bakes) = measure(&scene, &point, opts)?;
+            let (image, frame_ms, passes, dev, bakes) = match measure(&scene, &point, opts) {
+                Ok(m) => m,
+                // A swept point beyond one of the method's limits for this scene (a finer
+                // segmentation over its memory limit) is left out with its reason; the scene's
+                // own configuration must run.
+                Err(Error::Usage(why)) if i > 0 => {
+                    eprintln!("chart: {config} left out: {why}");
+                    skipped.push(format!("{config}: {why}"));
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
             device = dev;
             let metrics = metrics::compare(&image, reference, &CompareOptions::default())?;
             let bake_ms = bakes.iter().map(|b| b.ms).sum();
@@ -168,7 +182,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         }
         progress.finish();
     }
-    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, rows };
+    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, rows, skipped };
     let csv = chart.csv();
     std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
     let cached = opts.cache_dir.join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
@@ -354,7 +368,7 @@ mod tests {
             metrics: m(e),
             reference: "direct, 4 spp".into(),
         };
-        let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)] };
+        let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new() };
         assert_eq!(chart.pareto_front(), vec![0, 2]);
         let parsed = parse_csv(&chart.csv()).unwrap();
         assert_eq!(parsed, vec![cfg("a", 1.0, 0.5), cfg("b", 2.0, 0.6), cfg("c", 3.0, 0.1)]);
