@@ -167,7 +167,8 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
                 // A swept point beyond one of the method's limits for this scene (a finer
                 // segmentation over its memory limit) is left out with its reason; the scene's
                 // own configuration must run.
-                Err(Error::Usage(why)) if i > 0 => {
+                Err(e @ (Error::Usage(_) | Error::Scene(_))) if i > 0 => {
+                    let why = e.to_string();
                     eprintln!("chart: {config} left out: {why}");
                     skipped.push(format!("{config}: {why}"));
                     continue;
