@@ -16,7 +16,7 @@ use super::Scene;
 use crate::world::level_gen::RoomsParams;
 
 pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-    let ctx = Ctx { file: source, text, base_dir };
+    let ctx = Ctx::new(source, text, base_dir);
     let root = ctx.parse()?;
     let top = Table::new(&ctx, String::new(), &root, None)?;
     top.allow(&["camera", "materials", "objects", "lights", "environment", "methods", "combinations", "light_arrays", "light_board"])?;
