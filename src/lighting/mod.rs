@@ -31,7 +31,7 @@ pub mod vls;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::backend::{vk, Gpu, ImageId};
+use crate::backend::{vk, BlendMode, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, ImageId, SpecConstant};
 use crate::bake::Baker;
 use crate::environment::EnvironmentMap;
 use crate::error::Result;
@@ -109,6 +109,23 @@ pub struct CreateContext<'a> {
     pub bakes: &'a mut Baker,
     /// The terms this method will draw in the configuration being created.
     pub terms: Terms,
+}
+
+/// The pipeline of a pass that draws the scene's surfaces and writes `terms` into the frame's
+/// radiance: thin surfaces seen from both sides, the terms as specialization constant 0, and —
+/// when it is not the base — the base's depth tested but not written and its light added. The
+/// caller adds its vertex layout, further constants and any depth bias.
+pub fn term_pipeline_desc(name: &str, vertex: &str, fragment: &str, terms: Terms, depth_format: vk::Format) -> GraphicsPipelineDesc {
+    let mut desc = GraphicsPipelineDesc::new(name, vertex, Some(fragment));
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+    desc.depth_format = Some(depth_format);
+    desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
+    if !terms.has(Term::Base) {
+        desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+        desc.color_targets[0].blend = BlendMode::Additive;
+    }
+    desc
 }
 
 pub trait LightingMethod {

@@ -24,15 +24,12 @@ mod tests;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::backend::{
-    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange,
-    VertexAttribute, VertexLayout,
-};
+use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout};
 use crate::bake::{BakeData, BakeKey};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lighting::params::Params;
-use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms, RADIANCE_FORMAT};
+use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms};
 use crate::many_lights::{scene_polygons, LightModel, ManyLight};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use setup::Projection;
@@ -401,21 +398,14 @@ impl BspLights {
         let ds_format = gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
             let vert = if terms.has(Term::Direct) { "bsp_lights/segments.vert" } else { "bsp_lights/segments_base.vert" };
-            let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} {terms}"), vert, Some("bsp_lights/segments.frag"));
+            let mut desc = term_pipeline_desc(&format!("{NAME} {terms}"), vert, "bsp_lights/segments.frag", terms, ds_format);
             let attr = |location: u32| VertexAttribute { location, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 12 * location };
             desc.vertex_layout = VertexLayout { buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)], attributes: (0..4).map(attr).collect() };
-            // Thin surfaces are seen from both sides (as forward draws them).
-            desc.raster.cull = vk::CullModeFlags::NONE;
-            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            desc.depth_format = Some(ds_format);
-            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
             if !terms.has(Term::Base) {
                 // Over another method's base: the segments' interior vertices are not the
                 // base's, so their depths differ by rounding; a small bias toward the eye keeps
                 // the base's depth deciding what is seen without the surfaces fighting.
-                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
                 desc.raster.depth_bias = Some((-16.0, -1.0));
-                desc.color_targets[0].blend = BlendMode::Additive;
             }
             gpu.create_graphics_pipeline(&desc, cx.shaders)
         };

@@ -19,14 +19,11 @@ mod tests;
 
 use glam::Vec3;
 
-use crate::backend::{
-    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant,
-    SubresourceRange,
-};
+use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
 use crate::scene::{Light, MethodDecl, MethodSchema, ParamKind, ParamSchema};
 use assign::{Assignment, ClusterBlock, LightVolume};
 use config::Config;
@@ -130,18 +127,8 @@ impl Clustered {
         let assign_pipeline = compute(cx.gpu, "clustered assign", "clustered/assign.comp")?;
         let ds_format = cx.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
-            let mut desc = GraphicsPipelineDesc::new(&format!("{NAME} {terms}"), "clustered/clustered.vert", Some("clustered/clustered.frag"));
+            let mut desc = term_pipeline_desc(&format!("{NAME} {terms}"), "clustered/clustered.vert", "clustered/clustered.frag", terms, ds_format);
             desc.vertex_layout = vertex_layout();
-            // Thin surfaces (planes, leaves) are seen from both sides.
-            desc.raster.cull = vk::CullModeFlags::NONE;
-            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            desc.depth_format = Some(ds_format);
-            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
-            if !terms.has(Term::Base) {
-                // Over another method's base: its depth decides what is seen; light adds.
-                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
-                desc.color_targets[0].blend = BlendMode::Additive;
-            }
             cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
         let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);

@@ -8,11 +8,11 @@
 //! It is penumbra's first method and the baseline the others are measured against. Its CPU
 //! mirror is [`crate::lighting::brdf`].
 
-use crate::backend::{vk, Bind, BlendMode, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
+use crate::backend::{vk, Bind, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
 use crate::error::Result;
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph};
-use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
 use crate::scene::{MethodDecl, MethodSchema};
 
 pub const SCHEMA: MethodSchema = MethodSchema { name: "forward", params: &[] };
@@ -33,18 +33,8 @@ impl Forward {
     pub fn new(c: &mut CreateContext<'_>, _decl: &MethodDecl) -> Result<Self> {
         let ds_format = c.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
-            let mut desc = GraphicsPipelineDesc::new(&format!("forward {terms}"), "forward/forward.vert", Some("forward/forward.frag"));
+            let mut desc = term_pipeline_desc(&format!("forward {terms}"), "forward/forward.vert", "forward/forward.frag", terms, ds_format);
             desc.vertex_layout = vertex_layout();
-            // Thin surfaces (planes, leaves) are seen from both sides.
-            desc.raster.cull = vk::CullModeFlags::NONE;
-            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            desc.depth_format = Some(ds_format);
-            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
-            if !terms.has(Term::Base) {
-                // Over another method's base: its depth decides what is seen; light adds.
-                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
-                desc.color_targets[0].blend = BlendMode::Additive;
-            }
             c.gpu.create_graphics_pipeline(&desc, c.shaders)
         };
         Ok(Forward { both: pipeline(Terms::BASE_DIRECT)?, base: pipeline(Terms::BASE)?, direct: pipeline(Terms::DIRECT)? })

@@ -22,14 +22,12 @@ mod tests;
 
 use glam::DVec3;
 
-use crate::backend::{
-    vk, Bind, BlendMode, BufferId, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
-};
+use crate::backend::{vk, Bind, BufferId, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::params::Params;
-use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
 use crate::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use setup::{Feeler, LightSets, Point, Selection, SetupParams};
@@ -279,22 +277,17 @@ impl Vls {
         let ds_format = cx.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
             let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
-            let mut desc = GraphicsPipelineDesc::new(&format!("vls {terms}"), "vls/vls.vert", Some("vls/vls.frag"));
+            let mut desc = term_pipeline_desc(&format!("vls {terms}"), "vls/vls.vert", "vls/vls.frag", terms, ds_format);
             let f3 = vk::Format::R32G32B32_SFLOAT;
             desc.vertex_layout = VertexLayout {
                 buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)],
                 attributes: vec![attr(0, f3, 0), attr(1, f3, 12), attr(2, f3, 24), attr(3, f3, 36), attr(4, vk::Format::R32_UINT, 48)],
             };
-            desc.raster.cull = vk::CullModeFlags::NONE;
-            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            desc.depth_format = Some(ds_format);
-            desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }, SpecConstant { id: 1, bits: u32::from(config.setup.point == Point::Vertex) }];
+            desc.specialization.push(SpecConstant { id: 1, bits: u32::from(config.setup.point == Point::Vertex) });
             if !terms.has(Term::Base) {
                 // Over another method's base, whose triangles are not these segments: a pull
                 // towards the eye lets the segments pass the base's equal depth.
-                desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
                 desc.raster.depth_bias = Some((-4.0, -1.0));
-                desc.color_targets[0].blend = BlendMode::Additive;
             }
             cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
