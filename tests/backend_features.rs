@@ -1,6 +1,7 @@
 //! Backend features the techniques rely on, each checked by a value that could be wrong:
 //! 3D, cube and array images with mip chains; specialization constants; shader hot reload that
-//! keeps the old pipeline when the new source does not compile.
+//! keeps the old pipeline when the new source does not compile; per-frame uploads past the
+//! first 4 MiB block.
 
 mod common;
 
@@ -148,9 +149,105 @@ fn a_scoped_computation_leaves_nothing_behind_on_success_or_error() {
     // Inside, the objects were alive.
     gpu.scoped(|gpu| -> Result<(), BackendError> {
         made(gpu)?;
-        assert!(gpu.live_objects().0 >= before.0 + 2 && gpu.live_objects().2 == before.2 + 1 && gpu.live_frames() == frames + 1);
+        // The buffer (a frame's upload blocks belong to the frame, not to the buffer arena).
+        assert!(gpu.live_objects().0 > before.0 && gpu.live_objects().2 == before.2 + 1 && gpu.live_frames() == frames + 1);
         Ok(())
     })
     .unwrap();
+    common::assert_clean(&gpu);
+}
+
+/// One frame uploads far more than the first 4 MiB block (thousands of lights' constants do:
+/// the stencil method at 4,096 lights): later blocks are added as needed, every dispatch reads
+/// exactly what was uploaded for it, and the same frame slot reused with other data (and the
+/// blocks it kept) reads the new data.
+#[test]
+fn uploads_past_the_first_block_reach_the_shader() {
+    use penumbra::backend::Bind;
+    let mut gpu = common::test_gpu();
+    let pipeline =
+        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "upload check".into(), shader: "util/upload_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    // 1.5 MiB each, then one of 9 MiB that no block grown by doubling alone would hold yet.
+    let sizes: Vec<usize> = (0..7).map(|_| 3 << 19).chain([9 << 20]).collect();
+    let total: usize = sizes.iter().sum();
+    assert!(total > 3 * (4 << 20), "the test must pass the first block several times over");
+    let slots = sizes.len() as u32;
+    let result = gpu.create_storage_output("upload check result", slots as u64 * 64 * 4, MemoryKind::GpuToCpu).unwrap();
+    let frame = gpu.create_frame().unwrap();
+    let mut states = ResourceStates::default();
+    for round in 0..2u32 {
+        let blocks: Vec<Vec<u32>> = sizes.iter().enumerate().map(|(slot, &bytes)| (0..bytes as u32 / 4).map(|j| (round << 31) | ((slot as u32) << 24) | j).collect()).collect();
+        let strides: Vec<u32> = sizes.iter().map(|&b| (b / 4 / 64) as u32).collect();
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let mut graph = RenderGraph::new();
+        for (slot, words) in blocks.iter().enumerate() {
+            let push = [slot as u32, strides[slot]];
+            graph.pass(&format!("read block {slot}")).buffer(result, Access::StorageWrite { stages: compute }, Some("result")).record(move |ctx| {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[("data", Bind::StorageData(bytemuck::cast_slice(words)))])?;
+                ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
+                ctx.rec.dispatch([1, 1, 1])
+            });
+        }
+        graph.pass("host").buffer(result, Access::HostRead, None).record(|_| Ok(()));
+        let mut rec = gpu.begin_frame(frame).unwrap();
+        graph.execute(&mut rec, &mut states).unwrap();
+        rec.finish().unwrap();
+        gpu.submit_and_wait(frame).unwrap();
+        let got: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(result).unwrap()).to_vec();
+        for (slot, words) in blocks.iter().enumerate() {
+            for i in 0..64 {
+                assert_eq!(got[slot * 64 + i], words[i * strides[slot] as usize], "round {round}, block {slot}, word {i}");
+            }
+        }
+        let held = gpu.frame_footprint(frame).unwrap();
+        assert!(held.upload_blocks >= 3 && held.upload_bytes >= total as u64, "round {round}: {held:?}");
+    }
+    common::assert_clean(&gpu);
+}
+
+/// One frame binding more descriptor sets than a descriptor pool holds (2,048; a pass per
+/// light for thousands of lights does) takes them from further pools instead of asking one
+/// pool for more than it has, which a driver may refuse: every dispatch reads its own data.
+#[test]
+fn a_frame_binding_more_sets_than_a_pool_holds_takes_more_pools() {
+    use penumbra::backend::{Bind, BufferTransition};
+    let mut gpu = common::test_gpu();
+    let pipeline =
+        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "upload check".into(), shader: "util/upload_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    const BINDS: u32 = 5000;
+    let result = gpu.create_storage_output("bind check result", BINDS as u64 * 64 * 4, MemoryKind::GpuToCpu).unwrap();
+    let frame = gpu.create_frame().unwrap();
+    let mut states = ResourceStates::default();
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let mut graph = RenderGraph::new();
+    graph.pass("many binds").buffer(result, Access::StorageWrite { stages: compute }, Some("result")).record(move |ctx| {
+        ctx.rec.bind_pipeline(pipeline)?;
+        for slot in 0..BINDS {
+            // 64 words, each the slot's number and its own index.
+            let words: Vec<u32> = (0..64).map(|i| slot * 1000 + i).collect();
+            ctx.bind(&[("data", Bind::StorageData(bytemuck::cast_slice(&words)))])?;
+            ctx.rec.push_constants(bytemuck::cast_slice(&[slot, 1]))?;
+            ctx.rec.dispatch([1, 1, 1])?;
+            // The dispatches write disjoint words, but a whole-buffer binding is what
+            // synchronization validation sees.
+            let w = vk::AccessFlags2::SHADER_STORAGE_WRITE;
+            ctx.rec.barriers(&[], &[BufferTransition { buffer: result, src_stages: compute, src_access: w, dst_stages: compute, dst_access: w }])?;
+        }
+        Ok(())
+    });
+    graph.pass("host").buffer(result, Access::HostRead, None).record(|_| Ok(()));
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, &mut states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+    let got: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(result).unwrap()).to_vec();
+    for slot in 0..BINDS {
+        for i in 0..64 {
+            assert_eq!(got[(slot * 64 + i) as usize], slot * 1000 + i, "bind {slot}, word {i}");
+        }
+    }
+    let held = gpu.frame_footprint(frame).unwrap();
+    assert!(held.descriptor_pools >= 3, "{BINDS} sets of two storage buffers fit in {} pool(s)", held.descriptor_pools);
     common::assert_clean(&gpu);
 }

@@ -3,7 +3,7 @@
 use ash::vk;
 
 use super::error::{BackendError, BackendResult};
-use super::frame::UPLOAD_ALIGN;
+use super::frame::{MAX_UPLOAD_BYTES, POOL_SETS, POOL_SIZES, UPLOAD_ALIGN};
 use super::recorder::Recorder;
 use super::reflect::ReflectedBinding;
 use super::resources::{BufferId, ImageId, SamplerId, SubresourceRange};
@@ -119,7 +119,7 @@ impl Recorder<'_> {
         let sets = if p.set_layouts.is_empty() {
             Vec::new()
         } else {
-            let pool = self.frame.descriptor_pool;
+            let pool = self.descriptor_pool_for(p.set_layouts.len() as u32, infos.iter().map(|(b, _)| gpu.driver_descriptor_type(b.ty)))?;
             unsafe { gpu.device.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&p.set_layouts)) }
                 .map_err(|e| BackendError::Vulkan { call: "vkAllocateDescriptorSets", result: e })?
         };
@@ -142,22 +142,72 @@ impl Recorder<'_> {
         Ok(())
     }
 
-    /// Copies bytes into the frame's upload buffer; returns where they landed.
+    /// The pool to allocate `sets` sets holding `types` from: the one being filled if it has
+    /// room for all of them, else the next (created the first time a frame needs it).
+    fn descriptor_pool_for(&mut self, sets: u32, types: impl Iterator<Item = vk::DescriptorType>) -> BackendResult<vk::DescriptorPool> {
+        let mut need = [0u32; 4];
+        for ty in types {
+            let i = POOL_SIZES.iter().position(|(t, _)| *t == ty).ok_or_else(|| BackendError::Invalid(format!("descriptor type {ty:?} has no place in the frame's pools")))?;
+            need[i] += 1;
+        }
+        if sets > POOL_SETS || need.iter().zip(&POOL_SIZES).any(|(n, (_, cap))| n > cap) {
+            return Err(BackendError::Invalid(format!("one bind needs {sets} sets and {need:?} descriptors, more than a descriptor pool holds")));
+        }
+        let f = &mut self.frame;
+        let fits = f.pool_sets + sets <= POOL_SETS && f.pool_descriptors.iter().zip(&need).zip(&POOL_SIZES).all(|((used, n), (_, cap))| used + n <= *cap);
+        if !fits {
+            if f.descriptor_pool_index + 1 == f.descriptor_pools.len() {
+                let pool = self.gpu.create_descriptor_pool()?;
+                self.frame.descriptor_pools.push(pool);
+            }
+            let f = &mut self.frame;
+            f.descriptor_pool_index += 1;
+            f.pool_sets = 0;
+            f.pool_descriptors = [0; 4];
+        }
+        let f = &mut self.frame;
+        f.pool_sets += sets;
+        for (used, n) in f.pool_descriptors.iter_mut().zip(need) {
+            *used += n;
+        }
+        Ok(f.descriptor_pools[f.descriptor_pool_index])
+    }
+
+    /// Copies bytes into the frame's upload blocks; returns where they landed. When the block
+    /// being filled has no room, the next one is used, created (twice the size of the last,
+    /// and at least `bytes`) the first time a frame needs it.
     pub(crate) fn upload(&mut self, bytes: &[u8]) -> BackendResult<(vk::Buffer, u64)> {
-        let offset = self.frame.upload_offset.next_multiple_of(UPLOAD_ALIGN);
-        let upload = self.frame.upload;
-        let capacity = self.gpu.buffer(upload)?.desc.size;
-        if offset + bytes.len() as u64 > capacity {
-            return Err(BackendError::Invalid(format!("per-frame upload buffer full ({capacity} bytes); upload large data once instead")));
+        let len = bytes.len() as u64;
+        loop {
+            let block = self.frame.upload_block;
+            let offset = self.frame.upload_offset.next_multiple_of(UPLOAD_ALIGN);
+            let capacity = self.frame.uploads[block].desc.size;
+            if offset + len <= capacity {
+                let buffer = &self.frame.uploads[block];
+                let ptr = buffer.allocation.as_ref().and_then(|a| a.mapped_ptr()).ok_or_else(|| BackendError::Invalid("upload buffer is not mapped".into()))?;
+                // SAFETY: the block is host-visible and mapped, this frame's previous use of it
+                // was waited for in begin_frame, and [offset, offset + len) lies inside it.
+                unsafe {
+                    std::ptr::copy_nonoverlapping(bytes.as_ptr(), (ptr.as_ptr() as *mut u8).add(offset as usize), bytes.len());
+                }
+                let raw = buffer.raw;
+                self.frame.upload_offset = offset + len;
+                return Ok((raw, offset));
+            }
+            if block + 1 == self.frame.uploads.len() {
+                let held: u64 = self.frame.uploads.iter().map(|b| b.desc.size).sum();
+                let size = (2 * capacity).max(len.next_multiple_of(UPLOAD_ALIGN));
+                if held + size > MAX_UPLOAD_BYTES {
+                    return Err(BackendError::Invalid(format!(
+                        "one frame's uploads would pass {} MiB ({held} bytes held, {len} more asked for); upload large data once into a buffer of its own",
+                        MAX_UPLOAD_BYTES >> 20
+                    )));
+                }
+                let next = self.gpu.create_upload_block(block + 1, size)?;
+                self.frame.uploads.push(next);
+            }
+            self.frame.upload_block = block + 1;
+            self.frame.upload_offset = 0;
         }
-        // SAFETY-free path: the upload buffer is host-visible and this frame's previous use was
-        // waited for in begin_frame, so the CPU may write it.
-        let buffer = self.gpu.buffer(upload)?;
-        let ptr = buffer.allocation.as_ref().and_then(|a| a.mapped_ptr()).ok_or_else(|| BackendError::Invalid("upload buffer is not mapped".into()))?;
-        unsafe {
-            std::ptr::copy_nonoverlapping(bytes.as_ptr(), (ptr.as_ptr() as *mut u8).add(offset as usize), bytes.len());
-        }
-        self.frame.upload_offset = offset + bytes.len() as u64;
-        Ok((buffer.raw, offset))
     }
 }

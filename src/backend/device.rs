@@ -445,7 +445,7 @@ impl Drop for Gpu {
         unsafe {
             let _ = self.device.device_wait_idle();
             for f in self.frames.drain(..).flatten() {
-                f.into_inner().destroy(&self.device);
+                f.into_inner().destroy(&self.device, &self.allocator);
             }
             self.arenas.destroy_all(&self.device, &self.allocator);
             self.device.destroy_command_pool(self.command_pool, None);

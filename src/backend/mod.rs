@@ -25,7 +25,7 @@ mod uniform_blocks;
 pub use descriptors::Bind;
 pub use device::{DeviceCaps, Gpu, GpuDesc, ValidationLog};
 pub use error::{BackendError, BackendResult};
-pub use frame::Frame;
+pub use frame::{Frame, FrameFootprint};
 pub use pipeline::{
     BlendMode, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, PipelineId, RasterState, ShaderSource, SpecConstant, StencilFace, StencilFaces, VertexAttribute, VertexLayout,
 };

@@ -96,7 +96,9 @@ impl Gpu {
         let mut frame = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is already being recorded".into()))?;
         let cb = frame.cb;
         unsafe {
-            self.device.reset_descriptor_pool(frame.descriptor_pool, vk::DescriptorPoolResetFlags::empty()).vk("vkResetDescriptorPool")?;
+            for &pool in &frame.descriptor_pools {
+                self.device.reset_descriptor_pool(pool, vk::DescriptorPoolResetFlags::empty()).vk("vkResetDescriptorPool")?;
+            }
             self.device.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
             self.device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT)).vk("vkBeginCommandBuffer")?;
             if let Some(q) = frame.queries {
@@ -106,6 +108,10 @@ impl Gpu {
         frame.next_query = 0;
         frame.scopes.clear();
         frame.open_scopes.clear();
+        frame.descriptor_pool_index = 0;
+        frame.pool_sets = 0;
+        frame.pool_descriptors = [0; 4];
+        frame.upload_block = 0;
         frame.upload_offset = 0;
         Ok(Recorder { gpu: self, frame, cb, pipeline: None, rendering: false })
     }

@@ -251,7 +251,7 @@ impl Arenas {
     }
 }
 
-unsafe fn destroy_buffer(device: &ash::Device, allocator: &Mutex<Allocator>, mut b: Buffer) {
+pub(crate) unsafe fn destroy_buffer(device: &ash::Device, allocator: &Mutex<Allocator>, mut b: Buffer) {
     unsafe { device.destroy_buffer(b.raw, None) };
     if let (Some(a), Ok(mut alloc)) = (b.allocation.take(), allocator.lock()) {
         let _ = alloc.free(a);
@@ -280,7 +280,9 @@ impl Gpu {
             .map_err(|e| BackendError::Allocation { name: name.into(), message: e.to_string() })
     }
 
-    pub fn create_buffer(&mut self, desc: &BufferDesc) -> BackendResult<BufferId> {
+    /// A buffer with its memory, owned by the caller rather than the arenas: for objects that
+    /// belong to something else the Gpu holds (a frame's upload blocks, created while recording).
+    pub(crate) fn create_raw_buffer(&self, desc: &BufferDesc) -> BackendResult<Buffer> {
         if desc.size == 0 {
             return Err(BackendError::Invalid(format!("buffer `{}` has size 0", desc.name)));
         }
@@ -306,7 +308,12 @@ impl Gpu {
         };
         unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindBufferMemory")?;
         self.set_name(raw, &desc.name);
-        self.arenas.buffers.push(Some(Buffer { raw, desc: desc.clone(), allocation: Some(allocation) }));
+        Ok(Buffer { raw, desc: desc.clone(), allocation: Some(allocation) })
+    }
+
+    pub fn create_buffer(&mut self, desc: &BufferDesc) -> BackendResult<BufferId> {
+        let buffer = self.create_raw_buffer(desc)?;
+        self.arenas.buffers.push(Some(buffer));
         let id = BufferId(self.arenas.buffers.len() as u32 - 1);
         if let Some(scope) = self.scopes.last_mut() {
             scope.buffers.push(id);
