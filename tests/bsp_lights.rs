@@ -9,6 +9,7 @@ use penumbra::bake::Baker;
 use penumbra::environment::EnvironmentMap;
 use penumbra::gpu_scene::SceneGpu;
 use penumbra::graph::{RenderGraph, ResourceStates};
+use penumbra::lighting::bsp_lights::Layout;
 use penumbra::lighting::{CreateContext, LightingMethod, Terms};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
@@ -93,12 +94,18 @@ fn cpu_sum(bsp: &penumbra::lighting::bsp_lights::BspLights, scales: &[f32], thre
 }
 
 /// Item 19: random intensities every "frame"; the GEMV equals the CPU sum to f32 rounding (f16
-/// storage: to half-precision rounding of each entry).
+/// storage: to half-precision rounding of each entry), in both layouts.
 #[test]
 fn item_19_relighting_is_linear_in_random_intensities() {
-    for (storage, tolerance) in [("f32", 2e-6), ("f16", 1e-3)] {
-        let sc = scene(&scene_text(&format!("{{ name = \"bsp_lights\", max_segment_area = 0.02, threshold = 0, storage = \"{storage}\" }}"), 12, 2));
+    for (storage, tolerance, layout) in [("f32", 2e-6, "dense"), ("f16", 1e-3, "dense"), ("f32", 2e-6, "sparse"), ("f16", 1e-3, "sparse")] {
+        let sc = scene(&scene_text(&format!("{{ name = \"bsp_lights\", max_segment_area = 0.02, threshold = 0, storage = \"{storage}\", layout = \"{layout}\" }}"), 12, 2));
         let (mut setup, mut bsp) = create(&sc);
+        let want_layout = if layout == "dense" { Layout::Dense } else { Layout::Sparse };
+        assert_eq!(bsp.layout, want_layout);
+        // The floor under the box is in its shadow and the box's faces turn from some lights:
+        // the sparse layout leaves out real zeros.
+        let zeros = bsp.baked.colours.chunks(3).filter(|c| c.iter().all(|&x| x == 0.0)).count();
+        assert!(zeros > bsp.baked.colours.len() / 30, "{zeros} zero entries");
         let mut rng = Rng(5);
         let largest = bsp.baked.colours.iter().fold(0.0f32, |m, &c| m.max(c)) as f64;
         for frame in 0..5 {
@@ -106,8 +113,8 @@ fn item_19_relighting_is_linear_in_random_intensities() {
             let got = gemv(&mut setup, &mut bsp, &scales);
             let want = cpu_sum(&bsp, &scales, 0.0);
             let worst = got.iter().zip(&want).flat_map(|(g, w)| (0..3).map(move |c| (g[c] as f64 - w[c]).abs())).fold(0.0, f64::max);
-            println!("{storage} frame {frame}: {} vertices, max |GPU − CPU| = {:.2e} of the largest entry", want.len(), worst / largest);
-            assert!(worst <= tolerance * largest * 12.0, "{storage} frame {frame}: {worst}");
+            println!("{layout} {storage} frame {frame}: {} vertices, max |GPU − CPU| = {:.2e} of the largest entry", want.len(), worst / largest);
+            assert!(worst <= tolerance * largest * 12.0, "{layout} {storage} frame {frame}: {worst}");
         }
         common::assert_clean(&setup.gpu);
     }
@@ -142,8 +149,9 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
     println!("{skipped} of {lights} lights skipped; largest error / bound {worst_ratio:.4}");
     common::assert_clean(&setup.gpu);
 
-    // The speed-up, from the GEMV pass's timestamps over a frame loop.
-    let sc = scene(&scene_text("{ name = \"bsp_lights\", max_segment_area = 0.002 }", 100, 8));
+    // The speed-up, from the GEMV pass's timestamps over a frame loop. The dense layout's: the
+    // sparse one reads every non-zero entry whatever the scales.
+    let sc = scene(&scene_text("{ name = \"bsp_lights\", max_segment_area = 0.002, layout = \"dense\" }", 100, 8));
     let mut r = Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (32, 24), 1).unwrap_or_else(|e| panic!("{e}"));
     let cam = r.scene.camera.clone();
     let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
@@ -303,7 +311,7 @@ fn the_direct_term_adds_over_another_methods_base() {
 /// Bad parameters are one error line naming the scene and the field, through the renderer.
 #[test]
 fn bad_parameters_are_one_line_through_the_renderer() {
-    for (decl, field) in [("{ name = \"bsp_lights\", threshold = -0.1 }", "methods[0].threshold"), ("{ name = \"bsp_lights\", max_segment_area = \"big\" }", "methods[0].max_segment_area")] {
+    for (decl, field) in [("{ name = \"bsp_lights\", threshold = -0.1 }", "methods[0].threshold"), ("{ name = \"bsp_lights\", max_segment_area = \"big\" }", "methods[0].max_segment_area"), ("{ name = \"bsp_lights\", layout = \"diagonal\" }", "methods[0].layout")] {
         let err = match Scene::from_str(&scene_text(decl, 1, 1), "bsp_lights test", std::path::Path::new("scenes")) {
             Err(e) => e.to_string(),
             Ok(sc) => match Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (8, 8), 1) {
@@ -450,4 +458,50 @@ fn the_largest_light_count_relights_in_one_pass_and_one_more_is_refused() {
         Err(e) => e.to_string(),
     };
     assert!(!err.contains('\n') && err.contains("bsp_lights test") && err.contains("8193 lights"), "{err}");
+}
+
+/// A floor under 64 narrow spots, each reaching under a tenth of it.
+fn spot_floor(layout: &str) -> String {
+    let mut text = format!(
+        "methods = [{{ name = \"bsp_lights\", max_segment_area = 0.002, layout = \"{layout}\" }}]\n[camera]\nposition = [0, 3, 4]\ntarget = [0, 0, 0]\n\
+         [[objects]]\nmesh = \"plane\"\nsize = 4\n"
+    );
+    for i in 0..64 {
+        let (x, z) = (-1.75 + 0.5 * (i % 8) as f64, -1.75 + 0.5 * (i / 8) as f64);
+        text += &format!("[[lights]]\ntype = \"spot\"\nposition = [{x}, 2.5, {z}]\ntarget = [{x}, 0, {z}]\ninner_deg = 10\nouter_deg = 15\nintensity = 3\n");
+    }
+    text
+}
+
+/// Where most lights reach few vertices (narrow spots), `auto` takes the sparse layout, its
+/// GEMV equals the CPU sum, and it is faster than the dense one by about the fraction of
+/// entries it skips (timestamps of the GEMV pass, one run).
+#[test]
+fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
+    let sc = scene(&spot_floor("auto"));
+    let (mut setup, mut bsp) = create(&sc);
+    assert_eq!(bsp.layout, Layout::Sparse);
+    let density = bsp.baked.colours.chunks(3).filter(|c| c.iter().any(|&x| x != 0.0)).count() as f64 / (bsp.baked.colours.len() / 3) as f64;
+    let mut rng = Rng(3);
+    let scales: Vec<f32> = (0..64).map(|_| 0.1 + rng.next()).collect();
+    let got = gemv(&mut setup, &mut bsp, &scales);
+    let want = cpu_sum(&bsp, &scales, 0.05);
+    let largest = want.iter().flatten().fold(0.0f64, |m, &x| m.max(x));
+    let worst = got.iter().zip(&want).flat_map(|(g, w)| (0..3).map(move |c| (g[c] as f64 - w[c]).abs())).fold(0.0, f64::max);
+    assert!(worst <= 1e-5 * largest, "sparse GEMV off the CPU sum by {worst} (largest {largest})");
+    common::assert_clean(&setup.gpu);
+
+    let time = |layout: &str| -> f64 {
+        let mut r = Renderer::new(common::test_gpu(), scene(&spot_floor(layout)), Some("bsp_lights"), (16, 12), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let frames = r.profile(&cam, 7).unwrap();
+        let stats = penumbra::timing::summarise(&frames);
+        let ms = stats.iter().find(|s| s.name == "bsp_lights gemv").expect("the GEMV pass is timed").median_ms;
+        common::assert_clean(&r.gpu);
+        ms
+    };
+    let (dense, sparse) = (time("dense"), time("sparse"));
+    println!("{} vertices x 64 spots, {:.1} % of entries non-zero: dense GEMV {dense:.3} ms, sparse {sparse:.3} ms ({:.1}x)", bsp.baked.vertices.len(), 100.0 * density, dense / sparse);
+    assert!(density < 0.2, "the spots should reach under a fifth of the floor each: {density}");
+    assert!(dense > 2.0 * sparse, "the sparse GEMV should be well faster at {:.1} % density: dense {dense} ms, sparse {sparse} ms", 100.0 * density);
 }

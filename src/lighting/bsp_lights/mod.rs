@@ -4,7 +4,11 @@
 //! - **Set-up** ([`setup`], through the bake stage): the BSP of the scene polygons with the
 //!   first polygon as splitter, its fragments segmented to `max_segment_area`, and per light the
 //!   full-intensity colour `C_l(v)` of every segment vertex with the painter's shadow pass from
-//!   the light. Stored as a vertices × lights matrix (f32 RGB, or f16 with `storage = "f16"`).
+//!   the light. Stored as a vertices × lights matrix (f32 RGB, or f16 with `storage = "f16"`),
+//!   on the GPU either whole (`layout = "dense"`, light-major) or as each vertex's non-zero
+//!   entries only (`layout = "sparse"`, a CSR row per vertex: a light that does not reach a
+//!   vertex — outside its cone, facing away, in shadow — costs neither memory nor time).
+//!   `layout = "auto"` (default) takes the sparse layout when it is under half the dense one.
 //! - **Run time**: each light's scale `s_l` is its current intensity over the baked one (the
 //!   ratio of their largest channels: the thesis's lights are dimmers, a scalar per light, and a
 //!   light board dims every channel alike; a change of hue is not representable in a per-light
@@ -44,6 +48,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "k", kind: ParamKind::Float },
         ParamSchema { name: "threshold", kind: ParamKind::Float },
         ParamSchema { name: "storage", kind: ParamKind::String },
+        ParamSchema { name: "layout", kind: ParamKind::String },
     ],
 };
 
@@ -80,6 +85,50 @@ impl Storage {
     }
 }
 
+/// How the matrix lies on the GPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// Every entry, light-major: the GEMV reads each active light's column.
+    Dense,
+    /// Per vertex, its non-zero entries (light index and colour): the GEMV reads each vertex's
+    /// row, whatever the lights' scales.
+    Sparse,
+    /// Sparse when that takes under half the dense bytes, else dense.
+    Auto,
+}
+
+impl Storage {
+    /// Bytes of one non-zero entry in the sparse layout: the light's index with the colour
+    /// (f16: a 16-bit index and three halves in two words; f32: four words).
+    pub fn bytes_per_sparse_entry(self) -> u64 {
+        match self {
+            Storage::F32 => 16,
+            Storage::F16 => 8,
+        }
+    }
+}
+
+/// Bytes of the matrix on the GPU in each layout: `(dense, sparse)` for `vertices`, `lights`
+/// and `non_zero` entries (the sparse layout adds a row start per vertex and one at the end).
+pub fn layout_bytes(vertices: usize, lights: usize, non_zero: usize, storage: Storage) -> (u64, u64) {
+    (vertices as u64 * lights as u64 * storage.bytes_per_entry(), 4 * (vertices as u64 + 1) + non_zero as u64 * storage.bytes_per_sparse_entry())
+}
+
+/// The layout `layout` resolves to for a matrix of `vertices × lights` with `non_zero` entries.
+pub fn choose_layout(layout: Layout, vertices: usize, lights: usize, non_zero: usize, storage: Storage) -> Layout {
+    match layout {
+        Layout::Auto => {
+            let (dense, sparse) = layout_bytes(vertices, lights, non_zero, storage);
+            if 2 * sparse < dense {
+                Layout::Sparse
+            } else {
+                Layout::Dense
+            }
+        }
+        l => l,
+    }
+}
+
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
@@ -91,11 +140,12 @@ pub struct Config {
     /// Lights scaled below this fraction of their baked intensity are skipped.
     pub threshold: f64,
     pub storage: Storage,
+    pub layout: Layout,
 }
 
 impl Default for Config {
     fn default() -> Self {
-        Config { mode: Mode::Corrected, max_segment_area: 0.01, k: 1.0, threshold: 0.05, storage: Storage::F32 }
+        Config { mode: Mode::Corrected, max_segment_area: 0.01, k: 1.0, threshold: 0.05, storage: Storage::F32, layout: Layout::Auto }
     }
 }
 
@@ -108,6 +158,9 @@ impl Config {
         }
         if let Some(storage) = params.get_choice("storage", &[("f32", Storage::F32), ("f16", Storage::F16)])? {
             c.storage = storage;
+        }
+        if let Some(layout) = params.get_choice("layout", &[("auto", Layout::Auto), ("dense", Layout::Dense), ("sparse", Layout::Sparse)])? {
+            c.layout = layout;
         }
         if let Some(v) = decl.param("max_segment_area") {
             c.max_segment_area = Params::float(v).filter(|x| *x >= 1e-6 && *x <= 1e4).ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 m²", v))?;
@@ -308,6 +361,51 @@ fn active_words(active: &[(u32, f32)], vertices: usize) -> Vec<u32> {
     words
 }
 
+/// Matches `Scales` in glsl/bsp_lights/gemv_sparse.comp: the light count and vertex count,
+/// then every light's scale (0 where it is below `threshold`).
+fn scale_words(scales: &[f32], threshold: f32, vertices: usize) -> Vec<u32> {
+    let mut words = vec![scales.len() as u32, vertices as u32, 0, 0];
+    words.extend(scales.iter().map(|&s| if s >= threshold && s > 0.0 { s.to_bits() } else { 0 }));
+    words
+}
+
+fn half_bits(x: f32) -> u32 {
+    u32::from(half::f16::from_f32(x).to_bits())
+}
+
+/// The dense layout (light-major, as `Baked::colours`) as `glsl/bsp_lights/gemv.comp` reads it.
+fn dense_words(baked: &Baked, storage: Storage) -> Vec<u32> {
+    match storage {
+        Storage::F32 => baked.colours.iter().map(|c| c.to_bits()).collect(),
+        Storage::F16 => baked.colours.chunks(2).map(|p| half_bits(p[0]) | half_bits(p.get(1).copied().unwrap_or(0.0)) << 16).collect(),
+    }
+}
+
+/// The sparse layout as `glsl/bsp_lights/gemv_sparse.comp` reads it: per vertex, its non-zero
+/// entries in light order (row starts in entries, then the entries' words).
+pub fn sparse_words(baked: &Baked, storage: Storage) -> (Vec<u32>, Vec<u32>) {
+    let n = baked.vertices.len();
+    let mut rows = Vec::with_capacity(n + 1);
+    let mut words = Vec::new();
+    let mut entries = 0u32;
+    for v in 0..n {
+        rows.push(entries);
+        for l in 0..baked.lights {
+            let c = &baked.colours[3 * (l * n + v)..3 * (l * n + v) + 3];
+            if c.iter().all(|&x| x == 0.0) {
+                continue;
+            }
+            entries += 1;
+            match storage {
+                Storage::F32 => words.extend([l as u32, c[0].to_bits(), c[1].to_bits(), c[2].to_bits()]),
+                Storage::F16 => words.extend([l as u32 | half_bits(c[0]) << 16, half_bits(c[1]) | half_bits(c[2]) << 16]),
+            }
+        }
+    }
+    rows.push(entries);
+    (rows, words)
+}
+
 pub struct BspLights {
     pub config: Config,
     pub baked: Baked,
@@ -321,8 +419,16 @@ pub struct BspLights {
     both: PipelineId,
     base: PipelineId,
     direct: PipelineId,
-    /// This frame's active lights (index, scale), as `active_words` lays them out.
+    /// The layout the matrix took (`config.layout` resolved).
+    pub layout: Layout,
+    /// The sparse layout's row starts (one per vertex and one at the end).
+    rows: Option<BufferId>,
+    /// This frame's active lights (index, scale), as `active_words` lays them out (the dense
+    /// GEMV's input).
     active: Vec<u32>,
+    /// This frame's scale of every light, 0 below the threshold, as `scale_words` lays them out
+    /// (the sparse GEMV's input).
+    scales: Vec<u32>,
 }
 
 impl BspLights {
@@ -377,12 +483,27 @@ impl BspLights {
         let gpu = &mut *cx.gpu;
         let vertices = gpu.create_buffer_init(&format!("{NAME} vertices"), vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&baked.vertices))?;
         let indices = gpu.create_buffer_init(&format!("{NAME} indices"), vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&baked.indices))?;
-        let matrix_words: Vec<u32> = match config.storage {
-            Storage::F32 => baked.colours.iter().map(|c| c.to_bits()).collect(),
-            Storage::F16 => {
-                baked.colours.chunks(2).map(|p| u32::from(half::f16::from_f32(p[0]).to_bits()) | u32::from(half::f16::from_f32(p.get(1).copied().unwrap_or(0.0)).to_bits()) << 16).collect()
+        let non_zero = baked.colours.chunks(3).filter(|c| c.iter().any(|&x| x != 0.0)).count();
+        let layout = choose_layout(config.layout, baked.vertices.len(), baked.lights, non_zero, config.storage);
+        let (matrix_words, rows) = match layout {
+            Layout::Sparse => {
+                let (rows, words) = sparse_words(&baked, config.storage);
+                let (_, bytes) = layout_bytes(baked.vertices.len(), baked.lights, non_zero, config.storage);
+                if bytes > MAX_MATRIX_BYTES {
+                    return Err(field_error(scene, "layout", format!("the sparse matrix takes {bytes} bytes, over the {MAX_MATRIX_BYTES} a storage buffer is sure to hold")));
+                }
+                (words, Some(gpu.create_storage_buffer(&format!("{NAME} matrix rows"), bytemuck::cast_slice(&rows))?))
             }
+            _ => (dense_words(&baked, config.storage), None),
         };
+        crate::errln!(
+            "{NAME}: {} of {} matrix entries non-zero ({:.1} %); {} layout, {:.2} MiB on the GPU",
+            non_zero,
+            baked.vertices.len() * baked.lights,
+            100.0 * non_zero as f64 / (baked.vertices.len() * baked.lights).max(1) as f64,
+            if layout == Layout::Sparse { "sparse" } else { "dense" },
+            (4 * matrix_words.len() + rows.map_or(0, |_| 4 * (baked.vertices.len() + 1))) as f64 / (1u64 << 20) as f64
+        );
         let matrix = gpu.create_storage_buffer(&format!("{NAME} matrix"), bytemuck::cast_slice(&matrix_words))?;
         let colours = gpu.create_buffer(&BufferDesc {
             name: format!("{NAME} vertex colours"),
@@ -390,11 +511,12 @@ impl BspLights {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
             memory: MemoryKind::GpuOnly,
         })?;
-        for b in [vertices, indices, matrix, colours] {
+        for b in [vertices, indices, matrix, colours].into_iter().chain(rows) {
             cx.states.forget_buffer(b);
         }
         let half = SpecConstant { id: 0, bits: u32::from(config.storage == Storage::F16) };
-        let gemv = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} gemv"), shader: "bsp_lights/gemv.comp".into(), specialization: vec![half] }, cx.shaders)?;
+        let shader = if layout == Layout::Sparse { "bsp_lights/gemv_sparse.comp" } else { "bsp_lights/gemv.comp" };
+        let gemv = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} gemv"), shader: shader.into(), specialization: vec![half] }, cx.shaders)?;
         let ds_format = gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
             let vert = if terms.has(Term::Direct) { "bsp_lights/segments.vert" } else { "bsp_lights/segments_base.vert" };
@@ -412,7 +534,8 @@ impl BspLights {
         let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
         let all: Vec<(u32, f32)> = (0..baked.lights as u32).map(|l| (l, 1.0)).collect();
         let active = active_words(&all, baked.vertices.len());
-        Ok(BspLights { config, baked, full, vertices, indices, matrix, colours, gemv, both, base, direct, active })
+        let scales = scale_words(&vec![1.0; baked.lights], 0.0, baked.vertices.len());
+        Ok(BspLights { config, layout, baked, full, vertices, indices, matrix, rows, colours, gemv, both, base, direct, active, scales })
     }
 
     /// Sets each light's scale from its current intensity (RGB, as the frame's lights carry
@@ -428,6 +551,11 @@ impl BspLights {
         let threshold = self.config.threshold as f32;
         let active: Vec<(u32, f32)> = scales.iter().enumerate().filter(|(_, &s)| s >= threshold && s > 0.0).map(|(l, &s)| (l as u32, s)).collect();
         self.active = active_words(&active, self.baked.vertices.len());
+        let mut all = vec![0.0; self.baked.lights];
+        for &(l, s) in &active {
+            all[l as usize] = s;
+        }
+        self.scales = scale_words(&all, 0.0, self.baked.vertices.len());
     }
 
     /// Lights in this frame's GEMV.
@@ -444,15 +572,23 @@ impl BspLights {
     pub fn add_gemv<'a>(&'a self, graph: &mut RenderGraph<'a>) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let n = self.baked.vertices.len() as u32;
-        graph
-            .pass(&format!("{NAME} gemv"))
-            .buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix"))
-            .buffer(self.colours, Access::StorageWrite { stages: compute }, Some("colours"))
-            .record(move |ctx| {
-                ctx.rec.bind_pipeline(self.gemv)?;
-                ctx.bind(&[("enabled", Bind::StorageData(bytemuck::cast_slice(&self.active)))])?;
-                ctx.rec.dispatch([n, 1, 1])
-            });
+        let mut pass = graph.pass(&format!("{NAME} gemv")).buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix")).buffer(
+            self.colours,
+            Access::StorageWrite { stages: compute },
+            Some("colours"),
+        );
+        let input: &[u32] = match self.rows {
+            Some(rows) => {
+                pass = pass.buffer(rows, Access::StorageRead { stages: compute }, Some("rows"));
+                &self.scales
+            }
+            None => &self.active,
+        };
+        pass.record(move |ctx| {
+            ctx.rec.bind_pipeline(self.gemv)?;
+            ctx.bind(&[("enabled", Bind::StorageData(bytemuck::cast_slice(input)))])?;
+            ctx.rec.dispatch([n, 1, 1])
+        });
     }
 
     /// Reads the vertex colour buffer back (after the frames that wrote it finished).
