@@ -77,10 +77,10 @@ pub struct FrameClock {
 
 impl FrameClock {
     /// Animation step per frame (a 60 Hz display).
-    pub const STEP_S: f32 = 1.0 / 60.0;
+    pub const STEP_S: f32 = crate::scene::motion::FRAME_STEP_S;
 
     pub fn at(frame: u64) -> FrameClock {
-        FrameClock { frame, time_s: frame as f32 * Self::STEP_S }
+        FrameClock { frame, time_s: crate::scene::motion::frame_time(frame) }
     }
 }
 

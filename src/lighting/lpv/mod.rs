@@ -153,8 +153,10 @@ pub struct Lpv {
     pub placements: Vec<Placement>,
     /// The finest cascade's side when the cascades follow the camera.
     finest: Option<f32>,
-    /// The light as the scene places it (turned by `light_spin`).
+    /// The light as the last frame had it (the scene's light motion and board applied, then
+    /// turned by `light_spin`), and its index in the frame's lights.
     light: GpuLight,
+    light_index: usize,
     /// Over the largest volume.
     camera: LightCamera,
     blocks: Vec<VolumeBlock>,
@@ -197,6 +199,8 @@ impl Lpv {
             (None, None) => vec![Placement::fit(bounds.0, bounds.1, config.grid)],
         };
         let light = *light;
+        // The frame's lights are `raster_lights`, one per scene light: the punctual light's slot.
+        let light_index = crate::gpu_scene::raster_lights(cx.scene).iter().position(|l| *l == light).unwrap_or(0);
         let largest = placements[placements.len() - 1];
         let camera = LightCamera::new(&light, &largest, config.rsm, config.snap).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
         let blocks: Vec<VolumeBlock> = placements.iter().map(|p| camera.block(p, &config)).collect();
@@ -241,7 +245,26 @@ impl Lpv {
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
         let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        Ok(Lpv { config, placements, finest, light, camera, blocks, camera_raster, camera_blocks, cascade_block, volumes, rsm, transmittance, composite, debug, calls, objects, animation })
+        Ok(Lpv {
+            config,
+            placements,
+            finest,
+            light,
+            light_index,
+            camera,
+            blocks,
+            camera_raster,
+            camera_blocks,
+            cascade_block,
+            volumes,
+            rsm,
+            transmittance,
+            composite,
+            debug,
+            calls,
+            objects,
+            animation,
+        })
     }
 
     pub fn config(&self) -> &Config {
@@ -321,11 +344,15 @@ impl LightingMethod for Lpv {
             }
             None => false,
         };
-        if self.config.light_spin != 0.0 || moved {
+        // The frame's light (the scene's light motion turns it for every method), then the
+        // LPV's own `light_spin` about world up.
+        let mut light = frame.scene.lights.get(self.light_index).copied().unwrap_or(self.light);
+        if self.config.light_spin != 0.0 {
             let turn = glam::Quat::from_rotation_y((self.config.light_spin * t as f64).to_radians() as f32);
-            let mut light = self.light;
-            let d = turn * Vec3::from_slice(&light.direction[..3]);
-            light.direction = d.extend(0.0).into();
+            light.direction = (turn * Vec3::from_slice(&light.direction[..3])).extend(0.0).into();
+        }
+        if light != self.light || moved {
+            self.light = light;
             self.camera = LightCamera::new(&light, &self.placements[self.placements.len() - 1], self.config.rsm, self.config.snap)?;
             self.blocks = self.placements.iter().map(|p| self.camera.block(p, &self.config)).collect();
             self.cascade_block = cascade_block(&self.placements);
