@@ -515,3 +515,46 @@ fn the_atrium_indirect_light_is_measured_against_the_path_tracer() {
     println!("atrium: LPV / path tracer in mean {ratio:.3}");
     assert!((1.1..1.7).contains(&ratio), "atrium ratio {ratio}");
 }
+
+/// T14's memory: `penumbra profile` itemises the LPV's device memory, and each volume's three
+/// sets hold the document's 3 × 8 B × N³ each in fp16 (16 B in fp32), its fixed-point injection
+/// sums 3 × 4 × 4 B × N³, its geometry volume (4 + 4 + 12) × 4 B × N³, each cascade as much; the
+/// RSM four RGBA32F layers of R² texels and a depth buffer.
+#[test]
+fn the_memory_readout_matches_the_formula() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for (params, n, r, cascades, per_coefficient) in [("grid = 16, rsm = 64", 16u64, 64u64, 1, 2u64), ("grid = 8, rsm = 32, cascades = 2, storage = \"f32\"", 8, 32, 2, 4)] {
+        let path = common::temp_path(&format!("memory-{n}.toml"));
+        let text = std::fs::read_to_string(dir.join("lpv_cornell.toml")).unwrap().replace("{ name = \"lpv\" }", &format!("{{ name = \"lpv\", {params} }}"));
+        assert!(text.contains(params));
+        std::fs::write(&path, text.replace("\"textures/", &format!("\"{}/textures/", dir.display()))).unwrap();
+        let opts = penumbra::capture::CaptureOptions {
+            scene: Some(path),
+            png: None,
+            exr: None,
+            size: (16, 12),
+            frames: 1,
+            method: Some("lpv".into()),
+            exposure: 1.0,
+            gpu: common::test_gpu_desc(),
+            config: None,
+        };
+        let report = penumbra::profile::run(&opts, 1).unwrap_or_else(|e| panic!("{e}"));
+        let table = report.table();
+        let find = |name: &str| report.memory.iter().find(|m| m.resource == name).unwrap_or_else(|| panic!("no `{name}` in {:?}", report.memory));
+        let cells = n.pow(3);
+        for k in 0..cascades {
+            let label = if k == 0 { "lpv".to_string() } else { format!("lpv cascade {k}") };
+            let sets = find(&format!("{label} sets (2 wavefronts + accumulation)"));
+            assert_eq!(sets.requested, 3 * 3 * 4 * per_coefficient * cells, "{label}: 3 sets of 3 x {} B x N^3", 4 * per_coefficient);
+            assert!(sets.allocated >= sets.requested && sets.allocated < sets.requested + 3 * 65536, "{sets:?}");
+            assert_eq!(find(&format!("{label} injection sums")).requested, 3 * 4 * 4 * cells);
+            assert_eq!(find(&format!("{label} geometry volume (sums, corners, faces)")).requested, (4 + 4 + 12) * 4 * cells);
+            assert!(table.contains(&format!("{label} sets (2 wavefronts + accumulation)")), "{table}");
+        }
+        let rsm = find(&format!("lpv rsm ({r}x{r}, 4 x RGBA32F + depth)"));
+        assert!(rsm.requested >= 4 * 16 * r * r && rsm.allocated >= 4 * 16 * r * r && rsm.requested < 4 * 16 * r * r + 8 * r * r + 65536, "{rsm:?}");
+        assert_eq!(report.memory.len(), 3 * cascades + 1, "{:?}", report.memory);
+        assert!(table.contains("device memory"), "{table}");
+    }
+}

@@ -176,6 +176,15 @@ impl Renderer {
         Ok(())
     }
 
+    /// The device memory of the methods' resources, as each method itemises it.
+    pub fn method_memory(&self) -> Result<Vec<crate::lighting::MemoryItem>> {
+        let mut out = Vec::new();
+        for m in &self.methods {
+            out.extend(m.memory(&self.gpu)?);
+        }
+        Ok(out)
+    }
+
     /// The names of the configuration's methods, in frame order.
     pub fn method_names(&self) -> Vec<&'static str> {
         self.methods.iter().map(|m| m.name()).collect()

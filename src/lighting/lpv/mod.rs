@@ -365,6 +365,26 @@ impl LightingMethod for Lpv {
         Ok(())
     }
 
+    /// Per volume (each cascade): its three sets of 3 × 4 SH coefficients per cell (the
+    /// document's 3 × 8 B × N³ per set in fp16), the fixed-point injection sums and the geometry
+    /// volume; then the RSM and the camera's surfels.
+    fn memory(&self, gpu: &crate::backend::Gpu) -> Result<Vec<crate::lighting::MemoryItem>> {
+        let item = |resource: String, requested: u64, allocated: u64| crate::lighting::MemoryItem { method: NAME, resource, requested, allocated };
+        let mut out = Vec::new();
+        for v in &self.volumes {
+            for (name, requested, allocated) in v.memory(gpu)? {
+                out.push(item(name, requested, allocated));
+            }
+        }
+        let (requested, allocated) = self.rsm.map.memory(gpu)?;
+        out.push(item(format!("{NAME} rsm ({0}x{0}, 4 x RGBA32F + depth)", self.rsm.map.size), requested, allocated));
+        if let Some(c) = &self.rsm.camera {
+            let (requested, allocated) = c.memory(gpu)?;
+            out.push(item(format!("{NAME} camera surfels ({0}x{0})", c.size), requested, allocated));
+        }
+        Ok(out)
+    }
+
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
         if !frame.terms.has(Term::Indirect) {
             return Ok(());
