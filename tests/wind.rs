@@ -214,3 +214,28 @@ fn methods_that_keep_the_rest_pose_say_so() {
         assert!(registry::motion_notes(&registry::configuration(&still, Some(method)).unwrap(), &still).is_empty());
     }
 }
+
+/// The path tracer's scene at frame 1 (`penumbra reference --frame 1`) holds the leaf where the
+/// wind puts it and the sun where `[light_motion]` turned it, as the renderer's frame 1 does.
+#[test]
+fn the_reference_traces_the_frames_geometry_and_sun() {
+    use penumbra::reference::TracedScene;
+    let s = scene(
+        "[camera]\nposition = [0, 2, 3]\ntarget = [0, 0.37, 0]\n\
+         [[objects]]\nmesh = \"quad\"\ncorner = [-0.5, 0.37, 0.5]\nedge_u = [1, 0, 0]\nedge_v = [0, 0, -1]\nwind = { amplitude = 1e-5, unit = 1e4, rate = 90 }\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 2\n\
+         [light_motion]\naxis = [0, 0, 1]\ndeg_per_s = 1800\n",
+    );
+    for frame in [0u64, 1] {
+        let t = FrameClock::at(frame).time_s;
+        let traced = TracedScene::build_at(&s, t).unwrap();
+        let want = 0.37 + lift(Vec3::ZERO, 1.0, t as f64, 1e-5, 90.0, 1e4);
+        assert!(!traced.corners.is_empty());
+        for c in traced.corners.iter().flatten() {
+            assert!((c.y as f64 - want).abs() < 1e-5, "frame {frame}: a corner at {} m, the wind puts the leaf at {want} m", c.y);
+        }
+        let turned = (30.0 * frame as f32).to_radians();
+        let d = Vec3::from_slice(&traced.lights[0].direction[..3]);
+        assert!(d.distance(Vec3::new(turned.sin(), -turned.cos(), 0.0)) < 1e-5, "frame {frame}: sun {d}");
+    }
+}
