@@ -440,6 +440,7 @@ fn bad_parameters_name_the_field() {
         (r#"{ name = "lpv", centre = [0, 1], size = 2 }"#, "methods[0].centre"),
         (r#"{ name = "lpv", size = -2, centre = [0, 0, 0] }"#, "methods[0].size"),
         (r#"{ name = "lpv", light_spin = 1e9 }"#, "methods[0].light_spin"),
+        (r#"{ name = "lpv", blend = true }"#, "methods[0].blend"),
     ] {
         let err = match Renderer::new(common::test_gpu(), leaf(method), Some("lpv"), (8, 8), 1) {
             Ok(_) => panic!("{method}: accepted"),
@@ -557,4 +558,39 @@ fn the_memory_readout_matches_the_formula() {
         assert_eq!(report.memory.len(), 3 * cascades + 1, "{:?}", report.memory);
         assert!(table.contains("device memory"), "{table}");
     }
+}
+
+/// The document's compositor (faithful `blend`): the LPV adds albedo·(I − D) with
+/// I = D + (1 − D)·GI, D = clamp(n·toLight)·shadow. On the ground lit head-on by an overhead sun
+/// (D = 1) it adds nothing; in the leaf's shadow (D = 0, the RSM's shadow test) it adds GI as the
+/// plain look-up does; nowhere more than the plain look-up.
+#[test]
+fn the_documents_compositor_blends_the_indirect_light_with_the_direct() {
+    use penumbra::renderer::{FrameOutput, Renderer};
+    let image = |blend: bool| {
+        let text = format!(
+            "methods = [{{ name = \"lpv\", mode = \"faithful\", blend = {blend}, centre = [0, 1, 0], size = 7.5 }}]\n[camera]\nposition = [0, 3, 4]\ntarget = [0, 0.5, 0]\n\
+             [[materials]]\nname = \"leaf\"\nalbedo = 0.5\ntransmittance = 0.3\n[[materials]]\nname = \"ground\"\nalbedo = 0.6\n\
+             [[objects]]\nmesh = \"quad\"\nmaterial = \"leaf\"\ncorner = [-0.5, 1, 0.5]\nedge_u = [1, 0, 0]\nedge_v = [0, 0, -1]\n\
+             [[objects]]\nmesh = \"plane\"\nsize = 20\nmaterial = \"ground\"\n\
+             [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 2\n"
+        );
+        let mut r = Renderer::new(common::test_gpu(), scene(&text), Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        common::assert_clean(&r.gpu);
+        img.pixels
+    };
+    let (blended, plain) = (image(true), image(false));
+    let (mut zeroed, mut kept) = (0, 0);
+    for (b, p) in blended.iter().zip(&plain) {
+        assert!(b[0] <= p[0] + 1e-6, "blended {b:?} above the plain look-up {p:?}");
+        if p[0] > 1e-4 && b[0] == 0.0 {
+            zeroed += 1;
+        } else if p[0] > 1e-4 && (b[0] - p[0]).abs() < 1e-6 {
+            kept += 1;
+        }
+    }
+    println!("blend: {zeroed} pixels lit head-on get nothing, {kept} in shadow keep the look-up");
+    assert!(zeroed > 200 && kept > 10, "{zeroed} zeroed, {kept} kept");
 }

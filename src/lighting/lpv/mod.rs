@@ -53,6 +53,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "light", kind: ParamKind::Int },
         ParamSchema { name: "light_spin", kind: ParamKind::Float },
         ParamSchema { name: "snap", kind: ParamKind::Bool },
+        ParamSchema { name: "blend", kind: ParamKind::Bool },
         ParamSchema { name: "centre", kind: ParamKind::FloatArray },
         ParamSchema { name: "size", kind: ParamKind::Float },
         ParamSchema { name: "view", kind: ParamKind::String },
@@ -230,7 +231,12 @@ impl Lpv {
         desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
         desc.color_targets[0].blend = BlendMode::Additive;
         let view = if config.view.full_screen() { 0 } else { config.view.id() };
-        desc.specialization = vec![SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 }, SpecConstant { id: 1, bits: view }, SpecConstant { id: 10, bits: config.half as u32 }];
+        desc.specialization = vec![
+            SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 },
+            SpecConstant { id: 1, bits: view },
+            SpecConstant { id: 2, bits: config.blend as u32 },
+            SpecConstant { id: 10, bits: config.half as u32 },
+        ];
         let composite = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let debug = if config.view.full_screen() {
             let mut desc = GraphicsPipelineDesc::new("lpv debug view", "post/fullscreen.vert", Some("lpv/debug.frag"));
@@ -405,7 +411,8 @@ impl LightingMethod for Lpv {
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"));
+            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"))
+            .sample("rsm_position", self.rsm.map.layers[2], SubresourceRange::mip(0), scene.sampler, frag);
         for (volume, name) in self.volumes.iter().zip(NAMES) {
             pass = pass.buffer(volume.result(), Access::StorageRead { stages: frag }, Some(name));
         }
