@@ -178,6 +178,10 @@ enum Command {
         /// Random seed: the same seed gives a bit-identical image, another seed independent noise.
         #[arg(long, value_name = "S", default_value_t = 0)]
         seed: u32,
+        /// Trace the scene as the renderer's frame N has it (N/60 s: wind, light motion and
+        /// light board applied); `capture --frames N` shows frame N-1.
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        frame: u64,
         /// Output EXR of the mean radiance, W/(m²·sr).
         #[arg(short = 'o', long = "output", value_name = "EXR", default_value = "reference.exr")]
         output: PathBuf,
@@ -302,7 +306,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let opts = options(&render);
             penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
         }
-        Command::Reference { scene, spp, size, bounces, direct_only, indirect_only, seed, output, device } => {
+        Command::Reference { scene, spp, size, bounces, direct_only, indirect_only, seed, frame, output, device } => {
             use penumbra::reference::{Batching, LightPaths, ReferenceOptions, Settings};
             let paths = if direct_only {
                 LightPaths::Direct
@@ -312,7 +316,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 LightPaths::All
             };
             let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive };
-            let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, gpu: gpu_desc(&device) })?;
+            let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, frame, gpu: gpu_desc(&device) })?;
             for p in &report.written {
                 penumbra::outln!("wrote {}", p.display());
             }

@@ -27,6 +27,8 @@ pub struct ProfileReport {
     pub bakes: Vec<BakeReport>,
     /// What the methods add to the report (their registry hooks), as text.
     pub method_report: String,
+    /// The methods' device memory per resource group (the methods that itemise it).
+    pub memory: Vec<crate::lighting::MemoryItem>,
 }
 
 pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
@@ -43,12 +45,14 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
     let timings = renderer.profile(&camera, frames.max(1))?;
     let passes = summarise(&timings);
     let method_report = registry::reports(&renderer.configuration, &passes);
+    let memory = renderer.method_memory()?;
     let caps = renderer.gpu.caps();
     Ok(ProfileReport {
         configuration: renderer.configuration.name.clone(),
         methods: renderer.method_names().iter().map(|s| s.to_string()).collect(),
         bakes: renderer.bakes.clone(),
         method_report,
+        memory,
         device: caps.name.clone(),
         driver: format!("{} {}", caps.driver_name, caps.driver_info),
         width: opts.size.0,
@@ -82,6 +86,12 @@ impl ProfileReport {
             s += &format!("culled (outputs unused): {}\n", self.culled.join(", "));
         }
         s += &self.method_report;
+        if !self.memory.is_empty() {
+            s += &format!("{:<52} {:>12} {:>12}\n", "device memory", "requested", "allocated");
+            for m in &self.memory {
+                s += &format!("{:<52} {:>12} {:>12}\n", m.resource, m.requested, m.allocated);
+            }
+        }
         if !self.bakes.is_empty() {
             s += "bakes (at creation, not frame time):\n";
             s += &crate::bake::table(&self.bakes);

@@ -453,6 +453,7 @@ fn cli_options(scene: &str, output: &Path, seed: u32) -> ReferenceOptions {
         output: output.to_path_buf(),
         size: (16, 16),
         settings: settings(4, 2, LightPaths::All, seed),
+        frame: 0,
         gpu: common::test_gpu_desc(),
     }
 }

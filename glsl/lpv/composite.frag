@@ -17,6 +17,10 @@ layout(constant_id = 0) const uint FAITHFUL = 0u;
 // 0: the indirect term; debug views of what the look-up reads: 6 albedo, 7 shading normal,
 // 8 position in the (finest) volume (the G-buffer's layers of a deferred renderer).
 layout(constant_id = 1) const uint VIEW = 0u;
+// The document's compositor (faithful): the look-up blended with the direct term as
+// defCompositor.glsl does, D = clamp(n.toLight) * shadow; I = D + (1 - D) GI; I += (1 - I) TI;
+// this pass adds albedo * (I - D), the direct method below supplying the direct light.
+layout(constant_id = 2) const uint BLEND = 0u;
 
 layout(set = 0, binding = 2) readonly buffer Materials { Material items[]; } materials;
 layout(set = 0, binding = 3) uniform sampler2D albedo_map;
@@ -30,6 +34,9 @@ layout(set = 0, binding = 10) uniform Cascades {
     uvec4 count;     // x: cascades in use
     vec4 origin[4];  // xyz: a cascade's corner; w: its cell size
 } cascades;
+
+// The RSM's position layer (xyz: the surface the light sees; w: 1 where it saw one).
+layout(set = 0, binding = 11) uniform sampler2D rsm_position;
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) in vec3 in_normal;
@@ -73,6 +80,23 @@ void lookup(int k, vec3 p, out vec4 c[3]) {
     }
 }
 
+// 1 where the light reaches the point, 0 where the RSM saw a surface nearer the light by more
+// than half a cell (one tap: the document's 17-tap depth-difference sum is not reproduced);
+// 1 outside the RSM.
+float lit(vec3 l) {
+    vec4 clip = volume.light_view_proj * vec4(in_world, 1.0);
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) {
+        return 1.0;
+    }
+    vec4 seen = texelFetch(rsm_position, ivec2(uv * float(volume.rsm.x)), 0);
+    if (seen.w < 0.5) {
+        return 1.0;
+    }
+    float nearer = volume.light.w > 0.5 ? distance(in_world, volume.light_pos.xyz) - distance(seen.xyz, volume.light_pos.xyz) : dot(seen.xyz - in_world, -l);
+    return nearer > 0.5 * volume.origin.w ? 0.0 : 1.0;
+}
+
 // The indirect light cascade k gives the point.
 vec3 shade(int k, vec3 n, vec3 albedo, vec3 tau) {
     float cell = cascades.origin[k].w;
@@ -83,20 +107,25 @@ vec3 shade(int k, vec3 n, vec3 albedo, vec3 tau) {
         vec3 p = (in_world + n * (0.001 * cell * float(volume.size.x)) - origin) / cell - 0.5;
         lookup(k, p, c);
         vec4 y = sh_basis(-n);
+        vec3 l = volume.light.w > 0.5 ? normalize(in_world - volume.light_pos.xyz) : volume.light.xyz;
+        float shadow = BLEND != 0u ? lit(l) : 1.0;
+        float d = BLEND != 0u ? clamp(dot(n, -l), 0.0, 1.0) * shadow : 0.0;
+        vec3 gi;
         for (int ch = 0; ch < 3; ++ch) {
-            radiance[ch] = albedo[ch] * clamp(dot(c[ch], y), 0.0, 1.0);
+            gi[ch] = clamp(dot(c[ch], y), 0.0, 1.0);
+            // (D + (1 - D) GI) - D
+            radiance[ch] = albedo[ch] * (1.0 - d) * gi[ch];
         }
         if (any(greaterThan(tau, vec3(0.0)))) {
             // The document's TI term on translucent surfaces: the volume along the light's
-            // travel, (0.05 + min(2, max(n.L, 0) / max(0.1, 1 - T))) times it, added where
-            // its screen blend adds it in full (no direct light: the back faces it is for);
-            // no shadow factor (there is no shadow map here).
-            vec3 l = volume.light.w > 0.5 ? normalize(in_world - volume.light_pos.xyz) : volume.light.xyz;
+            // travel, (0.05 + min(2, max(n.L, 0) / max(0.1, 1 - T))) times it and the shadow
+            // factor, screen-blended over D + (1 - D) GI (with `blend`; else added in full).
             float t = (tau.r + tau.g + tau.b) / 3.0;
             float back = 0.05 + min(2.0, max(dot(n, l), 0.0) / max(0.1, 1.0 - t));
             vec4 yl = sh_basis(l);
             for (int ch = 0; ch < 3; ++ch) {
-                radiance[ch] += albedo[ch] * back * clamp(dot(c[ch], yl), 0.0, 1.0);
+                float ti = back * clamp(dot(c[ch], yl), 0.0, 1.0) * shadow;
+                radiance[ch] += albedo[ch] * (BLEND != 0u ? 1.0 - (d + (1.0 - d) * gi[ch]) : 1.0) * ti;
             }
         }
         return radiance;

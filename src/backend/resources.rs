@@ -426,6 +426,17 @@ impl Gpu {
         Ok(&self.image(id)?.desc)
     }
 
+    /// The device memory bound to a buffer (its allocation's size: the requested size rounded up
+    /// to the driver's requirements).
+    pub fn buffer_memory(&self, id: BufferId) -> BackendResult<u64> {
+        Ok(self.buffer(id)?.allocation.as_ref().map_or(0, |a| a.size()))
+    }
+
+    /// The device memory bound to an image (0 for swapchain images).
+    pub fn image_memory(&self, id: ImageId) -> BackendResult<u64> {
+        Ok(self.image(id)?.allocation.as_ref().map_or(0, |a| a.size()))
+    }
+
     /// Writes into a host-visible buffer now, or into a device-local one through a staging copy
     /// that is waited for. Not for use while a frame that reads the buffer is in flight.
     pub fn upload_buffer(&mut self, id: BufferId, offset: u64, data: &[u8]) -> BackendResult<()> {

@@ -247,6 +247,13 @@ fn load_texture(gpu: &mut Gpu, states: &mut ResourceStates, path: Option<&std::p
     Ok(id)
 }
 
+/// `mesh`'s vertices as the vertex buffer holds them (defaults for missing attributes).
+pub fn vertices_of(mesh: &Mesh) -> Vec<Vertex> {
+    let mut out = Vec::with_capacity(mesh.positions.len());
+    push_vertices(&mut out, mesh);
+    out
+}
+
 fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
     for i in 0..mesh.positions.len() {
         vertices.push(Vertex {
@@ -328,7 +335,8 @@ impl SceneGpu {
             vertices.push(Vertex::zeroed());
             indices.extend([0, 0, 0]);
         }
-        let vb = gpu.create_buffer_init("scene vertices", vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&vertices))?;
+        let vb =
+            gpu.create_buffer_init("scene vertices", vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&vertices))?;
         let ib = gpu.create_buffer_init("scene indices", vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&indices))?;
         if gpu_materials.is_empty() {
             gpu_materials.push(GpuMaterial::zeroed());

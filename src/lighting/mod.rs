@@ -77,10 +77,10 @@ pub struct FrameClock {
 
 impl FrameClock {
     /// Animation step per frame (a 60 Hz display).
-    pub const STEP_S: f32 = 1.0 / 60.0;
+    pub const STEP_S: f32 = crate::scene::motion::FRAME_STEP_S;
 
     pub fn at(frame: u64) -> FrameClock {
-        FrameClock { frame, time_s: frame as f32 * Self::STEP_S }
+        FrameClock { frame, time_s: crate::scene::motion::frame_time(frame) }
     }
 }
 
@@ -137,6 +137,22 @@ pub trait LightingMethod {
     }
     /// Adds the passes that draw `frame.terms` into `frame.targets`.
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()>;
+    /// The device memory of its resources, per group, for `profile`'s report (none: not
+    /// itemised).
+    fn memory(&self, _gpu: &Gpu) -> Result<Vec<MemoryItem>> {
+        Ok(Vec::new())
+    }
+}
+
+/// One group of a method's resources and the device memory bound to it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MemoryItem {
+    pub method: &'static str,
+    /// What it is ("lpv sets (2 wavefronts + accumulation)").
+    pub resource: String,
+    /// The bytes the resources' sizes ask for, and the bytes allocated for them.
+    pub requested: u64,
+    pub allocated: u64,
 }
 
 /// What the reference must contain for a method's error to mean something.

@@ -33,6 +33,10 @@ pub struct MethodInfo {
     pub create: CreateFn,
     /// Extra lines for `profile`'s report, from the frame's pass timings.
     pub report: Option<ReportFn>,
+    /// `None`: it draws the scene's vertex buffer and reads the lights every frame, so it follows
+    /// the scene's wind and light motion; otherwise why it keeps the rest pose (it says so when
+    /// created for a scene that moves).
+    pub rest_pose: Option<&'static str>,
 }
 
 /// Every method penumbra implements.
@@ -46,6 +50,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(forward::Forward::new(c, d)?)),
+            rest_pose: None,
             report: None,
         },
         MethodInfo {
@@ -56,6 +61,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: true,
             create: |c, d| Ok(Box::new(shadow_volumes::ShadowVolumes::new(c, d)?)),
+            rest_pose: Some("its shadow volumes are extruded from the entities' rest-pose positions"),
             report: None,
         },
         MethodInfo {
@@ -66,6 +72,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
+            rest_pose: Some("it traces its height field's time-0 shape"),
             report: Some(heightfield::measure::table_6_6),
         },
         MethodInfo {
@@ -76,6 +83,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
+            rest_pose: Some("it traces its height field's time-0 shape"),
             report: Some(heightfield::measure::table_6_6),
         },
         MethodInfo {
@@ -86,6 +94,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: radiosity::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(radiosity::Radiosity::new(c, d)?)),
+            rest_pose: Some("its light-map is baked from the rest pose and the scene's lights"),
             report: None,
         },
         MethodInfo {
@@ -96,6 +105,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: sh_lightmap::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(sh_lightmap::ShLightmap::new(c, d)?)),
+            rest_pose: Some("its light-map is baked from the rest pose"),
             report: None,
         },
         MethodInfo {
@@ -106,6 +116,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: prt::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(prt::Prt::new(c, d)?)),
+            rest_pose: Some("its transfer is baked from the rest pose"),
             report: None,
         },
         MethodInfo {
@@ -116,6 +127,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: lpv::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(lpv::Lpv::new(c, d)?)),
+            rest_pose: None,
             report: None,
         },
         MethodInfo {
@@ -127,6 +139,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(clustered::Clustered::new(c, d)?)),
+            rest_pose: None,
             report: None,
         },
         MethodInfo {
@@ -137,6 +150,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: vls::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(vls::Vls::new(c, d)?)),
+            rest_pose: Some("each segment's lights and shadow feelers are chosen once, from the rest pose"),
             report: None,
         },
         MethodInfo {
@@ -147,6 +161,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: bsp_lights::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(bsp_lights::BspLights::new(c, d)?)),
+            rest_pose: Some("its per-light vertex colours are baked from the rest pose"),
             report: None,
         },
     ]
@@ -210,9 +225,29 @@ pub fn reference_kind(config: &Configuration) -> Result<ReferenceKind> {
     Ok(kind.unwrap_or(ReferenceKind::Direct))
 }
 
+/// One line per method of `config` that keeps the rest pose in a scene that moves (wind, a
+/// turning light): what it leaves out, and why.
+pub fn motion_notes(config: &Configuration, scene: &Scene) -> Vec<String> {
+    let Some(what) = scene.motion_summary() else { return Vec::new() };
+    let mut out = Vec::new();
+    for p in &config.parts {
+        if let Some(why) = info(&p.decl.name).ok().and_then(|i| i.rest_pose) {
+            let line = format!("{}: note: the {} method keeps the rest pose ({why}): {what} moves in every other method and in the reference, not in it", scene.source, p.decl.name);
+            if !out.contains(&line) {
+                out.push(line);
+            }
+        }
+    }
+    out
+}
+
 /// Creates the methods of a configuration, in frame order, refusing translucent materials for
-/// methods that do not draw them.
+/// methods that do not draw them. A method that keeps the rest pose of a moving scene says so on
+/// standard error ([`motion_notes`]).
 pub fn create(config: &Configuration, ctx: &mut CreateContext<'_>) -> Result<Vec<Box<dyn LightingMethod>>> {
+    for line in motion_notes(config, ctx.scene) {
+        crate::errln!("{line}");
+    }
     let mut out = Vec::new();
     for p in &config.parts {
         let info = info(&p.decl.name)?;

@@ -216,11 +216,17 @@ pub struct ReferenceRenderer {
 const ACCUMULATION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 impl ReferenceRenderer {
-    pub fn new(mut gpu: Gpu, scene: &Scene, (width, height): (u32, u32)) -> Result<ReferenceRenderer> {
+    pub fn new(gpu: Gpu, scene: &Scene, size: (u32, u32)) -> Result<ReferenceRenderer> {
+        ReferenceRenderer::at_frame(gpu, scene, size, 0)
+    }
+
+    /// The scene as the renderer's frame `frame` has it (its clock's time: wind, light motion
+    /// and light board applied), so a method's frame N is compared with the same geometry.
+    pub fn at_frame(mut gpu: Gpu, scene: &Scene, (width, height): (u32, u32), frame: u64) -> Result<ReferenceRenderer> {
         if width == 0 || height == 0 {
             return Err(Error::Usage(format!("image size {width}x{height} is empty")));
         }
-        let traced = TracedScene::build(scene)?;
+        let traced = TracedScene::build_at(scene, crate::scene::motion::frame_time(frame))?;
         let buffers = traced.upload(&mut gpu)?;
         let pipeline =
             gpu.create_compute_pipeline(&ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded)?;
@@ -372,6 +378,9 @@ pub struct ReferenceOptions {
     pub output: PathBuf,
     pub size: (u32, u32),
     pub settings: Settings,
+    /// The renderer's frame whose scene is traced (0: the scene as written, moved by wind where
+    /// it has some).
+    pub frame: u64,
     pub gpu: GpuDesc,
 }
 
@@ -390,7 +399,7 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     opts.settings.check()?;
     let scene = Scene::from_file(&opts.scene)?;
     let gpu = Gpu::new(&opts.gpu)?;
-    let mut renderer = ReferenceRenderer::new(gpu, &scene, opts.size)?;
+    let mut renderer = ReferenceRenderer::at_frame(gpu, &scene, opts.size, opts.frame)?;
     // Progress (rate, elapsed, remaining) on a terminal only: a log or a pipe gets the summary.
     let mut progress = crate::progress::Progress::new("reference (spp)");
     let image = renderer.render(&opts.settings, &mut |done, total| progress.update(done as u64, total as u64))?;

@@ -134,6 +134,19 @@ impl TracedScene {
     /// Gathers every object's triangles in world space. Features the tracer does not model are
     /// errors naming the scene and the field, never silently different results.
     pub fn build(scene: &Scene) -> Result<TracedScene> {
+        TracedScene::build_at(scene, 0.0)
+    }
+
+    /// The scene at `time_s` on the renderer's clock: each object's wind applied to its mesh,
+    /// the lights as [`Scene::lights_at`] has them.
+    pub fn build_at(scene: &Scene, time_s: f32) -> Result<TracedScene> {
+        let moved;
+        let scene = if scene.has_motion() || scene.light_board.is_some() {
+            moved = Scene { lights: scene.lights_at(time_s), light_board: None, light_motion: None, ..scene.clone() };
+            &moved
+        } else {
+            scene
+        };
         let src = &scene.source;
         let (environment, environment_map) = match &scene.environment {
             None => (Vec3::ZERO, None),
@@ -166,7 +179,7 @@ impl TracedScene {
         let mut frames = Vec::new();
         let mut material_of = Vec::new();
         for obj in &scene.objects {
-            let mut mesh = obj.load_mesh(std::path::Path::new("."))?;
+            let mut mesh = scene.wind_mesh(obj, obj.load_mesh(std::path::Path::new("."))?, time_s)?;
             // What the raster vertex buffer substitutes for missing attributes (`push_vertices`
             // in src/renderer/scene_gpu.rs), before the placement, as the vertex shaders see it.
             let count = mesh.positions.len();

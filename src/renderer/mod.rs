@@ -5,6 +5,7 @@
 //! tone mapping for the window). One clock ([`FrameClock`]) drives every method's animation.
 
 mod frame_passes;
+pub mod wind;
 
 use glam::Mat4;
 
@@ -44,8 +45,11 @@ pub struct Renderer {
     pub shaders: ShaderLibrary,
     pub scene: Scene,
     pub scene_gpu: SceneGpu,
-    /// `scene_gpu.lights` as uploaded: the light board scales these each frame.
+    /// `scene_gpu.lights` as uploaded: the light board scales these each frame and the light
+    /// motion turns them.
     static_lights: Vec<GpuLight>,
+    /// The scene's wind, applied to the vertex buffer at each frame's time.
+    wind: Option<wind::WindPass>,
     /// The scene's environment as loaded (once) for every consumer.
     pub environment: EnvironmentMap,
     /// What frames are drawn with, and its methods in frame order (one per part).
@@ -108,6 +112,7 @@ impl Renderer {
         let mut states = ResourceStates::default();
         let environment = EnvironmentMap::of_scene(&scene)?;
         let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, &scene, &environment)?;
+        let wind = wind::WindPass::new(&mut gpu, &mut states, &shaders, &scene, &scene_gpu)?;
         let (methods, method_resources) = {
             let mut ctx =
                 CreateContext { gpu: &mut gpu, shaders: &shaders, states: &mut states, scene: &scene, scene_gpu: &scene_gpu, environment: &environment, bakes: &mut bakes, terms: Terms::NONE };
@@ -123,6 +128,7 @@ impl Renderer {
             scene,
             scene_gpu,
             static_lights,
+            wind,
             environment,
             configuration,
             methods,
@@ -168,6 +174,15 @@ impl Renderer {
         self.bakes = bakes.take_reports();
         self.clock_frame = 0;
         Ok(())
+    }
+
+    /// The device memory of the methods' resources, as each method itemises it.
+    pub fn method_memory(&self) -> Result<Vec<crate::lighting::MemoryItem>> {
+        let mut out = Vec::new();
+        for m in &self.methods {
+            out.extend(m.memory(&self.gpu)?);
+        }
+        Ok(out)
     }
 
     /// The names of the configuration's methods, in frame order.
@@ -251,6 +266,13 @@ impl Renderer {
                 light.intensity = [base.intensity[0] * f, base.intensity[1] * f, base.intensity[2] * f, base.intensity[3]];
             }
         }
+        if let Some(m) = &self.scene.light_motion {
+            // The same for the light motion: every method reads the turned direction.
+            if let (Some(light), Some(base)) = (self.scene_gpu.lights.get_mut(m.light), self.static_lights.get(m.light)) {
+                let d = m.direction_at(glam::Vec3::from_slice(&base.direction[..3]), clock.time_s);
+                light.direction = d.extend(0.0).into();
+            }
+        }
         let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
         let has_base = terms.iter().any(|t| t.has(Term::Base));
         for (method, &terms) in self.methods.iter_mut().zip(&terms) {
@@ -259,6 +281,9 @@ impl Renderer {
         }
         let gpu = &self.gpu;
         let mut graph = RenderGraph::new();
+        if let Some(w) = &self.wind {
+            w.add(&mut graph, &self.scene_gpu, clock.time_s);
+        }
         // The background: targets cleared and, under a base term, the sky everywhere (the base
         // then draws over it, so the sky stays where no geometry is).
         self.passes.add_background(&mut graph, &self.scene_gpu, self.targets, &uniforms, has_base);

@@ -10,6 +10,7 @@ use super::doc::{Ctx, Field, Table};
 use super::error::SceneError;
 use super::generators;
 use super::methods::{self, MethodDecl};
+use super::motion::{LightMotion, Wind};
 use super::types::{Animation, Camera, CubeFaces, Environment, Light, Material, MeshSource, Object, CUBE_FACE_KEYS};
 use super::world_mesh::{self, WorldLevel};
 use super::Scene;
@@ -19,7 +20,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     let ctx = Ctx::new(source, text, base_dir);
     let root = ctx.parse()?;
     let top = Table::new(&ctx, String::new(), &root, None)?;
-    top.allow(&["camera", "materials", "objects", "lights", "environment", "methods", "combinations", "light_arrays", "light_board"])?;
+    top.allow(&["camera", "materials", "objects", "lights", "environment", "methods", "combinations", "light_arrays", "light_board", "light_motion"])?;
 
     let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
     let mut materials: Vec<Material> = Vec::new();
@@ -44,6 +45,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     }
     lights.extend(extra_lights);
     let light_board = top.get("light_board").map(|f| read_light_board(&f)).transpose()?;
+    let light_motion = top.get("light_motion").map(|f| read_light_motion(&f, &lights)).transpose()?;
     let environment = top.get("environment").map(|f| read_environment(&f)).transpose()?;
     let mut methods = match top.get("methods") {
         Some(f) => methods::read(&f)?,
@@ -56,7 +58,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         Some(f) => methods::read_combinations(&f)?,
         None => Vec::new(),
     };
-    Ok(Scene { source: source.to_owned(), camera, materials, objects, lights, environment, methods, combinations, light_board })
+    Ok(Scene { source: source.to_owned(), camera, materials, objects, lights, environment, methods, combinations, light_board, light_motion })
 }
 
 /// Elements of an optional array field (absent = empty).
@@ -177,7 +179,8 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
     let expands = matches!(kind, "cornell_box" | "bsp_rooms" | "bsp_fig8c");
     let material_key: &[&str] = if expands { &[] } else { &["material"] };
     let animation_keys: &[&str] = if expands { &[] } else { &ANIMATION_KEYS };
-    t.allow(&[&PLACEMENT[..], material_key, animation_keys, mesh_extra].concat())?;
+    let wind_key: &[&str] = if expands || kind == "heightfield" { &[] } else { &["wind"] };
+    t.allow(&[&PLACEMENT[..], material_key, animation_keys, wind_key, mesh_extra].concat())?;
 
     let obj_name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
     let translate = opt(t.get("translate"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
@@ -192,6 +195,7 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
         return read_world(&t, kind, &obj_name, materials, objects);
     }
     let animation = read_animation(&t)?;
+    let wind = opt(t.get("wind"), read_wind)?;
 
     if kind == "cornell_box" {
         for part in cornell::parts(subdivisions) {
@@ -201,6 +205,7 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
                 material: material_index(materials, part.material).unwrap_or(0),
                 transform: transform * part.local,
                 animation,
+                wind: None,
             });
         }
         if opt(t.get("light"), |f| f.boolean())?.unwrap_or(true) {
@@ -250,7 +255,7 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
             })?
         }
     };
-    objects.push(Object { name: obj_name, mesh, material, transform, animation });
+    objects.push(Object { name: obj_name, mesh, material, transform, animation, wind });
     Ok(())
 }
 
@@ -321,7 +326,14 @@ fn read_world(t: &Table, kind: &str, obj_name: &str, materials: &mut Vec<Materia
                 })?
             }
         };
-        objects.push(Object { name: format!("{obj_name}.{suffix}"), mesh: MeshSource::World { level: level.clone(), class }, material, transform: Mat4::from_translation(translate), animation: None });
+        objects.push(Object {
+            name: format!("{obj_name}.{suffix}"),
+            mesh: MeshSource::World { level: level.clone(), class },
+            material,
+            transform: Mat4::from_translation(translate),
+            animation: None,
+            wind: None,
+        });
     }
     Ok(())
 }
@@ -552,6 +564,46 @@ fn read_light_board(f: &Field) -> Result<super::types::LightBoard, SceneError> {
         rate_hz: opt(t.get("rate_hz"), |f| f.number_where("a rate in Hz in (0, 1000]", |x| x > 0.0 && x <= 1000.0))?.unwrap_or(0.5),
         seed: opt(t.get("seed"), |f| f.int_in(0, u32::MAX))?.unwrap_or(1),
     })
+}
+
+/// `[objects.wind]`: seed 004's vertex wind (src/scene/motion.rs), the document's constants by
+/// default.
+fn read_wind(f: &Field) -> Result<Wind, SceneError> {
+    let t = f.table()?;
+    t.allow(&["amplitude", "rate", "unit"])?;
+    let d = Wind::default();
+    Ok(Wind {
+        amplitude: opt(t.get("amplitude"), |f| f.number_where("a peak displacement in the document's units, from 0 to 100", |x| (0.0..=100.0).contains(&x)))?.unwrap_or(d.amplitude),
+        rate: opt(t.get("rate"), |f| f.number_where("a phase rate in rad/s, from -1000 to 1000", |x| x.abs() <= 1000.0))?.unwrap_or(d.rate),
+        unit: opt(t.get("unit"), |f| f.number_where("metres per the document's unit, from 1e-4 to 1e4", |x| (1e-4..=1e4).contains(&x)))?.unwrap_or(d.unit),
+    })
+}
+
+/// `[light_motion]`: a directional light (`light`, its name; default the first directional
+/// light) turning about `axis` at `deg_per_s`.
+fn read_light_motion(f: &Field, lights: &[Light]) -> Result<LightMotion, SceneError> {
+    let t = f.table()?;
+    t.allow(&["light", "axis", "deg_per_s"])?;
+    let light = match t.get("light") {
+        Some(lf) => {
+            let wanted = lf.string()?;
+            let i = lights.iter().position(|l| l.name() == wanted).ok_or_else(|| lf.err(format!("no light is named {wanted:?}")))?;
+            if !matches!(lights[i], Light::Directional { .. }) {
+                return Err(lf.err(format!("light {wanted:?} is not directional: only a directional light turns")));
+            }
+            i
+        }
+        None => lights.iter().position(|l| matches!(l, Light::Directional { .. })).ok_or_else(|| f.err("the scene has no directional light to turn"))?,
+    };
+    let axis = match t.get("axis") {
+        Some(af) => {
+            let a = af.vec3()?;
+            a.try_normalize().filter(|_| a.length() > 1e-6).ok_or_else(|| af.err("expected a non-zero axis"))?
+        }
+        None => Vec3::Y,
+    };
+    let deg_per_s = t.require("deg_per_s", "degrees per second")?.number_where("degrees per second, at most 3600 either way", |x| x.abs() <= 3600.0)?;
+    Ok(LightMotion { light, axis, deg_per_s })
 }
 
 fn read_environment(f: &Field) -> Result<Environment, SceneError> {

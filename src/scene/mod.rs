@@ -23,6 +23,7 @@ pub mod heightfield;
 mod light_tests;
 mod mesh;
 mod methods;
+pub mod motion;
 mod obj;
 #[cfg(test)]
 mod tests;
@@ -66,6 +67,8 @@ pub struct Scene {
     pub combinations: Vec<CombinationDecl>,
     /// Per-frame intensity factors of the point and spot lights (`[light_board]`); none: static.
     pub light_board: Option<LightBoard>,
+    /// A directional light turning per frame (`[light_motion]`); none: static.
+    pub light_motion: Option<motion::LightMotion>,
 }
 
 impl Scene {
@@ -141,6 +144,48 @@ impl Scene {
                 _ => 1.0,
             })
             .collect()
+    }
+
+    /// Whether anything moves per frame besides rigid entity animation: wind on an object, or a
+    /// turning light (what methods that bake keep at the rest pose).
+    pub fn has_motion(&self) -> bool {
+        self.light_motion.is_some() || self.objects.iter().any(|o| o.wind.is_some())
+    }
+
+    /// What moves, for a method that keeps the rest pose to say so: "wind (objects[1] "bush")".
+    pub fn motion_summary(&self) -> Option<String> {
+        let mut parts: Vec<String> = self.objects.iter().enumerate().filter(|(_, o)| o.wind.is_some()).map(|(i, o)| format!("wind (objects[{i}] {:?})", o.name)).collect();
+        if let Some(m) = &self.light_motion {
+            parts.push(format!("light_motion (lights[{}] {:?})", m.light, self.lights.get(m.light).map(|l| l.name()).unwrap_or("")));
+        }
+        (!parts.is_empty()).then(|| parts.join(", "))
+    }
+
+    /// The scene's lights as the renderer's frame at `time_s` has them: [`Scene::light_motion`]
+    /// turning its light, and the light board's factor on each point and spot light's intensity.
+    pub fn lights_at(&self, time_s: f32) -> Vec<Light> {
+        let mut lights = self.lights.clone();
+        for (light, f) in lights.iter_mut().zip(self.light_factors(time_s)) {
+            if let Light::Point { intensity, .. } | Light::Spot { intensity, .. } = light {
+                *intensity *= f;
+            }
+        }
+        if let Some(m) = &self.light_motion {
+            if let Some(Light::Directional { direction, .. }) = lights.get_mut(m.light) {
+                *direction = m.direction_at(*direction, time_s);
+            }
+        }
+        lights
+    }
+
+    /// `object`'s object-space mesh at `time_s` with its wind applied (`mesh` as loaded).
+    pub fn wind_mesh(&self, object: &Object, mut mesh: Mesh, time_s: f32) -> Result<Mesh, SceneError> {
+        if let Some(wind) = &object.wind {
+            let map = self.material_of(object).and_then(|m| m.albedo_map.as_deref());
+            let weights = motion::wind_weights(&mesh, map).map_err(|e| SceneError::new(&self.source, None, format!("object {:?}: wind: albedo_map", object.name), e))?;
+            wind.deform(&mut mesh, &weights, time_s);
+        }
+        Ok(mesh)
     }
 
     /// The material of `object` (`None` only for a hand-built object with a bad index).

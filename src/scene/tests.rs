@@ -319,12 +319,15 @@ fn truncated_and_mangled_input_never_panics() {
 fn readme_examples_parse() {
     let readme = std::fs::read_to_string(scenes_dir().join("README.md")).unwrap();
     let blocks: Vec<&str> = readme.split("```toml\n").skip(1).filter_map(|b| b.split("```").next()).collect();
-    assert_eq!(blocks.len(), 6);
+    assert_eq!(blocks.len(), 7);
     let rig = parse(&format!("{CAM}{}", blocks[0])).unwrap();
     assert_eq!((rig.lights.len(), rig.lights[39].name()), (40, "rig[39]"));
     let board = parse(&format!("{CAM}{}", blocks[1])).unwrap();
     assert_eq!(board.light_board, Some(LightBoard { depth: 0.8, rate_hz: 0.4, seed: 7 }));
-    let blocks = &blocks[2..];
+    let sun = "[[lights]]\ntype = \"directional\"\nname = \"sun\"\ndirection = [0, -1, 0]\nirradiance = 1\n";
+    let turning = parse(&format!("{CAM}{sun}{}", blocks[2])).unwrap();
+    assert_eq!(turning.light_motion, Some(super::motion::LightMotion { light: 0, axis: glam::Vec3::Y, deg_per_s: 6.0 }));
+    let blocks = &blocks[3..];
     let dir = temp_dir("readme");
     std::fs::create_dir_all(dir.join("meshes")).unwrap();
     std::fs::write(dir.join("meshes/spot.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();

@@ -189,6 +189,8 @@ pub struct Object {
     pub transform: Mat4,
     /// Motion over time, for methods that animate entities (`transform` is the pose at t = 0).
     pub animation: Option<Animation>,
+    /// Vertex wind (seed 004), applied by the renderer every frame for every method.
+    pub wind: Option<super::motion::Wind>,
 }
 
 /// A light in radiometric units (watts; linear RGB per channel).

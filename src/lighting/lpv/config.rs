@@ -95,6 +95,9 @@ pub struct Config {
     pub light_spin: f64,
     /// Snap the RSM's window to whole texels across the light.
     pub snap: bool,
+    /// The document's compositor: the point look-up blended with the direct term (faithful
+    /// only; the corrected look-up adds).
+    pub blend: bool,
     /// The volume's centre and side (metres); `None`: the cube over the scene's objects. With
     /// cascades the centre is the camera's and the side the finest cascade's.
     pub region: Option<([f32; 3], f32)>,
@@ -133,6 +136,7 @@ impl Config {
             light: 0,
             light_spin: 0.0,
             snap: true,
+            blend: !corrected,
             region: None,
             view: View::Indirect,
             cascades: 1,
@@ -165,6 +169,7 @@ impl Config {
                 "light" => c.light = int(p, v, 0..=65535, "the index of a point, spot or directional light")? as usize,
                 "light_spin" => c.light_spin = Params::float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
                 "snap" => c.snap = flag(p, v)?,
+                "blend" => c.blend = flag(p, v)?,
                 "cascades" => c.cascades = int(p, v, 1..=4, "a cascade count from 1 to 4")?,
                 "camera_surfels" => c.camera_surfels = int(p, v, 0..=4096, "texels per side from 16 to 4096, or 0 for none")?,
                 "view" => {
@@ -187,6 +192,14 @@ impl Config {
         }
         let centre = decl.param("centre").map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v))).transpose()?;
         let size = decl.param("size").map(|v| Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| bad("size", "a side > 0 (metres)", v))).transpose()?;
+        if c.lookup != Lookup::Point && decl.param("blend").and_then(toml::Value::as_bool) == Some(true) {
+            return Err(bad(
+                "blend",
+                "false: the document's blend with the direct term belongs to its point look-up (lookup = \"point\"); the irradiance look-up adds",
+                decl.param("blend").unwrap_or(&toml::Value::from(true)),
+            ));
+        }
+        c.blend &= c.lookup == Lookup::Point;
         if (1..16).contains(&c.camera_surfels) {
             return Err(bad("camera_surfels", "texels per side from 16 to 4096, or 0 for none", decl.param("camera_surfels").unwrap_or(&toml::Value::from(0))));
         }

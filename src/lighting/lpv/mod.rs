@@ -53,6 +53,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "light", kind: ParamKind::Int },
         ParamSchema { name: "light_spin", kind: ParamKind::Float },
         ParamSchema { name: "snap", kind: ParamKind::Bool },
+        ParamSchema { name: "blend", kind: ParamKind::Bool },
         ParamSchema { name: "centre", kind: ParamKind::FloatArray },
         ParamSchema { name: "size", kind: ParamKind::Float },
         ParamSchema { name: "view", kind: ParamKind::String },
@@ -153,8 +154,10 @@ pub struct Lpv {
     pub placements: Vec<Placement>,
     /// The finest cascade's side when the cascades follow the camera.
     finest: Option<f32>,
-    /// The light as the scene places it (turned by `light_spin`).
+    /// The light as the last frame had it (the scene's light motion and board applied, then
+    /// turned by `light_spin`), and its index in the frame's lights.
     light: GpuLight,
+    light_index: usize,
     /// Over the largest volume.
     camera: LightCamera,
     blocks: Vec<VolumeBlock>,
@@ -197,6 +200,8 @@ impl Lpv {
             (None, None) => vec![Placement::fit(bounds.0, bounds.1, config.grid)],
         };
         let light = *light;
+        // The frame's lights are `raster_lights`, one per scene light: the punctual light's slot.
+        let light_index = crate::gpu_scene::raster_lights(cx.scene).iter().position(|l| *l == light).unwrap_or(0);
         let largest = placements[placements.len() - 1];
         let camera = LightCamera::new(&light, &largest, config.rsm, config.snap).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
         let blocks: Vec<VolumeBlock> = placements.iter().map(|p| camera.block(p, &config)).collect();
@@ -226,7 +231,12 @@ impl Lpv {
         desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
         desc.color_targets[0].blend = BlendMode::Additive;
         let view = if config.view.full_screen() { 0 } else { config.view.id() };
-        desc.specialization = vec![SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 }, SpecConstant { id: 1, bits: view }, SpecConstant { id: 10, bits: config.half as u32 }];
+        desc.specialization = vec![
+            SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 },
+            SpecConstant { id: 1, bits: view },
+            SpecConstant { id: 2, bits: config.blend as u32 },
+            SpecConstant { id: 10, bits: config.half as u32 },
+        ];
         let composite = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let debug = if config.view.full_screen() {
             let mut desc = GraphicsPipelineDesc::new("lpv debug view", "post/fullscreen.vert", Some("lpv/debug.frag"));
@@ -241,7 +251,26 @@ impl Lpv {
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
         let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        Ok(Lpv { config, placements, finest, light, camera, blocks, camera_raster, camera_blocks, cascade_block, volumes, rsm, transmittance, composite, debug, calls, objects, animation })
+        Ok(Lpv {
+            config,
+            placements,
+            finest,
+            light,
+            light_index,
+            camera,
+            blocks,
+            camera_raster,
+            camera_blocks,
+            cascade_block,
+            volumes,
+            rsm,
+            transmittance,
+            composite,
+            debug,
+            calls,
+            objects,
+            animation,
+        })
     }
 
     pub fn config(&self) -> &Config {
@@ -321,11 +350,15 @@ impl LightingMethod for Lpv {
             }
             None => false,
         };
-        if self.config.light_spin != 0.0 || moved {
+        // The frame's light (the scene's light motion turns it for every method), then the
+        // LPV's own `light_spin` about world up.
+        let mut light = frame.scene.lights.get(self.light_index).copied().unwrap_or(self.light);
+        if self.config.light_spin != 0.0 {
             let turn = glam::Quat::from_rotation_y((self.config.light_spin * t as f64).to_radians() as f32);
-            let mut light = self.light;
-            let d = turn * Vec3::from_slice(&light.direction[..3]);
-            light.direction = d.extend(0.0).into();
+            light.direction = (turn * Vec3::from_slice(&light.direction[..3])).extend(0.0).into();
+        }
+        if light != self.light || moved {
+            self.light = light;
             self.camera = LightCamera::new(&light, &self.placements[self.placements.len() - 1], self.config.rsm, self.config.snap)?;
             self.blocks = self.placements.iter().map(|p| self.camera.block(p, &self.config)).collect();
             self.cascade_block = cascade_block(&self.placements);
@@ -336,6 +369,26 @@ impl LightingMethod for Lpv {
             self.camera_blocks = self.blocks.iter().map(|b| rsm::camera_block(b, view_proj, eye, size)).collect();
         }
         Ok(())
+    }
+
+    /// Per volume (each cascade): its three sets of 3 × 4 SH coefficients per cell (the
+    /// document's 3 × 8 B × N³ per set in fp16), the fixed-point injection sums and the geometry
+    /// volume; then the RSM and the camera's surfels.
+    fn memory(&self, gpu: &crate::backend::Gpu) -> Result<Vec<crate::lighting::MemoryItem>> {
+        let item = |resource: String, requested: u64, allocated: u64| crate::lighting::MemoryItem { method: NAME, resource, requested, allocated };
+        let mut out = Vec::new();
+        for v in &self.volumes {
+            for (name, requested, allocated) in v.memory(gpu)? {
+                out.push(item(name, requested, allocated));
+            }
+        }
+        let (requested, allocated) = self.rsm.map.memory(gpu)?;
+        out.push(item(format!("{NAME} rsm ({0}x{0}, 4 x RGBA32F + depth)", self.rsm.map.size), requested, allocated));
+        if let Some(c) = &self.rsm.camera {
+            let (requested, allocated) = c.memory(gpu)?;
+            out.push(item(format!("{NAME} camera surfels ({0}x{0})", c.size), requested, allocated));
+        }
+        Ok(out)
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
@@ -358,7 +411,8 @@ impl LightingMethod for Lpv {
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"));
+            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"))
+            .sample("rsm_position", self.rsm.map.layers[2], SubresourceRange::mip(0), scene.sampler, frag);
         for (volume, name) in self.volumes.iter().zip(NAMES) {
             pass = pass.buffer(volume.result(), Access::StorageRead { stages: frag }, Some(name));
         }

@@ -134,6 +134,19 @@ impl SurfelMap {
     }
 }
 
+impl SurfelMap {
+    /// Its device memory: (requested bytes of the four RGBA32F layers and the depth, allocated).
+    pub fn memory(&self, gpu: &Gpu) -> Result<(u64, u64)> {
+        let texels = u64::from(self.size) * u64::from(self.size);
+        let depth = gpu.image_memory(self.depth)?;
+        let mut allocated = depth;
+        for l in self.layers {
+            allocated += gpu.image_memory(l)?;
+        }
+        Ok((4 * 16 * texels + depth, allocated))
+    }
+}
+
 /// The RSM's layers, pipelines and the injection.
 pub struct Rsm {
     /// The RSM itself.

@@ -197,6 +197,25 @@ impl VolumeGpu {
         })
     }
 
+    /// Device memory per group of buffers: (group, requested bytes, allocated bytes).
+    pub fn memory(&self, gpu: &Gpu) -> Result<Vec<(String, u64, u64)>> {
+        let groups = [
+            ("sets (2 wavefronts + accumulation)", vec![self.sets[0], self.sets[1], self.accumulation]),
+            ("injection sums", vec![self.fixed_light]),
+            ("geometry volume (sums, corners, faces)", vec![self.fixed_blocking, self.blocking, self.blocking_faces]),
+        ];
+        let mut out = Vec::new();
+        for (name, ids) in groups {
+            let (mut requested, mut allocated) = (0, 0);
+            for id in ids {
+                requested += gpu.buffer_desc(id)?.size;
+                allocated += gpu.buffer_memory(id)?;
+            }
+            out.push((format!("{} {name}", self.label), requested, allocated));
+        }
+        Ok(out)
+    }
+
     /// The set the look-up reads: the accumulation, or the document's last iteration.
     pub fn result(&self) -> BufferId {
         if self.faithful {
