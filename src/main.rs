@@ -166,9 +166,15 @@ enum Command {
         /// Image size as WIDTHxHEIGHT.
         #[arg(long, default_value = "640x360", value_parser = parse_size)]
         size: (u32, u32),
-        /// Surface interactions followed after the first hit: light that made at most K+1 is counted (0: direct light only). No Russian roulette.
+        /// Surface interactions followed after the first hit: light that made at most K+1 is counted (0: direct light only).
         #[arg(long, value_name = "K", default_value_t = penumbra::reference::DEFAULT_BOUNCES)]
         bounces: u32,
+        /// Russian roulette where the K-th bounce and every later one hits a surface (unbiased: the same expected value within --bounces), or `off`.
+        #[arg(long, value_name = "K|off", default_value_t = Roulette(Some(penumbra::reference::DEFAULT_ROULETTE_AFTER)), value_parser = parse_roulette)]
+        roulette_after: Roulette,
+        /// Write the scene as the tracer sees it (triangles per material as PLY, camera, materials and lights as JSON) into DIR and exit, for tools/reference_vs_mitsuba.py.
+        #[arg(long, value_name = "DIR")]
+        export_scene: Option<PathBuf>,
         /// Only emission seen directly and light after exactly one surface interaction (same as --bounces 0).
         #[arg(long, conflicts_with_all = ["indirect_only", "bounces"])]
         direct_only: bool,
@@ -188,6 +194,29 @@ enum Command {
         #[command(flatten)]
         device: DeviceArgs,
     },
+}
+
+/// `--roulette-after`: an interaction count of at least 1, or `off`.
+#[derive(Clone, Copy, Debug)]
+struct Roulette(Option<u32>);
+
+impl std::fmt::Display for Roulette {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self.0 {
+            Some(k) => write!(f, "{k}"),
+            None => f.write_str("off"),
+        }
+    }
+}
+
+fn parse_roulette(s: &str) -> Result<Roulette, String> {
+    if s.trim().eq_ignore_ascii_case("off") {
+        return Ok(Roulette(None));
+    }
+    match s.trim().parse::<u32>() {
+        Ok(k) if k >= 1 => Ok(Roulette(Some(k))),
+        _ => Err(format!("`{s}`: expected a whole number of at least 1, or `off`")),
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -306,7 +335,13 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let opts = options(&render);
             penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
         }
-        Command::Reference { scene, spp, size, bounces, direct_only, indirect_only, seed, frame, output, device } => {
+        Command::Reference { scene, spp, size, bounces, roulette_after, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
+            if let Some(dir) = export_scene {
+                for p in penumbra::reference::export::export_file(&scene, &dir)? {
+                    penumbra::outln!("wrote {}", p.display());
+                }
+                return Ok(());
+            }
             use penumbra::reference::{Batching, LightPaths, ReferenceOptions, Settings};
             let paths = if direct_only {
                 LightPaths::Direct
@@ -315,7 +350,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             } else {
                 LightPaths::All
             };
-            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive };
+            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0 };
             let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, frame, gpu: gpu_desc(&device) })?;
             for p in &report.written {
                 penumbra::outln!("wrote {}", p.display());

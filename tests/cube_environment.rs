@@ -127,7 +127,7 @@ fn forward_cube_and_equirect_skies_agree() {
 }
 
 fn settings(spp: u32, bounces: u32, paths: LightPaths) -> Settings {
-    Settings { spp, bounces, paths, seed: 3, batching: Batching::Adaptive }
+    Settings { spp, bounces, paths, seed: 3, batching: Batching::Adaptive, ..Settings::default() }
 }
 
 fn reference(scene: &Scene, size: (u32, u32), s: Settings) -> penumbra::reference::ReferenceImage {

@@ -65,7 +65,7 @@ fn bounced_light_under_shadow_volumes_approaches_the_path_tracer() {
     let size = (32, 24);
     let scene = Scene::from_file("scenes/room_gi.toml").unwrap();
     let mut tracer = ReferenceRenderer::new(common::test_gpu(), &scene, size).unwrap();
-    let mut truth = |paths| tracer.render(&Settings { spp: 128, bounces: 12, paths, seed: 3, batching: Batching::Adaptive }, &mut |_, _| {}).unwrap().mean;
+    let mut truth = |paths| tracer.render(&Settings { spp: 128, bounces: 12, paths, seed: 3, batching: Batching::Adaptive, ..Settings::default() }, &mut |_, _| {}).unwrap().mean;
     let (all, indirect) = (truth(LightPaths::All), truth(LightPaths::Indirect));
     common::assert_clean(&tracer.gpu);
     let frame = |name: &str| {

@@ -26,7 +26,7 @@ fn parse(toml: &str) -> Scene {
 }
 
 fn settings(spp: u32, bounces: u32, paths: LightPaths, seed: u32) -> Settings {
-    Settings { spp, bounces, paths, seed, batching: Batching::Adaptive }
+    Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, ..Settings::default() }
 }
 
 /// Renders each settings in turn on one validated device.
@@ -44,7 +44,11 @@ fn furnace_converges_to_the_geometric_series() {
     let (albedo, emission) = (m.albedo, m.emission);
     let bounces = 14;
     assert!(albedo.max_element().powi(bounces as i32) < 1e-4);
-    let img = &render(&scene, (32, 32), &[settings(32, bounces, LightPaths::All, 7)])[0];
+    // Without Russian roulette every furnace path carries exactly the truncated series, so the
+    // check is to rounding; roulette would add all of the noise (see
+    // russian_roulette_leaves_the_mean_unchanged for the furnace with it).
+    let no_roulette = |s: Settings| Settings { roulette_after: None, ..s };
+    let img = &render(&scene, (32, 32), &[no_roulette(settings(32, bounces, LightPaths::All, 7))])[0];
     let want = emission / (Vec3::ONE - albedo);
     // The estimate keeps the first K + 2 terms E ρ^k of the series.
     let truncation = emission * albedo.powf(bounces as f32 + 2.0) / (Vec3::ONE - albedo);
@@ -56,7 +60,7 @@ fn furnace_converges_to_the_geometric_series() {
     }
     furnace.assert();
     // With too few bounces the missing tail must show: the test can see truncation.
-    let short = &render(&scene, (8, 8), &[settings(4, 1, LightPaths::All, 7)])[0];
+    let short = &render(&scene, (8, 8), &[no_roulette(settings(4, 1, LightPaths::All, 7))])[0];
     let three_terms = emission * (Vec3::ONE + albedo + albedo * albedo);
     let mut truncated = Agreement::new("furnace with 1 bounce");
     truncated.check(short, 3, 3, three_terms, Vec3::ZERO);
@@ -389,6 +393,84 @@ fn error_falls_as_one_over_sqrt_spp() {
     assert!((1.6..=2.5).contains(&ratio), "RMSE at 8 spp {e8}, at 32 spp {e32}: ratio {ratio}");
 }
 
+/// Per channel, how two independent renders of the same estimand differ in units of their
+/// combined standard error: pixels beyond 3 and the worst, and the z of the means over the pixels
+/// `keep` marks.
+fn two_render_z(a: &ReferenceImage, b: &ReferenceImage, keep: &[bool]) -> (usize, f64, [f64; 3]) {
+    let (mut beyond_3, mut worst) = (0, 0.0f64);
+    let (mut diff, mut var) = ([0.0f64; 3], [0.0f64; 3]);
+    let pixels = a.mean.pixels.iter().zip(&b.mean.pixels).zip(a.standard_error.pixels.iter().zip(&b.standard_error.pixels));
+    for (((ma, mb), (sa, sb)), &kept) in pixels.zip(keep) {
+        let mut pixel_z = 0.0f64;
+        for c in 0..3 {
+            let s2 = (sa[c] as f64).powi(2) + (sb[c] as f64).powi(2);
+            let d = ma[c] as f64 - mb[c] as f64;
+            if kept {
+                diff[c] += d;
+                var[c] += s2;
+            }
+            pixel_z = pixel_z.max(if s2 > 0.0 {
+                d.abs() / s2.sqrt()
+            } else if d == 0.0 {
+                0.0
+            } else {
+                f64::INFINITY
+            });
+        }
+        beyond_3 += usize::from(pixel_z > 3.0);
+        worst = worst.max(pixel_z);
+    }
+    (beyond_3, worst, [0, 1, 2].map(|c| diff[c] / var[c].sqrt()))
+}
+
+/// Mean per-pixel variance of one sample (s.e.² × spp), in luminance-weighted channels.
+fn sample_variance(img: &ReferenceImage) -> f64 {
+    let w = [0.2126, 0.7152, 0.0722];
+    let n = img.standard_error.pixels.len() as f64;
+    img.standard_error.pixels.iter().map(|p| (0..3).map(|c| w[c] * (p[c] as f64).powi(2)).sum::<f64>()).sum::<f64>() / n * img.spp as f64
+}
+
+/// Russian roulette is unbiased: with it the Cornell box (8 bounces) renders the same mean as
+/// without, pixel by pixel and over the image, within the renders' own standard errors, and the
+/// furnace (where every path without roulette carries exactly the truncated series) the
+/// truncated series within the noise roulette adds. Roulette from the first bounce, the most
+/// it can be used. Forgetting to divide the throughput by the survival probability moves the
+/// Cornell box's image mean by tens of standard errors.
+#[test]
+fn russian_roulette_leaves_the_mean_unchanged() {
+    let scene = scene_file("cornell.toml");
+    let size = (16, 16);
+    let with = |roulette_after, seed| Settings { roulette_after, ..settings(128, 8, LightPaths::All, seed) };
+    // Independent seeds: renders sharing a seed share their first interactions.
+    let imgs = render(&scene, size, &[with(None, 1), with(Some(1), 2), with(Some(1), 1)]);
+    let (plain, roulette, same_seed) = (&imgs[0], &imgs[1], &imgs[2]);
+    assert_ne!(plain.mean, same_seed.mean, "roulette reaches the tracer: the same seed renders differently");
+    // The mean over the pixels clear of the light's outline: the few that straddle it mix the
+    // light's radiance with the room's and would hold nearly all of the image mean's variance.
+    let (beyond_3, worst, image_z) = two_render_z(plain, roulette, &off_light_outline(&scene, size));
+    let cost = sample_variance(roulette) / sample_variance(plain);
+    eprintln!("Cornell box: {beyond_3} of 256 pixels beyond 3 s.e., worst z {worst:.2}, image mean z {image_z:?}; variance per sample with roulette / without {cost:.3}");
+    assert!(beyond_3 <= 5 && worst <= 6.0, "{beyond_3} pixels beyond 3 s.e., worst z {worst}");
+    assert!(image_z.iter().all(|z| z.abs() <= 4.0), "image means differ: z {image_z:?}");
+    // Survival in proportion to the throughput costs little variance (0.98 measured: noise).
+    assert!(cost < 1.3, "roulette multiplies the variance by {cost}");
+
+    let furnace = scene_file("furnace.toml");
+    let m = &furnace.materials[0];
+    let bounces = 14;
+    let img = &render(&furnace, size, &[Settings { roulette_after: Some(1), ..settings(64, bounces, LightPaths::All, 5) }])[0];
+    // The first K + 2 terms of E (1 + ρ + ρ² + …).
+    let truncated = (0..bounces + 2).fold(Vec3::ZERO, |sum, k| sum + m.emission * m.albedo.powf(k as f32));
+    let mut agreement = Agreement::new("furnace with roulette");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            agreement.check(img, i, j, truncated, Vec3::ZERO);
+        }
+    }
+    assert!(img.standard_error.pixels.iter().all(|p| p[0] > 0.0), "roulette makes the furnace noisy: it was used");
+    agreement.assert();
+}
+
 /// The standard error a render reports is the spread of its mean across seeds, and a render
 /// does not depend on its batches, even where a batch asks one shader invocation for more loop
 /// iterations than llvmpipe allows it (65,535 in all, after which every loop stops early). At
@@ -483,7 +565,8 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
         all.extend_from_slice(args);
         std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&all).output().expect("run penumbra")
     };
-    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "-o", out.to_str().expect("utf-8 path")]);
+    // No roulette: the furnace is then noise-free (every path carries the truncated series).
+    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "--roulette-after", "off", "-o", out.to_str().expect("utf-8 path")]);
     let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{stdout}\n{stderr}");
     // The summary goes to stdout; progress lines only to a terminal, so a pipe gets none.
@@ -499,6 +582,8 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
         (&["--indirect-only", "--bounces", "0"][..], "--indirect-only"),
         (&["--spp", "0"][..], "--spp"),
         (&["--size", "0x4"][..], "--size"),
+        (&["--roulette-after", "0"][..], "--roulette-after"),
+        (&["--roulette-after", "never"][..], "--roulette-after"),
     ] {
         let o = penumbra(args);
         let stderr = String::from_utf8_lossy(&o.stderr);
@@ -869,4 +954,30 @@ fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacit
     through.assert();
     under_shadow.assert();
     open.assert();
+}
+
+/// `--export-scene` writes every traced triangle once, under its material, with the camera and
+/// lights of the scene file (what tools/reference_vs_mitsuba.py rebuilds for Mitsuba).
+#[test]
+fn export_scene_writes_every_triangle_with_its_material() {
+    let dir = common::temp_path("export-cornell");
+    let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml");
+    let written = penumbra::reference::export::export_file(&scene_path, &dir).expect("export");
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("scene.json")).expect("scene.json")).expect("valid JSON");
+    let traced = penumbra::reference::TracedScene::build(&scene_file("cornell.toml")).unwrap();
+    let mut total = 0;
+    for m in doc["materials"].as_array().expect("materials") {
+        let n = m["triangles"].as_u64().unwrap() as usize;
+        total += n;
+        if n > 0 {
+            let ply = std::fs::read(dir.join(m["mesh"].as_str().unwrap())).expect("ply");
+            let header = String::from_utf8_lossy(&ply[..ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11]).to_string();
+            assert!(header.contains(&format!("element face {n}\n")) && header.contains(&format!("element vertex {}\n", 3 * n)), "{header}");
+            assert_eq!(ply.len(), header.len() + n * 3 * 24 + n * 13, "positions and normals per vertex, a list of three indices per face");
+        }
+    }
+    assert_eq!(total, traced.triangles.len());
+    assert_eq!(doc["lights"][0]["type"], "quad");
+    assert_eq!(doc["camera"]["fov_y_deg"].as_f64().unwrap() as f32, 39.3);
+    assert!(written.len() >= 2);
 }

@@ -32,6 +32,7 @@ layout(set = 0, binding = 0) uniform Params {
     vec4 environment;  // rgb: radiance of rays that escape
     uvec4 counts;      // x: lights, y: triangles, z: width, w: height
     uvec4 environment_map;  // x, y: size of the map (0 for the constant environment); z: sampled; w: cube
+    uvec4 options;     // x: 1 when a ray past the last interaction can find light (emission, sky)
 } params;
 
 #define BVH_NODES_BINDING 1
@@ -128,6 +129,7 @@ layout(push_constant) uniform Batch {
     uint seed;
     uint bounces;        // surface interactions followed after the first hit
     uint flags;
+    uint roulette_after; // first interaction subject to Russian roulette (0xffffffff: none)
 } batch;
 
 // Leave out light that reaches the camera after fewer than two surface interactions.
@@ -335,6 +337,11 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
             uint light_rng = pcg_hash(light_key ^ pcg_hash(depth));
             radiance += throughput * direct_light(s, m, v, light_rng);
         }
+        // Past the last vertex a ray can only add emission or the environment: where the scene
+        // has neither, the path ends here with the same estimate and one ray fewer.
+        if (depth >= batch.bounces && params.options.x == 0u) {
+            break;
+        }
         vec3 l;
         vec3 weight;
         float pdf;
@@ -358,6 +365,16 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
         }
         if (depth >= batch.bounces) {
             break;
+        }
+        // Russian roulette: where bounce `roulette_after` or a later one hits, the path goes on with
+        // probability q (its throughput's largest channel, at most 0.95) and its throughput is
+        // divided by q, so the expected value is that of the path without roulette.
+        if (depth + 1u >= batch.roulette_after) {
+            float q = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
+            if (rand(rng) >= q) {
+                break;
+            }
+            throughput /= q;
         }
     }
     return radiance;

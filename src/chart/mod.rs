@@ -97,7 +97,7 @@ fn reference_settings(kind: ReferenceKind, spp: u32) -> (Settings, String) {
         ReferenceKind::Indirect(k) => (LightPaths::Indirect, k, "bounces (indirect only)"),
     };
     let label = if kind == ReferenceKind::Direct { format!("{label}, {spp} spp") } else { format!("{bounces} {label}, {spp} spp") };
-    (Settings { spp, bounces, paths, seed: 0, batching: Batching::Adaptive }, label)
+    (Settings { spp, bounces, paths, seed: 0, batching: Batching::Adaptive, ..Settings::default() }, label)
 }
 
 /// The reference for this scene and kind: from the cache, or rendered and cached.

@@ -25,10 +25,19 @@
 //!   the raster methods sample each map at a pixel's centre, the reference averages it over the
 //!   pixel, so fine texture detail differs between them by aliasing alone (the maps have one
 //!   mip level, so there is no mipmapping to differ);
-//! - no Russian roulette: a path is cut after `bounces` surface interactions past the first hit,
-//!   so the estimate counts exactly the light that made at most `bounces + 1` interactions.
-//!   The bias of that cut is the energy of longer paths, e.g. ρ^(K+2)/(1 − ρ) of the emission in
-//!   a closed furnace of albedo ρ.
+//! - a path is cut after `bounces` surface interactions past the first hit, so the estimate
+//!   counts exactly the light that made at most `bounces + 1` interactions. The bias of that cut
+//!   is the energy of longer paths, e.g. ρ^(K+2)/(1 − ρ) of the emission in a closed furnace of
+//!   albedo ρ;
+//! - Russian roulette ([`Settings::roulette_after`]) ends paths earlier at random without
+//!   changing that expected value: where the K-th bounce's ray (and every later one) hits a
+//!   surface, the path goes on with probability q = min(max channel of its throughput, 0.95)
+//!   and its throughput is divided by q. It costs a little variance and saves much time (README,
+//!   "The reference against Mitsuba 3"); the furnace, whose paths all carry the same value,
+//!   is the exception: there it adds all of its noise;
+//! - past the last interaction the tracer only samples and traces another ray when the scene
+//!   has something it could find there (emission or a sky), so a dark scene's paths end a ray
+//!   earlier with the same estimate.
 //!
 //! [`LightPaths::Direct`] is `bounces = 0` (emission seen directly plus light after one surface
 //! interaction); [`LightPaths::Indirect`] is the full estimator minus exactly those terms, so
@@ -42,6 +51,8 @@
 //! small until enough of them have been drawn.
 
 pub mod bvh;
+
+pub mod export;
 
 pub mod scene_data;
 
@@ -88,13 +99,23 @@ pub struct Settings {
     pub paths: LightPaths,
     pub seed: u32,
     pub batching: Batching,
+    /// Russian roulette where the K-th bounce's ray and every later one hits a surface (the
+    /// camera ray's hit is never rouletted); `None` switches it off. Unbiased: the expected value
+    /// is the same as without, within the `bounces` cap.
+    pub roulette_after: Option<u32>,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { spp: 256, bounces: DEFAULT_BOUNCES, paths: LightPaths::All, seed: 0, batching: Batching::Adaptive }
+        Settings { spp: 256, bounces: DEFAULT_BOUNCES, paths: LightPaths::All, seed: 0, batching: Batching::Adaptive, roulette_after: Some(DEFAULT_ROULETTE_AFTER) }
     }
 }
+
+/// Russian roulette from the second bounce on (the first indirect bounce is never cut, so a
+/// one-bounce indirect reference keeps its variance): on the Cornell box with 32 bounces, K = 1,
+/// 2, 3 and 5 gave 3.5, 3.4, 3.2 and 2.2 times the efficiency (samples/s ÷ variance) of no
+/// roulette (README, "The reference against Mitsuba 3").
+pub const DEFAULT_ROULETTE_AFTER: u32 = 2;
 
 /// Enough for 0.6^17 ≈ 2e-4 of the light in a white-walled room to be cut off.
 pub const DEFAULT_BOUNCES: u32 = 16;
@@ -115,6 +136,9 @@ impl Settings {
         if self.paths == LightPaths::Indirect && self.bounces == 0 {
             return Err(Error::Usage("--indirect-only needs --bounces of at least 1: with 0 bounces there is no indirect light".into()));
         }
+        if self.roulette_after == Some(0) {
+            return Err(Error::Usage("--roulette-after must be at least 1 (or off): the camera ray's hit is never cut".into()));
+        }
         if let Batching::Fixed(0) = self.batching {
             return Err(Error::Usage("a batch must hold at least one sample".into()));
         }
@@ -131,7 +155,7 @@ impl Settings {
             LightPaths::Direct => (0, 0),
             LightPaths::Indirect => (self.bounces, FLAG_INDIRECT_ONLY),
         };
-        BatchPush { sample_offset: offset, sample_count: count, seed: self.seed, bounces, flags }
+        BatchPush { sample_offset: offset, sample_count: count, seed: self.seed, bounces, flags, roulette_after: self.roulette_after.unwrap_or(u32::MAX) }
     }
 }
 
@@ -148,6 +172,8 @@ struct Params {
     environment: [f32; 4],
     counts: [u32; 4],
     environment_map: [u32; 4],
+    /// x: 1 when a ray can still find light after the last interaction (emission or a sky).
+    options: [u32; 4],
 }
 
 /// `Batch` push constants in the shader.
@@ -159,6 +185,8 @@ struct BatchPush {
     seed: u32,
     bounces: u32,
     flags: u32,
+    /// First interaction subject to Russian roulette; u32::MAX: none.
+    roulette_after: u32,
 }
 
 /// A finished render: per-pixel mean radiance and the standard error of that mean.
@@ -228,8 +256,7 @@ impl ReferenceRenderer {
         }
         let traced = TracedScene::build_at(scene, crate::scene::motion::frame_time(frame))?;
         let buffers = traced.upload(&mut gpu)?;
-        let pipeline =
-            gpu.create_compute_pipeline(&ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded)?;
+        let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] }, &dev_shaders())?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
         let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
@@ -256,6 +283,7 @@ impl ReferenceRenderer {
                 Some(m) => [m.width, m.height, m.has_power as u32, m.cube as u32],
                 None => [0; 4],
             },
+            options: [traced.light_beyond_last_bounce() as u32, 0, 0, 0],
         };
         Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, status, frame, states: ResourceStates::default(), width, height })
     }
@@ -359,6 +387,17 @@ impl ReferenceRenderer {
         graph.run_and_wait(gpu, self.frame, &mut self.states, "reference")?;
         let bytes = gpu.read_buffer(status)?;
         Ok(bytes.get(..4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(u32::MAX))
+    }
+}
+
+/// Where the tracer's shader comes from: the embedded SPIR-V, or with `PENUMBRA_REF_GLSL=DIR`
+/// compiled now from a copy of the `glsl/` folder, so variants of the shader (counters in place
+/// of radiance, a term switched off) can be timed without rebuilding (how the README's profile
+/// of the reference was made).
+fn dev_shaders() -> ShaderLibrary {
+    match std::env::var_os("PENUMBRA_REF_GLSL") {
+        Some(d) => ShaderLibrary::Directory(d.into()),
+        None => ShaderLibrary::Embedded,
     }
 }
 

@@ -260,6 +260,12 @@ impl TracedScene {
         Ok(TracedScene { corners, bvh, triangles, shading, materials, lights, textures, environment, environment_map })
     }
 
+    /// Whether a ray leaving a path's last vertex can still find light: some material emits or
+    /// the environment is not black. Otherwise the tracer does not trace that ray.
+    pub fn light_beyond_last_bounce(&self) -> bool {
+        self.materials.iter().any(|m| m.emission[..3].iter().any(|&e| e != 0.0)) || self.environment != Vec3::ZERO || self.environment_map.is_some()
+    }
+
     /// Every texture's texels, one after another, and per texture (first texel, width, height, 0):
     /// the `texture_texels` and `textures` buffers.
     pub fn texture_buffers(&self) -> (Vec<[f32; 4]>, Vec<[u32; 4]>) {
