@@ -65,6 +65,11 @@ enum Command {
         /// Where `chart` caches references and tables.
         #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
         cache_dir: PathBuf,
+        /// Render at N times the size in each axis and box-filter down to --size, so each pixel
+        /// averages its footprint as the reference's does (N from 1 to 16; at most 4096x4096
+        /// rendered pixels in all).
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        supersample: u32,
     },
     /// Image metrics of TEST against REF (linear radiance EXRs): RMSE, relative MSE, mean bias,
     /// 99th-percentile and max per-pixel error, and FLIP on the tone-mapped pair.
@@ -101,9 +106,17 @@ enum Command {
         /// Frames timed per configuration (the median is reported).
         #[arg(long, default_value_t = 20, value_parser = parse_frames)]
         frames: usize,
-        /// Samples per pixel of the reference.
+        /// Samples per pixel of the reference: the most it may take (exactly this with --reference-noise 0).
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
         reference_spp: u32,
+        /// The reference renders (from 32 spp on) until its noise adds at most this fraction of the
+        /// smallest relative MSE among the configurations it judges; 0: exactly --reference-spp.
+        #[arg(long, value_name = "F", default_value_t = 0.1)]
+        reference_noise: f64,
+        /// Also render each configuration at N times the size in each axis, box-filtered down, and
+        /// report both errors (pixel centres and supersampled); the plot shows the supersampled one.
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        supersample: u32,
         /// Where references and tables are cached.
         #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
         cache_dir: PathBuf,
@@ -160,9 +173,18 @@ enum Command {
     Reference {
         /// Scene file (TOML, see scenes/README.md).
         scene: PathBuf,
-        /// Samples per pixel.
-        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
-        spp: u32,
+        /// Samples per pixel (default 256); with --max-stderr the most it may take (default 65536).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        spp: Option<u32>,
+        /// Keep sampling until the relative standard error is at most E (see --stderr-over), with
+        /// --spp as the cap; judged from 32 spp on. Prints the spp used and the error reached.
+        #[arg(long, value_name = "E", value_parser = parse_max_stderr)]
+        max_stderr: Option<f64>,
+        /// What --max-stderr bounds: `image` = the standard error of the image's mean over that
+        /// mean (worst RGB channel); `pixel` = the 99th percentile over pixels of s.e./sqrt(mean²+0.01)
+        /// (worst channel).
+        #[arg(long, value_name = "SCOPE", default_value = "image", value_parser = parse_scope, requires = "max_stderr")]
+        stderr_over: penumbra::reference::ErrorScope,
         /// Image size as WIDTHxHEIGHT.
         #[arg(long, default_value = "640x360", value_parser = parse_size)]
         size: (u32, u32),
@@ -244,6 +266,22 @@ fn parse_max_error(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A relative standard error: a finite number above 0.
+fn parse_max_stderr(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
+        _ => Err(format!("`{s}`: expected a relative standard error, a finite number above 0 (e.g. 0.01)")),
+    }
+}
+
+fn parse_scope(s: &str) -> Result<penumbra::reference::ErrorScope, String> {
+    match s.trim() {
+        "image" => Ok(penumbra::reference::ErrorScope::Image),
+        "pixel" => Ok(penumbra::reference::ErrorScope::Pixel),
+        _ => Err(format!("`{s}`: expected `image` or `pixel`")),
+    }
+}
+
 /// An exposure multiplier: a finite number above 0.
 fn parse_exposure(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
@@ -265,13 +303,13 @@ fn gpu_desc(d: &DeviceArgs) -> GpuDesc {
 }
 
 fn options(r: &RenderArgs) -> CaptureOptions {
-    CaptureOptions { scene: r.scene.clone(), png: None, exr: None, size: r.size, frames: 1, method: r.method.clone(), exposure: 1.0, gpu: gpu_desc(&r.device), config: None }
+    CaptureOptions { scene: r.scene.clone(), png: None, exr: None, size: r.size, frames: 1, method: r.method.clone(), exposure: 1.0, gpu: gpu_desc(&r.device), config: None, supersample: 1 }
 }
 
 fn run(cli: Cli) -> penumbra::Result<()> {
     match cli.command {
-        Command::Capture { render, output, exr, frames, exposure, max_error, cache_dir } => {
-            let mut opts = CaptureOptions { png: output, exr, frames, exposure, ..options(&render) };
+        Command::Capture { render, output, exr, frames, exposure, max_error, cache_dir, supersample } => {
+            let mut opts = CaptureOptions { png: output, exr, frames, exposure, supersample, ..options(&render) };
             if let Some(e) = max_error {
                 let (decl, why) = penumbra::capture::choose_configuration(&opts, e, &cache_dir)?;
                 penumbra::outln!("{why}");
@@ -314,12 +352,49 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
         }
-        Command::Chart { scene, output, csv, size, frames, reference_spp, cache_dir, methods, device } => {
-            let opts = penumbra::chart::ChartOptions { scene, size, frames, reference_spp, png: Some(output.clone()), csv: csv.clone(), cache_dir, gpu: gpu_desc(&device), methods };
+        Command::Chart { scene, output, csv, size, frames, reference_spp, reference_noise, supersample, cache_dir, methods, device } => {
+            let opts = penumbra::chart::ChartOptions {
+                scene,
+                size,
+                frames,
+                reference_spp,
+                reference_noise,
+                supersample,
+                png: Some(output.clone()),
+                csv: csv.clone(),
+                cache_dir,
+                gpu: gpu_desc(&device),
+                methods,
+            };
+            let start = std::time::Instant::now();
             let chart = penumbra::chart::run(&opts)?;
+            penumbra::outln!("{}; each metric is followed by [the reference's own error: what an exact method would score]", chart.comparison());
             for r in &chart.rows {
-                penumbra::outln!("{:<32} {:>9.3} ms   rel MSE {:.5}   FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
+                let (m, n) = (r.lighting_metrics(), &r.reference_noise);
+                let centre = match &r.supersampled {
+                    Some(_) => format!("   centre-sampled rel MSE {:.3e}", r.metrics.rel_mse),
+                    None => String::new(),
+                };
+                penumbra::outln!(
+                    "{:<32} {:>9.3} ms   rel MSE {:.3e} [{:.1e}]   RMSE {:.3e} [{:.1e}]   bias {:+.2e} [{:.1e}]   p99 {:.3e} [{:.1e}]   max {:.3e} [{:.1e}]   FLIP {:.4} [{:.4}]   ({}){centre}",
+                    r.config,
+                    r.frame_ms,
+                    m.rel_mse,
+                    n.rel_mse,
+                    m.rmse,
+                    n.rmse,
+                    m.mean_bias,
+                    n.mean_bias,
+                    m.p99_abs_error,
+                    n.p99_abs_error,
+                    m.max_abs_error,
+                    n.max_abs_error,
+                    m.flip_mean,
+                    n.flip_mean,
+                    r.reference
+                );
             }
+            penumbra::outln!("chart: {} configurations in {:.1} s wall", chart.rows.len(), start.elapsed().as_secs_f64());
             penumbra::outln!("wrote {}", output.display());
             if let Some(p) = csv {
                 penumbra::outln!("wrote {}", p.display());
@@ -335,14 +410,14 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let opts = options(&render);
             penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
         }
-        Command::Reference { scene, spp, size, bounces, roulette_after, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
+        Command::Reference { scene, spp, max_stderr, stderr_over, size, bounces, roulette_after, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
             if let Some(dir) = export_scene {
                 for p in penumbra::reference::export::export_file(&scene, &dir)? {
                     penumbra::outln!("wrote {}", p.display());
                 }
                 return Ok(());
             }
-            use penumbra::reference::{Batching, LightPaths, ReferenceOptions, Settings};
+            use penumbra::reference::{Batching, ErrorTarget, LightPaths, ReferenceOptions, Settings, MIN_ADAPTIVE_SPP};
             let paths = if direct_only {
                 LightPaths::Direct
             } else if indirect_only {
@@ -350,8 +425,10 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             } else {
                 LightPaths::All
             };
+            let spp = spp.unwrap_or(if max_stderr.is_some() { 65536 } else { 256 });
+            let target = max_stderr.map(|max| ErrorTarget { max, scope: stderr_over, min_spp: MIN_ADAPTIVE_SPP });
             let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0 };
-            let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, frame, gpu: gpu_desc(&device) })?;
+            let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, target, frame, gpu: gpu_desc(&device) })?;
             for p in &report.written {
                 penumbra::outln!("wrote {}", p.display());
             }
@@ -359,6 +436,11 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
             let (mean, se) = img.average();
             penumbra::outln!("average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}", mean[0], mean[1], mean[2], se[0], se[1], se[2]);
+            if let (Some(t), Some(a)) = (target, report.achieved) {
+                let over = if t.scope == penumbra::reference::ErrorScope::Image { "image" } else { "pixel" };
+                let verdict = if a <= t.max { "reached" } else { "NOT reached: the --spp cap came first" };
+                penumbra::outln!("relative standard error ({over}): {a:.3e} at {} spp, target {:.3e} {verdict}", img.spp, t.max);
+            }
         }
     }
     Ok(())

@@ -107,6 +107,8 @@ fn chart_measures_the_textured_shadow_volume_level() {
         "16",
         "--frames",
         "1",
+        "--supersample",
+        "4",
         "--cache-dir",
         cache.to_str().unwrap(),
         "-o",
@@ -114,7 +116,8 @@ fn chart_measures_the_textured_shadow_volume_level() {
         "--csv",
         csv.to_str().unwrap(),
     ];
-    ok(&penumbra(&args));
+    let stdout = ok(&penumbra(&args));
+    assert!(stdout.contains("supersampled 4x4"), "{stdout}");
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let configs: Vec<&str> = rows.iter().map(|r| r.config.as_str()).collect();
     assert_eq!(rows.len(), 14, "{configs:?}");
@@ -134,7 +137,15 @@ fn chart_measures_the_textured_shadow_volume_level() {
         assert!((err(c) / err("physical pscs") - 1.0).abs() < 1e-3, "{c}: {} vs {}", err(c), err("physical pscs"));
     }
     let table = std::fs::read_to_string(&csv).unwrap();
-    assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,")), "{table}");
+    assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,4,")), "{table}");
+    // Like for like: the method rendered at 256² and box-filtered to 64² averages its pixels'
+    // footprints as the reference does, and most of the pixel centres' error is gone (aliased
+    // texture detail); the CSV keeps both.
+    let (centre, ss, noise) = (column(&table, "rel_mse"), column(&table, "ss_rel_mse"), column(&table, "ref_noise_rel_mse"));
+    let i = rows.iter().position(|r| r.config.ends_with("physical pscs")).unwrap();
+    let (centre, ss, noise): (f64, f64, f64) = (centre[i].parse().unwrap(), ss[i].parse().unwrap(), noise[i].parse().unwrap());
+    println!("physical pscs, relative MSE: pixel centres {centre:.4}, supersampled 4x4 {ss:.5}, the reference's own noise {noise:.5}");
+    assert!(ss < centre / 4.0, "supersampled {ss} vs pixel centres {centre}");
 }
 
 /// `penumbra chart` on the spot-light level (scenes/bsp_spot.toml): the direct reference
@@ -230,4 +241,101 @@ radiance = 0.3
     assert!(err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected") >= default);
     let table = std::fs::read_to_string(&csv).unwrap();
     assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,")), "{table}");
+}
+
+/// A CSV column by header name, one string per row.
+fn column(table: &str, name: &str) -> Vec<String> {
+    let header: Vec<&str> = table.lines().next().unwrap().split(',').collect();
+    let i = header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}: {header:?}"));
+    table.lines().skip(1).map(|l| l.split(',').nth(i).unwrap_or("").to_string()).collect()
+}
+
+/// The chart asks the reference for the error its metrics need: the reference renders (from
+/// 32 spp on) until the relative MSE its noise adds is at most `--reference-noise` of the
+/// smallest relative MSE it judges, and the CSV gives, beside every metric, the reference's own
+/// error; the closed-form ones are checked here against the cached standard-error image by
+/// hand.
+#[test]
+fn chart_asks_the_reference_for_the_error_its_metrics_need_and_reports_its_noise() {
+    let cache = common::temp_path("chart-noise-cache");
+    let (png, csv) = (common::temp_path("chart-noise.png"), common::temp_path("chart-noise.csv"));
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml");
+    let cap = 2048;
+    let args = [
+        "chart",
+        scene,
+        "--size",
+        "24x24",
+        "--reference-spp",
+        "2048",
+        "--reference-noise",
+        "0.1",
+        "--frames",
+        "1",
+        "--cache-dir",
+        cache.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ];
+    let stdout = ok(&penumbra(&args));
+    assert!(stdout.contains("[the reference's own error"), "{stdout}");
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let num = |name: &str| -> f64 { column(&table, name)[0].parse().unwrap_or_else(|_| panic!("{name} is not a number: {table}")) };
+    for m in ["rmse", "rel_mse", "mean_bias", "p99_abs_error", "max_abs_error", "flip"] {
+        let v = num(&format!("ref_noise_{m}"));
+        assert!(v.is_finite() && v > 0.0, "ref_noise_{m} = {v}");
+        assert_eq!(column(&table, &format!("ss_{m}"))[0], "", "no supersampling asked for");
+    }
+    assert_eq!(column(&table, "supersample")[0], "1");
+    // The spp the reference took, from its label (`16 bounces; N spp`).
+    let label = &column(&table, "reference")[0];
+    let spp: u32 = label.rsplit("; ").next().and_then(|t| t.strip_suffix(" spp")).and_then(|n| n.parse().ok()).unwrap_or_else(|| panic!("{label}"));
+    let (rel_mse, noise) = (num("rel_mse"), num("ref_noise_rel_mse"));
+    println!("reference {label}: its noise adds {noise:.3e} to a relative MSE of {rel_mse:.3e}");
+    // At the 32 spp minimum the noise was 6.6e-3 of 4.8e-2: more samples were needed.
+    assert!((33..cap).contains(&spp), "stopped at {spp} of at most {cap}");
+    assert!(noise <= 0.1 * rel_mse, "{noise} > 0.1 × {rel_mse}");
+
+    // By hand from the cached mean and standard error.
+    let cached: Vec<std::path::PathBuf> = std::fs::read_dir(&cache).unwrap().map(|e| e.unwrap().path()).filter(|p| p.to_string_lossy().ends_with(".stderr.exr")).collect();
+    assert_eq!(cached.len(), 1, "{cached:?}");
+    let se = HdrImage::read_exr(&cached[0]).unwrap();
+    let mean = HdrImage::read_exr(&std::path::PathBuf::from(cached[0].to_string_lossy().replace(".stderr.exr", ".exr"))).unwrap();
+    let (mut sum_sq, mut sum_rel) = (0.0f64, 0.0f64);
+    for (m, s) in mean.pixels.iter().zip(&se.pixels) {
+        for c in 0..3 {
+            let (m, s) = (m[c] as f64, s[c] as f64);
+            sum_sq += s * s;
+            sum_rel += s * s / (m * m + 0.01);
+        }
+    }
+    let n = 3.0 * mean.pixels.len() as f64;
+    let close = |name: &str, want: f64| assert!((num(name) - want).abs() <= 1e-9 * want, "{name}: {} vs {want} by hand", num(name));
+    close("ref_noise_rel_mse", sum_rel / n);
+    close("ref_noise_rmse", (sum_sq / n).sqrt());
+    close("ref_noise_mean_bias", sum_sq.sqrt() / n);
+    // The simulated ones: an exact image's p99 error lies near the typical |noise|, below the max.
+    assert!(num("ref_noise_p99_abs_error") <= num("ref_noise_max_abs_error") && num("ref_noise_p99_abs_error") > 0.5 * num("ref_noise_rmse"));
+}
+
+/// `capture --supersample N` writes an image of `--size` (the N× render box-filtered down), and
+/// refuses a render over the limit with one line before anything is allocated.
+#[test]
+fn capture_supersamples_to_the_asked_size_and_refuses_huge_factors() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml");
+    let (exr, plain) = (common::temp_path("ss-capture.exr"), common::temp_path("ss-plain.exr"));
+    ok(&penumbra(&["capture", scene, "--size", "12x8", "--supersample", "3", "--exr", exr.to_str().unwrap()]));
+    ok(&penumbra(&["capture", scene, "--size", "12x8", "--exr", plain.to_str().unwrap()]));
+    let (ss, centre) = (HdrImage::read_exr(&exr).unwrap(), HdrImage::read_exr(&plain).unwrap());
+    assert_eq!((ss.width, ss.height), (12, 8));
+    assert_ne!(ss.pixels, centre.pixels, "supersampling changes the image");
+    for (args, want) in [(&["--size", "640x360", "--supersample", "16"][..], "limit"), (&["--size", "8x8", "--supersample", "0"][..], "from 1 to 16")] {
+        let mut all = vec!["capture", scene];
+        all.extend_from_slice(args);
+        let o = penumbra(&all);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains("--supersample") && e.contains(want) && e.lines().count() == 1, "{args:?}: {e}");
+    }
 }

@@ -176,6 +176,9 @@ fn chart_and_speedup_at_equal_error() {
             size: (128, 128),
             frames,
             reference_spp: spp,
+            // Exactly `spp` samples, as this measurement was made.
+            reference_noise: 0.0,
+            supersample: 1,
             png: Some(out_dir().join(format!("chart_{name}.png"))),
             csv: Some(out_dir().join(format!("chart_{name}.csv"))),
             cache_dir: out_dir().join("cache"),

@@ -539,6 +539,7 @@ fn the_memory_readout_matches_the_formula() {
             exposure: 1.0,
             gpu: common::test_gpu_desc(),
             config: None,
+            supersample: 1,
         };
         let report = penumbra::profile::run(&opts, 1).unwrap_or_else(|e| panic!("{e}"));
         let table = report.table();

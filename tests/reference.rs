@@ -536,6 +536,7 @@ fn cli_options(scene: &str, output: &Path, seed: u32) -> ReferenceOptions {
         size: (16, 16),
         settings: settings(4, 2, LightPaths::All, seed),
         frame: 0,
+        target: None,
         gpu: common::test_gpu_desc(),
     }
 }
@@ -980,4 +981,91 @@ fn export_scene_writes_every_triangle_with_its_material() {
     assert_eq!(doc["lights"][0]["type"], "quad");
     assert_eq!(doc["camera"]["fov_y_deg"].as_f64().unwrap() as f32, 39.3);
     assert!(written.len() >= 2);
+}
+
+/// `--max-stderr`: a render with a target error stops once the error, as
+/// `reference::relative_error` measures it, is at most the target (never before 32 spp), a
+/// tighter target takes more samples, and a render stopped at n samples is bit for bit the
+/// fixed render of n samples (samples are keyed by their index, whatever the batching).
+#[test]
+fn a_target_error_stops_the_render_where_it_holds() {
+    use penumbra::reference::{relative_error, ErrorScope, Stop, MIN_ADAPTIVE_SPP};
+    let scene = scene_file("cornell.toml");
+    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (16, 16)).expect("reference renderer");
+    let cap = settings(4096, 3, LightPaths::All, 5);
+    let mut adaptive = |scope: ErrorScope, max: f64| {
+        let mut checks = 0;
+        let mut check = |img: &ReferenceImage| {
+            checks += 1;
+            relative_error(img, scope) / max
+        };
+        let img = r.render_until(&cap, Some(Stop { min_spp: MIN_ADAPTIVE_SPP, check: &mut check }), &mut |_, _| {}).expect("adaptive render");
+        (img, checks)
+    };
+    let mut stopped = Vec::new();
+    for (scope, loose, tight) in [(ErrorScope::Image, 0.05, 0.025), (ErrorScope::Pixel, 0.5, 0.35)] {
+        let ((a, checks_a), (b, checks_b)) = (adaptive(scope, loose), adaptive(scope, tight));
+        let (ea, eb) = (relative_error(&a, scope), relative_error(&b, scope));
+        eprintln!("{scope:?}: target {loose} reached {ea:.4} at {} spp ({checks_a} checks), target {tight} reached {eb:.4} at {} spp ({checks_b} checks)", a.spp, b.spp);
+        assert!(ea <= loose && eb <= tight, "{scope:?}: {ea} > {loose} or {eb} > {tight}");
+        assert!(a.spp >= MIN_ADAPTIVE_SPP && b.spp > a.spp && b.spp < cap.spp, "{scope:?}: {} then {} spp", a.spp, b.spp);
+        stopped.push(a);
+        stopped.push(b);
+    }
+    // Two of the stopped renders against fixed ones of the same spp, bit for bit.
+    let fixed = render(&scene, (16, 16), &[settings(stopped[0].spp, 3, LightPaths::All, 5), settings(stopped[3].spp, 3, LightPaths::All, 5)]);
+    for (stopped, fixed) in [(&stopped[0], &fixed[0]), (&stopped[3], &fixed[1])] {
+        assert_eq!(stopped.spp, fixed.spp);
+        assert_eq!((&stopped.mean, &stopped.standard_error), (&fixed.mean, &fixed.standard_error), "stopped at {} spp", fixed.spp);
+    }
+    // A target out of reach ends at the cap.
+    let small_cap = settings(40, 3, LightPaths::All, 5);
+    let img = r.render_until(&small_cap, Some(Stop { min_spp: MIN_ADAPTIVE_SPP, check: &mut |_| 2.0 }), &mut |_, _| {}).expect("capped render");
+    assert_eq!(img.spp, 40);
+    common::assert_clean(&r.gpu);
+}
+
+/// The relative standard errors by hand on a 2-pixel image: the image's is the s.e. of the
+/// image mean over that mean (worst channel), the pixel one s.e./sqrt(mean² + 0.01) at the
+/// 99th percentile (here the larger pixel, worst channel); a black channel counts as 0.
+#[test]
+fn relative_error_follows_its_definition() {
+    use penumbra::reference::{relative_error, ErrorScope};
+    let mut mean = HdrImage::new(2, 1);
+    let mut se = HdrImage::new(2, 1);
+    mean.pixels = vec![[1.0, 0.0, 0.2, 1.0], [3.0, 0.0, 0.0, 1.0]];
+    se.pixels = vec![[0.1, 0.0, 0.05, 1.0], [0.2, 0.0, 0.01, 1.0]];
+    let img = ReferenceImage { mean, standard_error: se, spp: 100, seconds: 1.0 };
+    // R: sqrt(0.01 + 0.04) / 2 over 2; B: sqrt(0.0025 + 0.0001) / 2 over 0.1.
+    let image = (0.05f64.sqrt() / 2.0 / 2.0).max(0.0026f64.sqrt() / 2.0 / 0.1);
+    assert!((relative_error(&img, ErrorScope::Image) - image).abs() < 1e-6, "{} vs {image}", relative_error(&img, ErrorScope::Image));
+    // Pixel 0: R 0.1/sqrt(1.01), B 0.05/sqrt(0.05); pixel 1: R 0.2/sqrt(9.01), B 0.01/sqrt(0.01).
+    let pixel = (0.1 / 1.01f64.sqrt()).max(0.05 / 0.05f64.sqrt()).max(0.2 / 9.01f64.sqrt()).max(0.01 / 0.01f64.sqrt());
+    assert!((relative_error(&img, ErrorScope::Pixel) - pixel).abs() < 1e-6, "{} vs {pixel}", relative_error(&img, ErrorScope::Pixel));
+}
+
+/// `penumbra reference --max-stderr` prints the spp it used and the error it reached.
+#[test]
+fn command_line_max_stderr_reports_spp_and_error() {
+    let out = common::temp_path("cli-max-stderr.exr");
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["reference", cornell.to_str().unwrap(), "--device", &device, "--validation", "--size", "8x8", "--bounces", "2", "-o", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&args).output().expect("run penumbra")
+    };
+    let o = run(&["--max-stderr", "0.03", "--stderr-over", "image"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    let line = stdout.lines().find(|l| l.starts_with("relative standard error (image)")).unwrap_or_else(|| panic!("{stdout}"));
+    assert!(line.contains("reached") && !line.contains("NOT"), "{line}");
+    let achieved: f64 = line.split_whitespace().nth(4).and_then(|v| v.trim_end_matches(':').parse().ok()).unwrap_or_else(|| panic!("{line}"));
+    assert!(achieved <= 0.03, "{line}");
+    // The cap first: said so.
+    let o = run(&["--max-stderr", "1e-6", "--spp", "40"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && stdout.contains("at 40 spp") && stdout.contains("NOT reached"), "{stdout}");
+    let o = run(&["--max-stderr", "0"]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--max-stderr"));
 }

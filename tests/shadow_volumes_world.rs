@@ -261,7 +261,18 @@ fn spot_cone_culling_changes_draws_not_pixels() {
 #[test]
 fn profile_breaks_out_every_pass() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bsp_rooms.toml");
-    let opts = penumbra::capture::CaptureOptions { scene: Some(path), png: None, exr: None, size: (64, 48), frames: 1, method: None, exposure: 1.0, gpu: common::test_gpu_desc(), config: None };
+    let opts = penumbra::capture::CaptureOptions {
+        scene: Some(path),
+        png: None,
+        exr: None,
+        size: (64, 48),
+        frames: 1,
+        method: None,
+        exposure: 1.0,
+        gpu: common::test_gpu_desc(),
+        config: None,
+        supersample: 1,
+    };
     let report = penumbra::profile::run(&opts, 2).unwrap();
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
     println!("{}", report.table());
@@ -321,7 +332,18 @@ intensity = 0.01
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("many_passes.toml");
     std::fs::write(&path, text).unwrap();
-    let opts = penumbra::capture::CaptureOptions { scene: Some(path), png: None, exr: None, size: (16, 16), frames: 1, method: None, exposure: 1.0, gpu: common::test_gpu_desc(), config: None };
+    let opts = penumbra::capture::CaptureOptions {
+        scene: Some(path),
+        png: None,
+        exr: None,
+        size: (16, 16),
+        frames: 1,
+        method: None,
+        exposure: 1.0,
+        gpu: common::test_gpu_desc(),
+        config: None,
+        supersample: 1,
+    };
     let report = penumbra::profile::run(&opts, 1).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();

@@ -4,6 +4,18 @@
 //!
 //! The reference is rendered once per (scene content, size, reference settings) and cached in
 //! `.penumbra-cache/`, as is the chart's table, which `capture --max-error` reads.
+//!
+//! Every configuration is rendered first; then each reference renders until its own noise is
+//! well below the errors it judges: its expected contribution to the relative MSE (see
+//! [`reference_noise`]) at most `reference_noise` (0.1 by default) times the smallest relative
+//! MSE among the configurations measured against it, from 32 spp on, with `reference_spp` as
+//! the cap. Beside every metric the table gives what an exact method would score against that
+//! reference ([`reference_noise`]): the reference's own error.
+//!
+//! With `supersample` N > 1 each configuration is also rendered at N× the size in each axis and
+//! box-filtered down, so that its pixels average their footprint as the reference's do; the
+//! table keeps both the pixel-centre metrics (`rmse`, …) and the supersampled ones (`ss_rmse`,
+//! …), so aliasing stays visible, and the plot shows the supersampled ones.
 
 mod plot;
 
@@ -17,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, ReferenceKind};
 use crate::metrics::{self, CompareOptions, Metrics};
-use crate::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
+use crate::reference::{LightPaths, ReferenceImage, ReferenceRenderer, Settings, Stop, MIN_ADAPTIVE_SPP};
 use crate::renderer::{FrameOutput, Renderer};
 use crate::scene::Scene;
 use crate::timing::summarise;
@@ -28,8 +40,13 @@ pub struct ChartOptions {
     pub size: (u32, u32),
     /// Frames timed per configuration (the median is reported).
     pub frames: usize,
-    /// Samples per pixel of the reference.
+    /// Samples per pixel of the reference: the cap when `reference_noise` > 0.
     pub reference_spp: u32,
+    /// The reference renders until its noise's relative MSE is at most this fraction of the
+    /// smallest relative MSE it judges (0: exactly `reference_spp`).
+    pub reference_noise: f64,
+    /// Also render each configuration at this many times the size and box-filter it down (1: no).
+    pub supersample: u32,
     pub png: Option<PathBuf>,
     pub csv: Option<PathBuf>,
     pub cache_dir: PathBuf,
@@ -48,7 +65,12 @@ pub struct ChartRow {
     pub frame_ms: f64,
     /// Median GPU milliseconds per pass.
     pub passes: Vec<(String, f64)>,
+    /// Against the reference, the method's pixel centres.
     pub metrics: Metrics,
+    /// Against the reference, the method supersampled and box-filtered (with `supersample` > 1).
+    pub supersampled: Option<Metrics>,
+    /// What an exact method would score against this reference: its own error.
+    pub reference_noise: Metrics,
     /// The reference it was measured against (e.g. `direct, 256 spp`).
     pub reference: String,
     /// Wall time of the configuration's bakes when it was created (from the cache when
@@ -61,6 +83,8 @@ pub struct Chart {
     pub scene: String,
     pub device: String,
     pub size: (u32, u32),
+    /// 1: the method's pixel centres; N: supersampled N×N and box-filtered (also in the rows).
+    pub supersample: u32,
     pub rows: Vec<ChartRow>,
     /// Swept points left out, with why (a limit of the method on this scene).
     pub skipped: Vec<String>,
@@ -96,34 +120,130 @@ fn reference_settings(kind: ReferenceKind, spp: u32) -> (Settings, String) {
         ReferenceKind::Bounces(k) => (LightPaths::All, k, "bounces"),
         ReferenceKind::Indirect(k) => (LightPaths::Indirect, k, "bounces (indirect only)"),
     };
-    let label = if kind == ReferenceKind::Direct { format!("{label}, {spp} spp") } else { format!("{bounces} {label}, {spp} spp") };
-    (Settings { spp, bounces, paths, seed: 0, batching: Batching::Adaptive, ..Settings::default() }, label)
+    let label = if kind == ReferenceKind::Direct { label.to_string() } else { format!("{bounces} {label}") };
+    (Settings { spp, bounces, paths, ..Settings::default() }, label)
 }
 
-/// The reference for this scene and kind: from the cache, or rendered and cached.
-pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, spp: u32, cache_dir: &Path, gpu: &GpuDesc) -> Result<(HdrImage, String)> {
-    let (settings, label) = reference_settings(kind, spp);
-    let key = cache_key(scene, size, &format!("{settings:?}"));
-    let path = cache_dir.join(format!("reference-{key}.exr"));
-    if let Ok(img) = HdrImage::read_exr(&path) {
-        if (img.width, img.height) == size {
-            return Ok((img, label));
+/// A chart's reference: its mean, its standard error, and the label naming kind and spp.
+pub struct ChartReference {
+    pub image: ReferenceImage,
+    pub label: String,
+}
+
+/// The relative MSE the reference's noise adds to a comparison (see [`reference_noise`]).
+fn noise_rel_mse(image: &ReferenceImage) -> f64 {
+    let mut sum = 0.0;
+    for (m, s) in image.mean.pixels.iter().zip(&image.standard_error.pixels) {
+        for c in 0..3 {
+            sum += (s[c] as f64).powi(2) / ((m[c] as f64).powi(2) + crate::metrics::stats::REL_MSE_EPSILON);
         }
     }
-    crate::errln!("chart: rendering the reference ({label}) for {}", scene.source);
-    let mut tracer = ReferenceRenderer::new(Gpu::new(gpu)?, scene, size)?;
-    let mut progress = crate::progress::Progress::new("reference (spp)");
-    let image = tracer.render(&settings, &mut |done, total| progress.update(done as u64, total as u64))?;
-    progress.finish();
-    std::fs::create_dir_all(cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", cache_dir.display())))?;
-    image.mean.write_exr(&path)?;
-    Ok((image.mean, label))
+    sum / (3 * image.mean.pixels.len().max(1)) as f64
 }
 
-/// One configuration's image, median frame time (ms), per-pass medians, device name and bakes.
-type Measured = (HdrImage, f64, Vec<(String, f64)>, String, Vec<BakeReport>);
+/// The reference for this scene and kind, good enough for `judged` (the images measured
+/// against it): from the cache when the cached one is, or rendered and cached.
+pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, judged: &[&HdrImage], opts: &ChartOptions) -> Result<ChartReference> {
+    let (settings, label) = reference_settings(kind, opts.reference_spp);
+    let key = cache_key(scene, size, &format!("{settings:?}|noise {}", opts.reference_noise));
+    let path = opts.cache_dir.join(format!("reference-{key}.exr"));
+    let (se_path, spp_path) = (crate::reference::stderr_path(&path), path.with_extension("spp"));
+    // The ratio of the reference's noise to the error it may have: at most 1 is good enough.
+    let ratio = |img: &ReferenceImage| -> f64 {
+        let smallest = judged.iter().map(|t| crate::metrics::stats::radiance_stats(&t.pixels, &img.mean.pixels).rel_mse).fold(f64::INFINITY, f64::min);
+        (noise_rel_mse(img) / (opts.reference_noise * smallest)).sqrt()
+    };
+    let cached = || -> Option<ReferenceImage> {
+        let (mean, standard_error) = (HdrImage::read_exr(&path).ok()?, HdrImage::read_exr(&se_path).ok()?);
+        let spp = std::fs::read_to_string(&spp_path).ok()?.trim().parse().ok()?;
+        ((mean.width, mean.height) == size && (standard_error.width, standard_error.height) == size).then_some(ReferenceImage { mean, standard_error, spp, seconds: 0.0 })
+    };
+    let labelled = |image: ReferenceImage| {
+        let label = format!("{label}, {} spp", image.spp);
+        ChartReference { image, label }
+    };
+    if let Some(image) = cached() {
+        if image.spp >= opts.reference_spp || (opts.reference_noise > 0.0 && ratio(&image) <= 1.0) {
+            return Ok(labelled(image));
+        }
+    }
+    crate::errln!("chart: rendering the reference ({label}, up to {} spp) for {}", opts.reference_spp, scene.source);
+    let mut tracer = ReferenceRenderer::new(Gpu::new(&opts.gpu)?, scene, size)?;
+    let mut progress = crate::progress::Progress::new("reference (spp)");
+    let mut update = |done: u32, total: u32| progress.update(done as u64, total as u64);
+    let image = if opts.reference_noise > 0.0 {
+        let mut check = |img: &ReferenceImage| ratio(img);
+        tracer.render_until(&settings, Some(Stop { min_spp: MIN_ADAPTIVE_SPP, check: &mut check }), &mut update)?
+    } else {
+        tracer.render(&settings, &mut update)?
+    };
+    progress.finish();
+    let dir = &opts.cache_dir;
+    std::fs::create_dir_all(dir).map_err(|e| Error::Usage(format!("{}: {e}", dir.display())))?;
+    image.mean.write_exr(&path)?;
+    image.standard_error.write_exr(&se_path)?;
+    crate::image_io::write_file(&spp_path, image.spp.to_string().as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", spp_path.display())))?;
+    Ok(labelled(image))
+}
 
-/// Renders and times one configuration.
+/// What an exact method would score against this reference: the reference's own error in
+/// each metric. With s a pixel's standard error in one channel, r its mean, N pixels:
+/// - `rmse` = sqrt(Σ s² / 3N), the RMSE an exact image has in expectation (E (r̂ − r)² = s²);
+/// - `rel_mse` = Σ s² / (r² + 0.01) / 3N, the relative MSE it adds in expectation;
+/// - `mean_bias` = sqrt(Σ s²) / 3N, the standard deviation of the mean bias it causes;
+/// - `p99_abs_error`, `max_abs_error` and `flip`: those metrics of the reference against the
+///   reference plus Gaussian noise of its standard error (a fixed seed; clamped at 0), an
+///   exact image as a reference this noisy would see it.
+///
+/// Infinite where a standard error is (one sample per pixel).
+pub fn reference_noise(reference: &ReferenceImage) -> Result<Metrics> {
+    let (mean, se) = (&reference.mean, &reference.standard_error);
+    let n = (3 * mean.pixels.len().max(1)) as f64;
+    let sum_sq: f64 = se.pixels.iter().map(|s| (0..3).map(|c| (s[c] as f64).powi(2)).sum::<f64>()).sum();
+    if !sum_sq.is_finite() {
+        let inf = f64::INFINITY;
+        return Ok(Metrics { rmse: inf, rel_mse: inf, mean_bias: inf, p99_abs_error: inf, max_abs_error: inf, flip_mean: inf, pixels: mean.pixels.len() });
+    }
+    let simulated = metrics::compare(&noisy_copy(mean, se, 0x5eed), mean, &CompareOptions::default())?;
+    Ok(Metrics { rmse: (sum_sq / n).sqrt(), rel_mse: noise_rel_mse(reference), mean_bias: sum_sq.sqrt() / n, ..simulated })
+}
+
+/// `mean` plus independent Gaussian noise of standard deviation `se` in each channel (a fixed
+/// `seed`; Box–Muller on a SplitMix64 stream), clamped at 0 as radiance is.
+pub fn noisy_copy(mean: &HdrImage, se: &HdrImage, seed: u64) -> HdrImage {
+    let mut state = seed;
+    let mut uniform = || {
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let mut out = mean.clone();
+    for (p, s) in out.pixels.iter_mut().zip(&se.pixels) {
+        for c in 0..3 {
+            let (u1, u2) = (uniform(), uniform());
+            let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+            p[c] = (p[c] as f64 + s[c] as f64 * z).max(0.0) as f32;
+        }
+    }
+    out
+}
+
+/// One configuration rendered and timed.
+struct Measured {
+    /// At the pixel centres, at the chart's size.
+    image: HdrImage,
+    /// Supersampled and box-filtered to the chart's size (with `supersample` > 1).
+    supersampled: Option<HdrImage>,
+    frame_ms: f64,
+    passes: Vec<(String, f64)>,
+    device: String,
+    bakes: Vec<BakeReport>,
+}
+
+/// Renders and times one configuration (timed at the chart's size only).
 fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
     let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
     let mut renderer = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
@@ -134,13 +254,26 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     let stats = summarise(&timings);
     let frame_ms = stats.iter().find(|s| s.name == "frame").map(|s| s.median_ms).unwrap_or(f64::NAN);
     let passes = stats.into_iter().filter(|s| s.name != "frame").map(|s| (s.name, s.median_ms)).collect();
-    Ok((image, frame_ms, passes, device, renderer.bakes.clone()))
+    let bakes = renderer.bakes.clone();
+    drop(renderer);
+    let supersampled = if opts.supersample > 1 {
+        let size = crate::capture::supersampled_size(opts.size, opts.supersample)?;
+        let mut big = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), size, 1, Baker::new(Some(opts.cache_dir.join("bake"))))?;
+        let camera = big.scene.camera.clone();
+        let image = big.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+        Some(crate::capture::box_filter(&image, opts.supersample)?)
+    } else {
+        None
+    };
+    Ok(Measured { image, supersampled, frame_ms, passes, device, bakes })
 }
 
 pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let scene = Scene::from_file(&opts.scene)?;
-    let mut rows = Vec::new();
-    let mut references: BTreeMap<String, (HdrImage, String)> = BTreeMap::new();
+    if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
+        return Err(Error::Usage(format!("--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)", opts.reference_noise)));
+    }
+    crate::capture::supersampled_size(opts.size, opts.supersample)?;
     let mut device = String::new();
     let mut skipped: Vec<String> = Vec::new();
     let all = registry::configurations(&scene)?;
@@ -150,40 +283,70 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             return Err(Error::Usage(format!("{}: --method {name}: the scene has no such method or combination (it has {})", opts.scene.display(), known.join(", "))));
         }
     }
+    // Every configuration first, so that each reference knows the errors it must resolve.
+    let mut swept = Vec::new();
     for configuration in all.into_iter().filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name)) {
         let kind = registry::reference_kind(&configuration)?;
-        let key = format!("{kind:?}");
-        if !references.contains_key(&key) {
-            references.insert(key.clone(), reference_image(&scene, opts.size, kind, opts.reference_spp, &opts.cache_dir, &opts.gpu)?);
-        }
-        let (reference, reference_label) = &references[&key];
-        let points = registry::sweep(&configuration)?;
-        let mut progress = crate::progress::Progress::new(&format!("chart {}", configuration.name));
-        let total = points.len() as u64;
+        swept.push((configuration.name.clone(), kind, registry::sweep(&configuration)?));
+    }
+    let total = swept.iter().map(|(_, _, p)| p.len() as u64).sum();
+    let mut progress = crate::progress::Progress::new("chart (configurations)");
+    let mut measured: Vec<(String, String, ReferenceKind, Measured)> = Vec::new();
+    let mut done = 0;
+    for (method, kind, points) in swept {
         for (i, (config, point)) in points.into_iter().enumerate() {
-            progress.update(i as u64, total);
-            let (image, frame_ms, passes, dev, bakes) = match measure(&scene, &point, opts) {
-                Ok(m) => m,
+            progress.update(done, total);
+            done += 1;
+            match measure(&scene, &point, opts) {
+                Ok(m) => measured.push((method.clone(), config, kind, m)),
                 // A swept point beyond one of the method's limits for this scene (a finer
                 // segmentation over its memory limit) is left out with its reason; the scene's
                 // own configuration must run.
                 Err(e @ (Error::Usage(_) | Error::Scene(_))) if i > 0 => {
                     let why = e.to_string();
+                    progress.finish();
                     eprintln!("chart: {config} left out: {why}");
                     skipped.push(format!("{config}: {why}"));
-                    continue;
                 }
                 Err(e) => return Err(e),
-            };
-            device = dev;
-            let metrics = metrics::compare(&image, reference, &CompareOptions::default())?;
-            let bake_ms = bakes.iter().map(|b| b.ms).sum();
-            let bake_bytes = bakes.iter().map(|b| b.bytes).sum();
-            rows.push(ChartRow { method: configuration.name.clone(), config, frame_ms, passes, metrics, reference: reference_label.clone(), bake_ms, bake_bytes });
+            }
         }
-        progress.finish();
     }
-    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, rows, skipped };
+    progress.update(done, total);
+    progress.finish();
+    // One reference per kind, asked for the error the images it judges need (the supersampled
+    // ones when there are: those are the lighting errors the chart shows).
+    let mut references: BTreeMap<String, (ChartReference, Metrics)> = BTreeMap::new();
+    for (_, _, kind, _) in &measured {
+        let key = format!("{kind:?}");
+        if references.contains_key(&key) {
+            continue;
+        }
+        let judged: Vec<&HdrImage> = measured.iter().filter(|(_, _, k, _)| k == kind).map(|(_, _, _, m)| m.supersampled.as_ref().unwrap_or(&m.image)).collect();
+        let reference = reference_image(&scene, opts.size, *kind, &judged, opts)?;
+        let noise = reference_noise(&reference.image)?;
+        references.insert(key, (reference, noise));
+    }
+    let mut rows = Vec::new();
+    for (method, config, kind, m) in measured {
+        let (reference, noise) = &references[&format!("{kind:?}")];
+        let metrics = metrics::compare(&m.image, &reference.image.mean, &CompareOptions::default())?;
+        let supersampled = m.supersampled.as_ref().map(|img| metrics::compare(img, &reference.image.mean, &CompareOptions::default())).transpose()?;
+        device = m.device;
+        rows.push(ChartRow {
+            method,
+            config,
+            frame_ms: m.frame_ms,
+            passes: m.passes,
+            metrics,
+            supersampled,
+            reference_noise: noise.clone(),
+            reference: reference.label.clone(),
+            bake_ms: m.bakes.iter().map(|b| b.ms).sum(),
+            bake_bytes: m.bakes.iter().map(|b| b.bytes).sum(),
+        });
+    }
+    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, supersample: opts.supersample.max(1), rows, skipped };
     let csv = chart.csv();
     std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
     let cached = opts.cache_dir.join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
@@ -203,7 +366,32 @@ fn metric_values(m: &Metrics) -> [f64; 6] {
     [m.rmse, m.rel_mse, m.mean_bias, m.p99_abs_error, m.max_abs_error, m.flip_mean]
 }
 
+impl ChartRow {
+    /// The metrics the plot shows: the supersampled ones when there are, else the pixel centres'.
+    pub fn lighting_metrics(&self) -> &Metrics {
+        self.supersampled.as_ref().unwrap_or(&self.metrics)
+    }
+}
+
 impl Chart {
+    /// Which comparison the plotted error is, for titles.
+    pub fn comparison(&self) -> String {
+        if self.supersample > 1 {
+            format!("method supersampled {0}x{0} and box-filtered, as the reference averages each pixel (lighting error)", self.supersample)
+        } else {
+            "method at pixel centres, reference averaged over each pixel (aliasing included)".to_string()
+        }
+    }
+
+    /// [`comparison`](Self::comparison) in a few words.
+    pub fn short_comparison(&self) -> String {
+        if self.supersample > 1 {
+            format!("method supersampled {0}x{0}, box-filtered", self.supersample)
+        } else {
+            "method at pixel centres".to_string()
+        }
+    }
+
     /// Configurations on the Pareto front: no other is both faster and more accurate.
     pub fn pareto_front(&self) -> Vec<usize> {
         let mut idx: Vec<usize> = (0..self.rows.len()).collect();
@@ -211,7 +399,7 @@ impl Chart {
         let mut best = f64::INFINITY;
         let mut front = Vec::new();
         for i in idx {
-            let e = self.rows[i].metrics.rel_mse;
+            let e = self.rows[i].lighting_metrics().rel_mse;
             if e < best {
                 best = e;
                 front.push(i);
@@ -230,24 +418,27 @@ impl Chart {
                 }
             }
         }
-        let mut s = String::from("method,config,device,width,height,reference,frame_ms,bake_ms,bake_bytes");
+        let mut s = String::from("method,config,device,width,height,reference,supersample,frame_ms,bake_ms,bake_bytes");
         for p in &pass_names {
             let _ = write!(s, ",pass:{}_ms", p.replace(',', ";"));
         }
-        for m in METRIC_COLUMNS {
-            let _ = write!(s, ",{m}");
+        for prefix in ["", "ss_", "ref_noise_"] {
+            for m in METRIC_COLUMNS {
+                let _ = write!(s, ",{prefix}{m}");
+            }
         }
         s.push('\n');
         for r in &self.rows {
             let _ = write!(
                 s,
-                "{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{}",
                 r.method,
                 r.config.replace(',', ";"),
                 self.device.replace(',', ";"),
                 self.size.0,
                 self.size.1,
                 r.reference.replace(',', ";"),
+                self.supersample,
                 r.frame_ms,
                 r.bake_ms,
                 r.bake_bytes
@@ -261,6 +452,17 @@ impl Chart {
                 }
             }
             for v in metric_values(&r.metrics) {
+                let _ = write!(s, ",{v}");
+            }
+            match &r.supersampled {
+                Some(m) => {
+                    for v in metric_values(m) {
+                        let _ = write!(s, ",{v}");
+                    }
+                }
+                None => s.push_str(&",".repeat(METRIC_COLUMNS.len())),
+            }
+            for v in metric_values(&r.reference_noise) {
                 let _ = write!(s, ",{v}");
             }
             s.push('\n');
@@ -367,12 +569,45 @@ mod tests {
             bake_bytes: 0,
             passes: vec![("p".into(), ms * 0.5)],
             metrics: m(e),
+            supersampled: None,
+            reference_noise: m(e / 100.0),
             reference: "direct, 4 spp".into(),
         };
-        let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new() };
+        let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), supersample: 1, rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new() };
         assert_eq!(chart.pareto_front(), vec![0, 2]);
         let parsed = parse_csv(&chart.csv()).unwrap();
         assert_eq!(parsed, vec![cfg("a", 1.0, 0.5), cfg("b", 2.0, 0.6), cfg("c", 3.0, 0.1)]);
         assert!(chart.csv().lines().next().unwrap().contains("pass:p_ms"));
+    }
+
+    /// The noise `reference_noise` simulates has the standard error's scale: over 3 × 4,096
+    /// draws of σ = 0.05 about 0.5, the RMSE is σ within 3% and the mean within 4 standard
+    /// errors of 0; the same seed gives the same image; the closed forms by hand.
+    #[test]
+    fn simulated_noise_has_the_standard_errors_scale() {
+        let (m, sigma) = (0.5f32, 0.05f32);
+        let mut mean = HdrImage::new(64, 64);
+        let mut se = HdrImage::new(64, 64);
+        for p in &mut mean.pixels {
+            *p = [m, m, m, 1.0];
+        }
+        for p in &mut se.pixels {
+            *p = [sigma, sigma, sigma, 1.0];
+        }
+        let noisy = noisy_copy(&mean, &se, 7);
+        assert_eq!(noisy, noisy_copy(&mean, &se, 7));
+        let d: Vec<f64> = noisy.pixels.iter().flat_map(|p| (0..3).map(move |c| (p[c] - m) as f64)).collect();
+        let n = d.len() as f64;
+        let (sigma, m) = (sigma as f64, m as f64);
+        let rms = (d.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
+        let avg = d.iter().sum::<f64>() / n;
+        assert!((rms / sigma - 1.0).abs() < 0.03, "rms {rms}");
+        assert!(avg.abs() < 4.0 * sigma / n.sqrt(), "mean {avg}");
+        let image = ReferenceImage { mean, standard_error: se, spp: 64, seconds: 0.0 };
+        let noise = reference_noise(&image).unwrap();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b;
+        assert!(close(noise.rmse, sigma) && close(noise.rel_mse, sigma * sigma / (m * m + 0.01)) && close(noise.mean_bias, sigma / n.sqrt()), "{noise:?}");
+        // An exact image's typical pixel error: the mean of three |N(0, σ)| is about 0.8 σ.
+        assert!(noise.p99_abs_error > sigma && noise.max_abs_error >= noise.p99_abs_error && noise.flip_mean > 0.0, "{noise:?}");
     }
 }

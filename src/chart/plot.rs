@@ -63,10 +63,10 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
         const FLOOR: f64 = 1e-7;
         let x = log_range(chart.rows.iter().map(|r| r.frame_ms), 1e-4);
-        let y = log_range(chart.rows.iter().map(|r| r.metrics.rel_mse), FLOOR);
+        let y = log_range(chart.rows.iter().map(|r| r.lighting_metrics().rel_mse), FLOOR);
         let reference = chart.rows.first().map(|r| r.reference.as_str()).unwrap_or("");
         let mut c = ChartBuilder::on(&root)
-            .caption(format!("{} — {}×{} — {} — reference: {}", chart.scene, chart.size.0, chart.size.1, chart.device, reference), ("sans-serif", 18))
+            .caption(format!("{} — {}×{} — {} — reference: {} — {}", chart.scene, chart.size.0, chart.size.1, chart.device, reference, chart.short_comparison()), ("sans-serif", 16))
             .margin(20)
             .x_label_area_size(50)
             .y_label_area_size(80)
@@ -74,7 +74,7 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
             .map_err(plot_err)?;
         c.configure_mesh()
             .x_desc("GPU time per frame, ms (median of timestamp queries)")
-            .y_desc("relative MSE against the reference")
+            .y_desc(format!("relative MSE against the reference ({})", chart.short_comparison()))
             .label_style(("sans-serif", 14))
             .x_labels(12)
             .y_labels(12)
@@ -90,14 +90,14 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         }
         for (i, m) in methods.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let points: Vec<(f64, f64)> = chart.rows.iter().filter(|r| r.method == *m).map(|r| (r.frame_ms.max(1e-4), r.metrics.rel_mse.max(FLOOR))).collect();
+            let points: Vec<(f64, f64)> = chart.rows.iter().filter(|r| r.method == *m).map(|r| (r.frame_ms.max(1e-4), r.lighting_metrics().rel_mse.max(FLOOR))).collect();
             c.draw_series(points.iter().map(|&p| Circle::new(p, 6, colour.filled()))).map_err(plot_err)?.label(*m).legend(move |(x, y)| Circle::new((x + 10, y), 6, colour.filled()));
             // Each point labelled with its configuration.
             for r in chart.rows.iter().filter(|r| r.method == *m) {
-                c.draw_series(std::iter::once(Text::new(r.config.clone(), (r.frame_ms.max(1e-4), r.metrics.rel_mse.max(FLOOR)), ("sans-serif", 12)))).map_err(plot_err)?;
+                c.draw_series(std::iter::once(Text::new(r.config.clone(), (r.frame_ms.max(1e-4), r.lighting_metrics().rel_mse.max(FLOOR)), ("sans-serif", 12)))).map_err(plot_err)?;
             }
         }
-        let front: Vec<(f64, f64)> = chart.pareto_front().iter().map(|&i| (chart.rows[i].frame_ms.max(1e-4), chart.rows[i].metrics.rel_mse.max(FLOOR))).collect();
+        let front: Vec<(f64, f64)> = chart.pareto_front().iter().map(|&i| (chart.rows[i].frame_ms.max(1e-4), chart.rows[i].lighting_metrics().rel_mse.max(FLOOR))).collect();
         if front.len() > 1 {
             c.draw_series(LineSeries::new(front, BLACK.stroke_width(2))).map_err(plot_err)?.label("Pareto front").legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
         }

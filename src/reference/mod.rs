@@ -222,6 +222,67 @@ impl ReferenceImage {
     }
 }
 
+/// When [`ReferenceRenderer::render_until`] may stop before its cap.
+pub struct Stop<'a> {
+    /// No judgement before this many samples: the standard error is itself estimated from the
+    /// samples, and too small until the rare events a pixel hinges on have been drawn.
+    pub min_spp: u32,
+    /// The achieved error over the target for the render so far: at most 1 stops. It must
+    /// fall as 1/sqrt(spp), as a standard error does, for the next checkpoint to be predicted.
+    pub check: &'a mut dyn FnMut(&ReferenceImage) -> f64,
+}
+
+/// Samples a render with a target error takes before it trusts its standard error.
+pub const MIN_ADAPTIVE_SPP: u32 = 32;
+
+/// What `--max-stderr` measures (see [`relative_error`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ErrorScope {
+    /// The standard error of the image's mean over that mean, the worst RGB channel.
+    #[default]
+    Image,
+    /// The 99th percentile over pixels of each pixel's worst channel's standard error over
+    /// sqrt(mean² + 0.01).
+    Pixel,
+}
+
+/// `--max-stderr E`: render until the relative standard error is at most `max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorTarget {
+    pub max: f64,
+    pub scope: ErrorScope,
+    pub min_spp: u32,
+}
+
+/// The relative standard error of a render, as `--max-stderr` bounds it. With m and s a
+/// pixel's mean and standard error in one channel, N pixels:
+/// - [`ErrorScope::Image`]: the largest over R, G, B of sqrt(Σ s²) / N (the standard error of
+///   the image's mean, pixels being independent) over the image's mean Σ m / N. A channel
+///   that is black everywhere (mean and error 0) counts as 0. Black pixels only add to the
+///   mean, so they cannot stall it; it bounds the error of image averages, not of pixels.
+/// - [`ErrorScope::Pixel`]: the nearest-rank 99th percentile over pixels of the largest over
+///   R, G, B of s / sqrt(m² + 0.01). The 0.01 is the relative MSE's (`metrics::stats`): on a
+///   black pixel the error is measured against 0.1 W/(m²·sr) instead of against 0, so shadows
+///   do not demand endless samples, and E² bounds the reference noise's share of a pixel's
+///   relative MSE. The percentile leaves out the worst 1% (light outlines, rare caustics),
+///   whose standard errors are the least trustworthy estimates.
+///
+/// Infinite with one sample per pixel.
+pub fn relative_error(image: &ReferenceImage, scope: ErrorScope) -> f64 {
+    let (m, s) = (&image.mean.pixels, &image.standard_error.pixels);
+    match scope {
+        ErrorScope::Image => {
+            let (mean, se) = image.average();
+            (0..3).map(|c| if se[c] == 0.0 { 0.0 } else { se[c] / mean[c] }).fold(0.0, f64::max)
+        }
+        ErrorScope::Pixel => {
+            let mut per_pixel: Vec<f64> =
+                m.iter().zip(s).map(|(m, s)| (0..3).map(|c| s[c] as f64 / ((m[c] as f64).powi(2) + crate::metrics::stats::REL_MSE_EPSILON).sqrt()).fold(0.0, f64::max)).collect();
+            crate::metrics::stats::nearest_rank_percentile(&mut per_pixel, 99)
+        }
+    }
+}
+
 /// The tracer for one scene and image size: the scene's buffers, the accumulation images and
 /// the pipeline stay on the GPU between renders.
 pub struct ReferenceRenderer {
@@ -296,6 +357,15 @@ impl ReferenceRenderer {
     /// which becomes the cap for the rest of the render. A single sample cut short is an error,
     /// and so is any pixel that ends with fewer samples than asked for.
     pub fn render(&mut self, settings: &Settings, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
+        self.render_until(settings, None, progress)
+    }
+
+    /// [`render`](Self::render), stopping early once `stop` is met, with `settings.spp` as the
+    /// cap. The render is read back at checkpoints (the first at `stop.min_spp`, the next where
+    /// the ratio predicts the target, at most 4× the samples so far) and `stop.check` judges it;
+    /// samples are keyed by their index, so a render stopped at n samples is bit for bit the one
+    /// `--spp n` gives. `progress(done, total)` gets the predicted total.
+    pub fn render_until(&mut self, settings: &Settings, mut stop: Option<Stop<'_>>, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
         settings.check()?;
         let start = Instant::now();
         let target = Duration::from_millis(250);
@@ -304,12 +374,20 @@ impl ReferenceRenderer {
             Batching::Adaptive => 1,
             Batching::Fixed(n) => n,
         };
+        // Where the next checkpoint falls (the cap when there is no stopping rule).
+        let mut next_check = match &stop {
+            Some(s) => s.min_spp.max(2).min(settings.spp),
+            None => settings.spp,
+        };
+        // The total `progress` is told: the cap, or where the last checkpoint predicts the end.
+        let mut expected = next_check;
         let mut done = 0;
+        let mut readback: Option<ReferenceImage> = None;
         while done < settings.spp {
-            let count = batch.min(cap).min(settings.spp - done);
-            let last = done + count == settings.spp;
+            let count = batch.min(cap).min(next_check - done);
+            let checkpoint = done + count == next_check;
             let t0 = Instant::now();
-            let short = self.dispatch(settings.push(done, count), last)?;
+            let short = self.dispatch(settings.push(done, count), checkpoint)?;
             if short > 0 {
                 if count == 1 {
                     return Err(Error::Usage(format!(
@@ -321,13 +399,36 @@ impl ReferenceRenderer {
                 continue;
             }
             done += count;
-            progress(done, settings.spp);
             if settings.batching == Batching::Adaptive {
                 let per_sample = t0.elapsed().as_secs_f64() / count as f64;
                 let fit = (target.as_secs_f64() / per_sample.max(1e-9)) as u32;
                 batch = fit.clamp(1, count.saturating_mul(2));
             }
+            if checkpoint {
+                let image = self.read_image(done, start)?;
+                if let Some(s) = stop.as_mut() {
+                    let ratio = (s.check)(&image);
+                    if ratio <= 1.0 || done == settings.spp {
+                        progress(done, done);
+                        return Ok(image);
+                    }
+                    // Errors fall as 1/sqrt(spp): aim for where the ratio reaches 1, with 5% to
+                    // spare, and look again on the way where that is far.
+                    let predicted = (done as f64 * ratio * ratio * 1.05).ceil();
+                    next_check = (predicted.min(4.0 * done as f64).min(settings.spp as f64) as u32).max(done + 1);
+                    expected = (predicted.min(settings.spp as f64) as u32).max(next_check);
+                    progress(done, expected);
+                    continue;
+                }
+                readback = Some(image);
+            }
+            progress(done, expected);
         }
+        readback.ok_or_else(|| Error::Usage("reference: no samples were rendered".into()))
+    }
+
+    /// The accumulation images as read back by the last checkpoint, holding `spp` samples each.
+    fn read_image(&self, spp: u32, start: Instant) -> Result<ReferenceImage> {
         let seconds = start.elapsed().as_secs_f64();
         let read = |b: BufferId| -> Result<HdrImage> {
             let bytes = self.gpu.read_buffer(b)?;
@@ -336,18 +437,18 @@ impl ReferenceRenderer {
         let mean = read(self.readback[0])?;
         let mut standard_error = read(self.readback[1])?;
         // Every pixel must hold exactly the samples asked for (the shader writes its count).
-        let short = standard_error.pixels.iter().filter(|p| p[3] != settings.spp as f32).count();
+        let short = standard_error.pixels.iter().filter(|p| p[3] != spp as f32).count();
         if short > 0 {
-            return Err(Error::Usage(format!("{short} pixel(s) of the reference hold fewer than {} samples: the device cut the tracer short", settings.spp)));
+            return Err(Error::Usage(format!("{short} pixel(s) of the reference hold fewer than {spp} samples: the device cut the tracer short")));
         }
-        let n = settings.spp as f64;
+        let n = spp as f64;
         for p in &mut standard_error.pixels {
             for c in &mut p[..3] {
-                *c = if settings.spp < 2 { f32::INFINITY } else { (*c as f64 / (n - 1.0) / n).max(0.0).sqrt() as f32 };
+                *c = if spp < 2 { f32::INFINITY } else { (*c as f64 / (n - 1.0) / n).max(0.0).sqrt() as f32 };
             }
             p[3] = 1.0;
         }
-        Ok(ReferenceImage { mean, standard_error, spp: settings.spp, seconds })
+        Ok(ReferenceImage { mean, standard_error, spp, seconds })
     }
 
     /// One submitted and waited-for batch; the last one also copies the results to the host.
@@ -420,6 +521,8 @@ pub struct ReferenceOptions {
     /// The renderer's frame whose scene is traced (0: the scene as written, moved by wind where
     /// it has some).
     pub frame: u64,
+    /// `--max-stderr`: stop once this holds (`settings.spp` is then the cap).
+    pub target: Option<ErrorTarget>,
     pub gpu: GpuDesc,
 }
 
@@ -427,6 +530,8 @@ pub struct ReferenceOptions {
 pub struct ReferenceReport {
     pub written: Vec<PathBuf>,
     pub image: ReferenceImage,
+    /// The relative standard error reached, as the target measures it (with a target).
+    pub achieved: Option<f64>,
 }
 
 /// Renders the scene and writes the mean and standard-error EXRs, printing progress on stderr.
@@ -441,8 +546,19 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let mut renderer = ReferenceRenderer::at_frame(gpu, &scene, opts.size, opts.frame)?;
     // Progress (rate, elapsed, remaining) on a terminal only: a log or a pipe gets the summary.
     let mut progress = crate::progress::Progress::new("reference (spp)");
-    let image = renderer.render(&opts.settings, &mut |done, total| progress.update(done as u64, total as u64))?;
+    let mut update = |done: u32, total: u32| progress.update(done as u64, total as u64);
+    let image = match opts.target {
+        Some(t) => {
+            if !(t.max.is_finite() && t.max > 0.0) {
+                return Err(Error::Usage(format!("--max-stderr {}: expected a relative standard error above 0, e.g. 0.01", t.max)));
+            }
+            let mut check = |img: &ReferenceImage| relative_error(img, t.scope) / t.max;
+            renderer.render_until(&opts.settings, Some(Stop { min_spp: t.min_spp, check: &mut check }), &mut update)?
+        }
+        None => renderer.render(&opts.settings, &mut update)?,
+    };
     progress.finish();
+    let achieved = opts.target.map(|t| relative_error(&image, t.scope));
     let n = renderer.gpu.validation_log().count();
     if n > 0 {
         return Err(Error::Usage(format!("{n} validation message(s) (see above)")));
@@ -450,5 +566,5 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let stderr = stderr_path(&opts.output);
     image.mean.write_exr(&opts.output)?;
     image.standard_error.write_exr(&stderr)?;
-    Ok(ReferenceReport { written: vec![opts.output.clone(), stderr], image })
+    Ok(ReferenceReport { written: vec![opts.output.clone(), stderr], image, achieved })
 }
