@@ -311,7 +311,11 @@ fn the_direct_term_adds_over_another_methods_base() {
 /// Bad parameters are one error line naming the scene and the field, through the renderer.
 #[test]
 fn bad_parameters_are_one_line_through_the_renderer() {
-    for (decl, field) in [("{ name = \"bsp_lights\", threshold = -0.1 }", "methods[0].threshold"), ("{ name = \"bsp_lights\", max_segment_area = \"big\" }", "methods[0].max_segment_area"), ("{ name = \"bsp_lights\", layout = \"diagonal\" }", "methods[0].layout")] {
+    for (decl, field) in [
+        ("{ name = \"bsp_lights\", threshold = -0.1 }", "methods[0].threshold"),
+        ("{ name = \"bsp_lights\", max_segment_area = \"big\" }", "methods[0].max_segment_area"),
+        ("{ name = \"bsp_lights\", layout = \"diagonal\" }", "methods[0].layout"),
+    ] {
         let err = match Scene::from_str(&scene_text(decl, 1, 1), "bsp_lights test", std::path::Path::new("scenes")) {
             Err(e) => e.to_string(),
             Ok(sc) => match Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (8, 8), 1) {

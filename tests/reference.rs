@@ -1069,3 +1069,34 @@ fn command_line_max_stderr_reports_spp_and_error() {
     let o = run(&["--max-stderr", "0"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--max-stderr"));
 }
+
+/// A batch the device cuts short for some pixels only (llvmpipe ends an invocation after
+/// 65,535 loop iterations: pixels inside the box run out, pixels that see past it do not) is
+/// run again with fewer samples, and the pixels that had finished it count none of its samples
+/// twice: the image is bit for bit the one batches that are never cut short give.
+#[test]
+fn a_batch_cut_short_for_some_pixels_counts_no_sample_twice() {
+    let mut scene = scene_file("cornell.toml");
+    // Far back and wide: the box fills the middle, the rest of the image sees the black beyond.
+    scene.camera.position.z = 7.0;
+    scene.camera.fov_y_deg = 60.0;
+    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (12, 12)).expect("reference renderer");
+    let plain = |spp| Settings { roulette_after: None, ..settings(spp, 32, LightPaths::All, 4) };
+    let mut cut = None;
+    // Growing batches (1, 2, 4, ...): the first one the device cuts short starts past sample 0,
+    // where the pixels that finished it hold samples the rerun would add again.
+    for spp in [1024, 2048, 4096] {
+        let image = r.render(&plain(spp), &mut |_, _| {}).expect("render");
+        println!("{spp} spp in growing batches: pixels cut short per rerun {:?}", r.pixels_cut_short);
+        if r.pixels_cut_short.first().is_some_and(|&n| n > 0 && n < 144) {
+            cut = Some((spp, image));
+            break;
+        }
+    }
+    let (spp, image) = cut.expect("no batch was cut short for some pixels only: the test does not reach the case it is for");
+    let small = r.render(&Settings { batching: Batching::Fixed(16), ..plain(spp) }, &mut |_, _| {}).expect("render");
+    assert!(r.pixels_cut_short.is_empty(), "batches of 16 were cut short: {:?}", r.pixels_cut_short);
+    assert_eq!(image.mean.pixels, small.mean.pixels, "{spp} spp in batches cut short against batches of 16");
+    assert_eq!(image.standard_error.pixels, small.standard_error.pixels);
+    common::assert_clean(&r.gpu);
+}

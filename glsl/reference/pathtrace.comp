@@ -1,6 +1,6 @@
 #version 460
 // The ground-truth reference: unidirectional Monte Carlo path tracing with next-event
-// estimation, one pixel per invocation, adding `batch.sample_count` samples to each pixel's
+// estimation, one pixel per invocation, bringing each pixel to `sample_offset + sample_count`
 // running mean and sum of squared deviations (Welford) so the host can stop, read progress and
 // go on. Lighting and BRDF are those of glsl/common/lights.glsl; see src/reference/mod.rs for
 // what the estimator counts.
@@ -393,9 +393,13 @@ void main() {
         m2 = imageLoad(second_moment, ivec2(pixel));
     }
     uint pixel_index = pixel.y * size.x + pixel.x;
+    // Each pixel goes on from the samples it holds to the batch's end: after a batch cut short
+    // for some pixels only, those that finished it already hold its samples and add nothing
+    // when it is run again with fewer, instead of counting samples twice.
+    uint have = batch.sample_offset > 0u ? uint(m2.a) : 0u;
+    uint end = max(batch.sample_offset + batch.sample_count, have);
     uint done = 0u;
-    for (uint k = 0u; k < batch.sample_count; ++k) {
-        uint index = batch.sample_offset + k;
+    for (uint index = have; index < end; ++index) {
         uint rng = rng_start(pixel_index, index, batch.seed);
         uint light_key = rng_start(pixel_index, index, batch.seed ^ LIGHT_STREAM);
         // Box filter: uniform over the pixel's square.
@@ -416,13 +420,13 @@ void main() {
     for (uint i = 0u; i < params.counts.x + 2u; ++i) {
         canary += 1u;
     }
-    if (done != batch.sample_count || canary != params.counts.x + 2u) {
+    if (have + done != end || canary != params.counts.x + 2u) {
         atomicAdd(status.short_pixels, 1u);
         return;
     }
     mean.a = 1.0;
     // The samples this pixel holds: the host checks that every pixel holds all it asked for.
-    m2.a = float(batch.sample_offset + done);
+    m2.a = float(end);
     imageStore(mean_radiance, ivec2(pixel), mean);
     imageStore(second_moment, ivec2(pixel), m2);
 }

@@ -300,6 +300,11 @@ pub struct ReferenceRenderer {
     states: ResourceStates,
     width: u32,
     height: u32,
+    /// Batches the device cut short (for some pixels or all) and that were run again with
+    /// fewer samples, in the last render.
+    pub batches_cut_short: u32,
+    /// Per batch run again: how many pixels the device had cut short.
+    pub pixels_cut_short: Vec<u32>,
 }
 
 const ACCUMULATION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -346,7 +351,23 @@ impl ReferenceRenderer {
             },
             options: [traced.light_beyond_last_bounce() as u32, 0, 0, 0],
         };
-        Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, status, frame, states: ResourceStates::default(), width, height })
+        Ok(ReferenceRenderer {
+            gpu,
+            scene: traced,
+            pipeline,
+            buffers,
+            params,
+            mean,
+            second_moment,
+            readback,
+            status,
+            frame,
+            states: ResourceStates::default(),
+            width,
+            height,
+            batches_cut_short: 0,
+            pixels_cut_short: Vec::new(),
+        })
     }
 
     /// Renders `settings.spp` samples per pixel, calling `progress(done, total)` after each batch.
@@ -370,6 +391,8 @@ impl ReferenceRenderer {
         let start = Instant::now();
         let target = Duration::from_millis(250);
         let mut cap = MAX_BATCH;
+        self.batches_cut_short = 0;
+        self.pixels_cut_short.clear();
         let mut batch = match settings.batching {
             Batching::Adaptive => 1,
             Batching::Fixed(n) => n,
@@ -395,7 +418,12 @@ impl ReferenceRenderer {
                         self.gpu.caps().name
                     )));
                 }
+                // The pixels that finished the batch keep it (the shader brings every pixel
+                // to the batch's end from what it holds), so running it again with half the
+                // samples, then the rest, counts no sample twice.
                 cap = count / 2;
+                self.batches_cut_short += 1;
+                self.pixels_cut_short.push(short);
                 continue;
             }
             done += count;
