@@ -257,11 +257,11 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     let bakes = renderer.bakes.clone();
     drop(renderer);
     let supersampled = if opts.supersample > 1 {
-        let size = crate::capture::supersampled_size(opts.size, opts.supersample)?;
+        let size = crate::supersample::supersampled_size(opts.size, opts.supersample)?;
         let mut big = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), size, 1, Baker::new(Some(opts.cache_dir.join("bake"))))?;
         let camera = big.scene.camera.clone();
         let image = big.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
-        Some(crate::capture::box_filter(&image, opts.supersample)?)
+        Some(crate::supersample::box_filter(&image, opts.supersample)?)
     } else {
         None
     };
@@ -273,7 +273,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
         return Err(Error::Usage(format!("--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)", opts.reference_noise)));
     }
-    crate::capture::supersampled_size(opts.size, opts.supersample)?;
+    crate::supersample::supersampled_size(opts.size, opts.supersample)?;
     let mut device = String::new();
     let mut skipped: Vec<String> = Vec::new();
     let all = registry::configurations(&scene)?;
