@@ -157,6 +157,20 @@ fn a_scoped_computation_leaves_nothing_behind_on_success_or_error() {
     common::assert_clean(&gpu);
 }
 
+/// The check kernel of glsl/util/upload_check.comp.
+fn upload_check_pipeline(gpu: &mut Gpu) -> PipelineId {
+    gpu.create_compute_pipeline(&ComputePipelineDesc { name: "upload check".into(), shader: "util/upload_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap()
+}
+
+/// Records `graph` into `frame`, submits it, waits, and reads `result` back as words.
+fn run_and_read(gpu: &Gpu, frame: penumbra::backend::Frame, states: &mut ResourceStates, graph: RenderGraph<'_>, result: BufferId) -> Vec<u32> {
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+    bytemuck::cast_slice(&gpu.read_buffer(result).unwrap()).to_vec()
+}
+
 /// One frame uploads far more than the first 4 MiB block (thousands of lights' constants do:
 /// the stencil method at 4,096 lights): later blocks are added as needed, every dispatch reads
 /// exactly what was uploaded for it, and the same frame slot reused with other data (and the
@@ -165,8 +179,7 @@ fn a_scoped_computation_leaves_nothing_behind_on_success_or_error() {
 fn uploads_past_the_first_block_reach_the_shader() {
     use penumbra::backend::Bind;
     let mut gpu = common::test_gpu();
-    let pipeline =
-        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "upload check".into(), shader: "util/upload_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    let pipeline = upload_check_pipeline(&mut gpu);
     // 1.5 MiB each, then one of 9 MiB that no block grown by doubling alone would hold yet.
     let sizes: Vec<usize> = (0..7).map(|_| 3 << 19).chain([9 << 20]).collect();
     let total: usize = sizes.iter().sum();
@@ -190,11 +203,7 @@ fn uploads_past_the_first_block_reach_the_shader() {
             });
         }
         graph.pass("host").buffer(result, Access::HostRead, None).record(|_| Ok(()));
-        let mut rec = gpu.begin_frame(frame).unwrap();
-        graph.execute(&mut rec, &mut states).unwrap();
-        rec.finish().unwrap();
-        gpu.submit_and_wait(frame).unwrap();
-        let got: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(result).unwrap()).to_vec();
+        let got = run_and_read(&gpu, frame, &mut states, graph, result);
         for (slot, words) in blocks.iter().enumerate() {
             for i in 0..64 {
                 assert_eq!(got[slot * 64 + i], words[i * strides[slot] as usize], "round {round}, block {slot}, word {i}");
@@ -213,8 +222,7 @@ fn uploads_past_the_first_block_reach_the_shader() {
 fn a_frame_binding_more_sets_than_a_pool_holds_takes_more_pools() {
     use penumbra::backend::{Bind, BufferTransition};
     let mut gpu = common::test_gpu();
-    let pipeline =
-        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "upload check".into(), shader: "util/upload_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    let pipeline = upload_check_pipeline(&mut gpu);
     const BINDS: u32 = 5000;
     let result = gpu.create_storage_output("bind check result", BINDS as u64 * 64 * 4, MemoryKind::GpuToCpu).unwrap();
     let frame = gpu.create_frame().unwrap();
@@ -237,11 +245,7 @@ fn a_frame_binding_more_sets_than_a_pool_holds_takes_more_pools() {
         Ok(())
     });
     graph.pass("host").buffer(result, Access::HostRead, None).record(|_| Ok(()));
-    let mut rec = gpu.begin_frame(frame).unwrap();
-    graph.execute(&mut rec, &mut states).unwrap();
-    rec.finish().unwrap();
-    gpu.submit_and_wait(frame).unwrap();
-    let got: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(result).unwrap()).to_vec();
+    let got = run_and_read(&gpu, frame, &mut states, graph, result);
     for slot in 0..BINDS {
         for i in 0..64 {
             assert_eq!(got[(slot * 64 + i) as usize], slot * 1000 + i, "bind {slot}, word {i}");

@@ -120,6 +120,13 @@ fn item_19_relighting_is_linear_in_random_intensities() {
     }
 }
 
+/// The GEMV pass's median time over 7 profiled frames.
+fn gemv_median_ms(r: &mut Renderer, cam: &penumbra::scene::Camera) -> f64 {
+    let frames = r.profile(cam, 7).unwrap();
+    let stats = penumbra::timing::summarise(&frames);
+    stats.iter().find(|s| s.name == "bsp_lights gemv").expect("the GEMV pass is timed").median_ms
+}
+
 /// Item 20: with 90 % of the lights under the threshold the result is within
 /// `Σ_{s_l < 0.05} s_l·C_l(v)` of the full sum at every vertex, and the GEMV is faster.
 #[test]
@@ -160,9 +167,7 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
             let s = if dim && l % 10 != 0 { 0.01 } else { 1.0 };
             light.intensity = full[l].map(|c| c * s);
         }
-        let frames = r.profile(&cam, 7).unwrap();
-        let stats = penumbra::timing::summarise(&frames);
-        stats.iter().find(|s| s.name == "bsp_lights gemv").expect("the GEMV pass is timed").median_ms
+        gemv_median_ms(r, &cam)
     };
     let all = time(&mut r, false);
     let tenth = time(&mut r, true);
@@ -498,9 +503,7 @@ fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
     let time = |layout: &str| -> f64 {
         let mut r = Renderer::new(common::test_gpu(), scene(&spot_floor(layout)), Some("bsp_lights"), (16, 12), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
-        let frames = r.profile(&cam, 7).unwrap();
-        let stats = penumbra::timing::summarise(&frames);
-        let ms = stats.iter().find(|s| s.name == "bsp_lights gemv").expect("the GEMV pass is timed").median_ms;
+        let ms = gemv_median_ms(&mut r, &cam);
         common::assert_clean(&r.gpu);
         ms
     };
