@@ -157,7 +157,8 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
 /// Every shipped scene with each of its configurations (every method it enables, then every
 /// combination it declares), `PENUMBRA_SOAK_FRAMES` frames each (default 10,000) at
 /// `PENUMBRA_SOAK_SIZE` (default 64x36), printing RssAnon every 100 frames as CSV lines
-/// `scene,method,frame,rss_anon_mib,device_mib` (device memory: live allocations). Run by
+/// `scene,method,frame,rss_anon_mib,device_mib` (device memory: live allocations).
+/// `PENUMBRA_SOAK_METHODS` (comma-separated configuration names) keeps only those. Run by
 /// tools/soak.sh.
 #[test]
 #[ignore]
@@ -176,7 +177,10 @@ fn soak_every_shipped_scene_and_method() {
     for name in names {
         let scene = shipped(&name);
         // Every configuration: each method alone, then each declared combination.
-        let methods: Vec<String> = penumbra::lighting::registry::configurations(&scene).unwrap().into_iter().map(|c| c.name).collect();
+        let mut methods: Vec<String> = penumbra::lighting::registry::configurations(&scene).unwrap().into_iter().map(|c| c.name).collect();
+        if let Ok(keep) = std::env::var("PENUMBRA_SOAK_METHODS") {
+            methods.retain(|m| keep.split(',').any(|k| k == m));
+        }
         for method in methods {
             let camera = scene.camera.clone();
             let mut r = Renderer::new(common::test_gpu(), scene.clone(), Some(&method), (w, h), 1).unwrap();

@@ -7,6 +7,7 @@
 #                         takes about a second on lavapipe, so that is hours)
 #   PENUMBRA_SOAK_SIZE    image size (default 64x36)
 #   PENUMBRA_SOAK_SCENES  comma-separated scene-name prefixes to run (default: all)
+#   PENUMBRA_SOAK_METHODS comma-separated configuration names to run (default: all)
 # PENUMBRA_UNIFORM_BLOCKS_AS_STORAGE=0 turns off the lavapipe workaround (to see the leak).
 set -euo pipefail
 cd "$(dirname "$0")/.."
