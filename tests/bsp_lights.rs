@@ -320,6 +320,7 @@ fn bad_parameters_are_one_line_through_the_renderer() {
         ("{ name = \"bsp_lights\", threshold = -0.1 }", "methods[0].threshold"),
         ("{ name = \"bsp_lights\", max_segment_area = \"big\" }", "methods[0].max_segment_area"),
         ("{ name = \"bsp_lights\", layout = \"diagonal\" }", "methods[0].layout"),
+        ("{ name = \"bsp_lights\", hidden = \"zbuffer\" }", "methods[0].hidden"),
     ] {
         let err = match Scene::from_str(&scene_text(decl, 1, 1), "bsp_lights test", std::path::Path::new("scenes")) {
             Err(e) => e.to_string(),
@@ -511,4 +512,68 @@ fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
     println!("{} vertices x 64 spots, {:.1} % of entries non-zero: dense GEMV {dense:.3} ms, sparse {sparse:.3} ms ({:.1}x)", bsp.baked.vertices.len(), 100.0 * density, dense / sparse);
     assert!(density < 0.2, "the spots should reach under a fifth of the floor each: {density}");
     assert!(dense > 2.0 * sparse, "the sparse GEMV should be well faster at {:.1} % density: dense {dense} ms, sparse {sparse} ms", 100.0 * density);
+}
+
+/// Two panels crossing in an X over a floor (the thesis's Fig. 6-8), lit from both sides, drawn
+/// with `hidden`.
+fn crossing_panels(hidden: &str) -> String {
+    let mut text = format!(
+        "methods = [{{ name = \"bsp_lights\", max_segment_area = 0.05, hidden = \"{hidden}\" }}]\n\
+         [camera]\nposition = [0.5, 2.2, 5.0]\ntarget = [0, 0.6, 0]\nfov_y_deg = 50\n\
+         [[objects]]\nmesh = \"plane\"\nsize = [6, 6]\n\
+         [[objects]]\nmesh = \"quad\"\ncorner = [-1.0, 0.05, -1.0]\nedge_u = [2.0, 0, 2.0]\nedge_v = [0, 1.6, 0]\n\
+         [[objects]]\nmesh = \"quad\"\ncorner = [-1.0, 0.05, 1.0]\nedge_u = [2.0, 0, -2.0]\nedge_v = [0, 1.6, 0]\n"
+    );
+    for (x, z, colour) in [(-2.5, 0.4, "[3, 1, 1]"), (2.5, -0.4, "[1, 1, 3]"), (0.3, 2.5, "[1, 3, 1]"), (-0.3, -2.5, "[2, 2, 1]")] {
+        text += &format!("[[lights]]\ntype = \"point\"\nposition = [{x}, 2.2, {z}]\nintensity = {colour}\n");
+    }
+    text
+}
+
+/// Pixels whose radiance differs by more than 1e-4 relative.
+fn differing(a: &penumbra::image_io::HdrImage, b: &penumbra::image_io::HdrImage) -> usize {
+    a.pixels.iter().zip(&b.pixels).filter(|(p, q)| (0..3).any(|c| (p[c] - q[c]).abs() > 1e-4 * (1.0 + p[c].abs()))).count()
+}
+
+/// Digest §5 item 9 on the GPU, and §3.3 item 5. Drawn without a depth test, back to front
+/// from each frame's eye by the BSP (`hidden = "painter"`), the crossing panels look as they
+/// do with the depth buffer from every side. The order kept from the first frame's eye (the
+/// thesis's "predetermined order", `hidden = "fixed"`) is right there and wrong from the far
+/// side, where the far halves of the panels are drawn over the near ones.
+#[test]
+fn the_painters_order_from_the_eye_matches_the_depth_buffer_and_a_fixed_order_does_not() {
+    let size = (64, 48);
+    let make = |hidden: &str| Renderer::new(common::test_gpu(), scene(&crossing_panels(hidden)), Some("bsp_lights"), size, 1).unwrap_or_else(|e| panic!("{e}"));
+    let (mut depth, mut painter, mut fixed) = (make("depth"), make("painter"), make("fixed"));
+    let base = depth.scene.camera.clone();
+    let eye = |angle_deg: f32, height: f32| {
+        let a = angle_deg.to_radians();
+        penumbra::scene::Camera { position: glam::Vec3::new(5.0 * a.sin(), height, 5.0 * a.cos()), ..base.clone() }
+    };
+    let pixels = (size.0 * size.1) as usize;
+    let mut covered_total = 0;
+    for (i, (angle, height)) in [(5.0, 2.2), (50.0, 1.2), (95.0, 3.0), (140.0, 0.8), (185.0, 2.2), (230.0, 1.5), (275.0, 2.6), (320.0, 1.0)].into_iter().enumerate() {
+        let cam = eye(angle, height);
+        let want = depth.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        let got = painter.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        let lit = want.pixels.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
+        covered_total += lit;
+        let wrong = differing(&want, &got);
+        println!("eye {i} ({angle} deg, {height} m): painter differs from the depth buffer at {wrong} of {pixels} pixels");
+        assert!(wrong as f64 <= 1e-3 * pixels as f64, "eye {i}: the painter's order differs from the depth buffer at {wrong} pixels");
+    }
+    assert!(covered_total > pixels, "the panels and floor are lit and seen");
+    // The fixed order: taken at the first eye, right there, wrong from the opposite side.
+    let (near, far) = (eye(5.0, 2.2), eye(185.0, 2.2));
+    let want_near = depth.render(&near, FrameOutput::Readback).unwrap().image.unwrap();
+    let got_near = fixed.render(&near, FrameOutput::Readback).unwrap().image.unwrap();
+    assert!(differing(&want_near, &got_near) as f64 <= 1e-3 * pixels as f64, "the fixed order is right from the eye it was taken at");
+    let want_far = depth.render(&far, FrameOutput::Readback).unwrap().image.unwrap();
+    let got_far = fixed.render(&far, FrameOutput::Readback).unwrap().image.unwrap();
+    let wrong = differing(&want_far, &got_far);
+    println!("fixed order from the far side: differs at {wrong} of {pixels} pixels");
+    assert!(wrong as f64 > 0.02 * pixels as f64, "the fixed order from the far side should show hidden surfaces ({wrong} pixels differ)");
+    for r in [&depth, &painter, &fixed] {
+        common::assert_clean(&r.gpu);
+    }
 }

@@ -21,6 +21,7 @@
 //! path tracer) and the projection's validity checks; `mode = "faithful"` uses the thesis's
 //! `k·ρ·cos/d` model with its linear spot ramp and projects every occluder vertex as written.
 
+pub mod painter;
 pub mod setup;
 
 #[cfg(test)]
@@ -49,11 +50,12 @@ pub const SCHEMA: MethodSchema = MethodSchema {
         ParamSchema { name: "threshold", kind: ParamKind::Float },
         ParamSchema { name: "storage", kind: ParamKind::String },
         ParamSchema { name: "layout", kind: ParamKind::String },
+        ParamSchema { name: "hidden", kind: ParamKind::String },
     ],
 };
 
 /// Bumped whenever the set-up's output for the same inputs changes.
-const SETUP_VERSION: u32 = 1;
+const SETUP_VERSION: u32 = 2;
 
 /// The matrix is bound whole as one storage buffer by the GEMV: Vulkan guarantees a storage
 /// buffer range of 2²⁷ bytes (`maxStorageBufferRange`'s required minimum) and no more.
@@ -129,6 +131,18 @@ pub fn choose_layout(layout: Layout, vertices: usize, lights: usize, non_zero: u
     }
 }
 
+/// How hidden surfaces are removed when this method draws the base ([`painter`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hidden {
+    /// The depth buffer.
+    Depth,
+    /// No depth test: the fragments back to front from each frame's eye by the BSP.
+    Painter,
+    /// No depth test: the order back to front from the first frame's eye, kept (the thesis's
+    /// "predetermined order", wrong once the eye crosses a node's plane).
+    Fixed,
+}
+
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
@@ -141,11 +155,12 @@ pub struct Config {
     pub threshold: f64,
     pub storage: Storage,
     pub layout: Layout,
+    pub hidden: Hidden,
 }
 
 impl Default for Config {
     fn default() -> Self {
-        Config { mode: Mode::Corrected, max_segment_area: 0.01, k: 1.0, threshold: 0.05, storage: Storage::F32, layout: Layout::Auto }
+        Config { mode: Mode::Corrected, max_segment_area: 0.01, k: 1.0, threshold: 0.05, storage: Storage::F32, layout: Layout::Auto, hidden: Hidden::Depth }
     }
 }
 
@@ -161,6 +176,9 @@ impl Config {
         }
         if let Some(layout) = params.get_choice("layout", &[("auto", Layout::Auto), ("dense", Layout::Dense), ("sparse", Layout::Sparse)])? {
             c.layout = layout;
+        }
+        if let Some(hidden) = params.get_choice("hidden", &[("depth", Hidden::Depth), ("painter", Hidden::Painter), ("fixed", Hidden::Fixed)])? {
+            c.hidden = hidden;
         }
         if let Some(v) = decl.param("max_segment_area") {
             c.max_segment_area = Params::float(v).filter(|x| *x >= 1e-6 && *x <= 1e4).ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 m²", v))?;
@@ -239,6 +257,8 @@ pub struct Baked {
     pub phases: setup::Phases,
     pub polygons: usize,
     pub fragments: usize,
+    /// The BSP and each fragment's triangles, for drawing without a depth test.
+    pub painter: painter::PainterTree,
 }
 
 impl Baked {
@@ -263,6 +283,7 @@ impl BakeData for Baked {
         out.extend_from_slice(bytemuck::cast_slice(&self.vertices));
         out.extend_from_slice(bytemuck::cast_slice(&self.indices));
         out.extend_from_slice(bytemuck::cast_slice(&self.colours));
+        out.extend_from_slice(&self.painter.encode());
         out
     }
 
@@ -276,7 +297,8 @@ impl BakeData for Baked {
         let head = 24 + 40;
         let vertex_bytes = v * std::mem::size_of::<SegmentVertex>();
         let (vb, ib, cb) = (head..head + vertex_bytes, head + vertex_bytes..head + vertex_bytes + 4 * i, head + vertex_bytes + 4 * i..head + vertex_bytes + 4 * i + 12 * v * l);
-        if bytes.len() != cb.end {
+        let (painter, painter_bytes) = painter::PainterTree::decode(bytes.get(cb.end..)?, (i / 3) as u32)?;
+        if bytes.len() != cb.end + painter_bytes {
             return None;
         }
         Some(Baked {
@@ -287,6 +309,7 @@ impl BakeData for Baked {
             phases: setup::Phases { bsp_ms: time(0)?, segment_ms: time(1)?, colour_cpu_ms: time(2)?, shadow_cpu_ms: time(3)?, lights_wall_ms: time(4)? },
             polygons: word(4)?,
             fragments: word(5)?,
+            painter,
         })
     }
 }
@@ -347,6 +370,7 @@ impl Baked {
             phases: s.phases,
             polygons: polygons.len(),
             fragments: s.tree.fragments.len(),
+            painter: painter::PainterTree::new(&s.tree, &s.segments.triangle_polygon),
         }
     }
 }
@@ -419,6 +443,11 @@ pub struct BspLights {
     both: PipelineId,
     base: PipelineId,
     direct: PipelineId,
+    /// With `hidden` other than `depth`: the base pipelines (with and without the direct term)
+    /// that draw in painter's order, depth always written and never tested.
+    painter_pipelines: Option<(PipelineId, PipelineId)>,
+    /// This frame's painter's order as index ranges (empty with `hidden = "depth"`).
+    draws: Vec<(u32, u32)>,
     /// The layout the matrix took (`config.layout` resolved).
     pub layout: Layout,
     /// The sparse layout's row starts (one per vertex and one at the end).
@@ -518,9 +547,15 @@ impl BspLights {
         let shader = if layout == Layout::Sparse { "bsp_lights/gemv_sparse.comp" } else { "bsp_lights/gemv.comp" };
         let gemv = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} gemv"), shader: shader.into(), specialization: vec![half] }, cx.shaders)?;
         let ds_format = gpu.caps().depth_stencil_format;
-        let mut pipeline = |terms: Terms| {
+        let mut pipeline = |terms: Terms, painter: bool| {
             let vert = if terms.has(Term::Direct) { "bsp_lights/segments.vert" } else { "bsp_lights/segments_base.vert" };
-            let mut desc = term_pipeline_desc(&format!("{NAME} {terms}"), vert, "bsp_lights/segments.frag", terms, ds_format);
+            let name = if painter { format!("{NAME} {terms} painter") } else { format!("{NAME} {terms}") };
+            let mut desc = term_pipeline_desc(&name, vert, "bsp_lights/segments.frag", terms, ds_format);
+            if painter {
+                // The draw order decides what is seen; the depth is still written for the
+                // passes after this one (a disabled test would write nothing).
+                desc.depth = crate::backend::DepthState { test: true, write: true, compare: vk::CompareOp::ALWAYS };
+            }
             let attr = |location: u32| VertexAttribute { location, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 12 * location };
             desc.vertex_layout = VertexLayout { buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)], attributes: (0..4).map(attr).collect() };
             if !terms.has(Term::Base) {
@@ -531,11 +566,12 @@ impl BspLights {
             }
             gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
-        let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
+        let (both, base, direct) = (pipeline(Terms::BASE_DIRECT, false)?, pipeline(Terms::BASE, false)?, pipeline(Terms::DIRECT, false)?);
+        let painter_pipelines = if config.hidden == Hidden::Depth { None } else { Some((pipeline(Terms::BASE_DIRECT, true)?, pipeline(Terms::BASE, true)?)) };
         let all: Vec<(u32, f32)> = (0..baked.lights as u32).map(|l| (l, 1.0)).collect();
         let active = active_words(&all, baked.vertices.len());
         let scales = scale_words(&vec![1.0; baked.lights], 0.0, baked.vertices.len());
-        Ok(BspLights { config, layout, baked, full, vertices, indices, matrix, rows, colours, gemv, both, base, direct, active, scales })
+        Ok(BspLights { config, layout, baked, full, vertices, indices, matrix, rows, colours, gemv, both, base, direct, painter_pipelines, draws: Vec::new(), active, scales })
     }
 
     /// Sets each light's scale from its current intensity (RGB, as the frame's lights carry
@@ -556,6 +592,26 @@ impl BspLights {
             all[l as usize] = s;
         }
         self.scales = scale_words(&all, 0.0, self.baked.vertices.len());
+    }
+
+    /// Sets the painter's order for an eye at `eye` (`hidden = "painter"`: every frame;
+    /// `"fixed"`: the first frame only).
+    pub fn set_eye(&mut self, eye: glam::DVec3) {
+        let take = match self.config.hidden {
+            Hidden::Depth => false,
+            Hidden::Painter => true,
+            Hidden::Fixed => self.draws.is_empty(),
+        };
+        if take {
+            let order = self.baked.painter.back_to_front(eye);
+            self.draws = self.baked.painter.draws(&order);
+        }
+    }
+
+    /// This frame's draws as `(first index, index count)`, back to front (empty with
+    /// `hidden = "depth"`).
+    pub fn painter_draws(&self) -> &[(u32, u32)] {
+        &self.draws
     }
 
     /// Lights in this frame's GEMV.
@@ -617,17 +673,25 @@ impl LightingMethod for BspLights {
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
         let current: Vec<[f32; 3]> = frame.scene.lights.iter().map(|l| [l.intensity[0], l.intensity[1], l.intensity[2]]).collect();
         self.set_intensities(&current);
+        let eye = frame.uniforms.camera_pos;
+        self.set_eye(glam::DVec3::new(eye[0] as f64, eye[1] as f64, eye[2] as f64));
         Ok(())
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
         let (base, direct) = (frame.terms.has(Term::Base), frame.terms.has(Term::Direct));
-        let pipeline = match (base, direct) {
-            (true, true) => self.both,
-            (true, false) => self.base,
-            (false, true) => self.direct,
-            (false, false) => return Ok(()),
+        // Over another method's base its depth decides what is seen: the painter's order
+        // applies only where this method draws the base.
+        let painter = self.painter_pipelines.filter(|_| base);
+        let pipeline = match (base, direct, painter) {
+            (true, true, Some((both, _))) => both,
+            (true, false, Some((_, base))) => base,
+            (true, true, None) => self.both,
+            (true, false, None) => self.base,
+            (false, true, _) => self.direct,
+            (false, false, _) => return Ok(()),
         };
+        let draws: &[(u32, u32)] = if painter.is_some() { &self.draws } else { &[] };
         if direct {
             self.add_gemv(graph);
         }
@@ -647,7 +711,13 @@ impl LightingMethod for BspLights {
             ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
             ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
             ctx.rec.bind_index_buffer(self.indices, 0)?;
-            ctx.rec.draw_indexed(count, 0, 0)?;
+            if painter.is_some() {
+                for &(first, n) in draws {
+                    ctx.rec.draw_indexed(n, first, 0)?;
+                }
+            } else {
+                ctx.rec.draw_indexed(count, 0, 0)?;
+            }
             ctx.rec.end_rendering();
             Ok(())
         });

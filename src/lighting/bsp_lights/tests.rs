@@ -494,6 +494,17 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     let baked = Baked::from_setup(&s, &polygons);
     assert_eq!(Baked::decode(&baked.encode()), Some(baked.clone()));
     assert!(Baked::decode(&baked.encode()[..100]).is_none());
+    // The painter's tree survives the round trip: the same order from any eye as the set-up's
+    // tree, and a cut-off or trailing byte is refused.
+    let decoded = Baked::decode(&baked.encode()).unwrap();
+    for eye in [DVec3::new(0.0, 3.0, 4.0), DVec3::new(-2.0, 0.5, -3.0), DVec3::new(1.0, -1.0, 0.2)] {
+        let order = s.tree.faces_back_to_front(eye);
+        assert_eq!(order.len(), s.tree.fragments.len());
+        assert_eq!(decoded.painter.back_to_front(eye), order);
+    }
+    let bytes = baked.encode();
+    assert!(Baked::decode(&bytes[..bytes.len() - 1]).is_none());
+    assert!(Baked::decode(&[bytes.as_slice(), &[0]].concat()).is_none());
     assert_eq!(baked.bytes_per_light(Storage::F32), 12 * baked.vertices.len() as u64);
     assert_eq!(baked.bytes_per_light(Storage::F16), 6 * baked.vertices.len() as u64);
     let dir = std::env::temp_dir().join(format!("penumbra-bsp-lights-{}", std::process::id()));
