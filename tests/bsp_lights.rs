@@ -577,3 +577,36 @@ fn the_painters_order_from_the_eye_matches_the_depth_buffer_and_a_fixed_order_do
         common::assert_clean(&r.gpu);
     }
 }
+
+/// A thin panel lit red from above and blue from below, seen from below: corrected mode draws
+/// its underside with the blue light (the back rows), as `forward`, which shades both sides per
+/// pixel and is exact here (nothing casts a shadow), does. One colour per vertex would show the
+/// top's red there.
+#[test]
+fn the_underside_of_a_panel_shows_the_light_below_it() {
+    let text = |method: &str| {
+        format!(
+            "methods = [{method}]\n[camera]\nposition = [0, 0.1, 1.2]\ntarget = [0, 1, -0.3]\nfov_y_deg = 70\n\
+             [[objects]]\nmesh = \"quad\"\ncorner = [-1, 1, 1]\nedge_u = [2, 0, 0]\nedge_v = [0, 0, -2]\n\
+             [[lights]]\ntype = \"point\"\nposition = [0.2, 2, 0.1]\nintensity = [4, 0, 0]\n\
+             [[lights]]\ntype = \"point\"\nposition = [0.1, 0.3, -0.2]\nintensity = [0, 0, 4]\n"
+        )
+    };
+    let render = |method: &str, decl: &str| {
+        let mut r = Renderer::new(common::test_gpu(), scene(&text(decl)), Some(method), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        common::assert_clean(&r.gpu);
+        img
+    };
+    let want = render("forward", "\"forward\"");
+    let got = render("bsp_lights", "{ name = \"bsp_lights\", max_segment_area = 0.002 }");
+    let seen: Vec<usize> = (0..want.pixels.len()).filter(|&i| want.pixels[i][2] > 0.0).collect();
+    assert!(seen.len() > want.pixels.len() / 4, "the panel's underside fills the view ({} pixels)", seen.len());
+    let mean = |img: &penumbra::image_io::HdrImage, c: usize| seen.iter().map(|&i| img.pixels[i][c] as f64).sum::<f64>() / seen.len() as f64;
+    let (blue, red) = (mean(&got, 2), mean(&got, 0));
+    println!("underside: bsp_lights blue {blue:.5} red {red:.5}; forward blue {:.5} red {:.5}", mean(&want, 2), mean(&want, 0));
+    assert_eq!(mean(&want, 0), 0.0, "forward: no red on the underside");
+    assert!(red == 0.0, "bsp_lights shows the top's red light on the underside ({red})");
+    assert!((blue / mean(&want, 2) - 1.0).abs() < 0.02, "bsp_lights underside {blue} against forward {}", mean(&want, 2));
+}

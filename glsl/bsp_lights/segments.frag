@@ -12,6 +12,7 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec3 in_albedo;
 layout(location = 3) in vec3 in_emission;
 layout(location = 4) in vec3 in_direct;
+layout(location = 5) in vec3 in_direct_back;
 
 layout(location = 0) out vec4 out_radiance;
 
@@ -28,8 +29,10 @@ vec3 environment_irradiance(vec3 n) {
 
 void main() {
     vec3 n = normalize(in_normal);
-    // Thin surfaces take the environment on the side the viewer sees, as forward does.
-    if (dot(n, frame.camera_pos.xyz - in_world) < 0.0) {
+    // Thin surfaces take the environment and the direct light of the side the viewer sees, as
+    // forward does.
+    bool back = dot(n, frame.camera_pos.xyz - in_world) < 0.0;
+    if (back) {
         n = -n;
     }
     vec3 radiance = vec3(0.0);
@@ -37,7 +40,7 @@ void main() {
         radiance = in_emission + in_albedo / SH_PI * environment_irradiance(n);
     }
     if ((TERMS & 2u) != 0u) {
-        radiance += in_direct;
+        radiance += back ? in_direct_back : in_direct;
     }
     out_radiance = vec4(radiance, 1.0);
 }

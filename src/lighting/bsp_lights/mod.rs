@@ -55,7 +55,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the set-up's output for the same inputs changes.
-const SETUP_VERSION: u32 = 2;
+const SETUP_VERSION: u32 = 3;
 
 /// The matrix is bound whole as one storage buffer by the GEMV: Vulkan guarantees a storage
 /// buffer range of 2²⁷ bytes (`maxStorageBufferRange`'s required minimum) and no more.
@@ -199,6 +199,12 @@ impl Config {
         }
     }
 
+    /// Corrected mode lights both sides of a surface, as every other method and the path
+    /// tracer do; faithful lights the front only, as the thesis does.
+    pub fn two_sided(&self) -> bool {
+        self.mode == Mode::Corrected
+    }
+
     pub fn projection(&self) -> Projection {
         match self.mode {
             Mode::Corrected => Projection::Valid,
@@ -235,7 +241,8 @@ pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
     ReferenceKind::Direct
 }
 
-/// A segment vertex as `glsl/bsp_lights/segments.vert` reads it (world space).
+/// A segment vertex as `glsl/bsp_lights/segments.vert` reads it (world space). Rows past the
+/// drawn vertices are back sides, read only through `back`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct SegmentVertex {
@@ -243,7 +250,12 @@ pub struct SegmentVertex {
     pub normal: [f32; 3],
     pub albedo: [f32; 3],
     pub emission: [f32; 3],
+    /// The row of this vertex's back side in the colour buffer, or `NO_BACK`.
+    pub back: u32,
 }
+
+/// `SegmentVertex::back` of a vertex whose back side receives no direct light.
+pub const NO_BACK: u32 = u32::MAX;
 
 /// The baked set-up as the run time needs it (and the cache stores it).
 #[derive(Clone, Debug, PartialEq)]
@@ -332,6 +344,7 @@ pub fn bake_scene(
         model: config.model(),
         projection: config.projection(),
         max_segment_area: config.max_segment_area,
+        two_sided: config.two_sided(),
         threads: 0,
         max_matrix_bytes: MAX_MATRIX_BYTES,
         bytes_per_entry: config.storage.bytes_per_entry(),
@@ -359,6 +372,7 @@ impl Baked {
                     normal: seg.normals[v].as_vec3().to_array(),
                     albedo: p.albedo.as_vec3().to_array(),
                     emission: p.emission.as_vec3().to_array(),
+                    back: s.back_row.get(v).copied().unwrap_or(NO_BACK),
                 }
             })
             .collect();
@@ -478,6 +492,7 @@ impl BspLights {
             .with("version", SETUP_VERSION)
             .with("model", config.model())
             .with("projection", config.projection())
+            .with("two_sided", config.two_sided())
             .with("max_segment_area", config.max_segment_area)
             .with("lights", &lights)
             .with_bytes("geometry", bytemuck::cast_slice(&geometry_floats));
@@ -556,8 +571,8 @@ impl BspLights {
                 // passes after this one (a disabled test would write nothing).
                 desc.depth = crate::backend::DepthState { test: true, write: true, compare: vk::CompareOp::ALWAYS };
             }
-            let attr = |location: u32| VertexAttribute { location, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 12 * location };
-            desc.vertex_layout = VertexLayout { buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)], attributes: (0..4).map(attr).collect() };
+            let attr = |location: u32| VertexAttribute { location, binding: 0, format: if location < 4 { vk::Format::R32G32B32_SFLOAT } else { vk::Format::R32_UINT }, offset: 12 * location };
+            desc.vertex_layout = VertexLayout { buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)], attributes: (0..5).map(attr).collect() };
             if !terms.has(Term::Base) {
                 // Over another method's base: the segments' interior vertices are not the
                 // base's, so their depths differ by rounding; a small bias toward the eye keeps

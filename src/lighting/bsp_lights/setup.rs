@@ -61,6 +61,10 @@ pub struct Settings {
     pub model: LightModel,
     pub projection: Projection,
     pub max_segment_area: f64,
+    /// Light both sides of a surface (penumbra's thin-surface convention): a fragment with a
+    /// light behind its plane gets a second row per vertex, its back, with the normal turned.
+    /// The thesis lights the front only (one colour per vertex).
+    pub two_sided: bool,
     /// Threads for the per-light phase (0: every core).
     pub threads: usize,
     /// Bytes the matrix may take at `bytes_per_entry` per vertex and light: checked after the
@@ -80,6 +84,14 @@ pub struct Setup {
     /// Per fragment: its segment vertices (contiguous: `Segments` adds a polygon's vertices
     /// together).
     pub fragment_vertices: Vec<Range<u32>>,
+    /// Rows of the matrix that are drawn vertices: `0..front_vertices`. The rows after them
+    /// are back sides (`segments` holds them with the normal turned and no triangles).
+    pub front_vertices: usize,
+    /// Per front vertex: the row of its back side, or `u32::MAX` (no light is behind its
+    /// fragment, or one-sided).
+    pub back_row: Vec<u32>,
+    /// Per fragment: its back-side rows (empty when it has none).
+    pub fragment_back_vertices: Vec<Range<u32>>,
     pub lights: usize,
     /// `C_l(v)` light-major: entry `l · V + v`.
     pub colours: Vec<[f32; 3]>,
@@ -116,8 +128,12 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
     let bsp_ms = ms(start);
 
     let start = Instant::now();
-    let segments = Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), settings.max_segment_area)?;
+    let mut segments = Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), settings.max_segment_area)?;
     let fragment_vertices = vertex_ranges(&segments, tree.fragments.len());
+    let front_vertices = segments.positions.len();
+    let planes: Vec<Plane> = tree.fragments.iter().map(|(f, _)| f.polygon.plane).collect();
+    let (back_row, fragment_back_vertices) =
+        if settings.two_sided { add_back_rows(&mut segments, &planes, &fragment_vertices, lights) } else { (vec![u32::MAX; front_vertices], vec![0..0; planes.len()]) };
     let segment_ms = ms(start);
 
     check_matrix(segments.positions.len(), lights.len(), settings.bytes_per_entry, settings.max_matrix_bytes)?;
@@ -128,7 +144,16 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
     let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads }.clamp(1, lights.len().max(1));
     let done = AtomicUsize::new(0);
     let fragments: Vec<&Polygon> = tree.fragments.iter().map(|(f, _)| &f.polygon).collect();
-    let shared = Shared { fragments: &fragments, tree: &tree, segments: &segments, fragment_vertices: &fragment_vertices, albedo: &albedo, model: settings.model, projection: settings.projection };
+    let shared = Shared {
+        fragments: &fragments,
+        tree: &tree,
+        segments: &segments,
+        fragment_vertices: &fragment_vertices,
+        fragment_back_vertices: &fragment_back_vertices,
+        albedo: &albedo,
+        model: settings.model,
+        projection: settings.projection,
+    };
     let per_thread: Vec<ThreadResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
@@ -171,7 +196,30 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
     if filled != lights.len() {
         return Err(format!("a set-up thread failed ({filled} of {} lights shaded)", lights.len()));
     }
-    Ok(Setup { tree, segments, fragment_source, fragment_vertices, lights: lights.len(), colours, phases })
+    Ok(Setup { tree, segments, fragment_source, fragment_vertices, front_vertices, back_row, fragment_back_vertices, lights: lights.len(), colours, phases })
+}
+
+/// Appends a back-side row (same position, normal turned) for every vertex of each fragment
+/// that has a light strictly behind its plane; returns each front vertex's back row
+/// (`u32::MAX`: none) and each fragment's back rows. A fragment every light is in front of
+/// gets none: its back side's direct light is zero, which the run time draws for a missing row.
+fn add_back_rows(segments: &mut Segments, planes: &[Plane], fragment_vertices: &[Range<u32>], lights: &[ManyLight]) -> (Vec<u32>, Vec<Range<u32>>) {
+    let mut back_row = vec![u32::MAX; segments.positions.len()];
+    let mut ranges = vec![0u32..0u32; planes.len()];
+    for (f, plane) in planes.iter().enumerate() {
+        if !lights.iter().any(|l| plane.distance(l.position) < -crate::world::PLANE_EPSILON) {
+            continue;
+        }
+        let first = segments.positions.len() as u32;
+        for v in fragment_vertices[f].clone() {
+            back_row[v as usize] = segments.positions.len() as u32;
+            segments.positions.push(segments.positions[v as usize]);
+            segments.normals.push(-segments.normals[v as usize]);
+            segments.vertex_polygon.push(f as u32);
+        }
+        ranges[f] = first..segments.positions.len() as u32;
+    }
+    (back_row, ranges)
 }
 
 /// `V·L·bytes` of vertex colours against the limit, as one sentence when over it.
@@ -208,6 +256,7 @@ struct Shared<'a> {
     tree: &'a Tree,
     segments: &'a Segments,
     fragment_vertices: &'a [Range<u32>],
+    fragment_back_vertices: &'a [Range<u32>],
     albedo: &'a [DVec3],
     model: LightModel,
     projection: Projection,
@@ -226,7 +275,8 @@ impl Shared<'_> {
         let order: Vec<usize> = self.tree.faces_back_to_front(light).into_iter().map(|f| f as usize).collect();
         let positions = &self.segments.positions;
         // Lit vertices left per fragment: a target gone dark is never projected onto again.
-        let mut lit: Vec<usize> = self.fragment_vertices.iter().map(|r| r.clone().filter(|&v| column[v as usize] != [0.0; 3]).count()).collect();
+        let rows = |t: usize| self.fragment_vertices[t].clone().chain(self.fragment_back_vertices[t].clone());
+        let mut lit: Vec<usize> = (0..self.fragments.len()).map(|t| rows(t).filter(|&v| column[v as usize] != [0.0; 3]).count()).collect();
         for (i, &o) in order.iter().enumerate() {
             let occluder = self.fragments[o];
             for &t in &order[..i] {
@@ -237,7 +287,7 @@ impl Shared<'_> {
                 let Some(shadow) = project(light, &occluder.vertices, &target.plane, self.projection) else { continue };
                 // The test on the projected polygon's bounds first: most pairs miss entirely.
                 let (lo, hi) = bounds(&shadow);
-                for v in self.fragment_vertices[t].clone() {
+                for v in rows(t) {
                     let (v, p) = (v as usize, positions[v as usize]);
                     if column[v] == [0.0; 3] || p.cmplt(lo).any() || p.cmpgt(hi).any() {
                         continue;

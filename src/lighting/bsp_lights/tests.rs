@@ -61,7 +61,7 @@ fn run(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projection, 
         Projection::Valid => LightModel::Physical,
         Projection::Thesis => LightModel::Seed { k: 1.0 },
     };
-    let settings = Settings { model, projection, max_segment_area: area, threads: 2, max_matrix_bytes: super::MAX_MATRIX_BYTES, bytes_per_entry: 12 };
+    let settings = Settings { model, projection, max_segment_area: area, two_sided: projection == Projection::Valid, threads: 2, max_matrix_bytes: super::MAX_MATRIX_BYTES, bytes_per_entry: 12 };
     setup::run(polygons, lights, &settings, &mut Progress::new("test")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -71,10 +71,15 @@ fn run(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projection, 
 /// by the ray cast itself (a verdict that flips within `eps` of the vertex), independent of any
 /// projection. Vertices the light does not reach (facing away, outside a cone) are not counted.
 fn against_ray_cast(s: &Setup, polygons: &[ScenePolygon], lights: &[ManyLight], l: usize, eps: f64) -> (usize, usize, usize, usize) {
+    against_ray_cast_rows(s, polygons, lights, l, eps, 0..s.vertices())
+}
+
+/// [`against_ray_cast`] over the matrix rows `rows` only.
+fn against_ray_cast_rows(s: &Setup, polygons: &[ScenePolygon], lights: &[ManyLight], l: usize, eps: f64, rows: std::ops::Range<usize>) -> (usize, usize, usize, usize) {
     let occluders = Occluders::new(polygons.iter().map(|p| &p.polygon));
     let light = &lights[l];
     let (mut far, mut near, mut reached, mut blocked_count) = (0, 0, 0, 0);
-    for vtx in 0..s.vertices() {
+    for vtx in rows {
         let (p, n) = (s.segments.positions[vtx], s.segments.normals[vtx]);
         let model = LightModel::Physical;
         if light.shade(&model, p, n, DVec3::ONE) == DVec3::ZERO {
@@ -250,7 +255,8 @@ fn item_12_a_box_above_a_plane_under_an_overhead_light() {
     let light = v(1.0, 5.0, 0.6);
     let lights = [point(light, DVec3::splat(10.0))];
     let s = run(&polygons, &lights, Projection::Valid, 0.01);
-    let by_source = |src: u32| -> Vec<f32> { (0..s.vertices()).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == src).map(|x| s.colour(0, x)[0]).collect() };
+    // The front sides (the back rows of the faces the light is behind are inside the box).
+    let by_source = |src: u32| -> Vec<f32> { (0..s.front_vertices).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == src).map(|x| s.colour(0, x)[0]).collect() };
     let top = by_source(1);
     let bottom = by_source(2);
     let sides: Vec<f32> = (3..7).flat_map(by_source).collect();
@@ -274,6 +280,45 @@ fn item_12_a_box_above_a_plane_under_an_overhead_light() {
     };
     assert_eq!(s.colour(0, floor_at(v(0.1, 0.0, 0.1)))[0], 0.0);
     assert!(s.colour(0, floor_at(v(2.9, 0.0, 2.9)))[0] > 0.0);
+}
+
+/// Corrected mode lights both sides of a thin surface, as every other method and the path
+/// tracer do: a plate lit from above by a red light and from below by a blue one, with a small
+/// plate under it casting a shadow on its underside. Its front rows carry the red light only,
+/// its back rows (normal turned) the blue one only, the underside's shadow matches the ray
+/// cast, and the closed form holds on the underside. Faithful mode (the thesis) has no back
+/// rows.
+#[test]
+fn two_sided_rows_light_the_back_of_a_surface_with_its_shadows() {
+    let polygons = vec![plate(0.0, 1.0, 0.0, 2.0), plate(0.3, 0.5, 0.0, 0.4)];
+    let (above, below) = (v(0.2, 2.0, 0.1), v(0.1, 0.0, -0.1));
+    let lights = [point(above, v(4.0, 0.0, 0.0)), point(below, v(0.0, 0.0, 4.0))];
+    let s = run(&polygons, &lights, Projection::Valid, 0.005);
+    let panel = |x: usize| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 0;
+    let (front, back): (Vec<usize>, Vec<usize>) = (0..s.vertices()).filter(|&x| panel(x)).partition(|&x| x < s.front_vertices);
+    assert!(!back.is_empty() && front.len() == back.len(), "every vertex of the panel has its back row ({} front, {} back)", front.len(), back.len());
+    for &x in &front {
+        assert!(s.colour(0, x)[0] > 0.0 && s.colour(1, x) == [0.0; 3], "front row {x}: red only");
+        let b = s.back_row[x] as usize;
+        assert!(back.contains(&b) && s.segments.positions[b] == s.segments.positions[x], "front row {x}: its back row {b} is at the same place");
+    }
+    for &x in &back {
+        assert_eq!(s.colour(0, x), [0.0; 3], "back row {x}: no red");
+        assert!(s.segments.normals[x].y < -0.999);
+    }
+    let (far, near, reached, blocked) = against_ray_cast(&s, &polygons, &lights, 1, 1e-4);
+    println!("blue light: {reached} rows reached, {blocked} blocked, {far} far from the edge disagree, {near} near");
+    assert_eq!(far, 0);
+    let dark = back.iter().filter(|&&x| s.colour(1, x) == [0.0; 3]).count();
+    assert!(dark > 20 && dark < back.len() / 4, "the small plate shadows part of the underside ({dark} of {} rows)", back.len());
+    // I·ρ·cos/(π·d²) at the underside's corner, far from the shadow.
+    let corner = *back.iter().min_by(|&&a, &&b| s.segments.positions[a].distance(v(-1.0, 1.0, 1.0)).total_cmp(&s.segments.positions[b].distance(v(-1.0, 1.0, 1.0)))).unwrap();
+    let p = s.segments.positions[corner];
+    let d = p.distance(below);
+    let want = 4.0 * 0.5 * (1.0 / d) / (std::f64::consts::PI * d * d);
+    assert!((s.colour(1, corner)[2] as f64 - want).abs() < 1e-6 * want, "{} against {want}", s.colour(1, corner)[2]);
+    let faithful = run(&polygons, &lights, Projection::Thesis, 0.005);
+    assert_eq!(faithful.vertices(), faithful.front_vertices, "the thesis lights the front only");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -402,9 +447,11 @@ fn item_14_coplanar_and_touching_polygons_cast_no_slivers_and_do_not_shadow_them
     let top = (0..s.vertices()).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 2);
     assert!(top.clone().all(|x| s.colour(0, x) != [0.0; 3]), "the box's top is lit everywhere");
     // The other face that sees the light (−x) is not shadowed by the box itself.
-    let minus_x = (0..s.vertices()).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 5);
+    let minus_x = (0..s.front_vertices).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 5);
     assert!(minus_x.clone().all(|x| s.colour(0, x) != [0.0; 3] || s.segments.positions[x].y < 1e-9), "the −x face shadows itself");
-    let (far, near, reached, blocked) = against_ray_cast(&s, &polygons, &lights, 0, 1e-4);
+    // The front sides: the back rows here are the box's inside, where three vertices' rays to
+    // the light run exactly along the box's edges (either verdict is right there).
+    let (far, near, reached, blocked) = against_ray_cast_rows(&s, &polygons, &lights, 0, 1e-4, 0..s.front_vertices);
     println!("box on the floor: {reached} reached, {blocked} blocked, {far} far, {near} near");
     assert_eq!(far, 0);
 }
