@@ -103,9 +103,13 @@ enum Command {
         /// Image size as WIDTHxHEIGHT.
         #[arg(long, default_value = "128x128", value_parser = parse_size)]
         size: (u32, u32),
-        /// Frames timed per configuration (the median is reported).
+        /// Frames timed per configuration at most (the median is reported).
         #[arg(long, default_value_t = 20, value_parser = parse_frames)]
         frames: usize,
+        /// Seconds of timed frames per configuration after which timing stops, once 3 frames are
+        /// timed (0: always --frames); the CSV's frames_timed column says how many were.
+        #[arg(long, value_name = "S", default_value_t = 2.0)]
+        timing_budget: f64,
         /// Samples per pixel of the reference: the most it may take (exactly this with --reference-noise 0).
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
         reference_spp: u32,
@@ -352,11 +356,12 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
         }
-        Command::Chart { scene, output, csv, size, frames, reference_spp, reference_noise, supersample, cache_dir, methods, device } => {
+        Command::Chart { scene, output, csv, size, frames, timing_budget, reference_spp, reference_noise, supersample, cache_dir, methods, device } => {
             let opts = penumbra::chart::ChartOptions {
                 scene,
                 size,
                 frames,
+                timing_budget_s: timing_budget,
                 reference_spp,
                 reference_noise,
                 supersample,

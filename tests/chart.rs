@@ -213,7 +213,10 @@ radiance = 0.3
         "--reference-spp",
         "16",
         "--frames",
-        "1",
+        "6",
+        // Any frame outruns this budget: each configuration is timed over the minimum, 3.
+        "--timing-budget",
+        "1e-6",
         "--cache-dir",
         cache.to_str().unwrap(),
         "-o",
@@ -225,6 +228,8 @@ radiance = 0.3
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let count = |m: &str| rows.iter().filter(|r| r.method == m).count();
     assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (14, 7));
+    let timed = column(&std::fs::read_to_string(&csv).unwrap(), "frames_timed");
+    assert!(timed.len() == 21 && timed.iter().all(|t| t == "3"), "frames timed under a spent budget: {timed:?}");
     let err = |c: &str| rows.iter().find(|r| r.config == c).map(|r| r.rel_mse).unwrap_or_else(|| panic!("{c} missing"));
     let default = err("pyramid nphi=32 ls=4 lo=4 bands=4 corrected");
     println!(

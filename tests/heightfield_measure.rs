@@ -175,6 +175,8 @@ fn chart_and_speedup_at_equal_error() {
             scene: path,
             size: (128, 128),
             frames,
+            // Every frame, as this measurement was made.
+            timing_budget_s: 0.0,
             reference_spp: spp,
             // Exactly `spp` samples, as this measurement was made.
             reference_noise: 0.0,

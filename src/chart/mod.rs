@@ -38,8 +38,12 @@ use crate::timing::summarise;
 pub struct ChartOptions {
     pub scene: PathBuf,
     pub size: (u32, u32),
-    /// Frames timed per configuration (the median is reported).
+    /// Frames timed per configuration at most (the median is reported).
     pub frames: usize,
+    /// Seconds of timed frames per configuration after which timing stops, once
+    /// [`MIN_TIMED_FRAMES`] are timed (0: always `frames`). A configuration that takes a second a
+    /// frame on a CPU device is timed over a few frames instead of `frames`.
+    pub timing_budget_s: f64,
     /// Samples per pixel of the reference: the cap when `reference_noise` > 0.
     pub reference_spp: u32,
     /// The reference renders until its noise's relative MSE is at most this fraction of the
@@ -63,6 +67,8 @@ pub struct ChartRow {
     pub config: String,
     /// Median GPU milliseconds of the whole frame.
     pub frame_ms: f64,
+    /// Frames the medians are over.
+    pub frames_timed: usize,
     /// Median GPU milliseconds per pass.
     pub passes: Vec<(String, f64)>,
     /// Against the reference, the method's pixel centres.
@@ -238,9 +244,18 @@ struct Measured {
     /// Supersampled and box-filtered to the chart's size (with `supersample` > 1).
     supersampled: Option<HdrImage>,
     frame_ms: f64,
+    frames_timed: usize,
     passes: Vec<(String, f64)>,
     device: String,
     bakes: Vec<BakeReport>,
+}
+
+/// Frames a configuration is timed over at least (fewer only when `--frames` asks for fewer).
+pub const MIN_TIMED_FRAMES: usize = 3;
+
+/// Whether timing should go on after `timed` frames that took `elapsed_s` of wall time.
+pub fn keep_timing(timed: usize, elapsed_s: f64, frames: usize, budget_s: f64) -> bool {
+    timed < frames && (timed < MIN_TIMED_FRAMES || budget_s <= 0.0 || elapsed_s < budget_s)
 }
 
 /// Renders and times one configuration (timed at the chart's size only).
@@ -250,7 +265,17 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
     let image = renderer.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
-    let timings = renderer.profile(&camera, opts.frames.max(1))?;
+    let mut timings = Vec::new();
+    let start = std::time::Instant::now();
+    while keep_timing(timings.len(), start.elapsed().as_secs_f64(), opts.frames.max(1), opts.timing_budget_s) {
+        let frame = renderer.profile(&camera, 1)?;
+        if frame.is_empty() {
+            // A device without timestamps: nothing to time.
+            break;
+        }
+        timings.extend(frame);
+    }
+    let frames_timed = timings.len();
     let stats = summarise(&timings);
     let frame_ms = stats.iter().find(|s| s.name == "frame").map(|s| s.median_ms).unwrap_or(f64::NAN);
     let passes = stats.into_iter().filter(|s| s.name != "frame").map(|s| (s.name, s.median_ms)).collect();
@@ -265,11 +290,14 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     } else {
         None
     };
-    Ok(Measured { image, supersampled, frame_ms, passes, device, bakes })
+    Ok(Measured { image, supersampled, frame_ms, frames_timed, passes, device, bakes })
 }
 
 pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let scene = Scene::from_file(&opts.scene)?;
+    if !(opts.timing_budget_s.is_finite() && opts.timing_budget_s >= 0.0) {
+        return Err(Error::Usage(format!("--timing-budget {}: expected seconds, at least 0 (0: every --frames frame)", opts.timing_budget_s)));
+    }
     if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
         return Err(Error::Usage(format!("--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)", opts.reference_noise)));
     }
@@ -337,6 +365,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             method,
             config,
             frame_ms: m.frame_ms,
+            frames_timed: m.frames_timed,
             passes: m.passes,
             metrics,
             supersampled,
@@ -418,7 +447,7 @@ impl Chart {
                 }
             }
         }
-        let mut s = String::from("method,config,device,width,height,reference,supersample,frame_ms,bake_ms,bake_bytes");
+        let mut s = String::from("method,config,device,width,height,reference,supersample,frame_ms,frames_timed,bake_ms,bake_bytes");
         for p in &pass_names {
             let _ = write!(s, ",pass:{}_ms", p.replace(',', ";"));
         }
@@ -431,7 +460,7 @@ impl Chart {
         for r in &self.rows {
             let _ = write!(
                 s,
-                "{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{}",
                 r.method,
                 r.config.replace(',', ";"),
                 self.device.replace(',', ";"),
@@ -440,6 +469,7 @@ impl Chart {
                 r.reference.replace(',', ";"),
                 self.supersample,
                 r.frame_ms,
+                r.frames_timed,
                 r.bake_ms,
                 r.bake_bytes
             );
@@ -559,12 +589,26 @@ mod tests {
     }
 
     #[test]
+    fn timing_stops_at_the_frame_count_or_the_budget_after_the_minimum() {
+        use super::{keep_timing, MIN_TIMED_FRAMES};
+        assert_eq!(MIN_TIMED_FRAMES, 3);
+        assert!(keep_timing(0, 0.0, 20, 2.0));
+        assert!(keep_timing(2, 100.0, 20, 2.0), "the minimum is timed whatever the budget");
+        assert!(!keep_timing(3, 2.5, 20, 2.0), "past the budget with the minimum timed");
+        assert!(keep_timing(3, 1.0, 20, 2.0));
+        assert!(!keep_timing(20, 0.0, 20, 2.0), "never past --frames");
+        assert!(!keep_timing(1, 0.0, 1, 2.0), "--frames below the minimum wins");
+        assert!(keep_timing(19, 100.0, 20, 0.0), "budget 0: every frame");
+    }
+
+    #[test]
     fn csv_round_trips_and_pareto_front_is_monotone() {
         let m = |e: f64| Metrics { rmse: e, rel_mse: e, mean_bias: 0.0, p99_abs_error: e, max_abs_error: e, flip_mean: e, pixels: 4 };
         let row = |c: &str, ms: f64, e: f64| ChartRow {
             method: "m".into(),
             config: c.into(),
             frame_ms: ms,
+            frames_timed: 20,
             bake_ms: 0.0,
             bake_bytes: 0,
             passes: vec![("p".into(), ms * 0.5)],
