@@ -114,7 +114,8 @@ enum Command {
         #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
         reference_spp: u32,
         /// The reference renders (from 32 spp on) until its noise adds at most this fraction of the
-        /// smallest relative MSE among the configurations it judges; 0: exactly --reference-spp.
+        /// smallest relative MSE among the configurations it judges, and its noise's p99 error is
+        /// at most the square root of this fraction of the smallest p99; 0: exactly --reference-spp.
         #[arg(long, value_name = "F", default_value_t = 0.1)]
         reference_noise: f64,
         /// Also render each configuration at N times the size in each axis, box-filtered down, and

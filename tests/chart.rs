@@ -257,7 +257,8 @@ fn column(table: &str, name: &str) -> Vec<String> {
 
 /// The chart asks the reference for the error its metrics need: the reference renders (from
 /// 32 spp on) until the relative MSE its noise adds is at most `--reference-noise` of the
-/// smallest relative MSE it judges, and the CSV gives, beside every metric, the reference's own
+/// smallest relative MSE it judges, and its noise's 99th-percentile error at most the square
+/// root of that fraction of the smallest p99 it judges, and the CSV gives, beside every metric, the reference's own
 /// error; the closed-form ones are checked here against the cached standard-error image by
 /// hand.
 #[test]
@@ -302,6 +303,10 @@ fn chart_asks_the_reference_for_the_error_its_metrics_need_and_reports_its_noise
     // At the 32 spp minimum the noise was 6.6e-3 of 4.8e-2: more samples were needed.
     assert!((33..cap).contains(&spp), "stopped at {spp} of at most {cap}");
     assert!(noise <= 0.1 * rel_mse, "{noise} > 0.1 × {rel_mse}");
+    // And the 99th percentile: the noise's at most √0.1 of the method's.
+    let (p99, noise_p99) = (num("p99_abs_error"), num("ref_noise_p99_abs_error"));
+    println!("p99: the noise's {noise_p99:.3e} against the method's {p99:.3e}");
+    assert!(noise_p99 <= 0.1f64.sqrt() * p99, "{noise_p99} > √0.1 × {p99}");
 
     // By hand from the cached mean and standard error.
     let cached: Vec<std::path::PathBuf> = std::fs::read_dir(&cache).unwrap().map(|e| e.unwrap().path()).filter(|p| p.to_string_lossy().ends_with(".stderr.exr")).collect();

@@ -147,6 +147,16 @@ fn noise_rel_mse(image: &ReferenceImage) -> f64 {
     sum / (3 * image.mean.pixels.len().max(1)) as f64
 }
 
+/// How far the reference's noise is from good enough (at most 1: good enough) for judged
+/// images whose smallest relative MSE and p99 error are `smallest_rel` and `smallest_p99`:
+/// the larger of √(noise_rel / (F·smallest_rel)) and noise_p99 / (√F·smallest_p99). A p99 of
+/// 0/0 (every judged image and the noise exact at 99 % of pixels) does not count.
+pub fn stop_ratio(smallest_rel: f64, smallest_p99: f64, noise_rel: f64, noise_p99: f64, fraction: f64) -> f64 {
+    let rel = (noise_rel / (fraction * smallest_rel)).sqrt();
+    let p99 = noise_p99 / (fraction.sqrt() * smallest_p99);
+    rel.max(if p99.is_nan() { 0.0 } else { p99 })
+}
+
 /// The reference for this scene and kind, good enough for `judged` (the images measured
 /// against it): from the cache when the cached one is, or rendered and cached.
 pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, judged: &[&HdrImage], opts: &ChartOptions) -> Result<ChartReference> {
@@ -155,9 +165,17 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
     let path = opts.cache_dir.join(format!("reference-{key}.exr"));
     let (se_path, spp_path) = (crate::reference::stderr_path(&path), path.with_extension("spp"));
     // The ratio of the reference's noise to the error it may have: at most 1 is good enough.
+    // Relative MSE (squared): the noise's at most F times the smallest judged. The 99th
+    // percentile of the per-pixel error (linear): the noise's, simulated as the CSV's
+    // `ref_noise_p99_abs_error` is, at most √F times the smallest judged, which keeps the
+    // noise's share of a judged p99 as small as its share of a relative MSE. The maximum is not
+    // judged: the largest of N noisy pixels keeps growing with N.
     let ratio = |img: &ReferenceImage| -> f64 {
-        let smallest = judged.iter().map(|t| crate::metrics::stats::radiance_stats(&t.pixels, &img.mean.pixels).rel_mse).fold(f64::INFINITY, f64::min);
-        (noise_rel_mse(img) / (opts.reference_noise * smallest)).sqrt()
+        let stats: Vec<_> = judged.iter().map(|t| crate::metrics::stats::radiance_stats(&t.pixels, &img.mean.pixels)).collect();
+        let smallest_rel = stats.iter().map(|s| s.rel_mse).fold(f64::INFINITY, f64::min);
+        let smallest_p99 = stats.iter().map(|s| s.p99_abs_error).fold(f64::INFINITY, f64::min);
+        let noise_p99 = crate::metrics::stats::radiance_stats(&noisy_copy(&img.mean, &img.standard_error, NOISE_SEED).pixels, &img.mean.pixels).p99_abs_error;
+        stop_ratio(smallest_rel, smallest_p99, noise_rel_mse(img), noise_p99, opts.reference_noise)
     };
     let cached = || -> Option<ReferenceImage> {
         let (mean, standard_error) = (HdrImage::read_exr(&path).ok()?, HdrImage::read_exr(&se_path).ok()?);
@@ -210,9 +228,12 @@ pub fn reference_noise(reference: &ReferenceImage) -> Result<Metrics> {
         let inf = f64::INFINITY;
         return Ok(Metrics { rmse: inf, rel_mse: inf, mean_bias: inf, p99_abs_error: inf, max_abs_error: inf, flip_mean: inf, pixels: mean.pixels.len() });
     }
-    let simulated = metrics::compare(&noisy_copy(mean, se, 0x5eed), mean, &CompareOptions::default())?;
+    let simulated = metrics::compare(&noisy_copy(mean, se, NOISE_SEED), mean, &CompareOptions::default())?;
     Ok(Metrics { rmse: (sum_sq / n).sqrt(), rel_mse: noise_rel_mse(reference), mean_bias: sum_sq.sqrt() / n, ..simulated })
 }
+
+/// The seed of the simulated noise behind `ref_noise_p99_abs_error` and the stop rule's p99.
+const NOISE_SEED: u64 = 0x5eed;
 
 /// `mean` plus independent Gaussian noise of standard deviation `se` in each channel (a fixed
 /// `seed`; Box–Muller on a SplitMix64 stream), clamped at 0 as radiance is.
@@ -586,6 +607,20 @@ mod tests {
         assert_eq!(choose(&configs, 1e-4).unwrap(), Choice::NoneQualifies { closest: cfg("slow exact", 9.0, 0.001) });
         let text = choose(&configs, 0.05).unwrap().to_string();
         assert!(text.contains("picked `middle`") && text.contains("`fast rough` is cheaper"), "{text}");
+    }
+
+    #[test]
+    fn the_reference_stops_when_its_noise_is_small_in_relative_mse_and_in_p99() {
+        use super::stop_ratio;
+        // Both within: F = 0.1, noise 0.05 of the relative MSE and 0.2 of the p99 (√0.1 = 0.316).
+        assert!(stop_ratio(1e-2, 0.5, 5e-4, 0.1, 0.1) <= 1.0);
+        // The relative MSE alone would stop; the p99 asks for more samples.
+        let r = stop_ratio(1e-2, 0.5, 5e-4, 0.2, 0.1);
+        assert!(r > 1.0 && (r - 0.2 / (0.1f64.sqrt() * 0.5)).abs() < 1e-12, "{r}");
+        // The relative MSE asks for more.
+        assert!((stop_ratio(1e-2, 0.5, 4e-3, 0.01, 0.1) - 2.0).abs() < 1e-12);
+        // Exact everywhere that counts for the p99: only the relative MSE decides.
+        assert!((stop_ratio(1e-2, 0.0, 1e-3, 0.0, 0.1) - 1.0).abs() < 1e-12);
     }
 
     #[test]
