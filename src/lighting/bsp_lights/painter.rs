@@ -42,7 +42,7 @@ impl PainterTree {
     pub fn new(tree: &Tree, triangle_fragment: &[u32]) -> PainterTree {
         let nodes = tree.nodes.iter().map(|n| Node { plane: n.plane, front: node_or_leaf(n.front), back: node_or_leaf(n.back), faces: n.faces.clone() }).collect();
         let stripped = Tree { nodes, leaves: Vec::new(), root: tree.root.map(node_or_leaf), fragments: Vec::new(), degenerate_fragments: 0 };
-        PainterTree { tree: stripped, fragment_triangles: contiguous_ranges(triangle_fragment, tree.fragments.len()) }
+        PainterTree { tree: stripped, fragment_triangles: super::setup::owner_ranges(triangle_fragment, tree.fragments.len()) }
     }
 
     pub fn fragments(&self) -> usize {
@@ -92,16 +92,11 @@ impl PainterTree {
     /// The tree from `bytes` (as `encode` wrote it), and the bytes it took; `None` when they
     /// are not a well-formed tree over `triangles` triangles.
     pub fn decode(bytes: &[u8], triangles: u32) -> Option<(PainterTree, usize)> {
-        let mut at = 0usize;
-        let mut word = || {
-            let w = u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?);
-            at += 4;
-            Some(w)
-        };
-        let (nodes, root, fragments) = (word()?, word()?, word()?);
+        let mut r = Reader { bytes, at: 0 };
+        let (nodes, root, fragments) = (r.u32()?, r.u32()?, r.u32()?);
         let mut fragment_triangles = Vec::with_capacity(fragments.min(1 << 24) as usize);
         for _ in 0..fragments {
-            let (start, end) = (word()?, word()?);
+            let (start, end) = (r.u32()?, r.u32()?);
             if start > end || end > triangles {
                 return None;
             }
@@ -109,19 +104,10 @@ impl PainterTree {
         }
         let mut tree = Tree { root: Some(decode_child(root, nodes)?), ..Tree::default() };
         for _ in 0..nodes {
-            let mut plane = [0.0f64; 4];
-            for x in &mut plane {
-                *x = f64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?);
-                at += 8;
-            }
-            let mut word = || {
-                let w = u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?);
-                at += 4;
-                Some(w)
-            };
-            let (front, back, count) = (word()?, word()?, word()?);
-            let faces: Option<Vec<u32>> = (0..count).map(|_| word().filter(|&f| f < fragments)).collect();
-            let plane = Plane { normal: DVec3::new(plane[0], plane[1], plane[2]), dist: plane[3] };
+            let normal = DVec3::new(r.f64()?, r.f64()?, r.f64()?);
+            let plane = Plane { normal, dist: r.f64()? };
+            let (front, back, count) = (r.u32()?, r.u32()?, r.u32()?);
+            let faces: Option<Vec<u32>> = (0..count).map(|_| r.u32().filter(|&f| f < fragments)).collect();
             tree.nodes.push(Node { plane, front: decode_child(front, nodes)?, back: decode_child(back, nodes)?, faces: faces? });
         }
         // Children come after their parent (the build numbers nodes depth first): a corrupt
@@ -135,7 +121,29 @@ impl PainterTree {
                 }
             }
         }
-        Some((PainterTree { tree, fragment_triangles }, at))
+        Some((PainterTree { tree, fragment_triangles }, r.at))
+    }
+}
+
+/// Little-endian words read from the front of a byte slice.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
+        let b = self.bytes.get(self.at..self.at + N)?.try_into().ok()?;
+        self.at += N;
+        Some(b)
+    }
+
+    fn u32(&mut self) -> Option<u32> {
+        self.take().map(u32::from_le_bytes)
+    }
+
+    fn f64(&mut self) -> Option<f64> {
+        self.take().map(f64::from_le_bytes)
     }
 }
 
@@ -159,22 +167,4 @@ fn decode_child(w: u32, nodes: u32) -> Option<Child> {
         n if n < nodes => Some(Child::Node(n)),
         _ => None,
     }
-}
-
-/// Per fragment, the range of triangles that belong to it (`Segments` adds a fragment's
-/// triangles together; a fragment with none gets an empty range).
-fn contiguous_ranges(triangle_fragment: &[u32], fragments: usize) -> Vec<Range<u32>> {
-    let mut ranges = vec![0u32..0u32; fragments];
-    let mut t = 0usize;
-    while t < triangle_fragment.len() {
-        let f = triangle_fragment[t];
-        let first = t;
-        while t < triangle_fragment.len() && triangle_fragment[t] == f {
-            t += 1;
-        }
-        if let Some(r) = ranges.get_mut(f as usize) {
-            *r = first as u32..t as u32;
-        }
-    }
-    ranges
 }

@@ -129,7 +129,7 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
 
     let start = Instant::now();
     let mut segments = Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), settings.max_segment_area)?;
-    let fragment_vertices = vertex_ranges(&segments, tree.fragments.len());
+    let fragment_vertices = owner_ranges(&segments.vertex_polygon, tree.fragments.len());
     let front_vertices = segments.positions.len();
     let planes: Vec<Plane> = tree.fragments.iter().map(|(f, _)| f.polygon.plane).collect();
     let (back_row, fragment_back_vertices) =
@@ -235,17 +235,20 @@ pub fn check_matrix(vertices: usize, lights: usize, bytes_per_entry: u64, max_by
     Ok(())
 }
 
-/// Each fragment's contiguous range of segment vertices.
-fn vertex_ranges(segments: &Segments, fragments: usize) -> Vec<Range<u32>> {
-    let mut ranges = vec![0u32..0u32; fragments];
-    let mut v = 0usize;
-    while v < segments.vertex_polygon.len() {
-        let f = segments.vertex_polygon[v];
-        let first = v;
-        while v < segments.vertex_polygon.len() && segments.vertex_polygon[v] == f {
-            v += 1;
+/// Per owner (0..`owners`), the run of consecutive items it owns in `owner_of` (`Segments` adds
+/// a polygon's vertices and its triangles together); an owner with none gets an empty range.
+pub fn owner_ranges(owner_of: &[u32], owners: usize) -> Vec<Range<u32>> {
+    let mut ranges = vec![0u32..0u32; owners];
+    let mut i = 0usize;
+    while i < owner_of.len() {
+        let owner = owner_of[i];
+        let first = i;
+        while i < owner_of.len() && owner_of[i] == owner {
+            i += 1;
         }
-        ranges[f as usize] = first as u32..v as u32;
+        if let Some(r) = ranges.get_mut(owner as usize) {
+            *r = first as u32..i as u32;
+        }
     }
     ranges
 }
