@@ -199,6 +199,11 @@ enum Command {
         /// Russian roulette where the K-th bounce and every later one hits a surface (unbiased: the same expected value within --bounces), or `off`.
         #[arg(long, value_name = "K|off", default_value_t = Roulette(Some(penumbra::reference::DEFAULT_ROULETTE_AFTER)), value_parser = parse_roulette)]
         roulette_after: Roulette,
+        /// Next-event estimation of punctual lights: `every` light at every vertex, `one` drawn in
+        /// proportion to its unshadowed contribution (one shadow ray a vertex, unbiased), or
+        /// `auto` (every light up to 32, one beyond).
+        #[arg(long, value_name = "every|one|auto", default_value = "auto", value_parser = parse_light_selection)]
+        light_selection: penumbra::reference::LightSelection,
         /// Write the scene as the tracer sees it (triangles per material as PLY, camera, materials and lights as JSON) into DIR and exit, for tools/reference_vs_mitsuba.py.
         #[arg(long, value_name = "DIR")]
         export_scene: Option<PathBuf>,
@@ -243,6 +248,16 @@ fn parse_roulette(s: &str) -> Result<Roulette, String> {
     match s.trim().parse::<u32>() {
         Ok(k) if k >= 1 => Ok(Roulette(Some(k))),
         _ => Err(format!("`{s}`: expected a whole number of at least 1, or `off`")),
+    }
+}
+
+fn parse_light_selection(s: &str) -> Result<penumbra::reference::LightSelection, String> {
+    use penumbra::reference::LightSelection;
+    match s.trim().to_ascii_lowercase().as_str() {
+        "every" => Ok(LightSelection::Every),
+        "one" => Ok(LightSelection::One),
+        "auto" => Ok(LightSelection::Auto),
+        _ => Err(format!("`{s}`: expected every, one or auto")),
     }
 }
 
@@ -416,7 +431,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let opts = options(&render);
             penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
         }
-        Command::Reference { scene, spp, max_stderr, stderr_over, size, bounces, roulette_after, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
+        Command::Reference { scene, spp, max_stderr, stderr_over, size, bounces, roulette_after, light_selection, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
             if let Some(dir) = export_scene {
                 for p in penumbra::reference::export::export_file(&scene, &dir)? {
                     penumbra::outln!("wrote {}", p.display());
@@ -433,7 +448,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             };
             let spp = spp.unwrap_or(if max_stderr.is_some() { 65536 } else { 256 });
             let target = max_stderr.map(|max| ErrorTarget { max, scope: stderr_over, min_spp: MIN_ADAPTIVE_SPP });
-            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0 };
+            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0, light_selection };
             let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, target, frame, gpu: gpu_desc(&device) })?;
             for p in &report.written {
                 penumbra::outln!("wrote {}", p.display());

@@ -13,7 +13,7 @@ use penumbra::environment::EnvironmentMap;
 use penumbra::gpu_scene::punctual_lights;
 use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
-use penumbra::reference::{Batching, LightPaths, ReferenceImage, ReferenceOptions, ReferenceRenderer, Settings};
+use penumbra::reference::{Batching, LightPaths, LightSelection, ReferenceImage, ReferenceOptions, ReferenceRenderer, Settings, DEFAULT_BOUNCES};
 use penumbra::scene::Scene;
 use reference_support::{ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance, reflected_environment, rmse, Agreement};
 
@@ -142,26 +142,85 @@ fov_y_deg = 50
 "#;
 
 /// Direct light from punctual lights is the forward method's closed form (plus `extra`, for
-/// what it does not model), box-filtered over each pixel; the only noise is the pixel jitter.
+/// what it does not model), box-filtered over each pixel, with every light visited at each
+/// vertex and with one drawn per vertex; the only noise of the first is the pixel jitter.
 fn check_punctual(material: &str, surface: Surface, lights: &str, extra: impl Fn(Vec3) -> Vec3) {
+    check_punctual_with(material, surface, lights, extra, (32, 32), &[LightSelection::Every, LightSelection::One]);
+}
+
+fn check_punctual_with(material: &str, surface: Surface, lights: &str, extra: impl Fn(Vec3) -> Vec3, size: (u32, u32), selections: &[LightSelection]) -> Vec<ReferenceImage> {
     let toml = format!("{LIT_PLANE}\n[[materials]]\nname = \"m\"\n{material}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n{lights}");
     let scene = parse(&toml);
-    let size = (32, 32);
-    let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 3)])[0];
+    let runs: Vec<Settings> = selections.iter().map(|&light_selection| Settings { light_selection, ..settings(64, 0, LightPaths::Direct, 3) }).collect();
+    let imgs = render(&scene, size, &runs);
     let gpu_lights = punctual_lights(&scene);
-    let mut agreement = Agreement::new("punctual lights");
-    for j in 0..size.1 {
-        for i in 0..size.0 {
-            let want = pixel_average(i, j, 8, |x, y| {
+    let want: Vec<Option<Vec3>> = (0..size.0 * size.1)
+        .map(|k| {
+            let (i, j) = (k % size.0, k / size.0);
+            pixel_average(i, j, 8, |x, y| {
                 let p = ground_point(&scene, x, y, size, 3.0)?;
                 Some(shade(p, Vec3::Y, scene.camera.position, &surface, &gpu_lights, Vec3::ZERO) + extra(p))
-            });
-            let Some(want) = want else { continue };
-            agreement.check(img, i, j, want, want * 1e-3);
+            })
+        })
+        .collect();
+    for (img, selection) in imgs.iter().zip(selections) {
+        let mut agreement = Agreement::new(if *selection == LightSelection::One { "punctual lights, one drawn per vertex" } else { "punctual lights, every one" });
+        for (k, want) in want.iter().enumerate() {
+            let Some(want) = *want else { continue };
+            agreement.check(img, k as u32 % size.0, k as u32 / size.0, want, want * 1e-3);
         }
+        assert!(agreement.pixels > (size.0 * size.1 * 2 / 5) as usize, "most pixels see the plane ({})", agreement.pixels);
+        agreement.assert();
     }
-    assert!(agreement.pixels > 400, "most pixels see the plane ({})", agreement.pixels);
-    agreement.assert();
+    imgs
+}
+
+/// Drawing one punctual light per vertex and colour channel in proportion to its unshadowed
+/// contribution: with nothing in the way every draw gives the full sum, so the noise is the
+/// pixel jitter's alone, as when every light is visited (a uniform draw, or any draw not in
+/// proportion, would multiply it). And 1,024 lights, a shadow ray each beyond what llvmpipe lets
+/// one invocation loop, render in one ray a vertex to their closed-form sum.
+#[test]
+fn one_punctual_light_drawn_per_vertex_is_unbiased_and_follows_the_contribution() {
+    let surface = Surface { albedo: Vec3::splat(0.6), specular: Vec3::splat(0.3), exponent: 16.0, emission: Vec3::ZERO };
+    let material = "albedo = 0.6\nspecular = 0.3\nexponent = 16";
+    let mut lights = String::new();
+    for k in 0..20 {
+        let (x, z) = ((k % 5) as f32 * 0.8 - 1.6, (k / 5) as f32 * 0.8 - 1.2);
+        // Coloured, so that a light can matter to one channel and hardly to another.
+        let intensity = [0.3 + 0.25 * (k % 7) as f32, 0.2 + 0.3 * (k % 3) as f32, 0.05 + 0.4 * (k % 5 == 0) as u32 as f32];
+        lights += &format!("\n[[lights]]\ntype = \"point\"\nposition = [{x}, {}, {z}]\nintensity = {intensity:?}\n", 0.6 + 0.1 * (k % 3) as f32);
+    }
+    let imgs = check_punctual_with(material, surface, &lights, |_| Vec3::ZERO, (16, 16), &[LightSelection::Every, LightSelection::One]);
+    let (every, one) = (sample_variance(&imgs[0]), sample_variance(&imgs[1]));
+    eprintln!("variance per sample: every light {every:.3e}, one drawn {one:.3e}");
+    assert!(one <= every * 1.02 + 1e-12, "one light drawn in proportion adds no noise on an unshadowed plane: {one:.3e} against {every:.3e}");
+
+    let grid = "\n[[light_arrays]]\nname = \"rig\"\ntype = \"point\"\ngrid = [32, 1, 32]\nmin = [-3, 1.5, -3]\nmax = [3, 1.5, 3]\nintensity = 0.004\n";
+    check_punctual_with(material, surface, grid, |_| Vec3::ZERO, (16, 16), &[LightSelection::Auto]);
+}
+
+/// Under shadows and with indirect light (seed 003's slanted polygon under 25 white lights, and
+/// its polygon over a plane under three coloured ones, where each channel draws its own light),
+/// the light drawn per vertex renders the mean of visiting every light, pixel by pixel and over
+/// the image, within the renders' own standard errors; weighting the drawn light by anything
+/// but the inverse of its probability, or drawing for all channels by one, moves the means by
+/// many standard errors.
+#[test]
+fn one_punctual_light_drawn_per_vertex_matches_every_light_under_shadows() {
+    let size = (16, 16);
+    for (name, lights) in [("many_slanted.toml", 25), ("many_polygon3.toml", 3)] {
+        let scene = scene_file(name);
+        assert_eq!(punctual_lights(&scene).len(), lights);
+        let with = |light_selection, seed| Settings { light_selection, ..settings(128, 2, LightPaths::All, seed) };
+        let imgs = render(&scene, size, &[with(LightSelection::Every, 1), with(LightSelection::One, 2), with(LightSelection::Auto, 1)]);
+        assert_eq!(imgs[0].mean, imgs[2].mean, "up to 32 lights auto visits every one");
+        let (beyond_3, worst, image_z) = two_render_z(&imgs[0], &imgs[1], &vec![true; 256]);
+        let cost = sample_variance(&imgs[1]) / sample_variance(&imgs[0]);
+        eprintln!("{name}: {beyond_3} of 256 pixels beyond 3 s.e., worst z {worst:.2}, image mean z {image_z:?}; variance per sample one / every {cost:.2}");
+        assert!(beyond_3 <= 5 && worst <= 6.0, "{name}: {beyond_3} pixels beyond 3 s.e., worst z {worst}");
+        assert!(image_z.iter().all(|z| z.abs() <= 4.0), "{name}: image means differ: z {image_z:?}");
+    }
 }
 
 #[test]
@@ -567,7 +626,7 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
         std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&all).output().expect("run penumbra")
     };
     // No roulette: the furnace is then noise-free (every path carries the truncated series).
-    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "--roulette-after", "off", "-o", out.to_str().expect("utf-8 path")]);
+    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "--roulette-after", "off", "--light-selection", "one", "-o", out.to_str().expect("utf-8 path")]);
     let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{stdout}\n{stderr}");
     // The summary goes to stdout; progress lines only to a terminal, so a pipe gets none.
@@ -585,6 +644,7 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
         (&["--size", "0x4"][..], "--size"),
         (&["--roulette-after", "0"][..], "--roulette-after"),
         (&["--roulette-after", "never"][..], "--roulette-after"),
+        (&["--light-selection", "some"][..], "--light-selection"),
     ] {
         let o = penumbra(args);
         let stderr = String::from_utf8_lossy(&o.stderr);
@@ -1099,4 +1159,32 @@ fn a_batch_cut_short_for_some_pixels_counts_no_sample_twice() {
     assert_eq!(image.mean.pixels, small.mean.pixels, "{spp} spp in batches cut short against batches of 16");
     assert_eq!(image.standard_error.pixels, small.standard_error.pixels);
     common::assert_clean(&r.gpu);
+}
+
+/// Measurement behind `ONE_LIGHT_ABOVE` (README, "Many punctual lights in the reference"): per
+/// scene, samples per second and variance per sample with every light visited and with one
+/// drawn, and their efficiency ratio (samples/s ÷ variance). `cargo test --release --test
+/// reference light_selection_efficiency -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn light_selection_efficiency() {
+    let size = (64, 36);
+    for name in ["many_polygon3.toml", "many_intersecting.toml", "many_slanted.toml", "theatre_50.toml", "theatre_100.toml"] {
+        let scene = scene_file(name);
+        let lights = punctual_lights(&scene).len();
+        let with = |light_selection| Settings { light_selection, batching: Batching::Fixed(16), ..settings(128, DEFAULT_BOUNCES, LightPaths::All, 1) };
+        // The first render of a device also pays for its warm-up: measured again after it.
+        let mut imgs = render(&scene, size, &[with(LightSelection::One), with(LightSelection::Every), with(LightSelection::One)]);
+        imgs.remove(0);
+        let rate = |i: &ReferenceImage| i.samples_per_second();
+        let efficiency = |i: &ReferenceImage| rate(i) / sample_variance(i);
+        eprintln!(
+            "{name}: {lights} lights; every {:.0} samples/s, variance {:.3e}; one {:.0} samples/s, variance {:.3e}; efficiency one / every {:.2}",
+            rate(&imgs[0]),
+            sample_variance(&imgs[0]),
+            rate(&imgs[1]),
+            sample_variance(&imgs[1]),
+            efficiency(&imgs[1]) / efficiency(&imgs[0])
+        );
+    }
 }

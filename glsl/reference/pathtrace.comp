@@ -32,7 +32,8 @@ layout(set = 0, binding = 0) uniform Params {
     vec4 environment;  // rgb: radiance of rays that escape
     uvec4 counts;      // x: lights, y: triangles, z: width, w: height
     uvec4 environment_map;  // x, y: size of the map (0 for the constant environment); z: sampled; w: cube
-    uvec4 options;     // x: 1 when a ray past the last interaction can find light (emission, sky)
+    uvec4 options;     // x: 1 when a ray past the last interaction can find light (emission, sky);
+                       // y: the first area light (punctual lights come before it)
 } params;
 
 #define BVH_NODES_BINDING 1
@@ -88,7 +89,7 @@ Hit trace_visible(vec3 o, vec3 d, inout uint rng) {
 // `occluded` with translucent surfaces stopping the ray stochastically. The any-hit query
 // answers first; only when what it found is translucent are the layers walked nearest first.
 bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
-    for (uint i = 0u; i < params.counts.x; ++i) {
+    for (uint i = params.options.y; i < params.counts.x; ++i) {
         if (i != skip_light && hit_area_light(i, o, d) < t_max) {
             return true;
         }
@@ -134,6 +135,8 @@ layout(push_constant) uniform Batch {
 
 // Leave out light that reaches the camera after fewer than two surface interactions.
 const uint FLAG_INDIRECT_ONLY = 1u;
+// Next-event estimation picks one punctual light per vertex instead of visiting every one.
+const uint FLAG_ONE_PUNCTUAL_LIGHT = 2u;
 // Seed difference of the next-event estimation stream.
 const uint LIGHT_STREAM = 0x9e3779b9u;
 
@@ -267,11 +270,78 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
     return false;
 }
 
-// Next-event estimation: one shadow ray to each light, and one to the environment map, weighted
-// against the BSDF sampling that can also find it.
+// The light punctual light `i` sends through a surface toward v, unshadowed, and its direction
+// and distance: zero where it cannot reach the surface (behind it, outside a spot's cone).
+vec3 punctual_contribution(uint i, Surface s, Material m, vec3 v, out vec3 l, out float dist) {
+    Light light = lights.items[i];
+    vec3 arriving;
+    l = vec3(0.0, 1.0, 0.0);
+    light_incidence(light, s.p, l, arriving);
+    dist = uint(light.position.w) == LIGHT_DIRECTIONAL ? NO_HIT : distance(light.position.xyz, s.p);
+    if (all(equal(arriving, vec3(0.0)))) {
+        return vec3(0.0);
+    }
+    return bsdf_times_cos(s, m, v, l) * arriving;
+}
+
+bool unblocked_toward(Surface s, vec3 l, float dist, uint skip_light, inout uint rng) {
+    float t_max = dist == NO_HIT ? NO_HIT : dist * (1.0 - 1e-4);
+    return !blocked(spawn_origin(s, l), l, t_max, skip_light, rng);
+}
+
+// Next-event estimation. Punctual lights: a shadow ray to each, or (FLAG_ONE_PUNCTUAL_LIGHT) per
+// colour channel one light drawn with probability c_i / C, its unshadowed contribution to that
+// channel over all lights' C, and counted as C times its visibility: the expected value is the
+// same sum, the estimate is exact where nothing is shadowed and never exceeds C, so coloured
+// lights leave no rare large values for the standard error to miss. The draw is one pass of
+// weighted reservoir sampling with one random number per light for all three channels, so lights
+// of one colour pick the same light and take one shadow ray. Area lights: one sampled point
+// each. The environment map: one ray, weighted against the BSDF sampling that can also find it.
 vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
     vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < params.counts.x; ++i) {
+    uint punctual = params.options.y;
+    if ((batch.flags & FLAG_ONE_PUNCTUAL_LIGHT) != 0u) {
+        vec3 total = vec3(0.0);
+        uvec3 chosen = uvec3(NO_LIGHT);
+        for (uint i = 0u; i < punctual; ++i) {
+            vec3 l;
+            float dist;
+            vec3 c = max(punctual_contribution(i, s, m, v, l, dist), vec3(0.0));
+            if (all(equal(c, vec3(0.0)))) {
+                continue;
+            }
+            total += c;
+            // Where c is 0 the comparison fails, so a channel only ever picks a light it gets.
+            chosen = mix(chosen, uvec3(i), lessThan(vec3(rand(rng)) * total, c));
+        }
+        float seen[3];
+        for (int k = 0; k < 3; ++k) {
+            uint i = chosen[k];
+            if (i == NO_LIGHT) {
+                seen[k] = 0.0;
+            } else if (k > 0 && i == chosen[0]) {
+                seen[k] = seen[0];
+            } else if (k > 1 && i == chosen[1]) {
+                seen[k] = seen[1];
+            } else {
+                vec3 l;
+                float dist;
+                punctual_contribution(i, s, m, v, l, dist);
+                seen[k] = unblocked_toward(s, l, dist, NO_LIGHT, rng) ? 1.0 : 0.0;
+            }
+        }
+        sum += total * vec3(seen[0], seen[1], seen[2]);
+    } else {
+        for (uint i = 0u; i < punctual; ++i) {
+            vec3 l;
+            float dist;
+            vec3 c = punctual_contribution(i, s, m, v, l, dist);
+            if (any(notEqual(c, vec3(0.0))) && unblocked_toward(s, l, dist, NO_LIGHT, rng)) {
+                sum += c;
+            }
+        }
+    }
+    for (uint i = punctual; i < params.counts.x; ++i) {
         vec3 l;
         vec3 arriving;
         float dist;
@@ -279,11 +349,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
             continue;
         }
         vec3 f = bsdf_times_cos(s, m, v, l);
-        if (all(equal(f, vec3(0.0)))) {
-            continue;
-        }
-        float t_max = dist == NO_HIT ? NO_HIT : dist * (1.0 - 1e-4);
-        if (!blocked(spawn_origin(s, l), l, t_max, i, rng)) {
+        if (any(notEqual(f, vec3(0.0))) && unblocked_toward(s, l, dist, i, rng)) {
             sum += f * arriving;
         }
     }

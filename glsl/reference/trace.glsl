@@ -1,7 +1,8 @@
 // Ray queries against the scene: the BVH over triangles (common/bvh.glsl) and the area lights,
 // which are opaque to every ray.
-// The including shader declares `params` (counts.x: lights) and `lights`, and includes
-// common/bvh.glsl, before including this file.
+// The including shader declares `params` (counts.x: lights; options.y: the first area light,
+// the punctual ones coming before it) and `lights`, and includes common/bvh.glsl, before
+// including this file.
 #ifndef PENUMBRA_REFERENCE_TRACE_GLSL
 #define PENUMBRA_REFERENCE_TRACE_GLSL
 
@@ -64,7 +65,7 @@ Hit trace_closest(vec3 o, vec3 d) {
     h.t = NO_HIT;
     h.light = -1;
     trace_triangles(o, d, false, h.t, h.triangle, h.uv);
-    for (uint i = 0u; i < params.counts.x; ++i) {
+    for (uint i = params.options.y; i < params.counts.x; ++i) {
         float t = hit_area_light(i, o, d);
         if (t < h.t) {
             h.t = t;
@@ -77,7 +78,7 @@ Hit trace_closest(vec3 o, vec3 d) {
 
 // Whether anything lies on the ray closer than t_max; `skip_light` is the light being sampled.
 bool occluded(vec3 o, vec3 d, float t_max, uint skip_light) {
-    for (uint i = 0u; i < params.counts.x; ++i) {
+    for (uint i = params.options.y; i < params.counts.x; ++i) {
         if (i != skip_light && hit_area_light(i, o, d) < t_max) {
             return true;
         }

@@ -115,6 +115,8 @@ pub struct TracedScene {
     /// radius, `intensity` = radiance) and quad lights (`position` = corner, `direction` =
     /// edge_u, `cone` = edge_v, `intensity` = radiance).
     pub lights: Vec<GpuLight>,
+    /// How many of `lights` are punctual (they come first).
+    pub punctual_lights: u32,
     /// Every distinct (file, encoding) texture map the materials use.
     pub textures: Vec<TracedTexture>,
     /// Constant radiance of rays that escape (when there is no map).
@@ -246,6 +248,7 @@ impl TracedScene {
             })
             .collect();
         let mut lights = punctual_lights(scene);
+        let punctual_lights = lights.len() as u32;
         for l in &scene.lights {
             match l {
                 Light::Sphere { center, radius, radiance, .. } => {
@@ -257,7 +260,7 @@ impl TracedScene {
                 Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => {}
             }
         }
-        Ok(TracedScene { corners, bvh, triangles, shading, materials, lights, textures, environment, environment_map })
+        Ok(TracedScene { corners, bvh, triangles, shading, materials, lights, punctual_lights, textures, environment, environment_map })
     }
 
     /// Whether a ray leaving a path's last vertex can still find light: some material emits or
