@@ -56,7 +56,10 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
 }
 
 pub fn run(opts: &CaptureOptions) -> Result<Vec<String>> {
-    let (image, renderer) = render_image(opts)?;
+    let (image, mut renderer) = render_image(opts)?;
+    for w in renderer.method_warnings()? {
+        eprintln!("warning: {w}");
+    }
     let mut written = Vec::new();
     if let Some(p) = &opts.exr {
         image.write_exr(p)?;

@@ -199,9 +199,9 @@ enum Command {
         /// Russian roulette where the K-th bounce and every later one hits a surface (unbiased: the same expected value within --bounces), or `off`.
         #[arg(long, value_name = "K|off", default_value_t = Roulette(Some(penumbra::reference::DEFAULT_ROULETTE_AFTER)), value_parser = parse_roulette)]
         roulette_after: Roulette,
-        /// Next-event estimation of punctual lights: `every` light at every vertex, `one` drawn in
-        /// proportion to its unshadowed contribution (one shadow ray a vertex, unbiased), or
-        /// `auto` (every light up to 32, one beyond).
+        /// Next-event estimation: `every` light at every vertex, `one` drawn per colour channel in
+        /// proportion to its unshadowed contribution (one to three shadow rays a vertex, unbiased),
+        /// or `auto` (every light up to 32, one beyond).
         #[arg(long, value_name = "every|one|auto", default_value = "auto", value_parser = parse_light_selection)]
         light_selection: penumbra::reference::LightSelection,
         /// Write the scene as the tracer sees it (triangles per material as PLY, camera, materials and lights as JSON) into DIR and exit, for tools/reference_vs_mitsuba.py.
@@ -414,6 +414,9 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                     n.flip_mean,
                     r.reference
                 );
+                for w in &r.warnings {
+                    penumbra::outln!("    warning: {w}");
+                }
             }
             penumbra::outln!("chart: {} configurations in {:.1} s wall", chart.rows.len(), start.elapsed().as_secs_f64());
             penumbra::outln!("wrote {}", output.display());

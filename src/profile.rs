@@ -29,6 +29,8 @@ pub struct ProfileReport {
     pub method_report: String,
     /// The methods' device memory per resource group (the methods that itemise it).
     pub memory: Vec<crate::lighting::MemoryItem>,
+    /// What the methods left out of the last frame ([`crate::lighting::LightingMethod::warnings`]).
+    pub warnings: Vec<String>,
 }
 
 pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
@@ -46,6 +48,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
     let passes = summarise(&timings);
     let method_report = registry::reports(&renderer.configuration, &passes);
     let memory = renderer.method_memory()?;
+    let warnings = renderer.method_warnings()?;
     let caps = renderer.gpu.caps();
     Ok(ProfileReport {
         configuration: renderer.configuration.name.clone(),
@@ -53,6 +56,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
         bakes: renderer.bakes.clone(),
         method_report,
         memory,
+        warnings,
         device: caps.name.clone(),
         driver: format!("{} {}", caps.driver_name, caps.driver_info),
         width: opts.size.0,
@@ -91,6 +95,9 @@ impl ProfileReport {
             for m in &self.memory {
                 s += &format!("{:<52} {:>12} {:>12}\n", m.resource, m.requested, m.allocated);
             }
+        }
+        for w in &self.warnings {
+            s += &format!("warning: {w}\n");
         }
         if !self.bakes.is_empty() {
             s += "bakes (at creation, not frame time):\n";

@@ -66,12 +66,16 @@ fn lights(points: usize, spots: usize, seed: u64) -> String {
 }
 
 /// A 24 m floor, diffuse with a specular lobe, seen obliquely so the slices span 3–20 m.
-fn floor_scene(methods: &str, lights: &str) -> Scene {
-    let text = format!(
+fn floor_text(methods: &str, lights: &str) -> String {
+    format!(
         "methods = [{methods}]\n[camera]\nposition = [0, 7, 9]\ntarget = [0, 0, -2]\nfov_y_deg = 60\n\n\
          [[materials]]\nname = \"floor\"\nalbedo = [0.7, 0.6, 0.5]\nspecular = 0.2\nexponent = 16\n\n\
          [[objects]]\nmesh = \"plane\"\nsize = [24, 24]\nmaterial = \"floor\"\n\n{lights}"
-    );
+    )
+}
+
+fn floor_scene(methods: &str, lights: &str) -> Scene {
+    let text = floor_text(methods, lights);
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     Scene::from_str(&text, "clustered test", &dir).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -243,6 +247,43 @@ fn overflow_is_counted() {
     let (roomy, _) = assignment(&floor_scene("{ name = \"clustered\", max_per_cluster = 16, tiles = [8, 6], slices = 8 }", &text));
     assert_eq!((roomy.overflowed_clusters(), roomy.dropped()), (0, 0));
     assert!(roomy.lights.iter().all(|l| l.len() == 12));
+}
+
+/// Overflow reaches the user: the renderer's warnings after a frame name the method, the
+/// clusters and `max_per_cluster` when lights were dropped and say nothing when none were, and
+/// `penumbra capture` prints the line on stderr.
+#[test]
+fn dropped_lights_are_reported_to_the_user() {
+    let mut text = String::new();
+    for k in 0..12 {
+        text += &format!("[[lights]]\ntype = \"point\"\nposition = [{}, 1, -2]\nintensity = 1\nradius = 100\n\n", k as f32 - 6.0);
+    }
+    let warnings = |cap: u32| {
+        let scene = floor_scene(&format!("{{ name = \"clustered\", max_per_cluster = {cap}, tiles = [8, 6], slices = 8 }}"), &text);
+        let mut r = Renderer::new(common::test_gpu(), scene, Some("clustered"), (W, H), 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        r.render(&cam, FrameOutput::Readback).unwrap();
+        let w = r.method_warnings().unwrap();
+        common::assert_clean(&r.gpu);
+        w
+    };
+    let small = warnings(4);
+    assert_eq!(small.len(), 1, "{small:?}");
+    assert!(small[0].starts_with("clustered: 384 of 384 clusters") && small[0].contains("max_per_cluster = 4 (the fullest 12)") && small[0].contains("3072 light-cluster pairs"), "{}", small[0]);
+    assert!(warnings(12).is_empty(), "12 slots hold all 12 lights");
+
+    let dir = common::temp_path("clustered-overflow");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("overflow.toml");
+    std::fs::write(&scene_path, floor_text("{ name = \"clustered\", max_per_cluster = 4 }", &text)).unwrap();
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["capture", scene_path.to_str().unwrap(), "--size", "32x24", "--device", &device, "--validation", "-o", dir.join("c.png").to_str().unwrap()])
+        .output()
+        .expect("run penumbra");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.lines().any(|l| l.starts_with("warning: clustered:") && l.contains("max_per_cluster = 4")), "{stderr}");
 }
 
 /// Bad parameters: one error naming the scene, the method's entry and the parameter.

@@ -362,6 +362,47 @@ radiance = [5.0, 4.0, 3.0]
     plane.assert();
 }
 
+/// A ceiling of 100 small coloured quad lights over a plane: every light visited and one drawn
+/// per vertex and channel (each at one sampled point) both give the sum of Lambert's polygon
+/// formula over the lights, within their standard errors.
+#[test]
+fn many_quad_lights_every_one_or_one_drawn_per_vertex_give_the_polygon_formula() {
+    let mut toml = String::from(
+        "[camera]\nposition = [0.2, 1.2, 1.6]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = 60\n\n[[materials]]\nname = \"m\"\nalbedo = 0.7\n\n[[objects]]\nmesh = \"plane\"\nsize = 20\nmaterial = \"m\"\n",
+    );
+    let mut quads = Vec::new();
+    for k in 0..100 {
+        let corner = Vec3::new(-3.0 + 0.6 * (k % 10) as f32, 2.0, -3.0 + 0.6 * (k / 10) as f32);
+        let radiance = [Vec3::new(6.0, 1.0, 1.0), Vec3::new(1.0, 6.0, 1.0), Vec3::new(1.0, 1.0, 6.0), Vec3::new(3.0, 3.0, 3.0)][k % 4];
+        toml += &format!(
+            "\n[[lights]]\ntype = \"quad\"\ncorner = [{}, {}, {}]\nedge_u = [0.2, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.2]\nradiance = [{}, {}, {}]\n",
+            corner.x, corner.y, corner.z, radiance.x, radiance.y, radiance.z
+        );
+        quads.push(([corner, corner + Vec3::new(0.2, 0.0, 0.0), corner + Vec3::new(0.2, 0.0, 0.2), corner + Vec3::new(0.0, 0.0, 0.2)], radiance));
+    }
+    let scene = parse(&toml);
+    let size = (16, 16);
+    let with = |light_selection, seed| Settings { light_selection, ..settings(64, 0, LightPaths::Direct, seed) };
+    let imgs = render(&scene, size, &[with(LightSelection::Every, 1), with(LightSelection::One, 2), with(LightSelection::Auto, 2)]);
+    assert_eq!(imgs[1].mean, imgs[2].mean, "100 lights are many: auto draws one");
+    for (img, what) in imgs.iter().zip(["plane under 100 quads, every one", "plane under 100 quads, one drawn"]) {
+        let mut plane = Agreement::new(what);
+        for j in 0..size.1 {
+            for i in 0..size.0 {
+                let want = pixel_average(i, j, 4, |x, y| {
+                    let p = ground_point(&scene, x, y, size, 9.0)?;
+                    Some(quads.iter().fold(Vec3::ZERO, |sum, (verts, radiance)| sum + 0.7 / std::f32::consts::PI * *radiance * polygon_irradiance(p, Vec3::Y, verts)))
+                });
+                if let Some(want) = want {
+                    plane.check(img, i, j, want, want * 2e-3);
+                }
+            }
+        }
+        assert!(plane.pixels > 200, "{what}: {} pixels", plane.pixels);
+        plane.assert();
+    }
+}
+
 #[test]
 fn sphere_light_over_a_plane_direct_only() {
     // A sphere wholly above a Lambertian receiver's horizon gives the same irradiance as a point

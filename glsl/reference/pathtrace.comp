@@ -135,8 +135,8 @@ layout(push_constant) uniform Batch {
 
 // Leave out light that reaches the camera after fewer than two surface interactions.
 const uint FLAG_INDIRECT_ONLY = 1u;
-// Next-event estimation picks one punctual light per vertex instead of visiting every one.
-const uint FLAG_ONE_PUNCTUAL_LIGHT = 2u;
+// Next-event estimation draws one light per vertex and colour channel instead of visiting every one.
+const uint FLAG_ONE_LIGHT = 2u;
 // Seed difference of the next-event estimation stream.
 const uint LIGHT_STREAM = 0x9e3779b9u;
 
@@ -270,15 +270,12 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
     return false;
 }
 
-// The light punctual light `i` sends through a surface toward v, unshadowed, and its direction
-// and distance: zero where it cannot reach the surface (behind it, outside a spot's cone).
-vec3 punctual_contribution(uint i, Surface s, Material m, vec3 v, out vec3 l, out float dist) {
-    Light light = lights.items[i];
+// What light `i` sends through the surface toward v, unshadowed, with the direction and distance
+// of the shadow ray that decides whether it arrives: exact for a punctual light, one sampled point
+// (divided by its pdf) of an area light; zero where it cannot reach the surface.
+vec3 light_contribution(uint i, Surface s, Material m, vec3 v, inout uint rng, out vec3 l, out float dist) {
     vec3 arriving;
-    l = vec3(0.0, 1.0, 0.0);
-    light_incidence(light, s.p, l, arriving);
-    dist = uint(light.position.w) == LIGHT_DIRECTIONAL ? NO_HIT : distance(light.position.xyz, s.p);
-    if (all(equal(arriving, vec3(0.0)))) {
+    if (!sample_light(i, s.p, rng, l, arriving, dist) || all(equal(arriving, vec3(0.0)))) {
         return vec3(0.0);
     }
     return bsdf_times_cos(s, m, v, l) * arriving;
@@ -289,31 +286,40 @@ bool unblocked_toward(Surface s, vec3 l, float dist, uint skip_light, inout uint
     return !blocked(spawn_origin(s, l), l, t_max, skip_light, rng);
 }
 
-// Next-event estimation. Punctual lights: a shadow ray to each, or (FLAG_ONE_PUNCTUAL_LIGHT) per
-// colour channel one light drawn with probability c_i / C, its unshadowed contribution to that
-// channel over all lights' C, and counted as C times its visibility: the expected value is the
-// same sum, the estimate is exact where nothing is shadowed and never exceeds C, so coloured
-// lights leave no rare large values for the standard error to miss. The draw is one pass of
-// weighted reservoir sampling with one random number per light for all three channels, so lights
-// of one colour pick the same light and take one shadow ray. Area lights: one sampled point
-// each. The environment map: one ray, weighted against the BSDF sampling that can also find it.
+// Next-event estimation. Lights: a shadow ray to each (one sampled point of an area light), or
+// (FLAG_ONE_LIGHT) per colour channel one light drawn with probability c_i / C, its unshadowed
+// contribution c_i to that channel (for an area light, at the point sampled on it) over all
+// lights' C, and counted as C times its visibility. Given the sampled points the expected value
+// is the sum over lights of c_i times visibility, so the estimate is unbiased; it is exact where
+// nothing is shadowed and punctual, and never exceeds C, so coloured lights leave no rare large
+// values for the standard error to miss. The draw is one pass of weighted reservoir sampling
+// with one random number per light for all three channels, so lights of one colour pick the same
+// light and take one shadow ray. The environment map: one ray, weighted against the BSDF
+// sampling that can also find it.
 vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
     vec3 sum = vec3(0.0);
-    uint punctual = params.options.y;
-    if ((batch.flags & FLAG_ONE_PUNCTUAL_LIGHT) != 0u) {
+    if ((batch.flags & FLAG_ONE_LIGHT) != 0u) {
         vec3 total = vec3(0.0);
         uvec3 chosen = uvec3(NO_LIGHT);
-        for (uint i = 0u; i < punctual; ++i) {
+        vec3 chosen_l[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
+        vec3 chosen_dist = vec3(0.0);
+        for (uint i = 0u; i < params.counts.x; ++i) {
             vec3 l;
             float dist;
-            vec3 c = max(punctual_contribution(i, s, m, v, l, dist), vec3(0.0));
+            vec3 c = max(light_contribution(i, s, m, v, rng, l, dist), vec3(0.0));
             if (all(equal(c, vec3(0.0)))) {
                 continue;
             }
             total += c;
             // Where c is 0 the comparison fails, so a channel only ever picks a light it gets.
-            chosen = mix(chosen, uvec3(i), lessThan(vec3(rand(rng)) * total, c));
+            bvec3 take = lessThan(vec3(rand(rng)) * total, c);
+            chosen = mix(chosen, uvec3(i), take);
+            chosen_dist = mix(chosen_dist, vec3(dist), take);
+            chosen_l[0] = take.x ? l : chosen_l[0];
+            chosen_l[1] = take.y ? l : chosen_l[1];
+            chosen_l[2] = take.z ? l : chosen_l[2];
         }
+        // A light drawn by two channels is the same sample: one shadow ray serves both.
         float seen[3];
         for (int k = 0; k < 3; ++k) {
             uint i = chosen[k];
@@ -324,33 +330,18 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
             } else if (k > 1 && i == chosen[1]) {
                 seen[k] = seen[1];
             } else {
-                vec3 l;
-                float dist;
-                punctual_contribution(i, s, m, v, l, dist);
-                seen[k] = unblocked_toward(s, l, dist, NO_LIGHT, rng) ? 1.0 : 0.0;
+                seen[k] = unblocked_toward(s, chosen_l[k], chosen_dist[k], i, rng) ? 1.0 : 0.0;
             }
         }
         sum += total * vec3(seen[0], seen[1], seen[2]);
     } else {
-        for (uint i = 0u; i < punctual; ++i) {
+        for (uint i = 0u; i < params.counts.x; ++i) {
             vec3 l;
             float dist;
-            vec3 c = punctual_contribution(i, s, m, v, l, dist);
-            if (any(notEqual(c, vec3(0.0))) && unblocked_toward(s, l, dist, NO_LIGHT, rng)) {
+            vec3 c = light_contribution(i, s, m, v, rng, l, dist);
+            if (any(notEqual(c, vec3(0.0))) && unblocked_toward(s, l, dist, i, rng)) {
                 sum += c;
             }
-        }
-    }
-    for (uint i = punctual; i < params.counts.x; ++i) {
-        vec3 l;
-        vec3 arriving;
-        float dist;
-        if (!sample_light(i, s.p, rng, l, arriving, dist) || all(equal(arriving, vec3(0.0)))) {
-            continue;
-        }
-        vec3 f = bsdf_times_cos(s, m, v, l);
-        if (any(notEqual(f, vec3(0.0))) && unblocked_toward(s, l, dist, i, rng)) {
-            sum += f * arriving;
         }
     }
     if (params.environment_map.z == 0u) {

@@ -77,6 +77,8 @@ pub struct ChartRow {
     pub supersampled: Option<Metrics>,
     /// What an exact method would score against this reference: its own error.
     pub reference_noise: Metrics,
+    /// What the method left out of its frame ([`crate::lighting::LightingMethod::warnings`]).
+    pub warnings: Vec<String>,
     /// The reference it was measured against (e.g. `direct, 256 spp`).
     pub reference: String,
     /// Wall time of the configuration's bakes when it was created (from the cache when
@@ -269,6 +271,7 @@ struct Measured {
     passes: Vec<(String, f64)>,
     device: String,
     bakes: Vec<BakeReport>,
+    warnings: Vec<String>,
 }
 
 /// Frames a configuration is timed over at least (fewer only when `--frames` asks for fewer).
@@ -286,6 +289,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
     let image = renderer.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+    let warnings = renderer.method_warnings()?;
     let mut timings = Vec::new();
     let start = std::time::Instant::now();
     while keep_timing(timings.len(), start.elapsed().as_secs_f64(), opts.frames.max(1), opts.timing_budget_s) {
@@ -311,7 +315,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     } else {
         None
     };
-    Ok(Measured { image, supersampled, frame_ms, frames_timed, passes, device, bakes })
+    Ok(Measured { image, supersampled, frame_ms, frames_timed, passes, device, bakes, warnings })
 }
 
 pub fn run(opts: &ChartOptions) -> Result<Chart> {
@@ -391,6 +395,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             metrics,
             supersampled,
             reference_noise: noise.clone(),
+            warnings: m.warnings,
             reference: reference.label.clone(),
             bake_ms: m.bakes.iter().map(|b| b.ms).sum(),
             bake_bytes: m.bakes.iter().map(|b| b.bytes).sum(),
@@ -477,7 +482,7 @@ impl Chart {
                 let _ = write!(s, ",{prefix}{m}");
             }
         }
-        s.push('\n');
+        s.push_str(",warnings\n");
         for r in &self.rows {
             let _ = write!(
                 s,
@@ -516,7 +521,7 @@ impl Chart {
             for v in metric_values(&r.reference_noise) {
                 let _ = write!(s, ",{v}");
             }
-            s.push('\n');
+            let _ = writeln!(s, ",{}", r.warnings.join(" | ").replace([',', '\n'], ";"));
         }
         s
     }
@@ -650,6 +655,7 @@ mod tests {
             metrics: m(e),
             supersampled: None,
             reference_noise: m(e / 100.0),
+            warnings: vec!["x: 2, of 3 dropped".into()],
             reference: "direct, 4 spp".into(),
         };
         let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), supersample: 1, rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new() };
@@ -657,6 +663,7 @@ mod tests {
         let parsed = parse_csv(&chart.csv()).unwrap();
         assert_eq!(parsed, vec![cfg("a", 1.0, 0.5), cfg("b", 2.0, 0.6), cfg("c", 3.0, 0.1)]);
         assert!(chart.csv().lines().next().unwrap().contains("pass:p_ms"));
+        assert!(chart.csv().lines().nth(1).unwrap().ends_with(",x: 2; of 3 dropped"), "a warning is one CSV field: {}", chart.csv());
     }
 
     /// The noise `reference_noise` simulates has the standard error's scale: over 3 × 4,096

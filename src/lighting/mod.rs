@@ -142,6 +142,12 @@ pub trait LightingMethod {
     fn memory(&self, _gpu: &Gpu) -> Result<Vec<MemoryItem>> {
         Ok(Vec::new())
     }
+    /// What the last (finished) frame had to leave out, read back, each a line for the user:
+    /// light the method dropped for want of room, which the image lacks without any other sign.
+    /// Read once after a run, not every frame.
+    fn warnings(&self, _gpu: &mut Gpu) -> Result<Vec<String>> {
+        Ok(Vec::new())
+    }
 }
 
 /// One group of a method's resources and the device memory bound to it.

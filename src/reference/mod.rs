@@ -7,10 +7,10 @@
 //!   (point, spot and directional exactly as `glsl/common/lights.glsl`; spherical lights by
 //!   uniform sampling of the visible cap's cone; quad lights by uniform area sampling, one-sided),
 //!   then a direction sampled from the Lambert + Blinn-Phong + diffuse-transmission BSDF. Where
-//!   there are many punctual lights ([`LightSelection`]) each colour channel draws one of them
-//!   per vertex in proportion to its unshadowed contribution there and counts it weighted by the
-//!   inverse of that probability, so a vertex costs one to three shadow rays instead of one per
-//!   light;
+//!   there are many lights ([`LightSelection`]) each colour channel draws one of them per vertex
+//!   in proportion to its unshadowed contribution there (an area light's at the point sampled
+//!   on it) and counts it weighted by the inverse of that probability, so a vertex costs one to
+//!   three shadow rays instead of one per light;
 //! - a ray that escapes sees the environment: a constant, found by BSDF sampling alone, or an
 //!   equirectangular map ([`environment`]), also sampled at every vertex in proportion to
 //!   luminance × sin θ and combined with BSDF sampling by multiple importance sampling (power
@@ -124,37 +124,38 @@ impl Default for Settings {
     }
 }
 
-/// How next-event estimation treats punctual lights (point, spot, directional). Area lights are
-/// always sampled one point each.
+/// How next-event estimation treats the lights (an area light is sampled at one point either
+/// way).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSelection {
-    /// A shadow ray to every light at every vertex: no noise where nothing is shadowed, work
-    /// growing with the light count (and llvmpipe's loop limit reached at about a thousand).
+    /// A shadow ray to every light at every vertex: no noise from punctual lights where nothing
+    /// is shadowed, work growing with the light count (and llvmpipe's loop limit reached at about
+    /// a thousand punctual lights, or a few hundred area lights, whose shadow rays also test
+    /// every area light).
     Every,
     /// Per colour channel one light per vertex, drawn with probability proportional to its
-    /// unshadowed contribution c_i to that channel there and counted as Σc times its visibility:
-    /// unbiased, exact where nothing is shadowed, never above the unshadowed sum (so no rare
-    /// large values), and one shadow ray per vertex where the lights share a colour (three at
-    /// most).
+    /// unshadowed contribution c_i to that channel there (an area light's at the point sampled on
+    /// it) and counted as Σc times its visibility: unbiased, exact for punctual lights where
+    /// nothing is shadowed, never above the unshadowed sum (so no rare large values), and one
+    /// shadow ray per vertex where the lights share a colour (three at most).
     One,
-    /// [`Every`](Self::Every) up to [`ONE_LIGHT_ABOVE`] punctual lights, [`One`](Self::One)
-    /// beyond.
+    /// [`Every`](Self::Every) up to [`ONE_LIGHT_ABOVE`] lights, [`One`](Self::One) beyond.
     #[default]
     Auto,
 }
 
-/// Punctual lights beyond which [`LightSelection::Auto`] draws one per vertex. Measured
+/// Lights beyond which [`LightSelection::Auto`] draws one per vertex. Measured
 /// efficiency (samples/s ÷ variance) of drawing one over visiting every light, lavapipe, full
 /// paths: 0.30 with 3 lights, 0.88 with 10, 0.70 with 25, 2.1 with 50 and 2.4 with 100 (ignored
 /// test `light_selection_efficiency`).
 pub const ONE_LIGHT_ABOVE: u32 = 32;
 
 impl LightSelection {
-    fn draws_one(self, punctual_lights: u32) -> bool {
+    fn draws_one(self, lights: u32) -> bool {
         match self {
             LightSelection::Every => false,
             LightSelection::One => true,
-            LightSelection::Auto => punctual_lights > ONE_LIGHT_ABOVE,
+            LightSelection::Auto => lights > ONE_LIGHT_ABOVE,
         }
     }
 }
@@ -197,21 +198,21 @@ impl Settings {
         Ok(())
     }
 
-    fn push(&self, offset: u32, count: u32, punctual_lights: u32) -> BatchPush {
+    fn push(&self, offset: u32, count: u32, lights: u32) -> BatchPush {
         let (bounces, mut flags) = match self.paths {
             LightPaths::All => (self.bounces, 0),
             LightPaths::Direct => (0, 0),
             LightPaths::Indirect => (self.bounces, FLAG_INDIRECT_ONLY),
         };
-        if self.light_selection.draws_one(punctual_lights) {
-            flags |= FLAG_ONE_PUNCTUAL_LIGHT;
+        if self.light_selection.draws_one(lights) {
+            flags |= FLAG_ONE_LIGHT;
         }
         BatchPush { sample_offset: offset, sample_count: count, seed: self.seed, bounces, flags, roulette_after: self.roulette_after.unwrap_or(u32::MAX) }
     }
 }
 
 const FLAG_INDIRECT_ONLY: u32 = 1;
-const FLAG_ONE_PUNCTUAL_LIGHT: u32 = 2;
+const FLAG_ONE_LIGHT: u32 = 2;
 
 /// `Params` in the shader.
 #[repr(C)]
@@ -463,7 +464,7 @@ impl ReferenceRenderer {
             let count = batch.min(cap).min(next_check - done);
             let checkpoint = done + count == next_check;
             let t0 = Instant::now();
-            let short = self.dispatch(settings.push(done, count, self.params.options[1]), checkpoint)?;
+            let short = self.dispatch(settings.push(done, count, self.params.counts[0]), checkpoint)?;
             if short > 0 {
                 if count == 1 {
                     return Err(Error::Usage(format!(

@@ -185,6 +185,16 @@ impl Renderer {
         Ok(out)
     }
 
+    /// What the methods left out of the last frame (see [`LightingMethod::warnings`]); call after
+    /// that frame has finished.
+    pub fn method_warnings(&mut self) -> Result<Vec<String>> {
+        let mut out = Vec::new();
+        for m in &self.methods {
+            out.extend(m.warnings(&mut self.gpu)?);
+        }
+        Ok(out)
+    }
+
     /// The names of the configuration's methods, in frame order.
     pub fn method_names(&self) -> Vec<&'static str> {
         self.methods.iter().map(|m| m.name()).collect()

@@ -192,6 +192,28 @@ impl Clustered {
         let indices = read_words(gpu, self.indices)?;
         Ok(Assignment::from_words(&counts[..clusters], &indices, self.config.max_per_cluster))
     }
+
+    /// The last frame's uncapped light count per cluster, read back (after it finished).
+    pub fn read_counts(&self, gpu: &mut Gpu) -> Result<Vec<u32>> {
+        let mut counts = read_words(gpu, self.counts)?;
+        counts.truncate(self.config.clusters() as usize);
+        Ok(counts)
+    }
+}
+
+/// The line that says a frame dropped light for want of slots, if it did.
+pub fn overflow_warning(counts: &[u32], max_per_cluster: u32) -> Option<String> {
+    let cap = max_per_cluster;
+    let over = counts.iter().filter(|&&n| n > cap).count();
+    if over == 0 {
+        return None;
+    }
+    let dropped: u64 = counts.iter().map(|&n| n.saturating_sub(cap) as u64).sum();
+    let most = counts.iter().max().copied().unwrap_or(0);
+    Some(format!(
+        "{NAME}: {over} of {} clusters reached more lights than max_per_cluster = {cap} (the fullest {most}): {dropped} light-cluster pairs were dropped, so what those clusters show lacks their light; raise max_per_cluster, give the lights a radius or raise cutoff",
+        counts.len()
+    ))
 }
 
 fn read_words(gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
@@ -212,6 +234,10 @@ fn read_words(gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
 impl LightingMethod for Clustered {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn warnings(&self, gpu: &mut Gpu) -> Result<Vec<String>> {
+        Ok(overflow_warning(&self.read_counts(gpu)?, self.config.max_per_cluster).into_iter().collect())
     }
 
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
