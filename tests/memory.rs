@@ -158,8 +158,9 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
 /// combination it declares), `PENUMBRA_SOAK_FRAMES` frames each (default 10,000) at
 /// `PENUMBRA_SOAK_SIZE` (default 64x36), printing RssAnon every 100 frames as CSV lines
 /// `scene,method,frame,rss_anon_mib,device_mib` (device memory: live allocations).
-/// `PENUMBRA_SOAK_METHODS` (comma-separated configuration names) keeps only those. Run by
-/// tools/soak.sh.
+/// `PENUMBRA_SOAK_METHODS` (comma-separated configuration names) keeps only those;
+/// `PENUMBRA_SOAK_SCENE_DIR` reads the scenes from another folder (e.g. shipped scenes with a
+/// parameter changed). Run by tools/soak.sh.
 #[test]
 #[ignore]
 fn soak_every_shipped_scene_and_method() {
@@ -167,7 +168,7 @@ fn soak_every_shipped_scene_and_method() {
     let size = std::env::var("PENUMBRA_SOAK_SIZE").unwrap_or_else(|_| "64x36".into());
     let (w, h) = size.split_once('x').and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?))).expect("PENUMBRA_SOAK_SIZE is WxH");
     let only = std::env::var("PENUMBRA_SOAK_SCENES").ok();
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let dir = std::env::var_os("PENUMBRA_SOAK_SCENE_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"));
     let mut names: Vec<String> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()?.file_name().into_string().ok()).filter(|n| n.ends_with(".toml")).collect();
     names.sort();
     if let Some(only) = &only {
@@ -175,7 +176,7 @@ fn soak_every_shipped_scene_and_method() {
     }
     println!("scene,method,frame,rss_anon_mib,device_mib");
     for name in names {
-        let scene = shipped(&name);
+        let scene = penumbra::capture::load_scene(Some(&dir.join(&name))).unwrap();
         // Every configuration: each method alone, then each declared combination.
         let mut methods: Vec<String> = penumbra::lighting::registry::configurations(&scene).unwrap().into_iter().map(|c| c.name).collect();
         if let Ok(keep) = std::env::var("PENUMBRA_SOAK_METHODS") {

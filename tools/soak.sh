@@ -8,6 +8,8 @@
 #   PENUMBRA_SOAK_SIZE    image size (default 64x36)
 #   PENUMBRA_SOAK_SCENES  comma-separated scene-name prefixes to run (default: all)
 #   PENUMBRA_SOAK_METHODS comma-separated configuration names to run (default: all)
+#   PENUMBRA_SOAK_SCENE_DIR read the scenes from this folder instead of scenes/ (e.g. a
+#                         shipped scene with a smaller height-field resolution)
 # PENUMBRA_UNIFORM_BLOCKS_AS_STORAGE=0 turns off the lavapipe workaround (to see the leak).
 set -euo pipefail
 cd "$(dirname "$0")/.."
