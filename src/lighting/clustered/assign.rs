@@ -218,6 +218,16 @@ pub fn assign_cpu(block: &ClusterBlock, volumes: &[LightVolume]) -> Vec<Vec<u32>
         .collect()
 }
 
+/// Clusters whose uncapped light count is over the cap.
+pub fn overflowed_clusters(counts: &[u32], max_per_cluster: u32) -> usize {
+    counts.iter().filter(|&&n| n > max_per_cluster).count()
+}
+
+/// Light-cluster pairs beyond the cap, summed over the clusters.
+pub fn dropped(counts: &[u32], max_per_cluster: u32) -> u64 {
+    counts.iter().map(|&n| n.saturating_sub(max_per_cluster) as u64).sum()
+}
+
 /// The assignment as the GPU wrote it, read back.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Assignment {
@@ -237,12 +247,12 @@ impl Assignment {
 
     /// Clusters that had more lights than slots.
     pub fn overflowed_clusters(&self) -> usize {
-        self.counts.iter().filter(|&&n| n > self.max_per_cluster).count()
+        overflowed_clusters(&self.counts, self.max_per_cluster)
     }
 
     /// Light-cluster pairs dropped for want of slots.
     pub fn dropped(&self) -> u64 {
-        self.counts.iter().map(|&n| n.saturating_sub(self.max_per_cluster) as u64).sum()
+        dropped(&self.counts, self.max_per_cluster)
     }
 
     /// The clusters holding light `i`.

@@ -204,11 +204,11 @@ impl Clustered {
 /// The line that says a frame dropped light for want of slots, if it did.
 pub fn overflow_warning(counts: &[u32], max_per_cluster: u32) -> Option<String> {
     let cap = max_per_cluster;
-    let over = counts.iter().filter(|&&n| n > cap).count();
+    let over = assign::overflowed_clusters(counts, cap);
     if over == 0 {
         return None;
     }
-    let dropped: u64 = counts.iter().map(|&n| n.saturating_sub(cap) as u64).sum();
+    let dropped = assign::dropped(counts, cap);
     let most = counts.iter().max().copied().unwrap_or(0);
     Some(format!(
         "{NAME}: {over} of {} clusters reached more lights than max_per_cluster = {cap} (the fullest {most}): {dropped} light-cluster pairs were dropped, so what those clusters show lacks their light; raise max_per_cluster, give the lights a radius or raise cutoff",
