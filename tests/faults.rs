@@ -40,3 +40,28 @@ fn a_lost_device_is_one_line_and_leaves_no_output() {
         assert!(!png.exists() && !exr.exists(), "{fault}: an output was written");
     }
 }
+
+/// A test process killed by a signal says which thread died and where, and still dies by the
+/// same signal (so cargo reports the crash, not a pass).
+#[test]
+fn a_crash_is_reported_with_its_thread_and_place_and_still_kills() {
+    use std::os::unix::process::ExitStatusExt;
+    if std::env::var_os("PENUMBRA_TEST_CRASH_NOW").is_some() {
+        common::crash_report::install();
+        let crasher = std::thread::Builder::new().name("crasher".into());
+        // An unmapped, aligned, non-null address: a real fault, not a precondition panic.
+        let _ = crasher.spawn(|| unsafe { (8usize as *const u32).read_volatile() }).unwrap().join();
+        unreachable!("the read should have faulted");
+    }
+    let exe = std::env::current_exe().unwrap();
+    let out = std::process::Command::new(&exe)
+        .args(["--exact", "a_crash_is_reported_with_its_thread_and_place_and_still_kills", "--nocapture", "--test-threads=1"])
+        .env("PENUMBRA_TEST_CRASH_NOW", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.signal(), Some(libc::SIGSEGV), "{:?}\n{stderr}", out.status);
+    assert!(stderr.contains("crash report: signal 11 on thread 'crasher', fault address 0x8"), "{stderr}");
+    let name = exe.file_name().unwrap().to_string_lossy();
+    assert!(stderr.lines().any(|l| l.contains("crash report") && l.contains(&*name)), "the faulting library is named: {stderr}");
+}

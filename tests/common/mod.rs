@@ -4,7 +4,10 @@
 
 use penumbra::backend::{Gpu, GpuDesc};
 
+pub mod crash_report;
+
 pub fn test_gpu_desc() -> GpuDesc {
+    crash_report::install();
     GpuDesc { validation: true, device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())), display: None }
 }
 
