@@ -8,7 +8,7 @@
 use glam::DVec3;
 
 use super::brush::{convex_faces, BASE_WINDING_SIZE};
-use super::polygon::{Aabb, Plane, Polygon, Side, Split};
+use super::polygon::{Aabb, Plane, Polygon, Side, Split, Tolerance};
 use super::{FaceId, LeafId, NodeId};
 
 /// How the splitting plane of a node is chosen among the planes of its remaining faces.
@@ -85,8 +85,13 @@ pub struct Tree {
 impl Tree {
     /// Builds the tree over `fragments`; every fragment lands in exactly one node.
     pub fn build(fragments: Vec<Fragment>, heuristic: SplitHeuristic) -> Tree {
+        Tree::build_in(fragments, heuristic, &Tolerance::EXACT)
+    }
+
+    /// [`Tree::build`] with `tolerance`'s side tests and rounding of the cuts.
+    pub fn build_in(fragments: Vec<Fragment>, heuristic: SplitHeuristic, tolerance: &Tolerance) -> Tree {
         let mut tree = Tree::default();
-        let root = tree.build_rec(fragments, heuristic);
+        let root = tree.build_rec(fragments, heuristic, tolerance);
         tree.root = Some(root);
         tree
     }
@@ -96,16 +101,16 @@ impl Tree {
         Child::Leaf((self.leaves.len() - 1) as LeafId)
     }
 
-    fn build_rec(&mut self, fragments: Vec<Fragment>, heuristic: SplitHeuristic) -> Child {
+    fn build_rec(&mut self, fragments: Vec<Fragment>, heuristic: SplitHeuristic, tolerance: &Tolerance) -> Child {
         if fragments.is_empty() {
             return self.new_leaf();
         }
-        let plane = choose_plane(&fragments, heuristic);
+        let plane = choose_plane(&fragments, heuristic, tolerance);
         let (mut front, mut back) = (Vec::new(), Vec::new());
         let node_id = self.nodes.len() as NodeId;
         self.nodes.push(Node { plane, front: Child::Leaf(0), back: Child::Leaf(0), faces: Vec::new() });
         for frag in fragments {
-            match frag.polygon.split(&plane) {
+            match frag.polygon.split_in(&plane, tolerance) {
                 Split::Front(polygon) => front.push(Fragment { polygon, ..frag }),
                 Split::Back(polygon) => back.push(Fragment { polygon, ..frag }),
                 Split::On(polygon, _) => {
@@ -119,8 +124,8 @@ impl Tree {
                 }
             }
         }
-        let front = self.build_rec(front, heuristic);
-        let back = self.build_rec(back, heuristic);
+        let front = self.build_rec(front, heuristic, tolerance);
+        let back = self.build_rec(back, heuristic, tolerance);
         let node = &mut self.nodes[node_id as usize];
         node.front = front;
         node.back = back;
@@ -265,7 +270,7 @@ impl Tree {
 }
 
 /// Picks the split plane for a set of fragments (see [`SplitHeuristic`]).
-fn choose_plane(fragments: &[Fragment], heuristic: SplitHeuristic) -> Plane {
+fn choose_plane(fragments: &[Fragment], heuristic: SplitHeuristic, tolerance: &Tolerance) -> Plane {
     let split_weight = match heuristic {
         SplitHeuristic::FirstFace => return fragments[0].polygon.plane,
         SplitHeuristic::Balanced { split_weight } => split_weight as i64,
@@ -281,7 +286,7 @@ fn choose_plane(fragments: &[Fragment], heuristic: SplitHeuristic) -> Plane {
     for plane in candidates {
         let (mut front, mut back, mut splits, mut on) = (0i64, 0i64, 0i64, 0i64);
         for f in fragments {
-            match f.polygon.classify(&plane) {
+            match f.polygon.classify_in(&plane, tolerance) {
                 Side::Front => front += 1,
                 Side::Back => back += 1,
                 Side::On => on += 1,

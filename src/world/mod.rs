@@ -39,7 +39,7 @@ use glam::DVec3;
 pub use brush::{Brush, BrushSide, CsgStats};
 pub use bsp::{Child, Leaf, Node, SplitHeuristic};
 pub use compile::CompileOptions;
-pub use polygon::{Aabb, Plane, Polygon, Side, Split};
+pub use polygon::{Aabb, Plane, Polygon, Side, Split, Tolerance};
 pub use portals::Portal;
 pub use pvs::{Pvs, PvsStats};
 pub use raycast::RayHit;

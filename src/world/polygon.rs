@@ -28,6 +28,42 @@ pub enum Side {
     Spanning,
 }
 
+/// How thick a plane is for side tests, and whether coordinates are rounded: the numeric policy
+/// of a BSP build. [`Tolerance::EXACT`] is the world compiler's (f64 throughout, planes
+/// [`PLANE_EPSILON`] thick); [`Tolerance::THESIS`] is seed 003's (§5.6.1: every double rounded to
+/// four decimal places, points that close to a plane on it), kept so its faithful mode can be
+/// compared with the exact one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerance {
+    /// Half-thickness of a plane: a point this close to it is on it.
+    pub plane: f64,
+    /// The grid new and input coordinates are rounded to, if any.
+    pub grid: Option<f64>,
+}
+
+impl Tolerance {
+    pub const EXACT: Tolerance = Tolerance { plane: PLANE_EPSILON, grid: None };
+    pub const THESIS: Tolerance = Tolerance { plane: 1e-4, grid: Some(1e-4) };
+
+    /// `p` rounded to the grid (unchanged without one).
+    pub fn round(&self, p: DVec3) -> DVec3 {
+        match self.grid {
+            Some(g) => (p / g).round() * g,
+            None => p,
+        }
+    }
+
+    fn side(&self, d: f64) -> Side {
+        if d > self.plane {
+            Side::Front
+        } else if d < -self.plane {
+            Side::Back
+        } else {
+            Side::On
+        }
+    }
+}
+
 impl Plane {
     /// A plane from a (not necessarily unit) normal and a point on it; `None` for a zero normal.
     pub fn from_normal_point(normal: DVec3, point: DVec3) -> Option<Plane> {
@@ -51,14 +87,11 @@ impl Plane {
     }
 
     pub fn side_of_point(&self, p: DVec3) -> Side {
-        let d = self.distance(p);
-        if d > PLANE_EPSILON {
-            Side::Front
-        } else if d < -PLANE_EPSILON {
-            Side::Back
-        } else {
-            Side::On
-        }
+        self.side_of_point_in(p, &Tolerance::EXACT)
+    }
+
+    pub fn side_of_point_in(&self, p: DVec3, tolerance: &Tolerance) -> Side {
+        tolerance.side(self.distance(p))
     }
 
     /// `Some(true)` if `other` is the same plane, `Some(false)` if it is the same plane facing
@@ -222,14 +255,19 @@ impl Polygon {
 
     /// Drops consecutive vertices closer than the epsilon; `None` if fewer than three remain or
     /// the area is below [`MIN_POLYGON_AREA`]. Degenerate polygons leave the pipeline here.
-    pub fn cleaned(mut self) -> Option<Polygon> {
+    pub fn cleaned(self) -> Option<Polygon> {
+        self.cleaned_in(&Tolerance::EXACT)
+    }
+
+    /// [`Polygon::cleaned`] with vertices closer than `tolerance.plane` merged.
+    pub fn cleaned_in(mut self, tolerance: &Tolerance) -> Option<Polygon> {
         let mut out: Vec<DVec3> = Vec::with_capacity(self.vertices.len());
         for &v in &self.vertices {
-            if out.last().is_none_or(|l| l.distance(v) > PLANE_EPSILON) {
+            if out.last().is_none_or(|l| l.distance(v) > tolerance.plane) {
                 out.push(v);
             }
         }
-        while out.len() > 1 && out[0].distance(out[out.len() - 1]) <= PLANE_EPSILON {
+        while out.len() > 1 && out[0].distance(out[out.len() - 1]) <= tolerance.plane {
             out.pop();
         }
         self.vertices = out;
@@ -237,9 +275,13 @@ impl Polygon {
     }
 
     pub fn classify(&self, plane: &Plane) -> Side {
+        self.classify_in(plane, &Tolerance::EXACT)
+    }
+
+    pub fn classify_in(&self, plane: &Plane, tolerance: &Tolerance) -> Side {
         let (mut front, mut back) = (false, false);
         for &v in &self.vertices {
-            match plane.side_of_point(v) {
+            match plane.side_of_point_in(v, tolerance) {
                 Side::Front => front = true,
                 Side::Back => back = true,
                 _ => {}
@@ -257,7 +299,13 @@ impl Polygon {
     /// edge crossings are computed once and shared, so the two pieces meet exactly and their
     /// areas sum to the original.
     pub fn split(self, plane: &Plane) -> Split {
-        match self.classify(plane) {
+        self.split_in(plane, &Tolerance::EXACT)
+    }
+
+    /// [`Polygon::split`] under `tolerance`: its plane thickness, and the crossings rounded to
+    /// its grid.
+    pub fn split_in(self, plane: &Plane, tolerance: &Tolerance) -> Split {
+        match self.classify_in(plane, tolerance) {
             Side::Front => return Split::Front(self),
             Side::Back => return Split::Back(self),
             Side::On => {
@@ -266,8 +314,8 @@ impl Polygon {
             }
             Side::Spanning => {}
         }
-        let (front, back) = split_points(&self.vertices, plane);
-        let piece = |vertices| Polygon { vertices, plane: self.plane }.cleaned();
+        let (front, back) = split_points_in(&self.vertices, plane, tolerance);
+        let piece = |vertices| Polygon { vertices, plane: self.plane }.cleaned_in(tolerance);
         Split::Spanning { front: piece(front), back: piece(back) }
     }
 
@@ -323,19 +371,13 @@ impl Polygon {
 /// Sutherland–Hodgman in both directions at once: the vertex lists of the front and back
 /// pieces. On-plane vertices go to both; crossings are snapped onto axis-aligned planes exactly.
 pub fn split_points(vertices: &[DVec3], plane: &Plane) -> (Vec<DVec3>, Vec<DVec3>) {
+    split_points_in(vertices, plane, &Tolerance::EXACT)
+}
+
+/// [`split_points`] under `tolerance` (crossings rounded to its grid after the axis snap).
+pub fn split_points_in(vertices: &[DVec3], plane: &Plane, tolerance: &Tolerance) -> (Vec<DVec3>, Vec<DVec3>) {
     let dists: Vec<f64> = vertices.iter().map(|&v| plane.distance(v)).collect();
-    let sides: Vec<Side> = dists
-        .iter()
-        .map(|&d| {
-            if d > PLANE_EPSILON {
-                Side::Front
-            } else if d < -PLANE_EPSILON {
-                Side::Back
-            } else {
-                Side::On
-            }
-        })
-        .collect();
+    let sides: Vec<Side> = dists.iter().map(|&d| tolerance.side(d)).collect();
     let (mut front, mut back) = (Vec::new(), Vec::new());
     let count = vertices.len();
     for i in 0..count {
@@ -358,6 +400,7 @@ pub fn split_points(vertices: &[DVec3], plane: &Plane) -> (Vec<DVec3>, Vec<DVec3
         if let Some(axis) = plane.axis() {
             mid[axis] = plane.dist * plane.normal[axis].signum();
         }
+        let mid = tolerance.round(mid);
         front.push(mid);
         back.push(mid);
     }

@@ -217,3 +217,26 @@ fn queries_on_degenerate_input_answer_without_panicking() {
     assert!(!w.is_visible(0, 999_999) && w.visible_leaves(999_999).count() == 0);
     assert!(w.casters_light_pvs(inside, f64::NAN).is_empty());
 }
+
+/// Seed 003's numeric policy (§5.6.1): a point within 1e-4 of a plane is on it, and the cuts a
+/// split makes land on the 1e-4 grid; the exact policy keeps both as they are.
+#[test]
+fn the_thesis_tolerance_thickens_planes_and_rounds_cuts_to_four_decimals() {
+    use super::Tolerance;
+    let floor = Plane { normal: DVec3::Y, dist: 0.0 };
+    let near = DVec3::new(0.3, 5e-5, 0.2);
+    assert_eq!(floor.side_of_point(near), super::Side::Front);
+    assert_eq!(floor.side_of_point_in(near, &Tolerance::THESIS), super::Side::On);
+    let on_grid = |v: DVec3| (0..3).all(|i| ((v[i] / 1e-4) - (v[i] / 1e-4).round()).abs() < 1e-6);
+    // A slanted cut through a square: its crossings fall between grid points unless rounded.
+    let square = Polygon::from_vertices(vec![DVec3::new(-1.0, 0.0, -1.0), DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, -1.0)]).unwrap();
+    let cut = Plane::from_normal_point(DVec3::new(1.0, 0.0, 0.37), DVec3::new(0.123457, 0.0, 0.0)).unwrap();
+    for (tolerance, rounded) in [(Tolerance::EXACT, false), (Tolerance::THESIS, true)] {
+        let Split::Spanning { front: Some(front), back: Some(back) } = square.clone().split_in(&cut, &tolerance) else { panic!("{tolerance:?}: the cut spans the square") };
+        let all = front.vertices.iter().chain(&back.vertices);
+        assert_eq!(all.clone().all(|&v| on_grid(v)), rounded, "{tolerance:?}: {front:?} {back:?}");
+        // Rounded or not, the pieces still cover the square (to the grid's slack along the cut).
+        let slack = if rounded { 2.0 * 2.0 * 1e-4 } else { 1e-12 };
+        assert!((front.area() + back.area() - 4.0).abs() <= slack, "{tolerance:?}: {} + {}", front.area(), back.area());
+    }
+}

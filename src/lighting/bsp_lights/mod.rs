@@ -19,7 +19,8 @@
 //!
 //! `mode = "corrected"` (default) uses the physical light model (radiance, comparable with the
 //! path tracer) and the projection's validity checks; `mode = "faithful"` uses the thesis's
-//! `k·ρ·cos/d` model with its linear spot ramp and projects every occluder vertex as written.
+//! `k·ρ·cos/d` model with its linear spot ramp, projects every occluder vertex as written and
+//! rounds every coordinate to four decimals with planes as thick (the thesis's §5.6.1).
 
 pub mod painter;
 pub mod setup;
@@ -37,6 +38,7 @@ use crate::lighting::params::Params;
 use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms};
 use crate::many_lights::{scene_polygons, LightModel, ManyLight};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
+use crate::world::Tolerance;
 use setup::Projection;
 
 pub const NAME: &str = "bsp_lights";
@@ -211,6 +213,14 @@ impl Config {
             Mode::Faithful => Projection::Thesis,
         }
     }
+
+    /// Faithful mode rounds every coordinate to four decimals as the thesis does (§5.6.1).
+    pub fn tolerance(&self) -> Tolerance {
+        match self.mode {
+            Mode::Corrected => Tolerance::EXACT,
+            Mode::Faithful => Tolerance::THESIS,
+        }
+    }
 }
 
 /// The chart's sweep: as declared; the segment area at 4×, 1× and ¼ of the declared one, the
@@ -343,6 +353,7 @@ pub fn bake_scene(
     let settings = setup::Settings {
         model: config.model(),
         projection: config.projection(),
+        tolerance: config.tolerance(),
         max_segment_area: config.max_segment_area,
         two_sided: config.two_sided(),
         threads: 0,
@@ -492,6 +503,7 @@ impl BspLights {
             .with("version", SETUP_VERSION)
             .with("model", config.model())
             .with("projection", config.projection())
+            .with("tolerance", config.tolerance())
             .with("two_sided", config.two_sided())
             .with("max_segment_area", config.max_segment_area)
             .with("lights", &lights)

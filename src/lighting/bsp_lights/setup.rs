@@ -19,7 +19,7 @@ use crate::many_lights::{LightModel, ManyLight, ScenePolygon, Segments};
 use crate::progress::Progress;
 use crate::world::bsp::{Fragment, Tree};
 use crate::world::polygon::clip_points_front;
-use crate::world::{Plane, Polygon, Side, SplitHeuristic};
+use crate::world::{Plane, Polygon, Side, SplitHeuristic, Tolerance};
 
 /// Which projection the shadow pass uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,6 +61,10 @@ pub struct Settings {
     pub model: LightModel,
     pub projection: Projection,
     pub max_segment_area: f64,
+    /// The numeric policy: f64 with thin planes (corrected), or the thesis's rounding of every
+    /// coordinate to 1e-4 — the input polygons, the BSP's cuts, the segment vertices and the
+    /// projected shadows — with planes as thick (faithful).
+    pub tolerance: Tolerance,
     /// Light both sides of a surface (penumbra's thin-surface convention): a fragment with a
     /// light behind its plane gets a second row per vertex, its back, with the normal turned.
     /// The thesis lights the front only (one colour per vertex).
@@ -114,8 +118,18 @@ fn ms(start: Instant) -> f64 {
 
 /// The BSP tree over the scene polygons, first polygon as splitter (§1.5, "no heuristic").
 pub fn build_tree(polygons: &[ScenePolygon]) -> Tree {
-    let fragments = polygons.iter().enumerate().map(|(i, p)| Fragment { polygon: p.polygon.clone(), source: i }).collect();
-    Tree::build(fragments, SplitHeuristic::FirstFace)
+    build_tree_in(polygons, &Tolerance::EXACT)
+}
+
+/// [`build_tree`] under `tolerance`: the input vertices rounded to its grid first (each
+/// polygon keeps its plane), then its side tests and rounded cuts.
+pub fn build_tree_in(polygons: &[ScenePolygon], tolerance: &Tolerance) -> Tree {
+    let fragments = polygons
+        .iter()
+        .enumerate()
+        .map(|(i, p)| Fragment { polygon: Polygon { vertices: p.polygon.vertices.iter().map(|&v| tolerance.round(v)).collect(), plane: p.polygon.plane }, source: i })
+        .collect();
+    Tree::build_in(fragments, SplitHeuristic::FirstFace, tolerance)
 }
 
 /// One thread's columns (light, `C_l`) and its colouring and shadow CPU times.
@@ -124,16 +138,18 @@ type ThreadResult = (Vec<(usize, Vec<[f32; 3]>)>, f64, f64);
 /// Runs the whole set-up. Errors are one sentence (the caller names the file and field).
 pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings, progress: &mut Progress) -> Result<Setup, String> {
     let start = Instant::now();
-    let tree = build_tree(polygons);
+    let tolerance = settings.tolerance;
+    let tree = build_tree_in(polygons, &tolerance);
     let bsp_ms = ms(start);
 
     let start = Instant::now();
     let mut segments = Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), settings.max_segment_area)?;
+    segments.positions.iter_mut().for_each(|p| *p = tolerance.round(*p));
     let fragment_vertices = owner_ranges(&segments.vertex_polygon, tree.fragments.len());
     let front_vertices = segments.positions.len();
     let planes: Vec<Plane> = tree.fragments.iter().map(|(f, _)| f.polygon.plane).collect();
     let (back_row, fragment_back_vertices) =
-        if settings.two_sided { add_back_rows(&mut segments, &planes, &fragment_vertices, lights) } else { (vec![u32::MAX; front_vertices], vec![0..0; planes.len()]) };
+        if settings.two_sided { add_back_rows(&mut segments, &planes, &fragment_vertices, lights, &tolerance) } else { (vec![u32::MAX; front_vertices], vec![0..0; planes.len()]) };
     let segment_ms = ms(start);
 
     check_matrix(segments.positions.len(), lights.len(), settings.bytes_per_entry, settings.max_matrix_bytes)?;
@@ -153,6 +169,7 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
         albedo: &albedo,
         model: settings.model,
         projection: settings.projection,
+        tolerance,
     };
     let per_thread: Vec<ThreadResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
@@ -203,11 +220,11 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
 /// that has a light strictly behind its plane; returns each front vertex's back row
 /// (`u32::MAX`: none) and each fragment's back rows. A fragment every light is in front of
 /// gets none: its back side's direct light is zero, which the run time draws for a missing row.
-fn add_back_rows(segments: &mut Segments, planes: &[Plane], fragment_vertices: &[Range<u32>], lights: &[ManyLight]) -> (Vec<u32>, Vec<Range<u32>>) {
+fn add_back_rows(segments: &mut Segments, planes: &[Plane], fragment_vertices: &[Range<u32>], lights: &[ManyLight], tolerance: &Tolerance) -> (Vec<u32>, Vec<Range<u32>>) {
     let mut back_row = vec![u32::MAX; segments.positions.len()];
     let mut ranges = vec![0u32..0u32; planes.len()];
     for (f, plane) in planes.iter().enumerate() {
-        if !lights.iter().any(|l| plane.distance(l.position) < -crate::world::PLANE_EPSILON) {
+        if !lights.iter().any(|l| plane.side_of_point_in(l.position, tolerance) == Side::Back) {
             continue;
         }
         let first = segments.positions.len() as u32;
@@ -263,6 +280,7 @@ struct Shared<'a> {
     albedo: &'a [DVec3],
     model: LightModel,
     projection: Projection,
+    tolerance: Tolerance,
 }
 
 impl Shared<'_> {
@@ -287,7 +305,7 @@ impl Shared<'_> {
                     continue;
                 }
                 let target = self.fragments[t];
-                let Some(shadow) = project(light, &occluder.vertices, &target.plane, self.projection) else { continue };
+                let Some(shadow) = project(light, &occluder.vertices, &target.plane, self.projection, &self.tolerance) else { continue };
                 // The test on the projected polygon's bounds first: most pairs miss entirely.
                 let (lo, hi) = bounds(&shadow);
                 for v in rows(t) {
@@ -316,13 +334,13 @@ fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
 /// (`P = L + t·(x − L)`, `t = h_L / (h_L − h_x)` with `h` the signed heights over the plane), or
 /// `None` where it casts nothing there. An occluder lying in the target's plane casts nothing in
 /// either mode (it is beside the target, not in front of it; the thesis's rounding served the
-/// same end).
-pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Projection) -> Option<Vec<DVec3>> {
+/// same end). `tolerance` says what "in the plane" means and rounds the shadow's vertices.
+pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Projection, tolerance: &Tolerance) -> Option<Vec<DVec3>> {
     let h_light = target.distance(light);
-    if h_light.abs() <= crate::world::PLANE_EPSILON {
+    if h_light.abs() <= tolerance.plane {
         return None;
     }
-    let on_plane = occluder.iter().all(|&x| target.side_of_point(x) == Side::On);
+    let on_plane = occluder.iter().all(|&x| target.side_of_point_in(x, tolerance) == Side::On);
     if on_plane {
         return None;
     }
@@ -350,7 +368,7 @@ pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Pro
             // has no answer for it either, so the occluder casts nothing.
             return None;
         }
-        out.push(light + (x - light) * (h_light / denom));
+        out.push(tolerance.round(light + (x - light) * (h_light / denom)));
     }
     // Only the valid projection is a simple polygon whose area means something: the thesis's
     // can be a bow-tie through infinity, whose lobes cancel.

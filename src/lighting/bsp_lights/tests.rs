@@ -11,7 +11,7 @@ use crate::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon};
 use crate::progress::Progress;
 use crate::world::bsp::{Child, Tree};
 use crate::world::polygon::point_segment_distance;
-use crate::world::{Plane, Polygon, Split, PLANE_EPSILON};
+use crate::world::{Plane, Polygon, Split, Tolerance, PLANE_EPSILON};
 
 fn v(x: f64, y: f64, z: f64) -> DVec3 {
     DVec3::new(x, y, z)
@@ -57,11 +57,16 @@ fn point(position: DVec3, rgb: DVec3) -> ManyLight {
 }
 
 fn run(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projection, area: f64) -> Setup {
+    run_in(polygons, lights, projection, crate::world::Tolerance::EXACT, area)
+}
+
+fn run_in(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projection, tolerance: crate::world::Tolerance, area: f64) -> Setup {
     let model = match projection {
         Projection::Valid => LightModel::Physical,
         Projection::Thesis => LightModel::Seed { k: 1.0 },
     };
-    let settings = Settings { model, projection, max_segment_area: area, two_sided: projection == Projection::Valid, threads: 2, max_matrix_bytes: super::MAX_MATRIX_BYTES, bytes_per_entry: 12 };
+    let settings =
+        Settings { model, projection, tolerance, max_segment_area: area, two_sided: projection == Projection::Valid, threads: 2, max_matrix_bytes: super::MAX_MATRIX_BYTES, bytes_per_entry: 12 };
     setup::run(polygons, lights, &settings, &mut Progress::new("test")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -333,12 +338,15 @@ fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
     let shadow: Vec<DVec3> = polygons[1].polygon.vertices.iter().map(|&c| c + (c - light) * (c.y / (light.y - c.y))).collect();
     let (area, perimeter) = (area_of(&shadow), 4.0 * shadow[0].distance(shadow[1]));
     assert!((area - 2.25).abs() < 1e-9, "the analytic shadow is the square scaled 1.5x: {area}");
-    for projection in [Projection::Valid, Projection::Thesis] {
+    // The thesis's rounding moves a vertex and a shadow's corners by at most 0.5e-4 per axis
+    // (7.1e-5 in the floor's plane), less than the 1e-4 margin.
+    for (projection, tolerance) in [(Projection::Valid, Tolerance::EXACT), (Projection::Thesis, Tolerance::EXACT), (Projection::Thesis, Tolerance::THESIS)] {
+        let projection_name = format!("{projection:?} {tolerance:?}");
         // Floor segments of about 2 cm (2^8 steps along its 5 m edges).
-        let s = run(&polygons, &lights, projection, 2e-4);
+        let s = run_in(&polygons, &lights, projection, tolerance, 2e-4);
         let (far, near, reached, blocked) = against_ray_cast(&s, &polygons, &lights, 0, 1e-4);
-        println!("{projection:?}: {reached} vertices lit by the model, {blocked} blocked; {far} disagree farther than 1e-4 from the edge, {near} within");
-        assert_eq!(far, 0, "{projection:?}: vertices away from the shadow's edge disagree with the ray cast");
+        println!("{projection_name}: {reached} vertices lit by the model, {blocked} blocked; {far} disagree farther than 1e-4 from the edge, {near} within");
+        assert_eq!(far, 0, "{projection_name}: vertices away from the shadow's edge disagree with the ray cast");
         // Agreement by the analytic boundary too.
         let mut disagreements_off_edge = 0;
         let (mut dark_floor, mut floor_vertices) = (0usize, 0usize);
@@ -356,13 +364,13 @@ fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
                 disagreements_off_edge += 1;
             }
         }
-        assert_eq!(disagreements_off_edge, 0, "{projection:?}");
+        assert_eq!(disagreements_off_edge, 0, "{projection_name}");
         // Shadowed area: dark vertices × the area per floor vertex, against the closed form,
         // within one vertex spacing along the perimeter.
         let h = 5.0 / 256.0;
         let measured = dark_floor as f64 * 25.0 / floor_vertices as f64;
-        println!("{projection:?}: shadowed area {measured:.4} m² vs analytic {area:.4} (allowed ±{:.4})", perimeter * h);
-        assert!((measured - area).abs() <= perimeter * h, "{projection:?}: {measured} vs {area}");
+        println!("{projection_name}: shadowed area {measured:.4} m² vs analytic {area:.4} (allowed ±{:.4})", perimeter * h);
+        assert!((measured - area).abs() <= perimeter * h, "{projection_name}: {measured} vs {area}");
     }
 }
 
@@ -678,4 +686,29 @@ fn the_sweep_covers_segment_areas_and_both_modes() {
     let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.02 }", 1);
     let labels: Vec<String> = super::sweep(&sc.methods[0]).into_iter().map(|(l, _)| l).collect();
     assert_eq!(labels, ["bsp_lights corrected area=0.02", "bsp_lights corrected area=0.08", "bsp_lights corrected area=0.005 f16", "bsp_lights faithful area=0.02"]);
+}
+
+/// The thesis's rounding (§5.6.1, its fix for "zero-width sliver polygons when polygons just
+/// touch"): a wall whose foot sits 40 µm under the floor is cut by the floor (the first
+/// polygon, the root's splitter) into the wall and a 40 µm sliver under exact numerics; rounded
+/// to four decimals its foot is on the floor and nothing is cut. Faithful mode's every vertex
+/// lies on the 1e-4 grid, and its bake key differs from corrected mode's.
+#[test]
+fn faithful_numerics_round_to_four_decimals_and_leave_no_sliver_where_polygons_touch() {
+    let wall = quad(v(-1.0, -4e-5, 0.0), v(2.0, 0.0, 0.0), v(0.0, 1.5, 0.0));
+    let polygons = vec![floor(5.0), wall];
+    let lights = [point(v(0.3, 3.0, 2.0), DVec3::splat(5.0))];
+    let exact = run_in(&polygons, &lights, Projection::Thesis, Tolerance::EXACT, 0.01);
+    let thesis = run_in(&polygons, &lights, Projection::Thesis, Tolerance::THESIS, 0.01);
+    let wall_pieces = |s: &Setup| s.tree.fragments.iter().filter(|(f, _)| f.source == 1).map(|(f, _)| f.polygon.bounds()).collect::<Vec<_>>();
+    let (exact_wall, thesis_wall) = (wall_pieces(&exact), wall_pieces(&thesis));
+    assert_eq!(exact_wall.len(), 2, "exact numerics cut the wall's foot off: {exact_wall:?}");
+    assert!(exact_wall.iter().any(|b| (b.max.y - b.min.y) < 1e-4), "one piece is a sliver under 1e-4 tall: {exact_wall:?}");
+    assert_eq!(thesis_wall.len(), 1, "the rounded wall stands on the floor uncut: {thesis_wall:?}");
+    let on_grid = |p: DVec3| (0..3).all(|i| ((p[i] / 1e-4) - (p[i] / 1e-4).round()).abs() < 1e-6);
+    assert!(thesis.segments.positions.iter().all(|&p| on_grid(p)), "every segment vertex on the 1e-4 grid");
+    assert!(thesis.tree.fragments.iter().all(|(f, _)| f.polygon.vertices.iter().all(|&p| on_grid(p))), "every fragment vertex on the grid");
+    assert!(!exact.segments.positions.iter().all(|&p| on_grid(p)), "exact numerics keep the wall's foot at -4e-5");
+    let faithful = Config { mode: Mode::Faithful, ..Config::default() };
+    assert_eq!((faithful.tolerance(), Config::default().tolerance()), (Tolerance::THESIS, Tolerance::EXACT));
 }
