@@ -128,6 +128,10 @@ enum Command {
         /// Chart only this method or combination (repeat for more; default: all of the scene's).
         #[arg(long = "method", value_name = "M")]
         methods: Vec<String>,
+        /// Compare frame N (N/60 s: wind, light motion and light board applied): each
+        /// configuration renders frames 0 to N and the reference traces frame N.
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        frame: u64,
         #[command(flatten)]
         device: DeviceArgs,
     },
@@ -372,7 +376,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
         }
-        Command::Chart { scene, output, csv, size, frames, timing_budget, reference_spp, reference_noise, supersample, cache_dir, methods, device } => {
+        Command::Chart { scene, output, csv, size, frames, timing_budget, reference_spp, reference_noise, supersample, cache_dir, methods, frame, device } => {
             let opts = penumbra::chart::ChartOptions {
                 scene,
                 size,
@@ -386,6 +390,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 cache_dir,
                 gpu: gpu_desc(&device),
                 methods,
+                frame,
             };
             let start = std::time::Instant::now();
             let chart = penumbra::chart::run(&opts)?;

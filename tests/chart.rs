@@ -349,3 +349,54 @@ fn capture_supersamples_to_the_asked_size_and_refuses_huge_factors() {
         assert!(!o.status.success() && e.contains("--supersample") && e.contains(want) && e.lines().count() == 1, "{args:?}: {e}");
     }
 }
+
+/// `chart --frame N` judges each configuration's frame N against the reference traced at frame
+/// N: under a sun that `[light_motion]` turns 60° by frame 2 (1800°/s), `forward` on an open
+/// plane (exact there) scores the reference's own noise at frame 2, where judging its frame 2
+/// against the scene as written (frame 0: irradiance twice as high) would be off by a factor 2.
+#[test]
+fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
+    let dir = common::temp_path("chart-frame");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("turning_sun.toml");
+    std::fs::write(
+        &scene,
+        "methods = [\"forward\"]\n\
+         [camera]\nposition = [0, 3, 0.01]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n\
+         [[materials]]\nname = \"grey\"\nalbedo = 0.5\n\
+         [[objects]]\nmesh = \"quad\"\nmaterial = \"grey\"\ncorner = [-20, 0, 20]\nedge_u = [40, 0, 0]\nedge_v = [0, 0, -40]\n\
+         [[lights]]\ntype = \"directional\"\nname = \"sun\"\ndirection = [0, -1, 0]\nirradiance = 2\n\
+         [light_motion]\nlight = \"sun\"\naxis = [0, 0, 1]\ndeg_per_s = 1800\n",
+    )
+    .unwrap();
+    let rel_mse = |frame: &str| {
+        let (png, csv) = (dir.join(format!("chart{frame}.png")), dir.join(format!("chart{frame}.csv")));
+        let cache = dir.join("cache");
+        let args = [
+            "chart",
+            scene.to_str().unwrap(),
+            "--size",
+            "16x16",
+            "--reference-spp",
+            "64",
+            "--frames",
+            "1",
+            "--frame",
+            frame,
+            "--cache-dir",
+            cache.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ];
+        let stdout = ok(&penumbra(&args));
+        assert_eq!(stdout.contains(&format!(", frame {frame}")), frame != "0", "the comparison names the frame: {stdout}");
+        let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+        rows[0].rel_mse
+    };
+    let (at_0, at_2) = (rel_mse("0"), rel_mse("2"));
+    println!("forward against the reference: frame 0 {at_0:.2e}, frame 2 {at_2:.2e}");
+    // Frame 2 against frame 0 would be (0.5 − 1)² / 1 = 0.25 relative MSE.
+    assert!(at_0 < 1e-3 && at_2 < 1e-3, "frame 0 {at_0}, frame 2 {at_2}");
+}

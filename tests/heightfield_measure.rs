@@ -186,6 +186,7 @@ fn chart_and_speedup_at_equal_error() {
             cache_dir: out_dir().join("cache"),
             gpu: measure_gpu(),
             methods: Vec::new(),
+            frame: 0,
         };
         let chart = penumbra::chart::run(&opts).unwrap();
         let points = |m: &str| -> Vec<Point> {

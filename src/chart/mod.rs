@@ -57,6 +57,10 @@ pub struct ChartOptions {
     pub gpu: GpuDesc,
     /// Only these methods or combinations (all of the scene's when empty).
     pub methods: Vec<String>,
+    /// The frame compared (its wind, light motion and light board; 0: the scene as written):
+    /// each configuration renders frames 0 … N and is judged on frame N, against the reference
+    /// traced at frame N.
+    pub frame: u64,
 }
 
 /// One configuration of one method, measured.
@@ -96,6 +100,8 @@ pub struct Chart {
     pub rows: Vec<ChartRow>,
     /// Swept points left out, with why (a limit of the method on this scene).
     pub skipped: Vec<String>,
+    /// The frame compared ([`ChartOptions::frame`]).
+    pub frame: u64,
 }
 
 /// FNV-1a: a stable content hash for cache keys (std's hasher may change between releases).
@@ -163,7 +169,9 @@ pub fn stop_ratio(smallest_rel: f64, smallest_p99: f64, noise_rel: f64, noise_p9
 /// against it): from the cache when the cached one is, or rendered and cached.
 pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, judged: &[&HdrImage], opts: &ChartOptions) -> Result<ChartReference> {
     let (settings, label) = reference_settings(kind, opts.reference_spp);
-    let key = cache_key(scene, size, &format!("{settings:?}|noise {}", opts.reference_noise));
+    // Frame 0 keeps the key it had before frames could be charted, so caches stay valid.
+    let frame_key = if opts.frame == 0 { String::new() } else { format!("|frame {}", opts.frame) };
+    let key = cache_key(scene, size, &format!("{settings:?}|noise {}{frame_key}", opts.reference_noise));
     let path = opts.cache_dir.join(format!("reference-{key}.exr"));
     let (se_path, spp_path) = (crate::reference::stderr_path(&path), path.with_extension("spp"));
     // The ratio of the reference's noise to the error it may have: at most 1 is good enough.
@@ -194,7 +202,7 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
         }
     }
     crate::errln!("chart: rendering the reference ({label}, up to {} spp) for {}", opts.reference_spp, scene.source);
-    let mut tracer = ReferenceRenderer::new(Gpu::new(&opts.gpu)?, scene, size)?;
+    let mut tracer = ReferenceRenderer::at_frame(Gpu::new(&opts.gpu)?, scene, size, opts.frame)?;
     let mut progress = crate::progress::Progress::new("reference (spp)");
     let mut update = |done: u32, total: u32| progress.update(done as u64, total as u64);
     let image = if opts.reference_noise > 0.0 {
@@ -282,12 +290,21 @@ pub fn keep_timing(timed: usize, elapsed_s: f64, frames: usize, budget_s: f64) -
     timed < frames && (timed < MIN_TIMED_FRAMES || budget_s <= 0.0 || elapsed_s < budget_s)
 }
 
+/// Renders frames 0 … `frames` − 1, so that the next one rendered is frame `frames`.
+fn advance(renderer: &mut Renderer, camera: &crate::scene::Camera, frames: u64) -> Result<()> {
+    for _ in 0..frames {
+        renderer.render(camera, FrameOutput::None)?;
+    }
+    Ok(())
+}
+
 /// Renders and times one configuration (timed at the chart's size only).
 fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
     let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
     let mut renderer = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
+    advance(&mut renderer, &camera, opts.frame)?;
     let image = renderer.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
     let warnings = renderer.method_warnings()?;
     let mut timings = Vec::new();
@@ -310,6 +327,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
         let size = crate::supersample::supersampled_size(opts.size, opts.supersample)?;
         let mut big = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), size, 1, Baker::new(Some(opts.cache_dir.join("bake"))))?;
         let camera = big.scene.camera.clone();
+        advance(&mut big, &camera, opts.frame)?;
         let image = big.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
         Some(crate::supersample::box_filter(&image, opts.supersample)?)
     } else {
@@ -401,7 +419,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             bake_bytes: m.bakes.iter().map(|b| b.bytes).sum(),
         });
     }
-    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, supersample: opts.supersample.max(1), rows, skipped };
+    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, supersample: opts.supersample.max(1), rows, skipped, frame: opts.frame };
     let csv = chart.csv();
     std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
     let cached = opts.cache_dir.join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
@@ -431,20 +449,27 @@ impl ChartRow {
 impl Chart {
     /// Which comparison the plotted error is, for titles.
     pub fn comparison(&self) -> String {
-        if self.supersample > 1 {
+        let how = if self.supersample > 1 {
             format!("method supersampled {0}x{0} and box-filtered, as the reference averages each pixel (lighting error)", self.supersample)
         } else {
             "method at pixel centres, reference averaged over each pixel (aliasing included)".to_string()
+        };
+        how + &self.frame_note()
+    }
+
+    /// ", frame N" when the chart compares a frame other than the first.
+    fn frame_note(&self) -> String {
+        if self.frame == 0 {
+            String::new()
+        } else {
+            format!(", frame {}", self.frame)
         }
     }
 
     /// [`comparison`](Self::comparison) in a few words.
     pub fn short_comparison(&self) -> String {
-        if self.supersample > 1 {
-            format!("method supersampled {0}x{0}, box-filtered", self.supersample)
-        } else {
-            "method at pixel centres".to_string()
-        }
+        let how = if self.supersample > 1 { format!("method supersampled {0}x{0}, box-filtered", self.supersample) } else { "method at pixel centres".to_string() };
+        how + &self.frame_note()
     }
 
     /// Configurations on the Pareto front: no other is both faster and more accurate.
@@ -658,7 +683,8 @@ mod tests {
             warnings: vec!["x: 2, of 3 dropped".into()],
             reference: "direct, 4 spp".into(),
         };
-        let chart = Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), supersample: 1, rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new() };
+        let chart =
+            Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), supersample: 1, rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new(), frame: 0 };
         assert_eq!(chart.pareto_front(), vec![0, 2]);
         let parsed = parse_csv(&chart.csv()).unwrap();
         assert_eq!(parsed, vec![cfg("a", 1.0, 0.5), cfg("b", 2.0, 0.6), cfg("c", 3.0, 0.1)]);
