@@ -24,9 +24,12 @@ xvfb-run -a -s "-screen 0 1024x768x24" cargo test --no-fail-fast "$@" 2>&1 | tee
 status=${PIPESTATUS[0]}
 set -e
 [ "$status" -eq 0 ] && exit 0
-# Cargo names each failed target ("to rerun pass `--test NAME`") and then how it ended.
-mapfile -t failures < <(awk '/to rerun pass `/ { match($0, /`[^`]*`/); t = substr($0, RSTART + 1, RLENGTH - 2) }
-  /process didn.t exit successfully/ && t != "" { print (index($0, "(signal: ") ? "crashed" : "failed") " " t; t = "" }' "$log")
+# Cargo names each failed target ("to rerun pass `--test NAME`") and then how it ended; a target
+# with no "(signal: …)" line after its name (a failed assertion, a doctest) counts as failed.
+mapfile -t failures < <(awk '
+  /to rerun pass `/ { if (t != "") print "failed " t; match($0, /`[^`]*`/); t = substr($0, RSTART + 1, RLENGTH - 2) }
+  /process didn.t exit successfully/ && t != "" { print (index($0, "(signal: ") ? "crashed" : "failed") " " t; t = "" }
+  END { if (t != "") print "failed " t }' "$log")
 if [ "${#failures[@]}" -eq 0 ] || printf '%s\n' "${failures[@]}" | grep -q '^failed '; then
   exit "$status"
 fi
