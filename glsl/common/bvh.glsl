@@ -1,9 +1,13 @@
 // Closest or any hit of a ray against a BVH over triangles, built by src/reference/bvh.rs
 // (whose CPU traversal mirrors this one). The including shader defines BVH_NODES_BINDING and
-// BVH_TRIANGLES_BINDING (set 0 bindings of `nodes` and of `triangles`: corner and two edges in
-// BVH leaf order) and BVH_TRIANGLE_COUNT before including this file.
+// BVH_TRIANGLES_BINDING (set 0 bindings of the tables `bvh_nodes` and `bvh_triangles`: corner
+// and two edges in BVH leaf order) and BVH_TRIANGLE_COUNT before including this file.
+// The tables are images (common/texel_table.glsl): a node is texels 2i (lo, index) and 2i + 1
+// (hi, count), a triangle texels 3i to 3i + 2.
 #ifndef PENUMBRA_COMMON_BVH_GLSL
 #define PENUMBRA_COMMON_BVH_GLSL
+
+#include "common/texel_table.glsl"
 
 const float NO_HIT = 3.0e38;
 // Matches bvh::MAX_DEPTH: the build bounds the tree's depth by it.
@@ -22,8 +26,27 @@ struct Triangle {
     vec4 e2;
 };
 
-layout(set = 0, binding = BVH_NODES_BINDING) readonly buffer Nodes { Node items[]; } nodes;
-layout(set = 0, binding = BVH_TRIANGLES_BINDING) readonly buffer Triangles { Triangle items[]; } triangles;
+layout(set = 0, binding = BVH_NODES_BINDING) uniform sampler2D bvh_nodes;
+layout(set = 0, binding = BVH_TRIANGLES_BINDING) uniform sampler2D bvh_triangles;
+
+Node bvh_node(uint i) {
+    vec4 a = table_texel(bvh_nodes, 2u * i);
+    vec4 b = table_texel(bvh_nodes, 2u * i + 1u);
+    Node n;
+    n.lo = a.xyz;
+    n.index = floatBitsToUint(a.w);
+    n.hi = b.xyz;
+    n.count = floatBitsToUint(b.w);
+    return n;
+}
+
+Triangle bvh_triangle(uint i) {
+    Triangle t;
+    t.p0 = table_texel(bvh_triangles, 3u * i);
+    t.e1 = table_texel(bvh_triangles, 3u * i + 1u);
+    t.e2 = table_texel(bvh_triangles, 3u * i + 2u);
+    return t;
+}
 
 // Moller-Trumbore, the same arithmetic as bvh::intersect_triangle.
 bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out float t, out vec2 uv) {
@@ -51,8 +74,8 @@ bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out fl
 
 // Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it.
 float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
-    vec3 t0 = (nodes.items[i].lo - o) * inv_d;
-    vec3 t1 = (nodes.items[i].hi - o) * inv_d;
+    vec3 t0 = (table_texel(bvh_nodes, 2u * i).xyz - o) * inv_d;
+    vec3 t1 = (table_texel(bvh_nodes, 2u * i + 1u).xyz - o) * inv_d;
     vec3 near = min(t0, t1);
     vec3 far = max(t0, t1);
     float enter = max(max(near.x, near.y), max(near.z, 0.0));
@@ -77,12 +100,12 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
     uint sp = 0u;
     uint node = 0u;
     while (true) {
-        Node n = nodes.items[node];
+        Node n = bvh_node(node);
         bool descended = false;
         if (n.count > 0u) {
             for (uint k = 0u; k < n.count; ++k) {
                 uint slot = n.index + k;
-                Triangle tri = triangles.items[slot];
+                Triangle tri = bvh_triangle(slot);
                 float t;
                 vec2 b;
                 if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
@@ -138,7 +161,14 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
 
 #ifdef BVH_SKIPS_BINDING
 // Per node, the node after its subtree (Bvh::skip_links).
-layout(set = 0, binding = BVH_SKIPS_BINDING) readonly buffer Skips { uint items[]; } skips;
+// Four links a texel.
+layout(set = 0, binding = BVH_SKIPS_BINDING) uniform sampler2D bvh_skips;
+
+uint bvh_skip(uint i) {
+    vec4 t = table_texel(bvh_skips, i / 4u);
+    uint c = i % 4u;
+    return floatBitsToUint(c == 0u ? t.x : (c == 1u ? t.y : (c == 2u ? t.z : t.w)));
+}
 
 // Whether a triangle of the tree rooted at node `root` lies on the ray closer than t_max: shadow
 // rays, where the order of the hits does not matter, walk the nodes in storage order without a
@@ -149,20 +179,20 @@ layout(set = 0, binding = BVH_SKIPS_BINDING) readonly buffer Skips { uint items[
 // the answer then means nothing.
 bool occluded_in(uint root, vec3 o, vec3 d, float t_max, out bool complete) {
     vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
-    uint end = skips.items[root];
+    uint end = bvh_skip(root);
     uint node = root;
     while (node < end) {
         if (box_entry(node, o, inv_d, t_max) == NO_HIT) {
-            node = skips.items[node];
+            node = bvh_skip(node);
             continue;
         }
-        Node n = nodes.items[node];
+        Node n = bvh_node(node);
         if (n.count == 0u) {
             node += 1u;
             continue;
         }
         for (uint k = 0u; k < n.count; ++k) {
-            Triangle tri = triangles.items[n.index + k];
+            Triangle tri = bvh_triangle(n.index + k);
             float t;
             vec2 b;
             if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
@@ -170,7 +200,7 @@ bool occluded_in(uint root, vec3 o, vec3 d, float t_max, out bool complete) {
                 return true;
             }
         }
-        node = skips.items[node];
+        node = bvh_skip(node);
     }
     complete = node >= end;
     return false;

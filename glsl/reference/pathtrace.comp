@@ -40,7 +40,8 @@ layout(set = 0, binding = 0) uniform Params {
 #define BVH_TRIANGLES_BINDING 2
 #define BVH_TRIANGLE_COUNT params.counts.y
 #include "common/bvh.glsl"
-layout(set = 0, binding = 3) readonly buffer TriangleShading { Shading items[]; } shading;
+// Per triangle its Shading (8 texels) and per material its Material (5 texels), as tables.
+layout(set = 0, binding = 3) uniform sampler2D shading_table;
 layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
 layout(set = 0, binding = 8) readonly buffer EnvironmentMap { vec4 items[]; } environment_map;
 layout(set = 0, binding = 9) readonly buffer EnvironmentCdf { float items[]; } environment_cdf;
@@ -53,7 +54,46 @@ layout(set = 0, binding = 11) readonly buffer Textures { uvec4 items[]; } textur
 #include "reference/environment.glsl"
 #include "reference/trace.glsl"
 
-layout(set = 0, binding = 5) readonly buffer Materials { Material items[]; } materials;
+layout(set = 0, binding = 5) uniform sampler2D material_table;
+
+Shading shading_of(uint triangle) {
+    uint k = 8u * triangle;
+    vec4 a = table_texel(shading_table, k);
+    vec4 b = table_texel(shading_table, k + 1u);
+    vec4 c = table_texel(shading_table, k + 2u);
+    vec4 uv01 = table_texel(shading_table, k + 6u);
+    vec4 uv2 = table_texel(shading_table, k + 7u);
+    Shading sh;
+    sh.n0 = a.xyz;
+    sh.material = floatBitsToUint(a.w);
+    sh.n1 = b.xyz;
+    sh.pad0 = 0u;
+    sh.n2 = c.xyz;
+    sh.pad1 = 0u;
+    sh.t0 = table_texel(shading_table, k + 3u);
+    sh.t1 = table_texel(shading_table, k + 4u);
+    sh.t2 = table_texel(shading_table, k + 5u);
+    sh.uv0 = uv01.xy;
+    sh.uv1 = uv01.zw;
+    sh.uv2 = uv2.xy;
+    sh.pad2 = vec2(0.0);
+    return sh;
+}
+
+uint material_index_of(uint triangle) {
+    return floatBitsToUint(table_texel(shading_table, 8u * triangle).w);
+}
+
+Material material_of(uint index) {
+    uint k = 5u * index;
+    Material m;
+    m.albedo = table_texel(material_table, k);
+    m.specular = table_texel(material_table, k + 1u);
+    m.transmittance = table_texel(material_table, k + 2u);
+    m.emission = table_texel(material_table, k + 3u);
+    m.maps = floatBitsToUint(table_texel(material_table, k + 4u));
+    return m;
+}
 // Stochastic transparency: a surface of opacity a (its material's albedo.w) stops a ray with
 // probability a and otherwise lets it through unchanged, so the expected radiance is
 // a * surface + (1 - a) * behind, and each layer on a shadow ray blocks it with probability a.
@@ -62,12 +102,12 @@ layout(set = 0, binding = 5) readonly buffer Materials { Material items[]; } mat
 const uint MAX_LAYERS = 64u;
 
 float opacity_of(int triangle) {
-    return materials.items[shading.items[triangle].material].albedo.w;
+    return table_texel(material_table, 5u * material_index_of(uint(triangle))).w;
 }
 
 // A ray origin just past the triangle's point at uv, on the side the ray travels to.
 vec3 beyond(int triangle, vec2 uv, vec3 d) {
-    Triangle tri = triangles.items[triangle];
+    Triangle tri = bvh_triangle(uint(triangle));
     vec3 p = tri.p0.xyz + uv.x * tri.e1.xyz + uv.y * tri.e2.xyz;
     vec3 ng = normalize(cross(tri.e1.xyz, tri.e2.xyz));
     return offset_origin(p, dot(ng, d) >= 0.0 ? ng : -ng);
@@ -167,9 +207,9 @@ vec4 sample_texture(uint index, vec2 uv) {
 // normal bent by the normal map in the frame (t, b, n) built after the flip, so that seen from
 // behind the frame is (t, -b, -n).
 Surface surface_at(Hit h, vec3 d, out Material m) {
-    Triangle tri = triangles.items[h.triangle];
-    Shading sh = shading.items[h.triangle];
-    m = materials.items[sh.material];
+    Triangle tri = bvh_triangle(uint(h.triangle));
+    Shading sh = shading_of(uint(h.triangle));
+    m = material_of(sh.material);
     Surface s;
     s.p = tri.p0.xyz + h.uv.x * tri.e1.xyz + h.uv.y * tri.e2.xyz;
     vec3 ng = normalize(cross(tri.e1.xyz, tri.e2.xyz));
@@ -418,7 +458,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
             break;
         }
         if (counted) {
-            radiance += throughput * materials.items[shading.items[h.triangle].material].emission.rgb;
+            radiance += throughput * table_texel(material_table, 5u * material_index_of(uint(h.triangle)) + 3u).rgb;
         }
         if (depth >= batch.bounces) {
             break;

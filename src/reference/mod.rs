@@ -55,6 +55,7 @@
 //! small until enough of them have been drawn.
 
 pub mod bvh;
+pub mod texel_table;
 
 pub mod export;
 
@@ -375,7 +376,8 @@ impl ReferenceRenderer {
             return Err(Error::Usage(format!("image size {width}x{height} is empty")));
         }
         let traced = TracedScene::build_at(scene, crate::scene::motion::frame_time(frame))?;
-        let buffers = traced.upload(&mut gpu)?;
+        let mut states = ResourceStates::default();
+        let buffers = traced.upload(&mut gpu, &mut states)?;
         let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] }, &dev_shaders())?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
@@ -405,23 +407,7 @@ impl ReferenceRenderer {
             },
             options: [traced.light_beyond_last_bounce() as u32, traced.punctual_lights, 0, 0],
         };
-        Ok(ReferenceRenderer {
-            gpu,
-            scene: traced,
-            pipeline,
-            buffers,
-            params,
-            mean,
-            second_moment,
-            readback,
-            status,
-            frame,
-            states: ResourceStates::default(),
-            width,
-            height,
-            batches_cut_short: 0,
-            pixels_cut_short: Vec::new(),
-        })
+        Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, status, frame, states, width, height, batches_cut_short: 0, pixels_cut_short: Vec::new() })
     }
 
     /// Renders `settings.spp` samples per pixel, calling `progress(done, total)` after each batch.
@@ -550,6 +536,7 @@ impl ReferenceRenderer {
         for (name, buffer) in self.buffers.bindings() {
             pass = pass.buffer(buffer, Access::StorageRead { stages: compute }, Some(name));
         }
+        pass = self.buffers.read_tables(pass, compute);
         pass.record(move |ctx| {
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("params", Bind::UniformData(params))])?;

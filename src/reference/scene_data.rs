@@ -12,11 +12,13 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
-use super::bvh::{Bvh, BvhNode};
+use super::bvh::Bvh;
+use super::texel_table::{GpuBvh, TexelTable};
 use crate::backend::{vk, BufferId, Gpu};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::gpu_scene::{punctual_lights, GpuLight};
+use crate::graph::{PassBuilder, ResourceStates};
 use crate::scene::{Environment, Light, Scene};
 
 /// Light types beyond the punctual ones of `glsl/common/lights.glsl` (stored in `position.w`).
@@ -281,7 +283,8 @@ impl TracedScene {
         (texels, headers)
     }
 
-    pub fn upload(&self, gpu: &mut Gpu) -> Result<SceneBuffers> {
+    /// The buffers and BVH tables, the tables registered in `states`.
+    pub fn upload(&self, gpu: &mut Gpu, states: &mut ResourceStates) -> Result<SceneBuffers> {
         // Shaders declare runtime arrays; an empty one is bound as one zeroed element.
         fn storage<T: Pod + Zeroable>(gpu: &mut Gpu, name: &str, items: &[T]) -> Result<BufferId> {
             let zero = [T::zeroed()];
@@ -292,10 +295,9 @@ impl TracedScene {
         Ok(SceneBuffers {
             texture_texels: storage(gpu, "reference texture texels", &texels)?,
             textures: storage(gpu, "reference textures", &headers)?,
-            nodes: storage::<BvhNode>(gpu, "reference bvh nodes", &self.bvh.nodes)?,
-            triangles: storage(gpu, "reference triangles", &self.triangles)?,
-            shading: storage(gpu, "reference triangle shading", &self.shading)?,
-            materials: storage(gpu, "reference materials", &self.materials)?,
+            bvh: GpuBvh::upload(gpu, states, "reference", &self.bvh.nodes, &self.triangles, None)?,
+            shading: TexelTable::upload(gpu, states, "reference triangle shading", &self.shading)?,
+            materials: TexelTable::upload(gpu, states, "reference materials", &self.materials)?,
             lights: storage(gpu, "reference lights", &self.lights)?,
             environment_map: storage(gpu, "reference environment map", self.environment_map.as_ref().map_or(&[][..], |m| &m.texels))?,
             environment_cdf: storage(gpu, "reference environment cdf", self.environment_map.as_ref().map_or(&[][..], |m| &m.cdf))?,
@@ -303,13 +305,12 @@ impl TracedScene {
     }
 }
 
-/// The storage buffers of a [`TracedScene`], named after the shader bindings.
+/// The storage buffers and BVH tables of a [`TracedScene`], named after the shader bindings.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneBuffers {
-    pub nodes: BufferId,
-    pub triangles: BufferId,
-    pub shading: BufferId,
-    pub materials: BufferId,
+    pub bvh: GpuBvh,
+    pub shading: TexelTable,
+    pub materials: TexelTable,
     pub lights: BufferId,
     pub environment_map: BufferId,
     pub environment_cdf: BufferId,
@@ -318,17 +319,14 @@ pub struct SceneBuffers {
 }
 
 impl SceneBuffers {
-    pub fn bindings(&self) -> [(&'static str, BufferId); 9] {
-        [
-            ("nodes", self.nodes),
-            ("triangles", self.triangles),
-            ("shading", self.shading),
-            ("materials", self.materials),
-            ("lights", self.lights),
-            ("environment_map", self.environment_map),
-            ("environment_cdf", self.environment_cdf),
-            ("texture_texels", self.texture_texels),
-            ("textures", self.textures),
-        ]
+    /// The storage buffers (the tables are declared by [`SceneBuffers::read_tables`]).
+    pub fn bindings(&self) -> [(&'static str, BufferId); 5] {
+        [("lights", self.lights), ("environment_map", self.environment_map), ("environment_cdf", self.environment_cdf), ("texture_texels", self.texture_texels), ("textures", self.textures)]
+    }
+
+    /// Declares the pass's reads of the tables: the BVH, per-triangle shading and materials.
+    pub fn read_tables<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
+        let pass = self.shading.read(self.bvh.read(pass, stages), "shading_table", stages);
+        self.materials.read(pass, "material_table", stages)
     }
 }

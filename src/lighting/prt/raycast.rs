@@ -29,6 +29,7 @@ use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::progress::Progress;
 use crate::reference::bvh::{box_entry, intersect_triangle, safe_inverse, Bvh, BvhNode};
 use crate::reference::scene_data::TracedTriangle;
+use crate::reference::texel_table::GpuBvh;
 use crate::shaders::ShaderLibrary;
 
 /// Most SH bands either path bakes (the shader's `SH_MAX_BANDS`).
@@ -301,9 +302,6 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
 
     let receivers_buf = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(&receivers))?;
     let directions_buf = gpu.create_storage_buffer("prt rays directions", bytemuck::cast_slice(&local))?;
-    let nodes_buf = gpu.create_storage_buffer("prt rays bvh nodes", bytemuck::cast_slice(&nodes))?;
-    let triangles_buf = gpu.create_storage_buffer("prt rays bvh triangles", bytemuck::cast_slice(&traced))?;
-    let skips_buf = gpu.create_storage_buffer("prt rays bvh skip links", bytemuck::cast_slice(&skips))?;
     // Room for at least one receiver at one ray per invocation.
     let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
     let sums_buf = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuToCpu)?;
@@ -322,6 +320,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
+    let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, Some(&skips))?;
     let (mut base, mut chunk) = (0usize, FIRST_CHUNK);
     while base < total {
         let lanes = samples.div_ceil(per as usize);
@@ -334,8 +333,8 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
         graph.pass("prt rays chunk count").buffer(count_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(count_buf, count));
         graph.pass("prt rays per lane").buffer(per_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(per_buf, per));
         graph.pass("prt rays clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
-        graph
-            .pass("prt rays")
+        bvh_tables
+            .read(graph.pass("prt rays"), vk::PipelineStageFlags2::COMPUTE_SHADER)
             .buffer(receivers_buf, read, Some("receivers"))
             .buffer(directions_buf, read, Some("directions"))
             .buffer(sums_buf, write, Some("sums"))
@@ -343,9 +342,6 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
             .buffer(base_buf, read, Some("chunk_base"))
             .buffer(count_buf, read, Some("chunk_count"))
             .buffer(per_buf, read, Some("per_lane"))
-            .buffer(nodes_buf, read, Some("nodes"))
-            .buffer(triangles_buf, read, Some("triangles"))
-            .buffer(skips_buf, read, Some("skips"))
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(pipeline)?;
                 ctx.bind(&[])?;

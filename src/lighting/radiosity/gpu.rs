@@ -21,6 +21,7 @@ use crate::lightmap::visibility::Matrix;
 use crate::progress::Progress;
 use crate::reference::bvh::Bvh;
 use crate::reference::scene_data::TracedTriangle;
+use crate::reference::texel_table::GpuBvh;
 use crate::shaders::ShaderLibrary;
 
 /// `Patch` in glsl/radiosity/shooting.glsl.
@@ -170,10 +171,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
     let members_buf = storage_buffer(gpu, "radiosity block members", none, bytemuck::cast_slice(&members))?;
     let charts_buf = storage_buffer(gpu, "radiosity charts", none, bytemuck::cast_slice(&charts))?;
     let power_buf = storage_buffer(gpu, "radiosity block power", none, &vec![0u8; 4 * blocks.len()])?;
-    let nodes_buf = storage_buffer(gpu, "radiosity bvh nodes", none, bytemuck::cast_slice(&bvh.nodes))?;
-    let triangles_buf = storage_buffer(gpu, "radiosity bvh triangles", none, bytemuck::cast_slice(&traced))?;
     let visibility_buf = storage_buffer(gpu, "radiosity visibility matrix", none, bytemuck::cast_slice(&visibility))?;
-    let skips_buf = storage_buffer(gpu, "radiosity bvh skip links", none, bytemuck::cast_slice(&bvh.skip_links()))?;
     let storage_host = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
     let shot_buf = host_buffer(gpu, "radiosity shot", std::mem::size_of::<GpuShot>() as u64, storage_host)?;
     let status_buf = host_buffer(gpu, "radiosity status", 4, storage_host)?;
@@ -211,6 +209,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
+    let bvh_tables = GpuBvh::upload(gpu, &mut states, "radiosity", &bvh.nodes, &traced, Some(&bvh.skip_links()))?;
     let mut recorded = 0usize;
     let mut batch = 4usize;
     let shot = loop {
@@ -252,14 +251,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
                     ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                     ctx.rec.dispatch([64, 1, 1])
                 });
-            graph
-                .pass("radiosity shoot")
+            bvh_tables
+                .read(graph.pass("radiosity shoot"), vk::PipelineStageFlags2::COMPUTE_SHADER)
                 .buffer(patches_buf, read, Some("patches"))
                 .buffer(state_buf, write, Some("radiosity"))
                 .buffer(shot_buf, read, Some("shots"))
-                .buffer(nodes_buf, read, Some("nodes"))
-                .buffer(triangles_buf, read, Some("triangles"))
-                .buffer(skips_buf, read, Some("skips"))
                 .buffer(visibility_buf, read, Some("visibility"))
                 .buffer(status_buf, write, Some("status"))
                 .record(move |ctx| {

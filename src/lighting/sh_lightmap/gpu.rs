@@ -25,6 +25,7 @@ use crate::lightmap::solve::Mode;
 use crate::progress::Progress;
 use crate::reference::bvh::Bvh;
 use crate::reference::scene_data::TracedTriangle;
+use crate::reference::texel_table::GpuBvh;
 use crate::shaders::ShaderLibrary;
 
 /// `Patch` in glsl/sh_lightmap/visibility.comp.
@@ -117,9 +118,6 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
     let patches_buf = gpu.create_storage_buffer("sh visibility patches", bytemuck::cast_slice(&patches))?;
     let samples_buf = gpu.create_storage_buffer("sh visibility samples", bytemuck::cast_slice(&dirs))?;
     let sky_buf = gpu.create_storage_buffer("sh visibility sky flags", bytemuck::cast_slice(&sky))?;
-    let nodes_buf = gpu.create_storage_buffer("sh visibility bvh nodes", bytemuck::cast_slice(&bvh.nodes))?;
-    let triangles_buf = gpu.create_storage_buffer("sh visibility bvh triangles", bytemuck::cast_slice(&traced))?;
-    let skips_buf = gpu.create_storage_buffer("sh visibility bvh skip links", bytemuck::cast_slice(&bvh.skip_links()))?;
     let max_chunk = MAX_CHUNK.min(total);
     let out_buf = gpu.create_storage_output("sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
     let status_buf = gpu.create_storage_output("sh visibility status", 4, MemoryKind::GpuToCpu)?;
@@ -143,6 +141,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
+    let bvh_tables = GpuBvh::upload(gpu, &mut states, "sh visibility", &bvh.nodes, &traced, Some(&bvh.skip_links()))?;
     let (mut base, mut chunk) = (0usize, FIRST_CHUNK.min(max_chunk));
     while base < total {
         let n = chunk.min(total - base).min(MAX_INVOCATIONS / lanes as usize);
@@ -153,8 +152,8 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
         graph.pass("sh visibility lanes").buffer(lanes_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(lanes_buf, lanes));
         graph.pass("sh visibility clear bits").buffer(out_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(out_buf, 0));
         graph.pass("sh visibility clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
-        graph
-            .pass("sh visibility")
+        bvh_tables
+            .read(graph.pass("sh visibility"), vk::PipelineStageFlags2::COMPUTE_SHADER)
             .buffer(patches_buf, read, Some("patches"))
             .buffer(samples_buf, read, Some("samples"))
             .buffer(sky_buf, read, Some("sky"))
@@ -162,9 +161,6 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
             .buffer(status_buf, write, Some("status"))
             .buffer(chunk_buf, read, Some("chunk"))
             .buffer(lanes_buf, read, Some("lanes_per_word"))
-            .buffer(nodes_buf, read, Some("nodes"))
-            .buffer(triangles_buf, read, Some("triangles"))
-            .buffer(skips_buf, read, Some("skips"))
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(pipeline)?;
                 ctx.bind(&[])?;

@@ -1,0 +1,99 @@
+//! Read-only arrays the compute shaders index per invocation (BVH nodes and triangles, the
+//! reference's per-triangle shading and materials), stored as RGBA32F images used as tables:
+//! [`TABLE_WIDTH`] texels a row, read with `texelFetch` (`glsl/common/texel_table.glsl`).
+//!
+//! Why images and not storage buffers: on lavapipe a storage-buffer load whose address differs
+//! between the lanes of a SIMD group compiles to a loop over the lanes with a branch for each,
+//! while a texel fetch is a gather without branches. On a GPU both are plain memory reads. The
+//! README has the measured difference (the reference against Mitsuba 3).
+
+use bytemuck::Pod;
+
+use super::bvh::BvhNode;
+use super::scene_data::TracedTriangle;
+use crate::backend::{vk, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, SubresourceRange};
+use crate::error::{Error, Result};
+use crate::graph::{Access, PassBuilder, ResourceStates};
+
+/// Texels in a row of a table (`TABLE_WIDTH` in glsl/common/texel_table.glsl): Vulkan's
+/// smallest allowed maxImageDimension2D, so every device takes it.
+pub const TABLE_WIDTH: u32 = 4096;
+
+/// One table: an image bound through a sampler (texelFetch ignores its filtering).
+#[derive(Clone, Copy, Debug)]
+pub struct TexelTable {
+    pub image: ImageId,
+    sampler: SamplerId,
+}
+
+impl TexelTable {
+    /// `items` (whose size must be a multiple of 16 bytes) as texels, the last row padded with
+    /// zeros; an empty slice gives one zeroed texel. The image is registered in `states` as
+    /// sampled.
+    pub fn upload<T: Pod>(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, items: &[T]) -> Result<TexelTable> {
+        let bytes: &[u8] = bytemuck::cast_slice(items);
+        if !std::mem::size_of::<T>().is_multiple_of(16) {
+            return Err(Error::Usage(format!("{name}: items of {} bytes are not whole texels", std::mem::size_of::<T>())));
+        }
+        let texels = (bytes.len() as u64 / 16).max(1);
+        let rows = texels.div_ceil(TABLE_WIDTH as u64);
+        let max = gpu.caps().max_image_dimension_2d as u64;
+        if rows > max {
+            return Err(Error::Usage(format!("{name}: {texels} texels need {rows} rows of {TABLE_WIDTH}, more than the device's largest image ({max} rows)")));
+        }
+        let size = (rows * TABLE_WIDTH as u64 * 16) as usize;
+        let mut data = Vec::with_capacity(size);
+        data.extend_from_slice(bytes);
+        data.resize(size, 0);
+        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        let image = gpu.create_image(&ImageDesc::new_2d(name, vk::Format::R32G32B32A32_SFLOAT, TABLE_WIDTH, rows as u32).usage(usage))?;
+        gpu.upload_image(image, 0, &data)?;
+        states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        let sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
+        Ok(TexelTable { image, sampler })
+    }
+
+    /// Declares the pass's read of the table through binding `name` in `stages`.
+    pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, name: &'static str, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
+        pass.sample(name, self.image, SubresourceRange::mip(0), self.sampler, stages)
+    }
+}
+
+/// A BVH as `glsl/common/bvh.glsl` reads it: nodes (two texels each) and triangles (three) in
+/// the tables `bvh_nodes` and `bvh_triangles`, and where the shader walks them the skip links
+/// of the stackless shadow-ray walk (four a texel) in `bvh_skips`.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuBvh {
+    pub nodes: TexelTable,
+    pub triangles: TexelTable,
+    pub skips: Option<TexelTable>,
+}
+
+impl GpuBvh {
+    /// Uploads nodes and triangles (indices as the shader reads them: several trees one after
+    /// another if the caller put them so) and the skip links where the shader walks them.
+    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, label: &str, nodes: &[BvhNode], triangles: &[TracedTriangle], skips: Option<&[u32]>) -> Result<GpuBvh> {
+        let nodes = TexelTable::upload(gpu, states, &format!("{label} bvh nodes"), nodes)?;
+        let triangles = TexelTable::upload(gpu, states, &format!("{label} bvh triangles"), triangles)?;
+        let skips = match skips {
+            Some(s) => {
+                let mut texels = vec![[0u32; 4]; s.len().div_ceil(4)];
+                for (i, &link) in s.iter().enumerate() {
+                    texels[i / 4][i % 4] = link;
+                }
+                Some(TexelTable::upload(gpu, states, &format!("{label} bvh skip links"), &texels)?)
+            }
+            None => None,
+        };
+        Ok(GpuBvh { nodes, triangles, skips })
+    }
+
+    /// Declares the pass's reads of the tables (and skip links) in `stages`.
+    pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
+        let pass = self.triangles.read(self.nodes.read(pass, "bvh_nodes", stages), "bvh_triangles", stages);
+        match self.skips {
+            Some(s) => s.read(pass, "bvh_skips", stages),
+            None => pass,
+        }
+    }
+}
