@@ -2,13 +2,21 @@
 // cube map (src/reference/environment.rs) taken as constant over each texel and importance-sampled
 // in proportion to luminance x texel solid angle. The including shader declares `params`
 // (environment_map: x width, y height, both 0 without a map; z: 1 if the map can be sampled;
-// w: 1 for a cube map, its faces stacked, height = 6 width), `environment_map` and
-// `environment_cdf` first.
+// w: 1 for a cube map, its faces stacked, height = 6 width) and the tables `environment_table`
+// (texels) and `environment_cdf_table` (the CDFs, four values a texel) first.
 #ifndef PENUMBRA_REFERENCE_ENVIRONMENT_GLSL
 #define PENUMBRA_REFERENCE_ENVIRONMENT_GLSL
 
 #include "common/lights.glsl"
 #include "common/cube.glsl"
+#include "common/texel_table.glsl"
+
+// Value i of the CDFs.
+float environment_cdf(uint i) {
+    vec4 t = table_texel(environment_cdf_table, i / 4u);
+    uint c = i % 4u;
+    return c == 0u ? t.x : (c == 1u ? t.y : (c == 2u ? t.z : t.w));
+}
 
 // Matches Environment::equirect_uv / equirect_dir in src/scene/types.rs.
 vec2 equirect_uv(vec3 d) {
@@ -55,7 +63,7 @@ vec3 environment_radiance(vec3 d) {
     }
     float density;
     uvec2 t = environment_texel(d, density);
-    return environment_map.items[t.y * params.environment_map.x + t.x].rgb;
+    return table_texel(environment_table, t.y * params.environment_map.x + t.x).rgb;
 }
 
 // Probabilities of texel row j and of column i within it, from the CDFs.
@@ -63,8 +71,8 @@ float environment_texel_probability(uvec2 t) {
     uint w = params.environment_map.x;
     uint h = params.environment_map.y;
     uint row = h + 1u + t.y * (w + 1u);
-    return (environment_cdf.items[t.y + 1u] - environment_cdf.items[t.y])
-        * (environment_cdf.items[row + t.x + 1u] - environment_cdf.items[row + t.x]);
+    return (environment_cdf(t.y + 1u) - environment_cdf(t.y))
+        * (environment_cdf(row + t.x + 1u) - environment_cdf(row + t.x));
 }
 
 // Solid-angle density of sample_environment choosing d (0 when the map is not sampled).
@@ -83,7 +91,7 @@ uint cdf_search(uint offset, uint n, float u) {
     uint hi = n - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (environment_cdf.items[offset + mid + 1u] <= u) {
+        if (environment_cdf(offset + mid + 1u) <= u) {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -98,12 +106,12 @@ bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
     uint w = params.environment_map.x;
     uint h = params.environment_map.y;
     uint j = cdf_search(0u, h, u.x);
-    float r0 = environment_cdf.items[j];
-    float r1 = environment_cdf.items[j + 1u];
+    float r0 = environment_cdf(j);
+    float r1 = environment_cdf(j + 1u);
     uint row = h + 1u + j * (w + 1u);
     uint i = cdf_search(row, w, u.y);
-    float c0 = environment_cdf.items[row + i];
-    float c1 = environment_cdf.items[row + i + 1u];
+    float c0 = environment_cdf(row + i);
+    float c1 = environment_cdf(row + i + 1u);
     vec2 within = vec2((u.y - c0) / (c1 - c0), (u.x - r0) / (r1 - r0));
     float probability = (r1 - r0) * (c1 - c0);
     if (params.environment_map.w != 0u) {

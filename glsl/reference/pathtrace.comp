@@ -43,12 +43,13 @@ layout(set = 0, binding = 0) uniform Params {
 // Per triangle its Shading (8 texels) and per material its Material (5 texels), as tables.
 layout(set = 0, binding = 3) uniform sampler2D shading_table;
 layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
-layout(set = 0, binding = 8) readonly buffer EnvironmentMap { vec4 items[]; } environment_map;
-layout(set = 0, binding = 9) readonly buffer EnvironmentCdf { float items[]; } environment_cdf;
+// The environment map's texels, and its CDFs four values a texel (environment.glsl).
+layout(set = 0, binding = 8) uniform sampler2D environment_table;
+layout(set = 0, binding = 9) uniform sampler2D environment_cdf_table;
 // Texture maps as linear float texels (src/reference/scene_data.rs); per texture
 // (first texel, width, height, 0).
-layout(set = 0, binding = 10) readonly buffer TextureTexels { vec4 items[]; } texture_texels;
-layout(set = 0, binding = 11) readonly buffer Textures { uvec4 items[]; } textures;
+layout(set = 0, binding = 10) uniform sampler2D texture_table;
+layout(set = 0, binding = 11) uniform sampler2D texture_headers;
 
 #include "reference/bsdf.glsl"
 #include "reference/environment.glsl"
@@ -186,11 +187,11 @@ const uint LIGHT_STREAM = 0x9e3779b9u;
 vec4 texel_at(uvec4 header, ivec2 i) {
     ivec2 size = ivec2(header.yz);
     i += size * ivec2(lessThan(i, ivec2(0))) - size * ivec2(greaterThanEqual(i, size));
-    return texture_texels.items[header.x + uint(i.y * size.x + i.x)];
+    return table_texel(texture_table, header.x + uint(i.y * size.x + i.x));
 }
 
 vec4 sample_texture(uint index, vec2 uv) {
-    uvec4 header = textures.items[index];
+    uvec4 header = floatBitsToUint(table_texel(texture_headers, index));
     vec2 s = fract(uv) * vec2(header.yz) - 0.5;
     vec2 base = floor(s);
     vec2 f = s - base;

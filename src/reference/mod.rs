@@ -533,10 +533,7 @@ impl ReferenceRenderer {
             Access::StorageWrite { stages: compute },
             Some("status"),
         );
-        for (name, buffer) in self.buffers.bindings() {
-            pass = pass.buffer(buffer, Access::StorageRead { stages: compute }, Some(name));
-        }
-        pass = self.buffers.read_tables(pass, compute);
+        pass = self.buffers.read(pass, compute);
         pass.record(move |ctx| {
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("params", Bind::UniformData(params))])?;

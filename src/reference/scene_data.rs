@@ -18,7 +18,7 @@ use crate::backend::{vk, BufferId, Gpu};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::gpu_scene::{punctual_lights, GpuLight};
-use crate::graph::{PassBuilder, ResourceStates};
+use crate::graph::{Access, PassBuilder, ResourceStates};
 use crate::scene::{Environment, Light, Scene};
 
 /// Light types beyond the punctual ones of `glsl/common/lights.glsl` (stored in `position.w`).
@@ -293,40 +293,47 @@ impl TracedScene {
         }
         let (texels, headers) = self.texture_buffers();
         Ok(SceneBuffers {
-            texture_texels: storage(gpu, "reference texture texels", &texels)?,
-            textures: storage(gpu, "reference textures", &headers)?,
+            texture_texels: TexelTable::upload(gpu, states, "reference texture texels", &texels)?,
+            textures: TexelTable::upload(gpu, states, "reference textures", &headers)?,
             bvh: GpuBvh::upload(gpu, states, "reference", &self.bvh.nodes, &self.triangles, None)?,
             shading: TexelTable::upload(gpu, states, "reference triangle shading", &self.shading)?,
             materials: TexelTable::upload(gpu, states, "reference materials", &self.materials)?,
             lights: storage(gpu, "reference lights", &self.lights)?,
-            environment_map: storage(gpu, "reference environment map", self.environment_map.as_ref().map_or(&[][..], |m| &m.texels))?,
-            environment_cdf: storage(gpu, "reference environment cdf", self.environment_map.as_ref().map_or(&[][..], |m| &m.cdf))?,
+            environment_map: TexelTable::upload(gpu, states, "reference environment map", self.environment_map.as_ref().map_or(&[][..], |m| &m.texels))?,
+            environment_cdf: TexelTable::upload_packed(gpu, states, "reference environment cdf", self.environment_map.as_ref().map_or(&[][..], |m| &m.cdf))?,
         })
     }
 }
 
-/// The storage buffers and BVH tables of a [`TracedScene`], named after the shader bindings.
+/// What the tracer reads of a [`TracedScene`]: the lights in a storage buffer (every invocation
+/// reads the same light at a time) and the rest as texel tables, named after the shader
+/// bindings.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneBuffers {
     pub bvh: GpuBvh,
     pub shading: TexelTable,
     pub materials: TexelTable,
     pub lights: BufferId,
-    pub environment_map: BufferId,
-    pub environment_cdf: BufferId,
-    pub texture_texels: BufferId,
-    pub textures: BufferId,
+    pub environment_map: TexelTable,
+    pub environment_cdf: TexelTable,
+    pub texture_texels: TexelTable,
+    pub textures: TexelTable,
 }
 
 impl SceneBuffers {
-    /// The storage buffers (the tables are declared by [`SceneBuffers::read_tables`]).
-    pub fn bindings(&self) -> [(&'static str, BufferId); 5] {
-        [("lights", self.lights), ("environment_map", self.environment_map), ("environment_cdf", self.environment_cdf), ("texture_texels", self.texture_texels), ("textures", self.textures)]
-    }
-
-    /// Declares the pass's reads of the tables: the BVH, per-triangle shading and materials.
-    pub fn read_tables<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
-        let pass = self.shading.read(self.bvh.read(pass, stages), "shading_table", stages);
-        self.materials.read(pass, "material_table", stages)
+    /// Declares the pass's reads of all of it in `stages`.
+    pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
+        let mut pass = self.bvh.read(pass.buffer(self.lights, Access::StorageRead { stages }, Some("lights")), stages);
+        for (name, table) in [
+            ("shading_table", self.shading),
+            ("material_table", self.materials),
+            ("environment_table", self.environment_map),
+            ("environment_cdf_table", self.environment_cdf),
+            ("texture_table", self.texture_texels),
+            ("texture_headers", self.textures),
+        ] {
+            pass = table.read(pass, name, stages);
+        }
+        pass
     }
 }

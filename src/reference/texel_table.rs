@@ -7,7 +7,7 @@
 //! while a texel fetch is a gather without branches. On a GPU both are plain memory reads. The
 //! README has the measured difference (the reference against Mitsuba 3).
 
-use bytemuck::Pod;
+use bytemuck::{Pod, Zeroable};
 
 use super::bvh::BvhNode;
 use super::scene_data::TracedTriangle;
@@ -53,6 +53,18 @@ impl TexelTable {
         Ok(TexelTable { image, sampler })
     }
 
+    /// 4-byte `items` packed four a texel (value i is component i % 4 of texel i / 4).
+    pub fn upload_packed<T: Pod + Zeroable>(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, items: &[T]) -> Result<TexelTable> {
+        if std::mem::size_of::<T>() != 4 {
+            return Err(Error::Usage(format!("{name}: items of {} bytes do not pack four a texel", std::mem::size_of::<T>())));
+        }
+        let mut texels = vec![[T::zeroed(); 4]; items.len().div_ceil(4)];
+        for (i, &item) in items.iter().enumerate() {
+            texels[i / 4][i % 4] = item;
+        }
+        TexelTable::upload(gpu, states, name, &texels)
+    }
+
     /// Declares the pass's read of the table through binding `name` in `stages`.
     pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, name: &'static str, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
         pass.sample(name, self.image, SubresourceRange::mip(0), self.sampler, stages)
@@ -76,13 +88,7 @@ impl GpuBvh {
         let nodes = TexelTable::upload(gpu, states, &format!("{label} bvh nodes"), nodes)?;
         let triangles = TexelTable::upload(gpu, states, &format!("{label} bvh triangles"), triangles)?;
         let skips = match skips {
-            Some(s) => {
-                let mut texels = vec![[0u32; 4]; s.len().div_ceil(4)];
-                for (i, &link) in s.iter().enumerate() {
-                    texels[i / 4][i % 4] = link;
-                }
-                Some(TexelTable::upload(gpu, states, &format!("{label} bvh skip links"), &texels)?)
-            }
+            Some(s) => Some(TexelTable::upload_packed(gpu, states, &format!("{label} bvh skip links"), s)?),
             None => None,
         };
         Ok(GpuBvh { nodes, triangles, skips })
