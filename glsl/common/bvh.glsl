@@ -26,25 +26,25 @@ struct Triangle {
     vec4 e2;
 };
 
-layout(set = 0, binding = BVH_NODES_BINDING) uniform sampler2D bvh_nodes;
-layout(set = 0, binding = BVH_TRIANGLES_BINDING) uniform sampler2D bvh_triangles;
+layout(set = 0, binding = BVH_NODES_BINDING) uniform usampler2D bvh_nodes;
+layout(set = 0, binding = BVH_TRIANGLES_BINDING) uniform usampler2D bvh_triangles;
 
 Node bvh_node(uint i) {
-    vec4 a = table_texel(bvh_nodes, 2u * i);
-    vec4 b = table_texel(bvh_nodes, 2u * i + 1u);
+    uvec4 a = table_texel(bvh_nodes, 2u * i);
+    uvec4 b = table_texel(bvh_nodes, 2u * i + 1u);
     Node n;
-    n.lo = a.xyz;
-    n.index = floatBitsToUint(a.w);
-    n.hi = b.xyz;
-    n.count = floatBitsToUint(b.w);
+    n.lo = uintBitsToFloat(a.xyz);
+    n.index = a.w;
+    n.hi = uintBitsToFloat(b.xyz);
+    n.count = b.w;
     return n;
 }
 
 Triangle bvh_triangle(uint i) {
     Triangle t;
-    t.p0 = table_texel(bvh_triangles, 3u * i);
-    t.e1 = table_texel(bvh_triangles, 3u * i + 1u);
-    t.e2 = table_texel(bvh_triangles, 3u * i + 2u);
+    t.p0 = table_vec4(bvh_triangles, 3u * i);
+    t.e1 = table_vec4(bvh_triangles, 3u * i + 1u);
+    t.e2 = table_vec4(bvh_triangles, 3u * i + 2u);
     return t;
 }
 
@@ -74,8 +74,8 @@ bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out fl
 
 // Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it.
 float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
-    vec3 t0 = (table_texel(bvh_nodes, 2u * i).xyz - o) * inv_d;
-    vec3 t1 = (table_texel(bvh_nodes, 2u * i + 1u).xyz - o) * inv_d;
+    vec3 t0 = (table_vec4(bvh_nodes, 2u * i).xyz - o) * inv_d;
+    vec3 t1 = (table_vec4(bvh_nodes, 2u * i + 1u).xyz - o) * inv_d;
     vec3 near = min(t0, t1);
     vec3 far = max(t0, t1);
     float enter = max(max(near.x, near.y), max(near.z, 0.0));
@@ -162,12 +162,10 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
 #ifdef BVH_SKIPS_BINDING
 // Per node, the node after its subtree (Bvh::skip_links).
 // Four links a texel.
-layout(set = 0, binding = BVH_SKIPS_BINDING) uniform sampler2D bvh_skips;
+layout(set = 0, binding = BVH_SKIPS_BINDING) uniform usampler2D bvh_skips;
 
 uint bvh_skip(uint i) {
-    vec4 t = table_texel(bvh_skips, i / 4u);
-    uint c = i % 4u;
-    return floatBitsToUint(c == 0u ? t.x : (c == 1u ? t.y : (c == 2u ? t.z : t.w)));
+    return table_packed(bvh_skips, i);
 }
 
 // Whether a triangle of the tree rooted at node `root` lies on the ray closer than t_max: shadow

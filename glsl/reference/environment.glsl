@@ -13,9 +13,7 @@
 
 // Value i of the CDFs.
 float environment_cdf(uint i) {
-    vec4 t = table_texel(environment_cdf_table, i / 4u);
-    uint c = i % 4u;
-    return c == 0u ? t.x : (c == 1u ? t.y : (c == 2u ? t.z : t.w));
+    return uintBitsToFloat(table_packed(environment_cdf_table, i));
 }
 
 // Matches Environment::equirect_uv / equirect_dir in src/scene/types.rs.
@@ -63,7 +61,7 @@ vec3 environment_radiance(vec3 d) {
     }
     float density;
     uvec2 t = environment_texel(d, density);
-    return table_texel(environment_table, t.y * params.environment_map.x + t.x).rgb;
+    return table_vec4(environment_table, t.y * params.environment_map.x + t.x).rgb;
 }
 
 // Probabilities of texel row j and of column i within it, from the CDFs.

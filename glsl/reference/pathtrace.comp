@@ -41,39 +41,39 @@ layout(set = 0, binding = 0) uniform Params {
 #define BVH_TRIANGLE_COUNT params.counts.y
 #include "common/bvh.glsl"
 // Per triangle its Shading (8 texels) and per material its Material (5 texels), as tables.
-layout(set = 0, binding = 3) uniform sampler2D shading_table;
+layout(set = 0, binding = 3) uniform usampler2D shading_table;
 layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
 // The environment map's texels, and its CDFs four values a texel (environment.glsl).
-layout(set = 0, binding = 8) uniform sampler2D environment_table;
-layout(set = 0, binding = 9) uniform sampler2D environment_cdf_table;
+layout(set = 0, binding = 8) uniform usampler2D environment_table;
+layout(set = 0, binding = 9) uniform usampler2D environment_cdf_table;
 // Texture maps as linear float texels (src/reference/scene_data.rs); per texture
 // (first texel, width, height, 0).
-layout(set = 0, binding = 10) uniform sampler2D texture_table;
-layout(set = 0, binding = 11) uniform sampler2D texture_headers;
+layout(set = 0, binding = 10) uniform usampler2D texture_table;
+layout(set = 0, binding = 11) uniform usampler2D texture_headers;
 
 #include "reference/bsdf.glsl"
 #include "reference/environment.glsl"
 #include "reference/trace.glsl"
 
-layout(set = 0, binding = 5) uniform sampler2D material_table;
+layout(set = 0, binding = 5) uniform usampler2D material_table;
 
 Shading shading_of(uint triangle) {
     uint k = 8u * triangle;
-    vec4 a = table_texel(shading_table, k);
-    vec4 b = table_texel(shading_table, k + 1u);
-    vec4 c = table_texel(shading_table, k + 2u);
-    vec4 uv01 = table_texel(shading_table, k + 6u);
-    vec4 uv2 = table_texel(shading_table, k + 7u);
+    uvec4 a = table_texel(shading_table, k);
+    vec3 n1 = table_vec4(shading_table, k + 1u).xyz;
+    vec3 n2 = table_vec4(shading_table, k + 2u).xyz;
+    vec4 uv01 = table_vec4(shading_table, k + 6u);
+    vec4 uv2 = table_vec4(shading_table, k + 7u);
     Shading sh;
-    sh.n0 = a.xyz;
-    sh.material = floatBitsToUint(a.w);
-    sh.n1 = b.xyz;
+    sh.n0 = uintBitsToFloat(a.xyz);
+    sh.material = a.w;
+    sh.n1 = n1;
     sh.pad0 = 0u;
-    sh.n2 = c.xyz;
+    sh.n2 = n2;
     sh.pad1 = 0u;
-    sh.t0 = table_texel(shading_table, k + 3u);
-    sh.t1 = table_texel(shading_table, k + 4u);
-    sh.t2 = table_texel(shading_table, k + 5u);
+    sh.t0 = table_vec4(shading_table, k + 3u);
+    sh.t1 = table_vec4(shading_table, k + 4u);
+    sh.t2 = table_vec4(shading_table, k + 5u);
     sh.uv0 = uv01.xy;
     sh.uv1 = uv01.zw;
     sh.uv2 = uv2.xy;
@@ -82,17 +82,17 @@ Shading shading_of(uint triangle) {
 }
 
 uint material_index_of(uint triangle) {
-    return floatBitsToUint(table_texel(shading_table, 8u * triangle).w);
+    return table_texel(shading_table, 8u * triangle).w;
 }
 
 Material material_of(uint index) {
     uint k = 5u * index;
     Material m;
-    m.albedo = table_texel(material_table, k);
-    m.specular = table_texel(material_table, k + 1u);
-    m.transmittance = table_texel(material_table, k + 2u);
-    m.emission = table_texel(material_table, k + 3u);
-    m.maps = floatBitsToUint(table_texel(material_table, k + 4u));
+    m.albedo = table_vec4(material_table, k);
+    m.specular = table_vec4(material_table, k + 1u);
+    m.transmittance = table_vec4(material_table, k + 2u);
+    m.emission = table_vec4(material_table, k + 3u);
+    m.maps = table_texel(material_table, k + 4u);
     return m;
 }
 // Stochastic transparency: a surface of opacity a (its material's albedo.w) stops a ray with
@@ -103,7 +103,7 @@ Material material_of(uint index) {
 const uint MAX_LAYERS = 64u;
 
 float opacity_of(int triangle) {
-    return table_texel(material_table, 5u * material_index_of(uint(triangle))).w;
+    return table_vec4(material_table, 5u * material_index_of(uint(triangle))).w;
 }
 
 // A ray origin just past the triangle's point at uv, on the side the ray travels to.
@@ -187,11 +187,11 @@ const uint LIGHT_STREAM = 0x9e3779b9u;
 vec4 texel_at(uvec4 header, ivec2 i) {
     ivec2 size = ivec2(header.yz);
     i += size * ivec2(lessThan(i, ivec2(0))) - size * ivec2(greaterThanEqual(i, size));
-    return table_texel(texture_table, header.x + uint(i.y * size.x + i.x));
+    return table_vec4(texture_table, header.x + uint(i.y * size.x + i.x));
 }
 
 vec4 sample_texture(uint index, vec2 uv) {
-    uvec4 header = floatBitsToUint(table_texel(texture_headers, index));
+    uvec4 header = table_texel(texture_headers, index);
     vec2 s = fract(uv) * vec2(header.yz) - 0.5;
     vec2 base = floor(s);
     vec2 f = s - base;
@@ -459,7 +459,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
             break;
         }
         if (counted) {
-            radiance += throughput * table_texel(material_table, 5u * material_index_of(uint(h.triangle)) + 3u).rgb;
+            radiance += throughput * table_vec4(material_table, 5u * material_index_of(uint(h.triangle)) + 3u).rgb;
         }
         if (depth >= batch.bounces) {
             break;

@@ -170,7 +170,7 @@ pub fn format_texel_size(format: vk::Format) -> Option<u64> {
         | vk::Format::R16G16_SFLOAT
         | vk::Format::D32_SFLOAT => 4,
         vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
-        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
         _ => return None,
     })
 }

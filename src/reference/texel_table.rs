@@ -1,6 +1,9 @@
 //! Read-only arrays the compute shaders index per invocation (BVH nodes and triangles, the
-//! reference's per-triangle shading and materials), stored as RGBA32F images used as tables:
-//! [`TABLE_WIDTH`] texels a row, read with `texelFetch` (`glsl/common/texel_table.glsl`).
+//! reference's per-triangle shading, materials, texture maps and environment), stored as
+//! RGBA32UI images used as tables: [`TABLE_WIDTH`] texels a row, read with `texelFetch`
+//! (`glsl/common/texel_table.glsl`). An integer format, because a float one need not keep
+//! every bit pattern: integers stored in floats (indices, counts) are denormals, which a
+//! texture unit may flush to zero.
 //!
 //! Why images and not storage buffers: on lavapipe a storage-buffer load whose address differs
 //! between the lanes of a SIMD group compiles to a loop over the lanes with a branch for each,
@@ -46,7 +49,7 @@ impl TexelTable {
         data.extend_from_slice(bytes);
         data.resize(size, 0);
         let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
-        let image = gpu.create_image(&ImageDesc::new_2d(name, vk::Format::R32G32B32A32_SFLOAT, TABLE_WIDTH, rows as u32).usage(usage))?;
+        let image = gpu.create_image(&ImageDesc::new_2d(name, vk::Format::R32G32B32A32_UINT, TABLE_WIDTH, rows as u32).usage(usage))?;
         gpu.upload_image(image, 0, &data)?;
         states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         let sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
