@@ -6,6 +6,14 @@ use common::{ok, penumbra};
 
 use penumbra::image_io::HdrImage;
 
+/// `penumbra chart SCENE OPTIONS...` writing its reference cache, PNG and CSV to the given paths.
+fn chart(scene: &str, options: &[&str], cache: &std::path::Path, png: &std::path::Path, csv: &std::path::Path) -> std::process::Output {
+    let mut args = vec!["chart", scene];
+    args.extend_from_slice(options);
+    args.extend(["--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()]);
+    penumbra(&args)
+}
+
 #[test]
 fn compare_prints_known_metrics_and_writes_a_diff_image() {
     let (a, b, diff) = (common::temp_path("cmp-test.exr"), common::temp_path("cmp-ref.exr"), common::temp_path("cmp-diff.png"));
@@ -48,8 +56,8 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     let cache = common::temp_path("chart-cache");
     let (png, csv) = (common::temp_path("chart.png"), common::temp_path("chart.csv"));
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml");
-    let args = ["chart", scene, "--size", "32x32", "--reference-spp", "16", "--frames", "3", "--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()];
-    let first = penumbra(&args);
+    let options = ["--size", "32x32", "--reference-spp", "16", "--frames", "3"];
+    let first = chart(scene, &options, &cache, &png, &csv);
     ok(&first);
     assert!(String::from_utf8_lossy(&first.stderr).contains("rendering the reference"));
     let table = std::fs::read_to_string(&csv).unwrap();
@@ -65,7 +73,7 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     assert_eq!((img.width(), img.height()), (1000, 700));
 
     // Second run: the reference comes from the cache, and the error is the same.
-    let second = penumbra(&args);
+    let second = chart(scene, &options, &cache, &png, &csv);
     ok(&second);
     assert!(!String::from_utf8_lossy(&second.stderr).contains("rendering the reference"));
     let again = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
@@ -96,27 +104,8 @@ fn chart_measures_the_textured_shadow_volume_level() {
     let csv = common::temp_path("sv-chart.csv");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bsp_rooms.toml");
     let png = common::temp_path("sv-chart.png");
-    let args = [
-        "chart",
-        scene,
-        "--method",
-        "shadow_volumes",
-        "--size",
-        "64x64",
-        "--reference-spp",
-        "16",
-        "--frames",
-        "1",
-        "--supersample",
-        "4",
-        "--cache-dir",
-        cache.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
-    ];
-    let stdout = ok(&penumbra(&args));
+    let options = ["--method", "shadow_volumes", "--size", "64x64", "--reference-spp", "16", "--frames", "1", "--supersample", "4"];
+    let stdout = ok(&chart(scene, &options, &cache, &png, &csv));
     assert!(stdout.contains("supersampled 4x4"), "{stdout}");
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let configs: Vec<&str> = rows.iter().map(|r| r.config.as_str()).collect();
@@ -158,8 +147,8 @@ fn chart_measures_the_spot_light_level() {
     let csv = common::temp_path("sv-spot-chart.csv");
     let png = common::temp_path("sv-spot-chart.png");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bsp_spot.toml");
-    let args = ["chart", scene, "--size", "64x64", "--reference-spp", "64", "--frames", "1", "--cache-dir", cache.to_str().unwrap(), "-o", png.to_str().unwrap(), "--csv", csv.to_str().unwrap()];
-    ok(&penumbra(&args));
+    let options = ["--size", "64x64", "--reference-spp", "64", "--frames", "1"];
+    ok(&chart(scene, &options, &cache, &png, &csv));
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let err = |c: &str| rows.iter().find(|r| r.config.ends_with(c)).map(|r| r.rel_mse).unwrap();
     println!("spot level, relative MSE: faithful {:.4}, physical {:.4}", err("faithful pscs"), err("physical pscs"));
@@ -205,9 +194,7 @@ radiance = 0.3
     )
     .unwrap();
     let (cache, csv, png) = (common::temp_path("hf-chart-cache"), common::temp_path("hf-chart.csv"), common::temp_path("hf-chart.png"));
-    let args = [
-        "chart",
-        scene.to_str().unwrap(),
+    let options = [
         "--size",
         "32x32",
         "--reference-spp",
@@ -217,14 +204,8 @@ radiance = 0.3
         // Any frame outruns this budget: each configuration is timed over the minimum, 3.
         "--timing-budget",
         "1e-6",
-        "--cache-dir",
-        cache.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
     ];
-    ok(&penumbra(&args));
+    ok(&chart(scene.to_str().unwrap(), &options, &cache, &png, &csv));
     let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let count = |m: &str| rows.iter().filter(|r| r.method == m).count();
     assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (14, 7));
@@ -267,25 +248,8 @@ fn chart_asks_the_reference_for_the_error_its_metrics_need_and_reports_its_noise
     let (png, csv) = (common::temp_path("chart-noise.png"), common::temp_path("chart-noise.csv"));
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml");
     let cap = 2048;
-    let args = [
-        "chart",
-        scene,
-        "--size",
-        "24x24",
-        "--reference-spp",
-        "2048",
-        "--reference-noise",
-        "0.1",
-        "--frames",
-        "1",
-        "--cache-dir",
-        cache.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
-    ];
-    let stdout = ok(&penumbra(&args));
+    let options = ["--size", "24x24", "--reference-spp", "2048", "--reference-noise", "0.1", "--frames", "1"];
+    let stdout = ok(&chart(scene, &options, &cache, &png, &csv));
     assert!(stdout.contains("[the reference's own error"), "{stdout}");
     let table = std::fs::read_to_string(&csv).unwrap();
     let num = |name: &str| -> f64 { column(&table, name)[0].parse().unwrap_or_else(|_| panic!("{name} is not a number: {table}")) };
@@ -372,25 +336,8 @@ fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
     let rel_mse = |frame: &str| {
         let (png, csv) = (dir.join(format!("chart{frame}.png")), dir.join(format!("chart{frame}.csv")));
         let cache = dir.join("cache");
-        let args = [
-            "chart",
-            scene.to_str().unwrap(),
-            "--size",
-            "16x16",
-            "--reference-spp",
-            "64",
-            "--frames",
-            "1",
-            "--frame",
-            frame,
-            "--cache-dir",
-            cache.to_str().unwrap(),
-            "-o",
-            png.to_str().unwrap(),
-            "--csv",
-            csv.to_str().unwrap(),
-        ];
-        let stdout = ok(&penumbra(&args));
+        let options = ["--size", "16x16", "--reference-spp", "64", "--frames", "1", "--frame", frame];
+        let stdout = ok(&chart(scene.to_str().unwrap(), &options, &cache, &png, &csv));
         assert_eq!(stdout.contains(&format!(", frame {frame}")), frame != "0", "the comparison names the frame: {stdout}");
         let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
         rows[0].rel_mse

@@ -5,7 +5,14 @@
 #   tools/reference_ab.sh OLD_BINARY NEW_BINARY [ROUNDS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ $# -lt 2 ]; then
+  echo "usage: tools/reference_ab.sh OLD_BINARY NEW_BINARY [ROUNDS]" >&2
+  exit 2
+fi
 a=$1 b=$2 rounds=${3:-3}
+for bin in "$a" "$b"; do
+  [ -x "$bin" ] || { echo "reference_ab.sh: $bin is not an executable file" >&2; exit 2; }
+done
 cases=("cornell32|scenes/cornell.toml|--bounces 32 --spp 64"
        "direct|scenes/cornell.toml|--direct-only --spp 256"
        "furnace|scenes/furnace.toml|--spp 16"
@@ -18,7 +25,12 @@ for ((r = 1; r <= rounds; r++)); do
     for side in a b; do
       bin=$a; [ "$side" = b ] && bin=$b
       # shellcheck disable=SC2086
-      rate=$("$bin" reference "$scene" --size 64x64 --seed 1 $args -o "$out/$side.exr" 2>&1 | grep -o '[0-9]* samples/s' | cut -d' ' -f1)
+      log=$("$bin" reference "$scene" --size 64x64 --seed 1 $args -o "$out/$side.exr" 2>&1) || true
+      rate=$(grep -o '[0-9]* samples/s' <<< "$log" | cut -d' ' -f1 || true)
+      if [ -z "$rate" ]; then
+        echo "reference_ab.sh: $bin gave no rate for $name: $(tail -n 1 <<< "$log")" >&2
+        exit 1
+      fi
       echo "$name $side $rate" >> "$out/rates"
       echo "round $r: $name $side $rate samples/s"
     done
