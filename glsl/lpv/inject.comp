@@ -2,8 +2,7 @@
 // Scatter injection (corrected): every valid RSM texel is a VPL added, as a cosine lobe of its
 // reflected flux Phi/pi * coslobe(n) (and of its transmitted flux along -n), into the cell that
 // holds p + cell/2 * n; and, as blocking potential (A_s / cell^2) * coslobe(n) * (1 - tau) (peak
-// normalised to 1), into
-// the geometry volume's corner nearest p. Sums are fixed-point integer atomics (no float
+// normalised to 1; a thin surface's from both sides), into the geometry volume's corner nearest p. Sums are fixed-point integer atomics (no float
 // atomics needed), made floats again by resolve.comp.
 #include "lpv/volume.glsl"
 
@@ -58,8 +57,12 @@ void main() {
         // The 2-band lobe of max(0, n.w) peaks at 0.75 (LPV_COS0 * SH_Y00 + LPV_COS1 * SH_C1):
         // scaled by 4/3 so that a surface filling the cell blocks light meeting it head-on
         // completely, as max(0, n.w) itself would.
+        // A thin surface (one that transmits, transmitted.w < 1) blocks light meeting either of
+        // its sides: a leaf lit from above still stops light coming up from the ground. A
+        // solid's back is the front of another of its surfaces, which blocks in its turn.
         float peak = LPV_COS0 * SH_Y00 + LPV_COS1 * SH_C1;
-        vec4 b = cosine_lobe(n) * (flux.w / (cell_size * cell_size) * transmitted.w / peak);
+        vec4 sides = transmitted.w < 1.0 ? cosine_lobe(n) + cosine_lobe(-n) : cosine_lobe(n);
+        vec4 b = sides * (flux.w / (cell_size * cell_size) * transmitted.w / peak);
         for (uint k = 0u; k < 4u; ++k) {
             int q = int(round(b[k] * volume.units.z));
             if (q != 0) {

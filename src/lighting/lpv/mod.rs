@@ -68,8 +68,9 @@ pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
 }
 
 /// The chart's sweep: as declared; corrected at 16³, 32³ and 64³, with 4, 8 and 16
-/// iterations, at RSM 128² and 512², without the geometry volume, with 3 cascades around the
-/// camera; the document's mode, and with its transform bug fixed.
+/// iterations, at RSM 128² and 512², without the geometry volume, with the camera's surfels
+/// added to it (or without them where declared), with 3 cascades around the camera; the
+/// document's mode, and with its transform bug fixed.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
@@ -80,6 +81,9 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
             }
             if c.cascades > 1 {
                 label += &format!(" {} cascades", c.cascades);
+            }
+            if c.camera_surfels > 0 {
+                label += &format!(" camera surfels {}²", c.camera_surfels);
             }
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
@@ -98,6 +102,9 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         push(corrected.with("rsm", r.into()));
     }
     push(corrected.with("geometry_volume", false.into()));
+    // The geometry volume from the RSM's surfels alone, and with the camera's added.
+    let surfels = Config::from_decl(&corrected, None).map_or(0, |c| c.camera_surfels);
+    push(corrected.with("camera_surfels", (if surfels > 0 { 0i64 } else { 128 }).into()));
     // Cascades follow the camera: only a region's side carries over.
     let mut cascaded = corrected.with("cascades", 3i64.into());
     cascaded.params.retain(|(n, _, _)| n != "centre");
