@@ -203,6 +203,11 @@ impl Config {
         if (1..16).contains(&c.camera_surfels) {
             return Err(bad("camera_surfels", "texels per side from 16 to 4096, or 0 for none", decl.param("camera_surfels").unwrap_or(&toml::Value::from(0))));
         }
+        // The camera's surfels feed the geometry volume only: without it they would cost a pass
+        // and change nothing.
+        if !c.occlusion {
+            c.camera_surfels = 0;
+        }
         c.region = match (centre, size, c.cascades) {
             (Some(_), _, 2..) => return Err(bad("centre", "no centre: cascades follow the camera (`size` sets the finest one's side)", decl.param("centre").unwrap_or(&toml::Value::from(0)))),
             (None, Some(s), 2..) => Some(([0.0; 3], s as f32)),

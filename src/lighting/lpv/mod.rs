@@ -82,6 +82,9 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
             if c.cascades > 1 {
                 label += &format!(" {} cascades", c.cascades);
             }
+            if c.mode == Mode::Faithful && !c.transform_bug {
+                label += " transform fixed";
+            }
             if c.camera_surfels > 0 {
                 label += &format!(" camera surfels {}²", c.camera_surfels);
             }
