@@ -402,7 +402,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                     None => String::new(),
                 };
                 penumbra::outln!(
-                    "{:<32} {:>9.3} ms   rel MSE {:.3e} [{:.1e}]   RMSE {:.3e} [{:.1e}]   bias {:+.2e} [{:.1e}]   p99 {:.3e} [{:.1e}]   max {:.3e} [{:.1e}]   FLIP {:.4} [{:.4}]   ({}){centre}",
+                    "{:<32} {:>9.3} ms   rel MSE {:.3e} [{:.1e}]   RMSE {:.3e} [{:.1e}]   bias {:+.2e} [{:.1e}]   p99 {:.3e} [{:.1e}]   max {:.3e} [{:.1e}]   FLIP {:.4} [{:.4}]   mean ratio {:.3}   scaled rel RMSE {:.3} [{:.3}]   ({}){centre}",
                     r.config,
                     r.frame_ms,
                     m.rel_mse,
@@ -417,6 +417,9 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                     n.max_abs_error,
                     m.flip_mean,
                     n.flip_mean,
+                    m.mean_ratio,
+                    m.scaled_rel_rmse,
+                    n.scaled_rel_rmse,
                     r.reference
                 );
                 for w in &r.warnings {

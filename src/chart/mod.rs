@@ -225,7 +225,8 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
 /// - `rmse` = sqrt(Σ s² / 3N), the RMSE an exact image has in expectation (E (r̂ − r)² = s²);
 /// - `rel_mse` = Σ s² / (r² + 0.01) / 3N, the relative MSE it adds in expectation;
 /// - `mean_bias` = sqrt(Σ s²) / 3N, the standard deviation of the mean bias it causes;
-/// - `p99_abs_error`, `max_abs_error` and `flip`: those metrics of the reference against the
+/// - `p99_abs_error`, `max_abs_error`, `flip`, `mean_ratio` and `scaled_rel_rmse`: those
+///   metrics of the reference against the
 ///   reference plus Gaussian noise of its standard error (a fixed seed; clamped at 0), an
 ///   exact image as a reference this noisy would see it.
 ///
@@ -236,7 +237,7 @@ pub fn reference_noise(reference: &ReferenceImage) -> Result<Metrics> {
     let sum_sq: f64 = se.pixels.iter().map(|s| (0..3).map(|c| (s[c] as f64).powi(2)).sum::<f64>()).sum();
     if !sum_sq.is_finite() {
         let inf = f64::INFINITY;
-        return Ok(Metrics { rmse: inf, rel_mse: inf, mean_bias: inf, p99_abs_error: inf, max_abs_error: inf, flip_mean: inf, pixels: mean.pixels.len() });
+        return Ok(Metrics { rmse: inf, rel_mse: inf, mean_bias: inf, p99_abs_error: inf, max_abs_error: inf, flip_mean: inf, mean_ratio: inf, scaled_rel_rmse: inf, pixels: mean.pixels.len() });
     }
     let simulated = metrics::compare(&noisy_copy(mean, se, NOISE_SEED), mean, &CompareOptions::default())?;
     Ok(Metrics { rmse: (sum_sq / n).sqrt(), rel_mse: noise_rel_mse(reference), mean_bias: sum_sq.sqrt() / n, ..simulated })
@@ -433,10 +434,10 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     Ok(chart)
 }
 
-const METRIC_COLUMNS: [&str; 6] = ["rmse", "rel_mse", "mean_bias", "p99_abs_error", "max_abs_error", "flip"];
+const METRIC_COLUMNS: [&str; 8] = ["rmse", "rel_mse", "mean_bias", "p99_abs_error", "max_abs_error", "flip", "mean_ratio", "scaled_rel_rmse"];
 
-fn metric_values(m: &Metrics) -> [f64; 6] {
-    [m.rmse, m.rel_mse, m.mean_bias, m.p99_abs_error, m.max_abs_error, m.flip_mean]
+fn metric_values(m: &Metrics) -> [f64; 8] {
+    [m.rmse, m.rel_mse, m.mean_bias, m.p99_abs_error, m.max_abs_error, m.flip_mean, m.mean_ratio, m.scaled_rel_rmse]
 }
 
 impl ChartRow {
@@ -668,7 +669,7 @@ mod tests {
 
     #[test]
     fn csv_round_trips_and_pareto_front_is_monotone() {
-        let m = |e: f64| Metrics { rmse: e, rel_mse: e, mean_bias: 0.0, p99_abs_error: e, max_abs_error: e, flip_mean: e, pixels: 4 };
+        let m = |e: f64| Metrics { rmse: e, rel_mse: e, mean_bias: 0.0, p99_abs_error: e, max_abs_error: e, flip_mean: e, mean_ratio: 1.0, scaled_rel_rmse: e, pixels: 4 };
         let row = |c: &str, ms: f64, e: f64| ChartRow {
             method: "m".into(),
             config: c.into(),

@@ -102,6 +102,11 @@ pub struct Metrics {
     pub max_abs_error: f64,
     /// Mean over pixels of the LDR-ꟻLIP error, in [0, 1].
     pub flip_mean: f64,
+    /// Σ t / Σ r over pixels and channels: the global bias as a factor.
+    pub mean_ratio: f64,
+    /// The relative RMSE left after scaling the test image by its best-fit factor: the error
+    /// in shape, apart from the level.
+    pub scaled_rel_rmse: f64,
     /// Number of pixels compared (width × height).
     pub pixels: usize,
 }
@@ -109,7 +114,7 @@ pub struct Metrics {
 impl Metrics {
     /// One line per metric, names padded to a column, for printing to a terminal.
     pub fn table(&self) -> String {
-        let rows: [(&str, String, &str); 7] = [
+        let rows: [(&str, String, &str); 9] = [
             ("pixels", self.pixels.to_string(), ""),
             ("RMSE", fmt_value(self.rmse), "sqrt mean (t-r)^2 over RGB"),
             ("relative MSE", fmt_value(self.rel_mse), "mean (t-r)^2/(r^2+0.01) over RGB"),
@@ -117,6 +122,8 @@ impl Metrics {
             ("p99 abs error", fmt_value(self.p99_abs_error), "per-pixel mean |t-r| over RGB"),
             ("max abs error", fmt_value(self.max_abs_error), "per-pixel mean |t-r| over RGB"),
             ("FLIP mean", fmt_value(self.flip_mean), "LDR-FLIP, 0 = identical, 1 = worst"),
+            ("mean ratio", fmt_value(self.mean_ratio), "mean t / mean r over RGB (global bias)"),
+            ("scaled rel RMSE", fmt_value(self.scaled_rel_rmse), "RMSE of s*t - r at the best-fit s, / mean r"),
         ];
         let mut out = String::new();
         for (name, value, note) in rows {
@@ -157,8 +164,17 @@ pub fn compare_with_map(test: &HdrImage, reference: &HdrImage, opts: &CompareOpt
     validate(test, reference, opts)?;
     let s = stats::radiance_stats(&test.pixels, &reference.pixels);
     let map = flip::flip_map_unchecked(test, reference, opts);
-    let metrics =
-        Metrics { rmse: s.rmse, rel_mse: s.rel_mse, mean_bias: s.mean_bias, p99_abs_error: s.p99_abs_error, max_abs_error: s.max_abs_error, flip_mean: map.mean(), pixels: test.pixels.len() };
+    let metrics = Metrics {
+        rmse: s.rmse,
+        rel_mse: s.rel_mse,
+        mean_bias: s.mean_bias,
+        p99_abs_error: s.p99_abs_error,
+        max_abs_error: s.max_abs_error,
+        flip_mean: map.mean(),
+        mean_ratio: s.mean_ratio,
+        scaled_rel_rmse: s.scaled_rel_rmse,
+        pixels: test.pixels.len(),
+    };
     Ok((metrics, map))
 }
 

@@ -50,7 +50,7 @@ fn default_viewing_conditions_give_67_ppd() {
 fn identical_images_give_exactly_zero() {
     let img = noise(32, 24, 1, 0.0, 4.0);
     let m = compare(&img, &img, &opts()).unwrap();
-    assert_eq!(m, Metrics { rmse: 0.0, rel_mse: 0.0, mean_bias: 0.0, p99_abs_error: 0.0, max_abs_error: 0.0, flip_mean: 0.0, pixels: 768 });
+    assert_eq!(m, Metrics { rmse: 0.0, rel_mse: 0.0, mean_bias: 0.0, p99_abs_error: 0.0, max_abs_error: 0.0, flip_mean: 0.0, mean_ratio: 1.0, scaled_rel_rmse: 0.0, pixels: 768 });
 }
 
 #[test]
@@ -373,9 +373,11 @@ fn diff_image_uses_magma() {
 
 #[test]
 fn table_and_json() {
-    let m = Metrics { rmse: 0.1, rel_mse: 0.105, mean_bias: -0.02, p99_abs_error: 0.3, max_abs_error: 2.5e-6, flip_mean: 0.25, pixels: 64 };
+    let m = Metrics { rmse: 0.1, rel_mse: 0.105, mean_bias: -0.02, p99_abs_error: 0.3, max_abs_error: 2.5e-6, flip_mean: 0.25, mean_ratio: 0.9, scaled_rel_rmse: 0.04, pixels: 64 };
     let t = m.table();
-    assert_eq!(t.lines().count(), 7);
+    assert_eq!(t.lines().count(), 9);
+    assert!(t.contains("mean ratio      0.900000"));
+    assert!(t.contains("scaled rel RMSE 0.040000"));
     assert!(t.lines().next().is_some_and(|l| l.starts_with("pixels") && l.ends_with("64")));
     assert!(t.contains("RMSE            0.100000"));
     assert!(t.contains("mean bias       -0.020000"));
@@ -383,4 +385,31 @@ fn table_and_json() {
     assert!(t.contains("FLIP mean       0.250000"));
     let json = serde_json::to_string(&m).unwrap();
     assert!(json.contains("\"flip_mean\":0.25") && json.contains("\"pixels\":64"));
+}
+
+/// An image from per-pixel grey values, one row.
+fn grey_row(values: &[f32]) -> HdrImage {
+    image(values.len() as u32, 1, |x, _| [values[x as usize]; 3])
+}
+
+#[test]
+fn mean_ratio_and_scaled_error_separate_the_level_from_the_shape() {
+    // A scaled copy: the ratio is the factor and nothing is left once scaled back.
+    let r = grey_row(&[0.0, 1.0, 2.0, 5.0]);
+    let m = compare(&grey_row(&[0.0, 3.0, 6.0, 15.0]), &r, &opts()).unwrap();
+    assert!((m.mean_ratio - 3.0).abs() < 1e-12 && m.scaled_rel_rmse < 1e-9, "{m:?}");
+    // t = (1, 1) against r = (0, 2): same mean, ratio 1; s = Σtr/Σt² = 1, residual (1, 1),
+    // RMSE 1 over a mean of 1. Against the brute-force minimum over s on a fine grid.
+    let (t, r) = (grey_row(&[1.0, 1.0]), grey_row(&[0.0, 2.0]));
+    let m = compare(&t, &r, &opts()).unwrap();
+    assert!((m.mean_ratio - 1.0).abs() < 1e-12, "{m:?}");
+    assert!((m.scaled_rel_rmse - 1.0).abs() < 1e-12, "{m:?}");
+    let brute = (0..=4000).map(|i| i as f64 / 1000.0).map(|s| ((s * 1.0 - 0.0f64).powi(2) + (s * 1.0 - 2.0f64).powi(2)) / 2.0).fold(f64::INFINITY, f64::min).sqrt();
+    assert!((m.scaled_rel_rmse - brute / 1.0).abs() < 1e-6);
+    // A black reference: equal black images agree, anything else is infinitely off.
+    let black = grey_row(&[0.0, 0.0]);
+    let m = compare(&black, &black, &opts()).unwrap();
+    assert_eq!((m.mean_ratio, m.scaled_rel_rmse), (1.0, 0.0));
+    let m = compare(&grey_row(&[0.5, 0.0]), &black, &opts()).unwrap();
+    assert!(m.mean_ratio.is_infinite() && m.scaled_rel_rmse.is_infinite());
 }
