@@ -198,8 +198,12 @@ impl Lpv {
         })?;
         let bounds = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
         let finest = (config.cascades > 1).then(|| {
-            // Without a size, the largest cascade spans the scene's objects.
-            config.region.map_or((bounds.1 - bounds.0).max_element() / (1 << (config.cascades - 1)) as f32, |r| r.1).max(1e-3)
+            // Without a size, the largest cascade reaches every object from the camera it is
+            // centred on: twice the farthest bound along any axis (a camera outside the scene,
+            // as in a Cornell box seen through its open side, would otherwise light nothing).
+            let eye = cx.scene.camera.position;
+            let reach = (bounds.0 - eye).abs().max((bounds.1 - eye).abs()).max_element();
+            config.region.map_or(2.0 * reach / (1 << (config.cascades - 1)) as f32, |r| r.1).max(1e-3)
         });
         let placements = match (config.region, finest) {
             (_, Some(side)) => cascade_placements(cx.scene.camera.position, side, &config),
