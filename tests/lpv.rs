@@ -269,11 +269,7 @@ fn cornell_indirect_light_is_within_a_quarter_of_the_path_tracer_in_mean() {
     common::ok(&common::penumbra(&["reference", "scenes/lpv_cornell.toml", "--indirect-only", "--bounces", "1", "--spp", "256", "--size", "32x24", "--output", reference.to_str().unwrap()]));
     let want = mean(&reference);
     let mut ratios = Vec::new();
-    let cases = [
-        ("corrected", r#"{ name = "lpv", grid = 16, iterations = 16 }"#),
-        ("faithful", r#"{ name = "lpv", mode = "faithful" }"#),
-        ("cascades", r#"{ name = "lpv", cascades = 3 }"#),
-    ];
+    let cases = [("corrected", r#"{ name = "lpv", grid = 16, iterations = 16 }"#), ("faithful", r#"{ name = "lpv", mode = "faithful" }"#), ("cascades", r#"{ name = "lpv", cascades = 3 }"#)];
     for (label, decl) in cases {
         let path = dir.join(format!("scenes/.lpv_test_{label}.toml"));
         std::fs::write(&path, text.replace(r#"{ name = "lpv" }"#, decl)).unwrap();
