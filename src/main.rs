@@ -72,7 +72,8 @@ enum Command {
         supersample: u32,
     },
     /// Image metrics of TEST against REF (linear radiance EXRs): RMSE, relative MSE, mean bias,
-    /// 99th-percentile and max per-pixel error, and FLIP on the tone-mapped pair.
+    /// 99th-percentile and max per-pixel error, FLIP on the tone-mapped pair, the mean ratio and
+    /// the relative RMSE left after the best-fit scale.
     Compare {
         /// The image to judge.
         test: PathBuf,
