@@ -7,6 +7,8 @@
 struct LightVolume {
     vec4 sphere;  // view-space bounding sphere; w < 0: reaches nowhere, infinite: everywhere
     vec4 range;   // x: distance from the light's position past which it is not summed
+    vec4 apex;    // a spot light's view-space position; w: cos of its outer half-angle
+    vec4 axis;    // its view-space unit axis; w: sin of the outer half-angle, < 0 for no cone
 };
 
 layout(set = 0, binding = CLUSTERS_BINDING) uniform ClusterBlock {
@@ -72,6 +74,24 @@ bool reaches_column(vec4 s, vec4 planes[4]) {
         }
     }
     return -s.z + r >= clusters.depth.x && -s.z - r <= clusters.depth.y;
+}
+
+// Whether a spot light's cone, cut at its range, may reach the sphere (centre c, radius r)
+// about a cluster's box; always true for lights without a cone. The signed distance of c from
+// the cone's side, cos(a) * (distance off the axis) - sin(a) * (distance along it), is never
+// more than its distance from the cone, for any half-angle a, so a sphere farther than r from
+// the side is wholly outside (Wronski, "Cull that cone", 2017). Also outside: a sphere wholly
+// behind the apex of a cone no wider than a hemisphere, or farther along the axis than the
+// range.
+bool cone_reaches(LightVolume v, vec3 c, float r) {
+    if (v.axis.w < 0.0) {
+        return true;
+    }
+    vec3 to_c = c - v.apex.xyz;
+    float along = dot(to_c, v.axis.xyz);
+    float off = sqrt(max(dot(to_c, to_c) - along * along, 0.0));
+    float beside = v.apex.w * off - v.axis.w * along;
+    return beside <= r && (along >= -r || v.apex.w < 0.0) && along <= r + v.range.x;
 }
 
 #endif

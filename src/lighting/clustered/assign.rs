@@ -1,6 +1,6 @@
 //! The cluster grid on the CPU: the uniform block the three passes share, the camera recovered
-//! from the frame's view-projection, each light's bounding sphere in view space, and a CPU twin
-//! of the GPU's froxel bounds and sphere test (for tests and for reading the assignment back).
+//! from the frame's view-projection, each light's bounding sphere (and a spot light's cone) in
+//! view space, and a CPU twin of the GPU's froxel bounds and sphere and cone tests (for tests and for reading the assignment back).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
@@ -33,7 +33,15 @@ pub struct LightVolume {
     pub sphere: [f32; 4],
     /// x: the range from the light's position (infinite for directional lights).
     pub range: [f32; 4],
+    /// A spot light's view-space position; w: the cosine of its outer half-angle.
+    pub apex: [f32; 4],
+    /// Its view-space unit axis; w: the sine of the outer half-angle, negative for a light
+    /// without a cone.
+    pub axis: [f32; 4],
 }
+
+/// The `apex` and `axis` of a light without a cone.
+const NO_CONE: ([f32; 4], [f32; 4]) = ([0.0; 4], [0.0, 0.0, 0.0, -1.0]);
 
 /// The camera as the renderer builds it (`Camera::projection`: an infinite far plane, NDC y
 /// down), recovered from the view-projection the frame carries: (world → view, aspect/f, 1/f,
@@ -105,15 +113,27 @@ pub fn light_volumes(lights: &[GpuLight], radii: &[f32], cutoff: f32, view: &Mat
         .enumerate()
         .map(|(i, l)| {
             let r = range(l, radii.get(i).copied().unwrap_or(0.0), cutoff);
+            let (apex, axis) = NO_CONE;
             if r.is_infinite() {
-                return LightVolume { sphere: [0.0, 0.0, 0.0, f32::INFINITY], range: [f32::INFINITY, 0.0, 0.0, 0.0] };
+                return LightVolume { sphere: [0.0, 0.0, 0.0, f32::INFINITY], range: [f32::INFINITY, 0.0, 0.0, 0.0], apex, axis };
             }
             if r <= 0.0 {
-                return LightVolume { sphere: [0.0, 0.0, 0.0, -1.0], range: [0.0; 4] };
+                return LightVolume { sphere: [0.0, 0.0, 0.0, -1.0], range: [0.0; 4], apex, axis };
             }
             let p = Vec3::from_slice(&l.position[..3]);
-            let (centre, radius) = if l.position[3] == LIGHT_SPOT { cone_sphere(p, Vec3::from_slice(&l.direction[..3]), l.cone[1], r) } else { (p, r) };
-            LightVolume { sphere: view.transform_point3(centre).extend(radius).into(), range: [r, 0.0, 0.0, 0.0] }
+            let direction = Vec3::from_slice(&l.direction[..3]).normalize_or_zero();
+            if l.position[3] != LIGHT_SPOT || direction == Vec3::ZERO {
+                return LightVolume { sphere: view.transform_point3(p).extend(r).into(), range: [r, 0.0, 0.0, 0.0], apex, axis };
+            }
+            let cos_outer = l.cone[1].clamp(-1.0, 1.0);
+            let (centre, radius) = cone_sphere(p, direction, cos_outer, r);
+            let sin_outer = (1.0 - cos_outer * cos_outer).max(0.0).sqrt();
+            LightVolume {
+                sphere: view.transform_point3(centre).extend(radius).into(),
+                range: [r, 0.0, 0.0, 0.0],
+                apex: view.transform_point3(p).extend(cos_outer).into(),
+                axis: view.transform_vector3(direction).normalize_or_zero().extend(sin_outer).into(),
+            }
         })
         .collect()
 }
@@ -176,7 +196,8 @@ pub fn froxel_bounds(block: &ClusterBlock, c: u32) -> (Vec3, Vec3) {
     (min - pad, max + pad)
 }
 
-/// Whether `volume`'s sphere touches the box `min`–`max`.
+/// Whether `volume` may reach the box `min`–`max`: its sphere touches the box and, for a spot
+/// light, its cone reaches the sphere about the box (as glsl/clustered/assign.comp decides).
 pub fn touches(volume: &LightVolume, min: Vec3, max: Vec3) -> bool {
     let r = volume.sphere[3];
     if r < 0.0 {
@@ -184,7 +205,21 @@ pub fn touches(volume: &LightVolume, min: Vec3, max: Vec3) -> bool {
     }
     let c = Vec3::from_slice(&volume.sphere[..3]);
     let d = c - c.clamp(min, max);
-    d.length_squared() <= r * r
+    d.length_squared() <= r * r && cone_reaches(volume, 0.5 * (min + max), 0.5 * (max - min).length() * (1.0 + 1e-4))
+}
+
+/// Whether a spot light's cone, cut at its range, may reach the sphere (`centre`, `radius`);
+/// true for a light without a cone. `cone_reaches` in glsl/clustered/clusters.glsl, which says
+/// why the test is conservative.
+pub fn cone_reaches(volume: &LightVolume, centre: Vec3, radius: f32) -> bool {
+    let (cos_outer, sin_outer) = (volume.apex[3], volume.axis[3]);
+    if sin_outer < 0.0 {
+        return true;
+    }
+    let to_c = centre - Vec3::from_slice(&volume.apex[..3]);
+    let along = to_c.dot(Vec3::from_slice(&volume.axis[..3]));
+    let off = (to_c.length_squared() - along * along).max(0.0).sqrt();
+    cos_outer * off - sin_outer * along <= radius && (along >= -radius || cos_outer < 0.0) && along <= radius + volume.range[0]
 }
 
 /// Whether `volume` reaches the column of tile (`x`, `y`) between the near and far depths, as

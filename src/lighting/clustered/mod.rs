@@ -40,10 +40,13 @@ pub const SCHEMA: MethodSchema = MethodSchema {
     ],
 };
 
-/// The most lights a scene may have: the assignment keeps a tile's lights in a shared bit mask
-/// of this many bits, and an invocation may loop over all of them for each of up to 4 slices,
-/// under llvmpipe's 65,535 loop iterations per invocation. Matches glsl/clustered/assign.comp.
+/// The most lights a scene may have: the assignment takes a tile's lights in chunks, and an
+/// invocation may loop over every light of every chunk for each of its 4 slices, which must
+/// stay under llvmpipe's 65,535 loop iterations per invocation. Matches glsl/clustered/assign.comp.
 pub const MAX_LIGHTS: usize = 8192;
+
+/// Invocations in a workgroup of glsl/clustered/assign.comp (`LANES`).
+const ASSIGN_LANES: u32 = 64;
 
 /// The chart's sweep: as declared, then a coarse, the default and a fine grid.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
@@ -172,8 +175,8 @@ impl Clustered {
         graph.pass("clustered assign").buffer(self.bounds, read, Some("bounds")).buffer(self.counts, write, Some("counts")).buffer(self.indices, write, Some("indices")).record(move |ctx| {
             ctx.rec.bind_pipeline(self.assign_pipeline)?;
             ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
-            // One workgroup of 64 per tile.
-            ctx.rec.dispatch([tiles * 64, 1, 1])
+            // One workgroup per tile.
+            ctx.rec.dispatch([tiles * ASSIGN_LANES, 1, 1])
         });
     }
 
