@@ -231,12 +231,12 @@ fn assignment_follows_the_lights() {
     }
 }
 
-/// Past one chunk of lights (2,048) and past one slice per invocation (128): 2,300 lights over
-/// 160 slices, assigned through the masks of bands of slices, equal the CPU twin's exhaustive test of every
+/// Bands of 24 slices and more than one slice per invocation (64): 2,300 lights over 160
+/// slices, assigned through the masks of bands of slices, equal the CPU twin's exhaustive test of every
 /// light against every cluster (but for rounding at a box's face), in light order. The same run
 /// shows what the spot cones save: fewer light-cluster pairs than the bounding spheres alone give.
 #[test]
-fn the_assignment_is_exhaustive_across_chunks_and_slices() {
+fn the_assignment_is_exhaustive_across_bands_and_slices() {
     let decl = "{ name = \"clustered\", tiles = [6, 4], slices = 160, max_per_cluster = 1024 }";
     let scene = floor_scene(decl, &lights(1300, 1000, 23));
     let (a, method) = assignment(&scene);
@@ -244,9 +244,8 @@ fn the_assignment_is_exhaustive_across_chunks_and_slices() {
     assert_eq!(a.overflowed_clusters(), 0);
     let differing = a.lights.iter().zip(&cpu).filter(|(g, c)| g != c).count();
     assert!(differing * 200 <= a.counts.len(), "{differing} of {} clusters differ from the CPU's assignment", a.counts.len());
-    let late: usize = a.lights.iter().map(|l| l.iter().filter(|&&i| i >= 2048).count()).sum();
-    let deep = a.counts.iter().skip(6 * 4 * 128).filter(|&&n| n > 0).count();
-    assert!(late > 1000 && deep > 0, "{late} pairs of lights past the first chunk, {deep} clusters past slice 128 hold lights");
+    let deep = a.counts.iter().skip(6 * 4 * 64).filter(|&&n| n > 0).count();
+    assert!(deep > 0, "no cluster past slice 64 holds a light");
     let spheres: Vec<_> = method.volumes.iter().map(|v| LightVolume { axis: [0.0, 0.0, 0.0, -1.0], ..*v }).collect();
     let (with_cones, without): (usize, usize) = (cpu.iter().map(Vec::len).sum(), assign_cpu(&method.block, &spheres).iter().map(Vec::len).sum());
     assert!(with_cones * 100 < without * 98, "{with_cones} pairs with the cones against {without} with their spheres");

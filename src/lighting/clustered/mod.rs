@@ -40,9 +40,10 @@ pub const SCHEMA: MethodSchema = MethodSchema {
     ],
 };
 
-/// The most lights a scene may have: the assignment takes a tile's lights in chunks, and an
-/// invocation may loop over every light of every chunk for each of its 4 slices, which must
-/// stay under llvmpipe's 65,535 loop iterations per invocation. Matches glsl/clustered/assign.comp.
+/// The most lights a scene may have: the assignment keeps a tile's lights in shared bit masks
+/// (one per band of depth slices) of this many bits, and an invocation may loop over all of them
+/// for each of up to 4 slices, under llvmpipe's 65,535 loop iterations per invocation. Matches
+/// glsl/clustered/assign.comp.
 pub const MAX_LIGHTS: usize = 8192;
 
 /// Invocations in a workgroup of glsl/clustered/assign.comp (`LANES`).
