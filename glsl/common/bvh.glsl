@@ -99,26 +99,13 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
     float stack_t[MAX_DEPTH];
     uint sp = 0u;
     uint node = 0u;
-    while (true) {
+    bool done = false;
+    // While-while (Aila and Laine 2009): every lane descends through interior nodes until it
+    // reaches a leaf, then the lanes test their leaves together, so SIMD lanes at different
+    // kinds of node do not take turns.
+    while (!done) {
         Node n = bvh_node(node);
-        bool descended = false;
-        if (n.count > 0u) {
-            for (uint k = 0u; k < n.count; ++k) {
-                uint slot = n.index + k;
-                Triangle tri = bvh_triangle(slot);
-                float t;
-                vec2 b;
-                if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
-                    t_max = t;
-                    triangle = int(slot);
-                    uv = b;
-                    if (any_hit) {
-                        return true;
-                    }
-                }
-            }
-        } else {
-            // Nearer child first; the other waits on the stack with its entry distance.
+        while (n.count == 0u) {
             uint a = node + 1u;
             uint c = n.index;
             float ta = box_entry(a, o, inv_d, t_max);
@@ -138,23 +125,50 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
                     ++sp;
                 }
                 node = a;
-                descended = true;
-            }
-        }
-        if (!descended) {
-            bool found = false;
-            while (sp > 0u) {
-                --sp;
-                if (stack_t[sp] < t_max) {
-                    node = stack_node[sp];
-                    found = true;
+            } else {
+                bool found = false;
+                while (sp > 0u) {
+                    --sp;
+                    if (stack_t[sp] < t_max) {
+                        node = stack_node[sp];
+                        found = true;
+                        break;
+                    }
+                }
+                if (!found) {
+                    done = true;
                     break;
                 }
             }
-            if (!found) {
+            n = bvh_node(node);
+        }
+        if (done) {
+            break;
+        }
+        for (uint k = 0u; k < n.count; ++k) {
+            uint slot = n.index + k;
+            Triangle tri = bvh_triangle(slot);
+            float t;
+            vec2 b;
+            if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
+                t_max = t;
+                triangle = int(slot);
+                uv = b;
+                if (any_hit) {
+                    return true;
+                }
+            }
+        }
+        bool found = false;
+        while (sp > 0u) {
+            --sp;
+            if (stack_t[sp] < t_max) {
+                node = stack_node[sp];
+                found = true;
                 break;
             }
         }
+        done = !found;
     }
     return triangle >= 0;
 }
