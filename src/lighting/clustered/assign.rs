@@ -1,6 +1,7 @@
 //! The cluster grid on the CPU: the uniform block the three passes share, the camera recovered
 //! from the frame's view-projection, each light's bounding sphere (and a spot light's cone) in
-//! view space, and a CPU twin of the GPU's froxel bounds and sphere and cone tests (for tests and for reading the assignment back).
+//! view space, and a CPU twin of the GPU's froxel bounds and sphere and cone tests (for tests
+//! and for reading the assignment back).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};

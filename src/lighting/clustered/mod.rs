@@ -46,7 +46,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 /// glsl/clustered/assign.comp.
 pub const MAX_LIGHTS: usize = 8192;
 
-/// Invocations in a workgroup of glsl/clustered/assign.comp (`LANES`).
+/// Invocations in a workgroup of glsl/clustered/assign.comp (its `local_size_x`).
 const ASSIGN_LANES: u32 = 64;
 
 /// The chart's sweep: as declared, then a coarse, the default and a fine grid.
