@@ -313,7 +313,7 @@ fn bad_parameters_are_refused() {
         ("tiles = [0, 9]", "tiles", "[columns, rows]"),
         ("tiles = [16]", "tiles", "[columns, rows]"),
         ("slices = 0", "slices", "depth slice count"),
-        ("max_per_cluster = 5000", "max_per_cluster", "from 1 to 1024"),
+        ("max_per_cluster = 8193", "max_per_cluster", "from 1 to 8192"),
         ("cutoff = -1", "cutoff", "irradiance > 0"),
         ("cutoff = 0", "cutoff", "irradiance > 0"),
         ("tiles = [128, 128], slices = 16, max_per_cluster = 1024", "max_per_cluster", "MiB"),
