@@ -83,7 +83,29 @@ float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
     return enter <= exit ? enter : NO_HIT;
 }
 
+// trace_triangles' stack of nodes still to visit, with their entry distances. Private to each
+// invocation; module scope so that `pop_closer` reaches it without copying it.
+uint bvh_stack_node[MAX_DEPTH];
+float bvh_stack_t[MAX_DEPTH];
+
+// The most recently pushed node whose entry is closer than t_max, dropping those farther away;
+// false when none is left.
+bool pop_closer(inout uint sp, float t_max, out uint node) {
+    node = 0u;
+    while (sp > 0u) {
+        --sp;
+        if (bvh_stack_t[sp] < t_max) {
+            node = bvh_stack_node[sp];
+            return true;
+        }
+    }
+    return false;
+}
+
 // Closest triangle hit closer than t_max (which it lowers), or with `any_hit` the first found.
+// While-while (Aila and Laine 2009): every lane descends through interior nodes until it reaches
+// a leaf, then the lanes test their leaves together, so SIMD lanes at different kinds of node do
+// not take turns.
 bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
     triangle = -1;
     uv = vec2(0.0);
@@ -95,17 +117,13 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
     if (box_entry(0u, o, inv_d, t_max) == NO_HIT) {
         return false;
     }
-    uint stack_node[MAX_DEPTH];
-    float stack_t[MAX_DEPTH];
     uint sp = 0u;
     uint node = 0u;
     bool done = false;
-    // While-while (Aila and Laine 2009): every lane descends through interior nodes until it
-    // reaches a leaf, then the lanes test their leaves together, so SIMD lanes at different
-    // kinds of node do not take turns.
     while (!done) {
         Node n = bvh_node(node);
         while (n.count == 0u) {
+            // Nearer child first; the other waits on the stack with its entry distance.
             uint a = node + 1u;
             uint c = n.index;
             float ta = box_entry(a, o, inv_d, t_max);
@@ -120,25 +138,14 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
             }
             if (ta != NO_HIT) {
                 if (tc != NO_HIT && sp < MAX_DEPTH) {
-                    stack_node[sp] = c;
-                    stack_t[sp] = tc;
+                    bvh_stack_node[sp] = c;
+                    bvh_stack_t[sp] = tc;
                     ++sp;
                 }
                 node = a;
-            } else {
-                bool found = false;
-                while (sp > 0u) {
-                    --sp;
-                    if (stack_t[sp] < t_max) {
-                        node = stack_node[sp];
-                        found = true;
-                        break;
-                    }
-                }
-                if (!found) {
-                    done = true;
-                    break;
-                }
+            } else if (!pop_closer(sp, t_max, node)) {
+                done = true;
+                break;
             }
             n = bvh_node(node);
         }
@@ -159,16 +166,7 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
                 }
             }
         }
-        bool found = false;
-        while (sp > 0u) {
-            --sp;
-            if (stack_t[sp] < t_max) {
-                node = stack_node[sp];
-                found = true;
-                break;
-            }
-        }
-        done = !found;
+        done = !pop_closer(sp, t_max, node);
     }
     return triangle >= 0;
 }

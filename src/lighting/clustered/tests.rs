@@ -7,6 +7,7 @@ use super::assign::{self, block, cone_sphere, decompose, froxel_bounds, range, L
 use super::config::Config;
 use crate::gpu_scene::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT};
 use crate::scene::Camera;
+use crate::world::level_gen::Rng;
 
 fn camera() -> Camera {
     Camera { position: Vec3::new(1.0, 4.0, 6.0), target: Vec3::new(-1.0, 0.0, -2.0), up: Vec3::Y, fov_y_deg: 55.0, near: 0.1 }
@@ -100,13 +101,8 @@ fn spot_volume(apex: Vec3, axis: Vec3, outer_deg: f32, range: f32) -> LightVolum
 /// would be kept.
 #[test]
 fn the_cone_test_keeps_every_box_the_cut_cone_reaches() {
-    let mut seed = 0x9e37_79b9u32;
-    let mut rand = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 17;
-        seed ^= seed << 5;
-        seed as f32 / u32::MAX as f32
-    };
+    let mut rng = Rng::new(7);
+    let mut rand = move || rng.unit() as f32;
     let (mut reached, mut culled_outside, mut outside) = (0, 0, 0);
     for case in 0..400 {
         let apex = Vec3::new(rand() * 4.0 - 2.0, rand() * 4.0 - 2.0, rand() * 4.0 - 2.0);
