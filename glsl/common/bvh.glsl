@@ -13,13 +13,6 @@ const float NO_HIT = 3.0e38;
 // Matches bvh::MAX_DEPTH: the build bounds the tree's depth by it.
 const uint MAX_DEPTH = 64u;
 
-struct Node {
-    vec3 lo;
-    uint index;  // interior: second child (the first is the next node); leaf: first triangle
-    vec3 hi;
-    uint count;  // triangles in a leaf; 0 for interior nodes
-};
-
 struct Triangle {
     vec4 p0;
     vec4 e1;
@@ -28,17 +21,6 @@ struct Triangle {
 
 layout(set = 0, binding = BVH_NODES_BINDING) uniform usampler2D bvh_nodes;
 layout(set = 0, binding = BVH_TRIANGLES_BINDING) uniform usampler2D bvh_triangles;
-
-Node bvh_node(uint i) {
-    uvec4 a = table_texel(bvh_nodes, 2u * i);
-    uvec4 b = table_texel(bvh_nodes, 2u * i + 1u);
-    Node n;
-    n.lo = uintBitsToFloat(a.xyz);
-    n.index = a.w;
-    n.hi = uintBitsToFloat(b.xyz);
-    n.count = b.w;
-    return n;
-}
 
 Triangle bvh_triangle(uint i) {
     Triangle t;
@@ -72,10 +54,17 @@ bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out fl
     return t > 0.0 && t < t_max;
 }
 
-// Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it.
-float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
-    vec3 t0 = (table_vec4(bvh_nodes, 2u * i).xyz - o) * inv_d;
-    vec3 t1 = (table_vec4(bvh_nodes, 2u * i + 1u).xyz - o) * inv_d;
+// Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it; also the
+// node's index (interior: second child, the first being the next node; leaf: first triangle) and
+// count (triangles in a leaf, 0 for interior nodes) from the same two texels, so that descending
+// into the node needs no second fetch.
+float node_entry(uint i, vec3 o, vec3 inv_d, float t_max, out uint index, out uint count) {
+    uvec4 a = table_texel(bvh_nodes, 2u * i);
+    uvec4 b = table_texel(bvh_nodes, 2u * i + 1u);
+    index = a.w;
+    count = b.w;
+    vec3 t0 = (uintBitsToFloat(a.xyz) - o) * inv_d;
+    vec3 t1 = (uintBitsToFloat(b.xyz) - o) * inv_d;
     vec3 near = min(t0, t1);
     vec3 far = max(t0, t1);
     float enter = max(max(near.x, near.y), max(near.z, 0.0));
@@ -83,19 +72,27 @@ float box_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
     return enter <= exit ? enter : NO_HIT;
 }
 
-// trace_triangles' stack of nodes still to visit, with their entry distances. Private to each
-// invocation; module scope so that `pop_closer` reaches it without copying it.
+// trace_triangles' stack of nodes still to visit, with their entry distances, indices and counts
+// (kept from the box test, so a node taken off the stack is not fetched again: 1.05-1.12x on
+// llvmpipe). Private to each invocation; module scope so that `pop_closer` reaches it without
+// copying it.
 uint bvh_stack_node[MAX_DEPTH];
 float bvh_stack_t[MAX_DEPTH];
+uint bvh_stack_index[MAX_DEPTH];
+uint bvh_stack_count[MAX_DEPTH];
 
-// The most recently pushed node whose entry is closer than t_max, dropping those farther away;
-// false when none is left.
-bool pop_closer(inout uint sp, float t_max, out uint node) {
+// The most recently pushed node whose entry is closer than t_max, with its index and count,
+// dropping those farther away; false when none is left.
+bool pop_closer(inout uint sp, float t_max, out uint node, out uint index, out uint count) {
     node = 0u;
+    index = 0u;
+    count = 0u;
     while (sp > 0u) {
         --sp;
         if (bvh_stack_t[sp] < t_max) {
             node = bvh_stack_node[sp];
+            index = bvh_stack_index[sp];
+            count = bvh_stack_count[sp];
             return true;
         }
     }
@@ -114,46 +111,59 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
     }
     // Zero components would give 0 * inf = NaN in the slab test.
     vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
-    if (box_entry(0u, o, inv_d, t_max) == NO_HIT) {
-        return false;
-    }
     uint sp = 0u;
     uint node = 0u;
+    uint index;
+    uint count;
+    if (node_entry(0u, o, inv_d, t_max, index, count) == NO_HIT) {
+        return false;
+    }
     bool done = false;
     while (!done) {
-        Node n = bvh_node(node);
-        while (n.count == 0u) {
+        while (count == 0u) {
             // Nearer child first; the other waits on the stack with its entry distance.
             uint a = node + 1u;
-            uint c = n.index;
-            float ta = box_entry(a, o, inv_d, t_max);
-            float tc = box_entry(c, o, inv_d, t_max);
+            uint c = index;
+            uint a_index;
+            uint a_count;
+            uint c_index;
+            uint c_count;
+            float ta = node_entry(a, o, inv_d, t_max, a_index, a_count);
+            float tc = node_entry(c, o, inv_d, t_max, c_index, c_count);
             if (tc < ta) {
-                uint swap_node = a;
-                a = c;
-                c = swap_node;
+                a = index;
+                c = node + 1u;
                 float swap_t = ta;
                 ta = tc;
                 tc = swap_t;
+                uint swap_index = a_index;
+                a_index = c_index;
+                c_index = swap_index;
+                uint swap_count = a_count;
+                a_count = c_count;
+                c_count = swap_count;
             }
             if (ta != NO_HIT) {
                 if (tc != NO_HIT && sp < MAX_DEPTH) {
                     bvh_stack_node[sp] = c;
                     bvh_stack_t[sp] = tc;
+                    bvh_stack_index[sp] = c_index;
+                    bvh_stack_count[sp] = c_count;
                     ++sp;
                 }
                 node = a;
-            } else if (!pop_closer(sp, t_max, node)) {
+                index = a_index;
+                count = a_count;
+            } else if (!pop_closer(sp, t_max, node, index, count)) {
                 done = true;
                 break;
             }
-            n = bvh_node(node);
         }
         if (done) {
             break;
         }
-        for (uint k = 0u; k < n.count; ++k) {
-            uint slot = n.index + k;
+        for (uint k = 0u; k < count; ++k) {
+            uint slot = index + k;
             Triangle tri = bvh_triangle(slot);
             float t;
             vec2 b;
@@ -166,7 +176,7 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
                 }
             }
         }
-        done = !pop_closer(sp, t_max, node);
+        done = !pop_closer(sp, t_max, node, index, count);
     }
     return triangle >= 0;
 }
@@ -192,17 +202,18 @@ bool occluded_in(uint root, vec3 o, vec3 d, float t_max, out bool complete) {
     uint end = bvh_skip(root);
     uint node = root;
     while (node < end) {
-        if (box_entry(node, o, inv_d, t_max) == NO_HIT) {
+        uint index;
+        uint count;
+        if (node_entry(node, o, inv_d, t_max, index, count) == NO_HIT) {
             node = bvh_skip(node);
             continue;
         }
-        Node n = bvh_node(node);
-        if (n.count == 0u) {
+        if (count == 0u) {
             node += 1u;
             continue;
         }
-        for (uint k = 0u; k < n.count; ++k) {
-            Triangle tri = bvh_triangle(n.index + k);
+        for (uint k = 0u; k < count; ++k) {
+            Triangle tri = bvh_triangle(index + k);
             float t;
             vec2 b;
             if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
