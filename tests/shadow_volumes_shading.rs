@@ -40,9 +40,12 @@ fn fixture() -> std::path::PathBuf {
     fixture_in("sv-shading", normal_texel())
 }
 
-/// [`fixture`] in its own directory `name`, with the constant normal map `normal` (texel).
+/// [`fixture`] in a directory of its own (`name` and a number for each call: tests run in
+/// parallel threads, and one rewriting a map while another loads it read a truncated PNG), with
+/// the constant normal map `normal` (texel).
 fn fixture_in(name: &str, normal: [u8; 3]) -> std::path::PathBuf {
-    let dir = common::temp_path(name);
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let dir = common::temp_path(&format!("{name}-{}", CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)));
     std::fs::create_dir_all(&dir).unwrap();
     let solid = |rgb: [u8; 3]| image::RgbaImage::from_pixel(4, 4, image::Rgba([rgb[0], rgb[1], rgb[2], 255]));
     solid(ALBEDO_TEXEL).save(dir.join("albedo.png")).unwrap();
