@@ -64,9 +64,9 @@ impl Config {
                     let grid = grid.ok_or_else(|| bad(p, want, v))?;
                     c.tiles = [grid[0], grid[1]];
                 }
-                "slices" => c.slices = int(p, v, 1..=256, "a depth slice count from 1 to 256")?,
+                "slices" => c.slices = int(p, v, 1..=super::MAX_SLICES as i64, &format!("a depth slice count from 1 to {}", super::MAX_SLICES))?,
                 // Up to every light a scene may have: a dense rig can put all of them in one cluster.
-                "max_per_cluster" => c.max_per_cluster = int(p, v, 1..=super::MAX_LIGHTS as i64, "index slots per cluster from 1 to 8192")?,
+                "max_per_cluster" => c.max_per_cluster = int(p, v, 1..=super::MAX_LIGHTS as i64, &format!("index slots per cluster from 1 to {}", super::MAX_LIGHTS))?,
                 "cutoff" => c.cutoff = Params::float(v).filter(|x| x.is_finite() && *x > 0.0).map(|x| x as f32).ok_or_else(|| bad(p, "an irradiance > 0 (W/m²)", v))?,
                 _ => {}
             }

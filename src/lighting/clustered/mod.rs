@@ -46,6 +46,10 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 /// glsl/clustered/assign.comp.
 pub const MAX_LIGHTS: usize = 8192;
 
+/// Depth slices a grid may have; `MAX_SLICES` in glsl/clustered/assign.comp (its loop bounds
+/// assume it).
+pub const MAX_SLICES: u32 = 256;
+
 /// Invocations in a workgroup of glsl/clustered/assign.comp (its `local_size_x`).
 const ASSIGN_LANES: u32 = 64;
 

@@ -149,3 +149,13 @@ fn a_spot_light_is_not_assigned_beside_its_cone() {
     let (min, max) = floor_box(2.0);
     assert!(assign::touches(&volume, min, max), "a box in the cone's footprint lost the spot light");
 }
+
+/// The assignment shader's limits are copies of the Rust ones (the config checks against these,
+/// the shader's loops and shared masks are sized by its own).
+#[test]
+fn the_assignment_shader_has_the_same_limits() {
+    let shader = include_str!("../../../glsl/clustered/assign.comp");
+    for line in [format!("const uint MAX_LIGHTS = {}u;", super::MAX_LIGHTS), format!("const uint MAX_SLICES = {}u;", super::MAX_SLICES)] {
+        assert!(shader.lines().any(|l| l.trim() == line), "glsl/clustered/assign.comp lacks `{line}`");
+    }
+}
