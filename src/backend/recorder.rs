@@ -364,6 +364,15 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// One indexed draw (the bound index buffer) whose `VkDrawIndexedIndirectCommand` an earlier
+    /// pass wrote into `buffer` at `offset` (the buffer needs INDIRECT_BUFFER usage).
+    pub fn draw_indexed_indirect(&mut self, buffer: BufferId, offset: u64) -> BackendResult<()> {
+        self.bound_pipeline()?;
+        let raw = self.gpu.buffer(buffer)?.raw;
+        unsafe { self.gpu.device.cmd_draw_indexed_indirect(self.cb, raw, offset, 1, std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32) };
+        Ok(())
+    }
+
     pub fn draw_indexed(&mut self, indices: u32, first_index: u32, vertex_offset: i32) -> BackendResult<()> {
         self.bound_pipeline()?;
         unsafe { self.gpu.device.cmd_draw_indexed(self.cb, indices, 1, first_index, vertex_offset, 0) };
@@ -408,6 +417,16 @@ impl<'g> Recorder<'g> {
     pub fn fill_buffer(&mut self, buffer: BufferId, value: u32) -> BackendResult<()> {
         let raw = self.gpu.buffer(buffer)?.raw;
         unsafe { self.gpu.device.cmd_fill_buffer(self.cb, raw, 0, vk::WHOLE_SIZE, value) };
+        Ok(())
+    }
+
+    /// Writes `words` into `buffer` from its start (a transfer; at most 65,536 bytes).
+    pub fn update_buffer(&mut self, buffer: BufferId, words: &[u32]) -> BackendResult<()> {
+        let raw = self.gpu.buffer(buffer)?.raw;
+        if words.is_empty() || words.len() * 4 > 65_536 {
+            return Err(BackendError::Invalid(format!("update_buffer of {} words: 1 to 16,384 allowed", words.len())));
+        }
+        unsafe { self.gpu.device.cmd_update_buffer(self.cb, raw, 0, bytemuck::cast_slice(words)) };
         Ok(())
     }
 

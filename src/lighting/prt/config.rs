@@ -126,6 +126,10 @@ pub struct Config {
     pub storage: Storage,
     /// Rotation of every vertex camera about its normal, radians (must not matter; tests).
     pub twist: f64,
+    /// Exact coverage: the most rectangles (88 bytes each with their indices) one listing pass may hold; the
+    /// occluders are listed and drawn in chunks of `rect_budget / batch` triangles. It changes
+    /// memory and the number of passes, never the result (tests).
+    pub rect_budget: u32,
 }
 
 impl Config {
@@ -156,6 +160,7 @@ impl Config {
             loop_s: 4.0,
             storage: Storage::F32,
             twist: 0.0,
+            rect_budget: 1 << 20,
         }
     }
 

@@ -17,8 +17,8 @@ use super::config::{Config, Coverage, Depth, Directions, Reduction};
 use super::mapping;
 use super::receivers::{tangent_frame, Receivers};
 use crate::backend::{
-    vk, Bind, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId,
-    SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc,
+    SamplerId, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -88,6 +88,9 @@ struct Bake {
     occluders: BufferId,
     /// The same triangles as corners (vec4 × 3), for exact coverage.
     triangles: BufferId,
+    /// Exact coverage: the listing pass (`cull.comp`), its rectangles and the indirect draw
+    /// command it counts into, and the triangles per chunk.
+    cull: Option<Cull>,
     /// Per occluder set: (first vertex, vertex count) in `occluders`.
     set_vertices: Vec<(u32, u32)>,
     atlas: ImageId,
@@ -105,6 +108,29 @@ struct Bake {
     multiply: Vec<PipelineId>,
     reduce: Vec<Vec<PipelineId>>,
 }
+
+/// Exact coverage's listing of the rectangles to draw (`glsl/prt/cull.comp`).
+struct Cull {
+    pipeline: PipelineId,
+    rects: BufferId,
+    /// Two triangles over each rectangle's four vertices, for as many rectangles as a chunk holds.
+    indices: BufferId,
+    command: BufferId,
+    chunk_triangles: u32,
+}
+
+/// `Chunk` in glsl/prt/cull.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ChunkPush {
+    first_slot: u32,
+    receivers: u32,
+    first_triangle: u32,
+    triangle_count: u32,
+}
+
+/// Bytes of one listed rectangle (`Rect` in glsl/prt/cull.comp).
+const RECT_BYTES: u64 = 64;
 
 /// Bakes the transfer of every receiver (`bands²` per receiver, receiver-major) on the device.
 pub fn bake(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, progress: &mut Progress) -> Result<Vec<f32>> {
@@ -182,6 +208,10 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
         coefficients: gpu.create_storage_output("prt coefficients", slots.total as u64 * 64, MemoryKind::GpuToCpu)?,
         occluders: gpu.create_buffer_init("prt occluders", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(if vertices.is_empty() { &[[0.0f32; 3]][..] } else { &vertices }))?,
         triangles: gpu.create_storage_buffer("prt occluder triangles", bytemuck::cast_slice(&corners))?,
+        cull: match config.coverage {
+            Coverage::Projected => None,
+            Coverage::Exact => Some(cull(gpu, shaders, config)?),
+        },
         set_vertices,
         atlas: image(gpu, "prt visibility atlas", rgba, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
         depth: image(gpu, "prt visibility depth", vk::Format::D32_SFLOAT, w, h, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?,
@@ -268,6 +298,23 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
     Ok(out)
 }
 
+fn cull(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config) -> Result<Cull> {
+    let chunk_triangles = (config.rect_budget / config.batch).max(1);
+    let rects = u64::from(chunk_triangles) * u64::from(config.batch);
+    let c = |id: u32, bits: u32| SpecConstant { id, bits };
+    let pipeline =
+        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt cull".into(), shader: "prt/cull.comp".into(), specialization: vec![c(0, config.mapping as u32), c(2, config.tile)] }, shaders)?;
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let indices: Vec<u32> = (0..rects as u32).flat_map(|k| [0, 1, 2, 0, 2, 3].map(|i| 4 * k + i)).collect();
+    Ok(Cull {
+        pipeline,
+        indices: gpu.create_buffer_init("prt rectangle indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&indices))?,
+        rects: gpu.create_buffer(&BufferDesc { name: "prt rectangles".into(), size: rects * RECT_BYTES, usage, memory: MemoryKind::GpuOnly })?,
+        command: gpu.create_buffer(&BufferDesc { name: "prt draw command".into(), size: 20, usage: usage | vk::BufferUsageFlags::INDIRECT_BUFFER, memory: MemoryKind::GpuOnly })?,
+        chunk_triangles,
+    })
+}
+
 fn visibility_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, w: u32, h: u32, far: f64) -> Result<PipelineId> {
     let mut desc = match config.coverage {
         Coverage::Projected => {
@@ -310,42 +357,79 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
     graph.pass("prt batch").buffer(batch, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(batch, first));
     if render {
         let (first_vertex, vertex_count) = b.set_vertices[set];
-        let exact = config.coverage == Coverage::Exact;
+        // Buffers are bound by name per pipeline: the sphere's and the occluders' pipelines
+        // share the pass and read different ones.
         let vertex = Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER };
-        let mut pass = graph.pass("prt visibility").color_attachment(b.atlas, full, true).depth_stencil_write(b.depth, true).buffer(b.receivers, vertex, Some("receivers"));
-        if exact {
-            // Bound by name below: the sphere's pipeline, in the same pass, has no triangles.
-            pass = pass.buffer(b.triangles, vertex, None);
+        // B (visibility) starts at 1; R and G (the sphere's angles) at 0, where the document
+        // leaves pixels the sphere does not reach.
+        let clear = [RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0]), RenderTarget::clear_depth(b.depth, 1.0, 0)];
+        let load = [RenderTarget::load(b.atlas), RenderTarget::load(b.depth)];
+        let begin = move |rec: &mut crate::backend::Recorder<'_>, first: bool| {
+            let [colour, depth] = if first { clear } else { load };
+            rec.begin_rendering(&RenderingDesc { colors: vec![colour], depth_stencil: Some(depth) }).map(|_| ())
+        };
+        match &b.cull {
+            None => {
+                graph.pass("prt visibility").color_attachment(b.atlas, full, true).depth_stencil_write(b.depth, true).buffer(b.receivers, vertex, None).record(move |ctx| {
+                    begin(ctx.rec, true)?;
+                    draw_sphere(ctx, b, first, count)?;
+                    if vertex_count > 0 {
+                        ctx.rec.bind_pipeline(b.visibility)?;
+                        ctx.bind(&[("receivers", Bind::StorageBuffer(b.receivers))])?;
+                        ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
+                        ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
+                    }
+                    ctx.rec.end_rendering();
+                    Ok(())
+                });
+            }
+            Some(cull) => {
+                // Per chunk of triangles: list the rectangles with something to draw, then draw
+                // them. The first chunk clears the atlas, the rest draw over it.
+                let (first_triangle, triangles) = (first_vertex / 3, vertex_count / 3);
+                let chunks = triangles.div_ceil(cull.chunk_triangles).max(1);
+                for k in 0..chunks {
+                    let start = k * cull.chunk_triangles;
+                    let n = cull.chunk_triangles.min(triangles - start);
+                    let command = cull.command;
+                    graph.pass("prt cull reset").buffer(command, Access::TransferWrite, None).record(move |ctx| ctx.rec.update_buffer(command, &[0, 1, 0, 0, 0]));
+                    let push = ChunkPush { first_slot: first, receivers: count, first_triangle: first_triangle + start, triangle_count: n };
+                    let (pipeline, rects, indices) = (cull.pipeline, cull.rects, cull.indices);
+                    graph
+                        .pass("prt cull")
+                        .buffer(b.receivers, read, Some("receivers"))
+                        .buffer(b.triangles, read, Some("triangles"))
+                        .buffer(rects, write, Some("rects"))
+                        .buffer(command, Access::StorageWrite { stages: compute }, Some("command"))
+                        .record(move |ctx| {
+                            ctx.rec.bind_pipeline(pipeline)?;
+                            ctx.bind(&[])?;
+                            ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                            ctx.rec.dispatch([count * n, 1, 1])
+                        });
+                    graph
+                        .pass("prt visibility")
+                        .color_attachment(b.atlas, full, k == 0)
+                        .depth_stencil_write(b.depth, k == 0)
+                        .buffer(b.receivers, vertex, None)
+                        .buffer(rects, vertex, None)
+                        .buffer(indices, Access::IndexRead, None)
+                        .buffer(command, Access::IndirectRead, None)
+                        .record(move |ctx| {
+                            begin(ctx.rec, k == 0)?;
+                            if k == 0 {
+                                draw_sphere(ctx, b, first, count)?;
+                            }
+                            ctx.rec.bind_pipeline(b.visibility)?;
+                            ctx.bind(&[("rects", Bind::StorageBuffer(rects))])?;
+                            ctx.rec.bind_index_buffer(indices, 0)?;
+                            ctx.rec.draw_indexed_indirect(command, 0)?;
+                            ctx.rec.end_rendering();
+                            Ok(())
+                        });
+                }
+            }
         }
-        pass.record(move |ctx| {
-            // B (visibility) starts at 1; R and G (the sphere's angles) at 0, where the document
-            // leaves pixels the sphere does not reach.
-            let _ =
-                ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0])], depth_stencil: Some(RenderTarget::clear_depth(b.depth, 1.0, 0)) })?;
-            if let Some((pipeline, vertices, n)) = b.sphere {
-                ctx.rec.bind_pipeline(pipeline)?;
-                ctx.bind(&[])?;
-                ctx.rec.bind_vertex_buffers(&[(vertices, 0)])?;
-                ctx.rec.draw_instanced(n, 0, count, first)?;
-            }
-            if vertex_count > 0 {
-                ctx.rec.bind_pipeline(b.visibility)?;
-                if exact {
-                    ctx.bind(&[("triangles", Bind::StorageBuffer(b.triangles))])?;
-                } else {
-                    ctx.bind(&[])?;
-                }
-                if exact {
-                    // A rectangle (two triangles) per occluder triangle.
-                    ctx.rec.draw_instanced(2 * vertex_count, 2 * first_vertex, count, first)?;
-                } else {
-                    ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
-                    ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
-                }
-            }
-            ctx.rec.end_rendering();
-            Ok(())
-        });
     }
     // The reduction's last step: `src` summed per tile into the batch's receiver slots.
     let to_slots = |graph: &mut RenderGraph<'a>, name: &str, src: ImageId, p: PipelineId, threads: [u32; 3]| {
@@ -397,6 +481,17 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
             }
         }
     }
+}
+
+/// The document's directions: the colour-coded sphere drawn into every receiver's tile.
+fn draw_sphere(ctx: &mut crate::graph::PassContext<'_, '_>, b: &Bake, first: u32, count: u32) -> std::result::Result<(), crate::backend::BackendError> {
+    if let Some((pipeline, vertices, n)) = b.sphere {
+        ctx.rec.bind_pipeline(pipeline)?;
+        ctx.bind(&[("receivers", Bind::StorageBuffer(b.receivers))])?;
+        ctx.rec.bind_vertex_buffers(&[(vertices, 0)])?;
+        ctx.rec.draw_instanced(n, 0, count, first)?;
+    }
+    Ok(())
 }
 
 /// The colour-coded sphere (Listing 2.3) into R and G, with no depth test or write.
