@@ -1229,3 +1229,58 @@ fn light_selection_efficiency() {
         );
     }
 }
+
+/// The tracer compiled for what a scene holds (glsl/reference/features.glsl: code for absent
+/// kinds of light and material dropped) gives the general shader's image bit for bit. Together
+/// the scenes have every feature and lack every one, and one draws one light per vertex, so a
+/// feature detected wrongly, or a gate that drops code a scene runs, changes some image here.
+#[test]
+fn specialised_tracer_matches_the_general_one() {
+    use penumbra::reference::features::SceneFeatures;
+    let names = ["cornell.toml", "terrain_cones.toml", "sh_courtyard_sky.toml", "sv_glass.toml", "lpv_bush.toml", "default.toml", "theatre_50.toml"];
+    let mut seen_on = SceneFeatures {
+        maps: false,
+        translucency: false,
+        specular: false,
+        transmission: false,
+        punctual_lights: false,
+        sphere_lights: false,
+        quad_lights: false,
+        environment_map: false,
+        sampled_environment: false,
+    };
+    let mut seen_off = seen_on;
+    let run = settings(3, 3, LightPaths::All, 7);
+    for name in names {
+        let scene = scene_file(name);
+        let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (10, 8)).expect("reference renderer");
+        let f = r.features;
+        assert_eq!(f, SceneFeatures::of(&r.scene));
+        assert_ne!(f, SceneFeatures::ALL, "{name}: nothing to specialise");
+        for (on, off, have) in [
+            (&mut seen_on.maps, &mut seen_off.maps, f.maps),
+            (&mut seen_on.translucency, &mut seen_off.translucency, f.translucency),
+            (&mut seen_on.specular, &mut seen_off.specular, f.specular),
+            (&mut seen_on.transmission, &mut seen_off.transmission, f.transmission),
+            (&mut seen_on.punctual_lights, &mut seen_off.punctual_lights, f.punctual_lights),
+            (&mut seen_on.sphere_lights, &mut seen_off.sphere_lights, f.sphere_lights),
+            (&mut seen_on.quad_lights, &mut seen_off.quad_lights, f.quad_lights),
+            (&mut seen_on.environment_map, &mut seen_off.environment_map, f.environment_map),
+            (&mut seen_on.sampled_environment, &mut seen_off.sampled_environment, f.sampled_environment),
+        ] {
+            *on |= have;
+            *off |= !have;
+        }
+        let specialised = r.render(&run, &mut |_, _| {}).expect("render");
+        r.features = SceneFeatures::ALL;
+        let general = r.render(&run, &mut |_, _| {}).expect("render");
+        common::assert_clean(&r.gpu);
+        let bits = |img: &ReferenceImage| img.mean.pixels.iter().chain(&img.standard_error.pixels).flat_map(|p| p.map(f32::to_bits)).collect::<Vec<u32>>();
+        let (a, b) = (bits(&specialised), bits(&general));
+        let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        assert_eq!(differ, 0, "{name}: {differ} of {} values differ between the specialised and the general tracer", a.len());
+        assert!(specialised.mean.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0), "{name}: a black image shows nothing");
+    }
+    assert_eq!(seen_on, SceneFeatures::ALL, "some feature is in none of the scenes");
+    assert_eq!(seen_off, SceneFeatures::ALL, "some feature is in every scene");
+}

@@ -10,6 +10,7 @@
 #define PENUMBRA_REFERENCE_BSDF_GLSL
 
 #include "common/lights.glsl"
+#include "reference/features.glsl"
 #include "reference/rng.glsl"
 
 struct Material {
@@ -93,9 +94,13 @@ vec3 bsdf_times_cos(Surface s, Material m, vec3 v, vec3 l) {
     float g = dot(s.geometric_normal, l);
     float c = dot(s.shading_normal, l);
     if (g > 0.0 && c > 0.0) {
+        if (!SCENE_HAS_SPECULAR) {
+            // brdf_times_cos with no specular colour: the same arithmetic, less the zero lobe.
+            return m.albedo.rgb / PI * c;
+        }
         return brdf_times_cos(s.shading_normal, v, l, m.albedo.rgb, m.specular.rgb, m.specular.w);
     }
-    if (g < 0.0 && c < 0.0) {
+    if (SCENE_HAS_TRANSMISSION && g < 0.0 && c < 0.0) {
         return m.transmittance.rgb / PI * -c;
     }
     return vec3(0.0);
@@ -105,8 +110,8 @@ vec3 bsdf_times_cos(Surface s, Material m, vec3 v, vec3 l) {
 // surface, into the transmission hemisphere, so its density counts on both sides.
 float bsdf_pdf(Surface s, Material m, LobeChoice p, vec3 v, vec3 l) {
     float c = dot(s.shading_normal, l);
-    float pdf = c > 0.0 ? p.diffuse * c / PI : p.transmit * -c / PI;
-    if (p.specular > 0.0) {
+    float pdf = c > 0.0 ? p.diffuse * c / PI : (SCENE_HAS_TRANSMISSION ? p.transmit * -c / PI : 0.0);
+    if (SCENE_HAS_SPECULAR && p.specular > 0.0) {
         pdf += p.specular * blinn_pdf(s.shading_normal, v, l, m.specular.w);
     }
     return pdf;
@@ -121,14 +126,14 @@ bool sample_bsdf(Surface s, Material m, vec3 v, inout uint rng, out vec3 l, out 
     vec2 u = vec2(rand(rng), rand(rng));
     if (choice < p.diffuse) {
         l = sample_cosine(s.shading_normal, u);
-    } else if (choice < p.diffuse + p.specular) {
+    } else if (SCENE_HAS_SPECULAR && choice < p.diffuse + p.specular) {
         vec3 h = sample_blinn_half(s.shading_normal, m.specular.w, u);
         float v_dot_h = dot(v, h);
         if (v_dot_h <= 0.0) {
             return false;
         }
         l = 2.0 * v_dot_h * h - v;
-    } else if (p.transmit > 0.0) {
+    } else if (SCENE_HAS_TRANSMISSION && p.transmit > 0.0) {
         l = sample_cosine(-s.shading_normal, u);
     } else {
         l = vec3(0.0);

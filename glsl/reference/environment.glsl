@@ -56,7 +56,7 @@ uvec2 environment_texel(vec3 d, out float density) {
 }
 
 vec3 environment_radiance(vec3 d) {
-    if (params.environment_map.x == 0u) {
+    if (!SCENE_HAS_ENVIRONMENT_MAP || params.environment_map.x == 0u) {
         return params.environment.rgb;
     }
     float density;
@@ -75,7 +75,7 @@ float environment_texel_probability(uvec2 t) {
 
 // Solid-angle density of sample_environment choosing d (0 when the map is not sampled).
 float environment_pdf(vec3 d) {
-    if (params.environment_map.z == 0u) {
+    if (!SCENE_SAMPLES_ENVIRONMENT || params.environment_map.z == 0u) {
         return 0.0;
     }
     float density;

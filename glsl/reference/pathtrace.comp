@@ -117,6 +117,9 @@ vec3 beyond(int triangle, vec2 uv, vec3 d) {
 // The surface (or area light) a ray stops at.
 Hit trace_visible(vec3 o, vec3 d, inout uint rng) {
     Hit h = trace_closest(o, d);
+    if (!SCENE_HAS_TRANSLUCENCY) {
+        return h;
+    }
     for (uint k = 0u; k < MAX_LAYERS && h.triangle >= 0; ++k) {
         float a = opacity_of(h.triangle);
         if (a >= 1.0 || rand(rng) < a) {
@@ -141,7 +144,7 @@ bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
     if (!trace_triangles(o, d, true, t, triangle, uv)) {
         return false;
     }
-    if (opacity_of(triangle) >= 1.0) {
+    if (!SCENE_HAS_TRANSLUCENCY || opacity_of(triangle) >= 1.0) {
         return true;
     }
     for (uint k = 0u; k < MAX_LAYERS; ++k) {
@@ -220,7 +223,7 @@ Surface surface_at(Hit h, vec3 d, out Material m) {
     ns = len > 0.0 ? ns / len : ng;
     s.geometric_normal = dot(ng, d) > 0.0 ? -ng : ng;
     s.shading_normal = dot(ns, d) > 0.0 ? -ns : ns;
-    if (all(equal(m.maps.xyz, uvec3(0u)))) {
+    if (!SCENE_HAS_MAPS || all(equal(m.maps.xyz, uvec3(0u)))) {
         return s;
     }
     vec2 uv = bary.x * sh.uv0 + bary.y * sh.uv1 + bary.z * sh.uv2;
@@ -252,7 +255,7 @@ vec3 spawn_origin(Surface s, vec3 dir) {
 // Radiance an area light sends back along -d (quads emit from their front side only).
 vec3 light_seen(uint i, vec3 d) {
     Light light = lights.items[i];
-    if (uint(light.position.w) == LIGHT_QUAD && dot(d, cross(light.direction.xyz, light.cone.xyz)) >= 0.0) {
+    if (SCENE_HAS_QUAD_LIGHTS && uint(light.position.w) == LIGHT_QUAD && dot(d, cross(light.direction.xyz, light.cone.xyz)) >= 0.0) {
         return vec3(0.0);
     }
     return light.intensity.rgb;
@@ -266,7 +269,7 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
     l = vec3(0.0, 1.0, 0.0);
     arriving = vec3(0.0);
     dist = NO_HIT;
-    if (type <= LIGHT_DIRECTIONAL) {
+    if (SCENE_HAS_PUNCTUAL_LIGHTS && type <= LIGHT_DIRECTIONAL) {
         light_incidence(light, p, l, arriving);
         if (type != LIGHT_DIRECTIONAL) {
             dist = distance(light.position.xyz, p);
@@ -274,7 +277,7 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
         return true;
     }
     vec2 u = vec2(rand(rng), rand(rng));
-    if (type == LIGHT_SPHERE) {
+    if (SCENE_HAS_SPHERE_LIGHTS && type == LIGHT_SPHERE) {
         // Uniform directions in the cone of the sphere's visible cap: pdf 1 / (2 pi (1 - cos_max)).
         vec3 to_center = light.position.xyz - p;
         float d2 = dot(to_center, to_center);
@@ -292,7 +295,7 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
         arriving = light.intensity.rgb * (2.0 * PI * cap);
         return true;
     }
-    if (type == LIGHT_QUAD) {
+    if (SCENE_HAS_QUAD_LIGHTS && type == LIGHT_QUAD) {
         // Uniform on the area: pdf dist^2 / (cos_light * area) per solid angle.
         vec3 q = light.position.xyz + u.x * light.direction.xyz + u.y * light.cone.xyz;
         vec3 n = cross(light.direction.xyz, light.cone.xyz);
@@ -339,7 +342,7 @@ bool unblocked_toward(Surface s, vec3 l, float dist, uint skip_light, inout uint
 // sampling that can also find it.
 vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
     vec3 sum = vec3(0.0);
-    if ((batch.flags & FLAG_ONE_LIGHT) != 0u) {
+    if (NEE_MODE == 1u || (NEE_MODE == 2u && (batch.flags & FLAG_ONE_LIGHT) != 0u)) {
         vec3 total = vec3(0.0);
         uvec3 chosen = uvec3(NO_LIGHT);
         vec3 chosen_l[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
@@ -385,7 +388,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
             }
         }
     }
-    if (params.environment_map.z == 0u) {
+    if (!SCENE_SAMPLES_ENVIRONMENT || params.environment_map.z == 0u) {
         return sum;
     }
     vec2 u = vec2(rand(rng), rand(rng));

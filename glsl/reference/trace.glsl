@@ -7,6 +7,7 @@
 #define PENUMBRA_REFERENCE_TRACE_GLSL
 
 #include "common/bvh.glsl"
+#include "reference/features.glsl"
 
 const uint LIGHT_SPHERE = 3u;
 const uint LIGHT_QUAD = 4u;
@@ -37,10 +38,10 @@ float hit_sphere(vec3 o, vec3 d, vec3 center, float radius) {
 float hit_area_light(uint i, vec3 o, vec3 d) {
     Light light = lights.items[i];
     uint type = uint(light.position.w);
-    if (type == LIGHT_SPHERE) {
+    if (SCENE_HAS_SPHERE_LIGHTS && type == LIGHT_SPHERE) {
         return hit_sphere(o, d, light.position.xyz, light.direction.x);
     }
-    if (type == LIGHT_QUAD) {
+    if (SCENE_HAS_QUAD_LIGHTS && type == LIGHT_QUAD) {
         // A parallelogram is a triangle test without the u + v <= 1 bound.
         vec3 e1 = light.direction.xyz;
         vec3 e2 = light.cone.xyz;

@@ -59,6 +59,8 @@ pub mod texel_table;
 
 pub mod export;
 
+pub mod features;
+
 pub mod scene_data;
 
 use std::path::{Path, PathBuf};
@@ -72,6 +74,7 @@ use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
 use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
+use features::{NeeMode, SceneFeatures};
 pub use scene_data::{srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
 
 /// Which light the estimator counts, by the surface interactions along its path.
@@ -215,6 +218,15 @@ impl Settings {
 const FLAG_INDIRECT_ONLY: u32 = 1;
 const FLAG_ONE_LIGHT: u32 = 2;
 
+/// The tracer's next-event mode for a batch's flags.
+fn nee_mode(flags: u32) -> NeeMode {
+    if flags & FLAG_ONE_LIGHT != 0 {
+        NeeMode::One
+    } else {
+        NeeMode::Every
+    }
+}
+
 /// `Params` in the shader.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -343,7 +355,11 @@ pub fn relative_error(image: &ReferenceImage, scope: ErrorScope) -> f64 {
 pub struct ReferenceRenderer {
     pub gpu: Gpu,
     pub scene: TracedScene,
-    pipeline: PipelineId,
+    /// The shader's specialization (`features`): what it is compiled for. [`SceneFeatures::of`]
+    /// the scene by default; [`SceneFeatures::ALL`] gives the shader as written.
+    pub features: SceneFeatures,
+    /// Pipelines compiled so far, by the features and next-event mode they were made for.
+    pipelines: Vec<(SceneFeatures, NeeMode, PipelineId)>,
     buffers: SceneBuffers,
     params: Params,
     mean: ImageId,
@@ -378,7 +394,6 @@ impl ReferenceRenderer {
         let traced = TracedScene::build_at(scene, crate::scene::motion::frame_time(frame))?;
         let mut states = ResourceStates::default();
         let buffers = traced.upload(&mut gpu, &mut states)?;
-        let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: vec![] }, &dev_shaders())?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
         let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
@@ -407,7 +422,25 @@ impl ReferenceRenderer {
             },
             options: [traced.light_beyond_last_bounce() as u32, traced.punctual_lights, 0, 0],
         };
-        Ok(ReferenceRenderer { gpu, scene: traced, pipeline, buffers, params, mean, second_moment, readback, status, frame, states, width, height, batches_cut_short: 0, pixels_cut_short: Vec::new() })
+        let features = SceneFeatures::of(&traced);
+        Ok(ReferenceRenderer {
+            gpu,
+            scene: traced,
+            features,
+            pipelines: Vec::new(),
+            buffers,
+            params,
+            mean,
+            second_moment,
+            readback,
+            status,
+            frame,
+            states,
+            width,
+            height,
+            batches_cut_short: 0,
+            pixels_cut_short: Vec::new(),
+        })
     }
 
     /// Renders `settings.spp` samples per pixel, calling `progress(done, total)` after each batch.
@@ -428,6 +461,8 @@ impl ReferenceRenderer {
     /// `--spp n` gives. `progress(done, total)` gets the predicted total.
     pub fn render_until(&mut self, settings: &Settings, mut stop: Option<Stop<'_>>, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
         settings.check()?;
+        // Compiled before the clock starts: the rate counts tracing, not llvmpipe's compile.
+        self.pipeline(nee_mode(settings.push(0, 1, self.params.counts[0]).flags))?;
         let start = Instant::now();
         let target = Duration::from_millis(250);
         let mut cap = MAX_BATCH;
@@ -519,11 +554,27 @@ impl ReferenceRenderer {
         Ok(ReferenceImage { mean, standard_error, spp, seconds })
     }
 
+    /// The tracer specialised for `self.features` and `nee`, compiled on first use (a scene
+    /// renders with one mode, so one compile).
+    fn pipeline(&mut self, nee: NeeMode) -> Result<PipelineId> {
+        let features = self.features;
+        // Every feature on is the shader as written, which reads the mode from the batch.
+        let nee = if features == SceneFeatures::ALL { NeeMode::Either } else { nee };
+        if let Some(&(_, _, id)) = self.pipelines.iter().find(|(f, n, _)| *f == features && *n == nee) {
+            return Ok(id);
+        }
+        let desc = ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: features.specialization(nee) };
+        let id = self.gpu.create_compute_pipeline(&desc, &dev_shaders())?;
+        self.pipelines.push((features, nee, id));
+        Ok(id)
+    }
+
     /// One submitted and waited-for batch; the last one also copies the results to the host.
     /// Returns how many pixels' batches were cut short (and so left as they were).
     fn dispatch(&mut self, push: BatchPush, read_back: bool) -> Result<u32> {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let (pipeline, mean, m2, rb, status) = (self.pipeline, self.mean, self.second_moment, self.readback, self.status);
+        let pipeline = self.pipeline(nee_mode(push.flags))?;
+        let (mean, m2, rb, status) = (self.mean, self.second_moment, self.readback, self.status);
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
