@@ -55,6 +55,11 @@ layout(set = 0, binding = 6) readonly buffer PerLane { uint count; } per_lane;
 
 const uint NO_BVH = 0xffffffffu;
 
+// The bake's band count, set by raycast.rs (0: read push.bands). llvmpipe runs both sides of a
+// branch with lanes masked off, so with the bands unknown every direction paid for the general
+// 64-coefficient evaluation beside the 16-coefficient one; known, the compiler keeps one.
+layout(constant_id = 0) const uint BANDS = 0u;
+
 void main() {
     uint per = per_lane.count;
     uint lanes = (push.sample_count + per - 1u) / per;
@@ -68,7 +73,8 @@ void main() {
     Receiver r = receivers.items[item];
     uint first = lane * per;
     uint count = min(per, push.sample_count - first);
-    bool small = push.bands <= 4u;
+    uint bands = BANDS != 0u ? BANDS : push.bands;
+    bool small = bands <= 4u;
 
     float acc[SH_MAX_COEFFS];
     for (int i = 0; i < SH_MAX_COEFFS; ++i) {
@@ -104,7 +110,7 @@ void main() {
             }
         } else {
             float y[SH_MAX_COEFFS];
-            sh_eval_bands(dir, int(push.bands), y);
+            sh_eval_bands(dir, int(bands), y);
             for (int i = 0; i < SH_MAX_COEFFS; ++i) {
                 acc[i] += y[i];
             }
@@ -114,7 +120,7 @@ void main() {
         atomicAdd(status.cut, 1u);
         return;
     }
-    uint dim = push.bands * push.bands;
+    uint dim = bands * bands;
     uint at = (local_item * lanes + lane) * dim;
     // The same sentinel for the writes: a cut here would leave sums unwritten.
     bool written = false;

@@ -23,7 +23,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::receivers::{tangent_frame, Clip, Receivers};
-use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind};
+use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind, SpecConstant};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::progress::Progress;
@@ -309,7 +309,9 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
     let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
     let per_buf = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization: vec![] }, shaders)?;
+    // The bands as a constant: the shader then keeps only the SH evaluation it needs.
+    let specialization = vec![SpecConstant { id: 0, bits: bands as u32 }];
+    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization }, shaders)?;
     let frame = gpu.create_frame()?;
 
     let push = Push { receiver_count: total as u32, sample_count: samples as u32, bands: bands as u32, triangle_count: traced.len() as u32, near: clip.near as f32, t_max: ray_length(clip) };
