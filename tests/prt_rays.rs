@@ -82,6 +82,37 @@ fn gpu_transfer_equals_the_cpu_on_floor_box_and_disk() {
     }
 }
 
+/// Slivers so many that one ray's walk outlasts llvmpipe's 65,535 loop iterations: even at one
+/// ray per invocation the bake must say so, never return what a cut walk found. A cut traversal
+/// cannot tell it was cut, and with one ray per invocation the shader's own loop ends at its
+/// sentinel anyway, so only the canary loop after it notices (this fails without it).
+#[test]
+fn a_walk_too_long_for_the_device_is_an_error_not_a_wrong_transfer() {
+    let mut rng = 0x2545_f491_4f6c_dd1du64;
+    let mut random = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f32 / (1u64 << 53) as f32
+    };
+    // Every sliver spans the region, so every box overlaps every ray; few are ever hit.
+    let slivers: Vec<[Vec3; 3]> = (0..40_000)
+        .map(|_| {
+            let a = Vec3::new(-3.0, 0.5 + random() * 2.0, random() * 6.0 - 3.0);
+            let b = Vec3::new(3.0, 0.5 + random() * 2.0, random() * 6.0 - 3.0);
+            [a, b, a + Vec3::new(0.0, 1e-5, 1e-5)]
+        })
+        .collect();
+    let points = [(glam::DVec3::new(0.0, 0.0, 0.0), glam::DVec3::Y)];
+    let r = Receivers { sets: vec![OccluderSet { objects: vec![0], triangles: slivers }], ..Receivers::explicit(&points, Vec::new()) };
+    let mut gpu = common::test_gpu();
+    if !gpu.caps().name.contains("llvmpipe") {
+        return;
+    }
+    let e = bake_gpu(&mut gpu, &ShaderLibrary::Embedded, &r, 4, 16, Clip::default(), &mut Progress::new("test")).expect_err("a walk longer than the device allows");
+    assert!(e.to_string().contains("use the CPU baker"), "{e}");
+}
+
 /// A floor under 3,000 long slivers whose boxes all overlap and which rarely stop a ray: a walk
 /// visits thousands of nodes, so llvmpipe cuts the first invocations (64 rays each) short and
 /// the bake retries with fewer rays per invocation.

@@ -102,8 +102,10 @@ bool pop_closer(inout uint sp, float t_max, out uint node, out uint index, out u
 // Closest triangle hit closer than t_max (which it lowers), or with `any_hit` the first found.
 // While-while (Aila and Laine 2009): every lane descends through interior nodes until it reaches
 // a leaf, then the lanes test their leaves together, so SIMD lanes at different kinds of node do
-// not take turns.
-bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
+// not take turns. The tree is rooted at node `root`: several trees may share the tables one
+// after the other, their indices counted from the start of the tables (glsl/prt/rays.comp).
+// The stack holds MAX_DEPTH entries, the depth bvh::Bvh::build bounds every tree by.
+bool trace_triangles_from(uint root, vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
     triangle = -1;
     uv = vec2(0.0);
     if (BVH_TRIANGLE_COUNT == 0u) {
@@ -112,10 +114,10 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
     // Zero components would give 0 * inf = NaN in the slab test.
     vec3 inv_d = 1.0 / mix(d, vec3(1e-30), equal(d, vec3(0.0)));
     uint sp = 0u;
-    uint node = 0u;
+    uint node = root;
     uint index;
     uint count;
-    if (node_entry(0u, o, inv_d, t_max, index, count) == NO_HIT) {
+    if (node_entry(root, o, inv_d, t_max, index, count) == NO_HIT) {
         return false;
     }
     bool done = false;
@@ -179,6 +181,10 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
         done = !pop_closer(sp, t_max, node, index, count);
     }
     return triangle >= 0;
+}
+
+bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
+    return trace_triangles_from(0u, o, d, any_hit, t_max, triangle, uv);
 }
 
 #ifdef BVH_SKIPS_BINDING

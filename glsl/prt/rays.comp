@@ -6,9 +6,9 @@
 //
 // One invocation traces `per` consecutive directions of one receiver (a lane) and writes its
 // partial sums; the host adds up a receiver's lanes in order and scales them by pi/N. llvmpipe
-// ends an invocation's loops after 65,535 iterations in total, so an invocation that finds a
-// walk or one of its own loops cut short reports it, and the host traces the chunk again with
-// fewer directions per lane.
+// ends an invocation's loops after 65,535 iterations in total, so an invocation whose loops were
+// cut short reports it (its sentinels below), and the host traces the chunk again with fewer
+// directions per lane.
 //
 // Invocations are ordered lane-major, receiver-minor: neighbouring invocations trace the same
 // directions from neighbouring receivers, which keeps a SIMD batch's rays coherent.
@@ -48,7 +48,6 @@ layout(set = 0, binding = 6) readonly buffer PerLane { uint count; } per_lane;
 
 #define BVH_NODES_BINDING 7
 #define BVH_TRIANGLES_BINDING 8
-#define BVH_SKIPS_BINDING 9
 #define BVH_TRIANGLE_COUNT push.triangle_count
 #include "common/bvh.glsl"
 #include "common/sh.glsl"
@@ -80,7 +79,6 @@ void main() {
     for (int i = 0; i < SH_MAX_COEFFS; ++i) {
         acc[i] = 0.0;
     }
-    bool cut = false;
     // One more iteration than directions: it is reached only if no loop was cut short before it
     // (the device's limit ends every loop of the invocation once spent).
     bool finished = false;
@@ -94,9 +92,10 @@ void main() {
         precise vec3 d = r.tangent.xyz * l.x + r.bitangent.xyz * l.y + r.normal.xyz * l.z;
         if (r.bvh.x != NO_BVH) {
             precise vec3 o = r.position.xyz + d * push.near;
-            bool complete;
-            bool blocked = occluded_in(r.bvh.x, o, d, push.t_max, complete);
-            cut = cut || !complete;
+            float t = push.t_max;
+            int tri;
+            vec2 uv;
+            bool blocked = trace_triangles_from(r.bvh.x, o, d, true, t, tri, uv);
             if (blocked) {
                 continue;
             }
@@ -116,7 +115,10 @@ void main() {
             }
         }
     }
-    if (cut || !finished) {
+    // The traversal cannot tell it was cut (its loops just end). Once the budget is spent the
+    // later loops end early too: this one misses its sentinel, and so does the write loop below
+    // (tests/prt_rays.rs, a walk too long for the device, fails without both).
+    if (!finished) {
         atomicAdd(status.cut, 1u);
         return;
     }

@@ -113,7 +113,8 @@ fn to_sh(d: Vec3) -> DVec3 {
 }
 
 /// One occluder set's BVH with its triangles in leaf-slot order as corner and edges (the
-/// shader's `Triangle`), and the skip links of the stackless any-hit walk.
+/// shader's `Triangle`), and the skip links of the CPU's stackless any-hit walk (the shader
+/// walks the tree with a stack: glsl/common/bvh.glsl, trace_triangles_from).
 struct SetBvh {
     nodes: Vec<BvhNode>,
     skips: Vec<u32>,
@@ -138,7 +139,8 @@ impl SetBvh {
     }
 
     /// Whether a triangle lies on the ray closer than `t_max`: `occluded` of
-    /// glsl/common/bvh.glsl, the same walk and arithmetic.
+    /// glsl/common/bvh.glsl. The bake's shader walks the tree in another order (with a stack,
+    /// nearer child first) but tests triangles with the same arithmetic, so it answers alike.
     fn occluded(&self, o: Vec3, d: Vec3, t_max: f32) -> bool {
         let inv_d = safe_inverse(d);
         let mut node = 0usize;
@@ -275,8 +277,8 @@ pub fn bake_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: us
 fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
     let dim = bands * bands;
     let total = r.len();
-    // The sets' BVHs one after the other, their node and slot indices and skip links offset.
-    let (mut nodes, mut skips, mut traced) = (Vec::<BvhNode>::new(), Vec::<u32>::new(), Vec::<TracedTriangle>::new());
+    // The sets' BVHs one after the other, their node and slot indices offset.
+    let (mut nodes, mut traced) = (Vec::<BvhNode>::new(), Vec::<TracedTriangle>::new());
     let roots: Vec<u32> = r
         .sets
         .iter()
@@ -284,7 +286,6 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
             let Some(b) = SetBvh::build(&s.triangles) else { return NO_BVH };
             let (node_base, slot_base) = (nodes.len() as u32, traced.len() as u32);
             nodes.extend(b.nodes.iter().map(|n| BvhNode { index: n.index + if n.is_leaf() { slot_base } else { node_base }, ..*n }));
-            skips.extend(b.skips.iter().map(|s| s + node_base));
             traced.extend(b.triangles.iter().map(|t| TracedTriangle { p0: v4(t[0]), e1: v4(t[1]), e2: v4(t[2]) }));
             node_base
         })
@@ -322,7 +323,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
-    let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, Some(&skips))?;
+    let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, None)?;
     let (mut base, mut chunk) = (0usize, FIRST_CHUNK);
     while base < total {
         let lanes = samples.div_ceil(per as usize);
