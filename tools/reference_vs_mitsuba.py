@@ -20,9 +20,9 @@ read-back image (the scene and pipeline are built before); Mitsuba's of `mi.rend
 copy to numpy, after the scene is loaded (and, for the LLVM variant, after a 1-spp render that
 compiles its kernels).
 
-Needs `pip install mitsuba` (tools/.venv, see README). The `llvm_ad_rgb` variant needs an LLVM
-newer than Debian 12's system LLVM 15 (Dr.Jit's kernels fail to compile there); put one at
-tools/.venv/llvm19 (`apt-get download libllvm19 && dpkg -x libllvm19_*.deb tools/.venv/llvm19`)
+Needs `python3 -m venv tools/.venv && tools/.venv/bin/pip install mitsuba numpy` (the mitsuba
+wheel does not pull numpy in). The `llvm_ad_rgb` variant needs an LLVM newer than Debian 12's
+system LLVM 15 (Dr.Jit's kernels fail to compile there); put one at tools/.venv/llvm19 (`apt-get download libllvm19 && dpkg -x libllvm19_*.deb tools/.venv/llvm19`)
 or name it with --libllvm / DRJIT_LIBLLVM_PATH.
 
 Usage:
