@@ -84,17 +84,12 @@ fn gpu_transfer_equals_the_cpu_on_floor_box_and_disk() {
 
 /// Slivers so many that one ray's walk outlasts llvmpipe's 65,535 loop iterations: even at one
 /// ray per invocation the bake must say so, never return what a cut walk found. A cut traversal
-/// cannot tell it was cut, and with one ray per invocation the shader's own loop ends at its
-/// sentinel anyway, so only the canary loop after it notices (this fails without it).
+/// cannot tell it was cut; the shader's loop sentinels after it must (this fails with both
+/// disabled).
 #[test]
 fn a_walk_too_long_for_the_device_is_an_error_not_a_wrong_transfer() {
-    let mut rng = 0x2545_f491_4f6c_dd1du64;
-    let mut random = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 7;
-        rng ^= rng << 17;
-        (rng >> 11) as f32 / (1u64 << 53) as f32
-    };
+    let mut stream = common::xorshift(0x2545_f491_4f6c_dd1d);
+    let mut random = move || stream() as f32;
     // Every sliver spans the region, so every box overlaps every ray; few are ever hit.
     let slivers: Vec<[Vec3; 3]> = (0..40_000)
         .map(|_| {
@@ -118,13 +113,8 @@ fn a_walk_too_long_for_the_device_is_an_error_not_a_wrong_transfer() {
 /// the bake retries with fewer rays per invocation.
 #[test]
 fn gpu_transfer_equals_the_cpu_through_a_deep_bvh() {
-    let mut rng = 0x853c_49e6_748f_ea9bu64;
-    let mut random = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 7;
-        rng ^= rng << 17;
-        (rng >> 11) as f32 / (1u64 << 53) as f32
-    };
+    let mut stream = common::xorshift(0x853c_49e6_748f_ea9b);
+    let mut random = move || stream() as f32;
     let mut slivers = Vec::new();
     for _ in 0..3000 {
         let mut point = || Vec3::new(random() * 4.0 - 2.0, 0.5 + random() * 2.0, random() * 4.0 - 2.0);

@@ -188,13 +188,7 @@ fn gpu_visibility_matches_the_cpu_through_a_deep_bvh() {
         t.sky = true;
     }
     tris.extend(lid);
-    let mut rng = 0x853c_49e6_748f_ea9bu64;
-    let mut random = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 7;
-        rng ^= rng << 17;
-        (rng >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut random = common::xorshift(0x853c_49e6_748f_ea9b);
     for _ in 0..5000 {
         let mut point = || DVec3::new(random() * 4.0 - 2.0, 0.5 + random() * 2.0, random() * 4.0 - 2.0);
         let (a, b) = (point(), point());

@@ -21,6 +21,17 @@ pub fn assert_clean(gpu: &Gpu) {
     assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
 }
 
+/// A deterministic xorshift64 stream in [0, 1) (53 bits) for test geometry.
+pub fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 pub fn temp_path(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("penumbra-tests-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
