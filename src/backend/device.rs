@@ -167,10 +167,36 @@ fn cstr_field(bytes: &[std::ffi::c_char]) -> String {
     String::from_utf8_lossy(&bytes).into_owned()
 }
 
+/// The system Vulkan loader, loaded on first use and kept for the life of the process, with one
+/// bare instance that is never destroyed. The loader unloads a driver when its last instance goes,
+/// and loads it again for the next: `penumbra chart`, which creates a device per configuration,
+/// then failed on NVIDIA's 580 driver with "Unable to find a Vulkan driver" after some dozens of
+/// configurations (an H200; the same chart ran to the end with the driver preloaded), where
+/// lavapipe reloads without complaint. The instance keeps the driver loaded; it costs a few
+/// kilobytes and is created only once.
+struct Loader {
+    entry: ash::Entry,
+    _keep_driver_loaded: Option<ash::Instance>,
+}
+
+fn vulkan_loader() -> BackendResult<ash::Entry> {
+    static LOADER: std::sync::OnceLock<Result<Loader, String>> = std::sync::OnceLock::new();
+    let loader = LOADER.get_or_init(|| {
+        // SAFETY: loading the system Vulkan loader; failure is reported, not assumed. The static
+        // holds the library, so every Entry cloned from it stays valid.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| e.to_string())?;
+        let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_0);
+        // SAFETY: a plain instance with no layers or extensions. Where none can be created,
+        // Gpu::new's own attempt reports why.
+        let keep = unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }.ok();
+        Ok(Loader { entry, _keep_driver_loaded: keep })
+    });
+    loader.as_ref().map(|l| l.entry.clone()).map_err(|e| BackendError::Loader(e.clone()))
+}
+
 impl Gpu {
     pub fn new(desc: &GpuDesc) -> BackendResult<Gpu> {
-        // SAFETY: loading the system Vulkan loader; failure is reported, not assumed.
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| BackendError::Loader(e.to_string()))?;
+        let entry = vulkan_loader()?;
 
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
         let has_validation = layers.iter().any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
