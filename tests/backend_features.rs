@@ -255,3 +255,17 @@ fn a_frame_binding_more_sets_than_a_pool_holds_takes_more_pools() {
     assert!(held.descriptor_pools >= 3, "{BINDS} sets of two storage buffers fit in {} pool(s)", held.descriptor_pools);
     common::assert_clean(&gpu);
 }
+
+/// `read_buffer_prefix` returns exactly the bytes asked for from the start of the buffer, and
+/// refuses to read past its end (an error, not a panic).
+#[test]
+fn a_buffer_prefix_reads_back_what_was_written() {
+    let mut gpu = common::test_gpu();
+    let buf = gpu.create_storage_output("prefix", 64, MemoryKind::GpuToCpu).unwrap();
+    let bytes: Vec<u8> = (0..64u8).map(|b| b.wrapping_mul(37)).collect();
+    gpu.upload_buffer(buf, 0, &bytes).unwrap();
+    assert_eq!(gpu.read_buffer_prefix(buf, 12).unwrap(), bytes[..12]);
+    assert_eq!(gpu.read_buffer_prefix(buf, 64).unwrap(), bytes);
+    assert!(gpu.read_buffer_prefix(buf, 65).is_err());
+    common::assert_clean(&gpu);
+}

@@ -475,6 +475,19 @@ impl Gpu {
         Ok(slice[..b.desc.size as usize].to_vec())
     }
 
+    /// The first `len` bytes of a host-visible buffer. Where a pass fills only part of a large
+    /// output buffer, this copies only that part: device memory the host reads can be uncached
+    /// on a discrete GPU, and copying all of a 64 MiB buffer after every submission cost a PRT
+    /// bake more than its rays did.
+    pub fn read_buffer_prefix(&self, id: BufferId, len: usize) -> BackendResult<Vec<u8>> {
+        let b = self.buffer(id)?;
+        if len as u64 > b.desc.size {
+            return Err(BackendError::Invalid(format!("read of {len} bytes from buffer `{}` of {} bytes", b.desc.name, b.desc.size)));
+        }
+        let slice = b.allocation.as_ref().and_then(|a| a.mapped_slice()).ok_or_else(|| BackendError::Invalid(format!("buffer `{}` is not host-visible", b.desc.name)))?;
+        Ok(slice[..len].to_vec())
+    }
+
     pub fn destroy_buffer(&mut self, id: BufferId) {
         if let Some(slot) = self.arenas.buffers.get_mut(id.0 as usize) {
             if let Some(b) = slot.take() {

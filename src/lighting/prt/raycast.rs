@@ -367,8 +367,8 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
             chunk = chunk.div_ceil(2).max(16);
             continue;
         }
-        let sums = gpu.read_buffer(sums_buf)?;
-        let sums: &[f32] = sums.get(..4 * n * lanes * dim).map(bytemuck::cast_slice).ok_or_else(|| Error::Usage("PRT ray cast: the partial sums read back short".into()))?;
+        let sums = gpu.read_buffer_prefix(sums_buf, 4 * n * lanes * dim)?;
+        let sums: &[f32] = bytemuck::cast_slice(&sums);
         for (i, item) in sums.chunks_exact(lanes * dim).enumerate() {
             let row = &mut out[(base + i) * dim..(base + i + 1) * dim];
             for (c, o) in row.iter_mut().enumerate() {

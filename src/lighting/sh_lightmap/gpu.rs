@@ -183,8 +183,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
             chunk = chunk.div_ceil(2).max(64);
             continue;
         }
-        let out = gpu.read_buffer(out_buf)?;
-        let out = out.get(..4 * n).ok_or_else(|| Error::Usage("SH light-map visibility: the bits read back short".into()))?;
+        let out = gpu.read_buffer_prefix(out_buf, 4 * n)?;
         for (i, b) in out.chunks_exact(4).enumerate() {
             let word_bits = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
             let item = base + i;
