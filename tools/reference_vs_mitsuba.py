@@ -17,8 +17,8 @@ channels and the variants, z being the difference of the two image means over th
 standard error (penumbra's from its standard-error image, Mitsuba's from the scatter of the means
 of CHUNKS renders with different seeds). Timing: penumbra's from its first dispatch to the
 read-back image (the scene and pipeline are built before); Mitsuba's of `mi.render` and the
-copy to numpy, after the scene is loaded (and, for the LLVM variant, after a 1-spp render that
-compiles its kernels).
+copy to numpy, after the scene is loaded (and, for the LLVM and CUDA variants, after a 1-spp
+render that compiles their kernels).
 
 Needs `python3 -m venv tools/.venv && tools/.venv/bin/pip install mitsuba numpy` (the mitsuba
 wheel does not pull numpy in). The `llvm_ad_rgb` variant needs an LLVM newer than Debian 12's
@@ -161,7 +161,7 @@ def render_mitsuba(variant, exported, folder, size, max_depth, flip, spp, chunks
     mi.set_variant(variant)
     scene = mi.load_dict(mitsuba_scene(mi, exported, folder, size, max_depth, flip))
     per_chunk = max(1, spp // chunks)
-    if variant.startswith("llvm"):
+    if variant.startswith(("llvm", "cuda")):
         np.array(mi.render(scene, spp=1, seed=999))  # compiles the kernels outside the timing
     means, seconds = [], 0.0
     for c in range(chunks):
