@@ -1,8 +1,9 @@
 #version 460
 // Clustered pass 2: the lights of every cluster, one workgroup per screen tile. The workgroup
-// first marks, in a shared bit mask per band of consecutive depth slices, the lights whose
-// bounding sphere reaches the tile's column (its four side planes and the near and far depths)
-// and whose depth extent reaches the band (give or take a slice, for rounding). Then each
+// first marks, in a shared bit mask per band of consecutive depth slices, the lights (of those
+// the coarse pass listed for its block of tiles) whose bounding sphere reaches the tile's column
+// (its four side planes and the near and far depths) and whose depth extent reaches the band
+// (give or take a slice, for rounding). Then each
 // invocation takes a slice and tests the lights marked for its band: the sphere against the
 // cluster's box, and a spot light's cone against the sphere about the box. Hits are written in
 // light order, the first max_per_cluster of them to the cluster's slots; the count written is
@@ -27,6 +28,7 @@ layout(set = 0, binding = 1) readonly buffer Bounds { vec4 b[]; } bounds;
 layout(set = 0, binding = 2) readonly buffer Volumes { LightVolume items[]; } volumes;
 layout(set = 0, binding = 3) writeonly buffer Counts { uint n[]; } counts;
 layout(set = 0, binding = 4) writeonly buffer Indices { uint i[]; } indices;
+layout(set = 0, binding = 5) readonly buffer Coarse { uint m[]; } coarse;
 
 const uint WORDS = MAX_LIGHTS / 32u;
 const uint MAX_SLICES = 256u;
@@ -59,13 +61,21 @@ void main() {
     }
     barrier();
     vec4 planes[4] = column_planes(tile);
-    for (uint i = lane; i < light_count; i += 64u) {
-        vec4 s = volumes.items[i].sphere;
-        if (reaches_column(s, planes)) {
-            uint b0 = uint(max(slice_of(-s.z - s.w) - 1, 0)) / band;
-            uint b1 = uint(min(slice_of(-s.z + s.w) + 1, int(slices) - 1)) / band;
-            for (uint b = b0; b <= b1; ++b) {
-                atomicOr(band_lights[b * words + i / 32u], 1u << (i % 32u));
+    // Only the lights that reach the tile's coarse tile (a superset of those reaching the column:
+    // the coarse column holds it), a word of them per invocation.
+    uint coarse_base = (tile.x / COARSE + coarse_columns() * (tile.y / COARSE)) * WORDS;
+    for (uint w = lane; w < words; w += 64u) {
+        uint candidates = coarse.m[coarse_base + w];
+        while (candidates != 0u) {
+            uint i = w * 32u + uint(findLSB(candidates));
+            candidates &= candidates - 1u;
+            vec4 s = volumes.items[i].sphere;
+            if (reaches_column(s, planes)) {
+                uint b0 = uint(max(slice_of(-s.z - s.w) - 1, 0)) / band;
+                uint b1 = uint(min(slice_of(-s.z + s.w) + 1, int(slices) - 1)) / band;
+                for (uint b = b0; b <= b1; ++b) {
+                    atomicOr(band_lights[b * words + i / 32u], 1u << (i % 32u));
+                }
             }
         }
     }

@@ -48,16 +48,31 @@ uint cluster_at(vec2 frag, float d) {
     return x + clusters.grid.x * (y + clusters.grid.y * k);
 }
 
-// The four side planes of tile `t`'s column through the eye (view space, unit normals pointing
-// inward, w unused).
-vec4[4] column_planes(uvec2 t) {
-    vec2 ndc0 = vec2(t) / vec2(clusters.grid.xy) * 2.0 - 1.0;
-    vec2 ndc1 = vec2(t + 1u) / vec2(clusters.grid.xy) * 2.0 - 1.0;
+// Columns per side of a coarse tile: the coarse pass (glsl/clustered/coarse.comp) lists, for each
+// block of COARSE x COARSE columns, the lights that reach it, and the assignment tests only those
+// against each of its columns.
+const uint COARSE = 4u;
+
+// Coarse tiles across the screen.
+uint coarse_columns() {
+    return (clusters.grid.x + COARSE - 1u) / COARSE;
+}
+
+// The four side planes through the eye of the column over tiles t0 (inclusive) to t1
+// (exclusive) (view space, unit normals pointing inward, w unused).
+vec4[4] span_planes(uvec2 t0, uvec2 t1) {
+    vec2 ndc0 = vec2(t0) / vec2(clusters.grid.xy) * 2.0 - 1.0;
+    vec2 ndc1 = vec2(t1) / vec2(clusters.grid.xy) * 2.0 - 1.0;
     float sx = clusters.screen.z;
     float sy = clusters.screen.w;
     // View x = ndc x * depth * sx and view y = -ndc y * depth * sy, with depth = -view z.
     return vec4[4](vec4(normalize(vec3(1.0, 0.0, ndc0.x * sx)), 0.0), vec4(normalize(vec3(-1.0, 0.0, -ndc1.x * sx)), 0.0),
                    vec4(normalize(vec3(0.0, 1.0, -ndc1.y * sy)), 0.0), vec4(normalize(vec3(0.0, -1.0, ndc0.y * sy)), 0.0));
+}
+
+// The four side planes of tile `t`'s column.
+vec4[4] column_planes(uvec2 t) {
+    return span_planes(t, t + 1u);
 }
 
 // Whether a bounding sphere reaches the column between the near and far depths: not wholly

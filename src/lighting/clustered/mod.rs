@@ -98,12 +98,24 @@ pub struct Clustered {
     bounds: BufferId,
     pub counts: BufferId,
     pub indices: BufferId,
+    /// Per coarse tile, a bit per light that reaches it (glsl/clustered/coarse.comp).
+    coarse: BufferId,
     bounds_pipeline: PipelineId,
+    coarse_pipeline: PipelineId,
     assign_pipeline: PipelineId,
     both: PipelineId,
     base: PipelineId,
     direct: PipelineId,
 }
+
+/// Coarse tiles of `COARSE` × `COARSE` screen tiles (glsl/clustered/clusters.glsl), partial
+/// ones at the right and bottom edges included.
+fn coarse_tiles(config: &Config) -> u32 {
+    config.tiles[0].div_ceil(COARSE) * config.tiles[1].div_ceil(COARSE)
+}
+
+/// Columns per side of a coarse tile; `COARSE` in glsl/clustered/clusters.glsl.
+pub(crate) const COARSE: u32 = 4;
 
 fn cluster_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -130,8 +142,10 @@ impl Clustered {
         let bounds = cluster_buffer(cx.gpu, "clustered bounds", clusters * 32)?;
         let counts = cluster_buffer(cx.gpu, "clustered counts", clusters * 4)?;
         let indices = cluster_buffer(cx.gpu, "clustered indices", config.index_bytes())?;
+        let coarse = cluster_buffer(cx.gpu, "clustered coarse", coarse_tiles(&config) as u64 * (MAX_LIGHTS as u64 / 32) * 4)?;
         let compute = |gpu: &mut Gpu, name: &str, shader: &str| gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, cx.shaders);
         let bounds_pipeline = compute(cx.gpu, "clustered bounds", "clustered/bounds.comp")?;
+        let coarse_pipeline = compute(cx.gpu, "clustered coarse", "clustered/coarse.comp")?;
         let assign_pipeline = compute(cx.gpu, "clustered assign", "clustered/assign.comp")?;
         let ds_format = cx.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
@@ -140,8 +154,23 @@ impl Clustered {
             cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
         let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
-        let mut method =
-            Clustered { config, radii, scene_box: scene_box(cx), block: ClusterBlock::default(), volumes: Vec::new(), bounds, counts, indices, bounds_pipeline, assign_pipeline, both, base, direct };
+        let mut method = Clustered {
+            config,
+            radii,
+            scene_box: scene_box(cx),
+            block: ClusterBlock::default(),
+            volumes: Vec::new(),
+            bounds,
+            counts,
+            indices,
+            coarse,
+            bounds_pipeline,
+            coarse_pipeline,
+            assign_pipeline,
+            both,
+            base,
+            direct,
+        };
         // The scene's camera until the first frame says where the camera is.
         let view_proj = cx.scene.camera.view_projection(16.0 / 9.0).to_cols_array();
         method.plan(&view_proj, &cx.scene_gpu.lights, 1280, 720)?;
@@ -163,7 +192,7 @@ impl Clustered {
         Ok(())
     }
 
-    /// The bounds and assignment passes: they write [`Clustered::counts`] and
+    /// The bounds, coarse and assignment passes: they write [`Clustered::counts`] and
     /// [`Clustered::indices`].
     pub fn add_assignment_passes<'a>(&'a self, graph: &mut RenderGraph<'a>) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -176,13 +205,26 @@ impl Clustered {
             ctx.rec.dispatch([clusters, 1, 1])
         });
         let volumes = self.volume_bytes();
-        let tiles = self.config.tiles[0] * self.config.tiles[1];
-        graph.pass("clustered assign").buffer(self.bounds, read, Some("bounds")).buffer(self.counts, write, Some("counts")).buffer(self.indices, write, Some("indices")).record(move |ctx| {
-            ctx.rec.bind_pipeline(self.assign_pipeline)?;
+        let coarse = coarse_tiles(&self.config);
+        graph.pass("clustered coarse").buffer(self.coarse, write, Some("coarse")).record(move |ctx| {
+            ctx.rec.bind_pipeline(self.coarse_pipeline)?;
             ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
-            // One workgroup per tile.
-            ctx.rec.dispatch([tiles * ASSIGN_LANES, 1, 1])
+            // One workgroup per coarse tile.
+            ctx.rec.dispatch([coarse * ASSIGN_LANES, 1, 1])
         });
+        let tiles = self.config.tiles[0] * self.config.tiles[1];
+        graph
+            .pass("clustered assign")
+            .buffer(self.bounds, read, Some("bounds"))
+            .buffer(self.coarse, read, Some("coarse"))
+            .buffer(self.counts, write, Some("counts"))
+            .buffer(self.indices, write, Some("indices"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(self.assign_pipeline)?;
+                ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
+                // One workgroup per tile.
+                ctx.rec.dispatch([tiles * ASSIGN_LANES, 1, 1])
+            });
     }
 
     fn volume_bytes(&self) -> &[u8] {

@@ -158,4 +158,12 @@ fn the_assignment_shader_has_the_same_limits() {
     for line in [format!("const uint MAX_LIGHTS = {}u;", super::MAX_LIGHTS), format!("const uint MAX_SLICES = {}u;", super::MAX_SLICES)] {
         assert!(shader.lines().any(|l| l.trim() == line), "glsl/clustered/assign.comp lacks `{line}`");
     }
+    // The coarse pass strides its masks by MAX_LIGHTS / 32 words, as the assignment reads them,
+    // and the coarse buffer is sized by the Rust COARSE.
+    let coarse = include_str!("../../../glsl/clustered/coarse.comp");
+    let line = format!("const uint MAX_LIGHTS = {}u;", super::MAX_LIGHTS);
+    assert!(coarse.lines().any(|l| l.trim() == line), "glsl/clustered/coarse.comp lacks `{line}`");
+    let common = include_str!("../../../glsl/clustered/clusters.glsl");
+    let line = format!("const uint COARSE = {}u;", super::COARSE);
+    assert!(common.lines().any(|l| l.trim() == line), "glsl/clustered/clusters.glsl lacks `{line}`");
 }
