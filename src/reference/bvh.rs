@@ -70,18 +70,32 @@ impl Aabb {
     }
 }
 
+/// Builds one subtree: over `order`, which holds slots `base .. base + order.len()` of the whole
+/// build. Its nodes are numbered from 0; a subtree built on another thread is spliced into its
+/// parent's nodes with its second-child indices shifted (leaf slots are already absolute).
 struct Builder<'a> {
-    tris: &'a [[Vec3; 3]],
-    bounds: Vec<Aabb>,
-    centroids: Vec<Vec3>,
-    order: Vec<u32>,
+    bounds: &'a [Aabb],
+    centroids: &'a [Vec3],
+    order: &'a mut [u32],
+    base: usize,
     nodes: Vec<BvhNode>,
     depth: u32,
 }
 
+/// Subtrees over at least this many triangles, within the top `PARALLEL_LEVELS` levels, are built
+/// on a thread of their own (up to 2^`PARALLEL_LEVELS` at once). The tree is the same either way:
+/// each split depends only on its own triangles.
+const PARALLEL_MIN: usize = 8192;
+const PARALLEL_LEVELS: u32 = 3;
+
 impl Bvh {
     /// Builds over `tris` (world-space corners). An empty input gives an empty hierarchy.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
+        Bvh::build_on(tris, std::thread::available_parallelism().map_or(1, |n| n.get()) > 1)
+    }
+
+    /// The build, its top subtrees on threads of their own when `parallel` (the same tree).
+    fn build_on(tris: &[[Vec3; 3]], parallel: bool) -> Bvh {
         if tris.is_empty() {
             return Bvh::default();
         }
@@ -93,11 +107,12 @@ impl Bvh {
                 b
             })
             .collect();
-        let centroids = bounds.iter().map(|b| 0.5 * (b.lo + b.hi)).collect();
-        let mut b = Builder { tris, bounds, centroids, order: (0..tris.len() as u32).collect(), nodes: Vec::new(), depth: 0 };
-        b.node(0, tris.len(), 0);
-        debug_assert_eq!(b.tris.len(), b.order.len());
-        Bvh { nodes: b.nodes, order: b.order, depth: b.depth }
+        let centroids: Vec<Vec3> = bounds.iter().map(|b| 0.5 * (b.lo + b.hi)).collect();
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let mut b = Builder { bounds: &bounds, centroids: &centroids, order: &mut order, base: 0, nodes: Vec::new(), depth: 0 };
+        b.node(0, tris.len(), 0, parallel);
+        let (nodes, depth) = (b.nodes, b.depth);
+        Bvh { nodes, order, depth }
     }
 }
 
@@ -120,15 +135,15 @@ impl Bvh {
 impl Builder<'_> {
     fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
         let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
-        for &t in &self.order[start..end] {
+        for &t in &self.order[start - self.base..end - self.base] {
             all.union(&self.bounds[t as usize]);
             cent.grow(self.centroids[t as usize]);
         }
         (all, cent)
     }
 
-    /// Appends the subtree over `order[start..end]` and returns its root's index.
-    fn node(&mut self, start: usize, end: usize, depth: u32) -> u32 {
+    /// Appends the subtree over slots `start..end` and returns its root's index.
+    fn node(&mut self, start: usize, end: usize, depth: u32, parallel: bool) -> u32 {
         let (bounds, cent) = self.range_bounds(start, end);
         let id = self.nodes.len() as u32;
         self.nodes.push(BvhNode { lo: bounds.lo.into(), index: start as u32, hi: bounds.hi.into(), count: (end - start) as u32 });
@@ -156,10 +171,42 @@ impl Builder<'_> {
             self.median_split(start, end, axis)
         };
         self.nodes[id as usize].count = 0;
-        self.node(start, mid, depth + 1);
-        let second = self.node(mid, end, depth + 1);
+        if parallel && depth < PARALLEL_LEVELS && n >= PARALLEL_MIN {
+            let second = self.split_in_parallel(start, mid, end, depth + 1);
+            self.nodes[id as usize].index = second;
+            return id;
+        }
+        self.node(start, mid, depth + 1, parallel);
+        let second = self.node(mid, end, depth + 1, parallel);
         self.nodes[id as usize].index = second;
         id
+    }
+
+    /// Builds the two children of a split at `mid`, the second on another thread, and appends
+    /// both (first child first, as the serial build does); returns the second child's index.
+    fn split_in_parallel(&mut self, start: usize, mid: usize, end: usize, depth: u32) -> u32 {
+        let (bounds, centroids) = (self.bounds, self.centroids);
+        let (first, second) = self.order[start - self.base..end - self.base].split_at_mut(mid - start);
+        let (a, b) = std::thread::scope(|scope| {
+            let right = scope.spawn(move || {
+                let mut b = Builder { bounds, centroids, order: second, base: mid, nodes: Vec::new(), depth: 0 };
+                b.node(mid, end, depth, true);
+                (b.nodes, b.depth)
+            });
+            let mut a = Builder { bounds, centroids, order: first, base: start, nodes: Vec::new(), depth: 0 };
+            a.node(start, mid, depth, true);
+            // A panic in the thread is a bug in this builder; carry it to the caller.
+            ((a.nodes, a.depth), right.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+        });
+        let splice = |nodes: &mut Vec<BvhNode>, sub: Vec<BvhNode>| {
+            let offset = nodes.len() as u32;
+            nodes.extend(sub.into_iter().map(|n| if n.is_leaf() { n } else { BvhNode { index: n.index + offset, ..n } }));
+            offset
+        };
+        splice(&mut self.nodes, a.0);
+        let second_index = splice(&mut self.nodes, b.0);
+        self.depth = self.depth.max(a.1).max(b.1);
+        second_index
     }
 
     /// The best binned-SAH partition over all three axes, or `None` when a leaf is cheaper.
@@ -174,7 +221,7 @@ impl Builder<'_> {
             let scale = BINS as f32 / (hi - lo);
             let bin_of = |c: f32| (((c - lo) * scale) as usize).min(BINS - 1);
             let mut bins = [(Aabb::EMPTY, 0usize); BINS];
-            for &t in &self.order[start..end] {
+            for &t in &self.order[start - self.base..end - self.base] {
                 let b = &mut bins[bin_of(self.centroids[t as usize][axis])];
                 b.0.union(&self.bounds[t as usize]);
                 b.1 += 1;
@@ -208,8 +255,8 @@ impl Builder<'_> {
         }
         let (lo, hi) = (cent.lo[axis], cent.hi[axis]);
         let scale = BINS as f32 / (hi - lo);
-        let centroids = &self.centroids;
-        let slice = &mut self.order[start..end];
+        let centroids = self.centroids;
+        let slice = &mut self.order[start - self.base..end - self.base];
         let left = partition(slice, |&t| (((centroids[t as usize][axis] - lo) * scale) as usize).min(BINS - 1) < left_bins);
         Some(start + left)
     }
@@ -217,8 +264,8 @@ impl Builder<'_> {
     /// Splits at the median centroid along `axis` (halves the count: bounds the depth).
     fn median_split(&mut self, start: usize, end: usize, axis: usize) -> usize {
         let mid = start + (end - start) / 2;
-        let centroids = &self.centroids;
-        self.order[start..end].select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
+        let centroids = self.centroids;
+        self.order[start - self.base..end - self.base].select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
         mid
     }
 }
@@ -426,6 +473,25 @@ mod tests {
         let line: Vec<_> = (0..5000).map(|i| [Vec3::X * i as f32, Vec3::X * i as f32 + Vec3::Y, Vec3::X * i as f32 + Vec3::Z]).collect();
         check_structure(&Bvh::build(&line), &line);
         assert!(Bvh::build(&[]).nodes.is_empty());
+    }
+
+    /// The threaded build gives the serial build's tree, node for node and slot for slot, on
+    /// inputs large enough to be split across threads (and one that is not).
+    #[test]
+    fn the_parallel_build_equals_the_serial_one() {
+        let grid: Vec<_> = (0..40_000)
+            .map(|i| {
+                let c = Vec3::new((i % 200) as f32, ((i / 200) % 200) as f32 * 0.5, (i % 7) as f32);
+                [c, c + Vec3::X, c + Vec3::Y]
+            })
+            .collect();
+        for tris in [soup(60_000, 8), grid, soup(3_000, 9)] {
+            let (a, b) = (Bvh::build_on(&tris, true), Bvh::build_on(&tris, false));
+            assert_eq!(a.order, b.order);
+            assert_eq!(a.nodes, b.nodes);
+            assert_eq!(a.depth, b.depth);
+            check_structure(&a, &tris);
+        }
     }
 
     #[test]
