@@ -27,6 +27,9 @@ bin=$(realpath "${PENUMBRA:-target/release/penumbra}")
 py=${PYTHON:-python3}
 mkdir -p "$out"
 export PENUMBRA_CACHE="$out/cache"
+# The scene variants live beside the shipped scenes (their asset paths are relative); none is
+# left behind when a step is cut short.
+trap 'rm -f scenes/_gpu_*.toml' EXIT
 
 step() {
     local limit=$1 name=$2

@@ -470,9 +470,7 @@ impl Gpu {
 
     /// The bytes of a host-visible buffer (call after the frame that wrote it completed).
     pub fn read_buffer(&self, id: BufferId) -> BackendResult<Vec<u8>> {
-        let b = self.buffer(id)?;
-        let slice = b.allocation.as_ref().and_then(|a| a.mapped_slice()).ok_or_else(|| BackendError::Invalid(format!("buffer `{}` is not host-visible", b.desc.name)))?;
-        Ok(slice[..b.desc.size as usize].to_vec())
+        self.read_buffer_prefix(id, self.buffer(id)?.desc.size as usize)
     }
 
     /// The first `len` bytes of a host-visible buffer. Where a pass fills only part of a large

@@ -133,9 +133,18 @@ impl Bvh {
 }
 
 impl Builder<'_> {
+    /// The triangles at slots `start..end` (slots count from the whole build's first).
+    fn slots(&self, start: usize, end: usize) -> &[u32] {
+        &self.order[start - self.base..end - self.base]
+    }
+
+    fn slots_mut(&mut self, start: usize, end: usize) -> &mut [u32] {
+        &mut self.order[start - self.base..end - self.base]
+    }
+
     fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
         let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
-        for &t in &self.order[start - self.base..end - self.base] {
+        for &t in self.slots(start, end) {
             all.union(&self.bounds[t as usize]);
             cent.grow(self.centroids[t as usize]);
         }
@@ -184,20 +193,26 @@ impl Builder<'_> {
 
     /// Builds the two children of a split at `mid`, the second on another thread, and appends
     /// both (first child first, as the serial build does); returns the second child's index.
+    /// Where the system gives no thread, the second is built after the first on this one.
     fn split_in_parallel(&mut self, start: usize, mid: usize, end: usize, depth: u32) -> u32 {
         let (bounds, centroids) = (self.bounds, self.centroids);
-        let (first, second) = self.order[start - self.base..end - self.base].split_at_mut(mid - start);
-        let (a, b) = std::thread::scope(|scope| {
-            let right = scope.spawn(move || {
-                let mut b = Builder { bounds, centroids, order: second, base: mid, nodes: Vec::new(), depth: 0 };
-                b.node(mid, end, depth, true);
-                (b.nodes, b.depth)
-            });
-            let mut a = Builder { bounds, centroids, order: first, base: start, nodes: Vec::new(), depth: 0 };
-            a.node(start, mid, depth, true);
+        let (first, second) = self.slots_mut(start, end).split_at_mut(mid - start);
+        let subtree = move |order: &mut [u32], base: usize, end: usize| {
+            let mut b = Builder { bounds, centroids, order, base, nodes: Vec::new(), depth: 0 };
+            b.node(base, end, depth, true);
+            (b.nodes, b.depth)
+        };
+        let built = std::thread::scope(|scope| {
+            let right = std::thread::Builder::new().spawn_scoped(scope, move || subtree(second, mid, end)).ok()?;
+            let a = subtree(first, start, mid);
             // A panic in the thread is a bug in this builder; carry it to the caller.
-            ((a.nodes, a.depth), right.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            Some((a, right.join().unwrap_or_else(|e| std::panic::resume_unwind(e))))
         });
+        let Some((a, b)) = built else {
+            // No thread to be had: both children here, one after the other (the same tree).
+            self.node(start, mid, depth, false);
+            return self.node(mid, end, depth, false);
+        };
         let splice = |nodes: &mut Vec<BvhNode>, sub: Vec<BvhNode>| {
             let offset = nodes.len() as u32;
             nodes.extend(sub.into_iter().map(|n| if n.is_leaf() { n } else { BvhNode { index: n.index + offset, ..n } }));
@@ -221,7 +236,7 @@ impl Builder<'_> {
             let scale = BINS as f32 / (hi - lo);
             let bin_of = |c: f32| (((c - lo) * scale) as usize).min(BINS - 1);
             let mut bins = [(Aabb::EMPTY, 0usize); BINS];
-            for &t in &self.order[start - self.base..end - self.base] {
+            for &t in self.slots(start, end) {
                 let b = &mut bins[bin_of(self.centroids[t as usize][axis])];
                 b.0.union(&self.bounds[t as usize]);
                 b.1 += 1;
@@ -256,7 +271,7 @@ impl Builder<'_> {
         let (lo, hi) = (cent.lo[axis], cent.hi[axis]);
         let scale = BINS as f32 / (hi - lo);
         let centroids = self.centroids;
-        let slice = &mut self.order[start - self.base..end - self.base];
+        let slice = self.slots_mut(start, end);
         let left = partition(slice, |&t| (((centroids[t as usize][axis] - lo) * scale) as usize).min(BINS - 1) < left_bins);
         Some(start + left)
     }
@@ -265,7 +280,7 @@ impl Builder<'_> {
     fn median_split(&mut self, start: usize, end: usize, axis: usize) -> usize {
         let mid = start + (end - start) / 2;
         let centroids = self.centroids;
-        self.order[start - self.base..end - self.base].select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
+        self.slots_mut(start, end).select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
         mid
     }
 }
