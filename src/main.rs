@@ -469,6 +469,8 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
             let (mean, se) = img.average();
             penumbra::outln!("average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}", mean[0], mean[1], mean[2], se[0], se[1], se[2]);
+            let variance = img.relative_variance_per_sample();
+            penumbra::outln!("relative variance per sample: {variance:.4e}; efficiency (samples/s over it): {:.4e}", img.samples_per_second() / variance);
             if let (Some(t), Some(a)) = (target, report.achieved) {
                 let over = if t.scope == penumbra::reference::ErrorScope::Image { "image" } else { "pixel" };
                 let verdict = if a <= t.max { "reached" } else { "NOT reached: the --spp cap came first" };

@@ -20,6 +20,14 @@ read-back image (the scene and pipeline are built before); Mitsuba's of `mi.rend
 copy to numpy, after the scene is loaded (and, for the LLVM and CUDA variants, after a 1-spp
 render that compiles their kernels).
 
+Samples per second alone favour the renderer with the noisier samples, so the table also gives
+each renderer's variance of one sample, per pixel and channel relative as the chart's relative
+MSE weighs errors (over r^2 + 0.01, r being penumbra's image for both, so that both weigh the
+pixels alike), averaged over the image: penumbra's from its standard-error image, Mitsuba's from
+the scatter of its CHUNKS renders pixel by pixel. A renderer reaches a given relative MSE in a
+time proportional to that variance over its samples per second, so the last column, penumbra's
+samples/s over its variance divided by Mitsuba's, is penumbra's speed at equal error.
+
 Needs `python3 -m venv tools/.venv && tools/.venv/bin/pip install mitsuba numpy` (the mitsuba
 wheel does not pull numpy in). The `llvm_ad_rgb` variant needs an LLVM newer than Debian 12's
 system LLVM 15 (Dr.Jit's kernels fail to compile there); put one at tools/.venv/llvm19 (`apt-get download libllvm19 && dpkg -x libllvm19_*.deb tools/.venv/llvm19`)
@@ -83,7 +91,11 @@ def run_penumbra(binary, scene, args, size, spp, seed, extra):
     rate = float(re.search(r"([0-9.]+) samples/s", r.stdout).group(1))
     m = re.search(r"average radiance \(RGB\): (\S+) (\S+) (\S+), standard error (\S+) (\S+) (\S+)", r.stdout)
     vals = [float(x) for x in m.groups()]
-    return rate, vals[:3], vals[3:]
+    return rate, vals[:3], vals[3:], out
+
+
+def stderr_image(image):
+    return image.with_suffix(".stderr.exr")
 
 
 def export_scene(binary, scene, dest):
@@ -163,17 +175,33 @@ def render_mitsuba(variant, exported, folder, size, max_depth, flip, spp, chunks
     per_chunk = max(1, spp // chunks)
     if variant.startswith(("llvm", "cuda")):
         np.array(mi.render(scene, spp=1, seed=999))  # compiles the kernels outside the timing
-    means, seconds = [], 0.0
+    means, images, seconds = [], [], 0.0
     for c in range(chunks):
         t0 = time.perf_counter()
         img = np.array(mi.render(scene, spp=per_chunk, seed=c))
         seconds += time.perf_counter() - t0
+        images.append(img[..., :3].astype(np.float64))
         means.append(img.reshape(-1, img.shape[-1])[:, :3].mean(axis=0))
     means = np.array(means)
     mean = means.mean(axis=0)
     se = means.std(axis=0, ddof=1) / math.sqrt(chunks) if chunks > 1 else np.full(3, float("nan"))
     rate = size[0] * size[1] * per_chunk * chunks / seconds
-    return rate, mean, se
+    # Per pixel and channel, the variance of one sample: that of the chunk means times their spp.
+    variance = np.var(np.array(images), axis=0, ddof=1) * per_chunk if chunks > 1 else None
+    return rate, mean, se, variance
+
+
+def read_rgb(path):
+    import mitsuba as mi
+    import numpy as np
+
+    return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
+
+
+def relative_variance(variance, reference):
+    """Per-sample variance over the pixels and channels, each relative to the pixel's value as
+    the chart's relative MSE weighs it (over reference^2 + 0.01), averaged."""
+    return float((variance / (reference**2 + 0.01)).mean())
 
 
 def main():
@@ -188,13 +216,23 @@ def main():
         spp = max(args.chunks, int(spp * args.spp_scale))
         folder = Path(tempfile.mkdtemp(prefix=f"mitsuba-{name}-"))
         exported = export_scene(args.penumbra, scene, folder)
-        rate, mean, se = run_penumbra(args.penumbra, scene, pargs, args.size, spp, 1, extra)
-        row = {"case": name, "spp": spp, "penumbra": (rate, mean, se), "mitsuba": {}}
+        rate, mean, se, image = run_penumbra(args.penumbra, scene, pargs, args.size, spp, 1, extra)
+        row = {"case": name, "spp": spp, "penumbra": (rate, mean, se), "mitsuba": {}, "efficiency": {}}
         for v in variants:
             try:
                 row["mitsuba"][v] = render_mitsuba(v, exported, folder, (w, h), max_depth, flip, spp, args.chunks)
             except Exception as e:  # a variant that cannot run here is reported, not fatal
                 row["mitsuba"][v] = str(e).splitlines()[0][:60]
+                continue
+            mvariance = row["mitsuba"][v][3]
+            if mvariance is not None:
+                # Equal error: a renderer reaches a given noise in time proportional to its
+                # variance per sample over its samples per second, so the ratio of
+                # samples/s / variance is the speed ratio at equal error. Both variances are
+                # taken relative to penumbra's image, so they weigh the pixels alike.
+                reference = read_rgb(image)
+                pvariance = read_rgb(stderr_image(image)) ** 2 * spp
+                row["efficiency"][v] = (relative_variance(pvariance, reference), relative_variance(mvariance, reference))
         rows.append(row)
         print(f"{name}: done", file=sys.stderr, flush=True)
 
@@ -203,6 +241,7 @@ def main():
 
     head = f"| case ({w}x{h}) | spp | penumbra samples/s | " + " | ".join(f"Mitsuba {v} samples/s (penumbra / it)" for v in variants)
     head += " | penumbra mean (lum.) | " + " | ".join(f"{v} mean (lum.)" for v in variants) + " | worst per-channel z |"
+    head += " penumbra variance per sample (rel.) | " + " | ".join(f"{v} variance per sample (rel.) | penumbra / {v} at equal error" for v in variants) + " |"
     print(head)
     print("|" + "---|" * (head.count("|") - 1))
     for r in rows:
@@ -215,13 +254,23 @@ def main():
                 cells.append(f"failed: {m}")
                 means.append("-")
                 continue
-            mrate, mmean, mse = m
+            mrate, mmean, mse, _ = m
             cells.append(f"{mrate / 1e3:.1f} k ({rate / mrate:.2f}x)")
             means.append(f"{lum(mmean):.5f}")
             zs += [abs(mean[c] - mmean[c]) / math.sqrt(se[c] ** 2 + mse[c] ** 2) for c in range(3) if se[c] + mse[c] > 0]
         cells.append(f"{lum(mean):.5f}")
         cells += means
         cells.append(f"{max(zs):.2f}" if zs else "-")
+        effs = r["efficiency"]
+        cells.append(f"{next(iter(effs.values()))[0]:.3g}" if effs else "-")
+        for v in variants:
+            m = r["mitsuba"][v]
+            if v not in effs or isinstance(m, str):
+                cells += ["-", "-"]
+                continue
+            pv, mv = effs[v]
+            cells.append(f"{mv:.3g}")
+            cells.append(f"{(rate / pv) / (m[0] / mv):.2f}x" if pv > 0 and mv > 0 else "-")
         print("| " + " | ".join(cells) + " |")
 
 

@@ -283,6 +283,18 @@ impl ReferenceImage {
         (mean, var.map(f64::sqrt))
     }
 
+    /// The variance of one sample, per pixel and channel relative as the chart's relative MSE
+    /// weighs errors (over mean² + REL_MSE_EPSILON), averaged: the relative MSE this render
+    /// would have against the truth at one sample per pixel. Its noise at n spp is this over n,
+    /// so samples/s over this is the speed at which the reference reaches a given relative MSE
+    /// (what `--roulette-after` and the other estimator settings trade).
+    pub fn relative_variance_per_sample(&self) -> f64 {
+        let eps = crate::metrics::stats::REL_MSE_EPSILON;
+        let n = 3.0 * self.mean.pixels.len().max(1) as f64;
+        let spp = self.spp as f64;
+        self.mean.pixels.iter().zip(&self.standard_error.pixels).map(|(m, e)| (0..3).map(|c| (e[c] as f64).powi(2) * spp / ((m[c] as f64).powi(2) + eps)).sum::<f64>()).sum::<f64>() / n
+    }
+
     /// Pixel samples per second.
     pub fn samples_per_second(&self) -> f64 {
         self.mean.width as f64 * self.mean.height as f64 * self.spp as f64 / self.seconds.max(1e-9)
@@ -684,4 +696,24 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     image.mean.write_exr(&opts.output)?;
     image.standard_error.write_exr(&stderr)?;
     Ok(ReferenceReport { written: vec![opts.output.clone(), stderr], image, achieved })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ReferenceImage;
+    use crate::image_io::HdrImage;
+
+    fn image(width: u32, pixels: Vec<[f32; 4]>) -> HdrImage {
+        HdrImage { width, height: pixels.len() as u32 / width, pixels }
+    }
+
+    #[test]
+    fn relative_variance_per_sample_weighs_pixels_as_the_relative_mse() {
+        // Pixel 0: s.e. 0.05 at 4 spp is a variance of 0.01 a sample, over 0.1² + 0.01 = 0.5 in
+        // each channel; pixel 1: 0.5² · 4 / (1 + 0.01) in red only. Mean over the six values.
+        let img =
+            ReferenceImage { mean: image(2, vec![[0.1, 0.1, 0.1, 1.0], [1.0, 1.0, 1.0, 1.0]]), standard_error: image(2, vec![[0.05, 0.05, 0.05, 1.0], [0.5, 0.0, 0.0, 1.0]]), spp: 4, seconds: 1.0 };
+        let expected = (3.0 * 0.5 + 1.0 / 1.01) / 6.0;
+        assert!((img.relative_variance_per_sample() - expected).abs() < 1e-6, "{}", img.relative_variance_per_sample());
+    }
 }
