@@ -164,11 +164,14 @@ impl LightSelection {
     }
 }
 
-/// Russian roulette from the second bounce on (the first indirect bounce is never cut, so a
-/// one-bounce indirect reference keeps its variance): on the Cornell box with 32 bounces, K = 1,
-/// 2, 3 and 5 gave 3.5, 3.4, 3.2 and 2.2 times the efficiency (samples/s ÷ variance) of no
-/// roulette (README, "The reference against Mitsuba 3").
-pub const DEFAULT_ROULETTE_AFTER: u32 = 2;
+/// Russian roulette from the fifth bounce on (as Mitsuba's `rr_depth` 5). Chosen by the speed at
+/// which the reference reaches a given relative MSE (samples/s over the relative variance of a
+/// sample, [`ReferenceImage::relative_variance_per_sample`]) on 18 shipped scenes
+/// (`tools/roulette_efficiency.sh`, README "Russian roulette's first bounce"): against K = 2, the
+/// default before, K = 5 is 1.13 times as fast in the geometric mean leaving out the furnace,
+/// 5.8 times on the furnace and 2.2 on `two_rooms`, whose light arrives after many bounces and
+/// which early roulette cut off most; 0.81 times on `sv_glass` at worst.
+pub const DEFAULT_ROULETTE_AFTER: u32 = 5;
 
 /// Enough for 0.6^17 ≈ 2e-4 of the light in a white-walled room to be cut off.
 pub const DEFAULT_BOUNCES: u32 = 16;
