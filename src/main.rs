@@ -179,7 +179,9 @@ enum Command {
         cycle_every: Option<u64>,
     },
     /// Ground truth: path-trace a scene (Monte Carlo, compute shader) and write the mean radiance
-    /// EXR plus the per-pixel standard error of that mean as NAME.stderr.exr next to it.
+    /// EXR plus the per-pixel standard error of that mean as NAME.stderr.exr next to it. Prints
+    /// the rate, the image's average with its standard error, and the relative variance of one
+    /// sample (as the relative MSE weighs pixels) with the efficiency, samples/s over it.
     Reference {
         /// Scene file (TOML, see scenes/README.md).
         scene: PathBuf,

@@ -530,6 +530,26 @@ fn sample_variance(img: &ReferenceImage) -> f64 {
     img.standard_error.pixels.iter().map(|p| (0..3).map(|c| w[c] * (p[c] as f64).powi(2)).sum::<f64>()).sum::<f64>() / n * img.spp as f64
 }
 
+/// The relative variance of one sample that the reference prints (and its efficiency is built
+/// on) predicts the relative MSE of a render against the truth: on the furnace with roulette from
+/// the first bounce (noisy, and exact in expectation: the truncated series), the relative MSE
+/// against that series equals the printed variance over the spp. Leaving the spp out of the
+/// variance, or weighing the pixels otherwise than the relative MSE, misses by far more.
+#[test]
+fn relative_variance_per_sample_predicts_the_relative_mse_against_the_truth() {
+    let furnace = scene_file("furnace.toml");
+    let m = &furnace.materials[0];
+    let (size, spp, bounces) = ((32u32, 32u32), 16, 14);
+    let img = &render(&furnace, size, &[Settings { roulette_after: Some(1), ..settings(spp, bounces, LightPaths::All, 11) }])[0];
+    let truth = (0..bounces + 2).fold(Vec3::ZERO, |sum, k| sum + m.emission * m.albedo.powf(k as f32));
+    let eps = penumbra::metrics::stats::REL_MSE_EPSILON;
+    let rel_mse =
+        img.mean.pixels.iter().map(|p| (0..3).map(|c| (p[c] as f64 - truth[c] as f64).powi(2) / ((truth[c] as f64).powi(2) + eps)).sum::<f64>()).sum::<f64>() / (3 * img.mean.pixels.len()) as f64;
+    let predicted = img.relative_variance_per_sample() / spp as f64;
+    eprintln!("relative MSE against the series {rel_mse:.4e}, predicted {predicted:.4e}");
+    assert!(rel_mse > 0.0 && (0.75..1.33).contains(&(predicted / rel_mse)), "predicted {predicted:.4e} against {rel_mse:.4e}");
+}
+
 /// Russian roulette is unbiased: with it the Cornell box (8 bounces) renders the same mean as
 /// without, pixel by pixel and over the image, within the renders' own standard errors, and the
 /// furnace (where every path without roulette carries exactly the truncated series) the

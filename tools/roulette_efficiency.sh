@@ -40,9 +40,9 @@ for scene in "$@"; do
         echo "roulette_efficiency.sh: $scene, K = $k: $(tail -n 1 <<< "$log")" >&2; exit 1; }
       vals+=("$(sed -n 's/.*efficiency (samples\/s over it): \([0-9.e+-]*\).*/\1/p' <<< "$log")")
     done
-    effs+=("$(printf '%s\n' "${vals[@]}" | sort -g | head -n 1) $(printf '%s\n' "${vals[@]}" | sort -g | tail -n 1)")
+    effs+=("${vals[*]}")
   done
-  # Median of two is their mean; the row's best is marked.
+  # The median of two is their mean; the row's best is marked.
   printf '%s\n' "${effs[@]}" | awk -v name="$(basename "$scene" .toml)" '
     { v[NR] = ($1 + $2) / 2; if (v[NR] > best) best = v[NR] }
     END { row = "| " name " |"; for (i = 1; i <= NR; i++) { s = sprintf("%.3g", v[i]); row = row " " (v[i] == best ? "**" s "**" : s) " |" } print row }'
