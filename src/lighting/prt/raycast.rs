@@ -241,6 +241,15 @@ struct Push {
     t_max: f32,
 }
 
+/// `glsl/prt/reduce_lanes.comp`'s push constants: the same for every dispatch of a bake.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ReducePush {
+    sample_count: u32,
+    dim: u32,
+    weight: f32,
+}
+
 const NO_BVH: u32 = u32::MAX;
 /// Rays per invocation to start with; halved (more invocations per receiver) whenever the device
 /// cuts an invocation's loops short.
@@ -254,14 +263,20 @@ const MAX_INVOCATIONS: usize = 65_535 * 64;
 const MAX_SUMS_BYTES: usize = 64 << 20;
 /// A submission long enough that its fixed cost is small, short enough for a lively progress line.
 const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
+/// How much a submission may grow over the last one. A small submission on a GPU costs its
+/// latency (each invocation walks its rays one after another), not its size, so its time
+/// understates the rate and the fit alone would grow slowly; doubling took 12 submissions to
+/// cover 114k receivers whatever the device. A factor of 8 reaches the sums buffer's limit in
+/// four, and still bounds what a chunk traced again after a cut loop wastes.
+const MAX_CHUNK_GROWTH: usize = 8;
 
 fn v4(v: Vec3) -> [f32; 4] {
     [v.x, v.y, v.z, 0.0]
 }
 
 /// [`bake_cpu`] in a compute pass (`glsl/prt/rays.comp`): the same rays, BVHs and layout. Each
-/// invocation traces a share of one receiver's rays and writes its partial sums, which the host
-/// adds up in a fixed order; where the device bounds an invocation's loop iterations (llvmpipe:
+/// invocation traces a share of one receiver's rays and writes its partial sums, which a second
+/// pass (`glsl/prt/reduce_lanes.comp`) adds up in a fixed order; where the device bounds an invocation's loop iterations (llvmpipe:
 /// 65,535) and a walk is cut short, the chunk is traced again with fewer rays per invocation,
 /// down to one, and then the bake is refused.
 pub fn bake_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
@@ -308,9 +323,12 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     phases.trees = start.elapsed();
     let receivers_buf = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(&receivers))?;
     let directions_buf = gpu.create_storage_buffer("prt rays directions", bytemuck::cast_slice(&local))?;
-    // Room for at least one receiver at one ray per invocation.
+    // Room for at least one receiver at one ray per invocation. The partial sums stay on the
+    // device; the host reads the reduced transfer, at most one chunk of it at a time.
     let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
-    let sums_buf = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuToCpu)?;
+    let sums_buf = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuOnly)?;
+    let most_receivers = total.min(sums_bytes / (4 * dim));
+    let transfer_buf = gpu.create_storage_output("prt rays transfer", (most_receivers * dim * 4) as u64, MemoryKind::GpuToCpu)?;
     let status_buf = gpu.create_storage_output("prt rays status", 4, MemoryKind::GpuToCpu)?;
     let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
     let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
@@ -319,11 +337,12 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let specialization = vec![SpecConstant { id: 0, bits: bands as u32 }];
     let t = std::time::Instant::now();
     let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization }, shaders)?;
+    let reduce = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays reduce".into(), shader: "prt/reduce_lanes.comp".into(), specialization: Vec::new() }, shaders)?;
     phases.pipeline = t.elapsed();
     let frame = gpu.create_frame()?;
 
     let push = Push { receiver_count: total as u32, sample_count: samples as u32, bands: bands as u32, triangle_count: traced.len() as u32, near: clip.near as f32, t_max: ray_length(clip) };
-    let weight = std::f64::consts::PI / samples as f64;
+    let reduce_push = ReducePush { sample_count: samples as u32, dim: dim as u32, weight: (std::f64::consts::PI / samples as f64) as f32 };
     let mut out = vec![0.0f32; total * dim];
     let mut per = FIRST_RAYS_PER_LANE.min(samples as u32);
     let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -331,10 +350,13 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
     let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, None)?;
+    phases.buffers = start.elapsed().saturating_sub(phases.trees + phases.pipeline);
     let (mut base, mut chunk) = (0usize, FIRST_CHUNK);
     while base < total {
         let lanes = samples.div_ceil(per as usize);
-        let fits = (MAX_INVOCATIONS / lanes).min(sums_bytes / (4 * lanes * dim)).max(1);
+        // Both dispatches within the guaranteed workgroup count: the trace's lanes, the
+        // reduction's coefficients.
+        let fits = (MAX_INVOCATIONS / lanes.max(dim)).min(sums_bytes / (4 * lanes * dim)).max(1);
         let n = chunk.min(total - base).min(fits);
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
@@ -358,10 +380,22 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
                 ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                 ctx.rec.dispatch([(n * lanes) as u32, 1, 1])
             });
-        graph.pass("prt rays host").buffer(sums_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("prt rays reduce")
+            .buffer(sums_buf, read, Some("sums"))
+            .buffer(transfer_buf, write, Some("transfer"))
+            .buffer(status_buf, write, Some("status"))
+            .buffer(count_buf, read, Some("chunk_count"))
+            .buffer(per_buf, read, Some("per_lane"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(reduce)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(bytemuck::bytes_of(&reduce_push))?;
+                ctx.rec.dispatch([(n * dim) as u32, 1, 1])
+            });
+        graph.pass("prt rays host").buffer(transfer_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "PRT ray cast")?;
-        phases.submissions += 1;
-        phases.traced += t0.elapsed();
+        phases.record_submission(n, t0.elapsed());
         let t_sum = std::time::Instant::now();
         let status = gpu.read_buffer(status_buf)?;
         let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
@@ -377,20 +411,14 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
             chunk = chunk.div_ceil(2).max(16);
             continue;
         }
-        let sums = gpu.read_buffer_prefix(sums_buf, 4 * n * lanes * dim)?;
-        let sums: &[f32] = bytemuck::cast_slice(&sums);
-        for (i, item) in sums.chunks_exact(lanes * dim).enumerate() {
-            let row = &mut out[(base + i) * dim..(base + i + 1) * dim];
-            for (c, o) in row.iter_mut().enumerate() {
-                *o = (item.iter().skip(c).step_by(dim).map(|&s| s as f64).sum::<f64>() * weight) as f32;
-            }
-        }
-        phases.summed += t_sum.elapsed();
+        let transfer = gpu.read_buffer_prefix(transfer_buf, 4 * n * dim)?;
+        out[base * dim..(base + n) * dim].copy_from_slice(bytemuck::cast_slice(&transfer));
+        phases.read_back += t_sum.elapsed();
         base += n;
         progress.update(base as u64, total as u64);
         let seconds = t0.elapsed().as_secs_f64();
         let fit = (SUBMISSION_TARGET_SECONDS * n as f64 / seconds.max(1e-9)) as usize;
-        chunk = fit.clamp(16, (2 * n).max(16));
+        chunk = fit.clamp(16, (MAX_CHUNK_GROWTH * n).max(16));
     }
     progress.finish();
     phases.total = start.elapsed();
@@ -404,26 +432,44 @@ struct BakePhases {
     /// The occluder sets' BVHs and the receivers' frames (CPU).
     trees: std::time::Duration,
     pipeline: std::time::Duration,
+    /// Creating the buffers and the frame, and uploading the receivers and the trees.
+    buffers: std::time::Duration,
     /// Recording, submitting and waiting for the dispatches.
     traced: std::time::Duration,
-    /// Reading the partial sums back and summing them (CPU).
-    summed: std::time::Duration,
+    /// Reading the transfer back (CPU).
+    read_back: std::time::Duration,
     submissions: usize,
+    /// The first submission and the largest (receivers, wall time): the latency and the rate.
+    first: Option<(usize, std::time::Duration)>,
+    largest: Option<(usize, std::time::Duration)>,
     total: std::time::Duration,
 }
 
 impl BakePhases {
+    fn record_submission(&mut self, receivers: usize, took: std::time::Duration) {
+        self.submissions += 1;
+        self.traced += took;
+        self.first.get_or_insert((receivers, took));
+        if self.largest.is_none_or(|(n, _)| receivers > n) {
+            self.largest = Some((receivers, took));
+        }
+    }
+
     fn report(&self, receivers: usize, samples: usize) -> String {
         let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-        let other = self.total.saturating_sub(self.trees + self.pipeline + self.traced + self.summed);
+        let other = self.total.saturating_sub(self.trees + self.pipeline + self.buffers + self.traced + self.read_back);
+        let one = |s: Option<(usize, std::time::Duration)>| s.map_or("none".to_string(), |(n, d)| format!("{n} receivers in {:.1} ms", ms(d)));
         format!(
-            "prt rays: {receivers} receivers x {samples} rays in {:.0} ms: trees {:.0} ms, pipeline {:.0} ms, {} submissions {:.0} ms, read back and summed {:.0} ms, the rest (uploads, frame) {:.0} ms",
+            "prt rays: {receivers} receivers x {samples} rays in {:.0} ms: trees {:.0} ms, pipeline {:.0} ms, buffers and uploads {:.0} ms, {} submissions {:.0} ms (first {}, largest {}), read back {:.0} ms, the rest {:.0} ms",
             ms(self.total),
             ms(self.trees),
             ms(self.pipeline),
+            ms(self.buffers),
             self.submissions,
             ms(self.traced),
-            ms(self.summed),
+            one(self.first),
+            one(self.largest),
+            ms(self.read_back),
             ms(other)
         )
     }
