@@ -283,7 +283,11 @@ impl Gpu {
             physical_device: physical,
             debug_settings: Default::default(),
             buffer_device_address: false,
-            allocation_sizes: Default::default(),
+            // Blocks start at 8 MiB and double as more are needed, up to gpu-allocator's defaults
+            // (256 MiB device, 64 MiB host). Starting at the defaults cost a short bake on an
+            // H200 about 13 ms of its 53 (the first 64 MiB of host-visible memory), and the
+            // default scene's capture about 70 ms.
+            allocation_sizes: gpu_allocator::AllocationSizes::new(8 << 20, 8 << 20).with_max_device_memblock_size(256 << 20).with_max_host_memblock_size(64 << 20),
         })
         .map_err(|e| BackendError::Allocation { name: "allocator".into(), message: e.to_string() })?;
 

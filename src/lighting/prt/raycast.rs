@@ -323,6 +323,7 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     phases.trees = start.elapsed();
     let receivers_buf = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(&receivers))?;
     let directions_buf = gpu.create_storage_buffer("prt rays directions", bytemuck::cast_slice(&local))?;
+    phases.set_up[0] = start.elapsed() - phases.trees;
     // Room for at least one receiver at one ray per invocation. The partial sums stay on the
     // device; the host reads the reduced transfer, at most one chunk of it at a time.
     let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
@@ -333,13 +334,16 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
     let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
     let per_buf = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
+    phases.set_up[1] = start.elapsed() - phases.trees - phases.set_up[0];
     // The bands as a constant: the shader then keeps only the SH evaluation it needs.
     let specialization = vec![SpecConstant { id: 0, bits: bands as u32 }];
     let t = std::time::Instant::now();
     let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization }, shaders)?;
     let reduce = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays reduce".into(), shader: "prt/reduce_lanes.comp".into(), specialization: Vec::new() }, shaders)?;
     phases.pipeline = t.elapsed();
+    let t = std::time::Instant::now();
     let frame = gpu.create_frame()?;
+    phases.set_up[2] = t.elapsed();
 
     let push = Push { receiver_count: total as u32, sample_count: samples as u32, bands: bands as u32, triangle_count: traced.len() as u32, near: clip.near as f32, t_max: ray_length(clip) };
     let reduce_push = ReducePush { sample_count: samples as u32, dim: dim as u32, weight: (std::f64::consts::PI / samples as f64) as f32 };
@@ -349,7 +353,9 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
+    let t = std::time::Instant::now();
     let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, None)?;
+    phases.set_up[3] = t.elapsed();
     phases.buffers = start.elapsed().saturating_sub(phases.trees + phases.pipeline);
     let (mut base, mut chunk) = (0usize, FIRST_CHUNK);
     while base < total {
@@ -434,6 +440,9 @@ struct BakePhases {
     pipeline: std::time::Duration,
     /// Creating the buffers and the frame, and uploading the receivers and the trees.
     buffers: std::time::Duration,
+    /// Of those: the receivers and directions uploaded, the outputs created, the frame, the trees
+    /// uploaded.
+    set_up: [std::time::Duration; 4],
     /// Recording, submitting and waiting for the dispatches.
     traced: std::time::Duration,
     /// Reading the transfer back (CPU).
@@ -460,11 +469,15 @@ impl BakePhases {
         let other = self.total.saturating_sub(self.trees + self.pipeline + self.buffers + self.traced + self.read_back);
         let one = |s: Option<(usize, std::time::Duration)>| s.map_or("none".to_string(), |(n, d)| format!("{n} receivers in {:.1} ms", ms(d)));
         format!(
-            "prt rays: {receivers} receivers x {samples} rays in {:.0} ms: trees {:.0} ms, pipeline {:.0} ms, buffers and uploads {:.0} ms, {} submissions {:.0} ms (first {}, largest {}), read back {:.0} ms, the rest {:.0} ms",
+            "prt rays: {receivers} receivers x {samples} rays in {:.0} ms: trees {:.0} ms, pipeline {:.0} ms, buffers and uploads {:.0} ms (receivers {:.0}, outputs {:.0}, frame {:.0}, trees {:.0}), {} submissions {:.0} ms (first {}, largest {}), read back {:.0} ms, the rest {:.0} ms",
             ms(self.total),
             ms(self.trees),
             ms(self.pipeline),
             ms(self.buffers),
+            ms(self.set_up[0]),
+            ms(self.set_up[1]),
+            ms(self.set_up[2]),
+            ms(self.set_up[3]),
             self.submissions,
             ms(self.traced),
             one(self.first),
