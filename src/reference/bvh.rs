@@ -8,6 +8,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// One node as the shader reads it (std430 `struct { vec3 lo; uint index; vec3 hi; uint count; }`).
 #[repr(C)]
@@ -80,22 +81,29 @@ struct Builder<'a> {
     base: usize,
     nodes: Vec<BvhNode>,
     depth: u32,
+    /// Threads this build may still start (shared by all its threads).
+    spare_threads: &'a AtomicUsize,
 }
 
-/// Subtrees over at least this many triangles, within the top `PARALLEL_LEVELS` levels, are built
-/// on a thread of their own (up to 2^`PARALLEL_LEVELS` at once). The tree is the same either way:
-/// each split depends only on its own triangles.
+/// A split's second subtree over at least this many triangles is built on a thread of its own
+/// while the build has threads to spare. The tree is the same either way: each split depends
+/// only on its own triangles.
 const PARALLEL_MIN: usize = 8192;
-const PARALLEL_LEVELS: u32 = 3;
+/// Threads a build may run at once, per core. More than one: SAH splits are uneven, and with a
+/// thread per core the largest subtree would keep one core busy while the others idle (with the
+/// top three levels on threads, 8 at most, an H200 host's 16 cores built 226k triangles no faster
+/// than this 2-core machine).
+const THREADS_PER_CORE: usize = 4;
 
 impl Bvh {
     /// Builds over `tris` (world-space corners). An empty input gives an empty hierarchy.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
-        Bvh::build_on(tris, std::thread::available_parallelism().map_or(1, |n| n.get()) > 1)
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        Bvh::build_on(tris, if cores > 1 { cores * THREADS_PER_CORE - 1 } else { 0 })
     }
 
-    /// The build, its top subtrees on threads of their own when `parallel` (the same tree).
-    fn build_on(tris: &[[Vec3; 3]], parallel: bool) -> Bvh {
+    /// The build, with up to `threads` subtrees on threads of their own (the same tree).
+    fn build_on(tris: &[[Vec3; 3]], threads: usize) -> Bvh {
         if tris.is_empty() {
             return Bvh::default();
         }
@@ -109,8 +117,9 @@ impl Bvh {
             .collect();
         let centroids: Vec<Vec3> = bounds.iter().map(|b| 0.5 * (b.lo + b.hi)).collect();
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
-        let mut b = Builder { bounds: &bounds, centroids: &centroids, order: &mut order, base: 0, nodes: Vec::new(), depth: 0 };
-        b.node(0, tris.len(), 0, parallel);
+        let spare_threads = AtomicUsize::new(threads);
+        let mut b = Builder { bounds: &bounds, centroids: &centroids, order: &mut order, base: 0, nodes: Vec::new(), depth: 0, spare_threads: &spare_threads };
+        b.node(0, tris.len(), 0);
         let (nodes, depth) = (b.nodes, b.depth);
         Bvh { nodes, order, depth }
     }
@@ -152,7 +161,7 @@ impl Builder<'_> {
     }
 
     /// Appends the subtree over slots `start..end` and returns its root's index.
-    fn node(&mut self, start: usize, end: usize, depth: u32, parallel: bool) -> u32 {
+    fn node(&mut self, start: usize, end: usize, depth: u32) -> u32 {
         let (bounds, cent) = self.range_bounds(start, end);
         let id = self.nodes.len() as u32;
         self.nodes.push(BvhNode { lo: bounds.lo.into(), index: start as u32, hi: bounds.hi.into(), count: (end - start) as u32 });
@@ -180,38 +189,47 @@ impl Builder<'_> {
             self.median_split(start, end, axis)
         };
         self.nodes[id as usize].count = 0;
-        if parallel && depth < PARALLEL_LEVELS && n >= PARALLEL_MIN {
+        if end - mid >= PARALLEL_MIN && take_thread(self.spare_threads) {
             let second = self.split_in_parallel(start, mid, end, depth + 1);
             self.nodes[id as usize].index = second;
             return id;
         }
-        self.node(start, mid, depth + 1, parallel);
-        let second = self.node(mid, end, depth + 1, parallel);
+        self.node(start, mid, depth + 1);
+        let second = self.node(mid, end, depth + 1);
         self.nodes[id as usize].index = second;
         id
     }
 
-    /// Builds the two children of a split at `mid`, the second on another thread, and appends
-    /// both (first child first, as the serial build does); returns the second child's index.
-    /// Where the system gives no thread, the second is built after the first on this one.
+    /// Builds the two children of a split at `mid`, the second on another thread (whose share
+    /// of the budget the caller took, and which gives it back when done), and appends both
+    /// (first child first, as the serial build does); returns the second child's index. Where
+    /// the system gives no thread, the second is built after the first on this one, and the
+    /// build starts no more.
     fn split_in_parallel(&mut self, start: usize, mid: usize, end: usize, depth: u32) -> u32 {
-        let (bounds, centroids) = (self.bounds, self.centroids);
+        let (bounds, centroids, spare_threads) = (self.bounds, self.centroids, self.spare_threads);
         let (first, second) = self.slots_mut(start, end).split_at_mut(mid - start);
         let subtree = move |order: &mut [u32], base: usize, end: usize| {
-            let mut b = Builder { bounds, centroids, order, base, nodes: Vec::new(), depth: 0 };
-            b.node(base, end, depth, true);
+            let mut b = Builder { bounds, centroids, order, base, nodes: Vec::new(), depth: 0, spare_threads };
+            b.node(base, end, depth);
             (b.nodes, b.depth)
         };
         let built = std::thread::scope(|scope| {
-            let right = std::thread::Builder::new().spawn_scoped(scope, move || subtree(second, mid, end)).ok()?;
+            let right = std::thread::Builder::new()
+                .spawn_scoped(scope, move || {
+                    let built = subtree(second, mid, end);
+                    spare_threads.fetch_add(1, Ordering::Relaxed);
+                    built
+                })
+                .ok()?;
             let a = subtree(first, start, mid);
             // A panic in the thread is a bug in this builder; carry it to the caller.
             Some((a, right.join().unwrap_or_else(|e| std::panic::resume_unwind(e))))
         });
         let Some((a, b)) = built else {
             // No thread to be had: both children here, one after the other (the same tree).
-            self.node(start, mid, depth, false);
-            return self.node(mid, end, depth, false);
+            self.spare_threads.store(0, Ordering::Relaxed);
+            self.node(start, mid, depth);
+            return self.node(mid, end, depth);
         };
         let splice = |nodes: &mut Vec<BvhNode>, sub: Vec<BvhNode>| {
             let offset = nodes.len() as u32;
@@ -283,6 +301,11 @@ impl Builder<'_> {
         self.slots_mut(start, end).select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
         mid
     }
+}
+
+/// Takes one thread from the build's budget, if it has one left.
+fn take_thread(spare: &AtomicUsize) -> bool {
+    spare.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1)).is_ok()
 }
 
 /// Moves the elements satisfying `pred` to the front; returns how many there are.
@@ -501,7 +524,7 @@ mod tests {
             })
             .collect();
         for tris in [soup(60_000, 8), grid, soup(3_000, 9)] {
-            let (a, b) = (Bvh::build_on(&tris, true), Bvh::build_on(&tris, false));
+            let (a, b) = (Bvh::build_on(&tris, 63), Bvh::build_on(&tris, 0));
             assert_eq!(a.order, b.order);
             assert_eq!(a.nodes, b.nodes);
             assert_eq!(a.depth, b.depth);
