@@ -83,6 +83,8 @@ struct Builder<'a> {
     depth: u32,
     /// Threads this build may still start (shared by all its threads).
     spare_threads: &'a AtomicUsize,
+    /// Threads a node's scans (bounds, SAH bins) may be shared among.
+    scan_threads: usize,
 }
 
 /// A split's second subtree over at least this many triangles is built on a thread of its own
@@ -90,35 +92,56 @@ struct Builder<'a> {
 /// only on its own triangles.
 const PARALLEL_MIN: usize = 8192;
 /// Threads a build may run at once, per core. More than one: SAH splits are uneven, and with a
-/// thread per core the largest subtree would keep one core busy while the others idle (with the
-/// top three levels on threads, 8 at most, an H200 host's 16 cores built 226k triangles no faster
-/// than this 2-core machine).
-const THREADS_PER_CORE: usize = 4;
+/// thread per core the largest subtree would keep one core busy while the others idle. Measured
+/// on an H200 host's 16 cores with the top nodes' scans shared (tools/results/h200/log13), a
+/// 524k-triangle plane: 76–87 ms at 2 a core, 80–81 at 4, 83–100 at 1 (without shared scans),
+/// 364–405 on one thread; four such planes, 2 M triangles: 345–364, 357–395, 427–443 and
+/// 1,553–2,255 ms. On this 2-core machine one extra thread does best (87–100 ms against 108–111
+/// at 2 a core), which is not worth a special case.
+const THREADS_PER_CORE: usize = 2;
+/// Slots one thread scans at least where a node's scans are shared (the top levels: below them
+/// the subtrees themselves run on threads). On the H200 host the root's scans of 524k triangles
+/// took 31 ms of a 90 ms build, all of it on one core.
+const SCAN_PIECE: usize = 32_768;
 
 impl Bvh {
     /// Builds over `tris` (world-space corners). An empty input gives an empty hierarchy.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Bvh::build_on(tris, if cores > 1 { cores * THREADS_PER_CORE - 1 } else { 0 })
+        Bvh::build_on(tris, if cores > 1 { cores * THREADS_PER_CORE - 1 } else { 0 }, cores)
     }
 
-    /// The build, with up to `threads` subtrees on threads of their own (the same tree).
-    fn build_on(tris: &[[Vec3; 3]], threads: usize) -> Bvh {
+    /// The build, with up to `threads` subtrees on threads of their own and a node's scans
+    /// shared among up to `scan_threads` (the same tree: bins and bounds are unions and counts,
+    /// whatever the order they are gathered in).
+    fn build_on(tris: &[[Vec3; 3]], threads: usize, scan_threads: usize) -> Bvh {
         if tris.is_empty() {
             return Bvh::default();
         }
-        let bounds: Vec<Aabb> = tris
-            .iter()
-            .map(|t| {
-                let mut b = Aabb::EMPTY;
-                t.iter().for_each(|&p| b.grow(p));
-                b
-            })
-            .collect();
-        let centroids: Vec<Vec3> = bounds.iter().map(|b| 0.5 * (b.lo + b.hi)).collect();
+        let (bounds, centroids) = in_pieces(
+            tris.len(),
+            scan_threads,
+            |range| {
+                let bounds: Vec<Aabb> = tris[range]
+                    .iter()
+                    .map(|t| {
+                        let mut b = Aabb::EMPTY;
+                        t.iter().for_each(|&p| b.grow(p));
+                        b
+                    })
+                    .collect();
+                let centroids: Vec<Vec3> = bounds.iter().map(|b| 0.5 * (b.lo + b.hi)).collect();
+                (bounds, centroids)
+            },
+            |(mut bounds, mut centroids), (b, c)| {
+                bounds.extend(b);
+                centroids.extend(c);
+                (bounds, centroids)
+            },
+        );
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let spare_threads = AtomicUsize::new(threads);
-        let mut b = Builder { bounds: &bounds, centroids: &centroids, order: &mut order, base: 0, nodes: Vec::new(), depth: 0, spare_threads: &spare_threads };
+        let mut b = Builder { bounds: &bounds, centroids: &centroids, order: &mut order, base: 0, nodes: Vec::new(), depth: 0, spare_threads: &spare_threads, scan_threads };
         b.node(0, tris.len(), 0);
         let (nodes, depth) = (b.nodes, b.depth);
         Bvh { nodes, order, depth }
@@ -152,12 +175,24 @@ impl Builder<'_> {
     }
 
     fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
-        let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
-        for &t in self.slots(start, end) {
-            all.union(&self.bounds[t as usize]);
-            cent.grow(self.centroids[t as usize]);
-        }
-        (all, cent)
+        let (slots, bounds, centroids) = (self.slots(start, end), self.bounds, self.centroids);
+        in_pieces(
+            slots.len(),
+            self.scan_threads,
+            |range| {
+                let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
+                for &t in &slots[range] {
+                    all.union(&bounds[t as usize]);
+                    cent.grow(centroids[t as usize]);
+                }
+                (all, cent)
+            },
+            |(mut all, mut cent), (a, c)| {
+                all.union(&a);
+                cent.union(&c);
+                (all, cent)
+            },
+        )
     }
 
     /// Appends the subtree over slots `start..end` and returns its root's index.
@@ -206,10 +241,10 @@ impl Builder<'_> {
     /// the system gives no thread, the second is built after the first on this one, and the
     /// build starts no more.
     fn split_in_parallel(&mut self, start: usize, mid: usize, end: usize, depth: u32) -> u32 {
-        let (bounds, centroids, spare_threads) = (self.bounds, self.centroids, self.spare_threads);
+        let (bounds, centroids, spare_threads, scan_threads) = (self.bounds, self.centroids, self.spare_threads, self.scan_threads);
         let (first, second) = self.slots_mut(start, end).split_at_mut(mid - start);
         let subtree = move |order: &mut [u32], base: usize, end: usize| {
-            let mut b = Builder { bounds, centroids, order, base, nodes: Vec::new(), depth: 0, spare_threads };
+            let mut b = Builder { bounds, centroids, order, base, nodes: Vec::new(), depth: 0, spare_threads, scan_threads };
             b.node(base, end, depth);
             (b.nodes, b.depth)
         };
@@ -245,19 +280,43 @@ impl Builder<'_> {
     /// The best binned-SAH partition over all three axes, or `None` when a leaf is cheaper.
     fn sah_split(&mut self, start: usize, end: usize, bounds: &Aabb, cent: &Aabb) -> Option<usize> {
         let n = end - start;
-        let mut best: Option<(f32, usize, usize)> = None; // cost, axis, bins left of the split
-        for axis in 0..3 {
+        // Per axis the centroids' range as (lo, bins per unit), or none where they coincide.
+        let axes: [Option<(f32, f32)>; 3] = std::array::from_fn(|axis| {
             let (lo, hi) = (cent.lo[axis], cent.hi[axis]);
-            if hi <= lo {
+            (hi > lo).then(|| (lo, BINS as f32 / (hi - lo)))
+        });
+        let bin_of = |c: f32, (lo, scale): (f32, f32)| (((c - lo) * scale) as usize).min(BINS - 1);
+        // Every axis's bins in one pass over the slots, in pieces on threads at the top levels.
+        let (slots, bounds_of, centroids) = (self.slots(start, end), self.bounds, self.centroids);
+        let all_bins = in_pieces(
+            n,
+            self.scan_threads,
+            |range| {
+                let mut bins = [[(Aabb::EMPTY, 0usize); BINS]; 3];
+                for &t in &slots[range] {
+                    let (c, b) = (centroids[t as usize], &bounds_of[t as usize]);
+                    for (axis, range) in axes.iter().enumerate() {
+                        if let Some(range) = *range {
+                            let bin = &mut bins[axis][bin_of(c[axis], range)];
+                            bin.0.union(b);
+                            bin.1 += 1;
+                        }
+                    }
+                }
+                bins
+            },
+            |mut all, piece| {
+                for (into, from) in all.iter_mut().flatten().zip(piece.iter().flatten()) {
+                    into.0.union(&from.0);
+                    into.1 += from.1;
+                }
+                all
+            },
+        );
+        let mut best: Option<(f32, usize, usize)> = None; // cost, axis, bins left of the split
+        for (axis, bins) in all_bins.iter().enumerate() {
+            if axes[axis].is_none() {
                 continue;
-            }
-            let scale = BINS as f32 / (hi - lo);
-            let bin_of = |c: f32| (((c - lo) * scale) as usize).min(BINS - 1);
-            let mut bins = [(Aabb::EMPTY, 0usize); BINS];
-            for &t in self.slots(start, end) {
-                let b = &mut bins[bin_of(self.centroids[t as usize][axis])];
-                b.0.union(&self.bounds[t as usize]);
-                b.1 += 1;
             }
             // Sweep from the right to get each suffix's area × count, then from the left.
             let mut right_cost = [0.0f32; BINS];
@@ -301,6 +360,33 @@ impl Builder<'_> {
         self.slots_mut(start, end).select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
         mid
     }
+}
+
+/// `work` over `0..len` in up to `threads` contiguous pieces of at least [`SCAN_PIECE`], all but
+/// the first on threads of their own, the results joined with `join` in order of their pieces.
+/// Where the system gives no thread, that piece runs here. One piece (most nodes) costs nothing
+/// over calling `work`.
+fn in_pieces<T: Send>(len: usize, threads: usize, work: impl Fn(std::ops::Range<usize>) -> T + Sync, join: impl Fn(T, T) -> T) -> T {
+    let pieces = (len / SCAN_PIECE).clamp(1, threads.max(1));
+    if pieces == 1 {
+        return work(0..len);
+    }
+    let step = len.div_ceil(pieces);
+    let range = |k: usize| k * step..((k + 1) * step).min(len);
+    std::thread::scope(|scope| {
+        let work = &work;
+        let others: Vec<_> = (1..pieces).map(|k| (k, std::thread::Builder::new().spawn_scoped(scope, move || work(range(k))))).collect();
+        let mut out = work(range(0));
+        for (k, handle) in others {
+            // A panic in the thread is a bug in the work; carry it to the caller.
+            let piece = match handle {
+                Ok(h) => h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
+                Err(_) => work(range(k)),
+            };
+            out = join(out, piece);
+        }
+        out
+    })
 }
 
 /// Takes one thread from the build's budget, if it has one left.
@@ -514,7 +600,8 @@ mod tests {
     }
 
     /// The threaded build gives the serial build's tree, node for node and slot for slot, on
-    /// inputs large enough to be split across threads (and one that is not).
+    /// inputs large enough to be split across threads (and one that is not), and with the top
+    /// nodes' scans in pieces.
     #[test]
     fn the_parallel_build_equals_the_serial_one() {
         let grid: Vec<_> = (0..40_000)
@@ -524,12 +611,17 @@ mod tests {
             })
             .collect();
         for tris in [soup(60_000, 8), grid, soup(3_000, 9)] {
-            let (a, b) = (Bvh::build_on(&tris, 63), Bvh::build_on(&tris, 0));
+            let (a, b) = (Bvh::build_on(&tris, 63, 5), Bvh::build_on(&tris, 0, 1));
             assert_eq!(a.order, b.order);
             assert_eq!(a.nodes, b.nodes);
             assert_eq!(a.depth, b.depth);
             check_structure(&a, &tris);
         }
+        // Large enough that the top nodes' scans are split among threads (5 pieces at the root).
+        let big = soup(5 * SCAN_PIECE + 1000, 10);
+        let (a, b) = (Bvh::build_on(&big, 63, 5), Bvh::build_on(&big, 0, 1));
+        assert_eq!(a.order, b.order);
+        assert_eq!(a.nodes, b.nodes);
     }
 
     #[test]
