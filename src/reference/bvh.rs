@@ -708,4 +708,29 @@ mod tests {
     fn node_layout_is_32_bytes() {
         assert_eq!(std::mem::size_of::<BvhNode>(), 32);
     }
+
+    /// Build time against the thread budget and shared scans, on a 524k-triangle plane and four
+    /// of them: `cargo test --release --lib measure_build_time -- --ignored --nocapture` (the
+    /// H200 host's numbers in THREADS_PER_CORE's comment came from it).
+    #[test]
+    #[ignore]
+    fn measure_build_time_against_threads() {
+        let plane = crate::scene::generators::plane(glam::Vec2::splat(3.0), 1000);
+        let one: Vec<[Vec3; 3]> = plane.triangles().map(|t| t.map(|i| plane.positions[i])).collect();
+        let four: Vec<[Vec3; 3]> = (0..4).flat_map(|k| one.iter().map(move |t| t.map(|p| p + Vec3::X * (3.0 * k as f32)))).collect();
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        for tris in [&one, &four] {
+            eprintln!("{} triangles, {cores} cores", tris.len());
+            for (threads, scans) in [(0, 1), (cores - 1, 1), (cores * 2 - 1, 1), (cores * 2 - 1, cores), (cores * 4 - 1, 1), (cores * 4 - 1, cores)] {
+                let times: Vec<f64> = (0..3)
+                    .map(|_| {
+                        let t = std::time::Instant::now();
+                        std::hint::black_box(Bvh::build_on(tris, threads, scans));
+                        t.elapsed().as_secs_f64() * 1e3
+                    })
+                    .collect();
+                eprintln!("threads {threads:2} scans {scans:2}: {:.0} {:.0} {:.0} ms", times[0], times[1], times[2]);
+            }
+        }
+    }
 }
