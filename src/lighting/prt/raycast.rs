@@ -304,7 +304,13 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
         .map(|s| {
             let Some(b) = SetBvh::build(&s.triangles) else { return NO_BVH };
             let (node_base, slot_base) = (nodes.len() as u32, traced.len() as u32);
-            nodes.extend(b.nodes.iter().map(|n| BvhNode { index: n.index + if n.is_leaf() { slot_base } else { node_base }, ..*n }));
+            if nodes.is_empty() {
+                // The first set's indices need no offset: its nodes move rather than copy
+                // (3.5 M of them for a 2 M-triangle set).
+                nodes = b.nodes;
+            } else {
+                nodes.extend(b.nodes.iter().map(|n| BvhNode { index: n.index + if n.is_leaf() { slot_base } else { node_base }, ..*n }));
+            }
             traced.extend(b.triangles.iter().map(|t| TracedTriangle { p0: v4(t[0]), e1: v4(t[1]), e2: v4(t[2]) }));
             node_base
         })
