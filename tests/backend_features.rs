@@ -59,6 +59,33 @@ fn volume_cube_and_array_images_round_trip_every_subresource() {
     common::assert_clean(&gpu);
 }
 
+/// A zero-padded upload writes the bytes given and zeros after them, not whatever the staging
+/// memory held: a full upload of 0xff bytes goes first, so that the padded one's staging buffer
+/// reuses dirty memory (it fails with the padding left unwritten). More bytes than the image
+/// holds are an error.
+#[test]
+fn a_zero_padded_upload_fills_the_rest_of_the_image_with_zeros() {
+    let mut gpu = common::test_gpu();
+    let mut states = ResourceStates::default();
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+    let desc = |name: &str| ImageDesc::new_2d(name, vk::Format::R32G32B32A32_UINT, 64, 4).usage(usage);
+    let size = 64 * 4 * 16;
+    // Both images first: the padded upload's staging buffer then takes the memory the dirty
+    // one's staging buffer left.
+    let dirty = gpu.create_image(&desc("dirty")).unwrap();
+    let table = gpu.create_image(&desc("table")).unwrap();
+    gpu.upload_image(dirty, 0, &vec![0xff; size]).unwrap();
+    let data: Vec<u8> = (0..size / 3).map(|i| (i % 251) as u8 + 1).collect();
+    gpu.upload_image_zero_padded(table, 0, &data).unwrap();
+    states.set_image(&gpu, table, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS }).unwrap();
+    let got = read_subresource(&mut gpu, &mut states, table, 0, 0);
+    assert_eq!(&got[..data.len()], &data[..]);
+    assert!(got[data.len()..].iter().all(|&b| b == 0), "the padding is zero");
+    let e = gpu.upload_image_zero_padded(table, 0, &vec![1; size + 16]).expect_err("more bytes than the image holds");
+    assert!(e.to_string().contains("expected"), "{e}");
+    common::assert_clean(&gpu);
+}
+
 /// Runs util/downsample.comp on a 2×2 image of constant `value` and returns the 1×1 result.
 fn downsample_once(gpu: &mut Gpu, pipeline: PipelineId, value: f32) -> f32 {
     let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;

@@ -635,6 +635,17 @@ impl Gpu {
     /// image in SHADER_READ_ONLY_OPTIMAL with the copy complete (it waits). The frame graph
     /// imports such images as "sampled, nothing pending".
     pub fn upload_image(&mut self, id: ImageId, mip: u32, data: &[u8]) -> BackendResult<()> {
+        self.upload_image_padded(id, mip, data, false)
+    }
+
+    /// [`Gpu::upload_image`] of `data` and zeros after it up to the mip's size: a table whose
+    /// last row is partly used goes to the staging buffer without first being copied whole into
+    /// a padded one (the 2 M-triangle BVH of a PRT bake is 210 MB).
+    pub fn upload_image_zero_padded(&mut self, id: ImageId, mip: u32, data: &[u8]) -> BackendResult<()> {
+        self.upload_image_padded(id, mip, data, true)
+    }
+
+    fn upload_image_padded(&mut self, id: ImageId, mip: u32, data: &[u8], pad: bool) -> BackendResult<()> {
         let (raw, desc) = {
             let i = self.image(id)?;
             (i.raw, i.desc.clone())
@@ -642,11 +653,21 @@ impl Gpu {
         let texel = format_texel_size(desc.format).ok_or_else(|| BackendError::Unsupported(format!("upload to format {:?}", desc.format)))?;
         let e = desc.mip_extent(mip);
         let expected = texel * e.width as u64 * e.height as u64 * e.depth as u64 * desc.layers as u64;
-        if data.len() as u64 != expected {
+        if data.len() as u64 != expected && !(pad && (data.len() as u64) < expected) {
             return Err(BackendError::Invalid(format!("upload to `{}` mip {mip}: {} bytes given, {expected} expected", desc.name, data.len())));
         }
         let staging = self.create_buffer(&BufferDesc { name: format!("{} staging", desc.name), size: expected, usage: vk::BufferUsageFlags::TRANSFER_SRC, memory: MemoryKind::CpuToGpu })?;
-        self.upload_buffer(staging, 0, data)?;
+        let filled = self.upload_buffer(staging, 0, data).and_then(|()| {
+            let rest = expected as usize - data.len();
+            if rest == 0 {
+                return Ok(());
+            }
+            self.upload_buffer(staging, data.len() as u64, &vec![0u8; rest])
+        });
+        if let Err(e) = filled {
+            self.destroy_buffer(staging);
+            return Err(e);
+        }
         let src = self.buffer(staging)?.raw;
         let aspect = desc.aspect();
         let whole = vk::ImageSubresourceRange { aspect_mask: aspect, base_mip_level: 0, level_count: desc.mip_levels, base_array_layer: 0, layer_count: desc.layers };

@@ -44,13 +44,9 @@ impl TexelTable {
         if rows > max {
             return Err(Error::Usage(format!("{name}: {texels} texels need {rows} rows of {TABLE_WIDTH}, more than the device's largest image ({max} rows)")));
         }
-        let size = (rows * TABLE_WIDTH as u64 * 16) as usize;
-        let mut data = Vec::with_capacity(size);
-        data.extend_from_slice(bytes);
-        data.resize(size, 0);
         let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
         let image = gpu.create_image(&ImageDesc::new_2d(name, vk::Format::R32G32B32A32_UINT, TABLE_WIDTH, rows as u32).usage(usage))?;
-        gpu.upload_image(image, 0, &data)?;
+        gpu.upload_image_zero_padded(image, 0, bytes)?;
         states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
         let sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
         Ok(TexelTable { image, sampler })
