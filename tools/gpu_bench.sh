@@ -10,8 +10,8 @@
 # Steps: the device (and whether it has VK_KHR_ray_query, from vulkaninfo when present); the
 # reference against Mitsuba 3 (tools/reference_vs_mitsuba.py, when $PYTHON can import mitsuba;
 # with the cuda_ad_rgb variant beside the CPU ones) and the reference alone at 1024x1024; the PRT
-# bakers side by side on prt_bunny_cow (CPU rays on every core, compute rays, the raster baker's
-# three paths) and run-time shading of 1,004,004 PRT vertices; frame time against 1 ... 4,096
+# bakers side by side on prt_bunny_cow (CPU rays on every core, compute rays, the two ray bakers
+# alternating there and on prt_throughput, the raster baker's three paths) and run-time shading of 1,004,004 PRT vertices; frame time against 1 ... 4,096
 # lights for the five many-light methods (tools/many_lights_scaling.py); every method family
 # captured once under the validation layer (when it is installed); charts of theatre_100,
 # prt_bunny_cow and terrain_sky; the 114,127-vertex PRT bake with each baker.
@@ -75,6 +75,21 @@ prt_bake() {
 }
 prt_bake cpu_rays '{ name = "prt", baker = "rays_cpu", samples = 1024 }' 60
 prt_bake gpu_rays '{ name = "prt", baker = "rays", samples = 1024 }' 60
+# The CPU and compute ray bakers alternating, three runs each after one compute bake that fills
+# the driver's pipeline cache: the ratio issue 14's target names. Lease machines differ (the
+# CPU rays of one bake took 377-691 ms on three of them), so only ratios within one run count.
+prt_alternate() {
+    local scene=$1
+    variant "scenes/$scene.toml" scenes/_gpu_alt_cpu.toml '{ name = "prt", baker = "rays_cpu", samples = 1024 }'
+    variant "scenes/$scene.toml" scenes/_gpu_alt_gpu.toml '{ name = "prt", baker = "rays", samples = 1024 }'
+    for side in gpu cpu gpu cpu gpu cpu gpu; do
+        rm -rf "$PENUMBRA_CACHE/bake"
+        step 60 "PRT bake $scene, $side rays, alternating" "$bin" bake "scenes/_gpu_alt_$side.toml" --method prt
+    done
+    rm -f scenes/_gpu_alt_*.toml
+}
+prt_alternate prt_bunny_cow
+prt_alternate prt_throughput
 prt_bake raster_compute '{ name = "prt", baker = "raster", coverage = "exact", reduction = "compute" }' 120
 prt_bake raster_passes '{ name = "prt", baker = "raster", coverage = "exact", reduction = "passes" }' 120
 prt_bake raster_projected '{ name = "prt", baker = "raster", coverage = "projected", reduction = "passes" }' 120
