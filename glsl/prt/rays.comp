@@ -5,10 +5,10 @@
 // from p + near*w along w closer than t_max = far - near.
 //
 // One invocation traces `per` consecutive directions of one receiver (a lane) and writes its
-// partial sums; the host adds up a receiver's lanes in order and scales them by pi/N. llvmpipe
-// ends an invocation's loops after 65,535 iterations in total, so an invocation whose loops were
-// cut short reports it (its sentinels below), and the host traces the chunk again with fewer
-// directions per lane.
+// partial sums; reduce_lanes.comp adds up a receiver's lanes in order and scales them by pi/N.
+// llvmpipe ends an invocation's loops after 65,535 iterations in total, so an invocation whose
+// loops were cut short reports it (its sentinels below), and the host traces the chunk again with
+// fewer directions per lane.
 //
 // Invocations are ordered lane-major, receiver-minor: neighbouring invocations trace the same
 // directions from neighbouring receivers, which keeps a SIMD batch's rays coherent.

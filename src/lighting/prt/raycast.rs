@@ -310,9 +310,9 @@ fn par_map<T: Sync, U: Zeroable + Send>(items: &[T], f: impl Fn(&T) -> U + Sync)
 
 /// [`bake_cpu`] in a compute pass (`glsl/prt/rays.comp`): the same rays, BVHs and layout. Each
 /// invocation traces a share of one receiver's rays and writes its partial sums, which a second
-/// pass (`glsl/prt/reduce_lanes.comp`) adds up in a fixed order; where the device bounds an invocation's loop iterations (llvmpipe:
-/// 65,535) and a walk is cut short, the chunk is traced again with fewer rays per invocation,
-/// down to one, and then the bake is refused.
+/// pass (`glsl/prt/reduce_lanes.comp`) adds up in a fixed order. Where the device bounds an
+/// invocation's loop iterations (llvmpipe: 65,535) and a walk is cut short, the chunk is traced
+/// again with fewer rays per invocation, down to one, and then the bake is refused.
 pub fn bake_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
     check_all(r, bands, samples, clip)?;
     if r.is_empty() {
