@@ -21,6 +21,7 @@ pub mod lighting;
 pub mod lightmap;
 pub mod many_lights;
 pub mod metrics;
+pub mod parallel;
 pub mod profile;
 pub mod progress;
 pub mod reference;

@@ -10,6 +10,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::parallel::{cores, fold_ranges};
+
 /// One node as the shader reads it (std430 `struct { vec3 lo; uint index; vec3 hi; uint count; }`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -107,7 +109,7 @@ const SCAN_PIECE: usize = 32_768;
 impl Bvh {
     /// Builds over `tris` (world-space corners). An empty input gives an empty hierarchy.
     pub fn build(tris: &[[Vec3; 3]]) -> Bvh {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let cores = cores();
         Bvh::build_on(tris, if cores > 1 { cores * THREADS_PER_CORE - 1 } else { 0 }, cores)
     }
 
@@ -118,9 +120,10 @@ impl Bvh {
         if tris.is_empty() {
             return Bvh::default();
         }
-        let (bounds, centroids) = in_pieces(
+        let (bounds, centroids) = fold_ranges(
             tris.len(),
             scan_threads,
+            SCAN_PIECE,
             |range| {
                 let bounds: Vec<Aabb> = tris[range]
                     .iter()
@@ -176,9 +179,10 @@ impl Builder<'_> {
 
     fn range_bounds(&self, start: usize, end: usize) -> (Aabb, Aabb) {
         let (slots, bounds, centroids) = (self.slots(start, end), self.bounds, self.centroids);
-        in_pieces(
+        fold_ranges(
             slots.len(),
             self.scan_threads,
+            SCAN_PIECE,
             |range| {
                 let (mut all, mut cent) = (Aabb::EMPTY, Aabb::EMPTY);
                 for &t in &slots[range] {
@@ -288,9 +292,10 @@ impl Builder<'_> {
         let bin_of = |c: f32, (lo, scale): (f32, f32)| (((c - lo) * scale) as usize).min(BINS - 1);
         // Every axis's bins in one pass over the slots, in pieces on threads at the top levels.
         let (slots, bounds_of, centroids) = (self.slots(start, end), self.bounds, self.centroids);
-        let all_bins = in_pieces(
+        let all_bins = fold_ranges(
             n,
             self.scan_threads,
+            SCAN_PIECE,
             |range| {
                 let mut bins = [[(Aabb::EMPTY, 0usize); BINS]; 3];
                 for &t in &slots[range] {
@@ -360,33 +365,6 @@ impl Builder<'_> {
         self.slots_mut(start, end).select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
         mid
     }
-}
-
-/// `work` over `0..len` in up to `threads` contiguous pieces of at least [`SCAN_PIECE`], all but
-/// the first on threads of their own, the results joined with `join` in order of their pieces.
-/// Where the system gives no thread, that piece runs here. One piece (most nodes) costs nothing
-/// over calling `work`.
-fn in_pieces<T: Send>(len: usize, threads: usize, work: impl Fn(std::ops::Range<usize>) -> T + Sync, join: impl Fn(T, T) -> T) -> T {
-    let pieces = (len / SCAN_PIECE).clamp(1, threads.max(1));
-    if pieces == 1 {
-        return work(0..len);
-    }
-    let step = len.div_ceil(pieces);
-    let range = |k: usize| k * step..((k + 1) * step).min(len);
-    std::thread::scope(|scope| {
-        let work = &work;
-        let others: Vec<_> = (1..pieces).map(|k| (k, std::thread::Builder::new().spawn_scoped(scope, move || work(range(k))))).collect();
-        let mut out = work(range(0));
-        for (k, handle) in others {
-            // A panic in the thread is a bug in the work; carry it to the caller.
-            let piece = match handle {
-                Ok(h) => h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
-                Err(_) => work(range(k)),
-            };
-            out = join(out, piece);
-        }
-        out
-    })
 }
 
 /// Takes one thread from the build's budget, if it has one left.
