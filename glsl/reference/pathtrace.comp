@@ -39,6 +39,7 @@ layout(set = 0, binding = 0) uniform Params {
 #define BVH_NODES_BINDING 1
 #define BVH_TRIANGLES_BINDING 2
 #define BVH_TRIANGLE_COUNT params.counts.y
+#define BVH_ORDERED_SKIPS_BINDING 13
 #include "common/bvh.glsl"
 // Per triangle its Shading (8 texels) and per material its Material (5 texels), as tables.
 layout(set = 0, binding = 3) uniform usampler2D shading_table;
@@ -141,7 +142,7 @@ bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
     int triangle;
     vec2 uv;
     float t = t_max;
-    if (!trace_triangles(o, d, true, t, triangle, uv)) {
+    if (!trace_triangles_ordered(o, d, true, t, triangle, uv)) {
         return false;
     }
     if (!SCENE_HAS_TRANSLUCENCY || opacity_of(triangle) >= 1.0) {
@@ -149,7 +150,7 @@ bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
     }
     for (uint k = 0u; k < MAX_LAYERS; ++k) {
         t = t_max;
-        if (!trace_triangles(o, d, false, t, triangle, uv)) {
+        if (!trace_triangles_ordered(o, d, false, t, triangle, uv)) {
             return false;
         }
         float a = opacity_of(triangle);

@@ -13,7 +13,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
 use super::bvh::Bvh;
-use super::texel_table::{GpuBvh, TexelTable};
+use super::texel_table::TexelTable;
 use crate::backend::{vk, BufferId, Gpu};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
@@ -295,7 +295,9 @@ impl TracedScene {
         Ok(SceneBuffers {
             texture_texels: TexelTable::upload(gpu, states, "reference texture texels", &texels)?,
             textures: TexelTable::upload(gpu, states, "reference textures", &headers)?,
-            bvh: GpuBvh::upload(gpu, states, "reference", &self.bvh.nodes, &self.triangles, None)?,
+            bvh_nodes: TexelTable::upload(gpu, states, "reference bvh nodes", &self.bvh.nodes)?,
+            bvh_triangles: TexelTable::upload(gpu, states, "reference bvh triangles", &self.triangles)?,
+            bvh_skips: TexelTable::upload_packed(gpu, states, "reference bvh skip links", &self.bvh.octant_skip_links())?,
             shading: TexelTable::upload(gpu, states, "reference triangle shading", &self.shading)?,
             materials: TexelTable::upload(gpu, states, "reference materials", &self.materials)?,
             lights: storage(gpu, "reference lights", &self.lights)?,
@@ -310,7 +312,9 @@ impl TracedScene {
 /// bindings.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneBuffers {
-    pub bvh: GpuBvh,
+    pub bvh_nodes: TexelTable,
+    pub bvh_triangles: TexelTable,
+    pub bvh_skips: TexelTable,
     pub shading: TexelTable,
     pub materials: TexelTable,
     pub lights: BufferId,
@@ -323,8 +327,11 @@ pub struct SceneBuffers {
 impl SceneBuffers {
     /// Declares the pass's reads of all of it in `stages`.
     pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
-        let mut pass = self.bvh.read(pass.buffer(self.lights, Access::StorageRead { stages }, Some("lights")), stages);
+        let mut pass = pass.buffer(self.lights, Access::StorageRead { stages }, Some("lights"));
         for (name, table) in [
+            ("bvh_nodes", self.bvh_nodes),
+            ("bvh_triangles", self.bvh_triangles),
+            ("bvh_skips", self.bvh_skips),
             ("shading_table", self.shading),
             ("material_table", self.materials),
             ("environment_table", self.environment_map),
