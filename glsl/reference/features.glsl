@@ -24,5 +24,9 @@ layout(constant_id = 7) const bool SCENE_HAS_ENVIRONMENT_MAP = true;
 layout(constant_id = 8) const bool SCENE_SAMPLES_ENVIRONMENT = true;
 // Next-event estimation: 0 visits every light, 1 draws one (FLAG_ONE_LIGHT), 2 reads the flag.
 layout(constant_id = 9) const uint NEE_MODE = 2u;
+// How rays walk the BVH (src/reference/features.rs, BvhWalk): false, the stack walk
+// (trace_triangles); true, the stackless walk ordered per ray octant (trace_triangles_ordered).
+// The same closest hits either way; the host picks the faster on the device.
+layout(constant_id = 10) const bool BVH_WALK_ORDERED = false;
 
 #endif

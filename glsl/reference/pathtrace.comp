@@ -142,7 +142,7 @@ bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
     int triangle;
     vec2 uv;
     float t = t_max;
-    if (!trace_triangles_ordered(o, d, true, t, triangle, uv)) {
+    if (!trace_scene(o, d, true, t, triangle, uv)) {
         return false;
     }
     if (!SCENE_HAS_TRANSLUCENCY || opacity_of(triangle) >= 1.0) {
@@ -150,7 +150,7 @@ bool blocked(vec3 o, vec3 d, float t_max, uint skip_light, inout uint rng) {
     }
     for (uint k = 0u; k < MAX_LAYERS; ++k) {
         t = t_max;
-        if (!trace_triangles_ordered(o, d, false, t, triangle, uv)) {
+        if (!trace_scene(o, d, false, t, triangle, uv)) {
             return false;
         }
         float a = opacity_of(triangle);

@@ -61,11 +61,19 @@ float hit_area_light(uint i, vec3 o, vec3 d) {
     return NO_HIT;
 }
 
+// The BVH query through the walk the host chose (features.glsl).
+bool trace_scene(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
+    if (BVH_WALK_ORDERED) {
+        return trace_triangles_ordered(o, d, any_hit, t_max, triangle, uv);
+    }
+    return trace_triangles(o, d, any_hit, t_max, triangle, uv);
+}
+
 Hit trace_closest(vec3 o, vec3 d) {
     Hit h;
     h.t = NO_HIT;
     h.light = -1;
-    trace_triangles_ordered(o, d, false, h.t, h.triangle, h.uv);
+    trace_scene(o, d, false, h.t, h.triangle, h.uv);
     for (uint i = params.options.y; i < params.counts.x; ++i) {
         float t = hit_area_light(i, o, d);
         if (t < h.t) {
@@ -86,7 +94,7 @@ bool occluded(vec3 o, vec3 d, float t_max, uint skip_light) {
     }
     int triangle;
     vec2 uv;
-    return trace_triangles_ordered(o, d, true, t_max, triangle, uv);
+    return trace_scene(o, d, true, t_max, triangle, uv);
 }
 
 // A ray origin just off the surface at p on the side of unit `n`, offset in units of the float

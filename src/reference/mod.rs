@@ -74,7 +74,7 @@ use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
 use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
-use features::{NeeMode, SceneFeatures};
+use features::{BvhWalk, NeeMode, SceneFeatures};
 pub use scene_data::{srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
 
 /// Which light the estimator counts, by the surface interactions along its path.
@@ -373,8 +373,10 @@ pub struct ReferenceRenderer {
     /// The shader's specialization (`features`): what it is compiled for. [`SceneFeatures::of`]
     /// the scene by default; [`SceneFeatures::ALL`] gives the shader as written.
     pub features: SceneFeatures,
-    /// Pipelines compiled so far, by the features and next-event mode they were made for.
-    pipelines: Vec<(SceneFeatures, NeeMode, PipelineId)>,
+    /// How rays walk the BVH: [`BvhWalk::for_device`] by default.
+    pub walk: BvhWalk,
+    /// Pipelines compiled so far, by the features, next-event mode and walk they were made for.
+    pipelines: Vec<(SceneFeatures, NeeMode, BvhWalk, PipelineId)>,
     buffers: SceneBuffers,
     params: Params,
     mean: ImageId,
@@ -438,10 +440,12 @@ impl ReferenceRenderer {
             options: [traced.light_beyond_last_bounce() as u32, traced.punctual_lights, 0, 0],
         };
         let features = SceneFeatures::of(&traced);
+        let walk = BvhWalk::for_device(gpu.caps().device_type);
         Ok(ReferenceRenderer {
             gpu,
             scene: traced,
             features,
+            walk,
             pipelines: Vec::new(),
             buffers,
             params,
@@ -569,18 +573,18 @@ impl ReferenceRenderer {
         Ok(ReferenceImage { mean, standard_error, spp, seconds })
     }
 
-    /// The tracer specialised for `self.features` and `nee`, compiled on first use (a scene
-    /// renders with one mode, so one compile).
+    /// The tracer specialised for `self.features`, `nee` and `self.walk`, compiled on first use
+    /// (a scene renders with one mode, so one compile).
     fn pipeline(&mut self, nee: NeeMode) -> Result<PipelineId> {
-        let features = self.features;
+        let (features, walk) = (self.features, self.walk);
         // Every feature on is the shader as written, which reads the mode from the batch.
         let nee = if features == SceneFeatures::ALL { NeeMode::Either } else { nee };
-        if let Some(&(_, _, id)) = self.pipelines.iter().find(|(f, n, _)| *f == features && *n == nee) {
+        if let Some(&(_, _, _, id)) = self.pipelines.iter().find(|(f, n, w, _)| *f == features && *n == nee && *w == walk) {
             return Ok(id);
         }
-        let desc = ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: features.specialization(nee) };
+        let desc = ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: features.specialization(nee, walk) };
         let id = self.gpu.create_compute_pipeline(&desc, &dev_shaders())?;
-        self.pipelines.push((features, nee, id));
+        self.pipelines.push((features, nee, walk, id));
         Ok(id)
     }
 
