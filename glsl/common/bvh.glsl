@@ -199,9 +199,9 @@ layout(set = 0, binding = BVH_ORDERED_SKIPS_BINDING) uniform usampler2D bvh_skip
 // (within 2 %, measured on the CPU twin for rays leaving a furnace sphere's and a box's walls),
 // one a step with a third texel for the link, and keeps no stack: on llvmpipe a private array
 // indexed per lane is a scalar store or load per lane, and trace_triangles pushes and pops four.
-// The reference tracer, 1.07-1.12x on the Cornell box and the terrain, 0.94x on the furnace,
-// whose rays cross 88 boxes where the Cornell box's cross 38 (README, "The reference against
-// Mitsuba 3").
+// With it the reference traces 1.02-1.14x as fast on lavapipe and 0.79-0.92x as fast on the
+// H200, which keeps a stack in fast memory, so the reference picks the walk per device
+// (src/reference/features.rs, BvhWalk; README, "The reference against Mitsuba 3").
 bool trace_triangles_ordered(vec3 o, vec3 d, bool any_hit, inout float t_max, out int triangle, out vec2 uv) {
     triangle = -1;
     uv = vec2(0.0);
