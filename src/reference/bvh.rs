@@ -297,39 +297,40 @@ impl Builder<'_> {
     /// build starts no more.
     fn split_in_parallel(&mut self, start: usize, mid: usize, end: usize, depth: u32) -> u32 {
         let (bounds, centroids, spare_threads, scan_threads) = (self.bounds, self.centroids, self.spare_threads, self.scan_threads);
+        // The first subtree is built straight into this builder's nodes (its indices are then
+        // already where they stay); only the second, built on the other thread, is copied in.
+        // Copying both cost the top levels of a 2 M-triangle build a copy of every node below
+        // them per level.
+        let own = std::mem::take(&mut self.nodes);
         let (first, second) = self.slots_mut(start, end).split_at_mut(mid - start);
-        let subtree = move |order: &mut [u32], base: usize, end: usize| {
-            let mut b = Builder { bounds, centroids, order, base, nodes: Vec::new(), depth: 0, spare_threads, scan_threads };
+        let subtree = move |order: &mut [u32], base: usize, end: usize, nodes: Vec<BvhNode>| {
+            let mut b = Builder { bounds, centroids, order, base, nodes, depth: 0, spare_threads, scan_threads };
             b.node(base, end, depth);
             (b.nodes, b.depth)
         };
-        let built = std::thread::scope(|scope| {
-            let right = std::thread::Builder::new()
-                .spawn_scoped(scope, move || {
-                    let built = subtree(second, mid, end);
-                    spare_threads.fetch_add(1, Ordering::Relaxed);
-                    built
-                })
-                .ok()?;
-            let a = subtree(first, start, mid);
+        let (own, built) = std::thread::scope(|scope| {
+            let Ok(right) = std::thread::Builder::new().spawn_scoped(scope, move || {
+                let built = subtree(second, mid, end, Vec::new());
+                spare_threads.fetch_add(1, Ordering::Relaxed);
+                built
+            }) else {
+                return (own, None);
+            };
+            let (own, first_depth) = subtree(first, start, mid, own);
             // A panic in the thread is a bug in this builder; carry it to the caller.
-            Some((a, right.join().unwrap_or_else(|e| std::panic::resume_unwind(e))))
+            (own, Some((first_depth, right.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))))
         });
-        let Some((a, b)) = built else {
+        self.nodes = own;
+        let Some((first_depth, (second_nodes, second_depth))) = built else {
             // No thread to be had: both children here, one after the other (the same tree).
             self.spare_threads.store(0, Ordering::Relaxed);
             self.node(start, mid, depth);
             return self.node(mid, end, depth);
         };
-        let splice = |nodes: &mut Vec<BvhNode>, sub: Vec<BvhNode>| {
-            let offset = nodes.len() as u32;
-            nodes.extend(sub.into_iter().map(|n| if n.is_leaf() { n } else { BvhNode { index: n.index + offset, ..n } }));
-            offset
-        };
-        splice(&mut self.nodes, a.0);
-        let second_index = splice(&mut self.nodes, b.0);
-        self.depth = self.depth.max(a.1).max(b.1);
-        second_index
+        let offset = self.nodes.len() as u32;
+        self.nodes.extend(second_nodes.into_iter().map(|n| if n.is_leaf() { n } else { BvhNode { index: n.index + offset, ..n } }));
+        self.depth = self.depth.max(first_depth).max(second_depth);
+        offset
     }
 
     /// The best binned-SAH partition over all three axes, or `None` when a leaf is cheaper.
