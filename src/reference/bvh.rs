@@ -640,12 +640,21 @@ mod tests {
                 [c, c + Vec3::X, c + Vec3::Y]
             })
             .collect();
-        for tris in [soup(60_000, 8), grid, soup(3_000, 9)] {
-            let (a, b) = (Bvh::build_on(&tris, 63, 5), Bvh::build_on(&tris, 0, 1));
-            assert_eq!(a.order, b.order);
-            assert_eq!(a.nodes, b.nodes);
-            assert_eq!(a.depth, b.depth);
-            check_structure(&a, &tris);
+        // A large cluster and a small one far away: the root's second child is too small for a
+        // thread, so it is built here after the first child's threaded subtrees.
+        let lopsided: Vec<_> = soup(40_000, 14).into_iter().chain(soup(5_000, 15).into_iter().map(|t| t.map(|p| p + Vec3::X * 1000.0))).collect();
+        for tris in [soup(60_000, 8), grid, soup(3_000, 9), lopsided] {
+            let b = Bvh::build_on(&tris, 0, 1);
+            // A budget that runs out leaves nodes built here after subtrees built on threads
+            // (grafted before them when the tree is flattened); a large one threads every split
+            // it can.
+            for threads in [1, 2, 3, 63] {
+                let a = Bvh::build_on(&tris, threads, 5);
+                assert_eq!(a.order, b.order);
+                assert_eq!(a.nodes, b.nodes, "{threads} threads");
+                assert_eq!(a.depth, b.depth);
+                check_structure(&a, &tris);
+            }
         }
         // Large enough that the top nodes' scans are split among threads (5 pieces at the root).
         let big = soup(5 * SCAN_PIECE + 1000, 10);
