@@ -182,13 +182,11 @@ impl Bvh {
             return words;
         }
         let centre = |n: &BvhNode| (Vec3::from(n.lo) + Vec3::from(n.hi)) * 0.5;
-        // Preorder: a node's own link is set (by its parent) before its children are reached.
-        let mut links = vec![[count as u32; 8]; count];
+        // The root's link is the end. In preorder a node's link is set (by its parent) before
+        // the node is reached, and its flag only when it is.
+        words[..8].fill(count as u32);
         for i in 0..count {
             let n = self.nodes[i];
-            for oct in 0..8 {
-                words[8 * i + oct] = links[i][oct];
-            }
             if n.is_leaf() {
                 continue;
             }
@@ -207,8 +205,8 @@ impl Bvh {
                 // The second child goes first where it lies behind the first along the ray.
                 let second_first = if negative { gap[axis] > 0.0 } else { gap[axis] < 0.0 };
                 let (a, b) = if second_first { (second, first) } else { (first, second) };
-                links[a][oct] = b as u32;
-                links[b][oct] = links[i][oct];
+                words[8 * a + oct] = b as u32;
+                words[8 * b + oct] = words[8 * i + oct];
                 if second_first {
                     words[8 * i + oct] |= SECOND_FIRST;
                 }
