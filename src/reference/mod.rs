@@ -375,6 +375,8 @@ pub struct ReferenceRenderer {
     pub features: SceneFeatures,
     /// How rays walk the BVH: [`BvhWalk::for_device`] by default.
     pub walk: BvhWalk,
+    /// The walk whose links `buffers.bvh_skips` holds (the stack walk's are one zeroed texel).
+    links_for: BvhWalk,
     /// Pipelines compiled so far, by the features, next-event mode and walk they were made for.
     pipelines: Vec<(SceneFeatures, NeeMode, BvhWalk, PipelineId)>,
     buffers: SceneBuffers,
@@ -404,13 +406,24 @@ impl ReferenceRenderer {
 
     /// The scene as the renderer's frame `frame` has it (its clock's time: wind, light motion
     /// and light board applied), so a method's frame N is compared with the same geometry.
-    pub fn at_frame(mut gpu: Gpu, scene: &Scene, (width, height): (u32, u32), frame: u64) -> Result<ReferenceRenderer> {
+    pub fn at_frame(gpu: Gpu, scene: &Scene, size: (u32, u32), frame: u64) -> Result<ReferenceRenderer> {
+        let walk = BvhWalk::for_device(gpu.caps().device_type);
+        ReferenceRenderer::at_frame_walking(gpu, scene, size, frame, walk)
+    }
+
+    /// [`new`](Self::new) with the BVH walk given rather than chosen for the device (the tables
+    /// the other walk needs are uploaded when it is first used).
+    pub fn with_walk(gpu: Gpu, scene: &Scene, size: (u32, u32), walk: BvhWalk) -> Result<ReferenceRenderer> {
+        ReferenceRenderer::at_frame_walking(gpu, scene, size, 0, walk)
+    }
+
+    fn at_frame_walking(mut gpu: Gpu, scene: &Scene, (width, height): (u32, u32), frame: u64, walk: BvhWalk) -> Result<ReferenceRenderer> {
         if width == 0 || height == 0 {
             return Err(Error::Usage(format!("image size {width}x{height} is empty")));
         }
         let traced = TracedScene::build_at(scene, crate::scene::motion::frame_time(frame))?;
         let mut states = ResourceStates::default();
-        let buffers = traced.upload(&mut gpu, &mut states)?;
+        let buffers = traced.upload(&mut gpu, &mut states, walk)?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
         let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
@@ -440,12 +453,12 @@ impl ReferenceRenderer {
             options: [traced.light_beyond_last_bounce() as u32, traced.punctual_lights, 0, 0],
         };
         let features = SceneFeatures::of(&traced);
-        let walk = BvhWalk::for_device(gpu.caps().device_type);
         Ok(ReferenceRenderer {
             gpu,
             scene: traced,
             features,
             walk,
+            links_for: walk,
             pipelines: Vec::new(),
             buffers,
             params,
@@ -577,6 +590,13 @@ impl ReferenceRenderer {
     /// (a scene renders with one mode, so one compile).
     fn pipeline(&mut self, nee: NeeMode) -> Result<PipelineId> {
         let (features, walk) = (self.features, self.walk);
+        if walk == BvhWalk::Ordered && self.links_for != walk {
+            let stale = self.buffers.bvh_skips.image;
+            self.buffers.bvh_skips = self.scene.octant_links(&mut self.gpu, &mut self.states, walk)?;
+            self.links_for = walk;
+            self.states.forget_image(stale);
+            self.gpu.destroy_image(stale);
+        }
         // Every feature on is the shader as written, which reads the mode from the batch.
         let nee = if features == SceneFeatures::ALL { NeeMode::Either } else { nee };
         if let Some(&(_, _, _, id)) = self.pipelines.iter().find(|(f, n, w, _)| *f == features && *n == nee && *w == walk) {

@@ -13,6 +13,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
 use super::bvh::Bvh;
+use super::features::BvhWalk;
 use super::texel_table::TexelTable;
 use crate::backend::{vk, BufferId, Gpu};
 use crate::environment::EnvironmentMap;
@@ -283,8 +284,9 @@ impl TracedScene {
         (texels, headers)
     }
 
-    /// The buffers and BVH tables, the tables registered in `states`.
-    pub fn upload(&self, gpu: &mut Gpu, states: &mut ResourceStates) -> Result<SceneBuffers> {
+    /// The buffers and BVH tables, the tables registered in `states`. The octant links only
+    /// where `walk` reads them (32 bytes a node); otherwise the binding gets one zeroed texel.
+    pub fn upload(&self, gpu: &mut Gpu, states: &mut ResourceStates, walk: BvhWalk) -> Result<SceneBuffers> {
         // Shaders declare runtime arrays; an empty one is bound as one zeroed element.
         fn storage<T: Pod + Zeroable>(gpu: &mut Gpu, name: &str, items: &[T]) -> Result<BufferId> {
             let zero = [T::zeroed()];
@@ -297,13 +299,25 @@ impl TracedScene {
             textures: TexelTable::upload(gpu, states, "reference textures", &headers)?,
             bvh_nodes: TexelTable::upload(gpu, states, "reference bvh nodes", &self.bvh.nodes)?,
             bvh_triangles: TexelTable::upload(gpu, states, "reference bvh triangles", &self.triangles)?,
-            bvh_skips: TexelTable::upload_packed(gpu, states, "reference bvh skip links", &self.bvh.octant_skip_links())?,
+            bvh_skips: self.octant_links(gpu, states, walk)?,
             shading: TexelTable::upload(gpu, states, "reference triangle shading", &self.shading)?,
             materials: TexelTable::upload(gpu, states, "reference materials", &self.materials)?,
             lights: storage(gpu, "reference lights", &self.lights)?,
             environment_map: TexelTable::upload(gpu, states, "reference environment map", self.environment_map.as_ref().map_or(&[][..], |m| &m.texels))?,
             environment_cdf: TexelTable::upload_packed(gpu, states, "reference environment cdf", self.environment_map.as_ref().map_or(&[][..], |m| &m.cdf))?,
         })
+    }
+}
+
+impl TracedScene {
+    /// The table `bvh_skips`: the octant links for [`BvhWalk::Ordered`], one zeroed texel for
+    /// the stack walk, which does not read it.
+    pub fn octant_links(&self, gpu: &mut Gpu, states: &mut ResourceStates, walk: BvhWalk) -> Result<TexelTable> {
+        let links = match walk {
+            BvhWalk::Ordered => self.bvh.octant_skip_links(),
+            BvhWalk::Stack => Vec::new(),
+        };
+        TexelTable::upload_packed(gpu, states, "reference bvh skip links", &links)
     }
 }
 
