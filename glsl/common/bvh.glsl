@@ -73,6 +73,27 @@ float node_entry(uint i, vec3 o, vec3 inv_d, float t_max, out uint index, out ui
     return enter <= exit ? enter : NO_HIT;
 }
 
+// The leaf's triangles index .. index + count - 1 against the ray: each hit closer than t_max
+// lowers it and becomes the hit (slot and barycentrics). True only for `any_hit` and a hit, which
+// ends the query; the walks share it.
+bool hit_leaf(uint index, uint count, vec3 o, vec3 d, bool any_hit, inout float t_max, inout int triangle, inout vec2 uv) {
+    for (uint k = 0u; k < count; ++k) {
+        uint slot = index + k;
+        Triangle tri = bvh_triangle(slot);
+        float t;
+        vec2 b;
+        if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
+            t_max = t;
+            triangle = int(slot);
+            uv = b;
+            if (any_hit) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
 // trace_triangles' stack of nodes still to visit, with their entry distances, indices and counts
 // (kept from the box test, so a node taken off the stack is not fetched again: 1.05-1.12x on
 // llvmpipe). Private to each invocation; module scope so that `pop_closer` reaches it without
@@ -165,19 +186,8 @@ bool trace_triangles_from(uint root, vec3 o, vec3 d, bool any_hit, inout float t
         if (done) {
             break;
         }
-        for (uint k = 0u; k < count; ++k) {
-            uint slot = index + k;
-            Triangle tri = bvh_triangle(slot);
-            float t;
-            vec2 b;
-            if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
-                t_max = t;
-                triangle = int(slot);
-                uv = b;
-                if (any_hit) {
-                    return true;
-                }
-            }
+        if (hit_leaf(index, count, o, d, any_hit, t_max, triangle, uv)) {
+            return true;
         }
         done = !pop_closer(sp, t_max, node, index, count);
     }
@@ -230,19 +240,8 @@ bool trace_triangles_ordered(vec3 o, vec3 d, bool any_hit, inout float t_max, ou
         if (node >= end) {
             break;
         }
-        for (uint k = 0u; k < count; ++k) {
-            uint slot = index + k;
-            Triangle tri = bvh_triangle(slot);
-            float t;
-            vec2 b;
-            if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
-                t_max = t;
-                triangle = int(slot);
-                uv = b;
-                if (any_hit) {
-                    return true;
-                }
-            }
+        if (hit_leaf(index, count, o, d, any_hit, t_max, triangle, uv)) {
+            return true;
         }
         node = word & 0x7fffffffu;
     }
@@ -281,14 +280,11 @@ bool occluded_in(uint root, vec3 o, vec3 d, float t_max, out bool complete) {
             node += 1u;
             continue;
         }
-        for (uint k = 0u; k < count; ++k) {
-            Triangle tri = bvh_triangle(index + k);
-            float t;
-            vec2 b;
-            if (hit_triangle(o, d, tri.p0.xyz, tri.e1.xyz, tri.e2.xyz, t_max, t, b)) {
-                complete = true;
-                return true;
-            }
+        int triangle = -1;
+        vec2 uv;
+        if (hit_leaf(index, count, o, d, true, t_max, triangle, uv)) {
+            complete = true;
+            return true;
         }
         node = bvh_skip(node);
     }

@@ -567,6 +567,18 @@ mod tests {
         out
     }
 
+    /// Ray `k` of a test: from anywhere around the soups, some aimed at the geometry, some
+    /// axis-aligned (zero direction components); none where the direction is zero.
+    fn test_ray(r: &mut Lcg, k: usize) -> Option<(Vec3, Vec3)> {
+        let o = r.v(14.0);
+        let d = match k % 3 {
+            0 => r.v(1.0),
+            1 => r.v(4.0) - o,
+            _ => [Vec3::X, Vec3::NEG_Y, Vec3::Z][k % 9 / 3],
+        };
+        Some((o, d.try_normalize()?))
+    }
+
     fn brute_force(tris: &[[Vec3; 3]], o: Vec3, d: Vec3) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
         for (i, [p0, p1, p2]) in tris.iter().enumerate() {
@@ -668,14 +680,7 @@ mod tests {
             let bvh = Bvh::build(&tris);
             let mut hits = 0;
             for k in 0..3000 {
-                let o = r.v(14.0);
-                // Some rays aimed at the geometry, some axis-aligned (zero direction components).
-                let d = match k % 3 {
-                    0 => r.v(1.0),
-                    1 => r.v(4.0) - o,
-                    _ => [Vec3::X, Vec3::NEG_Y, Vec3::Z][k % 9 / 3],
-                };
-                let Some(d) = d.try_normalize() else { continue };
+                let Some((o, d)) = test_ray(&mut r, k) else { continue };
                 let (a, b) = (bvh.closest_hit(&tris, o, d), brute_force(&tris, o, d));
                 match (a, b) {
                     (None, None) => {}
@@ -811,13 +816,7 @@ mod tests {
                 }
             }
             for k in 0..3000 {
-                let o = r.v(14.0);
-                let d = match k % 3 {
-                    0 => r.v(1.0),
-                    1 => r.v(4.0) - o,
-                    _ => [Vec3::X, Vec3::NEG_Y, Vec3::Z][k % 9 / 3],
-                };
-                let Some(d) = d.try_normalize() else { continue };
+                let Some((o, d)) = test_ray(&mut r, k) else { continue };
                 let (hit, _) = closest_by_octant_links(&bvh, &words, &tris, o, d, f32::MAX);
                 assert_eq!(hit.map(|h| h.0), brute_force(&tris, o, d).map(|h| h.0), "ray {k} from {o} along {d}");
             }
