@@ -211,6 +211,12 @@ enum Command {
         /// or `auto` (every light up to 32, one beyond).
         #[arg(long, value_name = "every|one|auto", default_value = "auto", value_parser = parse_light_selection)]
         light_selection: penumbra::reference::LightSelection,
+        /// Where the 2D draws (point in the pixel, on an area light, environment and BSDF
+        /// directions) come from: `independent` numbers, or scrambled `sobol` points, stratified
+        /// over each pixel's samples (unbiased, less error for the same samples; the
+        /// standard-error image then states the error independent samples would have).
+        #[arg(long, value_name = "independent|sobol", default_value = "independent")]
+        sampler: penumbra::reference::Sampler,
         /// Write the scene as the tracer sees it (triangles per material as PLY, camera, materials and lights as JSON) into DIR and exit, for tools/reference_vs_mitsuba.py.
         #[arg(long, value_name = "DIR")]
         export_scene: Option<PathBuf>,
@@ -445,7 +451,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let opts = options(&render);
             penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
         }
-        Command::Reference { scene, spp, max_stderr, stderr_over, size, bounces, roulette_after, light_selection, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
+        Command::Reference { scene, spp, max_stderr, stderr_over, size, bounces, roulette_after, light_selection, sampler, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
             if let Some(dir) = export_scene {
                 for p in penumbra::reference::export::export_file(&scene, &dir)? {
                     penumbra::outln!("wrote {}", p.display());
@@ -462,7 +468,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             };
             let spp = spp.unwrap_or(if max_stderr.is_some() { 65536 } else { 256 });
             let target = max_stderr.map(|max| ErrorTarget { max, scope: stderr_over, min_spp: MIN_ADAPTIVE_SPP });
-            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0, light_selection };
+            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0, light_selection, sampler };
             let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, target, frame, gpu: gpu_desc(&device) })?;
             for p in &report.written {
                 penumbra::outln!("wrote {}", p.display());

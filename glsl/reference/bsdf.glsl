@@ -117,13 +117,14 @@ float bsdf_pdf(Surface s, Material m, LobeChoice p, vec3 v, vec3 l) {
     return pdf;
 }
 
-// Samples the next direction; `weight` = f |cos| / pdf. False when the path ends here.
-bool sample_bsdf(Surface s, Material m, vec3 v, inout uint rng, out vec3 l, out vec3 weight, out float pdf) {
+// Samples the next direction at path depth `depth`; `weight` = f |cos| / pdf. False when the
+// path ends here.
+bool sample_bsdf(Surface s, Material m, vec3 v, uint depth, inout uint rng, out vec3 l, out vec3 weight, out float pdf) {
     weight = vec3(0.0);
     pdf = 0.0;
     LobeChoice p = lobe_choice(m);
     float choice = rand(rng);
-    vec2 u = vec2(rand(rng), rand(rng));
+    vec2 u = sample2(DRAW_BSDF, depth, 0u, rng);
     if (choice < p.diffuse) {
         l = sample_cosine(s.shading_normal, u);
     } else if (SCENE_HAS_SPECULAR && choice < p.diffuse + p.specular) {

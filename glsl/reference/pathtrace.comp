@@ -264,7 +264,7 @@ vec3 light_seen(uint i, vec3 d) {
 
 // A direction toward a point light, its distance and what arrives along it divided by the
 // solid-angle pdf of the direction (for delta lights, the irradiance at normal incidence).
-bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving, out float dist) {
+bool sample_light(uint i, vec3 p, uint depth, inout uint rng, out vec3 l, out vec3 arriving, out float dist) {
     Light light = lights.items[i];
     uint type = uint(light.position.w);
     l = vec3(0.0, 1.0, 0.0);
@@ -277,7 +277,7 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
         }
         return true;
     }
-    vec2 u = vec2(rand(rng), rand(rng));
+    vec2 u = sample2(DRAW_LIGHT, depth, i, rng);
     if (SCENE_HAS_SPHERE_LIGHTS && type == LIGHT_SPHERE) {
         // Uniform directions in the cone of the sphere's visible cap: pdf 1 / (2 pi (1 - cos_max)).
         vec3 to_center = light.position.xyz - p;
@@ -318,9 +318,9 @@ bool sample_light(uint i, vec3 p, inout uint rng, out vec3 l, out vec3 arriving,
 // What light `i` sends through the surface toward v, unshadowed, with the direction and distance
 // of the shadow ray that decides whether it arrives: exact for a punctual light, one sampled point
 // (divided by its pdf) of an area light; zero where it cannot reach the surface.
-vec3 light_contribution(uint i, Surface s, Material m, vec3 v, inout uint rng, out vec3 l, out float dist) {
+vec3 light_contribution(uint i, Surface s, Material m, vec3 v, uint depth, inout uint rng, out vec3 l, out float dist) {
     vec3 arriving;
-    if (!sample_light(i, s.p, rng, l, arriving, dist) || all(equal(arriving, vec3(0.0)))) {
+    if (!sample_light(i, s.p, depth, rng, l, arriving, dist) || all(equal(arriving, vec3(0.0)))) {
         return vec3(0.0);
     }
     return bsdf_times_cos(s, m, v, l) * arriving;
@@ -341,7 +341,7 @@ bool unblocked_toward(Surface s, vec3 l, float dist, uint skip_light, inout uint
 // with one random number per light for all three channels, so lights of one colour pick the same
 // light and take one shadow ray. The environment map: one ray, weighted against the BSDF
 // sampling that can also find it.
-vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
+vec3 direct_light(Surface s, Material m, vec3 v, uint depth, inout uint rng) {
     vec3 sum = vec3(0.0);
     if (NEE_MODE == 1u || (NEE_MODE == 2u && (batch.flags & FLAG_ONE_LIGHT) != 0u)) {
         vec3 total = vec3(0.0);
@@ -351,7 +351,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
         for (uint i = 0u; i < params.counts.x; ++i) {
             vec3 l;
             float dist;
-            vec3 c = max(light_contribution(i, s, m, v, rng, l, dist), vec3(0.0));
+            vec3 c = max(light_contribution(i, s, m, v, depth, rng, l, dist), vec3(0.0));
             if (all(equal(c, vec3(0.0)))) {
                 continue;
             }
@@ -383,7 +383,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
         for (uint i = 0u; i < params.counts.x; ++i) {
             vec3 l;
             float dist;
-            vec3 c = light_contribution(i, s, m, v, rng, l, dist);
+            vec3 c = light_contribution(i, s, m, v, depth, rng, l, dist);
             if (any(notEqual(c, vec3(0.0))) && unblocked_toward(s, l, dist, i, rng)) {
                 sum += c;
             }
@@ -392,7 +392,7 @@ vec3 direct_light(Surface s, Material m, vec3 v, inout uint rng) {
     if (!SCENE_SAMPLES_ENVIRONMENT || params.environment_map.z == 0u) {
         return sum;
     }
-    vec2 u = vec2(rand(rng), rand(rng));
+    vec2 u = sample2(DRAW_ENVIRONMENT, depth, 0u, rng);
     vec3 l;
     float pdf;
     if (sample_environment(u, l, pdf)) {
@@ -437,7 +437,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
         }
         if (counted) {
             uint light_rng = pcg_hash(light_key ^ pcg_hash(depth));
-            radiance += throughput * direct_light(s, m, v, light_rng);
+            radiance += throughput * direct_light(s, m, v, depth, light_rng);
         }
         // Past the last vertex a ray can only add emission or the environment: where the scene
         // has neither, the path ends here with the same estimate and one ray fewer.
@@ -447,7 +447,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
         vec3 l;
         vec3 weight;
         float pdf;
-        if (!sample_bsdf(s, m, v, rng, l, weight, pdf)) {
+        if (!sample_bsdf(s, m, v, depth, rng, l, weight, pdf)) {
             break;
         }
         throughput *= weight;
@@ -504,8 +504,9 @@ void main() {
     for (uint index = have; index < end; ++index) {
         uint rng = rng_start(pixel_index, index, batch.seed);
         uint light_key = rng_start(pixel_index, index, batch.seed ^ LIGHT_STREAM);
+        sampler_start(pixel_index, index, batch.seed);
         // Box filter: uniform over the pixel's square.
-        vec2 film = vec2(pixel) + vec2(rand(rng), rand(rng));
+        vec2 film = vec2(pixel) + sample2(DRAW_PIXEL, 0u, 0u, rng);
         vec3 x = path_radiance(film, rng, light_key);
         vec3 delta = x - mean.rgb;
         mean.rgb += delta / float(index + 1u);

@@ -52,6 +52,45 @@ impl BvhWalk {
     }
 }
 
+/// Where the tracer's 2D draws (the point in the pixel, on an area light, the environment and
+/// BSDF directions) come from: spec constant 11 (`SAMPLER_SOBOL`, `glsl/reference/rng.glsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Sampler {
+    /// Independent uniform numbers from each sample's PCG stream: the samples of a pixel are
+    /// independent, so their scatter is the error of their mean (the standard-error image).
+    #[default]
+    Independent,
+    /// Owen-scrambled Sobol points, shuffled per draw (Burley 2020): a pixel's samples are
+    /// stratified in each 2D draw, so its mean has less error than independent samples' where
+    /// the integrand is smooth in those dimensions (README, "The Sobol sampler": 2.3 times less
+    /// variance on the Cornell box with 32 bounces, 16 with direct light only, measured by
+    /// the scatter of means over seeds), and still unbiased. The standard-error image is
+    /// then the error independent samples would have: an overestimate wherever stratification
+    /// helps.
+    Sobol,
+}
+
+impl Sampler {
+    /// The command line's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Sampler::Independent => "independent",
+            Sampler::Sobol => "sobol",
+        }
+    }
+}
+
+impl std::str::FromStr for Sampler {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Sampler, String> {
+        match s {
+            "independent" => Ok(Sampler::Independent),
+            "sobol" => Ok(Sampler::Sobol),
+            _ => Err(format!("unknown sampler `{s}` (independent or sobol)")),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SceneFeatures {
     pub maps: bool,
@@ -98,11 +137,12 @@ impl SceneFeatures {
     }
 
     /// The constants in `glsl/reference/features.glsl`'s order.
-    pub fn specialization(&self, nee: NeeMode, walk: BvhWalk) -> Vec<SpecConstant> {
+    pub fn specialization(&self, nee: NeeMode, walk: BvhWalk, sampler: Sampler) -> Vec<SpecConstant> {
         let flags = [self.maps, self.translucency, self.specular, self.transmission, self.punctual_lights, self.sphere_lights, self.quad_lights, self.environment_map, self.sampled_environment];
         let mut constants: Vec<SpecConstant> = flags.iter().enumerate().map(|(id, &on)| SpecConstant { id: id as u32, bits: u32::from(on) }).collect();
         constants.push(SpecConstant { id: flags.len() as u32, bits: nee as u32 });
         constants.push(SpecConstant { id: flags.len() as u32 + 1, bits: u32::from(walk == BvhWalk::Ordered) });
+        constants.push(SpecConstant { id: flags.len() as u32 + 2, bits: u32::from(sampler == Sampler::Sobol) });
         constants
     }
 }

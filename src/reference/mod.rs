@@ -53,6 +53,14 @@
 //! `sqrt(M2 / (n − 1) / n)`. That standard error is itself estimated from the samples: where a
 //! pixel's value hinges on rare events (a small bright light found by few paths) it is too
 //! small until enough of them have been drawn.
+//!
+//! With [`Sampler::Sobol`] the 2D draws (the point in the pixel, on an area light, the
+//! environment and BSDF directions at each depth) come instead from Owen-scrambled Sobol points,
+//! the pixel's n-th sample taking the n-th point, still whatever the batching. The mean is as
+//! unbiased and its error is smaller (stratification), but the samples of a pixel are no longer
+//! independent, so the standard error above is then the one independent samples would have: an
+//! overestimate wherever stratification helps (`tests/reference.rs`, README "The Sobol
+//! sampler").
 
 pub mod bvh;
 pub mod texel_table;
@@ -74,6 +82,7 @@ use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
 use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
+pub use features::Sampler;
 use features::{BvhWalk, NeeMode, SceneFeatures};
 pub use scene_data::{srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
 
@@ -112,6 +121,8 @@ pub struct Settings {
     /// is the same as without, within the `bounces` cap.
     pub roulette_after: Option<u32>,
     pub light_selection: LightSelection,
+    /// Where the 2D draws come from; [`Sampler::Sobol`] stratifies a pixel's samples.
+    pub sampler: Sampler,
 }
 
 impl Default for Settings {
@@ -124,6 +135,7 @@ impl Default for Settings {
             batching: Batching::Adaptive,
             roulette_after: Some(DEFAULT_ROULETTE_AFTER),
             light_selection: LightSelection::Auto,
+            sampler: Sampler::Independent,
         }
     }
 }
@@ -378,7 +390,7 @@ pub struct ReferenceRenderer {
     /// The walk whose links `buffers.bvh_skips` holds (the stack walk's are one zeroed texel).
     links_for: BvhWalk,
     /// Pipelines compiled so far, by the features, next-event mode and walk they were made for.
-    pipelines: Vec<(SceneFeatures, NeeMode, BvhWalk, PipelineId)>,
+    pipelines: Vec<(SceneFeatures, NeeMode, BvhWalk, Sampler, PipelineId)>,
     buffers: SceneBuffers,
     params: Params,
     mean: ImageId,
@@ -494,7 +506,7 @@ impl ReferenceRenderer {
     pub fn render_until(&mut self, settings: &Settings, mut stop: Option<Stop<'_>>, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
         settings.check()?;
         // Compiled before the clock starts: the rate counts tracing, not llvmpipe's compile.
-        self.pipeline(nee_mode(settings.push(0, 1, self.params.counts[0]).flags))?;
+        self.pipeline(nee_mode(settings.push(0, 1, self.params.counts[0]).flags), settings.sampler)?;
         let start = Instant::now();
         let target = Duration::from_millis(250);
         let mut cap = MAX_BATCH;
@@ -517,7 +529,7 @@ impl ReferenceRenderer {
             let count = batch.min(cap).min(next_check - done);
             let checkpoint = done + count == next_check;
             let t0 = Instant::now();
-            let short = self.dispatch(settings.push(done, count, self.params.counts[0]), checkpoint)?;
+            let short = self.dispatch(settings.push(done, count, self.params.counts[0]), settings.sampler, checkpoint)?;
             if short > 0 {
                 if count == 1 {
                     return Err(Error::Usage(format!(
@@ -586,9 +598,9 @@ impl ReferenceRenderer {
         Ok(ReferenceImage { mean, standard_error, spp, seconds })
     }
 
-    /// The tracer specialised for `self.features`, `nee` and `self.walk`, compiled on first use
-    /// (a scene renders with one mode, so one compile).
-    fn pipeline(&mut self, nee: NeeMode) -> Result<PipelineId> {
+    /// The tracer specialised for `self.features`, `nee`, `self.walk` and `sampler`, compiled on
+    /// first use (a scene renders with one mode, so one compile).
+    fn pipeline(&mut self, nee: NeeMode, sampler: Sampler) -> Result<PipelineId> {
         let (features, walk) = (self.features, self.walk);
         if walk == BvhWalk::Ordered && self.links_for != walk {
             let stale = self.buffers.bvh_skips.image;
@@ -599,20 +611,20 @@ impl ReferenceRenderer {
         }
         // Every feature on is the shader as written, which reads the mode from the batch.
         let nee = if features == SceneFeatures::ALL { NeeMode::Either } else { nee };
-        if let Some(&(_, _, _, id)) = self.pipelines.iter().find(|(f, n, w, _)| *f == features && *n == nee && *w == walk) {
+        if let Some(&(_, _, _, _, id)) = self.pipelines.iter().find(|(f, n, w, s, _)| *f == features && *n == nee && *w == walk && *s == sampler) {
             return Ok(id);
         }
-        let desc = ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: features.specialization(nee, walk) };
+        let desc = ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: features.specialization(nee, walk, sampler) };
         let id = self.gpu.create_compute_pipeline(&desc, &dev_shaders())?;
-        self.pipelines.push((features, nee, walk, id));
+        self.pipelines.push((features, nee, walk, sampler, id));
         Ok(id)
     }
 
     /// One submitted and waited-for batch; the last one also copies the results to the host.
     /// Returns how many pixels' batches were cut short (and so left as they were).
-    fn dispatch(&mut self, push: BatchPush, read_back: bool) -> Result<u32> {
+    fn dispatch(&mut self, push: BatchPush, sampler: Sampler, read_back: bool) -> Result<u32> {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let pipeline = self.pipeline(nee_mode(push.flags))?;
+        let pipeline = self.pipeline(nee_mode(push.flags), sampler)?;
         let (mean, m2, rb, status) = (self.mean, self.second_moment, self.readback, self.status);
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
