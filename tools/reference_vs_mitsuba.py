@@ -14,8 +14,8 @@ Mitsuba keeps its own Russian roulette (`rr_depth` 5), penumbra its default.
 Prints one table: samples per second of each renderer (in brackets penumbra's rate over
 Mitsuba's), the image means (luminance) and the agreement check: the largest |z| over the RGB
 channels and the variants, z being the difference of the two image means over their combined
-standard error (penumbra's from its standard-error image, Mitsuba's from the scatter of the means
-of CHUNKS renders with different seeds). Timing: penumbra's from its first dispatch to the
+standard error (each renderer's from the scatter of the means of its CHUNKS renders, each of the
+full spp with its own seed). Timing: penumbra's from its first dispatch to the
 read-back image (the scene and pipeline are built before); Mitsuba's of `mi.render` and the
 copy to numpy, after the scene is loaded (and, for the LLVM and CUDA variants, after a 1-spp
 render that compiles their kernels).
@@ -23,10 +23,14 @@ render that compiles their kernels).
 Samples per second alone favour the renderer with the noisier samples, so the table also gives
 each renderer's variance of one sample, per pixel and channel relative as the chart's relative
 MSE weighs errors (over r^2 + 0.01, r being penumbra's image for both, so that both weigh the
-pixels alike), averaged over the image: penumbra's from its standard-error image, Mitsuba's from
-the scatter of its CHUNKS renders pixel by pixel. A renderer reaches a given relative MSE in a
-time proportional to that variance over its samples per second, so the last column, penumbra's
-samples/s over its variance divided by Mitsuba's, is penumbra's speed at equal error.
+pixels alike), averaged over the image: for both, the scatter of its CHUNKS renders pixel by
+pixel times their spp (the error a render of that spp has, whatever the sampler; a stratified
+sampler's samples are not independent, so neither a standard-error image nor renders of fewer
+samples would give it). A renderer reaches a given relative MSE in a time proportional to that
+variance over its samples per second, so the last column, penumbra's samples/s over its variance
+divided by Mitsuba's, is penumbra's speed at equal error. `--penumbra-args '--sampler sobol'` and
+`--mitsuba-sampler NAME` (Mitsuba's `independent`, `stratified`, `multijitter`, `orthogonal` or
+`ldsampler`) choose the samplers.
 
 Needs `python3 -m venv tools/.venv && tools/.venv/bin/pip install mitsuba numpy` (the mitsuba
 wheel does not pull numpy in). The `llvm_ad_rgb` variant needs an LLVM newer than Debian 12's
@@ -68,7 +72,8 @@ def parse_args():
     p.add_argument("--cases", default=",".join(CASES))
     p.add_argument("--variants", default="scalar_rgb,llvm_ad_rgb")
     p.add_argument("--spp-scale", type=float, default=1.0, help="multiply every case's spp")
-    p.add_argument("--chunks", type=int, default=4, help="Mitsuba renders per case (different seeds) for its standard error")
+    p.add_argument("--chunks", type=int, default=4, help="renders per case and renderer (different seeds, each of the full spp) for the error of one")
+    p.add_argument("--mitsuba-sampler", default="independent", help="Mitsuba's sampler plugin (independent, stratified, multijitter, orthogonal, ldsampler)")
     p.add_argument("--libllvm", default=None, help="libLLVM for Dr.Jit's LLVM backend")
     p.add_argument("--penumbra-args", default="", help="extra arguments for penumbra reference (e.g. '--roulette-after off')")
     return p.parse_args()
@@ -94,10 +99,6 @@ def run_penumbra(binary, scene, args, size, spp, seed, extra):
     return rate, vals[:3], vals[3:], out
 
 
-def stderr_image(image):
-    return image.with_suffix(".stderr.exr")
-
-
 def export_scene(binary, scene, dest):
     r = subprocess.run([binary, "reference", str(ROOT / scene), "--export-scene", str(dest)], capture_output=True, text=True)
     if r.returncode != 0:
@@ -109,7 +110,7 @@ def rgb(v):
     return {"type": "rgb", "value": [float(x) for x in v]}
 
 
-def mitsuba_scene(mi, exported, folder, size, max_depth, flip_emissive):
+def mitsuba_scene(mi, exported, folder, size, max_depth, flip_emissive, sampler):
     T = mi.ScalarTransform4f
     cam = exported["camera"]
     w, h = size
@@ -122,7 +123,7 @@ def mitsuba_scene(mi, exported, folder, size, max_depth, flip_emissive):
             "fov": cam["fov_y_deg"],
             "to_world": T().look_at(origin=cam["position"], target=cam["target"], up=cam["up"]),
             "film": {"type": "hdrfilm", "width": w, "height": h, "pixel_format": "rgb", "rfilter": {"type": "box"}},
-            "sampler": {"type": "independent"},
+            "sampler": {"type": sampler},
         },
     }
     black = {"type": "diffuse", "reflectance": rgb([0, 0, 0])}
@@ -166,13 +167,13 @@ def mitsuba_scene(mi, exported, folder, size, max_depth, flip_emissive):
     return scene
 
 
-def render_mitsuba(variant, exported, folder, size, max_depth, flip, spp, chunks):
+def render_mitsuba(variant, exported, folder, size, max_depth, flip, spp, chunks, sampler):
     import mitsuba as mi
     import numpy as np
 
     mi.set_variant(variant)
-    scene = mi.load_dict(mitsuba_scene(mi, exported, folder, size, max_depth, flip))
-    per_chunk = max(1, spp // chunks)
+    scene = mi.load_dict(mitsuba_scene(mi, exported, folder, size, max_depth, flip, sampler))
+    per_chunk = spp
     if variant.startswith(("llvm", "cuda")):
         np.array(mi.render(scene, spp=1, seed=999))  # compiles the kernels outside the timing
     means, images, seconds = [], [], 0.0
@@ -186,7 +187,7 @@ def render_mitsuba(variant, exported, folder, size, max_depth, flip, spp, chunks
     mean = means.mean(axis=0)
     se = means.std(axis=0, ddof=1) / math.sqrt(chunks) if chunks > 1 else np.full(3, float("nan"))
     rate = size[0] * size[1] * per_chunk * chunks / seconds
-    # Per pixel and channel, the variance of one sample: that of the chunk means times their spp.
+    # Per pixel and channel, the variance of one sample: that of the renders times their spp.
     variance = np.var(np.array(images), axis=0, ddof=1) * per_chunk if chunks > 1 else None
     return rate, mean, se, variance
 
@@ -204,6 +205,26 @@ def relative_variance(variance, reference):
     return float((variance / (reference**2 + 0.01)).mean())
 
 
+def penumbra_renders(args, scene, pargs, spp, extra):
+    """CHUNKS renders of the full spp with seeds 1.. CHUNKS: the rate over all of them, the mean
+    of their image means and its standard error from their scatter, their average image, and
+    per pixel and channel the variance of one sample (that of the renders times their spp)."""
+    import numpy as np
+
+    samples, seconds, means, images = 0.0, 0.0, [], []
+    for seed in range(1, args.chunks + 1):
+        rate, mean, _, out = run_penumbra(args.penumbra, scene, pargs, args.size, spp, seed, extra)
+        img = read_rgb(out)
+        samples += img.shape[0] * img.shape[1] * spp
+        seconds += img.shape[0] * img.shape[1] * spp / rate
+        means.append(mean)
+        images.append(img)
+    means = np.array(means)
+    se = means.std(axis=0, ddof=1) / math.sqrt(args.chunks) if args.chunks > 1 else np.full(3, float("nan"))
+    variance = np.var(np.array(images), axis=0, ddof=1) * spp if args.chunks > 1 else None
+    return samples / seconds, means.mean(axis=0), se, np.mean(images, axis=0), variance
+
+
 def main():
     args = parse_args()
     setup_llvm(args.libllvm)
@@ -216,22 +237,21 @@ def main():
         spp = max(args.chunks, int(spp * args.spp_scale))
         folder = Path(tempfile.mkdtemp(prefix=f"mitsuba-{name}-"))
         exported = export_scene(args.penumbra, scene, folder)
-        rate, mean, se, image = run_penumbra(args.penumbra, scene, pargs, args.size, spp, 1, extra)
+        rate, mean, se, image, pvariance = penumbra_renders(args, scene, pargs, spp, extra)
         row = {"case": name, "spp": spp, "penumbra": (rate, mean, se), "mitsuba": {}, "efficiency": {}}
         for v in variants:
             try:
-                row["mitsuba"][v] = render_mitsuba(v, exported, folder, (w, h), max_depth, flip, spp, args.chunks)
+                row["mitsuba"][v] = render_mitsuba(v, exported, folder, (w, h), max_depth, flip, spp, args.chunks, args.mitsuba_sampler)
             except Exception as e:  # a variant that cannot run here is reported, not fatal
                 row["mitsuba"][v] = str(e).splitlines()[0][:60]
                 continue
             mvariance = row["mitsuba"][v][3]
-            if mvariance is not None:
+            if mvariance is not None and pvariance is not None:
                 # Equal error: a renderer reaches a given noise in time proportional to its
                 # variance per sample over its samples per second, so the ratio of
                 # samples/s / variance is the speed ratio at equal error. Both variances are
                 # taken relative to penumbra's image, so they weigh the pixels alike.
-                reference = read_rgb(image)
-                pvariance = read_rgb(stderr_image(image)) ** 2 * spp
+                reference = image
                 row["efficiency"][v] = (relative_variance(pvariance, reference), relative_variance(mvariance, reference))
         rows.append(row)
         print(f"{name}: done", file=sys.stderr, flush=True)
