@@ -794,7 +794,7 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
         std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&all).output().expect("run penumbra")
     };
     // No roulette: the furnace is then noise-free (every path carries the truncated series).
-    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "--roulette-after", "off", "--light-selection", "one", "-o", out.to_str().expect("utf-8 path")]);
+    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "--roulette-after", "off", "--light-selection", "one", "--sampler", "sobol", "-o", out.to_str().expect("utf-8 path")]);
     let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{stdout}\n{stderr}");
     // The summary goes to stdout; progress lines only to a terminal, so a pipe gets none.
@@ -813,6 +813,7 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
         (&["--roulette-after", "0"][..], "--roulette-after"),
         (&["--roulette-after", "never"][..], "--roulette-after"),
         (&["--light-selection", "some"][..], "--light-selection"),
+        (&["--sampler", "halton"][..], "--sampler"),
     ] {
         let o = penumbra(args);
         let stderr = String::from_utf8_lossy(&o.stderr);
