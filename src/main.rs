@@ -119,6 +119,10 @@ enum Command {
         /// at most the square root of this fraction of the smallest p99; 0: exactly --reference-spp.
         #[arg(long, value_name = "F", default_value_t = 0.1)]
         reference_noise: f64,
+        /// Where the reference's draws come from: `sobol` (scrambled Sobol points, the error
+        /// from independent replicates; less error for the same samples) or `independent`.
+        #[arg(long, value_name = "independent|sobol", default_value = "sobol")]
+        reference_sampler: penumbra::reference::Sampler,
         /// Also render each configuration at N times the size in each axis, box-filtered down, and
         /// report both errors (pixel centres and supersampled); the plot shows the supersampled one.
         #[arg(long, value_name = "N", default_value_t = 1)]
@@ -212,9 +216,9 @@ enum Command {
         #[arg(long, value_name = "every|one|auto", default_value = "auto", value_parser = parse_light_selection)]
         light_selection: penumbra::reference::LightSelection,
         /// Where the 2D draws (point in the pixel, on an area light, environment and BSDF
-        /// directions) come from: `independent` numbers, or scrambled `sobol` points, stratified
-        /// over each pixel's samples (unbiased, less error for the same samples; the
-        /// standard-error image then states the error independent samples would have).
+        /// directions) come from: `independent` numbers, or scrambled `sobol` points in 8
+        /// independent replicates per pixel (unbiased, less error for the same samples; the
+        /// standard error from the replicates' scatter).
         #[arg(long, value_name = "independent|sobol", default_value = "independent")]
         sampler: penumbra::reference::Sampler,
         /// Write the scene as the tracer sees it (triangles per material as PLY, camera, materials and lights as JSON) into DIR and exit, for tools/reference_vs_mitsuba.py.
@@ -385,7 +389,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
         }
-        Command::Chart { scene, output, csv, size, frames, timing_budget, reference_spp, reference_noise, supersample, cache_dir, methods, frame, device } => {
+        Command::Chart { scene, output, csv, size, frames, timing_budget, reference_spp, reference_noise, reference_sampler, supersample, cache_dir, methods, frame, device } => {
             let opts = penumbra::chart::ChartOptions {
                 scene,
                 size,
@@ -393,6 +397,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 timing_budget_s: timing_budget,
                 reference_spp,
                 reference_noise,
+                reference_sampler,
                 supersample,
                 png: Some(output.clone()),
                 csv: csv.clone(),

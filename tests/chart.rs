@@ -126,7 +126,7 @@ fn chart_measures_the_textured_shadow_volume_level() {
         assert!((err(c) / err("physical pscs") - 1.0).abs() < 1e-3, "{c}: {} vs {}", err(c), err("physical pscs"));
     }
     let table = std::fs::read_to_string(&csv).unwrap();
-    assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,4,")), "{table}");
+    assert!(table.lines().skip(1).all(|l| l.contains(",direct; sobol; 16 spp,4,")), "{table}");
     // Like for like: the method rendered at 256² and box-filtered to 64² averages its pixels'
     // footprints as the reference does, and most of the pixel centres' error is gone (aliased
     // texture detail); the CSV keeps both.
@@ -226,7 +226,7 @@ radiance = 0.3
     assert!(err("pyramid nphi=32 ls=4 lo=4 bands=2 corrected") > 1.5 * default);
     assert!(err("pyramid nphi=4 ls=4 lo=4 bands=4 corrected") >= default);
     let table = std::fs::read_to_string(&csv).unwrap();
-    assert!(table.lines().skip(1).all(|l| l.contains(",direct; 16 spp,")), "{table}");
+    assert!(table.lines().skip(1).all(|l| l.contains(",direct; sobol; 16 spp,")), "{table}");
 }
 
 /// A CSV column by header name, one string per row.

@@ -180,6 +180,8 @@ fn chart_and_speedup_at_equal_error() {
             reference_spp: spp,
             // Exactly `spp` samples, as this measurement was made.
             reference_noise: 0.0,
+            // Independent samples, as this measurement was made.
+            reference_sampler: penumbra::reference::Sampler::Independent,
             supersample: 1,
             png: Some(out_dir().join(format!("chart_{name}.png"))),
             csv: Some(out_dir().join(format!("chart_{name}.csv"))),

@@ -168,6 +168,10 @@ layout(set = 0, binding = 6, rgba32f) uniform image2D mean_radiance;
 layout(set = 0, binding = 7, rgba32f) uniform image2D second_moment;
 // Pixels whose batch did not run to the end (zeroed by the host before each dispatch).
 layout(set = 0, binding = 12) buffer Status { uint short_pixels; } status;
+// With the Sobol sampler, per pixel the sum of each replicate's samples (rgb; sample index
+// modulo SOBOL_REPLICATES, reference/rng.glsl): the scatter of the replicates' means is the
+// error of the pixel's mean (src/reference/mod.rs, read_image). Unused otherwise.
+layout(set = 0, binding = 14) buffer Replicates { vec4 sums[]; } replicates;
 
 layout(push_constant) uniform Batch {
     uint sample_offset;  // index of this dispatch's first sample (0: start afresh)
@@ -501,6 +505,11 @@ void main() {
     uint have = batch.sample_offset > 0u ? uint(m2.a) : 0u;
     uint end = max(batch.sample_offset + batch.sample_count, have);
     uint done = 0u;
+    vec3 replicate_sum[SOBOL_REPLICATES];
+    uint first_replicate = pixel_index * SOBOL_REPLICATES;
+    for (uint r = 0u; r < SOBOL_REPLICATES; ++r) {
+        replicate_sum[r] = SAMPLER_SOBOL && have > 0u ? replicates.sums[first_replicate + r].rgb : vec3(0.0);
+    }
     for (uint index = have; index < end; ++index) {
         uint rng = rng_start(pixel_index, index, batch.seed);
         uint light_key = rng_start(pixel_index, index, batch.seed ^ LIGHT_STREAM);
@@ -511,6 +520,9 @@ void main() {
         vec3 delta = x - mean.rgb;
         mean.rgb += delta / float(index + 1u);
         m2.rgb += delta * (x - mean.rgb);
+        if (SAMPLER_SOBOL) {
+            replicate_sum[index % SOBOL_REPLICATES] += x;
+        }
         done += 1u;
     }
     // llvmpipe stops every loop of an invocation once all of them together have run 65,535
@@ -532,4 +544,9 @@ void main() {
     m2.a = float(end);
     imageStore(mean_radiance, ivec2(pixel), mean);
     imageStore(second_moment, ivec2(pixel), m2);
+    if (SAMPLER_SOBOL) {
+        for (uint r = 0u; r < SOBOL_REPLICATES; ++r) {
+            replicates.sums[first_replicate + r] = vec4(replicate_sum[r], 0.0);
+        }
+    }
 }

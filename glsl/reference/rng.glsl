@@ -28,23 +28,28 @@ float rand(inout uint state) {
     return float(word >> 8u) * (1.0 / 16777216.0);
 }
 
-// The Sobol sampler: per pixel and per 2D draw (a `dimension` key: what is drawn, at which
-// depth, for which light) the first two dimensions of Sobol's sequence, shuffled and
-// Owen-scrambled with hashes (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020). The
-// pixel's n-th sample takes the sequence's n-th point (after the shuffle), so any prefix of a
-// pixel's samples - whatever the batching - is a stratified set in every 2D draw, and each draw
-// is uniform on its own: the estimate is unbiased, and its error falls faster than independent
-// sampling's wherever the integrand is smooth enough in those two dimensions. Draws with
+// The Sobol sampler: per pixel and per 2D draw (a key: what is drawn, at which depth, for which
+// light) the first two dimensions of Sobol's sequence, shuffled and Owen-scrambled with hashes
+// (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020). A pixel's samples form
+// SOBOL_REPLICATES independent replicates (sample index modulo the count), each with scrambles of
+// its own, and a replicate's k-th sample takes its sequence's k-th point (after the shuffle), so
+// any prefix of a replicate's samples - whatever the batching - is a stratified set in every 2D
+// draw, and each draw is uniform on its own: the estimate is unbiased, and its error falls faster
+// than independent sampling's wherever the integrand is smooth enough in those two dimensions.
+// The replicates being independent, the scatter of their means measures that error (a single
+// scramble's samples are not independent, so their scatter would overstate it). Draws with
 // different keys use independent scrambles (padding), so they are independent of each other
-// within a sample. The sample index and the pixel's scramble seed are set once per sample by
+// within a sample. The sample index and the scramble seed are set once per sample by
 // `sampler_start`; they are per-invocation state like the PCG streams.
+const uint SOBOL_REPLICATES = 8u;  // src/reference/mod.rs SOBOL_REPLICATES
 uint sampler_index = 0u;
 uint sampler_pixel_seed = 0u;
 
 void sampler_start(uint pixel, uint sample_index, uint seed) {
-    sampler_index = sample_index;
-    // Independent of the sample index: every sample of the pixel shares the scramble.
-    sampler_pixel_seed = pcg_hash(pixel ^ pcg_hash(seed ^ 0x51ed270bu));
+    sampler_index = sample_index / SOBOL_REPLICATES;
+    // Independent of the sample's place in its replicate: the replicate's samples share the scramble.
+    uint replicate = sample_index % SOBOL_REPLICATES;
+    sampler_pixel_seed = pcg_hash(pcg_hash(pixel ^ pcg_hash(seed ^ 0x51ed270bu)) ^ pcg_hash(replicate + 0x2545f491u));
 }
 
 // Laine and Karras's permutation as improved by Burley: each output bit depends only on the

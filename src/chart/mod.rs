@@ -29,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, ReferenceKind};
 use crate::metrics::{self, CompareOptions, Metrics};
-use crate::reference::{LightPaths, ReferenceImage, ReferenceRenderer, Settings, Stop, MIN_ADAPTIVE_SPP};
+use crate::reference::{LightPaths, ReferenceImage, ReferenceRenderer, Sampler, Settings, Stop, MIN_ADAPTIVE_SPP};
 use crate::renderer::{FrameOutput, Renderer};
 use crate::scene::Scene;
 use crate::timing::summarise;
@@ -49,6 +49,9 @@ pub struct ChartOptions {
     /// The reference renders until its noise's relative MSE is at most this fraction of the
     /// smallest relative MSE it judges (0: exactly `reference_spp`).
     pub reference_noise: f64,
+    /// Where the reference's random draws come from; [`Sampler::Sobol`] (the command line's
+    /// default) reaches the noise the chart asks for in fewer samples.
+    pub reference_sampler: Sampler,
     /// Also render each configuration at this many times the size and box-filter it down (1: no).
     pub supersample: u32,
     pub png: Option<PathBuf>,
@@ -128,14 +131,15 @@ fn scene_without_source(scene: &Scene) -> Scene {
     s
 }
 
-fn reference_settings(kind: ReferenceKind, spp: u32) -> (Settings, String) {
+fn reference_settings(kind: ReferenceKind, spp: u32, sampler: Sampler) -> (Settings, String) {
     let (paths, bounces, label) = match kind {
         ReferenceKind::Direct => (LightPaths::Direct, 0, "direct"),
         ReferenceKind::Bounces(k) => (LightPaths::All, k, "bounces"),
         ReferenceKind::Indirect(k) => (LightPaths::Indirect, k, "bounces (indirect only)"),
     };
     let label = if kind == ReferenceKind::Direct { label.to_string() } else { format!("{bounces} {label}") };
-    (Settings { spp, bounces, paths, ..Settings::default() }, label)
+    let label = if sampler == Sampler::Independent { label } else { format!("{label}, {}", sampler.name()) };
+    (Settings { spp, bounces, paths, sampler, ..Settings::default() }, label)
 }
 
 /// A chart's reference: its mean, its standard error, and the label naming kind and spp.
@@ -168,7 +172,7 @@ pub fn stop_ratio(smallest_rel: f64, smallest_p99: f64, noise_rel: f64, noise_p9
 /// The reference for this scene and kind, good enough for `judged` (the images measured
 /// against it): from the cache when the cached one is, or rendered and cached.
 pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, judged: &[&HdrImage], opts: &ChartOptions) -> Result<ChartReference> {
-    let (settings, label) = reference_settings(kind, opts.reference_spp);
+    let (settings, label) = reference_settings(kind, opts.reference_spp, opts.reference_sampler);
     // Frame 0 keeps the key it had before frames could be charted, so caches stay valid.
     let frame_key = if opts.frame == 0 { String::new() } else { format!("|frame {}", opts.frame) };
     let key = cache_key(scene, size, &format!("{settings:?}|noise {}{frame_key}", opts.reference_noise));

@@ -60,13 +60,12 @@ pub enum Sampler {
     /// independent, so their scatter is the error of their mean (the standard-error image).
     #[default]
     Independent,
-    /// Owen-scrambled Sobol points, shuffled per draw (Burley 2020): a pixel's samples are
-    /// stratified in each 2D draw, so its mean has less error than independent samples' where
-    /// the integrand is smooth in those dimensions (README, "The Sobol sampler": 2.3 times less
-    /// variance on the Cornell box with 32 bounces, 16 with direct light only, measured by
-    /// the scatter of means over seeds), and still unbiased. The standard-error image is
-    /// then the error independent samples would have: an overestimate wherever stratification
-    /// helps.
+    /// Owen-scrambled Sobol points, shuffled per draw (Burley 2020), in
+    /// [`SOBOL_REPLICATES`](super::SOBOL_REPLICATES) independently scrambled replicates per
+    /// pixel: each replicate's samples are stratified in each 2D draw, so the pixel's mean has
+    /// less error than independent samples' where the integrand is smooth in those dimensions
+    /// (README, "The Sobol sampler"), and is still unbiased; the standard error comes from the
+    /// scatter of the replicates' means.
     Sobol,
 }
 
