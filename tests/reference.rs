@@ -134,6 +134,72 @@ radiance = [{}, {}, {}]
     }
 }
 
+/// Shading normals tilted away from the true surface: a large plane (y = 0) whose vertex normals
+/// all lean 40° toward +x, under a constant sky, seen from a camera low on the -x side looking
+/// along +x, so that every camera ray arrives between the two planes (above the surface, behind
+/// the shading normal). Both normals must be turned to the side the ray came from together: the
+/// plane then reflects the part of the cosine lobe about the shading normal that lies above the
+/// surface, ρ L (1 + cos α) / 2 (the lobe's projected solid angle above a plane at angle α,
+/// π (1 + cos α) / 2), wherever it is seen from. Turning each normal on its own toward the ray
+/// flips the shading normal under the surface and leaves ρ L (1 − cos α) / 2.
+#[test]
+fn shading_normals_tilted_from_the_surface_are_turned_with_it() {
+    let alpha = 40f32.to_radians();
+    let (sx, sy) = (alpha.sin(), alpha.cos());
+    let obj = common::temp_path("tilted-normals.obj");
+    let half = 20.0;
+    std::fs::write(
+        &obj,
+        format!("v -{half} 0 -{half}\nv {half} 0 -{half}\nv {half} 0 {half}\nv -{half} 0 {half}\nvn {sx} {sy} 0\nf 1//1 3//1 2//1\nf 1//1 4//1 3//1\n"),
+    )
+    .expect("write obj");
+    let sky = Vec3::new(1.0, 0.8, 0.6);
+    let albedo = 0.6;
+    let scene = parse(&format!(
+        r#"
+[camera]
+position = [-8.0, 1.5, 0.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 30
+
+[[materials]]
+name = "m"
+albedo = {albedo}
+
+[[objects]]
+mesh = "obj"
+path = "{}"
+material = "m"
+
+[environment]
+type = "constant"
+radiance = [{}, {}, {}]
+"#,
+        obj.display(),
+        sky.x,
+        sky.y,
+        sky.z
+    ));
+    let size = (24, 24);
+    let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 5)])[0];
+    let want = sky * albedo * (1.0 + alpha.cos()) / 2.0;
+    let mut plane = Agreement::new("plane with tilted shading normals");
+    for j in 0..size.1 {
+        for i in 0..size.0 {
+            let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
+            let on_plane = corners.iter().all(|&(a, b)| ground_point(&scene, i as f32 + a, j as f32 + b, size, half - 0.5).is_some());
+            if !on_plane {
+                continue;
+            }
+            let (_, d) = scene.camera.pixel_center_ray(i, j, size.0, size.1);
+            assert!(d.y < 0.0 && d.dot(Vec3::new(sx, sy, 0.0)) > 0.0, "the ray arrives between the planes");
+            plane.check(img, i, j, want, Vec3::ZERO);
+        }
+    }
+    assert!(plane.pixels > 150, "{} pixels", plane.pixels);
+    plane.assert();
+}
+
 const LIT_PLANE: &str = r#"
 [camera]
 position = [0.3, 2.5, 2.0]

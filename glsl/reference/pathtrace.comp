@@ -210,7 +210,11 @@ vec4 sample_texture(uint index, vec2 uv) {
 }
 
 // The surface hit by the ray along d, normals turned toward where the ray came from: a one-sided
-// thin surface seen from behind reflects like its front, as in the forward method. The material
+// thin surface seen from behind reflects like its front, as in the forward method. The shading
+// normal is turned with the geometric one, to its side: a ray arriving between the two planes
+// (at grazing incidence where interpolated normals lean away from the face) would otherwise turn
+// them to opposite sides, where bsdf_times_cos, which wants l on the viewer's side of both, is
+// zero almost everywhere, and the point would go black. The material
 // comes back with its maps applied as the raster methods apply them (glsl/forward/forward.frag,
 // glsl/shadow_volumes/light.frag): albedo and specular multiplied by their maps, and the shading
 // normal bent by the normal map in the frame (t, b, n) built after the flip, so that seen from
@@ -227,7 +231,7 @@ Surface surface_at(Hit h, vec3 d, out Material m) {
     float len = length(ns);
     ns = len > 0.0 ? ns / len : ng;
     s.geometric_normal = dot(ng, d) > 0.0 ? -ng : ng;
-    s.shading_normal = dot(ns, d) > 0.0 ? -ns : ns;
+    s.shading_normal = dot(ns, s.geometric_normal) < 0.0 ? -ns : ns;
     if (!SCENE_HAS_MAPS || all(equal(m.maps.xyz, uvec3(0u)))) {
         return s;
     }
