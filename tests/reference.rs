@@ -148,11 +148,7 @@ fn shading_normals_tilted_from_the_surface_are_turned_with_it() {
     let (sx, sy) = (alpha.sin(), alpha.cos());
     let obj = common::temp_path("tilted-normals.obj");
     let half = 20.0;
-    std::fs::write(
-        &obj,
-        format!("v -{half} 0 -{half}\nv {half} 0 -{half}\nv {half} 0 {half}\nv -{half} 0 {half}\nvn {sx} {sy} 0\nf 1//1 3//1 2//1\nf 1//1 4//1 3//1\n"),
-    )
-    .expect("write obj");
+    std::fs::write(&obj, format!("v -{half} 0 -{half}\nv {half} 0 -{half}\nv {half} 0 {half}\nv -{half} 0 {half}\nvn {sx} {sy} 0\nf 1//1 3//1 2//1\nf 1//1 4//1 3//1\n")).expect("write obj");
     let sky = Vec3::new(1.0, 0.8, 0.6);
     let albedo = 0.6;
     let scene = parse(&format!(
