@@ -401,8 +401,9 @@ pub struct ReferenceRenderer {
     /// How many pixels' batches were cut short in the last dispatch (host-visible).
     status: BufferId,
     /// With the Sobol sampler, per pixel the sum of each of its [`SOBOL_REPLICATES`]
-    /// replicates' samples (host-visible); one unused texel's worth until a Sobol render.
-    replicates: BufferId,
+    /// replicates' samples, and its host-visible copy made at checkpoints; one unused texel's
+    /// worth until a Sobol render.
+    replicates: [BufferId; 2],
     replicates_bytes: u64,
     frame: Frame,
     states: ResourceStates,
@@ -453,7 +454,7 @@ impl ReferenceRenderer {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             memory: MemoryKind::GpuToCpu,
         })?;
-        let replicates = replicate_buffer(&mut gpu, 16)?;
+        let replicates = replicate_buffers(&mut gpu, 16)?;
         let frame = gpu.create_frame()?;
         let cam = &scene.camera;
         let (right, up, forward) = cam.basis();
@@ -599,7 +600,7 @@ impl ReferenceRenderer {
         }
         let n = spp as f64;
         if sampler == Sampler::Sobol {
-            let sums = self.gpu.read_buffer_prefix(self.replicates, standard_error.pixels.len() * SOBOL_REPLICATES as usize * 16)?;
+            let sums = self.gpu.read_buffer_prefix(self.replicates[1], standard_error.pixels.len() * SOBOL_REPLICATES as usize * 16)?;
             // Copied into [f32; 4]s: the bytes' Vec<u8> need not be aligned for a cast.
             let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&sums);
             for (p, replicates) in standard_error.pixels.iter_mut().zip(sums.chunks_exact(SOBOL_REPLICATES as usize)) {
@@ -647,13 +648,16 @@ impl ReferenceRenderer {
             let bytes = self.width as u64 * self.height as u64 * u64::from(SOBOL_REPLICATES) * 16;
             if self.replicates_bytes < bytes {
                 let small = self.replicates;
-                self.replicates = replicate_buffer(&mut self.gpu, bytes)?;
+                self.replicates = replicate_buffers(&mut self.gpu, bytes)?;
                 self.replicates_bytes = bytes;
-                self.states.forget_buffer(small);
-                self.gpu.destroy_buffer(small);
+                for b in small {
+                    self.states.forget_buffer(b);
+                    self.gpu.destroy_buffer(b);
+                }
             }
         }
-        let (mean, m2, rb, status, replicates) = (self.mean, self.second_moment, self.readback, self.status, self.replicates);
+        let (mean, m2, rb, status) = (self.mean, self.second_moment, self.readback, self.status);
+        let ([replicates, replicates_host], replicates_bytes) = (self.replicates, self.replicates_bytes);
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
@@ -676,11 +680,16 @@ impl ReferenceRenderer {
                 graph.pass(name).transfer_read(image, SubresourceRange::mip(0)).buffer(buffer, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
             }
             graph
+                .pass("read back replicate sums")
+                .buffer(replicates, Access::TransferRead, None)
+                .buffer(replicates_host, Access::TransferWrite, None)
+                .record(move |ctx| ctx.rec.copy_buffer(replicates, replicates_host, replicates_bytes));
+            graph
                 .pass("host visibility")
                 .buffer(rb[0], Access::HostRead, None)
                 .buffer(rb[1], Access::HostRead, None)
                 .buffer(status, Access::HostRead, None)
-                .buffer(replicates, Access::HostRead, None)
+                .buffer(replicates_host, Access::HostRead, None)
                 .record(|_| Ok(()));
         } else {
             graph.output_image(mean);
@@ -736,9 +745,12 @@ fn replicate_standard_error(sums: &[[f32; 4]], spp: u32) -> [f32; 4] {
     se
 }
 
-/// The Sobol sampler's per-pixel replicate sums, written by the tracer and read by the host.
-fn replicate_buffer(gpu: &mut Gpu, size: u64) -> Result<BufferId> {
-    Ok(gpu.create_buffer(&BufferDesc { name: "reference replicate sums".into(), size, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu })?)
+/// The Sobol sampler's per-pixel replicate sums, in device memory for the tracer (which reads
+/// and writes them every batch), and the host-visible buffer they are copied to at checkpoints.
+fn replicate_buffers(gpu: &mut Gpu, size: u64) -> Result<[BufferId; 2]> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+    let sums = gpu.create_buffer(&BufferDesc { name: "reference replicate sums".into(), size, usage, memory: MemoryKind::GpuOnly })?;
+    Ok([sums, readback_buffer(gpu, "reference replicate sums readback", size)?])
 }
 
 fn readback_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
