@@ -216,10 +216,10 @@ enum Command {
         #[arg(long, value_name = "every|one|auto", default_value = "auto", value_parser = parse_light_selection)]
         light_selection: penumbra::reference::LightSelection,
         /// Where the 2D draws (point in the pixel, on an area light, environment and BSDF
-        /// directions) come from: `independent` numbers, or scrambled `sobol` points in 8
-        /// independent replicates per pixel (unbiased, less error for the same samples; the
-        /// standard error from the replicates' scatter).
-        #[arg(long, value_name = "independent|sobol", default_value = "independent")]
+        /// directions) come from: scrambled `sobol` points in 8 independent replicates per pixel
+        /// (unbiased, less error for the same samples; the standard error from the replicates'
+        /// scatter), or `independent` numbers.
+        #[arg(long, value_name = "sobol|independent", default_value = "sobol")]
         sampler: penumbra::reference::Sampler,
         /// Write the scene as the tracer sees it (triangles per material as PLY, camera, materials and lights as JSON) into DIR and exit, for tools/reference_vs_mitsuba.py.
         #[arg(long, value_name = "DIR")]
@@ -479,7 +479,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
             let img = &report.image;
-            penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second());
+            penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s ({} sampler)", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second(), sampler.name());
             let (mean, se) = img.average();
             penumbra::outln!("average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}", mean[0], mean[1], mean[2], se[0], se[1], se[2]);
             let variance = img.relative_variance_per_sample();

@@ -2,6 +2,9 @@
 # Reference speed, A against B: two penumbra binaries (e.g. release builds of two commits)
 # render the cases of tools/reference_vs_mitsuba.py at 64x64, alternating, ROUNDS times
 # (default 3), and the median samples/s of each is printed. Run it on an idle machine.
+# Each binary renders with its own default sampler: builds before 2026-12-04 night use
+# independent samples, later ones Sobol points (a few per cent slower per sample), so compare
+# builds of the same side of that change, or read the rates with that in mind.
 #   tools/reference_ab.sh OLD_BINARY NEW_BINARY [ROUNDS]
 set -euo pipefail
 cd "$(dirname "$0")/.."

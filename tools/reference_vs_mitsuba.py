@@ -28,8 +28,8 @@ pixel times their spp (the error a render of that spp has, whatever the sampler;
 sampler's samples are not independent, so neither a standard-error image nor renders of fewer
 samples would give it). A renderer reaches a given relative MSE in a time proportional to that
 variance over its samples per second, so the last column, penumbra's samples/s over its variance
-divided by Mitsuba's, is penumbra's speed at equal error. `--penumbra-args '--sampler sobol'` and
-`--mitsuba-sampler NAME` (Mitsuba's `independent`, `stratified`, `multijitter`, `orthogonal` or
+divided by Mitsuba's, is penumbra's speed at equal error. `--penumbra-args '--sampler NAME'`
+(penumbra's default is `sobol`) and `--mitsuba-sampler NAME` (Mitsuba's `independent`, `stratified`, `multijitter`, `orthogonal` or
 `ldsampler`) choose the samplers.
 
 Needs `python3 -m venv tools/.venv && tools/.venv/bin/pip install mitsuba numpy` (the mitsuba

@@ -3,7 +3,8 @@
 # `--roulette-after` value, `penumbra reference` renders at SIZE and SPP with two seeds, and the
 # median of its printed efficiency (samples/s over the relative variance of one sample, the
 # speed at which it reaches a given relative MSE) is tabled, with each row's best in bold.
-# Run it on an idle machine.
+# Independent samples (`--sampler independent`), as the README's table was measured; the
+# binary must know that option (builds from 2026-12-04 night on). Run it on an idle machine.
 #   tools/roulette_efficiency.sh [-b BINARY] [-s WxH] [-n SPP] [-k "1 2 3 5 8 off"] SCENE...
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -36,7 +37,7 @@ for scene in "$@"; do
   for k in $ks; do
     vals=()
     for seed in 1 2; do
-      log=$("$bin" reference "$scene" --size "$size" --spp "$spp" --seed "$seed" --roulette-after "$k" -o "$out/r.exr" 2>&1) || {
+      log=$("$bin" reference "$scene" --size "$size" --spp "$spp" --seed "$seed" --roulette-after "$k" --sampler independent -o "$out/r.exr" 2>&1) || {
         echo "roulette_efficiency.sh: $scene, K = $k: $(tail -n 1 <<< "$log")" >&2; exit 1; }
       vals+=("$(sed -n 's/.*efficiency (samples\/s over it): \([0-9.e+-]*\).*/\1/p' <<< "$log")")
     done

@@ -123,7 +123,10 @@ pub struct Settings {
     /// is the same as without, within the `bounces` cap.
     pub roulette_after: Option<u32>,
     pub light_selection: LightSelection,
-    /// Where the 2D draws come from; [`Sampler::Sobol`] stratifies a pixel's samples.
+    /// Where the 2D draws come from; [`Sampler::Sobol`] stratifies a pixel's samples. The
+    /// default is independent samples, whose per-pixel standard error has n − 1 degrees of
+    /// freedom, as the per-pixel statistics of tests and callers assume; the command line and
+    /// the chart choose Sobol.
     pub sampler: Sampler,
 }
 
