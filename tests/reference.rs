@@ -752,6 +752,18 @@ fn russian_roulette_leaves_the_mean_unchanged() {
     }
     assert!(img.standard_error.pixels.iter().all(|p| p[0] > 0.0), "roulette makes the furnace noisy: it was used");
     agreement.assert();
+
+    // With the Sobol sampler roulette's draws are stratified per depth: still the truncated
+    // series (the image mean, within 4 of its standard error), with less variance.
+    let sobol = |seed| Settings { roulette_after: Some(1), sampler: Sampler::Sobol, ..settings(256, bounces, LightPaths::All, seed) };
+    let imgs = render(&furnace, size, &[Settings { sampler: Sampler::Independent, ..sobol(6) }, sobol(6)]);
+    let ((_, independent), (mean, se)) = (imgs[0].average(), imgs[1].average());
+    for c in 0..3 {
+        let z = (mean[c] - truncated[c] as f64) / se[c];
+        eprintln!("furnace, sobol: channel {c}: mean {:.6} against {:.6}, z {z:.2}; standard error {:.3e} against independent samples' {:.3e}", mean[c], truncated[c], se[c], independent[c]);
+        assert!(z.abs() <= 4.0, "channel {c}: the Sobol furnace's mean {} is {z:.1} standard errors from {}", mean[c], truncated[c]);
+        assert!(se[c] < 0.8 * independent[c], "channel {c}: stratified roulette should lower the error ({:.3e} against {:.3e})", se[c], independent[c]);
+    }
 }
 
 /// The standard error a render reports is the spread of its mean across seeds, and a render

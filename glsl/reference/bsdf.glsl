@@ -123,7 +123,7 @@ bool sample_bsdf(Surface s, Material m, vec3 v, uint depth, inout uint rng, out 
     weight = vec3(0.0);
     pdf = 0.0;
     LobeChoice p = lobe_choice(m);
-    float choice = rand(rng);
+    float choice = sample1(DRAW_LOBE, depth, rng);
     vec2 u = sample2(DRAW_BSDF, depth, 0u, rng);
     if (choice < p.diffuse) {
         l = sample_cosine(s.shading_normal, u);

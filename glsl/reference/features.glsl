@@ -28,8 +28,8 @@ layout(constant_id = 9) const uint NEE_MODE = 2u;
 // (trace_triangles); true, the stackless walk ordered per ray octant (trace_triangles_ordered).
 // The same closest hits either way; the host picks the faster on the device.
 layout(constant_id = 10) const bool BVH_WALK_ORDERED = false;
-// Where the 2D draws come from (reference/rng.glsl, `sample2`): false, the PCG stream (independent
-// samples); true, scrambled Sobol points, stratified over a pixel's samples.
+// Where the main draws come from (reference/rng.glsl, `sample1` and `sample2`): false, the PCG
+// stream (independent samples); true, scrambled Sobol points, stratified over a pixel's samples.
 layout(constant_id = 11) const bool SAMPLER_SOBOL = false;
 
 #endif

@@ -481,7 +481,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
         // divided by q, so the expected value is that of the path without roulette.
         if (depth + 1u >= batch.roulette_after) {
             float q = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95);
-            if (rand(rng) >= q) {
+            if (sample1(DRAW_ROULETTE, depth, rng) >= q) {
                 break;
             }
             throughput /= q;

@@ -1,9 +1,9 @@
 // Deterministic random numbers for the reference path tracer: every (pixel, sample index, seed)
 // starts its own PCG stream, so a sample's value does not depend on how samples are batched.
-// The 2D draws that matter most (the point in the pixel, the point on an area light, the
-// environment direction and the BSDF direction) go through `sample2`, which with the Sobol
-// sampler (spec constant SAMPLER_SOBOL, src/reference/features.rs) takes them from a
-// scrambled low-discrepancy sequence instead.
+// The draws that matter most (in 2D the point in the pixel, the point on an area light, the
+// environment direction and the BSDF direction; in 1D the BSDF's lobe and Russian roulette) go
+// through `sample2` and `sample1`, which with the Sobol sampler (spec constant SAMPLER_SOBOL,
+// src/reference/features.rs) take them from a scrambled low-discrepancy sequence instead.
 #ifndef PENUMBRA_REFERENCE_RNG_GLSL
 #define PENUMBRA_REFERENCE_RNG_GLSL
 
@@ -107,25 +107,45 @@ uint sobol_second(uint i) {
     return r;
 }
 
-// What identifies a 2D draw within a sample: where it is used, the path depth and the light.
+// What identifies a draw within a sample: where it is used, the path depth and the light.
+// 2D draws:
 const uint DRAW_PIXEL = 0u;
 const uint DRAW_BSDF = 1u;
 const uint DRAW_LIGHT = 2u;
 const uint DRAW_ENVIRONMENT = 3u;
+// 1D draws (`sample1`): which lobe the BSDF samples, and Russian roulette.
+const uint DRAW_LOBE = 4u;
+const uint DRAW_ROULETTE = 5u;
 // Keys are distinct below these bounds; draws past them come from the PCG stream.
 const uint SOBOL_DEPTHS = 1024u;
-const uint SOBOL_LIGHTS = 1u << 20u;
+const uint SOBOL_LIGHTS = 1u << 19u;
 
 uint draw_key(uint use, uint depth, uint light) {
-    return use + 4u * (depth + SOBOL_DEPTHS * light);
+    return use + 8u * (depth + SOBOL_DEPTHS * light);
+}
+
+// The scramble seed of a draw: pcg_hash is a bijection, so distinct keys give distinct seeds.
+uint draw_seed(uint use, uint depth, uint light) {
+    return pcg_hash(sampler_pixel_seed ^ pcg_hash(draw_key(use, depth, light)));
+}
+
+// A 1D draw: Sobol's first dimension (van der Corput), shuffled and scrambled per key as the 2D
+// draws are; stratified over a replicate's samples like them.
+float sample1(uint use, uint depth, inout uint rng) {
+    if (!SAMPLER_SOBOL || depth >= SOBOL_DEPTHS) {
+        return rand(rng);
+    }
+    uint seed = draw_seed(use, depth, 0u);
+    uint i = nested_uniform_scramble(sampler_index, seed);
+    uint x = nested_uniform_scramble(bitfieldReverse(i), pcg_hash(seed ^ 0x68bc21ebu));
+    return float(x >> 8u) * (1.0 / 16777216.0);
 }
 
 vec2 sample2(uint use, uint depth, uint light, inout uint rng) {
     if (!SAMPLER_SOBOL || depth >= SOBOL_DEPTHS || light >= SOBOL_LIGHTS) {
         return vec2(rand(rng), rand(rng));
     }
-    // pcg_hash is a bijection, so distinct keys give distinct scramble seeds.
-    uint seed = pcg_hash(sampler_pixel_seed ^ pcg_hash(draw_key(use, depth, light)));
+    uint seed = draw_seed(use, depth, light);
     uint i = nested_uniform_scramble(sampler_index, seed);
     uint x = nested_uniform_scramble(bitfieldReverse(i), pcg_hash(seed ^ 0x68bc21ebu));
     uint y = nested_uniform_scramble(sobol_second(i), pcg_hash(seed ^ 0x02e5be93u));

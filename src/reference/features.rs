@@ -52,8 +52,9 @@ impl BvhWalk {
     }
 }
 
-/// Where the tracer's 2D draws (the point in the pixel, on an area light, the environment and
-/// BSDF directions) come from: spec constant 11 (`SAMPLER_SOBOL`, `glsl/reference/rng.glsl`).
+/// Where the tracer's main draws (the point in the pixel, on an area light, the environment and
+/// BSDF directions, the BSDF's lobe and Russian roulette) come from: spec constant 11
+/// (`SAMPLER_SOBOL`, `glsl/reference/rng.glsl`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Sampler {
     /// Independent uniform numbers from each sample's PCG stream: the samples of a pixel are
