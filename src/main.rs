@@ -121,7 +121,7 @@ enum Command {
         reference_noise: f64,
         /// Where the reference's draws come from: `sobol` (scrambled Sobol points, the error
         /// from independent replicates; less error for the same samples) or `independent`.
-        #[arg(long, value_name = "independent|sobol", default_value = "sobol")]
+        #[arg(long, value_name = "sobol|independent", default_value = "sobol")]
         reference_sampler: penumbra::reference::Sampler,
         /// Also render each configuration at N times the size in each axis, box-filtered down, and
         /// report both errors (pixel centres and supersampled); the plot shows the supersampled one.

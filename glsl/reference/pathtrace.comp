@@ -168,10 +168,12 @@ layout(set = 0, binding = 6, rgba32f) uniform image2D mean_radiance;
 layout(set = 0, binding = 7, rgba32f) uniform image2D second_moment;
 // Pixels whose batch did not run to the end (zeroed by the host before each dispatch).
 layout(set = 0, binding = 12) buffer Status { uint short_pixels; } status;
-// With the Sobol sampler, per pixel the sum of each replicate's samples (rgb; sample index
-// modulo SOBOL_REPLICATES, reference/rng.glsl): the scatter of the replicates' means is the
-// error of the pixel's mean (src/reference/mod.rs, read_image). Unused otherwise.
-layout(set = 0, binding = 14) buffer Replicates { vec4 sums[]; } replicates;
+// With the Sobol sampler, per pixel the sum of each replicate's samples (rgb), one layer per
+// replicate (sample index modulo SOBOL_REPLICATES, reference/rng.glsl): the scatter of the
+// replicates' means is the error of the pixel's mean (src/reference/mod.rs, read_image). An
+// image, not a buffer: at 128 bytes a pixel a buffer would pass a device's maxStorageBufferRange
+// (lavapipe's 128 MiB) at about a megapixel. Unused otherwise.
+layout(set = 0, binding = 14, rgba32f) uniform image2DArray replicate_sums;
 
 layout(push_constant) uniform Batch {
     uint sample_offset;  // index of this dispatch's first sample (0: start afresh)
@@ -510,9 +512,8 @@ void main() {
     uint end = max(batch.sample_offset + batch.sample_count, have);
     uint done = 0u;
     vec3 replicate_sum[SOBOL_REPLICATES];
-    uint first_replicate = pixel_index * SOBOL_REPLICATES;
     for (uint r = 0u; r < SOBOL_REPLICATES; ++r) {
-        replicate_sum[r] = SAMPLER_SOBOL && have > 0u ? replicates.sums[first_replicate + r].rgb : vec3(0.0);
+        replicate_sum[r] = SAMPLER_SOBOL && have > 0u ? imageLoad(replicate_sums, ivec3(pixel, r)).rgb : vec3(0.0);
     }
     for (uint index = have; index < end; ++index) {
         uint rng = rng_start(pixel_index, index, batch.seed);
@@ -550,7 +551,7 @@ void main() {
     imageStore(second_moment, ivec2(pixel), m2);
     if (SAMPLER_SOBOL) {
         for (uint r = 0u; r < SOBOL_REPLICATES; ++r) {
-            replicates.sums[first_replicate + r] = vec4(replicate_sum[r], 0.0);
+            imageStore(replicate_sums, ivec3(pixel, r), vec4(replicate_sum[r], 0.0));
         }
     }
 }

@@ -129,16 +129,28 @@ uint draw_seed(uint use, uint depth, uint light) {
     return pcg_hash(sampler_pixel_seed ^ pcg_hash(draw_key(use, depth, light)));
 }
 
-// A 1D draw: Sobol's first dimension (van der Corput), shuffled and scrambled per key as the 2D
-// draws are; stratified over a replicate's samples like them.
+// The sample's index in the draw's shuffled sequence, and that point's first coordinate (van der
+// Corput) Owen-scrambled, both from the draw's seed; a 32-bit fraction's top 24 bits in [0, 1).
+uint shuffled_index(uint seed) {
+    return nested_uniform_scramble(sampler_index, seed);
+}
+
+uint sobol_first_scrambled(uint i, uint seed) {
+    return nested_uniform_scramble(bitfieldReverse(i), pcg_hash(seed ^ 0x68bc21ebu));
+}
+
+float unit_fraction(uint x) {
+    return float(x >> 8u) * (1.0 / 16777216.0);
+}
+
+// A 1D draw: Sobol's first dimension, shuffled and scrambled per key as the 2D draws are;
+// stratified over a replicate's samples like them.
 float sample1(uint use, uint depth, inout uint rng) {
     if (!SAMPLER_SOBOL || depth >= SOBOL_DEPTHS) {
         return rand(rng);
     }
     uint seed = draw_seed(use, depth, 0u);
-    uint i = nested_uniform_scramble(sampler_index, seed);
-    uint x = nested_uniform_scramble(bitfieldReverse(i), pcg_hash(seed ^ 0x68bc21ebu));
-    return float(x >> 8u) * (1.0 / 16777216.0);
+    return unit_fraction(sobol_first_scrambled(shuffled_index(seed), seed));
 }
 
 vec2 sample2(uint use, uint depth, uint light, inout uint rng) {
@@ -146,10 +158,9 @@ vec2 sample2(uint use, uint depth, uint light, inout uint rng) {
         return vec2(rand(rng), rand(rng));
     }
     uint seed = draw_seed(use, depth, light);
-    uint i = nested_uniform_scramble(sampler_index, seed);
-    uint x = nested_uniform_scramble(bitfieldReverse(i), pcg_hash(seed ^ 0x68bc21ebu));
+    uint i = shuffled_index(seed);
     uint y = nested_uniform_scramble(sobol_second(i), pcg_hash(seed ^ 0x02e5be93u));
-    return vec2(float(x >> 8u), float(y >> 8u)) * (1.0 / 16777216.0);
+    return vec2(unit_fraction(sobol_first_scrambled(i, seed)), unit_fraction(y));
 }
 
 #endif

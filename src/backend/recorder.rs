@@ -391,10 +391,16 @@ impl<'g> Recorder<'g> {
 
     /// Copies one mip/layer of an image (in TRANSFER_SRC_OPTIMAL) into a buffer, tightly packed.
     pub fn copy_image_to_buffer(&mut self, image: ImageId, mip: u32, layer: u32, buffer: BufferId) -> BackendResult<()> {
+        self.copy_image_to_buffer_at(image, mip, layer, buffer, 0)
+    }
+
+    /// [`copy_image_to_buffer`](Self::copy_image_to_buffer) from byte `offset` of the buffer
+    /// (several layers into one buffer).
+    pub fn copy_image_to_buffer_at(&mut self, image: ImageId, mip: u32, layer: u32, buffer: BufferId, offset: u64) -> BackendResult<()> {
         let img = self.gpu.image(image)?;
         let buf = self.gpu.buffer(buffer)?;
         let region = vk::BufferImageCopy {
-            buffer_offset: 0,
+            buffer_offset: offset,
             buffer_row_length: 0,
             buffer_image_height: 0,
             image_subresource: vk::ImageSubresourceLayers { aspect_mask: img.desc.aspect(), mip_level: mip, base_array_layer: layer, layer_count: 1 },

@@ -404,10 +404,9 @@ pub struct ReferenceRenderer {
     /// How many pixels' batches were cut short in the last dispatch (host-visible).
     status: BufferId,
     /// With the Sobol sampler, per pixel the sum of each of its [`SOBOL_REPLICATES`]
-    /// replicates' samples, and its host-visible copy made at checkpoints; one unused texel's
-    /// worth until a Sobol render.
-    replicates: [BufferId; 2],
-    replicates_bytes: u64,
+    /// replicates' samples (a layer each), and their host-visible copy made at checkpoints; one
+    /// unused pixel's worth until a Sobol render.
+    replicates: (ImageId, BufferId),
     frame: Frame,
     states: ResourceStates,
     width: u32,
@@ -457,7 +456,7 @@ impl ReferenceRenderer {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             memory: MemoryKind::GpuToCpu,
         })?;
-        let replicates = replicate_buffers(&mut gpu, 16)?;
+        let replicates = replicate_sums(&mut gpu, 1, 1)?;
         let frame = gpu.create_frame()?;
         let cam = &scene.camera;
         let (right, up, forward) = cam.basis();
@@ -490,7 +489,6 @@ impl ReferenceRenderer {
             readback,
             status,
             replicates,
-            replicates_bytes: 16,
             frame,
             states,
             width,
@@ -603,11 +601,14 @@ impl ReferenceRenderer {
         }
         let n = spp as f64;
         if sampler == Sampler::Sobol {
-            let sums = self.gpu.read_buffer_prefix(self.replicates[1], standard_error.pixels.len() * SOBOL_REPLICATES as usize * 16)?;
-            // Copied into [f32; 4]s: the bytes' Vec<u8> need not be aligned for a cast.
+            let pixels = standard_error.pixels.len();
+            let sums = self.gpu.read_buffer_prefix(self.replicates.1, pixels * SOBOL_REPLICATES as usize * 16)?;
+            // Copied into [f32; 4]s: the bytes' Vec<u8> need not be aligned for a cast. One
+            // layer after another: replicate r of pixel k is at r * pixels + k.
             let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&sums);
-            for (p, replicates) in standard_error.pixels.iter_mut().zip(sums.chunks_exact(SOBOL_REPLICATES as usize)) {
-                *p = replicate_standard_error(replicates, spp);
+            for (k, p) in standard_error.pixels.iter_mut().enumerate() {
+                let replicates: Vec<[f32; 4]> = (0..SOBOL_REPLICATES as usize).map(|r| sums[r * pixels + k]).collect();
+                *p = replicate_standard_error(&replicates, spp);
             }
             return Ok(ReferenceImage { mean, standard_error, spp, seconds });
         }
@@ -649,18 +650,19 @@ impl ReferenceRenderer {
         let pipeline = self.pipeline(nee_mode(push.flags), sampler)?;
         if sampler == Sampler::Sobol {
             let bytes = self.width as u64 * self.height as u64 * u64::from(SOBOL_REPLICATES) * 16;
-            if self.replicates_bytes < bytes {
-                let small = self.replicates;
-                self.replicates = replicate_buffers(&mut self.gpu, bytes)?;
-                self.replicates_bytes = bytes;
-                for b in small {
-                    self.states.forget_buffer(b);
-                    self.gpu.destroy_buffer(b);
-                }
+            if self.gpu.buffer_desc(self.replicates.1)?.size < bytes {
+                let (small, small_host) = self.replicates;
+                self.replicates = replicate_sums(&mut self.gpu, self.width, self.height)?;
+                self.states.forget_image(small);
+                self.gpu.destroy_image(small);
+                self.states.forget_buffer(small_host);
+                self.gpu.destroy_buffer(small_host);
             }
         }
         let (mean, m2, rb, status) = (self.mean, self.second_moment, self.readback, self.status);
-        let ([replicates, replicates_host], replicates_bytes) = (self.replicates, self.replicates_bytes);
+        let (replicates, replicates_host) = self.replicates;
+        let layer_bytes = self.gpu.buffer_desc(replicates_host)?.size / u64::from(SOBOL_REPLICATES);
+        let all_layers = SubresourceRange::all(1, SOBOL_REPLICATES);
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
@@ -670,7 +672,7 @@ impl ReferenceRenderer {
             Access::StorageWrite { stages: compute },
             Some("status"),
         );
-        pass = pass.buffer(replicates, Access::StorageWrite { stages: compute }, Some("replicates"));
+        pass = pass.storage_write("replicate_sums", replicates, all_layers, compute);
         pass = self.buffers.read(pass, compute);
         pass.record(move |ctx| {
             ctx.rec.bind_pipeline(pipeline)?;
@@ -684,9 +686,9 @@ impl ReferenceRenderer {
             }
             graph
                 .pass("read back replicate sums")
-                .buffer(replicates, Access::TransferRead, None)
+                .transfer_read(replicates, all_layers)
                 .buffer(replicates_host, Access::TransferWrite, None)
-                .record(move |ctx| ctx.rec.copy_buffer(replicates, replicates_host, replicates_bytes));
+                .record(move |ctx| (0..SOBOL_REPLICATES).try_for_each(|r| ctx.rec.copy_image_to_buffer_at(replicates, 0, r, replicates_host, u64::from(r) * layer_bytes)));
             graph
                 .pass("host visibility")
                 .buffer(rb[0], Access::HostRead, None)
@@ -697,6 +699,7 @@ impl ReferenceRenderer {
         } else {
             graph.output_image(mean);
             graph.output_image(m2);
+            graph.output_image(replicates);
             graph.pass("host visibility").buffer(status, Access::HostRead, None).record(|_| Ok(()));
         }
         let gpu = &self.gpu;
@@ -749,12 +752,15 @@ fn replicate_standard_error(sums: &[[f32; 4]], spp: u32) -> [f32; 4] {
     se
 }
 
-/// The Sobol sampler's per-pixel replicate sums, in device memory for the tracer (which reads
-/// and writes them every batch), and the host-visible buffer they are copied to at checkpoints.
-fn replicate_buffers(gpu: &mut Gpu, size: u64) -> Result<[BufferId; 2]> {
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-    let sums = gpu.create_buffer(&BufferDesc { name: "reference replicate sums".into(), size, usage, memory: MemoryKind::GpuOnly })?;
-    Ok([sums, readback_buffer(gpu, "reference replicate sums readback", size)?])
+/// The Sobol sampler's per-pixel replicate sums, an image of one layer per replicate in device
+/// memory for the tracer (which reads and writes them every batch), and the host-visible buffer
+/// the layers are copied to, one after another, at checkpoints.
+fn replicate_sums(gpu: &mut Gpu, width: u32, height: u32) -> Result<(ImageId, BufferId)> {
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let desc = ImageDesc::new_2d("reference replicate sums", ACCUMULATION_FORMAT, width, height).layers(SOBOL_REPLICATES).usage(usage);
+    let sums = gpu.create_image(&desc)?;
+    let bytes = width as u64 * height as u64 * u64::from(SOBOL_REPLICATES) * 16;
+    Ok((sums, readback_buffer(gpu, "reference replicate sums readback", bytes)?))
 }
 
 fn readback_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
