@@ -1,8 +1,9 @@
 //! Instance and device creation, capability probing, the validation-message log.
 
+use std::cell::Cell;
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, PoisonError, RwLock, RwLockReadGuard, RwLockWriteGuard};
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -188,15 +189,74 @@ fn vulkan_loader() -> BackendResult<ash::Entry> {
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_0);
         // SAFETY: a plain instance with no layers or extensions. Where none can be created,
         // Gpu::new's own attempt reports why.
-        let keep = unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }.ok();
+        let keep = {
+            let _change = device_set_change();
+            unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }.ok()
+        };
         Ok(Loader { entry, _keep_driver_loaded: keep })
     });
     loader.as_ref().map(|l| l.entry.clone()).map_err(|e| BackendError::Loader(e.clone()))
 }
 
+// Vulkan calls on one thread against devices made or dropped on another. The Vulkan loader adds
+// and frees entries of its process-wide device list without the lock its readers take
+// (Vulkan-Loader issue 2018, still so in 1.4.341), and the validation layer of Debian 12
+// (1.3.239) looks every call's device or instance up in a process-wide map that creating and
+// destroying them change, with no lock at all. So a call on one thread could read an entry that
+// another thread was adding or freeing: `cargo test`, which runs a binary's GPU tests on threads
+// of their own, crashed now and then at address 0 or inside the layer's lookup
+// (`tests/backend_threads.rs` crashed in 3 of 8 runs without this lock, in none of 12 with it).
+// Making or dropping a device and its instance therefore holds this lock exclusively, and every
+// other stretch of Vulkan calls holds it shared. A thread counts the holds it has, so nested
+// stretches take the lock once and a device made or dropped inside one (nothing in penumbra does)
+// goes ahead rather than deadlock.
+static DEVICE_SET: RwLock<()> = RwLock::new(());
+
+thread_local! {
+    static HOLDS: Cell<u32> = const { Cell::new(0) };
+}
+
+/// The lock, held shared or exclusive by the outermost hold of a thread; dropping the hold
+/// releases it (nested holds are taken and dropped innermost first, as scopes are).
+pub(crate) struct DeviceSetLock {
+    _shared: Option<RwLockReadGuard<'static, ()>>,
+    _exclusive: Option<RwLockWriteGuard<'static, ()>>,
+}
+
+impl Drop for DeviceSetLock {
+    fn drop(&mut self) {
+        HOLDS.with(|h| h.set(h.get().saturating_sub(1)));
+    }
+}
+
+fn hold(exclusive: bool) -> DeviceSetLock {
+    let outermost = HOLDS.with(|h| {
+        let n = h.get();
+        h.set(n + 1);
+        n == 0
+    });
+    // A poisoned lock still orders the calls: what it guards is the driver's state, not ours.
+    DeviceSetLock {
+        _shared: (outermost && !exclusive).then(|| DEVICE_SET.read().unwrap_or_else(PoisonError::into_inner)),
+        _exclusive: (outermost && exclusive).then(|| DEVICE_SET.write().unwrap_or_else(PoisonError::into_inner)),
+    }
+}
+
+/// Held around Vulkan calls on an existing device or instance.
+pub(crate) fn vulkan_calls() -> DeviceSetLock {
+    hold(false)
+}
+
+/// Held while a device or instance is made or dropped.
+pub(crate) fn device_set_change() -> DeviceSetLock {
+    hold(true)
+}
+
 impl Gpu {
     pub fn new(desc: &GpuDesc) -> BackendResult<Gpu> {
         let entry = vulkan_loader()?;
+        // From the instance to the last object of the new device, made under one exclusive hold.
+        let _change = device_set_change();
 
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
         let has_validation = layers.iter().any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
@@ -455,6 +515,7 @@ impl Gpu {
     }
 
     pub fn wait_idle(&self) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")
     }
 
@@ -464,6 +525,7 @@ impl Gpu {
             if let Ok(c) = CString::new(name) {
                 let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
                 // Naming is a debugging aid; a failure here must not fail the render.
+                let _calls = vulkan_calls();
                 let _ = unsafe { dd.set_debug_utils_object_name(&info) };
             }
         }
@@ -472,6 +534,8 @@ impl Gpu {
 
 impl Drop for Gpu {
     fn drop(&mut self) {
+        // Everything the device owns goes with it, under the same exclusive hold.
+        let _change = device_set_change();
         unsafe {
             let _ = self.device.device_wait_idle();
             for f in self.frames.drain(..).flatten() {

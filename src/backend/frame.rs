@@ -10,6 +10,7 @@ use std::sync::Mutex;
 use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
+use super::device::vulkan_calls;
 use super::error::{BackendError, BackendResult, VkContext};
 use super::resources::{destroy_buffer, Buffer, BufferDesc, MemoryKind};
 use super::timestamps::{elapsed_ns, PassTiming};
@@ -92,6 +93,7 @@ impl FrameData {
 impl Gpu {
     /// A new frame slot. Create one for headless work, two or more for frames in flight.
     pub fn create_frame(&mut self) -> BackendResult<Frame> {
+        let _calls = vulkan_calls();
         let upload = self.create_upload_block(0, UPLOAD_BYTES)?;
         let cb =
             unsafe { self.device.allocate_command_buffers(&vk::CommandBufferAllocateInfo::default().command_pool(self.command_pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1)) }
@@ -130,6 +132,7 @@ impl Gpu {
     /// Waits for the frame's last submission and frees it (its command buffer, fence, pools and
     /// upload buffer): for work that needs a frame only for a while, such as a bake.
     pub fn destroy_frame(&mut self, f: Frame) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         self.wait_frame(f)?;
         let Some(slot) = self.frames.get_mut(f.0 as usize).and_then(|x| x.take()) else { return Ok(()) };
         let fd = slot.into_inner();
@@ -142,6 +145,7 @@ impl Gpu {
 
     /// One of a frame's descriptor pools: [`POOL_SETS`] sets holding at most [`POOL_SIZES`].
     pub(crate) fn create_descriptor_pool(&self) -> BackendResult<vk::DescriptorPool> {
+        let _calls = vulkan_calls();
         let sizes = POOL_SIZES.map(|(ty, n)| vk::DescriptorPoolSize { ty, descriptor_count: n });
         unsafe { self.device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(POOL_SETS).pool_sizes(&sizes), None) }.vk("vkCreateDescriptorPool")
     }
@@ -167,6 +171,7 @@ impl Gpu {
 
     /// Waits for the frame's last submission (if any) and collects its timestamps.
     pub fn wait_frame(&self, f: Frame) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         let mut fd = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is being recorded".into()))?;
         if !fd.submitted {
             return Ok(());
@@ -179,6 +184,7 @@ impl Gpu {
     }
 
     fn read_timings(&self, fd: &FrameData) -> BackendResult<Option<Vec<PassTiming>>> {
+        let _calls = vulkan_calls();
         let Some(pool) = fd.queries else { return Ok(None) };
         if fd.next_query == 0 {
             return Ok(Some(Vec::new()));
@@ -207,6 +213,7 @@ impl Gpu {
     /// Submits the frame's recorded commands. `wait`/`signal` are binary semaphores for
     /// presentation.
     pub fn submit_frame(&self, f: Frame, wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>, signal: Option<vk::Semaphore>) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         let mut fd = self.frame_data(f)?.borrow_mut();
         let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(fd.cb)];
         let waits: Vec<vk::SemaphoreSubmitInfo> = wait.iter().map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage)).collect();

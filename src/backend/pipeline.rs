@@ -4,6 +4,7 @@ use std::ffi::CString;
 
 use ash::vk;
 
+use super::device::vulkan_calls;
 use super::error::{BackendError, BackendResult, VkContext};
 use super::reflect::ShaderReflection;
 use super::Gpu;
@@ -241,6 +242,7 @@ impl Gpu {
     /// Destroys a pipeline once the device is idle (for pipelines used only for a while, such as
     /// a bake's). Its id stays invalid.
     pub fn destroy_pipeline(&mut self, id: PipelineId) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         self.wait_idle()?;
         if let Some(old) = self.arenas.pipelines.get_mut(id.0 as usize).and_then(|p| p.take()) {
             unsafe { old.destroy(&self.device) };
@@ -251,6 +253,7 @@ impl Gpu {
     /// Rebuilds a pipeline from fresh shaders. On any error the old pipeline stays in place and
     /// the error is returned, so a typo in a shader never takes the running demo down.
     pub fn reload_pipeline(&mut self, id: PipelineId, shaders: &dyn ShaderSource) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         let kind = self.pipeline(id)?.kind.clone();
         let new = self.build_pipeline(&kind, shaders)?;
         self.wait_idle()?;
@@ -275,6 +278,7 @@ impl Gpu {
     }
 
     fn load_stage(&self, path: &str, shaders: &dyn ShaderSource, reflections: &mut Vec<ShaderReflection>) -> BackendResult<LoadedStage> {
+        let _calls = vulkan_calls();
         let stage = stage_of(path)?;
         let words = shaders.spirv(path).map_err(|m| BackendError::Shader { name: path.into(), message: m })?;
         reflections.push(ShaderReflection::from_spirv(path, stage, &words)?);
@@ -287,6 +291,7 @@ impl Gpu {
     }
 
     fn build_pipeline(&self, kind: &PipelineKind, shaders: &dyn ShaderSource) -> BackendResult<PipelineObject> {
+        let _calls = vulkan_calls();
         let (name, paths, spec) = match kind {
             PipelineKind::Graphics(d) => {
                 let mut p = vec![d.vertex.clone()];
@@ -366,6 +371,7 @@ impl Gpu {
     }
 
     fn create_set_layouts(&self, r: &ShaderReflection) -> BackendResult<Vec<vk::DescriptorSetLayout>> {
+        let _calls = vulkan_calls();
         let mut layouts = Vec::new();
         for set in 0..r.set_count() {
             let bindings: Vec<vk::DescriptorSetLayoutBinding> = r
@@ -389,6 +395,7 @@ impl Gpu {
     }
 
     fn create_compute_raw(&self, stage: &LoadedStage, layout: vk::PipelineLayout, spec: &[SpecConstant]) -> BackendResult<vk::Pipeline> {
+        let _calls = vulkan_calls();
         let entry = c"main";
         let (entries, data) = spec_data(spec);
         let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(&data);
@@ -402,6 +409,7 @@ impl Gpu {
     }
 
     fn create_graphics_raw(&self, d: &GraphicsPipelineDesc, stages: &[LoadedStage], layout: vk::PipelineLayout, spec: &[SpecConstant]) -> BackendResult<vk::Pipeline> {
+        let _calls = vulkan_calls();
         if d.raster.depth_clamp && !self.caps.depth_clamp {
             return Err(BackendError::Unsupported(format!("depth clamp (pipeline `{}`)", d.name)));
         }

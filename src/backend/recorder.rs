@@ -5,6 +5,7 @@ use std::ffi::CString;
 
 use ash::vk;
 
+use super::device::{vulkan_calls, DeviceSetLock};
 use super::error::{BackendError, BackendResult, VkContext};
 use super::frame::{Frame, FrameData, MAX_QUERIES};
 use super::pipeline::PipelineId;
@@ -87,11 +88,15 @@ pub struct Recorder<'g> {
     pub(crate) cb: vk::CommandBuffer,
     pipeline: Option<PipelineId>,
     rendering: bool,
+    /// Recording calls Vulkan throughout; the hold orders it against devices made or dropped on
+    /// other threads (see `vulkan_calls`).
+    _calls: DeviceSetLock,
 }
 
 impl Gpu {
     /// Waits for the frame's previous submission, resets its pools and begins recording.
     pub fn begin_frame(&self, f: Frame) -> BackendResult<Recorder<'_>> {
+        let calls = vulkan_calls();
         self.wait_frame(f)?;
         let mut frame = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is already being recorded".into()))?;
         let cb = frame.cb;
@@ -113,7 +118,7 @@ impl Gpu {
         frame.pool_descriptors = [0; 4];
         frame.upload_block = 0;
         frame.upload_offset = 0;
-        Ok(Recorder { gpu: self, frame, cb, pipeline: None, rendering: false })
+        Ok(Recorder { gpu: self, frame, cb, pipeline: None, rendering: false, _calls: calls })
     }
 }
 

@@ -8,6 +8,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator};
 use gpu_allocator::MemoryLocation;
 
+use super::device::vulkan_calls;
 use super::error::{BackendError, BackendResult, VkContext};
 use super::pipeline::PipelineObject;
 use super::Gpu;
@@ -283,6 +284,7 @@ impl Gpu {
     /// A buffer with its memory, owned by the caller rather than the arenas: for objects that
     /// belong to something else the Gpu holds (a frame's upload blocks, created while recording).
     pub(crate) fn create_raw_buffer(&self, desc: &BufferDesc) -> BackendResult<Buffer> {
+        let _calls = vulkan_calls();
         if desc.size == 0 {
             return Err(BackendError::Invalid(format!("buffer `{}` has size 0", desc.name)));
         }
@@ -440,6 +442,7 @@ impl Gpu {
     /// Writes into a host-visible buffer now, or into a device-local one through a staging copy
     /// that is waited for. Not for use while a frame that reads the buffer is in flight.
     pub fn upload_buffer(&mut self, id: BufferId, offset: u64, data: &[u8]) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         if data.is_empty() {
             return Ok(());
         }
@@ -487,6 +490,7 @@ impl Gpu {
     }
 
     pub fn destroy_buffer(&mut self, id: BufferId) {
+        let _calls = vulkan_calls();
         if let Some(slot) = self.arenas.buffers.get_mut(id.0 as usize) {
             if let Some(b) = slot.take() {
                 unsafe {
@@ -498,6 +502,7 @@ impl Gpu {
     }
 
     pub fn create_image(&mut self, desc: &ImageDesc) -> BackendResult<ImageId> {
+        let _calls = vulkan_calls();
         let e = desc.extent;
         let max = if desc.is_3d() { self.caps.max_image_dimension_3d } else { self.caps.max_image_dimension_2d };
         if e.width == 0 || e.height == 0 || e.depth == 0 || e.width.max(e.height).max(e.depth) > max {
@@ -553,6 +558,7 @@ impl Gpu {
     }
 
     pub fn destroy_image(&mut self, id: ImageId) {
+        let _calls = vulkan_calls();
         if let Some(slot) = self.arenas.images.get_mut(id.0 as usize) {
             if let Some(i) = slot.take() {
                 unsafe {
@@ -566,6 +572,7 @@ impl Gpu {
     /// A view of `mip_count` mips from `base_mip` and `layer_count` layers from `base_layer`,
     /// created on first use and cached with the image.
     pub(crate) fn image_view(&self, id: ImageId, base_mip: u32, mip_count: u32, base_layer: u32, layer_count: u32, view_type: Option<vk::ImageViewType>) -> BackendResult<vk::ImageView> {
+        let _calls = vulkan_calls();
         let img = self.image(id)?;
         let d = &img.desc;
         let mip_count = if mip_count == vk::REMAINING_MIP_LEVELS { d.mip_levels.saturating_sub(base_mip) } else { mip_count };
@@ -604,11 +611,13 @@ impl Gpu {
     /// What the device supports for `format` in optimal tiling (e.g. whether it can be sampled
     /// with linear filtering: `SAMPLED_IMAGE_FILTER_LINEAR`, optional for 32-bit float formats).
     pub fn format_features(&self, format: vk::Format) -> vk::FormatFeatureFlags {
+        let _calls = vulkan_calls();
         unsafe { self.instance.get_physical_device_format_properties(self.physical, format) }.optimal_tiling_features
     }
 
     /// A sampler, shared among everyone asking for the same description.
     pub fn sampler(&mut self, desc: SamplerDesc) -> BackendResult<SamplerId> {
+        let _calls = vulkan_calls();
         if let Some(&id) = self.arenas.sampler_cache.get(&desc) {
             return Ok(id);
         }
@@ -646,6 +655,7 @@ impl Gpu {
     }
 
     fn upload_image_padded(&mut self, id: ImageId, mip: u32, data: &[u8], pad: bool) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         let (raw, desc) = {
             let i = self.image(id)?;
             (i.raw, i.desc.clone())
@@ -707,6 +717,7 @@ impl Gpu {
 
     /// Records `f` into a fresh command buffer, submits it and waits for it.
     pub(crate) fn one_shot(&self, f: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         let alloc = vk::CommandBufferAllocateInfo::default().command_pool(self.command_pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1);
         let cb = unsafe { self.device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let result = (|| {

@@ -7,6 +7,7 @@
 use ash::vk;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
+use super::device::vulkan_calls;
 use super::error::{BackendError, BackendResult, VkContext};
 use super::resources::{ImageDesc, ImageId};
 use super::Gpu;
@@ -36,6 +37,7 @@ pub struct AcquiredImage {
 impl Gpu {
     /// A swapchain for the window, with `slots` acquire semaphores (one per frame in flight).
     pub fn create_swapchain<W: HasDisplayHandle + HasWindowHandle>(&mut self, window: &W, size: (u32, u32), slots: usize) -> BackendResult<Swapchain> {
+        let _calls = vulkan_calls();
         let display = window.display_handle().map_err(|e| BackendError::Unsupported(format!("display handle: {e}")))?;
         let win = window.window_handle().map_err(|e| BackendError::Unsupported(format!("window handle: {e}")))?;
         let surface = unsafe { ash_window::create_surface(&self.entry, &self.instance, display.as_raw(), win.as_raw(), None) }.vk("vkCreateSurfaceKHR")?;
@@ -67,6 +69,7 @@ impl Gpu {
 
     /// Rebuilds the swapchain at a new size (after a resize or an out-of-date present).
     pub fn recreate_swapchain(&mut self, sc: &mut Swapchain, size: (u32, u32)) -> BackendResult<()> {
+        let _calls = vulkan_calls();
         self.wait_idle()?;
         let caps = unsafe { sc.surface_fn.get_physical_device_surface_capabilities(self.physical, sc.surface) }.vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
         let formats = unsafe { sc.surface_fn.get_physical_device_surface_formats(self.physical, sc.surface) }.vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
@@ -123,6 +126,7 @@ impl Gpu {
     }
 
     fn release_swapchain_images(&mut self, sc: &mut Swapchain) {
+        let _calls = vulkan_calls();
         for id in sc.images.drain(..) {
             self.destroy_image(id);
         }
@@ -133,6 +137,7 @@ impl Gpu {
 
     /// Acquires the next image for frame slot `slot`. `Ok(None)`: the swapchain is out of date.
     pub fn acquire(&self, sc: &Swapchain, slot: usize) -> BackendResult<Option<AcquiredImage>> {
+        let _calls = vulkan_calls();
         let acquired = sc.acquire_semaphores[slot % sc.acquire_semaphores.len()];
         match unsafe { sc.swapchain_fn.acquire_next_image(sc.raw, u64::MAX, acquired, vk::Fence::null()) } {
             Ok((index, _suboptimal)) => Ok(Some(AcquiredImage { index, image: sc.images[index as usize], acquired, rendered: sc.present_semaphores[index as usize] })),
@@ -143,6 +148,7 @@ impl Gpu {
 
     /// Presents; returns false when the swapchain must be recreated.
     pub fn present(&self, sc: &Swapchain, image: &AcquiredImage) -> BackendResult<bool> {
+        let _calls = vulkan_calls();
         let waits = [image.rendered];
         let chains = [sc.raw];
         let indices = [image.index];
@@ -155,6 +161,7 @@ impl Gpu {
     }
 
     pub fn destroy_swapchain(&mut self, mut sc: Swapchain) {
+        let _calls = vulkan_calls();
         let _ = self.wait_idle();
         self.release_swapchain_images(&mut sc);
         unsafe {
