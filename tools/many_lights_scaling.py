@@ -199,6 +199,26 @@ def svg_plot(rows, methods, path, device):
         f.write("\n".join(out))
 
 
+def measure(args, counts, methods, tmp, rows, stopped):
+    """Profiles every method at every count, appending a row each (with the device's name)."""
+    for n in counts:
+        scene = os.path.join(tmp, "stage_%d.toml" % n)
+        with open(scene, "w") as f:
+            f.write(stage_scene(n, methods, coverage=args.coverage))
+        for m in methods:
+            if m in stopped:
+                rows.append({"lights": n, "method": m, "frame_ms": None, "bake_ms": None, "note": "not run: " + stopped[m]})
+                continue
+            res, err = profile(args.binary, scene, m, args.frames, args.size, args.timeout)
+            if err:
+                stopped[m] = "%s at %d lights" % (err, n)
+                rows.append({"lights": n, "method": m, "frame_ms": None, "bake_ms": None, "note": err})
+                print("%6d %-15s %s" % (n, m, err), flush=True)
+                continue
+            rows.append({"lights": n, "method": m, "frame_ms": res["frame_ms"], "bake_ms": res["bake_ms"], "note": res["note"], "device": res["device"]})
+            print("%6d %-15s frame %10.3f ms   bake %10.1f ms%s" % (n, m, res["frame_ms"], res["bake_ms"], "   warning: " + res["note"] if res["note"] else ""), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--counts", default="1,4,16,64,256,1024,4096")
@@ -222,27 +242,15 @@ def main():
             sys.exit("--methods: unknown method %r (known: %s)" % (m, ", ".join(METHOD_DECLS)))
     if not os.path.exists(args.binary):
         subprocess.run(["cargo", "build", "--release", "--quiet"], check=True)
-    rows, stopped, device = [], {}, "?"
-    tmp = tempfile.mkdtemp(prefix="penumbra-scaling-")
-    # Bakes must be timed, not read back from an earlier run's cache.
-    os.environ["PENUMBRA_CACHE"] = tmp
-    for n in counts:
-        scene = os.path.join(tmp, "stage_%d.toml" % n)
-        with open(scene, "w") as f:
-            f.write(stage_scene(n, methods, coverage=args.coverage))
-        for m in methods:
-            if m in stopped:
-                rows.append({"lights": n, "method": m, "frame_ms": None, "bake_ms": None, "note": "not run: " + stopped[m]})
-                continue
-            res, err = profile(args.binary, scene, m, args.frames, args.size, args.timeout)
-            if err:
-                stopped[m] = "%s at %d lights" % (err, n)
-                rows.append({"lights": n, "method": m, "frame_ms": None, "bake_ms": None, "note": err})
-                print("%6d %-15s %s" % (n, m, err), flush=True)
-                continue
-            device = res["device"]
-            rows.append({"lights": n, "method": m, "frame_ms": res["frame_ms"], "bake_ms": res["bake_ms"], "note": res["note"]})
-            print("%6d %-15s frame %10.3f ms   bake %10.1f ms%s" % (n, m, res["frame_ms"], res["bake_ms"], "   warning: " + res["note"] if res["note"] else ""), flush=True)
+    rows, stopped = [], {}
+    # Bakes must be timed, not read back from an earlier run's cache; the scenes and the cache go
+    # with the folder when the run ends.
+    with tempfile.TemporaryDirectory(prefix="penumbra-scaling-") as tmp:
+        os.environ["PENUMBRA_CACHE"] = tmp
+        measure(args, counts, methods, tmp, rows, stopped)
+    device = next((r["device"] for r in rows if "device" in r), "?")
+    for r in rows:
+        r.pop("device", None)
     with open(args.out + ".csv", "w", newline="") as f:
         wr = csv.DictWriter(f, fieldnames=["lights", "method", "frame_ms", "bake_ms", "note"])
         wr.writeheader()

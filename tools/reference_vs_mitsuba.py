@@ -87,8 +87,16 @@ def setup_llvm(path):
         os.environ["DRJIT_LIBLLVM_PATH"] = path
 
 
+# Every file the run writes goes under one folder, removed when the run ends (however it ends).
+WORK = None
+
+
+def work_dir(prefix):
+    return Path(tempfile.mkdtemp(prefix=prefix, dir=WORK))
+
+
 def run_penumbra(binary, scene, args, size, spp, seed, extra):
-    out = Path(tempfile.mkdtemp(prefix="penumbra-vs-mitsuba-")) / "ref.exr"
+    out = work_dir("penumbra-") / "ref.exr"
     cmd = [binary, "reference", str(ROOT / scene), "--size", size, "--spp", str(spp), "--seed", str(seed), "-o", str(out)] + args + extra
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
@@ -235,7 +243,7 @@ def main():
     for name in args.cases.split(","):
         scene, pargs, max_depth, spp, flip = CASES[name]
         spp = max(args.chunks, int(spp * args.spp_scale))
-        folder = Path(tempfile.mkdtemp(prefix=f"mitsuba-{name}-"))
+        folder = work_dir(f"mitsuba-{name}-")
         exported = export_scene(args.penumbra, scene, folder)
         rate, mean, se, image, pvariance = penumbra_renders(args, scene, pargs, spp, extra)
         row = {"case": name, "spp": spp, "penumbra": (rate, mean, se), "mitsuba": {}, "efficiency": {}}
@@ -295,4 +303,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with tempfile.TemporaryDirectory(prefix="penumbra-vs-mitsuba-") as WORK:
+        main()
