@@ -87,6 +87,28 @@ def setup_llvm(path):
         os.environ["DRJIT_LIBLLVM_PATH"] = path
 
 
+def jit_variants_that_run(variants):
+    """The variants left after dropping each LLVM or CUDA one that cannot render a 1-spp scene
+    here, with one line saying why. Tried in a child process: Dr.Jit compiling its kernels with
+    too old an LLVM (Debian 12's 15) aborts the process, which no exception handler would see."""
+    kept = []
+    for v in variants:
+        if not v.startswith(("llvm", "cuda")):
+            kept.append(v)
+            continue
+        probe = f"import mitsuba as mi; mi.set_variant({v!r}); mi.render(mi.load_dict(mi.cornell_box()), spp=1)"
+        try:
+            r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=300)
+            ok, why = r.returncode == 0, (r.stderr.strip().splitlines() or ["exit status %d" % r.returncode])[0][:120]
+        except subprocess.TimeoutExpired:
+            ok, why = False, "a 1-spp render took over 300 s"
+        if ok:
+            kept.append(v)
+        else:
+            print(f"skipping Mitsuba variant {v}: {why} (for llvm_ad_rgb see --libllvm in this script's docstring)", file=sys.stderr)
+    return kept
+
+
 # Every file the run writes goes under one folder, removed when the run ends (however it ends).
 WORK = None
 
@@ -237,7 +259,7 @@ def main():
     args = parse_args()
     setup_llvm(args.libllvm)
     w, h = (int(x) for x in args.size.lower().split("x"))
-    variants = [v for v in args.variants.split(",") if v]
+    variants = jit_variants_that_run([v for v in args.variants.split(",") if v])
     extra = args.penumbra_args.split()
     rows = []
     for name in args.cases.split(","):
