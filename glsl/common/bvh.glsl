@@ -20,8 +20,8 @@ struct Triangle {
     vec4 e2;
 };
 
-layout(set = 0, binding = BVH_NODES_BINDING) uniform usampler2D bvh_nodes;
-layout(set = 0, binding = BVH_TRIANGLES_BINDING) uniform usampler2D bvh_triangles;
+layout(set = 0, binding = BVH_NODES_BINDING, rgba32ui) readonly uniform uimage2D bvh_nodes;
+layout(set = 0, binding = BVH_TRIANGLES_BINDING, rgba32ui) readonly uniform uimage2D bvh_triangles;
 
 Triangle bvh_triangle(uint i) {
     Triangle t;
@@ -201,7 +201,7 @@ bool trace_triangles(vec3 o, vec3 d, bool any_hit, inout float t_max, out int tr
 #ifdef BVH_ORDERED_SKIPS_BINDING
 // Per node and ray octant, the node after its subtree in the order that octant takes children,
 // bit 31 set where it takes the second child first (Bvh::octant_skip_links): eight words a node.
-layout(set = 0, binding = BVH_ORDERED_SKIPS_BINDING) uniform usampler2D bvh_skips;
+layout(set = 0, binding = BVH_ORDERED_SKIPS_BINDING, rgba32ui) readonly uniform uimage2D bvh_skips;
 
 // trace_triangles without a stack: the nodes in an order fixed per ray octant, each child
 // before the other where the ray runs from it toward the other, past a subtree whose box the
@@ -252,7 +252,7 @@ bool trace_triangles_ordered(vec3 o, vec3 d, bool any_hit, inout float t_max, ou
 #ifdef BVH_SKIPS_BINDING
 // Per node, the node after its subtree (Bvh::skip_links).
 // Four links a texel.
-layout(set = 0, binding = BVH_SKIPS_BINDING) uniform usampler2D bvh_skips;
+layout(set = 0, binding = BVH_SKIPS_BINDING, rgba32ui) readonly uniform uimage2D bvh_skips;
 
 uint bvh_skip(uint i) {
     return table_packed(bvh_skips, i);

@@ -42,21 +42,21 @@ layout(set = 0, binding = 0) uniform Params {
 #define BVH_ORDERED_SKIPS_BINDING 13
 #include "common/bvh.glsl"
 // Per triangle its Shading (8 texels) and per material its Material (5 texels), as tables.
-layout(set = 0, binding = 3) uniform usampler2D shading_table;
+layout(set = 0, binding = 3, rgba32ui) readonly uniform uimage2D shading_table;
 layout(set = 0, binding = 4) readonly buffer Lights { Light items[]; } lights;
 // The environment map's texels, and its CDFs four values a texel (environment.glsl).
-layout(set = 0, binding = 8) uniform usampler2D environment_table;
-layout(set = 0, binding = 9) uniform usampler2D environment_cdf_table;
+layout(set = 0, binding = 8, rgba32ui) readonly uniform uimage2D environment_table;
+layout(set = 0, binding = 9, rgba32ui) readonly uniform uimage2D environment_cdf_table;
 // Texture maps as linear float texels (src/reference/scene_data.rs); per texture
 // (first texel, width, height, 0).
-layout(set = 0, binding = 10) uniform usampler2D texture_table;
-layout(set = 0, binding = 11) uniform usampler2D texture_headers;
+layout(set = 0, binding = 10, rgba32ui) readonly uniform uimage2D texture_table;
+layout(set = 0, binding = 11, rgba32ui) readonly uniform uimage2D texture_headers;
 
 #include "reference/bsdf.glsl"
 #include "reference/environment.glsl"
 #include "reference/trace.glsl"
 
-layout(set = 0, binding = 5) uniform usampler2D material_table;
+layout(set = 0, binding = 5, rgba32ui) readonly uniform uimage2D material_table;
 
 Shading shading_of(uint triangle) {
     uint k = 8u * triangle;
