@@ -31,5 +31,9 @@ layout(constant_id = 10) const bool BVH_WALK_ORDERED = false;
 // Where the main draws come from (reference/rng.glsl, `sample1` and `sample2`): false, the PCG
 // stream (independent samples); true, scrambled Sobol points, stratified over a pixel's samples.
 layout(constant_id = 11) const bool SAMPLER_SOBOL = false;
+// How many independently scrambled replicates the Sobol sampler splits a pixel's samples into
+// (reference/rng.glsl): always set by the host from src/reference/mod.rs SOBOL_REPLICATES, which
+// also reads the replicates back; the 8 here is only a default.
+layout(constant_id = 12) const uint SOBOL_REPLICATES = 8u;
 
 #endif

@@ -41,7 +41,6 @@ float rand(inout uint state) {
 // different keys use independent scrambles (padding), so they are independent of each other
 // within a sample. The sample index and the scramble seed are set once per sample by
 // `sampler_start`; they are per-invocation state like the PCG streams.
-const uint SOBOL_REPLICATES = 8u;  // src/reference/mod.rs SOBOL_REPLICATES
 uint sampler_index = 0u;
 uint sampler_pixel_seed = 0u;
 

@@ -143,6 +143,7 @@ impl SceneFeatures {
         constants.push(SpecConstant { id: flags.len() as u32, bits: nee as u32 });
         constants.push(SpecConstant { id: flags.len() as u32 + 1, bits: u32::from(walk == BvhWalk::Ordered) });
         constants.push(SpecConstant { id: flags.len() as u32 + 2, bits: u32::from(sampler == Sampler::Sobol) });
+        constants.push(SpecConstant { id: flags.len() as u32 + 3, bits: super::SOBOL_REPLICATES });
         constants
     }
 }

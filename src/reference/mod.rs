@@ -721,7 +721,8 @@ fn dev_shaders() -> ShaderLibrary {
 }
 
 /// How many independently scrambled replicates the Sobol sampler splits a pixel's samples into
-/// (sample index modulo this; `SOBOL_REPLICATES` in `glsl/reference/rng.glsl`). The scatter of
+/// (sample index modulo this; the tracer gets it as its specialization constant 12,
+/// `SOBOL_REPLICATES` in `glsl/reference/features.glsl`). The scatter of
 /// their means is the error of the pixel's mean with R - 1 degrees of freedom; more replicates
 /// make that estimate steadier but each replicate's stratification coarser (R replicates of n/R
 /// samples), which costs error: on the Cornell box with 32 bounces one scramble per pixel gained
