@@ -55,6 +55,23 @@ bool hit_triangle(vec3 o, vec3 d, vec3 p0, vec3 e1, vec3 e2, float t_max, out fl
     return t > 0.0 && t < t_max;
 }
 
+// min and max written as selects, for the slab test below. GLSL's min and max must return the
+// other operand where one is NaN, which llvmpipe compiles as the x86 min or max plus a compare
+// and a blend (unless it can prove an operand is a number); `a < b ? a : b` is exactly x86's
+// minps, one instruction. No NaN reaches the slab test (inv_d is finite: zero directions are
+// replaced by 1e-30), so the results are bit for bit those of min and max: 1.08-1.13x on the
+// reference's rates on lavapipe (README, "The reference against Mitsuba 3"). `precise` keeps
+// the compiler from folding the selects back into NaN-aware min and max.
+float select_min(float a, float b) {
+    precise float m = a < b ? a : b;
+    return m;
+}
+
+float select_max(float a, float b) {
+    precise float m = a > b ? a : b;
+    return m;
+}
+
 // Entry distance into node `i`'s box within [0, t_max], NO_HIT if the ray misses it; also the
 // node's index (interior: second child, the first being the next node; leaf: first triangle) and
 // count (triangles in a leaf, 0 for interior nodes) from the same two texels, so that descending
@@ -66,10 +83,11 @@ float node_entry(uint i, vec3 o, vec3 inv_d, float t_max, out uint index, out ui
     count = b.w;
     vec3 t0 = (uintBitsToFloat(a.xyz) - o) * inv_d;
     vec3 t1 = (uintBitsToFloat(b.xyz) - o) * inv_d;
-    vec3 near = min(t0, t1);
-    vec3 far = max(t0, t1);
-    float enter = max(max(near.x, near.y), max(near.z, 0.0));
-    float exit = min(min(far.x, far.y), min(far.z, t_max));
+    bvec3 t0_nearer = lessThan(t0, t1);
+    precise vec3 near = mix(t1, t0, t0_nearer);
+    precise vec3 far = mix(t0, t1, t0_nearer);
+    float enter = select_max(select_max(near.x, near.y), select_max(near.z, 0.0));
+    float exit = select_min(select_min(far.x, far.y), select_min(far.z, t_max));
     return enter <= exit ? enter : NO_HIT;
 }
 
