@@ -8,7 +8,7 @@ use crate::capture::{load_scene, CaptureOptions};
 use crate::error::{Error, Result};
 use crate::lighting::registry;
 use crate::renderer::Renderer;
-pub use crate::timing::{median, summarise, PassStats};
+pub use crate::timing::{median, summarise, PassStats, TimingSummary};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ProfileReport {
@@ -44,8 +44,9 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
     // One frame to warm caches and learn which passes were culled.
     let culled = renderer.render(&camera, crate::renderer::FrameOutput::None)?.report.culled;
     renderer.gpu.submit_and_wait(renderer.last_frame())?;
-    let timings = renderer.profile(&camera, frames.max(1))?;
-    let passes = summarise(&timings);
+    let mut timings = TimingSummary::default();
+    renderer.profile_into(&camera, frames.max(1), &mut timings)?;
+    let passes = timings.stats();
     let method_report = registry::reports(&renderer.configuration, &passes);
     let memory = renderer.method_memory()?;
     let warnings = renderer.method_warnings()?;
@@ -61,7 +62,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
         driver: format!("{} {}", caps.driver_name, caps.driver_info),
         width: opts.size.0,
         height: opts.size.1,
-        frames: timings.len(),
+        frames: timings.frames(),
         passes,
         culled,
     })

@@ -22,6 +22,7 @@ use crate::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod, Term, Terms, RADIANCE_FORMAT};
 use crate::scene::{Camera, Scene};
 use crate::shaders::ShaderLibrary;
+use crate::timing::TimingSummary;
 
 /// Where a frame goes besides the radiance target.
 pub enum FrameOutput {
@@ -387,15 +388,26 @@ impl Renderer {
     /// Renders `frames` frames (each submitted and waited for) and returns each frame's timings.
     pub fn profile(&mut self, camera: &Camera, frames: usize) -> Result<Vec<Vec<PassTiming>>> {
         let mut out = Vec::new();
+        self.profile_each(camera, frames, |t| out.push(t))?;
+        Ok(out)
+    }
+
+    /// Renders `frames` frames as [`Renderer::profile`] does, handing each frame's timings to
+    /// `summary` instead of keeping them: memory that does not grow with the frames' names.
+    pub fn profile_into(&mut self, camera: &Camera, frames: usize, summary: &mut TimingSummary) -> Result<()> {
+        self.profile_each(camera, frames, |t| summary.add(&t))
+    }
+
+    fn profile_each(&mut self, camera: &Camera, frames: usize, mut each: impl FnMut(Vec<PassTiming>)) -> Result<()> {
         for _ in 0..frames {
             self.render(camera, FrameOutput::None)?;
             let f = self.last_frame();
             self.gpu.submit_and_wait(f)?;
             if let Some(t) = self.gpu.frame_timings(f)? {
-                out.push(t);
+                each(t);
             }
         }
-        Ok(out)
+        Ok(())
     }
 
     /// Reloads every pipeline's shaders from `glsl/`. On a compile error the old pipelines stay.
