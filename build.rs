@@ -19,7 +19,12 @@ fn main() {
                 let file = out.join(format!("{}.spv", rel.replace('/', "__")));
                 let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
                 std::fs::write(&file, bytes).expect("write SPIR-V into OUT_DIR");
-                writeln!(table, "    ({rel:?}, include_bytes!({:?})),", file.display().to_string()).ok();
+                writeln!(
+                    table,
+                    "    ({rel:?}, include_bytes!({:?})),",
+                    file.display().to_string()
+                )
+                .ok();
             }
             Err(e) => failures.push(e),
         }
@@ -30,7 +35,11 @@ fn main() {
                 println!("cargo:warning={line}");
             }
         }
-        panic!("{} shader(s) failed to compile:\n{}", failures.len(), failures.join("\n"));
+        panic!(
+            "{} shader(s) failed to compile:\n{}",
+            failures.len(),
+            failures.join("\n")
+        );
     }
     table.push_str("];\n");
     std::fs::write(out.join("embedded_shaders.rs"), table).expect("write embedded_shaders.rs");

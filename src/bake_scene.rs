@@ -18,7 +18,14 @@ pub fn run(opts: &CaptureOptions) -> Result<Vec<(String, Vec<BakeReport>)>> {
     let mut out = Vec::new();
     for c in configurations {
         // Creating the methods runs their bakes; the frame targets are a token size.
-        let renderer = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), c.clone(), (1, 1), 1, Baker::new(Some(Baker::default_dir())))?;
+        let renderer = Renderer::with_configuration(
+            Gpu::new(&opts.gpu)?,
+            scene.clone(),
+            c.clone(),
+            (1, 1),
+            1,
+            Baker::new(Some(Baker::default_dir())),
+        )?;
         out.push((c.name, renderer.bakes.clone()));
     }
     Ok(out)

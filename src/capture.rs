@@ -44,14 +44,25 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
         None => registry::configuration(&scene, opts.method.as_deref())?,
     };
     let gpu = Gpu::new(&opts.gpu)?;
-    let mut renderer = Renderer::with_configuration(gpu, scene, config, render_size, 1, Baker::new(Some(Baker::default_dir())))?;
+    let mut renderer = Renderer::with_configuration(
+        gpu,
+        scene,
+        config,
+        render_size,
+        1,
+        Baker::new(Some(Baker::default_dir())),
+    )?;
     let camera = renderer.scene.camera.clone();
     let mut image = None;
     for _ in 0..opts.frames.max(1) {
         image = renderer.render(&camera, FrameOutput::Readback)?.image;
     }
     let image = image.ok_or_else(|| crate::error::Error::Usage("readback returned no image".into()))?;
-    let image = if opts.supersample > 1 { crate::supersample::box_filter(&image, opts.supersample)? } else { image };
+    let image = if opts.supersample > 1 {
+        crate::supersample::box_filter(&image, opts.supersample)?
+    } else {
+        image
+    };
     Ok((image, renderer))
 }
 
@@ -76,17 +87,26 @@ pub fn run(opts: &CaptureOptions) -> Result<Vec<String>> {
     }
     let n = renderer.gpu.validation_log().count();
     if n > 0 {
-        return Err(crate::error::Error::Usage(format!("{n} validation message(s) (see above)")));
+        return Err(crate::error::Error::Usage(format!(
+            "{n} validation message(s) (see above)"
+        )));
     }
     Ok(written)
 }
 
 /// `capture --max-error E`: the cheapest configuration within E (relative MSE) from the chart
 /// data cached for this scene and size, and a sentence saying why it was chosen.
-pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: &std::path::Path) -> Result<(Configuration, String)> {
+pub fn choose_configuration(
+    opts: &CaptureOptions,
+    max_rel_mse: f64,
+    cache_dir: &std::path::Path,
+) -> Result<(Configuration, String)> {
     use crate::chart::{cached_table, choose, parse_csv, Choice};
     use crate::error::Error;
-    let path = opts.scene.as_deref().ok_or_else(|| Error::Usage("--max-error needs a scene file (the chart is measured per scene)".into()))?;
+    let path = opts
+        .scene
+        .as_deref()
+        .ok_or_else(|| Error::Usage("--max-error needs a scene file (the chart is measured per scene)".into()))?;
     let scene = load_scene(Some(path))?;
     let table = cached_table(&scene, opts.size, cache_dir);
     let text = std::fs::read_to_string(&table).map_err(|_| {
@@ -104,16 +124,30 @@ pub fn choose_configuration(opts: &CaptureOptions, max_rel_mse: f64, cache_dir: 
     let configs = parse_csv(&text)?;
     match choose(&configs, max_rel_mse) {
         Some(Choice::Picked { config, rejected }) => {
-            let why = Choice::Picked { config: config.clone(), rejected }.to_string();
+            let why = Choice::Picked {
+                config: config.clone(),
+                rejected,
+            }
+            .to_string();
             let configuration = registry::configurations(&scene)?
                 .into_iter()
                 .find(|c| c.name == config.method)
-                .ok_or_else(|| Error::Usage(format!("the chart names method `{}`, which the scene no longer enables; run `penumbra chart` again", config.method)))?;
+                .ok_or_else(|| {
+                    Error::Usage(format!(
+                        "the chart names method `{}`, which the scene no longer enables; run `penumbra chart` again",
+                        config.method
+                    ))
+                })?;
             let chosen = registry::sweep(&configuration)?
                 .into_iter()
                 .find(|(label, _)| *label == config.config)
                 .map(|(_, d)| d)
-                .ok_or_else(|| Error::Usage(format!("configuration `{}` is no longer in {}'s sweep; run `penumbra chart` again", config.config, config.method)))?;
+                .ok_or_else(|| {
+                    Error::Usage(format!(
+                        "configuration `{}` is no longer in {}'s sweep; run `penumbra chart` again",
+                        config.config, config.method
+                    ))
+                })?;
             Ok((chosen, why))
         }
         Some(none) => Err(Error::Usage(format!("--max-error {max_rel_mse}: {none}"))),

@@ -31,10 +31,18 @@ pub struct FlyCamera {
 impl FlyCamera {
     pub fn new(base: Camera) -> Self {
         let d = (base.target - base.position).normalize_or(Vec3::NEG_Z);
-        FlyCamera { yaw: d.x.atan2(-d.z), pitch: d.y.clamp(-1.0, 1.0).asin(), base }
+        FlyCamera {
+            yaw: d.x.atan2(-d.z),
+            pitch: d.y.clamp(-1.0, 1.0).asin(),
+            base,
+        }
     }
     pub fn forward(&self) -> Vec3 {
-        Vec3::new(self.yaw.sin() * self.pitch.cos(), self.pitch.sin(), -self.yaw.cos() * self.pitch.cos())
+        Vec3::new(
+            self.yaw.sin() * self.pitch.cos(),
+            self.pitch.sin(),
+            -self.yaw.cos() * self.pitch.cos(),
+        )
     }
     pub fn camera(&self) -> Camera {
         let mut c = self.base.clone();
@@ -50,7 +58,14 @@ impl FlyCamera {
         let f = self.forward();
         let right = f.cross(Vec3::Y).normalize_or_zero();
         let mut v = Vec3::ZERO;
-        for (k, d) in [(KeyCode::KeyW, f), (KeyCode::KeyS, -f), (KeyCode::KeyD, right), (KeyCode::KeyA, -right), (KeyCode::KeyE, Vec3::Y), (KeyCode::KeyQ, -Vec3::Y)] {
+        for (k, d) in [
+            (KeyCode::KeyW, f),
+            (KeyCode::KeyS, -f),
+            (KeyCode::KeyD, right),
+            (KeyCode::KeyA, -right),
+            (KeyCode::KeyE, Vec3::Y),
+            (KeyCode::KeyQ, -Vec3::Y),
+        ] {
             if keys.contains(&k) {
                 v += d;
             }
@@ -122,16 +137,29 @@ impl App {
     fn start(&mut self, el: &ActiveEventLoop) -> Result<Running> {
         let scene = load_scene(self.opts.scene.as_deref())?;
         let (w, h) = self.opts.size;
-        let attrs = Window::default_attributes().with_title("penumbra").with_inner_size(PhysicalSize::new(w, h));
-        let window = el.create_window(attrs).map_err(|e| Error::Usage(format!("cannot open a window: {e}")))?;
+        let attrs = Window::default_attributes()
+            .with_title("penumbra")
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = el
+            .create_window(attrs)
+            .map_err(|e| Error::Usage(format!("cannot open a window: {e}")))?;
         let desc = self.opts.gpu.clone().with_display(el)?;
         let mut gpu = Gpu::new(&desc)?;
         let size = window.inner_size();
         let swapchain = gpu.create_swapchain(&window, (size.width.max(1), size.height.max(1)), FRAMES_IN_FLIGHT)?;
         let extent = swapchain.extent;
         let configurations = crate::lighting::registry::configurations(&scene)?;
-        let renderer = Renderer::new(gpu, scene, self.opts.method.as_deref(), (extent.width, extent.height), FRAMES_IN_FLIGHT)?;
-        let current = configurations.iter().position(|c| *c == renderer.configuration).unwrap_or(0);
+        let renderer = Renderer::new(
+            gpu,
+            scene,
+            self.opts.method.as_deref(),
+            (extent.width, extent.height),
+            FRAMES_IN_FLIGHT,
+        )?;
+        let current = configurations
+            .iter()
+            .position(|c| *c == renderer.configuration)
+            .unwrap_or(0);
         let camera = FlyCamera::new(renderer.scene.camera.clone());
         Ok(Running {
             window,
@@ -163,7 +191,9 @@ impl Running {
         if size.width == 0 || size.height == 0 {
             return Ok(());
         }
-        self.renderer.gpu.recreate_swapchain(&mut self.swapchain, (size.width, size.height))?;
+        self.renderer
+            .gpu
+            .recreate_swapchain(&mut self.swapchain, (size.width, size.height))?;
         let e = self.swapchain.extent;
         self.renderer.resize((e.width, e.height))?;
         Ok(())
@@ -187,7 +217,11 @@ impl Running {
             if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
                 let parts: Vec<String> = t.iter().map(|p| format!("{} {:.2} ms", p.name, p.ms)).collect();
                 let methods = self.renderer.method_names().join(" + ");
-                self.window.set_title(&format!("penumbra — {} ({methods}) — {}", self.renderer.configuration.name, parts.join(" | ")));
+                self.window.set_title(&format!(
+                    "penumbra — {} ({methods}) — {}",
+                    self.renderer.configuration.name,
+                    parts.join(" | ")
+                ));
             }
             self.title_at = Instant::now();
         }
@@ -199,9 +233,20 @@ impl Running {
         self.renderer.states.acquired_image(acquired.image, wait_stage);
         let camera = self.camera.camera();
         let readback = self.grab_next;
-        self.renderer.render(&camera, FrameOutput::Present { image: acquired.image, exposure: 1.0, readback })?;
+        self.renderer.render(
+            &camera,
+            FrameOutput::Present {
+                image: acquired.image,
+                exposure: 1.0,
+                readback,
+            },
+        )?;
         let gpu = &self.renderer.gpu;
-        gpu.submit_frame(self.renderer.last_frame(), Some((acquired.acquired, wait_stage)), Some(acquired.rendered))?;
+        gpu.submit_frame(
+            self.renderer.last_frame(),
+            Some((acquired.acquired, wait_stage)),
+            Some(acquired.rendered),
+        )?;
         let presented = gpu.present(&self.swapchain, &acquired)?;
         if readback {
             gpu.wait_frame(self.renderer.last_frame())?;
@@ -217,8 +262,15 @@ impl Running {
 
     /// Saves the last grabbed presented frame.
     fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
-        let image = self.grabbed.take().ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
-        Ok(crate::image_io::save_image(path, image.into(), image::ImageFormat::Png)?)
+        let image = self
+            .grabbed
+            .take()
+            .ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
+        Ok(crate::image_io::save_image(
+            path,
+            image.into(),
+            image::ImageFormat::Png,
+        )?)
     }
 }
 
@@ -241,7 +293,11 @@ impl ApplicationHandler for App {
             match event {
                 WindowEvent::CloseRequested => el.exit(),
                 WindowEvent::Resized(_) => s.recreate()?,
-                WindowEvent::MouseInput { state, button: MouseButton::Left | MouseButton::Right, .. } => {
+                WindowEvent::MouseInput {
+                    state,
+                    button: MouseButton::Left | MouseButton::Right,
+                    ..
+                } => {
                     s.looking = state == ElementState::Pressed;
                 }
                 WindowEvent::KeyboardInput { event, .. } => {
@@ -320,17 +376,34 @@ impl ApplicationHandler for App {
 
 /// Runs the window until Esc, the close button, or `max_frames`.
 pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
-    let DemoScript { frames: max_frames, screenshot, resize_at, cycle_every } = script;
+    let DemoScript {
+        frames: max_frames,
+        screenshot,
+        resize_at,
+        cycle_every,
+    } = script;
     let event_loop = EventLoop::new().map_err(|e| Error::Usage(format!("cannot connect to a display: {e}")))?;
-    let mut app = App { opts: opts.clone(), max_frames, screenshot, resize_at, cycle_every, state: None, error: None };
-    event_loop.run_app(&mut app).map_err(|e| Error::Usage(format!("event loop: {e}")))?;
+    let mut app = App {
+        opts: opts.clone(),
+        max_frames,
+        screenshot,
+        resize_at,
+        cycle_every,
+        state: None,
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::Usage(format!("event loop: {e}")))?;
     if let Some(e) = app.error.take() {
         return Err(e);
     }
     if let Some(s) = app.state.take() {
         s.renderer.gpu.wait_idle()?;
         let n = s.renderer.gpu.validation_log().count();
-        let Running { renderer, swapchain, .. } = s;
+        let Running {
+            renderer, swapchain, ..
+        } = s;
         let mut renderer = renderer;
         renderer.gpu.destroy_swapchain(swapchain);
         if n > 0 {

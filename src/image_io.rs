@@ -28,8 +28,16 @@ const MAX_DECODE_BYTES: u64 = 4 << 30;
 /// The format and size of an image file from its header alone: a format penumbra reads (PNG,
 /// OpenEXR, Radiance HDR), and at most [`MAX_IMAGE_SIDE`] on a side. The message names no file.
 pub fn image_header(path: &Path) -> Result<(image::ImageFormat, u32, u32), String> {
-    let reader = image::ImageReader::open(path).map_err(|e| format!("cannot read: {e}"))?.with_guessed_format().map_err(|e| format!("cannot read: {e}"))?;
-    let Some(format) = reader.format().filter(|f| matches!(f, image::ImageFormat::Png | image::ImageFormat::OpenExr | image::ImageFormat::Hdr)) else {
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot read: {e}"))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read: {e}"))?;
+    let Some(format) = reader.format().filter(|f| {
+        matches!(
+            f,
+            image::ImageFormat::Png | image::ImageFormat::OpenExr | image::ImageFormat::Hdr
+        )
+    }) else {
         return Err("not an image penumbra reads (PNG, OpenEXR or Radiance HDR)".into());
     };
     let (w, h) = reader.into_dimensions().map_err(describe_image_error)?;
@@ -37,7 +45,9 @@ pub fn image_header(path: &Path) -> Result<(image::ImageFormat, u32, u32), Strin
         return Err(format!("the header says {w}×{h} pixels"));
     }
     if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
-        return Err(format!("the header says {w}×{h} pixels; penumbra reads images of at most {MAX_IMAGE_SIDE} on a side"));
+        return Err(format!(
+            "the header says {w}×{h} pixels; penumbra reads images of at most {MAX_IMAGE_SIDE} on a side"
+        ));
     }
     Ok((format, w, h))
 }
@@ -46,7 +56,10 @@ pub fn image_header(path: &Path) -> Result<(image::ImageFormat, u32, u32), Strin
 /// without the decoder's internals, naming no file (the caller says which file and field).
 pub fn open_image(path: &Path) -> Result<image::DynamicImage, String> {
     image_header(path)?;
-    let mut reader = image::ImageReader::open(path).map_err(|e| format!("cannot read: {e}"))?.with_guessed_format().map_err(|e| format!("cannot read: {e}"))?;
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot read: {e}"))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read: {e}"))?;
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(MAX_DECODE_BYTES);
     limits.max_image_width = Some(MAX_IMAGE_SIDE);
@@ -75,11 +88,15 @@ fn describe_image_error(e: image::ImageError) -> String {
                 image::error::ImageFormatHint::Exact(image::ImageFormat::Hdr) => "Radiance HDR",
                 _ => "image",
             };
-            let why = std::error::Error::source(d).map(|s| s.to_string()).unwrap_or_else(|| d.to_string());
+            let why = std::error::Error::source(d)
+                .map(|s| s.to_string())
+                .unwrap_or_else(|| d.to_string());
             format!("corrupt or truncated {format} data: {why}")
         }
         ImageError::Limits(_) => format!("too large to decode (more than {} GiB)", MAX_DECODE_BYTES >> 30),
-        ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => "truncated: the file ends early".into(),
+        ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "truncated: the file ends early".into()
+        }
         other => other.to_string(),
     };
     without_debug_dumps(&text)
@@ -91,7 +108,9 @@ fn without_debug_dumps(text: &str) -> String {
     let mut out = String::new();
     let mut rest = text;
     while let Some(open) = rest.find('{') {
-        let Some(close) = rest[open..].find('}').map(|c| open + c) else { break };
+        let Some(close) = rest[open..].find('}').map(|c| open + c) else {
+            break;
+        };
         let before = &rest[..open];
         // Drop the type name in front of the braces too.
         let kept = before.trim_end().rsplit_once(' ').map_or("", |(k, _)| k);
@@ -119,9 +138,14 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     use std::io::Write;
     use std::sync::atomic::{AtomicUsize, Ordering};
     static WRITES: AtomicUsize = AtomicUsize::new(0);
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let partial = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
-    let abort_at: Option<usize> = std::env::var("PENUMBRA_FAULT_ABORT_WRITE").ok().and_then(|v| v.parse().ok());
+    let abort_at: Option<usize> = std::env::var("PENUMBRA_FAULT_ABORT_WRITE")
+        .ok()
+        .and_then(|v| v.parse().ok());
     let nth = WRITES.fetch_add(1, Ordering::SeqCst) + 1;
     let result = (|| {
         let mut f = std::fs::File::create(&partial)?;
@@ -143,7 +167,10 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// Encodes `image` in `format` in memory and writes it with [`write_file`].
 pub fn save_image(path: &Path, image: image::DynamicImage, format: image::ImageFormat) -> Result<(), ImageIoError> {
-    let err = |message: String| ImageIoError::Io { path: path.display().to_string(), message };
+    let err = |message: String| ImageIoError::Io {
+        path: path.display().to_string(),
+        message,
+    };
     let mut out = std::io::Cursor::new(Vec::new());
     image.write_to(&mut out, format).map_err(|e| err(e.to_string()))?;
     write_file(path, out.get_ref()).map_err(|e| err(e.to_string()))
@@ -151,7 +178,11 @@ pub fn save_image(path: &Path, image: image::DynamicImage, format: image::ImageF
 
 impl HdrImage {
     pub fn new(width: u32, height: u32) -> Self {
-        HdrImage { width, height, pixels: vec![[0.0; 4]; (width * height) as usize] }
+        HdrImage {
+            width,
+            height,
+            pixels: vec![[0.0; 4]; (width * height) as usize],
+        }
     }
 
     pub fn get(&self, x: u32, y: u32) -> [f32; 4] {
@@ -175,22 +206,31 @@ impl HdrImage {
 
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageIoError> {
         let raw: Vec<f32> = self.pixels.iter().flat_map(|p| *p).collect();
-        let img =
-            image::Rgba32FImage::from_raw(self.width, self.height, raw).ok_or_else(|| ImageIoError::Io { path: path.display().to_string(), message: "pixel buffer does not match the size".into() })?;
+        let img = image::Rgba32FImage::from_raw(self.width, self.height, raw).ok_or_else(|| ImageIoError::Io {
+            path: path.display().to_string(),
+            message: "pixel buffer does not match the size".into(),
+        })?;
         save_image(path, img.into(), image::ImageFormat::OpenExr)
     }
 
     /// Reads an OpenEXR image (linear radiance). Any other format is refused: an 8-bit PNG holds
     /// display values, and reading it as radiance would compare the wrong quantities.
     pub fn read_exr(path: &Path) -> Result<Self, ImageIoError> {
-        let err = |message: String| ImageIoError::Io { path: path.display().to_string(), message };
+        let err = |message: String| ImageIoError::Io {
+            path: path.display().to_string(),
+            message,
+        };
         let (format, _, _) = image_header(path).map_err(err)?;
         if format != image::ImageFormat::OpenExr {
             return Err(err(format!("is {}, not OpenEXR: linear radiance is read from EXR files only (a PNG holds tone-mapped display values)", format_name(format))));
         }
         let img = open_image(path).map_err(err)?;
         let rgba = img.to_rgba32f();
-        Ok(HdrImage { width: rgba.width(), height: rgba.height(), pixels: rgba.pixels().map(|p| p.0).collect() })
+        Ok(HdrImage {
+            width: rgba.width(),
+            height: rgba.height(),
+            pixels: rgba.pixels().map(|p| p.0).collect(),
+        })
     }
 
     /// The display image as 8-bit sRGB.

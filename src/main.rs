@@ -8,7 +8,11 @@ use penumbra::backend::{Gpu, GpuDesc};
 use penumbra::capture::CaptureOptions;
 
 #[derive(Parser)]
-#[command(name = "penumbra", version, about = "Classic real-time lighting methods on Vulkan, rendered side by side and measured")]
+#[command(
+    name = "penumbra",
+    version,
+    about = "Classic real-time lighting methods on Vulkan, rendered side by side and measured"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -279,7 +283,9 @@ fn parse_light_selection(s: &str) -> Result<penumbra::reference::LightSelection,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT, e.g. 640x360"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT, e.g. 640x360"))?;
     let p = |v: &str| v.trim().parse::<u32>().ok().filter(|&n| n > 0 && n <= 16384);
     match (p(w), p(h)) {
         (Some(w), Some(h)) => Ok((w, h)),
@@ -299,7 +305,9 @@ fn parse_frames(s: &str) -> Result<usize, String> {
 fn parse_max_error(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
-        _ => Err(format!("`{s}`: expected a relative MSE, a finite number above 0 (e.g. 0.01)")),
+        _ => Err(format!(
+            "`{s}`: expected a relative MSE, a finite number above 0 (e.g. 0.01)"
+        )),
     }
 }
 
@@ -307,7 +315,9 @@ fn parse_max_error(s: &str) -> Result<f64, String> {
 fn parse_max_stderr(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
-        _ => Err(format!("`{s}`: expected a relative standard error, a finite number above 0 (e.g. 0.01)")),
+        _ => Err(format!(
+            "`{s}`: expected a relative standard error, a finite number above 0 (e.g. 0.01)"
+        )),
     }
 }
 
@@ -323,30 +333,68 @@ fn parse_scope(s: &str) -> Result<penumbra::reference::ErrorScope, String> {
 fn parse_exposure(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
-        _ => Err(format!("`{s}`: expected an exposure multiplier, a finite number above 0")),
+        _ => Err(format!(
+            "`{s}`: expected an exposure multiplier, a finite number above 0"
+        )),
     }
 }
 
 fn parse_resize(s: &str) -> Result<(u64, u32, u32), String> {
-    let (frame, size) = s.split_once(':').ok_or_else(|| format!("`{s}`: expected FRAME:WxH, e.g. 10:320x200"))?;
-    let frame = frame.trim().parse::<u64>().map_err(|_| format!("`{frame}`: expected a frame number"))?;
+    let (frame, size) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}`: expected FRAME:WxH, e.g. 10:320x200"))?;
+    let frame = frame
+        .trim()
+        .parse::<u64>()
+        .map_err(|_| format!("`{frame}`: expected a frame number"))?;
     let (w, h) = parse_size(size)?;
     Ok((frame, w, h))
 }
 
 fn gpu_desc(d: &DeviceArgs) -> GpuDesc {
     let env = std::env::var("PENUMBRA_VALIDATION").map(|v| v == "1").unwrap_or(false);
-    GpuDesc { validation: d.validation || env, device_name: d.device.clone(), display: None }
+    GpuDesc {
+        validation: d.validation || env,
+        device_name: d.device.clone(),
+        display: None,
+    }
 }
 
 fn options(r: &RenderArgs) -> CaptureOptions {
-    CaptureOptions { scene: r.scene.clone(), png: None, exr: None, size: r.size, frames: 1, method: r.method.clone(), exposure: 1.0, gpu: gpu_desc(&r.device), config: None, supersample: 1 }
+    CaptureOptions {
+        scene: r.scene.clone(),
+        png: None,
+        exr: None,
+        size: r.size,
+        frames: 1,
+        method: r.method.clone(),
+        exposure: 1.0,
+        gpu: gpu_desc(&r.device),
+        config: None,
+        supersample: 1,
+    }
 }
 
 fn run(cli: Cli) -> penumbra::Result<()> {
     match cli.command {
-        Command::Capture { render, output, exr, frames, exposure, max_error, cache_dir, supersample } => {
-            let mut opts = CaptureOptions { png: output, exr, frames, exposure, supersample, ..options(&render) };
+        Command::Capture {
+            render,
+            output,
+            exr,
+            frames,
+            exposure,
+            max_error,
+            cache_dir,
+            supersample,
+        } => {
+            let mut opts = CaptureOptions {
+                png: output,
+                exr,
+                frames,
+                exposure,
+                supersample,
+                ..options(&render)
+            };
             if let Some(e) = max_error {
                 let (decl, why) = penumbra::capture::choose_configuration(&opts, e, &cache_dir)?;
                 penumbra::outln!("{why}");
@@ -361,7 +409,8 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             penumbra::out!("{}", report.table());
             if let Some(p) = json {
                 let text = serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Usage(e.to_string()))?;
-                penumbra::image_io::write_file(&p, text.as_bytes()).map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
+                penumbra::image_io::write_file(&p, text.as_bytes())
+                    .map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
                 penumbra::outln!("wrote {}", p.display());
             }
         }
@@ -374,13 +423,29 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 }
             }
         }
-        Command::Compare { test, reference, diff, exposure, json } => {
+        Command::Compare {
+            test,
+            reference,
+            diff,
+            exposure,
+            json,
+        } => {
             use penumbra::image_io::HdrImage;
             use penumbra::metrics::{colorize, compare_with_map, CompareOptions};
             let (t, r) = (HdrImage::read_exr(&test)?, HdrImage::read_exr(&reference)?);
-            let (metrics, map) = compare_with_map(&t, &r, &CompareOptions { exposure, ..CompareOptions::default() })?;
+            let (metrics, map) = compare_with_map(
+                &t,
+                &r,
+                &CompareOptions {
+                    exposure,
+                    ..CompareOptions::default()
+                },
+            )?;
             if json {
-                penumbra::outln!("{}", serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?);
+                penumbra::outln!(
+                    "{}",
+                    serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?
+                );
             } else {
                 penumbra::out!("{}", metrics.table());
             }
@@ -389,7 +454,22 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("wrote {}", p.display());
             }
         }
-        Command::Chart { scene, output, csv, size, frames, timing_budget, reference_spp, reference_noise, reference_sampler, supersample, cache_dir, methods, frame, device } => {
+        Command::Chart {
+            scene,
+            output,
+            csv,
+            size,
+            frames,
+            timing_budget,
+            reference_spp,
+            reference_noise,
+            reference_sampler,
+            supersample,
+            cache_dir,
+            methods,
+            frame,
+            device,
+        } => {
             let opts = penumbra::chart::ChartOptions {
                 scene,
                 size,
@@ -408,7 +488,10 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             };
             let start = std::time::Instant::now();
             let chart = penumbra::chart::run(&opts)?;
-            penumbra::outln!("{}; each metric is followed by [the reference's own error: what an exact method would score]", chart.comparison());
+            penumbra::outln!(
+                "{}; each metric is followed by [the reference's own error: what an exact method would score]",
+                chart.comparison()
+            );
             for r in &chart.rows {
                 let (m, n) = (r.lighting_metrics(), &r.reference_noise);
                 let centre = match &r.supersampled {
@@ -440,7 +523,11 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                     penumbra::outln!("    warning: {w}");
                 }
             }
-            penumbra::outln!("chart: {} configurations in {:.1} s wall", chart.rows.len(), start.elapsed().as_secs_f64());
+            penumbra::outln!(
+                "chart: {} configurations in {:.1} s wall",
+                chart.rows.len(),
+                start.elapsed().as_secs_f64()
+            );
             penumbra::outln!("wrote {}", output.display());
             if let Some(p) = csv {
                 penumbra::outln!("wrote {}", p.display());
@@ -452,18 +539,51 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("{k:<38} {v}");
             }
         }
-        Command::Demo { render, frames, screenshot, resize_at, cycle_every } => {
+        Command::Demo {
+            render,
+            frames,
+            screenshot,
+            resize_at,
+            cycle_every,
+        } => {
             let opts = options(&render);
-            penumbra::demo::run(&opts, penumbra::demo::DemoScript { frames, screenshot, resize_at, cycle_every })?;
+            penumbra::demo::run(
+                &opts,
+                penumbra::demo::DemoScript {
+                    frames,
+                    screenshot,
+                    resize_at,
+                    cycle_every,
+                },
+            )?;
         }
-        Command::Reference { scene, spp, max_stderr, stderr_over, size, bounces, roulette_after, light_selection, sampler, export_scene, direct_only, indirect_only, seed, frame, output, device } => {
+        Command::Reference {
+            scene,
+            spp,
+            max_stderr,
+            stderr_over,
+            size,
+            bounces,
+            roulette_after,
+            light_selection,
+            sampler,
+            export_scene,
+            direct_only,
+            indirect_only,
+            seed,
+            frame,
+            output,
+            device,
+        } => {
             if let Some(dir) = export_scene {
                 for p in penumbra::reference::export::export_file(&scene, &dir)? {
                     penumbra::outln!("wrote {}", p.display());
                 }
                 return Ok(());
             }
-            use penumbra::reference::{Batching, ErrorTarget, LightPaths, ReferenceOptions, Settings, MIN_ADAPTIVE_SPP};
+            use penumbra::reference::{
+                Batching, ErrorTarget, LightPaths, ReferenceOptions, Settings, MIN_ADAPTIVE_SPP,
+            };
             let paths = if direct_only {
                 LightPaths::Direct
             } else if indirect_only {
@@ -472,22 +592,74 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 LightPaths::All
             };
             let spp = spp.unwrap_or(if max_stderr.is_some() { 65536 } else { 256 });
-            let target = max_stderr.map(|max| ErrorTarget { max, scope: stderr_over, min_spp: MIN_ADAPTIVE_SPP });
-            let settings = Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, roulette_after: roulette_after.0, light_selection, sampler };
-            let report = penumbra::reference::run(&ReferenceOptions { scene, output, size, settings, target, frame, gpu: gpu_desc(&device) })?;
+            let target = max_stderr.map(|max| ErrorTarget {
+                max,
+                scope: stderr_over,
+                min_spp: MIN_ADAPTIVE_SPP,
+            });
+            let settings = Settings {
+                spp,
+                bounces,
+                paths,
+                seed,
+                batching: Batching::Adaptive,
+                roulette_after: roulette_after.0,
+                light_selection,
+                sampler,
+            };
+            let report = penumbra::reference::run(&ReferenceOptions {
+                scene,
+                output,
+                size,
+                settings,
+                target,
+                frame,
+                gpu: gpu_desc(&device),
+            })?;
             for p in &report.written {
                 penumbra::outln!("wrote {}", p.display());
             }
             let img = &report.image;
-            penumbra::outln!("reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s ({} sampler)", img.spp, img.mean.width, img.mean.height, img.seconds, img.samples_per_second(), sampler.name());
+            penumbra::outln!(
+                "reference: {} spp at {}x{} in {:.2} s: {:.0} samples/s ({} sampler)",
+                img.spp,
+                img.mean.width,
+                img.mean.height,
+                img.seconds,
+                img.samples_per_second(),
+                sampler.name()
+            );
             let (mean, se) = img.average();
-            penumbra::outln!("average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}", mean[0], mean[1], mean[2], se[0], se[1], se[2]);
+            penumbra::outln!(
+                "average radiance (RGB): {:.6} {:.6} {:.6}, standard error {:.2e} {:.2e} {:.2e}",
+                mean[0],
+                mean[1],
+                mean[2],
+                se[0],
+                se[1],
+                se[2]
+            );
             let variance = img.relative_variance_per_sample();
-            penumbra::outln!("relative variance per sample: {variance:.4e}; efficiency (samples/s over it): {:.4e}", img.samples_per_second() / variance);
+            penumbra::outln!(
+                "relative variance per sample: {variance:.4e}; efficiency (samples/s over it): {:.4e}",
+                img.samples_per_second() / variance
+            );
             if let (Some(t), Some(a)) = (target, report.achieved) {
-                let over = if t.scope == penumbra::reference::ErrorScope::Image { "image" } else { "pixel" };
-                let verdict = if a <= t.max { "reached" } else { "NOT reached: the --spp cap came first" };
-                penumbra::outln!("relative standard error ({over}): {a:.3e} at {} spp, target {:.3e} {verdict}", img.spp, t.max);
+                let over = if t.scope == penumbra::reference::ErrorScope::Image {
+                    "image"
+                } else {
+                    "pixel"
+                };
+                let verdict = if a <= t.max {
+                    "reached"
+                } else {
+                    "NOT reached: the --spp cap came first"
+                };
+                penumbra::outln!(
+                    "relative standard error ({over}): {a:.3e} at {} spp, target {:.3e} {verdict}",
+                    img.spp,
+                    t.max
+                );
             }
         }
     }

@@ -17,7 +17,13 @@ pub fn cores() -> usize {
 /// on this thread and at no cost over calling `work`, when `len` is below twice that), all but
 /// the first on threads of their own; the results are joined with `join` in order of their
 /// pieces.
-pub fn fold_ranges<T: Send>(len: usize, threads: usize, min_piece: usize, work: impl Fn(Range<usize>) -> T + Sync, join: impl Fn(T, T) -> T) -> T {
+pub fn fold_ranges<T: Send>(
+    len: usize,
+    threads: usize,
+    min_piece: usize,
+    work: impl Fn(Range<usize>) -> T + Sync,
+    join: impl Fn(T, T) -> T,
+) -> T {
     let pieces = (len / min_piece.max(1)).clamp(1, threads.max(1));
     if pieces == 1 {
         return work(0..len);
@@ -26,7 +32,14 @@ pub fn fold_ranges<T: Send>(len: usize, threads: usize, min_piece: usize, work: 
     let range = |k: usize| k * step..((k + 1) * step).min(len);
     std::thread::scope(|scope| {
         let work = &work;
-        let others: Vec<_> = (1..pieces).map(|k| (k, std::thread::Builder::new().spawn_scoped(scope, move || work(range(k))))).collect();
+        let others: Vec<_> = (1..pieces)
+            .map(|k| {
+                (
+                    k,
+                    std::thread::Builder::new().spawn_scoped(scope, move || work(range(k))),
+                )
+            })
+            .collect();
         let mut out = work(range(0));
         for (k, handle) in others {
             // A panic in the thread is a bug in the work; carry it to the caller.
@@ -81,7 +94,10 @@ mod tests {
             let items: Vec<u64> = (0..n as u64).collect();
             let out: Vec<u64> = map(&items, 1000, |&x| x * x + 7);
             assert_eq!(out.len(), n);
-            assert!(out.iter().enumerate().all(|(i, &y)| y == (i as u64) * (i as u64) + 7), "n = {n}");
+            assert!(
+                out.iter().enumerate().all(|(i, &y)| y == (i as u64) * (i as u64) + 7),
+                "n = {n}"
+            );
         }
     }
 

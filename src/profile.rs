@@ -37,12 +37,18 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
     let scene = load_scene(opts.scene.as_deref())?;
     let gpu = Gpu::new(&opts.gpu)?;
     if gpu.caps().timestamp_valid_bits == 0 {
-        return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!("{}: timestamps on the graphics queue (timestampValidBits = 0)", gpu.caps().name))));
+        return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!(
+            "{}: timestamps on the graphics queue (timestampValidBits = 0)",
+            gpu.caps().name
+        ))));
     }
     let mut renderer = Renderer::new(gpu, scene, opts.method.as_deref(), opts.size, 1)?;
     let camera = renderer.scene.camera.clone();
     // One frame to warm caches and learn which passes were culled.
-    let culled = renderer.render(&camera, crate::renderer::FrameOutput::None)?.report.culled;
+    let culled = renderer
+        .render(&camera, crate::renderer::FrameOutput::None)?
+        .report
+        .culled;
     renderer.gpu.submit_and_wait(renderer.last_frame())?;
     let mut timings = TimingSummary::default();
     renderer.profile_into(&camera, frames.max(1), &mut timings)?;
@@ -85,7 +91,10 @@ impl ProfileReport {
             "max ms"
         );
         for p in &self.passes {
-            s += &format!("{:<28} {:>10.3} {:>10.3} {:>10.3}\n", p.name, p.median_ms, p.min_ms, p.max_ms);
+            s += &format!(
+                "{:<28} {:>10.3} {:>10.3} {:>10.3}\n",
+                p.name, p.median_ms, p.min_ms, p.max_ms
+            );
         }
         if !self.culled.is_empty() {
             s += &format!("culled (outputs unused): {}\n", self.culled.join(", "));

@@ -19,7 +19,9 @@ pub const MAX_SUPERSAMPLED_SIDE: u64 = 16384;
 pub fn supersampled_size(size: (u32, u32), n: u32) -> Result<(u32, u32)> {
     use crate::error::Error;
     if n == 0 || n > MAX_SUPERSAMPLE {
-        return Err(Error::Usage(format!("--supersample {n}: expected a factor from 1 to {MAX_SUPERSAMPLE}")));
+        return Err(Error::Usage(format!(
+            "--supersample {n}: expected a factor from 1 to {MAX_SUPERSAMPLE}"
+        )));
     }
     let (w, h) = (size.0 as u64 * n as u64, size.1 as u64 * n as u64);
     if w > MAX_SUPERSAMPLED_SIDE || h > MAX_SUPERSAMPLED_SIDE || w * h > MAX_SUPERSAMPLED_PIXELS {
@@ -38,7 +40,10 @@ pub fn supersampled_size(size: (u32, u32), n: u32) -> Result<(u32, u32)> {
 /// image's sides must be multiples of n.
 pub fn box_filter(image: &HdrImage, n: u32) -> Result<HdrImage> {
     if n == 0 || !image.width.is_multiple_of(n) || !image.height.is_multiple_of(n) {
-        return Err(crate::error::Error::Usage(format!("box filter: {}x{} is not a whole number of {n}x{n} blocks", image.width, image.height)));
+        return Err(crate::error::Error::Usage(format!(
+            "box filter: {}x{} is not a whole number of {n}x{n} blocks",
+            image.width, image.height
+        )));
     }
     let (w, h) = (image.width / n, image.height / n);
     let mut out = HdrImage::new(w, h);
@@ -77,16 +82,33 @@ mod tests {
         assert_eq!((down.width, down.height), (3, 2));
         for y in 0..2u32 {
             for x in 0..3u32 {
-                let block = [img.get(2 * x, 2 * y), img.get(2 * x + 1, 2 * y), img.get(2 * x, 2 * y + 1), img.get(2 * x + 1, 2 * y + 1)];
+                let block = [
+                    img.get(2 * x, 2 * y),
+                    img.get(2 * x + 1, 2 * y),
+                    img.get(2 * x, 2 * y + 1),
+                    img.get(2 * x + 1, 2 * y + 1),
+                ];
                 let got = down.get(x, y);
                 for c in 0..4 {
                     let want = block.iter().map(|p| p[c] as f64).sum::<f64>() / 4.0;
-                    assert!((got[c] as f64 - want).abs() <= 1e-6 * want.abs().max(1.0), "pixel ({x},{y}) channel {c}: {} vs {want}", got[c]);
+                    assert!(
+                        (got[c] as f64 - want).abs() <= 1e-6 * want.abs().max(1.0),
+                        "pixel ({x},{y}) channel {c}: {} vs {want}",
+                        got[c]
+                    );
                 }
             }
         }
         assert_eq!(box_filter(&img, 1).unwrap(), img);
-        let whole = box_filter(&HdrImage { width: 2, height: 2, pixels: vec![[1.0; 4], [2.0; 4], [3.0; 4], [6.0; 4]] }, 2).unwrap();
+        let whole = box_filter(
+            &HdrImage {
+                width: 2,
+                height: 2,
+                pixels: vec![[1.0; 4], [2.0; 4], [3.0; 4], [6.0; 4]],
+            },
+            2,
+        )
+        .unwrap();
         assert_eq!(whole.pixels, vec![[3.0; 4]]);
         assert!(box_filter(&img, 4).is_err(), "6x4 is not a whole number of 4x4 blocks");
     }
@@ -95,9 +117,18 @@ mod tests {
     fn large_supersampling_is_refused_before_anything_is_allocated() {
         assert_eq!(supersampled_size((128, 128), 4).unwrap(), (512, 512));
         assert_eq!(supersampled_size((4096, 4096), 1).unwrap(), (4096, 4096));
-        for (size, n) in [((640, 360), 16), ((4096, 4096), 2), ((16384, 1), 2), ((8, 8), 0), ((8, 8), 17)] {
+        for (size, n) in [
+            ((640, 360), 16),
+            ((4096, 4096), 2),
+            ((16384, 1), 2),
+            ((8, 8), 0),
+            ((8, 8), 17),
+        ] {
             let e = supersampled_size(size, n).unwrap_err().to_string();
-            assert!(e.contains("--supersample") && e.contains("limit") || e.contains("from 1 to"), "{size:?} x{n}: {e}");
+            assert!(
+                e.contains("--supersample") && e.contains("limit") || e.contains("from 1 to"),
+                "{size:?} x{n}: {e}"
+            );
         }
     }
 }

@@ -65,7 +65,12 @@ impl TimingSummary {
             .map(|(name, v)| {
                 let min = v.iter().copied().fold(f64::INFINITY, f64::min);
                 let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                PassStats { name: name.clone(), median_ms: median(&mut v.clone()), min_ms: min, max_ms: max }
+                PassStats {
+                    name: name.clone(),
+                    median_ms: median(&mut v.clone()),
+                    min_ms: min,
+                    max_ms: max,
+                }
             })
             .collect()
     }
@@ -86,8 +91,20 @@ mod tests {
 
     #[test]
     fn summary_statistics() {
-        let f = |v: &[(&str, f64)]| v.iter().map(|(n, ms)| PassTiming { name: n.to_string(), ms: *ms }).collect::<Vec<_>>();
-        let frames = vec![f(&[("a", 1.0), ("b", 5.0)]), f(&[("a", 3.0), ("b", 4.0)]), f(&[("a", 2.0), ("b", 9.0)]), f(&[("a", 10.0)])];
+        let f = |v: &[(&str, f64)]| {
+            v.iter()
+                .map(|(n, ms)| PassTiming {
+                    name: n.to_string(),
+                    ms: *ms,
+                })
+                .collect::<Vec<_>>()
+        };
+        let frames = vec![
+            f(&[("a", 1.0), ("b", 5.0)]),
+            f(&[("a", 3.0), ("b", 4.0)]),
+            f(&[("a", 2.0), ("b", 9.0)]),
+            f(&[("a", 10.0)]),
+        ];
         let mut summary = TimingSummary::default();
         for frame in &frames {
             summary.add(frame);
@@ -95,7 +112,23 @@ mod tests {
         assert_eq!(summary.frames(), 4);
         let s = summary.stats();
         assert_eq!(s, summarise(&frames));
-        assert_eq!(s[0], PassStats { name: "a".into(), median_ms: 2.5, min_ms: 1.0, max_ms: 10.0 });
-        assert_eq!(s[1], PassStats { name: "b".into(), median_ms: 5.0, min_ms: 4.0, max_ms: 9.0 });
+        assert_eq!(
+            s[0],
+            PassStats {
+                name: "a".into(),
+                median_ms: 2.5,
+                min_ms: 1.0,
+                max_ms: 10.0
+            }
+        );
+        assert_eq!(
+            s[1],
+            PassStats {
+                name: "b".into(),
+                median_ms: 5.0,
+                min_ms: 4.0,
+                max_ms: 9.0
+            }
+        );
     }
 }

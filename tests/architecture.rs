@@ -17,7 +17,12 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 
 /// Source without comments (doc links may name anything).
 fn code(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap().lines().map(|l| l.split("//").next().unwrap_or("")).collect::<Vec<_>>().join("\n")
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// Top-level module → the top-level modules its code names (`crate::x`, `use crate::{x, …}`).
@@ -25,8 +30,22 @@ fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     rust_files(&src, &mut files);
-    let top = |p: &Path| p.strip_prefix(&src).unwrap().components().next().unwrap().as_os_str().to_string_lossy().trim_end_matches(".rs").to_string();
-    let modules: BTreeSet<String> = files.iter().map(|p| top(p)).filter(|m| m != "lib" && m != "main").collect();
+    let top = |p: &Path| {
+        p.strip_prefix(&src)
+            .unwrap()
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_string_lossy()
+            .trim_end_matches(".rs")
+            .to_string()
+    };
+    let modules: BTreeSet<String> = files
+        .iter()
+        .map(|p| top(p))
+        .filter(|m| m != "lib" && m != "main")
+        .collect();
     let mut graph: BTreeMap<String, BTreeSet<String>> = modules.iter().map(|m| (m.clone(), BTreeSet::new())).collect();
     for f in &files {
         let from = top(f);
@@ -34,10 +53,18 @@ fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
             continue;
         }
         let text = code(f);
-        let mut names: Vec<String> = text.split("crate::").skip(1).map(|rest| rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect()).collect();
+        let mut names: Vec<String> = text
+            .split("crate::")
+            .skip(1)
+            .map(|rest| rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect())
+            .collect();
         for group in text.split("use crate::{").skip(1) {
             let inner = group.split('}').next().unwrap_or("");
-            names.extend(inner.split(',').map(|n| n.trim().split("::").next().unwrap_or("").to_string()));
+            names.extend(
+                inner
+                    .split(',')
+                    .map(|n| n.trim().split("::").next().unwrap_or("").to_string()),
+            );
         }
         for n in names {
             if n != from && modules.contains(&n) {
@@ -51,9 +78,17 @@ fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
 #[test]
 fn no_dependency_cycle_between_top_level_modules() {
     let graph = module_graph();
-    assert!(graph.contains_key("lighting") && graph.contains_key("renderer"), "{graph:?}");
+    assert!(
+        graph.contains_key("lighting") && graph.contains_key("renderer"),
+        "{graph:?}"
+    );
     // Depth-first search for a back edge; the path names the cycle.
-    fn visit(m: &str, g: &BTreeMap<String, BTreeSet<String>>, state: &mut BTreeMap<String, u8>, path: &mut Vec<String>) -> Option<Vec<String>> {
+    fn visit(
+        m: &str,
+        g: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, u8>,
+        path: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
         state.insert(m.to_string(), 1);
         path.push(m.to_string());
         for n in &g[m] {
@@ -89,23 +124,44 @@ fn only_the_lighting_layer_names_techniques() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     rust_files(&src, &mut files);
-    let techniques: Vec<String> = std::fs::read_dir(src.join("lighting")).unwrap().filter_map(|e| e.ok()).filter(|e| e.path().is_dir()).map(|e| e.file_name().to_string_lossy().to_string()).collect();
+    let techniques: Vec<String> = std::fs::read_dir(src.join("lighting"))
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_dir())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .collect();
     assert!(techniques.len() >= 3, "{techniques:?}");
     for f in files.iter().filter(|f| !f.starts_with(src.join("lighting"))) {
         let text = code(f);
         for t in &techniques {
-            assert!(!text.contains(&format!("lighting::{t}")), "{} names the technique `{t}`: go through lighting::registry", f.display());
+            assert!(
+                !text.contains(&format!("lighting::{t}")),
+                "{} names the technique `{t}`: go through lighting::registry",
+                f.display()
+            );
         }
     }
     // Inside the layer, techniques do not use each other: shared code lives in the layer itself.
     for f in files.iter().filter(|f| f.starts_with(src.join("lighting"))) {
-        let own = f.strip_prefix(src.join("lighting")).unwrap().components().next().unwrap().as_os_str().to_string_lossy().to_string();
+        let own = f
+            .strip_prefix(src.join("lighting"))
+            .unwrap()
+            .components()
+            .next()
+            .unwrap()
+            .as_os_str()
+            .to_string_lossy()
+            .to_string();
         if !techniques.contains(&own) {
             continue;
         }
         let text = code(f);
         for t in techniques.iter().filter(|t| **t != own) {
-            assert!(!text.contains(&format!("lighting::{t}")), "{} (technique {own}) uses technique `{t}`", f.display());
+            assert!(
+                !text.contains(&format!("lighting::{t}")),
+                "{} (technique {own}) uses technique `{t}`",
+                f.display()
+            );
         }
     }
 }

@@ -22,7 +22,12 @@ use penumbra::graph::{Access, RenderGraph, ResourceStates};
 /// and destruction, many calls in a short time.
 fn buffer_round_trip(gpu: &mut Gpu, name: &str, seed: usize) {
     let data: Vec<u8> = (0..256 + 16 * (seed % 64)).map(|i| (i * 7 + seed) as u8).collect();
-    let desc = BufferDesc { name: name.into(), size: data.len() as u64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::CpuToGpu };
+    let desc = BufferDesc {
+        name: name.into(),
+        size: data.len() as u64,
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+        memory: MemoryKind::CpuToGpu,
+    };
     let buffer = gpu.create_buffer(&desc).expect("a small buffer");
     gpu.upload_buffer(buffer, 0, &data).expect("write");
     assert_eq!(gpu.read_buffer(buffer).expect("read back"), data);
@@ -33,12 +38,23 @@ fn buffer_round_trip(gpu: &mut Gpu, name: &str, seed: usize) {
 fn frame_round_trip(gpu: &mut Gpu, name: &str, seed: usize) {
     let words = 64 + 4 * (seed % 64);
     let value = 0x9e37_79b9u32.wrapping_mul(seed as u32 + 1);
-    let desc = BufferDesc { name: name.into(), size: 4 * words as u64, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu };
+    let desc = BufferDesc {
+        name: name.into(),
+        size: 4 * words as u64,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        memory: MemoryKind::GpuToCpu,
+    };
     let buffer = gpu.create_buffer(&desc).expect("a small buffer");
     let frame = gpu.create_frame().expect("a frame");
     let mut graph = RenderGraph::new();
-    graph.pass("fill").buffer(buffer, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(buffer, value));
-    graph.pass("host").buffer(buffer, Access::HostRead, None).record(|_| Ok(()));
+    graph
+        .pass("fill")
+        .buffer(buffer, Access::TransferWrite, None)
+        .record(move |ctx| ctx.rec.fill_buffer(buffer, value));
+    graph
+        .pass("host")
+        .buffer(buffer, Access::HostRead, None)
+        .record(|_| Ok(()));
     let mut rec = gpu.begin_frame(frame).expect("begin");
     graph.execute(&mut rec, &mut ResourceStates::default()).expect("record");
     rec.finish().expect("finish");

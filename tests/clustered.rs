@@ -29,7 +29,10 @@ struct Rng(u64);
 
 impl Rng {
     fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 40) as f64 / (1u64 << 24) as f64) as f32
     }
     fn range(&mut self, a: f32, b: f32) -> f32 {
@@ -46,7 +49,10 @@ fn lights(points: usize, spots: usize, seed: u64) -> String {
         let (x, y, z) = (rng.range(-9.0, 9.0), rng.range(0.3, 1.2), rng.range(-10.0, 6.0));
         let i = [rng.range(0.5, 3.0), rng.range(0.5, 3.0), rng.range(0.5, 3.0)];
         let r = rng.range(1.5, 4.0);
-        out += &format!("[[lights]]\ntype = \"point\"\nposition = [{x}, {y}, {z}]\nintensity = [{}, {}, {}]\nradius = {r}\n\n", i[0], i[1], i[2]);
+        out += &format!(
+            "[[lights]]\ntype = \"point\"\nposition = [{x}, {y}, {z}]\nintensity = [{}, {}, {}]\nradius = {r}\n\n",
+            i[0], i[1], i[2]
+        );
     }
     for _ in 0..spots {
         let (x, y, z) = (rng.range(-9.0, 9.0), rng.range(0.8, 2.0), rng.range(-10.0, 6.0));
@@ -81,7 +87,8 @@ fn floor_scene(methods: &str, lights: &str) -> Scene {
 }
 
 fn render(scene: &Scene, method: &str) -> HdrImage {
-    let mut r = Renderer::new(common::test_gpu(), scene.clone(), Some(method), (W, H), 1).unwrap_or_else(|e| panic!("{e}"));
+    let mut r =
+        Renderer::new(common::test_gpu(), scene.clone(), Some(method), (W, H), 1).unwrap_or_else(|e| panic!("{e}"));
     let cam = r.scene.camera.clone();
     let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
     common::assert_clean(&r.gpu);
@@ -113,9 +120,23 @@ fn assignment(scene: &Scene) -> (Assignment, Clustered) {
     let environment = EnvironmentMap::of_scene(scene).unwrap();
     let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
     let mut bakes = Baker::new(None);
-    let decl = scene.methods.iter().find(|d| d.name == "clustered").expect("a clustered method").clone();
+    let decl = scene
+        .methods
+        .iter()
+        .find(|d| d.name == "clustered")
+        .expect("a clustered method")
+        .clone();
     let mut method = {
-        let mut cx = CreateContext { gpu: &mut gpu, shaders: &shaders, states: &mut states, scene, scene_gpu: &scene_gpu, environment: &environment, bakes: &mut bakes, terms: Terms::BASE_DIRECT };
+        let mut cx = CreateContext {
+            gpu: &mut gpu,
+            shaders: &shaders,
+            states: &mut states,
+            scene,
+            scene_gpu: &scene_gpu,
+            environment: &environment,
+            bakes: &mut bakes,
+            terms: Terms::BASE_DIRECT,
+        };
         Clustered::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"))
     };
     let view_proj = scene.camera.view_projection(W as f32 / H as f32).to_cols_array();
@@ -159,34 +180,62 @@ fn matches_forward_within_each_lights_range() {
     let forward = render(&scene, "forward");
     let mut gpu = common::test_gpu();
     let (lights, ranges) = lights_and_ranges(&scene, &mut gpu);
-    let surface = Surface { albedo: Vec3::new(0.7, 0.6, 0.5), specular: Vec3::splat(0.2), exponent: 16.0, emission: Vec3::ZERO };
+    let surface = Surface {
+        albedo: Vec3::new(0.7, 0.6, 0.5),
+        specular: Vec3::splat(0.2),
+        exponent: 16.0,
+        emission: Vec3::ZERO,
+    };
     let eye = scene.camera.position;
     let (mut checked, mut edge, mut cut_somewhere) = (0, 0, 0);
     for j in 0..H {
         for i in 0..W {
-            let Some(p) = hit_floor(&scene, i, j, 0.5) else { continue };
+            let Some(p) = hit_floor(&scene, i, j, 0.5) else {
+                continue;
+            };
             let dist = |k: usize| (Vec3::from_slice(&lights[k].position[..3]) - p).length();
             if (0..lights.len()).any(|k| (dist(k) - ranges[k]).abs() < 0.002 * ranges[k]) {
                 edge += 1;
                 continue;
             }
             checked += 1;
-            let within: Vec<_> = (0..lights.len()).filter(|&k| dist(k) <= ranges[k]).map(|k| lights[k]).collect();
+            let within: Vec<_> = (0..lights.len())
+                .filter(|&k| dist(k) <= ranges[k])
+                .map(|k| lights[k])
+                .collect();
             let windowed = shade(p, Vec3::Y, eye, &surface, &within, Vec3::ZERO);
             let full = shade(p, Vec3::Y, eye, &surface, &lights, Vec3::ZERO);
-            let (c, f) = (Vec3::from_slice(&clustered.get(i, j)[..3]), Vec3::from_slice(&forward.get(i, j)[..3]));
-            assert!(close(c, windowed, 2e-3, 1e-5), "pixel ({i},{j}) at {p}: clustered {c} vs the sum within range {windowed}");
-            assert!(close(f, full, 2e-3, 1e-5), "pixel ({i},{j}) at {p}: forward {f} vs the sum over all lights {full}");
+            let (c, f) = (
+                Vec3::from_slice(&clustered.get(i, j)[..3]),
+                Vec3::from_slice(&forward.get(i, j)[..3]),
+            );
+            assert!(
+                close(c, windowed, 2e-3, 1e-5),
+                "pixel ({i},{j}) at {p}: clustered {c} vs the sum within range {windowed}"
+            );
+            assert!(
+                close(f, full, 2e-3, 1e-5),
+                "pixel ({i},{j}) at {p}: forward {f} vs the sum over all lights {full}"
+            );
             let tail = full - windowed;
-            assert!(close(c, f - tail, 2e-3, 1e-4), "pixel ({i},{j}): clustered {c} vs forward {f} less the lights beyond range {tail}");
+            assert!(
+                close(c, f - tail, 2e-3, 1e-4),
+                "pixel ({i},{j}): clustered {c} vs forward {f} less the lights beyond range {tail}"
+            );
             if tail.max_element() > 1e-3 * full.max_element() {
                 cut_somewhere += 1;
             }
         }
     }
-    assert!(checked > (W * H / 2) as usize && edge < checked / 3, "{checked} pixels checked, {edge} on a range's edge");
+    assert!(
+        checked > (W * H / 2) as usize && edge < checked / 3,
+        "{checked} pixels checked, {edge} on a range's edge"
+    );
     // The ranges cut real light somewhere, or the test would not tell a cut-off from none.
-    assert!(cut_somewhere > checked / 10, "{cut_somewhere} of {checked} pixels lose light beyond a range");
+    assert!(
+        cut_somewhere > checked / 10,
+        "{cut_somewhere} of {checked} pixels lose light beyond a range"
+    );
 }
 
 /// The assignment read back: equal to the CPU twin's (but for clusters whose box a sphere
@@ -199,22 +248,40 @@ fn assignment_follows_the_lights() {
     let scene = floor_scene("\"clustered\"", &base);
     let (a, method) = assignment(&scene);
     let cpu = assign_cpu(&method.block, &method.volumes);
-    let differing = a.counts.iter().zip(&cpu).filter(|(g, c)| **g as usize != c.len()).count();
-    assert!(differing * 200 <= a.counts.len(), "{differing} of {} clusters differ from the CPU's assignment", a.counts.len());
+    let differing = a
+        .counts
+        .iter()
+        .zip(&cpu)
+        .filter(|(g, c)| **g as usize != c.len())
+        .count();
+    assert!(
+        differing * 200 <= a.counts.len(),
+        "{differing} of {} clusters differ from the CPU's assignment",
+        a.counts.len()
+    );
     let total: u64 = a.counts.iter().map(|&n| n as u64).sum();
     let mean = total as f64 / a.counts.len() as f64;
-    assert!(total > 0 && mean < 48.0 / 8.0, "mean {mean:.2} lights per cluster of 48");
+    assert!(
+        total > 0 && mean < 48.0 / 8.0,
+        "mean {mean:.2} lights per cluster of 48"
+    );
     assert_eq!(a.overflowed_clusters(), 0);
 
     // Far off to the side and beyond the slices' far end: within reach of no cluster.
     let far = "[[lights]]\ntype = \"point\"\nposition = [60, 1, -40]\nintensity = 5\nradius = 3\n";
     let with_far = floor_scene("\"clustered\"", &format!("{base}{far}"));
     let (b, _) = assignment(&with_far);
-    assert_eq!(a.counts, b.counts, "a light out of every cluster's reach changed the counts");
+    assert_eq!(
+        a.counts, b.counts,
+        "a light out of every cluster's reach changed the counts"
+    );
     assert_eq!(a.lights, b.lights);
     assert!(b.clusters_of(48).is_empty());
     let (img_a, img_b) = (render(&scene, "clustered"), render(&with_far, "clustered"));
-    assert!(img_a.pixels == img_b.pixels, "a light out of every cluster's reach changed the image");
+    assert!(
+        img_a.pixels == img_b.pixels,
+        "a light out of every cluster's reach changed the image"
+    );
 
     // Light 0 moved 4 m along x, toward the middle.
     let mut moved = scene.clone();
@@ -225,7 +292,10 @@ fn assignment_follows_the_lights() {
     }
     let (m, _) = assignment(&moved);
     let (before, after) = (a.clusters_of(0), m.clusters_of(0));
-    assert!(!before.is_empty() && !after.is_empty() && before != after, "light 0's clusters: {before:?} then {after:?}");
+    assert!(
+        !before.is_empty() && !after.is_empty() && before != after,
+        "light 0's clusters: {before:?} then {after:?}"
+    );
     for k in 1..48u32 {
         assert_eq!(a.clusters_of(k), m.clusters_of(k), "light {k} did not move");
     }
@@ -243,12 +313,29 @@ fn the_assignment_is_exhaustive_across_bands_and_slices() {
     let cpu = assign_cpu(&method.block, &method.volumes);
     assert_eq!(a.overflowed_clusters(), 0);
     let differing = a.lights.iter().zip(&cpu).filter(|(g, c)| g != c).count();
-    assert!(differing * 200 <= a.counts.len(), "{differing} of {} clusters differ from the CPU's assignment", a.counts.len());
+    assert!(
+        differing * 200 <= a.counts.len(),
+        "{differing} of {} clusters differ from the CPU's assignment",
+        a.counts.len()
+    );
     let deep = a.counts.iter().skip(6 * 4 * 64).filter(|&&n| n > 0).count();
     assert!(deep > 0, "no cluster past slice 64 holds a light");
-    let spheres: Vec<_> = method.volumes.iter().map(|v| LightVolume { axis: [0.0, 0.0, 0.0, -1.0], ..*v }).collect();
-    let (with_cones, without): (usize, usize) = (cpu.iter().map(Vec::len).sum(), assign_cpu(&method.block, &spheres).iter().map(Vec::len).sum());
-    assert!(with_cones * 100 < without * 98, "{with_cones} pairs with the cones against {without} with their spheres");
+    let spheres: Vec<_> = method
+        .volumes
+        .iter()
+        .map(|v| LightVolume {
+            axis: [0.0, 0.0, 0.0, -1.0],
+            ..*v
+        })
+        .collect();
+    let (with_cones, without): (usize, usize) = (
+        cpu.iter().map(Vec::len).sum(),
+        assign_cpu(&method.block, &spheres).iter().map(Vec::len).sum(),
+    );
+    assert!(
+        with_cones * 100 < without * 98,
+        "{with_cones} pairs with the cones against {without} with their spheres"
+    );
 }
 
 /// Twelve lights whose ranges cover the whole floor in 4 slots: every cluster on the floor
@@ -257,14 +344,28 @@ fn the_assignment_is_exhaustive_across_bands_and_slices() {
 fn overflow_is_counted() {
     let mut text = String::new();
     for k in 0..12 {
-        text += &format!("[[lights]]\ntype = \"point\"\nposition = [{}, 1, -2]\nintensity = 1\nradius = 100\n\n", k as f32 - 6.0);
+        text += &format!(
+            "[[lights]]\ntype = \"point\"\nposition = [{}, 1, -2]\nintensity = 1\nradius = 100\n\n",
+            k as f32 - 6.0
+        );
     }
-    let (small, _) = assignment(&floor_scene("{ name = \"clustered\", max_per_cluster = 4, tiles = [8, 6], slices = 8 }", &text));
+    let (small, _) = assignment(&floor_scene(
+        "{ name = \"clustered\", max_per_cluster = 4, tiles = [8, 6], slices = 8 }",
+        &text,
+    ));
     assert_eq!(small.counts.iter().max(), Some(&12));
-    assert_eq!(small.overflowed_clusters(), small.counts.len(), "every cluster holds all 12 lights: {:?}", small.counts);
+    assert_eq!(
+        small.overflowed_clusters(),
+        small.counts.len(),
+        "every cluster holds all 12 lights: {:?}",
+        small.counts
+    );
     assert_eq!(small.dropped(), 8 * small.counts.len() as u64);
     assert!(small.lights.iter().all(|l| l.len() == 4));
-    let (roomy, _) = assignment(&floor_scene("{ name = \"clustered\", max_per_cluster = 16, tiles = [8, 6], slices = 8 }", &text));
+    let (roomy, _) = assignment(&floor_scene(
+        "{ name = \"clustered\", max_per_cluster = 16, tiles = [8, 6], slices = 8 }",
+        &text,
+    ));
     assert_eq!((roomy.overflowed_clusters(), roomy.dropped()), (0, 0));
     assert!(roomy.lights.iter().all(|l| l.len() == 12));
 }
@@ -276,11 +377,18 @@ fn overflow_is_counted() {
 fn dropped_lights_are_reported_to_the_user() {
     let mut text = String::new();
     for k in 0..12 {
-        text += &format!("[[lights]]\ntype = \"point\"\nposition = [{}, 1, -2]\nintensity = 1\nradius = 100\n\n", k as f32 - 6.0);
+        text += &format!(
+            "[[lights]]\ntype = \"point\"\nposition = [{}, 1, -2]\nintensity = 1\nradius = 100\n\n",
+            k as f32 - 6.0
+        );
     }
     let warnings = |cap: u32| {
-        let scene = floor_scene(&format!("{{ name = \"clustered\", max_per_cluster = {cap}, tiles = [8, 6], slices = 8 }}"), &text);
-        let mut r = Renderer::new(common::test_gpu(), scene, Some("clustered"), (W, H), 1).unwrap_or_else(|e| panic!("{e}"));
+        let scene = floor_scene(
+            &format!("{{ name = \"clustered\", max_per_cluster = {cap}, tiles = [8, 6], slices = 8 }}"),
+            &text,
+        );
+        let mut r =
+            Renderer::new(common::test_gpu(), scene, Some("clustered"), (W, H), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         r.render(&cam, FrameOutput::Readback).unwrap();
         let w = r.method_warnings().unwrap();
@@ -289,21 +397,46 @@ fn dropped_lights_are_reported_to_the_user() {
     };
     let small = warnings(4);
     assert_eq!(small.len(), 1, "{small:?}");
-    assert!(small[0].starts_with("clustered: 384 of 384 clusters") && small[0].contains("max_per_cluster = 4 (the fullest 12)") && small[0].contains("3072 light-cluster pairs"), "{}", small[0]);
+    assert!(
+        small[0].starts_with("clustered: 384 of 384 clusters")
+            && small[0].contains("max_per_cluster = 4 (the fullest 12)")
+            && small[0].contains("3072 light-cluster pairs"),
+        "{}",
+        small[0]
+    );
     assert!(warnings(12).is_empty(), "12 slots hold all 12 lights");
 
     let dir = common::temp_path("clustered-overflow");
     std::fs::create_dir_all(&dir).unwrap();
     let scene_path = dir.join("overflow.toml");
-    std::fs::write(&scene_path, floor_text("{ name = \"clustered\", max_per_cluster = 4 }", &text)).unwrap();
+    std::fs::write(
+        &scene_path,
+        floor_text("{ name = \"clustered\", max_per_cluster = 4 }", &text),
+    )
+    .unwrap();
     let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .args(["capture", scene_path.to_str().unwrap(), "--size", "32x24", "--device", &device, "--validation", "-o", dir.join("c.png").to_str().unwrap()])
+        .args([
+            "capture",
+            scene_path.to_str().unwrap(),
+            "--size",
+            "32x24",
+            "--device",
+            &device,
+            "--validation",
+            "-o",
+            dir.join("c.png").to_str().unwrap(),
+        ])
         .output()
         .expect("run penumbra");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
-    assert!(stderr.lines().any(|l| l.starts_with("warning: clustered:") && l.contains("max_per_cluster = 4")), "{stderr}");
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with("warning: clustered:") && l.contains("max_per_cluster = 4")),
+        "{stderr}"
+    );
 }
 
 /// Bad parameters: one error naming the scene, the method's entry and the parameter.
@@ -316,7 +449,11 @@ fn bad_parameters_are_refused() {
         ("max_per_cluster = 8193", "max_per_cluster", "from 1 to 8192"),
         ("cutoff = -1", "cutoff", "irradiance > 0"),
         ("cutoff = 0", "cutoff", "irradiance > 0"),
-        ("tiles = [128, 128], slices = 16, max_per_cluster = 1024", "max_per_cluster", "MiB"),
+        (
+            "tiles = [128, 128], slices = 16, max_per_cluster = 1024",
+            "max_per_cluster",
+            "MiB",
+        ),
         ("tiles = [256, 256]", "tiles", "at most 16384 tiles"),
         ("tiles = [128, 128], slices = 256", "slices", "at most 1048576 clusters"),
     ];
@@ -324,14 +461,19 @@ fn bad_parameters_are_refused() {
         let scene = floor_scene(&format!("{{ name = \"clustered\", {params} }}"), "");
         let decl = &scene.methods[0];
         let e = Config::from_decl(decl, Some(&scene)).expect_err(params).to_string();
-        assert!(e.contains("clustered test") && e.contains(&format!("methods[0].{param}")) && e.contains(want), "{params}: {e}");
+        assert!(
+            e.contains("clustered test") && e.contains(&format!("methods[0].{param}")) && e.contains(want),
+            "{params}: {e}"
+        );
         assert_eq!(e.lines().count(), 1, "{e}");
     }
     // Types are checked when the scene loads.
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let text = "methods = [{ name = \"clustered\", slices = \"many\" }]\n[camera]\nposition = [0, 1, 2]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\n";
     let e = match Scene::from_str(text, "clustered types", &dir) {
-        Ok(scene) => penumbra::lighting::registry::configurations(&scene).expect_err("a string for slices").to_string(),
+        Ok(scene) => penumbra::lighting::registry::configurations(&scene)
+            .expect_err("a string for slices")
+            .to_string(),
         Err(e) => e.to_string(),
     };
     assert!(e.contains("clustered types") && e.contains("slices"), "{e}");
@@ -342,12 +484,18 @@ fn bad_parameters_are_refused() {
 #[test]
 fn direct_term_over_another_base() {
     let combination = "[environment]\ntype = \"constant\"\nradiance = 0.3\n\n[[combinations]]\nname = \"mixed\"\nbase = \"forward\"\ndirect = \"clustered\"\n\n";
-    let scene = floor_scene("\"clustered\", \"forward\"", &format!("{combination}{}", lights(24, 8, 3)));
+    let scene = floor_scene(
+        "\"clustered\", \"forward\"",
+        &format!("{combination}{}", lights(24, 8, 3)),
+    );
     let (alone, mixed) = (render(&scene, "clustered"), render(&scene, "mixed"));
     let mut lit = 0;
     for (k, (a, m)) in alone.pixels.iter().zip(&mixed.pixels).enumerate() {
         let (a, m) = (Vec3::from_slice(&a[..3]), Vec3::from_slice(&m[..3]));
-        assert!(close(a, m, 1e-4, 1e-6), "pixel {k}: clustered alone {a}, over forward's base {m}");
+        assert!(
+            close(a, m, 1e-4, 1e-6),
+            "pixel {k}: clustered alone {a}, over forward's base {m}"
+        );
         lit += (a.max_element() > 0.0) as usize;
     }
     assert!(lit > alone.pixels.len() / 2, "{lit} lit pixels");

@@ -82,7 +82,8 @@ fn scene() -> Scene {
 }
 
 fn render(name: &str) -> HdrImage {
-    let mut r = Renderer::new(common::test_gpu(), scene(), Some(name), SIZE, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut r =
+        Renderer::new(common::test_gpu(), scene(), Some(name), SIZE, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
     let cam = r.scene.camera.clone();
     let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
     common::assert_clean(&r.gpu);
@@ -111,7 +112,10 @@ fn a_combination_is_the_sum_of_its_terms_alone() {
     let combo = render("shadowed_over_forward");
     // Additive blending adds the direct term onto the base in fp32: one rounding per light.
     let e = sum_error(&base, &shadowed, &combo);
-    assert!(e < 1e-5, "forward base + shadow-volume direct vs the combination: worst relative error {e}");
+    assert!(
+        e < 1e-5,
+        "forward base + shadow-volume direct vs the combination: worst relative error {e}"
+    );
     // The terms are real: the direct term carries more light than the base (sky and ambient).
     let (tb, td) = (total(&base), total(&shadowed));
     assert!(tb > 0.0 && td > tb, "base {tb}, direct {td}");
@@ -120,14 +124,30 @@ fn a_combination_is_the_sum_of_its_terms_alone() {
     // the one blend).
     let (fb, fd, whole) = (base, render("forward_direct"), render("forward"));
     let e = sum_error(&fb, &fd, &whole);
-    assert!(e < 1e-5, "forward base + forward direct vs forward: worst relative error {e}");
+    assert!(
+        e < 1e-5,
+        "forward base + forward direct vs forward: worst relative error {e}"
+    );
     // And the shadows are what the combination adds over forward: the box's shadow on the floor
     // darkens a part of the image that forward lights.
     // (Each shadow is lit by the other light, hence "a third darker".)
-    let darker = whole.pixels.iter().zip(&combo.pixels).filter(|(w, c)| c[1] < 0.67 * w[1] && w[1] > 0.05).count();
-    let brighter = whole.pixels.iter().zip(&combo.pixels).filter(|(w, c)| c[1] > w[1] * 1.0001 + 1e-6).count();
+    let darker = whole
+        .pixels
+        .iter()
+        .zip(&combo.pixels)
+        .filter(|(w, c)| c[1] < 0.67 * w[1] && w[1] > 0.05)
+        .count();
+    let brighter = whole
+        .pixels
+        .iter()
+        .zip(&combo.pixels)
+        .filter(|(w, c)| c[1] > w[1] * 1.0001 + 1e-6)
+        .count();
     eprintln!("{darker} pixels a third darker than forward, {brighter} brighter");
-    assert!(darker > 15 && brighter == 0, "{darker} pixels in shadow in the combination, {brighter} brighter than unshadowed forward");
+    assert!(
+        darker > 15 && brighter == 0,
+        "{darker} pixels in shadow in the combination, {brighter} brighter than unshadowed forward"
+    );
 }
 
 #[test]
@@ -148,38 +168,95 @@ fn a_direct_term_alone_tests_against_the_scene_depth() {
 
 #[test]
 fn configurations_list_methods_then_combinations() {
-    let names: Vec<String> = registry::configurations(&scene()).unwrap().into_iter().map(|c| c.name).collect();
-    assert_eq!(names, ["forward", "shadow_volumes", "shadowed_over_forward", "forward_base", "forward_direct", "shadowed_direct"]);
+    let names: Vec<String> = registry::configurations(&scene())
+        .unwrap()
+        .into_iter()
+        .map(|c| c.name)
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "forward",
+            "shadow_volumes",
+            "shadowed_over_forward",
+            "forward_base",
+            "forward_direct",
+            "shadowed_direct"
+        ]
+    );
     let c = registry::configuration(&scene(), Some("shadowed_over_forward")).unwrap();
-    let parts: Vec<(String, String)> = c.parts.iter().map(|p| (p.decl.name.clone(), p.terms.to_string())).collect();
-    assert_eq!(parts, [("forward".to_string(), "base".to_string()), ("shadow_volumes".to_string(), "direct".to_string())]);
+    let parts: Vec<(String, String)> = c
+        .parts
+        .iter()
+        .map(|p| (p.decl.name.clone(), p.terms.to_string()))
+        .collect();
+    assert_eq!(
+        parts,
+        [
+            ("forward".to_string(), "base".to_string()),
+            ("shadow_volumes".to_string(), "direct".to_string())
+        ]
+    );
     // The chart measures a combination as declared, then with each part swept.
     let sweep = registry::sweep(&c).unwrap();
     assert_eq!(sweep[0].0, "shadowed_over_forward");
-    assert!(sweep.len() > 2 && sweep.iter().all(|(l, _)| l.starts_with("shadowed_over_forward")), "{:?}", sweep.iter().map(|s| &s.0).collect::<Vec<_>>());
+    assert!(
+        sweep.len() > 2 && sweep.iter().all(|(l, _)| l.starts_with("shadowed_over_forward")),
+        "{:?}",
+        sweep.iter().map(|s| &s.0).collect::<Vec<_>>()
+    );
 }
 
 fn config_error(extra: &str, methods: &str) -> String {
     let text = format!("methods = {methods}\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\ngenerator = \"flat\"\n{extra}");
     let scene = Scene::from_str(&text, "mix.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
-    registry::configurations(&scene).expect_err("a bad combination must be refused").to_string()
+    registry::configurations(&scene)
+        .expect_err("a bad combination must be refused")
+        .to_string()
 }
 
 #[test]
 fn bad_combinations_are_one_line_naming_file_line_and_field() {
-    let e = config_error("[[combinations]]\nname = \"mix\"\ndirect = \"heightfield_pyramid\"\n", r#"["heightfield_pyramid"]"#);
+    let e = config_error(
+        "[[combinations]]\nname = \"mix\"\ndirect = \"heightfield_pyramid\"\n",
+        r#"["heightfield_pyramid"]"#,
+    );
     assert_eq!(e, "mix.toml:10: combinations[0].direct: heightfield_pyramid draws its terms (base + direct) in one pass and cannot supply direct alone");
-    let e = config_error("[[combinations]]\nname = \"mix\"\nbase = \"forward\"\n", r#"["heightfield_pyramid"]"#);
-    assert_eq!(e, "mix.toml:10: combinations[0].base: \"forward\" is not one of the scene's methods (heightfield_pyramid)");
-    let e = config_error("[[combinations]]\nname = \"mix\"\nindirect = \"forward\"\n", r#"["forward"]"#);
-    assert_eq!(e, "mix.toml:10: combinations[0].indirect: forward cannot supply the indirect term (it supplies base + direct)");
-    let e = config_error("[[combinations]]\nname = \"forward\"\nbase = \"forward\"\n", r#"["forward"]"#);
-    assert_eq!(e, "mix.toml:9: combinations[0].name: \"forward\" is already the name of a method or combination");
+    let e = config_error(
+        "[[combinations]]\nname = \"mix\"\nbase = \"forward\"\n",
+        r#"["heightfield_pyramid"]"#,
+    );
+    assert_eq!(
+        e,
+        "mix.toml:10: combinations[0].base: \"forward\" is not one of the scene's methods (heightfield_pyramid)"
+    );
+    let e = config_error(
+        "[[combinations]]\nname = \"mix\"\nindirect = \"forward\"\n",
+        r#"["forward"]"#,
+    );
+    assert_eq!(
+        e,
+        "mix.toml:10: combinations[0].indirect: forward cannot supply the indirect term (it supplies base + direct)"
+    );
+    let e = config_error(
+        "[[combinations]]\nname = \"forward\"\nbase = \"forward\"\n",
+        r#"["forward"]"#,
+    );
+    assert_eq!(
+        e,
+        "mix.toml:9: combinations[0].name: \"forward\" is already the name of a method or combination"
+    );
     let e = config_error("[[combinations]]\nname = \"empty\"\n", r#"["forward"]"#);
-    assert_eq!(e, "mix.toml:9: combinations[0]: names no term: give at least one of base, direct, indirect");
+    assert_eq!(
+        e,
+        "mix.toml:9: combinations[0]: names no term: give at least one of base, direct, indirect"
+    );
     // Unknown keys are caught by the parser, with the same promise.
-    let text = "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[combinations]]\nname = \"x\"\nambient = \"forward\"\n";
-    let e = Scene::from_str(text, "mix.toml", std::path::Path::new(".")).unwrap_err().to_string();
+    let text =
+        "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[combinations]]\nname = \"x\"\nambient = \"forward\"\n";
+    let e = Scene::from_str(text, "mix.toml", std::path::Path::new("."))
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("mix.toml:6: combinations[0].ambient"), "{e}");
 }
 
@@ -196,12 +273,16 @@ fn switching_configurations_frees_the_previous_methods() {
     let mut after_cycle = Vec::new();
     for _ in 0..3 {
         for c in &configurations {
-            r.set_configuration(c.clone()).unwrap_or_else(|e| panic!("{}: {e}", c.name));
+            r.set_configuration(c.clone())
+                .unwrap_or_else(|e| panic!("{}: {e}", c.name));
             r.render(&cam, FrameOutput::Readback).unwrap();
         }
         after_cycle.push(r.gpu.live_objects());
     }
     eprintln!("live (buffers, images, pipelines) after each cycle: {after_cycle:?}");
-    assert!(after_cycle.windows(2).all(|w| w[0] == w[1]), "objects grow with switching: {after_cycle:?}");
+    assert!(
+        after_cycle.windows(2).all(|w| w[0] == w[1]),
+        "objects grow with switching: {after_cycle:?}"
+    );
     common::assert_clean(&r.gpu);
 }

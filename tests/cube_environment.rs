@@ -30,13 +30,22 @@ fn cube_sky(name: &str, n: u32, f: impl Fn(Vec3) -> [f32; 3]) -> (String, Vec<[f
     for (face, key) in CUBE_FACE_KEYS.into_iter().enumerate() {
         let pixels: Vec<[f32; 4]> = (0..n * n)
             .map(|k| {
-                let (s, t) = (2.0 * ((k % n) as f32 + 0.5) / n as f32 - 1.0, 2.0 * ((k / n) as f32 + 0.5) / n as f32 - 1.0);
+                let (s, t) = (
+                    2.0 * ((k % n) as f32 + 0.5) / n as f32 - 1.0,
+                    2.0 * ((k / n) as f32 + 0.5) / n as f32 - 1.0,
+                );
                 let c = f(Environment::cube_dir(face, s, t).normalize());
                 [c[0], c[1], c[2], 1.0]
             })
             .collect();
         let path = common::temp_path(&format!("{name}-{key}.exr"));
-        HdrImage { width: n, height: n, pixels: pixels.clone() }.write_exr(&path).expect("write face");
+        HdrImage {
+            width: n,
+            height: n,
+            pixels: pixels.clone(),
+        }
+        .write_exr(&path)
+        .expect("write face");
         table += &format!("{key} = {:?}\n", path.display().to_string());
         all.extend(pixels.iter().map(|p| [p[0], p[1], p[2], 0.0]));
     }
@@ -47,13 +56,24 @@ fn cube_sky(name: &str, n: u32, f: impl Fn(Vec3) -> [f32; 3]) -> (String, Vec<[f
 fn equirect_sky(name: &str, w: u32, h: u32, f: impl Fn(Vec3) -> [f32; 3]) -> String {
     let pixels = (0..w * h)
         .map(|i| {
-            let c = f(sh::equirect_texel_dir_world((i % w) as usize, (i / w) as usize, w as usize, h as usize).normalize());
+            let c = f(
+                sh::equirect_texel_dir_world((i % w) as usize, (i / w) as usize, w as usize, h as usize).normalize(),
+            );
             [c[0], c[1], c[2], 1.0]
         })
         .collect();
     let path = common::temp_path(name);
-    HdrImage { width: w, height: h, pixels }.write_exr(&path).expect("write sky");
-    format!("[environment]\ntype = \"image\"\npath = {:?}\n", path.display().to_string())
+    HdrImage {
+        width: w,
+        height: h,
+        pixels,
+    }
+    .write_exr(&path)
+    .expect("write sky");
+    format!(
+        "[environment]\ntype = \"image\"\npath = {:?}\n",
+        path.display().to_string()
+    )
 }
 
 fn parse(toml: &str) -> Scene {
@@ -106,7 +126,12 @@ fn forward_cube_and_equirect_skies_agree() {
                     let tol = Vec3::from(B[c]).length() * 0.114 + 1e-5;
                     sky_worst = sky_worst.max((a[c] - b[c]).abs() / tol);
                     // And each map is its own texel-centre value of the sky.
-                    assert!((a[c] - want[c]).abs() <= Vec3::from(B[c]).length() * 0.0442 + 1e-5, "cube sky ({i},{j}) ch {c}: {} vs {}", a[c], want[c]);
+                    assert!(
+                        (a[c] - want[c]).abs() <= Vec3::from(B[c]).length() * 0.0442 + 1e-5,
+                        "cube sky ({i},{j}) ch {c}: {} vs {}",
+                        a[c],
+                        want[c]
+                    );
                 }
                 lo = lo.min(a[0]);
                 hi = hi.max(a[0]);
@@ -120,14 +145,24 @@ fn forward_cube_and_equirect_skies_agree() {
         }
     }
     eprintln!("forward: {sky_pixels} sky pixels, worst |cube - equirect| {sky_worst:.3} of the bound; {sphere_pixels} sphere pixels, worst {sphere_worst:.3} of 1e-3 relative; sky red spans {lo:.3}..{hi:.3}");
-    assert!(sky_pixels > 800 && sphere_pixels > 300, "{sky_pixels} sky, {sphere_pixels} sphere pixels");
+    assert!(
+        sky_pixels > 800 && sphere_pixels > 300,
+        "{sky_pixels} sky, {sphere_pixels} sphere pixels"
+    );
     assert!(sky_worst <= 1.0 && sphere_worst <= 1.0);
     // The sky seen varies by many times the tolerance: a wrong face would not pass.
     assert!(hi - lo > 5.0 * 0.616 * 0.114, "sky red spans only {lo}..{hi}");
 }
 
 fn settings(spp: u32, bounces: u32, paths: LightPaths) -> Settings {
-    Settings { spp, bounces, paths, seed: 3, batching: Batching::Adaptive, ..Settings::default() }
+    Settings {
+        spp,
+        bounces,
+        paths,
+        seed: 3,
+        batching: Batching::Adaptive,
+        ..Settings::default()
+    }
 }
 
 fn reference(scene: &Scene, size: (u32, u32), s: Settings) -> penumbra::reference::ReferenceImage {
@@ -149,7 +184,10 @@ fn reference_plane_under_a_constant_cube_sky_reflects_rho_l() {
     ));
     let size = (24, 24);
     let img = reference(&scene, size, settings(16, 3, LightPaths::All));
-    let (mut ground, mut sky) = (Agreement::new("plane under a constant cube sky"), Agreement::new("constant cube sky seen directly"));
+    let (mut ground, mut sky) = (
+        Agreement::new("plane under a constant cube sky"),
+        Agreement::new("constant cube sky seen directly"),
+    );
     for j in 0..size.1 {
         for i in 0..size.0 {
             let d = scene.camera.pixel_center_ray(i, j, size.0, size.1).1;
@@ -160,7 +198,12 @@ fn reference_plane_under_a_constant_cube_sky_reflects_rho_l() {
             }
         }
     }
-    assert!(ground.pixels > 100 && sky.pixels > 100, "{} ground, {} sky pixels", ground.pixels, sky.pixels);
+    assert!(
+        ground.pixels > 100 && sky.pixels > 100,
+        "{} ground, {} sky pixels",
+        ground.pixels,
+        sky.pixels
+    );
     ground.assert();
     sky.assert();
 }
@@ -175,17 +218,37 @@ fn reference_plane_under_a_constant_cube_sky_reflects_rho_l() {
 fn reference_half_face_skies_light_the_planes_that_face_them() {
     let sky = |d: Vec3| {
         let (face, s, t) = Environment::cube_face(d);
-        [if face == 0 && s < 0.0 { 1.0 } else { 0.0 }, if face == 2 && t < 0.0 { 1.0 } else { 0.0 }, 0.0]
+        [
+            if face == 0 && s < 0.0 { 1.0 } else { 0.0 },
+            if face == 2 && t < 0.0 { 1.0 } else { 0.0 },
+            0.0,
+        ]
     };
     let env = cube_sky("ref-halves", 8, sky).0;
-    let red = [Vec3::new(1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, -1.0, 1.0)];
-    let green = [Vec3::new(-1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, -1.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(-1.0, 1.0, 0.0)];
+    let red = [
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(1.0, -1.0, 1.0),
+    ];
+    let green = [
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(1.0, 1.0, -1.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
     let rho = 0.8;
     for (normal, rot, cam_z) in [(Vec3::Z, 90, 3.0), (Vec3::NEG_Z, -90, -3.0)] {
         let scene = parse(&format!(
             "[camera]\nposition = [0, 0, {cam_z}]\ntarget = [0, 0, 0]\nfov_y_deg = 60\n[[materials]]\nname = \"m\"\nalbedo = {rho}\n[[objects]]\nmesh = \"plane\"\nsize = 400\nrotate_deg = [{rot}, 0, 0]\nmaterial = \"m\"\n{env}"
         ));
-        let e = |poly: &[Vec3]| if poly.iter().all(|v| v.dot(normal) >= 0.0) { polygon_irradiance(Vec3::ZERO, normal, poly) } else { 0.0 };
+        let e = |poly: &[Vec3]| {
+            if poly.iter().all(|v| v.dot(normal) >= 0.0) {
+                polygon_irradiance(Vec3::ZERO, normal, poly)
+            } else {
+                0.0
+            }
+        };
         let want = Vec3::new(e(&red), e(&green), 0.0) * rho / std::f32::consts::PI;
         assert!(want.max_element() > 0.05 && want.min_element() == 0.0, "{want}");
         let size = (8, 8);
@@ -196,7 +259,10 @@ fn reference_half_face_skies_light_the_planes_that_face_them() {
                 lit.check(&img, i, j, want, Vec3::ZERO);
             }
         }
-        eprintln!("plane facing {normal}: want {want}, pixel (3,3) {:?}", img.mean.get(3, 3));
+        eprintln!(
+            "plane facing {normal}: want {want}, pixel (3,3) {:?}",
+            img.mean.get(3, 3)
+        );
         lit.assert();
     }
 }
@@ -213,7 +279,9 @@ fn reference_cube_sky_seen_directly_is_its_texels() {
     };
     let (env, texels) = cube_sky("ref-direct", n, sky);
     let map = EnvironmentMap::from_cube(n, texels);
-    let scene = parse(&format!("[camera]\nposition = [0, 0, 0]\ntarget = [0.7, 0.6, -1]\nfov_y_deg = 110\n{env}"));
+    let scene = parse(&format!(
+        "[camera]\nposition = [0, 0, 0]\ntarget = [0.7, 0.6, -1]\nfov_y_deg = 110\n{env}"
+    ));
     let size = (32, 32);
     let img = reference(&scene, size, settings(4, 1, LightPaths::All));
     let mut direct = Agreement::new("cube sky seen directly");
@@ -224,7 +292,11 @@ fn reference_cube_sky_seen_directly_is_its_texels() {
             let want = pixel_average(i, j, 4, |x, y| {
                 let d = scene.camera.ray(x, y, size.0, size.1).1;
                 let (face, s, t) = Environment::cube_face(d);
-                let key = (face, ((s + 1.0) * 0.5 * n as f32) as u32, ((t + 1.0) * 0.5 * n as f32) as u32);
+                let key = (
+                    face,
+                    ((s + 1.0) * 0.5 * n as f32) as u32,
+                    ((t + 1.0) * 0.5 * n as f32) as u32,
+                );
                 (*texel.get_or_insert(key) == key).then(|| map.radiance(d))
             });
             if let Some(want) = want {
@@ -233,7 +305,11 @@ fn reference_cube_sky_seen_directly_is_its_texels() {
             }
         }
     }
-    assert!(direct.pixels > 300 && faces.len() == 3, "{} pixels on faces {faces:?}", direct.pixels);
+    assert!(
+        direct.pixels > 300 && faces.len() == 3,
+        "{} pixels on faces {faces:?}",
+        direct.pixels
+    );
     direct.assert();
 }
 
@@ -244,17 +320,31 @@ fn reference_cube_sky_seen_directly_is_its_texels() {
 /// texels (the GPU projection equals the CPU's to ~1e-7 relative, tests/sh_gpu.rs), plus rounding.
 #[test]
 fn heightfield_cube_and_equirect_skies_shade_alike() {
-    let f = |d: Vec3| [0.6 + 0.3 * d.x + 0.4 * d.y + 0.2 * d.y * d.y, 0.5 - 0.2 * d.z + 0.3 * d.x * d.y, 0.4 + 0.1 * d.y];
+    let f = |d: Vec3| {
+        [
+            0.6 + 0.3 * d.x + 0.4 * d.y + 0.2 * d.y * d.y,
+            0.5 - 0.2 * d.z + 0.3 * d.x * d.y,
+            0.4 + 0.1 * d.y,
+        ]
+    };
     let bands = 4;
     let (cube_env, cube_texels) = cube_sky("hf-cube", 32, f);
     let equirect_env = equirect_sky("hf-equirect.exr", 64, 32, f);
     let rgb = |t: &[[f32; 4]]| t.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
     let c_cube = sh::project_cubemap(&rgb(&cube_texels), 32, bands).unwrap();
-    let eq_texels: Vec<[f32; 3]> = (0..64 * 32).map(|i| f(sh::equirect_texel_dir_world(i % 64, i / 64, 64, 32).normalize())).collect();
+    let eq_texels: Vec<[f32; 3]> = (0..64 * 32)
+        .map(|i| f(sh::equirect_texel_dir_world(i % 64, i / 64, 64, 32).normalize()))
+        .collect();
     let c_eq = sh::project_equirect(&eq_texels, 64, 32, bands).unwrap();
-    let dc: Vec3 = c_cube.iter().zip(&c_eq).map(|(a, b)| (*a - *b) * (*a - *b)).sum::<Vec3>().powf(0.5);
+    let dc: Vec3 = c_cube
+        .iter()
+        .zip(&c_eq)
+        .map(|(a, b)| (*a - *b) * (*a - *b))
+        .sum::<Vec3>()
+        .powf(0.5);
     let t_norm = (2.0 * std::f32::consts::PI / 3.0).sqrt() / std::f32::consts::PI;
-    let cones = "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 5\nradius = 1.2\nring_radius = 2\nheight = 1.5";
+    let cones =
+        "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 5\nradius = 1.2\nring_radius = 2\nheight = 1.5";
     let method = format!("{{ name = \"heightfield_pyramid\", bands = {bands} }}");
     let shade = |env: &str| {
         let mut h = hf_common::harness(&hf_common::scene(cones, &method, env));
@@ -285,15 +375,27 @@ fn heightfield_cube_and_equirect_skies_shade_alike() {
 #[test]
 fn terrain_sky_cube_scene_matches_terrain_sky() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let (cube, equirect) = (Scene::from_file(dir.join("terrain_sky_cube.toml")).unwrap(), Scene::from_file(dir.join("terrain_sky.toml")).unwrap());
-    let Some(Environment::Cube { faces, scale }) = &cube.environment else { panic!("{:?}", cube.environment) };
-    let Some(Environment::Image { path, .. }) = &equirect.environment else { panic!("{:?}", equirect.environment) };
+    let (cube, equirect) = (
+        Scene::from_file(dir.join("terrain_sky_cube.toml")).unwrap(),
+        Scene::from_file(dir.join("terrain_sky.toml")).unwrap(),
+    );
+    let Some(Environment::Cube { faces, scale }) = &cube.environment else {
+        panic!("{:?}", cube.environment)
+    };
+    let Some(Environment::Image { path, .. }) = &equirect.environment else {
+        panic!("{:?}", equirect.environment)
+    };
     let faces = penumbra::scene::CubeFaces::load(faces, *scale).unwrap();
     let rgb = |t: &[[f32; 4]]| t.iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>();
     let c_cube = sh::project_cubemap(&rgb(&faces.texels), faces.size as usize, 4).unwrap();
     let eq = EnvironmentMap::load(path, 1.0, "terrain_sky.toml").unwrap();
     let c_eq = sh::project_equirect(&rgb(&eq.texels), eq.width as usize, eq.height as usize, 4).unwrap();
-    let dc: Vec3 = c_cube.iter().zip(&c_eq).map(|(a, b)| (*a - *b) * (*a - *b)).sum::<Vec3>().powf(0.5);
+    let dc: Vec3 = c_cube
+        .iter()
+        .zip(&c_eq)
+        .map(|(a, b)| (*a - *b) * (*a - *b))
+        .sum::<Vec3>()
+        .powf(0.5);
     let t_norm = (2.0 * std::f32::consts::PI / 3.0).sqrt() / std::f32::consts::PI;
     let shade = |s: &Scene| {
         let mut decl = s.methods[0].clone();
@@ -312,7 +414,9 @@ fn terrain_sky_cube_scene_matches_terrain_sky() {
         }
     }
     let c00 = c_eq[0];
-    eprintln!("terrain sky: |c_cube - c_equirect| = {dc} (c_00 {c00}), worst |cube - equirect| {worst:.3} of the bound");
+    eprintln!(
+        "terrain sky: |c_cube - c_equirect| = {dc} (c_00 {c00}), worst |cube - equirect| {worst:.3} of the bound"
+    );
     assert!(worst <= 1.0, "{worst}");
     // The bound is tight enough to mean something: a few per cent of the sky's mean.
     assert!((dc / c00).max_element() < 0.05, "{dc} vs {c00}");

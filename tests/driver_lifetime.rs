@@ -17,18 +17,28 @@ use penumbra::backend::{Gpu, GpuDesc};
 /// The shared libraries mapped into this process.
 fn mapped_libraries() -> BTreeSet<String> {
     let maps = std::fs::read_to_string("/proc/self/maps").expect("read /proc/self/maps");
-    maps.lines().filter_map(|l| l.split_whitespace().nth(5)).filter(|p| p.contains(".so")).map(str::to_owned).collect()
+    maps.lines()
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .filter(|p| p.contains(".so"))
+        .map(str::to_owned)
+        .collect()
 }
 
 #[test]
 fn the_driver_stays_loaded_between_devices() {
     // No validation layer: its library belongs to the validating instance and goes with it.
-    let desc = GpuDesc { validation: false, ..common::test_gpu_desc() };
+    let desc = GpuDesc {
+        validation: false,
+        ..common::test_gpu_desc()
+    };
     let before = mapped_libraries();
     let gpu = Gpu::new(&desc).expect("create a Vulkan device");
     let name = gpu.caps().name.clone();
     let came: BTreeSet<String> = mapped_libraries().difference(&before).cloned().collect();
-    assert!(came.iter().any(|l| l.contains("vulkan")), "creating a device loaded no Vulkan library: {came:?}");
+    assert!(
+        came.iter().any(|l| l.contains("vulkan")),
+        "creating a device loaded no Vulkan library: {came:?}"
+    );
     drop(gpu);
     let after = mapped_libraries();
     let gone: Vec<&String> = came.iter().filter(|l| !after.contains(*l)).collect();

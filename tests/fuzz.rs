@@ -68,7 +68,9 @@ fn mutate(input: &[u8], other: &[u8], rng: &mut Rng) -> Vec<u8> {
             }
             1 if n > 0 => {
                 let i = rng.below(n);
-                v[i] = *[0u8, 0xff, b'\n', b'"', b'[', b']', b'=', b'-', b'.', b'e', b'9', b' '].get(rng.below(12)).unwrap();
+                v[i] = *[0u8, 0xff, b'\n', b'"', b'[', b']', b'=', b'-', b'.', b'e', b'9', b' ']
+                    .get(rng.below(12))
+                    .unwrap();
             }
             2 if n > 0 => {
                 let i = rng.below(n);
@@ -108,18 +110,27 @@ struct Stats {
 }
 
 fn iterations(default: usize) -> usize {
-    std::env::var("FUZZ_ITERATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+    std::env::var("FUZZ_ITERATIONS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 /// The seed of target `k`: k, shifted by `FUZZ_SEED` (xorshift needs a nonzero state).
 fn seed(k: u64) -> u64 {
-    let shift: u64 = std::env::var("FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    let shift: u64 = std::env::var("FUZZ_SEED")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     (k.wrapping_add(shift.wrapping_mul(0x9e37_79b9_7f4a_7c15))).max(1)
 }
 
 fn corpus(paths: &[&str]) -> Vec<Vec<u8>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    paths.iter().map(|p| std::fs::read(root.join(p)).unwrap_or_else(|e| panic!("{p}: {e}"))).collect()
+    paths
+        .iter()
+        .map(|p| std::fs::read(root.join(p)).unwrap_or_else(|e| panic!("{p}: {e}")))
+        .collect()
 }
 
 fn shipped_scenes() -> Vec<Vec<u8>> {
@@ -136,17 +147,30 @@ fn shipped_scenes() -> Vec<Vec<u8>> {
 
 /// Runs `target` on `n` mutations of the corpus; a panic fails with the input that caused it
 /// (saved next to the test's temp files so it can become a regression test).
-fn run(name: &str, seed: u64, n: usize, corpus: &[Vec<u8>], mut target: impl FnMut(&[u8]) -> Result<(), String>) -> Stats {
+fn run(
+    name: &str,
+    seed: u64,
+    n: usize,
+    corpus: &[Vec<u8>],
+    mut target: impl FnMut(&[u8]) -> Result<(), String>,
+) -> Stats {
     let mut rng = Rng(seed);
     let mut stats = Stats::default();
     for i in 0..n {
         let a = &corpus[rng.below(corpus.len())];
         let b = &corpus[rng.below(corpus.len())];
-        let input = if i < corpus.len() { corpus[i].clone() } else { mutate(a, b, &mut rng) };
+        let input = if i < corpus.len() {
+            corpus[i].clone()
+        } else {
+            mutate(a, b, &mut rng)
+        };
         match catch_unwind(AssertUnwindSafe(|| target(&input))) {
             Ok(Ok(())) => stats.accepted += 1,
             Ok(Err(msg)) => {
-                assert!(!msg.contains('\n') && !msg.is_empty(), "{name}: the error is not one line: {msg:?}");
+                assert!(
+                    !msg.contains('\n') && !msg.is_empty(),
+                    "{name}: the error is not one line: {msg:?}"
+                );
                 stats.rejected += 1;
             }
             Err(_) => {
@@ -169,12 +193,19 @@ fn scratch(name: &str) -> PathBuf {
 
 fn scene_target(input: &[u8]) -> Result<(), String> {
     let text = String::from_utf8_lossy(input);
-    match Scene::from_str(&text, "fuzz.toml", Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").as_path()) {
+    match Scene::from_str(
+        &text,
+        "fuzz.toml",
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").as_path(),
+    ) {
         Ok(scene) => {
             // What a command does next: the lighting layer's checks, and the meshes.
             penumbra::lighting::registry::configurations(&scene).map_err(|e| e.to_string())?;
             for o in scene.objects.iter().take(4) {
-                if !matches!(o.mesh, penumbra::scene::MeshSource::World { .. } | penumbra::scene::MeshSource::Heightfield(_)) {
+                if !matches!(
+                    o.mesh,
+                    penumbra::scene::MeshSource::World { .. } | penumbra::scene::MeshSource::Heightfield(_)
+                ) {
                     o.load_mesh(Path::new(".")).map_err(|e| e.to_string())?;
                 }
             }
@@ -192,13 +223,22 @@ fn obj_target(input: &[u8], path: &Path) -> Result<(), String> {
     std::fs::write(path, input).unwrap();
     match load_obj(path) {
         Ok(mesh) => {
-            assert!(mesh.positions.iter().all(|p| p.is_finite()), "a mesh with non-finite positions was accepted");
-            assert!(mesh.indices.iter().all(|&i| (i as usize) < mesh.positions.len()), "an index out of range was accepted");
+            assert!(
+                mesh.positions.iter().all(|p| p.is_finite()),
+                "a mesh with non-finite positions was accepted"
+            );
+            assert!(
+                mesh.indices.iter().all(|&i| (i as usize) < mesh.positions.len()),
+                "an index out of range was accepted"
+            );
             Ok(())
         }
         Err(e) => {
             let e = e.to_string();
-            assert!(e.contains(&path.display().to_string()), "an OBJ error must name the file: {e}");
+            assert!(
+                e.contains(&path.display().to_string()),
+                "an OBJ error must name the file: {e}"
+            );
             Err(e)
         }
     }
@@ -224,7 +264,12 @@ fn image_target(input: &[u8], dir: &Path) -> Result<(), String> {
         Err(e) => errors.push(e.to_string()),
     }
     match EnvironmentMap::load(path, 1.0, "fuzz.toml") {
-        Ok(m) => assert!(m.texels.iter().all(|t| t[..3].iter().all(|c| c.is_finite() && *c >= 0.0)), "a non-finite or negative environment texel was accepted"),
+        Ok(m) => assert!(
+            m.texels
+                .iter()
+                .all(|t| t[..3].iter().all(|c| c.is_finite() && *c >= 0.0)),
+            "a non-finite or negative environment texel was accepted"
+        ),
         Err(e) => errors.push(e.to_string()),
     }
     if let Err(e) = HdrImage::read_exr(path) {
@@ -244,15 +289,40 @@ fn image_target(input: &[u8], dir: &Path) -> Result<(), String> {
 /// `compare` of a decoded pair: equal sizes give metrics (finite when the inputs are), others
 /// one error line.
 fn compare_target(input: &[u8]) -> Result<(), String> {
-    let floats: Vec<f32> = input.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
-    let (w, h) = (1 + (input.first().copied().unwrap_or(0) % 5) as u32, 1 + (input.get(1).copied().unwrap_or(0) % 5) as u32);
-    let pixel = |i: usize| [floats.get(i).copied().unwrap_or(0.5), floats.get(i + 1).copied().unwrap_or(0.5), floats.get(i + 2).copied().unwrap_or(0.5), 1.0];
-    let a = HdrImage { width: w, height: h, pixels: (0..(w * h) as usize).map(|i| pixel(3 * i)).collect() };
+    let floats: Vec<f32> = input
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    let (w, h) = (
+        1 + (input.first().copied().unwrap_or(0) % 5) as u32,
+        1 + (input.get(1).copied().unwrap_or(0) % 5) as u32,
+    );
+    let pixel = |i: usize| {
+        [
+            floats.get(i).copied().unwrap_or(0.5),
+            floats.get(i + 1).copied().unwrap_or(0.5),
+            floats.get(i + 2).copied().unwrap_or(0.5),
+            1.0,
+        ]
+    };
+    let a = HdrImage {
+        width: w,
+        height: h,
+        pixels: (0..(w * h) as usize).map(|i| pixel(3 * i)).collect(),
+    };
     let bw = if input.len().is_multiple_of(7) { w + 1 } else { w };
-    let b = HdrImage { width: bw, height: h, pixels: (0..(bw * h) as usize).map(|i| pixel(3 * i + 1)).collect() };
+    let b = HdrImage {
+        width: bw,
+        height: h,
+        pixels: (0..(bw * h) as usize).map(|i| pixel(3 * i + 1)).collect(),
+    };
     match compare(&a, &b, &CompareOptions::default()) {
         Ok(m) => {
-            let finite = a.pixels.iter().chain(&b.pixels).all(|p| p.iter().all(|c| c.is_finite()));
+            let finite = a
+                .pixels
+                .iter()
+                .chain(&b.pixels)
+                .all(|p| p.iter().all(|c| c.is_finite()));
             if finite {
                 assert!(m.rmse.is_finite() && m.rel_mse.is_finite(), "finite inputs gave {m:?}");
             }
@@ -264,15 +334,42 @@ fn compare_target(input: &[u8]) -> Result<(), String> {
 
 fn campaign(scale: usize) -> Vec<(&'static str, Stats)> {
     let mut out = Vec::new();
-    out.push(("scene", run("scene", seed(1), iterations(1500) * scale, &shipped_scenes(), scene_target)));
+    out.push((
+        "scene",
+        run(
+            "scene",
+            seed(1),
+            iterations(1500) * scale,
+            &shipped_scenes(),
+            scene_target,
+        ),
+    ));
     let objs = corpus(&["tests/fuzz_corpus/quad.obj", "tests/fuzz_corpus/relative.obj"]);
     let obj_path = scratch("fuzz.obj");
-    out.push(("obj", run("obj", seed(2), iterations(1500) * scale, &objs, |b| obj_target(b, &obj_path))));
-    let images = corpus(&["scenes/terrain/teddy.png", "scenes/terrain/sky.hdr", "tests/fuzz_corpus/tiny.exr", "tests/fuzz_corpus/tiny16.png"]);
+    out.push((
+        "obj",
+        run("obj", seed(2), iterations(1500) * scale, &objs, |b| {
+            obj_target(b, &obj_path)
+        }),
+    ));
+    let images = corpus(&[
+        "scenes/terrain/teddy.png",
+        "scenes/terrain/sky.hdr",
+        "tests/fuzz_corpus/tiny.exr",
+        "tests/fuzz_corpus/tiny16.png",
+    ]);
     let img_path = scratch("fuzz.img");
-    out.push(("image", run("image", seed(3), iterations(300) * scale, &images, |b| image_target(b, &img_path))));
+    out.push((
+        "image",
+        run("image", seed(3), iterations(300) * scale, &images, |b| {
+            image_target(b, &img_path)
+        }),
+    ));
     let pairs = vec![vec![3u8, 2, 0, 0, 128, 63, 0, 0, 0, 64], (0..64u8).collect()];
-    out.push(("compare", run("compare", seed(4), iterations(500) * scale, &pairs, compare_target)));
+    out.push((
+        "compare",
+        run("compare", seed(4), iterations(500) * scale, &pairs, compare_target),
+    ));
     out
 }
 
@@ -297,23 +394,52 @@ fn metric_identities_hold_on_random_images() {
     let mut image = |w: u32, h: u32| HdrImage {
         width: w,
         height: h,
-        pixels: (0..w * h).map(|_| [0, 1, 2].map(|_| (rng.next() % 10_000) as f32 / 1000.0).into_iter().chain([1.0]).collect::<Vec<_>>().try_into().unwrap()).collect(),
+        pixels: (0..w * h)
+            .map(|_| {
+                [0, 1, 2]
+                    .map(|_| (rng.next() % 10_000) as f32 / 1000.0)
+                    .into_iter()
+                    .chain([1.0])
+                    .collect::<Vec<_>>()
+                    .try_into()
+                    .unwrap()
+            })
+            .collect(),
     };
     for _ in 0..40 {
         let (a, b) = (image(7, 5), image(7, 5));
         let o = CompareOptions::default();
         let same = compare(&a, &a, &o).unwrap();
-        assert_eq!((same.rmse, same.rel_mse, same.mean_bias, same.p99_abs_error, same.max_abs_error, same.flip_mean), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0));
+        assert_eq!(
+            (
+                same.rmse,
+                same.rel_mse,
+                same.mean_bias,
+                same.p99_abs_error,
+                same.max_abs_error,
+                same.flip_mean
+            ),
+            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        );
         let (ab, ba) = (compare(&a, &b, &o).unwrap(), compare(&b, &a, &o).unwrap());
-        assert!((ab.rmse - ba.rmse).abs() <= 1e-12 * ab.rmse.max(1.0), "RMSE is symmetric");
+        assert!(
+            (ab.rmse - ba.rmse).abs() <= 1e-12 * ab.rmse.max(1.0),
+            "RMSE is symmetric"
+        );
         assert!((ab.mean_bias + ba.mean_bias).abs() <= 1e-9, "bias is antisymmetric");
         assert!((ab.max_abs_error - ba.max_abs_error).abs() <= 1e-9 && ab.p99_abs_error <= ab.max_abs_error);
         assert!(ab.mean_bias.abs() <= ab.rmse + 1e-12, "|bias| ≤ RMSE");
         assert!((0.0..=1.0).contains(&ab.flip_mean));
         // A constant offset c gives bias c and RMSE |c| exactly (up to rounding).
         let c = 0.25f32;
-        let shifted = HdrImage { pixels: a.pixels.iter().map(|p| [p[0] + c, p[1] + c, p[2] + c, 1.0]).collect(), ..a.clone() };
+        let shifted = HdrImage {
+            pixels: a.pixels.iter().map(|p| [p[0] + c, p[1] + c, p[2] + c, 1.0]).collect(),
+            ..a.clone()
+        };
         let m = compare(&shifted, &a, &o).unwrap();
-        assert!((m.mean_bias - c as f64).abs() < 1e-5 && (m.rmse - c as f64).abs() < 1e-5, "{m:?}");
+        assert!(
+            (m.mean_bias - c as f64).abs() < 1e-5 && (m.rmse - c as f64).abs() < 1e-5,
+            "{m:?}"
+        );
     }
 }

@@ -4,7 +4,9 @@
 
 mod common;
 
-use penumbra::backend::{vk, Bind, BufferDesc, ComputePipelineDesc, ImageDesc, MemoryKind, SamplerDesc, SubresourceRange};
+use penumbra::backend::{
+    vk, Bind, BufferDesc, ComputePipelineDesc, ImageDesc, MemoryKind, SamplerDesc, SubresourceRange,
+};
 use penumbra::graph::{Access, RenderGraph, ResourceStates};
 use penumbra::shaders::ShaderLibrary;
 
@@ -21,7 +23,8 @@ fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
             for x in 0..d {
                 for c in 0..4 {
                     let at = |xx: u32, yy: u32| prev[((yy * s + xx) * 4 + c) as usize];
-                    next[((y * d + x) * 4 + c) as usize] = 0.25 * (at(2 * x, 2 * y) + at(2 * x + 1, 2 * y) + at(2 * x, 2 * y + 1) + at(2 * x + 1, 2 * y + 1));
+                    next[((y * d + x) * 4 + c) as usize] = 0.25
+                        * (at(2 * x, 2 * y) + at(2 * x + 1, 2 * y) + at(2 * x, 2 * y + 1) + at(2 * x + 1, 2 * y + 1));
                 }
             }
         }
@@ -34,44 +37,93 @@ fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
 fn mip_pyramid_barriers_are_exact_and_values_correct() {
     let mut gpu = common::test_gpu();
     let shaders = ShaderLibrary::Embedded;
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &shaders).unwrap();
-    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
-    let image = gpu.create_image(&ImageDesc::new_2d("pyramid", vk::Format::R32G32B32A32_SFLOAT, SIZE, SIZE).mips(MIPS).usage(usage)).unwrap();
+    let pipeline = gpu
+        .create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "downsample".into(),
+                shader: "util/downsample.comp".into(),
+                specialization: vec![],
+            },
+            &shaders,
+        )
+        .unwrap();
+    let usage = vk::ImageUsageFlags::SAMPLED
+        | vk::ImageUsageFlags::STORAGE
+        | vk::ImageUsageFlags::TRANSFER_SRC
+        | vk::ImageUsageFlags::TRANSFER_DST;
+    let image = gpu
+        .create_image(
+            &ImageDesc::new_2d("pyramid", vk::Format::R32G32B32A32_SFLOAT, SIZE, SIZE)
+                .mips(MIPS)
+                .usage(usage),
+        )
+        .unwrap();
     let base: Vec<f32> = (0..SIZE * SIZE * 4).map(|i| ((i * 7919) % 101) as f32 * 0.5).collect();
     gpu.upload_image(image, 0, bytemuck::cast_slice(&base)).unwrap();
     let sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP).unwrap();
     let readbacks: Vec<_> = (1..MIPS)
         .map(|m| {
             let s = (SIZE >> m) as u64;
-            gpu.create_buffer(&BufferDesc { name: format!("mip {m}"), size: s * s * 16, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu }).unwrap()
+            gpu.create_buffer(&BufferDesc {
+                name: format!("mip {m}"),
+                size: s * s * 16,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                memory: MemoryKind::GpuToCpu,
+            })
+            .unwrap()
         })
         .collect();
     let mut states = ResourceStates::default();
-    states.set_image(&gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS }).unwrap();
+    states
+        .set_image(
+            &gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )
+        .unwrap();
     let frame = gpu.create_frame().unwrap();
 
     let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
     let mut graph = RenderGraph::new();
     for m in 1..MIPS {
-        graph.pass(&format!("downsample {m}")).sample("src", image, SubresourceRange::mip(m - 1), sampler, compute).storage_write("dst", image, SubresourceRange::mip(m), compute).record(move |ctx| {
-            ctx.rec.bind_pipeline(pipeline)?;
-            ctx.bind(&[])?;
-            ctx.rec.push_constants(&0u32.to_le_bytes())?;
-            ctx.rec.dispatch([SIZE >> m, SIZE >> m, 1])
-        });
+        graph
+            .pass(&format!("downsample {m}"))
+            .sample("src", image, SubresourceRange::mip(m - 1), sampler, compute)
+            .storage_write("dst", image, SubresourceRange::mip(m), compute)
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(&0u32.to_le_bytes())?;
+                ctx.rec.dispatch([SIZE >> m, SIZE >> m, 1])
+            });
     }
     for (i, &buf) in readbacks.iter().enumerate() {
         let m = i as u32 + 1;
-        graph.pass(&format!("read mip {m}")).transfer_read(image, SubresourceRange::mip(m)).buffer(buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, m, 0, buf));
-        graph.pass(&format!("host {m}")).buffer(buf, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass(&format!("read mip {m}"))
+            .transfer_read(image, SubresourceRange::mip(m))
+            .buffer(buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.copy_image_to_buffer(image, m, 0, buf));
+        graph
+            .pass(&format!("host {m}"))
+            .buffer(buf, Access::HostRead, None)
+            .record(|_| Ok(()));
     }
     // A pass whose output nothing reads must not be recorded.
-    let unused = gpu.create_image(&ImageDesc::new_2d("unused", vk::Format::R32G32B32A32_SFLOAT, 4, 4).usage(usage)).unwrap();
-    graph.pass("unused output").sample("src", image, SubresourceRange::mip(0), sampler, compute).storage_write("dst", unused, SubresourceRange::mip(0), compute).record(move |ctx| {
-        ctx.rec.bind_pipeline(pipeline)?;
-        ctx.bind(&[])?;
-        ctx.rec.dispatch([4, 4, 1])
-    });
+    let unused = gpu
+        .create_image(&ImageDesc::new_2d("unused", vk::Format::R32G32B32A32_SFLOAT, 4, 4).usage(usage))
+        .unwrap();
+    graph
+        .pass("unused output")
+        .sample("src", image, SubresourceRange::mip(0), sampler, compute)
+        .storage_write("dst", unused, SubresourceRange::mip(0), compute)
+        .record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[])?;
+            ctx.rec.dispatch([4, 4, 1])
+        });
 
     let mut rec = gpu.begin_frame(frame).unwrap();
     let report = graph.execute(&mut rec, &mut states).unwrap();
@@ -92,12 +144,22 @@ fn mip_pyramid_barriers_are_exact_and_values_correct() {
         }
     }
     // Every mip ends where the graph says it does.
-    assert_eq!(states.image_layout(image, 0, 0), Some(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL));
+    assert_eq!(
+        states.image_layout(image, 0, 0),
+        Some(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+    );
     for m in 1..MIPS {
-        assert_eq!(states.image_layout(image, m, 0), Some(vk::ImageLayout::TRANSFER_SRC_OPTIMAL));
+        assert_eq!(
+            states.image_layout(image, m, 0),
+            Some(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+        );
     }
     let timings = gpu.frame_timings(frame).unwrap().expect("lavapipe has timestamps");
-    assert_eq!(timings.len(), report.recorded.len(), "one timestamp scope per recorded pass");
+    assert_eq!(
+        timings.len(),
+        report.recorded.len(),
+        "one timestamp scope per recorded pass"
+    );
     assert!(timings.iter().all(|t| t.ms >= 0.0 && t.ms.is_finite()));
     common::assert_clean(&gpu);
 }
@@ -105,16 +167,40 @@ fn mip_pyramid_barriers_are_exact_and_values_correct() {
 #[test]
 fn bindings_are_checked_against_reflection() {
     let mut gpu = common::test_gpu();
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "downsample".into(), shader: "util/downsample.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    let pipeline = gpu
+        .create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "downsample".into(),
+                shader: "util/downsample.comp".into(),
+                specialization: vec![],
+            },
+            &ShaderLibrary::Embedded,
+        )
+        .unwrap();
     let refl = gpu.pipeline_reflection(pipeline).unwrap();
     assert_eq!(refl.local_size, Some([8, 8, 1]));
     assert_eq!(refl.push_constant_size, 4);
     let names: Vec<(&str, vk::DescriptorType)> = refl.bindings.iter().map(|b| (b.name.as_str(), b.ty)).collect();
-    assert_eq!(names, vec![("src", vk::DescriptorType::COMBINED_IMAGE_SAMPLER), ("dst", vk::DescriptorType::STORAGE_IMAGE)]);
+    assert_eq!(
+        names,
+        vec![
+            ("src", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            ("dst", vk::DescriptorType::STORAGE_IMAGE)
+        ]
+    );
 
     let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::STORAGE;
-    let img = gpu.create_image(&ImageDesc::new_2d("x", vk::Format::R32G32B32A32_SFLOAT, 4, 4).usage(usage)).unwrap();
-    let buf = gpu.create_buffer(&BufferDesc { name: "b".into(), size: 64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuOnly }).unwrap();
+    let img = gpu
+        .create_image(&ImageDesc::new_2d("x", vk::Format::R32G32B32A32_SFLOAT, 4, 4).usage(usage))
+        .unwrap();
+    let buf = gpu
+        .create_buffer(&BufferDesc {
+            name: "b".into(),
+            size: 64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuOnly,
+        })
+        .unwrap();
     let sampler = gpu.sampler(SamplerDesc::NEAREST_CLAMP).unwrap();
     let frame = gpu.create_frame().unwrap();
     let mut rec = gpu.begin_frame(frame).unwrap();
@@ -122,13 +208,39 @@ fn bindings_are_checked_against_reflection() {
     let whole = SubresourceRange::mip(0);
     let err = |r: Result<(), penumbra::backend::BackendError>| r.unwrap_err().to_string();
     // Wrong type for a declared name.
-    let e = err(rec.bind(&[("src", Bind::StorageBuffer(buf)), ("dst", Bind::StorageImage { image: img, range: whole })]));
+    let e = err(rec.bind(&[
+        ("src", Bind::StorageBuffer(buf)),
+        (
+            "dst",
+            Bind::StorageImage {
+                image: img,
+                range: whole,
+            },
+        ),
+    ]));
     assert!(e.contains("`src`") && e.contains("COMBINED_IMAGE_SAMPLER"), "{e}");
     // A name the shader does not declare.
-    let e = err(rec.bind(&[("source", Bind::Sampled { image: img, range: whole, sampler })]));
-    assert!(e.contains("`source`") && e.contains("not declared") && e.contains("src, dst"), "{e}");
+    let e = err(rec.bind(&[(
+        "source",
+        Bind::Sampled {
+            image: img,
+            range: whole,
+            sampler,
+        },
+    )]));
+    assert!(
+        e.contains("`source`") && e.contains("not declared") && e.contains("src, dst"),
+        "{e}"
+    );
     // A declared binding left out.
-    let e = err(rec.bind(&[("src", Bind::Sampled { image: img, range: whole, sampler })]));
+    let e = err(rec.bind(&[(
+        "src",
+        Bind::Sampled {
+            image: img,
+            range: whole,
+            sampler,
+        },
+    )]));
     assert!(e.contains("`dst`") && e.contains("not bound"), "{e}");
     // Push constants of the wrong size.
     let e = err(rec.push_constants(&[0u8; 8]));
@@ -141,10 +253,22 @@ fn bindings_are_checked_against_reflection() {
 fn unsupported_capability_is_an_error_not_a_panic() {
     let mut gpu = common::test_gpu();
     let too_big = gpu.caps().max_image_dimension_2d + 1;
-    let e = gpu.create_image(&ImageDesc::new_2d("huge", vk::Format::R8G8B8A8_UNORM, too_big, 1).usage(vk::ImageUsageFlags::SAMPLED)).unwrap_err();
+    let e = gpu
+        .create_image(
+            &ImageDesc::new_2d("huge", vk::Format::R8G8B8A8_UNORM, too_big, 1).usage(vk::ImageUsageFlags::SAMPLED),
+        )
+        .unwrap_err();
     assert!(matches!(e, penumbra::backend::BackendError::Unsupported(_)), "{e}");
-    let e = penumbra::backend::Gpu::new(&penumbra::backend::GpuDesc { device_name: Some("no such device 42".into()), ..common::test_gpu_desc() }).err().expect("an unknown device name is an error");
-    assert!(e.to_string().contains("no such device 42") && e.to_string().contains("available"), "{e}");
+    let e = penumbra::backend::Gpu::new(&penumbra::backend::GpuDesc {
+        device_name: Some("no such device 42".into()),
+        ..common::test_gpu_desc()
+    })
+    .err()
+    .expect("an unknown device name is an error");
+    assert!(
+        e.to_string().contains("no such device 42") && e.to_string().contains("available"),
+        "{e}"
+    );
     common::assert_clean(&gpu);
 }
 
@@ -154,7 +278,9 @@ fn synchronization_validation_is_live() {
     use penumbra::backend::ImageTransition;
     let mut gpu = common::test_gpu();
     let usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED;
-    let img = gpu.create_image(&ImageDesc::new_2d("hazard", vk::Format::R8G8B8A8_UNORM, 4, 4).usage(usage)).unwrap();
+    let img = gpu
+        .create_image(&ImageDesc::new_2d("hazard", vk::Format::R8G8B8A8_UNORM, 4, 4).usage(usage))
+        .unwrap();
     let frame = gpu.create_frame().unwrap();
     let mut rec = gpu.begin_frame(frame).unwrap();
     let range = SubresourceRange::mip(0);
@@ -178,5 +304,8 @@ fn synchronization_validation_is_live() {
     rec.finish().unwrap();
     gpu.submit_and_wait(frame).unwrap();
     let messages = gpu.validation_log().take();
-    assert!(messages.iter().any(|m| m.contains("SYNC-HAZARD-WRITE-AFTER-WRITE")), "{messages:?}");
+    assert!(
+        messages.iter().any(|m| m.contains("SYNC-HAZARD-WRITE-AFTER-WRITE")),
+        "{messages:?}"
+    );
 }

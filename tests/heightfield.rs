@@ -17,7 +17,10 @@ const PYRAMID: &str = r#"{ name = "heightfield_pyramid" }"#;
 const BRUTE: &str = r#"{ name = "heightfield_bruteforce", march_step = 0.125 }"#;
 
 fn sphere(center: Vec3, radius: f32, radiance: f32) -> String {
-    format!("[[lights]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {radius}\nradiance = {radiance}\n", center.x, center.y, center.z)
+    format!(
+        "[[lights]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {radius}\nradiance = {radiance}\n",
+        center.x, center.y, center.z
+    )
 }
 
 /// World position (x, z) of texel (i, j) of a `res` field of side `size` centred on the origin.
@@ -29,15 +32,26 @@ fn texel_xz(i: u32, j: u32, res: u32, size: f32) -> (f32, f32) {
 /// Writes a 16-bit greyscale PNG of `values` (in [0, 1], row-major, row 0 at −z).
 fn write_png(name: &str, res: u32, values: &[f32]) -> std::path::PathBuf {
     let path = common::temp_path(name);
-    let data: Vec<u16> = values.iter().map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16).collect();
-    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(res, res, data).unwrap().save(&path).unwrap();
+    let data: Vec<u16> = values
+        .iter()
+        .map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)
+        .collect();
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(res, res, data)
+        .unwrap()
+        .save(&path)
+        .unwrap();
     path
 }
 
 /// Bumps of assorted sizes away from the border, in [0, 1].
 fn bumps(res: u32) -> Vec<f32> {
     let mut v = vec![0.0f32; (res * res) as usize];
-    let spots = [(20.0f32, 24.0f32, 6.0f32, 1.0f32), (40.0, 30.0, 4.0, 0.7), (30.0, 44.0, 8.0, 0.5), (44.0, 46.0, 2.5, 0.9)];
+    let spots = [
+        (20.0f32, 24.0f32, 6.0f32, 1.0f32),
+        (40.0, 30.0, 4.0, 0.7),
+        (30.0, 44.0, 8.0, 0.5),
+        (44.0, 46.0, 2.5, 0.9),
+    ];
     for j in 0..res {
         for i in 0..res {
             let mut h = 0.0f32;
@@ -61,7 +75,11 @@ fn flat_plane_under_a_unit_sky_is_one() {
         r#"{ name = "heightfield_bruteforce", march_step = 1, bilinear = "shader" }"#,
         r#"{ name = "heightfield_pyramid", window = "lanczos", window_width = 3 }"#,
     ] {
-        let s = scene("generator = \"flat\"\nsize = 8\nresolution = 32\nheight = 0.3", method, SKY);
+        let s = scene(
+            "generator = \"flat\"\nsize = 8\nresolution = 32\nheight = 0.3",
+            method,
+            SKY,
+        );
         let mut h = harness(&s);
         let img = h.shading(0.0).unwrap();
         for (i, p) in img.iter().enumerate() {
@@ -92,14 +110,20 @@ fn generated_heights_match_the_cpu() {
     let mut gpu = Some(common::test_gpu());
     for field in fields {
         let s = scene(&format!("size = 8\nresolution = 64\n{field}"), PYRAMID, SKY);
-        let MeshSource::Heightfield(src) = &s.objects[0].mesh else { unreachable!() };
+        let MeshSource::Heightfield(src) = &s.objects[0].mesh else {
+            unreachable!()
+        };
         let mut h = Standalone::new(gpu.take().unwrap(), &s, &s.methods[0]).unwrap();
         for t in [0.0f32, 0.7] {
             let got = h.heights(t).unwrap();
             let want = src.grid(64, t, None);
             // Floor/threshold decisions (city blocks) may land differently on a handful of
             // texels; everything else agrees to float rounding.
-            let bad = got.iter().zip(&want).filter(|(a, b)| (*a - *b).abs() > 1e-4 * src.height.abs().max(1.0)).count();
+            let bad = got
+                .iter()
+                .zip(&want)
+                .filter(|(a, b)| (*a - *b).abs() > 1e-4 * src.height.abs().max(1.0))
+                .count();
             assert!(bad <= 4, "{field} at t = {t}: {bad} texels differ");
             let closed_form = |i: u32, j: u32| -> Option<f64> {
                 let (x, z) = texel_xz(i, j, 64, 8.0);
@@ -121,12 +145,18 @@ fn generated_heights_match_the_cpu() {
                     if let Some(want) = closed_form(i, j) {
                         let got = got[(j * 64 + i) as usize] as f64;
                         worst = worst.max((got - want).abs());
-                        assert!((got - want).abs() < 1e-5, "{field} at t = {t}, texel ({i}, {j}): {got} vs the closed form {want}");
+                        assert!(
+                            (got - want).abs() < 1e-5,
+                            "{field} at t = {t}, texel ({i}, {j}): {got} vs the closed form {want}"
+                        );
                     }
                 }
             }
             if closed_form(0, 0).is_some() {
-                eprintln!("{} at t = {t}: worst {worst:.1e} against the closed form", field.split('"').nth(1).unwrap());
+                eprintln!(
+                    "{} at t = {t}: worst {worst:.1e} against the closed form",
+                    field.split('"').nth(1).unwrap()
+                );
             }
         }
         clean(&h);
@@ -142,13 +172,23 @@ fn wall_against_one_plus_cos_beta() {
         // 64² over 8 m: texel 0.125 m. The wall top starts at texel 24, the receiver is texel
         // (16, 32): 8 texels = 1 m away.
         let height = beta_deg.to_radians().tan();
-        let s = scene(&format!("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = -1.0\nheight = {height}"), BRUTE, SKY);
+        let s = scene(
+            &format!("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = -1.0\nheight = {height}"),
+            BRUTE,
+            SKY,
+        );
         let mut h = harness(&s);
         let got = h.shading(0.0).unwrap()[32 * 64 + 16][0];
         let exact = 0.5 * (1.0 + beta_deg.to_radians().cos());
         eprintln!("wall β = {beta_deg}°: {got:.4} (digest SH {digest_sh}, exact {exact:.4})");
-        assert!((got - digest_sh).abs() < 0.004, "β {beta_deg}: {got} vs the digest's {digest_sh}");
-        assert!((got - exact).abs() / exact < 0.01, "β {beta_deg}: {got} vs exact {exact}");
+        assert!(
+            (got - digest_sh).abs() < 0.004,
+            "β {beta_deg}: {got} vs the digest's {digest_sh}"
+        );
+        assert!(
+            (got - exact).abs() / exact < 0.01,
+            "β {beta_deg}: {got} vs exact {exact}"
+        );
         clean(&h);
     }
 }
@@ -157,7 +197,13 @@ fn wall_against_one_plus_cos_beta() {
 /// `height = 1`: texel (i, j) of the field reads `values[j·res + i]` exactly.
 fn write_heights(name: &str, res: u32, values: &[f32]) -> std::path::PathBuf {
     let path = common::temp_path(name);
-    penumbra::image_io::HdrImage { width: res, height: res, pixels: values.iter().map(|&v| [v, v, v, 1.0]).collect() }.write_exr(&path).unwrap();
+    penumbra::image_io::HdrImage {
+        width: res,
+        height: res,
+        pixels: values.iter().map(|&v| [v, v, v, 1.0]).collect(),
+    }
+    .write_exr(&path)
+    .unwrap();
     path
 }
 
@@ -218,7 +264,13 @@ fn tilted_plane_against_one_plus_cos_alpha() {
     let (ri, rj) = (40u32, 32u32);
     for (alpha_deg, digest_sh) in [(15.0f64, 0.9747f64), (30.0, 0.9263), (45.0, 0.8517), (60.0, 0.7517)] {
         let ta = alpha_deg.to_radians().tan();
-        let ridge = |i: f64| if (i - 26.0).abs() < 10.0 { 2.0 * (1.0 + (std::f64::consts::PI * (i - 26.0) / 10.0).cos()) } else { 0.0 };
+        let ridge = |i: f64| {
+            if (i - 26.0).abs() < 10.0 {
+                2.0 * (1.0 + (std::f64::consts::PI * (i - 26.0) / 10.0).cos())
+            } else {
+                0.0
+            }
+        };
         let field = |with_ridge: bool| -> Vec<f32> {
             (0..res * res)
                 .map(|k| {
@@ -234,24 +286,49 @@ fn tilted_plane_against_one_plus_cos_alpha() {
             let want = sky_by_quadrature(&heights, res, spacing, (ri, rj), n);
             if !with_ridge {
                 // The quadrature itself against the closed form.
-                assert!((want - closed_form).abs() < 2e-4, "α {alpha_deg}: quadrature {want} vs (1 + cos α)/2 = {closed_form}");
+                assert!(
+                    (want - closed_form).abs() < 2e-4,
+                    "α {alpha_deg}: quadrature {want} vs (1 + cos α)/2 = {closed_form}"
+                );
             } else {
-                assert!(closed_form - want > 0.25, "α {alpha_deg}: the ridge must hide far more than the tolerances: {want} vs {closed_form}");
+                assert!(
+                    closed_form - want > 0.25,
+                    "α {alpha_deg}: the ridge must hide far more than the tolerances: {want} vs {closed_form}"
+                );
             }
             let path = write_heights(&format!("slope_{alpha_deg}_{with_ridge}.exr"), res, &heights);
             for method in [PYRAMID, BRUTE] {
-                let s = scene(&format!("size = 8\nresolution = {res}\npath = \"{}\"\nheight = 1", path.display()), method, SKY);
+                let s = scene(
+                    &format!(
+                        "size = 8\nresolution = {res}\npath = \"{}\"\nheight = 1",
+                        path.display()
+                    ),
+                    method,
+                    SKY,
+                );
                 let mut h = harness(&s);
                 let got = h.shading(0.0).unwrap()[(rj * res + ri) as usize][0] as f64;
                 clean(&h);
                 eprintln!("slope α = {alpha_deg}°, ridge {with_ridge}, {method}: {got:.4} (quadrature {want:.4}, {:+.4}; (1 + cos α)/2 = {closed_form:.4})", got - want);
                 if !with_ridge {
-                    assert!((got - want).abs() / want < 0.01, "α {alpha_deg} {method}: {got} vs {want}");
-                    assert!((got - digest_sh).abs() < 5e-4, "α {alpha_deg} {method}: {got} vs the digest's SH value {digest_sh}");
+                    assert!(
+                        (got - want).abs() / want < 0.01,
+                        "α {alpha_deg} {method}: {got} vs {want}"
+                    );
+                    assert!(
+                        (got - digest_sh).abs() < 5e-4,
+                        "α {alpha_deg} {method}: {got} vs the digest's SH value {digest_sh}"
+                    );
                 } else if method == BRUTE {
-                    assert!((got - want).abs() / want < 0.015, "α {alpha_deg}, ridge, {method}: {got} vs {want}");
+                    assert!(
+                        (got - want).abs() / want < 0.015,
+                        "α {alpha_deg}, ridge, {method}: {got} vs {want}"
+                    );
                 } else {
-                    assert!(got - want < 0.05 && got - want > -0.005, "α {alpha_deg}, ridge, {method}: {got} vs {want}");
+                    assert!(
+                        got - want < 0.05 && got - want > -0.005,
+                        "α {alpha_deg}, ridge, {method}: {got} vs {want}"
+                    );
                 }
             }
         }
@@ -312,7 +389,11 @@ fn rotation_invariance() {
         }
     }
     let (pa, pb) = (write_png("rot_a.png", res, &a), write_png("rot_b.png", res, &b));
-    for method in [PYRAMID, BRUTE, r#"{ name = "heightfield_pyramid", bilinear = "shader" }"#] {
+    for method in [
+        PYRAMID,
+        BRUTE,
+        r#"{ name = "heightfield_pyramid", bilinear = "shader" }"#,
+    ] {
         let sa = harness(&scene(&image_field(&pa), method, SKY)).shading(0.0).unwrap();
         let mut hb = harness(&scene(&image_field(&pb), method, SKY));
         let sb = hb.shading(0.0).unwrap();
@@ -337,7 +418,14 @@ const FLAT64: &str = "size = 8\nresolution = 64\ngenerator = \"flat\"\nheight = 
 #[test]
 fn sphere_light_ratios_and_inverse_square() {
     let height = 2.0f32;
-    let ratios = [(1.0f32, 1.053f32), (10.0, 1.051), (30.0, 1.031), (45.0, 1.008), (60.0, 0.985), (80.0, 0.978)];
+    let ratios = [
+        (1.0f32, 1.053f32),
+        (10.0, 1.051),
+        (30.0, 1.031),
+        (45.0, 1.008),
+        (60.0, 0.985),
+        (80.0, 0.978),
+    ];
     let texels: Vec<(u32, u32)> = (0..8).map(|k| (8 + 7 * k, 8 + 6 * k)).collect();
     let mut lights = String::new();
     for (k, (deg, _)) in ratios.iter().enumerate() {
@@ -378,7 +466,11 @@ fn occluders_beyond_the_light_do_not_count() {
     for method in [PYRAMID, BRUTE] {
         let flat = harness(&scene(FLAT64, method, &light)).light_radiance(0.0, 0).unwrap();
         // Wall from texel 44 on (x > 1.5 m), as high as the light is far.
-        let mut hw = harness(&scene("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = 1.5\nheight = 3", method, &light));
+        let mut hw = harness(&scene(
+            "size = 8\nresolution = 64\ngenerator = \"step\"\nposition = 1.5\nheight = 3",
+            method,
+            &light,
+        ));
         let wall = hw.light_radiance(0.0, 0).unwrap();
         let mut checked = 0;
         for j in 0..64u32 {
@@ -388,7 +480,13 @@ fn occluders_beyond_the_light_do_not_count() {
                     continue;
                 }
                 let k = (j * 64 + i) as usize;
-                assert_eq!(flat[k][0].to_bits(), wall[k][0].to_bits(), "{method}: texel ({i}, {j}): {} vs {}", flat[k][0], wall[k][0]);
+                assert_eq!(
+                    flat[k][0].to_bits(),
+                    wall[k][0].to_bits(),
+                    "{method}: texel ({i}, {j}): {} vs {}",
+                    flat[k][0],
+                    wall[k][0]
+                );
                 checked += 1;
             }
         }
@@ -438,11 +536,24 @@ fn occluder_in_front_darkens_monotonically() {
         shade(&v, &transfer_cosine(glam::DVec3::Z, 4).unwrap(), &l, 4).unwrap()
     };
     // Wall heights: none, β = 20°, 45°, 60° and 78.7° (2.5 m).
-    let walls = [0.0f64, 0.5 * 20f64.to_radians().tan(), 0.5, 0.5 * 60f64.to_radians().tan(), 2.5];
+    let walls = [
+        0.0f64,
+        0.5 * 20f64.to_radians().tan(),
+        0.5,
+        0.5 * 60f64.to_radians().tan(),
+        2.5,
+    ];
     for method in [PYRAMID, BRUTE] {
         let mut seq = Vec::new();
         for wall in walls {
-            let mut h = harness(&scene(&format!("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = {}\nheight = {wall}", rx + 0.5 - 0.0625), method, &light));
+            let mut h = harness(&scene(
+                &format!(
+                    "size = 8\nresolution = 64\ngenerator = \"step\"\nposition = {}\nheight = {wall}",
+                    rx + 0.5 - 0.0625
+                ),
+                method,
+                &light,
+            ));
             let k = 32 * 64 + 16;
             let raw = h.light_radiance(0.0, 0).unwrap()[k][0] as f64;
             let shaded = h.shading(0.0).unwrap()[k][0] as f64;
@@ -453,21 +564,45 @@ fn occluder_in_front_darkens_monotonically() {
             if method == BRUTE {
                 assert!((raw - want).abs() < 1.5e-4, "{method} β {beta:.1}°: {raw} vs {want}");
             } else {
-                assert!(raw - want > -1e-4 && raw - want < 2e-3, "{method} β {beta:.1}°: {raw} vs {want}");
+                assert!(
+                    raw - want > -1e-4 && raw - want < 2e-3,
+                    "{method} β {beta:.1}°: {raw} vs {want}"
+                );
             }
-            assert_eq!(shaded, raw.max(0.0) as f32 as f64, "{method} β {beta:.1}°: the shading is the light clamped at 0");
+            assert_eq!(
+                shaded,
+                raw.max(0.0) as f32 as f64,
+                "{method} β {beta:.1}°: the shading is the light clamped at 0"
+            );
             seq.push((wall, raw, shaded));
         }
         for w in seq.windows(2) {
             assert!(w[1].1 <= w[0].1 + 1e-6, "{method}: {seq:?}");
         }
-        assert!((seq[0].1 - 0.01398).abs() < 1e-4, "{method}: unoccluded {} vs the digest's 0.01398", seq[0].1);
+        assert!(
+            (seq[0].1 - 0.01398).abs() < 1e-4,
+            "{method}: unoccluded {} vs the digest's 0.01398",
+            seq[0].1
+        );
         let hidden = seq.last().unwrap();
-        assert!(cpu(2.5) < -1e-3 && hidden.1 < 0.0, "{method}: the fully hidden light's SH value is negative before the clamp: {}", hidden.1);
-        assert_eq!(hidden.2, 0.0, "{method}: a wall above the light leaves {} of {}", hidden.2, seq[0].2);
+        assert!(
+            cpu(2.5) < -1e-3 && hidden.1 < 0.0,
+            "{method}: the fully hidden light's SH value is negative before the clamp: {}",
+            hidden.1
+        );
+        assert_eq!(
+            hidden.2, 0.0,
+            "{method}: a wall above the light leaves {} of {}",
+            hidden.2, seq[0].2
+        );
     }
     // The digest's infinite-wall residuals, for comparison: 0.0036 at 45°, about −0.0006 at 60°.
-    assert!((cpu(0.5) - 0.0036).abs() < 3e-4 && (cpu(0.5 * 60f64.to_radians().tan()) + 0.0006).abs() < 3e-4, "{} {}", cpu(0.5), cpu(0.5 * 60f64.to_radians().tan()));
+    assert!(
+        (cpu(0.5) - 0.0036).abs() < 3e-4 && (cpu(0.5 * 60f64.to_radians().tan()) + 0.0006).abs() < 3e-4,
+        "{} {}",
+        cpu(0.5),
+        cpu(0.5 * 60f64.to_radians().tan())
+    );
 }
 
 /// D5 (a recorded metric) and D7 (guards): a light below a flat surface leaks through the
@@ -492,12 +627,21 @@ fn leak_below_and_guards() {
         let images = h.lights_radiance(0.0).unwrap();
         let over = images[0][16 * 64 + 16][0];
         let under = images[1][16 * 64 + 48][0];
-        eprintln!("{method}: light below the surface leaks {under:.5} against {over:.5} overhead ({:.1}%)", 100.0 * under / over);
+        eprintln!(
+            "{method}: light below the surface leaks {under:.5} against {over:.5} overhead ({:.1}%)",
+            100.0 * under / over
+        );
         if !method.contains("faithful") {
-            assert!((under - 0.0021).abs() < 3e-4 && (over - 0.0317).abs() < 5e-4, "{under} {over}");
+            assert!(
+                (under - 0.0021).abs() < 3e-4 && (over - 0.0317).abs() < 5e-4,
+                "{under} {over}"
+            );
         }
         for (k, img) in images.iter().enumerate() {
-            assert!(img.iter().all(|p| p.iter().all(|v| v.is_finite())), "{method}: light {k} is not finite");
+            assert!(
+                img.iter().all(|p| p.iter().all(|v| v.is_finite())),
+                "{method}: light {k} is not finite"
+            );
         }
         let shading = h.shading(0.0).unwrap();
         assert!(shading.iter().all(|p| p.iter().all(|v| v.is_finite() && *v >= 0.0)));
@@ -522,7 +666,12 @@ fn flat_receiver_light_closed_form(a: f64, up: bool, window: [f64; 4]) -> f64 {
     let vis = [sp, (3.0 * PI).sqrt() / 2.0, 0.0, -(7.0 * PI).sqrt() / 8.0];
     let cosine = [sp / 2.0 / PI, (PI / 3.0).sqrt() / PI, (5.0 * PI).sqrt() / 8.0 / PI, 0.0];
     let (c, s2) = (a.cos(), a.sin().powi(2));
-    let cap = [sp * (1.0 - c), (3.0 * PI).sqrt() / 2.0 * s2, (5.0 * PI).sqrt() / 2.0 * c * s2, (7.0 * PI).sqrt() / 8.0 * s2 * (5.0 * c * c - 1.0)];
+    let cap = [
+        sp * (1.0 - c),
+        (3.0 * PI).sqrt() / 2.0 * s2,
+        (5.0 * PI).sqrt() / 2.0 * c * s2,
+        (7.0 * PI).sqrt() / 8.0 * s2 * (5.0 * c * c - 1.0),
+    ];
     let n = 20000;
     let mut t = [0.0f64; 4];
     for k in 0..n {
@@ -532,7 +681,9 @@ fn flat_receiver_light_closed_form(a: f64, up: bool, window: [f64; 4]) -> f64 {
             *tl += 2.0 * PI * vc * norm(l) * legendre(z)[l] * 2.0 / n as f64;
         }
     }
-    (0..4).map(|l| window[l] * t[l] * cap[l] * if up || l % 2 == 0 { 1.0 } else { -1.0 }).sum()
+    (0..4)
+        .map(|l| window[l] * t[l] * cap[l] * if up || l % 2 == 0 { 1.0 } else { -1.0 })
+        .sum()
 }
 
 /// The `window` setting damps the 4-band ringing where the method fails: a light below the
@@ -553,7 +704,11 @@ fn hanning_window_damps_the_leak_below() {
     let a = 10f32.to_radians();
     let (x0, z0) = texel_xz(16, 16, 64, 8.0);
     let (x1, z1) = texel_xz(48, 16, 64, 8.0);
-    let lights = [sphere(Vec3::new(x0, 1.0, z0), a.sin(), 1.0), sphere(Vec3::new(x1, -1.0, z1), a.sin(), 1.0)].concat();
+    let lights = [
+        sphere(Vec3::new(x0, 1.0, z0), a.sin(), 1.0),
+        sphere(Vec3::new(x1, -1.0, z1), a.sin(), 1.0),
+    ]
+    .concat();
     let run = |method: &str| {
         let mut h = harness(&scene(FLAT64, method, &lights));
         let images = h.lights_radiance(0.0).unwrap();
@@ -561,22 +716,64 @@ fn hanning_window_damps_the_leak_below() {
         (images[0][16 * 64 + 16][0] as f64, images[1][16 * 64 + 48][0] as f64)
     };
     let hanning = |l: f64| 0.5 * (1.0 + (std::f64::consts::PI * l / 5.0).cos());
-    for (method, window, want_ratio) in [(PYRAMID, [1.0; 4], 0.0651), (r#"{ name = "heightfield_pyramid", window = "hanning" }"#, [hanning(0.0), hanning(1.0), hanning(2.0), hanning(3.0)], 0.0070)] {
+    for (method, window, want_ratio) in [
+        (PYRAMID, [1.0; 4], 0.0651),
+        (
+            r#"{ name = "heightfield_pyramid", window = "hanning" }"#,
+            [hanning(0.0), hanning(1.0), hanning(2.0), hanning(3.0)],
+            0.0070,
+        ),
+    ] {
         let (over, under) = run(method);
-        let (over_cf, under_cf) = (flat_receiver_light_closed_form(a as f64, true, window), flat_receiver_light_closed_form(a as f64, false, window));
+        let (over_cf, under_cf) = (
+            flat_receiver_light_closed_form(a as f64, true, window),
+            flat_receiver_light_closed_form(a as f64, false, window),
+        );
         eprintln!(
             "{method}: leak below / overhead {:.3}% (closed form {:.3}%); overhead {over:.6} vs {over_cf:.6}, below {under:.3e} vs {under_cf:.3e}",
             100.0 * under / over,
             100.0 * under_cf / over_cf
         );
-        assert!((over - over_cf).abs() < 5e-4 * over_cf && (under - under_cf).abs() < 1e-5, "{method}: GPU ({over}, {under}) vs closed form ({over_cf}, {under_cf})");
-        assert!((under / over - want_ratio).abs() < 2e-4, "{method}: ratio {} vs {want_ratio}", under / over);
-        assert!((under / over - under_cf / over_cf).abs() < 3e-4, "{method}: ratio {} vs the closed form's {}", under / over, under_cf / over_cf);
+        assert!(
+            (over - over_cf).abs() < 5e-4 * over_cf && (under - under_cf).abs() < 1e-5,
+            "{method}: GPU ({over}, {under}) vs closed form ({over_cf}, {under_cf})"
+        );
+        assert!(
+            (under / over - want_ratio).abs() < 2e-4,
+            "{method}: ratio {} vs {want_ratio}",
+            under / over
+        );
+        assert!(
+            (under / over - under_cf / over_cf).abs() < 3e-4,
+            "{method}: ratio {} vs the closed form's {}",
+            under / over,
+            under_cf / over_cf
+        );
         if window[1] < 1.0 {
-            let settings = Settings { window: Window::Hanning(5.0), ..Settings::default() };
-            let cpu = |dir: glam::DVec3| shade_horizons(&[0.0; 32], TableKind::Local, &settings, glam::DVec3::Z, &sphere_light(dir, (a as f64).sin(), 4).unwrap()).unwrap();
-            assert!((over - cpu(glam::DVec3::Z)).abs() < 1e-4 * over, "{over} vs {}", cpu(glam::DVec3::Z));
-            assert!((under - cpu(-glam::DVec3::Z)).abs() < 1e-6, "{under} vs {}", cpu(-glam::DVec3::Z));
+            let settings = Settings {
+                window: Window::Hanning(5.0),
+                ..Settings::default()
+            };
+            let cpu = |dir: glam::DVec3| {
+                shade_horizons(
+                    &[0.0; 32],
+                    TableKind::Local,
+                    &settings,
+                    glam::DVec3::Z,
+                    &sphere_light(dir, (a as f64).sin(), 4).unwrap(),
+                )
+                .unwrap()
+            };
+            assert!(
+                (over - cpu(glam::DVec3::Z)).abs() < 1e-4 * over,
+                "{over} vs {}",
+                cpu(glam::DVec3::Z)
+            );
+            assert!(
+                (under - cpu(-glam::DVec3::Z)).abs() < 1e-6,
+                "{under} vs {}",
+                cpu(-glam::DVec3::Z)
+            );
         }
     }
 }
@@ -605,7 +802,12 @@ fn horizon_error(pyr: &[f32], brute: &[f32], res: u32) -> HorizonError {
     let n = diffs.len() as f64;
     let mut abs: Vec<f64> = diffs.iter().map(|d| d.abs()).collect();
     abs.sort_by(|a, b| a.total_cmp(b));
-    HorizonError { bias: diffs.iter().sum::<f64>() / n, mae: abs.iter().sum::<f64>() / n, p95: abs[(0.95 * n) as usize], max: diffs.iter().cloned().fold(f64::MIN, f64::max) }
+    HorizonError {
+        bias: diffs.iter().sum::<f64>() / n,
+        mae: abs.iter().sum::<f64>() / n,
+        p95: abs[(0.95 * n) as usize],
+        max: diffs.iter().cloned().fold(f64::MIN, f64::max),
+    }
 }
 
 /// E1: the pyramid horizon against the ray-marched one (0.25-texel steps, marched 2·res so a wall
@@ -635,9 +837,24 @@ fn pyramid_horizon_against_brute_force() {
     // (name, field, p95 bound, overshoot bound at ls = 4, lo = 4)
     let fields = [
         ("step", "generator = \"step\"\nheight = 1.25\nposition = 0.3", 7.0, 1.0),
-        ("sine", "generator = \"sine\"\nwavelength = 2\nheight = 1\npattern_rotate_deg = 20", 3.2, 1.0),
-        ("cones", "generator = \"cones\"\ncount = 7\nradius = 0.8\nring_radius = 2.2\nsize_variation = 0.6\nheight = 1.4", 8.0, 1.25),
-        ("fbm", "generator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 2.5", 2.0, 1.0),
+        (
+            "sine",
+            "generator = \"sine\"\nwavelength = 2\nheight = 1\npattern_rotate_deg = 20",
+            3.2,
+            1.0,
+        ),
+        (
+            "cones",
+            "generator = \"cones\"\ncount = 7\nradius = 0.8\nring_radius = 2.2\nsize_variation = 0.6\nheight = 1.4",
+            8.0,
+            1.25,
+        ),
+        (
+            "fbm",
+            "generator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 2.5",
+            2.0,
+            1.0,
+        ),
     ];
     // One validated device for every run (a device per run doubles the test's time).
     let mut gpu = Some(common::test_gpu());
@@ -652,17 +869,30 @@ fn pyramid_horizon_against_brute_force() {
     let mut failures = Vec::new();
     for (name, gen, p95_bound, overshoot_bound) in fields {
         let field = format!("size = 8\nresolution = 128\n{gen}");
-        let brute = horizons(&field, r#"{ name = "heightfield_bruteforce", march_step = 0.25, max_distance = 256 }"#);
+        let brute = horizons(
+            &field,
+            r#"{ name = "heightfield_bruteforce", march_step = 0.25, max_distance = 256 }"#,
+        );
         // mae[ls index][lo index]
         let mut mae = [[0.0f64; 3]; 3];
         for (a, ls) in [1u32, 2, 4].into_iter().enumerate() {
             for (b, lo) in [0u32, 2, 4].into_iter().enumerate() {
-                let e = horizon_error(&horizons(&field, &format!(r#"{{ name = "heightfield_pyramid", ls = {ls}, lo = {lo} }}"#)), &brute, 128);
+                let e = horizon_error(
+                    &horizons(
+                        &field,
+                        &format!(r#"{{ name = "heightfield_pyramid", ls = {ls}, lo = {lo} }}"#),
+                    ),
+                    &brute,
+                    128,
+                );
                 eprintln!("{name}, ls {ls}, lo {lo}: pyramid − brute force (degrees): bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}", e.bias, e.mae, e.p95, e.max);
                 mae[a][b] = e.mae;
                 if ls == 4 && lo == 4 {
                     if !(-2.0..=0.0).contains(&e.bias) || e.mae > 2.0 {
-                        failures.push(format!("{name}: bias {:.3}, MAE {:.3} (digest: bias in [−2, 0], MAE ≤ 2)", e.bias, e.mae));
+                        failures.push(format!(
+                            "{name}: bias {:.3}, MAE {:.3} (digest: bias in [−2, 0], MAE ≤ 2)",
+                            e.bias, e.mae
+                        ));
                     }
                     if e.p95 > p95_bound {
                         failures.push(format!("{name}: p95 {:.3} > {p95_bound}", e.p95));
@@ -680,13 +910,26 @@ fn pyramid_horizon_against_brute_force() {
         }
         for (b, lo) in [(1usize, 2), (2, 4)] {
             if !(mae[0][b] > mae[1][b] && mae[1][b] > mae[2][b]) {
-                failures.push(format!("{name}, lo {lo}: MAE does not fall with ls: {:?}", [mae[0][b], mae[1][b], mae[2][b]]));
+                failures.push(format!(
+                    "{name}, lo {lo}: MAE does not fall with ls: {:?}",
+                    [mae[0][b], mae[1][b], mae[2][b]]
+                ));
             }
         }
-        let faithful = horizon_error(&horizons(&field, r#"{ name = "heightfield_pyramid", mode = "faithful" }"#), &brute, 128);
-        eprintln!("{name}, faithful: bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}", faithful.bias, faithful.mae, faithful.p95, faithful.max);
+        let faithful = horizon_error(
+            &horizons(&field, r#"{ name = "heightfield_pyramid", mode = "faithful" }"#),
+            &brute,
+            128,
+        );
+        eprintln!(
+            "{name}, faithful: bias {:.3}, MAE {:.3}, p95 {:.3}, max {:.3}",
+            faithful.bias, faithful.mae, faithful.p95, faithful.max
+        );
         if name == "step" && faithful.max < 3.0 {
-            failures.push(format!("the faithful plateau overshoot is gone ({:.3}°): is the mode switch applied?", faithful.max));
+            failures.push(format!(
+                "the faithful plateau overshoot is gone ({:.3}°): is the mode switch applied?",
+                faithful.max
+            ));
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
@@ -739,14 +982,22 @@ radiance = 1
 fn translated_field_moves_with_its_lights() {
     let field = "size = 8\nresolution = 32\ngenerator = \"cones\"\ncount = 3\nradius = 1\nring_radius = 2\nheight = 1";
     let at = |t: Vec3| {
-        let s = scene(&format!("{field}\ntranslate = [{}, {}, {}]", t.x, t.y, t.z), PYRAMID, &sphere(Vec3::new(0.3, 1.5, -0.4) + t, 0.2, 3.0));
+        let s = scene(
+            &format!("{field}\ntranslate = [{}, {}, {}]", t.x, t.y, t.z),
+            PYRAMID,
+            &sphere(Vec3::new(0.3, 1.5, -0.4) + t, 0.2, 3.0),
+        );
         let mut h = harness(&s);
         let img = h.light_radiance(0.0, 0).unwrap();
         clean(&h);
         img
     };
     let (a, b) = (at(Vec3::ZERO), at(Vec3::new(0.5, 1.0, -2.0)));
-    let worst = a.iter().zip(&b).map(|(p, q)| (p[0] - q[0]).abs()).fold(0.0f32, f32::max);
+    let worst = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| (p[0] - q[0]).abs())
+        .fold(0.0f32, f32::max);
     let peak = a.iter().map(|p| p[0]).fold(0.0f32, f32::max);
     assert!(worst < 1e-4 * peak.max(1e-3), "{worst} against a peak of {peak}");
 }
@@ -766,13 +1017,26 @@ fn long_marches_match_the_cpu_mirror() {
     use penumbra::lighting::heightfield::cpu::{direction, BruteHorizon};
     use penumbra::lighting::heightfield::pyramid::Grid;
     let field = "size = 8\nresolution = 64\ngenerator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 1.5";
-    let s = scene(field, r#"{ name = "heightfield_bruteforce", march_step = 0.03125 }"#, SKY);
-    let MeshSource::Heightfield(src) = &s.objects[0].mesh else { unreachable!() };
+    let s = scene(
+        field,
+        r#"{ name = "heightfield_bruteforce", march_step = 0.03125 }"#,
+        SKY,
+    );
+    let MeshSource::Heightfield(src) = &s.objects[0].mesh else {
+        unreachable!()
+    };
     let mut h = harness(&s);
     let gpu = h.horizons(0.0, None).unwrap();
     clean(&h);
-    let g = Grid { size: 64, values: src.grid(64, 0.0, None) };
-    let cpu = BruteHorizon { heights: &g, step: 0.03125, spacing: 0.125 };
+    let g = Grid {
+        size: 64,
+        values: src.grid(64, 0.0, None),
+    };
+    let cpu = BruteHorizon {
+        heights: &g,
+        step: 0.03125,
+        spacing: 0.125,
+    };
     let mut worst = 0.0f64;
     for k in 0..24u32 {
         let (i, j) = ((k * 37 + 5) % 64, (k * 23 + 11) % 64);
@@ -784,7 +1048,11 @@ fn long_marches_match_the_cpu_mirror() {
     assert!(worst.to_degrees() < 0.05, "worst {:.3}°", worst.to_degrees());
 
     // The far wall: texels i ≥ 60 (x > 3.5 m) raised by 2 m; receivers at i = 2 in three rows.
-    let s = scene("size = 8\nresolution = 64\ngenerator = \"step\"\nposition = 3.5\nheight = 2", r#"{ name = "heightfield_bruteforce", march_step = 0.015625 }"#, SKY);
+    let s = scene(
+        "size = 8\nresolution = 64\ngenerator = \"step\"\nposition = 3.5\nheight = 2",
+        r#"{ name = "heightfield_bruteforce", march_step = 0.015625 }"#,
+        SKY,
+    );
     let mut hw = Standalone::new(h.gpu, &s, &s.methods[0]).unwrap();
     let gpu = hw.horizons(0.0, None).unwrap();
     clean(&hw);
@@ -802,15 +1070,30 @@ fn long_marches_match_the_cpu_mirror() {
             };
             let got = gpu[dir * 4096 + (j * 64 + 2) as usize] as f64;
             worst_wall = worst_wall.max((got - want).abs());
-            assert!((got - want).abs().to_degrees() < 0.1, "row {j}, direction {dir}: {:.3}° vs the wall's {:.3}°", got.to_degrees(), want.to_degrees());
+            assert!(
+                (got - want).abs().to_degrees() < 0.1,
+                "row {j}, direction {dir}: {:.3}° vs the wall's {:.3}°",
+                got.to_degrees(),
+                want.to_degrees()
+            );
         }
     }
-    eprintln!("far wall: worst {:.4}° against atan(H cos φ / D)", worst_wall.to_degrees());
+    eprintln!(
+        "far wall: worst {:.4}° against atan(H cos φ / D)",
+        worst_wall.to_degrees()
+    );
     let h = hw;
 
     if h.gpu.caps().name.contains("llvmpipe") {
-        let s = scene(field, r#"{ name = "heightfield_bruteforce", march_step = 0.01, resolution = 1024 }"#, SKY);
-        let e = Standalone::new(h.gpu, &s, &s.methods[0]).err().expect("refused").to_string();
+        let s = scene(
+            field,
+            r#"{ name = "heightfield_bruteforce", march_step = 0.01, resolution = 1024 }"#,
+            SKY,
+        );
+        let e = Standalone::new(h.gpu, &s, &s.methods[0])
+            .err()
+            .expect("refused")
+            .to_string();
         assert!(e.contains("llvmpipe stops a shader's loops"), "{e}");
     }
 }
@@ -825,7 +1108,11 @@ fn azimuthal_sampling_of_a_cone() {
     let (cx, cz) = texel_xz(42, 22, 64, 8.0);
     let field = format!("size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 1\nring_radius = 0\nradius = 0.375\nheight = 0.6\noffset = [{cx}, {cz}]");
     let at = |nphi: u32| {
-        let mut h = harness(&scene(&field, &format!(r#"{{ name = "heightfield_pyramid", nphi = {nphi} }}"#), SKY));
+        let mut h = harness(&scene(
+            &field,
+            &format!(r#"{{ name = "heightfield_pyramid", nphi = {nphi} }}"#),
+            SKY,
+        ));
         let img = h.shading(0.0).unwrap();
         clean(&h);
         img
@@ -836,12 +1123,20 @@ fn azimuthal_sampling_of_a_cone() {
     assert!((a - 1.0).abs() < 1e-4, "nφ = 4 should miss the cone: {a}");
     // The cone's silhouette from the receiver: a triangle about 24° wide and 19° tall near the
     // horizon, so cosine-weighted it hides about 0.002 of the sky.
-    assert!((0.001..0.004).contains(&(1.0 - b)), "nφ = 32 should see the cone hide about 0.002: {b}");
+    assert!(
+        (0.001..0.004).contains(&(1.0 - b)),
+        "nφ = 32 should see the cone hide about 0.002: {b}"
+    );
 
-    let centred = "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 1\nring_radius = 0\nradius = 0.75\nheight = 1";
+    let centred =
+        "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 1\nring_radius = 0\nradius = 0.75\nheight = 1";
     let mut spreads = Vec::new();
     for nphi in [4u32, 8, 32] {
-        let mut h = harness(&scene(centred, &format!(r#"{{ name = "heightfield_pyramid", nphi = {nphi} }}"#), SKY));
+        let mut h = harness(&scene(
+            centred,
+            &format!(r#"{{ name = "heightfield_pyramid", nphi = {nphi} }}"#),
+            SKY,
+        ));
         let img = h.shading(0.0).unwrap();
         clean(&h);
         // Receivers 12 texels from the cone's centre (31.5, 31.5), every 5°.
@@ -878,14 +1173,29 @@ fn pyramid_horizons_match_the_cpu_mirror() {
     use penumbra::lighting::heightfield::settings::{Decimation, Mode};
     let field = "size = 8\nresolution = 64\ngenerator = \"fbm\"\nwavelength = 3\noctaves = 4\nheight = 1.5";
     for (mode, m) in [("corrected", Mode::Corrected), ("faithful", Mode::Faithful)] {
-        let s = scene(field, &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#), SKY);
-        let MeshSource::Heightfield(src) = &s.objects[0].mesh else { unreachable!() };
+        let s = scene(
+            field,
+            &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#),
+            SKY,
+        );
+        let MeshSource::Heightfield(src) = &s.objects[0].mesh else {
+            unreachable!()
+        };
         let mut h = harness(&s);
         let gpu = h.horizons(0.0, None).unwrap();
         clean(&h);
-        let g = Grid { size: 64, values: src.grid(64, 0.0, None) };
+        let g = Grid {
+            size: 64,
+            values: src.grid(64, 0.0, None),
+        };
         let levels = build(&g, 4, Decimation::Bilinear, m == Mode::Corrected);
-        let cpu = PyramidHorizon { levels: &levels, ls: 4, lo: 4.0, spacing: 0.125, mode: m };
+        let cpu = PyramidHorizon {
+            levels: &levels,
+            ls: 4,
+            lo: 4.0,
+            spacing: 0.125,
+            mode: m,
+        };
         let mut worst = 0.0f64;
         for j in (0..64u32).step_by(5) {
             for i in (0..64u32).step_by(5) {
@@ -899,7 +1209,11 @@ fn pyramid_horizons_match_the_cpu_mirror() {
         assert!(worst.to_degrees() < 0.05, "{mode}: worst {:.4}°", worst.to_degrees());
 
         let plane = "size = 8\nresolution = 64\ngenerator = \"slope\"\nslope_deg = 20\npattern_rotate_deg = 90";
-        let s = scene(plane, &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#), SKY);
+        let s = scene(
+            plane,
+            &format!(r#"{{ name = "heightfield_pyramid", mode = "{mode}" }}"#),
+            SKY,
+        );
         let mut h = harness(&s);
         let gpu = h.horizons(0.0, None).unwrap();
         clean(&h);
@@ -912,10 +1226,18 @@ fn pyramid_horizons_match_the_cpu_mirror() {
                     let want = (-ta * phi.sin()).max(0.0).atan();
                     let got = gpu[dir * 4096 + (j * 64 + i) as usize] as f64;
                     worst_plane = worst_plane.max((got - want).abs());
-                    assert!((got - want).abs().to_degrees() < 0.15, "{mode}: plane, texel ({i}, {j}), direction {dir}: {:.3}° vs {:.3}°", got.to_degrees(), want.to_degrees());
+                    assert!(
+                        (got - want).abs().to_degrees() < 0.15,
+                        "{mode}: plane, texel ({i}, {j}), direction {dir}: {:.3}° vs {:.3}°",
+                        got.to_degrees(),
+                        want.to_degrees()
+                    );
                 }
             }
         }
-        eprintln!("{mode}: plane against the closed form: worst {:.4}°", worst_plane.to_degrees());
+        eprintln!(
+            "{mode}: plane against the closed form: worst {:.4}°",
+            worst_plane.to_degrees()
+        );
     }
 }

@@ -24,17 +24,36 @@ fn shading(s: &Scene) -> Vec<[f32; 4]> {
 
 /// Writes a `w`×`h` equirect EXR whose texel centres have radiance `f(world direction)`.
 fn sky_image(name: &str, w: u32, h: u32, f: impl Fn(Vec3) -> [f32; 3]) -> (std::path::PathBuf, Vec<[f32; 3]>) {
-    let rgb: Vec<[f32; 3]> = (0..w * h).map(|i| f(sh::equirect_texel_dir_world((i % w) as usize, (i / w) as usize, w as usize, h as usize))).collect();
+    let rgb: Vec<[f32; 3]> = (0..w * h)
+        .map(|i| {
+            f(sh::equirect_texel_dir_world(
+                (i % w) as usize,
+                (i / w) as usize,
+                w as usize,
+                h as usize,
+            ))
+        })
+        .collect();
     let path = common::temp_path(name);
-    HdrImage { width: w, height: h, pixels: rgb.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect() }.write_exr(&path).unwrap();
+    HdrImage {
+        width: w,
+        height: h,
+        pixels: rgb.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect(),
+    }
+    .write_exr(&path)
+    .unwrap();
     (path, rgb)
 }
 
 fn image_env(path: &std::path::Path) -> String {
-    format!("[environment]\ntype = \"image\"\npath = {:?}\n", path.display().to_string())
+    format!(
+        "[environment]\ntype = \"image\"\npath = {:?}\n",
+        path.display().to_string()
+    )
 }
 
-const CONES: &str = "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 5\nradius = 1.2\nring_radius = 2\nheight = 1.5";
+const CONES: &str =
+    "size = 8\nresolution = 64\ngenerator = \"cones\"\ncount = 5\nradius = 1.2\nring_radius = 2\nheight = 1.5";
 
 /// A constant image (256×128, the largest the method takes unfiltered) lights a field of cones
 /// as the constant-sky shortcut does. With 2 bands the image's projection is exact (c_00: the
@@ -48,11 +67,25 @@ fn constant_image_matches_the_constant_sky() {
     let (path, rgb) = sky_image("hf-constant-sky.exr", 256, 128, |_| [l, l, l]);
     let cpu = sh::project_equirect(&rgb, 256, 128, 4).unwrap();
     let residue = cpu[1..].iter().map(|c| (c.x as f64).powi(2)).sum::<f64>().sqrt();
-    for (bands, tol) in [(2u32, 1e-5f64), (4, (2.0 * std::f64::consts::PI / 3.0).sqrt() / std::f64::consts::PI * residue + 1e-5)] {
+    for (bands, tol) in [
+        (2u32, 1e-5f64),
+        (
+            4,
+            (2.0 * std::f64::consts::PI / 3.0).sqrt() / std::f64::consts::PI * residue + 1e-5,
+        ),
+    ] {
         let method = format!("{{ name = \"heightfield_pyramid\", bands = {bands} }}");
-        let shortcut = shading(&scene(CONES, &method, &format!("[environment]\ntype = \"constant\"\nradiance = {l}\n")));
+        let shortcut = shading(&scene(
+            CONES,
+            &method,
+            &format!("[environment]\ntype = \"constant\"\nradiance = {l}\n"),
+        ));
         let image = shading(&scene(CONES, &method, &image_env(&path)));
-        let worst = shortcut.iter().zip(&image).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max)).fold(0.0f32, f32::max);
+        let worst = shortcut
+            .iter()
+            .zip(&image)
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max))
+            .fold(0.0f32, f32::max);
         eprintln!("{bands} bands: largest |image - constant| {worst:.2e} (bound {tol:.2e})");
         assert!((worst as f64) <= tol, "{bands} bands: {worst} > {tol}");
         // Not trivially equal: the cones do shadow.
@@ -86,9 +119,17 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
     });
     let bands = 4usize;
     let method = format!("{{ name = \"heightfield_pyramid\", bands = {bands} }}");
-    let s = scene("size = 8\nresolution = 32\ngenerator = \"flat\"\nheight = 0", &method, &image_env(&path));
+    let s = scene(
+        "size = 8\nresolution = 32\ngenerator = \"flat\"\nheight = 0",
+        &method,
+        &image_env(&path),
+    );
     let img = shading(&s);
-    let settings = penumbra::lighting::heightfield::Settings::from_decl(&s.methods[0], penumbra::lighting::heightfield::Horizon::Pyramid).unwrap();
+    let settings = penumbra::lighting::heightfield::Settings::from_decl(
+        &s.methods[0],
+        penumbra::lighting::heightfield::Horizon::Pyramid,
+    )
+    .unwrap();
     let light = sh::project_equirect(&rgb, w as usize, h as usize, bands).unwrap();
     let cosine = cpu::transfer_cosine(DVec3::Z, bands).unwrap();
     let scale = light[0].max_element() as f64 * sh::Y00;
@@ -97,7 +138,10 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
         .map(|ch| {
             let mut e = 0.0;
             for j in 0..h {
-                let (t0, t1) = (std::f64::consts::PI * j as f64 / h as f64, std::f64::consts::PI * (j + 1) as f64 / h as f64);
+                let (t0, t1) = (
+                    std::f64::consts::PI * j as f64 / h as f64,
+                    std::f64::consts::PI * (j + 1) as f64 / h as f64,
+                );
                 let omega = std::f64::consts::TAU / w as f64 * (t0.cos() - t1.cos());
                 for i in 0..w {
                     let d = sh::equirect_texel_dir_world(i as usize, j as usize, w as usize, h as usize);
@@ -109,22 +153,50 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
         .collect();
     for ch in 0..3 {
         let l: Vec<f64> = light.iter().map(|c| c[ch] as f64).collect();
-        let mirror = cpu::shade_horizons(&vec![0.0; settings.nphi as usize], TableKind::Environment, &settings, DVec3::Z, &l).unwrap();
+        let mirror = cpu::shade_horizons(
+            &vec![0.0; settings.nphi as usize],
+            TableKind::Environment,
+            &settings,
+            DVec3::Z,
+            &l,
+        )
+        .unwrap();
         let irradiance: f64 = l.iter().zip(&cosine).map(|(a, b)| a * b).sum();
         let worst = img.iter().map(|p| (p[ch] as f64 - mirror).abs()).fold(0.0, f64::max);
         eprintln!("channel {ch}: GPU {:.6}, CPU mirror {mirror:.6}, L·C/π {irradiance:.6}, largest |GPU - mirror| {worst:.2e}", img[0][ch]);
-        assert!(worst <= 1e-5 * scale.max(1.0), "channel {ch}: GPU {} vs CPU mirror {mirror}", img[0][ch]);
-        assert!((mirror - irradiance).abs() <= 0.02 * irradiance, "channel {ch}: the open-horizon transfer {mirror} vs the clamped cosine {irradiance}");
+        assert!(
+            worst <= 1e-5 * scale.max(1.0),
+            "channel {ch}: GPU {} vs CPU mirror {mirror}",
+            img[0][ch]
+        );
+        assert!(
+            (mirror - irradiance).abs() <= 0.02 * irradiance,
+            "channel {ch}: the open-horizon transfer {mirror} vs the clamped cosine {irradiance}"
+        );
         let gpu = img[0][ch] as f64;
-        eprintln!("channel {ch}: GPU {gpu:.6} against the texel sum of the cosine-weighted sky {:.6} ({:+.2}%)", brute[ch], 100.0 * (gpu - brute[ch]) / brute[ch]);
-        assert!((gpu - brute[ch]).abs() <= IRRADIANCE_TOL * brute[ch], "channel {ch}: GPU {gpu} vs the irradiance by quadrature {}", brute[ch]);
+        eprintln!(
+            "channel {ch}: GPU {gpu:.6} against the texel sum of the cosine-weighted sky {:.6} ({:+.2}%)",
+            brute[ch],
+            100.0 * (gpu - brute[ch]) / brute[ch]
+        );
+        assert!(
+            (gpu - brute[ch]).abs() <= IRRADIANCE_TOL * brute[ch],
+            "channel {ch}: GPU {gpu} vs the irradiance by quadrature {}",
+            brute[ch]
+        );
         // The test can see a convention slip: the same sky upside down (v = 0 taken as straight
         // down) is lit by the black ground. (Only the zonal part about +y reaches a flat plane,
         // so an azimuth slip is for the cone and random-image tests of tests/sh_gpu.rs.)
-        let flipped: Vec<[f32; 3]> = (0..h).rev().flat_map(|j| rgb[(j * w) as usize..((j + 1) * w) as usize].to_vec()).collect();
+        let flipped: Vec<[f32; 3]> = (0..h)
+            .rev()
+            .flat_map(|j| rgb[(j * w) as usize..((j + 1) * w) as usize].to_vec())
+            .collect();
         let fl = sh::project_equirect(&flipped, w as usize, h as usize, bands).unwrap();
         let wrong: f64 = fl.iter().zip(&cosine).map(|(a, b)| a[ch] as f64 * b).sum();
-        assert!((wrong - mirror).abs() > 0.5 * mirror, "channel {ch}: flipped {wrong} vs {mirror}");
+        assert!(
+            (wrong - mirror).abs() > 0.5 * mirror,
+            "channel {ch}: flipped {wrong} vs {mirror}"
+        );
     }
 }
 
@@ -134,9 +206,16 @@ fn lopsided_sky_on_a_flat_plane_is_the_cosine_weighted_projection() {
 #[test]
 fn the_sky_scene_pyramid_agrees_with_the_brute_force() {
     let s = Scene::from_file("scenes/terrain_sky.toml").unwrap();
-    assert!(matches!(s.environment, Some(penumbra::scene::Environment::Image { .. })));
+    assert!(matches!(
+        s.environment,
+        Some(penumbra::scene::Environment::Image { .. })
+    ));
     let run = |name: &str, extra: (&str, toml::Value)| {
-        let mut decl = penumbra::scene::MethodDecl { name: name.into(), line: 0, params: vec![] };
+        let mut decl = penumbra::scene::MethodDecl {
+            name: name.into(),
+            line: 0,
+            params: vec![],
+        };
         decl.params.push(("resolution".into(), toml::Value::Integer(64), 0));
         decl.params.push((extra.0.into(), extra.1, 0));
         let mut h = Standalone::new(common::test_gpu(), &s, &decl).unwrap();
@@ -147,9 +226,21 @@ fn the_sky_scene_pyramid_agrees_with_the_brute_force() {
     let pyr = run("heightfield_pyramid", ("lo", toml::Value::Float(4.0)));
     let brute = run("heightfield_bruteforce", ("march_step", toml::Value::Float(0.5)));
     let mean = |img: &[[f32; 4]]| img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / img.len() as f64;
-    let rel: f64 = pyr.iter().zip(&brute).map(|(a, b)| ((a[2] - b[2]).abs() / b[2].max(1e-3)) as f64).sum::<f64>() / pyr.len() as f64;
-    eprintln!("sky scene, 64²: mean shading pyramid {:.4}, brute force {:.4}; mean relative difference (blue) {rel:.4}", mean(&pyr), mean(&brute));
-    assert!(pyr.iter().chain(&brute).all(|p| p[..3].iter().all(|v| v.is_finite() && *v >= 0.0)));
+    let rel: f64 = pyr
+        .iter()
+        .zip(&brute)
+        .map(|(a, b)| ((a[2] - b[2]).abs() / b[2].max(1e-3)) as f64)
+        .sum::<f64>()
+        / pyr.len() as f64;
+    eprintln!(
+        "sky scene, 64²: mean shading pyramid {:.4}, brute force {:.4}; mean relative difference (blue) {rel:.4}",
+        mean(&pyr),
+        mean(&brute)
+    );
+    assert!(pyr
+        .iter()
+        .chain(&brute)
+        .all(|p| p[..3].iter().all(|v| v.is_finite() && *v >= 0.0)));
     // The pyramid underestimates horizons (E1), so it is brighter on average, and otherwise close.
     assert!(mean(&pyr) > mean(&brute), "{} vs {}", mean(&pyr), mean(&brute));
     assert!(rel < 0.05, "{rel}");

@@ -55,7 +55,10 @@ const TEDDY: &str = "scenes/terrain/teddy.png";
 #[ignore]
 fn generate_teddy_asset() {
     let data: Vec<u16> = teddy(128).iter().map(|v| (v * 65535.0).round() as u16).collect();
-    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(128, 128, data).unwrap().save(TEDDY).unwrap();
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(128, 128, data)
+        .unwrap()
+        .save(TEDDY)
+        .unwrap();
 }
 
 /// The committed relief is what `teddy` generates.
@@ -81,11 +84,19 @@ fn record(name: &str, text: &str) {
 
 /// Lavapipe (or PENUMBRA_MEASURE_DEVICE) without validation: timings, not checks.
 fn measure_gpu() -> penumbra::backend::GpuDesc {
-    penumbra::backend::GpuDesc { validation: false, device_name: Some(std::env::var("PENUMBRA_MEASURE_DEVICE").unwrap_or_else(|_| "llvmpipe".into())), display: None }
+    penumbra::backend::GpuDesc {
+        validation: false,
+        device_name: Some(std::env::var("PENUMBRA_MEASURE_DEVICE").unwrap_or_else(|_| "llvmpipe".into())),
+        display: None,
+    }
 }
 
 fn decl(name: &str, params: &[(&str, toml::Value)]) -> MethodDecl {
-    MethodDecl { name: name.into(), line: 0, params: params.iter().map(|(k, v)| (k.to_string(), v.clone(), 0)).collect() }
+    MethodDecl {
+        name: name.into(),
+        line: 0,
+        params: params.iter().map(|(k, v)| (k.to_string(), v.clone(), 0)).collect(),
+    }
 }
 
 const TERRAIN: [&str; 7] = ["cones", "sine", "mountains", "eggtray", "city", "teddy", "sky"];
@@ -100,17 +111,33 @@ fn cost_by_resolution() {
     let mut text = String::from("| resolution | method | height update | pyramid (bounds) | environment | light 1 | accumulate | total compute |\n|---|---|---|---|---|---|---|---|\n");
     let configs: Vec<(u32, MethodDecl)> = vec![
         (256, decl("heightfield_pyramid", &[("resolution", 256.into())])),
-        (256, decl("heightfield_bruteforce", &[("resolution", 256.into()), ("march_step", 0.5.into())])),
+        (
+            256,
+            decl(
+                "heightfield_bruteforce",
+                &[("resolution", 256.into()), ("march_step", 0.5.into())],
+            ),
+        ),
         (512, decl("heightfield_pyramid", &[("resolution", 512.into())])),
-        (512, decl("heightfield_bruteforce", &[("resolution", 512.into()), ("march_step", 1.0.into())])),
+        (
+            512,
+            decl(
+                "heightfield_bruteforce",
+                &[("resolution", 512.into()), ("march_step", 1.0.into())],
+            ),
+        ),
         (1024, decl("heightfield_pyramid", &[("resolution", 1024.into())])),
     ];
-    let frames: usize = std::env::var("HF_MEASURE_FRAMES").ok().and_then(|v| v.parse().ok()).unwrap_or(2);
+    let frames: usize = std::env::var("HF_MEASURE_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2);
     for (res, d) in configs {
         let mut h = Standalone::new(Gpu::new(&measure_gpu()).unwrap(), &scene, &d).unwrap();
         h.profile(0.0, 1).unwrap(); // warm-up
         let stats = summarise(&h.profile(0.0, frames).unwrap());
-        let get = |pred: &dyn Fn(&str) -> bool| stats.iter().filter(|p| pred(&p.name)).map(|p| p.median_ms).sum::<f64>();
+        let get =
+            |pred: &dyn Fn(&str) -> bool| stats.iter().filter(|p| pred(&p.name)).map(|p| p.median_ms).sum::<f64>();
         let pyr = get(&|n| n.starts_with("hf pyramid") || n == "hf bounds");
         let total = get(&|n| n.starts_with("hf "));
         let row = format!(
@@ -128,7 +155,10 @@ fn cost_by_resolution() {
         }
     }
     let dev = Gpu::new(&measure_gpu()).unwrap().caps().name.clone();
-    record("cost_by_resolution.md", &format!("{dev}, ms per frame (medians of {frames} frames after one warm-up):\n\n{text}"));
+    record(
+        "cost_by_resolution.md",
+        &format!("{dev}, ms per frame (medians of {frames} frames after one warm-up):\n\n{text}"),
+    );
 }
 
 /// Frame-to-frame change of the shading under a slowly moving cone (a quarter texel per frame)
@@ -141,13 +171,30 @@ fn stability_against_lo() {
     // The cone moves at 0.02 rad/s on a 1.5 m circle: 0.03 m/s; a quarter texel (8/128 m) per
     // frame is dt = 0.52 s.
     let dt = 0.25 * 8.0 / 128.0 / 0.03;
-    let frames: usize = std::env::var("HF_MEASURE_FRAMES").ok().and_then(|v| v.parse().ok()).unwrap_or(24);
+    let frames: usize = std::env::var("HF_MEASURE_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(24);
     let mut text = format!("temporal stability, {frames} frames, the cone moving 0.25 texel per frame; |Δ| of the shading luminance per texel (unit: the shading image, exit radiance over albedo)\n\n| method | mean |Δ| | p99 |Δ| | mean |Δ²| | p99 |Δ²| |\n|---|---|---|---|---|\n");
-    let mut configs: Vec<(String, MethodDecl)> = [0.0f64, 2.0, 4.0].iter().map(|lo| (format!("pyramid lo = {lo}"), decl("heightfield_pyramid", &[("lo", (*lo).into())]))).collect();
-    configs.push(("brute force, 0.25-texel steps".into(), decl("heightfield_bruteforce", &[("march_step", 0.25.into())])));
+    let mut configs: Vec<(String, MethodDecl)> = [0.0f64, 2.0, 4.0]
+        .iter()
+        .map(|lo| {
+            (
+                format!("pyramid lo = {lo}"),
+                decl("heightfield_pyramid", &[("lo", (*lo).into())]),
+            )
+        })
+        .collect();
+    configs.push((
+        "brute force, 0.25-texel steps".into(),
+        decl("heightfield_bruteforce", &[("march_step", 0.25.into())]),
+    ));
     for (label, d) in configs {
         let s = temporal_stability(&measure_gpu(), &scene, &d, frames, dt as f32).unwrap();
-        let row = format!("| {label} | {:.3e} | {:.3e} | {:.3e} | {:.3e} |\n", s.mean, s.p99, s.mean_second, s.p99_second);
+        let row = format!(
+            "| {label} | {:.3e} | {:.3e} | {:.3e} | {:.3e} |\n",
+            s.mean, s.p99, s.mean_second, s.p99_second
+        );
         print!("{row}");
         text += &row;
     }
@@ -161,11 +208,18 @@ fn stability_against_lo() {
 #[test]
 #[ignore]
 fn chart_and_speedup_at_equal_error() {
-    let spp: u32 = std::env::var("HF_MEASURE_SPP").ok().and_then(|v| v.parse().ok()).unwrap_or(1024);
-    let frames: usize = std::env::var("HF_MEASURE_FRAMES").ok().and_then(|v| v.parse().ok()).unwrap_or(2);
+    let spp: u32 = std::env::var("HF_MEASURE_SPP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1024);
+    let frames: usize = std::env::var("HF_MEASURE_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2);
     let only: Option<String> = std::env::var("HF_MEASURE_SCENE").ok();
     let mut summary = String::from("| scene | pyramid config | rel MSE | frame ms | brute ms at that error | speed-up |\n|---|---|---|---|---|---|\n");
-    let mut table66 = String::from("| scene | pyramid | env. light | L-light 1 | (thesis defaults, ms) |\n|---|---|---|---|---|\n");
+    let mut table66 =
+        String::from("| scene | pyramid | env. light | L-light 1 | (thesis defaults, ms) |\n|---|---|---|---|---|\n");
     for name in TERRAIN {
         if only.as_deref().is_some_and(|o| o != name) {
             continue;
@@ -192,7 +246,17 @@ fn chart_and_speedup_at_equal_error() {
         };
         let chart = penumbra::chart::run(&opts).unwrap();
         let points = |m: &str| -> Vec<Point> {
-            chart.rows.iter().filter(|r| r.method == m).map(|r| Point { method: r.method.clone(), config: r.config.clone(), ms: r.frame_ms, error: r.metrics.rel_mse }).collect()
+            chart
+                .rows
+                .iter()
+                .filter(|r| r.method == m)
+                .map(|r| Point {
+                    method: r.method.clone(),
+                    config: r.config.clone(),
+                    ms: r.frame_ms,
+                    error: r.metrics.rel_mse,
+                })
+                .collect()
         };
         let (pyr, brute) = (points("heightfield_pyramid"), points("heightfield_bruteforce"));
         for p in &pyr {
@@ -201,10 +265,15 @@ fn chart_and_speedup_at_equal_error() {
                 Some(b) => (format!("{b:.1}"), format!("{:.1}×", b / p.ms)),
                 None => ("outside the brute force's range".into(), "—".into()),
             };
-            let _ = writeln!(summary, "| {name} | {} | {:.5} | {:.1} | {bs} | {sp} |", p.config, p.error, p.ms);
+            let _ = writeln!(
+                summary,
+                "| {name} | {} | {:.5} | {:.1} | {bs} | {sp} |",
+                p.config, p.error, p.ms
+            );
         }
         if let Some(r) = chart.rows.iter().find(|r| r.method == "heightfield_pyramid") {
-            let get = |pred: &dyn Fn(&str) -> bool| r.passes.iter().filter(|(n, _)| pred(n)).map(|(_, ms)| ms).sum::<f64>();
+            let get =
+                |pred: &dyn Fn(&str) -> bool| r.passes.iter().filter(|(n, _)| pred(n)).map(|(_, ms)| ms).sum::<f64>();
             let _ = writeln!(
                 table66,
                 "| {name} | {:.1} | {:.1} | {:.1} | {} |",
@@ -215,9 +284,15 @@ fn chart_and_speedup_at_equal_error() {
             );
         }
         for r in &chart.rows {
-            println!("{name}: {:<44} {:>9.1} ms  rel MSE {:.5}  FLIP {:.4}", r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean);
+            println!(
+                "{name}: {:<44} {:>9.1} ms  rel MSE {:.5}  FLIP {:.4}",
+                r.config, r.frame_ms, r.metrics.rel_mse, r.metrics.flip_mean
+            );
         }
-        record(&format!("speedup_{}.md", only.as_deref().unwrap_or("all")), &format!("{summary}\n{table66}"));
+        record(
+            &format!("speedup_{}.md", only.as_deref().unwrap_or("all")),
+            &format!("{summary}\n{table66}"),
+        );
     }
 }
 
@@ -248,7 +323,13 @@ fn speedup_at_equal_horizon_error() {
                 let mut costs: Vec<f64> = (0..3)
                     .map(|_| {
                         let (_, timings) = h.horizons_timed(0.0, None).unwrap();
-                        timings.iter().filter(|p| p.name == "hf horizons" || p.name.starts_with("hf pyramid") || p.name == "hf bounds").map(|p| p.ms).sum()
+                        timings
+                            .iter()
+                            .filter(|p| {
+                                p.name == "hf horizons" || p.name.starts_with("hf pyramid") || p.name == "hf bounds"
+                            })
+                            .map(|p| p.ms)
+                            .sum()
                     })
                     .collect();
                 costs.sort_by(f64::total_cmp);
@@ -261,16 +342,30 @@ fn speedup_at_equal_horizon_error() {
                 let d: Vec<f64> = h.iter().zip(&truth).map(|(a, b)| (a - b).to_degrees() as f64).collect();
                 (d.iter().map(|x| x.abs()).sum::<f64>() / n, d.iter().sum::<f64>() / n)
             };
-            let _ = writeln!(text, "| {name} | {res}² | brute force, 0.125-texel steps (truth) | 0 | 0 | {truth_ms:.1} |");
+            let _ = writeln!(
+                text,
+                "| {name} | {res}² | brute force, 0.125-texel steps (truth) | 0 | 0 | {truth_ms:.1} |"
+            );
             let (pyr, pyr_ms) = run(&decl("heightfield_pyramid", &[r(res)]));
             let (pyr_mae, pyr_bias) = err(&pyr);
-            let _ = writeln!(text, "| {name} | {res}² | pyramid ls = 4, lo = 4 | {pyr_mae:.3} | {pyr_bias:.3} | {pyr_ms:.1} |");
+            let _ = writeln!(
+                text,
+                "| {name} | {res}² | pyramid ls = 4, lo = 4 | {pyr_mae:.3} | {pyr_bias:.3} | {pyr_ms:.1} |"
+            );
             let mut brute = Vec::new();
             for step in [16.0f64, 8.0, 4.0, 2.0, 1.0, 0.5] {
                 let (b, ms) = run(&decl("heightfield_bruteforce", &[r(res), ("march_step", step.into())]));
                 let (mae, bias) = err(&b);
-                let _ = writeln!(text, "| {name} | {res}² | brute force, {step}-texel steps | {mae:.3} | {bias:.3} | {ms:.1} |");
-                brute.push(Point { method: "brute".into(), config: format!("{step}"), ms, error: mae });
+                let _ = writeln!(
+                    text,
+                    "| {name} | {res}² | brute force, {step}-texel steps | {mae:.3} | {bias:.3} | {ms:.1} |"
+                );
+                brute.push(Point {
+                    method: "brute".into(),
+                    config: format!("{step}"),
+                    ms,
+                    error: mae,
+                });
             }
             let line = match brute_cost_at(&brute, pyr_mae) {
                 Some(b) => format!("{name} {res}²: pyramid MAE {pyr_mae:.3}° in {pyr_ms:.1} ms; brute force at that error {b:.1} ms: speed-up {:.2}×\n", b / pyr_ms),

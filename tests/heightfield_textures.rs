@@ -16,7 +16,9 @@ use penumbra::scene::Scene;
 /// Checker cells of `cell` texels on a `texels`² sRGB PNG, colours `a` (cell (0, 0)) and `b`.
 fn checker_png(name: &str, texels: u32, cell: u32, a: [u8; 3], b: [u8; 3]) -> PathBuf {
     let path = common::temp_path(name);
-    let img = image::RgbImage::from_fn(texels, texels, |x, y| image::Rgb(if (x / cell + y / cell).is_multiple_of(2) { a } else { b }));
+    let img = image::RgbImage::from_fn(texels, texels, |x, y| {
+        image::Rgb(if (x / cell + y / cell).is_multiple_of(2) { a } else { b })
+    });
     img.save(&path).unwrap();
     path
 }
@@ -79,7 +81,13 @@ fn checker_albedo_map_times_shading() {
     let (texels, cell) = (16u32, 4u32);
     let map = checker_png("hf-checker.png", texels, cell, a, b);
     let colour = [1.0f32, 0.5, 0.8];
-    let text = flat_scene(METHODS, &format!("albedo = [{}, {}, {}]\nalbedo_map = {:?}", colour[0], colour[1], colour[2], map));
+    let text = flat_scene(
+        METHODS,
+        &format!(
+            "albedo = [{}, {}, {}]\nalbedo_map = {:?}",
+            colour[0], colour[1], colour[2], map
+        ),
+    );
     let scene = Scene::from_str(&text, "<test>", Path::new("/")).unwrap();
     let size = 64u32;
     let half = 6.0 * 30f32.to_radians().tan();
@@ -105,13 +113,20 @@ fn checker_albedo_map_times_shading() {
                     // 30 (measured); the shading adds 1e-4.
                     let err = (p[c] - want).abs() / want.max(0.05);
                     worst = worst.max(err);
-                    assert!(err < 1e-2, "{method}: pixel ({px}, {py}) channel {c}: {} against {want} (cell colour {texel:?})", p[c]);
+                    assert!(
+                        err < 1e-2,
+                        "{method}: pixel ({px}, {py}) channel {c}: {} against {want} (cell colour {texel:?})",
+                        p[c]
+                    );
                 }
                 seen[which] += 1;
                 checked += 1;
             }
         }
-        assert!(seen[0] > 200 && seen[1] > 200, "{method}: too few pixels checked: {seen:?}");
+        assert!(
+            seen[0] > 200 && seen[1] > 200,
+            "{method}: too few pixels checked: {seen:?}"
+        );
         eprintln!("{method}: {checked} pixels, worst error {worst:.2e} of max(expected, 0.05)");
     }
 }
@@ -121,15 +136,28 @@ fn checker_albedo_map_times_shading() {
 #[test]
 fn untextured_field_is_unchanged() {
     let white = common::temp_path("hf-white.png");
-    image::RgbImage::from_pixel(4, 4, image::Rgb([255, 255, 255])).save(&white).unwrap();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([255, 255, 255]))
+        .save(&white)
+        .unwrap();
     let lit = |material: &str| {
-        let text = flat_scene(r#""heightfield_pyramid""#, material).replace("generator = \"flat\"\nheight = 0", "generator = \"cones\"\ncount = 3\nradius = 1.5\nring_radius = 2\nheight = 1")
-            + "[[lights]]\ntype = \"sphere\"\ncenter = [0.5, 2, 0.3]\nradius = 0.3\nradiance = 5\n";
+        let text = flat_scene(r#""heightfield_pyramid""#, material).replace(
+            "generator = \"flat\"\nheight = 0",
+            "generator = \"cones\"\ncount = 3\nradius = 1.5\nring_radius = 2\nheight = 1",
+        ) + "[[lights]]\ntype = \"sphere\"\ncenter = [0.5, 2, 0.3]\nradius = 0.3\nradiance = 5\n";
         Scene::from_str(&text, "<test>", Path::new("/")).unwrap()
     };
     let plain = render(&lit("albedo = [0.7, 0.5, 0.3]"), "heightfield_pyramid", 32);
-    let mapped = render(&lit(&format!("albedo = [0.7, 0.5, 0.3]\nalbedo_map = {white:?}")), "heightfield_pyramid", 32);
-    let differing = plain.pixels.iter().zip(&mapped.pixels).filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.to_bits() != y.to_bits())).count();
+    let mapped = render(
+        &lit(&format!("albedo = [0.7, 0.5, 0.3]\nalbedo_map = {white:?}")),
+        "heightfield_pyramid",
+        32,
+    );
+    let differing = plain
+        .pixels
+        .iter()
+        .zip(&mapped.pixels)
+        .filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.to_bits() != y.to_bits()))
+        .count();
     assert_eq!(differing, 0, "pixels differ from the white-map image");
     let field = plain.pixels.iter().filter(|p| p[0] > 0.0 && p[0] < 1.0).count();
     assert!(field > 500, "the field covers only {field} pixels");
@@ -140,7 +168,9 @@ fn untextured_field_is_unchanged() {
 #[test]
 fn normal_map_is_refused() {
     let normal = common::temp_path("hf-normal.png");
-    image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255])).save(&normal).unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]))
+        .save(&normal)
+        .unwrap();
     let text = flat_scene(METHODS, "albedo = 0.5\nnormal_map = \"hf-normal.png\"");
     let dir = normal.parent().unwrap();
     let scene = Scene::from_str(&text, "bumpy.toml", dir).unwrap();
@@ -156,10 +186,23 @@ fn normal_map_is_refused() {
     }
     let path = dir.join("bumpy.toml");
     std::fs::write(&path, &text).unwrap();
-    let o = penumbra(&["capture", path.to_str().unwrap(), "--size", "16x16", "-o", common::temp_path("bumpy.png").to_str().unwrap()]);
+    let o = penumbra(&[
+        "capture",
+        path.to_str().unwrap(),
+        "--size",
+        "16x16",
+        "-o",
+        common::temp_path("bumpy.png").to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.lines().count() == 1 && err.contains("bumpy.toml") && err.contains("\"ground\"") && err.contains("\"terrain\""), "{err}");
+    assert!(
+        err.lines().count() == 1
+            && err.contains("bumpy.toml")
+            && err.contains("\"ground\"")
+            && err.contains("\"terrain\""),
+        "{err}"
+    );
 }
 
 /// `penumbra capture` of a textured flat field against `penumbra reference --direct-only`, as
@@ -172,14 +215,44 @@ fn textured_field_matches_the_reference() {
     // the texels are small, so the reference's pixel average and the method's pixel centre
     // differ only where a pixel reaches into the half-texel blend at an edge.
     let map = checker_png("hf-ref-checker.png", 256, 128, [230, 120, 40], [40, 160, 220]);
-    let text = flat_scene(r#""heightfield_pyramid""#, &format!("albedo = [0.9, 0.8, 1]\nalbedo_map = {map:?}"));
+    let text = flat_scene(
+        r#""heightfield_pyramid""#,
+        &format!("albedo = [0.9, 0.8, 1]\nalbedo_map = {map:?}"),
+    );
     let scene = common::temp_path("hf-textured.toml");
     std::fs::write(&scene, text).unwrap();
-    let (test, reference) = (common::temp_path("hf-textured.exr"), common::temp_path("hf-textured-ref.exr"));
+    let (test, reference) = (
+        common::temp_path("hf-textured.exr"),
+        common::temp_path("hf-textured-ref.exr"),
+    );
     let s = scene.to_str().unwrap();
-    ok(&penumbra(&["capture", s, "--size", "32x32", "-o", common::temp_path("hf-textured.png").to_str().unwrap(), "--exr", test.to_str().unwrap()]));
-    ok(&penumbra(&["reference", s, "--size", "32x32", "--spp", "256", "--direct-only", "-o", reference.to_str().unwrap()]));
-    let out = ok(&penumbra(&["compare", test.to_str().unwrap(), reference.to_str().unwrap(), "--json"]));
+    ok(&penumbra(&[
+        "capture",
+        s,
+        "--size",
+        "32x32",
+        "-o",
+        common::temp_path("hf-textured.png").to_str().unwrap(),
+        "--exr",
+        test.to_str().unwrap(),
+    ]));
+    ok(&penumbra(&[
+        "reference",
+        s,
+        "--size",
+        "32x32",
+        "--spp",
+        "256",
+        "--direct-only",
+        "-o",
+        reference.to_str().unwrap(),
+    ]));
+    let out = ok(&penumbra(&[
+        "compare",
+        test.to_str().unwrap(),
+        reference.to_str().unwrap(),
+        "--json",
+    ]));
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let rel = v["rel_mse"].as_f64().unwrap();
     eprintln!("relative MSE {rel:.2e}, bias {}", v["mean_bias"]);

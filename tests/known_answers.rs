@@ -73,11 +73,19 @@ irradiance = [3.0, 2.0, 1.0]
             let p = img.get(i, j);
             for c in 0..3 {
                 let rel = (p[c] - expected[c]).abs() / expected[c];
-                assert!(rel <= 1e-3, "pixel ({i},{j}) channel {c}: {} vs {} (rel {rel})", p[c], expected[c]);
+                assert!(
+                    rel <= 1e-3,
+                    "pixel ({i},{j}) channel {c}: {} vs {} (rel {rel})",
+                    p[c],
+                    expected[c]
+                );
             }
         }
     }
-    assert!(covered > (W * H / 2) as usize, "the plane covers most of the image ({covered} pixels)");
+    assert!(
+        covered > (W * H / 2) as usize,
+        "the plane covers most of the image ({covered} pixels)"
+    );
 }
 
 #[test]
@@ -105,7 +113,9 @@ intensity = [10.0, 10.0, 10.0]
     for j in 0..H {
         for i in 0..W {
             // Skip the plane's border pixels, which the rasteriser may cover partly.
-            let Some(p) = hit_ground(&scene, i, j, 2.9) else { continue };
+            let Some(p) = hit_ground(&scene, i, j, 2.9) else {
+                continue;
+            };
             let d = light - p;
             let r2 = d.length_squared();
             let expected = 0.9 / std::f32::consts::PI * 10.0 * (d.y / r2.sqrt()) / r2;
@@ -142,15 +152,30 @@ intensity = [5.0, 5.0, 5.0]
 "#
     );
     let (img, scene) = render(&toml);
-    let surface = Surface { albedo: Vec3::splat(0.1), specular: Vec3::splat(0.6), exponent: 64.0, emission: Vec3::ZERO };
-    let light = penumbra::gpu_scene::GpuLight { position: [-0.4, 1.2, -0.6, penumbra::gpu_scene::LIGHT_POINT], direction: [0.0; 4], intensity: [5.0; 4], cone: [0.0; 4] };
+    let surface = Surface {
+        albedo: Vec3::splat(0.1),
+        specular: Vec3::splat(0.6),
+        exponent: 64.0,
+        emission: Vec3::ZERO,
+    };
+    let light = penumbra::gpu_scene::GpuLight {
+        position: [-0.4, 1.2, -0.6, penumbra::gpu_scene::LIGHT_POINT],
+        direction: [0.0; 4],
+        intensity: [5.0; 4],
+        cone: [0.0; 4],
+    };
     let (mut gpu_best, mut cpu_best) = ((0, 0, 0.0f32), (0, 0, 0.0f32));
     for j in 0..H {
         for i in 0..W {
-            let Some(p) = hit_ground(&scene, i, j, 2.9) else { continue };
+            let Some(p) = hit_ground(&scene, i, j, 2.9) else {
+                continue;
+            };
             let want = shade(p, Vec3::Y, scene.camera.position, &surface, &[light], Vec3::ZERO).x;
             let got = img.get(i, j)[0];
-            assert!((got - want).abs() <= 1e-3 * want.max(1e-3), "pixel ({i},{j}): {got} vs {want}");
+            assert!(
+                (got - want).abs() <= 1e-3 * want.max(1e-3),
+                "pixel ({i},{j}): {got} vs {want}"
+            );
             if got > gpu_best.2 {
                 gpu_best = (i, j, got);
             }
@@ -161,7 +186,12 @@ intensity = [5.0, 5.0, 5.0]
     }
     assert_eq!((gpu_best.0, gpu_best.1), (cpu_best.0, cpu_best.1), "highlight pixel");
     // A real highlight: much brighter than the diffuse floor around it.
-    assert!(gpu_best.2 > 10.0 * img.get(0, H - 1)[0], "highlight {} vs corner {}", gpu_best.2, img.get(0, H - 1)[0]);
+    assert!(
+        gpu_best.2 > 10.0 * img.get(0, H - 1)[0],
+        "highlight {} vs corner {}",
+        gpu_best.2,
+        img.get(0, H - 1)[0]
+    );
 }
 
 #[test]
@@ -199,21 +229,32 @@ radiance = [20.0, 10.0, 5.0]
                 if disc > 0.25 * r * r {
                     emitter += 1;
                     let p = img.get(i, j);
-                    assert!((p[0] - 20.0).abs() < 1e-3 && (p[2] - 5.0).abs() < 1e-3, "emitter pixel ({i},{j}): {p:?}");
+                    assert!(
+                        (p[0] - 20.0).abs() < 1e-3 && (p[2] - 5.0).abs() < 1e-3,
+                        "emitter pixel ({i},{j}): {p:?}"
+                    );
                 }
                 continue;
             }
-            let Some(p) = hit_ground(&scene, i, j, 2.9) else { continue };
+            let Some(p) = hit_ground(&scene, i, j, 2.9) else {
+                continue;
+            };
             // Irradiance from a uniform sphere wholly above the horizon: π·L·(R/d)²·cos θ.
             let to = c - p;
             let d2 = to.length_squared();
             let expected = 0.7 * radiance.x * r * r / d2 * (to.y / d2.sqrt());
             let got = img.get(i, j)[0];
-            assert!((got - expected).abs() <= 1e-3 * expected, "pixel ({i},{j}): {got} vs {expected}");
+            assert!(
+                (got - expected).abs() <= 1e-3 * expected,
+                "pixel ({i},{j}): {got} vs {expected}"
+            );
             ground += 1;
         }
     }
-    assert!(emitter > 4 && ground > 1000, "{emitter} emitter pixels, {ground} ground pixels");
+    assert!(
+        emitter > 4 && ground > 1000,
+        "{emitter} emitter pixels, {ground} ground pixels"
+    );
 }
 
 #[test]
@@ -221,7 +262,12 @@ fn albedo_and_normal_maps_modulate_lambert() {
     // A four-colour albedo map (sRGB) and a normal map tilting the normal 45° about z.
     let dir = common::temp_path("maps");
     std::fs::create_dir_all(&dir).unwrap();
-    let texels = [[255u8, 255, 255, 255], [128, 128, 128, 255], [64, 64, 64, 255], [255, 0, 0, 255]];
+    let texels = [
+        [255u8, 255, 255, 255],
+        [128, 128, 128, 255],
+        [64, 64, 64, 255],
+        [255, 0, 0, 255],
+    ];
     // 8×8 texels in four uniform 4×4 quadrants, so bilinear filtering well inside a quadrant
     // returns that quadrant's colour exactly.
     let albedo = image::RgbaImage::from_fn(8, 8, |x, y| image::Rgba(texels[((y / 4) * 2 + x / 4) as usize]));
@@ -279,32 +325,46 @@ irradiance = [3.0, 3.0, 3.0]
     for j in 0..H {
         for i in 0..W {
             // Both planes span z ∈ [−1, 1]; stay clear of their edges.
-            let Some(p) = hit_ground(&scene, i, j, 2.0).filter(|p| p.z.abs() < 0.95) else { continue };
+            let Some(p) = hit_ground(&scene, i, j, 2.0).filter(|p| p.z.abs() < 0.95) else {
+                continue;
+            };
             let got = img.get(i, j);
             if p.x < -0.1 && p.x > -2.0 {
                 // uv spans [0, 1] over the plane (u along +x, v along +z); ×2 gives quadrant units.
                 let (u, v) = ((p.x + 1.05) / 2.0 + 0.5, p.z / 2.0 + 0.5);
                 let (u, v) = (u * 2.0, v * 2.0);
                 let (fu, fv) = (u.fract(), v.fract());
-                if !(0.3..0.7).contains(&fu) || !(0.3..0.7).contains(&fv) || u < 0.0 || v < 0.0 || u >= 2.0 || v >= 2.0 {
+                if !(0.3..0.7).contains(&fu) || !(0.3..0.7).contains(&fv) || u < 0.0 || v < 0.0 || u >= 2.0 || v >= 2.0
+                {
                     continue;
                 }
                 let texel = texels[(v as usize) * 2 + u as usize];
                 for c in 0..3 {
                     let expected = srgb(texel[c]) / std::f32::consts::PI * 3.0;
                     // 8-bit sRGB decoding in the sampler is approximate (lavapipe: 0.4% at 128).
-                    assert!((got[c] - expected).abs() <= 6e-3 * expected.max(0.05), "textured ({i},{j}) ch {c}: {} vs {expected}", got[c]);
+                    assert!(
+                        (got[c] - expected).abs() <= 6e-3 * expected.max(0.05),
+                        "textured ({i},{j}) ch {c}: {} vs {expected}",
+                        got[c]
+                    );
                 }
                 textured += 1;
             } else if p.x > 0.1 && p.x < 2.0 {
                 // The mapped normal is tilted 45° from the light: cos θ = cos 45° (to 8-bit precision).
                 let expected = 0.5 / std::f32::consts::PI * 3.0 * t;
-                assert!((got[0] - expected).abs() <= 1e-2 * expected, "bumped ({i},{j}): {} vs {expected}", got[0]);
+                assert!(
+                    (got[0] - expected).abs() <= 1e-2 * expected,
+                    "bumped ({i},{j}): {} vs {expected}",
+                    got[0]
+                );
                 bumped += 1;
             }
         }
     }
-    assert!(textured > 20 && bumped > 100, "{textured} textured and {bumped} bumped pixels checked");
+    assert!(
+        textured > 20 && bumped > 100,
+        "{textured} textured and {bumped} bumped pixels checked"
+    );
 }
 
 #[test]
@@ -335,7 +395,11 @@ radiance = [2.0, 1.5, 1.0]
                 Some(q) if q.x.abs() < 1.9 && q.z.abs() < 1.9 => {
                     // An unoccluded Lambertian surface under a uniform sky reflects ρ·L.
                     for (c, rho) in [0.6f32, 0.4, 0.2].into_iter().enumerate() {
-                        assert!((p[c] - rho * sky[c]).abs() <= 1e-3 * rho * sky[c], "ground ({i},{j}) ch {c}: {}", p[c]);
+                        assert!(
+                            (p[c] - rho * sky[c]).abs() <= 1e-3 * rho * sky[c],
+                            "ground ({i},{j}) ch {c}: {}",
+                            p[c]
+                        );
                     }
                     ground += 1;
                 }
@@ -347,5 +411,8 @@ radiance = [2.0, 1.5, 1.0]
             }
         }
     }
-    assert!(ground > 500 && background > 50, "{ground} ground and {background} sky pixels");
+    assert!(
+        ground > 500 && background > 50,
+        "{ground} ground and {background} sky pixels"
+    );
 }

@@ -77,16 +77,28 @@ fn check_board(method: &str) {
     let board = "[light_board]\ndepth = 0.8\nrate_hz = 1.0\nseed = 5\n";
     let s = scene(method, board);
     let factors = s.light_factors(LATER as f32 * FrameClock::STEP_S);
-    assert!(factors.iter().all(|&f| f < 0.97) && (factors[0] - factors[1]).abs() > 0.02, "a useful time: {factors:?}");
+    assert!(
+        factors.iter().all(|&f| f < 0.97) && (factors[0] - factors[1]).abs() > 0.02,
+        "a useful time: {factors:?}"
+    );
     let (first, later) = frames(s);
     let (still_first, _) = frames(scene(method, ""));
-    assert_eq!(first.pixels, still_first.pixels, "{method}: frame 0 is the static scene");
+    assert_eq!(
+        first.pixels, still_first.pixels,
+        "{method}: frame 0 is the static scene"
+    );
     for (l, (x, y)) in lit_pixels().into_iter().enumerate() {
         let (a, b) = (pixel(&first, x, y), pixel(&later, x, y));
         for c in 0..3 {
             assert!(a[c] > 1e-3, "{method}: pixel ({x}, {y}) is lit by light {l}: {a:?}");
             let ratio = b[c] / a[c];
-            assert!((ratio - factors[l]).abs() < 1e-4, "{method}: light {l} at ({x}, {y}) channel {c}: {} / {} = {ratio}, factor {}", b[c], a[c], factors[l]);
+            assert!(
+                (ratio - factors[l]).abs() < 1e-4,
+                "{method}: light {l} at ({x}, {y}) channel {c}: {} / {} = {ratio}, factor {}",
+                b[c],
+                a[c],
+                factors[l]
+            );
         }
     }
 }
@@ -103,7 +115,10 @@ fn shadow_volumes_frames_follow_the_board_factors() {
 
 #[test]
 fn without_a_board_frames_do_not_change() {
-    for method in [r#"{ name = "forward" }"#, r#"{ name = "shadow_volumes", mode = "physical", animate = false }"#] {
+    for method in [
+        r#"{ name = "forward" }"#,
+        r#"{ name = "shadow_volumes", mode = "physical", animate = false }"#,
+    ] {
         let (first, later) = frames(scene(method, ""));
         assert_eq!(first.pixels, later.pixels, "{method}");
     }
@@ -123,7 +138,11 @@ const MANY_LIGHT_SCENES: [(&str, usize, usize); 7] = [
 #[test]
 fn every_shipped_scene_loads_and_the_many_light_scenes_are_as_promised() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut names: Vec<String> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()?.file_name().into_string().ok()).filter(|n| n.ends_with(".toml")).collect();
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
     names.sort();
     for (name, ..) in MANY_LIGHT_SCENES {
         assert!(names.iter().any(|n| n == name), "{name} is missing");
@@ -131,15 +150,35 @@ fn every_shipped_scene_loads_and_the_many_light_scenes_are_as_promised() {
     for name in &names {
         let s = Scene::from_file(dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
         registry::configurations(&s).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let Some(&(_, lights, triangles)) = MANY_LIGHT_SCENES.iter().find(|(n, ..)| n == name) else { continue };
+        let Some(&(_, lights, triangles)) = MANY_LIGHT_SCENES.iter().find(|(n, ..)| n == name) else {
+            continue;
+        };
         assert_eq!(s.lights.len(), lights, "{name}");
-        assert!(s.lights.iter().all(|l| matches!(l, Light::Spot { .. })), "{name}: spot lights (shadow_volumes lights point and spot lights only)");
-        let tris: usize = s.objects.iter().map(|o| o.load_mesh(&dir).unwrap().indices.len() / 3).sum();
+        assert!(
+            s.lights.iter().all(|l| matches!(l, Light::Spot { .. })),
+            "{name}: spot lights (shadow_volumes lights point and spot lights only)"
+        );
+        let tris: usize = s
+            .objects
+            .iter()
+            .map(|o| o.load_mesh(&dir).unwrap().indices.len() / 3)
+            .sum();
         assert_eq!(tris, triangles, "{name}");
-        assert!(s.materials.iter().all(|m| m.specular == glam::Vec3::ZERO), "{name}: the seed's scenes are diffuse");
+        assert!(
+            s.materials.iter().all(|m| m.specular == glam::Vec3::ZERO),
+            "{name}: the seed's scenes are diffuse"
+        );
         let methods: Vec<&str> = s.methods.iter().map(|m| m.name.as_str()).collect();
         // The seed's two systems, the two baselines a user would pick today and the naive loop.
-        assert_eq!(methods, ["bsp_lights", "vls", "clustered", "forward", "shadow_volumes"], "{name}");
-        assert_eq!(s.light_board.is_some(), lights >= 50, "{name}: the theatres and the stress scene have a light board");
+        assert_eq!(
+            methods,
+            ["bsp_lights", "vls", "clustered", "forward", "shadow_volumes"],
+            "{name}"
+        );
+        assert_eq!(
+            s.light_board.is_some(),
+            lights >= 50,
+            "{name}: the theatres and the stress scene have a light board"
+        );
     }
 }

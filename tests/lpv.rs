@@ -25,12 +25,19 @@ struct Rng(u64);
 
 impl Rng {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     fn unit(&mut self) -> DVec3 {
         loop {
-            let v = DVec3::new(self.next() * 2.0 - 1.0, self.next() * 2.0 - 1.0, self.next() * 2.0 - 1.0);
+            let v = DVec3::new(
+                self.next() * 2.0 - 1.0,
+                self.next() * 2.0 - 1.0,
+                self.next() * 2.0 - 1.0,
+            );
             if v.length_squared() > 0.05 && v.length_squared() < 1.0 {
                 return v.normalize();
             }
@@ -43,7 +50,13 @@ impl Rng {
 fn random_volume(n: usize, seed: u64) -> ([Grid; 3], Grid) {
     let mut rng = Rng(seed);
     let mut channels = [Grid::cube(n), Grid::cube(n), Grid::cube(n)];
-    let cell = |rng: &mut Rng| IVec3::new((rng.next() * n as f64) as i32, (rng.next() * n as f64) as i32, (rng.next() * n as f64) as i32);
+    let cell = |rng: &mut Rng| {
+        IVec3::new(
+            (rng.next() * n as f64) as i32,
+            (rng.next() * n as f64) as i32,
+            (rng.next() * n as f64) as i32,
+        )
+    };
     for _ in 0..12 {
         let c = cell(&mut rng);
         let normal = rng.unit();
@@ -62,11 +75,22 @@ fn random_volume(n: usize, seed: u64) -> ([Grid; 3], Grid) {
 }
 
 fn max_abs(g: &[Grid; 3]) -> f64 {
-    g.iter().flat_map(|c| c.cells.iter().flatten()).fold(0.0f64, |m, x| m.max(x.abs()))
+    g.iter()
+        .flat_map(|c| c.cells.iter().flatten())
+        .fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
 fn max_diff(a: &[Grid; 3], b: &[Grid; 3]) -> f64 {
-    a.iter().zip(b).flat_map(|(x, y)| x.cells.iter().flatten().zip(y.cells.iter().flatten()).map(|(p, q)| (p - q).abs())).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| {
+            x.cells
+                .iter()
+                .flatten()
+                .zip(y.cells.iter().flatten())
+                .map(|(p, q)| (p - q).abs())
+        })
+        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -76,24 +100,57 @@ fn gpu_propagation_matches_the_cpu_reference() {
     let mut gpu = common::test_gpu();
     let shaders = ShaderLibrary::Embedded;
     let cases = [
-        ("corrected fp32 with the geometry volume", Mode::Corrected, false, true, 6, 2e-5),
+        (
+            "corrected fp32 with the geometry volume",
+            Mode::Corrected,
+            false,
+            true,
+            6,
+            2e-5,
+        ),
         ("corrected fp16", Mode::Corrected, true, false, 6, 4e-3),
         ("the document's fp32", Mode::Faithful, false, false, 3, 2e-5),
         ("the document's fp16", Mode::Faithful, true, false, 3, 1.5e-3),
     ];
     for (name, mode, half, occlusion, iterations, tolerance) in cases {
-        let config = Config { grid: n as u32, iterations, half, occlusion, ..Config::defaults(mode) };
-        let gpu_result = propagate_standalone(&mut gpu, &shaders, &config, &injected, occlusion.then_some(&gv)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let config = Config {
+            grid: n as u32,
+            iterations,
+            half,
+            occlusion,
+            ..Config::defaults(mode)
+        };
+        let gpu_result = propagate_standalone(&mut gpu, &shaders, &config, &injected, occlusion.then_some(&gv))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         let cpu: [Grid; 3] = injected.clone().map(|g| match mode {
-            Mode::Corrected => grid::propagate_corrected(&g, iterations as usize, &Corrected { occlusion: occlusion.then_some(&gv), ..Corrected::default() }).0,
+            Mode::Corrected => {
+                grid::propagate_corrected(
+                    &g,
+                    iterations as usize,
+                    &Corrected {
+                        occlusion: occlusion.then_some(&gv),
+                        ..Corrected::default()
+                    },
+                )
+                .0
+            }
             Mode::Faithful => grid::propagate_faithful(&g, iterations as usize),
         });
         let (scale, diff) = (max_abs(&cpu), max_diff(&gpu_result, &cpu));
         // The propagation moved light: the result is not the injection.
         let moved = max_diff(&cpu, &injected);
-        assert!(moved > 5.0 * tolerance * scale, "{name}: the propagation moved {moved:e}, too little to tell");
-        println!("{name}: max |GPU − CPU| = {:.2e} of the largest coefficient", diff / scale);
-        assert!(diff <= tolerance * scale, "{name}: max |GPU − CPU| = {diff:e} (largest coefficient {scale})");
+        assert!(
+            moved > 5.0 * tolerance * scale,
+            "{name}: the propagation moved {moved:e}, too little to tell"
+        );
+        println!(
+            "{name}: max |GPU − CPU| = {:.2e} of the largest coefficient",
+            diff / scale
+        );
+        assert!(
+            diff <= tolerance * scale,
+            "{name}: max |GPU − CPU| = {diff:e} (largest coefficient {scale})"
+        );
     }
     common::assert_clean(&gpu);
 }
@@ -112,9 +169,23 @@ fn volume_of(scene: &Scene) -> ([Grid; 3], Placement, LightCamera) {
     let environment = EnvironmentMap::of_scene(scene).unwrap();
     let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
     let mut bakes = Baker::new(None);
-    let decl = scene.methods.iter().find(|d| d.name == "lpv").expect("an lpv method").clone();
+    let decl = scene
+        .methods
+        .iter()
+        .find(|d| d.name == "lpv")
+        .expect("an lpv method")
+        .clone();
     let lpv = {
-        let mut cx = CreateContext { gpu: &mut gpu, shaders: &shaders, states: &mut states, scene, scene_gpu: &scene_gpu, environment: &environment, bakes: &mut bakes, terms: Terms::INDIRECT };
+        let mut cx = CreateContext {
+            gpu: &mut gpu,
+            shaders: &shaders,
+            states: &mut states,
+            scene,
+            scene_gpu: &scene_gpu,
+            environment: &environment,
+            bakes: &mut bakes,
+            terms: Terms::INDIRECT,
+        };
         Lpv::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"))
     };
     let frame = gpu.create_frame().unwrap();
@@ -146,9 +217,16 @@ fn covered_texels(camera: &LightCamera, n: u32, a: f32, y: f32) -> u32 {
         let c = camera.view_proj * p.extend(1.0);
         glam::Vec2::new(c.x, c.y) / c.w
     };
-    let (p, q) = (ndc(glam::Vec3::new(-0.5 * a, y, -0.5 * a)), ndc(glam::Vec3::new(0.5 * a, y, 0.5 * a)));
+    let (p, q) = (
+        ndc(glam::Vec3::new(-0.5 * a, y, -0.5 * a)),
+        ndc(glam::Vec3::new(0.5 * a, y, 0.5 * a)),
+    );
     let (lo, hi) = (p.min(q), p.max(q));
-    let count = |lo: f32, hi: f32| (0..n).filter(|i| (lo..hi).contains(&((*i as f32 + 0.5) / n as f32 * 2.0 - 1.0))).count() as u32;
+    let count = |lo: f32, hi: f32| {
+        (0..n)
+            .filter(|i| (lo..hi).contains(&((*i as f32 + 0.5) / n as f32 * 2.0 - 1.0)))
+            .count() as u32
+    };
     count(lo.x, hi.x) * count(lo.y, hi.y)
 }
 
@@ -175,8 +253,16 @@ fn injected_flux_is_rho_e_a_at_any_rsm_resolution() {
             }
         }
         println!("RSM {rsm}²: reflected {above:.5}, transmitted {below:.5}; rasterised area {area:.5} m² (A = 1)");
-        assert!((above - (1.0 * area + box_top)).abs() < 0.005 * above, "RSM {rsm}²: reflected flux {above}, ρE⊥A' = {}", area + box_top);
-        assert!((below - 0.6 * area).abs() < 0.005 * below, "RSM {rsm}²: transmitted flux {below}, τE⊥A' = {}", 0.6 * area);
+        assert!(
+            (above - (1.0 * area + box_top)).abs() < 0.005 * above,
+            "RSM {rsm}²: reflected flux {above}, ρE⊥A' = {}",
+            area + box_top
+        );
+        assert!(
+            (below - 0.6 * area).abs() < 0.005 * below,
+            "RSM {rsm}²: transmitted flux {below}, τE⊥A' = {}",
+            0.6 * area
+        );
         let quantisation = 2.0 * camera.texel.sqrt() as f64;
         assert!((area - 1.0).abs() < quantisation, "rasterised area {area}");
         assert!(up > 0.0 && down < 0.0, "lobes: reflected y {up}, transmitted y {down}");
@@ -213,7 +299,10 @@ fn the_geometry_volume_stops_light_leaking_through_a_thin_wall() {
         let lit = irradiance(&g[0], &placement, DVec3::new(0.2, 0.6, 0.0), DVec3::NEG_X);
         let dark = irradiance(&g[0], &placement, DVec3::new(-0.2, 0.6, 0.0), DVec3::X);
         leak[k] = dark / lit;
-        println!("geometry volume {gv}: lit side {lit:.4}, shaded side {dark:.4} W/m²: leak {:.1} %", 100.0 * leak[k]);
+        println!(
+            "geometry volume {gv}: lit side {lit:.4}, shaded side {dark:.4} W/m²: leak {:.1} %",
+            100.0 * leak[k]
+        );
     }
     assert!(leak[1] < 0.05, "leak with the geometry volume {:.3}", leak[1]);
     assert!(leak[0] > 2.0 * leak[1], "the geometry volume changed little: {leak:?}");
@@ -246,16 +335,29 @@ fn a_thin_surface_blocks_light_meeting_its_back() {
     for (k, screen) in [false, true].into_iter().enumerate() {
         let (g, placement, _) = volume_of(&screen_on_a_floor(screen));
         reaching[k] = irradiance(&g[0], &placement, DVec3::new(0.2, 0.6, 0.0), DVec3::NEG_X);
-        println!("screen {screen}: irradiance 0.2 m in front of x = 0, facing -x: {:.4} W/m²", reaching[k]);
+        println!(
+            "screen {screen}: irradiance 0.2 m in front of x = 0, facing -x: {:.4} W/m²",
+            reaching[k]
+        );
     }
     let through = reaching[1] / reaching[0];
-    println!("through the screen's back: {:.1} % of the open floor's", 100.0 * through);
-    assert!(through < 0.5, "light through the thin screen's back: {through:.3} of the open floor's");
+    println!(
+        "through the screen's back: {:.1} % of the open floor's",
+        100.0 * through
+    );
+    assert!(
+        through < 0.5,
+        "light through the thin screen's back: {through:.3} of the open floor's"
+    );
 }
 
 fn mean(path: &std::path::Path) -> f64 {
     let img = penumbra::image_io::HdrImage::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
-    img.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>() / img.pixels.len() as f64
+    img.pixels
+        .iter()
+        .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
+        .sum::<f64>()
+        / img.pixels.len() as f64
 }
 
 /// The Cornell box under a spot light: the corrected LPV's one-bounce indirect light (16³, 16
@@ -266,27 +368,65 @@ fn cornell_indirect_light_is_within_a_quarter_of_the_path_tracer_in_mean() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(dir.join("scenes/lpv_cornell.toml")).unwrap();
     let reference = common::temp_path("lpv_cornell_ref.exr");
-    common::ok(&common::penumbra(&["reference", "scenes/lpv_cornell.toml", "--indirect-only", "--bounces", "1", "--spp", "256", "--size", "32x24", "--output", reference.to_str().unwrap()]));
+    common::ok(&common::penumbra(&[
+        "reference",
+        "scenes/lpv_cornell.toml",
+        "--indirect-only",
+        "--bounces",
+        "1",
+        "--spp",
+        "256",
+        "--size",
+        "32x24",
+        "--output",
+        reference.to_str().unwrap(),
+    ]));
     let want = mean(&reference);
     let mut ratios = Vec::new();
-    let cases = [("corrected", r#"{ name = "lpv", grid = 16, iterations = 16 }"#), ("faithful", r#"{ name = "lpv", mode = "faithful" }"#), ("cascades", r#"{ name = "lpv", cascades = 3 }"#)];
+    let cases = [
+        ("corrected", r#"{ name = "lpv", grid = 16, iterations = 16 }"#),
+        ("faithful", r#"{ name = "lpv", mode = "faithful" }"#),
+        ("cascades", r#"{ name = "lpv", cascades = 3 }"#),
+    ];
     for (label, decl) in cases {
         let path = dir.join(format!("scenes/.lpv_test_{label}.toml"));
         std::fs::write(&path, text.replace(r#"{ name = "lpv" }"#, decl)).unwrap();
         let out = common::temp_path(&format!("lpv_cornell_{label}.exr"));
-        let run = common::penumbra(&["capture", path.to_str().unwrap(), "--method", "lpv", "--size", "32x24", "--validation", "--exr", out.to_str().unwrap()]);
+        let run = common::penumbra(&[
+            "capture",
+            path.to_str().unwrap(),
+            "--method",
+            "lpv",
+            "--size",
+            "32x24",
+            "--validation",
+            "--exr",
+            out.to_str().unwrap(),
+        ]);
         let _ = std::fs::remove_file(&path);
         common::ok(&run);
         let got = mean(&out);
         println!("{label}: mean {got:.5}, path tracer {want:.5}: ratio {:.3}", got / want);
         ratios.push(got / want);
     }
-    assert!(ratios[0] > 0.8 && ratios[0] < 1.25, "corrected/path tracer {}", ratios[0]);
-    assert!(!(0.8..1.25).contains(&ratios[1]), "the document's mode should be off in mean: {}", ratios[1]);
+    assert!(
+        ratios[0] > 0.8 && ratios[0] < 1.25,
+        "corrected/path tracer {}",
+        ratios[0]
+    );
+    assert!(
+        !(0.8..1.25).contains(&ratios[1]),
+        "the document's mode should be off in mean: {}",
+        ratios[1]
+    );
     // Cascades follow the camera, which looks into the box from outside it: without a size the
     // largest must still reach the box (it used to span the box's extent around the camera and
     // light nothing).
-    assert!(ratios[2] > 0.5 && ratios[2] < 2.0, "three cascades/path tracer {}", ratios[2]);
+    assert!(
+        ratios[2] > 0.5 && ratios[2] < 2.0,
+        "three cascades/path tracer {}",
+        ratios[2]
+    );
 }
 
 /// The bush (scenes/lpv_bush.toml as shipped: 32³, 8 iterations, the camera's surfels in the
@@ -297,9 +437,31 @@ fn cornell_indirect_light_is_within_a_quarter_of_the_path_tracer_in_mean() {
 #[test]
 fn bush_indirect_light_is_within_a_quarter_of_the_path_tracer_in_mean() {
     let reference = common::temp_path("lpv_bush_ref.exr");
-    common::ok(&common::penumbra(&["reference", "scenes/lpv_bush.toml", "--indirect-only", "--bounces", "1", "--spp", "256", "--size", "48x36", "--output", reference.to_str().unwrap()]));
+    common::ok(&common::penumbra(&[
+        "reference",
+        "scenes/lpv_bush.toml",
+        "--indirect-only",
+        "--bounces",
+        "1",
+        "--spp",
+        "256",
+        "--size",
+        "48x36",
+        "--output",
+        reference.to_str().unwrap(),
+    ]));
     let out = common::temp_path("lpv_bush.exr");
-    common::ok(&common::penumbra(&["capture", "scenes/lpv_bush.toml", "--method", "lpv", "--size", "48x36", "--validation", "--exr", out.to_str().unwrap()]));
+    common::ok(&common::penumbra(&[
+        "capture",
+        "scenes/lpv_bush.toml",
+        "--method",
+        "lpv",
+        "--size",
+        "48x36",
+        "--validation",
+        "--exr",
+        out.to_str().unwrap(),
+    ]));
     let ratio = mean(&out) / mean(&reference);
     println!("bush: LPV / path tracer in mean {ratio:.3}");
     assert!(ratio > 0.8 && ratio < 1.25, "bush: corrected/path tracer {ratio}");
@@ -334,11 +496,16 @@ fn t13(edit: impl Fn(&str) -> String, cases: &[(&str, &str)]) -> Vec<(f64, f64)>
     let mut results = Vec::new();
     for (label, params) in cases {
         let plain = format!("{{ name = \"lpv\", {region} }}");
-        let decl = if params.is_empty() { plain.clone() } else { format!("{{ name = \"lpv\", {region}, {params} }}") };
+        let decl = if params.is_empty() {
+            plain.clone()
+        } else {
+            format!("{{ name = \"lpv\", {region}, {params} }}")
+        };
         let text = text.replace(&plain, &decl);
         assert!(text.contains(&decl));
         let scene = Scene::from_str(&text, "lpv_bush.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
-        let mut r = Renderer::new(common::test_gpu(), scene, Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let mut r =
+            Renderer::new(common::test_gpu(), scene, Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         let frames: Vec<Vec<f32>> = (0..6)
             .map(|_| {
@@ -364,10 +531,18 @@ fn scatter_injection_is_steadier_than_the_documents_gather() {
             ("scatter", "light_spin = 6.0"),
             ("scatter, no snapping", "light_spin = 6.0, snap = false"),
             ("the document's gather", "mode = \"faithful\", light_spin = 6.0"),
-            ("gather without the transform bug", "mode = \"faithful\", transform_bug = false, light_spin = 6.0"),
+            (
+                "gather without the transform bug",
+                "mode = \"faithful\", transform_bug = false, light_spin = 6.0",
+            ),
         ],
     );
-    assert!(results[0].0 * 3.0 < results[2].0, "scatter {:.4} vs gather {:.4}", results[0].0, results[2].0);
+    assert!(
+        results[0].0 * 3.0 < results[2].0,
+        "scatter {:.4} vs gather {:.4}",
+        results[0].0,
+        results[2].0
+    );
 }
 
 /// The bush with the document's wind (scaled to its 2 m: `unit = 0.1`, 3 cm at the leaf tips)
@@ -375,7 +550,8 @@ fn scatter_injection_is_steadier_than_the_documents_gather() {
 fn windy_bush(text: &str) -> String {
     let bush = "leaf_size = 0.12\nmaterial = \"leaf\"\n";
     assert!(text.contains(bush));
-    text.replace(bush, &format!("{bush}wind = {{ unit = 0.1 }}\n")) + "\n[light_motion]\nlight = \"sun\"\ndeg_per_s = 6\n"
+    text.replace(bush, &format!("{bush}wind = {{ unit = 0.1 }}\n"))
+        + "\n[light_motion]\nlight = \"sun\"\ndeg_per_s = 6\n"
 }
 
 /// T13 with wind: the leaves move in the RSM and on screen alike; the scatter injection stays
@@ -388,10 +564,18 @@ fn t13_with_wind_scatter_stays_steadier_than_the_gather() {
             ("wind: scatter", ""),
             ("wind: scatter, no snapping", "snap = false"),
             ("wind: the document's gather", "mode = \"faithful\""),
-            ("wind: gather without the transform bug", "mode = \"faithful\", transform_bug = false"),
+            (
+                "wind: gather without the transform bug",
+                "mode = \"faithful\", transform_bug = false",
+            ),
         ],
     );
-    assert!(results[0].0 * 3.0 < results[2].0, "scatter {:.4} vs gather {:.4}", results[0].0, results[2].0);
+    assert!(
+        results[0].0 * 3.0 < results[2].0,
+        "scatter {:.4} vs gather {:.4}",
+        results[0].0,
+        results[2].0
+    );
 }
 
 /// The debug views draw what they name: the RSM's reflected flux per unit area over the leaf is
@@ -401,7 +585,14 @@ fn t13_with_wind_scatter_stays_steadier_than_the_gather() {
 fn debug_views_show_the_rsm_and_the_volume() {
     use penumbra::renderer::{FrameOutput, Renderer};
     let centre = |view: &str| {
-        let mut r = Renderer::new(common::test_gpu(), leaf(&format!("{{ name = \"lpv\", view = \"{view}\" }}")), Some("lpv"), (33, 33), 1).unwrap_or_else(|e| panic!("{e}"));
+        let mut r = Renderer::new(
+            common::test_gpu(),
+            leaf(&format!("{{ name = \"lpv\", view = \"{view}\" }}")),
+            Some("lpv"),
+            (33, 33),
+            1,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
         common::assert_clean(&r.gpu);
@@ -411,9 +602,15 @@ fn debug_views_show_the_rsm_and_the_volume() {
     let (flux, _) = centre("rsm_flux");
     assert!((flux[0] - 1.0).abs() < 1e-3, "RSM flux per area {flux:?}");
     let (transmitted, _) = centre("rsm_transmitted");
-    assert!((transmitted[0] - 0.6).abs() < 1e-3, "RSM transmitted flux per area {transmitted:?}");
+    assert!(
+        (transmitted[0] - 0.6).abs() < 1e-3,
+        "RSM transmitted flux per area {transmitted:?}"
+    );
     let (normal, _) = centre("rsm_normal");
-    assert!((normal[1] - 1.0).abs() < 1e-3 && (normal[0] - 0.5).abs() < 1e-3, "RSM normal {normal:?}");
+    assert!(
+        (normal[1] - 1.0).abs() < 1e-3 && (normal[0] - 0.5).abs() < 1e-3,
+        "RSM normal {normal:?}"
+    );
     let (_, slices) = centre("slices");
     assert!(slices > 0.0, "the slices are black");
     let (albedo, _) = centre("albedo");
@@ -457,7 +654,10 @@ fn one_bounce_through_and_under_a_leaf_against_the_closed_forms() {
     let (g, placement, _) = volume_of(&leaf_over_ground((0.0, tau), 0.0));
     let xs = [0.0, 0.5, 1.0, 2.0, 4.0];
     let closed = [0.23946, 0.18037, 0.08435, 0.01392, 0.00114];
-    let through: Vec<f64> = xs.iter().map(|&x| irradiance(&g[0], &placement, DVec3::new(x, 0.0, 0.0), DVec3::Y) / (tau * e_sun)).collect();
+    let through: Vec<f64> = xs
+        .iter()
+        .map(|&x| irradiance(&g[0], &placement, DVec3::new(x, 0.0, 0.0), DVec3::Y) / (tau * e_sun))
+        .collect();
     let r = pearson(&through, &closed);
     let through_ratio: Vec<f64> = through.iter().zip(closed).map(|(l, c)| l / c).collect();
     println!("transmitted to the ground: LPV {through:.5?}, closed form {closed:?}: ratios {through_ratio:.3?}, correlation {r:.3}");
@@ -466,16 +666,28 @@ fn one_bounce_through_and_under_a_leaf_against_the_closed_forms() {
     let (g, placement, _) = volume_of(&leaf_over_ground((0.0, 0.0), rho));
     let xs = [0.0, 0.25, 0.5];
     let closed = [0.76054, 0.77703, 0.81963];
-    let under: Vec<f64> = xs.iter().map(|&x| irradiance(&g[0], &placement, DVec3::new(x, 1.0, 0.0), DVec3::NEG_Y) / (rho * e_sun)).collect();
+    let under: Vec<f64> = xs
+        .iter()
+        .map(|&x| irradiance(&g[0], &placement, DVec3::new(x, 1.0, 0.0), DVec3::NEG_Y) / (rho * e_sun))
+        .collect();
     let under_ratio: Vec<f64> = under.iter().zip(closed).map(|(l, c)| l / c).collect();
     println!("reflected to the underside: LPV {under:.5?}, closed form {closed:?}: ratios {under_ratio:.3?}");
 
     // The digest's gates (within [0.5, 2], correlation > 0.9) where the LPV meets them.
-    assert!(through_ratio[..2].iter().all(|q| (0.5..=2.0).contains(q)), "transmitted ratios {through_ratio:?}");
+    assert!(
+        through_ratio[..2].iter().all(|q| (0.5..=2.0).contains(q)),
+        "transmitted ratios {through_ratio:?}"
+    );
     assert!(r > 0.95, "transmitted: correlation {r}");
     // Under the leaf the LPV falls short of the gate: hold it to what it measures.
-    assert!(under_ratio.iter().all(|q| (0.3..=2.0).contains(q)), "reflected ratios {under_ratio:?}");
-    assert!(under[0] < under[1] && under[1] < under[2], "the leaf's shadow should dim the centre most: {under:?}");
+    assert!(
+        under_ratio.iter().all(|q| (0.3..=2.0).contains(q)),
+        "reflected ratios {under_ratio:?}"
+    );
+    assert!(
+        under[0] < under[1] && under[1] < under[2],
+        "the leaf's shadow should dim the centre most: {under:?}"
+    );
 }
 
 /// Bad parameters and scenes the LPV cannot light are one error line naming the field.
@@ -501,12 +713,21 @@ fn bad_parameters_name_the_field() {
             Ok(_) => panic!("{method}: accepted"),
             Err(e) => e.to_string(),
         };
-        assert!(!err.contains('\n') && err.contains(field) && err.contains("lpv test"), "{method}: {err}");
+        assert!(
+            !err.contains('\n') && err.contains(field) && err.contains("lpv test"),
+            "{method}: {err}"
+        );
     }
     // A point light would need a cube RSM.
     let text = "methods = [\"lpv\"]\n[camera]\nposition = [0, 2, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1\n";
-    let err = Renderer::new(common::test_gpu(), scene(text), Some("lpv"), (8, 8), 1).err().expect("a point light is refused").to_string();
-    assert!(!err.contains('\n') && err.contains("point light") && err.contains("lpv test"), "{err}");
+    let err = Renderer::new(common::test_gpu(), scene(text), Some("lpv"), (8, 8), 1)
+        .err()
+        .expect("a point light is refused")
+        .to_string();
+    assert!(
+        !err.contains('\n') && err.contains("point light") && err.contains("lpv test"),
+        "{err}"
+    );
 }
 
 /// Cascades: three nested volumes around the camera (the finest 1.6 m wide, 5 cm cells) light
@@ -522,7 +743,8 @@ fn cascades_around_the_camera_agree_with_one_volume() {
     let mean_of = |decl: &str| {
         let text = text.replace(shipped, decl);
         let scene = Scene::from_str(&text, "lpv_bush.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
-        let mut r = Renderer::new(common::test_gpu(), scene, Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let mut r =
+            Renderer::new(common::test_gpu(), scene, Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
         common::assert_clean(&r.gpu);
@@ -530,8 +752,14 @@ fn cascades_around_the_camera_agree_with_one_volume() {
     };
     let one = mean_of(shipped);
     let three = mean_of(r#"{ name = "lpv", cascades = 3, size = 1.6, camera_surfels = 128 }"#);
-    println!("one volume {one:.5}, three cascades {three:.5}: {:+.1} %", 100.0 * (three / one - 1.0));
-    assert!((three / one - 1.0).abs() < 0.1, "one volume {one}, three cascades {three}");
+    println!(
+        "one volume {one:.5}, three cascades {three:.5}: {:+.1} %",
+        100.0 * (three / one - 1.0)
+    );
+    assert!(
+        (three / one - 1.0).abs() < 0.1,
+        "one volume {one}, three cascades {three}"
+    );
 }
 
 /// A wall along the sun's path (edge-on, so absent from the RSM) between a lit floor and a
@@ -554,9 +782,15 @@ fn camera_surfels_add_what_the_light_cannot_see_to_the_geometry_volume() {
     for (k, surfels) in [0, 128].into_iter().enumerate() {
         let (g, placement, _) = volume_of(&edge_on_wall(surfels));
         reaching[k] = irradiance(&g[0], &placement, DVec3::new(-0.2, 0.6, 0.0), DVec3::X);
-        println!("camera surfels {surfels}: irradiance on the wall's −x side {:.4} W/m²", reaching[k]);
+        println!(
+            "camera surfels {surfels}: irradiance on the wall's −x side {:.4} W/m²",
+            reaching[k]
+        );
     }
-    assert!(reaching[1] < 0.8 * reaching[0], "the camera's surfels changed little: {reaching:?}");
+    assert!(
+        reaching[1] < 0.8 * reaching[0],
+        "the camera's surfels changed little: {reaching:?}"
+    );
 }
 
 /// The atrium (scenes/lpv_atrium.toml: a court of boxes with thin gallery floors and coloured
@@ -566,9 +800,30 @@ fn camera_surfels_add_what_the_light_cannot_see_to_the_geometry_volume() {
 #[test]
 fn the_atrium_indirect_light_is_measured_against_the_path_tracer() {
     let reference = common::temp_path("lpv_atrium_ref.exr");
-    common::ok(&common::penumbra(&["reference", "scenes/lpv_atrium.toml", "--indirect-only", "--bounces", "1", "--spp", "256", "--size", "32x24", "--output", reference.to_str().unwrap()]));
+    common::ok(&common::penumbra(&[
+        "reference",
+        "scenes/lpv_atrium.toml",
+        "--indirect-only",
+        "--bounces",
+        "1",
+        "--spp",
+        "256",
+        "--size",
+        "32x24",
+        "--output",
+        reference.to_str().unwrap(),
+    ]));
     let out = common::temp_path("lpv_atrium.exr");
-    common::ok(&common::penumbra(&["capture", "scenes/lpv_atrium.toml", "--method", "lpv", "--size", "32x24", "--exr", out.to_str().unwrap()]));
+    common::ok(&common::penumbra(&[
+        "capture",
+        "scenes/lpv_atrium.toml",
+        "--method",
+        "lpv",
+        "--size",
+        "32x24",
+        "--exr",
+        out.to_str().unwrap(),
+    ]));
     let ratio = mean(&out) / mean(&reference);
     println!("atrium: LPV / path tracer in mean {ratio:.3}");
     assert!((1.1..1.7).contains(&ratio), "atrium ratio {ratio}");
@@ -581,11 +836,20 @@ fn the_atrium_indirect_light_is_measured_against_the_path_tracer() {
 #[test]
 fn the_memory_readout_matches_the_formula() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    for (params, n, r, cascades, per_coefficient) in [("grid = 16, rsm = 64", 16u64, 64u64, 1, 2u64), ("grid = 8, rsm = 32, cascades = 2, storage = \"f32\"", 8, 32, 2, 4)] {
+    for (params, n, r, cascades, per_coefficient) in [
+        ("grid = 16, rsm = 64", 16u64, 64u64, 1, 2u64),
+        ("grid = 8, rsm = 32, cascades = 2, storage = \"f32\"", 8, 32, 2, 4),
+    ] {
         let path = common::temp_path(&format!("memory-{n}.toml"));
-        let text = std::fs::read_to_string(dir.join("lpv_cornell.toml")).unwrap().replace("{ name = \"lpv\" }", &format!("{{ name = \"lpv\", {params} }}"));
+        let text = std::fs::read_to_string(dir.join("lpv_cornell.toml"))
+            .unwrap()
+            .replace("{ name = \"lpv\" }", &format!("{{ name = \"lpv\", {params} }}"));
         assert!(text.contains(params));
-        std::fs::write(&path, text.replace("\"textures/", &format!("\"{}/textures/", dir.display()))).unwrap();
+        std::fs::write(
+            &path,
+            text.replace("\"textures/", &format!("\"{}/textures/", dir.display())),
+        )
+        .unwrap();
         let opts = penumbra::capture::CaptureOptions {
             scene: Some(path),
             png: None,
@@ -600,19 +864,48 @@ fn the_memory_readout_matches_the_formula() {
         };
         let report = penumbra::profile::run(&opts, 1).unwrap_or_else(|e| panic!("{e}"));
         let table = report.table();
-        let find = |name: &str| report.memory.iter().find(|m| m.resource == name).unwrap_or_else(|| panic!("no `{name}` in {:?}", report.memory));
+        let find = |name: &str| {
+            report
+                .memory
+                .iter()
+                .find(|m| m.resource == name)
+                .unwrap_or_else(|| panic!("no `{name}` in {:?}", report.memory))
+        };
         let cells = n.pow(3);
         for k in 0..cascades {
-            let label = if k == 0 { "lpv".to_string() } else { format!("lpv cascade {k}") };
+            let label = if k == 0 {
+                "lpv".to_string()
+            } else {
+                format!("lpv cascade {k}")
+            };
             let sets = find(&format!("{label} sets (2 wavefronts + accumulation)"));
-            assert_eq!(sets.requested, 3 * 3 * 4 * per_coefficient * cells, "{label}: 3 sets of 3 x {} B x N^3", 4 * per_coefficient);
-            assert!(sets.allocated >= sets.requested && sets.allocated < sets.requested + 3 * 65536, "{sets:?}");
+            assert_eq!(
+                sets.requested,
+                3 * 3 * 4 * per_coefficient * cells,
+                "{label}: 3 sets of 3 x {} B x N^3",
+                4 * per_coefficient
+            );
+            assert!(
+                sets.allocated >= sets.requested && sets.allocated < sets.requested + 3 * 65536,
+                "{sets:?}"
+            );
             assert_eq!(find(&format!("{label} injection sums")).requested, 3 * 4 * 4 * cells);
-            assert_eq!(find(&format!("{label} geometry volume (sums, corners, faces)")).requested, (4 + 4 + 12) * 4 * cells);
-            assert!(table.contains(&format!("{label} sets (2 wavefronts + accumulation)")), "{table}");
+            assert_eq!(
+                find(&format!("{label} geometry volume (sums, corners, faces)")).requested,
+                (4 + 4 + 12) * 4 * cells
+            );
+            assert!(
+                table.contains(&format!("{label} sets (2 wavefronts + accumulation)")),
+                "{table}"
+            );
         }
         let rsm = find(&format!("lpv rsm ({r}x{r}, 4 x RGBA32F + depth)"));
-        assert!(rsm.requested >= 4 * 16 * r * r && rsm.allocated >= 4 * 16 * r * r && rsm.requested < 4 * 16 * r * r + 8 * r * r + 65536, "{rsm:?}");
+        assert!(
+            rsm.requested >= 4 * 16 * r * r
+                && rsm.allocated >= 4 * 16 * r * r
+                && rsm.requested < 4 * 16 * r * r + 8 * r * r + 65536,
+            "{rsm:?}"
+        );
         assert_eq!(report.memory.len(), 3 * cascades + 1, "{:?}", report.memory);
         assert!(table.contains("device memory"), "{table}");
     }
@@ -633,7 +926,8 @@ fn the_documents_compositor_blends_the_indirect_light_with_the_direct() {
              [[objects]]\nmesh = \"plane\"\nsize = 20\nmaterial = \"ground\"\n\
              [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 2\n"
         );
-        let mut r = Renderer::new(common::test_gpu(), scene(&text), Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
+        let mut r =
+            Renderer::new(common::test_gpu(), scene(&text), Some("lpv"), (48, 36), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
         let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
         common::assert_clean(&r.gpu);

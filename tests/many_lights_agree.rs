@@ -32,11 +32,19 @@ type TestLight = (DVec3, Option<(DVec3, f64, f64)>, DVec3);
 fn lights() -> Vec<TestLight> {
     vec![
         // Overhead, a little off the axis as in the seed's figure, its full cone over the scene.
-        (DVec3::new(-0.4, 4.0, -0.3), Some((DVec3::ZERO, 60.0, 75.0)), DVec3::new(9.0, 8.0, 7.0)),
+        (
+            DVec3::new(-0.4, 4.0, -0.3),
+            Some((DVec3::ZERO, 60.0, 75.0)),
+            DVec3::new(9.0, 8.0, 7.0),
+        ),
         (DVec3::new(1.8, 2.2, 1.2), None, DVec3::new(2.0, 2.5, 3.0)),
         (DVec3::new(-1.6, 1.6, 1.7), None, DVec3::new(1.5, 1.0, 0.5)),
         // A narrow spot: its ramp crosses the floor, where the comparison must leave it out.
-        (DVec3::new(1.2, 3.0, -1.5), Some((DVec3::new(0.6, 0.0, -0.8), 12.0, 20.0)), DVec3::new(3.0, 1.0, 1.0)),
+        (
+            DVec3::new(1.2, 3.0, -1.5),
+            Some((DVec3::new(0.6, 0.0, -0.8), 12.0, 20.0)),
+            DVec3::new(3.0, 1.0, 1.0),
+        ),
     ]
 }
 
@@ -77,10 +85,18 @@ material = "box"
         centre = 0.5 * (BOX_LOW + BOX_HIGH)
     );
     for (i, (p, spot, c)) in lights().iter().enumerate() {
-        s += &format!("\n[[lights]]\nname = \"l{i}\"\nposition = [{}, {}, {}]\nintensity = [{}, {}, {}]\n", p.x, p.y, p.z, c.x, c.y, c.z);
+        s += &format!(
+            "\n[[lights]]\nname = \"l{i}\"\nposition = [{}, {}, {}]\nintensity = [{}, {}, {}]\n",
+            p.x, p.y, p.z, c.x, c.y, c.z
+        );
         match spot {
             None => s += "type = \"point\"\n",
-            Some((t, inner, outer)) => s += &format!("type = \"spot\"\ntarget = [{}, {}, {}]\ninner_deg = {inner}\nouter_deg = {outer}\n", t.x, t.y, t.z),
+            Some((t, inner, outer)) => {
+                s += &format!(
+                    "type = \"spot\"\ntarget = [{}, {}, {}]\ninner_deg = {inner}\nouter_deg = {outer}\n",
+                    t.x, t.y, t.z
+                )
+            }
         }
     }
     s
@@ -104,12 +120,21 @@ fn quad(corner: DVec3, u: DVec3, w: DVec3) -> Polygon {
 fn box_faces() -> Vec<Polygon> {
     let (x, y, z) = (DVec3::X, DVec3::Y * (BOX_HIGH - BOX_LOW), DVec3::Z);
     let c = DVec3::new(-0.5, BOX_LOW, -0.5);
-    vec![quad(c + y, z, x), quad(c, x, z), quad(c + x, y, z), quad(c, z, y), quad(c + z, x, y), quad(c, y, x)]
+    vec![
+        quad(c + y, z, x),
+        quad(c, x, z),
+        quad(c + x, y, z),
+        quad(c, z, y),
+        quad(c + z, x, y),
+        quad(c, y, x),
+    ]
 }
 
 /// The spot factor of a light at p: 1 inside the inner cone, 0 outside the outer, else between.
 fn cone(light: &TestLight, p: DVec3) -> f64 {
-    let Some((target, inner, outer)) = light.1 else { return 1.0 };
+    let Some((target, inner, outer)) = light.1 else {
+        return 1.0;
+    };
     let cos = (p - light.0).normalize().dot((target - light.0).normalize());
     let (ci, co) = (inner.to_radians().cos(), outer.to_radians().cos());
     ((cos - co) / (ci - co)).clamp(0.0, 1.0)
@@ -149,9 +174,14 @@ fn clear_pixels(r: f64) -> Vec<usize> {
             });
             let points: Vec<DVec3> = std::iter::once(p).chain(around).collect();
             let clear = lights.iter().all(|l| {
-                let lit: Vec<bool> = points.iter().map(|&q| !occluders.blocked(q + DVec3::Y * 1e-6, l.0)).collect();
+                let lit: Vec<bool> = points
+                    .iter()
+                    .map(|&q| !occluders.blocked(q + DVec3::Y * 1e-6, l.0))
+                    .collect();
                 let ramp: Vec<f64> = points.iter().map(|&q| cone(l, q)).collect();
-                lit.iter().all(|&b| b == lit[0]) && ramp.iter().all(|&c| c == ramp[0]) && (ramp[0] == 0.0 || ramp[0] == 1.0)
+                lit.iter().all(|&b| b == lit[0])
+                    && ramp.iter().all(|&c| c == ramp[0])
+                    && (ramp[0] == 0.0 || ramp[0] == 1.0)
             });
             if clear {
                 out.push((j * w + i) as usize);
@@ -166,7 +196,11 @@ fn compare(vls_decl: &str, bsp_decl: &str) -> (f64, usize) {
     let vls = render(&text, "vls");
     let bsp = render(&text, "bsp_lights");
     let pixels = clear_pixels(0.3);
-    assert!(pixels.len() > SIZE.0 as usize * SIZE.1 as usize / 10, "only {} pixels to compare", pixels.len());
+    assert!(
+        pixels.len() > SIZE.0 as usize * SIZE.1 as usize / 10,
+        "only {} pixels to compare",
+        pixels.len()
+    );
     let mut worst = 0.0f64;
     for &i in &pixels {
         let (a, b) = (vls.pixels[i], bsp.pixels[i]);

@@ -20,7 +20,11 @@ mod common;
 /// Resident anonymous memory of this process, in MiB (Linux).
 fn rss_anon_mib() -> f64 {
     let status = std::fs::read_to_string("/proc/self/status").expect("read /proc/self/status");
-    let kb: f64 = status.lines().find_map(|l| l.strip_prefix("RssAnon:")).and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok()).expect("RssAnon in /proc/self/status");
+    let kb: f64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("RssAnon:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+        .expect("RssAnon in /proc/self/status");
     kb / 1024.0
 }
 
@@ -56,7 +60,12 @@ translate = [0, 0.5, 0]
 bob_amplitude = [0, 0.2, 0]
 bob_period_s = 1
 "#;
-    Scene::from_str(toml, "<memory test>", &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")).unwrap()
+    Scene::from_str(
+        toml,
+        "<memory test>",
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"),
+    )
+    .unwrap()
 }
 
 fn small_field(method: &str) -> Scene {
@@ -93,7 +102,14 @@ radiance = [0.3, 0.35, 0.45]
 /// Renders `warmup` frames, then `frames` more, reading the counter every `every` frames; returns
 /// (frame, MiB) samples, the first taken after warm-up. Stops early once memory has grown by more
 /// than `limit_mib` (a leak of megabytes per frame would otherwise exhaust the machine).
-fn run(scene: Scene, method: &str, warmup: usize, frames: usize, every: usize, limit_mib: f64) -> (Vec<(usize, f64)>, Vec<u64>) {
+fn run(
+    scene: Scene,
+    method: &str,
+    warmup: usize,
+    frames: usize,
+    every: usize,
+    limit_mib: f64,
+) -> (Vec<(usize, f64)>, Vec<u64>) {
     let camera = scene.camera.clone();
     let mut r = Renderer::new(common::test_gpu(), scene, Some(method), (48, 32), 1).unwrap();
     r.profile(&camera, warmup).unwrap();
@@ -142,13 +158,23 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         let (samples, device) = run(scene, method, 40, frames, 40, LIMIT_MIB);
         let growth = samples.last().unwrap().1 - samples[0].1;
         let trace: Vec<String> = samples.iter().map(|(f, m)| format!("{f}: {m:.1}")).collect();
-        eprintln!("{method}: RssAnon MiB by frame {} ({:.1} s); device memory allocated {:.2} MiB at every sample", trace.join(", "), t.elapsed().as_secs_f64(), device[0] as f64 / 1048576.0);
+        eprintln!(
+            "{method}: RssAnon MiB by frame {} ({:.1} s); device memory allocated {:.2} MiB at every sample",
+            trace.join(", "),
+            t.elapsed().as_secs_f64(),
+            device[0] as f64 / 1048576.0
+        );
         if growth > LIMIT_MIB {
-            failures.push(format!("{method}: +{growth:.1} MiB after warm-up ({})", trace.join(", ")));
+            failures.push(format!(
+                "{method}: +{growth:.1} MiB after warm-up ({})",
+                trace.join(", ")
+            ));
         }
         // Device memory (live allocations) is allocated up front: a frame adds none.
         if device.iter().any(|&d| d != device[0]) {
-            failures.push(format!("{method}: device memory changes after warm-up: {device:?} bytes"));
+            failures.push(format!(
+                "{method}: device memory changes after warm-up: {device:?} bytes"
+            ));
         }
     }
     assert!(failures.is_empty(), "memory grows:\n{}", failures.join("\n"));
@@ -164,12 +190,24 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
 #[test]
 #[ignore]
 fn soak_every_shipped_scene_and_method() {
-    let frames: usize = std::env::var("PENUMBRA_SOAK_FRAMES").ok().and_then(|v| v.parse().ok()).unwrap_or(10_000);
+    let frames: usize = std::env::var("PENUMBRA_SOAK_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(10_000);
     let size = std::env::var("PENUMBRA_SOAK_SIZE").unwrap_or_else(|_| "64x36".into());
-    let (w, h) = size.split_once('x').and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?))).expect("PENUMBRA_SOAK_SIZE is WxH");
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+        .expect("PENUMBRA_SOAK_SIZE is WxH");
     let only = std::env::var("PENUMBRA_SOAK_SCENES").ok();
-    let dir = std::env::var_os("PENUMBRA_SOAK_SCENE_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"));
-    let mut names: Vec<String> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()?.file_name().into_string().ok()).filter(|n| n.ends_with(".toml")).collect();
+    let dir = std::env::var_os("PENUMBRA_SOAK_SCENE_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"));
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
     names.sort();
     if let Some(only) = &only {
         names.retain(|n| only.split(',').any(|o| n.starts_with(o)));
@@ -178,7 +216,11 @@ fn soak_every_shipped_scene_and_method() {
     for name in names {
         let scene = penumbra::capture::load_scene(Some(&dir.join(&name))).unwrap();
         // Every configuration: each method alone, then each declared combination.
-        let mut methods: Vec<String> = penumbra::lighting::registry::configurations(&scene).unwrap().into_iter().map(|c| c.name).collect();
+        let mut methods: Vec<String> = penumbra::lighting::registry::configurations(&scene)
+            .unwrap()
+            .into_iter()
+            .map(|c| c.name)
+            .collect();
         if let Ok(keep) = std::env::var("PENUMBRA_SOAK_METHODS") {
             methods.retain(|m| keep.split(',').any(|k| k == m));
         }

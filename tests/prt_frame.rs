@@ -16,7 +16,8 @@ use common::scenes::{scene_text, OPEN_BOX, WALL};
 /// lives on vertices (the floor's centre is one).
 fn scene(template: &str, method: &str, (floor, wall): (u32, u32)) -> Scene {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    Scene::from_str(&scene_text(template, method, floor, wall), "prt test", &dir).unwrap_or_else(|e| panic!("{method}: {e}"))
+    Scene::from_str(&scene_text(template, method, floor, wall), "prt test", &dir)
+        .unwrap_or_else(|e| panic!("{method}: {e}"))
 }
 
 fn open_box(method: &str) -> Scene {
@@ -56,16 +57,26 @@ fn the_open_box_floor_shows_the_view_factor() {
         let cam = r.scene.camera.clone();
         let c = centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
         common::assert_clean(&r.gpu);
-        println!("{method}: centre {:.5} (closed form {want:.5}, {:+.2} %)", c[0], 100.0 * (c[0] / want - 1.0));
+        println!(
+            "{method}: centre {:.5} (closed form {want:.5}, {:+.2} %)",
+            c[0],
+            100.0 * (c[0] / want - 1.0)
+        );
         for k in 0..3 {
-            assert!((c[k] / want - 1.0).abs() < tolerance, "{method}: centre {c:?}, want {want}");
+            assert!(
+                (c[k] / want - 1.0).abs() < tolerance,
+                "{method}: centre {c:?}, want {want}"
+            );
         }
     }
     let mut r = renderer(open_box(r#"{ name = "prt", mode = "faithful" }"#));
     let cam = r.scene.camera.clone();
     let c = centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap());
     println!("faithful: centre {:.5} ({:+.1} %)", c[0], 100.0 * (c[0] / want - 1.0));
-    assert!((c[0] / want - 1.0).abs() > 0.05, "the document's path should be visibly off: {c:?}");
+    assert!(
+        (c[0] / want - 1.0).abs() > 0.05,
+        "the document's path should be visibly off: {c:?}"
+    );
 }
 
 /// 360°/s of environment spin: frame 0 has the sun on the wall's normal, frame 15 (a quarter
@@ -77,23 +88,36 @@ fn a_spinning_light_relights_by_sh_rotation() {
     // disk within 3.7e-3 (tests/prt_raster.rs).
     let mut r = renderer(wall(r#"{ name = "prt", env_spin = 360, mapping = "equal_area" }"#));
     let cam = r.scene.camera.clone();
-    let values: Vec<f32> = (0..16).map(|_| centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap())[0]).collect();
+    let values: Vec<f32> = (0..16)
+        .map(|_| centre(&r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap())[0])
+        .collect();
     common::assert_clean(&r.gpu);
     assert!((values[0] - 0.3382).abs() < 1e-3, "frame 0: {}", values[0]);
     assert!((values[15] - 0.0298).abs() < 1e-3, "frame 15: {}", values[15]);
-    assert!(values.windows(2).all(|w| w[1] < w[0]), "the wall darkens as the light turns away: {values:?}");
+    assert!(
+        values.windows(2).all(|w| w[1] < w[0]),
+        "the wall darkens as the light turns away: {values:?}"
+    );
 }
 
 /// A scene without objects has no vertex to carry a transfer: one error line, no panic.
 #[test]
 fn a_scene_without_objects_is_refused() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let s = Scene::from_str("methods = [\"prt\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n", "empty.toml", &dir).unwrap();
+    let s = Scene::from_str(
+        "methods = [\"prt\"]\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n",
+        "empty.toml",
+        &dir,
+    )
+    .unwrap();
     let err = match Renderer::new(common::test_gpu(), s, Some("prt"), (8, 8), 1) {
         Ok(_) => panic!("a scene without objects was accepted"),
         Err(e) => e.to_string(),
     };
-    assert!(!err.contains('\n') && err.contains("empty.toml") && err.contains("no object"), "{err}");
+    assert!(
+        !err.contains('\n') && err.contains("empty.toml") && err.contains("no object"),
+        "{err}"
+    );
 }
 
 /// Out-of-range parameters and unknown occluders: one error line naming the file and field.

@@ -37,11 +37,25 @@ fn scene() -> Receivers {
     let cube = generators::cuboid(Vec3::new(0.8, 0.6, 0.8), 1);
     let lid = disk(48);
     let placed = [
-        Placed { object: 0, model: Mat4::IDENTITY, mesh: &floor },
-        Placed { object: 1, model: Mat4::from_translation(Vec3::new(0.55, 0.35, -0.45)), mesh: &cube },
-        Placed { object: 2, model: Mat4::from_translation(Vec3::new(-0.35, 1.1, 0.25)) * Mat4::from_scale(Vec3::splat(0.7)), mesh: &lid },
+        Placed {
+            object: 0,
+            model: Mat4::IDENTITY,
+            mesh: &floor,
+        },
+        Placed {
+            object: 1,
+            model: Mat4::from_translation(Vec3::new(0.55, 0.35, -0.45)),
+            mesh: &cube,
+        },
+        Placed {
+            object: 2,
+            model: Mat4::from_translation(Vec3::new(-0.35, 1.1, 0.25)) * Mat4::from_scale(Vec3::splat(0.7)),
+            mesh: &lid,
+        },
     ];
-    let rules = OccluderRules { rules: vec![(1, vec![0, 2]), (2, vec![])] };
+    let rules = OccluderRules {
+        rules: vec![(1, vec![0, 2]), (2, vec![])],
+    };
     gather(&placed, &rules).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -51,15 +65,32 @@ fn cpu(r: &Receivers, bands: usize, samples: usize, clip: Clip) -> Vec<f32> {
 
 fn gpu_bake(gpu: &mut Gpu, r: &Receivers, bands: usize, samples: usize, clip: Clip) -> Vec<f32> {
     let before = (gpu.live_objects(), gpu.live_frames());
-    let t = bake_gpu(gpu, &ShaderLibrary::Embedded, r, bands, samples, clip, &mut Progress::new("test")).unwrap_or_else(|e| panic!("{e}"));
+    let t = bake_gpu(
+        gpu,
+        &ShaderLibrary::Embedded,
+        r,
+        bands,
+        samples,
+        clip,
+        &mut Progress::new("test"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     common::assert_clean(gpu);
-    assert_eq!((gpu.live_objects(), gpu.live_frames()), before, "the bake leaves nothing behind");
+    assert_eq!(
+        (gpu.live_objects(), gpu.live_frames()),
+        before,
+        "the bake leaves nothing behind"
+    );
     t
 }
 
 /// The largest difference, and where.
 fn worst(a: &[f32], b: &[f32]) -> (f32, usize) {
-    a.iter().zip(b).enumerate().map(|(i, (x, y))| ((x - y).abs(), i)).fold((0.0, 0), |w, d| if d.0 > w.0 { d } else { w })
+    a.iter()
+        .zip(b)
+        .enumerate()
+        .map(|(i, (x, y))| ((x - y).abs(), i))
+        .fold((0.0, 0), |w, d| if d.0 > w.0 { d } else { w })
 }
 
 #[test]
@@ -70,15 +101,32 @@ fn gpu_transfer_equals_the_cpu_on_floor_box_and_disk() {
     assert!(r.sets.iter().any(|s| s.triangles.is_empty()));
     let mut gpu = common::test_gpu();
     for (bands, samples, clip) in [(4, 1024, Clip::default()), (6, 256, Clip { near: 0.05, far: 1.5 })] {
-        let (a, b) = (cpu(&r, bands, samples, clip), gpu_bake(&mut gpu, &r, bands, samples, clip));
+        let (a, b) = (
+            cpu(&r, bands, samples, clip),
+            gpu_bake(&mut gpu, &r, bands, samples, clip),
+        );
         assert_eq!(a.len(), b.len());
         let (err, at) = worst(&a, &b);
         let dim = bands * bands;
-        eprintln!("{bands} bands, N = {samples}, {clip:?}: max |gpu - cpu| {err:.2e} (receiver {}, coefficient {})", at / dim, at % dim);
-        assert!(err <= 1e-4, "receiver {} coefficient {}: cpu {} gpu {}", at / dim, at % dim, a[at], b[at]);
+        eprintln!(
+            "{bands} bands, N = {samples}, {clip:?}: max |gpu - cpu| {err:.2e} (receiver {}, coefficient {})",
+            at / dim,
+            at % dim
+        );
+        assert!(
+            err <= 1e-4,
+            "receiver {} coefficient {}: cpu {} gpu {}",
+            at / dim,
+            at % dim,
+            a[at],
+            b[at]
+        );
         // The scene shadows: some floor receivers lose much of their sky, the disk none.
         assert!((0..121).any(|k| a[k * dim] < 0.6), "some floor receiver is shadowed");
-        assert!((145..194).all(|k| (a[k * dim] - 0.886227).abs() < 2e-3), "the disk's receivers are unshadowed");
+        assert!(
+            (145..194).all(|k| (a[k * dim] - 0.886227).abs() < 2e-3),
+            "the disk's receivers are unshadowed"
+        );
     }
 }
 
@@ -99,12 +147,27 @@ fn a_walk_too_long_for_the_device_is_an_error_not_a_wrong_transfer() {
         })
         .collect();
     let points = [(glam::DVec3::new(0.0, 0.0, 0.0), glam::DVec3::Y)];
-    let r = Receivers { sets: vec![OccluderSet { objects: vec![0], triangles: slivers }], ..Receivers::explicit(&points, Vec::new()) };
+    let r = Receivers {
+        sets: vec![OccluderSet {
+            objects: vec![0],
+            triangles: slivers,
+        }],
+        ..Receivers::explicit(&points, Vec::new())
+    };
     let mut gpu = common::test_gpu();
     if !gpu.caps().name.contains("llvmpipe") {
         return;
     }
-    let e = bake_gpu(&mut gpu, &ShaderLibrary::Embedded, &r, 4, 16, Clip::default(), &mut Progress::new("test")).expect_err("a walk longer than the device allows");
+    let e = bake_gpu(
+        &mut gpu,
+        &ShaderLibrary::Embedded,
+        &r,
+        4,
+        16,
+        Clip::default(),
+        &mut Progress::new("test"),
+    )
+    .expect_err("a walk longer than the device allows");
     assert!(e.to_string().contains("use the CPU baker"), "{e}");
 }
 
@@ -121,12 +184,26 @@ fn gpu_transfer_equals_the_cpu_through_a_deep_bvh() {
         let (a, b) = (point(), point());
         slivers.push([a, b, a + Vec3::new(1e-3, 1e-3, 0.0)]);
     }
-    let points: Vec<_> = (0..8).map(|k| (glam::DVec3::new(k as f64 * 0.2 - 0.7, 0.0, 0.1), glam::DVec3::Y)).collect();
-    let r = Receivers { sets: vec![OccluderSet { objects: vec![0], triangles: slivers }], ..Receivers::explicit(&points, Vec::new()) };
+    let points: Vec<_> = (0..8)
+        .map(|k| (glam::DVec3::new(k as f64 * 0.2 - 0.7, 0.0, 0.1), glam::DVec3::Y))
+        .collect();
+    let r = Receivers {
+        sets: vec![OccluderSet {
+            objects: vec![0],
+            triangles: slivers,
+        }],
+        ..Receivers::explicit(&points, Vec::new())
+    };
     let mut gpu = common::test_gpu();
-    let (a, b) = (cpu(&r, 4, 256, Clip::default()), gpu_bake(&mut gpu, &r, 4, 256, Clip::default()));
+    let (a, b) = (
+        cpu(&r, 4, 256, Clip::default()),
+        gpu_bake(&mut gpu, &r, 4, 256, Clip::default()),
+    );
     let (err, at) = worst(&a, &b);
-    eprintln!("deep BVH: max |gpu - cpu| {err:.2e} (at {at}); T00 of receiver 0: {}", a[0]);
+    eprintln!(
+        "deep BVH: max |gpu - cpu| {err:.2e} (at {at}); T00 of receiver 0: {}",
+        a[0]
+    );
     assert!(a[0] < 0.88, "the slivers block some rays");
     assert!(err <= 1e-4, "coefficient {at}: cpu {} gpu {}", a[at], b[at]);
 }
@@ -140,7 +217,10 @@ fn gpu_transfer_equals_the_cpu_through_a_deep_bvh() {
 fn measure_receivers_per_second() {
     let r = scene();
     // The scene's receivers 20 times over (the same rays, enough work to time).
-    let mut many = Receivers { sets: r.sets.clone(), ..Receivers::default() };
+    let mut many = Receivers {
+        sets: r.sets.clone(),
+        ..Receivers::default()
+    };
     for _ in 0..20 {
         many.positions.extend(&r.positions);
         many.normals.extend(&r.normals);

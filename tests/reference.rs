@@ -13,9 +13,15 @@ use penumbra::environment::EnvironmentMap;
 use penumbra::gpu_scene::punctual_lights;
 use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
-use penumbra::reference::{Batching, LightPaths, LightSelection, ReferenceImage, ReferenceOptions, ReferenceRenderer, Sampler, Settings, DEFAULT_BOUNCES};
+use penumbra::reference::{
+    Batching, LightPaths, LightSelection, ReferenceImage, ReferenceOptions, ReferenceRenderer, Sampler, Settings,
+    DEFAULT_BOUNCES,
+};
 use penumbra::scene::Scene;
-use reference_support::{ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance, reflected_environment, rmse, Agreement};
+use reference_support::{
+    ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance,
+    reflected_environment, rmse, Agreement,
+};
 
 fn scene_file(name: &str) -> Scene {
     Scene::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).expect("scene parses")
@@ -26,13 +32,23 @@ fn parse(toml: &str) -> Scene {
 }
 
 fn settings(spp: u32, bounces: u32, paths: LightPaths, seed: u32) -> Settings {
-    Settings { spp, bounces, paths, seed, batching: Batching::Adaptive, ..Settings::default() }
+    Settings {
+        spp,
+        bounces,
+        paths,
+        seed,
+        batching: Batching::Adaptive,
+        ..Settings::default()
+    }
 }
 
 /// Renders each settings in turn on one validated device.
 fn render(scene: &Scene, size: (u32, u32), runs: &[Settings]) -> Vec<ReferenceImage> {
     let mut r = ReferenceRenderer::new(common::test_gpu(), scene, size).expect("reference renderer");
-    let images = runs.iter().map(|s| r.render(s, &mut |_, _| {}).expect("render")).collect();
+    let images = runs
+        .iter()
+        .map(|s| r.render(s, &mut |_, _| {}).expect("render"))
+        .collect();
     common::assert_clean(&r.gpu);
     images
 }
@@ -47,8 +63,15 @@ fn furnace_converges_to_the_geometric_series() {
     // Without Russian roulette every furnace path carries exactly the truncated series, so the
     // check is to rounding; roulette would add all of the noise (see
     // russian_roulette_leaves_the_mean_unchanged for the furnace with it).
-    let no_roulette = |s: Settings| Settings { roulette_after: None, ..s };
-    let img = &render(&scene, (32, 32), &[no_roulette(settings(32, bounces, LightPaths::All, 7))])[0];
+    let no_roulette = |s: Settings| Settings {
+        roulette_after: None,
+        ..s
+    };
+    let img = &render(
+        &scene,
+        (32, 32),
+        &[no_roulette(settings(32, bounces, LightPaths::All, 7))],
+    )[0];
     let want = emission / (Vec3::ONE - albedo);
     // The estimate keeps the first K + 2 terms E ρ^k of the series.
     let truncation = emission * albedo.powf(bounces as f32 + 2.0) / (Vec3::ONE - albedo);
@@ -80,18 +103,31 @@ fn planes_under_a_constant_sky() {
     // plane that also transmits sees the sky below too, adding τ L. The glossy case checks the
     // Blinn-Phong lobe's importance sampling against quadrature of the BRDF itself.
     let sky = Vec3::new(1.0, 2.0, 0.5);
-    let lambert = |albedo, transmittance| Surface { albedo, specular: Vec3::ZERO, exponent: 1.0, emission: transmittance };
+    let lambert = |albedo, transmittance| Surface {
+        albedo,
+        specular: Vec3::ZERO,
+        exponent: 1.0,
+        emission: transmittance,
+    };
     let cases = [
         lambert(Vec3::new(0.2, 0.5, 0.9), Vec3::ZERO),
         lambert(Vec3::new(0.3, 0.1, 0.5), Vec3::new(0.6, 0.2, 0.1)),
-        Surface { albedo: Vec3::new(0.2, 0.3, 0.1), specular: Vec3::new(0.5, 0.4, 0.3), exponent: 20.0, emission: Vec3::new(0.15, 0.2, 0.25) },
+        Surface {
+            albedo: Vec3::new(0.2, 0.3, 0.1),
+            specular: Vec3::new(0.5, 0.4, 0.3),
+            exponent: 20.0,
+            emission: Vec3::new(0.15, 0.2, 0.25),
+        },
     ];
     // Lobes are chosen by luminance; each must be chosen often enough in 64 samples for the
     // sample variance to see it (a lobe never drawn leaves the mean low with a tiny s.e.).
     for case in cases {
         // `emission` carries the transmittance here (Surface has no such field).
         let (albedo, specular, transmittance) = (case.albedo, case.specular, case.emission);
-        let surface = Surface { emission: Vec3::ZERO, ..case };
+        let surface = Surface {
+            emission: Vec3::ZERO,
+            ..case
+        };
         let scene = parse(&format!(
             r#"{SKY_CAMERA}
 [[materials]]
@@ -110,13 +146,28 @@ material = "ground"
 type = "constant"
 radiance = [{}, {}, {}]
 "#,
-            albedo.x, albedo.y, albedo.z, specular.x, specular.y, specular.z, case.exponent, transmittance.x, transmittance.y, transmittance.z, sky.x, sky.y, sky.z
+            albedo.x,
+            albedo.y,
+            albedo.z,
+            specular.x,
+            specular.y,
+            specular.z,
+            case.exponent,
+            transmittance.x,
+            transmittance.y,
+            transmittance.z,
+            sky.x,
+            sky.y,
+            sky.z
         ));
         let img = &render(&scene, (32, 32), &[settings(64, 4, LightPaths::All, 1)])[0];
         let mut sky_check = Agreement::new("plane under the sky");
         for j in 0..32 {
             for i in 0..32 {
-                assert!(ground_point(&scene, i as f32, j as f32, (32, 32), 150.0).is_some(), "the plane fills the image");
+                assert!(
+                    ground_point(&scene, i as f32, j as f32, (32, 32), 150.0).is_some(),
+                    "the plane fills the image"
+                );
                 if specular == Vec3::ZERO {
                     sky_check.check(img, i, j, (albedo + transmittance) * sky, Vec3::ZERO);
                 } else {
@@ -183,12 +234,17 @@ radiance = [{}, {}, {}]
     for j in 0..size.1 {
         for i in 0..size.0 {
             let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
-            let on_plane = corners.iter().all(|&(a, b)| ground_point(&scene, i as f32 + a, j as f32 + b, size, half - 0.5).is_some());
+            let on_plane = corners
+                .iter()
+                .all(|&(a, b)| ground_point(&scene, i as f32 + a, j as f32 + b, size, half - 0.5).is_some());
             if !on_plane {
                 continue;
             }
             let (_, d) = scene.camera.pixel_center_ray(i, j, size.0, size.1);
-            assert!(d.y < 0.0 && d.dot(Vec3::new(sx, sy, 0.0)) > 0.0, "the ray arrives between the planes");
+            assert!(
+                d.y < 0.0 && d.dot(Vec3::new(sx, sy, 0.0)) > 0.0,
+                "the ray arrives between the planes"
+            );
             plane.check(img, i, j, want, Vec3::ZERO);
         }
     }
@@ -207,13 +263,33 @@ fov_y_deg = 50
 /// what it does not model), box-filtered over each pixel, with every light visited at each
 /// vertex and with one drawn per vertex; the only noise of the first is the pixel jitter.
 fn check_punctual(material: &str, surface: Surface, lights: &str, extra: impl Fn(Vec3) -> Vec3) {
-    check_punctual_with(material, surface, lights, extra, (32, 32), &[LightSelection::Every, LightSelection::One]);
+    check_punctual_with(
+        material,
+        surface,
+        lights,
+        extra,
+        (32, 32),
+        &[LightSelection::Every, LightSelection::One],
+    );
 }
 
-fn check_punctual_with(material: &str, surface: Surface, lights: &str, extra: impl Fn(Vec3) -> Vec3, size: (u32, u32), selections: &[LightSelection]) -> Vec<ReferenceImage> {
+fn check_punctual_with(
+    material: &str,
+    surface: Surface,
+    lights: &str,
+    extra: impl Fn(Vec3) -> Vec3,
+    size: (u32, u32),
+    selections: &[LightSelection],
+) -> Vec<ReferenceImage> {
     let toml = format!("{LIT_PLANE}\n[[materials]]\nname = \"m\"\n{material}\n\n[[objects]]\nmesh = \"plane\"\nsize = 6\nmaterial = \"m\"\n{lights}");
     let scene = parse(&toml);
-    let runs: Vec<Settings> = selections.iter().map(|&light_selection| Settings { light_selection, ..settings(64, 0, LightPaths::Direct, 3) }).collect();
+    let runs: Vec<Settings> = selections
+        .iter()
+        .map(|&light_selection| Settings {
+            light_selection,
+            ..settings(64, 0, LightPaths::Direct, 3)
+        })
+        .collect();
     let imgs = render(&scene, size, &runs);
     let gpu_lights = punctual_lights(&scene);
     let want: Vec<Option<Vec3>> = (0..size.0 * size.1)
@@ -226,12 +302,20 @@ fn check_punctual_with(material: &str, surface: Surface, lights: &str, extra: im
         })
         .collect();
     for (img, selection) in imgs.iter().zip(selections) {
-        let mut agreement = Agreement::new(if *selection == LightSelection::One { "punctual lights, one drawn per vertex" } else { "punctual lights, every one" });
+        let mut agreement = Agreement::new(if *selection == LightSelection::One {
+            "punctual lights, one drawn per vertex"
+        } else {
+            "punctual lights, every one"
+        });
         for (k, want) in want.iter().enumerate() {
             let Some(want) = *want else { continue };
             agreement.check(img, k as u32 % size.0, k as u32 / size.0, want, want * 1e-3);
         }
-        assert!(agreement.pixels > (size.0 * size.1 * 2 / 5) as usize, "most pixels see the plane ({})", agreement.pixels);
+        assert!(
+            agreement.pixels > (size.0 * size.1 * 2 / 5) as usize,
+            "most pixels see the plane ({})",
+            agreement.pixels
+        );
         agreement.assert();
     }
     imgs
@@ -244,22 +328,51 @@ fn check_punctual_with(material: &str, surface: Surface, lights: &str, extra: im
 /// one invocation loop, render in one ray a vertex to their closed-form sum.
 #[test]
 fn one_punctual_light_drawn_per_vertex_is_unbiased_and_follows_the_contribution() {
-    let surface = Surface { albedo: Vec3::splat(0.6), specular: Vec3::splat(0.3), exponent: 16.0, emission: Vec3::ZERO };
+    let surface = Surface {
+        albedo: Vec3::splat(0.6),
+        specular: Vec3::splat(0.3),
+        exponent: 16.0,
+        emission: Vec3::ZERO,
+    };
     let material = "albedo = 0.6\nspecular = 0.3\nexponent = 16";
     let mut lights = String::new();
     for k in 0..20 {
         let (x, z) = ((k % 5) as f32 * 0.8 - 1.6, (k / 5) as f32 * 0.8 - 1.2);
         // Coloured, so that a light can matter to one channel and hardly to another.
-        let intensity = [0.3 + 0.25 * (k % 7) as f32, 0.2 + 0.3 * (k % 3) as f32, 0.05 + 0.4 * (k % 5 == 0) as u32 as f32];
-        lights += &format!("\n[[lights]]\ntype = \"point\"\nposition = [{x}, {}, {z}]\nintensity = {intensity:?}\n", 0.6 + 0.1 * (k % 3) as f32);
+        let intensity = [
+            0.3 + 0.25 * (k % 7) as f32,
+            0.2 + 0.3 * (k % 3) as f32,
+            0.05 + 0.4 * (k % 5 == 0) as u32 as f32,
+        ];
+        lights += &format!(
+            "\n[[lights]]\ntype = \"point\"\nposition = [{x}, {}, {z}]\nintensity = {intensity:?}\n",
+            0.6 + 0.1 * (k % 3) as f32
+        );
     }
-    let imgs = check_punctual_with(material, surface, &lights, |_| Vec3::ZERO, (16, 16), &[LightSelection::Every, LightSelection::One]);
+    let imgs = check_punctual_with(
+        material,
+        surface,
+        &lights,
+        |_| Vec3::ZERO,
+        (16, 16),
+        &[LightSelection::Every, LightSelection::One],
+    );
     let (every, one) = (sample_variance(&imgs[0]), sample_variance(&imgs[1]));
     eprintln!("variance per sample: every light {every:.3e}, one drawn {one:.3e}");
-    assert!(one <= every * 1.02 + 1e-12, "one light drawn in proportion adds no noise on an unshadowed plane: {one:.3e} against {every:.3e}");
+    assert!(
+        one <= every * 1.02 + 1e-12,
+        "one light drawn in proportion adds no noise on an unshadowed plane: {one:.3e} against {every:.3e}"
+    );
 
     let grid = "\n[[light_arrays]]\nname = \"rig\"\ntype = \"point\"\ngrid = [32, 1, 32]\nmin = [-3, 1.5, -3]\nmax = [3, 1.5, 3]\nintensity = 0.004\n";
-    check_punctual_with(material, surface, grid, |_| Vec3::ZERO, (16, 16), &[LightSelection::Auto]);
+    check_punctual_with(
+        material,
+        surface,
+        grid,
+        |_| Vec3::ZERO,
+        (16, 16),
+        &[LightSelection::Auto],
+    );
 }
 
 /// Under shadows and with indirect light (seed 003's slanted polygon under 25 white lights, and
@@ -274,14 +387,31 @@ fn one_punctual_light_drawn_per_vertex_matches_every_light_under_shadows() {
     for (name, lights) in [("many_slanted.toml", 25), ("many_polygon3.toml", 3)] {
         let scene = scene_file(name);
         assert_eq!(punctual_lights(&scene).len(), lights);
-        let with = |light_selection, seed| Settings { light_selection, ..settings(128, 2, LightPaths::All, seed) };
-        let imgs = render(&scene, size, &[with(LightSelection::Every, 1), with(LightSelection::One, 2), with(LightSelection::Auto, 1)]);
+        let with = |light_selection, seed| Settings {
+            light_selection,
+            ..settings(128, 2, LightPaths::All, seed)
+        };
+        let imgs = render(
+            &scene,
+            size,
+            &[
+                with(LightSelection::Every, 1),
+                with(LightSelection::One, 2),
+                with(LightSelection::Auto, 1),
+            ],
+        );
         assert_eq!(imgs[0].mean, imgs[2].mean, "up to 32 lights auto visits every one");
         let (beyond_3, worst, image_z) = two_render_z(&imgs[0], &imgs[1], &vec![true; 256]);
         let cost = sample_variance(&imgs[1]) / sample_variance(&imgs[0]);
         eprintln!("{name}: {beyond_3} of 256 pixels beyond 3 s.e., worst z {worst:.2}, image mean z {image_z:?}; variance per sample one / every {cost:.2}");
-        assert!(beyond_3 <= 5 && worst <= 6.0, "{name}: {beyond_3} pixels beyond 3 s.e., worst z {worst}");
-        assert!(image_z.iter().all(|z| z.abs() <= 4.0), "{name}: image means differ: z {image_z:?}");
+        assert!(
+            beyond_3 <= 5 && worst <= 6.0,
+            "{name}: {beyond_3} pixels beyond 3 s.e., worst z {worst}"
+        );
+        assert!(
+            image_z.iter().all(|z| z.abs() <= 4.0),
+            "{name}: image means differ: z {image_z:?}"
+        );
     }
 }
 
@@ -308,9 +438,19 @@ fn point_light_and_shadow_over_a_plane_direct_only() {
     // Segment or ray against the box grown (or shrunk) by `grow`, for margins at silhouettes.
     let hits_box = |o: Vec3, d: Vec3, t_max: f32, grow: f32| {
         let h = Vec3::splat(half + grow);
-        penumbra::reference::bvh::box_entry(box_center - h, box_center + h, o, penumbra::reference::bvh::safe_inverse(d), t_max).is_some()
+        penumbra::reference::bvh::box_entry(
+            box_center - h,
+            box_center + h,
+            o,
+            penumbra::reference::bvh::safe_inverse(d),
+            t_max,
+        )
+        .is_some()
     };
-    let (mut lit, mut umbra) = (Agreement::new("lit by a point light"), Agreement::new("point light umbra"));
+    let (mut lit, mut umbra) = (
+        Agreement::new("lit by a point light"),
+        Agreement::new("point light umbra"),
+    );
     for j in 0..size.1 {
         for i in 0..size.0 {
             let (mut shadowed, mut unsure) = (0, false);
@@ -325,7 +465,11 @@ fn point_light_and_shadow_over_a_plane_direct_only() {
                 unsure |= blocked != maybe;
                 shadowed += blocked as u32;
                 let r2 = to_light.length_squared();
-                Some(Vec3::splat(if blocked { 0.0 } else { albedo / std::f32::consts::PI * intensity * (to_light.y / r2.sqrt()) / r2 }))
+                Some(Vec3::splat(if blocked {
+                    0.0
+                } else {
+                    albedo / std::f32::consts::PI * intensity * (to_light.y / r2.sqrt()) / r2
+                }))
             });
             let Some(want) = want else { continue };
             match shadowed {
@@ -336,14 +480,24 @@ fn point_light_and_shadow_over_a_plane_direct_only() {
             }
         }
     }
-    assert!(lit.pixels > 400 && umbra.pixels >= 4, "{} lit pixels, {} in the umbra", lit.pixels, umbra.pixels);
+    assert!(
+        lit.pixels > 400 && umbra.pixels >= 4,
+        "{} lit pixels, {} in the umbra",
+        lit.pixels,
+        umbra.pixels
+    );
     lit.assert();
     umbra.assert();
 }
 
 #[test]
 fn spot_directional_transmission_and_blinn_phong_direct_only() {
-    let surface = Surface { albedo: Vec3::new(0.3, 0.2, 0.1), specular: Vec3::splat(0.5), exponent: 32.0, emission: Vec3::ZERO };
+    let surface = Surface {
+        albedo: Vec3::new(0.3, 0.2, 0.1),
+        specular: Vec3::splat(0.5),
+        exponent: 32.0,
+        emission: Vec3::ZERO,
+    };
     let lights = r#"
 [[lights]]
 type = "spot"
@@ -364,12 +518,21 @@ position = [0.3, -0.8, 0.1]
 intensity = [3, 6, 9]
 "#;
     // The light under the plane reaches the viewer's side through diffuse transmission τ/π.
-    let (transmittance, below, intensity) = (Vec3::new(0.2, 0.3, 0.4), Vec3::new(0.3, -0.8, 0.1), Vec3::new(3.0, 6.0, 9.0));
+    let (transmittance, below, intensity) = (
+        Vec3::new(0.2, 0.3, 0.4),
+        Vec3::new(0.3, -0.8, 0.1),
+        Vec3::new(3.0, 6.0, 9.0),
+    );
     let through = |p: Vec3| {
         let d = below - p;
         transmittance / std::f32::consts::PI * intensity * (-d.y / d.length()) / d.length_squared()
     };
-    check_punctual("albedo = [0.3, 0.2, 0.1]\nspecular = 0.5\nexponent = 32\ntransmittance = [0.2, 0.3, 0.4]", surface, lights, through);
+    check_punctual(
+        "albedo = [0.3, 0.2, 0.1]\nspecular = 0.5\nexponent = 32\ntransmittance = [0.2, 0.3, 0.4]",
+        surface,
+        lights,
+        through,
+    );
 }
 
 const QUAD_OVER_PLANE: &str = r#"
@@ -398,7 +561,12 @@ radiance = [5.0, 4.0, 3.0]
 /// The plane's closed form at pixel (i, j) under QUAD_OVER_PLANE, box-filtered; None where the
 /// camera sees the light.
 fn quad_over_plane_want(scene: &Scene, i: u32, j: u32, size: (u32, u32)) -> Option<Vec3> {
-    let (corner, u, v, radiance) = (Vec3::new(-0.4, 1.2, -0.3), Vec3::new(0.8, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.6), Vec3::new(5.0, 4.0, 3.0));
+    let (corner, u, v, radiance) = (
+        Vec3::new(-0.4, 1.2, -0.3),
+        Vec3::new(0.8, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 0.6),
+        Vec3::new(5.0, 4.0, 3.0),
+    );
     let verts = [corner, corner + u, corner + u + v, corner + v];
     pixel_average(i, j, 8, |x, y| {
         // The camera is below the light and may see it; those pixels are left out.
@@ -446,7 +614,11 @@ fn error_over_seeds(imgs: &[ReferenceImage], wants: &[((u32, u32), Vec3)]) -> (f
             let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
             mse += xs.iter().map(|x| ((x - w) / w).powi(2)).sum::<f64>() / n;
             z2 += (m - w).powi(2) / (var / n + (1e-4 * w).powi(2));
-            reported += imgs.iter().map(|img| (img.standard_error.get(i, j)[c] as f64 / w).powi(2)).sum::<f64>() / n;
+            reported += imgs
+                .iter()
+                .map(|img| (img.standard_error.get(i, j)[c] as f64 / w).powi(2))
+                .sum::<f64>()
+                / n;
             count += 1.0;
         }
     }
@@ -463,8 +635,14 @@ fn sobol_sampler_is_unbiased_and_has_less_error_than_independent_samples() {
     let scene = parse(QUAD_OVER_PLANE);
     let size = (24, 24);
     let (seeds, spp) = (6, 32);
-    let run = |sampler, seed| Settings { sampler, ..settings(spp, 0, LightPaths::Direct, seed) };
-    let runs: Vec<Settings> = [Sampler::Independent, Sampler::Sobol].into_iter().flat_map(|s| (1..=seeds).map(move |seed| run(s, seed))).collect();
+    let run = |sampler, seed| Settings {
+        sampler,
+        ..settings(spp, 0, LightPaths::Direct, seed)
+    };
+    let runs: Vec<Settings> = [Sampler::Independent, Sampler::Sobol]
+        .into_iter()
+        .flat_map(|s| (1..=seeds).map(move |seed| run(s, seed)))
+        .collect();
     let imgs = render(&scene, size, &runs);
     let (independent, sobol) = imgs.split_at(seeds as usize);
     let mut wants = Vec::new();
@@ -481,11 +659,20 @@ fn sobol_sampler_is_unbiased_and_has_less_error_than_independent_samples() {
     eprintln!("independent: relative MSE {mse_i:.3e}, mean z² {z2_i:.2}, reported {reported_i:.3e}");
     eprintln!("sobol: relative MSE {mse_s:.3e}, mean z² {z2_s:.2}, reported {reported_s:.3e}");
     for (name, z2) in [("independent", z2_i), ("sobol", z2_s)] {
-        assert!(z2 < 3.0, "{name}: the seeds' average is {z2:.2} of its error² from the closed form: biased");
+        assert!(
+            z2 < 3.0,
+            "{name}: the seeds' average is {z2:.2} of its error² from the closed form: biased"
+        );
     }
-    assert!(mse_s * 4.0 < mse_i, "sobol's error {mse_s:.3e} should be well below independent samples' {mse_i:.3e}");
+    assert!(
+        mse_s * 4.0 < mse_i,
+        "sobol's error {mse_s:.3e} should be well below independent samples' {mse_i:.3e}"
+    );
     for (name, reported, mse) in [("independent", reported_i, mse_i), ("sobol", reported_s, mse_s)] {
-        assert!(reported > 0.7 * mse && reported < 1.4 * mse, "{name}: the standard-error image's {reported:.3e} is not the error {mse:.3e}");
+        assert!(
+            reported > 0.7 * mse && reported < 1.4 * mse,
+            "{name}: the standard-error image's {reported:.3e} is not the error {mse:.3e}"
+        );
     }
 }
 
@@ -497,9 +684,19 @@ fn sobol_sampler_is_unbiased_and_has_less_error_than_independent_samples() {
 fn sobol_sampler_renders_past_a_storage_buffer_range() {
     let scene = parse(QUAD_OVER_PLANE);
     let size = (1100, 1000);
-    let img = &render(&scene, size, &[Settings { sampler: Sampler::Sobol, ..settings(2, 0, LightPaths::Direct, 1) }])[0];
+    let img = &render(
+        &scene,
+        size,
+        &[Settings {
+            sampler: Sampler::Sobol,
+            ..settings(2, 0, LightPaths::Direct, 1)
+        }],
+    )[0];
     let (mean, se) = img.average();
-    assert!((0..3).all(|c| mean[c] > 0.0 && se[c].is_finite() && se[c] > 0.0), "mean {mean:?}, standard error {se:?}");
+    assert!(
+        (0..3).all(|c| mean[c] > 0.0 && se[c].is_finite() && se[c] > 0.0),
+        "mean {mean:?}, standard error {se:?}"
+    );
 }
 
 /// With bounces (BSDF draws at every depth, light draws at every vertex) the Sobol sampler's
@@ -511,7 +708,10 @@ fn sobol_sampler_with_bounces_agrees_with_independent_samples() {
     let size = (16, 16);
     let (seeds, spp, long) = (6, 128, 1024);
     let mut runs = vec![settings(long, 3, LightPaths::All, 100)];
-    runs.extend((1..=seeds).map(|seed| Settings { sampler: Sampler::Sobol, ..settings(spp, 3, LightPaths::All, seed) }));
+    runs.extend((1..=seeds).map(|seed| Settings {
+        sampler: Sampler::Sobol,
+        ..settings(spp, 3, LightPaths::All, seed)
+    }));
     let imgs = render(&scene, size, &runs);
     let (truth, sobol) = (&imgs[0], &imgs[1..]);
     let n = seeds as f64;
@@ -534,8 +734,14 @@ fn sobol_sampler_with_bounces_agrees_with_independent_samples() {
     }
     let (z2, ratio) = (z2 / count, mse_i / mse_s);
     eprintln!("mean z² {z2:.2}; independent over sobol variance at {spp} spp: {ratio:.2}");
-    assert!(z2 < 3.0, "sobol renders stand {z2:.2} error² from the long independent render: biased");
-    assert!(ratio > 1.3, "sobol's variance should be below independent samples' ({ratio:.2})");
+    assert!(
+        z2 < 3.0,
+        "sobol renders stand {z2:.2} error² from the long independent render: biased"
+    );
+    assert!(
+        ratio > 1.3,
+        "sobol's variance should be below independent samples' ({ratio:.2})"
+    );
 }
 
 /// A ceiling of 100 small coloured quad lights over a plane: every light visited and one drawn
@@ -549,25 +755,54 @@ fn many_quad_lights_every_one_or_one_drawn_per_vertex_give_the_polygon_formula()
     let mut quads = Vec::new();
     for k in 0..100 {
         let corner = Vec3::new(-3.0 + 0.6 * (k % 10) as f32, 2.0, -3.0 + 0.6 * (k / 10) as f32);
-        let radiance = [Vec3::new(6.0, 1.0, 1.0), Vec3::new(1.0, 6.0, 1.0), Vec3::new(1.0, 1.0, 6.0), Vec3::new(3.0, 3.0, 3.0)][k % 4];
+        let radiance = [
+            Vec3::new(6.0, 1.0, 1.0),
+            Vec3::new(1.0, 6.0, 1.0),
+            Vec3::new(1.0, 1.0, 6.0),
+            Vec3::new(3.0, 3.0, 3.0),
+        ][k % 4];
         toml += &format!(
             "\n[[lights]]\ntype = \"quad\"\ncorner = [{}, {}, {}]\nedge_u = [0.2, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.2]\nradiance = [{}, {}, {}]\n",
             corner.x, corner.y, corner.z, radiance.x, radiance.y, radiance.z
         );
-        quads.push(([corner, corner + Vec3::new(0.2, 0.0, 0.0), corner + Vec3::new(0.2, 0.0, 0.2), corner + Vec3::new(0.0, 0.0, 0.2)], radiance));
+        quads.push((
+            [
+                corner,
+                corner + Vec3::new(0.2, 0.0, 0.0),
+                corner + Vec3::new(0.2, 0.0, 0.2),
+                corner + Vec3::new(0.0, 0.0, 0.2),
+            ],
+            radiance,
+        ));
     }
     let scene = parse(&toml);
     let size = (16, 16);
-    let with = |light_selection, seed| Settings { light_selection, ..settings(64, 0, LightPaths::Direct, seed) };
-    let imgs = render(&scene, size, &[with(LightSelection::Every, 1), with(LightSelection::One, 2), with(LightSelection::Auto, 2)]);
+    let with = |light_selection, seed| Settings {
+        light_selection,
+        ..settings(64, 0, LightPaths::Direct, seed)
+    };
+    let imgs = render(
+        &scene,
+        size,
+        &[
+            with(LightSelection::Every, 1),
+            with(LightSelection::One, 2),
+            with(LightSelection::Auto, 2),
+        ],
+    );
     assert_eq!(imgs[1].mean, imgs[2].mean, "100 lights are many: auto draws one");
-    for (img, what) in imgs.iter().zip(["plane under 100 quads, every one", "plane under 100 quads, one drawn"]) {
+    for (img, what) in imgs
+        .iter()
+        .zip(["plane under 100 quads, every one", "plane under 100 quads, one drawn"])
+    {
         let mut plane = Agreement::new(what);
         for j in 0..size.1 {
             for i in 0..size.0 {
                 let want = pixel_average(i, j, 4, |x, y| {
                     let p = ground_point(&scene, x, y, size, 9.0)?;
-                    Some(quads.iter().fold(Vec3::ZERO, |sum, (verts, radiance)| sum + 0.7 / std::f32::consts::PI * *radiance * polygon_irradiance(p, Vec3::Y, verts)))
+                    Some(quads.iter().fold(Vec3::ZERO, |sum, (verts, radiance)| {
+                        sum + 0.7 / std::f32::consts::PI * *radiance * polygon_irradiance(p, Vec3::Y, verts)
+                    }))
                 });
                 if let Some(want) = want {
                     plane.check(img, i, j, want, want * 2e-3);
@@ -617,7 +852,11 @@ radiance = [4.0, 3.0, 2.0]
         let b = oc.dot(d);
         b * b - (oc.length_squared() - r * r) >= 0.0 && b < 0.0
     };
-    let (mut on_light, mut on_plane, mut nearest_axis) = (Agreement::new("sphere light seen directly"), Agreement::new("plane under a sphere light"), (f32::MAX, 0, 0));
+    let (mut on_light, mut on_plane, mut nearest_axis) = (
+        Agreement::new("sphere light seen directly"),
+        Agreement::new("plane under a sphere light"),
+        (f32::MAX, 0, 0),
+    );
     for j in 0..size.1 {
         for i in 0..size.0 {
             if pixel_average(i, j, 6, |x, y| hits_sphere(x, y, 0.97 * radius).then_some(Vec3::ONE)).is_some() {
@@ -641,14 +880,28 @@ radiance = [4.0, 3.0, 2.0]
             }
         }
     }
-    assert!(on_light.pixels > 10 && on_plane.pixels > 300, "{} pixels on the light, {} on the plane", on_light.pixels, on_plane.pixels);
+    assert!(
+        on_light.pixels > 10 && on_plane.pixels > 300,
+        "{} pixels on the light, {} on the plane",
+        on_light.pixels,
+        on_plane.pixels
+    );
     on_light.assert();
     on_plane.assert();
     let (r, i, j) = nearest_axis;
-    assert!(r < 0.1, "a pixel looks almost straight below the light ({r} m off the axis)");
+    assert!(
+        r < 0.1,
+        "a pixel looks almost straight below the light ({r} m off the axis)"
+    );
     let d = center.y;
     let mut axis = Agreement::new("on the axis");
-    axis.check(img, i, j, albedo * radiance * (radius / d).powi(2), albedo * radiance * 0.02);
+    axis.check(
+        img,
+        i,
+        j,
+        albedo * radiance * (radius / d).powi(2),
+        albedo * radiance * 0.02,
+    );
     axis.assert();
 }
 
@@ -657,16 +910,26 @@ fn error_falls_as_one_over_sqrt_spp() {
     let scene = scene_file("cornell.toml");
     let size = (32, 32);
     // Independent seeds: renders sharing a seed share their first samples.
-    let runs = [settings(8, 3, LightPaths::All, 1), settings(32, 3, LightPaths::All, 2), settings(512, 3, LightPaths::All, 3)];
+    let runs = [
+        settings(8, 3, LightPaths::All, 1),
+        settings(32, 3, LightPaths::All, 2),
+        settings(512, 3, LightPaths::All, 3),
+    ];
     let imgs = render(&scene, size, &runs);
     // The ~20 pixels straddling the light's outline hold nearly all the squared error at these
     // sample counts; with so few terms the RMSE ratio would scatter from 1.2 to 3.5 between seeds.
     let keep = off_light_outline(&scene, size);
     assert!(keep.iter().filter(|k| !**k).count() < 40);
-    let (e8, e32) = (rmse(&imgs[0].mean, &imgs[2].mean, Some(&keep)), rmse(&imgs[1].mean, &imgs[2].mean, Some(&keep)));
+    let (e8, e32) = (
+        rmse(&imgs[0].mean, &imgs[2].mean, Some(&keep)),
+        rmse(&imgs[1].mean, &imgs[2].mean, Some(&keep)),
+    );
     // Expected sqrt((1/8 + 1/512) / (1/32 + 1/512)) ≈ 1.96, the reference's own noise included.
     let ratio = e8 / e32;
-    assert!((1.6..=2.5).contains(&ratio), "RMSE at 8 spp {e8}, at 32 spp {e32}: ratio {ratio}");
+    assert!(
+        (1.6..=2.5).contains(&ratio),
+        "RMSE at 8 spp {e8}, at 32 spp {e32}: ratio {ratio}"
+    );
 }
 
 /// Per channel, how two independent renders of the same estimand differ in units of their
@@ -675,7 +938,12 @@ fn error_falls_as_one_over_sqrt_spp() {
 fn two_render_z(a: &ReferenceImage, b: &ReferenceImage, keep: &[bool]) -> (usize, f64, [f64; 3]) {
     let (mut beyond_3, mut worst) = (0, 0.0f64);
     let (mut diff, mut var) = ([0.0f64; 3], [0.0f64; 3]);
-    let pixels = a.mean.pixels.iter().zip(&b.mean.pixels).zip(a.standard_error.pixels.iter().zip(&b.standard_error.pixels));
+    let pixels = a
+        .mean
+        .pixels
+        .iter()
+        .zip(&b.mean.pixels)
+        .zip(a.standard_error.pixels.iter().zip(&b.standard_error.pixels));
     for (((ma, mb), (sa, sb)), &kept) in pixels.zip(keep) {
         let mut pixel_z = 0.0f64;
         for c in 0..3 {
@@ -703,7 +971,13 @@ fn two_render_z(a: &ReferenceImage, b: &ReferenceImage, keep: &[bool]) -> (usize
 fn sample_variance(img: &ReferenceImage) -> f64 {
     let w = [0.2126, 0.7152, 0.0722];
     let n = img.standard_error.pixels.len() as f64;
-    img.standard_error.pixels.iter().map(|p| (0..3).map(|c| w[c] * (p[c] as f64).powi(2)).sum::<f64>()).sum::<f64>() / n * img.spp as f64
+    img.standard_error
+        .pixels
+        .iter()
+        .map(|p| (0..3).map(|c| w[c] * (p[c] as f64).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        / n
+        * img.spp as f64
 }
 
 /// The relative variance of one sample that the reference prints (and its efficiency is built
@@ -716,14 +990,33 @@ fn relative_variance_per_sample_predicts_the_relative_mse_against_the_truth() {
     let furnace = scene_file("furnace.toml");
     let m = &furnace.materials[0];
     let (size, spp, bounces) = ((32u32, 32u32), 16, 14);
-    let img = &render(&furnace, size, &[Settings { roulette_after: Some(1), ..settings(spp, bounces, LightPaths::All, 11) }])[0];
+    let img = &render(
+        &furnace,
+        size,
+        &[Settings {
+            roulette_after: Some(1),
+            ..settings(spp, bounces, LightPaths::All, 11)
+        }],
+    )[0];
     let truth = (0..bounces + 2).fold(Vec3::ZERO, |sum, k| sum + m.emission * m.albedo.powf(k as f32));
     let eps = penumbra::metrics::stats::REL_MSE_EPSILON;
-    let rel_mse =
-        img.mean.pixels.iter().map(|p| (0..3).map(|c| (p[c] as f64 - truth[c] as f64).powi(2) / ((truth[c] as f64).powi(2) + eps)).sum::<f64>()).sum::<f64>() / (3 * img.mean.pixels.len()) as f64;
+    let rel_mse = img
+        .mean
+        .pixels
+        .iter()
+        .map(|p| {
+            (0..3)
+                .map(|c| (p[c] as f64 - truth[c] as f64).powi(2) / ((truth[c] as f64).powi(2) + eps))
+                .sum::<f64>()
+        })
+        .sum::<f64>()
+        / (3 * img.mean.pixels.len()) as f64;
     let predicted = img.relative_variance_per_sample() / spp as f64;
     eprintln!("relative MSE against the series {rel_mse:.4e}, predicted {predicted:.4e}");
-    assert!(rel_mse > 0.0 && (0.75..1.33).contains(&(predicted / rel_mse)), "predicted {predicted:.4e} against {rel_mse:.4e}");
+    assert!(
+        rel_mse > 0.0 && (0.75..1.33).contains(&(predicted / rel_mse)),
+        "predicted {predicted:.4e} against {rel_mse:.4e}"
+    );
 }
 
 /// Russian roulette is unbiased: with it the Cornell box (8 bounces) renders the same mean as
@@ -736,25 +1029,44 @@ fn relative_variance_per_sample_predicts_the_relative_mse_against_the_truth() {
 fn russian_roulette_leaves_the_mean_unchanged() {
     let scene = scene_file("cornell.toml");
     let size = (16, 16);
-    let with = |roulette_after, seed| Settings { roulette_after, ..settings(128, 8, LightPaths::All, seed) };
+    let with = |roulette_after, seed| Settings {
+        roulette_after,
+        ..settings(128, 8, LightPaths::All, seed)
+    };
     // Independent seeds: renders sharing a seed share their first interactions.
     let imgs = render(&scene, size, &[with(None, 1), with(Some(1), 2), with(Some(1), 1)]);
     let (plain, roulette, same_seed) = (&imgs[0], &imgs[1], &imgs[2]);
-    assert_ne!(plain.mean, same_seed.mean, "roulette reaches the tracer: the same seed renders differently");
+    assert_ne!(
+        plain.mean, same_seed.mean,
+        "roulette reaches the tracer: the same seed renders differently"
+    );
     // The mean over the pixels clear of the light's outline: the few that straddle it mix the
     // light's radiance with the room's and would hold nearly all of the image mean's variance.
     let (beyond_3, worst, image_z) = two_render_z(plain, roulette, &off_light_outline(&scene, size));
     let cost = sample_variance(roulette) / sample_variance(plain);
     eprintln!("Cornell box: {beyond_3} of 256 pixels beyond 3 s.e., worst z {worst:.2}, image mean z {image_z:?}; variance per sample with roulette / without {cost:.3}");
-    assert!(beyond_3 <= 5 && worst <= 6.0, "{beyond_3} pixels beyond 3 s.e., worst z {worst}");
-    assert!(image_z.iter().all(|z| z.abs() <= 4.0), "image means differ: z {image_z:?}");
+    assert!(
+        beyond_3 <= 5 && worst <= 6.0,
+        "{beyond_3} pixels beyond 3 s.e., worst z {worst}"
+    );
+    assert!(
+        image_z.iter().all(|z| z.abs() <= 4.0),
+        "image means differ: z {image_z:?}"
+    );
     // Survival in proportion to the throughput costs little variance (0.98 measured: noise).
     assert!(cost < 1.3, "roulette multiplies the variance by {cost}");
 
     let furnace = scene_file("furnace.toml");
     let m = &furnace.materials[0];
     let bounces = 14;
-    let img = &render(&furnace, size, &[Settings { roulette_after: Some(1), ..settings(64, bounces, LightPaths::All, 5) }])[0];
+    let img = &render(
+        &furnace,
+        size,
+        &[Settings {
+            roulette_after: Some(1),
+            ..settings(64, bounces, LightPaths::All, 5)
+        }],
+    )[0];
     // The first K + 2 terms of E (1 + ρ + ρ² + …).
     let truncated = (0..bounces + 2).fold(Vec3::ZERO, |sum, k| sum + m.emission * m.albedo.powf(k as f32));
     let mut agreement = Agreement::new("furnace with roulette");
@@ -763,19 +1075,46 @@ fn russian_roulette_leaves_the_mean_unchanged() {
             agreement.check(img, i, j, truncated, Vec3::ZERO);
         }
     }
-    assert!(img.standard_error.pixels.iter().all(|p| p[0] > 0.0), "roulette makes the furnace noisy: it was used");
+    assert!(
+        img.standard_error.pixels.iter().all(|p| p[0] > 0.0),
+        "roulette makes the furnace noisy: it was used"
+    );
     agreement.assert();
 
     // With the Sobol sampler roulette's draws are stratified per depth: still the truncated
     // series (the image mean, within 4 of its standard error), with less variance.
-    let sobol = |seed| Settings { roulette_after: Some(1), sampler: Sampler::Sobol, ..settings(256, bounces, LightPaths::All, seed) };
-    let imgs = render(&furnace, size, &[Settings { sampler: Sampler::Independent, ..sobol(6) }, sobol(6)]);
+    let sobol = |seed| Settings {
+        roulette_after: Some(1),
+        sampler: Sampler::Sobol,
+        ..settings(256, bounces, LightPaths::All, seed)
+    };
+    let imgs = render(
+        &furnace,
+        size,
+        &[
+            Settings {
+                sampler: Sampler::Independent,
+                ..sobol(6)
+            },
+            sobol(6),
+        ],
+    );
     let ((_, independent), (mean, se)) = (imgs[0].average(), imgs[1].average());
     for c in 0..3 {
         let z = (mean[c] - truncated[c] as f64) / se[c];
         eprintln!("furnace, sobol: channel {c}: mean {:.6} against {:.6}, z {z:.2}; standard error {:.3e} against independent samples' {:.3e}", mean[c], truncated[c], se[c], independent[c]);
-        assert!(z.abs() <= 4.0, "channel {c}: the Sobol furnace's mean {} is {z:.1} standard errors from {}", mean[c], truncated[c]);
-        assert!(se[c] < 0.8 * independent[c], "channel {c}: stratified roulette should lower the error ({:.3e} against {:.3e})", se[c], independent[c]);
+        assert!(
+            z.abs() <= 4.0,
+            "channel {c}: the Sobol furnace's mean {} is {z:.1} standard errors from {}",
+            mean[c],
+            truncated[c]
+        );
+        assert!(
+            se[c] < 0.8 * independent[c],
+            "channel {c}: stratified roulette should lower the error ({:.3e} against {:.3e})",
+            se[c],
+            independent[c]
+        );
     }
 }
 
@@ -798,10 +1137,20 @@ fn reported_standard_error_matches_the_spread_across_seeds() {
 fn standard_error_against_spread(sampler: Sampler) {
     let scene = scene_file("cornell.toml");
     let spp = 1000;
-    let one_batch = |seed| Settings { batching: Batching::Fixed(spp), sampler, ..settings(spp, 3, LightPaths::All, seed) };
+    let one_batch = |seed| Settings {
+        batching: Batching::Fixed(spp),
+        sampler,
+        ..settings(spp, 3, LightPaths::All, seed)
+    };
     let mut runs: Vec<Settings> = (1..=10).map(one_batch).collect();
-    runs.push(Settings { batching: Batching::Fixed(16), ..one_batch(1) });
-    runs.push(Settings { sampler, ..settings(spp, 3, LightPaths::All, 1) });
+    runs.push(Settings {
+        batching: Batching::Fixed(16),
+        ..one_batch(1)
+    });
+    runs.push(Settings {
+        sampler,
+        ..settings(spp, 3, LightPaths::All, 1)
+    });
     let mut imgs = render(&scene, (1, 1), &runs);
     let (adaptive, small_batches) = (imgs.pop().unwrap(), imgs.pop().unwrap());
     let n = imgs.len() as f64;
@@ -809,13 +1158,24 @@ fn standard_error_against_spread(sampler: Sampler) {
         let means: Vec<f64> = imgs.iter().map(|i| i.mean.get(0, 0)[c] as f64).collect();
         let m = means.iter().sum::<f64>() / n;
         let spread = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        let reported = (imgs.iter().map(|i| (i.standard_error.get(0, 0)[c] as f64).powi(2)).sum::<f64>() / n).sqrt();
+        let reported = (imgs
+            .iter()
+            .map(|i| (i.standard_error.get(0, 0)[c] as f64).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
         let ratio = spread / reported;
-        eprintln!("channel {c}: spread of means {spread:.3e}, reported standard error {reported:.3e}, ratio {ratio:.2}");
+        eprintln!(
+            "channel {c}: spread of means {spread:.3e}, reported standard error {reported:.3e}, ratio {ratio:.2}"
+        );
         assert!((0.35..=2.5).contains(&ratio), "channel {c}: means {means:?} spread {spread:.3e}, reported standard error {reported:.3e} (ratio {ratio:.2})");
     }
     for other in [&small_batches, &adaptive] {
-        assert_eq!((&other.mean, &other.standard_error), (&imgs[0].mean, &imgs[0].standard_error), "batches of 16 or adaptive give the one-batch render");
+        assert_eq!(
+            (&other.mean, &other.standard_error),
+            (&imgs[0].mean, &imgs[0].standard_error),
+            "batches of 16 or adaptive give the one-batch render"
+        );
     }
 }
 
@@ -828,25 +1188,45 @@ fn direct_plus_indirect_is_everything_and_batching_changes_nothing() {
 
 fn direct_plus_indirect_and_batching(sampler: Sampler) {
     let scene = scene_file("cornell.toml");
-    let with = |paths| Settings { sampler, ..settings(6, 3, paths, 9) };
-    let batched = |batching| Settings { batching, ..with(LightPaths::All) };
-    let runs = [batched(Batching::Fixed(1)), batched(Batching::Fixed(4)), with(LightPaths::Direct), with(LightPaths::Indirect)];
+    let with = |paths| Settings {
+        sampler,
+        ..settings(6, 3, paths, 9)
+    };
+    let batched = |batching| Settings {
+        batching,
+        ..with(LightPaths::All)
+    };
+    let runs = [
+        batched(Batching::Fixed(1)),
+        batched(Batching::Fixed(4)),
+        with(LightPaths::Direct),
+        with(LightPaths::Indirect),
+    ];
     let imgs = render(&scene, (16, 16), &runs);
-    assert_eq!(imgs[0].mean, imgs[1].mean, "samples do not depend on how they are batched");
+    assert_eq!(
+        imgs[0].mean, imgs[1].mean,
+        "samples do not depend on how they are batched"
+    );
     assert_eq!(imgs[0].standard_error, imgs[1].standard_error);
     let (all, direct, indirect) = (&imgs[0].mean, &imgs[2].mean, &imgs[3].mean);
     let (mut some_direct, mut some_indirect) = (false, false);
     for ((a, d), n) in all.pixels.iter().zip(&direct.pixels).zip(&indirect.pixels) {
         for c in 0..3 {
             // The same seed draws the same first interaction in all three estimators.
-            assert!((a[c] - d[c] - n[c]).abs() <= 1e-4 * a[c].abs() + 1e-6, "{a:?} != {d:?} + {n:?}");
+            assert!(
+                (a[c] - d[c] - n[c]).abs() <= 1e-4 * a[c].abs() + 1e-6,
+                "{a:?} != {d:?} + {n:?}"
+            );
             some_direct |= d[c] > 0.0;
             some_indirect |= n[c] > 0.0;
         }
     }
     assert!(some_direct && some_indirect);
     let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (4, 4)).expect("reference renderer");
-    let e = r.render(&settings(1, 0, LightPaths::Indirect, 0), &mut |_, _| {}).expect_err("--indirect-only with 0 bounces is an error").to_string();
+    let e = r
+        .render(&settings(1, 0, LightPaths::Indirect, 0), &mut |_, _| {})
+        .expect_err("--indirect-only with 0 bounces is an error")
+        .to_string();
     assert!(e.contains("--indirect-only") && e.contains("--bounces"), "{e}");
     common::assert_clean(&r.gpu);
 }
@@ -869,7 +1249,10 @@ fn same_seed_gives_identical_files_and_another_seed_differs() {
     // `run` fails when the validation layer reported anything.
     for (path, seed) in paths.iter().zip([3, 3, 4]) {
         let report = penumbra::reference::run(&cli_options("cornell.toml", path, seed)).expect("reference run");
-        assert_eq!(report.written, vec![path.clone(), penumbra::reference::stderr_path(path)]);
+        assert_eq!(
+            report.written,
+            vec![path.clone(), penumbra::reference::stderr_path(path)]
+        );
     }
     let bytes = |p: &Path| std::fs::read(p).expect("written");
     let stderr = |p: &Path| bytes(&penumbra::reference::stderr_path(p));
@@ -884,20 +1267,51 @@ fn command_line_renders_the_furnace_and_rejects_bad_input() {
     let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
     let furnace = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/furnace.toml");
     let penumbra = |args: &[&str]| {
-        let mut all = vec!["reference", furnace.to_str().expect("utf-8 path"), "--device", &device, "--validation"];
+        let mut all = vec![
+            "reference",
+            furnace.to_str().expect("utf-8 path"),
+            "--device",
+            &device,
+            "--validation",
+        ];
         all.extend_from_slice(args);
-        std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&all).output().expect("run penumbra")
+        std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .args(&all)
+            .output()
+            .expect("run penumbra")
     };
     // No roulette: the furnace is then noise-free (every path carries the truncated series).
-    let o = penumbra(&["--size", "8x8", "--spp", "3", "--bounces", "14", "--roulette-after", "off", "--light-selection", "one", "--sampler", "sobol", "-o", out.to_str().expect("utf-8 path")]);
+    let o = penumbra(&[
+        "--size",
+        "8x8",
+        "--spp",
+        "3",
+        "--bounces",
+        "14",
+        "--roulette-after",
+        "off",
+        "--light-selection",
+        "one",
+        "--sampler",
+        "sobol",
+        "-o",
+        out.to_str().expect("utf-8 path"),
+    ]);
     let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{stdout}\n{stderr}");
     // The summary goes to stdout; progress lines only to a terminal, so a pipe gets none.
-    assert!(stdout.contains("samples/s") && !stderr.contains("spp"), "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("samples/s") && !stderr.contains("spp"),
+        "{stdout}\n{stderr}"
+    );
     let mean = HdrImage::read_exr(&out).expect("mean EXR");
     let se = HdrImage::read_exr(&penumbra::reference::stderr_path(&out)).expect("standard-error EXR");
     assert_eq!((mean.width, mean.height, se.width), (8, 8, 8));
-    assert!(mean.pixels.iter().all(|p| (p[0] - 1.0).abs() < 1e-3), "{:?}", mean.pixels[0]);
+    assert!(
+        mean.pixels.iter().all(|p| (p[0] - 1.0).abs() < 1e-3),
+        "{:?}",
+        mean.pixels[0]
+    );
 
     for (args, expect) in [
         (&["-o", "x.png"][..], "OpenEXR"),
@@ -947,7 +1361,10 @@ fn albedo_and_specular_maps_give_each_texel_region_its_closed_form() {
     // Albedo bytes are sRGB, specular bytes linear: each quadrant a different known surface.
     let albedo_bytes = [[200, 64, 16], [32, 128, 240], [250, 250, 250], [10, 90, 160]];
     let specular_bytes = [[51, 51, 51], [255, 255, 255], [102, 102, 102], [0, 0, 0]];
-    let (albedo_png, specular_png) = (quadrant_png("quad-albedo.png", albedo_bytes), quadrant_png("quad-specular.png", specular_bytes));
+    let (albedo_png, specular_png) = (
+        quadrant_png("quad-albedo.png", albedo_bytes),
+        quadrant_png("quad-specular.png", specular_bytes),
+    );
     let (base_albedo, base_specular, exponent) = (Vec3::new(0.9, 0.8, 0.7), 0.5, 16.0);
     // The highlight's mirror point lies in the top-right quadrant (u ≈ 0.66, v ≈ 0.30).
     let toml = format!(
@@ -961,7 +1378,10 @@ fn albedo_and_specular_maps_give_each_texel_region_its_closed_form() {
     // The plane's uvs as the tracer reads them: u = (x + 3)/6, v = (z + 3)/6.
     let mesh = scene.objects[0].load_mesh(Path::new(".")).unwrap();
     for (p, uv) in mesh.positions.iter().zip(&mesh.uvs) {
-        assert!((uv.x - (p.x + 3.0) / 6.0).abs() < 1e-6 && (uv.y - (p.z + 3.0) / 6.0).abs() < 1e-6, "{p} has uv {uv}");
+        assert!(
+            (uv.x - (p.x + 3.0) / 6.0).abs() < 1e-6 && (uv.y - (p.z + 3.0) / 6.0).abs() < 1e-6,
+            "{p} has uv {uv}"
+        );
     }
     let surface_of = |q: usize| Surface {
         albedo: base_albedo * Vec3::from(albedo_bytes[q].map(penumbra::reference::srgb_decode)),
@@ -978,23 +1398,59 @@ fn albedo_and_specular_maps_give_each_texel_region_its_closed_form() {
         for i in 0..size.0 {
             // The plane's image of a pixel is convex, so its four corners in one pure quadrant
             // put the whole pixel there.
-            let corner_quadrant = |x: u32, y: u32| ground_point(&scene, x as f32, y as f32, size, 3.0).and_then(|p| pure_quadrant((p.x + 3.0) / 6.0, (p.z + 3.0) / 6.0));
+            let corner_quadrant = |x: u32, y: u32| {
+                ground_point(&scene, x as f32, y as f32, size, 3.0)
+                    .and_then(|p| pure_quadrant((p.x + 3.0) / 6.0, (p.z + 3.0) / 6.0))
+            };
             let Some(q) = corner_quadrant(i, j) else { continue };
-            if [(i + 1, j), (i, j + 1), (i + 1, j + 1)].into_iter().any(|(x, y)| corner_quadrant(x, y) != Some(q)) {
+            if [(i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                .into_iter()
+                .any(|(x, y)| corner_quadrant(x, y) != Some(q))
+            {
                 continue;
             }
             let s = surface_of(q);
-            let Some(want) = pixel_average(i, j, 8, |x, y| Some(shade(ground_point(&scene, x, y, size, 3.0)?, Vec3::Y, scene.camera.position, &s, &lights, Vec3::ZERO))) else { continue };
-            let diffuse_only = Surface { specular: Vec3::ZERO, ..s };
-            let diffuse = pixel_average(i, j, 4, |x, y| Some(shade(ground_point(&scene, x, y, size, 3.0)?, Vec3::Y, scene.camera.position, &diffuse_only, &lights, Vec3::ZERO))).unwrap();
+            let Some(want) = pixel_average(i, j, 8, |x, y| {
+                Some(shade(
+                    ground_point(&scene, x, y, size, 3.0)?,
+                    Vec3::Y,
+                    scene.camera.position,
+                    &s,
+                    &lights,
+                    Vec3::ZERO,
+                ))
+            }) else {
+                continue;
+            };
+            let diffuse_only = Surface {
+                specular: Vec3::ZERO,
+                ..s
+            };
+            let diffuse = pixel_average(i, j, 4, |x, y| {
+                Some(shade(
+                    ground_point(&scene, x, y, size, 3.0)?,
+                    Vec3::Y,
+                    scene.camera.position,
+                    &diffuse_only,
+                    &lights,
+                    Vec3::ZERO,
+                ))
+            })
+            .unwrap();
             specular_share = specular_share.max(1.0 - diffuse.x / want.x.max(1e-9));
             agreement.check(img, i, j, want, want * 1e-3);
             per_quadrant[q] += 1;
         }
     }
     println!("pixels per quadrant {per_quadrant:?}, largest specular share {specular_share}");
-    assert!(per_quadrant.iter().all(|&n| n >= 40), "every quadrant is checked: {per_quadrant:?}");
-    assert!(specular_share > 0.3, "the specular lobe matters somewhere checked ({specular_share})");
+    assert!(
+        per_quadrant.iter().all(|&n| n >= 40),
+        "every quadrant is checked: {per_quadrant:?}"
+    );
+    assert!(
+        specular_share > 0.3,
+        "the specular lobe matters somewhere checked ({specular_share})"
+    );
     agreement.assert();
 }
 
@@ -1003,7 +1459,16 @@ fn albedo_and_specular_maps_give_each_texel_region_its_closed_form() {
 #[test]
 fn albedo_map_is_filtered_bilinearly_with_repeat_wrapping() {
     let png = common::temp_path("gradient-albedo.png");
-    let texels = [[250, 20, 90], [30, 200, 60], [120, 120, 250], [10, 60, 10], [220, 220, 40], [60, 10, 200], [250, 250, 250], [0, 90, 30]];
+    let texels = [
+        [250, 20, 90],
+        [30, 200, 60],
+        [120, 120, 250],
+        [10, 60, 10],
+        [220, 220, 40],
+        [60, 10, 200],
+        [250, 250, 250],
+        [0, 90, 30],
+    ];
     image::RgbaImage::from_fn(4, 2, |x, y| {
         let [r, g, b] = texels[(y * 4 + x) as usize];
         image::Rgba([r, g, b, 255])
@@ -1020,9 +1485,17 @@ fn albedo_map_is_filtered_bilinearly_with_repeat_wrapping() {
     let map = &traced.textures[0];
     // The lookup itself: at a texel centre the texel; on the left edge half the far right texel.
     let decoded = |k: usize| Vec3::from(texels[k].map(penumbra::reference::srgb_decode));
-    assert!((map.sample(glam::Vec2::new(0.625, 0.25)).truncate() - decoded(2)).abs().max_element() < 1e-6);
+    assert!(
+        (map.sample(glam::Vec2::new(0.625, 0.25)).truncate() - decoded(2))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
     let edge = map.sample(glam::Vec2::new(0.0, 0.25)).truncate();
-    assert!((edge - 0.5 * (decoded(0) + decoded(3))).abs().max_element() < 1e-6, "{edge}");
+    assert!(
+        (edge - 0.5 * (decoded(0) + decoded(3))).abs().max_element() < 1e-6,
+        "{edge}"
+    );
     let size = (32, 32);
     let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 11)])[0];
     let mut agreement = Agreement::new("bilinear albedo map");
@@ -1030,7 +1503,11 @@ fn albedo_map_is_filtered_bilinearly_with_repeat_wrapping() {
         for i in 0..size.0 {
             let Some(want) = pixel_average(i, j, 8, |x, y| {
                 let p = ground_point(&scene, x, y, size, 3.0)?;
-                Some(map.sample(glam::Vec2::new((p.x + 3.0) / 6.0, (p.z + 3.0) / 6.0)).truncate() * (2.0 / std::f32::consts::PI))
+                Some(
+                    map.sample(glam::Vec2::new((p.x + 3.0) / 6.0, (p.z + 3.0) / 6.0))
+                        .truncate()
+                        * (2.0 / std::f32::consts::PI),
+                )
             }) else {
                 continue;
             };
@@ -1057,24 +1534,40 @@ fn normal_map_tilts_the_normal_in_the_meshs_tangent_frame() {
         png.display().to_string()
     );
     let scene = parse(&toml);
-    let mesh = scene.objects[0].load_mesh(Path::new(".")).unwrap().transformed(&scene.objects[0].transform);
+    let mesh = scene.objects[0]
+        .load_mesh(Path::new("."))
+        .unwrap()
+        .transformed(&scene.objects[0].transform);
     for t in &mesh.tangents {
-        assert!((t.truncate() - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5 && t.w == 1.0, "tangent {t}");
+        assert!(
+            (t.truncate() - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5 && t.w == 1.0,
+            "tangent {t}"
+        );
     }
     let tn = Vec3::from(bytes.map(|b| b as f32 / 255.0 * 2.0 - 1.0)).normalize();
     let (t, b, n) = (Vec3::new(0.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, 0.0), Vec3::Y);
     let tilted = (t * tn.x + b * tn.y + n * tn.z).normalize();
     let l = -Vec3::new(1.0, -1.0, 0.5).normalize();
-    let (cos_tilted, cos_flat, cos_mirrored_b) = (tilted.dot(l), n.dot(l), (t * tn.x - b * tn.y + n * tn.z).normalize().dot(l));
+    let (cos_tilted, cos_flat, cos_mirrored_b) = (
+        tilted.dot(l),
+        n.dot(l),
+        (t * tn.x - b * tn.y + n * tn.z).normalize().dot(l),
+    );
     // The test can tell the tilt, and the bitangent's sign, apart.
-    assert!(cos_tilted > 1.3 * cos_flat && cos_tilted > 1.5 * cos_mirrored_b, "{cos_tilted} {cos_flat} {cos_mirrored_b}");
+    assert!(
+        cos_tilted > 1.3 * cos_flat && cos_tilted > 1.5 * cos_mirrored_b,
+        "{cos_tilted} {cos_flat} {cos_mirrored_b}"
+    );
     let want = Vec3::splat(0.7 / std::f32::consts::PI * 3.0 * cos_tilted);
     let size = (32, 32);
     let img = &render(&scene, size, &[settings(16, 0, LightPaths::Direct, 9)])[0];
     let mut agreement = Agreement::new("normal-mapped plane under a directional light");
     for j in 0..size.1 {
         for i in 0..size.0 {
-            if [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].into_iter().all(|(x, y)| ground_point(&scene, x as f32, y as f32, size, 3.0).is_some()) {
+            if [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                .into_iter()
+                .all(|(x, y)| ground_point(&scene, x as f32, y as f32, size, 3.0).is_some())
+            {
                 agreement.check(img, i, j, want, want * 1e-4);
             }
         }
@@ -1087,21 +1580,43 @@ fn normal_map_tilts_the_normal_in_the_meshs_tangent_frame() {
 fn an_unreadable_texture_map_is_an_error_naming_the_field() {
     let bad = common::temp_path("not-an-image.png");
     std::fs::write(&bad, "not a PNG").expect("write");
-    let texture = |path: &Path| format!("{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nspecular_map = {:?}\n", path.display().to_string());
+    let texture = |path: &Path| {
+        format!(
+            "{SKY_CAMERA}\n[[materials]]\nname = \"wood\"\nspecular_map = {:?}\n",
+            path.display().to_string()
+        )
+    };
     // Not an image at all: refused when the scene is read, with the field's line.
-    let e = Scene::from_str(&texture(&bad), "<test>", Path::new(".")).expect_err("an error").to_string();
-    assert!(e.contains("<test>:") && e.contains("materials[0].specular_map") && e.contains("not-an-image.png"), "{e}");
+    let e = Scene::from_str(&texture(&bad), "<test>", Path::new("."))
+        .expect_err("an error")
+        .to_string();
+    assert!(
+        e.contains("<test>:") && e.contains("materials[0].specular_map") && e.contains("not-an-image.png"),
+        "{e}"
+    );
     // A valid header over corrupt image data: refused when the tracer decodes it.
     let scrambled = common::temp_path("scrambled.png");
-    image::RgbaImage::from_fn(16, 16, |x, y| image::Rgba([(x * 16) as u8, (y * 16) as u8, 7, 255])).save(&scrambled).unwrap();
+    image::RgbaImage::from_fn(16, 16, |x, y| image::Rgba([(x * 16) as u8, (y * 16) as u8, 7, 255]))
+        .save(&scrambled)
+        .unwrap();
     let mut bytes = std::fs::read(&scrambled).unwrap();
     let n = bytes.len();
     for b in &mut bytes[41..n - 12] {
         *b ^= 0x5a;
     }
     std::fs::write(&scrambled, bytes).unwrap();
-    let e = penumbra::reference::TracedScene::build(&parse(&texture(&scrambled))).err().expect("an error").to_string();
-    assert!(e.contains("<test>") && e.contains("specular_map") && e.contains("\"wood\"") && e.contains("scrambled.png") && e.contains("corrupt"), "{e}");
+    let e = penumbra::reference::TracedScene::build(&parse(&texture(&scrambled)))
+        .err()
+        .expect("an error")
+        .to_string();
+    assert!(
+        e.contains("<test>")
+            && e.contains("specular_map")
+            && e.contains("\"wood\"")
+            && e.contains("scrambled.png")
+            && e.contains("corrupt"),
+        "{e}"
+    );
     assert!(e.lines().count() == 1 && !e.contains('{'), "{e}");
 }
 
@@ -1128,13 +1643,31 @@ fn sky_texels() -> (u32, u32, Vec<[f32; 4]>) {
 fn image_environment_seen_directly_and_lighting_planes() {
     let (w, h, texels) = sky_texels();
     let exr = common::temp_path("sky.exr");
-    HdrImage { width: w, height: h, pixels: texels.clone() }.write_exr(&exr).expect("write sky");
+    HdrImage {
+        width: w,
+        height: h,
+        pixels: texels.clone(),
+    }
+    .write_exr(&exr)
+    .expect("write sky");
     let scale = 1.5;
-    let sky = EnvironmentMap::from_texels(w, h, texels.iter().map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, 0.0]).collect());
-    let environment = format!("\n[environment]\ntype = \"image\"\npath = {:?}\nscale = {scale}\n", exr.display().to_string());
+    let sky = EnvironmentMap::from_texels(
+        w,
+        h,
+        texels
+            .iter()
+            .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, 0.0])
+            .collect(),
+    );
+    let environment = format!(
+        "\n[environment]\ntype = \"image\"\npath = {:?}\nscale = {scale}\n",
+        exr.display().to_string()
+    );
 
     // Seen directly: every pixel whose footprint lies in one texel shows exactly that texel.
-    let scene = parse(&format!("[camera]\nposition = [0, 0, 0]\ntarget = [0.6, 0.5, -1]\nfov_y_deg = 100\n{environment}"));
+    let scene = parse(&format!(
+        "[camera]\nposition = [0, 0, 0]\ntarget = [0.6, 0.5, -1]\nfov_y_deg = 100\n{environment}"
+    ));
     let size = (32, 32);
     let img = &render(&scene, size, &[settings(4, 2, LightPaths::All, 1)])[0];
     let mut direct = Agreement::new("environment seen directly");
@@ -1161,7 +1694,10 @@ fn image_environment_seen_directly_and_lighting_planes() {
     let irradiance = |rows: std::ops::Range<u32>| {
         let mut e = Vec3::ZERO;
         for j in rows {
-            let (t0, t1) = (j as f32 / h as f32 * std::f32::consts::PI, (j + 1) as f32 / h as f32 * std::f32::consts::PI);
+            let (t0, t1) = (
+                j as f32 / h as f32 * std::f32::consts::PI,
+                (j + 1) as f32 / h as f32 * std::f32::consts::PI,
+            );
             let band = std::f32::consts::TAU / w as f32 * (t1.sin().powi(2) - t0.sin().powi(2)).abs() / 2.0;
             for i in 0..w {
                 let t = sky.texels[(j * w + i) as usize];
@@ -1172,17 +1708,33 @@ fn image_environment_seen_directly_and_lighting_planes() {
     };
     let (above, below) = (irradiance(0..h / 2), irradiance(h / 2..h));
     let size = (16, 16);
-    for (material, glossy) in [("albedo = [0.6, 0.5, 0.4]", false), ("albedo = [0.2, 0.3, 0.1]\nspecular = [0.5, 0.4, 0.3]\nexponent = 20\ntransmittance = [0.3, 0.3, 0.3]", true)] {
+    for (material, glossy) in [
+        ("albedo = [0.6, 0.5, 0.4]", false),
+        (
+            "albedo = [0.2, 0.3, 0.1]\nspecular = [0.5, 0.4, 0.3]\nexponent = 20\ntransmittance = [0.3, 0.3, 0.3]",
+            true,
+        ),
+    ] {
         let scene = parse(&format!("{SKY_CAMERA}\n[[materials]]\nname = \"m\"\n{material}\n\n[[objects]]\nmesh = \"plane\"\nsize = 400\nmaterial = \"m\"\n{environment}"));
         let m = &scene.materials[0];
-        let surface = Surface { albedo: m.albedo, specular: m.specular, exponent: m.exponent, emission: Vec3::ZERO };
+        let surface = Surface {
+            albedo: m.albedo,
+            specular: m.specular,
+            exponent: m.exponent,
+            emission: Vec3::ZERO,
+        };
         let img = &render(&scene, size, &[settings(64, 0, LightPaths::Direct, 2)])[0];
-        let mut lit = Agreement::new(if glossy { "glossy plane under an image sky" } else { "plane under an image sky" });
+        let mut lit = Agreement::new(if glossy {
+            "glossy plane under an image sky"
+        } else {
+            "plane under an image sky"
+        });
         for j in 0..size.1 {
             for i in 0..size.0 {
                 let v = -scene.camera.pixel_center_ray(i, j, size.0, size.1).1;
                 let (want, slack) = if glossy {
-                    let want = reflected_environment(&sky, v, &surface) + m.transmittance / std::f32::consts::PI * below;
+                    let want =
+                        reflected_environment(&sky, v, &surface) + m.transmittance / std::f32::consts::PI * below;
                     (want, want * 2e-3)
                 } else {
                     (m.albedo / std::f32::consts::PI * above, Vec3::ZERO)
@@ -1230,7 +1782,11 @@ fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacit
         rho / std::f32::consts::PI * intensity * (to_light.y / r2.sqrt()) / r2
     };
     let mut transmitted = glam::DVec2::ZERO;
-    let (mut through, mut under_shadow, mut open) = (Agreement::new("seen through the pane"), Agreement::new("floor in the pane's shadow"), Agreement::new("floor in the open"));
+    let (mut through, mut under_shadow, mut open) = (
+        Agreement::new("seen through the pane"),
+        Agreement::new("floor in the pane's shadow"),
+        Agreement::new("floor in the open"),
+    );
     for j in 0..size.1 {
         for i in 0..size.0 {
             // (through the pane, floor point behind the pane's shadow), uniform over the pixel.
@@ -1250,7 +1806,9 @@ fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacit
                     None => floor,
                 }))
             });
-            let (Some(want), Some(c), true) = (want, class, uniform) else { continue };
+            let (Some(want), Some(c), true) = (want, class, uniform) else {
+                continue;
+            };
             if c == (false, true) {
                 // What the floor there would be without the pane (the raster compromise).
                 transmitted += glam::DVec2::new(img.mean.get(i, j)[0] as f64, (want.x / (1.0 - alpha)) as f64);
@@ -1274,8 +1832,17 @@ fn a_translucent_pane_is_seen_and_lets_light_through_in_proportion_to_its_opacit
         transmitted.x / transmitted.y,
         1.0 - alpha
     );
-    assert!((transmitted.x / transmitted.y - (1.0 - alpha) as f64).abs() < 0.02, "{transmitted}");
-    assert!(through.pixels > 40 && under_shadow.pixels > 20 && open.pixels > 300, "{} / {} / {}", through.pixels, under_shadow.pixels, open.pixels);
+    assert!(
+        (transmitted.x / transmitted.y - (1.0 - alpha) as f64).abs() < 0.02,
+        "{transmitted}"
+    );
+    assert!(
+        through.pixels > 40 && under_shadow.pixels > 20 && open.pixels > 300,
+        "{} / {} / {}",
+        through.pixels,
+        under_shadow.pixels,
+        open.pixels
+    );
     through.assert();
     under_shadow.assert();
     open.assert();
@@ -1288,7 +1855,8 @@ fn export_scene_writes_every_triangle_with_its_material() {
     let dir = common::temp_path("export-cornell");
     let scene_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml");
     let written = penumbra::reference::export::export_file(&scene_path, &dir).expect("export");
-    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("scene.json")).expect("scene.json")).expect("valid JSON");
+    let doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("scene.json")).expect("scene.json")).expect("valid JSON");
     let traced = penumbra::reference::TracedScene::build(&scene_file("cornell.toml")).unwrap();
     let mut total = 0;
     for m in doc["materials"].as_array().expect("materials") {
@@ -1296,9 +1864,19 @@ fn export_scene_writes_every_triangle_with_its_material() {
         total += n;
         if n > 0 {
             let ply = std::fs::read(dir.join(m["mesh"].as_str().unwrap())).expect("ply");
-            let header = String::from_utf8_lossy(&ply[..ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11]).to_string();
-            assert!(header.contains(&format!("element face {n}\n")) && header.contains(&format!("element vertex {}\n", 3 * n)), "{header}");
-            assert_eq!(ply.len(), header.len() + n * 3 * 24 + n * 13, "positions and normals per vertex, a list of three indices per face");
+            let header =
+                String::from_utf8_lossy(&ply[..ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11])
+                    .to_string();
+            assert!(
+                header.contains(&format!("element face {n}\n"))
+                    && header.contains(&format!("element vertex {}\n", 3 * n)),
+                "{header}"
+            );
+            assert_eq!(
+                ply.len(),
+                header.len() + n * 3 * 24 + n * 13,
+                "positions and normals per vertex, a list of three indices per face"
+            );
         }
     }
     assert_eq!(total, traced.triangles.len());
@@ -1323,7 +1901,16 @@ fn a_target_error_stops_the_render_where_it_holds() {
             checks += 1;
             relative_error(img, scope) / max
         };
-        let img = r.render_until(&cap, Some(Stop { min_spp: MIN_ADAPTIVE_SPP, check: &mut check }), &mut |_, _| {}).expect("adaptive render");
+        let img = r
+            .render_until(
+                &cap,
+                Some(Stop {
+                    min_spp: MIN_ADAPTIVE_SPP,
+                    check: &mut check,
+                }),
+                &mut |_, _| {},
+            )
+            .expect("adaptive render");
         (img, checks)
     };
     let mut stopped = Vec::new();
@@ -1331,20 +1918,49 @@ fn a_target_error_stops_the_render_where_it_holds() {
         let ((a, checks_a), (b, checks_b)) = (adaptive(scope, loose), adaptive(scope, tight));
         let (ea, eb) = (relative_error(&a, scope), relative_error(&b, scope));
         eprintln!("{scope:?}: target {loose} reached {ea:.4} at {} spp ({checks_a} checks), target {tight} reached {eb:.4} at {} spp ({checks_b} checks)", a.spp, b.spp);
-        assert!(ea <= loose && eb <= tight, "{scope:?}: {ea} > {loose} or {eb} > {tight}");
-        assert!(a.spp >= MIN_ADAPTIVE_SPP && b.spp > a.spp && b.spp < cap.spp, "{scope:?}: {} then {} spp", a.spp, b.spp);
+        assert!(
+            ea <= loose && eb <= tight,
+            "{scope:?}: {ea} > {loose} or {eb} > {tight}"
+        );
+        assert!(
+            a.spp >= MIN_ADAPTIVE_SPP && b.spp > a.spp && b.spp < cap.spp,
+            "{scope:?}: {} then {} spp",
+            a.spp,
+            b.spp
+        );
         stopped.push(a);
         stopped.push(b);
     }
     // Two of the stopped renders against fixed ones of the same spp, bit for bit.
-    let fixed = render(&scene, (16, 16), &[settings(stopped[0].spp, 3, LightPaths::All, 5), settings(stopped[3].spp, 3, LightPaths::All, 5)]);
+    let fixed = render(
+        &scene,
+        (16, 16),
+        &[
+            settings(stopped[0].spp, 3, LightPaths::All, 5),
+            settings(stopped[3].spp, 3, LightPaths::All, 5),
+        ],
+    );
     for (stopped, fixed) in [(&stopped[0], &fixed[0]), (&stopped[3], &fixed[1])] {
         assert_eq!(stopped.spp, fixed.spp);
-        assert_eq!((&stopped.mean, &stopped.standard_error), (&fixed.mean, &fixed.standard_error), "stopped at {} spp", fixed.spp);
+        assert_eq!(
+            (&stopped.mean, &stopped.standard_error),
+            (&fixed.mean, &fixed.standard_error),
+            "stopped at {} spp",
+            fixed.spp
+        );
     }
     // A target out of reach ends at the cap.
     let small_cap = settings(40, 3, LightPaths::All, 5);
-    let img = r.render_until(&small_cap, Some(Stop { min_spp: MIN_ADAPTIVE_SPP, check: &mut |_| 2.0 }), &mut |_, _| {}).expect("capped render");
+    let img = r
+        .render_until(
+            &small_cap,
+            Some(Stop {
+                min_spp: MIN_ADAPTIVE_SPP,
+                check: &mut |_| 2.0,
+            }),
+            &mut |_, _| {},
+        )
+        .expect("capped render");
     assert_eq!(img.spp, 40);
     common::assert_clean(&r.gpu);
 }
@@ -1359,13 +1975,29 @@ fn relative_error_follows_its_definition() {
     let mut se = HdrImage::new(2, 1);
     mean.pixels = vec![[1.0, 0.0, 0.2, 1.0], [3.0, 0.0, 0.0, 1.0]];
     se.pixels = vec![[0.1, 0.0, 0.05, 1.0], [0.2, 0.0, 0.01, 1.0]];
-    let img = ReferenceImage { mean, standard_error: se, spp: 100, seconds: 1.0 };
+    let img = ReferenceImage {
+        mean,
+        standard_error: se,
+        spp: 100,
+        seconds: 1.0,
+    };
     // R: sqrt(0.01 + 0.04) / 2 over 2; B: sqrt(0.0025 + 0.0001) / 2 over 0.1.
     let image = (0.05f64.sqrt() / 2.0 / 2.0).max(0.0026f64.sqrt() / 2.0 / 0.1);
-    assert!((relative_error(&img, ErrorScope::Image) - image).abs() < 1e-6, "{} vs {image}", relative_error(&img, ErrorScope::Image));
+    assert!(
+        (relative_error(&img, ErrorScope::Image) - image).abs() < 1e-6,
+        "{} vs {image}",
+        relative_error(&img, ErrorScope::Image)
+    );
     // Pixel 0: R 0.1/sqrt(1.01), B 0.05/sqrt(0.05); pixel 1: R 0.2/sqrt(9.01), B 0.01/sqrt(0.01).
-    let pixel = (0.1 / 1.01f64.sqrt()).max(0.05 / 0.05f64.sqrt()).max(0.2 / 9.01f64.sqrt()).max(0.01 / 0.01f64.sqrt());
-    assert!((relative_error(&img, ErrorScope::Pixel) - pixel).abs() < 1e-6, "{} vs {pixel}", relative_error(&img, ErrorScope::Pixel));
+    let pixel = (0.1 / 1.01f64.sqrt())
+        .max(0.05 / 0.05f64.sqrt())
+        .max(0.2 / 9.01f64.sqrt())
+        .max(0.01 / 0.01f64.sqrt());
+    assert!(
+        (relative_error(&img, ErrorScope::Pixel) - pixel).abs() < 1e-6,
+        "{} vs {pixel}",
+        relative_error(&img, ErrorScope::Pixel)
+    );
 }
 
 /// `penumbra reference --max-stderr` prints the spp it used and the error it reached.
@@ -1375,21 +2007,46 @@ fn command_line_max_stderr_reports_spp_and_error() {
     let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
     let cornell = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml");
     let run = |extra: &[&str]| {
-        let mut args = vec!["reference", cornell.to_str().unwrap(), "--device", &device, "--validation", "--size", "8x8", "--bounces", "2", "-o", out.to_str().unwrap()];
+        let mut args = vec![
+            "reference",
+            cornell.to_str().unwrap(),
+            "--device",
+            &device,
+            "--validation",
+            "--size",
+            "8x8",
+            "--bounces",
+            "2",
+            "-o",
+            out.to_str().unwrap(),
+        ];
         args.extend_from_slice(extra);
-        std::process::Command::new(env!("CARGO_BIN_EXE_penumbra")).args(&args).output().expect("run penumbra")
+        std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .args(&args)
+            .output()
+            .expect("run penumbra")
     };
     let o = run(&["--max-stderr", "0.03", "--stderr-over", "image"]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
-    let line = stdout.lines().find(|l| l.starts_with("relative standard error (image)")).unwrap_or_else(|| panic!("{stdout}"));
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("relative standard error (image)"))
+        .unwrap_or_else(|| panic!("{stdout}"));
     assert!(line.contains("reached") && !line.contains("NOT"), "{line}");
-    let achieved: f64 = line.split_whitespace().nth(4).and_then(|v| v.trim_end_matches(':').parse().ok()).unwrap_or_else(|| panic!("{line}"));
+    let achieved: f64 = line
+        .split_whitespace()
+        .nth(4)
+        .and_then(|v| v.trim_end_matches(':').parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
     assert!(achieved <= 0.03, "{line}");
     // The cap first: said so.
     let o = run(&["--max-stderr", "1e-6", "--spp", "40"]);
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success() && stdout.contains("at 40 spp") && stdout.contains("NOT reached"), "{stdout}");
+    assert!(
+        o.status.success() && stdout.contains("at 40 spp") && stdout.contains("NOT reached"),
+        "{stdout}"
+    );
     let o = run(&["--max-stderr", "0"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--max-stderr"));
 }
@@ -1405,22 +2062,44 @@ fn a_batch_cut_short_for_some_pixels_counts_no_sample_twice() {
     scene.camera.position.z = 7.0;
     scene.camera.fov_y_deg = 60.0;
     let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (12, 12)).expect("reference renderer");
-    let plain = |spp| Settings { roulette_after: None, ..settings(spp, 32, LightPaths::All, 4) };
+    let plain = |spp| Settings {
+        roulette_after: None,
+        ..settings(spp, 32, LightPaths::All, 4)
+    };
     let mut cut = None;
     // Growing batches (1, 2, 4, ...): the first one the device cuts short starts past sample 0,
     // where the pixels that finished it hold samples the rerun would add again.
     for spp in [1024, 2048, 4096] {
         let image = r.render(&plain(spp), &mut |_, _| {}).expect("render");
-        println!("{spp} spp in growing batches: pixels cut short per rerun {:?}", r.pixels_cut_short);
+        println!(
+            "{spp} spp in growing batches: pixels cut short per rerun {:?}",
+            r.pixels_cut_short
+        );
         if r.pixels_cut_short.first().is_some_and(|&n| n > 0 && n < 144) {
             cut = Some((spp, image));
             break;
         }
     }
-    let (spp, image) = cut.expect("no batch was cut short for some pixels only: the test does not reach the case it is for");
-    let small = r.render(&Settings { batching: Batching::Fixed(16), ..plain(spp) }, &mut |_, _| {}).expect("render");
-    assert!(r.pixels_cut_short.is_empty(), "batches of 16 were cut short: {:?}", r.pixels_cut_short);
-    assert_eq!(image.mean.pixels, small.mean.pixels, "{spp} spp in batches cut short against batches of 16");
+    let (spp, image) =
+        cut.expect("no batch was cut short for some pixels only: the test does not reach the case it is for");
+    let small = r
+        .render(
+            &Settings {
+                batching: Batching::Fixed(16),
+                ..plain(spp)
+            },
+            &mut |_, _| {},
+        )
+        .expect("render");
+    assert!(
+        r.pixels_cut_short.is_empty(),
+        "batches of 16 were cut short: {:?}",
+        r.pixels_cut_short
+    );
+    assert_eq!(
+        image.mean.pixels, small.mean.pixels,
+        "{spp} spp in batches cut short against batches of 16"
+    );
     assert_eq!(image.standard_error.pixels, small.standard_error.pixels);
     common::assert_clean(&r.gpu);
 }
@@ -1433,12 +2112,30 @@ fn a_batch_cut_short_for_some_pixels_counts_no_sample_twice() {
 #[ignore]
 fn light_selection_efficiency() {
     let size = (64, 36);
-    for name in ["many_polygon3.toml", "many_intersecting.toml", "many_slanted.toml", "theatre_50.toml", "theatre_100.toml"] {
+    for name in [
+        "many_polygon3.toml",
+        "many_intersecting.toml",
+        "many_slanted.toml",
+        "theatre_50.toml",
+        "theatre_100.toml",
+    ] {
         let scene = scene_file(name);
         let lights = punctual_lights(&scene).len();
-        let with = |light_selection| Settings { light_selection, batching: Batching::Fixed(16), ..settings(128, DEFAULT_BOUNCES, LightPaths::All, 1) };
+        let with = |light_selection| Settings {
+            light_selection,
+            batching: Batching::Fixed(16),
+            ..settings(128, DEFAULT_BOUNCES, LightPaths::All, 1)
+        };
         // The first render of a device also pays for its warm-up: measured again after it.
-        let mut imgs = render(&scene, size, &[with(LightSelection::One), with(LightSelection::Every), with(LightSelection::One)]);
+        let mut imgs = render(
+            &scene,
+            size,
+            &[
+                with(LightSelection::One),
+                with(LightSelection::Every),
+                with(LightSelection::One),
+            ],
+        );
         imgs.remove(0);
         let rate = |i: &ReferenceImage| i.samples_per_second();
         let efficiency = |i: &ReferenceImage| rate(i) / sample_variance(i);
@@ -1465,9 +2162,19 @@ fn light_selection_efficiency() {
 /// differed between the specialised and the general tracer, 2026-12-04,
 /// tools/results/h200/log17_walk_per_device.txt).
 fn assert_same_image(gpu: &penumbra::backend::Gpu, what: &str, a: &ReferenceImage, b: &ReferenceImage) {
-    assert!(a.mean.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0), "{what}: a black image shows nothing");
+    assert!(
+        a.mean.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0),
+        "{what}: a black image shows nothing"
+    );
     if gpu.caps().device_type == ash::vk::PhysicalDeviceType::CPU {
-        let bits = |img: &ReferenceImage| img.mean.pixels.iter().chain(&img.standard_error.pixels).flat_map(|p| p.map(f32::to_bits)).collect::<Vec<u32>>();
+        let bits = |img: &ReferenceImage| {
+            img.mean
+                .pixels
+                .iter()
+                .chain(&img.standard_error.pixels)
+                .flat_map(|p| p.map(f32::to_bits))
+                .collect::<Vec<u32>>()
+        };
         let (x, y) = (bits(a), bits(b));
         let differ = x.iter().zip(&y).filter(|(p, q)| p != q).count();
         assert_eq!(differ, 0, "{what}: {differ} of {} values differ", x.len());
@@ -1476,14 +2183,29 @@ fn assert_same_image(gpu: &penumbra::backend::Gpu, what: &str, a: &ReferenceImag
     let ((ma, ea), (mb, eb)) = (a.average(), b.average());
     for c in 0..3 {
         let sigma = (ea[c] * ea[c] + eb[c] * eb[c]).sqrt();
-        assert!((ma[c] - mb[c]).abs() <= 4.0 * sigma + 1e-6 * ma[c].abs(), "{what}: channel {c} mean {} against {} (standard errors {} and {})", ma[c], mb[c], ea[c], eb[c]);
+        assert!(
+            (ma[c] - mb[c]).abs() <= 4.0 * sigma + 1e-6 * ma[c].abs(),
+            "{what}: channel {c} mean {} against {} (standard errors {} and {})",
+            ma[c],
+            mb[c],
+            ea[c],
+            eb[c]
+        );
     }
 }
 
 #[test]
 fn specialised_tracer_matches_the_general_one() {
     use penumbra::reference::features::SceneFeatures;
-    let names = ["cornell.toml", "terrain_cones.toml", "sh_courtyard_sky.toml", "sv_glass.toml", "lpv_bush.toml", "default.toml", "theatre_50.toml"];
+    let names = [
+        "cornell.toml",
+        "terrain_cones.toml",
+        "sh_courtyard_sky.toml",
+        "sv_glass.toml",
+        "lpv_bush.toml",
+        "default.toml",
+        "theatre_50.toml",
+    ];
     let mut seen_on = SceneFeatures {
         maps: false,
         translucency: false,
@@ -1508,11 +2230,23 @@ fn specialised_tracer_matches_the_general_one() {
             (&mut seen_on.translucency, &mut seen_off.translucency, f.translucency),
             (&mut seen_on.specular, &mut seen_off.specular, f.specular),
             (&mut seen_on.transmission, &mut seen_off.transmission, f.transmission),
-            (&mut seen_on.punctual_lights, &mut seen_off.punctual_lights, f.punctual_lights),
+            (
+                &mut seen_on.punctual_lights,
+                &mut seen_off.punctual_lights,
+                f.punctual_lights,
+            ),
             (&mut seen_on.sphere_lights, &mut seen_off.sphere_lights, f.sphere_lights),
             (&mut seen_on.quad_lights, &mut seen_off.quad_lights, f.quad_lights),
-            (&mut seen_on.environment_map, &mut seen_off.environment_map, f.environment_map),
-            (&mut seen_on.sampled_environment, &mut seen_off.sampled_environment, f.sampled_environment),
+            (
+                &mut seen_on.environment_map,
+                &mut seen_off.environment_map,
+                f.environment_map,
+            ),
+            (
+                &mut seen_on.sampled_environment,
+                &mut seen_off.sampled_environment,
+                f.sampled_environment,
+            ),
         ] {
             *on |= have;
             *off |= !have;
@@ -1521,7 +2255,12 @@ fn specialised_tracer_matches_the_general_one() {
         r.features = SceneFeatures::ALL;
         let general = r.render(&run, &mut |_, _| {}).expect("render");
         common::assert_clean(&r.gpu);
-        assert_same_image(&r.gpu, &format!("{name}, specialised against general"), &specialised, &general);
+        assert_same_image(
+            &r.gpu,
+            &format!("{name}, specialised against general"),
+            &specialised,
+            &general,
+        );
     }
     assert_eq!(seen_on, SceneFeatures::ALL, "some feature is in none of the scenes");
     assert_eq!(seen_off, SceneFeatures::ALL, "some feature is in every scene");
@@ -1534,17 +2273,29 @@ fn specialised_tracer_matches_the_general_one() {
 fn both_bvh_walks_give_the_same_image() {
     use penumbra::reference::features::BvhWalk;
     let run = settings(3, 4, LightPaths::All, 11);
-    for name in ["cornell.toml", "furnace.toml", "terrain_cones.toml", "lpv_bush.toml", "sh_courtyard_sky.toml"] {
+    for name in [
+        "cornell.toml",
+        "furnace.toml",
+        "terrain_cones.toml",
+        "lpv_bush.toml",
+        "sh_courtyard_sky.toml",
+    ] {
         let scene = scene_file(name);
         // Made for the stack walk, whose table of octant links is one zeroed texel: the ordered
         // walk uploads its links when it is first used.
-        let mut r = ReferenceRenderer::with_walk(common::test_gpu(), &scene, (12, 10), BvhWalk::Stack).expect("reference renderer");
+        let mut r = ReferenceRenderer::with_walk(common::test_gpu(), &scene, (12, 10), BvhWalk::Stack)
+            .expect("reference renderer");
         let mut images = Vec::new();
         for walk in [BvhWalk::Stack, BvhWalk::Ordered] {
             r.walk = walk;
             images.push(r.render(&run, &mut |_, _| {}).expect("render"));
         }
         common::assert_clean(&r.gpu);
-        assert_same_image(&r.gpu, &format!("{name}, stack walk against ordered walk"), &images[0], &images[1]);
+        assert_same_image(
+            &r.gpu,
+            &format!("{name}, stack walk against ordered walk"),
+            &images[0],
+            &images[1],
+        );
     }
 }

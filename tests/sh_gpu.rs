@@ -20,8 +20,23 @@ use penumbra::shaders::ShaderLibrary;
 fn basis_closed_form(d: Vec3) -> [f64; 9] {
     use std::f64::consts::PI;
     let (x, y, z) = (d.x as f64, d.y as f64, d.z as f64);
-    let (c0, c1, c2, c20) = ((1.0 / (4.0 * PI)).sqrt(), (3.0 / (4.0 * PI)).sqrt(), (15.0 / (4.0 * PI)).sqrt(), (5.0 / (16.0 * PI)).sqrt());
-    [c0, -c1 * y, c1 * z, -c1 * x, c2 * x * y, -c2 * y * z, c20 * (3.0 * z * z - 1.0), -c2 * x * z, 0.5 * c2 * (x * x - y * y)]
+    let (c0, c1, c2, c20) = (
+        (1.0 / (4.0 * PI)).sqrt(),
+        (3.0 / (4.0 * PI)).sqrt(),
+        (15.0 / (4.0 * PI)).sqrt(),
+        (5.0 / (16.0 * PI)).sqrt(),
+    );
+    [
+        c0,
+        -c1 * y,
+        c1 * z,
+        -c1 * x,
+        c2 * x * y,
+        -c2 * y * z,
+        c20 * (3.0 * z * z - 1.0),
+        -c2 * x * z,
+        0.5 * c2 * (x * x - y * y),
+    ]
 }
 
 /// The ZH of a cap of half-angle `a` (seed 001 Appendix A.1 as the digest writes it, unit
@@ -29,7 +44,12 @@ fn basis_closed_form(d: Vec3) -> [f64; 9] {
 fn cap_closed_form(a: f64) -> [f64; 4] {
     use std::f64::consts::PI;
     let (c, s2) = (a.cos(), a.sin().powi(2));
-    [PI.sqrt() * (1.0 - c), (3.0 * PI).sqrt() / 2.0 * s2, (5.0 * PI).sqrt() / 2.0 * c * s2, (7.0 * PI).sqrt() / 8.0 * s2 * (5.0 * c * c - 1.0)]
+    [
+        PI.sqrt() * (1.0 - c),
+        (3.0 * PI).sqrt() / 2.0 * s2,
+        (5.0 * PI).sqrt() / 2.0 * c * s2,
+        (7.0 * PI).sqrt() / 8.0 * s2 * (5.0 * c * c - 1.0),
+    ]
 }
 
 /// Besides the CPU library, two independent values per texel: the GPU's basis of bands 0–2
@@ -42,22 +62,46 @@ fn cap_closed_form(a: f64) -> [f64; 4] {
 #[test]
 fn glsl_sh_matches_the_cpu_library() {
     let mut gpu = common::test_gpu();
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh check".into(), shader: "util/sh_check.comp".into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    let pipeline = gpu
+        .create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "sh check".into(),
+                shader: "util/sh_check.comp".into(),
+                specialization: vec![],
+            },
+            &ShaderLibrary::Embedded,
+        )
+        .unwrap();
     let size = 128 * 128 * 4;
-    let out = gpu.create_buffer(&BufferDesc { name: "sh check".into(), size, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
+    let out = gpu
+        .create_buffer(&BufferDesc {
+            name: "sh check".into(),
+            size,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuToCpu,
+        })
+        .unwrap();
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
     let c = vk::PipelineStageFlags2::COMPUTE_SHADER;
-    graph.pass("sh check").buffer(out, Access::StorageWrite { stages: c }, Some("result")).record(move |ctx| {
-        ctx.rec.bind_pipeline(pipeline)?;
-        ctx.bind(&[])?;
-        ctx.rec.dispatch([128, 1, 1])
-    });
-    graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
+    graph
+        .pass("sh check")
+        .buffer(out, Access::StorageWrite { stages: c }, Some("result"))
+        .record(move |ctx| {
+            ctx.rec.bind_pipeline(pipeline)?;
+            ctx.bind(&[])?;
+            ctx.rec.dispatch([128, 1, 1])
+        });
+    graph
+        .pass("host")
+        .buffer(out, Access::HostRead, None)
+        .record(|_| Ok(()));
     common::run_once(&gpu, frame, graph);
     let got: Vec<f32> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
 
-    let close = |a: f32, b: f64, tol: f64, what: &str| assert!((a as f64 - b).abs() <= tol * b.abs().max(1.0), "{what}: GPU {a} vs {b}");
+    let close = |a: f32, b: f64, tol: f64, what: &str| {
+        assert!((a as f64 - b).abs() <= tol * b.abs().max(1.0), "{what}: GPU {a} vs {b}")
+    };
     let (mut worst_basis, mut worst_cap) = (0.0f64, 0.0f64);
     for i in 0..128usize {
         let r = &got[i * 128..(i + 1) * 128];
@@ -66,13 +110,25 @@ fn glsl_sh_matches_the_cpu_library() {
         // Independent values first, then the CPU library.
         for (k, want) in basis_closed_form(dir).into_iter().enumerate() {
             worst_basis = worst_basis.max((r[k] as f64 - want).abs());
-            close(r[k], want, 1e-5, &format!("texel {i} basis {k} against the closed form"));
+            close(
+                r[k],
+                want,
+                1e-5,
+                &format!("texel {i} basis {k} against the closed form"),
+            );
         }
         let on_axis: f64 = (0..16).map(|k| r[96 + k] as f64 * r[k] as f64).sum();
         let zh = cap_closed_form(0.45);
-        let want: f64 = (0..4).map(|l| zh[l] * ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt()).sum();
+        let want: f64 = (0..4)
+            .map(|l| zh[l] * ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt())
+            .sum();
         worst_cap = worst_cap.max((on_axis - want).abs() / want);
-        close(on_axis as f32, want, 1e-5, &format!("texel {i}: the cap on its axis against Appendix A.1"));
+        close(
+            on_axis as f32,
+            want,
+            1e-5,
+            &format!("texel {i}: the cap on its axis against Appendix A.1"),
+        );
         let mut y = vec![0.0f32; 64];
         sh::eval_basis(dir, 8, &mut y).unwrap();
         for k in 0..64 {
@@ -90,9 +146,18 @@ fn glsl_sh_matches_the_cpu_library() {
         for k in 0..16 {
             close(r[96 + k], cap[k], 1e-5, &format!("texel {i} cap {k}"));
         }
-        close(r[112], sh::equirect_texel_solid_angle(ty, 16, 8), 1e-5, "equirect solid angle");
+        close(
+            r[112],
+            sh::equirect_texel_solid_angle(ty, 16, 8),
+            1e-5,
+            "equirect solid angle",
+        );
         let omega = sh::cube_texel_solid_angle(i % 16, (i / 16) % 16, 16);
-        assert!((r[113] as f64 - omega).abs() <= 2e-6 * omega, "cube solid angle: GPU {} vs CPU {omega}", r[113]);
+        assert!(
+            (r[113] as f64 - omega).abs() <= 2e-6 * omega,
+            "cube solid angle: GPU {} vs CPU {omega}",
+            r[113]
+        );
         let cd = sh::cube_texel_dir_world(i % 6, i % 16, (i / 16) % 16, 16);
         for (k, v) in [cd.x, cd.y, cd.z].into_iter().enumerate() {
             close(r[114 + k], v as f64, 1e-5, "cube texel direction");
@@ -110,35 +175,82 @@ fn glsl_sh_matches_the_cpu_library() {
 /// Uploads `texels` (RGBA; a cube's six faces in layer order) as an equirect (`cube = false`,
 /// `w`×`h`) or cube (`w`² faces) image, projects it on the device onto `bands` bands and reads
 /// the coefficients back (SH frame).
-fn gpu_project(gpu: &mut penumbra::backend::Gpu, cube: bool, w: u32, h: u32, texels: &[[f32; 4]], bands: u32) -> Vec<Vec3> {
+fn gpu_project(
+    gpu: &mut penumbra::backend::Gpu,
+    cube: bool,
+    w: u32,
+    h: u32,
+    texels: &[[f32; 4]],
+    bands: u32,
+) -> Vec<Vec3> {
     use penumbra::backend::ImageDesc;
-    let desc = if cube { ImageDesc::new_cube("env", vk::Format::R32G32B32A32_SFLOAT, w) } else { ImageDesc::new_2d("env", vk::Format::R32G32B32A32_SFLOAT, w, h) };
-    let image = gpu.create_image(&desc.usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)).unwrap();
+    let desc = if cube {
+        ImageDesc::new_cube("env", vk::Format::R32G32B32A32_SFLOAT, w)
+    } else {
+        ImageDesc::new_2d("env", vk::Format::R32G32B32A32_SFLOAT, w, h)
+    };
+    let image = gpu
+        .create_image(&desc.usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))
+        .unwrap();
     gpu.upload_image(image, 0, bytemuck::cast_slice(texels)).unwrap();
     let mut states = ResourceStates::default();
-    states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS }).unwrap();
+    states
+        .set_image(
+            gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )
+        .unwrap();
     let projector = sh::ShProjector::new(gpu, &ShaderLibrary::Embedded, "sh projection").unwrap();
-    let out = gpu.create_buffer(&BufferDesc { name: "sh out".into(), size: 64 * 16, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
+    let out = gpu
+        .create_buffer(&BufferDesc {
+            name: "sh out".into(),
+            size: 64 * 16,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuToCpu,
+        })
+        .unwrap();
     let env = sh::EnvImage::of(gpu, image).unwrap();
-    assert_eq!(env.layout, if cube { sh::EnvLayout::Cube } else { sh::EnvLayout::Equirect });
+    assert_eq!(
+        env.layout,
+        if cube {
+            sh::EnvLayout::Cube
+        } else {
+            sh::EnvLayout::Equirect
+        }
+    );
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
-    projector.add_passes(&mut graph, "sh projection", env, bands, out).unwrap();
-    graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
+    projector
+        .add_passes(&mut graph, "sh projection", env, bands, out)
+        .unwrap();
+    graph
+        .pass("host")
+        .buffer(out, Access::HostRead, None)
+        .record(|_| Ok(()));
     let mut rec = gpu.begin_frame(frame).unwrap();
     graph.execute(&mut rec, &mut states).unwrap();
     rec.finish().unwrap();
     gpu.submit_and_wait(frame).unwrap();
     let got: Vec<[f32; 4]> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
-    got[..(bands * bands) as usize].iter().map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+    got[..(bands * bands) as usize]
+        .iter()
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect()
 }
 
 /// World directions of every texel centre: equirect `w`×`h`, or six `w`² cube faces.
 fn texel_dirs(cube: bool, w: usize, h: usize) -> Vec<Vec3> {
     if cube {
-        (0..6 * w * w).map(|i| sh::cube_texel_dir_world(i / (w * w), i % w, (i % (w * w)) / w, w).normalize()).collect()
+        (0..6 * w * w)
+            .map(|i| sh::cube_texel_dir_world(i / (w * w), i % w, (i % (w * w)) / w, w).normalize())
+            .collect()
     } else {
-        (0..w * h).map(|i| sh::equirect_texel_dir_world(i % w, i / w, w, h)).collect()
+        (0..w * h)
+            .map(|i| sh::equirect_texel_dir_world(i % w, i / w, w, h))
+            .collect()
     }
 }
 
@@ -148,7 +260,11 @@ fn abs_scale(cube: bool, w: usize, h: usize, texels: &[[f32; 4]], bands: usize) 
     let mut s = vec![0.0f64; bands * bands];
     let mut y = vec![0.0f64; bands * bands];
     for (i, d) in texel_dirs(cube, w, h).into_iter().enumerate() {
-        let omega = if cube { sh::cube_texel_solid_angle(i % w, (i % (w * w)) / w, w) } else { sh::equirect_texel_solid_angle(i / w, w, h) };
+        let omega = if cube {
+            sh::cube_texel_solid_angle(i % w, (i % (w * w)) / w, w)
+        } else {
+            sh::equirect_texel_solid_angle(i / w, w, h)
+        };
         sh::eval_basis_f64(sh::world_to_sh(d).as_dvec3(), bands, &mut y).unwrap();
         let l = texels[i][..3].iter().fold(0.0f64, |m, v| m.max(v.abs() as f64));
         for k in 0..bands * bands {
@@ -195,7 +311,11 @@ fn gpu_projection_recovers_a_band_limited_environment() {
             for (ch, (g, s)) in [(c.x, 1.0), (c.y, 2.0), (c.z, -1.0)].into_iter().enumerate() {
                 let err = (g - s * f[k]).abs();
                 worst = worst.max(err / s.abs());
-                assert!(err <= tol * s.abs(), "cube {cube}: coefficient {k} channel {ch}: GPU {g} vs {}", s * f[k]);
+                assert!(
+                    err <= tol * s.abs(),
+                    "cube {cube}: coefficient {k} channel {ch}: GPU {g} vs {}",
+                    s * f[k]
+                );
             }
         }
         eprintln!("cube {cube} {w}x{h}: largest |GPU - f| {worst:.2e}");
@@ -239,11 +359,19 @@ fn bands01_by_quadrature(cube: bool, w: usize, h: usize, texels: &[[f32; 4]]) ->
 fn gpu_projection_of_a_random_image_matches_the_cpu() {
     let mut gpu = common::test_gpu();
     let mut rng = Rng(12345);
-    for (cube, w, h, tol) in [(false, 64usize, 32usize, 1e-5f64), (false, 100, 37, 1e-5), (true, 32, 32, 1e-5)] {
+    for (cube, w, h, tol) in [
+        (false, 64usize, 32usize, 1e-5f64),
+        (false, 100, 37, 1e-5),
+        (true, 32, 32, 1e-5),
+    ] {
         let n = if cube { 6 * w * w } else { w * h };
         let texels: Vec<[f32; 4]> = (0..n).map(|_| [rng.next(), rng.next(), rng.next(), 0.0]).collect();
         let rgb: Vec<[f32; 3]> = texels.iter().map(|t| [t[0], t[1], t[2]]).collect();
-        let cpu = if cube { sh::project_cubemap(&rgb, w, 8).unwrap() } else { sh::project_equirect(&rgb, w, h, 8).unwrap() };
+        let cpu = if cube {
+            sh::project_cubemap(&rgb, w, 8).unwrap()
+        } else {
+            sh::project_equirect(&rgb, w, h, 8).unwrap()
+        };
         let got = gpu_project(&mut gpu, cube, w as u32, h as u32, &texels, 8);
         let scale = abs_scale(cube, w, h, &texels, 8);
         let mut worst = 0.0f64;
@@ -251,7 +379,13 @@ fn gpu_projection_of_a_random_image_matches_the_cpu() {
             for ch in 0..3 {
                 let rel = (got[k][ch] as f64 - cpu[k][ch] as f64).abs() / scale[k];
                 worst = worst.max(rel);
-                assert!(rel <= tol, "cube {cube} {w}x{h}: coefficient {k} channel {ch}: GPU {} vs CPU {} (scale {})", got[k][ch], cpu[k][ch], scale[k]);
+                assert!(
+                    rel <= tol,
+                    "cube {cube} {w}x{h}: coefficient {k} channel {ch}: GPU {} vs CPU {} (scale {})",
+                    got[k][ch],
+                    cpu[k][ch],
+                    scale[k]
+                );
             }
         }
         let own = bands01_by_quadrature(cube, w, h, &texels);
@@ -260,7 +394,12 @@ fn gpu_projection_of_a_random_image_matches_the_cpu() {
             for ch in 0..3 {
                 let rel = (got[k][ch] as f64 - own[k][ch]).abs() / scale[k];
                 worst_own = worst_own.max(rel);
-                assert!(rel <= tol, "cube {cube} {w}x{h}: coefficient {k} channel {ch}: GPU {} vs the test's quadrature {}", got[k][ch], own[k][ch]);
+                assert!(
+                    rel <= tol,
+                    "cube {cube} {w}x{h}: coefficient {k} channel {ch}: GPU {} vs the test's quadrature {}",
+                    got[k][ch],
+                    own[k][ch]
+                );
             }
         }
         eprintln!("cube {cube} {w}x{h}: largest |GPU - CPU| / scale {worst:.2e}; bands 0-1 against the test's own quadrature {worst_own:.2e}");
@@ -281,17 +420,37 @@ fn gpu_projection_of_a_constant_image_is_band_zero() {
         let n = if cube { 6 * w * w } else { w * h };
         let texels = vec![[l.x, l.y, l.z, 0.0]; n];
         let rgb = vec![[l.x, l.y, l.z]; n];
-        let cpu = if cube { sh::project_cubemap(&rgb, w, 6).unwrap() } else { sh::project_equirect(&rgb, w, h, 6).unwrap() };
+        let cpu = if cube {
+            sh::project_cubemap(&rgb, w, 6).unwrap()
+        } else {
+            sh::project_equirect(&rgb, w, h, 6).unwrap()
+        };
         let got = gpu_project(&mut gpu, cube, w as u32, h as u32, &texels, 6);
         let c00 = l * sh::CONSTANT_ONE_C00 as f32;
-        assert!((got[0] - c00).abs().max_element() <= 2e-6 * c00.max_element(), "cube {cube}: c00 {} vs {c00}", got[0]);
+        assert!(
+            (got[0] - c00).abs().max_element() <= 2e-6 * c00.max_element(),
+            "cube {cube}: c00 {} vs {c00}",
+            got[0]
+        );
         let mut worst = 0.0f32;
         for k in 1..36 {
             worst = worst.max(got[k].abs().max_element() / c00.max_element());
-            assert!((got[k] - cpu[k]).abs().max_element() <= 1e-5 * c00.max_element(), "cube {cube}: coefficient {k}: GPU {} vs CPU {}", got[k], cpu[k]);
-            assert!(got[k].abs().max_element() <= 2e-3 * c00.max_element(), "cube {cube}: coefficient {k}: {}", got[k]);
+            assert!(
+                (got[k] - cpu[k]).abs().max_element() <= 1e-5 * c00.max_element(),
+                "cube {cube}: coefficient {k}: GPU {} vs CPU {}",
+                got[k],
+                cpu[k]
+            );
+            assert!(
+                got[k].abs().max_element() <= 2e-3 * c00.max_element(),
+                "cube {cube}: coefficient {k}: {}",
+                got[k]
+            );
         }
-        eprintln!("cube {cube}: c00 {} (exact {c00}); largest other |c_k|/c00 {worst:.2e}", got[0]);
+        eprintln!(
+            "cube {cube}: c00 {} (exact {c00}); largest other |c_k|/c00 {worst:.2e}",
+            got[0]
+        );
     }
     common::assert_clean(&gpu);
 }
@@ -329,7 +488,14 @@ fn ops_cases() -> Vec<OpsCase> {
             };
             let a = (0..64).map(|_| s()).collect();
             let b = (0..64).map(|_| s()).collect();
-            OpsCase { r1, r2, rw, width, a, b }
+            OpsCase {
+                r1,
+                r2,
+                rw,
+                width,
+                a,
+                b,
+            }
         })
         .collect()
 }
@@ -337,7 +503,16 @@ fn ops_cases() -> Vec<OpsCase> {
 /// Runs `shader` on `cases` with the 8-band product term list; returns each case's 512 outputs.
 fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
     let mut gpu = common::test_gpu();
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh ops check".into(), shader: shader.into(), specialization: vec![] }, &ShaderLibrary::Embedded).unwrap();
+    let pipeline = gpu
+        .create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "sh ops check".into(),
+                shader: shader.into(),
+                specialization: vec![],
+            },
+            &ShaderLibrary::Embedded,
+        )
+        .unwrap();
     let mut input = Vec::<f32>::with_capacity(OPS_CASES * 48 * 4);
     for c in cases {
         for m in [c.r1, c.r2, c.rw] {
@@ -351,10 +526,28 @@ fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
         input.resize(input.len() + 6 * 4, 0.0); // 42 vec4s used of the case's 48
     }
     let terms = sh::product_terms(8).unwrap();
-    let cases_buf = gpu.create_buffer_init("sh ops cases", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&input)).unwrap();
-    let terms_buf = gpu.create_buffer_init("sh ops terms", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&terms)).unwrap();
-    let out =
-        gpu.create_buffer(&BufferDesc { name: "sh ops result".into(), size: (OPS_CASES * OPS_STRIDE * 4) as u64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
+    let cases_buf = gpu
+        .create_buffer_init(
+            "sh ops cases",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&input),
+        )
+        .unwrap();
+    let terms_buf = gpu
+        .create_buffer_init(
+            "sh ops terms",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&terms),
+        )
+        .unwrap();
+    let out = gpu
+        .create_buffer(&BufferDesc {
+            name: "sh ops result".into(),
+            size: (OPS_CASES * OPS_STRIDE * 4) as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuToCpu,
+        })
+        .unwrap();
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
     let c = vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -370,7 +563,10 @@ fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
             ctx.rec.push_constants(bytemuck::cast_slice(&count))?;
             ctx.rec.dispatch([OPS_CASES as u32, 1, 1])
         });
-    graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
+    graph
+        .pass("host")
+        .buffer(out, Access::HostRead, None)
+        .record(|_| Ok(()));
     common::run_once(&gpu, frame, graph);
     let got: Vec<f32> = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
     common::assert_clean(&gpu);
@@ -380,7 +576,10 @@ fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
 /// Largest |gpu - cpu| over a slice pair.
 fn worst(gpu: &[f32], cpu: &[f64]) -> f64 {
     assert_eq!(gpu.len(), cpu.len());
-    gpu.iter().zip(cpu).map(|(g, c)| (*g as f64 - c).abs()).fold(0.0, f64::max)
+    gpu.iter()
+        .zip(cpu)
+        .map(|(g, c)| (*g as f64 - c).abs())
+        .fold(0.0, f64::max)
 }
 
 fn f64s(v: &[f32]) -> Vec<f64> {
@@ -415,19 +614,31 @@ fn glsl_general_rotation_matches_the_cpu() {
         w8 = w8.max(worst(&g[0..64], &cpu));
         let cpu4 = sh::ShRotation::new(c.r1, 4).unwrap().rotate(&a[..16]).unwrap();
         w4 = w4.max(worst(&g[192..208], &cpu4));
-        assert_eq!(&g[208..256], &c.a[16..], "case {i}: a 4-band rotation changed bands 4..7");
+        assert_eq!(
+            &g[208..256],
+            &c.a[16..],
+            "case {i}: a 4-band rotation changed bands 4..7"
+        );
         let cpuw = sh::ShRotation::from_world(c.rw, 8).unwrap().rotate(&a).unwrap();
         ww = ww.max(worst(&g[256..320], &cpuw));
         // Independent: band 0 kept, band 1 rotated as a vector.
         let swap = glam::DMat3::from_cols(glam::DVec3::X, glam::DVec3::Z, -glam::DVec3::Y); // world (x, y, z) → SH (x, −z, y)
-        for (out, r) in [(0usize, c.r1.as_dmat3()), (256, swap * c.rw.as_dmat3() * swap.transpose())] {
+        for (out, r) in [
+            (0usize, c.r1.as_dmat3()),
+            (256, swap * c.rw.as_dmat3() * swap.transpose()),
+        ] {
             let want = r * band1_lobe(&c.a);
             let got = band1_lobe(&g[out..out + 4]);
-            wl = wl.max((got - want).abs().max_element()).max((g[out] - c.a[0]).abs() as f64);
+            wl = wl
+                .max((got - want).abs().max_element())
+                .max((g[out] - c.a[0]).abs() as f64);
         }
     }
     eprintln!("sh_rotate vs ShRotation, largest |GPU - CPU|: 8 bands {w8:.2e}, 4 bands {w4:.2e}, world frame {ww:.2e}");
-    assert!(w8 <= ROTATION_TOL && w4 <= ROTATION_TOL && ww <= ROTATION_TOL, "8 bands {w8:e}, 4 bands {w4:e}, world {ww:e}");
+    assert!(
+        w8 <= ROTATION_TOL && w4 <= ROTATION_TOL && ww <= ROTATION_TOL,
+        "8 bands {w8:e}, 4 bands {w4:e}, world {ww:e}"
+    );
     eprintln!("band 0 and 1 against the rotated vector: largest difference {wl:.2e}");
     assert!(wl <= ROTATION_TOL, "band 1 is not the rotated vector: {wl:e}");
 }
@@ -462,7 +673,10 @@ fn glsl_rotation_composes() {
     let got = run_ops_check("util/sh_ops_check.comp", &cases);
     let mut w = 0.0f64;
     for (c, g) in cases.iter().zip(&got) {
-        let cpu = sh::ShRotation::new(c.r2 * c.r1, 8).unwrap().rotate(&f64s(&c.a)).unwrap();
+        let cpu = sh::ShRotation::new(c.r2 * c.r1, 8)
+            .unwrap()
+            .rotate(&f64s(&c.a))
+            .unwrap();
         w = w.max(worst(&g[64..128], &cpu));
     }
     eprintln!("sh_rotate(R2, sh_rotate(R1, a)) vs ShRotation(R2 R1): largest difference {w:.2e}");
@@ -499,7 +713,11 @@ fn glsl_windows_match_the_cpu() {
     let mut w = 0.0f64;
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
         if c.width.is_nan() || c.width <= 0.0 {
-            assert!(g[384..464].iter().all(|v| *v == 0.0), "case {i}: width {} must give zero windows", c.width);
+            assert!(
+                g[384..464].iter().all(|v| *v == 0.0),
+                "case {i}: width {} must give zero windows",
+                c.width
+            );
             continue;
         }
         let h = sh::hanning(8, c.width as f64).unwrap();
@@ -513,10 +731,24 @@ fn glsl_windows_match_the_cpu() {
     assert!(w <= 1e-6, "{w:e}");
     assert_eq!(cases[14].width, 4.0);
     let hanning4 = [1.0, 0.853553390593, 0.5, 0.146446609407, 0.0, 0.0, 0.0, 0.0];
-    let lanczos4 = [1.0, 0.900316316157, std::f64::consts::FRAC_2_PI, 0.300105438719, 0.0, 0.0, 0.0, 0.0];
+    let lanczos4 = [
+        1.0,
+        0.900316316157,
+        std::f64::consts::FRAC_2_PI,
+        0.300105438719,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ];
     let literal = worst(&got[14][384..392], &hanning4).max(worst(&got[14][392..400], &lanczos4));
     eprintln!("width 4 against the literal windows: {literal:.1e}");
-    assert!(literal <= 1e-6, "width-4 windows: {:?} {:?}", &got[14][384..392], &got[14][392..400]);
+    assert!(
+        literal <= 1e-6,
+        "width-4 windows: {:?} {:?}",
+        &got[14][384..392],
+        &got[14][392..400]
+    );
 }
 
 /// sh_product over sh::product_terms(8) equals sh::product (f64) to 1e-5 of each output's
@@ -535,13 +767,23 @@ fn glsl_triple_product_matches_the_cpu() {
         let cpu = sh::product(&a, &b, 8).unwrap();
         let mut scale = [0.0f64; 64];
         for [packed, bits] in &terms {
-            let (ti, tj, tk) = ((packed & 0xff) as usize, ((packed >> 8) & 0xff) as usize, (packed >> 16) as usize);
+            let (ti, tj, tk) = (
+                (packed & 0xff) as usize,
+                ((packed >> 8) & 0xff) as usize,
+                (packed >> 16) as usize,
+            );
             scale[tk] += (f32::from_bits(*bits) as f64 * a[ti] * b[tj]).abs();
         }
         for k in 0..64 {
             let rel = (g[320 + k] as f64 - cpu[k]).abs() / scale[k].abs().max(1e-30);
             w = w.max(rel);
-            assert!(rel <= 1e-5, "case {i} coefficient {k}: GPU {} vs CPU {} (scale {})", g[320 + k], cpu[k], scale[k]);
+            assert!(
+                rel <= 1e-5,
+                "case {i} coefficient {k}: GPU {} vs CPU {} (scale {})",
+                g[320 + k],
+                cpu[k],
+                scale[k]
+            );
         }
     }
     eprintln!("sh_product vs sh::product: largest |GPU - CPU| / scale {w:.2e}");
@@ -549,7 +791,12 @@ fn glsl_triple_product_matches_the_cpu() {
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
         let dot: f64 = c.a.iter().zip(&c.b).map(|(x, y)| *x as f64 * *y as f64).sum();
         let y00 = 0.5 / std::f64::consts::PI.sqrt();
-        let scale: f64 = c.a.iter().zip(&c.b).map(|(x, y)| (*x as f64 * *y as f64).abs()).sum::<f64>() * y00;
+        let scale: f64 =
+            c.a.iter()
+                .zip(&c.b)
+                .map(|(x, y)| (*x as f64 * *y as f64).abs())
+                .sum::<f64>()
+                * y00;
         let rel = (g[320] as f64 - y00 * dot).abs() / scale;
         w00 = w00.max(rel);
         assert!(rel <= 1e-5, "case {i}: c_00 {} vs y_00·a·b {}", g[320], y00 * dot);

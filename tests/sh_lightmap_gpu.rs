@@ -19,7 +19,13 @@ use penumbra::shaders::ShaderLibrary;
 
 /// A quad `o + s·u + t·v` (s, t ∈ [0, 1]) as two triangles facing `u × v`.
 fn quad(o: DVec3, u: DVec3, v: DVec3, object: usize, albedo: f64) -> [Triangle; 2] {
-    let t = |p| Triangle { p, object, albedo: DVec3::splat(albedo), emission: DVec3::ZERO, sky: false };
+    let t = |p| Triangle {
+        p,
+        object,
+        albedo: DVec3::splat(albedo),
+        emission: DVec3::ZERO,
+        sky: false,
+    };
     [t([o, o + u, o + u + v]), t([o, o + u + v, o + v])]
 }
 
@@ -46,9 +52,21 @@ fn open_box(albedo: f64) -> Vec<Triangle> {
 /// walls and is patched too.
 fn box_with_sky() -> Vec<Triangle> {
     let mut tris = open_box(0.5);
-    let panel = quad(DVec3::new(-0.5, 0.3, -0.5), DVec3::new(0.0, 0.2, 0.8), DVec3::new(0.8, 0.0, 0.0), 5, 0.5);
+    let panel = quad(
+        DVec3::new(-0.5, 0.3, -0.5),
+        DVec3::new(0.0, 0.2, 0.8),
+        DVec3::new(0.8, 0.0, 0.0),
+        5,
+        0.5,
+    );
     tris.extend(panel);
-    let mut lid = quad(DVec3::new(-1.2, 1.5, -1.2), DVec3::new(1.325, 0.0, 0.0), DVec3::new(0.0, 0.0, 2.4), 6, 0.0);
+    let mut lid = quad(
+        DVec3::new(-1.2, 1.5, -1.2),
+        DVec3::new(1.325, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, 2.4),
+        6,
+        0.0,
+    );
     for t in &mut lid {
         t.sky = true;
     }
@@ -57,13 +75,31 @@ fn box_with_sky() -> Vec<Triangle> {
 }
 
 fn gpu_bits(gpu: &mut Gpu, p: &Patches, tris: &[Triangle], samples: &SampleSet, mode: Mode) -> Vec<u32> {
-    let bits = visibility_gpu(gpu, &ShaderLibrary::Embedded, p, tris, samples, mode, &mut Progress::new("test")).unwrap_or_else(|e| panic!("{e}"));
+    let bits = visibility_gpu(
+        gpu,
+        &ShaderLibrary::Embedded,
+        p,
+        tris,
+        samples,
+        mode,
+        &mut Progress::new("test"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     common::assert_clean(gpu);
     bits
 }
 
 fn settings(mode: Mode, bands: usize, bounces: bool) -> Settings {
-    Settings { solve: solve::Settings { mode, threshold: 1e-4, ..solve::Settings::default() }, bands, bounces, tone: false }
+    Settings {
+        solve: solve::Settings {
+            mode,
+            threshold: 1e-4,
+            ..solve::Settings::default()
+        },
+        bands,
+        bounces,
+        tone: false,
+    }
 }
 
 /// SH radiance coefficients of a constant sky L₀ = 1.
@@ -80,10 +116,17 @@ fn differing(p: &Patches, samples: &SampleSet, a: &[u32], b: &[u32]) -> (f64, u6
     for (k, q) in p.patches.iter().enumerate() {
         let row = k * words..(k + 1) * words;
         if q.inside() {
-            diff += a[row.clone()].iter().zip(&b[row]).map(|(x, y)| (x ^ y).count_ones() as u64).sum::<u64>();
+            diff += a[row.clone()]
+                .iter()
+                .zip(&b[row])
+                .map(|(x, y)| (x ^ y).count_ones() as u64)
+                .sum::<u64>();
             all += samples.len() as u64;
         } else {
-            assert!(a[row.clone()].iter().chain(&b[row]).all(|&w| w == 0), "border patch {k} has bits");
+            assert!(
+                a[row.clone()].iter().chain(&b[row]).all(|&w| w == 0),
+                "border patch {k} has bits"
+            );
         }
     }
     let ones = |v: &[u32]| v.iter().map(|w| w.count_ones() as u64).sum::<u64>();
@@ -97,7 +140,10 @@ fn shaded_difference(p: &Patches, a: &[f64], b: &[f64], bands: usize) -> f64 {
     let inside = (0..p.patches.len()).filter(|&k| p.patches[k].inside());
     let (mut worst, mut largest) = (0.0f64, 0.0f64);
     for k in inside {
-        let (x, y) = (transfer::shade(&a[k * dim..(k + 1) * dim], &light), transfer::shade(&b[k * dim..(k + 1) * dim], &light));
+        let (x, y) = (
+            transfer::shade(&a[k * dim..(k + 1) * dim], &light),
+            transfer::shade(&b[k * dim..(k + 1) * dim], &light),
+        );
         worst = worst.max((x - y).abs());
         largest = largest.max(x.abs());
     }
@@ -121,7 +167,10 @@ fn compare(gpu: &mut Gpu, name: &str, tris: &[Triangle], size: f64, mode: Mode) 
     eprintln!("{name} ({mode:?}): {share:.2e} of the bits differ (set: cpu {cpu_ones}, gpu {gpu_ones}); shaded transfer differs by {shaded:.2e} of its largest value");
     assert!(cpu_ones > 0, "{name}: the CPU sees no sky at all");
     assert!(share <= 1e-3, "{name} ({mode:?}): {share} of the bits differ");
-    assert!(shaded < 1e-3, "{name} ({mode:?}): the shaded transfer differs by {shaded}");
+    assert!(
+        shaded < 1e-3,
+        "{name} ({mode:?}): the shaded transfer differs by {shaded}"
+    );
     (p, on_gpu)
 }
 
@@ -143,8 +192,16 @@ fn gpu_visibility_matches_the_cpu_with_a_sky_surface() {
     // Faithful: only rays that hit the lid count; corrected: the escaping ones too. Both see some
     // sky, and faithful strictly less.
     let ones = |v: &[u32]| v.iter().map(|w| w.count_ones() as u64).sum::<u64>();
-    assert!(ones(&faithful) > 0 && ones(&faithful) < ones(&corrected), "faithful {} corrected {}", ones(&faithful), ones(&corrected));
-    assert!(faithful.iter().zip(&corrected).all(|(f, c)| f & !c == 0), "a ray reaches the sky in faithful mode only");
+    assert!(
+        ones(&faithful) > 0 && ones(&faithful) < ones(&corrected),
+        "faithful {} corrected {}",
+        ones(&faithful),
+        ones(&corrected)
+    );
+    assert!(
+        faithful.iter().zip(&corrected).all(|(f, c)| f & !c == 0),
+        "a ray reaches the sky in faithful mode only"
+    );
     assert!(p.patches.iter().filter(|q| q.inside()).count() > 100);
 }
 
@@ -165,7 +222,11 @@ fn the_gpu_open_box_floor_sees_the_opening_view_factor() {
     let bits = gpu_bits(&mut gpu, &p, &tris, &samples, Mode::Corrected);
     let k = (0..p.patches.len())
         .filter(|&k| p.patches[k].inside())
-        .min_by(|&a, &b| (p.patches[a].centre - DVec3::new(0.125, 0.0, 0.125)).length().total_cmp(&(p.patches[b].centre - DVec3::new(0.125, 0.0, 0.125)).length()))
+        .min_by(|&a, &b| {
+            (p.patches[a].centre - DVec3::new(0.125, 0.0, 0.125))
+                .length()
+                .total_cmp(&(p.patches[b].centre - DVec3::new(0.125, 0.0, 0.125)).length())
+        })
         .unwrap_or(0);
     assert!((p.patches[k].centre - DVec3::new(0.125, 0.0, 0.125)).length() < 1e-9);
     // The direct transfer from the GPU bits alone: (1/π)·Σ cos·y·4π/N, shaded with L = 1.
@@ -182,8 +243,21 @@ fn the_gpu_open_box_floor_sees_the_opening_view_factor() {
 /// GPU path has to retry its chunks with more lanes per word to give the CPU's bits.
 #[test]
 fn gpu_visibility_matches_the_cpu_through_a_deep_bvh() {
-    let mut tris = quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 2.0), DVec3::new(2.0, 0.0, 0.0), 0, 0.5).to_vec();
-    let mut lid = quad(DVec3::new(-3.0, 3.0, -3.0), DVec3::new(6.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 6.0), 1, 0.0);
+    let mut tris = quad(
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::new(0.0, 0.0, 2.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        0,
+        0.5,
+    )
+    .to_vec();
+    let mut lid = quad(
+        DVec3::new(-3.0, 3.0, -3.0),
+        DVec3::new(6.0, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, 6.0),
+        1,
+        0.0,
+    );
     for t in &mut lid {
         t.sky = true;
     }
@@ -192,7 +266,13 @@ fn gpu_visibility_matches_the_cpu_through_a_deep_bvh() {
     for _ in 0..5000 {
         let mut point = || DVec3::new(random() * 4.0 - 2.0, 0.5 + random() * 2.0, random() * 4.0 - 2.0);
         let (a, b) = (point(), point());
-        tris.push(Triangle { p: [a, b, a + DVec3::new(1e-3, 1e-3, 0.0)], object: 2, albedo: DVec3::splat(0.5), emission: DVec3::ZERO, sky: false });
+        tris.push(Triangle {
+            p: [a, b, a + DVec3::new(1e-3, 1e-3, 0.0)],
+            object: 2,
+            albedo: DVec3::splat(0.5),
+            emission: DVec3::ZERO,
+            sky: false,
+        });
     }
     let samples = SampleSet::new(2500, 2).unwrap_or_else(|e| panic!("{e}"));
     // Only the floor is patched; everything occludes.
@@ -203,7 +283,10 @@ fn gpu_visibility_matches_the_cpu_through_a_deep_bvh() {
     let on_gpu = gpu_bits(&mut gpu, &p, &tris, &samples, Mode::Faithful);
     let (share, cpu_ones, gpu_ones) = differing(&p, &samples, &cpu, &on_gpu);
     eprintln!("deep BVH: {share:.2e} of the bits differ (set: cpu {cpu_ones}, gpu {gpu_ones})");
-    assert!(cpu_ones > 0 && share <= 1e-3, "{share} of the bits differ (set: cpu {cpu_ones}, gpu {gpu_ones})");
+    assert!(
+        cpu_ones > 0 && share <= 1e-3,
+        "{share} of the bits differ (set: cpu {cpu_ones}, gpu {gpu_ones})"
+    );
 }
 
 /// CPU against GPU visibility rays per second on the open box at patch 0.05 (10,000 samples),
@@ -221,7 +304,16 @@ fn measure_visibility_rays_per_second() {
     let occ = Occluders::new(&tris);
     let inside: Vec<_> = p.patches.iter().filter(|q| q.inside()).collect();
     // The rays traced: the (patch, sample) pairs in front of both normals.
-    let rays = inside.iter().map(|q| samples.dirs.iter().filter(|d| d.dot(p.charts[q.chart].normal) > 0.0 && d.dot(q.normal) > 0.0).count()).sum::<usize>() as f64;
+    let rays = inside
+        .iter()
+        .map(|q| {
+            samples
+                .dirs
+                .iter()
+                .filter(|d| d.dot(p.charts[q.chart].normal) > 0.0 && d.dot(q.normal) > 0.0)
+                .count()
+        })
+        .sum::<usize>() as f64;
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
@@ -239,11 +331,16 @@ fn measure_visibility_rays_per_second() {
         );
         (s, out)
     };
-    let (cpu_s, cpu) = time(&mut || transfer::visibility_cpu(&p, &occ, &samples, Mode::Corrected, &mut Progress::new("cpu")));
+    let (cpu_s, cpu) =
+        time(&mut || transfer::visibility_cpu(&p, &occ, &samples, Mode::Corrected, &mut Progress::new("cpu")));
     let (gpu_s, on_gpu) = time(&mut || gpu_bits(&mut gpu, &p, &tris, &samples, Mode::Corrected));
     let (share, _, _) = differing(&p, &samples, &cpu, &on_gpu);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    println!("open box, patch 0.05: {} inside patches, {} samples, {rays:.0} rays; {share:.2e} of the bits differ", inside.len(), samples.len());
+    println!(
+        "open box, patch 0.05: {} inside patches, {} samples, {rays:.0} rays; {share:.2e} of the bits differ",
+        inside.len(),
+        samples.len()
+    );
     println!("cpu ({threads} threads): {cpu_s:.2} s, {:.3e} rays/s", rays / cpu_s);
     println!("gpu ({name}): {gpu_s:.2} s, {:.3e} rays/s", rays / gpu_s);
     assert!(share <= 1e-3);

@@ -33,22 +33,36 @@ fn ten_times_smaller_at_40_db_with_4_bands() {
     let baked = bake(0.1, 4, 2500);
     let row = quantized_row(&baked, 1024);
     eprintln!("| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n{row}");
-    assert!(row.texels > 16_000, "{} texels: too few for the ratio to mean anything", row.texels);
+    assert!(
+        row.texels > 16_000,
+        "{} texels: too few for the ratio to mean anything",
+        row.texels
+    );
     assert!(row.ratio >= 10.0, "compression {:.2}×", row.ratio);
     assert!(row.psnr_db >= 40.0, "PSNR {:.1} dB", row.psnr_db);
     // Fewer representatives cost accuracy: the measure sees the codebook.
     let coarse = quantized_row(&baked, 16);
-    assert!(coarse.psnr_db < row.psnr_db - 6.0, "16 representatives {:.1} dB against 1024's {:.1} dB", coarse.psnr_db, row.psnr_db);
+    assert!(
+        coarse.psnr_db < row.psnr_db - 6.0,
+        "16 representatives {:.1} dB against 1024's {:.1} dB",
+        coarse.psnr_db,
+        row.psnr_db
+    );
 }
 
 #[test]
 #[ignore = "measurement: several minutes; prints the README's PSNR table"]
 fn psnr_table() {
-    println!("| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|");
+    println!(
+        "| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|"
+    );
     for bands in [2, 3, 4, 6, 8] {
         let t = std::time::Instant::now();
         let baked = bake(0.1, bands, 10_000);
-        println!("bake, {bands} bands: {:.1} s (CPU rays, direct transfer)", t.elapsed().as_secs_f64());
+        println!(
+            "bake, {bands} bands: {:.1} s (CPU rays, direct transfer)",
+            t.elapsed().as_secs_f64()
+        );
         for reps in [1024, 4096, 16384, 65536] {
             println!("{}", quantized_row(&baked, reps));
         }
@@ -61,7 +75,9 @@ fn psnr_large_map() {
     let t = std::time::Instant::now();
     let baked = bake(0.05, 4, 2500);
     println!("bake, 4 bands, 5 cm, 2,500 samples: {:.1} s", t.elapsed().as_secs_f64());
-    println!("| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|");
+    println!(
+        "| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|"
+    );
     for reps in [1024, 4096, 16384, 65536] {
         println!("{}", quantized_row(&baked, reps));
     }

@@ -6,32 +6,112 @@
 
 mod common;
 
-use penumbra::backend::{vk, BufferDesc, ComputePipelineDesc, Gpu, ImageDesc, ImageId, MemoryKind, SamplerDesc, SpecConstant, SubresourceRange};
+use penumbra::backend::{
+    vk, BufferDesc, ComputePipelineDesc, Gpu, ImageDesc, ImageId, MemoryKind, SamplerDesc, SpecConstant,
+    SubresourceRange,
+};
 use penumbra::graph::{Access, RenderGraph, ResourceStates};
 use penumbra::lighting::sh_lightmap::storage;
 use penumbra::shaders::ShaderLibrary;
 
-fn image(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, format: vk::Format, w: u32, h: u32, bytes: &[u8]) -> ImageId {
-    let image = gpu.create_image(&ImageDesc::new_2d(name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)).unwrap();
+fn image(
+    gpu: &mut Gpu,
+    states: &mut ResourceStates,
+    name: &str,
+    format: vk::Format,
+    w: u32,
+    h: u32,
+    bytes: &[u8],
+) -> ImageId {
+    let image = gpu
+        .create_image(
+            &ImageDesc::new_2d(name, format, w, h)
+                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+        )
+        .unwrap();
     gpu.upload_image(image, 0, bytes).unwrap();
-    states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS }).unwrap();
+    states
+        .set_image(
+            gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )
+        .unwrap();
     image
 }
 
 /// Runs the check kernel in `mode` over `count` items with the index map `indices` (RGBA8 bytes,
 /// `iw`×`ih`) and the RGBA8 table `table` (`tw`×`th`); returns the result words.
 #[allow(clippy::too_many_arguments)]
-fn check(mode: u32, count: u32, bands: u32, indices: &[u8], iw: u32, ih: u32, table: &[u8], tw: u32, th: u32, words_per_item: u64) -> Vec<u32> {
+fn check(
+    mode: u32,
+    count: u32,
+    bands: u32,
+    indices: &[u8],
+    iw: u32,
+    ih: u32,
+    table: &[u8],
+    tw: u32,
+    th: u32,
+    words_per_item: u64,
+) -> Vec<u32> {
     let mut gpu = common::test_gpu();
     let mut states = ResourceStates::default();
-    let index_uint = image(&mut gpu, &mut states, "indices", vk::Format::R8G8B8A8_UINT, iw, ih, indices);
-    let index_unorm = image(&mut gpu, &mut states, "indices (unorm)", vk::Format::R8G8B8A8_UNORM, iw, ih, indices);
-    let table = image(&mut gpu, &mut states, "table", vk::Format::R8G8B8A8_UNORM, tw, th, table);
+    let index_uint = image(
+        &mut gpu,
+        &mut states,
+        "indices",
+        vk::Format::R8G8B8A8_UINT,
+        iw,
+        ih,
+        indices,
+    );
+    let index_unorm = image(
+        &mut gpu,
+        &mut states,
+        "indices (unorm)",
+        vk::Format::R8G8B8A8_UNORM,
+        iw,
+        ih,
+        indices,
+    );
+    let table = image(
+        &mut gpu,
+        &mut states,
+        "table",
+        vk::Format::R8G8B8A8_UNORM,
+        tw,
+        th,
+        table,
+    );
     let nearest = gpu.sampler(SamplerDesc::NEAREST_CLAMP).unwrap();
     let linear = gpu.sampler(SamplerDesc::LINEAR_CLAMP).unwrap();
-    let spec = vec![SpecConstant { id: 0, bits: bands }, SpecConstant { id: 1, bits: 1 }, SpecConstant { id: 2, bits: mode }, SpecConstant { id: 3, bits: count }];
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "shl vq check".into(), shader: "util/shl_vq_check.comp".into(), specialization: spec }, &ShaderLibrary::Embedded).unwrap();
-    let out = gpu.create_buffer(&BufferDesc { name: "result".into(), size: 4 * words_per_item * count as u64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu }).unwrap();
+    let spec = vec![
+        SpecConstant { id: 0, bits: bands },
+        SpecConstant { id: 1, bits: 1 },
+        SpecConstant { id: 2, bits: mode },
+        SpecConstant { id: 3, bits: count },
+    ];
+    let pipeline = gpu
+        .create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "shl vq check".into(),
+                shader: "util/shl_vq_check.comp".into(),
+                specialization: spec,
+            },
+            &ShaderLibrary::Embedded,
+        )
+        .unwrap();
+    let out = gpu
+        .create_buffer(&BufferDesc {
+            name: "result".into(),
+            size: 4 * words_per_item * count as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuToCpu,
+        })
+        .unwrap();
     let frame = gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
     let c = vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -46,7 +126,10 @@ fn check(mode: u32, count: u32, bands: u32, indices: &[u8], iw: u32, ih: u32, ta
             ctx.bind(&[])?;
             ctx.rec.dispatch([count, 1, 1])
         });
-    graph.pass("host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
+    graph
+        .pass("host")
+        .buffer(out, Access::HostRead, None)
+        .record(|_| Ok(()));
     common::run_once(&gpu, frame, graph);
     let got = bytemuck::cast_slice(&gpu.read_buffer(out).unwrap()).to_vec();
     common::assert_clean(&gpu);
@@ -56,15 +139,24 @@ fn check(mode: u32, count: u32, bands: u32, indices: &[u8], iw: u32, ih: u32, ta
 #[test]
 fn all_65536_indices_round_trip_bit_exact_and_linear_sampling_breaks_them() {
     // Texel (x, y) of a 256 × 256 map holds index y·256 + x, scrambled so that neighbours differ.
-    let want: Vec<u16> = (0..65_536u32).map(|i| (i.wrapping_mul(40_503) & 0xffff) as u16).collect();
+    let want: Vec<u16> = (0..65_536u32)
+        .map(|i| (i.wrapping_mul(40_503) & 0xffff) as u16)
+        .collect();
     let bytes = storage::pack_indices_rgba8(&want);
-    assert_eq!((bytes[0], bytes[1]), ((want[0] & 255) as u8, (want[0] >> 8) as u8), "R is the low byte, G the high");
+    assert_eq!(
+        (bytes[0], bytes[1]),
+        ((want[0] & 255) as u8, (want[0] >> 8) as u8),
+        "R is the low byte, G the high"
+    );
     let table = vec![128u8; 4 * 256];
     let got = check(0, 65_536, 2, &bytes, 256, 256, &table, 1, 256, 2);
     let wrong = (0..65_536).filter(|&i| got[2 * i] != want[i] as u32).count();
     assert_eq!(wrong, 0, "{wrong} indices read back wrong through integer fetches");
     let blended = (0..65_536).filter(|&i| got[2 * i + 1] != want[i] as u32).count();
-    assert!(blended > 60_000, "a LINEAR sampler at the seed's texel-edge coordinates should mix indices: only {blended} of 65,536 wrong");
+    assert!(
+        blended > 60_000,
+        "a LINEAR sampler at the seed's texel-edge coordinates should mix indices: only {blended} of 65,536 wrong"
+    );
 }
 
 #[test]
@@ -82,7 +174,18 @@ fn the_table_is_64_by_256_for_4096_representatives_and_fetches_every_coefficient
         .collect();
     let (tw, th, bytes) = storage::pack_table_rgba8(&codebook, bands).unwrap();
     let groups = 4u32;
-    let got = check(1, reps as u32 * groups, bands as u32, &[0, 0, 0, 255], 1, 1, &bytes, tw, th, 4);
+    let got = check(
+        1,
+        reps as u32 * groups,
+        bands as u32,
+        &[0, 0, 0, 255],
+        1,
+        1,
+        &bytes,
+        tw,
+        th,
+        4,
+    );
     let mut worst = 0.0f32;
     for (i, &c) in codebook.iter().enumerate() {
         let g = f32::from_bits(got[i]);
@@ -91,7 +194,10 @@ fn the_table_is_64_by_256_for_4096_representatives_and_fetches_every_coefficient
         let cpu = storage::decode_range(storage::encode_range(c));
         assert!((g - cpu).abs() < 1e-5, "coefficient {i}: GPU {g}, CPU decode {cpu}");
     }
-    assert!(worst <= 2.0 / 255.0 + 1e-6, "worst {worst} beyond half a step of the range encoding");
+    assert!(
+        worst <= 2.0 / 255.0 + 1e-6,
+        "worst {worst} beyond half a step of the range encoding"
+    );
 }
 
 #[test]
@@ -108,7 +214,10 @@ fn the_4_tap_filter_is_piecewise_constant_and_exact_on_constant_regions() {
     // The device's own decodes, read where all four taps agree (far from the step); they match
     // the CPU's within float rounding.
     let (d0, d1) = (f32::from_bits(got[0]), f32::from_bits(got[got.len() - 1]));
-    assert!((d0 - storage::decode_range(storage::encode_range(v0))).abs() < 1e-6 && (d1 - storage::decode_range(storage::encode_range(v1))).abs() < 1e-6);
+    assert!(
+        (d0 - storage::decode_range(storage::encode_range(v0))).abs() < 1e-6
+            && (d1 - storage::decode_range(storage::encode_range(v1))).abs() < 1e-6
+    );
     for (i, word) in got.iter().enumerate() {
         let x = 2.0 + 4.0 * (i as f32 + 0.5) / n as f32;
         // Relative to texel 3's centre (3.5): v0 below 1/4, the mean to 3/4, v1 beyond.

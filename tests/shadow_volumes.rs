@@ -97,13 +97,22 @@ fn hit_box(o: Vec3, d: Vec3, lo: Vec3, hi: Vec3) -> Option<bool> {
 fn check(c: &MaskComparison, what: &str) {
     println!("{what}: {c:?}");
     assert!(c.iou >= 0.99, "{what}: IoU {} < 0.99 ({c:?})", c.iou);
-    assert_eq!(c.interior_mismatches, 0, "{what}: mismatches away from the shadow's edge ({c:?})");
+    assert_eq!(
+        c.interior_mismatches, 0,
+        "{what}: mismatches away from the shadow's edge ({c:?})"
+    );
 }
 
 #[test]
 fn analytic_occluder_casts_the_square_of_side_4() {
-    for (name, occluder) in [("open quad (per-triangle volumes)", QUAD), ("closed slab (silhouettes)", SLAB)] {
-        for camera in [TOP_DOWN, "[camera]\nposition = [7, 14, 9]\ntarget = [0, 0, 0]\nfov_y_deg = 35"] {
+    for (name, occluder) in [
+        ("open quad (per-triangle volumes)", QUAD),
+        ("closed slab (silhouettes)", SLAB),
+    ] {
+        for camera in [
+            TOP_DOWN,
+            "[camera]\nposition = [7, 14, 9]\ntarget = [0, 0, 0]\nfov_y_deg = 35",
+        ] {
             let (img, scene) = render(&analytic_scene(camera, occluder, &[]), SIZE);
             let c = compare_masks(
                 SIZE.0,
@@ -136,16 +145,30 @@ fn shadow_area_is_16_square_metres() {
     for y in 0..SIZE.1 {
         for x in 0..SIZE.0 {
             // Ground area of the pixel (its footprint on y = 0), counted when unlit or occluder.
-            let corners: Vec<Vec3> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].iter().map(|&(dx, dy)| hit_plane_y(&scene.camera, x as f32 + dx, y as f32 + dy, SIZE, 0.0).unwrap().0).collect();
-            let a = 0.5 * ((corners[1] - corners[0]).cross(corners[2] - corners[0]).length() + (corners[2] - corners[0]).cross(corners[3] - corners[0]).length());
-            let on_occluder = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 5.0).is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
+            let corners: Vec<Vec3> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+                .iter()
+                .map(|&(dx, dy)| {
+                    hit_plane_y(&scene.camera, x as f32 + dx, y as f32 + dy, SIZE, 0.0)
+                        .unwrap()
+                        .0
+                })
+                .collect();
+            let a = 0.5
+                * ((corners[1] - corners[0]).cross(corners[2] - corners[0]).length()
+                    + (corners[2] - corners[0]).cross(corners[3] - corners[0]).length());
+            let on_occluder = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 5.0)
+                .is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
             if on_occluder || !lit(&img, x, y, 1e-6) {
                 area += f64::from(a);
             }
         }
     }
     // One pixel's ground footprint is about 0.07 m wide: the perimeter of 16 m allows ±1.2 m².
-    assert!((area - 16.0).abs() < 1.2, "shadow area {area} m² (side {})", area.sqrt());
+    assert!(
+        (area - 16.0).abs() < 1.2,
+        "shadow area {area} m² (side {})",
+        area.sqrt()
+    );
 }
 
 /// The camera below the occluder, inside its shadow volume, looking at the ground: the near
@@ -158,14 +181,29 @@ fn camera_inside_a_volume_z_fail_is_right_and_z_pass_is_wrong() {
     assert!(cam_pos.x.abs() < 1.6 && cam_pos.z.abs() < 1.6);
     let mut results = Vec::new();
     for stencil in ["zfail", "zpass"] {
-        let (img, scene) = render(&analytic_scene(camera, SLAB, &[&format!("stencil = \"{stencil}\"")]), SIZE);
-        let c = compare_masks(SIZE.0, SIZE.1, |x, y| lit(&img, x, y, 1e-6), |px, py| analytic_lit(&scene.camera, px, py, SIZE));
+        let (img, scene) = render(
+            &analytic_scene(camera, SLAB, &[&format!("stencil = \"{stencil}\"")]),
+            SIZE,
+        );
+        let c = compare_masks(
+            SIZE.0,
+            SIZE.1,
+            |x, y| lit(&img, x, y, 1e-6),
+            |px, py| analytic_lit(&scene.camera, px, py, SIZE),
+        );
         println!("{stencil}: {c:?}");
         results.push(c);
     }
     check(&results[0], "z-fail, camera in the volume");
-    assert!(results[0].cpu_shadow > 1000 && results[0].pixels - results[0].cpu_shadow > 1000, "both shadow and light in view");
-    assert!(results[1].mismatches * 2 > results[1].pixels, "z-pass must be visibly wrong: {:?}", results[1]);
+    assert!(
+        results[0].cpu_shadow > 1000 && results[0].pixels - results[0].cpu_shadow > 1000,
+        "both shadow and light in view"
+    );
+    assert!(
+        results[1].mismatches * 2 > results[1].pixels,
+        "z-pass must be visibly wrong: {:?}",
+        results[1]
+    );
 }
 
 /// A light 100 m up, a 1 m slab 1 m below it, the camera 330 m away: the volume is extruded to
@@ -241,7 +279,10 @@ fn more_than_255_overlapping_volumes() {
     for k in 0..300 {
         let h = 5.0 + k as f32 / 300.0;
         let s = 2.0 * (10.0 - h) / 10.0;
-        obj += &format!("v {} {h} {}\nv {} {h} {}\nv {} {h} {}\nv {} {h} {}\n", -s, -s, -s, s, s, s, s, -s);
+        obj += &format!(
+            "v {} {h} {}\nv {} {h} {}\nv {} {h} {}\nv {} {h} {}\n",
+            -s, -s, -s, s, s, s, s, -s
+        );
         let b = 4 * k + 1;
         obj += &format!("f {} {} {} {}\n", b, b + 1, b + 2, b + 3);
     }
@@ -272,7 +313,11 @@ fn more_than_255_overlapping_volumes() {
     assert!(stats[0].cpu_shadow > 500);
     // Negative control: saturating increments (one draw, both faces, no order between them)
     // lose the count and darken the lit ground.
-    assert!(stats[1].interior_mismatches > 1000, "saturating stencil should fail here: {:?}", stats[1]);
+    assert!(
+        stats[1].interior_mismatches > 1000,
+        "saturating stencil should fail here: {:?}",
+        stats[1]
+    );
 }
 
 const POINT_LIGHT: &str = "type = \"point\"\nposition = [0, 10, 0]\nintensity = 100";
@@ -309,7 +354,8 @@ fn spot_light_casts_the_same_square_and_nothing_outside_its_cone() {
     let (point_img, _) = render(&analytic_scene(camera, QUAD, &[]), SIZE);
     let (img, scene) = render(&analytic_scene(camera, QUAD, &[]).replace(POINT_LIGHT, spot), SIZE);
     // The angle from the axis of the ground point under continuous pixel (px, py).
-    let ground_angle = |px: f32, py: f32| hit_plane_y(&scene.camera, px, py, SIZE, 0.0).map(|(p, _)| (p.x.hypot(p.z) / 10.0).atan());
+    let ground_angle =
+        |px: f32, py: f32| hit_plane_y(&scene.camera, px, py, SIZE, 0.0).map(|(p, _)| (p.x.hypot(p.z) / 10.0).atan());
     let c = compare_masks(
         SIZE.0,
         SIZE.1,
@@ -317,7 +363,8 @@ fn spot_light_casts_the_same_square_and_nothing_outside_its_cone() {
         |px, py| {
             let lit = analytic_lit(&scene.camera, px, py, SIZE)?;
             // The occluder's top is well inside the inner cone.
-            let on_top = hit_plane_y(&scene.camera, px, py, SIZE, 5.0).is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
+            let on_top = hit_plane_y(&scene.camera, px, py, SIZE, 5.0)
+                .is_some_and(|(p, _)| p.x.abs() <= 1.0 && p.z.abs() <= 1.0);
             Some(lit && (on_top || ground_angle(px, py)? < outer))
         },
     );
@@ -326,7 +373,9 @@ fn spot_light_casts_the_same_square_and_nothing_outside_its_cone() {
     let (mut inside, mut same, mut outside, mut dark) = (0, 0, 0, 0);
     for y in 0..SIZE.1 {
         for x in 0..SIZE.0 {
-            let Some(a) = ground_angle(x as f32 + 0.5, y as f32 + 0.5) else { continue };
+            let Some(a) = ground_angle(x as f32 + 0.5, y as f32 + 0.5) else {
+                continue;
+            };
             if a < inner - 0.01 {
                 inside += 1;
                 same += usize::from(img.get(x, y)[..3] == point_img.get(x, y)[..3]);
@@ -337,7 +386,10 @@ fn spot_light_casts_the_same_square_and_nothing_outside_its_cone() {
         }
     }
     println!("inside the inner cone {same} of {inside} pixels equal the point light's; outside the outer cone {dark} of {outside} exactly 0");
-    assert!(inside > 1000 && outside > 2000, "both regions are in view: {inside}, {outside}");
+    assert!(
+        inside > 1000 && outside > 2000,
+        "both regions are in view: {inside}, {outside}"
+    );
     assert_eq!(same, inside, "inside the inner cone the spot equals the point light");
     assert_eq!(dark, outside, "outside the outer cone nothing is lit");
 }

@@ -13,7 +13,9 @@ mod sv_common;
 use glam::{Vec2, Vec3, Vec4};
 use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::Surface;
-use penumbra::lighting::shadow_volumes::cpu::{faithful_ambient, faithful_light, faithful_light_colour, physical_light, spot_factor};
+use penumbra::lighting::shadow_volumes::cpu::{
+    faithful_ambient, faithful_light, faithful_light_colour, physical_light, spot_factor,
+};
 use penumbra::lighting::shadow_volumes::Spot;
 use penumbra::scene::{load_obj, Mesh, Scene};
 use sv_common::{hit_plane_y, method, render_in, render_scene};
@@ -45,7 +47,10 @@ fn fixture() -> std::path::PathBuf {
 /// the constant normal map `normal` (texel).
 fn fixture_in(name: &str, normal: [u8; 3]) -> std::path::PathBuf {
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let dir = common::temp_path(&format!("{name}-{}", CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)));
+    let dir = common::temp_path(&format!(
+        "{name}-{}",
+        CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let solid = |rgb: [u8; 3]| image::RgbaImage::from_pixel(4, 4, image::Rgba([rgb[0], rgb[1], rgb[2], 255]));
     solid(ALBEDO_TEXEL).save(dir.join("albedo.png")).unwrap();
@@ -93,7 +98,10 @@ material = "mapped"
 }
 
 fn light_text() -> String {
-    format!("[[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {INTENSITY}\nradius = {RADIUS}\n", LIGHT.x, LIGHT.y, LIGHT.z)
+    format!(
+        "[[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity = {INTENSITY}\nradius = {RADIUS}\n",
+        LIGHT.x, LIGHT.y, LIGHT.z
+    )
 }
 
 /// A spot at the point light's place, tilted off the vertical, whose cones cut the quad in view:
@@ -110,12 +118,21 @@ fn spot_text() -> String {
 
 /// The cone as the method builds it from the scene (unit axis, cosines of the half-angles).
 fn spot() -> Spot {
-    Spot { direction: SPOT_AXIS.normalize(), cos_inner: SPOT_DEG.0.to_radians().cos(), cos_outer: SPOT_DEG.1.to_radians().cos() }
+    Spot {
+        direction: SPOT_AXIS.normalize(),
+        cos_inner: SPOT_DEG.0.to_radians().cos(),
+        cos_outer: SPOT_DEG.1.to_radians().cos(),
+    }
 }
 
 /// Angle (degrees) of `p` from the spot's axis.
 fn spot_angle(p: Vec3) -> f32 {
-    (p - LIGHT).normalize().dot(SPOT_AXIS.normalize()).clamp(-1.0, 1.0).acos().to_degrees()
+    (p - LIGHT)
+        .normalize()
+        .dot(SPOT_AXIS.normalize())
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
 }
 
 fn srgb_to_linear(b: u8) -> f32 {
@@ -147,7 +164,11 @@ fn interpolate(mesh: &Mesh, p: Vec3, eye: Vec3) -> Option<Interpolated> {
         let (pa, pb, pc) = (mesh.positions[a], mesh.positions[b], mesh.positions[c]);
         let n = (pb - pa).cross(pc - pa);
         let area = n.length();
-        let w = [(pc - pb).cross(p - pb).dot(n) / (area * area), (pa - pc).cross(p - pc).dot(n) / (area * area), (pb - pa).cross(p - pa).dot(n) / (area * area)];
+        let w = [
+            (pc - pb).cross(p - pb).dot(n) / (area * area),
+            (pa - pc).cross(p - pc).dot(n) / (area * area),
+            (pb - pa).cross(p - pa).dot(n) / (area * area),
+        ];
         if w.iter().any(|&x| x < -1e-6) {
             continue;
         }
@@ -158,11 +179,22 @@ fn interpolate(mesh: &Mesh, p: Vec3, eye: Vec3) -> Option<Interpolated> {
             let t = (t4.truncate() - n * n.dot(t4.truncate())).normalize();
             let b = n.cross(t) * t4.w;
             let (l, e) = (LIGHT - mesh.positions[i], eye - mesh.positions[i]);
-            (n, t.extend(t4.w), Vec3::new(l.dot(t), l.dot(b), l.dot(n)), Vec3::new(e.dot(t), e.dot(b), e.dot(n)))
+            (
+                n,
+                t.extend(t4.w),
+                Vec3::new(l.dot(t), l.dot(b), l.dot(n)),
+                Vec3::new(e.dot(t), e.dot(b), e.dot(n)),
+            )
         };
         let v = [per_vertex(a), per_vertex(b), per_vertex(c)];
         let mix3 = |f: &dyn Fn(&VertexVectors) -> Vec3| f(&v[0]) * w[0] + f(&v[1]) * w[1] + f(&v[2]) * w[2];
-        return Some(Interpolated { p, normal: mix3(&|x| x.0), tangent: v[0].1 * w[0] + v[1].1 * w[1] + v[2].1 * w[2], light_ts: mix3(&|x| x.2), eye_ts: mix3(&|x| x.3) });
+        return Some(Interpolated {
+            p,
+            normal: mix3(&|x| x.0),
+            tangent: v[0].1 * w[0] + v[1].1 * w[1] + v[2].1 * w[2],
+            light_ts: mix3(&|x| x.2),
+            eye_ts: mix3(&|x| x.3),
+        });
     }
     None
 }
@@ -184,7 +216,9 @@ fn pixels(scene: &Scene, mesh: &Mesh) -> Vec<(u32, u32, Interpolated)> {
     let mut out = Vec::new();
     for y in 0..SIZE.1 {
         for x in 0..SIZE.0 {
-            let Some((p, _)) = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 0.0) else { continue };
+            let Some((p, _)) = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 0.0) else {
+                continue;
+            };
             if p.x.abs() > 1.95 || p.z.abs() > 1.95 {
                 continue;
             }
@@ -197,7 +231,10 @@ fn pixels(scene: &Scene, mesh: &Mesh) -> Vec<(u32, u32, Interpolated)> {
 }
 
 fn max_error(img: &HdrImage, expected: &[(u32, u32, Vec3)]) -> f32 {
-    expected.iter().map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element()).fold(0.0, f32::max)
+    expected
+        .iter()
+        .map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element())
+        .fold(0.0, f32::max)
 }
 
 #[test]
@@ -208,13 +245,24 @@ fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
     let mut collapse_detected = false;
     // Every attenuation with the point light, then atten4 with the spot (the seed has no spot
     // lights: Eq. 5 times the forward method's falloff is this renderer's extension).
-    let cases = (1..=4u32).flat_map(|a| [(a, true, false), (a, false, false)]).chain([(4, true, true)]);
+    let cases = (1..=4u32)
+        .flat_map(|a| [(a, true, false), (a, false, false)])
+        .chain([(4, true, true)]);
     // The point light's images with N_z, by attenuation, for the closed-form check below.
     let mut by_atten: Vec<(u32, HdrImage, Scene)> = Vec::new();
     for (atten, nz, is_spot) in cases {
-        let params = ["mode = \"faithful\"".to_string(), format!("atten = {atten}"), format!("ambient_nz = {nz}"), format!("lightmap = [{}, {}, {}]", LIGHTMAP.x, LIGHTMAP.y, LIGHTMAP.z)];
+        let params = [
+            "mode = \"faithful\"".to_string(),
+            format!("atten = {atten}"),
+            format!("ambient_nz = {nz}"),
+            format!("lightmap = [{}, {}, {}]", LIGHTMAP.x, LIGHTMAP.y, LIGHTMAP.z),
+        ];
         let params: Vec<&str> = params.iter().map(String::as_str).collect();
-        let (img, scene) = render_in(&scene_text(&params, &if is_spot { spot_text() } else { light_text() }), &dir, SIZE);
+        let (img, scene) = render_in(
+            &scene_text(&params, &if is_spot { spot_text() } else { light_text() }),
+            &dir,
+            SIZE,
+        );
         let colour = faithful_light_colour(Vec3::splat(INTENSITY), RADIUS, atten);
         let cone = is_spot.then(spot);
         let mut expected = Vec::new();
@@ -223,17 +271,45 @@ fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
             let ambient = faithful_ambient(diffuse(), LIGHTMAP, n_map.z, nz, EMISSION);
             let dist = LIGHT.distance(i.p);
             let falloff = spot_factor(cone.as_ref(), LIGHT, i.p);
-            let light = falloff * faithful_light(n_map, i.light_ts, i.eye_ts, dist, diffuse(), specular(), colour, atten, RADIUS);
+            let light = falloff
+                * faithful_light(
+                    n_map,
+                    i.light_ts,
+                    i.eye_ts,
+                    dist,
+                    diffuse(),
+                    specular(),
+                    colour,
+                    atten,
+                    RADIUS,
+                );
             expected.push((x, y, ambient + light));
             // The same with the attenuation taken from the interpolated tangent-space vector.
-            let wrong = falloff * faithful_light(n_map, i.light_ts, i.eye_ts, i.light_ts.length(), diffuse(), specular(), colour, atten, RADIUS);
+            let wrong = falloff
+                * faithful_light(
+                    n_map,
+                    i.light_ts,
+                    i.eye_ts,
+                    i.light_ts.length(),
+                    diffuse(),
+                    specular(),
+                    colour,
+                    atten,
+                    RADIUS,
+                );
             collapsed.push((x, y, ambient + wrong));
         }
         assert!(expected.len() > 1500, "the quad fills the view");
-        assert!(expected.iter().all(|e| e.2.max_element() <= 1.0), "values stay in [0, 1]");
+        assert!(
+            expected.iter().all(|e| e.2.max_element() <= 1.0),
+            "values stay in [0, 1]"
+        );
         let err = max_error(&img, &expected);
         let what = if is_spot { "spot, " } else { "" };
-        println!("{what}atten{atten} N_z {nz}: max |GPU − CPU| = {err:.2e}; collapsed vectors would be off by {:.2e}", max_error(&img, &collapsed));
+        println!(
+            "{what}atten{atten} N_z {nz}: max |GPU − CPU| = {err:.2e}; collapsed vectors would be off by {:.2e}",
+            max_error(&img, &collapsed)
+        );
         // Measured ≤ 3.0e-4 (the float target; the device's sRGB decoding of the 8-bit maps).
         // 1e-3 is below the effects this guards: collapsed light vectors (3e-3 to 4.5e-2) and
         // N_z ignored or forced (7.5e-3 on this fixture; tested alone below).
@@ -243,7 +319,10 @@ fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
             by_atten.push((atten, img, scene));
         }
     }
-    assert!(collapse_detected, "the fixture must be sensitive to collapsing the two light vectors");
+    assert!(
+        collapse_detected,
+        "the fixture must be sensitive to collapsing the two light vectors"
+    );
 
     // An independent value, from the digest's formulas alone (not the CPU module): the light
     // term is atten(d)·L_C·(…), with L_C ∝ 1/atten(r/2) and (…) the same for every attenuation,
@@ -297,26 +376,44 @@ fn eq5_matches_the_cpu_per_pixel_with_separate_light_vectors() {
 fn ambient_nz_is_the_normal_maps_z() {
     let texel = [0.85f32, 0.1, 0.45];
     let n = Vec3::from(texel).normalize();
-    let dir = fixture_in("sv-shading-steep", [n.x, n.y, n.z].map(|c| ((c * 0.5 + 0.5) * 255.0).round() as u8));
-    let decoded = Vec3::from([n.x, n.y, n.z].map(|c| ((c * 0.5 + 0.5) * 255.0).round() / 255.0 * 2.0 - 1.0)).normalize();
+    let dir = fixture_in(
+        "sv-shading-steep",
+        [n.x, n.y, n.z].map(|c| ((c * 0.5 + 0.5) * 255.0).round() as u8),
+    );
+    let decoded =
+        Vec3::from([n.x, n.y, n.z].map(|c| ((c * 0.5 + 0.5) * 255.0).round() / 255.0 * 2.0 - 1.0)).normalize();
     let mesh = load_obj(&dir.join("quad.obj")).unwrap();
     let lightmap = Vec3::new(0.5, 0.6, 0.7);
     let albedo = ALBEDO * Vec3::from(ALBEDO_TEXEL.map(srgb_to_linear));
     let mut images = Vec::new();
     for nz in [true, false] {
-        let params = ["mode = \"faithful\"".to_string(), format!("ambient_nz = {nz}"), format!("lightmap = [{}, {}, {}]", lightmap.x, lightmap.y, lightmap.z)];
+        let params = [
+            "mode = \"faithful\"".to_string(),
+            format!("ambient_nz = {nz}"),
+            format!("lightmap = [{}, {}, {}]", lightmap.x, lightmap.y, lightmap.z),
+        ];
         let params: Vec<&str> = params.iter().map(String::as_str).collect();
         let (img, scene) = render_in(&scene_text(&params, ""), &dir, SIZE);
         let want = albedo * lightmap * if nz { decoded.z } else { 1.0 } + EMISSION;
-        let expected: Vec<(u32, u32, Vec3)> = pixels(&scene, &mesh).into_iter().map(|(x, y, _)| (x, y, want)).collect();
+        let expected: Vec<(u32, u32, Vec3)> = pixels(&scene, &mesh)
+            .into_iter()
+            .map(|(x, y, _)| (x, y, want))
+            .collect();
         assert!(expected.len() > 1500, "the quad fills the view");
         let err = max_error(&img, &expected);
-        println!("ambient only, N_z {nz} (N_z = {:.4}): expected {want:.4}, max |GPU − Eq. 5| = {err:.2e}", decoded.z);
+        println!(
+            "ambient only, N_z {nz} (N_z = {:.4}): expected {want:.4}, max |GPU − Eq. 5| = {err:.2e}",
+            decoded.z
+        );
         assert!(err <= 1e-3, "N_z {nz}: max error {err}");
         images.push((img, expected));
     }
     // The effect the check guards: every judged pixel's red moves by diffuse·lightmap·(1 − N_z).
-    let moved = images[0].1.iter().map(|&(x, y, _)| images[1].0.get(x, y)[0] - images[0].0.get(x, y)[0]).fold(f32::MAX, f32::min);
+    let moved = images[0]
+        .1
+        .iter()
+        .map(|&(x, y, _)| images[1].0.get(x, y)[0] - images[0].0.get(x, y)[0])
+        .fold(f32::MAX, f32::min);
     assert!(moved > 0.1, "switching N_z off moves the ambient by only {moved}");
 }
 
@@ -330,11 +427,19 @@ fn physical_mode_matches_the_cpu_per_pixel() {
 fn physical_case(is_spot: bool) {
     let dir = fixture();
     let mesh = load_obj(&dir.join("quad.obj")).unwrap();
-    let text = scene_text(&["mode = \"physical\""], &if is_spot { spot_text() } else { light_text() });
+    let text = scene_text(
+        &["mode = \"physical\""],
+        &if is_spot { spot_text() } else { light_text() },
+    );
     let (img, scene) = render_in(&text, &dir, SIZE);
     let cone = is_spot.then(spot);
     let tn = map_normal();
-    let surface = Surface { albedo: diffuse(), specular: specular(), exponent: 32.0, emission: EMISSION };
+    let surface = Surface {
+        albedo: diffuse(),
+        specular: specular(),
+        exponent: 32.0,
+        emission: EMISSION,
+    };
     let mut expected = Vec::new();
     for (x, y, i) in pixels(&scene, &mesh) {
         // light.frag: the interpolated frame, renormalised, then the normal map.
@@ -343,12 +448,33 @@ fn physical_case(is_spot: bool) {
         let b = n.cross(t) * i.tangent.w;
         let nm = (t * tn.x + b * tn.y + n * tn.z).normalize();
         let falloff = spot_factor(cone.as_ref(), LIGHT, i.p);
-        expected.push((x, y, EMISSION + falloff * physical_light(i.p, nm, scene.camera.position, &surface, LIGHT, Vec3::splat(INTENSITY), RADIUS)));
+        expected.push((
+            x,
+            y,
+            EMISSION
+                + falloff
+                    * physical_light(
+                        i.p,
+                        nm,
+                        scene.camera.position,
+                        &surface,
+                        LIGHT,
+                        Vec3::splat(INTENSITY),
+                        RADIUS,
+                    ),
+        ));
     }
     // Relative to the pixel's brightest channel (a dim channel of a lit pixel carries the
     // hardware sRGB decode's absolute rounding).
-    let worst = expected.iter().map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element() / e.max_element().max(1e-3)).fold(0.0, f32::max);
-    println!("physical{}: max relative error {worst:.2e} over {} pixels", if is_spot { ", spot" } else { "" }, expected.len());
+    let worst = expected
+        .iter()
+        .map(|&(x, y, e)| (Vec3::from_slice(&img.get(x, y)[..3]) - e).abs().max_element() / e.max_element().max(1e-3))
+        .fold(0.0, f32::max);
+    println!(
+        "physical{}: max relative error {worst:.2e} over {} pixels",
+        if is_spot { ", spot" } else { "" },
+        expected.len()
+    );
     assert!(worst < 3e-3, "{worst}");
 
     // An independent value: the path tracer (direct light only, 64 spp) of the same scene file,
@@ -386,15 +512,25 @@ fn physical_case(is_spot: bool) {
         if p.distance(LIGHT) > RADIUS - 0.05 {
             continue;
         }
-        let (g, r, e) = (Vec3::from_slice(&img.get(x, y)[..3]), Vec3::from_slice(&reference.get(x, y)[..3]), Vec3::from_slice(&stderr.get(x, y)[..3]));
+        let (g, r, e) = (
+            Vec3::from_slice(&img.get(x, y)[..3]),
+            Vec3::from_slice(&reference.get(x, y)[..3]),
+            Vec3::from_slice(&stderr.get(x, y)[..3]),
+        );
         worst_rel = worst_rel.max((g - r).abs().max_element() / r.max_element().max(1e-3));
         worst_sigma = worst_sigma.max(((g - r).abs() / e.max(Vec3::splat(1e-9))).max_element());
-        assert!(((g - r).abs() - 10.0 * e).max_element() <= 1e-3, "{name}: pixel ({x}, {y}): {g} vs the path tracer's {r} ± {e}");
+        assert!(
+            ((g - r).abs() - 10.0 * e).max_element() <= 1e-3,
+            "{name}: pixel ({x}, {y}): {g} vs the path tracer's {r} ± {e}"
+        );
         sum_gpu += g.element_sum() as f64;
         sum_ref += r.element_sum() as f64;
     }
     println!("{name}: against the path tracer: max relative {worst_rel:.2e}, max {worst_sigma:.1} standard errors, mean ratio {:.5}", sum_gpu / sum_ref);
-    assert!((sum_gpu / sum_ref - 1.0).abs() < 3e-3, "{name}: mean {sum_gpu} vs the path tracer's {sum_ref}");
+    assert!(
+        (sum_gpu / sum_ref - 1.0).abs() < 3e-3,
+        "{name}: mean {sum_gpu} vs the path tracer's {sum_ref}"
+    );
 }
 
 /// The level with its maps: special-case pipelines and the one default-map pipeline compute
@@ -414,9 +550,21 @@ fn both_material_paths_give_the_same_image() {
             }
             images.push(render_scene(scene, (96, 64)));
         }
-        let worst = images[0].pixels.iter().zip(&images[1].pixels).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs() / a[c].abs().max(1e-3)).fold(0.0, f32::max)).fold(0.0, f32::max);
+        let worst = images[0]
+            .pixels
+            .iter()
+            .zip(&images[1].pixels)
+            .map(|(a, b)| {
+                (0..3)
+                    .map(|c| (a[c] - b[c]).abs() / a[c].abs().max(1e-3))
+                    .fold(0.0, f32::max)
+            })
+            .fold(0.0, f32::max);
         println!("{mode}: largest relative difference {worst:.2e}");
-        assert!(worst <= 1e-5, "{mode}: special-case and default-map images differ by {worst}");
+        assert!(
+            worst <= 1e-5,
+            "{mode}: special-case and default-map images differ by {worst}"
+        );
     }
 }
 
@@ -456,8 +604,18 @@ material = "wall"
     let a = "[[lights]]\ntype = \"point\"\nposition = [5.2, 2.7, -8.6]\nintensity = [9, 7, 4.5]\nradius = 8\n";
     let b = "[[lights]]\ntype = \"point\"\nposition = [8.0, 2.2, -5.0]\nintensity = [2, 4, 9]\nradius = 6\n";
     let render = |lights: &str| {
-        let text = format!("{}\n{camera}\n{world}\n{lights}", method(&["mode = \"faithful\"", "lightmap = [0.05, 0.05, 0.06]", "animate = false"]));
-        render_scene(Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap(), (96, 64))
+        let text = format!(
+            "{}\n{camera}\n{world}\n{lights}",
+            method(&[
+                "mode = \"faithful\"",
+                "lightmap = [0.05, 0.05, 0.06]",
+                "animate = false"
+            ])
+        );
+        render_scene(
+            Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap(),
+            (96, 64),
+        )
     };
     let (both, only_a, only_b, none) = (render(&format!("{a}{b}")), render(a), render(b), render(""));
     let mut worst = 0.0f32;
@@ -467,11 +625,16 @@ material = "wall"
         for c in 0..3 {
             let sum = only_a.pixels[i][c] + only_b.pixels[i][c] - none.pixels[i][c];
             worst = worst.max((both.pixels[i][c] - sum).abs());
-            worst_ulps = worst_ulps.max((both.pixels[i][c] - sum).abs() / (both.pixels[i][c].abs().max(1.0) * f32::EPSILON));
+            worst_ulps =
+                worst_ulps.max((both.pixels[i][c] - sum).abs() / (both.pixels[i][c].abs().max(1.0) * f32::EPSILON));
         }
         lit_by_both += usize::from(only_a.pixels[i][0] > none.pixels[i][0] && only_b.pixels[i][0] > none.pixels[i][0]);
     }
-    let brightest = both.pixels.iter().map(|p| p[0].max(p[1]).max(p[2])).fold(0.0f32, f32::max);
+    let brightest = both
+        .pixels
+        .iter()
+        .map(|p| p[0].max(p[1]).max(p[2]))
+        .fold(0.0f32, f32::max);
     println!("max |both − (a + b − ambient)| = {worst:.2e} ({worst_ulps:.2} ulps of max(|v|, 1)); brightest {brightest:.3}; {lit_by_both} pixels lit by both");
     assert!(lit_by_both > 500, "the lights overlap in view");
     assert!(worst_ulps <= 4.0, "{worst} ({worst_ulps} ulps)");
@@ -486,11 +649,14 @@ fn spot_equals_the_point_light_inside_the_inner_cone_and_nothing_outside_the_out
     let dir = fixture();
     for mode in ["mode = \"faithful\"", "mode = \"physical\""] {
         let render = |lights: &str| render_in(&scene_text(&[mode], lights), &dir, SIZE);
-        let ((spot_img, scene), (point_img, _), (dark_img, _)) = (render(&spot_text()), render(&light_text()), render(""));
+        let ((spot_img, scene), (point_img, _), (dark_img, _)) =
+            (render(&spot_text()), render(&light_text()), render(""));
         let (mut inside, mut band, mut outside) = (Vec::new(), 0, Vec::new());
         for y in 0..SIZE.1 {
             for x in 0..SIZE.0 {
-                let Some((p, _)) = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 0.0) else { continue };
+                let Some((p, _)) = hit_plane_y(&scene.camera, x as f32 + 0.5, y as f32 + 0.5, SIZE, 0.0) else {
+                    continue;
+                };
                 if p.x.abs() > 1.95 || p.z.abs() > 1.95 {
                     continue;
                 }
@@ -506,14 +672,34 @@ fn spot_equals_the_point_light_inside_the_inner_cone_and_nothing_outside_the_out
             }
         }
         let diff = |a: &HdrImage, b: &HdrImage, set: &[(u32, u32)]| {
-            set.iter().map(|&(x, y)| (Vec3::from_slice(&a.get(x, y)[..3]) - Vec3::from_slice(&b.get(x, y)[..3])).abs().max_element()).fold(0.0, f32::max)
+            set.iter()
+                .map(|&(x, y)| {
+                    (Vec3::from_slice(&a.get(x, y)[..3]) - Vec3::from_slice(&b.get(x, y)[..3]))
+                        .abs()
+                        .max_element()
+                })
+                .fold(0.0, f32::max)
         };
-        let (d_in, d_out) = (diff(&spot_img, &point_img, &inside), diff(&spot_img, &dark_img, &outside));
+        let (d_in, d_out) = (
+            diff(&spot_img, &point_img, &inside),
+            diff(&spot_img, &dark_img, &outside),
+        );
         let point_outside = diff(&point_img, &dark_img, &outside);
         println!("{mode}: {} pixels inside the inner cone, max |spot − point| = {d_in:.1e}; {band} in the falloff band; {} beyond the outer cone, max |spot − no light| = {d_out:.1e} (the point light adds up to {point_outside:.2e} there)", inside.len(), outside.len());
-        assert!(inside.len() > 200 && band > 300 && outside.len() > 300, "{} / {band} / {}", inside.len(), outside.len());
-        assert!(point_outside > 1e-3, "the point light lights the region beyond the cone");
-        assert_eq!(d_in, 0.0, "{mode}: the spot differs from the point light inside the inner cone");
+        assert!(
+            inside.len() > 200 && band > 300 && outside.len() > 300,
+            "{} / {band} / {}",
+            inside.len(),
+            outside.len()
+        );
+        assert!(
+            point_outside > 1e-3,
+            "the point light lights the region beyond the cone"
+        );
+        assert_eq!(
+            d_in, 0.0,
+            "{mode}: the spot differs from the point light inside the inner cone"
+        );
         assert_eq!(d_out, 0.0, "{mode}: the spot lights beyond its outer cone");
     }
 }

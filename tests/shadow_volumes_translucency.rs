@@ -19,7 +19,12 @@ use sv_common::{method, render, render_scene};
 const SIZE: (u32, u32) = (96, 96);
 const LIGHT: Vec3 = Vec3::new(0.2, 3.0, 0.1);
 const INTENSITY: f32 = 6.0;
-const FLOOR: Surface = Surface { albedo: Vec3::splat(0.7), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::splat(0.01) };
+const FLOOR: Surface = Surface {
+    albedo: Vec3::splat(0.7),
+    specular: Vec3::ZERO,
+    exponent: 32.0,
+    emission: Vec3::splat(0.01),
+};
 /// The opaque caster above pane A: a square at y = 1.8.
 const CASTER: (f32, [f32; 4]) = (1.8, [-0.3, 0.1, -0.2, 0.2]);
 
@@ -32,10 +37,28 @@ struct Pane {
     opacity: f32,
 }
 
-const PANE_A: Pane =
-    Pane { y: 1.0, rect: [-1.0, 1.0, -1.0, 1.0], surface: Surface { albedo: Vec3::new(0.3, 0.6, 0.9), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::new(0.05, 0.08, 0.02) }, opacity: 0.4 };
-const PANE_B: Pane =
-    Pane { y: 0.5, rect: [-1.2, 1.4, -1.2, 1.4], surface: Surface { albedo: Vec3::new(0.9, 0.4, 0.2), specular: Vec3::ZERO, exponent: 32.0, emission: Vec3::new(0.02, 0.03, 0.09) }, opacity: 0.6 };
+const PANE_A: Pane = Pane {
+    y: 1.0,
+    rect: [-1.0, 1.0, -1.0, 1.0],
+    surface: Surface {
+        albedo: Vec3::new(0.3, 0.6, 0.9),
+        specular: Vec3::ZERO,
+        exponent: 32.0,
+        emission: Vec3::new(0.05, 0.08, 0.02),
+    },
+    opacity: 0.4,
+};
+const PANE_B: Pane = Pane {
+    y: 0.5,
+    rect: [-1.2, 1.4, -1.2, 1.4],
+    surface: Surface {
+        albedo: Vec3::new(0.9, 0.4, 0.2),
+        specular: Vec3::ZERO,
+        exponent: 32.0,
+        emission: Vec3::new(0.02, 0.03, 0.09),
+    },
+    opacity: 0.6,
+};
 
 fn v3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
@@ -43,7 +66,11 @@ fn v3(v: Vec3) -> String {
 
 fn material(name: &str, s: &Surface, opacity: Option<f32>) -> String {
     let o = opacity.map(|a| format!("opacity = {a}\n")).unwrap_or_default();
-    format!("[[materials]]\nname = \"{name}\"\nalbedo = {}\nemission = {}\n{o}\n", v3(s.albedo), v3(s.emission))
+    format!(
+        "[[materials]]\nname = \"{name}\"\nalbedo = {}\nemission = {}\n{o}\n",
+        v3(s.albedo),
+        v3(s.emission)
+    )
 }
 
 fn quad(name: &str, y: f32, [x0, x1, z0, z1]: [f32; 4], material: &str) -> String {
@@ -64,7 +91,10 @@ fn scene_text(panes: &[(Pane, Option<f32>)], caster: bool) -> String {
     if caster {
         s += &quad("caster", CASTER.0, CASTER.1, "floor");
     }
-    s += &format!("[[lights]]\ntype = \"point\"\nposition = {}\nintensity = {INTENSITY}\n", v3(LIGHT));
+    s += &format!(
+        "[[lights]]\ntype = \"point\"\nposition = {}\nintensity = {INTENSITY}\n",
+        v3(LIGHT)
+    );
     s
 }
 
@@ -109,7 +139,11 @@ fn cpu_shade(cam: &Camera, panes: &[Pane], caster: bool, px: f32, py: f32) -> Op
         }
     };
     let floor_colour = FLOOR.emission + light(floor, &FLOOR, caster);
-    let mut hits: Vec<(usize, Vec3)> = panes.iter().enumerate().filter_map(|(i, p)| hit_rect(o, d, p.y, p.rect).map(|h| (i, h))).collect();
+    let mut hits: Vec<(usize, Vec3)> = panes
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| hit_rect(o, d, p.y, p.rect).map(|h| (i, h)))
+        .collect();
     hits.sort_by(|a, b| a.1.distance(o).total_cmp(&b.1.distance(o)));
     let mut class: Vec<(usize, bool)> = hits.iter().map(|&(i, p)| (i, shadowed(p, caster))).collect();
     class.push((usize::MAX, shadowed(floor, caster)));
@@ -133,8 +167,14 @@ fn judged(cam: &Camera, panes: &[Pane], caster: bool) -> Vec<(u32, u32, Shade)> 
     for y in 0..SIZE.1 {
         for x in 0..SIZE.0 {
             let (fx, fy) = (x as f32, y as f32);
-            let Some(centre) = cpu_shade(cam, panes, caster, fx + 0.5, fy + 0.5) else { continue };
-            let uniform = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].iter().all(|&(dx, dy)| cpu_shade(cam, panes, caster, fx + dx, fy + dy).is_some_and(|s| s.class == centre.class));
+            let Some(centre) = cpu_shade(cam, panes, caster, fx + 0.5, fy + 0.5) else {
+                continue;
+            };
+            let uniform = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                .iter()
+                .all(|&(dx, dy)| {
+                    cpu_shade(cam, panes, caster, fx + dx, fy + dy).is_some_and(|s| s.class == centre.class)
+                });
             if uniform {
                 out.push((x, y, centre));
             }
@@ -176,7 +216,8 @@ fn light_shines_through_a_translucent_pane_which_is_lit_where_no_opaque_volume_c
             under += 1;
             let (_, in_shadow) = s.class[0];
             // α·pane (CPU) + (1 − α)·floor, with the floor taken from the pane-less render.
-            let want = (s.colour - (1.0 - PANE_A.opacity) * cpu_floor_only(cam, *x, *y)) + (1.0 - PANE_A.opacity) * pixel(&bare, *x, *y);
+            let want = (s.colour - (1.0 - PANE_A.opacity) * cpu_floor_only(cam, *x, *y))
+                + (1.0 - PANE_A.opacity) * pixel(&bare, *x, *y);
             worst_blend = worst_blend.max(rel_err(got, want));
             if in_shadow {
                 pane_shadowed += 1;
@@ -189,9 +230,18 @@ fn light_shines_through_a_translucent_pane_which_is_lit_where_no_opaque_volume_c
         "{} pixels judged: {outside} not under the pane ({outside_differs} differ from the pane-less image; the pane made opaque darkens {pane_shadow_on_floor} of them), {under} under it ({pane_lit} lit, {pane_shadowed} in the caster's shadow on the pane); max relative |GPU − CPU| = {worst_cpu:.2e}, under the pane vs the CPU's pane over the rendered floor {worst_blend:.2e}",
         pixels.len()
     );
-    assert!(outside > 2000 && under > 500 && pane_lit > 400 && pane_shadowed > 20, "{outside} / {under} / {pane_lit} / {pane_shadowed}");
-    assert_eq!(outside_differs, 0, "the translucent pane changed floor pixels it does not cover");
-    assert!(pane_shadow_on_floor > 200, "negative control: an opaque pane must shadow the floor beside it ({pane_shadow_on_floor})");
+    assert!(
+        outside > 2000 && under > 500 && pane_lit > 400 && pane_shadowed > 20,
+        "{outside} / {under} / {pane_lit} / {pane_shadowed}"
+    );
+    assert_eq!(
+        outside_differs, 0,
+        "the translucent pane changed floor pixels it does not cover"
+    );
+    assert!(
+        pane_shadow_on_floor > 200,
+        "negative control: an opaque pane must shadow the floor beside it ({pane_shadow_on_floor})"
+    );
     assert!(worst_cpu < 3e-3, "{worst_cpu}");
     assert!(worst_blend < 3e-3, "{worst_blend}");
 }
@@ -226,30 +276,66 @@ fn of_two_stacked_panes_only_the_nearer_receives_per_light_light() {
         }
     }
     println!("{} pixels judged: {both} through both panes, {only_a} pane A only, {only_b} pane B only; max relative |GPU − CPU| = {worst:.2e} ({worst_both:.2e} through both); lighting the farther pane too would change every two-pane pixel by ≥ {counterfactual:.2e}", pixels.len());
-    assert!(both > 500 && only_a > 100 && only_b > 100, "{both} / {only_a} / {only_b}");
+    assert!(
+        both > 500 && only_a > 100 && only_b > 100,
+        "{both} / {only_a} / {only_b}"
+    );
     assert!(worst < 3e-3, "{worst}");
-    assert!(counterfactual > 2e-2, "the fixture must tell the two behaviours apart: {counterfactual}");
+    assert!(
+        counterfactual > 2e-2,
+        "the fixture must tell the two behaviours apart: {counterfactual}"
+    );
 }
 
 #[test]
 fn opaque_only_consumers_refuse_translucent_materials_with_one_line() {
-    let text = |m: &str| scene_text(&[(PANE_A, None)], false).replace("name = \"shadow_volumes\"\nmode = \"physical\"\nanimate = false", &format!("name = \"{m}\""));
+    let text = |m: &str| {
+        scene_text(&[(PANE_A, None)], false).replace(
+            "name = \"shadow_volumes\"\nmode = \"physical\"\nanimate = false",
+            &format!("name = \"{m}\""),
+        )
+    };
     let forward = Scene::from_str(&text("forward"), "glass.toml", std::path::Path::new(".")).unwrap();
-    let e = Renderer::new(common::test_gpu(), forward, None, (16, 16), 1).err().expect("forward must refuse").to_string();
+    let e = Renderer::new(common::test_gpu(), forward, None, (16, 16), 1)
+        .err()
+        .expect("forward must refuse")
+        .to_string();
     println!("{e}");
-    assert!(!e.contains('\n') && e.contains("glass.toml") && e.contains("materials[1] (glass0).opacity") && e.contains("forward"), "{e}");
+    assert!(
+        !e.contains('\n')
+            && e.contains("glass.toml")
+            && e.contains("materials[1] (glass0).opacity")
+            && e.contains("forward"),
+        "{e}"
+    );
     // The height-field methods, on a terrain whose ground material is made translucent.
-    let mut terrain = Scene::from_file(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/terrain_sine.toml")).unwrap();
+    let mut terrain =
+        Scene::from_file(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/terrain_sine.toml")).unwrap();
     let ground = terrain.materials.iter().position(|m| m.name == "ground").unwrap();
     terrain.materials[ground].opacity = 0.5;
-    let e = Renderer::new(common::test_gpu(), terrain, None, (16, 16), 1).err().expect("the height-field method must refuse").to_string();
+    let e = Renderer::new(common::test_gpu(), terrain, None, (16, 16), 1)
+        .err()
+        .expect("the height-field method must refuse")
+        .to_string();
     println!("{e}");
-    assert!(!e.contains('\n') && e.contains("terrain_sine.toml") && e.contains(&format!("materials[{ground}] (ground).opacity")) && e.contains("heightfield_pyramid"), "{e}");
+    assert!(
+        !e.contains('\n')
+            && e.contains("terrain_sine.toml")
+            && e.contains(&format!("materials[{ground}] (ground).opacity"))
+            && e.contains("heightfield_pyramid"),
+        "{e}"
+    );
     // A translucent BSP world: its PVS would still treat the glass as a wall.
     let world = format!("{}[camera]\nposition = [3, 1.7, -3]\ntarget = [6, 1, -6]\n\n[[materials]]\nname = \"glass\"\nopacity = 0.5\n\n[[objects]]\nname = \"world\"\nmesh = \"bsp_rooms\"\nseed = 1\nwall_material = \"glass\"\n", method(&[]));
     let scene = Scene::from_str(&world, "world.toml", std::path::Path::new(".")).unwrap();
-    let e = Renderer::new(common::test_gpu(), scene, None, (16, 16), 1).err().expect("a translucent world must be refused").to_string();
+    let e = Renderer::new(common::test_gpu(), scene, None, (16, 16), 1)
+        .err()
+        .expect("a translucent world must be refused")
+        .to_string();
     println!("{e}");
-    assert!(!e.contains('\n') && e.contains("world.toml") && e.contains("\"glass\".opacity"), "{e}");
+    assert!(
+        !e.contains('\n') && e.contains("world.toml") && e.contains("\"glass\".opacity"),
+        "{e}"
+    );
     let _ = render_scene;
 }

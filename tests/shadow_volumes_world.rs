@@ -57,8 +57,15 @@ const CAMERAS: [&str; 3] = [
 
 /// The physical mode unless `params` names a mode.
 fn scene(camera: &str, world: &str, params: &[&str]) -> Scene {
-    let mode: &[&str] = if params.iter().any(|p| p.starts_with("mode")) { &[] } else { &["mode = \"physical\""] };
-    let text = format!("{}\n{camera}\n{world}", method(&[mode, &["animate = false"], params].concat()));
+    let mode: &[&str] = if params.iter().any(|p| p.starts_with("mode")) {
+        &[]
+    } else {
+        &["mode = \"physical\""]
+    };
+    let text = format!(
+        "{}\n{camera}\n{world}",
+        method(&[mode, &["animate = false"], params].concat())
+    );
     Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -74,7 +81,14 @@ fn caster_strategies_agree_on_generated_rooms() {
         for camera in CAMERAS {
             let mut images = Vec::new();
             for casters in STRATEGIES {
-                let s = scene(camera, &rooms(&[0, 1]), &[&format!("casters = \"{casters}\""), &format!("radius_culling = {radius_culling}")]);
+                let s = scene(
+                    camera,
+                    &rooms(&[0, 1]),
+                    &[
+                        &format!("casters = \"{casters}\""),
+                        &format!("radius_culling = {radius_culling}"),
+                    ],
+                );
                 let plan = Setup::new(&s, &s.methods[0]).unwrap().plan(s.camera.position, 0.0);
                 let i = STRATEGIES.iter().position(|c| *c == casters).unwrap_or(0);
                 totals[i] += plan.lights.iter().map(|l| l.caster_faces.len()).sum::<usize>();
@@ -82,14 +96,32 @@ fn caster_strategies_agree_on_generated_rooms() {
             }
             let (naive, pvs, pscs) = (&images[0], &images[1], &images[2]);
             // Back-facing casters: the strategies' volumes agree wherever the PSCS is complete.
-            assert_eq!(differing(&naive.0, &pscs.0), 0, "naive and PVS+PSCS casters must give bit-identical images");
+            assert_eq!(
+                differing(&naive.0, &pscs.0),
+                0,
+                "naive and PVS+PSCS casters must give bit-identical images"
+            );
             // The PVS alone may miss casters (Fig. 8(c)): it can only add light, never remove it.
-            let brighter =
-                naive.0.pixels.iter().zip(&pvs.0.pixels).filter(|(n, p)| n != p).inspect(|(n, p)| assert!((0..3).all(|c| p[c] >= n[c]), "PVS-only casters darkened a pixel: {n:?} -> {p:?}")).count();
+            let brighter = naive
+                .0
+                .pixels
+                .iter()
+                .zip(&pvs.0.pixels)
+                .filter(|(n, p)| n != p)
+                .inspect(|(n, p)| {
+                    assert!(
+                        (0..3).all(|c| p[c] >= n[c]),
+                        "PVS-only casters darkened a pixel: {n:?} -> {p:?}"
+                    )
+                })
+                .count();
             println!("radius culling {radius_culling}: PVS-only casters leave {brighter} shadowed pixels lit");
             for ((n, p), c) in naive.1.lights.iter().zip(&pvs.1.lights).zip(&pscs.1.lights) {
                 assert!(n.caster_faces.len() >= c.caster_faces.len() && c.caster_faces.len() >= p.caster_faces.len());
-                assert!(p.caster_faces.iter().all(|f| c.caster_faces.contains(f)) && c.caster_faces.iter().all(|f| n.caster_faces.contains(f)));
+                assert!(
+                    p.caster_faces.iter().all(|f| c.caster_faces.contains(f))
+                        && c.caster_faces.iter().all(|f| n.caster_faces.contains(f))
+                );
             }
         }
         println!("radius culling {radius_culling}: casters summed over cameras and drawn lights, naive / pvs / pscs: {totals:?}");
@@ -110,7 +142,11 @@ fn caster_strategies_agree_on_generated_rooms() {
 /// is unobstructed.
 #[test]
 fn world_shadows_match_bsp_ray_casts() {
-    let w = world_mesh::compiled(&WorldLevel::Rooms { seed: 1, params: RoomsParams::default() }).unwrap();
+    let w = world_mesh::compiled(&WorldLevel::Rooms {
+        seed: 1,
+        params: RoomsParams::default(),
+    })
+    .unwrap();
     for (camera, light) in [(CAMERAS[0], 0usize), (CAMERAS[2], 1)] {
         let s = scene(camera, &rooms(&[light]), &["casters = \"naive\""]);
         assert_eq!(s.lights.len(), 1);
@@ -191,11 +227,22 @@ radius = 30
     }
     // The receiver point projects to the image centre (the camera looks at it).
     let (cx, cy) = (SIZE.0 / 2, SIZE.1 / 2);
-    let around = |img: &HdrImage| (cy - 1..=cy).flat_map(|y| (cx - 1..=cx).map(move |x| (x, y))).all(|(x, y)| !lit(img, x, y, 0.0));
-    assert!(!around(&images[0].0), "with PVS-only casters the receiver is (wrongly) lit");
+    let around = |img: &HdrImage| {
+        (cy - 1..=cy)
+            .flat_map(|y| (cx - 1..=cx).map(move |x| (x, y)))
+            .all(|(x, y)| !lit(img, x, y, 0.0))
+    };
+    assert!(
+        !around(&images[0].0),
+        "with PVS-only casters the receiver is (wrongly) lit"
+    );
     assert!(around(&images[1].0), "with the PSCS the receiver is in shadow");
     assert!(around(&images[2].0), "brute force agrees");
-    assert_eq!(differing(&images[1].0, &images[2].0), 0, "PSCS and brute force give the same image");
+    assert_eq!(
+        differing(&images[1].0, &images[2].0),
+        0,
+        "PSCS and brute force give the same image"
+    );
     let missing = differing(&images[0].0, &images[1].0);
     println!("PVS-only casters miss a shadow of {missing} pixels");
     assert!(missing > 10, "the missing shadow covers {missing} pixels");
@@ -207,19 +254,30 @@ fn pvs_and_radius_culling_change_draws_not_pixels() {
     let with_entity = format!("{}\n[[objects]]\nname = \"crate\"\nmesh = \"box\"\nsize = 0.7\ntranslate = [7.0, 0.36, -8.0]\nmaterial = \"wall\"\n", rooms(&[0, 1]));
     let mut images = Vec::new();
     let mut draws = Vec::new();
-    for params in [vec!["mode = \"faithful\""], vec!["mode = \"faithful\"", "pvs = false"], vec!["mode = \"faithful\"", "radius_culling = false"]] {
+    for params in [
+        vec!["mode = \"faithful\""],
+        vec!["mode = \"faithful\"", "pvs = false"],
+        vec!["mode = \"faithful\"", "radius_culling = false"],
+    ] {
         let s = scene(CAMERAS[0], &with_entity, &params);
         let plan = Setup::new(&s, &s.methods[0]).unwrap().plan(s.camera.position, 0.0);
         let receivers: usize = plan.lights.iter().map(|l| l.receiver_faces.len()).sum();
         let casters: usize = plan.lights.iter().map(|l| l.caster_faces.len()).sum();
-        println!("{params:?}: {} faces drawn, {} lights, {receivers} receivers, {casters} casters", plan.visible_faces.len(), plan.lights.len());
+        println!(
+            "{params:?}: {} faces drawn, {} lights, {receivers} receivers, {casters} casters",
+            plan.visible_faces.len(),
+            plan.lights.len()
+        );
         draws.push((plan.visible_faces.len(), receivers, casters));
         images.push(render_scene(s, SIZE));
     }
     assert_eq!(differing(&images[0], &images[1]), 0, "PVS culling changed pixels");
     assert_eq!(differing(&images[0], &images[2]), 0, "radius culling changed pixels");
     assert!(draws[0].0 < draws[1].0, "the camera's PVS culls faces: {draws:?}");
-    assert!(draws[0].1 < draws[2].1 && draws[0].2 < draws[2].2, "radii cull receivers and casters: {draws:?}");
+    assert!(
+        draws[0].1 < draws[2].1 && draws[0].2 < draws[2].2,
+        "radii cull receivers and casters: {draws:?}"
+    );
 }
 
 /// Spot lights cull by their cone too (with `radius_culling`): receivers and casters wholly
@@ -235,12 +293,30 @@ fn spot_cone_culling_changes_draws_not_pixels() {
                   [[lights]]\ntype = \"point\"\nposition = [8.0, 2.2, -5.0]\nintensity = [2, 4, 9]\nradius = 8.0\n";
     let mut images = Vec::new();
     let mut draws = Vec::new();
-    for (lights, params) in [(spots, vec!["mode = \"faithful\""]), (spots, vec!["mode = \"faithful\"", "radius_culling = false"]), (points, vec!["mode = \"faithful\""])] {
+    for (lights, params) in [
+        (spots, vec!["mode = \"faithful\""]),
+        (spots, vec!["mode = \"faithful\"", "radius_culling = false"]),
+        (points, vec!["mode = \"faithful\""]),
+    ] {
         let s = scene(CAMERAS[1], &format!("{WORLD}{crate_obj}{lights}"), &params);
         let plan = Setup::new(&s, &s.methods[0]).unwrap().plan(s.camera.position, 0.0);
-        let count = |f: &dyn Fn(&penumbra::lighting::shadow_volumes::LightPlan) -> usize| plan.lights.iter().map(f).sum::<usize>();
-        let d = (count(&|l| l.receiver_faces.len()), count(&|l| l.caster_faces.len()), count(&|l| l.receiver_entities.len()), count(&|l| l.caster_entities.len()));
-        println!("{} {params:?}: receivers {}, casters {}, receiving entities {}, casting entities {}", if lights == spots { "spots" } else { "points" }, d.0, d.1, d.2, d.3);
+        let count = |f: &dyn Fn(&penumbra::lighting::shadow_volumes::LightPlan) -> usize| {
+            plan.lights.iter().map(f).sum::<usize>()
+        };
+        let d = (
+            count(&|l| l.receiver_faces.len()),
+            count(&|l| l.caster_faces.len()),
+            count(&|l| l.receiver_entities.len()),
+            count(&|l| l.caster_entities.len()),
+        );
+        println!(
+            "{} {params:?}: receivers {}, casters {}, receiving entities {}, casting entities {}",
+            if lights == spots { "spots" } else { "points" },
+            d.0,
+            d.1,
+            d.2,
+            d.3
+        );
         draws.push(d);
         if lights == spots {
             images.push(render_scene(s, SIZE));
@@ -251,9 +327,18 @@ fn spot_cone_culling_changes_draws_not_pixels() {
     assert!(lit_pixels > 500, "the spots light the view");
     assert_eq!(differing(&images[0], &images[1]), 0, "cone culling changed pixels");
     let (culled, points) = (draws[0], draws[2]);
-    assert!(culled.0 < points.0 && culled.1 < points.1, "the cones cull receivers and casters: {draws:?}");
-    assert!(culled.3 < points.3, "the spot aimed away does not extrude the crate: {draws:?}");
-    assert!(culled.0 < draws[1].0 && culled.1 < draws[1].1, "without culling the spots draw as much as the points: {draws:?}");
+    assert!(
+        culled.0 < points.0 && culled.1 < points.1,
+        "the cones cull receivers and casters: {draws:?}"
+    );
+    assert!(
+        culled.3 < points.3,
+        "the spot aimed away does not extrude the crate: {draws:?}"
+    );
+    assert!(
+        culled.0 < draws[1].0 && culled.1 < draws[1].1,
+        "without culling the spots draw as much as the points: {draws:?}"
+    );
 }
 
 /// `penumbra profile` on the test level lists the ambient pass, each drawn light's volume and
@@ -291,10 +376,14 @@ fn entities_move_between_frames_without_validation_messages() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bsp_rooms.toml");
     let render_frames = |animate: bool, frames: usize| {
         let mut scene = Scene::from_file(&path).unwrap();
-        scene.methods[0].params.push(("animate".into(), toml::Value::Boolean(animate), 0));
+        scene.methods[0]
+            .params
+            .push(("animate".into(), toml::Value::Boolean(animate), 0));
         let mut r = Renderer::new(common::test_gpu(), scene, None, (80, 48), 2).unwrap();
         let cam = r.scene.camera.clone();
-        let images: Vec<HdrImage> = (0..frames).map(|_| r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap()).collect();
+        let images: Vec<HdrImage> = (0..frames)
+            .map(|_| r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap())
+            .collect();
         common::assert_clean(&r.gpu);
         images
     };
@@ -302,7 +391,10 @@ fn entities_move_between_frames_without_validation_messages() {
     let still = render_frames(false, 1);
     assert_eq!(differing(&moving[0], &still[0]), 0, "frame 0 is the t = 0 pose");
     let moved = differing(&moving[0], &moving[29]);
-    assert!(moved > 20, "half a second later the ball and crate have moved ({moved} pixels differ)");
+    assert!(
+        moved > 20,
+        "half a second later the ball and crate have moved ({moved} pixels differ)"
+    );
 }
 
 /// A frame with more passes than the timestamp pool holds (a volume and a lighting pass per
@@ -349,8 +441,24 @@ intensity = 0.01
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
     let lighting = names.iter().filter(|n| n.ends_with(" lighting")).count();
     println!("{} passes timed, {lighting} light passes", names.len());
-    assert!(lighting > 100 && lighting < 2100, "the pool times some light passes but not all 2,100 ({lighting})");
-    let frame = report.passes.iter().find(|p| p.name == "frame").expect("the frame's time is kept");
-    let sum: f64 = report.passes.iter().filter(|p| p.name.starts_with("light ")).map(|p| p.median_ms).sum();
-    assert!(frame.median_ms > sum, "the frame ({} ms) covers more than the timed light passes ({sum} ms)", frame.median_ms);
+    assert!(
+        lighting > 100 && lighting < 2100,
+        "the pool times some light passes but not all 2,100 ({lighting})"
+    );
+    let frame = report
+        .passes
+        .iter()
+        .find(|p| p.name == "frame")
+        .expect("the frame's time is kept");
+    let sum: f64 = report
+        .passes
+        .iter()
+        .filter(|p| p.name.starts_with("light "))
+        .map(|p| p.median_ms)
+        .sum();
+    assert!(
+        frame.median_ms > sum,
+        "the frame ({} ms) covers more than the timed light passes ({sum} ms)",
+        frame.median_ms
+    );
 }

@@ -44,10 +44,18 @@ type TestLight = (Vec3, Option<(Vec3, f32, f32)>, Vec3);
 fn lights_text(lights: &[TestLight]) -> String {
     let mut s = String::new();
     for (i, (p, spot, intensity)) in lights.iter().enumerate() {
-        s += &format!("\n[[lights]]\nname = \"l{i}\"\nposition = [{}, {}, {}]\nintensity = [{}, {}, {}]\n", p.x, p.y, p.z, intensity.x, intensity.y, intensity.z);
+        s += &format!(
+            "\n[[lights]]\nname = \"l{i}\"\nposition = [{}, {}, {}]\nintensity = [{}, {}, {}]\n",
+            p.x, p.y, p.z, intensity.x, intensity.y, intensity.z
+        );
         match spot {
             None => s += "type = \"point\"\n",
-            Some((target, inner, outer)) => s += &format!("type = \"spot\"\ntarget = [{}, {}, {}]\ninner_deg = {inner}\nouter_deg = {outer}\n", target.x, target.y, target.z),
+            Some((target, inner, outer)) => {
+                s += &format!(
+                    "type = \"spot\"\ntarget = [{}, {}, {}]\ninner_deg = {inner}\nouter_deg = {outer}\n",
+                    target.x, target.y, target.z
+                )
+            }
         }
     }
     s
@@ -55,8 +63,16 @@ fn lights_text(lights: &[TestLight]) -> String {
 
 fn three_lights() -> String {
     lights_text(&[
-        (Vec3::new(0.3, 3.0, 0.2), Some((Vec3::new(0.0, 0.0, 0.0), 20.0, 35.0)), Vec3::new(6.0, 5.0, 4.0)),
-        (Vec3::new(-1.5, 2.0, 1.0), Some((Vec3::new(0.5, 0.0, -0.5), 25.0, 40.0)), Vec3::new(2.0, 3.0, 4.0)),
+        (
+            Vec3::new(0.3, 3.0, 0.2),
+            Some((Vec3::new(0.0, 0.0, 0.0), 20.0, 35.0)),
+            Vec3::new(6.0, 5.0, 4.0),
+        ),
+        (
+            Vec3::new(-1.5, 2.0, 1.0),
+            Some((Vec3::new(0.5, 0.0, -0.5), 25.0, 40.0)),
+            Vec3::new(2.0, 3.0, 4.0),
+        ),
         (Vec3::new(1.2, 1.5, -1.0), None, Vec3::new(1.0, 1.0, 1.0)),
     ])
 }
@@ -114,9 +130,22 @@ fn close(got: [f32; 4], want: DVec3, rel: f64) -> bool {
 #[test]
 fn the_shader_models_equal_the_cpu_models() {
     for (decl, model) in [
-        (r#"{ name = "vls", model = "physical", selection = "closest", can_illuminate = false }"#, LightModel::Physical),
-        (r#"{ name = "vls", model = "seed", seed_k = 0.5, selection = "closest", can_illuminate = false }"#, LightModel::Seed { k: 0.5 }),
-        (r#"{ name = "vls", model = "opengl", kc = 1.0, kl = 0.3, kq = 0.2, selection = "closest", can_illuminate = false }"#, LightModel::OpenGl { kc: 1.0, kl: 0.3, kq: 0.2 }),
+        (
+            r#"{ name = "vls", model = "physical", selection = "closest", can_illuminate = false }"#,
+            LightModel::Physical,
+        ),
+        (
+            r#"{ name = "vls", model = "seed", seed_k = 0.5, selection = "closest", can_illuminate = false }"#,
+            LightModel::Seed { k: 0.5 },
+        ),
+        (
+            r#"{ name = "vls", model = "opengl", kc = 1.0, kl = 0.3, kq = 0.2, selection = "closest", can_illuminate = false }"#,
+            LightModel::OpenGl {
+                kc: 1.0,
+                kl: 0.3,
+                kq: 0.2,
+            },
+        ),
     ] {
         let s = scene(decl, &three_lights());
         let lights = ManyLight::from_scene(&s, "vls").unwrap();
@@ -124,14 +153,23 @@ fn the_shader_models_equal_the_cpu_models() {
         let img = render(s, "vls");
         let (mut worst, mut lit) = (0.0f64, 0);
         for &(i, p) in &pixels {
-            let want: DVec3 = lights.iter().map(|l| l.shade(&model, p, DVec3::Y, DVec3::splat(0.5))).sum();
+            let want: DVec3 = lights
+                .iter()
+                .map(|l| l.shade(&model, p, DVec3::Y, DVec3::splat(0.5)))
+                .sum();
             let got = img.pixels[i];
             lit += usize::from(want.x > 1e-4);
             worst = worst.max((got[0] as f64 - want.x).abs() / want.x.max(1e-6));
             assert!(close(got, want, 2e-3), "{decl}: pixel {i} at {p}: {got:?}, CPU {want}");
         }
-        println!("{decl}: {} floor pixels ({lit} lit), worst relative difference {worst:.2e}", pixels.len());
-        assert!(lit > pixels.len() / 3, "too few lit pixels for the test to mean anything: {lit}");
+        println!(
+            "{decl}: {} floor pixels ({lit} lit), worst relative difference {worst:.2e}",
+            pixels.len()
+        );
+        assert!(
+            lit > pixels.len() / 3,
+            "too few lit pixels for the test to mean anything: {lit}"
+        );
     }
 }
 
@@ -153,7 +191,10 @@ fn physical_vls_equals_forward_without_dropped_lights() {
             assert!(d < 1e-4, "pixel {i}: vls {a:?}, forward {b:?}");
         }
     }
-    println!("vls against forward over {} floor pixels: worst relative difference {worst:.2e}", pixels.len());
+    println!(
+        "vls against forward over {} floor pixels: worst relative difference {worst:.2e}",
+        pixels.len()
+    );
 }
 
 /// As a direct term over another method's base (`forward`'s, under a constant sky), VLS adds
@@ -174,8 +215,14 @@ fn as_a_direct_term_it_adds_over_another_base() {
     for &(i, p) in &pixels {
         let (a, b, d) = (alone.pixels[i], over.pixels[i], direct.pixels[i]);
         for c in 0..3 {
-            assert!((a[c] - b[c]).abs() <= 1e-4 * a[c].abs() + 1e-6, "pixel {i} at {p}: vls {a:?}, vls over forward {b:?}");
-            assert!((d[c] + sky - a[c]).abs() <= 2e-3 * a[c].abs() + 1e-4, "pixel {i} at {p}: direct alone {d:?} + sky {sky} vs {a:?}");
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-4 * a[c].abs() + 1e-6,
+                "pixel {i} at {p}: vls {a:?}, vls over forward {b:?}"
+            );
+            assert!(
+                (d[c] + sky - a[c]).abs() <= 2e-3 * a[c].abs() + 1e-4,
+                "pixel {i} at {p}: direct alone {d:?} + sky {sky} vs {a:?}"
+            );
         }
     }
 }
@@ -194,7 +241,11 @@ fn a_segment_shades_with_exactly_its_light_set() {
     let sets = layout.select(&config.setup, &mut penumbra::progress::Progress::new("test"));
     let (segments, lights) = (&layout.segments, &layout.lights);
     let pixels = floor_pixels(&s);
-    let model = LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 };
+    let model = LightModel::OpenGl {
+        kc: 1.0,
+        kl: 0.0,
+        kq: 1.0,
+    };
     // The segment holding each pixel's point, away from its edges (a pixel on an edge may go to
     // either side).
     let owners: Vec<Option<usize>> = pixels
@@ -203,7 +254,12 @@ fn a_segment_shades_with_exactly_its_light_set() {
             (0..segments.triangles.len()).find(|&t| {
                 let [a, b, c] = segments.triangles[t].map(|k| segments.positions[k as usize]);
                 let n = (b - a).cross(c - a);
-                let w = [(c - b).cross(p - b).dot(n), (a - c).cross(p - c).dot(n), (b - a).cross(p - a).dot(n)].map(|x| x / n.length_squared());
+                let w = [
+                    (c - b).cross(p - b).dot(n),
+                    (a - c).cross(p - c).dot(n),
+                    (b - a).cross(p - a).dot(n),
+                ]
+                .map(|x| x / n.length_squared());
                 w.iter().all(|&x| x > 0.02)
             })
         })
@@ -235,12 +291,26 @@ fn a_segment_shades_with_exactly_its_light_set() {
             let Some(t) = *owner else { continue };
             let set: Vec<usize> = sets.of(t).collect();
             distinct.insert(set.clone());
-            let want: DVec3 = set.iter().map(|&l| lights[l].shade(&model, p, DVec3::Y, DVec3::splat(0.5)) * (scale[l] as f32) as f64).sum();
-            assert!(close(img.pixels[i], want, 2e-3), "frame {frame}: pixel {i} in segment {t} (lights {set:?}): {:?}, CPU {want}", img.pixels[i]);
+            let want: DVec3 = set
+                .iter()
+                .map(|&l| lights[l].shade(&model, p, DVec3::Y, DVec3::splat(0.5)) * (scale[l] as f32) as f64)
+                .sum();
+            assert!(
+                close(img.pixels[i], want, 2e-3),
+                "frame {frame}: pixel {i} in segment {t} (lights {set:?}): {:?}, CPU {want}",
+                img.pixels[i]
+            );
             checked += 1;
         }
-        println!("frame {frame}: {checked} pixels checked against their segment's set; {} distinct sets", distinct.len());
-        assert!(checked > pixels.len() / 2 && distinct.len() > 3, "{checked} pixels, {} sets", distinct.len());
+        println!(
+            "frame {frame}: {checked} pixels checked against their segment's set; {} distinct sets",
+            distinct.len()
+        );
+        assert!(
+            checked > pixels.len() / 2 && distinct.len() > 3,
+            "{checked} pixels, {} sets",
+            distinct.len()
+        );
     }
     common::assert_clean(&r.gpu);
 }
@@ -250,7 +320,8 @@ fn a_segment_shades_with_exactly_its_light_set() {
 /// of Σ `ManyLight::shade` at its segment's corners.
 #[test]
 fn per_vertex_sets_shade_at_the_vertices() {
-    let decl = r#"{ name = "vls", point = "vertex", selection = "closest", can_illuminate = false, max_segment_area = 0.1 }"#;
+    let decl =
+        r#"{ name = "vls", point = "vertex", selection = "closest", can_illuminate = false, max_segment_area = 0.1 }"#;
     let s = scene(decl, &three_lights());
     let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
     let geometry = scene_geometry(&s, "vls").unwrap();
@@ -258,23 +329,43 @@ fn per_vertex_sets_shade_at_the_vertices() {
     let (segments, lights) = (&layout.segments, &layout.lights);
     let pixels = floor_pixels(&s);
     let img = render(s, "vls");
-    let at = |q: DVec3| -> DVec3 { lights.iter().map(|l| l.shade(&LightModel::Physical, q, DVec3::Y, DVec3::splat(0.5))).sum() };
+    let at = |q: DVec3| -> DVec3 {
+        lights
+            .iter()
+            .map(|l| l.shade(&LightModel::Physical, q, DVec3::Y, DVec3::splat(0.5)))
+            .sum()
+    };
     let (mut checked, mut off_per_pixel) = (0, 0.0f64);
     for &(i, p) in &pixels {
         let found = (0..segments.triangles.len()).find_map(|t| {
             let [a, b, c] = segments.triangles[t].map(|k| segments.positions[k as usize]);
             let n = (b - a).cross(c - a);
-            let w = [(c - b).cross(p - b).dot(n), (a - c).cross(p - c).dot(n), (b - a).cross(p - a).dot(n)].map(|x| x / n.length_squared());
+            let w = [
+                (c - b).cross(p - b).dot(n),
+                (a - c).cross(p - c).dot(n),
+                (b - a).cross(p - a).dot(n),
+            ]
+            .map(|x| x / n.length_squared());
             w.iter().all(|&x| x >= 0.0).then_some(([a, b, c], w))
         });
         let Some((corners, w)) = found else { continue };
         let want = at(corners[0]) * w[0] + at(corners[1]) * w[1] + at(corners[2]) * w[2];
-        assert!(close(img.pixels[i], want, 2e-3), "pixel {i} at {p}: {:?}, interpolated CPU {want}", img.pixels[i]);
+        assert!(
+            close(img.pixels[i], want, 2e-3),
+            "pixel {i} at {p}: {:?}, interpolated CPU {want}",
+            img.pixels[i]
+        );
         off_per_pixel = off_per_pixel.max((want.x - at(p).x).abs() / at(p).x.max(1e-6));
         checked += 1;
     }
-    println!("{checked} pixels equal the interpolated vertex sums; per-pixel shading differs by up to {:.1} %", 100.0 * off_per_pixel);
-    assert!(checked > pixels.len() / 2 && off_per_pixel > 1e-3, "{checked} pixels, {off_per_pixel}");
+    println!(
+        "{checked} pixels equal the interpolated vertex sums; per-pixel shading differs by up to {:.1} %",
+        100.0 * off_per_pixel
+    );
+    assert!(
+        checked > pixels.len() / 2 && off_per_pixel > 1e-3,
+        "{checked} pixels, {off_per_pixel}"
+    );
 }
 
 /// Item 23: static intensities give the same bytes every frame, for 100 frames.
@@ -321,7 +412,8 @@ fn frame_time_against_lights() {
         let s = scene(methods, &lights_text(&lights));
         let mut times = Vec::new();
         for method in ["vls", "forward"] {
-            let mut r = Renderer::new(common::test_gpu(), s.clone(), Some(method), (640, 480), 1).unwrap_or_else(|e| panic!("{e}"));
+            let mut r = Renderer::new(common::test_gpu(), s.clone(), Some(method), (640, 480), 1)
+                .unwrap_or_else(|e| panic!("{e}"));
             let cam = r.scene.camera.clone();
             for _ in 0..3 {
                 r.render(&cam, FrameOutput::Readback).unwrap();

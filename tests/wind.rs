@@ -36,22 +36,41 @@ fn wind_vertices(scene: &Scene, frame: u64) -> (Vec<Vertex>, SceneGpu) {
     let mut states = ResourceStates::default();
     let environment = EnvironmentMap::of_scene(scene).unwrap();
     let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
-    let wind = WindPass::new(&mut gpu, &mut states, &ShaderLibrary::Embedded, scene, &scene_gpu).unwrap().expect("a windy object");
+    let wind = WindPass::new(&mut gpu, &mut states, &ShaderLibrary::Embedded, scene, &scene_gpu)
+        .unwrap()
+        .expect("a windy object");
     let size = gpu.buffer_desc(scene_gpu.vertices).unwrap().size;
-    let rb = gpu.create_buffer(&BufferDesc { name: "vertices readback".into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu }).unwrap();
+    let rb = gpu
+        .create_buffer(&BufferDesc {
+            name: "vertices readback".into(),
+            size,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })
+        .unwrap();
     let f = gpu.create_frame().unwrap();
     {
         let mut graph = RenderGraph::new();
         wind.add(&mut graph, &scene_gpu, FrameClock::at(frame).time_s);
         let vb = scene_gpu.vertices;
-        graph.pass("readback").buffer(vb, Access::TransferRead, None).buffer(rb, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_buffer(vb, rb, size));
+        graph
+            .pass("readback")
+            .buffer(vb, Access::TransferRead, None)
+            .buffer(rb, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.copy_buffer(vb, rb, size));
         graph.pass("host").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
         graph.output_buffer(rb);
         graph.run_and_wait(&gpu, f, &mut states, "wind test").unwrap();
     }
     let bytes = gpu.read_buffer(rb).unwrap();
     common::assert_clean(&gpu);
-    (bytes.chunks_exact(std::mem::size_of::<Vertex>()).map(bytemuck::pod_read_unaligned).collect(), scene_gpu)
+    (
+        bytes
+            .chunks_exact(std::mem::size_of::<Vertex>())
+            .map(bytemuck::pod_read_unaligned)
+            .collect(),
+        scene_gpu,
+    )
 }
 
 /// The GPU's wind on a bush of the leaf texture (alpha = weight): stems (alpha 0) stay put,
@@ -82,14 +101,21 @@ fn wind_moves_vertices_by_the_formula_as_the_reference_does() {
         } else if uv.y == 0.0 {
             let want = lift(*p, 1.0, t as f64, 0.3, 3.0, 0.1);
             let dy = v.position[1] as f64 - p.y as f64;
-            assert!((dy - want).abs() < 2e-6 && v.position[0] == p.x && v.position[2] == p.z, "tip vertex {i}: lift {dy} vs {want}");
+            assert!(
+                (dy - want).abs() < 2e-6 && v.position[0] == p.x && v.position[2] == p.z,
+                "tip vertex {i}: lift {dy} vs {want}"
+            );
             tips += 1;
         }
     }
     assert!(stems >= 40 && tips >= 40, "{stems} stems, {tips} tips");
     // The ground has no wind: untouched.
     let ground = &scene_gpu.meshes[0];
-    assert!(ground.positions.iter().enumerate().all(|(i, p)| Vec3::from(got[i].position) == *p));
+    assert!(ground
+        .positions
+        .iter()
+        .enumerate()
+        .all(|(i, p)| Vec3::from(got[i].position) == *p));
     // The reference's geometry: the CPU twin at the same time.
     let twin = s.wind_mesh(&s.objects[1], rest.clone(), t).unwrap();
     let mut worst = (0.0f32, 0.0f32);
@@ -98,8 +124,19 @@ fn wind_moves_vertices_by_the_formula_as_the_reference_does() {
         worst.0 = worst.0.max(Vec3::from(v.position).distance(*p));
         worst.1 = worst.1.max(Vec3::from(v.normal).distance(*n));
     }
-    assert!(worst.0 < 1e-6 && worst.1 < 1e-5, "GPU vs CPU twin: position {:.2e} m, normal {:.2e}", worst.0, worst.1);
-    assert!(twin.positions.iter().zip(&rest.positions).any(|(a, b)| (a.y - b.y).abs() > 1e-3), "the wind moved nothing");
+    assert!(
+        worst.0 < 1e-6 && worst.1 < 1e-5,
+        "GPU vs CPU twin: position {:.2e} m, normal {:.2e}",
+        worst.0,
+        worst.1
+    );
+    assert!(
+        twin.positions
+            .iter()
+            .zip(&rest.positions)
+            .any(|(a, b)| (a.y - b.y).abs() > 1e-3),
+        "the wind moved nothing"
+    );
 }
 
 /// A 1 m² leaf at 0.37 m whose wind lifts it uniformly by 0.1·cos(90 t) m (a huge `unit` makes
@@ -141,9 +178,15 @@ fn the_rsm_and_the_surfaces_see_the_same_moved_leaf() {
         for (frame, px) in got.iter().enumerate() {
             let y = volume.origin.y + px[1] * side;
             let want = height(frame as u64);
-            assert!((y as f64 - want).abs() < 2e-4, "{view}, frame {frame}: the leaf at {y} m, the wind puts it at {want} m");
+            assert!(
+                (y as f64 - want).abs() < 2e-4,
+                "{view}, frame {frame}: the leaf at {y} m, the wind puts it at {want} m"
+            );
         }
-        assert!((got[0][1] - got[1][1]).abs() * side > 0.09, "{view}: the leaf did not move");
+        assert!(
+            (got[0][1] - got[1][1]).abs() * side > 0.09,
+            "{view}: the leaf did not move"
+        );
     }
 }
 
@@ -153,9 +196,12 @@ fn the_rsm_and_the_surfaces_see_the_same_moved_leaf() {
 fn windy_frames_are_deterministic() {
     let s = lifted_leaf("indirect").to_owned();
     let run = || {
-        let mut r = Renderer::new(common::test_gpu(), s.clone(), Some("lpv"), (16, 16), 1).unwrap_or_else(|e| panic!("{e}"));
+        let mut r =
+            Renderer::new(common::test_gpu(), s.clone(), Some("lpv"), (16, 16), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
-        let frames: Vec<Vec<[f32; 4]>> = (0..4).map(|_| r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap().pixels).collect();
+        let frames: Vec<Vec<[f32; 4]>> = (0..4)
+            .map(|_| r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap().pixels)
+            .collect();
         common::assert_clean(&r.gpu);
         frames
     };
@@ -182,8 +228,15 @@ fn a_turning_sun_is_seen_by_every_method_at_the_closed_form_angle() {
     };
     let forward = centres(scene(&text("")), "forward", 9, 2);
     let ratio = forward[1][0] / forward[0][0];
-    assert!((forward[0][0] - 0.5 * 2.0 / std::f32::consts::PI).abs() < 1e-4, "frame 0: {:?}", forward[0]);
-    assert!((ratio - 30f32.to_radians().cos()).abs() < 1e-4, "forward: frame 1 / frame 0 = {ratio}");
+    assert!(
+        (forward[0][0] - 0.5 * 2.0 / std::f32::consts::PI).abs() < 1e-4,
+        "frame 0: {:?}",
+        forward[0]
+    );
+    assert!(
+        (ratio - 30f32.to_radians().cos()).abs() < 1e-4,
+        "forward: frame 1 / frame 0 = {ratio}"
+    );
     let lpv = centres(scene(&text("")), "lpv", 33, 2);
     let volume = Placement::fit(Vec3::new(-1.0, -0.5, -1.0), Vec3::new(1.0, 1.5, 1.0), 8);
     let side = volume.cell * 8.0;
@@ -192,8 +245,14 @@ fn a_turning_sun_is_seen_by_every_method_at_the_closed_form_angle() {
     let centre = volume.centre();
     let want = (centre.y + 0.4) * 30f32.to_radians().tan();
     assert!(want > 0.4, "{want}");
-    assert!((p0.x - centre.x).abs() < 2e-3 && (p0.y + 0.4).abs() < 1e-3, "frame 0: the RSM's centre meets the plane at {p0}");
-    assert!((p1.x - centre.x - want).abs() < 2e-3 && (p1.y + 0.4).abs() < 1e-3, "frame 1: {p1}, {want} m off centre expected");
+    assert!(
+        (p0.x - centre.x).abs() < 2e-3 && (p0.y + 0.4).abs() < 1e-3,
+        "frame 0: the RSM's centre meets the plane at {p0}"
+    );
+    assert!(
+        (p1.x - centre.x - want).abs() < 2e-3 && (p1.y + 0.4).abs() < 1e-3,
+        "frame 1: {p1}, {want} m off centre expected"
+    );
 }
 
 /// Methods that bake say they keep the rest pose of a moving scene; those that follow it say
@@ -209,7 +268,13 @@ fn methods_that_keep_the_rest_pose_say_so() {
         let notes = registry::motion_notes(&registry::configuration(&windy, Some(method)).unwrap(), &windy);
         assert_eq!(notes.len(), noted as usize, "{method}: {notes:?}");
         if noted {
-            assert!(notes[0].contains(method) && notes[0].contains("rest pose") && notes[0].contains("wind (objects[0] \"leaf\")"), "{}", notes[0]);
+            assert!(
+                notes[0].contains(method)
+                    && notes[0].contains("rest pose")
+                    && notes[0].contains("wind (objects[0] \"leaf\")"),
+                "{}",
+                notes[0]
+            );
         }
         assert!(registry::motion_notes(&registry::configuration(&still, Some(method)).unwrap(), &still).is_empty());
     }
@@ -232,10 +297,17 @@ fn the_reference_traces_the_frames_geometry_and_sun() {
         let want = 0.37 + lift(Vec3::ZERO, 1.0, t as f64, 1e-5, 90.0, 1e4);
         assert!(!traced.corners.is_empty());
         for c in traced.corners.iter().flatten() {
-            assert!((c.y as f64 - want).abs() < 1e-5, "frame {frame}: a corner at {} m, the wind puts the leaf at {want} m", c.y);
+            assert!(
+                (c.y as f64 - want).abs() < 1e-5,
+                "frame {frame}: a corner at {} m, the wind puts the leaf at {want} m",
+                c.y
+            );
         }
         let turned = (30.0 * frame as f32).to_radians();
         let d = Vec3::from_slice(&traced.lights[0].direction[..3]);
-        assert!(d.distance(Vec3::new(turned.sin(), -turned.cos(), 0.0)) < 1e-5, "frame {frame}: sun {d}");
+        assert!(
+            d.distance(Vec3::new(turned.sin(), -turned.cos(), 0.0)) < 1e-5,
+            "frame {frame}: sun {d}"
+        );
     }
 }

@@ -44,8 +44,14 @@ impl Bind<'_> {
             (self, ty),
             (Bind::Sampled { .. }, vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                 | (Bind::StorageImage { .. }, vk::DescriptorType::STORAGE_IMAGE)
-                | (Bind::UniformBuffer(_) | Bind::UniformData(_), vk::DescriptorType::UNIFORM_BUFFER)
-                | (Bind::StorageBuffer(_) | Bind::StorageData(_), vk::DescriptorType::STORAGE_BUFFER)
+                | (
+                    Bind::UniformBuffer(_) | Bind::UniformData(_),
+                    vk::DescriptorType::UNIFORM_BUFFER
+                )
+                | (
+                    Bind::StorageBuffer(_) | Bind::StorageData(_),
+                    vk::DescriptorType::STORAGE_BUFFER
+                )
         )
     }
 }
@@ -63,11 +69,18 @@ impl Recorder<'_> {
         let pipeline_id = self.bound_pipeline()?;
         let gpu = self.gpu;
         let p = gpu.pipeline(pipeline_id)?;
-        let err = |binding: &str, message: String| BackendError::Binding { pipeline: p.name.clone(), binding: binding.into(), message };
+        let err = |binding: &str, message: String| BackendError::Binding {
+            pipeline: p.name.clone(),
+            binding: binding.into(),
+            message,
+        };
         for (i, (name, _)) in resources.iter().enumerate() {
             if p.reflection.binding(name).is_none() {
                 let declared: Vec<&str> = p.reflection.bindings.iter().map(|b| b.name.as_str()).collect();
-                return Err(err(name, format!("not declared by the shaders (they declare: {})", declared.join(", "))));
+                return Err(err(
+                    name,
+                    format!("not declared by the shaders (they declare: {})", declared.join(", ")),
+                ));
             }
             if resources[..i].iter().any(|(n, _)| n == name) {
                 return Err(err(name, "bound twice".into()));
@@ -79,39 +92,88 @@ impl Recorder<'_> {
                 return Err(err(&b.name, format!("declared as {:?} but not bound", b.ty)));
             };
             if !res.matches(b.ty) {
-                return Err(err(&b.name, format!("shader declares {:?}, given {}", b.ty, res.kind())));
+                return Err(err(
+                    &b.name,
+                    format!("shader declares {:?}, given {}", b.ty, res.kind()),
+                ));
             }
             if b.count != 1 {
-                return Err(err(&b.name, format!("arrays of {} descriptors are not bindable yet", b.count)));
+                return Err(err(
+                    &b.name,
+                    format!("arrays of {} descriptors are not bindable yet", b.count),
+                ));
             }
             let info = match res {
                 Bind::Sampled { image, range, sampler } => {
                     let img = gpu.image(*image)?;
                     if !img.desc.usage.contains(vk::ImageUsageFlags::SAMPLED) {
-                        return Err(err(&b.name, format!("image `{}` was not created with SAMPLED usage", img.desc.name)));
+                        return Err(err(
+                            &b.name,
+                            format!("image `{}` was not created with SAMPLED usage", img.desc.name),
+                        ));
                     }
-                    let view = gpu.image_view(*image, range.base_mip, range.mip_count, range.base_layer, range.layer_count, None)?;
-                    Info::Image(vk::DescriptorImageInfo { sampler: gpu.raw_sampler(*sampler)?, image_view: view, image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL })
+                    let view = gpu.image_view(
+                        *image,
+                        range.base_mip,
+                        range.mip_count,
+                        range.base_layer,
+                        range.layer_count,
+                        None,
+                    )?;
+                    Info::Image(vk::DescriptorImageInfo {
+                        sampler: gpu.raw_sampler(*sampler)?,
+                        image_view: view,
+                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    })
                 }
                 Bind::StorageImage { image, range } => {
                     let img = gpu.image(*image)?;
                     if !img.desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
-                        return Err(err(&b.name, format!("image `{}` was not created with STORAGE usage", img.desc.name)));
+                        return Err(err(
+                            &b.name,
+                            format!("image `{}` was not created with STORAGE usage", img.desc.name),
+                        ));
                     }
-                    let view = gpu.image_view(*image, range.base_mip, range.mip_count, range.base_layer, range.layer_count, None)?;
-                    Info::Image(vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: view, image_layout: vk::ImageLayout::GENERAL })
+                    let view = gpu.image_view(
+                        *image,
+                        range.base_mip,
+                        range.mip_count,
+                        range.base_layer,
+                        range.layer_count,
+                        None,
+                    )?;
+                    Info::Image(vk::DescriptorImageInfo {
+                        sampler: vk::Sampler::null(),
+                        image_view: view,
+                        image_layout: vk::ImageLayout::GENERAL,
+                    })
                 }
                 Bind::UniformBuffer(id) | Bind::StorageBuffer(id) => {
                     let buf = gpu.buffer(*id)?;
-                    let needed = if matches!(res, Bind::UniformBuffer(_)) { vk::BufferUsageFlags::UNIFORM_BUFFER } else { vk::BufferUsageFlags::STORAGE_BUFFER };
+                    let needed = if matches!(res, Bind::UniformBuffer(_)) {
+                        vk::BufferUsageFlags::UNIFORM_BUFFER
+                    } else {
+                        vk::BufferUsageFlags::STORAGE_BUFFER
+                    };
                     if !buf.desc.usage.contains(needed) {
-                        return Err(err(&b.name, format!("buffer `{}` lacks {needed:?} usage", buf.desc.name)));
+                        return Err(err(
+                            &b.name,
+                            format!("buffer `{}` lacks {needed:?} usage", buf.desc.name),
+                        ));
                     }
-                    Info::Buffer(vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE })
+                    Info::Buffer(vk::DescriptorBufferInfo {
+                        buffer: buf.raw,
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    })
                 }
                 Bind::UniformData(bytes) | Bind::StorageData(bytes) => {
                     let (buffer, offset) = self.upload(bytes)?;
-                    Info::Buffer(vk::DescriptorBufferInfo { buffer, offset, range: bytes.len().max(4) as u64 })
+                    Info::Buffer(vk::DescriptorBufferInfo {
+                        buffer,
+                        offset,
+                        range: bytes.len().max(4) as u64,
+                    })
                 }
             };
             infos.push((b, info));
@@ -119,14 +181,29 @@ impl Recorder<'_> {
         let sets = if p.set_layouts.is_empty() {
             Vec::new()
         } else {
-            let pool = self.descriptor_pool_for(p.set_layouts.len() as u32, infos.iter().map(|(b, _)| gpu.driver_descriptor_type(b.ty)))?;
-            unsafe { gpu.device.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&p.set_layouts)) }
-                .map_err(|e| BackendError::Vulkan { call: "vkAllocateDescriptorSets", result: e })?
+            let pool = self.descriptor_pool_for(
+                p.set_layouts.len() as u32,
+                infos.iter().map(|(b, _)| gpu.driver_descriptor_type(b.ty)),
+            )?;
+            unsafe {
+                gpu.device.allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(pool)
+                        .set_layouts(&p.set_layouts),
+                )
+            }
+            .map_err(|e| BackendError::Vulkan {
+                call: "vkAllocateDescriptorSets",
+                result: e,
+            })?
         };
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .map(|(b, info)| {
-                let w = vk::WriteDescriptorSet::default().dst_set(sets[b.set as usize]).dst_binding(b.binding).descriptor_type(gpu.driver_descriptor_type(b.ty));
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_set(sets[b.set as usize])
+                    .dst_binding(b.binding)
+                    .descriptor_type(gpu.driver_descriptor_type(b.ty));
                 match info {
                     Info::Image(i) => w.image_info(std::slice::from_ref(i)),
                     Info::Buffer(i) => w.buffer_info(std::slice::from_ref(i)),
@@ -136,7 +213,8 @@ impl Recorder<'_> {
         unsafe {
             gpu.device.update_descriptor_sets(&writes, &[]);
             if !sets.is_empty() {
-                gpu.device.cmd_bind_descriptor_sets(self.cb, p.bind_point, p.layout, 0, &sets, &[]);
+                gpu.device
+                    .cmd_bind_descriptor_sets(self.cb, p.bind_point, p.layout, 0, &sets, &[]);
             }
         }
         Ok(())
@@ -144,17 +222,30 @@ impl Recorder<'_> {
 
     /// The pool to allocate `sets` sets holding `types` from: the one being filled if it has
     /// room for all of them, else the next (created the first time a frame needs it).
-    fn descriptor_pool_for(&mut self, sets: u32, types: impl Iterator<Item = vk::DescriptorType>) -> BackendResult<vk::DescriptorPool> {
+    fn descriptor_pool_for(
+        &mut self,
+        sets: u32,
+        types: impl Iterator<Item = vk::DescriptorType>,
+    ) -> BackendResult<vk::DescriptorPool> {
         let mut need = [0u32; 4];
         for ty in types {
-            let i = POOL_SIZES.iter().position(|(t, _)| *t == ty).ok_or_else(|| BackendError::Invalid(format!("descriptor type {ty:?} has no place in the frame's pools")))?;
+            let i = POOL_SIZES.iter().position(|(t, _)| *t == ty).ok_or_else(|| {
+                BackendError::Invalid(format!("descriptor type {ty:?} has no place in the frame's pools"))
+            })?;
             need[i] += 1;
         }
         if sets > POOL_SETS || need.iter().zip(&POOL_SIZES).any(|(n, (_, cap))| n > cap) {
-            return Err(BackendError::Invalid(format!("one bind needs {sets} sets and {need:?} descriptors, more than a descriptor pool holds")));
+            return Err(BackendError::Invalid(format!(
+                "one bind needs {sets} sets and {need:?} descriptors, more than a descriptor pool holds"
+            )));
         }
         let f = &mut self.frame;
-        let fits = f.pool_sets + sets <= POOL_SETS && f.pool_descriptors.iter().zip(&need).zip(&POOL_SIZES).all(|((used, n), (_, cap))| used + n <= *cap);
+        let fits = f.pool_sets + sets <= POOL_SETS
+            && f.pool_descriptors
+                .iter()
+                .zip(&need)
+                .zip(&POOL_SIZES)
+                .all(|((used, n), (_, cap))| used + n <= *cap);
         if !fits {
             if f.descriptor_pool_index + 1 == f.descriptor_pools.len() {
                 let pool = self.gpu.create_descriptor_pool()?;
@@ -184,11 +275,19 @@ impl Recorder<'_> {
             let capacity = self.frame.uploads[block].desc.size;
             if offset + len <= capacity {
                 let buffer = &self.frame.uploads[block];
-                let ptr = buffer.allocation.as_ref().and_then(|a| a.mapped_ptr()).ok_or_else(|| BackendError::Invalid("upload buffer is not mapped".into()))?;
+                let ptr = buffer
+                    .allocation
+                    .as_ref()
+                    .and_then(|a| a.mapped_ptr())
+                    .ok_or_else(|| BackendError::Invalid("upload buffer is not mapped".into()))?;
                 // SAFETY: the block is host-visible and mapped, this frame's previous use of it
                 // was waited for in begin_frame, and [offset, offset + len) lies inside it.
                 unsafe {
-                    std::ptr::copy_nonoverlapping(bytes.as_ptr(), (ptr.as_ptr() as *mut u8).add(offset as usize), bytes.len());
+                    std::ptr::copy_nonoverlapping(
+                        bytes.as_ptr(),
+                        (ptr.as_ptr() as *mut u8).add(offset as usize),
+                        bytes.len(),
+                    );
                 }
                 let raw = buffer.raw;
                 self.frame.upload_offset = offset + len;

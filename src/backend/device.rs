@@ -29,7 +29,9 @@ pub struct GpuDesc {
 impl GpuDesc {
     /// Fills `display` from a window-system connection.
     pub fn with_display(mut self, display: &impl HasDisplayHandle) -> BackendResult<Self> {
-        let handle = display.display_handle().map_err(|e| BackendError::Unsupported(format!("window display handle: {e}")))?;
+        let handle = display
+            .display_handle()
+            .map_err(|e| BackendError::Unsupported(format!("window display handle: {e}")))?;
         self.display = Some(handle.as_raw());
         Ok(self)
     }
@@ -92,7 +94,10 @@ impl DeviceCaps {
             ("device".into(), self.name.clone()),
             ("type".into(), format!("{:?}", self.device_type)),
             ("driver".into(), format!("{} ({})", self.driver_name, self.driver_info)),
-            ("Vulkan".into(), format!("{}.{}.{}", self.api_version.0, self.api_version.1, self.api_version.2)),
+            (
+                "Vulkan".into(),
+                format!("{}.{}.{}", self.api_version.0, self.api_version.1, self.api_version.2),
+            ),
             ("dynamic rendering, synchronization2".into(), "yes (required)".into()),
             ("depth clamp".into(), yes(self.depth_clamp)),
             ("non-solid fill".into(), yes(self.fill_mode_non_solid)),
@@ -102,16 +107,36 @@ impl DeviceCaps {
                 if self.timestamp_valid_bits == 0 {
                     "unsupported on the graphics queue".into()
                 } else {
-                    format!("{} valid bits, period {} ns, compute+graphics {}", self.timestamp_valid_bits, self.timestamp_period_ns, yes(self.timestamp_compute_and_graphics))
+                    format!(
+                        "{} valid bits, period {} ns, compute+graphics {}",
+                        self.timestamp_valid_bits,
+                        self.timestamp_period_ns,
+                        yes(self.timestamp_compute_and_graphics)
+                    )
                 },
             ),
             ("max 2D image".into(), self.max_image_dimension_2d.to_string()),
             ("max 3D image".into(), self.max_image_dimension_3d.to_string()),
-            ("max push constants".into(), format!("{} bytes", self.max_push_constants_size)),
-            ("max compute work group".into(), format!("{:?}, {} invocations", self.max_compute_work_group_size, self.max_compute_work_group_invocations)),
-            ("depth/stencil format".into(), format!("{:?}", self.depth_stencil_format)),
+            (
+                "max push constants".into(),
+                format!("{} bytes", self.max_push_constants_size),
+            ),
+            (
+                "max compute work group".into(),
+                format!(
+                    "{:?}, {} invocations",
+                    self.max_compute_work_group_size, self.max_compute_work_group_invocations
+                ),
+            ),
+            (
+                "depth/stencil format".into(),
+                format!("{:?}", self.depth_stencil_format),
+            ),
             ("validation".into(), yes(self.validation)),
-            ("uniform blocks bound as storage".into(), yes(self.uniform_blocks_as_storage)),
+            (
+                "uniform blocks bound as storage".into(),
+                yes(self.uniform_blocks_as_storage),
+            ),
         ]
     }
 }
@@ -149,11 +174,17 @@ unsafe extern "system" fn debug_callback(
     // outlives the messenger (destroyed first in Drop).
     let msg = unsafe {
         let data = &*data;
-        let text = if data.p_message.is_null() { "(no message)".to_string() } else { CStr::from_ptr(data.p_message).to_string_lossy().into_owned() };
+        let text = if data.p_message.is_null() {
+            "(no message)".to_string()
+        } else {
+            CStr::from_ptr(data.p_message).to_string_lossy().into_owned()
+        };
         format!("[{severity:?} {kind:?}] {text}")
     };
     // Info/verbose chatter from the loader is not a validation finding.
-    if severity.intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+    if severity
+        .intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+    {
         crate::errln!("vulkan: {msg}");
         if !user.is_null() {
             let log = unsafe { &*(user as *const ValidationLog) };
@@ -193,9 +224,15 @@ fn vulkan_loader() -> BackendResult<ash::Entry> {
             let _change = device_set_change();
             unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }.ok()
         };
-        Ok(Loader { entry, _keep_driver_loaded: keep })
+        Ok(Loader {
+            entry,
+            _keep_driver_loaded: keep,
+        })
     });
-    loader.as_ref().map(|l| l.entry.clone()).map_err(|e| BackendError::Loader(e.clone()))
+    loader
+        .as_ref()
+        .map(|l| l.entry.clone())
+        .map_err(|e| BackendError::Loader(e.clone()))
 }
 
 // Vulkan calls on one thread against devices made or dropped on another. The Vulkan loader adds
@@ -259,12 +296,19 @@ impl Gpu {
         let _change = device_set_change();
 
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
-        let has_validation = layers.iter().any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
+        let has_validation = layers
+            .iter()
+            .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
         if desc.validation && !has_validation {
             return Err(BackendError::Unsupported("validation requested but VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)".into()));
         }
-        let available_exts = unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
-        let has_ext = |name: &CStr| available_exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(name));
+        let available_exts = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
+        let has_ext = |name: &CStr| {
+            available_exts
+                .iter()
+                .any(|e| e.extension_name_as_c_str().ok() == Some(name))
+        };
         let debug_utils = has_ext(ash::ext::debug_utils::NAME);
 
         let mut ext_names: Vec<*const std::ffi::c_char> = Vec::new();
@@ -272,30 +316,50 @@ impl Gpu {
             ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
         }
         if let Some(display) = desc.display {
-            let needed = ash_window::enumerate_required_extensions(display).map_err(|e| BackendError::Unsupported(format!("presenting to this window system: {e}")))?;
+            let needed = ash_window::enumerate_required_extensions(display)
+                .map_err(|e| BackendError::Unsupported(format!("presenting to this window system: {e}")))?;
             for &n in needed {
                 let name = unsafe { CStr::from_ptr(n) };
                 if !has_ext(name) {
-                    return Err(BackendError::Unsupported(format!("instance extension {} (needed to open a window)", name.to_string_lossy())));
+                    return Err(BackendError::Unsupported(format!(
+                        "instance extension {} (needed to open a window)",
+                        name.to_string_lossy()
+                    )));
                 }
                 ext_names.push(n);
             }
         }
-        let layer_names: Vec<*const std::ffi::c_char> = if desc.validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
+        let layer_names: Vec<*const std::ffi::c_char> = if desc.validation {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
 
         let app_name = c"penumbra";
-        let app_info = vk::ApplicationInfo::default().application_name(app_name).engine_name(app_name).api_version(vk::API_VERSION_1_3);
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(app_name)
+            .engine_name(app_name)
+            .api_version(vk::API_VERSION_1_3);
 
         let log = ValidationLog::default();
         let log_box = Box::new(log.clone());
         let severity = vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR;
-        let kinds = vk::DebugUtilsMessageTypeFlagsEXT::GENERAL | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE;
+        let kinds = vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+            | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+            | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE;
         let user_ptr = &*log_box as *const ValidationLog as *mut c_void;
-        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default().message_severity(severity).message_type(kinds).pfn_user_callback(Some(debug_callback)).user_data(user_ptr);
+        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(severity)
+            .message_type(kinds)
+            .pfn_user_callback(Some(debug_callback))
+            .user_data(user_ptr);
         let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
 
-        let mut create_info = vk::InstanceCreateInfo::default().application_info(&app_info).enabled_layer_names(&layer_names).enabled_extension_names(&ext_names);
+        let mut create_info = vk::InstanceCreateInfo::default()
+            .application_info(&app_info)
+            .enabled_layer_names(&layer_names)
+            .enabled_extension_names(&ext_names);
         if desc.validation {
             create_info = create_info.push_next(&mut features);
             if debug_utils {
@@ -308,7 +372,11 @@ impl Gpu {
         let (debug_instance, messenger) = if debug_utils {
             let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
             let m = if desc.validation {
-                let info = vk::DebugUtilsMessengerCreateInfoEXT::default().message_severity(severity).message_type(kinds).pfn_user_callback(Some(debug_callback)).user_data(user_ptr);
+                let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                    .message_severity(severity)
+                    .message_type(kinds)
+                    .pfn_user_callback(Some(debug_callback))
+                    .user_data(user_ptr);
                 unsafe { di.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?
             } else {
                 vk::DebugUtilsMessengerEXT::null()
@@ -335,7 +403,9 @@ impl Gpu {
             }
         };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let debug_device = debug_instance.as_ref().map(|_| ash::ext::debug_utils::Device::new(&instance, &device));
+        let debug_device = debug_instance
+            .as_ref()
+            .map(|_| ash::ext::debug_utils::Device::new(&instance, &device));
 
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
@@ -347,11 +417,18 @@ impl Gpu {
             // (256 MiB device, 64 MiB host). Starting at the defaults cost a short bake on an
             // H200 about 13 ms of its 53 (the first 64 MiB of host-visible memory), and the
             // default scene's capture about 70 ms.
-            allocation_sizes: gpu_allocator::AllocationSizes::new(8 << 20, 8 << 20).with_max_device_memblock_size(256 << 20).with_max_host_memblock_size(64 << 20),
+            allocation_sizes: gpu_allocator::AllocationSizes::new(8 << 20, 8 << 20)
+                .with_max_device_memblock_size(256 << 20)
+                .with_max_host_memblock_size(64 << 20),
         })
-        .map_err(|e| BackendError::Allocation { name: "allocator".into(), message: e.to_string() })?;
+        .map_err(|e| BackendError::Allocation {
+            name: "allocator".into(),
+            message: e.to_string(),
+        })?;
 
-        let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(queue_family).flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
 
         let mut caps = caps;
@@ -385,7 +462,9 @@ impl Gpu {
     ) -> BackendResult<(vk::PhysicalDevice, ash::Device, u32, DeviceCaps)> {
         let physicals = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
         if physicals.is_empty() {
-            return Err(BackendError::NoDevice(" found (is mesa-vulkan-drivers installed?)".into()));
+            return Err(BackendError::NoDevice(
+                " found (is mesa-vulkan-drivers installed?)".into(),
+            ));
         }
         let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties, String)> = physicals
             .iter()
@@ -405,10 +484,13 @@ impl Gpu {
         let chosen = match &desc.device_name {
             Some(want) => {
                 let want_l = want.to_lowercase();
-                named.iter().find(|(_, _, n)| n.to_lowercase().contains(&want_l)).ok_or_else(|| {
-                    let names: Vec<&str> = named.iter().map(|(_, _, n)| n.as_str()).collect();
-                    BackendError::NoDevice(format!(" matches --device {want:?}; available: {}", names.join(", ")))
-                })?
+                named
+                    .iter()
+                    .find(|(_, _, n)| n.to_lowercase().contains(&want_l))
+                    .ok_or_else(|| {
+                        let names: Vec<&str> = named.iter().map(|(_, _, n)| n.as_str()).collect();
+                        BackendError::NoDevice(format!(" matches --device {want:?}; available: {}", names.join(", ")))
+                    })?
             }
             None => named
                 .iter()
@@ -428,31 +510,46 @@ impl Gpu {
 
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13).push_next(&mut f12);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut f13)
+            .push_next(&mut f12);
         unsafe { instance.get_physical_device_features2(physical, &mut f2) };
         let base = f2.features;
         if f13.dynamic_rendering == 0 || f13.synchronization2 == 0 {
-            return Err(BackendError::Unsupported(format!("{name} lacks dynamicRendering or synchronization2")));
+            return Err(BackendError::Unsupported(format!(
+                "{name} lacks dynamicRendering or synchronization2"
+            )));
         }
 
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
         unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
-        let driver_name = driver.driver_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-        let driver_info = driver.driver_info_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+        let driver_name = driver
+            .driver_name_as_c_str()
+            .map(|c| c.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let driver_info = driver
+            .driver_info_as_c_str()
+            .map(|c| c.to_string_lossy().into_owned())
+            .unwrap_or_default();
 
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let queue_family = families
             .iter()
-            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
-            .ok_or_else(|| BackendError::Unsupported(format!("{name} has no graphics+compute queue")))? as u32;
+            .position(|f| {
+                f.queue_flags
+                    .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+            })
+            .ok_or_else(|| BackendError::Unsupported(format!("{name} has no graphics+compute queue")))?
+            as u32;
         let timestamp_valid_bits = families[queue_family as usize].timestamp_valid_bits;
 
         let depth_stencil_format = [vk::Format::D32_SFLOAT_S8_UINT, vk::Format::D24_UNORM_S8_UINT]
             .into_iter()
             .find(|&f| {
                 let p = unsafe { instance.get_physical_device_format_properties(physical, f) };
-                p.optimal_tiling_features.contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
+                p.optimal_tiling_features
+                    .contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
             })
             .ok_or_else(|| BackendError::Unsupported(format!("{name} has no depth+stencil attachment format")))?;
 
@@ -462,7 +559,11 @@ impl Gpu {
             device_type: props.device_type,
             driver_name,
             driver_info,
-            api_version: (vk::api_version_major(props.api_version), vk::api_version_minor(props.api_version), vk::api_version_patch(props.api_version)),
+            api_version: (
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version),
+                vk::api_version_patch(props.api_version),
+            ),
             depth_clamp: base.depth_clamp != 0,
             fill_mode_non_solid: base.fill_mode_non_solid != 0,
             geometry_shader: base.geometry_shader != 0,
@@ -492,15 +593,26 @@ impl Gpu {
             .geometry_shader(caps.geometry_shader)
             .shader_storage_image_write_without_format(base.shader_storage_image_write_without_format != 0)
             .independent_blend(base.independent_blend != 0);
-        let mut e13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
-        let mut e12 = vk::PhysicalDeviceVulkan12Features::default().host_query_reset(f12.host_query_reset != 0).scalar_block_layout(f12.scalar_block_layout != 0);
+        let mut e13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true);
+        let mut e12 = vk::PhysicalDeviceVulkan12Features::default()
+            .host_query_reset(f12.host_query_reset != 0)
+            .scalar_block_layout(f12.scalar_block_layout != 0);
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
         let mut dev_exts: Vec<*const std::ffi::c_char> = Vec::new();
         if desc.display.is_some() {
             dev_exts.push(ash::khr::swapchain::NAME.as_ptr());
         }
-        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_features(&enabled).enabled_extension_names(&dev_exts).push_next(&mut e13).push_next(&mut e12);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&enabled)
+            .enabled_extension_names(&dev_exts)
+            .push_next(&mut e13)
+            .push_next(&mut e12);
         let device = unsafe { instance.create_device(physical, &device_info, None) }.vk("vkCreateDevice")?;
         Ok((physical, device, queue_family, caps))
     }
@@ -523,7 +635,9 @@ impl Gpu {
     pub(crate) fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
         if let Some(dd) = &self.debug_device {
             if let Ok(c) = CString::new(name) {
-                let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
+                let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                    .object_handle(handle)
+                    .object_name(&c);
                 // Naming is a debugging aid; a failure here must not fail the render.
                 let _calls = vulkan_calls();
                 let _ = unsafe { dd.set_debug_utils_object_name(&info) };

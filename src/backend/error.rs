@@ -23,7 +23,11 @@ pub enum BackendError {
     #[error("shader `{name}`: {message}")]
     Shader { name: String, message: String },
     #[error("pipeline `{pipeline}`: binding `{binding}`: {message}")]
-    Binding { pipeline: String, binding: String, message: String },
+    Binding {
+        pipeline: String,
+        binding: String,
+        message: String,
+    },
     #[error("{0}")]
     Invalid(String),
 }

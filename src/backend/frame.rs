@@ -38,8 +38,12 @@ pub(crate) const MAX_UPLOAD_BYTES: u64 = 1 << 30;
 /// Sets one descriptor pool holds.
 pub(crate) const POOL_SETS: u32 = 2048;
 /// Descriptors of each type one descriptor pool holds.
-pub(crate) const POOL_SIZES: [(vk::DescriptorType, u32); 4] =
-    [(vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096), (vk::DescriptorType::STORAGE_IMAGE, 2048), (vk::DescriptorType::UNIFORM_BUFFER, 2048), (vk::DescriptorType::STORAGE_BUFFER, 4096)];
+pub(crate) const POOL_SIZES: [(vk::DescriptorType, u32); 4] = [
+    (vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 4096),
+    (vk::DescriptorType::STORAGE_IMAGE, 2048),
+    (vk::DescriptorType::UNIFORM_BUFFER, 2048),
+    (vk::DescriptorType::STORAGE_BUFFER, 4096),
+];
 /// Conservative for every device (the spec allows up to 256 for minUniformBufferOffsetAlignment).
 pub(crate) const UPLOAD_ALIGN: u64 = 256;
 
@@ -95,13 +99,29 @@ impl Gpu {
     pub fn create_frame(&mut self) -> BackendResult<Frame> {
         let _calls = vulkan_calls();
         let upload = self.create_upload_block(0, UPLOAD_BYTES)?;
-        let cb =
-            unsafe { self.device.allocate_command_buffers(&vk::CommandBufferAllocateInfo::default().command_pool(self.command_pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1)) }
-                .vk("vkAllocateCommandBuffers")?[0];
+        let cb = unsafe {
+            self.device.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(self.command_pool)
+                    .level(vk::CommandBufferLevel::PRIMARY)
+                    .command_buffer_count(1),
+            )
+        }
+        .vk("vkAllocateCommandBuffers")?[0];
         let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
         let descriptor_pool = self.create_descriptor_pool()?;
         let queries = if self.caps.timestamp_valid_bits > 0 {
-            Some(unsafe { self.device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(MAX_QUERIES), None) }.vk("vkCreateQueryPool")?)
+            Some(
+                unsafe {
+                    self.device.create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(MAX_QUERIES),
+                        None,
+                    )
+                }
+                .vk("vkCreateQueryPool")?,
+            )
         } else {
             None
         };
@@ -134,7 +154,9 @@ impl Gpu {
     pub fn destroy_frame(&mut self, f: Frame) -> BackendResult<()> {
         let _calls = vulkan_calls();
         self.wait_frame(f)?;
-        let Some(slot) = self.frames.get_mut(f.0 as usize).and_then(|x| x.take()) else { return Ok(()) };
+        let Some(slot) = self.frames.get_mut(f.0 as usize).and_then(|x| x.take()) else {
+            return Ok(());
+        };
         let fd = slot.into_inner();
         unsafe {
             self.device.free_command_buffers(self.command_pool, &[fd.cb]);
@@ -146,8 +168,19 @@ impl Gpu {
     /// One of a frame's descriptor pools: [`POOL_SETS`] sets holding at most [`POOL_SIZES`].
     pub(crate) fn create_descriptor_pool(&self) -> BackendResult<vk::DescriptorPool> {
         let _calls = vulkan_calls();
-        let sizes = POOL_SIZES.map(|(ty, n)| vk::DescriptorPoolSize { ty, descriptor_count: n });
-        unsafe { self.device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(POOL_SETS).pool_sizes(&sizes), None) }.vk("vkCreateDescriptorPool")
+        let sizes = POOL_SIZES.map(|(ty, n)| vk::DescriptorPoolSize {
+            ty,
+            descriptor_count: n,
+        });
+        unsafe {
+            self.device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(POOL_SETS)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .vk("vkCreateDescriptorPool")
     }
 
     /// An upload block of `size` bytes: host-visible, bindable as any per-frame data.
@@ -155,24 +188,40 @@ impl Gpu {
         self.create_raw_buffer(&BufferDesc {
             name: format!("frame uploads {block}"),
             size,
-            usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::INDEX_BUFFER,
+            usage: vk::BufferUsageFlags::UNIFORM_BUFFER
+                | vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::VERTEX_BUFFER
+                | vk::BufferUsageFlags::INDEX_BUFFER,
             memory: MemoryKind::CpuToGpu,
         })
     }
 
     pub fn frame_footprint(&self, f: Frame) -> BackendResult<FrameFootprint> {
-        let fd = self.frame_data(f)?.try_borrow().map_err(|_| BackendError::Invalid("frame is being recorded".into()))?;
-        Ok(FrameFootprint { descriptor_pools: fd.descriptor_pools.len(), upload_blocks: fd.uploads.len(), upload_bytes: fd.uploads.iter().map(|b| b.desc.size).sum() })
+        let fd = self
+            .frame_data(f)?
+            .try_borrow()
+            .map_err(|_| BackendError::Invalid("frame is being recorded".into()))?;
+        Ok(FrameFootprint {
+            descriptor_pools: fd.descriptor_pools.len(),
+            upload_blocks: fd.uploads.len(),
+            upload_bytes: fd.uploads.iter().map(|b| b.desc.size).sum(),
+        })
     }
 
     pub(crate) fn frame_data(&self, f: Frame) -> BackendResult<&RefCell<FrameData>> {
-        self.frames.get(f.0 as usize).and_then(|x| x.as_ref()).ok_or_else(|| BackendError::Invalid(format!("frame {f:?} does not exist")))
+        self.frames
+            .get(f.0 as usize)
+            .and_then(|x| x.as_ref())
+            .ok_or_else(|| BackendError::Invalid(format!("frame {f:?} does not exist")))
     }
 
     /// Waits for the frame's last submission (if any) and collects its timestamps.
     pub fn wait_frame(&self, f: Frame) -> BackendResult<()> {
         let _calls = vulkan_calls();
-        let mut fd = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is being recorded".into()))?;
+        let mut fd = self
+            .frame_data(f)?
+            .try_borrow_mut()
+            .map_err(|_| BackendError::Invalid("frame is being recorded".into()))?;
         if !fd.submitted {
             return Ok(());
         }
@@ -190,7 +239,15 @@ impl Gpu {
             return Ok(Some(Vec::new()));
         }
         let mut raw = vec![0u64; fd.next_query as usize];
-        unsafe { self.device.get_query_pool_results(pool, 0, &mut raw, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }.vk("vkGetQueryPoolResults")?;
+        unsafe {
+            self.device.get_query_pool_results(
+                pool,
+                0,
+                &mut raw,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
         let bits = self.caps.timestamp_valid_bits;
         let period = self.caps.timestamp_period_ns;
         Ok(Some(
@@ -198,7 +255,10 @@ impl Gpu {
                 .iter()
                 .filter_map(|(name, b, e)| {
                     let e = (*e)?;
-                    Some(PassTiming { name: name.clone(), ms: elapsed_ns(raw[*b as usize], raw[e as usize], bits, period) / 1e6 })
+                    Some(PassTiming {
+                        name: name.clone(),
+                        ms: elapsed_ns(raw[*b as usize], raw[e as usize], bits, period) / 1e6,
+                    })
                 })
                 .collect(),
         ))
@@ -212,13 +272,31 @@ impl Gpu {
 
     /// Submits the frame's recorded commands. `wait`/`signal` are binary semaphores for
     /// presentation.
-    pub fn submit_frame(&self, f: Frame, wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>, signal: Option<vk::Semaphore>) -> BackendResult<()> {
+    pub fn submit_frame(
+        &self,
+        f: Frame,
+        wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>,
+        signal: Option<vk::Semaphore>,
+    ) -> BackendResult<()> {
         let _calls = vulkan_calls();
         let mut fd = self.frame_data(f)?.borrow_mut();
         let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(fd.cb)];
-        let waits: Vec<vk::SemaphoreSubmitInfo> = wait.iter().map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage)).collect();
-        let signals: Vec<vk::SemaphoreSubmitInfo> = signal.iter().map(|&s| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)).collect();
-        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbs).wait_semaphore_infos(&waits).signal_semaphore_infos(&signals)];
+        let waits: Vec<vk::SemaphoreSubmitInfo> = wait
+            .iter()
+            .map(|&(s, stage)| vk::SemaphoreSubmitInfo::default().semaphore(s).stage_mask(stage))
+            .collect();
+        let signals: Vec<vk::SemaphoreSubmitInfo> = signal
+            .iter()
+            .map(|&s| {
+                vk::SemaphoreSubmitInfo::default()
+                    .semaphore(s)
+                    .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            })
+            .collect();
+        let submit = [vk::SubmitInfo2::default()
+            .command_buffer_infos(&cbs)
+            .wait_semaphore_infos(&waits)
+            .signal_semaphore_infos(&signals)];
         if let Some(fault) = super::error::injected_submit_fault() {
             return Err(BackendError::from_vk("vkQueueSubmit2", fault));
         }

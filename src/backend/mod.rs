@@ -27,11 +27,15 @@ pub use device::{DeviceCaps, Gpu, GpuDesc, ValidationLog};
 pub use error::{BackendError, BackendResult};
 pub use frame::{Frame, FrameFootprint};
 pub use pipeline::{
-    BlendMode, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, PipelineId, RasterState, ShaderSource, SpecConstant, StencilFace, StencilFaces, VertexAttribute, VertexLayout,
+    BlendMode, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, PipelineId, RasterState,
+    ShaderSource, SpecConstant, StencilFace, StencilFaces, VertexAttribute, VertexLayout,
 };
 pub use recorder::{BufferTransition, Clear, ImageTransition, Recorder, RenderTarget, RenderingDesc};
 pub use reflect::{ReflectedBinding, ShaderReflection};
-pub use resources::{format_texel_size, BufferDesc, BufferId, ImageDesc, ImageId, MemoryKind, ResourceScope, SamplerDesc, SamplerId, SubresourceRange};
+pub use resources::{
+    format_texel_size, BufferDesc, BufferId, ImageDesc, ImageId, MemoryKind, ResourceScope, SamplerDesc, SamplerId,
+    SubresourceRange,
+};
 pub use swapchain::{AcquiredImage, Swapchain};
 pub use timestamps::{PassTiming, TimestampSupport};
 

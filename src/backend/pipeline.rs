@@ -50,7 +50,13 @@ pub struct RasterState {
 
 impl Default for RasterState {
     fn default() -> Self {
-        RasterState { cull: vk::CullModeFlags::BACK, front_face: vk::FrontFace::COUNTER_CLOCKWISE, polygon_mode: vk::PolygonMode::FILL, depth_clamp: false, depth_bias: None }
+        RasterState {
+            cull: vk::CullModeFlags::BACK,
+            front_face: vk::FrontFace::COUNTER_CLOCKWISE,
+            polygon_mode: vk::PolygonMode::FILL,
+            depth_clamp: false,
+            depth_bias: None,
+        }
     }
 }
 
@@ -63,7 +69,11 @@ pub struct DepthState {
 
 impl Default for DepthState {
     fn default() -> Self {
-        DepthState { test: true, write: true, compare: vk::CompareOp::LESS }
+        DepthState {
+            test: true,
+            write: true,
+            compare: vk::CompareOp::LESS,
+        }
     }
 }
 
@@ -82,7 +92,15 @@ pub struct StencilFace {
 impl StencilFace {
     /// Keeps the stencil value and passes where `compare(reference, stencil)` holds.
     pub fn test(compare: vk::CompareOp, reference: u32) -> Self {
-        StencilFace { fail: vk::StencilOp::KEEP, pass: vk::StencilOp::KEEP, depth_fail: vk::StencilOp::KEEP, compare, compare_mask: 0xff, write_mask: 0xff, reference }
+        StencilFace {
+            fail: vk::StencilOp::KEEP,
+            pass: vk::StencilOp::KEEP,
+            depth_fail: vk::StencilOp::KEEP,
+            compare,
+            compare_mask: 0xff,
+            write_mask: 0xff,
+            reference,
+        }
     }
     fn raw(&self) -> vk::StencilOpState {
         vk::StencilOpState {
@@ -122,7 +140,11 @@ pub struct ColorTarget {
 
 impl ColorTarget {
     pub fn new(format: vk::Format) -> Self {
-        ColorTarget { format, blend: BlendMode::Replace, write_mask: vk::ColorComponentFlags::RGBA }
+        ColorTarget {
+            format,
+            blend: BlendMode::Replace,
+            write_mask: vk::ColorComponentFlags::RGBA,
+        }
     }
 }
 
@@ -209,7 +231,12 @@ fn stage_of(path: &str) -> BackendResult<vk::ShaderStageFlags> {
         "frag" => vk::ShaderStageFlags::FRAGMENT,
         "geom" => vk::ShaderStageFlags::GEOMETRY,
         "comp" => vk::ShaderStageFlags::COMPUTE,
-        _ => return Err(BackendError::Shader { name: path.into(), message: "unknown shader stage (expected .vert, .frag, .geom or .comp)".into() }),
+        _ => {
+            return Err(BackendError::Shader {
+                name: path.into(),
+                message: "unknown shader stage (expected .vert, .frag, .geom or .comp)".into(),
+            })
+        }
     })
 }
 
@@ -219,7 +246,11 @@ struct LoadedStage {
 }
 
 impl Gpu {
-    pub fn create_graphics_pipeline(&mut self, desc: &GraphicsPipelineDesc, shaders: &dyn ShaderSource) -> BackendResult<PipelineId> {
+    pub fn create_graphics_pipeline(
+        &mut self,
+        desc: &GraphicsPipelineDesc,
+        shaders: &dyn ShaderSource,
+    ) -> BackendResult<PipelineId> {
         let obj = self.build_pipeline(&PipelineKind::Graphics(desc.clone()), shaders)?;
         self.arenas.pipelines.push(Some(obj));
         let id = PipelineId(self.arenas.pipelines.len() as u32 - 1);
@@ -229,7 +260,11 @@ impl Gpu {
         Ok(id)
     }
 
-    pub fn create_compute_pipeline(&mut self, desc: &ComputePipelineDesc, shaders: &dyn ShaderSource) -> BackendResult<PipelineId> {
+    pub fn create_compute_pipeline(
+        &mut self,
+        desc: &ComputePipelineDesc,
+        shaders: &dyn ShaderSource,
+    ) -> BackendResult<PipelineId> {
         let obj = self.build_pipeline(&PipelineKind::Compute(desc.clone()), shaders)?;
         self.arenas.pipelines.push(Some(obj));
         let id = PipelineId(self.arenas.pipelines.len() as u32 - 1);
@@ -265,11 +300,18 @@ impl Gpu {
 
     /// Every pipeline id currently alive (for reloading them all).
     pub fn pipeline_ids(&self) -> Vec<PipelineId> {
-        (0..self.arenas.pipelines.len() as u32).filter(|&i| self.arenas.pipelines[i as usize].is_some()).map(PipelineId).collect()
+        (0..self.arenas.pipelines.len() as u32)
+            .filter(|&i| self.arenas.pipelines[i as usize].is_some())
+            .map(PipelineId)
+            .collect()
     }
 
     pub(crate) fn pipeline(&self, id: PipelineId) -> BackendResult<&PipelineObject> {
-        self.arenas.pipelines.get(id.0 as usize).and_then(|p| p.as_ref()).ok_or_else(|| BackendError::Invalid(format!("pipeline {id:?} was destroyed")))
+        self.arenas
+            .pipelines
+            .get(id.0 as usize)
+            .and_then(|p| p.as_ref())
+            .ok_or_else(|| BackendError::Invalid(format!("pipeline {id:?} was destroyed")))
     }
 
     /// What the pipeline's shaders declare.
@@ -277,14 +319,28 @@ impl Gpu {
         Ok(&self.pipeline(id)?.reflection)
     }
 
-    fn load_stage(&self, path: &str, shaders: &dyn ShaderSource, reflections: &mut Vec<ShaderReflection>) -> BackendResult<LoadedStage> {
+    fn load_stage(
+        &self,
+        path: &str,
+        shaders: &dyn ShaderSource,
+        reflections: &mut Vec<ShaderReflection>,
+    ) -> BackendResult<LoadedStage> {
         let _calls = vulkan_calls();
         let stage = stage_of(path)?;
-        let words = shaders.spirv(path).map_err(|m| BackendError::Shader { name: path.into(), message: m })?;
+        let words = shaders.spirv(path).map_err(|m| BackendError::Shader {
+            name: path.into(),
+            message: m,
+        })?;
         reflections.push(ShaderReflection::from_spirv(path, stage, &words)?);
         // Reflection keeps the declared types; the driver may see uniform blocks as storage.
-        let words =
-            if self.caps.uniform_blocks_as_storage { super::uniform_blocks::uniform_blocks_as_storage(&words).map_err(|m| BackendError::Shader { name: path.into(), message: m })? } else { words };
+        let words = if self.caps.uniform_blocks_as_storage {
+            super::uniform_blocks::uniform_blocks_as_storage(&words).map_err(|m| BackendError::Shader {
+                name: path.into(),
+                message: m,
+            })?
+        } else {
+            words
+        };
         let info = vk::ShaderModuleCreateInfo::default().code(&words);
         let module = unsafe { self.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
         Ok(LoadedStage { stage, module })
@@ -315,16 +371,28 @@ impl Gpu {
                 )));
             }
             let set_layouts = self.create_set_layouts(&reflection)?;
-            let push_ranges =
-                if reflection.push_constant_size > 0 { vec![vk::PushConstantRange { stage_flags: reflection.push_constant_stages, offset: 0, size: reflection.push_constant_size }] } else { vec![] };
-            let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push_ranges);
+            let push_ranges = if reflection.push_constant_size > 0 {
+                vec![vk::PushConstantRange {
+                    stage_flags: reflection.push_constant_stages,
+                    offset: 0,
+                    size: reflection.push_constant_size,
+                }]
+            } else {
+                vec![]
+            };
+            let layout_info = vk::PipelineLayoutCreateInfo::default()
+                .set_layouts(&set_layouts)
+                .push_constant_ranges(&push_ranges);
             let layout = match unsafe { self.device.create_pipeline_layout(&layout_info, None) } {
                 Ok(l) => l,
                 Err(e) => {
                     for l in set_layouts {
                         unsafe { self.device.destroy_descriptor_set_layout(l, None) };
                     }
-                    return Err(BackendError::Vulkan { call: "vkCreatePipelineLayout", result: e });
+                    return Err(BackendError::Vulkan {
+                        call: "vkCreatePipelineLayout",
+                        result: e,
+                    });
                 }
             };
             let raw = match kind {
@@ -348,7 +416,15 @@ impl Gpu {
                 PipelineKind::Graphics(_) => vk::PipelineBindPoint::GRAPHICS,
                 PipelineKind::Compute(_) => vk::PipelineBindPoint::COMPUTE,
             };
-            Ok(PipelineObject { raw, layout, set_layouts, reflection, bind_point, kind: kind.clone(), name: name.clone() })
+            Ok(PipelineObject {
+                raw,
+                layout,
+                set_layouts,
+                reflection,
+                bind_point,
+                kind: kind.clone(),
+                name: name.clone(),
+            })
         })();
         for s in stages.drain(..) {
             unsafe { self.device.destroy_shader_module(s.module, None) };
@@ -378,7 +454,13 @@ impl Gpu {
                 .bindings
                 .iter()
                 .filter(|b| b.set == set)
-                .map(|b| vk::DescriptorSetLayoutBinding::default().binding(b.binding).descriptor_type(self.driver_descriptor_type(b.ty)).descriptor_count(b.count).stage_flags(b.stages))
+                .map(|b| {
+                    vk::DescriptorSetLayoutBinding::default()
+                        .binding(b.binding)
+                        .descriptor_type(self.driver_descriptor_type(b.ty))
+                        .descriptor_count(b.count)
+                        .stage_flags(b.stages)
+                })
                 .collect();
             let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
             match unsafe { self.device.create_descriptor_set_layout(&info, None) } {
@@ -387,37 +469,72 @@ impl Gpu {
                     for l in layouts {
                         unsafe { self.device.destroy_descriptor_set_layout(l, None) };
                     }
-                    return Err(BackendError::Vulkan { call: "vkCreateDescriptorSetLayout", result: e });
+                    return Err(BackendError::Vulkan {
+                        call: "vkCreateDescriptorSetLayout",
+                        result: e,
+                    });
                 }
             }
         }
         Ok(layouts)
     }
 
-    fn create_compute_raw(&self, stage: &LoadedStage, layout: vk::PipelineLayout, spec: &[SpecConstant]) -> BackendResult<vk::Pipeline> {
+    fn create_compute_raw(
+        &self,
+        stage: &LoadedStage,
+        layout: vk::PipelineLayout,
+        spec: &[SpecConstant],
+    ) -> BackendResult<vk::Pipeline> {
         let _calls = vulkan_calls();
         let entry = c"main";
         let (entries, data) = spec_data(spec);
         let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(&data);
-        let mut stage_info = vk::PipelineShaderStageCreateInfo::default().stage(stage.stage).module(stage.module).name(entry);
+        let mut stage_info = vk::PipelineShaderStageCreateInfo::default()
+            .stage(stage.stage)
+            .module(stage.module)
+            .name(entry);
         if !spec.is_empty() {
             stage_info = stage_info.specialization_info(&spec_info);
         }
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage_info).layout(layout)];
-        let p = unsafe { self.device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }.map_err(|(_, e)| BackendError::Vulkan { call: "vkCreateComputePipelines", result: e })?;
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage_info)
+            .layout(layout)];
+        let p = unsafe {
+            self.device
+                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+        }
+        .map_err(|(_, e)| BackendError::Vulkan {
+            call: "vkCreateComputePipelines",
+            result: e,
+        })?;
         Ok(p[0])
     }
 
-    fn create_graphics_raw(&self, d: &GraphicsPipelineDesc, stages: &[LoadedStage], layout: vk::PipelineLayout, spec: &[SpecConstant]) -> BackendResult<vk::Pipeline> {
+    fn create_graphics_raw(
+        &self,
+        d: &GraphicsPipelineDesc,
+        stages: &[LoadedStage],
+        layout: vk::PipelineLayout,
+        spec: &[SpecConstant],
+    ) -> BackendResult<vk::Pipeline> {
         let _calls = vulkan_calls();
         if d.raster.depth_clamp && !self.caps.depth_clamp {
-            return Err(BackendError::Unsupported(format!("depth clamp (pipeline `{}`)", d.name)));
+            return Err(BackendError::Unsupported(format!(
+                "depth clamp (pipeline `{}`)",
+                d.name
+            )));
         }
         if d.raster.polygon_mode != vk::PolygonMode::FILL && !self.caps.fill_mode_non_solid {
-            return Err(BackendError::Unsupported(format!("non-solid fill (pipeline `{}`)", d.name)));
+            return Err(BackendError::Unsupported(format!(
+                "non-solid fill (pipeline `{}`)",
+                d.name
+            )));
         }
         if d.geometry.is_some() && !self.caps.geometry_shader {
-            return Err(BackendError::Unsupported(format!("geometry shaders (pipeline `{}`)", d.name)));
+            return Err(BackendError::Unsupported(format!(
+                "geometry shaders (pipeline `{}`)",
+                d.name
+            )));
         }
         let entry = CString::new("main").map_err(|e| BackendError::Invalid(e.to_string()))?;
         let (entries, data) = spec_data(spec);
@@ -425,20 +542,44 @@ impl Gpu {
         let stage_infos: Vec<vk::PipelineShaderStageCreateInfo> = stages
             .iter()
             .map(|s| {
-                let mut i = vk::PipelineShaderStageCreateInfo::default().stage(s.stage).module(s.module).name(&entry);
+                let mut i = vk::PipelineShaderStageCreateInfo::default()
+                    .stage(s.stage)
+                    .module(s.module)
+                    .name(&entry);
                 if !spec.is_empty() {
                     i = i.specialization_info(&spec_info);
                 }
                 i
             })
             .collect();
-        let vb: Vec<vk::VertexInputBindingDescription> =
-            d.vertex_layout.buffers.iter().map(|&(binding, stride)| vk::VertexInputBindingDescription { binding, stride, input_rate: vk::VertexInputRate::VERTEX }).collect();
-        let va: Vec<vk::VertexInputAttributeDescription> =
-            d.vertex_layout.attributes.iter().map(|a| vk::VertexInputAttributeDescription { location: a.location, binding: a.binding, format: a.format, offset: a.offset }).collect();
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default().vertex_binding_descriptions(&vb).vertex_attribute_descriptions(&va);
+        let vb: Vec<vk::VertexInputBindingDescription> = d
+            .vertex_layout
+            .buffers
+            .iter()
+            .map(|&(binding, stride)| vk::VertexInputBindingDescription {
+                binding,
+                stride,
+                input_rate: vk::VertexInputRate::VERTEX,
+            })
+            .collect();
+        let va: Vec<vk::VertexInputAttributeDescription> = d
+            .vertex_layout
+            .attributes
+            .iter()
+            .map(|a| vk::VertexInputAttributeDescription {
+                location: a.location,
+                binding: a.binding,
+                format: a.format,
+                offset: a.offset,
+            })
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vb)
+            .vertex_attribute_descriptions(&va);
         let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(d.topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
         let mut raster = vk::PipelineRasterizationStateCreateInfo::default()
             .depth_clamp_enable(d.raster.depth_clamp)
             .polygon_mode(d.raster.polygon_mode)
@@ -446,12 +587,22 @@ impl Gpu {
             .front_face(d.raster.front_face)
             .line_width(1.0);
         if let Some((constant, slope)) = d.raster.depth_bias {
-            raster = raster.depth_bias_enable(true).depth_bias_constant_factor(constant).depth_bias_slope_factor(slope);
+            raster = raster
+                .depth_bias_enable(true)
+                .depth_bias_constant_factor(constant)
+                .depth_bias_slope_factor(slope);
         }
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let mut depth_stencil = vk::PipelineDepthStencilStateCreateInfo::default().depth_test_enable(d.depth.test).depth_write_enable(d.depth.write).depth_compare_op(d.depth.compare);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let mut depth_stencil = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(d.depth.test)
+            .depth_write_enable(d.depth.write)
+            .depth_compare_op(d.depth.compare);
         if let Some(s) = d.stencil {
-            depth_stencil = depth_stencil.stencil_test_enable(true).front(s.front.raw()).back(s.back.raw());
+            depth_stencil = depth_stencil
+                .stencil_test_enable(true)
+                .front(s.front.raw())
+                .back(s.back.raw());
         }
         let attachments: Vec<vk::PipelineColorBlendAttachmentState> = d
             .color_targets
@@ -486,11 +637,25 @@ impl Gpu {
         let (depth_fmt, stencil_fmt) = match d.depth_format {
             Some(f) => {
                 let a = super::resources::format_aspect(f);
-                (if a.contains(vk::ImageAspectFlags::DEPTH) { f } else { vk::Format::UNDEFINED }, if a.contains(vk::ImageAspectFlags::STENCIL) { f } else { vk::Format::UNDEFINED })
+                (
+                    if a.contains(vk::ImageAspectFlags::DEPTH) {
+                        f
+                    } else {
+                        vk::Format::UNDEFINED
+                    },
+                    if a.contains(vk::ImageAspectFlags::STENCIL) {
+                        f
+                    } else {
+                        vk::Format::UNDEFINED
+                    },
+                )
             }
             None => (vk::Format::UNDEFINED, vk::Format::UNDEFINED),
         };
-        let mut rendering = vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats).depth_attachment_format(depth_fmt).stencil_attachment_format(stencil_fmt);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(&color_formats)
+            .depth_attachment_format(depth_fmt)
+            .stencil_attachment_format(stencil_fmt);
         let info = [vk::GraphicsPipelineCreateInfo::default()
             .stages(&stage_infos)
             .vertex_input_state(&vertex_input)
@@ -503,13 +668,28 @@ impl Gpu {
             .dynamic_state(&dynamic)
             .layout(layout)
             .push_next(&mut rendering)];
-        let p = unsafe { self.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }.map_err(|(_, e)| BackendError::Vulkan { call: "vkCreateGraphicsPipelines", result: e })?;
+        let p = unsafe {
+            self.device
+                .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+        }
+        .map_err(|(_, e)| BackendError::Vulkan {
+            call: "vkCreateGraphicsPipelines",
+            result: e,
+        })?;
         Ok(p[0])
     }
 }
 
 fn spec_data(spec: &[SpecConstant]) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
-    let entries = spec.iter().enumerate().map(|(i, s)| vk::SpecializationMapEntry { constant_id: s.id, offset: 4 * i as u32, size: 4 }).collect();
+    let entries = spec
+        .iter()
+        .enumerate()
+        .map(|(i, s)| vk::SpecializationMapEntry {
+            constant_id: s.id,
+            offset: 4 * i as u32,
+            size: 4,
+        })
+        .collect();
     let data = spec.iter().flat_map(|s| s.bits.to_ne_bytes()).collect();
     (entries, data)
 }

@@ -21,8 +21,12 @@ pub enum Clear {
 impl Clear {
     fn raw(self) -> vk::ClearValue {
         match self {
-            Clear::Color(c) => vk::ClearValue { color: vk::ClearColorValue { float32: c } },
-            Clear::DepthStencil { depth, stencil } => vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth, stencil } },
+            Clear::Color(c) => vk::ClearValue {
+                color: vk::ClearColorValue { float32: c },
+            },
+            Clear::DepthStencil { depth, stencil } => vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue { depth, stencil },
+            },
         }
     }
 }
@@ -42,13 +46,34 @@ pub struct RenderTarget {
 
 impl RenderTarget {
     pub fn clear_color(image: ImageId, rgba: [f32; 4]) -> Self {
-        RenderTarget { image, mip: 0, layer: 0, clear: Some(Clear::Color(rgba)), store: true, read_only: false }
+        RenderTarget {
+            image,
+            mip: 0,
+            layer: 0,
+            clear: Some(Clear::Color(rgba)),
+            store: true,
+            read_only: false,
+        }
     }
     pub fn clear_depth(image: ImageId, depth: f32, stencil: u32) -> Self {
-        RenderTarget { image, mip: 0, layer: 0, clear: Some(Clear::DepthStencil { depth, stencil }), store: true, read_only: false }
+        RenderTarget {
+            image,
+            mip: 0,
+            layer: 0,
+            clear: Some(Clear::DepthStencil { depth, stencil }),
+            store: true,
+            read_only: false,
+        }
     }
     pub fn load(image: ImageId) -> Self {
-        RenderTarget { image, mip: 0, layer: 0, clear: None, store: true, read_only: false }
+        RenderTarget {
+            image,
+            mip: 0,
+            layer: 0,
+            clear: None,
+            store: true,
+            read_only: false,
+        }
     }
 }
 
@@ -98,14 +123,26 @@ impl Gpu {
     pub fn begin_frame(&self, f: Frame) -> BackendResult<Recorder<'_>> {
         let calls = vulkan_calls();
         self.wait_frame(f)?;
-        let mut frame = self.frame_data(f)?.try_borrow_mut().map_err(|_| BackendError::Invalid("frame is already being recorded".into()))?;
+        let mut frame = self
+            .frame_data(f)?
+            .try_borrow_mut()
+            .map_err(|_| BackendError::Invalid("frame is already being recorded".into()))?;
         let cb = frame.cb;
         unsafe {
             for &pool in &frame.descriptor_pools {
-                self.device.reset_descriptor_pool(pool, vk::DescriptorPoolResetFlags::empty()).vk("vkResetDescriptorPool")?;
+                self.device
+                    .reset_descriptor_pool(pool, vk::DescriptorPoolResetFlags::empty())
+                    .vk("vkResetDescriptorPool")?;
             }
-            self.device.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
-            self.device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT)).vk("vkBeginCommandBuffer")?;
+            self.device
+                .reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())
+                .vk("vkResetCommandBuffer")?;
+            self.device
+                .begin_command_buffer(
+                    cb,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+                .vk("vkBeginCommandBuffer")?;
             if let Some(q) = frame.queries {
                 self.device.cmd_reset_query_pool(cb, q, 0, MAX_QUERIES);
             }
@@ -118,7 +155,14 @@ impl Gpu {
         frame.pool_descriptors = [0; 4];
         frame.upload_block = 0;
         frame.upload_offset = 0;
-        Ok(Recorder { gpu: self, frame, cb, pipeline: None, rendering: false, _calls: calls })
+        Ok(Recorder {
+            gpu: self,
+            frame,
+            cb,
+            pipeline: None,
+            rendering: false,
+            _calls: calls,
+        })
     }
 }
 
@@ -150,7 +194,11 @@ impl<'g> Recorder<'g> {
         // when a frame has more passes than queries (a stencil volume per light of thousands),
         // the inner scopes go untimed and the outer ones (the whole frame) keep their time.
         let timed_open = self.frame.open_scopes.iter().filter(|&&i| i != usize::MAX).count() as u32;
-        let query = if self.frame.next_query + 2 + timed_open <= MAX_QUERIES { self.write_timestamp() } else { None };
+        let query = if self.frame.next_query + 2 + timed_open <= MAX_QUERIES {
+            self.write_timestamp()
+        } else {
+            None
+        };
         let idx = self.frame.scopes.len();
         self.frame.scopes.push((name.to_string(), query.unwrap_or(0), None));
         if query.is_none() {
@@ -163,7 +211,9 @@ impl<'g> Recorder<'g> {
     }
 
     pub fn end_scope(&mut self) {
-        let Some(idx) = self.frame.open_scopes.pop() else { return };
+        let Some(idx) = self.frame.open_scopes.pop() else {
+            return;
+        };
         if idx != usize::MAX {
             let q = self.write_timestamp();
             if let Some(s) = self.frame.scopes.get_mut(idx) {
@@ -184,7 +234,11 @@ impl<'g> Recorder<'g> {
         self.frame.next_query += 1;
         // ALL_COMMANDS: the timestamp is taken once every earlier command has finished, so a
         // scope measures its own commands (and the barriers recorded inside it).
-        unsafe { self.gpu.device.cmd_write_timestamp2(self.cb, vk::PipelineStageFlags2::ALL_COMMANDS, pool, q) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_write_timestamp2(self.cb, vk::PipelineStageFlags2::ALL_COMMANDS, pool, q)
+        };
         Some(q)
     }
 
@@ -232,7 +286,9 @@ impl<'g> Recorder<'g> {
                     .size(vk::WHOLE_SIZE),
             );
         }
-        let dep = vk::DependencyInfo::default().image_memory_barriers(&ib).buffer_memory_barriers(&bb);
+        let dep = vk::DependencyInfo::default()
+            .image_memory_barriers(&ib)
+            .buffer_memory_barriers(&bb);
         unsafe { self.gpu.device.cmd_pipeline_barrier2(self.cb, &dep) };
         Ok(())
     }
@@ -242,26 +298,58 @@ impl<'g> Recorder<'g> {
         if self.rendering {
             return Err(BackendError::Invalid("nested begin_rendering".into()));
         }
-        let first = desc.colors.first().or(desc.depth_stencil.as_ref()).ok_or_else(|| BackendError::Invalid("rendering without attachments".into()))?;
+        let first = desc
+            .colors
+            .first()
+            .or(desc.depth_stencil.as_ref())
+            .ok_or_else(|| BackendError::Invalid("rendering without attachments".into()))?;
         let e = self.gpu.image(first.image)?.desc.mip_extent(first.mip);
-        let extent = vk::Extent2D { width: e.width, height: e.height };
-        let attach = |t: &RenderTarget, layout: vk::ImageLayout| -> BackendResult<vk::RenderingAttachmentInfo<'static>> {
-            let view = self.gpu.image_view(t.image, t.mip, 1, t.layer, 1, Some(vk::ImageViewType::TYPE_2D))?;
-            let mut a = vk::RenderingAttachmentInfo::default()
-                .image_view(view)
-                .image_layout(layout)
-                .load_op(if t.clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
-                .store_op(if t.store { vk::AttachmentStoreOp::STORE } else { vk::AttachmentStoreOp::DONT_CARE });
-            if let Some(c) = t.clear {
-                a = a.clear_value(c.raw());
-            }
-            Ok(a)
+        let extent = vk::Extent2D {
+            width: e.width,
+            height: e.height,
         };
-        let colors = desc.colors.iter().map(|t| attach(t, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)).collect::<BackendResult<Vec<_>>>()?;
-        let mut info = vk::RenderingInfo::default().render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent }).layer_count(1).color_attachments(&colors);
+        let attach =
+            |t: &RenderTarget, layout: vk::ImageLayout| -> BackendResult<vk::RenderingAttachmentInfo<'static>> {
+                let view = self
+                    .gpu
+                    .image_view(t.image, t.mip, 1, t.layer, 1, Some(vk::ImageViewType::TYPE_2D))?;
+                let mut a = vk::RenderingAttachmentInfo::default()
+                    .image_view(view)
+                    .image_layout(layout)
+                    .load_op(if t.clear.is_some() {
+                        vk::AttachmentLoadOp::CLEAR
+                    } else {
+                        vk::AttachmentLoadOp::LOAD
+                    })
+                    .store_op(if t.store {
+                        vk::AttachmentStoreOp::STORE
+                    } else {
+                        vk::AttachmentStoreOp::DONT_CARE
+                    });
+                if let Some(c) = t.clear {
+                    a = a.clear_value(c.raw());
+                }
+                Ok(a)
+            };
+        let colors = desc
+            .colors
+            .iter()
+            .map(|t| attach(t, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL))
+            .collect::<BackendResult<Vec<_>>>()?;
+        let mut info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent,
+            })
+            .layer_count(1)
+            .color_attachments(&colors);
         let ds;
         if let Some(t) = &desc.depth_stencil {
-            let layout = if t.read_only { vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL } else { vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL };
+            let layout = if t.read_only {
+                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+            } else {
+                vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+            };
             ds = attach(t, layout)?;
             let aspect = self.gpu.image(t.image)?.desc.aspect();
             if aspect.contains(vk::ImageAspectFlags::DEPTH) {
@@ -273,8 +361,26 @@ impl<'g> Recorder<'g> {
         }
         unsafe {
             self.gpu.device.cmd_begin_rendering(self.cb, &info);
-            self.gpu.device.cmd_set_viewport(self.cb, 0, &[vk::Viewport { x: 0.0, y: 0.0, width: extent.width as f32, height: extent.height as f32, min_depth: 0.0, max_depth: 1.0 }]);
-            self.gpu.device.cmd_set_scissor(self.cb, 0, &[vk::Rect2D { offset: vk::Offset2D::default(), extent }]);
+            self.gpu.device.cmd_set_viewport(
+                self.cb,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: extent.width as f32,
+                    height: extent.height as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            self.gpu.device.cmd_set_scissor(
+                self.cb,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D::default(),
+                    extent,
+                }],
+            );
         }
         self.rendering = true;
         Ok(extent)
@@ -290,9 +396,21 @@ impl<'g> Recorder<'g> {
         let attachment = vk::ClearAttachment {
             aspect_mask: vk::ImageAspectFlags::STENCIL,
             color_attachment: 0,
-            clear_value: vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: value } },
+            clear_value: vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 0.0,
+                    stencil: value,
+                },
+            },
         };
-        let rect = vk::ClearRect { rect: vk::Rect2D { offset: vk::Offset2D::default(), extent }, base_array_layer: 0, layer_count: 1 };
+        let rect = vk::ClearRect {
+            rect: vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent,
+            },
+            base_array_layer: 0,
+            layer_count: 1,
+        };
         unsafe { self.gpu.device.cmd_clear_attachments(self.cb, &[attachment], &[rect]) };
         Ok(())
     }
@@ -321,7 +439,8 @@ impl<'g> Recorder<'g> {
     }
 
     pub(crate) fn bound_pipeline(&self) -> BackendResult<PipelineId> {
-        self.pipeline.ok_or_else(|| BackendError::Invalid("no pipeline bound".into()))
+        self.pipeline
+            .ok_or_else(|| BackendError::Invalid("no pipeline bound".into()))
     }
 
     /// Push constants for the bound pipeline; the size must equal the reflected block's size.
@@ -329,14 +448,25 @@ impl<'g> Recorder<'g> {
         let p = self.gpu.pipeline(self.bound_pipeline()?)?;
         let size = p.reflection.push_constant_size as usize;
         if bytes.len() != size {
-            return Err(BackendError::Binding { pipeline: p.name.clone(), binding: "push constants".into(), message: format!("{} bytes given, the shaders declare {size}", bytes.len()) });
+            return Err(BackendError::Binding {
+                pipeline: p.name.clone(),
+                binding: "push constants".into(),
+                message: format!("{} bytes given, the shaders declare {size}", bytes.len()),
+            });
         }
-        unsafe { self.gpu.device.cmd_push_constants(self.cb, p.layout, p.reflection.push_constant_stages, 0, bytes) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_push_constants(self.cb, p.layout, p.reflection.push_constant_stages, 0, bytes)
+        };
         Ok(())
     }
 
     pub fn bind_vertex_buffers(&mut self, buffers: &[(BufferId, u64)]) -> BackendResult<()> {
-        let raws = buffers.iter().map(|(b, _)| self.gpu.buffer(*b).map(|b| b.raw)).collect::<BackendResult<Vec<_>>>()?;
+        let raws = buffers
+            .iter()
+            .map(|(b, _)| self.gpu.buffer(*b).map(|b| b.raw))
+            .collect::<BackendResult<Vec<_>>>()?;
         let offsets: Vec<u64> = buffers.iter().map(|(_, o)| *o).collect();
         unsafe { self.gpu.device.cmd_bind_vertex_buffers(self.cb, 0, &raws, &offsets) };
         Ok(())
@@ -344,7 +474,11 @@ impl<'g> Recorder<'g> {
 
     pub fn bind_index_buffer(&mut self, buffer: BufferId, offset: u64) -> BackendResult<()> {
         let raw = self.gpu.buffer(buffer)?.raw;
-        unsafe { self.gpu.device.cmd_bind_index_buffer(self.cb, raw, offset, vk::IndexType::UINT32) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_bind_index_buffer(self.cb, raw, offset, vk::IndexType::UINT32)
+        };
         Ok(())
     }
 
@@ -363,9 +497,19 @@ impl<'g> Recorder<'g> {
 
     /// Non-indexed instanced draw: `instances` instances from `first_instance` (which
     /// `gl_InstanceIndex` includes), each of `vertices` vertices from `first_vertex`.
-    pub fn draw_instanced(&mut self, vertices: u32, first_vertex: u32, instances: u32, first_instance: u32) -> BackendResult<()> {
+    pub fn draw_instanced(
+        &mut self,
+        vertices: u32,
+        first_vertex: u32,
+        instances: u32,
+        first_instance: u32,
+    ) -> BackendResult<()> {
         self.bound_pipeline()?;
-        unsafe { self.gpu.device.cmd_draw(self.cb, vertices, instances, first_vertex, first_instance) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_draw(self.cb, vertices, instances, first_vertex, first_instance)
+        };
         Ok(())
     }
 
@@ -374,13 +518,25 @@ impl<'g> Recorder<'g> {
     pub fn draw_indexed_indirect(&mut self, buffer: BufferId, offset: u64) -> BackendResult<()> {
         self.bound_pipeline()?;
         let raw = self.gpu.buffer(buffer)?.raw;
-        unsafe { self.gpu.device.cmd_draw_indexed_indirect(self.cb, raw, offset, 1, std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32) };
+        unsafe {
+            self.gpu.device.cmd_draw_indexed_indirect(
+                self.cb,
+                raw,
+                offset,
+                1,
+                std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32,
+            )
+        };
         Ok(())
     }
 
     pub fn draw_indexed(&mut self, indices: u32, first_index: u32, vertex_offset: i32) -> BackendResult<()> {
         self.bound_pipeline()?;
-        unsafe { self.gpu.device.cmd_draw_indexed(self.cb, indices, 1, first_index, vertex_offset, 0) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_draw_indexed(self.cb, indices, 1, first_index, vertex_offset, 0)
+        };
         Ok(())
     }
 
@@ -388,40 +544,80 @@ impl<'g> Recorder<'g> {
     /// workgroup size comes from the shader's reflected `local_size`).
     pub fn dispatch(&mut self, threads: [u32; 3]) -> BackendResult<()> {
         let p = self.gpu.pipeline(self.bound_pipeline()?)?;
-        let ls = p.reflection.local_size.ok_or_else(|| BackendError::Invalid(format!("pipeline `{}` is not a compute pipeline", p.name)))?;
+        let ls = p
+            .reflection
+            .local_size
+            .ok_or_else(|| BackendError::Invalid(format!("pipeline `{}` is not a compute pipeline", p.name)))?;
         let groups = [0, 1, 2].map(|i| threads[i].div_ceil(ls[i].max(1)));
         unsafe { self.gpu.device.cmd_dispatch(self.cb, groups[0], groups[1], groups[2]) };
         Ok(())
     }
 
     /// Copies one mip/layer of an image (in TRANSFER_SRC_OPTIMAL) into a buffer, tightly packed.
-    pub fn copy_image_to_buffer(&mut self, image: ImageId, mip: u32, layer: u32, buffer: BufferId) -> BackendResult<()> {
+    pub fn copy_image_to_buffer(
+        &mut self,
+        image: ImageId,
+        mip: u32,
+        layer: u32,
+        buffer: BufferId,
+    ) -> BackendResult<()> {
         self.copy_image_to_buffer_at(image, mip, layer, buffer, 0)
     }
 
     /// [`copy_image_to_buffer`](Self::copy_image_to_buffer) from byte `offset` of the buffer
     /// (several layers into one buffer).
-    pub fn copy_image_to_buffer_at(&mut self, image: ImageId, mip: u32, layer: u32, buffer: BufferId, offset: u64) -> BackendResult<()> {
+    pub fn copy_image_to_buffer_at(
+        &mut self,
+        image: ImageId,
+        mip: u32,
+        layer: u32,
+        buffer: BufferId,
+        offset: u64,
+    ) -> BackendResult<()> {
         let img = self.gpu.image(image)?;
         let buf = self.gpu.buffer(buffer)?;
         let region = vk::BufferImageCopy {
             buffer_offset: offset,
             buffer_row_length: 0,
             buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers { aspect_mask: img.desc.aspect(), mip_level: mip, base_array_layer: layer, layer_count: 1 },
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: img.desc.aspect(),
+                mip_level: mip,
+                base_array_layer: layer,
+                layer_count: 1,
+            },
             image_offset: vk::Offset3D::default(),
             image_extent: img.desc.mip_extent(mip),
         };
         if img.desc.aspect() != vk::ImageAspectFlags::COLOR {
             return Err(BackendError::Unsupported("readback of depth/stencil images".into()));
         }
-        unsafe { self.gpu.device.cmd_copy_image_to_buffer(self.cb, img.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buf.raw, &[region]) };
+        unsafe {
+            self.gpu.device.cmd_copy_image_to_buffer(
+                self.cb,
+                img.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buf.raw,
+                &[region],
+            )
+        };
         Ok(())
     }
 
     pub fn copy_buffer(&mut self, src: BufferId, dst: BufferId, size: u64) -> BackendResult<()> {
         let (s, d) = (self.gpu.buffer(src)?.raw, self.gpu.buffer(dst)?.raw);
-        unsafe { self.gpu.device.cmd_copy_buffer(self.cb, s, d, &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size }]) };
+        unsafe {
+            self.gpu.device.cmd_copy_buffer(
+                self.cb,
+                s,
+                d,
+                &[vk::BufferCopy {
+                    src_offset: 0,
+                    dst_offset: 0,
+                    size,
+                }],
+            )
+        };
         Ok(())
     }
 
@@ -435,9 +631,16 @@ impl<'g> Recorder<'g> {
     pub fn update_buffer(&mut self, buffer: BufferId, words: &[u32]) -> BackendResult<()> {
         let raw = self.gpu.buffer(buffer)?.raw;
         if words.is_empty() || words.len() * 4 > 65_536 {
-            return Err(BackendError::Invalid(format!("update_buffer of {} words: 1 to 16,384 allowed", words.len())));
+            return Err(BackendError::Invalid(format!(
+                "update_buffer of {} words: 1 to 16,384 allowed",
+                words.len()
+            )));
         }
-        unsafe { self.gpu.device.cmd_update_buffer(self.cb, raw, 0, bytemuck::cast_slice(words)) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_update_buffer(self.cb, raw, 0, bytemuck::cast_slice(words))
+        };
         Ok(())
     }
 
@@ -451,15 +654,32 @@ impl<'g> Recorder<'g> {
             base_array_layer: range.base_layer,
             layer_count: range.layer_count,
         };
-        unsafe { self.gpu.device.cmd_clear_color_image(self.cb, raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &vk::ClearColorValue { float32: rgba }, &[r]) };
+        unsafe {
+            self.gpu.device.cmd_clear_color_image(
+                self.cb,
+                raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue { float32: rgba },
+                &[r],
+            )
+        };
         Ok(())
     }
 
     /// Blits mip 0 of `src` (TRANSFER_SRC_OPTIMAL) onto `dst` (TRANSFER_DST_OPTIMAL), scaling.
     pub fn blit(&mut self, src: ImageId, dst: ImageId) -> BackendResult<()> {
         let (s, d) = (self.gpu.image(src)?, self.gpu.image(dst)?);
-        let corner = |e: vk::Extent3D| vk::Offset3D { x: e.width as i32, y: e.height as i32, z: 1 };
-        let layers = vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 };
+        let corner = |e: vk::Extent3D| vk::Offset3D {
+            x: e.width as i32,
+            y: e.height as i32,
+            z: 1,
+        };
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
         let region = vk::ImageBlit2::default()
             .src_subresource(layers)
             .src_offsets([vk::Offset3D::default(), corner(s.desc.extent)])

@@ -30,31 +30,56 @@ pub struct ShaderReflection {
 
 impl ShaderReflection {
     pub fn from_spirv(name: &str, stage: vk::ShaderStageFlags, words: &[u32]) -> BackendResult<Self> {
-        let err = |m: String| BackendError::Shader { name: name.into(), message: m };
+        let err = |m: String| BackendError::Shader {
+            name: name.into(),
+            message: m,
+        };
         let bytes: &[u8] = bytemuck::cast_slice(words);
-        let r = rspirv_reflect::Reflection::new_from_spirv(bytes).map_err(|e| err(format!("SPIR-V reflection: {e:?}")))?;
-        let sets = r.get_descriptor_sets().map_err(|e| err(format!("descriptor reflection: {e:?}")))?;
+        let r =
+            rspirv_reflect::Reflection::new_from_spirv(bytes).map_err(|e| err(format!("SPIR-V reflection: {e:?}")))?;
+        let sets = r
+            .get_descriptor_sets()
+            .map_err(|e| err(format!("descriptor reflection: {e:?}")))?;
         let mut bindings = Vec::new();
         for (set, map) in sets {
             for (binding, info) in map {
                 let count = match info.binding_count {
                     rspirv_reflect::BindingCount::One => 1,
                     rspirv_reflect::BindingCount::StaticSized(n) => n as u32,
-                    rspirv_reflect::BindingCount::Unbounded => return Err(err(format!("binding `{}`: unbounded arrays are not supported", info.name))),
+                    rspirv_reflect::BindingCount::Unbounded => {
+                        return Err(err(format!(
+                            "binding `{}`: unbounded arrays are not supported",
+                            info.name
+                        )))
+                    }
                 };
                 if info.name.is_empty() {
                     return Err(err(format!("set {set} binding {binding} has no name: give every block an instance name, it is how resources are bound")));
                 }
-                bindings.push(ReflectedBinding { set, binding, name: info.name, ty: vk::DescriptorType::from_raw(info.ty.0 as i32), count, stages: stage });
+                bindings.push(ReflectedBinding {
+                    set,
+                    binding,
+                    name: info.name,
+                    ty: vk::DescriptorType::from_raw(info.ty.0 as i32),
+                    count,
+                    stages: stage,
+                });
             }
         }
-        let push = r.get_push_constant_range().map_err(|e| err(format!("push constants: {e:?}")))?;
+        let push = r
+            .get_push_constant_range()
+            .map_err(|e| err(format!("push constants: {e:?}")))?;
         let (push_constant_size, push_constant_stages) = match push {
             Some(p) => (p.offset + p.size, stage),
             None => (0, vk::ShaderStageFlags::empty()),
         };
         let local_size = r.get_compute_group_size().map(|(x, y, z)| [x, y, z]);
-        Ok(ShaderReflection { bindings, push_constant_size, push_constant_stages, local_size })
+        Ok(ShaderReflection {
+            bindings,
+            push_constant_size,
+            push_constant_stages,
+            local_size,
+        })
     }
 
     /// Combines the stages of one pipeline; a (set, binding) declared by several stages must agree
@@ -96,7 +121,10 @@ impl ShaderReflection {
                 return Err(BackendError::Binding {
                     pipeline: pipeline.into(),
                     binding: b.name.clone(),
-                    message: format!("name used at set {s} binding {bi} and set {} binding {}", b.set, b.binding),
+                    message: format!(
+                        "name used at set {s} binding {bi} and set {} binding {}",
+                        b.set, b.binding
+                    ),
                 });
             }
         }

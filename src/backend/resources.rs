@@ -57,7 +57,12 @@ pub struct SubresourceRange {
 
 impl SubresourceRange {
     pub const fn new(base_mip: u32, mip_count: u32, base_layer: u32, layer_count: u32) -> Self {
-        Self { base_mip, mip_count, base_layer, layer_count }
+        Self {
+            base_mip,
+            mip_count,
+            base_layer,
+            layer_count,
+        }
     }
     /// Every mip and layer of an image with `mips` mips and `layers` layers.
     pub const fn all(mips: u32, layers: u32) -> Self {
@@ -88,10 +93,19 @@ impl SubresourceRange {
         Self::new(0, vk::REMAINING_MIP_LEVELS, layer, 1)
     }
     pub const fn contains(&self, mip: u32, layer: u32) -> bool {
-        mip >= self.base_mip && mip - self.base_mip < self.mip_count && layer >= self.base_layer && layer - self.base_layer < self.layer_count
+        mip >= self.base_mip
+            && mip - self.base_mip < self.mip_count
+            && layer >= self.base_layer
+            && layer - self.base_layer < self.layer_count
     }
     pub fn to_vk(&self, aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
-        vk::ImageSubresourceRange { aspect_mask: aspect, base_mip_level: self.base_mip, level_count: self.mip_count, base_array_layer: self.base_layer, layer_count: self.layer_count }
+        vk::ImageSubresourceRange {
+            aspect_mask: aspect,
+            base_mip_level: self.base_mip,
+            level_count: self.mip_count,
+            base_array_layer: self.base_layer,
+            layer_count: self.layer_count,
+        }
     }
 }
 
@@ -110,13 +124,36 @@ pub struct ImageDesc {
 
 impl ImageDesc {
     pub fn new_2d(name: &str, format: vk::Format, width: u32, height: u32) -> Self {
-        ImageDesc { name: name.into(), format, extent: vk::Extent3D { width, height, depth: 1 }, mip_levels: 1, layers: 1, cube: false, usage: vk::ImageUsageFlags::empty() }
+        ImageDesc {
+            name: name.into(),
+            format,
+            extent: vk::Extent3D {
+                width,
+                height,
+                depth: 1,
+            },
+            mip_levels: 1,
+            layers: 1,
+            cube: false,
+            usage: vk::ImageUsageFlags::empty(),
+        }
     }
     pub fn new_3d(name: &str, format: vk::Format, w: u32, h: u32, d: u32) -> Self {
-        ImageDesc { extent: vk::Extent3D { width: w, height: h, depth: d }, ..Self::new_2d(name, format, w, h) }
+        ImageDesc {
+            extent: vk::Extent3D {
+                width: w,
+                height: h,
+                depth: d,
+            },
+            ..Self::new_2d(name, format, w, h)
+        }
     }
     pub fn new_cube(name: &str, format: vk::Format, size: u32) -> Self {
-        ImageDesc { layers: 6, cube: true, ..Self::new_2d(name, format, size, size) }
+        ImageDesc {
+            layers: 6,
+            cube: true,
+            ..Self::new_2d(name, format, size, size)
+        }
     }
     pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
         self.usage |= usage;
@@ -143,14 +180,20 @@ impl ImageDesc {
         format_aspect(self.format)
     }
     pub fn mip_extent(&self, mip: u32) -> vk::Extent3D {
-        vk::Extent3D { width: (self.extent.width >> mip).max(1), height: (self.extent.height >> mip).max(1), depth: (self.extent.depth >> mip).max(1) }
+        vk::Extent3D {
+            width: (self.extent.width >> mip).max(1),
+            height: (self.extent.height >> mip).max(1),
+            depth: (self.extent.depth >> mip).max(1),
+        }
     }
 }
 
 pub(crate) fn format_aspect(format: vk::Format) -> vk::ImageAspectFlags {
     match format {
         vk::Format::D16_UNORM | vk::Format::D32_SFLOAT | vk::Format::X8_D24_UNORM_PACK32 => vk::ImageAspectFlags::DEPTH,
-        vk::Format::D16_UNORM_S8_UINT | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL,
+        vk::Format::D16_UNORM_S8_UINT | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
         vk::Format::S8_UINT => vk::ImageAspectFlags::STENCIL,
         _ => vk::ImageAspectFlags::COLOR,
     }
@@ -184,9 +227,21 @@ pub struct SamplerDesc {
 }
 
 impl SamplerDesc {
-    pub const LINEAR_REPEAT: SamplerDesc = SamplerDesc { filter: vk::Filter::LINEAR, mipmap: vk::SamplerMipmapMode::LINEAR, address: vk::SamplerAddressMode::REPEAT };
-    pub const LINEAR_CLAMP: SamplerDesc = SamplerDesc { filter: vk::Filter::LINEAR, mipmap: vk::SamplerMipmapMode::LINEAR, address: vk::SamplerAddressMode::CLAMP_TO_EDGE };
-    pub const NEAREST_CLAMP: SamplerDesc = SamplerDesc { filter: vk::Filter::NEAREST, mipmap: vk::SamplerMipmapMode::NEAREST, address: vk::SamplerAddressMode::CLAMP_TO_EDGE };
+    pub const LINEAR_REPEAT: SamplerDesc = SamplerDesc {
+        filter: vk::Filter::LINEAR,
+        mipmap: vk::SamplerMipmapMode::LINEAR,
+        address: vk::SamplerAddressMode::REPEAT,
+    };
+    pub const LINEAR_CLAMP: SamplerDesc = SamplerDesc {
+        filter: vk::Filter::LINEAR,
+        mipmap: vk::SamplerMipmapMode::LINEAR,
+        address: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+    };
+    pub const NEAREST_CLAMP: SamplerDesc = SamplerDesc {
+        filter: vk::Filter::NEAREST,
+        mipmap: vk::SamplerMipmapMode::NEAREST,
+        address: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+    };
 }
 
 pub(crate) struct Buffer {
@@ -273,12 +328,27 @@ unsafe fn destroy_image(device: &ash::Device, allocator: &Mutex<Allocator>, mut 
 
 impl Gpu {
     /// Memory for a buffer (`linear`) or an optimally tiled image, from gpu-allocator.
-    fn allocate(&self, name: &str, requirements: vk::MemoryRequirements, location: MemoryLocation, linear: bool) -> BackendResult<Allocation> {
+    fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> BackendResult<Allocation> {
         self.allocator
             .lock()
             .map_err(|_| BackendError::Invalid("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc { name, requirements, location, linear, allocation_scheme: AllocationScheme::GpuAllocatorManaged })
-            .map_err(|e| BackendError::Allocation { name: name.into(), message: e.to_string() })
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| BackendError::Allocation {
+                name: name.into(),
+                message: e.to_string(),
+            })
     }
 
     /// A buffer with its memory, owned by the caller rather than the arenas: for objects that
@@ -293,7 +363,10 @@ impl Gpu {
             // Bound as a storage buffer on this device (backend/uniform_blocks.rs).
             usage |= vk::BufferUsageFlags::STORAGE_BUFFER;
         }
-        let info = vk::BufferCreateInfo::default().size(desc.size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info = vk::BufferCreateInfo::default()
+            .size(desc.size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { self.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
         let location = match desc.memory {
@@ -308,9 +381,17 @@ impl Gpu {
                 return Err(e);
             }
         };
-        unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindBufferMemory")?;
+        unsafe {
+            self.device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .vk("vkBindBufferMemory")?;
         self.set_name(raw, &desc.name);
-        Ok(Buffer { raw, desc: desc.clone(), allocation: Some(allocation) })
+        Ok(Buffer {
+            raw,
+            desc: desc.clone(),
+            allocation: Some(allocation),
+        })
     }
 
     pub fn create_buffer(&mut self, desc: &BufferDesc) -> BackendResult<BufferId> {
@@ -394,8 +475,18 @@ impl Gpu {
         )
     }
 
-    pub fn create_buffer_init(&mut self, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> BackendResult<BufferId> {
-        let id = self.create_buffer(&BufferDesc { name: name.into(), size: data.len().max(4) as u64, usage: usage | vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuOnly })?;
+    pub fn create_buffer_init(
+        &mut self,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        data: &[u8],
+    ) -> BackendResult<BufferId> {
+        let id = self.create_buffer(&BufferDesc {
+            name: name.into(),
+            size: data.len().max(4) as u64,
+            usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuOnly,
+        })?;
         self.upload_buffer(id, 0, data)?;
         Ok(id)
     }
@@ -409,15 +500,28 @@ impl Gpu {
     /// fill (`GpuToCpu` memory to read it back): compute passes' outputs.
     pub fn create_storage_output(&mut self, name: &str, size: u64, memory: MemoryKind) -> BackendResult<BufferId> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        self.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory })
+        self.create_buffer(&BufferDesc {
+            name: name.into(),
+            size: size.max(4),
+            usage,
+            memory,
+        })
     }
 
     pub(crate) fn buffer(&self, id: BufferId) -> BackendResult<&Buffer> {
-        self.arenas.buffers.get(id.0 as usize).and_then(|b| b.as_ref()).ok_or_else(|| BackendError::Invalid(format!("buffer {id:?} was destroyed")))
+        self.arenas
+            .buffers
+            .get(id.0 as usize)
+            .and_then(|b| b.as_ref())
+            .ok_or_else(|| BackendError::Invalid(format!("buffer {id:?} was destroyed")))
     }
 
     pub(crate) fn image(&self, id: ImageId) -> BackendResult<&Image> {
-        self.arenas.images.get(id.0 as usize).and_then(|b| b.as_ref()).ok_or_else(|| BackendError::Invalid(format!("image {id:?} was destroyed")))
+        self.arenas
+            .images
+            .get(id.0 as usize)
+            .and_then(|b| b.as_ref())
+            .ok_or_else(|| BackendError::Invalid(format!("image {id:?} was destroyed")))
     }
 
     pub fn buffer_desc(&self, id: BufferId) -> BackendResult<&BufferDesc> {
@@ -451,20 +555,36 @@ impl Gpu {
             (b.desc.size, b.desc.memory, b.raw, b.desc.name.clone())
         };
         if offset + data.len() as u64 > size {
-            return Err(BackendError::Invalid(format!("upload of {} bytes at {offset} overflows buffer `{name}` of {size} bytes", data.len())));
+            return Err(BackendError::Invalid(format!(
+                "upload of {} bytes at {offset} overflows buffer `{name}` of {size} bytes",
+                data.len()
+            )));
         }
         if memory != MemoryKind::GpuOnly {
-            let b = self.arenas.buffers[id.0 as usize].as_mut().and_then(|b| b.allocation.as_mut());
-            let slice = b.and_then(|a| a.mapped_slice_mut()).ok_or_else(|| BackendError::Invalid(format!("buffer `{name}` is not host-visible")))?;
+            let b = self.arenas.buffers[id.0 as usize]
+                .as_mut()
+                .and_then(|b| b.allocation.as_mut());
+            let slice = b
+                .and_then(|a| a.mapped_slice_mut())
+                .ok_or_else(|| BackendError::Invalid(format!("buffer `{name}` is not host-visible")))?;
             slice[offset as usize..offset as usize + data.len()].copy_from_slice(data);
             return Ok(());
         }
-        let staging = self.create_buffer(&BufferDesc { name: format!("{name} staging"), size: data.len() as u64, usage: vk::BufferUsageFlags::TRANSFER_SRC, memory: MemoryKind::CpuToGpu })?;
+        let staging = self.create_buffer(&BufferDesc {
+            name: format!("{name} staging"),
+            size: data.len() as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            memory: MemoryKind::CpuToGpu,
+        })?;
         self.upload_buffer(staging, 0, data)?;
         let src = self.buffer(staging)?.raw;
         let len = data.len() as u64;
         let result = self.one_shot(|device, cb| unsafe {
-            let region = vk::BufferCopy { src_offset: 0, dst_offset: offset, size: len };
+            let region = vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: offset,
+                size: len,
+            };
             device.cmd_copy_buffer(cb, src, raw, &[region]);
         });
         self.destroy_buffer(staging);
@@ -483,9 +603,16 @@ impl Gpu {
     pub fn read_buffer_prefix(&self, id: BufferId, len: usize) -> BackendResult<Vec<u8>> {
         let b = self.buffer(id)?;
         if len as u64 > b.desc.size {
-            return Err(BackendError::Invalid(format!("read of {len} bytes from buffer `{}` of {} bytes", b.desc.name, b.desc.size)));
+            return Err(BackendError::Invalid(format!(
+                "read of {len} bytes from buffer `{}` of {} bytes",
+                b.desc.name, b.desc.size
+            )));
         }
-        let slice = b.allocation.as_ref().and_then(|a| a.mapped_slice()).ok_or_else(|| BackendError::Invalid(format!("buffer `{}` is not host-visible", b.desc.name)))?;
+        let slice = b
+            .allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .ok_or_else(|| BackendError::Invalid(format!("buffer `{}` is not host-visible", b.desc.name)))?;
         Ok(slice[..len].to_vec())
     }
 
@@ -504,14 +631,27 @@ impl Gpu {
     pub fn create_image(&mut self, desc: &ImageDesc) -> BackendResult<ImageId> {
         let _calls = vulkan_calls();
         let e = desc.extent;
-        let max = if desc.is_3d() { self.caps.max_image_dimension_3d } else { self.caps.max_image_dimension_2d };
+        let max = if desc.is_3d() {
+            self.caps.max_image_dimension_3d
+        } else {
+            self.caps.max_image_dimension_2d
+        };
         if e.width == 0 || e.height == 0 || e.depth == 0 || e.width.max(e.height).max(e.depth) > max {
-            return Err(BackendError::Unsupported(format!("image `{}` of {}×{}×{} (device limit {max})", desc.name, e.width, e.height, e.depth)));
+            return Err(BackendError::Unsupported(format!(
+                "image `{}` of {}×{}×{} (device limit {max})",
+                desc.name, e.width, e.height, e.depth
+            )));
         }
-        let fmt_props = unsafe { self.instance.get_physical_device_format_properties(self.physical, desc.format) };
+        let fmt_props = unsafe {
+            self.instance
+                .get_physical_device_format_properties(self.physical, desc.format)
+        };
         let needed = usage_format_features(desc.usage);
         if !fmt_props.optimal_tiling_features.contains(needed) {
-            return Err(BackendError::Unsupported(format!("format {:?} for {:?} (image `{}`)", desc.format, desc.usage, desc.name)));
+            return Err(BackendError::Unsupported(format!(
+                "format {:?} for {:?} (image `{}`)",
+                desc.format, desc.usage, desc.name
+            )));
         }
         let mut flags = vk::ImageCreateFlags::empty();
         if desc.cube {
@@ -519,7 +659,11 @@ impl Gpu {
         }
         let info = vk::ImageCreateInfo::default()
             .flags(flags)
-            .image_type(if desc.is_3d() { vk::ImageType::TYPE_3D } else { vk::ImageType::TYPE_2D })
+            .image_type(if desc.is_3d() {
+                vk::ImageType::TYPE_3D
+            } else {
+                vk::ImageType::TYPE_2D
+            })
             .format(desc.format)
             .extent(desc.extent)
             .mip_levels(desc.mip_levels.max(1))
@@ -538,12 +682,22 @@ impl Gpu {
                 return Err(e);
             }
         };
-        unsafe { self.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
+        unsafe {
+            self.device
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .vk("vkBindImageMemory")?;
         self.set_name(raw, &desc.name);
         let mut desc = desc.clone();
         desc.mip_levels = desc.mip_levels.max(1);
         desc.layers = desc.layers.max(1);
-        self.arenas.images.push(Some(Image { raw, desc, allocation: Some(allocation), owned: true, views: RefCell::new(HashMap::new()) }));
+        self.arenas.images.push(Some(Image {
+            raw,
+            desc,
+            allocation: Some(allocation),
+            owned: true,
+            views: RefCell::new(HashMap::new()),
+        }));
         let id = ImageId(self.arenas.images.len() as u32 - 1);
         if let Some(scope) = self.scopes.last_mut() {
             scope.images.push(id);
@@ -553,7 +707,13 @@ impl Gpu {
 
     /// Registers an image owned elsewhere (a swapchain image).
     pub(crate) fn register_external_image(&mut self, raw: vk::Image, desc: ImageDesc) -> ImageId {
-        self.arenas.images.push(Some(Image { raw, desc, allocation: None, owned: false, views: RefCell::new(HashMap::new()) }));
+        self.arenas.images.push(Some(Image {
+            raw,
+            desc,
+            allocation: None,
+            owned: false,
+            views: RefCell::new(HashMap::new()),
+        }));
         ImageId(self.arenas.images.len() as u32 - 1)
     }
 
@@ -571,13 +731,33 @@ impl Gpu {
 
     /// A view of `mip_count` mips from `base_mip` and `layer_count` layers from `base_layer`,
     /// created on first use and cached with the image.
-    pub(crate) fn image_view(&self, id: ImageId, base_mip: u32, mip_count: u32, base_layer: u32, layer_count: u32, view_type: Option<vk::ImageViewType>) -> BackendResult<vk::ImageView> {
+    pub(crate) fn image_view(
+        &self,
+        id: ImageId,
+        base_mip: u32,
+        mip_count: u32,
+        base_layer: u32,
+        layer_count: u32,
+        view_type: Option<vk::ImageViewType>,
+    ) -> BackendResult<vk::ImageView> {
         let _calls = vulkan_calls();
         let img = self.image(id)?;
         let d = &img.desc;
-        let mip_count = if mip_count == vk::REMAINING_MIP_LEVELS { d.mip_levels.saturating_sub(base_mip) } else { mip_count };
-        let layer_count = if layer_count == vk::REMAINING_ARRAY_LAYERS { d.layers.saturating_sub(base_layer) } else { layer_count };
-        if mip_count == 0 || layer_count == 0 || base_mip.checked_add(mip_count).is_none_or(|m| m > d.mip_levels) || base_layer.checked_add(layer_count).is_none_or(|l| l > d.layers) {
+        let mip_count = if mip_count == vk::REMAINING_MIP_LEVELS {
+            d.mip_levels.saturating_sub(base_mip)
+        } else {
+            mip_count
+        };
+        let layer_count = if layer_count == vk::REMAINING_ARRAY_LAYERS {
+            d.layers.saturating_sub(base_layer)
+        } else {
+            layer_count
+        };
+        if mip_count == 0
+            || layer_count == 0
+            || base_mip.checked_add(mip_count).is_none_or(|m| m > d.mip_levels)
+            || base_layer.checked_add(layer_count).is_none_or(|l| l > d.layers)
+        {
             return Err(BackendError::Invalid(format!(
                 "view of mips {base_mip}+{mip_count}, layers {base_layer}+{layer_count} is outside image `{}` ({} mips, {} layers)",
                 d.name, d.mip_levels, d.layers
@@ -592,17 +772,27 @@ impl Gpu {
         } else {
             vk::ImageViewType::TYPE_2D
         });
-        let key = ViewKey { base_mip, mip_count, base_layer, layer_count, view_type };
+        let key = ViewKey {
+            base_mip,
+            mip_count,
+            base_layer,
+            layer_count,
+            view_type,
+        };
         if let Some(&v) = img.views.borrow().get(&key) {
             return Ok(v);
         }
-        let info = vk::ImageViewCreateInfo::default().image(img.raw).view_type(view_type).format(d.format).subresource_range(vk::ImageSubresourceRange {
-            aspect_mask: d.aspect(),
-            base_mip_level: base_mip,
-            level_count: mip_count,
-            base_array_layer: base_layer,
-            layer_count,
-        });
+        let info = vk::ImageViewCreateInfo::default()
+            .image(img.raw)
+            .view_type(view_type)
+            .format(d.format)
+            .subresource_range(vk::ImageSubresourceRange {
+                aspect_mask: d.aspect(),
+                base_mip_level: base_mip,
+                level_count: mip_count,
+                base_array_layer: base_layer,
+                layer_count,
+            });
         let view = unsafe { self.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
         img.views.borrow_mut().insert(key, view);
         Ok(view)
@@ -612,7 +802,11 @@ impl Gpu {
     /// with linear filtering: `SAMPLED_IMAGE_FILTER_LINEAR`, optional for 32-bit float formats).
     pub fn format_features(&self, format: vk::Format) -> vk::FormatFeatureFlags {
         let _calls = vulkan_calls();
-        unsafe { self.instance.get_physical_device_format_properties(self.physical, format) }.optimal_tiling_features
+        unsafe {
+            self.instance
+                .get_physical_device_format_properties(self.physical, format)
+        }
+        .optimal_tiling_features
     }
 
     /// A sampler, shared among everyone asking for the same description.
@@ -637,7 +831,12 @@ impl Gpu {
     }
 
     pub(crate) fn raw_sampler(&self, id: SamplerId) -> BackendResult<vk::Sampler> {
-        self.arenas.samplers.get(id.0 as usize).copied().flatten().ok_or_else(|| BackendError::Invalid(format!("sampler {id:?} was destroyed")))
+        self.arenas
+            .samplers
+            .get(id.0 as usize)
+            .copied()
+            .flatten()
+            .ok_or_else(|| BackendError::Invalid(format!("sampler {id:?} was destroyed")))
     }
 
     /// Fills mip `mip`, all layers, of an image from tightly packed texels and leaves the whole
@@ -660,13 +859,23 @@ impl Gpu {
             let i = self.image(id)?;
             (i.raw, i.desc.clone())
         };
-        let texel = format_texel_size(desc.format).ok_or_else(|| BackendError::Unsupported(format!("upload to format {:?}", desc.format)))?;
+        let texel = format_texel_size(desc.format)
+            .ok_or_else(|| BackendError::Unsupported(format!("upload to format {:?}", desc.format)))?;
         let e = desc.mip_extent(mip);
         let expected = texel * e.width as u64 * e.height as u64 * e.depth as u64 * desc.layers as u64;
         if data.len() as u64 != expected && !(pad && (data.len() as u64) < expected) {
-            return Err(BackendError::Invalid(format!("upload to `{}` mip {mip}: {} bytes given, {expected} expected", desc.name, data.len())));
+            return Err(BackendError::Invalid(format!(
+                "upload to `{}` mip {mip}: {} bytes given, {expected} expected",
+                desc.name,
+                data.len()
+            )));
         }
-        let staging = self.create_buffer(&BufferDesc { name: format!("{} staging", desc.name), size: expected, usage: vk::BufferUsageFlags::TRANSFER_SRC, memory: MemoryKind::CpuToGpu })?;
+        let staging = self.create_buffer(&BufferDesc {
+            name: format!("{} staging", desc.name),
+            size: expected,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            memory: MemoryKind::CpuToGpu,
+        })?;
         let filled = self.upload_buffer(staging, 0, data).and_then(|()| {
             let rest = expected as usize - data.len();
             if rest == 0 {
@@ -680,7 +889,13 @@ impl Gpu {
         }
         let src = self.buffer(staging)?.raw;
         let aspect = desc.aspect();
-        let whole = vk::ImageSubresourceRange { aspect_mask: aspect, base_mip_level: 0, level_count: desc.mip_levels, base_array_layer: 0, layer_count: desc.layers };
+        let whole = vk::ImageSubresourceRange {
+            aspect_mask: aspect,
+            base_mip_level: 0,
+            level_count: desc.mip_levels,
+            base_array_layer: 0,
+            layer_count: desc.layers,
+        };
         let result = self.one_shot(|device, cb| unsafe {
             let to_dst = [vk::ImageMemoryBarrier2::default()
                 .src_stage_mask(vk::PipelineStageFlags2::NONE)
@@ -695,7 +910,12 @@ impl Gpu {
                 buffer_offset: 0,
                 buffer_row_length: 0,
                 buffer_image_height: 0,
-                image_subresource: vk::ImageSubresourceLayers { aspect_mask: aspect, mip_level: mip, base_array_layer: 0, layer_count: desc.layers },
+                image_subresource: vk::ImageSubresourceLayers {
+                    aspect_mask: aspect,
+                    mip_level: mip,
+                    base_array_layer: 0,
+                    layer_count: desc.layers,
+                },
                 image_offset: vk::Offset3D::default(),
                 image_extent: e,
             };
@@ -718,19 +938,38 @@ impl Gpu {
     /// Records `f` into a fresh command buffer, submits it and waits for it.
     pub(crate) fn one_shot(&self, f: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> BackendResult<()> {
         let _calls = vulkan_calls();
-        let alloc = vk::CommandBufferAllocateInfo::default().command_pool(self.command_pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1);
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
         let cb = unsafe { self.device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let result = (|| {
             unsafe {
-                self.device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT)).vk("vkBeginCommandBuffer")?;
+                self.device
+                    .begin_command_buffer(
+                        cb,
+                        &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    )
+                    .vk("vkBeginCommandBuffer")?;
             }
             f(&self.device, cb);
             unsafe {
                 self.device.end_command_buffer(cb).vk("vkEndCommandBuffer")?;
-                let fence = self.device.create_fence(&vk::FenceCreateInfo::default(), None).vk("vkCreateFence")?;
+                let fence = self
+                    .device
+                    .create_fence(&vk::FenceCreateInfo::default(), None)
+                    .vk("vkCreateFence")?;
                 let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(cb)];
                 let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbs)];
-                let r = self.device.queue_submit2(self.queue, &submit, fence).vk("vkQueueSubmit2").and_then(|_| self.device.wait_for_fences(&[fence], true, u64::MAX).vk("vkWaitForFences"));
+                let r = self
+                    .device
+                    .queue_submit2(self.queue, &submit, fence)
+                    .vk("vkQueueSubmit2")
+                    .and_then(|_| {
+                        self.device
+                            .wait_for_fences(&[fence], true, u64::MAX)
+                            .vk("vkWaitForFences")
+                    });
                 self.device.destroy_fence(fence, None);
                 r
             }

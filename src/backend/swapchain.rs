@@ -36,21 +36,40 @@ pub struct AcquiredImage {
 
 impl Gpu {
     /// A swapchain for the window, with `slots` acquire semaphores (one per frame in flight).
-    pub fn create_swapchain<W: HasDisplayHandle + HasWindowHandle>(&mut self, window: &W, size: (u32, u32), slots: usize) -> BackendResult<Swapchain> {
+    pub fn create_swapchain<W: HasDisplayHandle + HasWindowHandle>(
+        &mut self,
+        window: &W,
+        size: (u32, u32),
+        slots: usize,
+    ) -> BackendResult<Swapchain> {
         let _calls = vulkan_calls();
-        let display = window.display_handle().map_err(|e| BackendError::Unsupported(format!("display handle: {e}")))?;
-        let win = window.window_handle().map_err(|e| BackendError::Unsupported(format!("window handle: {e}")))?;
-        let surface = unsafe { ash_window::create_surface(&self.entry, &self.instance, display.as_raw(), win.as_raw(), None) }.vk("vkCreateSurfaceKHR")?;
+        let display = window
+            .display_handle()
+            .map_err(|e| BackendError::Unsupported(format!("display handle: {e}")))?;
+        let win = window
+            .window_handle()
+            .map_err(|e| BackendError::Unsupported(format!("window handle: {e}")))?;
+        let surface =
+            unsafe { ash_window::create_surface(&self.entry, &self.instance, display.as_raw(), win.as_raw(), None) }
+                .vk("vkCreateSurfaceKHR")?;
         let surface_fn = ash::khr::surface::Instance::new(&self.entry, &self.instance);
-        let supported = unsafe { surface_fn.get_physical_device_surface_support(self.physical, self.queue_family, surface) }.vk("vkGetPhysicalDeviceSurfaceSupportKHR")?;
+        let supported =
+            unsafe { surface_fn.get_physical_device_surface_support(self.physical, self.queue_family, surface) }
+                .vk("vkGetPhysicalDeviceSurfaceSupportKHR")?;
         if !supported {
             unsafe { surface_fn.destroy_surface(surface, None) };
-            return Err(BackendError::Unsupported(format!("{} cannot present to this window", self.caps.name)));
+            return Err(BackendError::Unsupported(format!(
+                "{} cannot present to this window",
+                self.caps.name
+            )));
         }
         let swapchain_fn = ash::khr::swapchain::Device::new(&self.instance, &self.device);
         let mut acquire_semaphores = Vec::new();
         for _ in 0..slots.max(1) {
-            acquire_semaphores.push(unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?);
+            acquire_semaphores.push(
+                unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
+                    .vk("vkCreateSemaphore")?,
+            );
         }
         let mut sc = Swapchain {
             surface_fn,
@@ -71,8 +90,16 @@ impl Gpu {
     pub fn recreate_swapchain(&mut self, sc: &mut Swapchain, size: (u32, u32)) -> BackendResult<()> {
         let _calls = vulkan_calls();
         self.wait_idle()?;
-        let caps = unsafe { sc.surface_fn.get_physical_device_surface_capabilities(self.physical, sc.surface) }.vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
-        let formats = unsafe { sc.surface_fn.get_physical_device_surface_formats(self.physical, sc.surface) }.vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
+        let caps = unsafe {
+            sc.surface_fn
+                .get_physical_device_surface_capabilities(self.physical, sc.surface)
+        }
+        .vk("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")?;
+        let formats = unsafe {
+            sc.surface_fn
+                .get_physical_device_surface_formats(self.physical, sc.surface)
+        }
+        .vk("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
         let format = formats
             .iter()
             .find(|f| f.format == vk::Format::B8G8R8A8_SRGB || f.format == vk::Format::R8G8B8A8_SRGB)
@@ -82,16 +109,23 @@ impl Gpu {
         let extent = if caps.current_extent.width != u32::MAX {
             caps.current_extent
         } else {
-            vk::Extent2D { width: size.0.clamp(caps.min_image_extent.width, caps.max_image_extent.width), height: size.1.clamp(caps.min_image_extent.height, caps.max_image_extent.height) }
+            vk::Extent2D {
+                width: size.0.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                height: size.1.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+            }
         };
         let mut count = caps.min_image_count + 1;
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
         }
-        let wanted = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+        let wanted = vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
         let usage = wanted & caps.supported_usage_flags;
         if !usage.contains(vk::ImageUsageFlags::COLOR_ATTACHMENT) {
-            return Err(BackendError::Unsupported("swapchain images as colour attachments".into()));
+            return Err(BackendError::Unsupported(
+                "swapchain images as colour attachments".into(),
+            ));
         }
         let old = sc.raw;
         let info = vk::SwapchainCreateInfoKHR::default()
@@ -118,9 +152,13 @@ impl Gpu {
         sc.extent = extent;
         let raws = unsafe { sc.swapchain_fn.get_swapchain_images(raw) }.vk("vkGetSwapchainImagesKHR")?;
         for (i, r) in raws.into_iter().enumerate() {
-            let desc = ImageDesc::new_2d(&format!("swapchain {i}"), format.format, extent.width, extent.height).usage(usage);
+            let desc =
+                ImageDesc::new_2d(&format!("swapchain {i}"), format.format, extent.width, extent.height).usage(usage);
             sc.images.push(self.register_external_image(r, desc));
-            sc.present_semaphores.push(unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?);
+            sc.present_semaphores.push(
+                unsafe { self.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }
+                    .vk("vkCreateSemaphore")?,
+            );
         }
         Ok(())
     }
@@ -139,10 +177,21 @@ impl Gpu {
     pub fn acquire(&self, sc: &Swapchain, slot: usize) -> BackendResult<Option<AcquiredImage>> {
         let _calls = vulkan_calls();
         let acquired = sc.acquire_semaphores[slot % sc.acquire_semaphores.len()];
-        match unsafe { sc.swapchain_fn.acquire_next_image(sc.raw, u64::MAX, acquired, vk::Fence::null()) } {
-            Ok((index, _suboptimal)) => Ok(Some(AcquiredImage { index, image: sc.images[index as usize], acquired, rendered: sc.present_semaphores[index as usize] })),
+        match unsafe {
+            sc.swapchain_fn
+                .acquire_next_image(sc.raw, u64::MAX, acquired, vk::Fence::null())
+        } {
+            Ok((index, _suboptimal)) => Ok(Some(AcquiredImage {
+                index,
+                image: sc.images[index as usize],
+                acquired,
+                rendered: sc.present_semaphores[index as usize],
+            })),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(None),
-            Err(e) => Err(BackendError::Vulkan { call: "vkAcquireNextImageKHR", result: e }),
+            Err(e) => Err(BackendError::Vulkan {
+                call: "vkAcquireNextImageKHR",
+                result: e,
+            }),
         }
     }
 
@@ -152,11 +201,17 @@ impl Gpu {
         let waits = [image.rendered];
         let chains = [sc.raw];
         let indices = [image.index];
-        let info = vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&chains).image_indices(&indices);
+        let info = vk::PresentInfoKHR::default()
+            .wait_semaphores(&waits)
+            .swapchains(&chains)
+            .image_indices(&indices);
         match unsafe { sc.swapchain_fn.queue_present(self.queue, &info) } {
             Ok(false) => Ok(true),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(false),
-            Err(e) => Err(BackendError::Vulkan { call: "vkQueuePresentKHR", result: e }),
+            Err(e) => Err(BackendError::Vulkan {
+                call: "vkQueuePresentKHR",
+                result: e,
+            }),
         }
     }
 

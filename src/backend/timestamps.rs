@@ -20,7 +20,11 @@ pub enum TimestampSupport {
 /// Elapsed nanoseconds between two raw timestamps of a counter with `valid_bits` bits that may
 /// have wrapped once between them. Bits above `valid_bits` are undefined, so they are masked.
 pub fn elapsed_ns(start: u64, end: u64, valid_bits: u32, period_ns: f32) -> f64 {
-    let mask = if valid_bits >= 64 { u64::MAX } else { (1u64 << valid_bits) - 1 };
+    let mask = if valid_bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << valid_bits) - 1
+    };
     let (s, e) = (start & mask, end & mask);
     let ticks = if e >= s { e - s } else { (mask - s) + e + 1 };
     ticks as f64 * period_ns as f64

@@ -62,7 +62,9 @@ pub(crate) fn uniform_blocks_as_storage(words: &[u32]) -> Result<Vec<u32>, Strin
     for &(at, len, op) in &insts {
         let w = &words[at..at + len];
         match op {
-            OP_DECORATE if len >= 3 && (w[2] == DECORATION_BLOCK || w[2] == DECORATION_BUFFER_BLOCK) => blocks.push(w[1]),
+            OP_DECORATE if len >= 3 && (w[2] == DECORATION_BLOCK || w[2] == DECORATION_BUFFER_BLOCK) => {
+                blocks.push(w[1])
+            }
             OP_TYPE_STRUCT if len >= 2 => {
                 member_counts.insert(w[1], len - 2);
             }
@@ -77,7 +79,11 @@ pub(crate) fn uniform_blocks_as_storage(words: &[u32]) -> Result<Vec<u32>, Strin
     if !any_uniform {
         return Ok(words.to_vec());
     }
-    let uniform_blocks: Vec<u32> = blocks.iter().copied().filter(|b| uniform_pointees.contains(b)).collect();
+    let uniform_blocks: Vec<u32> = blocks
+        .iter()
+        .copied()
+        .filter(|b| uniform_pointees.contains(b))
+        .collect();
     let mut out = Vec::with_capacity(words.len() + 8 * uniform_blocks.len());
     out.extend_from_slice(&words[..5]);
     for &(at, len, op) in &insts {
@@ -85,12 +91,20 @@ pub(crate) fn uniform_blocks_as_storage(words: &[u32]) -> Result<Vec<u32>, Strin
         out.extend_from_slice(&words[at..at + len]);
         let w = &mut out[start..];
         match op {
-            OP_TYPE_POINTER | OP_TYPE_FORWARD_POINTER if len >= 3 && w[2] == STORAGE_UNIFORM => w[2] = STORAGE_STORAGE_BUFFER,
+            OP_TYPE_POINTER | OP_TYPE_FORWARD_POINTER if len >= 3 && w[2] == STORAGE_UNIFORM => {
+                w[2] = STORAGE_STORAGE_BUFFER
+            }
             OP_VARIABLE if len >= 4 && w[3] == STORAGE_UNIFORM => w[3] = STORAGE_STORAGE_BUFFER,
-            OP_DECORATE if len >= 3 && w[2] == DECORATION_BUFFER_BLOCK && uniform_blocks.contains(&w[1]) => w[2] = DECORATION_BLOCK,
+            OP_DECORATE if len >= 3 && w[2] == DECORATION_BUFFER_BLOCK && uniform_blocks.contains(&w[1]) => {
+                w[2] = DECORATION_BLOCK
+            }
             _ => {}
         }
-        if op == OP_DECORATE && len >= 3 && uniform_blocks.contains(&words[at + 1]) && (words[at + 2] == DECORATION_BLOCK || words[at + 2] == DECORATION_BUFFER_BLOCK) {
+        if op == OP_DECORATE
+            && len >= 3
+            && uniform_blocks.contains(&words[at + 1])
+            && (words[at + 2] == DECORATION_BLOCK || words[at + 2] == DECORATION_BUFFER_BLOCK)
+        {
             let id = words[at + 1];
             for m in 0..member_counts.get(&id).copied().unwrap_or(0) as u32 {
                 out.extend_from_slice(&[(4 << 16) | OP_MEMBER_DECORATE, id, m, DECORATION_NON_WRITABLE]);
@@ -111,7 +125,11 @@ mod tests {
         let mut o = shaderc::CompileOptions::new().unwrap();
         o.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
         o.set_target_spirv(shaderc::SpirvVersion::V1_5);
-        compiler.compile_into_spirv(src, kind, "t.glsl", "main", Some(&o)).unwrap().as_binary().to_vec()
+        compiler
+            .compile_into_spirv(src, kind, "t.glsl", "main", Some(&o))
+            .unwrap()
+            .as_binary()
+            .to_vec()
     }
 
     #[test]
@@ -127,7 +145,13 @@ mod tests {
         let out = uniform_blocks_as_storage(&words).unwrap();
         let before = ShaderReflection::from_spirv("t", vk::ShaderStageFlags::FRAGMENT, &words).unwrap();
         let after = ShaderReflection::from_spirv("t", vk::ShaderStageFlags::FRAGMENT, &out).unwrap();
-        let ty = |r: &ShaderReflection, n: &str| r.bindings.iter().find(|b| b.name == n).map(|b| (b.set, b.binding, b.ty)).unwrap();
+        let ty = |r: &ShaderReflection, n: &str| {
+            r.bindings
+                .iter()
+                .find(|b| b.name == n)
+                .map(|b| (b.set, b.binding, b.ty))
+                .unwrap()
+        };
         assert_eq!(ty(&before, "a"), (0, 0, vk::DescriptorType::UNIFORM_BUFFER));
         assert_eq!(ty(&after, "a"), (0, 0, vk::DescriptorType::STORAGE_BUFFER));
         for n in ["b", "t"] {
@@ -136,12 +160,25 @@ mod tests {
         assert_eq!(before.push_constant_size, after.push_constant_size);
         // No Uniform-class pointer or variable is left; both members of A are NonWritable.
         let insts = instructions(&out).unwrap();
-        assert!(!insts.iter().any(|&(at, len, op)| (op == OP_TYPE_POINTER && out[at + 2] == STORAGE_UNIFORM) || (op == OP_VARIABLE && len >= 4 && out[at + 3] == STORAGE_UNIFORM)));
-        let non_writable = insts.iter().filter(|&&(at, _, op)| op == OP_MEMBER_DECORATE && out[at + 3] == DECORATION_NON_WRITABLE).count();
-        let before_nw = instructions(&words).unwrap().iter().filter(|&&(at, _, op)| op == OP_MEMBER_DECORATE && words[at + 3] == DECORATION_NON_WRITABLE).count();
+        assert!(!insts.iter().any(
+            |&(at, len, op)| (op == OP_TYPE_POINTER && out[at + 2] == STORAGE_UNIFORM)
+                || (op == OP_VARIABLE && len >= 4 && out[at + 3] == STORAGE_UNIFORM)
+        ));
+        let non_writable = insts
+            .iter()
+            .filter(|&&(at, _, op)| op == OP_MEMBER_DECORATE && out[at + 3] == DECORATION_NON_WRITABLE)
+            .count();
+        let before_nw = instructions(&words)
+            .unwrap()
+            .iter()
+            .filter(|&&(at, _, op)| op == OP_MEMBER_DECORATE && words[at + 3] == DECORATION_NON_WRITABLE)
+            .count();
         assert_eq!(non_writable, before_nw + 2);
         // A module without uniform blocks is returned as it was.
-        let plain = compile("#version 460\nlayout(location = 0) out vec4 o;\nvoid main() { o = vec4(1.0); }\n", shaderc::ShaderKind::Fragment);
+        let plain = compile(
+            "#version 460\nlayout(location = 0) out vec4 o;\nvoid main() { o = vec4(1.0); }\n",
+            shaderc::ShaderKind::Fragment,
+        );
         assert_eq!(uniform_blocks_as_storage(&plain).unwrap(), plain);
         assert!(uniform_blocks_as_storage(&[1, 2, 3]).is_err());
     }

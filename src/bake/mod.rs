@@ -20,7 +20,9 @@ pub use crate::progress::Progress;
 
 /// FNV-1a: a stable content hash (std's hasher may change between releases).
 pub fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 /// Everything a bake depends on, as text that is hashed into the cache file's name.
@@ -31,7 +33,9 @@ pub struct BakeKey {
 
 impl BakeKey {
     pub fn new(name: &str) -> BakeKey {
-        BakeKey { text: format!("bake:{name}") }
+        BakeKey {
+            text: format!("bake:{name}"),
+        }
     }
 
     /// Adds an input by its `Debug` form (parameters, scene values).
@@ -73,7 +77,12 @@ impl BakeData for Vec<f64> {
         self.iter().flat_map(|v| v.to_le_bytes()).collect()
     }
     fn decode(bytes: &[u8]) -> Option<Self> {
-        bytes.len().is_multiple_of(8).then(|| bytes.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8-byte chunk"))).collect())
+        bytes.len().is_multiple_of(8).then(|| {
+            bytes
+                .chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().expect("8-byte chunk")))
+                .collect()
+        })
     }
 }
 
@@ -82,7 +91,12 @@ impl BakeData for Vec<f32> {
         self.iter().flat_map(|v| v.to_le_bytes()).collect()
     }
     fn decode(bytes: &[u8]) -> Option<Self> {
-        bytes.len().is_multiple_of(4).then(|| bytes.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().expect("4-byte chunk"))).collect())
+        bytes.len().is_multiple_of(4).then(|| {
+            bytes
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes(c.try_into().expect("4-byte chunk")))
+                .collect()
+        })
     }
 }
 
@@ -114,12 +128,17 @@ const HEADER: usize = 8 + 8 + 8 + 8;
 impl Baker {
     /// A baker caching in `dir` (`None`: no cache, every bake runs).
     pub fn new(dir: Option<PathBuf>) -> Baker {
-        Baker { dir, reports: Vec::new() }
+        Baker {
+            dir,
+            reports: Vec::new(),
+        }
     }
 
     /// `$PENUMBRA_CACHE/bake`, or `.penumbra-cache/bake` in the working directory.
     pub fn default_dir() -> PathBuf {
-        std::env::var_os("PENUMBRA_CACHE").map_or_else(|| PathBuf::from(".penumbra-cache"), PathBuf::from).join("bake")
+        std::env::var_os("PENUMBRA_CACHE")
+            .map_or_else(|| PathBuf::from(".penumbra-cache"), PathBuf::from)
+            .join("bake")
     }
 
     pub fn reports(&self) -> &[BakeReport] {
@@ -132,25 +151,51 @@ impl Baker {
 
     /// The file a key is cached in.
     pub fn path(&self, name: &str, key: &BakeKey) -> Option<PathBuf> {
-        let safe: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
-        self.dir.as_ref().map(|d| d.join(format!("{safe}-{:016x}.bin", key.hash())))
+        let safe: String = name
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        self.dir
+            .as_ref()
+            .map(|d| d.join(format!("{safe}-{:016x}.bin", key.hash())))
     }
 
     /// The result of bake `name` for `key`: read from the cache, or built by `build` (given a
     /// progress reporter) and cached.
-    pub fn bake<T: BakeData>(&mut self, name: &str, key: &BakeKey, build: impl FnOnce(&mut Progress) -> Result<T>) -> Result<T> {
+    pub fn bake<T: BakeData>(
+        &mut self,
+        name: &str,
+        key: &BakeKey,
+        build: impl FnOnce(&mut Progress) -> Result<T>,
+    ) -> Result<T> {
         let start = Instant::now();
         let path = self.path(name, key);
         let mut rebuilt = None;
         if let Some(p) = &path {
             match read_cached::<T>(p, key.hash()) {
                 Ok(Some((value, bytes))) => {
-                    self.reports.push(BakeReport { name: name.into(), key: format!("{:016x}", key.hash()), ms: ms_since(start), bytes, cached: true, rebuilt: None });
+                    self.reports.push(BakeReport {
+                        name: name.into(),
+                        key: format!("{:016x}", key.hash()),
+                        ms: ms_since(start),
+                        bytes,
+                        cached: true,
+                        rebuilt: None,
+                    });
                     return Ok(value);
                 }
                 Ok(None) => {}
                 Err(why) => {
-                    crate::errln!("warning: {}: bake cache unusable ({why}); rebuilding {name}", p.display());
+                    crate::errln!(
+                        "warning: {}: bake cache unusable ({why}); rebuilding {name}",
+                        p.display()
+                    );
                     rebuilt = Some(why);
                 }
             }
@@ -165,7 +210,14 @@ impl Baker {
                 crate::errln!("warning: {}: cannot write the bake cache: {e}", p.display());
             }
         }
-        self.reports.push(BakeReport { name: name.into(), key: format!("{:016x}", key.hash()), ms: ms_since(start), bytes: payload.len() as u64, cached: false, rebuilt });
+        self.reports.push(BakeReport {
+            name: name.into(),
+            key: format!("{:016x}", key.hash()),
+            ms: ms_since(start),
+            bytes: payload.len() as u64,
+            cached: false,
+            rebuilt,
+        });
         Ok(value)
     }
 }
@@ -195,7 +247,9 @@ fn read_cached<T: BakeData>(path: &Path, key: u64) -> std::result::Result<Option
     if word(2) != fnv1a(payload) {
         return Err("checksum mismatch".into());
     }
-    T::decode(payload).map(|v| Some((v, payload.len() as u64))).ok_or_else(|| "cannot decode".to_string())
+    T::decode(payload)
+        .map(|v| Some((v, payload.len() as u64)))
+        .ok_or_else(|| "cannot decode".to_string())
 }
 
 fn write_cached(path: &Path, key: u64, payload: &[u8]) -> std::io::Result<()> {

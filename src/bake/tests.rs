@@ -18,11 +18,17 @@ fn a_second_bake_with_the_same_key_comes_from_the_cache() {
     let dir = temp_dir("hit");
     let key = BakeKey::new("t").with("n", 3);
     let mut calls = 0;
-    let a = Baker::new(Some(dir.clone())).bake("t", &key, build_counting(&mut calls, vec![1.0, 2.5, -3.0])).unwrap();
+    let a = Baker::new(Some(dir.clone()))
+        .bake("t", &key, build_counting(&mut calls, vec![1.0, 2.5, -3.0]))
+        .unwrap();
     let mut baker = Baker::new(Some(dir.clone()));
     let b = baker.bake("t", &key, build_counting(&mut calls, vec![9.0])).unwrap();
     assert_eq!((a.clone(), b, calls), (vec![1.0, 2.5, -3.0], a, 1));
-    assert!(baker.reports()[0].cached && baker.reports()[0].bytes == 24, "{:?}", baker.reports());
+    assert!(
+        baker.reports()[0].cached && baker.reports()[0].bytes == 24,
+        "{:?}",
+        baker.reports()
+    );
 }
 
 #[test]
@@ -30,9 +36,27 @@ fn a_changed_input_rebuilds() {
     let dir = temp_dir("changed");
     let mut calls = 0;
     let mut baker = Baker::new(Some(dir.clone()));
-    baker.bake("t", &BakeKey::new("t").with("n", 3), build_counting(&mut calls, vec![1.0])).unwrap();
-    let v = baker.bake("t", &BakeKey::new("t").with("n", 4), build_counting(&mut calls, vec![2.0])).unwrap();
-    let w = baker.bake("t", &BakeKey::new("t").with("n", 3).with_bytes("mesh", &[1, 2, 3]), build_counting(&mut calls, vec![3.0])).unwrap();
+    baker
+        .bake(
+            "t",
+            &BakeKey::new("t").with("n", 3),
+            build_counting(&mut calls, vec![1.0]),
+        )
+        .unwrap();
+    let v = baker
+        .bake(
+            "t",
+            &BakeKey::new("t").with("n", 4),
+            build_counting(&mut calls, vec![2.0]),
+        )
+        .unwrap();
+    let w = baker
+        .bake(
+            "t",
+            &BakeKey::new("t").with("n", 3).with_bytes("mesh", &[1, 2, 3]),
+            build_counting(&mut calls, vec![3.0]),
+        )
+        .unwrap();
     assert_eq!((v, w, calls), (vec![2.0], vec![3.0], 3));
     assert!(baker.reports().iter().all(|r| !r.cached));
 }
@@ -43,7 +67,9 @@ fn corrupt_or_truncated_files_are_rebuilt_not_trusted() {
     let key = BakeKey::new("t").with("n", 1);
     let mut calls = 0;
     let mut baker = Baker::new(Some(dir.clone()));
-    baker.bake("t", &key, build_counting(&mut calls, vec![1.0, 2.0])).unwrap();
+    baker
+        .bake("t", &key, build_counting(&mut calls, vec![1.0, 2.0]))
+        .unwrap();
     let path = baker.path("t", &key).unwrap();
     let good = std::fs::read(&path).unwrap();
     // A flipped payload byte, a truncation, garbage, and another key's file under this name.
@@ -51,13 +77,21 @@ fn corrupt_or_truncated_files_are_rebuilt_not_trusted() {
     *flipped.last_mut().unwrap() ^= 0x40;
     let mut other_key = good.clone();
     other_key[8] ^= 1;
-    for (bad, why) in [(flipped, "checksum"), (good[..good.len() - 3].to_vec(), "truncated"), (b"hello".to_vec(), "not a penumbra"), (other_key, "another key")] {
+    for (bad, why) in [
+        (flipped, "checksum"),
+        (good[..good.len() - 3].to_vec(), "truncated"),
+        (b"hello".to_vec(), "not a penumbra"),
+        (other_key, "another key"),
+    ] {
         std::fs::write(&path, &bad).unwrap();
         let mut b = Baker::new(Some(dir.clone()));
         let v = b.bake("t", &key, build_counting(&mut calls, vec![1.0, 2.0])).unwrap();
         assert_eq!(v, vec![1.0, 2.0]);
         let r = &b.reports()[0];
-        assert!(!r.cached && r.rebuilt.as_deref().is_some_and(|w| w.contains(why)), "{why}: {r:?}");
+        assert!(
+            !r.cached && r.rebuilt.as_deref().is_some_and(|w| w.contains(why)),
+            "{why}: {r:?}"
+        );
         // The rebuilt file is whole again.
         assert_eq!(std::fs::read(&path).unwrap(), good, "{why}");
     }
@@ -79,7 +113,11 @@ fn shader_and_byte_inputs_change_the_key() {
     let a = BakeKey::new("t").with_bytes("x", &[1]);
     assert_ne!(a.hash(), BakeKey::new("t").with_bytes("x", &[2]).hash());
     let with = BakeKey::new("t").with_shaders("heightfield/");
-    assert_ne!(with.hash(), BakeKey::new("t").hash(), "embedded height-field shaders are part of the key");
+    assert_ne!(
+        with.hash(),
+        BakeKey::new("t").hash(),
+        "embedded height-field shaders are part of the key"
+    );
     let line = crate::progress::line("wedge", 250, 1000, std::time::Duration::from_secs(2));
     assert_eq!(line, "wedge:  25% (250/1000) 125.0/s, 2.0 s elapsed, 6.0 s left");
 }

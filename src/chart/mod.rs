@@ -109,7 +109,9 @@ pub struct Chart {
 
 /// FNV-1a: a stable content hash for cache keys (std's hasher may change between releases).
 fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 /// A key naming everything a cached result depends on: the parsed scene (so comments and
@@ -137,9 +139,26 @@ fn reference_settings(kind: ReferenceKind, spp: u32, sampler: Sampler) -> (Setti
         ReferenceKind::Bounces(k) => (LightPaths::All, k, "bounces"),
         ReferenceKind::Indirect(k) => (LightPaths::Indirect, k, "bounces (indirect only)"),
     };
-    let label = if kind == ReferenceKind::Direct { label.to_string() } else { format!("{bounces} {label}") };
-    let label = if sampler == Sampler::Independent { label } else { format!("{label}, {}", sampler.name()) };
-    (Settings { spp, bounces, paths, sampler, ..Settings::default() }, label)
+    let label = if kind == ReferenceKind::Direct {
+        label.to_string()
+    } else {
+        format!("{bounces} {label}")
+    };
+    let label = if sampler == Sampler::Independent {
+        label
+    } else {
+        format!("{label}, {}", sampler.name())
+    };
+    (
+        Settings {
+            spp,
+            bounces,
+            paths,
+            sampler,
+            ..Settings::default()
+        },
+        label,
+    )
 }
 
 /// A chart's reference: its mean, its standard error, and the label naming kind and spp.
@@ -171,11 +190,25 @@ pub fn stop_ratio(smallest_rel: f64, smallest_p99: f64, noise_rel: f64, noise_p9
 
 /// The reference for this scene and kind, good enough for `judged` (the images measured
 /// against it): from the cache when the cached one is, or rendered and cached.
-pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, judged: &[&HdrImage], opts: &ChartOptions) -> Result<ChartReference> {
+pub fn reference_image(
+    scene: &Scene,
+    size: (u32, u32),
+    kind: ReferenceKind,
+    judged: &[&HdrImage],
+    opts: &ChartOptions,
+) -> Result<ChartReference> {
     let (settings, label) = reference_settings(kind, opts.reference_spp, opts.reference_sampler);
     // Frame 0 keeps the key it had before frames could be charted, so caches stay valid.
-    let frame_key = if opts.frame == 0 { String::new() } else { format!("|frame {}", opts.frame) };
-    let key = cache_key(scene, size, &format!("{settings:?}|noise {}{frame_key}", opts.reference_noise));
+    let frame_key = if opts.frame == 0 {
+        String::new()
+    } else {
+        format!("|frame {}", opts.frame)
+    };
+    let key = cache_key(
+        scene,
+        size,
+        &format!("{settings:?}|noise {}{frame_key}", opts.reference_noise),
+    );
     let path = opts.cache_dir.join(format!("reference-{key}.exr"));
     let (se_path, spp_path) = (crate::reference::stderr_path(&path), path.with_extension("spp"));
     // The ratio of the reference's noise to the error it may have: at most 1 is good enough.
@@ -185,16 +218,36 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
     // noise's share of a judged p99 as small as its share of a relative MSE. The maximum is not
     // judged: the largest of N noisy pixels keeps growing with N.
     let ratio = |img: &ReferenceImage| -> f64 {
-        let stats: Vec<_> = judged.iter().map(|t| crate::metrics::stats::radiance_stats(&t.pixels, &img.mean.pixels)).collect();
+        let stats: Vec<_> = judged
+            .iter()
+            .map(|t| crate::metrics::stats::radiance_stats(&t.pixels, &img.mean.pixels))
+            .collect();
         let smallest_rel = stats.iter().map(|s| s.rel_mse).fold(f64::INFINITY, f64::min);
         let smallest_p99 = stats.iter().map(|s| s.p99_abs_error).fold(f64::INFINITY, f64::min);
-        let noise_p99 = crate::metrics::stats::radiance_stats(&noisy_copy(&img.mean, &img.standard_error, NOISE_SEED).pixels, &img.mean.pixels).p99_abs_error;
-        stop_ratio(smallest_rel, smallest_p99, noise_rel_mse(img), noise_p99, opts.reference_noise)
+        let noise_p99 = crate::metrics::stats::radiance_stats(
+            &noisy_copy(&img.mean, &img.standard_error, NOISE_SEED).pixels,
+            &img.mean.pixels,
+        )
+        .p99_abs_error;
+        stop_ratio(
+            smallest_rel,
+            smallest_p99,
+            noise_rel_mse(img),
+            noise_p99,
+            opts.reference_noise,
+        )
     };
     let cached = || -> Option<ReferenceImage> {
         let (mean, standard_error) = (HdrImage::read_exr(&path).ok()?, HdrImage::read_exr(&se_path).ok()?);
         let spp = std::fs::read_to_string(&spp_path).ok()?.trim().parse().ok()?;
-        ((mean.width, mean.height) == size && (standard_error.width, standard_error.height) == size).then_some(ReferenceImage { mean, standard_error, spp, seconds: 0.0 })
+        ((mean.width, mean.height) == size && (standard_error.width, standard_error.height) == size).then_some(
+            ReferenceImage {
+                mean,
+                standard_error,
+                spp,
+                seconds: 0.0,
+            },
+        )
     };
     let labelled = |image: ReferenceImage| {
         let label = format!("{label}, {} spp", image.spp);
@@ -205,13 +258,24 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
             return Ok(labelled(image));
         }
     }
-    crate::errln!("chart: rendering the reference ({label}, up to {} spp) for {}", opts.reference_spp, scene.source);
+    crate::errln!(
+        "chart: rendering the reference ({label}, up to {} spp) for {}",
+        opts.reference_spp,
+        scene.source
+    );
     let mut tracer = ReferenceRenderer::at_frame(Gpu::new(&opts.gpu)?, scene, size, opts.frame)?;
     let mut progress = crate::progress::Progress::new("reference (spp)");
     let mut update = |done: u32, total: u32| progress.update(done as u64, total as u64);
     let image = if opts.reference_noise > 0.0 {
         let mut check = |img: &ReferenceImage| ratio(img);
-        tracer.render_until(&settings, Some(Stop { min_spp: MIN_ADAPTIVE_SPP, check: &mut check }), &mut update)?
+        tracer.render_until(
+            &settings,
+            Some(Stop {
+                min_spp: MIN_ADAPTIVE_SPP,
+                check: &mut check,
+            }),
+            &mut update,
+        )?
     } else {
         tracer.render(&settings, &mut update)?
     };
@@ -220,7 +284,8 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
     std::fs::create_dir_all(dir).map_err(|e| Error::Usage(format!("{}: {e}", dir.display())))?;
     image.mean.write_exr(&path)?;
     image.standard_error.write_exr(&se_path)?;
-    crate::image_io::write_file(&spp_path, image.spp.to_string().as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", spp_path.display())))?;
+    crate::image_io::write_file(&spp_path, image.spp.to_string().as_bytes())
+        .map_err(|e| Error::Usage(format!("{}: {e}", spp_path.display())))?;
     Ok(labelled(image))
 }
 
@@ -238,13 +303,32 @@ pub fn reference_image(scene: &Scene, size: (u32, u32), kind: ReferenceKind, jud
 pub fn reference_noise(reference: &ReferenceImage) -> Result<Metrics> {
     let (mean, se) = (&reference.mean, &reference.standard_error);
     let n = (3 * mean.pixels.len().max(1)) as f64;
-    let sum_sq: f64 = se.pixels.iter().map(|s| (0..3).map(|c| (s[c] as f64).powi(2)).sum::<f64>()).sum();
+    let sum_sq: f64 = se
+        .pixels
+        .iter()
+        .map(|s| (0..3).map(|c| (s[c] as f64).powi(2)).sum::<f64>())
+        .sum();
     if !sum_sq.is_finite() {
         let inf = f64::INFINITY;
-        return Ok(Metrics { rmse: inf, rel_mse: inf, mean_bias: inf, p99_abs_error: inf, max_abs_error: inf, flip_mean: inf, mean_ratio: inf, scaled_rel_rmse: inf, pixels: mean.pixels.len() });
+        return Ok(Metrics {
+            rmse: inf,
+            rel_mse: inf,
+            mean_bias: inf,
+            p99_abs_error: inf,
+            max_abs_error: inf,
+            flip_mean: inf,
+            mean_ratio: inf,
+            scaled_rel_rmse: inf,
+            pixels: mean.pixels.len(),
+        });
     }
     let simulated = metrics::compare(&noisy_copy(mean, se, NOISE_SEED), mean, &CompareOptions::default())?;
-    Ok(Metrics { rmse: (sum_sq / n).sqrt(), rel_mse: noise_rel_mse(reference), mean_bias: sum_sq.sqrt() / n, ..simulated })
+    Ok(Metrics {
+        rmse: (sum_sq / n).sqrt(),
+        rel_mse: noise_rel_mse(reference),
+        mean_bias: sum_sq.sqrt() / n,
+        ..simulated
+    })
 }
 
 /// The seed of the simulated noise behind `ref_noise_p99_abs_error` and the stop rule's p99.
@@ -306,15 +390,24 @@ fn advance(renderer: &mut Renderer, camera: &crate::scene::Camera, frames: u64) 
 /// Renders and times one configuration (timed at the chart's size only).
 fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
     let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
-    let mut renderer = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
+    let mut renderer =
+        Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
     advance(&mut renderer, &camera, opts.frame)?;
-    let image = renderer.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+    let image = renderer
+        .render(&camera, FrameOutput::Readback)?
+        .image
+        .ok_or_else(|| Error::Usage("readback returned no image".into()))?;
     let warnings = renderer.method_warnings()?;
     let mut timings = Vec::new();
     let start = std::time::Instant::now();
-    while keep_timing(timings.len(), start.elapsed().as_secs_f64(), opts.frames.max(1), opts.timing_budget_s) {
+    while keep_timing(
+        timings.len(),
+        start.elapsed().as_secs_f64(),
+        opts.frames.max(1),
+        opts.timing_budget_s,
+    ) {
         let frame = renderer.profile(&camera, 1)?;
         if frame.is_empty() {
             // A device without timestamps: nothing to time.
@@ -324,30 +417,63 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     }
     let frames_timed = timings.len();
     let stats = summarise(&timings);
-    let frame_ms = stats.iter().find(|s| s.name == "frame").map(|s| s.median_ms).unwrap_or(f64::NAN);
-    let passes = stats.into_iter().filter(|s| s.name != "frame").map(|s| (s.name, s.median_ms)).collect();
+    let frame_ms = stats
+        .iter()
+        .find(|s| s.name == "frame")
+        .map(|s| s.median_ms)
+        .unwrap_or(f64::NAN);
+    let passes = stats
+        .into_iter()
+        .filter(|s| s.name != "frame")
+        .map(|s| (s.name, s.median_ms))
+        .collect();
     let bakes = renderer.bakes.clone();
     drop(renderer);
     let supersampled = if opts.supersample > 1 {
         let size = crate::supersample::supersampled_size(opts.size, opts.supersample)?;
-        let mut big = Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), size, 1, Baker::new(Some(opts.cache_dir.join("bake"))))?;
+        let mut big = Renderer::with_configuration(
+            Gpu::new(&opts.gpu)?,
+            scene.clone(),
+            config.clone(),
+            size,
+            1,
+            Baker::new(Some(opts.cache_dir.join("bake"))),
+        )?;
         let camera = big.scene.camera.clone();
         advance(&mut big, &camera, opts.frame)?;
-        let image = big.render(&camera, FrameOutput::Readback)?.image.ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+        let image = big
+            .render(&camera, FrameOutput::Readback)?
+            .image
+            .ok_or_else(|| Error::Usage("readback returned no image".into()))?;
         Some(crate::supersample::box_filter(&image, opts.supersample)?)
     } else {
         None
     };
-    Ok(Measured { image, supersampled, frame_ms, frames_timed, passes, device, bakes, warnings })
+    Ok(Measured {
+        image,
+        supersampled,
+        frame_ms,
+        frames_timed,
+        passes,
+        device,
+        bakes,
+        warnings,
+    })
 }
 
 pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let scene = Scene::from_file(&opts.scene)?;
     if !(opts.timing_budget_s.is_finite() && opts.timing_budget_s >= 0.0) {
-        return Err(Error::Usage(format!("--timing-budget {}: expected seconds, at least 0 (0: every --frames frame)", opts.timing_budget_s)));
+        return Err(Error::Usage(format!(
+            "--timing-budget {}: expected seconds, at least 0 (0: every --frames frame)",
+            opts.timing_budget_s
+        )));
     }
     if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
-        return Err(Error::Usage(format!("--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)", opts.reference_noise)));
+        return Err(Error::Usage(format!(
+            "--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)",
+            opts.reference_noise
+        )));
     }
     crate::supersample::supersampled_size(opts.size, opts.supersample)?;
     let mut device = String::new();
@@ -356,12 +482,19 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     for name in &opts.methods {
         if !all.iter().any(|c| c.name == *name) {
             let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
-            return Err(Error::Usage(format!("{}: --method {name}: the scene has no such method or combination (it has {})", opts.scene.display(), known.join(", "))));
+            return Err(Error::Usage(format!(
+                "{}: --method {name}: the scene has no such method or combination (it has {})",
+                opts.scene.display(),
+                known.join(", ")
+            )));
         }
     }
     // Every configuration first, so that each reference knows the errors it must resolve.
     let mut swept = Vec::new();
-    for configuration in all.into_iter().filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name)) {
+    for configuration in all
+        .into_iter()
+        .filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name))
+    {
         let kind = registry::reference_kind(&configuration)?;
         swept.push((configuration.name.clone(), kind, registry::sweep(&configuration)?));
     }
@@ -398,7 +531,11 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         if references.contains_key(&key) {
             continue;
         }
-        let judged: Vec<&HdrImage> = measured.iter().filter(|(_, _, k, _)| k == kind).map(|(_, _, _, m)| m.supersampled.as_ref().unwrap_or(&m.image)).collect();
+        let judged: Vec<&HdrImage> = measured
+            .iter()
+            .filter(|(_, _, k, _)| k == kind)
+            .map(|(_, _, _, m)| m.supersampled.as_ref().unwrap_or(&m.image))
+            .collect();
         let reference = reference_image(&scene, opts.size, *kind, &judged, opts)?;
         let noise = reference_noise(&reference.image)?;
         references.insert(key, (reference, noise));
@@ -407,7 +544,11 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     for (method, config, kind, m) in measured {
         let (reference, noise) = &references[&format!("{kind:?}")];
         let metrics = metrics::compare(&m.image, &reference.image.mean, &CompareOptions::default())?;
-        let supersampled = m.supersampled.as_ref().map(|img| metrics::compare(img, &reference.image.mean, &CompareOptions::default())).transpose()?;
+        let supersampled = m
+            .supersampled
+            .as_ref()
+            .map(|img| metrics::compare(img, &reference.image.mean, &CompareOptions::default()))
+            .transpose()?;
         device = m.device;
         rows.push(ChartRow {
             method,
@@ -424,11 +565,22 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             bake_bytes: m.bakes.iter().map(|b| b.bytes).sum(),
         });
     }
-    let chart = Chart { scene: opts.scene.display().to_string(), device, size: opts.size, supersample: opts.supersample.max(1), rows, skipped, frame: opts.frame };
+    let chart = Chart {
+        scene: opts.scene.display().to_string(),
+        device,
+        size: opts.size,
+        supersample: opts.supersample.max(1),
+        rows,
+        skipped,
+        frame: opts.frame,
+    };
     let csv = chart.csv();
     std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
-    let cached = opts.cache_dir.join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
-    crate::image_io::write_file(&cached, csv.as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
+    let cached = opts
+        .cache_dir
+        .join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
+    crate::image_io::write_file(&cached, csv.as_bytes())
+        .map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
     if let Some(p) = &opts.csv {
         crate::image_io::write_file(p, csv.as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
     }
@@ -438,10 +590,28 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     Ok(chart)
 }
 
-const METRIC_COLUMNS: [&str; 8] = ["rmse", "rel_mse", "mean_bias", "p99_abs_error", "max_abs_error", "flip", "mean_ratio", "scaled_rel_rmse"];
+const METRIC_COLUMNS: [&str; 8] = [
+    "rmse",
+    "rel_mse",
+    "mean_bias",
+    "p99_abs_error",
+    "max_abs_error",
+    "flip",
+    "mean_ratio",
+    "scaled_rel_rmse",
+];
 
 fn metric_values(m: &Metrics) -> [f64; 8] {
-    [m.rmse, m.rel_mse, m.mean_bias, m.p99_abs_error, m.max_abs_error, m.flip_mean, m.mean_ratio, m.scaled_rel_rmse]
+    [
+        m.rmse,
+        m.rel_mse,
+        m.mean_bias,
+        m.p99_abs_error,
+        m.max_abs_error,
+        m.flip_mean,
+        m.mean_ratio,
+        m.scaled_rel_rmse,
+    ]
 }
 
 impl ChartRow {
@@ -455,7 +625,10 @@ impl Chart {
     /// Which comparison the plotted error is, for titles.
     pub fn comparison(&self) -> String {
         let how = if self.supersample > 1 {
-            format!("method supersampled {0}x{0} and box-filtered, as the reference averages each pixel (lighting error)", self.supersample)
+            format!(
+                "method supersampled {0}x{0} and box-filtered, as the reference averages each pixel (lighting error)",
+                self.supersample
+            )
         } else {
             "method at pixel centres, reference averaged over each pixel (aliasing included)".to_string()
         };
@@ -473,7 +646,11 @@ impl Chart {
 
     /// [`comparison`](Self::comparison) in a few words.
     pub fn short_comparison(&self) -> String {
-        let how = if self.supersample > 1 { format!("method supersampled {0}x{0}, box-filtered", self.supersample) } else { "method at pixel centres".to_string() };
+        let how = if self.supersample > 1 {
+            format!("method supersampled {0}x{0}, box-filtered", self.supersample)
+        } else {
+            "method at pixel centres".to_string()
+        };
         how + &self.frame_note()
     }
 
@@ -503,7 +680,9 @@ impl Chart {
                 }
             }
         }
-        let mut s = String::from("method,config,device,width,height,reference,supersample,frame_ms,frames_timed,bake_ms,bake_bytes");
+        let mut s = String::from(
+            "method,config,device,width,height,reference,supersample,frame_ms,frames_timed,bake_ms,bake_bytes",
+        );
         for p in &pass_names {
             let _ = write!(s, ",pass:{}_ms", p.replace(',', ";"));
         }
@@ -570,13 +749,27 @@ pub struct MeasuredConfig {
 pub fn parse_csv(text: &str) -> Result<Vec<MeasuredConfig>> {
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).ok_or_else(|| Error::Usage(format!("chart table has no `{name}` column")));
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| Error::Usage(format!("chart table has no `{name}` column")))
+    };
     let (cm, cc, cf, ce) = (col("method")?, col("config")?, col("frame_ms")?, col("rel_mse")?);
     let mut out = Vec::new();
     for (i, line) in lines.enumerate() {
         let f: Vec<&str> = line.split(',').collect();
-        let num = |c: usize| f.get(c).and_then(|v| v.parse::<f64>().ok()).ok_or_else(|| Error::Usage(format!("chart table row {}: column {c} is not a number", i + 2)));
-        out.push(MeasuredConfig { method: f.get(cm).unwrap_or(&"").to_string(), config: f.get(cc).unwrap_or(&"").to_string(), frame_ms: num(cf)?, rel_mse: num(ce)? });
+        let num = |c: usize| {
+            f.get(c)
+                .and_then(|v| v.parse::<f64>().ok())
+                .ok_or_else(|| Error::Usage(format!("chart table row {}: column {c} is not a number", i + 2)))
+        };
+        out.push(MeasuredConfig {
+            method: f.get(cm).unwrap_or(&"").to_string(),
+            config: f.get(cc).unwrap_or(&"").to_string(),
+            frame_ms: num(cf)?,
+            rel_mse: num(ce)?,
+        });
     }
     Ok(out)
 }
@@ -585,7 +778,10 @@ pub fn parse_csv(text: &str) -> Result<Vec<MeasuredConfig>> {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Choice {
     /// The cheapest configuration within the bound; `rejected` are the cheaper ones that weren't.
-    Picked { config: MeasuredConfig, rejected: Vec<MeasuredConfig> },
+    Picked {
+        config: MeasuredConfig,
+        rejected: Vec<MeasuredConfig>,
+    },
     /// None is within the bound; the most accurate one is named.
     NoneQualifies { closest: MeasuredConfig },
 }
@@ -594,8 +790,14 @@ pub fn choose(configs: &[MeasuredConfig], max_rel_mse: f64) -> Option<Choice> {
     let mut by_time: Vec<&MeasuredConfig> = configs.iter().collect();
     by_time.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     match by_time.iter().position(|c| c.rel_mse <= max_rel_mse) {
-        Some(i) => Some(Choice::Picked { config: by_time[i].clone(), rejected: by_time[..i].iter().map(|c| (*c).clone()).collect() }),
-        None => configs.iter().min_by(|a, b| a.rel_mse.total_cmp(&b.rel_mse)).map(|c| Choice::NoneQualifies { closest: c.clone() }),
+        Some(i) => Some(Choice::Picked {
+            config: by_time[i].clone(),
+            rejected: by_time[..i].iter().map(|c| (*c).clone()).collect(),
+        }),
+        None => configs
+            .iter()
+            .min_by(|a, b| a.rel_mse.total_cmp(&b.rel_mse))
+            .map(|c| Choice::NoneQualifies { closest: c.clone() }),
     }
 }
 
@@ -603,14 +805,26 @@ impl std::fmt::Display for Choice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Choice::Picked { config, rejected } => {
-                write!(f, "picked `{}`: relative MSE {:.4} at {:.3} ms, the cheapest within the bound", config.config, config.rel_mse, config.frame_ms)?;
+                write!(
+                    f,
+                    "picked `{}`: relative MSE {:.4} at {:.3} ms, the cheapest within the bound",
+                    config.config, config.rel_mse, config.frame_ms
+                )?;
                 for r in rejected {
-                    write!(f, "; `{}` is cheaper ({:.3} ms) but its relative MSE is {:.4}", r.config, r.frame_ms, r.rel_mse)?;
+                    write!(
+                        f,
+                        "; `{}` is cheaper ({:.3} ms) but its relative MSE is {:.4}",
+                        r.config, r.frame_ms, r.rel_mse
+                    )?;
                 }
                 Ok(())
             }
             Choice::NoneQualifies { closest } => {
-                write!(f, "no configuration reaches the bound; the closest is `{}` with relative MSE {:.4} at {:.3} ms", closest.config, closest.rel_mse, closest.frame_ms)
+                write!(
+                    f,
+                    "no configuration reaches the bound; the closest is `{}` with relative MSE {:.4} at {:.3} ms",
+                    closest.config, closest.rel_mse, closest.frame_ms
+                )
             }
         }
     }
@@ -626,12 +840,21 @@ mod tests {
     use super::*;
 
     fn cfg(name: &str, ms: f64, e: f64) -> MeasuredConfig {
-        MeasuredConfig { method: "m".into(), config: name.into(), frame_ms: ms, rel_mse: e }
+        MeasuredConfig {
+            method: "m".into(),
+            config: name.into(),
+            frame_ms: ms,
+            rel_mse: e,
+        }
     }
 
     #[test]
     fn cheapest_within_the_bound_is_chosen() {
-        let configs = vec![cfg("slow exact", 9.0, 0.001), cfg("fast rough", 1.0, 0.2), cfg("middle", 3.0, 0.04)];
+        let configs = vec![
+            cfg("slow exact", 9.0, 0.001),
+            cfg("fast rough", 1.0, 0.2),
+            cfg("middle", 3.0, 0.04),
+        ];
         match choose(&configs, 0.05).unwrap() {
             Choice::Picked { config, rejected } => {
                 assert_eq!(config.config, "middle");
@@ -639,9 +862,17 @@ mod tests {
             }
             c => panic!("{c:?}"),
         }
-        assert_eq!(choose(&configs, 1e-4).unwrap(), Choice::NoneQualifies { closest: cfg("slow exact", 9.0, 0.001) });
+        assert_eq!(
+            choose(&configs, 1e-4).unwrap(),
+            Choice::NoneQualifies {
+                closest: cfg("slow exact", 9.0, 0.001)
+            }
+        );
         let text = choose(&configs, 0.05).unwrap().to_string();
-        assert!(text.contains("picked `middle`") && text.contains("`fast rough` is cheaper"), "{text}");
+        assert!(
+            text.contains("picked `middle`") && text.contains("`fast rough` is cheaper"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -663,7 +894,10 @@ mod tests {
         use super::{keep_timing, MIN_TIMED_FRAMES};
         assert_eq!(MIN_TIMED_FRAMES, 3);
         assert!(keep_timing(0, 0.0, 20, 2.0));
-        assert!(keep_timing(2, 100.0, 20, 2.0), "the minimum is timed whatever the budget");
+        assert!(
+            keep_timing(2, 100.0, 20, 2.0),
+            "the minimum is timed whatever the budget"
+        );
         assert!(!keep_timing(3, 2.5, 20, 2.0), "past the budget with the minimum timed");
         assert!(keep_timing(3, 1.0, 20, 2.0));
         assert!(!keep_timing(20, 0.0, 20, 2.0), "never past --frames");
@@ -673,7 +907,17 @@ mod tests {
 
     #[test]
     fn csv_round_trips_and_pareto_front_is_monotone() {
-        let m = |e: f64| Metrics { rmse: e, rel_mse: e, mean_bias: 0.0, p99_abs_error: e, max_abs_error: e, flip_mean: e, mean_ratio: 1.0, scaled_rel_rmse: e, pixels: 4 };
+        let m = |e: f64| Metrics {
+            rmse: e,
+            rel_mse: e,
+            mean_bias: 0.0,
+            p99_abs_error: e,
+            max_abs_error: e,
+            flip_mean: e,
+            mean_ratio: 1.0,
+            scaled_rel_rmse: e,
+            pixels: 4,
+        };
         let row = |c: &str, ms: f64, e: f64| ChartRow {
             method: "m".into(),
             config: c.into(),
@@ -688,13 +932,24 @@ mod tests {
             warnings: vec!["x: 2, of 3 dropped".into()],
             reference: "direct, 4 spp".into(),
         };
-        let chart =
-            Chart { scene: "s".into(), device: "dev, x".into(), size: (8, 8), supersample: 1, rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)], skipped: Vec::new(), frame: 0 };
+        let chart = Chart {
+            scene: "s".into(),
+            device: "dev, x".into(),
+            size: (8, 8),
+            supersample: 1,
+            rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)],
+            skipped: Vec::new(),
+            frame: 0,
+        };
         assert_eq!(chart.pareto_front(), vec![0, 2]);
         let parsed = parse_csv(&chart.csv()).unwrap();
         assert_eq!(parsed, vec![cfg("a", 1.0, 0.5), cfg("b", 2.0, 0.6), cfg("c", 3.0, 0.1)]);
         assert!(chart.csv().lines().next().unwrap().contains("pass:p_ms"));
-        assert!(chart.csv().lines().nth(1).unwrap().ends_with(",x: 2; of 3 dropped"), "a warning is one CSV field: {}", chart.csv());
+        assert!(
+            chart.csv().lines().nth(1).unwrap().ends_with(",x: 2; of 3 dropped"),
+            "a warning is one CSV field: {}",
+            chart.csv()
+        );
     }
 
     /// The noise `reference_noise` simulates has the standard error's scale: over 3 × 4,096
@@ -713,18 +968,35 @@ mod tests {
         }
         let noisy = noisy_copy(&mean, &se, 7);
         assert_eq!(noisy, noisy_copy(&mean, &se, 7));
-        let d: Vec<f64> = noisy.pixels.iter().flat_map(|p| (0..3).map(move |c| (p[c] - m) as f64)).collect();
+        let d: Vec<f64> = noisy
+            .pixels
+            .iter()
+            .flat_map(|p| (0..3).map(move |c| (p[c] - m) as f64))
+            .collect();
         let n = d.len() as f64;
         let (sigma, m) = (sigma as f64, m as f64);
         let rms = (d.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
         let avg = d.iter().sum::<f64>() / n;
         assert!((rms / sigma - 1.0).abs() < 0.03, "rms {rms}");
         assert!(avg.abs() < 4.0 * sigma / n.sqrt(), "mean {avg}");
-        let image = ReferenceImage { mean, standard_error: se, spp: 64, seconds: 0.0 };
+        let image = ReferenceImage {
+            mean,
+            standard_error: se,
+            spp: 64,
+            seconds: 0.0,
+        };
         let noise = reference_noise(&image).unwrap();
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b;
-        assert!(close(noise.rmse, sigma) && close(noise.rel_mse, sigma * sigma / (m * m + 0.01)) && close(noise.mean_bias, sigma / n.sqrt()), "{noise:?}");
+        assert!(
+            close(noise.rmse, sigma)
+                && close(noise.rel_mse, sigma * sigma / (m * m + 0.01))
+                && close(noise.mean_bias, sigma / n.sqrt()),
+            "{noise:?}"
+        );
         // An exact image's typical pixel error: the mean of three |N(0, σ)| is about 0.8 σ.
-        assert!(noise.p99_abs_error > sigma && noise.max_abs_error >= noise.p99_abs_error && noise.flip_mean > 0.0, "{noise:?}");
+        assert!(
+            noise.p99_abs_error > sigma && noise.max_abs_error >= noise.p99_abs_error && noise.flip_mean > 0.0,
+            "{noise:?}"
+        );
     }
 }

@@ -10,16 +10,25 @@ use super::Chart;
 use crate::error::{Error, Result};
 
 /// TrueType fonts looked for, in order (Debian: fonts-dejavu-core, installed by tools/setup.sh).
-const FONT_PATHS: [&str; 3] = ["/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf", "/usr/share/fonts/TTF/DejaVuSans.ttf"];
+const FONT_PATHS: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+];
 
 fn register_font() -> Result<()> {
     static FONT: OnceLock<std::result::Result<(), String>> = OnceLock::new();
     FONT.get_or_init(|| {
-        let bytes =
-            FONT_PATHS.iter().find_map(|p| std::fs::read(p).ok()).ok_or_else(|| format!("chart: no TrueType font found (looked for {}); apt-get install fonts-dejavu-core", FONT_PATHS.join(", ")))?;
+        let bytes = FONT_PATHS.iter().find_map(|p| std::fs::read(p).ok()).ok_or_else(|| {
+            format!(
+                "chart: no TrueType font found (looked for {}); apt-get install fonts-dejavu-core",
+                FONT_PATHS.join(", ")
+            )
+        })?;
         // plotters keeps fonts for the life of the program.
         let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).map_err(|_| "chart: the font file is not a valid TrueType font".to_string())
+        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+            .map_err(|_| "chart: the font file is not a valid TrueType font".to_string())
     })
     .clone()
     .map_err(Error::Usage)
@@ -66,7 +75,18 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         let y = log_range(chart.rows.iter().map(|r| r.lighting_metrics().rel_mse), FLOOR);
         let reference = chart.rows.first().map(|r| r.reference.as_str()).unwrap_or("");
         let mut c = ChartBuilder::on(&root)
-            .caption(format!("{} — {}×{} — {} — reference: {} — {}", chart.scene, chart.size.0, chart.size.1, chart.device, reference, chart.short_comparison()), ("sans-serif", 16))
+            .caption(
+                format!(
+                    "{} — {}×{} — {} — reference: {} — {}",
+                    chart.scene,
+                    chart.size.0,
+                    chart.size.1,
+                    chart.device,
+                    reference,
+                    chart.short_comparison()
+                ),
+                ("sans-serif", 16),
+            )
             .margin(20)
             .x_label_area_size(50)
             .y_label_area_size(80)
@@ -74,7 +94,10 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
             .map_err(plot_err)?;
         c.configure_mesh()
             .x_desc("GPU time per frame, ms (median of timestamp queries)")
-            .y_desc(format!("relative MSE against the reference ({})", chart.short_comparison()))
+            .y_desc(format!(
+                "relative MSE against the reference ({})",
+                chart.short_comparison()
+            ))
             .label_style(("sans-serif", 14))
             .x_labels(12)
             .y_labels(12)
@@ -90,18 +113,48 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         }
         for (i, m) in methods.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let points: Vec<(f64, f64)> = chart.rows.iter().filter(|r| r.method == *m).map(|r| (r.frame_ms.max(1e-4), r.lighting_metrics().rel_mse.max(FLOOR))).collect();
-            c.draw_series(points.iter().map(|&p| Circle::new(p, 6, colour.filled()))).map_err(plot_err)?.label(*m).legend(move |(x, y)| Circle::new((x + 10, y), 6, colour.filled()));
+            let points: Vec<(f64, f64)> = chart
+                .rows
+                .iter()
+                .filter(|r| r.method == *m)
+                .map(|r| (r.frame_ms.max(1e-4), r.lighting_metrics().rel_mse.max(FLOOR)))
+                .collect();
+            c.draw_series(points.iter().map(|&p| Circle::new(p, 6, colour.filled())))
+                .map_err(plot_err)?
+                .label(*m)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 6, colour.filled()));
             // Each point labelled with its configuration.
             for r in chart.rows.iter().filter(|r| r.method == *m) {
-                c.draw_series(std::iter::once(Text::new(r.config.clone(), (r.frame_ms.max(1e-4), r.lighting_metrics().rel_mse.max(FLOOR)), ("sans-serif", 12)))).map_err(plot_err)?;
+                c.draw_series(std::iter::once(Text::new(
+                    r.config.clone(),
+                    (r.frame_ms.max(1e-4), r.lighting_metrics().rel_mse.max(FLOOR)),
+                    ("sans-serif", 12),
+                )))
+                .map_err(plot_err)?;
             }
         }
-        let front: Vec<(f64, f64)> = chart.pareto_front().iter().map(|&i| (chart.rows[i].frame_ms.max(1e-4), chart.rows[i].lighting_metrics().rel_mse.max(FLOOR))).collect();
+        let front: Vec<(f64, f64)> = chart
+            .pareto_front()
+            .iter()
+            .map(|&i| {
+                (
+                    chart.rows[i].frame_ms.max(1e-4),
+                    chart.rows[i].lighting_metrics().rel_mse.max(FLOOR),
+                )
+            })
+            .collect();
         if front.len() > 1 {
-            c.draw_series(LineSeries::new(front, BLACK.stroke_width(2))).map_err(plot_err)?.label("Pareto front").legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+            c.draw_series(LineSeries::new(front, BLACK.stroke_width(2)))
+                .map_err(plot_err)?
+                .label("Pareto front")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
         }
-        c.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).label_font(("sans-serif", 14)).draw().map_err(plot_err)?;
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(plot_err)?;
         root.present().map_err(plot_err)?;
     }
     let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| Error::Usage("chart: bitmap size mismatch".into()))?;

@@ -57,7 +57,11 @@ fn cdf_of(weights: &[f64]) -> Vec<f32> {
     out.push(0.0);
     for (k, w) in weights.iter().enumerate() {
         acc += w;
-        out.push(if total > 0.0 { (acc / total) as f32 } else { (k + 1) as f32 / weights.len() as f32 });
+        out.push(if total > 0.0 {
+            (acc / total) as f32
+        } else {
+            (k + 1) as f32 / weights.len() as f32
+        });
     }
     *out.last_mut().expect("one entry per weight plus the 0") = 1.0;
     out
@@ -67,7 +71,14 @@ impl EnvironmentMap {
     /// Loads an `.hdr`/`.exr` radiance map, multiplied by `scale`. `source` names the scene file
     /// in errors.
     pub fn load(path: &Path, scale: f32, source: &str) -> Result<EnvironmentMap> {
-        let img = image::open(path).map_err(|e| Error::Usage(format!("{source}: environment.path: {}: cannot load: {e}", path.display())))?.to_rgba32f();
+        let img = image::open(path)
+            .map_err(|e| {
+                Error::Usage(format!(
+                    "{source}: environment.path: {}: cannot load: {e}",
+                    path.display()
+                ))
+            })?
+            .to_rgba32f();
         let (width, height) = img.dimensions();
         if (width as usize) * (height as usize) > MAX_TEXELS {
             return Err(Error::Backend(BackendError::Unsupported(format!(
@@ -75,7 +86,11 @@ impl EnvironmentMap {
                 path.display()
             ))));
         }
-        if let Some((i, p)) = img.pixels().enumerate().find(|(_, p)| p.0[..3].iter().any(|c| !c.is_finite() || *c < 0.0)) {
+        if let Some((i, p)) = img
+            .pixels()
+            .enumerate()
+            .find(|(_, p)| p.0[..3].iter().any(|c| !c.is_finite() || *c < 0.0))
+        {
             let (x, y) = (i as u32 % width, i as u32 / width);
             return Err(Error::Usage(format!(
                 "{source}: environment.path: {}: pixel ({x}, {y}) is ({}, {}, {}); radiance must be finite and not negative (fix or clamp the image)",
@@ -85,7 +100,10 @@ impl EnvironmentMap {
                 p[2]
             )));
         }
-        let texels = img.pixels().map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 0.0]).collect();
+        let texels = img
+            .pixels()
+            .map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 0.0])
+            .collect();
         Ok(EnvironmentMap::from_texels(width, height, texels))
     }
 
@@ -106,7 +124,9 @@ impl EnvironmentMap {
         Ok(match &scene.environment {
             Some(Environment::Image { path, scale }) => EnvironmentMap::load(path, *scale, &scene.source)?,
             Some(Environment::Cube { faces, scale }) => EnvironmentMap::load_cube(faces, *scale, &scene.source)?,
-            Some(Environment::Constant { radiance }) => EnvironmentMap::from_texels(1, 1, vec![radiance.extend(0.0).into()]),
+            Some(Environment::Constant { radiance }) => {
+                EnvironmentMap::from_texels(1, 1, vec![radiance.extend(0.0).into()])
+            }
             None => EnvironmentMap::from_texels(1, 1, vec![[0.0; 4]]),
         })
     }
@@ -122,7 +142,15 @@ impl EnvironmentMap {
             let mut out = vec![[0.0f32; 4]; (6 * m * m) as usize];
             for face in 0..6 {
                 let src = &self.texels[(face * n * n) as usize..((face + 1) * n * n) as usize];
-                box_filter(src, n, n, f, m, m, &mut out[(face * m * m) as usize..((face + 1) * m * m) as usize]);
+                box_filter(
+                    src,
+                    n,
+                    n,
+                    f,
+                    m,
+                    m,
+                    &mut out[(face * m * m) as usize..((face + 1) * m * m) as usize],
+                );
             }
             (m, out)
         } else {
@@ -137,29 +165,50 @@ impl EnvironmentMap {
 
     pub fn from_texels(width: u32, height: u32, texels: Vec<[f32; 4]>) -> EnvironmentMap {
         let h = height as f64;
-        EnvironmentMap::build(width, height, texels, false, |_, j| (std::f64::consts::PI * (j as f64 + 0.5) / h).sin())
+        EnvironmentMap::build(width, height, texels, false, |_, j| {
+            (std::f64::consts::PI * (j as f64 + 0.5) / h).sin()
+        })
     }
 
     /// A cube map from its six `size`² faces in layer order (as [`CubeFaces::texels`]).
     pub fn from_cube(size: u32, texels: Vec<[f32; 4]>) -> EnvironmentMap {
         let n = size as usize;
-        EnvironmentMap::build(size, 6 * size, texels, true, |i, j| crate::sh::cube_texel_solid_angle(i, j % n, n))
+        EnvironmentMap::build(size, 6 * size, texels, true, |i, j| {
+            crate::sh::cube_texel_solid_angle(i, j % n, n)
+        })
     }
 
     /// The CDFs of texel luminance × `solid_angle(i, j)` (anything proportional to it).
-    fn build(width: u32, height: u32, texels: Vec<[f32; 4]>, cube: bool, solid_angle: impl Fn(usize, usize) -> f64) -> EnvironmentMap {
+    fn build(
+        width: u32,
+        height: u32,
+        texels: Vec<[f32; 4]>,
+        cube: bool,
+        solid_angle: impl Fn(usize, usize) -> f64,
+    ) -> EnvironmentMap {
         let (w, h) = (width as usize, height as usize);
         let mut rows = Vec::with_capacity(h);
         let mut columns = Vec::with_capacity(h * (w + 1));
         for j in 0..h {
-            let weights: Vec<f64> = texels[j * w..(j + 1) * w].iter().enumerate().map(|(i, &t)| luminance(t).max(0.0) * solid_angle(i, j)).collect();
+            let weights: Vec<f64> = texels[j * w..(j + 1) * w]
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| luminance(t).max(0.0) * solid_angle(i, j))
+                .collect();
             rows.push(weights.iter().sum::<f64>());
             columns.extend(cdf_of(&weights));
         }
         let has_power = rows.iter().sum::<f64>() > 0.0;
         let mut cdf = cdf_of(&rows);
         cdf.extend(columns);
-        EnvironmentMap { width, height, texels, cdf, has_power, cube }
+        EnvironmentMap {
+            width,
+            height,
+            texels,
+            cdf,
+            has_power,
+            cube,
+        }
     }
 
     /// The texel `dir` falls in, as (column, row) of the stored map, and the density (per unit
@@ -178,7 +227,11 @@ impl EnvironmentMap {
             let i = ((uv.x * self.width as f32) as usize).min(w - 1);
             let j = ((uv.y * self.height as f32) as usize).min(h - 1);
             let sin_theta = (uv.y * std::f32::consts::PI).sin();
-            let density = if sin_theta > 0.0 { (w * h) as f32 / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_theta) } else { 0.0 };
+            let density = if sin_theta > 0.0 {
+                (w * h) as f32 / (2.0 * std::f32::consts::PI * std::f32::consts::PI * sin_theta)
+            } else {
+                0.0
+            };
             ((i, j), density)
         }
     }
@@ -220,7 +273,8 @@ fn box_filter(src: &[[f32; 4]], w: u32, h: u32, f: u32, nw: u32, nh: u32, out: &
 
 /// [`CubeFaces::load`] with its error as the renderer reports it: the scene file and the face's key.
 pub fn load_cube_faces(faces: &[std::path::PathBuf; 6], scale: f32, source: &str) -> Result<CubeFaces> {
-    CubeFaces::load(faces, scale).map_err(|(k, msg)| Error::Usage(format!("{source}: environment.{}: {msg}", CUBE_FACE_KEYS[k])))
+    CubeFaces::load(faces, scale)
+        .map_err(|(k, msg)| Error::Usage(format!("{source}: environment.{}: {msg}", CUBE_FACE_KEYS[k])))
 }
 
 #[cfg(test)]
@@ -231,7 +285,11 @@ mod tests {
     fn map() -> EnvironmentMap {
         let (w, h) = (16, 8);
         let texels = (0..w * h).map(|k| {
-            let v = if k == 2 * w + 5 { 50.0 } else { 0.2 + (k % w) as f32 * 0.05 };
+            let v = if k == 2 * w + 5 {
+                50.0
+            } else {
+                0.2 + (k % w) as f32 * 0.05
+            };
             [v, 0.5 * v, 0.1, 0.0]
         });
         EnvironmentMap::from_texels(w as u32, h as u32, texels.collect())
@@ -244,8 +302,14 @@ mod tests {
         for face in 0..6 {
             let n = 8;
             for (x, y) in [(0, 0), (3, 6), (7, 7)] {
-                let (s, t) = (2.0 * (x as f32 + 0.5) / n as f32 - 1.0, 2.0 * (y as f32 + 0.5) / n as f32 - 1.0);
-                assert_eq!(Environment::cube_dir(face, s, t), crate::sh::cube_texel_dir_world(face, x, y, n));
+                let (s, t) = (
+                    2.0 * (x as f32 + 0.5) / n as f32 - 1.0,
+                    2.0 * (y as f32 + 0.5) / n as f32 - 1.0,
+                );
+                assert_eq!(
+                    Environment::cube_dir(face, s, t),
+                    crate::sh::cube_texel_dir_world(face, x, y, n)
+                );
             }
         }
     }
@@ -269,7 +333,8 @@ mod tests {
         for a in 0..n {
             for b in 0..2 * n {
                 let uv = Vec2::new((b as f32 + 0.5) / (2 * n) as f32, (a as f32 + 0.5) / n as f32);
-                let d_omega = 2.0 * std::f64::consts::PI.powi(2) * (uv.y as f64 * std::f64::consts::PI).sin() / (2 * n * n) as f64;
+                let d_omega = 2.0 * std::f64::consts::PI.powi(2) * (uv.y as f64 * std::f64::consts::PI).sin()
+                    / (2 * n * n) as f64;
                 sum += m.pdf(Environment::equirect_dir(uv)) as f64 * d_omega;
             }
         }
@@ -292,7 +357,11 @@ mod tests {
     fn cube() -> EnvironmentMap {
         let n = 6;
         let texels = (0..6 * n * n).map(|k| {
-            let v = if k == 5 * n * n + 2 * n + 4 { 40.0 } else { (k / (n * n)) as f32 + 1.0 };
+            let v = if k == 5 * n * n + 2 * n + 4 {
+                40.0
+            } else {
+                (k / (n * n)) as f32 + 1.0
+            };
             [v, v, v, 0.0]
         });
         EnvironmentMap::from_cube(n as u32, texels.collect())

@@ -53,18 +53,35 @@ pub fn irradiance_sh(map: &EnvironmentMap) -> Result<[[f32; 4]; 9]> {
 
 impl EnvironmentLighting {
     /// Uploads `map`, the scene's environment as [`EnvironmentMap::of_scene`] loaded it.
-    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene, map: &EnvironmentMap) -> Result<EnvironmentLighting> {
+    pub fn upload(
+        gpu: &mut Gpu,
+        states: &mut ResourceStates,
+        scene: &Scene,
+        map: &EnvironmentMap,
+    ) -> Result<EnvironmentLighting> {
         let irradiance_sh = match &scene.environment {
             // Exact: a constant is band 0 alone (∫Y00 = √(4π)), and one texel is no quadrature.
             Some(Environment::Constant { radiance }) => constant_irradiance_sh(*radiance)?,
             Some(Environment::Image { .. } | Environment::Cube { .. }) => irradiance_sh(map)?,
             None => [[0.0; 4]; 9],
         };
-        let image =
-            gpu.create_image(&ImageDesc::new_2d("environment", vk::Format::R32G32B32A32_SFLOAT, map.width, map.height).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        let image = gpu.create_image(
+            &ImageDesc::new_2d("environment", vk::Format::R32G32B32A32_SFLOAT, map.width, map.height)
+                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+        )?;
         gpu.upload_image(image, 0, bytemuck::cast_slice(&map.texels))?;
-        states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        Ok(EnvironmentLighting { irradiance_sh, map: image, cube: map.cube })
+        states.set_image(
+            gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
+        Ok(EnvironmentLighting {
+            irradiance_sh,
+            map: image,
+            cube: map.cube,
+        })
     }
 }
 
@@ -88,7 +105,9 @@ mod tests {
         // Upper hemisphere radiance 1, lower 0: E(up) = π, E(down) ≈ 0, E(horizon) = π/2 — the
         // 3-band approximation is within a few per cent of these.
         let (w, h) = (64u32, 32u32);
-        let texels = (0..w * h).map(|i| if i / w < h / 2 { [1.0, 1.0, 1.0, 0.0] } else { [0.0; 4] }).collect();
+        let texels = (0..w * h)
+            .map(|i| if i / w < h / 2 { [1.0, 1.0, 1.0, 0.0] } else { [0.0; 4] })
+            .collect();
         let sh = irradiance_sh(&EnvironmentMap::from_texels(w, h, texels)).unwrap();
         let e = |dir: Vec3| {
             let mut y = [0.0f32; 9];

@@ -6,7 +6,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::backend::{vk, BackendError, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, VertexAttribute, VertexLayout};
+use crate::backend::{
+    vk, BackendError, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, VertexAttribute, VertexLayout,
+};
 use crate::environment::raster::EnvironmentLighting;
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
@@ -25,10 +27,20 @@ pub struct Vertex {
 
 /// The vertex layout of [`Vertex`] (`in_position` … `in_tangent` in glsl/common/scene.glsl).
 pub fn vertex_layout() -> VertexLayout {
-    let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
+    let attr = |location, format, offset| VertexAttribute {
+        location,
+        binding: 0,
+        format,
+        offset,
+    };
     VertexLayout {
         buffers: vec![(0, std::mem::size_of::<Vertex>() as u32)],
-        attributes: vec![attr(0, vk::Format::R32G32B32_SFLOAT, 0), attr(1, vk::Format::R32G32B32_SFLOAT, 12), attr(2, vk::Format::R32G32_SFLOAT, 24), attr(3, vk::Format::R32G32B32A32_SFLOAT, 32)],
+        attributes: vec![
+            attr(0, vk::Format::R32G32B32_SFLOAT, 0),
+            attr(1, vk::Format::R32G32B32_SFLOAT, 12),
+            attr(2, vk::Format::R32G32_SFLOAT, 24),
+            attr(3, vk::Format::R32G32B32A32_SFLOAT, 32),
+        ],
     }
 }
 
@@ -47,7 +59,11 @@ impl DrawPush {
     pub const BYTES: usize = 68;
 
     pub fn new(model: Mat4, material: u32) -> DrawPush {
-        DrawPush { model: model.to_cols_array(), material, _pad: [0; 3] }
+        DrawPush {
+            model: model.to_cols_array(),
+            material,
+            _pad: [0; 3],
+        }
     }
 
     pub fn bytes(&self) -> &[u8] {
@@ -68,7 +84,12 @@ pub struct DrawCall {
 impl DrawCall {
     /// The whole of scene draw `d` at its placement.
     pub fn whole(d: &DrawItem) -> DrawCall {
-        DrawCall { material: d.material, model: d.model, vertex_offset: d.vertex_offset, ranges: vec![(d.first_index, d.index_count)] }
+        DrawCall {
+            material: d.material,
+            model: d.model,
+            vertex_offset: d.vertex_offset,
+            ranges: vec![(d.first_index, d.index_count)],
+        }
     }
 }
 
@@ -89,7 +110,8 @@ pub fn record_draws(
             bind(ctx, call.material)?;
             bound = Some(call.material);
         }
-        ctx.rec.push_constants(DrawPush::new(call.model, call.material).bytes())?;
+        ctx.rec
+            .push_constants(DrawPush::new(call.model, call.material).bytes())?;
         for &(first, count) in &call.ranges {
             ctx.rec.draw_indexed(count, first, call.vertex_offset)?;
         }
@@ -176,28 +198,53 @@ pub fn raster_lights(scene: &Scene) -> Vec<GpuLight> {
     let mut out = Vec::new();
     for l in &scene.lights {
         match l {
-            Light::Point { position, intensity, .. } => {
-                out.push(GpuLight { position: position.extend(LIGHT_POINT).into(), direction: [0.0; 4], intensity: intensity.extend(0.0).into(), cone: [0.0; 4] })
-            }
-            Light::Spot { position, direction, intensity, inner_deg, outer_deg, .. } => out.push(GpuLight {
+            Light::Point {
+                position, intensity, ..
+            } => out.push(GpuLight {
+                position: position.extend(LIGHT_POINT).into(),
+                direction: [0.0; 4],
+                intensity: intensity.extend(0.0).into(),
+                cone: [0.0; 4],
+            }),
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+                ..
+            } => out.push(GpuLight {
                 position: position.extend(LIGHT_SPOT).into(),
                 direction: direction.normalize().extend(0.0).into(),
                 intensity: intensity.extend(0.0).into(),
                 cone: [inner_deg.to_radians().cos(), outer_deg.to_radians().cos(), 0.0, 0.0],
             }),
-            Light::Directional { direction, irradiance, .. } => out.push(GpuLight {
+            Light::Directional {
+                direction, irradiance, ..
+            } => out.push(GpuLight {
                 position: Vec4::new(0.0, 0.0, 0.0, LIGHT_DIRECTIONAL).into(),
                 direction: direction.normalize().extend(0.0).into(),
                 intensity: irradiance.extend(0.0).into(),
                 cone: [0.0; 4],
             }),
-            Light::Sphere { center, radius, radiance, .. } => out.push(GpuLight {
+            Light::Sphere {
+                center,
+                radius,
+                radiance,
+                ..
+            } => out.push(GpuLight {
                 position: center.extend(LIGHT_POINT).into(),
                 direction: [0.0; 4],
                 intensity: (*radiance * std::f32::consts::PI * radius * radius).extend(0.0).into(),
                 cone: [0.0, 0.0, 0.0, AREA_MARK],
             }),
-            Light::Quad { corner, edge_u, edge_v, radiance, .. } => {
+            Light::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                radiance,
+                ..
+            } => {
                 let cross = edge_u.cross(*edge_v);
                 out.push(GpuLight {
                     position: (*corner + 0.5 * (*edge_u + *edge_v)).extend(LIGHT_QUAD_FAR).into(),
@@ -218,11 +265,22 @@ pub(crate) fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
     let mut out = Vec::new();
     for l in &scene.lights {
         match l {
-            Light::Sphere { name, center, radius, radiance } => {
+            Light::Sphere {
+                name,
+                center,
+                radius,
+                radiance,
+            } => {
                 let m = generators::sphere(*radius, 32, 16).transformed(&Mat4::from_translation(*center));
                 out.push((name.clone(), m, *radiance));
             }
-            Light::Quad { name, corner, edge_u, edge_v, radiance } => {
+            Light::Quad {
+                name,
+                corner,
+                edge_u,
+                edge_v,
+                radiance,
+            } => {
                 out.push((name.clone(), generators::quad(*corner, *edge_u, *edge_v, 1), *radiance));
             }
             _ => {}
@@ -231,19 +289,42 @@ pub(crate) fn emitter_meshes(scene: &Scene) -> Vec<(String, Mesh, Vec3)> {
     out
 }
 
-fn load_texture(gpu: &mut Gpu, states: &mut ResourceStates, path: Option<&std::path::Path>, default: [u8; 4], srgb: bool, what: &str) -> Result<ImageId> {
+fn load_texture(
+    gpu: &mut Gpu,
+    states: &mut ResourceStates,
+    path: Option<&std::path::Path>,
+    default: [u8; 4],
+    srgb: bool,
+    what: &str,
+) -> Result<ImageId> {
     let (w, h, data) = match path {
         Some(p) => {
-            let img = crate::image_io::open_image(p).map_err(|e| Error::Usage(format!("{what}: {}: {e}", p.display())))?.to_rgba8();
+            let img = crate::image_io::open_image(p)
+                .map_err(|e| Error::Usage(format!("{what}: {}: {e}", p.display())))?
+                .to_rgba8();
             (img.width(), img.height(), img.into_raw())
         }
         None => (1, 1, default.to_vec()),
     };
-    let format = if srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
-    let name = path.map(|p| p.display().to_string()).unwrap_or_else(|| format!("default {what}"));
-    let id = gpu.create_image(&ImageDesc::new_2d(&name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+    let format = if srgb {
+        vk::Format::R8G8B8A8_SRGB
+    } else {
+        vk::Format::R8G8B8A8_UNORM
+    };
+    let name = path
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|| format!("default {what}"));
+    let id = gpu.create_image(
+        &ImageDesc::new_2d(&name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
     gpu.upload_image(id, 0, &data)?;
-    states.set_image(gpu, id, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    states.set_image(
+        gpu,
+        id,
+        Access::SampledRead {
+            stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+        },
+    )?;
     Ok(id)
 }
 
@@ -260,7 +341,12 @@ fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
             position: mesh.positions[i].into(),
             normal: mesh.normals.get(i).copied().unwrap_or(Vec3::Y).into(),
             uv: mesh.uvs.get(i).copied().unwrap_or_default().into(),
-            tangent: mesh.tangents.get(i).copied().unwrap_or(Vec4::new(1.0, 0.0, 0.0, 1.0)).into(),
+            tangent: mesh
+                .tangents
+                .get(i)
+                .copied()
+                .unwrap_or(Vec4::new(1.0, 0.0, 0.0, 1.0))
+                .into(),
         });
     }
 }
@@ -268,7 +354,12 @@ fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
 impl SceneGpu {
     /// Uploads the scene; `environment` is its environment as [`EnvironmentMap::of_scene`]
     /// loaded it.
-    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, scene: &Scene, environment: &EnvironmentMap) -> Result<SceneGpu> {
+    pub fn upload(
+        gpu: &mut Gpu,
+        states: &mut ResourceStates,
+        scene: &Scene,
+        environment: &EnvironmentMap,
+    ) -> Result<SceneGpu> {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut draws = Vec::new();
@@ -301,9 +392,30 @@ impl SceneGpu {
                 maps: [m.normal_map.is_some() as u32, 0, 0, 0],
             });
             material_maps.push(MaterialMaps {
-                albedo: load_texture(gpu, states, m.albedo_map.as_deref(), [255; 4], true, &field("albedo_map"))?,
-                normal: load_texture(gpu, states, m.normal_map.as_deref(), [128, 128, 255, 255], false, &field("normal_map"))?,
-                specular: load_texture(gpu, states, m.specular_map.as_deref(), [255; 4], false, &field("specular_map"))?,
+                albedo: load_texture(
+                    gpu,
+                    states,
+                    m.albedo_map.as_deref(),
+                    [255; 4],
+                    true,
+                    &field("albedo_map"),
+                )?,
+                normal: load_texture(
+                    gpu,
+                    states,
+                    m.normal_map.as_deref(),
+                    [128, 128, 255, 255],
+                    false,
+                    &field("normal_map"),
+                )?,
+                specular: load_texture(
+                    gpu,
+                    states,
+                    m.specular_map.as_deref(),
+                    [255; 4],
+                    false,
+                    &field("specular_map"),
+                )?,
             });
         }
         let emitters = emitter_meshes(scene);
@@ -315,7 +427,12 @@ impl SceneGpu {
             };
             for (name, mesh, radiance) in emitters {
                 let material = gpu_materials.len() as u32;
-                gpu_materials.push(GpuMaterial { albedo: [0.0, 0.0, 0.0, 1.0], specular: [0.0, 0.0, 0.0, 1.0], emission: radiance.extend(0.0).into(), maps: [0, 1, 0, 0] });
+                gpu_materials.push(GpuMaterial {
+                    albedo: [0.0, 0.0, 0.0, 1.0],
+                    specular: [0.0, 0.0, 0.0, 1.0],
+                    emission: radiance.extend(0.0).into(),
+                    maps: [0, 1, 0, 0],
+                });
                 material_maps.push(defaults);
                 draws.push(DrawItem {
                     name: format!("{name} (emitter)"),
@@ -335,20 +452,43 @@ impl SceneGpu {
             vertices.push(Vertex::zeroed());
             indices.extend([0, 0, 0]);
         }
-        let vb =
-            gpu.create_buffer_init("scene vertices", vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&vertices))?;
-        let ib = gpu.create_buffer_init("scene indices", vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&indices))?;
+        let vb = gpu.create_buffer_init(
+            "scene vertices",
+            vk::BufferUsageFlags::VERTEX_BUFFER
+                | vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            bytemuck::cast_slice(&vertices),
+        )?;
+        let ib = gpu.create_buffer_init(
+            "scene indices",
+            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&indices),
+        )?;
         if gpu_materials.is_empty() {
             gpu_materials.push(GpuMaterial::zeroed());
         }
-        let materials = gpu.create_buffer_init("materials", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&gpu_materials))?;
+        let materials = gpu.create_buffer_init(
+            "materials",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&gpu_materials),
+        )?;
         for id in [vb, ib, materials] {
             // Uploads were waited for: nothing is pending on these buffers.
             states.forget_buffer(id);
         }
         let sampler = gpu.sampler(SamplerDesc::LINEAR_REPEAT)?;
         let environment = EnvironmentLighting::upload(gpu, states, scene, environment)?;
-        Ok(SceneGpu { vertices: vb, indices: ib, draws, materials, material_maps, lights: raster_lights(scene), sampler, meshes, environment })
+        Ok(SceneGpu {
+            vertices: vb,
+            indices: ib,
+            draws,
+            materials,
+            material_maps,
+            lights: raster_lights(scene),
+            sampler,
+            meshes,
+            environment,
+        })
     }
 }
 
@@ -393,7 +533,10 @@ radiance = 3
         )
         .unwrap();
         let punctual = punctual_lights(&scene);
-        assert_eq!(punctual.iter().map(|l| l.position[3]).collect::<Vec<_>>(), vec![LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL]);
+        assert_eq!(
+            punctual.iter().map(|l| l.position[3]).collect::<Vec<_>>(),
+            vec![LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL]
+        );
         let raster = raster_lights(&scene);
         assert_eq!(raster.len(), 5);
         // Sphere: I = L·πR²; quad: I = L·A with A = |u × v| = 2, facing (2,0,0)×(0,0,1) = −y.

@@ -12,7 +12,10 @@ pub mod state;
 
 use std::collections::{HashMap, HashSet};
 
-use crate::backend::{vk, BackendError, Bind, BufferId, BufferTransition, Gpu, ImageId, ImageTransition, Recorder, SamplerId, SubresourceRange};
+use crate::backend::{
+    vk, BackendError, Bind, BufferId, BufferTransition, Gpu, ImageId, ImageTransition, Recorder, SamplerId,
+    SubresourceRange,
+};
 pub use state::Access;
 use state::{BufferState, ImageState};
 
@@ -28,7 +31,8 @@ impl ResourceStates {
     /// (e.g. a texture uploaded by `Gpu::upload_image`, left SHADER_READ_ONLY_OPTIMAL).
     pub fn set_image(&mut self, gpu: &Gpu, image: ImageId, access: Access) -> Result<(), BackendError> {
         let d = gpu.image_desc(image)?;
-        self.images.insert(image, ImageState::with_initial(d.mip_levels, d.layers, access));
+        self.images
+            .insert(image, ImageState::with_initial(d.mip_levels, d.layers, access));
         Ok(())
     }
     /// A swapchain image just acquired: its previous contents are irrelevant, and the
@@ -36,7 +40,10 @@ impl ResourceStates {
     /// submission waits for at `wait_stage`. Starting the image's state from that stage chains
     /// its first layout transition after the semaphore wait.
     pub fn acquired_image(&mut self, image: ImageId, wait_stage: vk::PipelineStageFlags2) {
-        self.images.insert(image, ImageState::external(1, 1, vk::ImageLayout::UNDEFINED, wait_stage, vk::AccessFlags2::NONE));
+        self.images.insert(
+            image,
+            ImageState::external(1, 1, vk::ImageLayout::UNDEFINED, wait_stage, vk::AccessFlags2::NONE),
+        );
     }
     /// Forgets an image (destroyed, or recreated at a new size).
     pub fn forget_image(&mut self, image: ImageId) {
@@ -87,46 +94,119 @@ pub struct PassBuilder<'g, 'a> {
 
 impl<'g, 'a> PassBuilder<'g, 'a> {
     /// Samples `range` of `image` in the given stages through the shader binding `name`.
-    pub fn sample(mut self, name: &'static str, image: ImageId, range: SubresourceRange, sampler: SamplerId, stages: vk::PipelineStageFlags2) -> Self {
-        self.node.images.push(ImageUse { image, range, access: Access::SampledRead { stages }, discard: false, binding: Some((name, Some(sampler))) });
+    pub fn sample(
+        mut self,
+        name: &'static str,
+        image: ImageId,
+        range: SubresourceRange,
+        sampler: SamplerId,
+        stages: vk::PipelineStageFlags2,
+    ) -> Self {
+        self.node.images.push(ImageUse {
+            image,
+            range,
+            access: Access::SampledRead { stages },
+            discard: false,
+            binding: Some((name, Some(sampler))),
+        });
         self
     }
     /// Reads a storage image through binding `name`.
-    pub fn storage_read(mut self, name: &'static str, image: ImageId, range: SubresourceRange, stages: vk::PipelineStageFlags2) -> Self {
-        self.node.images.push(ImageUse { image, range, access: Access::StorageRead { stages }, discard: false, binding: Some((name, None)) });
+    pub fn storage_read(
+        mut self,
+        name: &'static str,
+        image: ImageId,
+        range: SubresourceRange,
+        stages: vk::PipelineStageFlags2,
+    ) -> Self {
+        self.node.images.push(ImageUse {
+            image,
+            range,
+            access: Access::StorageRead { stages },
+            discard: false,
+            binding: Some((name, None)),
+        });
         self
     }
     /// Writes (or reads and writes) a storage image through binding `name`.
-    pub fn storage_write(mut self, name: &'static str, image: ImageId, range: SubresourceRange, stages: vk::PipelineStageFlags2) -> Self {
-        self.node.images.push(ImageUse { image, range, access: Access::StorageWrite { stages }, discard: false, binding: Some((name, None)) });
+    pub fn storage_write(
+        mut self,
+        name: &'static str,
+        image: ImageId,
+        range: SubresourceRange,
+        stages: vk::PipelineStageFlags2,
+    ) -> Self {
+        self.node.images.push(ImageUse {
+            image,
+            range,
+            access: Access::StorageWrite { stages },
+            discard: false,
+            binding: Some((name, None)),
+        });
         self
     }
     /// Renders to mip/layer `range` of a colour image. `discard`: the pass clears or fully covers it.
     pub fn color_attachment(mut self, image: ImageId, range: SubresourceRange, discard: bool) -> Self {
-        self.node.images.push(ImageUse { image, range, access: Access::ColorAttachmentWrite, discard, binding: None });
+        self.node.images.push(ImageUse {
+            image,
+            range,
+            access: Access::ColorAttachmentWrite,
+            discard,
+            binding: None,
+        });
         self
     }
     /// Depth/stencil attachment that is written (test + write, or cleared when `discard`).
     pub fn depth_stencil_write(mut self, image: ImageId, discard: bool) -> Self {
-        self.node.images.push(ImageUse { image, range: SubresourceRange::mip(0), access: Access::DepthStencilAttachmentWrite, discard, binding: None });
+        self.node.images.push(ImageUse {
+            image,
+            range: SubresourceRange::mip(0),
+            access: Access::DepthStencilAttachmentWrite,
+            discard,
+            binding: None,
+        });
         self
     }
     /// Depth/stencil attachment that is only tested.
     pub fn depth_stencil_read(mut self, image: ImageId) -> Self {
-        self.node.images.push(ImageUse { image, range: SubresourceRange::mip(0), access: Access::DepthStencilAttachmentRead, discard: false, binding: None });
+        self.node.images.push(ImageUse {
+            image,
+            range: SubresourceRange::mip(0),
+            access: Access::DepthStencilAttachmentRead,
+            discard: false,
+            binding: None,
+        });
         self
     }
     pub fn transfer_read(mut self, image: ImageId, range: SubresourceRange) -> Self {
-        self.node.images.push(ImageUse { image, range, access: Access::TransferRead, discard: false, binding: None });
+        self.node.images.push(ImageUse {
+            image,
+            range,
+            access: Access::TransferRead,
+            discard: false,
+            binding: None,
+        });
         self
     }
     pub fn transfer_write(mut self, image: ImageId, range: SubresourceRange, discard: bool) -> Self {
-        self.node.images.push(ImageUse { image, range, access: Access::TransferWrite, discard, binding: None });
+        self.node.images.push(ImageUse {
+            image,
+            range,
+            access: Access::TransferWrite,
+            discard,
+            binding: None,
+        });
         self
     }
     /// Leaves the image ready for presentation (the pass records nothing else with it).
     pub fn present(mut self, image: ImageId) -> Self {
-        self.node.images.push(ImageUse { image, range: SubresourceRange::mip(0), access: Access::Present, discard: false, binding: None });
+        self.node.images.push(ImageUse {
+            image,
+            range: SubresourceRange::mip(0),
+            access: Access::Present,
+            discard: false,
+            binding: None,
+        });
         self.node.side_effect = true;
         self
     }
@@ -135,7 +215,11 @@ impl<'g, 'a> PassBuilder<'g, 'a> {
         if matches!(access, Access::HostRead) {
             self.node.side_effect = true;
         }
-        self.node.buffers.push(BufferUse { buffer, access, binding });
+        self.node.buffers.push(BufferUse {
+            buffer,
+            access,
+            binding,
+        });
         self
     }
     /// Marks the pass as having an effect outside the graph, so it is never culled.
@@ -164,8 +248,15 @@ impl<'r, 'g> PassContext<'r, 'g> {
         for u in &self.images {
             if let Some((name, sampler)) = u.binding {
                 let bind = match (u.access, sampler) {
-                    (Access::SampledRead { .. }, Some(sampler)) => Bind::Sampled { image: u.image, range: u.range, sampler },
-                    _ => Bind::StorageImage { image: u.image, range: u.range },
+                    (Access::SampledRead { .. }, Some(sampler)) => Bind::Sampled {
+                        image: u.image,
+                        range: u.range,
+                        sampler,
+                    },
+                    _ => Bind::StorageImage {
+                        image: u.image,
+                        range: u.range,
+                    },
                 };
                 all.push((name, bind));
             }
@@ -216,11 +307,23 @@ impl<'a> Default for RenderGraph<'a> {
 
 impl<'a> RenderGraph<'a> {
     pub fn new() -> Self {
-        RenderGraph { passes: Vec::new(), outputs: HashSet::new() }
+        RenderGraph {
+            passes: Vec::new(),
+            outputs: HashSet::new(),
+        }
     }
 
     pub fn pass(&mut self, name: &str) -> PassBuilder<'_, 'a> {
-        PassBuilder { graph: self, node: PassNode { name: name.into(), images: Vec::new(), buffers: Vec::new(), side_effect: false, record: None } }
+        PassBuilder {
+            graph: self,
+            node: PassNode {
+                name: name.into(),
+                images: Vec::new(),
+                buffers: Vec::new(),
+                side_effect: false,
+                record: None,
+            },
+        }
     }
 
     /// Keeps the passes producing this image (its contents are used after the frame).
@@ -238,7 +341,17 @@ impl<'a> RenderGraph<'a> {
         let mut needed: HashSet<Resource> = self.outputs.clone();
         let mut live = vec![false; self.passes.len()];
         for (i, p) in self.passes.iter().enumerate().rev() {
-            let writes = p.images.iter().filter(|u| u.access.is_write()).map(|u| Resource::Image(u.image)).chain(p.buffers.iter().filter(|u| u.access.is_write()).map(|u| Resource::Buffer(u.buffer)));
+            let writes = p
+                .images
+                .iter()
+                .filter(|u| u.access.is_write())
+                .map(|u| Resource::Image(u.image))
+                .chain(
+                    p.buffers
+                        .iter()
+                        .filter(|u| u.access.is_write())
+                        .map(|u| Resource::Buffer(u.buffer)),
+                );
             let mut is_live = p.side_effect;
             for w in writes {
                 if needed.contains(&w) {
@@ -264,7 +377,13 @@ impl<'a> RenderGraph<'a> {
 
     /// Records the graph on `frame` inside a timestamp scope named `scope`, submits it and
     /// waits: how one-off work (a bake's compute passes, the reference's batches) runs.
-    pub fn run_and_wait(self, gpu: &Gpu, frame: crate::backend::Frame, states: &mut ResourceStates, scope: &str) -> Result<(), BackendError> {
+    pub fn run_and_wait(
+        self,
+        gpu: &Gpu,
+        frame: crate::backend::Frame,
+        states: &mut ResourceStates,
+        scope: &str,
+    ) -> Result<(), BackendError> {
         let mut rec = gpu.begin_frame(frame)?;
         rec.begin_scope(scope);
         self.execute(&mut rec, states)?;
@@ -293,7 +412,11 @@ impl<'a> RenderGraph<'a> {
                         e.insert(ImageState::new(d.mip_levels, d.layers))
                     }
                 };
-                let barriers = if u.discard { state.transition_discard(u.range, u.access) } else { state.transition(u.range, u.access) };
+                let barriers = if u.discard {
+                    state.transition_discard(u.range, u.access)
+                } else {
+                    state.transition(u.range, u.access)
+                };
                 image_barriers.extend(barriers.into_iter().map(|b| ImageTransition {
                     image: u.image,
                     range: b.range,
@@ -309,14 +432,24 @@ impl<'a> RenderGraph<'a> {
             for u in &pass.buffers {
                 let state = states.buffers.entry(u.buffer).or_default();
                 if let Some(b) = state.transition(u.access) {
-                    buffer_barriers.push(BufferTransition { buffer: u.buffer, src_stages: b.src_stages, src_access: b.src_access, dst_stages: b.dst_stages, dst_access: b.dst_access });
+                    buffer_barriers.push(BufferTransition {
+                        buffer: u.buffer,
+                        src_stages: b.src_stages,
+                        src_access: b.src_access,
+                        dst_stages: b.dst_stages,
+                        dst_access: b.dst_access,
+                    });
                 }
             }
             report.image_barriers += image_barriers.len();
             report.buffer_barriers += buffer_barriers.len();
             rec.barriers(&image_barriers, &buffer_barriers)?;
             if let Some(record) = pass.record {
-                let mut ctx = PassContext { rec: &mut *rec, images: pass.images, buffers: pass.buffers };
+                let mut ctx = PassContext {
+                    rec: &mut *rec,
+                    images: pass.images,
+                    buffers: pass.buffers,
+                };
                 let result = record(&mut ctx);
                 if let Err(e) = result {
                     rec.end_scope();

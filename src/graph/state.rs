@@ -115,7 +115,12 @@ pub enum Access {
     IndirectRead,
     /// Anything else. `access` may mix read and write bits; `write` says whether
     /// the subresource's contents change.
-    Custom { stages: Stages, access: AccessMask, layout: vk::ImageLayout, write: bool },
+    Custom {
+        stages: Stages,
+        access: AccessMask,
+        layout: vk::ImageLayout,
+        write: bool,
+    },
 }
 
 /// Every write bit of `AccessFlags2`; the rest are reads.
@@ -137,7 +142,8 @@ const WRITE_ACCESS: AccessMask = AccessMask::from_raw(
         | AccessMask::OPTICAL_FLOW_WRITE_NV.as_raw(),
 );
 
-const FRAGMENT_TESTS: Stages = Stages::from_raw(Stages::EARLY_FRAGMENT_TESTS.as_raw() | Stages::LATE_FRAGMENT_TESTS.as_raw());
+const FRAGMENT_TESTS: Stages =
+    Stages::from_raw(Stages::EARLY_FRAGMENT_TESTS.as_raw() | Stages::LATE_FRAGMENT_TESTS.as_raw());
 
 impl Access {
     pub fn stages(&self) -> Stages {
@@ -166,7 +172,9 @@ impl Access {
             Access::StorageWrite { .. } => AccessMask::SHADER_STORAGE_READ | AccessMask::SHADER_STORAGE_WRITE,
             Access::UniformRead { .. } => AccessMask::UNIFORM_READ,
             Access::ColorAttachmentWrite => AccessMask::COLOR_ATTACHMENT_READ | AccessMask::COLOR_ATTACHMENT_WRITE,
-            Access::DepthStencilAttachmentWrite => AccessMask::DEPTH_STENCIL_ATTACHMENT_READ | AccessMask::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            Access::DepthStencilAttachmentWrite => {
+                AccessMask::DEPTH_STENCIL_ATTACHMENT_READ | AccessMask::DEPTH_STENCIL_ATTACHMENT_WRITE
+            }
             Access::DepthStencilAttachmentRead => AccessMask::DEPTH_STENCIL_ATTACHMENT_READ,
             Access::TransferRead => AccessMask::TRANSFER_READ,
             Access::TransferWrite => AccessMask::TRANSFER_WRITE,
@@ -187,18 +195,25 @@ impl Access {
             Access::StorageRead { .. } | Access::StorageWrite { .. } | Access::HostRead => vk::ImageLayout::GENERAL,
             Access::ColorAttachmentWrite => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
             Access::DepthStencilAttachmentWrite => vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-            Access::DepthStencilAttachmentRead | Access::DepthSampledRead { .. } => vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+            Access::DepthStencilAttachmentRead | Access::DepthSampledRead { .. } => {
+                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+            }
             Access::TransferRead => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             Access::TransferWrite => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
-            Access::UniformRead { .. } | Access::VertexRead | Access::IndexRead | Access::IndirectRead => vk::ImageLayout::UNDEFINED,
+            Access::UniformRead { .. } | Access::VertexRead | Access::IndexRead | Access::IndirectRead => {
+                vk::ImageLayout::UNDEFINED
+            }
             Access::Custom { layout, .. } => layout,
         }
     }
 
     pub fn is_write(&self) -> bool {
         match *self {
-            Access::StorageWrite { .. } | Access::ColorAttachmentWrite | Access::DepthStencilAttachmentWrite | Access::TransferWrite => true,
+            Access::StorageWrite { .. }
+            | Access::ColorAttachmentWrite
+            | Access::DepthStencilAttachmentWrite
+            | Access::TransferWrite => true,
             Access::Custom { write, .. } => write,
             _ => false,
         }
@@ -264,7 +279,11 @@ impl BufferBarrier {
     /// As a global memory barrier (equivalent for a whole buffer, and several
     /// of them can be OR-ed into one).
     pub fn to_memory_barrier(&self) -> vk::MemoryBarrier2<'static> {
-        vk::MemoryBarrier2::default().src_stage_mask(self.src_stages).src_access_mask(self.src_access).dst_stage_mask(self.dst_stages).dst_access_mask(self.dst_access)
+        vk::MemoryBarrier2::default()
+            .src_stage_mask(self.src_stages)
+            .src_access_mask(self.src_access)
+            .dst_stage_mask(self.dst_stages)
+            .dst_access_mask(self.dst_access)
     }
 }
 
@@ -334,7 +353,13 @@ fn add_visible(visible: &mut Vec<(Stages, AccessMask)>, stages: Stages, access: 
 
 impl SubState {
     fn fresh() -> Self {
-        SubState { layout: vk::ImageLayout::UNDEFINED, write_stages: Stages::NONE, write_access: AccessMask::NONE, read_stages: Stages::NONE, visible: Vec::new() }
+        SubState {
+            layout: vk::ImageLayout::UNDEFINED,
+            write_stages: Stages::NONE,
+            write_access: AccessMask::NONE,
+            read_stages: Stages::NONE,
+            visible: Vec::new(),
+        }
     }
 
     /// As if `initial` had just been performed, after a barrier that made all
@@ -351,7 +376,12 @@ impl SubState {
     }
 
     fn external(layout: vk::ImageLayout, stages: Stages, access: AccessMask) -> Self {
-        SubState { layout, write_stages: stages, write_access: access & WRITE_ACCESS, ..SubState::fresh() }
+        SubState {
+            layout,
+            write_stages: stages,
+            write_access: access & WRITE_ACCESS,
+            ..SubState::fresh()
+        }
     }
 
     fn has_write(&self) -> bool {
@@ -362,14 +392,25 @@ impl SubState {
     fn step(&mut self, next: Access, discard: bool, has_layout: bool) -> Option<Sync> {
         let (stages, access) = (next.stages(), next.access());
         let new_layout = if has_layout { next.layout() } else { self.layout };
-        let sync = |src_stages, src_access, old_layout| Sync { src_stages, src_access, dst_stages: stages, dst_access: access, old_layout, new_layout };
+        let sync = |src_stages, src_access, old_layout| Sync {
+            src_stages,
+            src_access,
+            dst_stages: stages,
+            dst_access: access,
+            old_layout,
+            new_layout,
+        };
 
         let barrier = if new_layout != self.layout {
             // The transition rewrites the memory: it must come after the last
             // write (made available: it must not race with a late cache flush)
             // and after every reader (or it would clobber what they read).
             // Discarding only relaxes what the transition has to preserve.
-            let old = if discard { vk::ImageLayout::UNDEFINED } else { self.layout };
+            let old = if discard {
+                vk::ImageLayout::UNDEFINED
+            } else {
+                self.layout
+            };
             let b = sync(self.write_stages | self.read_stages, self.write_access, old);
             // The transition is now the last write: automatically available,
             // visible to `next` only, reachable through `next`'s stages.
@@ -460,14 +501,24 @@ impl ImageState {
     /// semaphore is waited at `COLOR_ATTACHMENT_OUTPUT`. The first barrier then
     /// has `src_stages = stages`, which chains it after the semaphore wait so
     /// that its layout transition cannot happen before the image is released.
-    pub fn external(mip_count: u32, layer_count: u32, layout: vk::ImageLayout, stages: Stages, access: AccessMask) -> Self {
+    pub fn external(
+        mip_count: u32,
+        layer_count: u32,
+        layout: vk::ImageLayout,
+        stages: Stages,
+        access: AccessMask,
+    ) -> Self {
         Self::from_sub(mip_count, layer_count, SubState::external(layout, stages, access))
     }
 
     fn from_sub(mip_count: u32, layer_count: u32, sub: SubState) -> Self {
         assert!(mip_count > 0 && layer_count > 0, "image with no subresource");
         let n = mip_count as usize * layer_count as usize;
-        ImageState { mip_count, layer_count, subs: vec![sub; n] }
+        ImageState {
+            mip_count,
+            layer_count,
+            subs: vec![sub; n],
+        }
     }
 
     /// What anything that follows all the work recorded so far on this image
@@ -476,7 +527,9 @@ impl ImageState {
     /// aliasing, start the next image on the same memory as
     /// `external(mips, layers, UNDEFINED, stages, access)` with these.
     pub fn pending(&self) -> (Stages, AccessMask) {
-        self.subs.iter().fold((Stages::NONE, AccessMask::NONE), |(s, a), sub| (s | sub.write_stages | sub.read_stages, a | sub.write_access))
+        self.subs.iter().fold((Stages::NONE, AccessMask::NONE), |(s, a), sub| {
+            (s | sub.write_stages | sub.read_stages, a | sub.write_access)
+        })
     }
 
     pub fn mip_count(&self) -> u32 {
@@ -508,7 +561,12 @@ impl ImageState {
     }
 
     fn index(&self, mip: u32, layer: u32) -> usize {
-        assert!(mip < self.mip_count && layer < self.layer_count, "subresource (mip {mip}, layer {layer}) outside a {}x{} image", self.mip_count, self.layer_count);
+        assert!(
+            mip < self.mip_count && layer < self.layer_count,
+            "subresource (mip {mip}, layer {layer}) outside a {}x{} image",
+            self.mip_count,
+            self.layer_count
+        );
         mip as usize * self.layer_count as usize + layer as usize
     }
 
@@ -517,18 +575,36 @@ impl ImageState {
         let rest = |base: u32, count: u32, total: u32, remaining: u32, what: &str| {
             assert!(base < total, "{what} {base} outside an image with {total}");
             let count = if count == remaining { total - base } else { count };
-            assert!(count > 0 && count <= total - base, "{what} range {base}+{count} outside an image with {total}");
+            assert!(
+                count > 0 && count <= total - base,
+                "{what} range {base}+{count} outside an image with {total}"
+            );
             count
         };
         SubresourceRange {
-            mip_count: rest(range.base_mip, range.mip_count, self.mip_count, vk::REMAINING_MIP_LEVELS, "mip"),
-            layer_count: rest(range.base_layer, range.layer_count, self.layer_count, vk::REMAINING_ARRAY_LAYERS, "layer"),
+            mip_count: rest(
+                range.base_mip,
+                range.mip_count,
+                self.mip_count,
+                vk::REMAINING_MIP_LEVELS,
+                "mip",
+            ),
+            layer_count: rest(
+                range.base_layer,
+                range.layer_count,
+                self.layer_count,
+                vk::REMAINING_ARRAY_LAYERS,
+                "layer",
+            ),
             ..range
         }
     }
 
     fn transition_impl(&mut self, range: SubresourceRange, next: Access, discard: bool) -> Vec<ImageBarrier> {
-        assert!(next.layout() != vk::ImageLayout::UNDEFINED, "{next:?} has no image layout (buffer-only access used on an image)");
+        assert!(
+            next.layout() != vk::ImageLayout::UNDEFINED,
+            "{next:?} has no image layout (buffer-only access used on an image)"
+        );
         let r = self.resolve(range);
         let mut grid = Vec::with_capacity(r.mip_count as usize * r.layer_count as usize);
         for mip in r.base_mip..r.base_mip + r.mip_count {
@@ -551,9 +627,15 @@ fn merge(r: SubresourceRange, grid: &[Option<Sync>]) -> Vec<ImageBarrier> {
     let by_mip = sweep(mips, layers, |m, l| grid[m * layers + l]);
     let by_layer = sweep(layers, mips, |l, m| grid[m * layers + l]);
     let mut out: Vec<ImageBarrier> = if by_layer.len() < by_mip.len() {
-        by_layer.into_iter().map(|(l0, ln, m0, mn, s)| barrier(r, m0, mn, l0, ln, s)).collect()
+        by_layer
+            .into_iter()
+            .map(|(l0, ln, m0, mn, s)| barrier(r, m0, mn, l0, ln, s))
+            .collect()
     } else {
-        by_mip.into_iter().map(|(m0, mn, l0, ln, s)| barrier(r, m0, mn, l0, ln, s)).collect()
+        by_mip
+            .into_iter()
+            .map(|(m0, mn, l0, ln, s)| barrier(r, m0, mn, l0, ln, s))
+            .collect()
     };
     out.sort_by_key(|b| (b.range.base_mip, b.range.base_layer));
     out
@@ -574,7 +656,11 @@ fn barrier(r: SubresourceRange, m0: usize, mn: usize, l0: usize, ln: usize, s: S
 /// Greedy rectangles over a rows × cols grid: take the first uncovered cell,
 /// extend along its row, then down the rows while the whole run matches.
 /// Returns (row, rows, col, cols, barrier).
-fn sweep(rows: usize, cols: usize, at: impl Fn(usize, usize) -> Option<Sync>) -> Vec<(usize, usize, usize, usize, Sync)> {
+fn sweep(
+    rows: usize,
+    cols: usize,
+    at: impl Fn(usize, usize) -> Option<Sync>,
+) -> Vec<(usize, usize, usize, usize, Sync)> {
     let mut used = vec![false; rows * cols];
     let mut out = Vec::new();
     for r in 0..rows {
@@ -628,14 +714,18 @@ impl BufferState {
     /// A buffer last used by `initial`, after a barrier that made all earlier
     /// work visible to it. See [`ImageState::with_initial`].
     pub fn with_initial(initial: Access) -> Self {
-        BufferState { sub: SubState::settled(initial, false) }
+        BufferState {
+            sub: SubState::settled(initial, false),
+        }
     }
 
     /// A buffer whose contents were produced outside the graph by work the
     /// queue waits for at `stages` (see [`ImageState::external`]), or which
     /// aliases memory last used as described by another state's `pending()`.
     pub fn external(stages: Stages, access: AccessMask) -> Self {
-        BufferState { sub: SubState::external(vk::ImageLayout::UNDEFINED, stages, access) }
+        BufferState {
+            sub: SubState::external(vk::ImageLayout::UNDEFINED, stages, access),
+        }
     }
 
     /// See [`ImageState::pending`].
@@ -646,7 +736,12 @@ impl BufferState {
     /// Record that the next use is `next`; return the barrier that must
     /// precede it, if any.
     pub fn transition(&mut self, next: Access) -> Option<BufferBarrier> {
-        self.sub.step(next, false, false).map(|s| BufferBarrier { src_stages: s.src_stages, src_access: s.src_access, dst_stages: s.dst_stages, dst_access: s.dst_access })
+        self.sub.step(next, false, false).map(|s| BufferBarrier {
+            src_stages: s.src_stages,
+            src_access: s.src_access,
+            dst_stages: s.dst_stages,
+            dst_access: s.dst_access,
+        })
     }
 }
 

@@ -53,7 +53,8 @@ pub fn brdf_times_cos(n: Vec3, v: Vec3, l: Vec3, s: &Surface) -> Vec3 {
     }
     let h = (l + v).normalize();
     let n_dot_h = n.dot(h).max(0.0);
-    let f = s.albedo / std::f32::consts::PI + s.specular * ((s.exponent + 8.0) / (8.0 * std::f32::consts::PI)) * n_dot_h.powf(s.exponent);
+    let f = s.albedo / std::f32::consts::PI
+        + s.specular * ((s.exponent + 8.0) / (8.0 * std::f32::consts::PI)) * n_dot_h.powf(s.exponent);
     f * n_dot_l
 }
 
@@ -76,8 +77,18 @@ mod tests {
 
     #[test]
     fn lambert_under_directional_light() {
-        let s = Surface { albedo: Vec3::splat(0.5), specular: Vec3::ZERO, exponent: 1.0, emission: Vec3::ZERO };
-        let light = GpuLight { position: [0.0, 0.0, 0.0, LIGHT_DIRECTIONAL], direction: [0.0, -1.0, 0.0, 0.0], intensity: [2.0, 2.0, 2.0, 0.0], cone: [0.0; 4] };
+        let s = Surface {
+            albedo: Vec3::splat(0.5),
+            specular: Vec3::ZERO,
+            exponent: 1.0,
+            emission: Vec3::ZERO,
+        };
+        let light = GpuLight {
+            position: [0.0, 0.0, 0.0, LIGHT_DIRECTIONAL],
+            direction: [0.0, -1.0, 0.0, 0.0],
+            intensity: [2.0, 2.0, 2.0, 0.0],
+            cone: [0.0; 4],
+        };
         let l = shade(Vec3::ZERO, Vec3::Y, Vec3::new(0.0, 5.0, 1.0), &s, &[light], Vec3::ZERO);
         assert!((l.x - 0.5 / std::f32::consts::PI * 2.0).abs() < 1e-6);
     }
@@ -95,12 +106,30 @@ mod tests {
 
     #[test]
     fn point_light_inverse_square() {
-        let s = Surface { albedo: Vec3::ONE, specular: Vec3::ZERO, exponent: 1.0, emission: Vec3::ZERO };
-        let light = GpuLight { position: [0.0, 2.0, 0.0, LIGHT_POINT], direction: [0.0; 4], intensity: [4.0; 4], cone: [0.0; 4] };
+        let s = Surface {
+            albedo: Vec3::ONE,
+            specular: Vec3::ZERO,
+            exponent: 1.0,
+            emission: Vec3::ZERO,
+        };
+        let light = GpuLight {
+            position: [0.0, 2.0, 0.0, LIGHT_POINT],
+            direction: [0.0; 4],
+            intensity: [4.0; 4],
+            cone: [0.0; 4],
+        };
         let a = shade(Vec3::ZERO, Vec3::Y, Vec3::new(0.0, 1.0, 1.0), &s, &[light], Vec3::ZERO).x;
         assert!((a - 1.0 / std::f32::consts::PI).abs() < 1e-6);
         // At (2, 0, 0): distance² = 8, cos θ = 2/√8.
-        let b = shade(Vec3::new(2.0, 0.0, 0.0), Vec3::Y, Vec3::new(2.0, 1.0, 1.0), &s, &[light], Vec3::ZERO).x;
+        let b = shade(
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::Y,
+            Vec3::new(2.0, 1.0, 1.0),
+            &s,
+            &[light],
+            Vec3::ZERO,
+        )
+        .x;
         let expected = 4.0 / 8.0 * (2.0 / 8f32.sqrt()) / std::f32::consts::PI;
         assert!((b - expected).abs() < 1e-6);
     }

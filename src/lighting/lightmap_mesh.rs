@@ -3,7 +3,10 @@
 
 use glam::Vec3;
 
-use crate::backend::{vk, Bind, BufferId, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::backend::{
+    vk, Bind, BufferId, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange,
+    VertexAttribute, VertexLayout,
+};
 use crate::error::Result;
 use crate::gpu_scene::DrawPush;
 use crate::graph::{Access, PassBuilder};
@@ -47,7 +50,12 @@ impl Mesh {
             let o = geometry.object_space[t].map(Vec3::from);
             let n = (o[1] - o[0]).cross(o[2] - o[0]).normalize_or_zero().to_array();
             for k in 0..3 {
-                vertices.push(LightmapVertex { position: o[k].to_array(), normal: n, lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]], uv: geometry.uvs[t][k] });
+                vertices.push(LightmapVertex {
+                    position: o[k].to_array(),
+                    normal: n,
+                    lightmap_uv: [uvs[6 * t + 2 * k], uvs[6 * t + 2 * k + 1]],
+                    uv: geometry.uvs[t][k],
+                });
             }
         }
         // Entities: their mesh as it is, outside the light-map (a negative coordinate reads as
@@ -59,32 +67,64 @@ impl Mesh {
                 let o = [0, 1, 2].map(|k| mesh.positions[t[k] as usize]);
                 let n = (o[1] - o[0]).cross(o[2] - o[0]).normalize_or_zero().to_array();
                 for (k, p) in o.iter().enumerate() {
-                    vertices.push(LightmapVertex { position: p.to_array(), normal: n, lightmap_uv: [-1.0, -1.0], uv: mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()) });
+                    vertices.push(LightmapVertex {
+                        position: p.to_array(),
+                        normal: n,
+                        lightmap_uv: [-1.0, -1.0],
+                        uv: mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()),
+                    });
                 }
             }
             draws.push((d, first, vertices.len() as u32 - first));
         }
-        let animations = draws.iter().map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation)).collect();
-        let vertices = cx.gpu.create_buffer_init(&format!("{method} vertices"), vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
+        let animations = draws
+            .iter()
+            .map(|&(d, _, _)| cx.scene_gpu.draws[d].object.and_then(|o| cx.scene.objects[o].animation))
+            .collect();
+        let vertices = cx.gpu.create_buffer_init(
+            &format!("{method} vertices"),
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            bytemuck::cast_slice(&vertices),
+        )?;
         cx.states.forget_buffer(vertices);
-        Ok(Mesh { vertices, draws, animations })
+        Ok(Mesh {
+            vertices,
+            draws,
+            animations,
+        })
     }
 
     /// A pipeline drawing the mesh with `fragment` (and glsl/radiosity/lightmap.vert) into the
     /// radiance target, depth tested and written.
     pub fn pipeline_desc(name: &str, fragment: &str) -> GraphicsPipelineDesc {
-        let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
+        let attr = |location, format, offset| VertexAttribute {
+            location,
+            binding: 0,
+            format,
+            offset,
+        };
         let mut desc = GraphicsPipelineDesc::new(name, "radiosity/lightmap.vert", Some(fragment));
         desc.vertex_layout = VertexLayout {
             buffers: vec![(0, std::mem::size_of::<LightmapVertex>() as u32)],
-            attributes: vec![attr(0, vk::Format::R32G32B32_SFLOAT, 0), attr(1, vk::Format::R32G32B32_SFLOAT, 12), attr(2, vk::Format::R32G32_SFLOAT, 24), attr(3, vk::Format::R32G32_SFLOAT, 32)],
+            attributes: vec![
+                attr(0, vk::Format::R32G32B32_SFLOAT, 0),
+                attr(1, vk::Format::R32G32B32_SFLOAT, 12),
+                attr(2, vk::Format::R32G32_SFLOAT, 24),
+                attr(3, vk::Format::R32G32_SFLOAT, 32),
+            ],
         };
         desc
     }
 
     /// Records `pass` (which declares the method's own images) drawing every draw with
     /// `pipeline`; `extra` is bound with each draw's frame, albedo and normal maps.
-    pub fn draw<'a>(&'a self, pass: PassBuilder<'_, 'a>, frame: &FrameContext<'a>, pipeline: PipelineId, extra: Vec<(&'static str, Vec<u8>)>) {
+    pub fn draw<'a>(
+        &'a self,
+        pass: PassBuilder<'_, 'a>,
+        frame: &FrameContext<'a>,
+        pipeline: PipelineId,
+        extra: Vec<(&'static str, Vec<u8>)>,
+    ) {
         let (scene, t, uniforms, time) = (frame.scene, frame.targets, frame.uniforms, frame.clock.time_s);
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         pass.color_attachment(t.radiance, SubresourceRange::mip(0), false)
@@ -92,17 +132,36 @@ impl Mesh {
             .buffer(self.vertices, Access::VertexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
             .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(t.radiance)],
+                    depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+                })?;
                 ctx.rec.bind_pipeline(pipeline)?;
                 ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
                 for (&(d, first, count), animation) in self.draws.iter().zip(&self.animations) {
                     let item = &scene.draws[d];
-                    let model = animation.as_ref().map_or(item.model, |a| a.transform_at(item.model, time));
+                    let model = animation
+                        .as_ref()
+                        .map_or(item.model, |a| a.transform_at(item.model, time));
                     let maps = scene.material_maps[item.material as usize];
                     let mut binds = vec![
                         ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
-                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
-                        ("normal_map", Bind::Sampled { image: maps.normal, range: SubresourceRange::mip(0), sampler: scene.sampler }),
+                        (
+                            "albedo_map",
+                            Bind::Sampled {
+                                image: maps.albedo,
+                                range: SubresourceRange::mip(0),
+                                sampler: scene.sampler,
+                            },
+                        ),
+                        (
+                            "normal_map",
+                            Bind::Sampled {
+                                image: maps.normal,
+                                range: SubresourceRange::mip(0),
+                                sampler: scene.sampler,
+                            },
+                        ),
                     ];
                     binds.extend(extra.iter().map(|(name, bytes)| (*name, Bind::UniformData(bytes))));
                     ctx.bind(&binds)?;

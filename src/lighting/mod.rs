@@ -80,7 +80,10 @@ impl FrameClock {
     pub const STEP_S: f32 = crate::scene::motion::FRAME_STEP_S;
 
     pub fn at(frame: u64) -> FrameClock {
-        FrameClock { frame, time_s: crate::scene::motion::frame_time(frame) }
+        FrameClock {
+            frame,
+            time_s: crate::scene::motion::frame_time(frame),
+        }
     }
 }
 
@@ -115,14 +118,27 @@ pub struct CreateContext<'a> {
 /// radiance: thin surfaces seen from both sides, the terms as specialization constant 0, and —
 /// when it is not the base — the base's depth tested but not written and its light added. The
 /// caller adds its vertex layout, further constants and any depth bias.
-pub fn term_pipeline_desc(name: &str, vertex: &str, fragment: &str, terms: Terms, depth_format: vk::Format) -> GraphicsPipelineDesc {
+pub fn term_pipeline_desc(
+    name: &str,
+    vertex: &str,
+    fragment: &str,
+    terms: Terms,
+    depth_format: vk::Format,
+) -> GraphicsPipelineDesc {
     let mut desc = GraphicsPipelineDesc::new(name, vertex, Some(fragment));
     desc.raster.cull = vk::CullModeFlags::NONE;
     desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
     desc.depth_format = Some(depth_format);
-    desc.specialization = vec![SpecConstant { id: 0, bits: terms.bits() }];
+    desc.specialization = vec![SpecConstant {
+        id: 0,
+        bits: terms.bits(),
+    }];
     if !terms.has(Term::Base) {
-        desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+        desc.depth = DepthState {
+            test: true,
+            write: false,
+            compare: vk::CompareOp::LESS_OR_EQUAL,
+        };
         desc.color_targets[0].blend = BlendMode::Additive;
     }
     desc

@@ -32,10 +32,13 @@ impl<'a> Params<'a> {
 
     /// `v`, the value of `p`, as one of the named `options`.
     pub fn choice<T: Copy>(&self, p: &str, v: &toml::Value, options: &[(&str, T)]) -> Result<T> {
-        v.as_str().and_then(|s| options.iter().find(|(o, _)| *o == s)).map(|(_, t)| *t).ok_or_else(|| {
-            let list: Vec<String> = options.iter().map(|(o, _)| format!("\"{o}\"")).collect();
-            self.error(p, &format!("one of {}", list.join(", ")), v)
-        })
+        v.as_str()
+            .and_then(|s| options.iter().find(|(o, _)| *o == s))
+            .map(|(_, t)| *t)
+            .ok_or_else(|| {
+                let list: Vec<String> = options.iter().map(|(o, _)| format!("\"{o}\"")).collect();
+                self.error(p, &format!("one of {}", list.join(", ")), v)
+            })
     }
 
     /// Parameter `p` as one of `options`, `None` when the declaration does not set it.

@@ -7,7 +7,10 @@
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
 use super::terms::{self, Supply};
-use super::{bsp_lights, clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, vls, Configuration, CreateContext, LightingMethod, ReferenceKind, Terms};
+use super::{
+    bsp_lights, clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, vls, Configuration,
+    CreateContext, LightingMethod, ReferenceKind, Terms,
+};
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
 use crate::timing::PassStats;
@@ -173,11 +176,21 @@ pub fn schemas() -> Vec<MethodSchema> {
 }
 
 pub fn info(name: &str) -> Result<MethodInfo> {
-    registry().into_iter().find(|m| m.schema.name == name).ok_or_else(|| Error::Usage(format!("method `{name}` is not implemented")))
+    registry()
+        .into_iter()
+        .find(|m| m.schema.name == name)
+        .ok_or_else(|| Error::Usage(format!("method `{name}` is not implemented")))
 }
 
 fn supply() -> Vec<Supply> {
-    registry().iter().map(|m| Supply { name: m.schema.name, terms: m.terms, separable: m.separable }).collect()
+    registry()
+        .iter()
+        .map(|m| Supply {
+            name: m.schema.name,
+            terms: m.terms,
+            separable: m.separable,
+        })
+        .collect()
 }
 
 /// Every configuration the scene declares: each method alone, then each combination.
@@ -190,20 +203,38 @@ pub fn configurations(scene: &Scene) -> Result<Vec<Configuration>> {
 pub fn configuration(scene: &Scene, name: Option<&str>) -> Result<Configuration> {
     let all = configurations(scene)?;
     match name {
-        None => all.into_iter().next().ok_or_else(|| Error::Usage(format!("{}: the scene enables no method", scene.source))),
+        None => all
+            .into_iter()
+            .next()
+            .ok_or_else(|| Error::Usage(format!("{}: the scene enables no method", scene.source))),
         Some(n) => {
             let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
             all.into_iter().find(|c| c.name == n).ok_or_else(|| {
                 let known: Vec<&str> = schemas().iter().map(|s| s.name).collect();
                 if known.contains(&n) {
-                    Error::Usage(format!("{}: method `{n}` is not enabled by the scene (it enables: {})", scene.source, names.join(", ")))
+                    Error::Usage(format!(
+                        "{}: method `{n}` is not enabled by the scene (it enables: {})",
+                        scene.source,
+                        names.join(", ")
+                    ))
                 } else {
                     let combinations = if scene.combinations.is_empty() {
                         String::new()
                     } else {
-                        format!("; the scene's combinations: {}", scene.combinations.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", "))
+                        format!(
+                            "; the scene's combinations: {}",
+                            scene
+                                .combinations
+                                .iter()
+                                .map(|c| c.name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        )
                     };
-                    Error::Usage(format!("--method {n}: unknown method; known methods: {}{combinations}", known.join(", ")))
+                    Error::Usage(format!(
+                        "--method {n}: unknown method; known methods: {}{combinations}",
+                        known.join(", ")
+                    ))
                 }
             })
         }
@@ -228,7 +259,9 @@ pub fn reference_kind(config: &Configuration) -> Result<ReferenceKind> {
 /// One line per method of `config` that keeps the rest pose in a scene that moves (wind, a
 /// turning light): what it leaves out, and why.
 pub fn motion_notes(config: &Configuration, scene: &Scene) -> Vec<String> {
-    let Some(what) = scene.motion_summary() else { return Vec::new() };
+    let Some(what) = scene.motion_summary() else {
+        return Vec::new();
+    };
     let mut out = Vec::new();
     for p in &config.parts {
         if let Some(why) = info(&p.decl.name).ok().and_then(|i| i.rest_pose) {
@@ -252,7 +285,9 @@ pub fn create(config: &Configuration, ctx: &mut CreateContext<'_>) -> Result<Vec
     for p in &config.parts {
         let info = info(&p.decl.name)?;
         if !info.translucency {
-            ctx.scene.refuse_translucency(&format!("the {} method", p.decl.name)).map_err(Error::Usage)?;
+            ctx.scene
+                .refuse_translucency(&format!("the {} method", p.decl.name))
+                .map_err(Error::Usage)?;
         }
         ctx.terms = p.terms;
         out.push((info.create)(ctx, &p.decl)?);

@@ -109,8 +109,17 @@ pub struct Supply {
 
 /// The configuration a scene's method declaration stands for alone.
 pub fn alone(decl: &MethodDecl, supply: &[Supply]) -> Configuration {
-    let terms = supply.iter().find(|s| s.name == decl.name).map_or(Terms::BASE_DIRECT, |s| s.terms);
-    Configuration { name: decl.name.clone(), parts: vec![Part { decl: decl.clone(), terms }] }
+    let terms = supply
+        .iter()
+        .find(|s| s.name == decl.name)
+        .map_or(Terms::BASE_DIRECT, |s| s.terms);
+    Configuration {
+        name: decl.name.clone(),
+        parts: vec![Part {
+            decl: decl.clone(),
+            terms,
+        }],
+    }
 }
 
 /// Every configuration a scene declares: each method alone, then each combination, checked
@@ -118,9 +127,15 @@ pub fn alone(decl: &MethodDecl, supply: &[Supply]) -> Configuration {
 pub fn configurations(scene: &Scene, supply: &[Supply]) -> Result<Vec<Configuration>, SceneError> {
     let mut out: Vec<Configuration> = scene.methods.iter().map(|d| alone(d, supply)).collect();
     for (i, c) in scene.combinations.iter().enumerate() {
-        let err = |line: usize, field: String, msg: String| SceneError::new(&scene.source, (line > 0).then_some(line), field, msg);
+        let err = |line: usize, field: String, msg: String| {
+            SceneError::new(&scene.source, (line > 0).then_some(line), field, msg)
+        };
         if out.iter().any(|o| o.name == c.name) {
-            return Err(err(c.line, format!("combinations[{i}].name"), format!("{:?} is already the name of a method or combination", c.name)));
+            return Err(err(
+                c.line,
+                format!("combinations[{i}].name"),
+                format!("{:?} is already the name of a method or combination", c.name),
+            ));
         }
         let mut parts: Vec<Part> = Vec::new();
         for (term, method, line) in &c.terms {
@@ -132,29 +147,66 @@ pub fn configurations(scene: &Scene, supply: &[Supply]) -> Result<Vec<Configurat
             let field = format!("combinations[{i}].{}", term.key());
             let decl = scene.methods.iter().find(|d| d.name == *method).ok_or_else(|| {
                 let names: Vec<&str> = scene.methods.iter().map(|d| d.name.as_str()).collect();
-                err(*line, field.clone(), format!("{method:?} is not one of the scene's methods ({})", names.join(", ")))
+                err(
+                    *line,
+                    field.clone(),
+                    format!("{method:?} is not one of the scene's methods ({})", names.join(", ")),
+                )
             })?;
-            let s = supply.iter().find(|s| s.name == *method).copied().unwrap_or(Supply { name: "", terms: Terms::NONE, separable: false });
+            let s = supply.iter().find(|s| s.name == *method).copied().unwrap_or(Supply {
+                name: "",
+                terms: Terms::NONE,
+                separable: false,
+            });
             if !s.terms.has(term) {
-                return Err(err(*line, field, format!("{method} cannot supply the {} term (it supplies {})", term.key(), s.terms)));
+                return Err(err(
+                    *line,
+                    field,
+                    format!(
+                        "{method} cannot supply the {} term (it supplies {})",
+                        term.key(),
+                        s.terms
+                    ),
+                ));
             }
             match parts.iter_mut().find(|p| p.decl.name == *method) {
                 Some(p) => p.terms = p.terms.union(Terms::of(&[term])),
-                None => parts.push(Part { decl: decl.clone(), terms: Terms::of(&[term]) }),
+                None => parts.push(Part {
+                    decl: decl.clone(),
+                    terms: Terms::of(&[term]),
+                }),
             }
         }
         if parts.is_empty() {
-            return Err(err(c.line, format!("combinations[{i}]"), "names no term: give at least one of base, direct, indirect".into()));
+            return Err(err(
+                c.line,
+                format!("combinations[{i}]"),
+                "names no term: give at least one of base, direct, indirect".into(),
+            ));
         }
         for p in &parts {
             let s = supply.iter().find(|s| s.name == p.decl.name).copied();
             if let Some(s) = s.filter(|s| !s.separable && p.terms != s.terms) {
-                let (key, line) = c.terms.iter().find(|(_, m, _)| *m == p.decl.name).map_or(("name", c.line), |t| (t.0, t.2));
-                return Err(err(line, format!("combinations[{i}].{key}"), format!("{} draws its terms ({}) in one pass and cannot supply {} alone", s.name, s.terms, p.terms)));
+                let (key, line) = c
+                    .terms
+                    .iter()
+                    .find(|(_, m, _)| *m == p.decl.name)
+                    .map_or(("name", c.line), |t| (t.0, t.2));
+                return Err(err(
+                    line,
+                    format!("combinations[{i}].{key}"),
+                    format!(
+                        "{} draws its terms ({}) in one pass and cannot supply {} alone",
+                        s.name, s.terms, p.terms
+                    ),
+                ));
             }
         }
         parts.sort_by_key(|p| p.terms.first());
-        out.push(Configuration { name: c.name.clone(), parts });
+        out.push(Configuration {
+            name: c.name.clone(),
+            parts,
+        });
     }
     Ok(out)
 }

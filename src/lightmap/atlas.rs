@@ -34,7 +34,11 @@ pub fn pack(p: &Patches) -> Atlas {
         x += w;
         shelf = shelf.max(h);
     }
-    Atlas { width, height: (y + shelf).max(1), offsets }
+    Atlas {
+        width,
+        height: (y + shelf).max(1),
+        offsets,
+    }
 }
 
 /// The light-map texels (RGBA32F, row-major): each patch's value (after the border passes,
@@ -46,7 +50,8 @@ pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec
         for j in 0..c.height {
             for i in 0..c.width {
                 let v = value(c.first + j * c.width + i);
-                out[((oy + j as u32) * atlas.width + ox + i as u32) as usize] = [v.x as f32, v.y as f32, v.z as f32, 1.0];
+                out[((oy + j as u32) * atlas.width + ox + i as u32) as usize] =
+                    [v.x as f32, v.y as f32, v.z as f32, 1.0];
             }
         }
     }
@@ -55,7 +60,15 @@ pub fn texels(p: &Patches, atlas: &Atlas, value: impl Fn(usize) -> DVec3) -> Vec
 
 /// Texels in [0, 1] as R8G8B8A8_UNORM bytes (alpha 255).
 pub fn to_rgb8(texels: &[f32]) -> Vec<u8> {
-    texels.chunks_exact(4).flat_map(|t| [t[0], t[1], t[2]].map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8).into_iter().chain([255])).collect()
+    texels
+        .chunks_exact(4)
+        .flat_map(|t| {
+            [t[0], t[1], t[2]]
+                .map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8)
+                .into_iter()
+                .chain([255])
+        })
+        .collect()
 }
 
 /// Each triangle corner's light-map coordinate in the atlas (3 per triangle); a sky chart's

@@ -38,7 +38,10 @@ pub struct Plan {
 impl Plan {
     pub fn new(p: &Patches, occluders: &Occluders) -> Plan {
         let (second, refused) = pass2_plan(p, occluders);
-        Plan { passes: [pass1_plan(p), second], refused }
+        Plan {
+            passes: [pass1_plan(p), second],
+            refused,
+        }
     }
 
     /// Applies pass 1 then pass 2 to `dim` values per patch (patch k's at `k·dim..`); each pass
@@ -73,7 +76,10 @@ fn pass1_plan(p: &Patches) -> Pass {
                 if p.patches[k].inside() {
                     continue;
                 }
-                let inside: Vec<usize> = neighbours(i, j, c.width, c.height).map(|(ni, nj)| at(ni, nj)).filter(|&n| p.patches[n].inside()).collect();
+                let inside: Vec<usize> = neighbours(i, j, c.width, c.height)
+                    .map(|(ni, nj)| at(ni, nj))
+                    .filter(|&n| p.patches[n].inside())
+                    .collect();
                 let w = 1.0 / inside.len().max(1) as f64;
                 out.push((k, inside.into_iter().map(|n| (n, w)).collect()));
             }
@@ -85,7 +91,9 @@ fn pass1_plan(p: &Patches) -> Pass {
 fn neighbours(i: usize, j: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
     (-1i64..=1)
         .flat_map(move |dj| (-1i64..=1).map(move |di| (i as i64 + di, j as i64 + dj)))
-        .filter(move |&(ni, nj)| (ni, nj) != (i as i64, j as i64) && ni >= 0 && nj >= 0 && (ni as usize) < w && (nj as usize) < h)
+        .filter(move |&(ni, nj)| {
+            (ni, nj) != (i as i64, j as i64) && ni >= 0 && nj >= 0 && (ni as usize) < w && (nj as usize) < h
+        })
         .map(|(ni, nj)| (ni as usize, nj as usize))
 }
 
@@ -188,6 +196,10 @@ fn near_inside(p: &Patches, c: usize, i: usize, j: usize) -> DVec3 {
         .iter()
         .filter(|o| o.inside())
         .map(|o| o.centre)
-        .min_by(|x, y| (*x - cell_centre).length_squared().total_cmp(&(*y - cell_centre).length_squared()))
+        .min_by(|x, y| {
+            (*x - cell_centre)
+                .length_squared()
+                .total_cmp(&(*y - cell_centre).length_squared())
+        })
         .unwrap_or(cell_centre)
 }

@@ -74,7 +74,12 @@ mod tests {
     /// A square of side `side` at height `h` above the origin, facing down.
     fn square(side: f64, h: f64) -> [DVec3; 4] {
         let s = side / 2.0;
-        [DVec3::new(-s, -s, h), DVec3::new(s, -s, h), DVec3::new(s, s, h), DVec3::new(-s, s, h)]
+        [
+            DVec3::new(-s, -s, h),
+            DVec3::new(s, -s, h),
+            DVec3::new(s, s, h),
+            DVec3::new(-s, s, h),
+        ]
     }
 
     /// The digest's unit test: a differential patch to a coaxial parallel square of side 2 at
@@ -98,7 +103,11 @@ mod tests {
         };
         let errors: Vec<f64> = [1.0, 0.5, 0.25, 0.1].iter().map(|&p| (sum(p) - exact).abs()).collect();
         for (p, want) in [(1.0, 0.5659), (0.5, 0.5631), (0.25, 0.5564), (0.1, 0.5545)] {
-            assert!((sum(p) - want).abs() < 6e-4, "p = {p}: {} against the digest's {want}", sum(p));
+            assert!(
+                (sum(p) - want).abs() < 6e-4,
+                "p = {p}: {} against the digest's {want}",
+                sum(p)
+            );
         }
         // Second order: halving p divides the error by about 4.
         let order = (errors[1] / errors[2]).log2();
@@ -121,16 +130,44 @@ mod tests {
         // A polygon entirely behind the receiver sees nothing; one crossing its plane only its
         // front half (a vertical square centred on the plane: half of the full-square value).
         assert_eq!(point_to_polygon(DVec3::ZERO, DVec3::Z, &square(2.0, -1.0)), 0.0);
-        let wall = [DVec3::new(-1.0, 1.0, -1.0), DVec3::new(1.0, 1.0, -1.0), DVec3::new(1.0, 1.0, 1.0), DVec3::new(-1.0, 1.0, 1.0)];
-        let top = [DVec3::new(-1.0, 1.0, 0.0), DVec3::new(1.0, 1.0, 0.0), DVec3::new(1.0, 1.0, 1.0), DVec3::new(-1.0, 1.0, 1.0)];
-        assert!((point_to_polygon(DVec3::ZERO, DVec3::Z, &wall) - point_to_polygon(DVec3::ZERO, DVec3::Z, &top)).abs() < 1e-12);
+        let wall = [
+            DVec3::new(-1.0, 1.0, -1.0),
+            DVec3::new(1.0, 1.0, -1.0),
+            DVec3::new(1.0, 1.0, 1.0),
+            DVec3::new(-1.0, 1.0, 1.0),
+        ];
+        let top = [
+            DVec3::new(-1.0, 1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(1.0, 1.0, 1.0),
+            DVec3::new(-1.0, 1.0, 1.0),
+        ];
+        assert!(
+            (point_to_polygon(DVec3::ZERO, DVec3::Z, &wall) - point_to_polygon(DVec3::ZERO, DVec3::Z, &top)).abs()
+                < 1e-12
+        );
         // The five inner faces of a unit cube around a receiver on the sixth add up to 1.
         let c = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
         let faces = [
-            [c(-0.5, -0.5, 1.0), c(0.5, -0.5, 1.0), c(0.5, 0.5, 1.0), c(-0.5, 0.5, 1.0)],
-            [c(-0.5, -0.5, 0.0), c(0.5, -0.5, 0.0), c(0.5, -0.5, 1.0), c(-0.5, -0.5, 1.0)],
+            [
+                c(-0.5, -0.5, 1.0),
+                c(0.5, -0.5, 1.0),
+                c(0.5, 0.5, 1.0),
+                c(-0.5, 0.5, 1.0),
+            ],
+            [
+                c(-0.5, -0.5, 0.0),
+                c(0.5, -0.5, 0.0),
+                c(0.5, -0.5, 1.0),
+                c(-0.5, -0.5, 1.0),
+            ],
             [c(-0.5, 0.5, 0.0), c(0.5, 0.5, 0.0), c(0.5, 0.5, 1.0), c(-0.5, 0.5, 1.0)],
-            [c(-0.5, -0.5, 0.0), c(-0.5, 0.5, 0.0), c(-0.5, 0.5, 1.0), c(-0.5, -0.5, 1.0)],
+            [
+                c(-0.5, -0.5, 0.0),
+                c(-0.5, 0.5, 0.0),
+                c(-0.5, 0.5, 1.0),
+                c(-0.5, -0.5, 1.0),
+            ],
             [c(0.5, -0.5, 0.0), c(0.5, 0.5, 0.0), c(0.5, 0.5, 1.0), c(0.5, -0.5, 1.0)],
         ];
         let x = DVec3::new(0.2, -0.1, 0.0);

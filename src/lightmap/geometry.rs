@@ -29,7 +29,14 @@ pub struct StaticGeometry {
 /// The scene's draws (objects and area-light emitters) in world space; animated objects are set
 /// apart as entities. Sphere lights are refused: sphere emitters are not patched yet.
 pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<StaticGeometry> {
-    from_draws(scene, gpu.draws.iter().zip(&gpu.meshes).map(|(item, mesh)| (item.object, item.model, mesh)), method)
+    from_draws(
+        scene,
+        gpu.draws
+            .iter()
+            .zip(&gpu.meshes)
+            .map(|(item, mesh)| (item.object, item.model, mesh)),
+        method,
+    )
 }
 
 /// [`static_geometry`] without a GPU: the scene's meshes loaded on the CPU, in the order the
@@ -37,7 +44,12 @@ pub fn static_geometry(scene: &Scene, gpu: &SceneGpu, method: &str) -> Result<St
 pub fn scene_geometry(scene: &Scene, method: &str) -> Result<StaticGeometry> {
     let mut meshes = Vec::new();
     for o in &scene.objects {
-        meshes.push((Some(meshes.len()), o.transform, o.load_mesh(std::path::Path::new(".")).map_err(|e| Error::Usage(e.to_string()))?));
+        meshes.push((
+            Some(meshes.len()),
+            o.transform,
+            o.load_mesh(std::path::Path::new("."))
+                .map_err(|e| Error::Usage(e.to_string()))?,
+        ));
     }
     for (_, mesh, _) in crate::gpu_scene::emitter_meshes(scene) {
         meshes.push((None, Mat4::IDENTITY, mesh));
@@ -45,17 +57,33 @@ pub fn scene_geometry(scene: &Scene, method: &str) -> Result<StaticGeometry> {
     from_draws(scene, meshes.iter().map(|(o, m, mesh)| (*o, *m, mesh)), method)
 }
 
-fn from_draws<'a>(scene: &Scene, draws: impl Iterator<Item = (Option<usize>, Mat4, &'a crate::scene::Mesh)>, method: &str) -> Result<StaticGeometry> {
+fn from_draws<'a>(
+    scene: &Scene,
+    draws: impl Iterator<Item = (Option<usize>, Mat4, &'a crate::scene::Mesh)>,
+    method: &str,
+) -> Result<StaticGeometry> {
     let src = &scene.source;
     let mut emitters = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
         match l {
             Light::Quad { radiance, .. } => emitters.push(*radiance),
-            Light::Sphere { .. } => return Err(Error::Usage(format!("{src}: lights[{i}] ({:?}): {method} does not patch sphere lights yet (use a quad light)", l.name()))),
+            Light::Sphere { .. } => {
+                return Err(Error::Usage(format!(
+                    "{src}: lights[{i}] ({:?}): {method} does not patch sphere lights yet (use a quad light)",
+                    l.name()
+                )))
+            }
             _ => {}
         }
     }
-    let mut out = StaticGeometry { triangles: Vec::new(), draw: Vec::new(), object_space: Vec::new(), uvs: Vec::new(), material: Vec::new(), entities: Vec::new() };
+    let mut out = StaticGeometry {
+        triangles: Vec::new(),
+        draw: Vec::new(),
+        object_space: Vec::new(),
+        uvs: Vec::new(),
+        material: Vec::new(),
+        entities: Vec::new(),
+    };
     let mut emitter = 0;
     for (d, (object, model, mesh)) in draws.enumerate() {
         let (albedo, emission, sky) = match object {
@@ -65,11 +93,20 @@ fn from_draws<'a>(scene: &Scene, draws: impl Iterator<Item = (Option<usize>, Mat
                     out.entities.push(d);
                     continue;
                 }
-                let m = scene.materials.get(obj.material).ok_or_else(|| Error::Usage(format!("{src}: objects[{o}]: material index out of range")))?;
+                let m = scene
+                    .materials
+                    .get(obj.material)
+                    .ok_or_else(|| Error::Usage(format!("{src}: objects[{o}]: material index out of range")))?;
                 // The light-map is multiplied by the albedo map texel by texel when drawn; a
                 // bounce reflects the map's mean (what qrad does with a texture's average).
                 let map_mean = match &m.albedo_map {
-                    Some(path) => mean_albedo(path).map_err(|e| Error::Usage(format!("{src}: material {:?}: albedo_map: cannot load {}: {e}", m.name, path.display())))?,
+                    Some(path) => mean_albedo(path).map_err(|e| {
+                        Error::Usage(format!(
+                            "{src}: material {:?}: albedo_map: cannot load {}: {e}",
+                            m.name,
+                            path.display()
+                        ))
+                    })?,
                     None => Vec3::ONE,
                 };
                 (m.albedo * map_mean, m.emission, m.sky)
@@ -84,9 +121,16 @@ fn from_draws<'a>(scene: &Scene, draws: impl Iterator<Item = (Option<usize>, Mat
         for t in mesh.indices.chunks_exact(3) {
             let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]).as_dvec3());
             let uv = [0, 1, 2].map(|k| mesh.uvs.get(t[k] as usize).map_or([0.0; 2], |v| v.to_array()));
-            out.triangles.push(Triangle { p, object: d, albedo: albedo.as_dvec3(), emission: emission.as_dvec3(), sky });
+            out.triangles.push(Triangle {
+                p,
+                object: d,
+                albedo: albedo.as_dvec3(),
+                emission: emission.as_dvec3(),
+                sky,
+            });
             out.draw.push(d);
-            out.object_space.push([0, 1, 2].map(|k| mesh.positions[t[k] as usize].to_array()));
+            out.object_space
+                .push([0, 1, 2].map(|k| mesh.positions[t[k] as usize].to_array()));
             out.uvs.push(uv);
             out.material.push(object.map(|o| scene.objects[o].material));
         }
@@ -100,7 +144,11 @@ fn mean_albedo(path: &std::path::Path) -> std::result::Result<Vec3, String> {
     let n = (img.width() as f64 * img.height() as f64).max(1.0);
     let mut sum = glam::DVec3::ZERO;
     for p in img.pixels() {
-        sum += glam::DVec3::new(srgb_decode(p.0[0]) as f64, srgb_decode(p.0[1]) as f64, srgb_decode(p.0[2]) as f64);
+        sum += glam::DVec3::new(
+            srgb_decode(p.0[0]) as f64,
+            srgb_decode(p.0[1]) as f64,
+            srgb_decode(p.0[2]) as f64,
+        );
     }
     Ok((sum / n).as_vec3())
 }

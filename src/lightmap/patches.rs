@@ -90,7 +90,11 @@ impl Patches {
     /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
     /// of the scene's size) and lays a grid of `size` patches on each.
     pub fn build(triangles: &[Triangle], size: f64) -> Patches {
-        let scale = triangles.iter().flat_map(|t| t.p).fold(0.0f64, |m, p| m.max(p.abs().max_element())).max(1.0);
+        let scale = triangles
+            .iter()
+            .flat_map(|t| t.p)
+            .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
+            .max(1.0);
         let mut charts: Vec<Chart> = Vec::new();
         for (ti, t) in triangles.iter().enumerate() {
             let n = t.normal();
@@ -114,7 +118,19 @@ impl Patches {
                     let u = helper.cross(n).normalize();
                     let v = n.cross(u);
                     let _ = d;
-                    charts.push(Chart { object: t.object, normal: n, origin: DVec3::ZERO, u, v, width: 0, height: 0, first: 0, triangles: vec![ti], cell: (0, 0), sky: t.sky });
+                    charts.push(Chart {
+                        object: t.object,
+                        normal: n,
+                        origin: DVec3::ZERO,
+                        u,
+                        v,
+                        width: 0,
+                        height: 0,
+                        first: 0,
+                        triangles: vec![ti],
+                        cell: (0, 0),
+                        sky: t.sky,
+                    });
                 }
             }
         }
@@ -139,7 +155,12 @@ impl Patches {
                 c.width = 1;
                 c.height = 1;
                 c.origin = plane + c.u * lo.x + c.v * lo.y;
-                patches.push(Patch { chart: ci, centre: c.origin, normal: c.normal, ..Patch::default() });
+                patches.push(Patch {
+                    chart: ci,
+                    centre: c.origin,
+                    normal: c.normal,
+                    ..Patch::default()
+                });
                 continue;
             }
             // Snap outward to the world grid (a vertex on a grid line within 1e-9 of a cell stays on it).
@@ -159,7 +180,11 @@ impl Patches {
                     let (mut covered, mut sum) = (0usize, DVec2::ZERO);
                     for sj in 0..COVERAGE_SAMPLES {
                         for si in 0..COVERAGE_SAMPLES {
-                            let q = corner + DVec2::new((si as f64 + 0.5) / COVERAGE_SAMPLES as f64, (sj as f64 + 0.5) / COVERAGE_SAMPLES as f64) * size;
+                            let q = corner
+                                + DVec2::new(
+                                    (si as f64 + 0.5) / COVERAGE_SAMPLES as f64,
+                                    (sj as f64 + 0.5) / COVERAGE_SAMPLES as f64,
+                                ) * size;
                             if tris2d.iter().any(|t| inside_triangle(q, t)) {
                                 covered += 1;
                                 sum += q;
@@ -179,7 +204,17 @@ impl Patches {
                     }
                     let emission = t0.emission * std::f64::consts::PI;
                     let e = if area > 0.0 { emission } else { DVec3::ZERO };
-                    patches.push(Patch { chart: ci, centre, normal: c.normal, area, coverage, albedo: t0.albedo, emission: e, total: e, unshot: e });
+                    patches.push(Patch {
+                        chart: ci,
+                        centre,
+                        normal: c.normal,
+                        area,
+                        coverage,
+                        albedo: t0.albedo,
+                        emission: e,
+                        total: e,
+                        unshot: e,
+                    });
                 }
             }
             // The sub-sampled coverage is coarse for a polygon smaller than a few patches (a

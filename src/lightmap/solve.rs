@@ -40,7 +40,14 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { mode: Mode::Corrected, block: 3, threshold: 1e-3, max_shots: 100_000, samples_per_chart: 10, full_visibility: true }
+        Settings {
+            mode: Mode::Corrected,
+            block: 3,
+            threshold: 1e-3,
+            max_shots: 100_000,
+            samples_per_chart: 10,
+            full_visibility: true,
+        }
     }
 }
 
@@ -74,12 +81,18 @@ impl Occluders {
     pub fn new(triangles: &[Triangle]) -> Occluders {
         let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|p| p.as_vec3())).collect();
         let bvh = Bvh::build(&tris);
-        Occluders { tris, bvh, triangles: triangles.to_vec() }
+        Occluders {
+            tris,
+            bvh,
+            triangles: triangles.to_vec(),
+        }
     }
 
     /// The first triangle a ray from `a` along the unit `dir` hits: (distance, index).
     pub fn first_hit(&self, a: DVec3, dir: DVec3) -> Option<(f64, usize)> {
-        self.bvh.closest_hit(&self.tris, a.as_vec3(), dir.as_vec3()).map(|(t, i)| (t as f64, i as usize))
+        self.bvh
+            .closest_hit(&self.tris, a.as_vec3(), dir.as_vec3())
+            .map(|(t, i)| (t as f64, i as usize))
     }
 
     pub fn has_sky(&self) -> bool {
@@ -121,18 +134,37 @@ fn blocks_of(p: &Geometry<'_>, n: usize) -> Vec<Block> {
         for j0 in (0..c.height).step_by(n) {
             for i0 in (0..c.width).step_by(n) {
                 let (i1, j1) = ((i0 + n).min(c.width), (j0 + n).min(c.height));
-                let members: Vec<usize> = (j0..j1).flat_map(|j| (i0..i1).map(move |i| c.first + j * c.width + i)).filter(|&k| p.patches[k].inside()).collect();
+                let members: Vec<usize> = (j0..j1)
+                    .flat_map(|j| (i0..i1).map(move |i| c.first + j * c.width + i))
+                    .filter(|&k| p.patches[k].inside())
+                    .collect();
                 if members.is_empty() {
                     continue;
                 }
                 // The block's rectangle is that of its patches inside the polygon: the border
                 // frame lies outside the surface and must not shoot.
                 let ij = |k: usize| ((k - c.first) % c.width, (k - c.first) / c.width);
-                let (lo_i, hi_i) = members.iter().map(|&k| ij(k).0).fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i + 1)));
-                let (lo_j, hi_j) = members.iter().map(|&k| ij(k).1).fold((usize::MAX, 0), |(a, b), j| (a.min(j), b.max(j + 1)));
+                let (lo_i, hi_i) = members
+                    .iter()
+                    .map(|&k| ij(k).0)
+                    .fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i + 1)));
+                let (lo_j, hi_j) = members
+                    .iter()
+                    .map(|&k| ij(k).1)
+                    .fold((usize::MAX, 0), |(a, b), j| (a.min(j), b.max(j + 1)));
                 let at = |i: usize, j: usize| c.origin + c.u * (i as f64 * s) + c.v * (j as f64 * s);
-                let normal = members.iter().map(|&k| p.patches[k].normal).sum::<DVec3>().try_normalize().unwrap_or(c.normal);
-                out.push(Block { chart: ci, members, corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)], normal });
+                let normal = members
+                    .iter()
+                    .map(|&k| p.patches[k].normal)
+                    .sum::<DVec3>()
+                    .try_normalize()
+                    .unwrap_or(c.normal);
+                out.push(Block {
+                    chart: ci,
+                    members,
+                    corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)],
+                    normal,
+                });
             }
         }
     }
@@ -146,8 +178,15 @@ fn magnitude(v: DVec3) -> f64 {
 /// Shows a solve's progress: the unshot energy falls about geometrically, so the fraction done is
 /// taken on a log scale from the initial energy down to the stop, which keeps the time left honest.
 pub(crate) fn show_progress(progress: &mut Progress, shots: usize, left: f64, initial: f64, threshold: f64) {
-    let fraction = if initial > 0.0 && left > 0.0 { ((initial / left).ln() / (1.0 / threshold).ln()).clamp(0.0, 1.0) } else { 1.0 };
-    progress.set_detail(format!("{shots} shots, unshot {:.2e} of the initial energy", if initial > 0.0 { left / initial } else { 0.0 }));
+    let fraction = if initial > 0.0 && left > 0.0 {
+        ((initial / left).ln() / (1.0 / threshold).ln()).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    progress.set_detail(format!(
+        "{shots} shots, unshot {:.2e} of the initial energy",
+        if initial > 0.0 { left / initial } else { 0.0 }
+    ));
     progress.update((fraction * 1000.0) as u64, 1000);
 }
 
@@ -203,7 +242,11 @@ impl Unshot for Radiosity<'_> {
 pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progress: &mut Progress) -> Report {
     // The loop reads the geometry while the payload (the same patches' radiosity) changes.
     let geometry = p.patches.clone();
-    let g = Geometry { size: p.size, charts: &p.charts, patches: &geometry };
+    let g = Geometry {
+        size: p.size,
+        charts: &p.charts,
+        patches: &geometry,
+    };
     shoot(g, occluders, settings, progress, &mut Radiosity(&mut p.patches))
 }
 
@@ -217,13 +260,23 @@ pub struct Geometry<'a> {
 
 impl<'a> From<&'a Patches> for Geometry<'a> {
     fn from(p: &'a Patches) -> Geometry<'a> {
-        Geometry { size: p.size, charts: &p.charts, patches: &p.patches }
+        Geometry {
+            size: p.size,
+            charts: &p.charts,
+            patches: &p.patches,
+        }
     }
 }
 
 /// The progressive-refinement loop over any [`Unshot`] payload: shooter selection (the seed's
 /// random block samples, or the largest), the stop, form factors and visibility.
-pub fn shoot(g: Geometry<'_>, occluders: &Occluders, settings: &Settings, progress: &mut Progress, energy: &mut dyn Unshot) -> Report {
+pub fn shoot(
+    g: Geometry<'_>,
+    occluders: &Occluders,
+    settings: &Settings,
+    progress: &mut Progress,
+    energy: &mut dyn Unshot,
+) -> Report {
     let blocks = blocks_of(&g, settings.block.max(1));
     let area: Vec<f64> = g.patches.iter().map(|q| q.area).collect();
     let power = |e: &dyn Unshot, b: &Block| b.members.iter().map(|&k| e.magnitude(k) * area[k]).sum::<f64>();
@@ -236,13 +289,19 @@ pub fn shoot(g: Geometry<'_>, occluders: &Occluders, settings: &Settings, progre
     let matrix = Matrix::build_for(&occluders.triangles, g.charts, settings.full_visibility);
     report.visibility = matrix.counts();
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let by_chart: Vec<Vec<usize>> = (0..g.charts.len()).map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect()).collect();
+    let by_chart: Vec<Vec<usize>> = (0..g.charts.len())
+        .map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect())
+        .collect();
     let receivers: Vec<usize> = (0..g.patches.len()).filter(|&k| g.patches[k].inside()).collect();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     // Receivers start a hair in front of their surface, so that their own plane never occludes.
     let eps = 1e-4 * g.size;
     while report.shots < settings.max_shots {
-        let full = |e: &dyn Unshot| (0..blocks.len()).map(|b| (b, power(e, &blocks[b]))).fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a });
+        let full = |e: &dyn Unshot| {
+            (0..blocks.len())
+                .map(|b| (b, power(e, &blocks[b])))
+                .fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a })
+        };
         let (best, best_power) = match settings.mode {
             Mode::Corrected => full(energy),
             Mode::Faithful => {
@@ -303,11 +362,18 @@ pub fn shoot(g: Geometry<'_>, occluders: &Occluders, settings: &Settings, progre
                     // F from the receiver to the square times the square's mean unshot radiosity.
                     Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / square,
                     // CaLight: the block as one patch of its area at its centre.
-                    Mode::Faithful => form_factor::point_sampled(rp.centre, rp.normal, centre, normal, block_area, g.size) / block_area,
+                    Mode::Faithful => {
+                        form_factor::point_sampled(rp.centre, rp.normal, centre, normal, block_area, g.size)
+                            / block_area
+                    }
                 };
                 // With normal-mapped patches, both ends must also face each other's planes (the
                 // seed's four cosines); for plain patches these equal the tests above.
-                if f <= 0.0 || !reflects[i] || plane.dot(centre - rp.centre) <= 0.0 || g.charts[b.chart].normal.dot(rp.centre - centre) <= 0.0 {
+                if f <= 0.0
+                    || !reflects[i]
+                    || plane.dot(centre - rp.centre) <= 0.0
+                    || g.charts[b.chart].normal.dot(rp.centre - centre) <= 0.0
+                {
                     return None;
                 }
                 let full = vis == Vis::Full;
@@ -317,8 +383,14 @@ pub fn shoot(g: Geometry<'_>, occluders: &Occluders, settings: &Settings, progre
             let chunk = receivers.len().div_ceil(threads).max(1);
             let indexed: Vec<(usize, &usize)> = receivers.iter().enumerate().collect();
             std::thread::scope(|scope| {
-                let handles: Vec<_> = indexed.chunks(chunk).map(|part| scope.spawn(move || part.iter().filter_map(|&x| shooter(x)).collect::<Vec<_>>())).collect();
-                handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect::<Vec<_>>()
+                let handles: Vec<_> = indexed
+                    .chunks(chunk)
+                    .map(|part| scope.spawn(move || part.iter().filter_map(|&x| shooter(x)).collect::<Vec<_>>()))
+                    .collect();
+                handles
+                    .into_iter()
+                    .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect::<Vec<_>>()
             })
         };
         let mut shares = Vec::with_capacity(found.len());

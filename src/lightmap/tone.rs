@@ -22,7 +22,11 @@ fn luminance(c: DVec3) -> f64 {
 /// display/world luminance ratio), black stays black.
 pub fn reproduce(values: &[DVec3]) -> Vec<[u8; 3]> {
     let lum: Vec<f64> = values.iter().map(|&v| luminance(v)).collect();
-    values.iter().zip(display_scale(&lum)).map(|(&v, scale)| [v.x, v.y, v.z].map(|c| (c * 255.0 * scale).round().clamp(0.0, 255.0) as u8)).collect()
+    values
+        .iter()
+        .zip(display_scale(&lum))
+        .map(|(&v, scale)| [v.x, v.y, v.z].map(|c| (c * 255.0 * scale).round().clamp(0.0, 255.0) as u8))
+        .collect()
 }
 
 /// Per world luminance, the factor that takes it to its display value in [0, 1] (0 for black):

@@ -92,7 +92,10 @@ impl Matrix {
     /// [`Matrix::build`] from the charts alone.
     pub fn build_for(triangles: &[Triangle], charts: &[Chart], full: bool) -> Matrix {
         let n = charts.len();
-        let mut m = Matrix { n, bits: vec![0; (n * (n + 1) / 2).div_ceil(4)] };
+        let mut m = Matrix {
+            n,
+            bits: vec![0; (n * (n + 1) / 2).div_ceil(4)],
+        };
         let test = Tester::of_charts(triangles, charts);
         for i in 0..n {
             for j in 0..=i {
@@ -117,20 +120,39 @@ impl<'a> Tester<'a> {
     }
 
     pub fn of_charts(triangles: &'a [Triangle], charts: &[Chart]) -> Tester<'a> {
-        let scale = triangles.iter().flat_map(|t| t.p).fold(0.0f64, |m, q| m.max(q.abs().max_element())).max(1.0);
+        let scale = triangles
+            .iter()
+            .flat_map(|t| t.p)
+            .fold(0.0f64, |m, q| m.max(q.abs().max_element()))
+            .max(1.0);
         let surfaces = charts
             .iter()
             .map(|c| {
                 let pts: Vec<DVec3> = c.triangles.iter().flat_map(|&t| triangles[t].p).collect();
                 let flat: Vec<DVec2> = pts.iter().map(|q| DVec2::new(q.dot(c.u), q.dot(c.v))).collect();
                 let offset = c.normal.dot(pts.first().copied().unwrap_or_default());
-                let hull = hull_2d(flat).into_iter().map(|f| c.normal * offset + c.u * f.x + c.v * f.y).collect();
+                let hull = hull_2d(flat)
+                    .into_iter()
+                    .map(|f| c.normal * offset + c.u * f.x + c.v * f.y)
+                    .collect();
                 let lo = pts.iter().fold(DVec3::splat(f64::INFINITY), |a, &q| a.min(q));
                 let hi = pts.iter().fold(DVec3::splat(f64::NEG_INFINITY), |a, &q| a.max(q));
-                Surface { hull, normal: c.normal, offset, sky: c.sky, triangles: c.triangles.clone(), lo, hi }
+                Surface {
+                    hull,
+                    normal: c.normal,
+                    offset,
+                    sky: c.sky,
+                    triangles: c.triangles.clone(),
+                    lo,
+                    hi,
+                }
             })
             .collect();
-        Tester { triangles, surfaces, tol: 1e-6 * scale }
+        Tester {
+            triangles,
+            surfaces,
+            tol: 1e-6 * scale,
+        }
     }
 
     pub fn classify(&self, i: usize, j: usize, full: bool) -> Vis {
@@ -179,7 +201,10 @@ struct Axes {
 }
 
 fn hull_axes(pts: &[DVec3]) -> Axes {
-    let mut axes = Axes { faces: Vec::new(), edges: Vec::new() };
+    let mut axes = Axes {
+        faces: Vec::new(),
+        edges: Vec::new(),
+    };
     let n = pts.len();
     for a in 0..n {
         for b in a + 1..n {
@@ -194,7 +219,9 @@ fn hull_axes(pts: &[DVec3]) -> Axes {
                 }
                 let f = f.normalize();
                 let d: Vec<f64> = pts.iter().map(|q| f.dot(*q - pts[a])).collect();
-                let (mn, mx) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| (l.min(x), h.max(x)));
+                let (mn, mx) = d
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| (l.min(x), h.max(x)));
                 if mn >= -1e-9 || mx <= 1e-9 {
                     axes.faces.push(f);
                 }
@@ -216,8 +243,12 @@ fn separated(pts: &[DVec3], tri: &[DVec3; 3], axes: &Axes, tol: f64) -> bool {
             return false;
         }
         let axis = axis / len;
-        let (hl, hh) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(axis.dot(*q)), h.max(axis.dot(*q))));
-        let (tl, th) = tri.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(axis.dot(*q)), h.max(axis.dot(*q))));
+        let (hl, hh) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+            (l.min(axis.dot(*q)), h.max(axis.dot(*q)))
+        });
+        let (tl, th) = tri.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+            (l.min(axis.dot(*q)), h.max(axis.dot(*q)))
+        });
         th <= hl + tol || hh <= tl + tol
     };
     let edges = [tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]];
@@ -238,7 +269,11 @@ fn hull_2d(mut pts: Vec<DVec2>) -> Vec<DVec2> {
     let mut hull: Vec<DVec2> = Vec::with_capacity(2 * pts.len());
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
+        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
         for &q in iter {
             while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0 {
                 hull.pop();

@@ -22,7 +22,9 @@ pub fn line_line(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> Option<(DVec3, f
     // The (p, q) pair with the largest 2-D determinant: the lines are then as far as possible
     // from parallel in that plane, and r is the remaining axis.
     let pairs = [(0usize, 1usize, 2usize), (0, 2, 1), (1, 2, 0)];
-    let (p, q, r) = pairs.into_iter().max_by(|a, b| det(u, v, a.0, a.1).abs().total_cmp(&det(u, v, b.0, b.1).abs()))?;
+    let (p, q, r) = pairs
+        .into_iter()
+        .max_by(|a, b| det(u, v, a.0, a.1).abs().total_cmp(&det(u, v, b.0, b.1).abs()))?;
     let d = det(u, v, p, q);
     // Solving p0 + s·u = q0 + t·v in the (p, q) plane.
     let s = (v[p] * w[q] - v[q] * w[p]) / d;

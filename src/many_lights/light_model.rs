@@ -95,14 +95,34 @@ impl ManyLight {
         let mut out = Vec::with_capacity(scene.lights.len());
         for (i, l) in scene.lights.iter().enumerate() {
             match l {
-                Light::Point { position, intensity, .. } => out.push(ManyLight { position: position.as_dvec3(), direction: DVec3::NEG_Z, intensity: intensity.as_dvec3(), cone: None }),
-                Light::Spot { position, direction, intensity, inner_deg, outer_deg, .. } => out.push(ManyLight {
+                Light::Point {
+                    position, intensity, ..
+                } => out.push(ManyLight {
+                    position: position.as_dvec3(),
+                    direction: DVec3::NEG_Z,
+                    intensity: intensity.as_dvec3(),
+                    cone: None,
+                }),
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    inner_deg,
+                    outer_deg,
+                    ..
+                } => out.push(ManyLight {
                     position: position.as_dvec3(),
                     direction: direction.as_dvec3().normalize_or(DVec3::NEG_Z),
                     intensity: intensity.as_dvec3(),
                     cone: Some(((*inner_deg as f64).to_radians(), (*outer_deg as f64).to_radians())),
                 }),
-                _ => return Err(Error::Usage(format!("{}: lights[{i}] ({:?}): {method} lights with point and spot lights only (seed 003)", scene.source, l.name()))),
+                _ => {
+                    return Err(Error::Usage(format!(
+                        "{}: lights[{i}] ({:?}): {method} lights with point and spot lights only (seed 003)",
+                        scene.source,
+                        l.name()
+                    )))
+                }
             }
         }
         Ok(out)
@@ -125,7 +145,9 @@ impl ManyLight {
         let factor = match (self.cone, model) {
             (None, _) => 1.0,
             (Some((full, null)), LightModel::Seed { .. }) => seed_spot_ramp(full, null, self.angle_to(p)),
-            (Some((full, null)), LightModel::Physical) => physical_spot_falloff(null.cos(), full.cos(), (-to_light / dist).dot(self.direction)),
+            (Some((full, null)), LightModel::Physical) => {
+                physical_spot_falloff(null.cos(), full.cos(), (-to_light / dist).dot(self.direction))
+            }
             (Some((full, null)), LightModel::OpenGl { .. }) => {
                 let cos = (-to_light / dist).dot(self.direction);
                 if cos < null.cos() {
@@ -141,7 +163,9 @@ impl ManyLight {
     /// What this light at full intensity makes a diffuse point reflect: outgoing radiance
     /// (physical) or the thesis's colour (faithful models), unshadowed.
     pub fn shade(&self, model: &LightModel, p: DVec3, n: DVec3, albedo: DVec3) -> DVec3 {
-        let Some((factor, dist, l)) = self.reach(model, p) else { return DVec3::ZERO };
+        let Some((factor, dist, l)) = self.reach(model, p) else {
+            return DVec3::ZERO;
+        };
         let cos = n.dot(l).max(0.0);
         let scale = match *model {
             LightModel::Physical => factor * cos / (dist * dist) / std::f64::consts::PI,

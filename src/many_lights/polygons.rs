@@ -31,7 +31,12 @@ pub fn scene_polygons(scene_source: &str, geometry: &StaticGeometry, method: &st
     let mut out = Vec::with_capacity(geometry.triangles.len());
     for (t, tri) in geometry.triangles.iter().enumerate() {
         if let Some(polygon) = Polygon::from_vertices(tri.p.to_vec()) {
-            out.push(ScenePolygon { polygon, albedo: tri.albedo, emission: tri.emission, draw: geometry.draw[t] });
+            out.push(ScenePolygon {
+                polygon,
+                albedo: tri.albedo,
+                emission: tri.emission,
+                draw: geometry.draw[t],
+            });
         }
     }
     Ok(out)

@@ -31,14 +31,26 @@ pub struct Segments {
 
 impl Segments {
     /// Segments no larger than `max_area` (world units²) over `polygons`, or why not.
-    pub fn build<'a>(polygons: impl IntoIterator<Item = &'a Polygon> + Clone, max_area: f64) -> Result<Segments, String> {
+    pub fn build<'a>(
+        polygons: impl IntoIterator<Item = &'a Polygon> + Clone,
+        max_area: f64,
+    ) -> Result<Segments, String> {
         if !(max_area.is_finite() && max_area > 0.0) {
-            return Err(format!("the maximum segment area must be a positive number (got {max_area})"));
+            return Err(format!(
+                "the maximum segment area must be a positive number (got {max_area})"
+            ));
         }
         let depths: Vec<u32> = polygons.clone().into_iter().map(|p| depth_for(p, max_area)).collect();
-        let total: f64 = polygons.clone().into_iter().zip(&depths).map(|(p, &d)| (p.vertices.len().saturating_sub(2)) as f64 * 4f64.powi(d as i32)).sum();
+        let total: f64 = polygons
+            .clone()
+            .into_iter()
+            .zip(&depths)
+            .map(|(p, &d)| (p.vertices.len().saturating_sub(2)) as f64 * 4f64.powi(d as i32))
+            .sum();
         if total > MAX_SEGMENTS as f64 {
-            return Err(format!("{total:.0} segments at a maximum area of {max_area} (the limit is {MAX_SEGMENTS}): raise the area"));
+            return Err(format!(
+                "{total:.0} segments at a maximum area of {max_area} (the limit is {MAX_SEGMENTS}): raise the area"
+            ));
         }
         let mut s = Segments::default();
         for (pi, (p, &depth)) in polygons.into_iter().zip(&depths).enumerate() {
@@ -49,7 +61,13 @@ impl Segments {
 
     fn add_polygon(&mut self, p: &Polygon, polygon: u32, depth: u32) {
         let m = 1u32 << depth;
-        let Segments { positions, normals, vertex_polygon, triangles, triangle_polygon } = self;
+        let Segments {
+            positions,
+            normals,
+            vertex_polygon,
+            triangles,
+            triangle_polygon,
+        } = self;
         let mut index: HashMap<[u64; 3], u32> = HashMap::new();
         let a = p.vertices[0];
         for k in 1..p.vertices.len().saturating_sub(1) {
@@ -87,14 +105,20 @@ impl Segments {
     }
 
     pub fn centroid(&self, t: usize) -> DVec3 {
-        self.triangles[t].iter().map(|&i| self.positions[i as usize]).sum::<DVec3>() / 3.0
+        self.triangles[t]
+            .iter()
+            .map(|&i| self.positions[i as usize])
+            .sum::<DVec3>()
+            / 3.0
     }
 }
 
 /// Rounds of 1→4 splitting the polygon's largest fan triangle needs to be at most `max_area`.
 fn depth_for(p: &Polygon, max_area: f64) -> u32 {
     let a = p.vertices[0];
-    let largest = (1..p.vertices.len().saturating_sub(1)).map(|k| 0.5 * (p.vertices[k] - a).cross(p.vertices[k + 1] - a).length()).fold(0.0, f64::max);
+    let largest = (1..p.vertices.len().saturating_sub(1))
+        .map(|k| 0.5 * (p.vertices[k] - a).cross(p.vertices[k + 1] - a).length())
+        .fold(0.0, f64::max);
     let mut depth = 0;
     let mut area = largest;
     while area > max_area && depth < 16 {

@@ -17,7 +17,10 @@ fn v(x: f64, y: f64, z: f64) -> DVec3 {
 struct Lcg(u64);
 impl Lcg {
     fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
@@ -42,7 +45,10 @@ fn line_line_meets_misses_and_covers_every_axis_pair() {
     let mut r = Lcg(7);
     for _ in 0..1000 {
         let x = v(r.range(-5.0, 5.0), r.range(-5.0, 5.0), r.range(-5.0, 5.0));
-        let (du, dv) = (v(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0)), v(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0)));
+        let (du, dv) = (
+            v(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0)),
+            v(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0)),
+        );
         if du.cross(dv).length() < 0.1 {
             continue;
         }
@@ -53,8 +59,16 @@ fn line_line_meets_misses_and_covers_every_axis_pair() {
 
 #[test]
 fn segment_plane_uses_the_corrected_formula() {
-    let z1 = Plane { normal: DVec3::Z, dist: 1.0 };
-    assert!(segment_plane(v(0.0, 0.0, 0.0), v(0.0, 0.0, 2.0), &z1).unwrap().distance(v(0.0, 0.0, 1.0)) < 1e-12);
+    let z1 = Plane {
+        normal: DVec3::Z,
+        dist: 1.0,
+    };
+    assert!(
+        segment_plane(v(0.0, 0.0, 0.0), v(0.0, 0.0, 2.0), &z1)
+            .unwrap()
+            .distance(v(0.0, 0.0, 1.0))
+            < 1e-12
+    );
     assert!(segment_plane(v(0.0, 0.0, 2.0), v(0.0, 0.0, 3.0), &z1).is_none());
     assert!(segment_plane(v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), &z1).is_none());
     let tilted = Plane::from_normal_point(v(1.0, 2.0, 3.0), v(0.2, -0.1, 0.4)).unwrap();
@@ -73,7 +87,11 @@ fn side_and_distance_of_points() {
 
 #[test]
 fn cone_containment_and_edge_angle() {
-    let c = Cone { apex: DVec3::ZERO, axis: v(0.0, 0.0, -1.0), spread: 30f64.to_radians() };
+    let c = Cone {
+        apex: DVec3::ZERO,
+        axis: v(0.0, 0.0, -1.0),
+        spread: 30f64.to_radians(),
+    };
     assert!(c.contains(v(0.0, 0.0, -1.0)));
     assert!(!c.contains(v(1.0, 0.0, -1.0)));
     assert!((c.angle_to_edge(v(0.0, 0.0, -1.0)).unwrap() - 30f64.to_radians()).abs() < 1e-12);
@@ -85,13 +103,22 @@ fn cone_containment_and_edge_angle() {
 #[test]
 fn point_in_convex_polygon_agrees_with_half_planes() {
     let mut r = Lcg(11);
-    let frames = [(DVec3::X, DVec3::Y), (DVec3::Y, DVec3::Z), (DVec3::Z, DVec3::X), (v(1.0, 1.0, 0.3).normalize(), v(-0.2, 0.5, 1.0).normalize())];
+    let frames = [
+        (DVec3::X, DVec3::Y),
+        (DVec3::Y, DVec3::Z),
+        (DVec3::Z, DVec3::X),
+        (v(1.0, 1.0, 0.3).normalize(), v(-0.2, 0.5, 1.0).normalize()),
+    ];
     let mut disagreements_far = 0;
     for (fu, fv) in frames {
         let fv = (fv - fu * fu.dot(fv)).normalize();
         let n = fu.cross(fv);
         for shape in 0..2 {
-            let corners: Vec<(f64, f64)> = if shape == 0 { vec![(0.0, 0.0), (1.0, 0.0), (0.3, 0.8)] } else { vec![(-1.0, -0.5), (1.0, -0.7), (1.2, 0.6), (-0.8, 0.9)] };
+            let corners: Vec<(f64, f64)> = if shape == 0 {
+                vec![(0.0, 0.0), (1.0, 0.0), (0.3, 0.8)]
+            } else {
+                vec![(-1.0, -0.5), (1.0, -0.7), (1.2, 0.6), (-0.8, 0.9)]
+            };
             let poly: Vec<DVec3> = corners.iter().map(|&(a, b)| fu * a + fv * b + n * 0.7).collect();
             let polygon = Polygon::from_vertices(poly.clone()).unwrap();
             assert!(point_in_convex_polygon(polygon.center(), &poly, n));
@@ -118,16 +145,40 @@ fn point_in_convex_polygon_agrees_with_half_planes() {
 
 #[test]
 fn segmentation_conserves_area_winding_and_bounds_size() {
-    let quad = Polygon::from_vertices(vec![v(0.0, 0.0, 0.0), v(3.0, 0.0, 0.0), v(3.5, 2.0, 1.0), v(0.2, 2.5, 1.25)]);
-    let quad = quad.unwrap_or_else(|| Polygon::from_vertices(vec![v(0.0, 0.0, 0.0), v(3.0, 0.0, 0.0), v(3.0, 2.0, 0.0), v(0.0, 2.0, 0.0)]).unwrap());
-    let pentagon = Polygon::from_vertices((0..5).map(|k| v((k as f64 * 1.2566).cos(), 0.0, -(k as f64 * 1.2566).sin())).collect()).unwrap();
+    let quad = Polygon::from_vertices(vec![
+        v(0.0, 0.0, 0.0),
+        v(3.0, 0.0, 0.0),
+        v(3.5, 2.0, 1.0),
+        v(0.2, 2.5, 1.25),
+    ]);
+    let quad = quad.unwrap_or_else(|| {
+        Polygon::from_vertices(vec![
+            v(0.0, 0.0, 0.0),
+            v(3.0, 0.0, 0.0),
+            v(3.0, 2.0, 0.0),
+            v(0.0, 2.0, 0.0),
+        ])
+        .unwrap()
+    });
+    let pentagon = Polygon::from_vertices(
+        (0..5)
+            .map(|k| v((k as f64 * 1.2566).cos(), 0.0, -(k as f64 * 1.2566).sin()))
+            .collect(),
+    )
+    .unwrap();
     let polygons = [quad, pentagon];
     for max_area in [10.0, 0.3, 0.01] {
         let s = Segments::build(polygons.iter(), max_area).unwrap();
         for (pi, p) in polygons.iter().enumerate() {
-            let tris: Vec<usize> = (0..s.triangles.len()).filter(|&t| s.triangle_polygon[t] == pi as u32).collect();
+            let tris: Vec<usize> = (0..s.triangles.len())
+                .filter(|&t| s.triangle_polygon[t] == pi as u32)
+                .collect();
             let area: f64 = tris.iter().map(|&t| s.triangle_area(t)).sum();
-            assert!((area - p.area()).abs() <= 1e-12 * p.area().max(1.0), "area {area} vs {}", p.area());
+            assert!(
+                (area - p.area()).abs() <= 1e-12 * p.area().max(1.0),
+                "area {area} vs {}",
+                p.area()
+            );
             for &t in &tris {
                 assert!(s.triangle_area(t) <= max_area * (1.0 + 1e-12));
                 let [a, b, c] = s.triangles[t].map(|i| s.positions[i as usize]);
@@ -167,7 +218,12 @@ fn spot_ramp_is_linear_in_angle_between_the_cones() {
         last = x;
     }
     // The spot light through the model: the 25° point gets half the axis's light.
-    let light = ManyLight { position: DVec3::ZERO, direction: v(0.0, 0.0, -1.0), intensity: DVec3::ONE, cone: Some((full, null)) };
+    let light = ManyLight {
+        position: DVec3::ZERO,
+        direction: v(0.0, 0.0, -1.0),
+        intensity: DVec3::ONE,
+        cone: Some((full, null)),
+    };
     let model = LightModel::Seed { k: 1.0 };
     let at = |deg: f64| {
         let a = f64::to_radians(deg);
@@ -179,28 +235,51 @@ fn spot_ramp_is_linear_in_angle_between_the_cones() {
 
 #[test]
 fn attenuation_cosine_and_back_faces() {
-    let light = ManyLight { position: v(0.0, 0.0, 4.0), direction: v(0.0, 0.0, -1.0), intensity: v(2.0, 1.0, 0.5), cone: None };
+    let light = ManyLight {
+        position: v(0.0, 0.0, 4.0),
+        direction: v(0.0, 0.0, -1.0),
+        intensity: v(2.0, 1.0, 0.5),
+        cone: None,
+    };
     let rho = v(0.5, 0.5, 0.5);
     let seed = LightModel::Seed { k: 3.0 };
     let near = light.shade(&seed, v(0.0, 0.0, 2.0), DVec3::Z, rho);
     let far = light.shade(&seed, v(0.0, 0.0, 0.0), DVec3::Z, rho);
-    assert!((near.x - 2.0 * far.x).abs() < 1e-12, "1/d: doubling d halves the modifier");
+    assert!(
+        (near.x - 2.0 * far.x).abs() < 1e-12,
+        "1/d: doubling d halves the modifier"
+    );
     assert!((far.x - 3.0 * 0.5 * 2.0 / 4.0).abs() < 1e-12, "k·ρ·cos·I/d");
-    assert_eq!(light.shade(&seed, v(0.0, 0.0, 0.0), -DVec3::Z, rho), DVec3::ZERO, "back faces are clamped to zero");
+    assert_eq!(
+        light.shade(&seed, v(0.0, 0.0, 0.0), -DVec3::Z, rho),
+        DVec3::ZERO,
+        "back faces are clamped to zero"
+    );
     // Physical: ρ/π · I/d² · cos.
-    let phys = light.shade(&LightModel::Physical, v(3.0, 0.0, 0.0), v(0.0, 0.0, 1.0), rho).x;
+    let phys = light
+        .shade(&LightModel::Physical, v(3.0, 0.0, 0.0), v(0.0, 0.0, 1.0), rho)
+        .x;
     let (d2, cos) = (25.0, 4.0 / 5.0);
     assert!((phys - 0.5 / std::f64::consts::PI * 2.0 / d2 * cos).abs() < 1e-12);
     // OpenGL fixed function: 1/(kc + kl d + kq d²) and cos^e inside the cutoff.
-    let gl = LightModel::OpenGl { kc: 1.0, kl: 0.5, kq: 0.25 };
+    let gl = LightModel::OpenGl {
+        kc: 1.0,
+        kl: 0.5,
+        kq: 0.25,
+    };
     let g = light.shade(&gl, v(0.0, 0.0, 0.0), DVec3::Z, rho).x;
     assert!((g - 0.5 * 2.0 / (1.0 + 2.0 + 4.0)).abs() < 1e-12);
-    let spot = ManyLight { cone: Some((20f64.to_radians(), 30f64.to_radians())), ..light };
+    let spot = ManyLight {
+        cone: Some((20f64.to_radians(), 30f64.to_radians())),
+        ..light
+    };
     let e = opengl_spot_exponent(20f64.to_radians());
     assert!((20f64.to_radians().cos().powf(e) - 0.5).abs() < 1e-12);
     let a = 25f64.to_radians();
     let p = v(4.0 * a.tan(), 0.0, 0.0);
-    let expected = a.cos().powf(e) * 0.5 * 2.0 / (1.0 + 0.5 * p.distance(spot.position) + 0.25 * p.distance_squared(spot.position)) * a.cos();
+    let expected = a.cos().powf(e) * 0.5 * 2.0
+        / (1.0 + 0.5 * p.distance(spot.position) + 0.25 * p.distance_squared(spot.position))
+        * a.cos();
     assert!((spot.shade(&gl, p, DVec3::Z, rho).x - expected).abs() < 1e-12);
     // The physical spot is the forward method's smoothstep.
     assert!((physical_spot_falloff(0.5, 0.9, 0.7) - 0.5).abs() < 1e-12);
@@ -208,10 +287,28 @@ fn attenuation_cosine_and_back_faces() {
 
 #[test]
 fn occluders_block_only_between_the_ends() {
-    let square = Polygon::from_vertices(vec![v(-0.5, -0.5, 1.0), v(0.5, -0.5, 1.0), v(0.5, 0.5, 1.0), v(-0.5, 0.5, 1.0)]).unwrap();
-    let floor = Polygon::from_vertices(vec![v(-5.0, -5.0, 0.0), v(5.0, -5.0, 0.0), v(5.0, 5.0, 0.0), v(-5.0, 5.0, 0.0)]).unwrap();
+    let square = Polygon::from_vertices(vec![
+        v(-0.5, -0.5, 1.0),
+        v(0.5, -0.5, 1.0),
+        v(0.5, 0.5, 1.0),
+        v(-0.5, 0.5, 1.0),
+    ])
+    .unwrap();
+    let floor = Polygon::from_vertices(vec![
+        v(-5.0, -5.0, 0.0),
+        v(5.0, -5.0, 0.0),
+        v(5.0, 5.0, 0.0),
+        v(-5.0, 5.0, 0.0),
+    ])
+    .unwrap();
     let o = Occluders::new([&square, &floor]);
     assert!(o.blocked(v(0.0, 0.0, 0.0), v(0.0, 0.0, 3.0)), "the square is between");
-    assert!(!o.blocked(v(2.0, 0.0, 0.0), v(2.0, 0.0, 3.0)), "beside the square; the floor under the start does not count");
-    assert!(!o.blocked(v(0.0, 0.0, 2.0), v(0.0, 0.0, 3.0)), "the light and receiver both above");
+    assert!(
+        !o.blocked(v(2.0, 0.0, 0.0), v(2.0, 0.0, 3.0)),
+        "beside the square; the floor under the start does not count"
+    );
+    assert!(
+        !o.blocked(v(0.0, 0.0, 2.0), v(0.0, 0.0, 3.0)),
+        "the light and receiver both above"
+    );
 }

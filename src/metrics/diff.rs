@@ -36,7 +36,11 @@ const MAGMA: [(f32, [f32; 3]); 17] = [
 pub fn magma(v: f32) -> [u8; 3] {
     let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     // The first knot whose position is ≥ v ends the segment holding v.
-    let hi = MAGMA.iter().position(|(p, _)| *p >= v).unwrap_or(MAGMA.len() - 1).max(1);
+    let hi = MAGMA
+        .iter()
+        .position(|(p, _)| *p >= v)
+        .unwrap_or(MAGMA.len() - 1)
+        .max(1);
     let (p0, c0) = MAGMA[hi - 1];
     let (p1, c1) = MAGMA[hi];
     let t = ((v - p0) / (p1 - p0)).clamp(0.0, 1.0);
@@ -56,6 +60,10 @@ pub fn colorize(map: &FlipMap) -> image::RgbaImage {
 /// The false-colour FLIP difference image of `test` against `reference`. Fails on the same
 /// inputs as `compare`; use `compare_with_map` + [`colorize`] to get metrics and image from
 /// one FLIP evaluation.
-pub fn diff_image(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> Result<image::RgbaImage, MetricsError> {
+pub fn diff_image(
+    test: &HdrImage,
+    reference: &HdrImage,
+    opts: &CompareOptions,
+) -> Result<image::RgbaImage, MetricsError> {
     super::flip::flip_error_map(test, reference, opts).map(|m| colorize(&m))
 }

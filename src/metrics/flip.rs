@@ -57,11 +57,26 @@ pub struct Csf {
 }
 
 /// Achromatic CSF. b2 is a placeholder (a2 = 0) that avoids a division by zero.
-pub const CSF_A: Csf = Csf { a1: 1.0, b1: 0.0047, a2: 0.0, b2: 1e-5 };
+pub const CSF_A: Csf = Csf {
+    a1: 1.0,
+    b1: 0.0047,
+    a2: 0.0,
+    b2: 1e-5,
+};
 /// Red-green CSF.
-pub const CSF_RG: Csf = Csf { a1: 1.0, b1: 0.0053, a2: 0.0, b2: 1e-5 };
+pub const CSF_RG: Csf = Csf {
+    a1: 1.0,
+    b1: 0.0053,
+    a2: 0.0,
+    b2: 1e-5,
+};
 /// Blue-yellow CSF.
-pub const CSF_BY: Csf = Csf { a1: 34.1, b1: 0.04, a2: 13.5, b2: 0.025 };
+pub const CSF_BY: Csf = Csf {
+    a1: 34.1,
+    b1: 0.04,
+    a2: 13.5,
+    b2: 0.025,
+};
 
 /// Per-pixel FLIP errors in [0, 1], rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -129,7 +144,11 @@ pub(crate) fn flip_map_unchecked(test: &HdrImage, reference: &HdrImage, opts: &C
             color.powf(1.0 - feature)
         })
         .collect();
-    FlipMap { width: test.width, height: test.height, values }
+    FlipMap {
+        width: test.width,
+        height: test.height,
+        values,
+    }
 }
 
 /// What the per-pixel comparison needs from one image.
@@ -158,7 +177,11 @@ fn prepare(img: &HdrImage, exposure: f32, f: &Filters, w: usize, h: usize) -> Pr
     let lum: Vec<f32> = opp[0].iter().map(|&y| (y + 16.0) / 116.0).collect();
 
     let [y, cx, cz] = opp;
-    let (y, cx, cz) = (f.csf_a.apply(&y, w, h), f.csf_rg.apply(&cx, w, h), f.csf_by.apply(&cz, w, h));
+    let (y, cx, cz) = (
+        f.csf_a.apply(&y, w, h),
+        f.csf_rg.apply(&cx, w, h),
+        f.csf_by.apply(&cz, w, h),
+    );
     let lab = (0..n)
         .map(|i| {
             let rgb = xyz_to_linear_rgb(ycxcz_to_xyz([y[i], cx[i], cz[i]])).map(|c| c.clamp(0.0, 1.0));
@@ -195,7 +218,10 @@ impl Filters {
     fn new(ppd: f32) -> Self {
         // One support for all three CSFs, wide enough for the widest Gaussian (b = 0.04) to
         // three standard deviations, as in the reference.
-        let b_max = [CSF_A, CSF_RG, CSF_BY].iter().flat_map(|c| [c.b1, c.b2]).fold(0.0f32, f32::max);
+        let b_max = [CSF_A, CSF_RG, CSF_BY]
+            .iter()
+            .flat_map(|c| [c.b1, c.b2])
+            .fold(0.0f32, f32::max);
         let csf_radius = (3.0 * (b_max / (2.0 * std::f32::consts::PI.powi(2))).sqrt() * ppd).ceil() as i32;
 
         let sigma = 0.5 * FEATURE_WIDTH_DEG * ppd;
@@ -203,7 +229,11 @@ impl Filters {
         let xs: Vec<f32> = (-radius..=radius).map(|x| x as f32).collect();
         let g: Vec<f32> = xs.iter().map(|x| (-x * x / (2.0 * sigma * sigma)).exp()).collect();
         let edge: Vec<f32> = xs.iter().zip(&g).map(|(x, g)| -x * g).collect();
-        let point: Vec<f32> = xs.iter().zip(&g).map(|(x, g)| (x * x / (sigma * sigma) - 1.0) * g).collect();
+        let point: Vec<f32> = xs
+            .iter()
+            .zip(&g)
+            .map(|(x, g)| (x * x / (sigma * sigma) - 1.0) * g)
+            .collect();
         Filters {
             csf_a: CsfFilter::new(CSF_A, ppd, csf_radius),
             csf_rg: CsfFilter::new(CSF_RG, ppd, csf_radius),

@@ -52,7 +52,10 @@ pub struct CompareOptions {
 
 impl Default for CompareOptions {
     fn default() -> Self {
-        CompareOptions { exposure: 1.0, pixels_per_degree: default_pixels_per_degree() }
+        CompareOptions {
+            exposure: 1.0,
+            pixels_per_degree: default_pixels_per_degree(),
+        }
     }
 }
 
@@ -79,7 +82,13 @@ pub enum MetricsError {
     #[error("{role} has a non-finite value at pixel ({x}, {y})")]
     NonFinite { role: Role, x: u32, y: u32 },
     #[error("{role} holds {len} pixels but its size {width}x{height} needs {expected}")]
-    BufferSize { role: Role, width: u32, height: u32, len: usize, expected: usize },
+    BufferSize {
+        role: Role,
+        width: u32,
+        height: u32,
+        len: usize,
+        expected: usize,
+    },
     #[error("images are empty ({width}x{height}): nothing to compare")]
     Empty { width: u32, height: u32 },
     #[error("invalid option: {0}")]
@@ -117,17 +126,45 @@ impl Metrics {
         let rows: [(&str, String, &str); 9] = [
             ("pixels", self.pixels.to_string(), ""),
             ("RMSE", fmt_value(self.rmse), "sqrt mean (t-r)^2 over RGB"),
-            ("relative MSE", fmt_value(self.rel_mse), "mean (t-r)^2/(r^2+0.01) over RGB"),
+            (
+                "relative MSE",
+                fmt_value(self.rel_mse),
+                "mean (t-r)^2/(r^2+0.01) over RGB",
+            ),
             ("mean bias", fmt_signed(self.mean_bias), "mean (t-r); < 0: test darker"),
-            ("p99 abs error", fmt_value(self.p99_abs_error), "per-pixel mean |t-r| over RGB"),
-            ("max abs error", fmt_value(self.max_abs_error), "per-pixel mean |t-r| over RGB"),
-            ("FLIP mean", fmt_value(self.flip_mean), "LDR-FLIP, 0 = identical, 1 = worst"),
-            ("mean ratio", fmt_value(self.mean_ratio), "mean t / mean r over RGB (global bias)"),
-            ("scaled rel RMSE", fmt_value(self.scaled_rel_rmse), "RMSE of s*t - r at the best-fit s, / mean r"),
+            (
+                "p99 abs error",
+                fmt_value(self.p99_abs_error),
+                "per-pixel mean |t-r| over RGB",
+            ),
+            (
+                "max abs error",
+                fmt_value(self.max_abs_error),
+                "per-pixel mean |t-r| over RGB",
+            ),
+            (
+                "FLIP mean",
+                fmt_value(self.flip_mean),
+                "LDR-FLIP, 0 = identical, 1 = worst",
+            ),
+            (
+                "mean ratio",
+                fmt_value(self.mean_ratio),
+                "mean t / mean r over RGB (global bias)",
+            ),
+            (
+                "scaled rel RMSE",
+                fmt_value(self.scaled_rel_rmse),
+                "RMSE of s*t - r at the best-fit s, / mean r",
+            ),
         ];
         let mut out = String::new();
         for (name, value, note) in rows {
-            let line = if note.is_empty() { format!("{name:<15} {value}") } else { format!("{name:<15} {value:<14} {note}") };
+            let line = if note.is_empty() {
+                format!("{name:<15} {value}")
+            } else {
+                format!("{name:<15} {value:<14} {note}")
+            };
             out.push_str(line.trim_end());
             out.push('\n');
         }
@@ -160,7 +197,11 @@ pub fn compare(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> 
 
 /// [`compare`], also handing back the per-pixel FLIP map so that a caller writing a difference
 /// image (see [`colorize`]) does not run FLIP twice.
-pub fn compare_with_map(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> Result<(Metrics, FlipMap), MetricsError> {
+pub fn compare_with_map(
+    test: &HdrImage,
+    reference: &HdrImage,
+    opts: &CompareOptions,
+) -> Result<(Metrics, FlipMap), MetricsError> {
     validate(test, reference, opts)?;
     let s = stats::radiance_stats(&test.pixels, &reference.pixels);
     let map = flip::flip_map_unchecked(test, reference, opts);
@@ -182,28 +223,50 @@ pub fn compare_with_map(test: &HdrImage, reference: &HdrImage, opts: &CompareOpt
 /// numeric code below can index freely.
 pub(crate) fn validate(test: &HdrImage, reference: &HdrImage, opts: &CompareOptions) -> Result<(), MetricsError> {
     if !opts.exposure.is_finite() || opts.exposure < 0.0 {
-        return Err(MetricsError::InvalidOption(format!("exposure must be finite and non-negative, got {}", opts.exposure)));
+        return Err(MetricsError::InvalidOption(format!(
+            "exposure must be finite and non-negative, got {}",
+            opts.exposure
+        )));
     }
     // Above ~10⁴ ppd the FLIP kernels would span thousands of pixels; nobody views images so.
     if !opts.pixels_per_degree.is_finite() || opts.pixels_per_degree <= 0.0 || opts.pixels_per_degree > 1.0e4 {
-        return Err(MetricsError::InvalidOption(format!("pixels per degree must be in (0, 10000], got {}", opts.pixels_per_degree)));
+        return Err(MetricsError::InvalidOption(format!(
+            "pixels per degree must be in (0, 10000], got {}",
+            opts.pixels_per_degree
+        )));
     }
     if (test.width, test.height) != (reference.width, reference.height) {
-        return Err(MetricsError::SizeMismatch { test: (test.width, test.height), reference: (reference.width, reference.height) });
+        return Err(MetricsError::SizeMismatch {
+            test: (test.width, test.height),
+            reference: (reference.width, reference.height),
+        });
     }
     for (role, img) in [(Role::Test, test), (Role::Reference, reference)] {
         let expected = img.width as usize * img.height as usize;
         if img.pixels.len() != expected {
-            return Err(MetricsError::BufferSize { role, width: img.width, height: img.height, len: img.pixels.len(), expected });
+            return Err(MetricsError::BufferSize {
+                role,
+                width: img.width,
+                height: img.height,
+                len: img.pixels.len(),
+                expected,
+            });
         }
     }
     if test.pixels.is_empty() {
-        return Err(MetricsError::Empty { width: test.width, height: test.height });
+        return Err(MetricsError::Empty {
+            width: test.width,
+            height: test.height,
+        });
     }
     for (role, img) in [(Role::Test, test), (Role::Reference, reference)] {
         if let Some(i) = img.pixels.iter().position(|p| !p[..3].iter().all(|c| c.is_finite())) {
             let w = img.width as usize;
-            return Err(MetricsError::NonFinite { role, x: (i % w) as u32, y: (i / w) as u32 });
+            return Err(MetricsError::NonFinite {
+                role,
+                x: (i % w) as u32,
+                y: (i / w) as u32,
+            });
         }
     }
     Ok(())

@@ -43,7 +43,15 @@ pub const REL_MSE_EPSILON: f64 = 0.01;
 pub fn radiance_stats(test: &[[f32; 4]], reference: &[[f32; 4]]) -> RadianceStats {
     let n = test.len().min(reference.len());
     if n == 0 {
-        return RadianceStats { rmse: 0.0, rel_mse: 0.0, mean_bias: 0.0, p99_abs_error: 0.0, max_abs_error: 0.0, mean_ratio: 1.0, scaled_rel_rmse: 0.0 };
+        return RadianceStats {
+            rmse: 0.0,
+            rel_mse: 0.0,
+            mean_bias: 0.0,
+            p99_abs_error: 0.0,
+            max_abs_error: 0.0,
+            mean_ratio: 1.0,
+            scaled_rel_rmse: 0.0,
+        };
     }
     let mut sum_sq = 0.0f64;
     let mut sum_rel = 0.0f64;
@@ -85,11 +93,19 @@ pub fn radiance_stats(test: &[[f32; 4]], reference: &[[f32; 4]]) -> RadianceStat
 fn level_and_shape(sum_t: f64, sum_r: f64, sum_tt: f64, sum_tr: f64, sum_rr: f64, samples: f64) -> (f64, f64) {
     if sum_r <= 0.0 {
         let both_black = sum_tt == 0.0 && sum_rr == 0.0;
-        return if both_black { (1.0, 0.0) } else { (f64::INFINITY, f64::INFINITY) };
+        return if both_black {
+            (1.0, 0.0)
+        } else {
+            (f64::INFINITY, f64::INFINITY)
+        };
     }
     let ratio = sum_t / sum_r;
     // Σ (s·t − r)² at s = Σ t·r / Σ t² is Σ r² − (Σ t·r)² / Σ t²; rounding may take it below 0.
-    let residual = if sum_tt > 0.0 { (sum_rr - sum_tr * sum_tr / sum_tt).max(0.0) } else { sum_rr };
+    let residual = if sum_tt > 0.0 {
+        (sum_rr - sum_tr * sum_tr / sum_tt).max(0.0)
+    } else {
+        sum_rr
+    };
     (ratio, (residual / samples).sqrt() / (sum_r / samples))
 }
 

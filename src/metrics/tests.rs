@@ -50,7 +50,20 @@ fn default_viewing_conditions_give_67_ppd() {
 fn identical_images_give_exactly_zero() {
     let img = noise(32, 24, 1, 0.0, 4.0);
     let m = compare(&img, &img, &opts()).unwrap();
-    assert_eq!(m, Metrics { rmse: 0.0, rel_mse: 0.0, mean_bias: 0.0, p99_abs_error: 0.0, max_abs_error: 0.0, flip_mean: 0.0, mean_ratio: 1.0, scaled_rel_rmse: 0.0, pixels: 768 });
+    assert_eq!(
+        m,
+        Metrics {
+            rmse: 0.0,
+            rel_mse: 0.0,
+            mean_bias: 0.0,
+            p99_abs_error: 0.0,
+            max_abs_error: 0.0,
+            flip_mean: 0.0,
+            mean_ratio: 1.0,
+            scaled_rel_rmse: 0.0,
+            pixels: 768
+        }
+    );
 }
 
 #[test]
@@ -144,7 +157,13 @@ fn hunt_lab_f64(rgb: [f64; 3]) -> [f64; 3] {
     let white = [0, 1, 2].map(|i| m[i][0] + m[i][1] + m[i][2]);
     let xyz = [0, 1, 2].map(|i| (m[i][0] * rgb[0] + m[i][1] * rgb[1] + m[i][2] * rgb[2]) / white[i]);
     let d = 6.0 / 29.0;
-    let f = |t: f64| if t > d * d * d { t.cbrt() } else { t / (3.0 * d * d) + 4.0 / 29.0 };
+    let f = |t: f64| {
+        if t > d * d * d {
+            t.cbrt()
+        } else {
+            t / (3.0 * d * d) + 4.0 / 29.0
+        }
+    };
     let [fx, fy, fz] = xyz.map(f);
     let l = 116.0 * fy - 16.0;
     [l, 0.01 * l * 500.0 * (fx - fy), 0.01 * l * 200.0 * (fy - fz)]
@@ -181,7 +200,10 @@ fn flip_black_vs_white_is_the_closed_form() {
     let map = flip_error_map(&black, &white, &opts()).unwrap();
     assert!(map.values.iter().all(|v| (f64::from(*v) - expected).abs() < 1e-4));
     // And the value does not depend on the viewing distance.
-    let far = CompareOptions { pixels_per_degree: 20.0, ..opts() };
+    let far = CompareOptions {
+        pixels_per_degree: 20.0,
+        ..opts()
+    };
     assert!(close(compare(&black, &white, &far).unwrap().flip_mean, expected, 1e-4));
 }
 
@@ -193,7 +215,11 @@ fn flip_of_grey_offsets_matches_closed_form_and_grows() {
         let m = compare(&constant(16, 16, 0.5 + k), &r, &opts()).unwrap();
         let (a, b) = (f64::from(image_io_aces(0.5 + k)), f64::from(image_io_aces(0.5)));
         let expected = closed_form_flip([a; 3], [b; 3]);
-        assert!(close(m.flip_mean, expected, 1e-4), "k = {k}: {} vs {expected}", m.flip_mean);
+        assert!(
+            close(m.flip_mean, expected, 1e-4),
+            "k = {k}: {} vs {expected}",
+            m.flip_mean
+        );
         assert!(m.flip_mean > last, "k = {k}: {} not above {last}", m.flip_mean);
         last = m.flip_mean;
     }
@@ -208,11 +234,27 @@ fn flip_exposure_is_applied_before_the_tone_curve() {
     // At exposure 0 both images display as black: FLIP sees nothing, RMSE still does.
     let r = constant(8, 8, 0.5);
     let t = constant(8, 8, 0.9);
-    let m = compare(&t, &r, &CompareOptions { exposure: 0.0, ..opts() }).unwrap();
+    let m = compare(
+        &t,
+        &r,
+        &CompareOptions {
+            exposure: 0.0,
+            ..opts()
+        },
+    )
+    .unwrap();
     assert_eq!(m.flip_mean, 0.0);
     assert!(close(m.rmse, 0.4, 1e-6));
     // Exposure 2 on 0.25 vs 0.45 is the same display pair as exposure 1 on 0.5 vs 0.9.
-    let a = compare(&constant(8, 8, 0.45), &constant(8, 8, 0.25), &CompareOptions { exposure: 2.0, ..opts() }).unwrap();
+    let a = compare(
+        &constant(8, 8, 0.45),
+        &constant(8, 8, 0.25),
+        &CompareOptions {
+            exposure: 2.0,
+            ..opts()
+        },
+    )
+    .unwrap();
     let b = compare(&t, &r, &opts()).unwrap();
     assert!(close(a.flip_mean, b.flip_mean, 1e-6));
 }
@@ -224,12 +266,19 @@ fn flip_on_noise() {
     assert!(same.values.iter().all(|v| *v == 0.0));
 
     let t = image(48, 40, |x, y| {
-        let (p, n) = (r.get(x, y), noise(1, 1, u64::from(y * 48 + x) + 100, -0.3, 0.3).pixels[0]);
+        let (p, n) = (
+            r.get(x, y),
+            noise(1, 1, u64::from(y * 48 + x) + 100, -0.3, 0.3).pixels[0],
+        );
         [p[0] + n[0], p[1] + n[1], p[2] + n[2]]
     });
     let map = flip_error_map(&t, &r, &opts()).unwrap();
     assert_eq!(map.values.len(), 48 * 40);
-    assert!(map.values.iter().all(|v| *v > 0.0 && *v <= 1.0), "{:?}", map.values.iter().fold((1f32, 0f32), |a, v| (a.0.min(*v), a.1.max(*v))));
+    assert!(
+        map.values.iter().all(|v| *v > 0.0 && *v <= 1.0),
+        "{:?}",
+        map.values.iter().fold((1f32, 0f32), |a, v| (a.0.min(*v), a.1.max(*v)))
+    );
     let m = compare(&t, &r, &opts()).unwrap();
     assert!(close(m.flip_mean, map.mean(), 1e-12));
     // A larger perturbation of the same pattern is more visible.
@@ -253,7 +302,10 @@ fn flip_of_a_thin_line_is_local_and_blurred() {
     let patch = closed_form_flip([f64::from(image_io_aces(0.3)); 3], [f64::from(image_io_aces(0.5)); 3]);
     assert!(at(16) > 0.0 && at(16) < patch, "{} vs patch {patch}", at(16));
     assert!(at(16) > at(14) && at(14) > at(12) && at(12) > 0.0);
-    assert!(close(at(13), at(19), 1e-6) && close(at(14), at(18), 1e-6), "symmetric about the line");
+    assert!(
+        close(at(13), at(19), 1e-6) && close(at(14), at(18), 1e-6),
+        "symmetric about the line"
+    );
     assert_eq!(at(2), 0.0);
     assert_eq!(at(30), 0.0);
 }
@@ -265,10 +317,15 @@ fn flip_matches_nvidia_reference_implementation() {
     // hashed noise, a multiplicative ±15 % perturbation and a brighter 8×20 rectangle. Over the
     // whole map the per-pixel difference to that tool was ≤ 1.1e-5 (f32 rounding).
     fn h(x: u32, y: u32, c: u32, seed: u32) -> f32 {
-        let v = x.wrapping_mul(73_856_093) ^ y.wrapping_mul(19_349_663) ^ c.wrapping_mul(83_492_791) ^ seed.wrapping_mul(2_654_435_761);
+        let v = x.wrapping_mul(73_856_093)
+            ^ y.wrapping_mul(19_349_663)
+            ^ c.wrapping_mul(83_492_791)
+            ^ seed.wrapping_mul(2_654_435_761);
         (v % 1024) as f32 / 1024.0
     }
-    let r = image(64, 48, |x, y| [0, 1, 2].map(|c| 0.3 + 0.8 * (((x / 8 + y / 8 + c) % 3) as f32 / 2.0) + 0.3 * h(x, y, c, 1)));
+    let r = image(64, 48, |x, y| {
+        [0, 1, 2].map(|c| 0.3 + 0.8 * (((x / 8 + y / 8 + c) % 3) as f32 / 2.0) + 0.3 * h(x, y, c, 1))
+    });
     let t = image(64, 48, |x, y| {
         let p = r.get(x, y);
         [0, 1, 2].map(|c| {
@@ -281,9 +338,30 @@ fn flip_matches_nvidia_reference_implementation() {
         })
     });
     // (ppd, mean, pixel (0, 0), pixel (25, 20), pixel (63, 47)) from the reference tool.
-    for (ppd, mean, p0, p1, p2) in [(default_pixels_per_degree(), 0.073_484_41, 0.148_825_27, 0.394_243_4, 0.116_180_7), (30.0, 0.118_434_28, 0.139_552_24, 0.428_181_5, 0.122_176_7)] {
-        let map = flip_error_map(&t, &r, &CompareOptions { pixels_per_degree: ppd, ..opts() }).unwrap();
-        assert!(close(map.mean(), mean, 2e-6), "ppd {ppd}: mean {} vs {mean}", map.mean());
+    for (ppd, mean, p0, p1, p2) in [
+        (
+            default_pixels_per_degree(),
+            0.073_484_41,
+            0.148_825_27,
+            0.394_243_4,
+            0.116_180_7,
+        ),
+        (30.0, 0.118_434_28, 0.139_552_24, 0.428_181_5, 0.122_176_7),
+    ] {
+        let map = flip_error_map(
+            &t,
+            &r,
+            &CompareOptions {
+                pixels_per_degree: ppd,
+                ..opts()
+            },
+        )
+        .unwrap();
+        assert!(
+            close(map.mean(), mean, 2e-6),
+            "ppd {ppd}: mean {} vs {mean}",
+            map.mean()
+        );
         for (i, want) in [(0, p0), (20 * 64 + 25, p1), (47 * 64 + 63, p2)] {
             let got = f64::from(map.values[i]);
             assert!(close(got, want, 2e-5), "ppd {ppd}, pixel {i}: {got} vs {want}");
@@ -343,11 +421,33 @@ fn malformed_inputs_and_options_are_errors() {
     let good = constant(4, 4, 0.5);
     let mut short = good.clone();
     short.pixels.pop();
-    assert_eq!(compare(&good, &short, &opts()).unwrap_err().to_string(), "reference holds 15 pixels but its size 4x4 needs 16");
+    assert_eq!(
+        compare(&good, &short, &opts()).unwrap_err().to_string(),
+        "reference holds 15 pixels but its size 4x4 needs 16"
+    );
     let empty = HdrImage::new(0, 3);
-    assert!(matches!(compare(&empty, &empty, &opts()), Err(MetricsError::Empty { .. })));
-    for bad in [CompareOptions { exposure: f32::NAN, ..opts() }, CompareOptions { exposure: -1.0, ..opts() }, CompareOptions { pixels_per_degree: 0.0, ..opts() }] {
-        assert!(matches!(compare(&good, &good, &bad), Err(MetricsError::InvalidOption(_))));
+    assert!(matches!(
+        compare(&empty, &empty, &opts()),
+        Err(MetricsError::Empty { .. })
+    ));
+    for bad in [
+        CompareOptions {
+            exposure: f32::NAN,
+            ..opts()
+        },
+        CompareOptions {
+            exposure: -1.0,
+            ..opts()
+        },
+        CompareOptions {
+            pixels_per_degree: 0.0,
+            ..opts()
+        },
+    ] {
+        assert!(matches!(
+            compare(&good, &good, &bad),
+            Err(MetricsError::InvalidOption(_))
+        ));
     }
 }
 
@@ -373,12 +473,25 @@ fn diff_image_uses_magma() {
 
 #[test]
 fn table_and_json() {
-    let m = Metrics { rmse: 0.1, rel_mse: 0.105, mean_bias: -0.02, p99_abs_error: 0.3, max_abs_error: 2.5e-6, flip_mean: 0.25, mean_ratio: 0.9, scaled_rel_rmse: 0.04, pixels: 64 };
+    let m = Metrics {
+        rmse: 0.1,
+        rel_mse: 0.105,
+        mean_bias: -0.02,
+        p99_abs_error: 0.3,
+        max_abs_error: 2.5e-6,
+        flip_mean: 0.25,
+        mean_ratio: 0.9,
+        scaled_rel_rmse: 0.04,
+        pixels: 64,
+    };
     let t = m.table();
     assert_eq!(t.lines().count(), 9);
     assert!(t.contains("mean ratio      0.900000"));
     assert!(t.contains("scaled rel RMSE 0.040000"));
-    assert!(t.lines().next().is_some_and(|l| l.starts_with("pixels") && l.ends_with("64")));
+    assert!(t
+        .lines()
+        .next()
+        .is_some_and(|l| l.starts_with("pixels") && l.ends_with("64")));
     assert!(t.contains("RMSE            0.100000"));
     assert!(t.contains("mean bias       -0.020000"));
     assert!(t.contains("max abs error   2.5000e-6"));
@@ -404,7 +517,11 @@ fn mean_ratio_and_scaled_error_separate_the_level_from_the_shape() {
     let m = compare(&t, &r, &opts()).unwrap();
     assert!((m.mean_ratio - 1.0).abs() < 1e-12, "{m:?}");
     assert!((m.scaled_rel_rmse - 1.0).abs() < 1e-12, "{m:?}");
-    let brute = (0..=4000).map(|i| i as f64 / 1000.0).map(|s| ((s * 1.0 - 0.0f64).powi(2) + (s * 1.0 - 2.0f64).powi(2)) / 2.0).fold(f64::INFINITY, f64::min).sqrt();
+    let brute = (0..=4000)
+        .map(|i| i as f64 / 1000.0)
+        .map(|s| ((s * 1.0 - 0.0f64).powi(2) + (s * 1.0 - 2.0f64).powi(2)) / 2.0)
+        .fold(f64::INFINITY, f64::min)
+        .sqrt();
     assert!((m.scaled_rel_rmse - brute / 1.0).abs() < 1e-6);
     // A black reference: equal black images agree, anything else is infinitely off.
     let black = grey_row(&[0.0, 0.0]);

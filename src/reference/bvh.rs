@@ -58,7 +58,10 @@ struct Aabb {
 }
 
 impl Aabb {
-    const EMPTY: Aabb = Aabb { lo: Vec3::splat(f32::INFINITY), hi: Vec3::splat(f32::NEG_INFINITY) };
+    const EMPTY: Aabb = Aabb {
+        lo: Vec3::splat(f32::INFINITY),
+        hi: Vec3::splat(f32::NEG_INFINITY),
+    };
     fn grow(&mut self, p: Vec3) {
         self.lo = self.lo.min(p);
         self.hi = self.hi.max(p);
@@ -144,7 +147,16 @@ impl Bvh {
         );
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let spare_threads = AtomicUsize::new(threads);
-        let mut b = Builder { bounds: &bounds, centroids: &centroids, order: &mut order, base: 0, nodes: Vec::new(), depth: 0, spare_threads: &spare_threads, scan_threads };
+        let mut b = Builder {
+            bounds: &bounds,
+            centroids: &centroids,
+            order: &mut order,
+            base: 0,
+            nodes: Vec::new(),
+            depth: 0,
+            spare_threads: &spare_threads,
+            scan_threads,
+        };
         b.node(0, tris.len(), 0);
         let (nodes, depth) = (b.nodes, b.depth);
         Bvh { nodes, order, depth }
@@ -161,7 +173,11 @@ impl Bvh {
         for i in (0..self.nodes.len()).rev() {
             let n = &self.nodes[i];
             // The second child comes after the first child's subtree, so its link is known.
-            skip[i] = if n.is_leaf() { i as u32 + 1 } else { skip[n.index as usize] };
+            skip[i] = if n.is_leaf() {
+                i as u32 + 1
+            } else {
+                skip[n.index as usize]
+            };
         }
         skip
     }
@@ -252,7 +268,12 @@ impl Builder<'_> {
     fn node(&mut self, start: usize, end: usize, depth: u32) -> u32 {
         let (bounds, cent) = self.range_bounds(start, end);
         let id = self.nodes.len() as u32;
-        self.nodes.push(BvhNode { lo: bounds.lo.into(), index: start as u32, hi: bounds.hi.into(), count: (end - start) as u32 });
+        self.nodes.push(BvhNode {
+            lo: bounds.lo.into(),
+            index: start as u32,
+            hi: bounds.hi.into(),
+            count: (end - start) as u32,
+        });
         self.depth = self.depth.max(depth);
         let n = end - start;
         let extent = cent.hi - cent.lo;
@@ -294,7 +315,8 @@ impl Builder<'_> {
     /// the system gives no thread, the second is built after the first on this one, and the
     /// build starts no more.
     fn split_in_parallel(&mut self, start: usize, mid: usize, end: usize, depth: u32) -> u32 {
-        let (bounds, centroids, spare_threads, scan_threads) = (self.bounds, self.centroids, self.spare_threads, self.scan_threads);
+        let (bounds, centroids, spare_threads, scan_threads) =
+            (self.bounds, self.centroids, self.spare_threads, self.scan_threads);
         // The first subtree is built straight into this builder's nodes (its indices are then
         // already where they stay); only the second, built on the other thread, is copied in.
         // Copying both cost the top levels of a 2 M-triangle build a copy of every node below
@@ -302,7 +324,16 @@ impl Builder<'_> {
         let own = std::mem::take(&mut self.nodes);
         let (first, second) = self.slots_mut(start, end).split_at_mut(mid - start);
         let subtree = move |order: &mut [u32], base: usize, end: usize, nodes: Vec<BvhNode>| {
-            let mut b = Builder { bounds, centroids, order, base, nodes, depth: 0, spare_threads, scan_threads };
+            let mut b = Builder {
+                bounds,
+                centroids,
+                order,
+                base,
+                nodes,
+                depth: 0,
+                spare_threads,
+                scan_threads,
+            };
             b.node(base, end, depth);
             (b.nodes, b.depth)
         };
@@ -316,7 +347,13 @@ impl Builder<'_> {
             };
             let (own, first_depth) = subtree(first, start, mid, own);
             // A panic in the thread is a bug in this builder; carry it to the caller.
-            (own, Some((first_depth, right.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))))
+            (
+                own,
+                Some((
+                    first_depth,
+                    right.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
+                )),
+            )
         });
         self.nodes = own;
         let Some((first_depth, (second_nodes, second_depth))) = built else {
@@ -326,7 +363,16 @@ impl Builder<'_> {
             return self.node(mid, end, depth);
         };
         let offset = self.nodes.len() as u32;
-        self.nodes.extend(second_nodes.into_iter().map(|n| if n.is_leaf() { n } else { BvhNode { index: n.index + offset, ..n } }));
+        self.nodes.extend(second_nodes.into_iter().map(|n| {
+            if n.is_leaf() {
+                n
+            } else {
+                BvhNode {
+                    index: n.index + offset,
+                    ..n
+                }
+            }
+        }));
         self.depth = self.depth.max(first_depth).max(second_depth);
         offset
     }
@@ -404,7 +450,9 @@ impl Builder<'_> {
         let scale = BINS as f32 / (hi - lo);
         let centroids = self.centroids;
         let slice = self.slots_mut(start, end);
-        let left = partition(slice, |&t| (((centroids[t as usize][axis] - lo) * scale) as usize).min(BINS - 1) < left_bins);
+        let left = partition(slice, |&t| {
+            (((centroids[t as usize][axis] - lo) * scale) as usize).min(BINS - 1) < left_bins
+        });
         Some(start + left)
     }
 
@@ -412,14 +460,18 @@ impl Builder<'_> {
     fn median_split(&mut self, start: usize, end: usize, axis: usize) -> usize {
         let mid = start + (end - start) / 2;
         let centroids = self.centroids;
-        self.slots_mut(start, end).select_nth_unstable_by(mid - start, |a, b| centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis]));
+        self.slots_mut(start, end).select_nth_unstable_by(mid - start, |a, b| {
+            centroids[*a as usize][axis].total_cmp(&centroids[*b as usize][axis])
+        });
         mid
     }
 }
 
 /// Takes one thread from the build's budget, if it has one left.
 fn take_thread(spare: &AtomicUsize) -> bool {
-    spare.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1)).is_ok()
+    spare
+        .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
+        .is_ok()
 }
 
 /// Moves the elements satisfying `pred` to the front; returns how many there are.
@@ -536,7 +588,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn f(&mut self) -> f32 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (self.0 >> 40) as f32 / (1u64 << 24) as f32
         }
         fn v(&mut self, scale: f32) -> Vec3 {
@@ -609,12 +664,19 @@ mod tests {
                     for &a in &path {
                         let b = bvh.nodes[a as usize];
                         for p in tris[t as usize] {
-                            assert!(p.cmpge(b.lo.into()).all() && p.cmple(b.hi.into()).all(), "triangle {t} outside node {a}");
+                            assert!(
+                                p.cmpge(b.lo.into()).all() && p.cmple(b.hi.into()).all(),
+                                "triangle {t} outside node {a}"
+                            );
                         }
                     }
                 }
             } else {
-                assert!(n.index > i + 1 && (n.index as usize) < bvh.nodes.len(), "node {i}: second child {}", n.index);
+                assert!(
+                    n.index > i + 1 && (n.index as usize) < bvh.nodes.len(),
+                    "node {i}: second child {}",
+                    n.index
+                );
                 stack.push((i + 1, depth + 1, path.clone()));
                 stack.push((n.index, depth + 1, path));
             }
@@ -634,7 +696,15 @@ mod tests {
         // Degenerate inputs: all triangles at one spot, and a long line of them.
         let same = vec![[Vec3::ZERO, Vec3::X, Vec3::Y]; 100];
         check_structure(&Bvh::build(&same), &same);
-        let line: Vec<_> = (0..5000).map(|i| [Vec3::X * i as f32, Vec3::X * i as f32 + Vec3::Y, Vec3::X * i as f32 + Vec3::Z]).collect();
+        let line: Vec<_> = (0..5000)
+            .map(|i| {
+                [
+                    Vec3::X * i as f32,
+                    Vec3::X * i as f32 + Vec3::Y,
+                    Vec3::X * i as f32 + Vec3::Z,
+                ]
+            })
+            .collect();
         check_structure(&Bvh::build(&line), &line);
         assert!(Bvh::build(&[]).nodes.is_empty());
     }
@@ -652,7 +722,10 @@ mod tests {
             .collect();
         // A large cluster and a small one far away: the root's second child is too small for a
         // thread, so it is built here after the first child's threaded subtrees.
-        let lopsided: Vec<_> = soup(40_000, 14).into_iter().chain(soup(5_000, 15).into_iter().map(|t| t.map(|p| p + Vec3::X * 1000.0))).collect();
+        let lopsided: Vec<_> = soup(40_000, 14)
+            .into_iter()
+            .chain(soup(5_000, 15).into_iter().map(|t| t.map(|p| p + Vec3::X * 1000.0)))
+            .collect();
         for tris in [soup(60_000, 8), grid, soup(3_000, 9), lopsided] {
             let b = Bvh::build_on(&tris, 0, 1);
             // A budget that runs out leaves nodes built here after subtrees built on threads
@@ -697,7 +770,14 @@ mod tests {
     }
 
     /// The stackless walk of glsl/common/bvh.glsl's `occluded`, by the skip links.
-    fn occluded_by_skip_links(bvh: &Bvh, skip: &[u32], tris: &[[Vec3; 3]], o: Vec3, d: Vec3, t_max: f32) -> (bool, usize) {
+    fn occluded_by_skip_links(
+        bvh: &Bvh,
+        skip: &[u32],
+        tris: &[[Vec3; 3]],
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+    ) -> (bool, usize) {
         let inv_d = safe_inverse(d);
         let (mut node, mut visited) = (0usize, 0usize);
         while node < bvh.nodes.len() {
@@ -742,13 +822,23 @@ mod tests {
                 assert!(visited <= bvh.nodes.len());
                 blocked += usize::from(hit);
             }
-            assert!(blocked > 300 && blocked < 2700, "a mix of blocked and free segments ({blocked})");
+            assert!(
+                blocked > 300 && blocked < 2700,
+                "a mix of blocked and free segments ({blocked})"
+            );
         }
     }
 
     /// The stackless walk of glsl/common/bvh.glsl's `trace_triangles_ordered`: the closest hit
     /// and the nodes visited, in order.
-    fn closest_by_octant_links(bvh: &Bvh, words: &[u32], tris: &[[Vec3; 3]], o: Vec3, d: Vec3, mut t_max: f32) -> (Option<(f32, u32)>, Vec<usize>) {
+    fn closest_by_octant_links(
+        bvh: &Bvh,
+        words: &[u32],
+        tris: &[[Vec3; 3]],
+        o: Vec3,
+        d: Vec3,
+        mut t_max: f32,
+    ) -> (Option<(f32, u32)>, Vec<usize>) {
         let inv_d = safe_inverse(d);
         let octant = usize::from(d.x < 0.0) | usize::from(d.y < 0.0) << 1 | usize::from(d.z < 0.0) << 2;
         let (mut node, mut visited, mut hit) = (0usize, Vec::new(), None);
@@ -786,9 +876,25 @@ mod tests {
             assert_eq!(words.len(), 8 * bvh.nodes.len());
             // Every box entered: each octant's order visits every node exactly once, a parent
             // before its children (a preorder of the tree).
-            let big = Bvh { nodes: bvh.nodes.iter().map(|n| BvhNode { lo: [-1e9; 3], hi: [1e9; 3], ..*n }).collect(), ..bvh.clone() };
+            let big = Bvh {
+                nodes: bvh
+                    .nodes
+                    .iter()
+                    .map(|n| BvhNode {
+                        lo: [-1e9; 3],
+                        hi: [1e9; 3],
+                        ..*n
+                    })
+                    .collect(),
+                ..bvh.clone()
+            };
             for octant in 0..8 {
-                let d = Vec3::new(if octant & 1 != 0 { -1.0 } else { 1.0 }, if octant & 2 != 0 { -1.0 } else { 1.0 }, if octant & 4 != 0 { -1.0 } else { 1.0 }).normalize();
+                let d = Vec3::new(
+                    if octant & 1 != 0 { -1.0 } else { 1.0 },
+                    if octant & 2 != 0 { -1.0 } else { 1.0 },
+                    if octant & 4 != 0 { -1.0 } else { 1.0 },
+                )
+                .normalize();
                 let (_, visited) = closest_by_octant_links(&big, &words, &tris, Vec3::ZERO, d, f32::MAX);
                 let mut seen = vec![0; bvh.nodes.len()];
                 let mut position = vec![0; bvh.nodes.len()];
@@ -799,7 +905,10 @@ mod tests {
                 assert!(seen.iter().all(|&c| c == 1), "octant {octant}: every node once");
                 for (i, n) in bvh.nodes.iter().enumerate().filter(|(_, n)| !n.is_leaf()) {
                     let (a, b) = (i + 1, n.index as usize);
-                    assert!(position[a] > position[i] && position[b] > position[i], "octant {octant}: node {i} before its children");
+                    assert!(
+                        position[a] > position[i] && position[b] > position[i],
+                        "octant {octant}: node {i} before its children"
+                    );
                     // The child taken first is the one the direction leaves behind.
                     let centre = |k: usize| (Vec3::from(bvh.nodes[k].lo) + Vec3::from(bvh.nodes[k].hi)) * 0.5;
                     let gap = centre(b) - centre(a);
@@ -812,13 +921,20 @@ mod tests {
                         2
                     };
                     let first = if gap[axis] * d[axis] >= 0.0 { a } else { b };
-                    assert!(position[first] < position[a + b - first], "octant {octant}: node {i} takes {first} first");
+                    assert!(
+                        position[first] < position[a + b - first],
+                        "octant {octant}: node {i} takes {first} first"
+                    );
                 }
             }
             for k in 0..3000 {
                 let Some((o, d)) = test_ray(&mut r, k) else { continue };
                 let (hit, _) = closest_by_octant_links(&bvh, &words, &tris, o, d, f32::MAX);
-                assert_eq!(hit.map(|h| h.0), brute_force(&tris, o, d).map(|h| h.0), "ray {k} from {o} along {d}");
+                assert_eq!(
+                    hit.map(|h| h.0),
+                    brute_force(&tris, o, d).map(|h| h.0),
+                    "ray {k} from {o} along {d}"
+                );
             }
         }
     }
@@ -836,11 +952,20 @@ mod tests {
     fn measure_build_time_against_threads() {
         let plane = crate::scene::generators::plane(glam::Vec2::splat(3.0), 1000);
         let one: Vec<[Vec3; 3]> = plane.triangles().map(|t| t.map(|i| plane.positions[i])).collect();
-        let four: Vec<[Vec3; 3]> = (0..4).flat_map(|k| one.iter().map(move |t| t.map(|p| p + Vec3::X * (3.0 * k as f32)))).collect();
+        let four: Vec<[Vec3; 3]> = (0..4)
+            .flat_map(|k| one.iter().map(move |t| t.map(|p| p + Vec3::X * (3.0 * k as f32))))
+            .collect();
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         for tris in [&one, &four] {
             eprintln!("{} triangles, {cores} cores", tris.len());
-            for (threads, scans) in [(0, 1), (cores - 1, 1), (cores * 2 - 1, 1), (cores * 2 - 1, cores), (cores * 4 - 1, 1), (cores * 4 - 1, cores)] {
+            for (threads, scans) in [
+                (0, 1),
+                (cores - 1, 1),
+                (cores * 2 - 1, 1),
+                (cores * 2 - 1, cores),
+                (cores * 4 - 1, 1),
+                (cores * 4 - 1, cores),
+            ] {
                 let times: Vec<f64> = (0..3)
                     .map(|_| {
                         let t = std::time::Instant::now();
@@ -848,7 +973,10 @@ mod tests {
                         t.elapsed().as_secs_f64() * 1e3
                     })
                     .collect();
-                eprintln!("threads {threads:2} scans {scans:2}: {:.0} {:.0} {:.0} ms", times[0], times[1], times[2]);
+                eprintln!(
+                    "threads {threads:2} scans {scans:2}: {:.0} {:.0} {:.0} ms",
+                    times[0], times[1], times[2]
+                );
             }
         }
     }

@@ -97,7 +97,9 @@ pub fn export(scene: &Scene, traced: &TracedScene, dir: &Path) -> Result<Vec<Pat
     let environment = match &scene.environment {
         None => Value::Null,
         Some(Environment::Constant { radiance }) => json!({"type": "constant", "radiance": v3(*radiance)}),
-        Some(Environment::Image { path, scale }) => json!({"type": "image", "path": path.display().to_string(), "scale": scale}),
+        Some(Environment::Image { path, scale }) => {
+            json!({"type": "image", "path": path.display().to_string(), "scale": scale})
+        }
         Some(Environment::Cube { scale, .. }) => json!({"type": "cube", "scale": scale}),
     };
     let cam = &scene.camera;

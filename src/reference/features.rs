@@ -138,12 +138,41 @@ impl SceneFeatures {
 
     /// The constants in `glsl/reference/features.glsl`'s order.
     pub fn specialization(&self, nee: NeeMode, walk: BvhWalk, sampler: Sampler) -> Vec<SpecConstant> {
-        let flags = [self.maps, self.translucency, self.specular, self.transmission, self.punctual_lights, self.sphere_lights, self.quad_lights, self.environment_map, self.sampled_environment];
-        let mut constants: Vec<SpecConstant> = flags.iter().enumerate().map(|(id, &on)| SpecConstant { id: id as u32, bits: u32::from(on) }).collect();
-        constants.push(SpecConstant { id: flags.len() as u32, bits: nee as u32 });
-        constants.push(SpecConstant { id: flags.len() as u32 + 1, bits: u32::from(walk == BvhWalk::Ordered) });
-        constants.push(SpecConstant { id: flags.len() as u32 + 2, bits: u32::from(sampler == Sampler::Sobol) });
-        constants.push(SpecConstant { id: flags.len() as u32 + 3, bits: super::SOBOL_REPLICATES });
+        let flags = [
+            self.maps,
+            self.translucency,
+            self.specular,
+            self.transmission,
+            self.punctual_lights,
+            self.sphere_lights,
+            self.quad_lights,
+            self.environment_map,
+            self.sampled_environment,
+        ];
+        let mut constants: Vec<SpecConstant> = flags
+            .iter()
+            .enumerate()
+            .map(|(id, &on)| SpecConstant {
+                id: id as u32,
+                bits: u32::from(on),
+            })
+            .collect();
+        constants.push(SpecConstant {
+            id: flags.len() as u32,
+            bits: nee as u32,
+        });
+        constants.push(SpecConstant {
+            id: flags.len() as u32 + 1,
+            bits: u32::from(walk == BvhWalk::Ordered),
+        });
+        constants.push(SpecConstant {
+            id: flags.len() as u32 + 2,
+            bits: u32::from(sampler == Sampler::Sobol),
+        });
+        constants.push(SpecConstant {
+            id: flags.len() as u32 + 3,
+            bits: super::SOBOL_REPLICATES,
+        });
         constants
     }
 }

@@ -78,7 +78,10 @@ use std::time::{Duration, Instant};
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Frame, Gpu, GpuDesc, ImageDesc, ImageId, MemoryKind, PipelineId, SubresourceRange};
+use crate::backend::{
+    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Frame, Gpu, GpuDesc, ImageDesc, ImageId, MemoryKind,
+    PipelineId, SubresourceRange,
+};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
@@ -86,7 +89,10 @@ use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
 pub use features::Sampler;
 use features::{BvhWalk, NeeMode, SceneFeatures};
-pub use scene_data::{srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE};
+pub use scene_data::{
+    srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD,
+    LIGHT_SPHERE,
+};
 
 /// Which light the estimator counts, by the surface interactions along its path.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -207,17 +213,24 @@ impl Settings {
             return Err(Error::Usage("--spp must be at least 1".into()));
         }
         if self.paths == LightPaths::Indirect && self.bounces == 0 {
-            return Err(Error::Usage("--indirect-only needs --bounces of at least 1: with 0 bounces there is no indirect light".into()));
+            return Err(Error::Usage(
+                "--indirect-only needs --bounces of at least 1: with 0 bounces there is no indirect light".into(),
+            ));
         }
         if self.roulette_after == Some(0) {
-            return Err(Error::Usage("--roulette-after must be at least 1 (or off): the camera ray's hit is never cut".into()));
+            return Err(Error::Usage(
+                "--roulette-after must be at least 1 (or off): the camera ray's hit is never cut".into(),
+            ));
         }
         if let Batching::Fixed(0) = self.batching {
             return Err(Error::Usage("a batch must hold at least one sample".into()));
         }
         // The shader keeps each pixel's sample count and running mean in 32-bit floats.
         if self.spp > MAX_SPP {
-            return Err(Error::Usage(format!("--spp {} is more than the tracer counts exactly ({MAX_SPP}, 2^24)", self.spp)));
+            return Err(Error::Usage(format!(
+                "--spp {} is more than the tracer counts exactly ({MAX_SPP}, 2^24)",
+                self.spp
+            )));
         }
         Ok(())
     }
@@ -231,7 +244,14 @@ impl Settings {
         if self.light_selection.draws_one(lights) {
             flags |= FLAG_ONE_LIGHT;
         }
-        BatchPush { sample_offset: offset, sample_count: count, seed: self.seed, bounces, flags, roulette_after: self.roulette_after.unwrap_or(u32::MAX) }
+        BatchPush {
+            sample_offset: offset,
+            sample_count: count,
+            seed: self.seed,
+            bounces,
+            flags,
+            roulette_after: self.roulette_after.unwrap_or(u32::MAX),
+        }
     }
 }
 
@@ -312,7 +332,17 @@ impl ReferenceImage {
         let eps = crate::metrics::stats::REL_MSE_EPSILON;
         let n = 3.0 * self.mean.pixels.len().max(1) as f64;
         let spp = self.spp as f64;
-        self.mean.pixels.iter().zip(&self.standard_error.pixels).map(|(m, e)| (0..3).map(|c| (e[c] as f64).powi(2) * spp / ((m[c] as f64).powi(2) + eps)).sum::<f64>()).sum::<f64>() / n
+        self.mean
+            .pixels
+            .iter()
+            .zip(&self.standard_error.pixels)
+            .map(|(m, e)| {
+                (0..3)
+                    .map(|c| (e[c] as f64).powi(2) * spp / ((m[c] as f64).powi(2) + eps))
+                    .sum::<f64>()
+            })
+            .sum::<f64>()
+            / n
     }
 
     /// Pixel samples per second.
@@ -372,11 +402,20 @@ pub fn relative_error(image: &ReferenceImage, scope: ErrorScope) -> f64 {
     match scope {
         ErrorScope::Image => {
             let (mean, se) = image.average();
-            (0..3).map(|c| if se[c] == 0.0 { 0.0 } else { se[c] / mean[c] }).fold(0.0, f64::max)
+            (0..3)
+                .map(|c| if se[c] == 0.0 { 0.0 } else { se[c] / mean[c] })
+                .fold(0.0, f64::max)
         }
         ErrorScope::Pixel => {
-            let mut per_pixel: Vec<f64> =
-                m.iter().zip(s).map(|(m, s)| (0..3).map(|c| s[c] as f64 / ((m[c] as f64).powi(2) + crate::metrics::stats::REL_MSE_EPSILON).sqrt()).fold(0.0, f64::max)).collect();
+            let mut per_pixel: Vec<f64> = m
+                .iter()
+                .zip(s)
+                .map(|(m, s)| {
+                    (0..3)
+                        .map(|c| s[c] as f64 / ((m[c] as f64).powi(2) + crate::metrics::stats::REL_MSE_EPSILON).sqrt())
+                        .fold(0.0, f64::max)
+                })
+                .collect();
             crate::metrics::stats::nearest_rank_percentile(&mut per_pixel, 99)
         }
     }
@@ -438,7 +477,13 @@ impl ReferenceRenderer {
         ReferenceRenderer::at_frame_walking(gpu, scene, size, 0, walk)
     }
 
-    fn at_frame_walking(mut gpu: Gpu, scene: &Scene, (width, height): (u32, u32), frame: u64, walk: BvhWalk) -> Result<ReferenceRenderer> {
+    fn at_frame_walking(
+        mut gpu: Gpu,
+        scene: &Scene,
+        (width, height): (u32, u32),
+        frame: u64,
+        walk: BvhWalk,
+    ) -> Result<ReferenceRenderer> {
         if width == 0 || height == 0 {
             return Err(Error::Usage(format!("image size {width}x{height} is empty")));
         }
@@ -446,10 +491,16 @@ impl ReferenceRenderer {
         let mut states = ResourceStates::default();
         let buffers = traced.upload(&mut gpu, &mut states, walk)?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let mean = gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
-        let second_moment = gpu.create_image(&ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage))?;
+        let mean =
+            gpu.create_image(&ImageDesc::new_2d("reference mean", ACCUMULATION_FORMAT, width, height).usage(usage))?;
+        let second_moment = gpu.create_image(
+            &ImageDesc::new_2d("reference second moment", ACCUMULATION_FORMAT, width, height).usage(usage),
+        )?;
         let bytes = width as u64 * height as u64 * 16;
-        let readback = [readback_buffer(&mut gpu, "reference mean readback", bytes)?, readback_buffer(&mut gpu, "reference second moment readback", bytes)?];
+        let readback = [
+            readback_buffer(&mut gpu, "reference mean readback", bytes)?,
+            readback_buffer(&mut gpu, "reference second moment readback", bytes)?,
+        ];
         let status = gpu.create_buffer(&BufferDesc {
             name: "reference status".into(),
             size: 4,
@@ -514,10 +565,18 @@ impl ReferenceRenderer {
     /// the ratio predicts the target, at most 4× the samples so far) and `stop.check` judges it;
     /// samples are keyed by their index, so a render stopped at n samples is bit for bit the one
     /// `--spp n` gives. `progress(done, total)` gets the predicted total.
-    pub fn render_until(&mut self, settings: &Settings, mut stop: Option<Stop<'_>>, progress: &mut dyn FnMut(u32, u32)) -> Result<ReferenceImage> {
+    pub fn render_until(
+        &mut self,
+        settings: &Settings,
+        mut stop: Option<Stop<'_>>,
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<ReferenceImage> {
         settings.check()?;
         // Compiled before the clock starts: the rate counts tracing, not llvmpipe's compile.
-        self.pipeline(nee_mode(settings.push(0, 1, self.params.counts[0]).flags), settings.sampler)?;
+        self.pipeline(
+            nee_mode(settings.push(0, 1, self.params.counts[0]).flags),
+            settings.sampler,
+        )?;
         let start = Instant::now();
         let target = Duration::from_millis(250);
         let mut cap = MAX_BATCH;
@@ -540,7 +599,11 @@ impl ReferenceRenderer {
             let count = batch.min(cap).min(next_check - done);
             let checkpoint = done + count == next_check;
             let t0 = Instant::now();
-            let short = self.dispatch(settings.push(done, count, self.params.counts[0]), settings.sampler, checkpoint)?;
+            let short = self.dispatch(
+                settings.push(done, count, self.params.counts[0]),
+                settings.sampler,
+                checkpoint,
+            )?;
             if short > 0 {
                 if count == 1 {
                     return Err(Error::Usage(format!(
@@ -590,19 +653,24 @@ impl ReferenceRenderer {
         let seconds = start.elapsed().as_secs_f64();
         let read = |b: BufferId| -> Result<HdrImage> {
             let bytes = self.gpu.read_buffer(b)?;
-            HdrImage::from_rgba32f_bytes(self.width, self.height, &bytes).ok_or_else(|| Error::Usage("reference readback has the wrong size".into()))
+            HdrImage::from_rgba32f_bytes(self.width, self.height, &bytes)
+                .ok_or_else(|| Error::Usage("reference readback has the wrong size".into()))
         };
         let mean = read(self.readback[0])?;
         let mut standard_error = read(self.readback[1])?;
         // Every pixel must hold exactly the samples asked for (the shader writes its count).
         let short = standard_error.pixels.iter().filter(|p| p[3] != spp as f32).count();
         if short > 0 {
-            return Err(Error::Usage(format!("{short} pixel(s) of the reference hold fewer than {spp} samples: the device cut the tracer short")));
+            return Err(Error::Usage(format!(
+                "{short} pixel(s) of the reference hold fewer than {spp} samples: the device cut the tracer short"
+            )));
         }
         let n = spp as f64;
         if sampler == Sampler::Sobol {
             let pixels = standard_error.pixels.len();
-            let sums = self.gpu.read_buffer_prefix(self.replicates.1, pixels * SOBOL_REPLICATES as usize * 16)?;
+            let sums = self
+                .gpu
+                .read_buffer_prefix(self.replicates.1, pixels * SOBOL_REPLICATES as usize * 16)?;
             // Copied into [f32; 4]s: the bytes' Vec<u8> need not be aligned for a cast. One
             // layer after another: replicate r of pixel k is at r * pixels + k.
             let sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&sums);
@@ -610,15 +678,29 @@ impl ReferenceRenderer {
                 let replicates: Vec<[f32; 4]> = (0..SOBOL_REPLICATES as usize).map(|r| sums[r * pixels + k]).collect();
                 *p = replicate_standard_error(&replicates, spp);
             }
-            return Ok(ReferenceImage { mean, standard_error, spp, seconds });
+            return Ok(ReferenceImage {
+                mean,
+                standard_error,
+                spp,
+                seconds,
+            });
         }
         for p in &mut standard_error.pixels {
             for c in &mut p[..3] {
-                *c = if spp < 2 { f32::INFINITY } else { (*c as f64 / (n - 1.0) / n).max(0.0).sqrt() as f32 };
+                *c = if spp < 2 {
+                    f32::INFINITY
+                } else {
+                    (*c as f64 / (n - 1.0) / n).max(0.0).sqrt() as f32
+                };
             }
             p[3] = 1.0;
         }
-        Ok(ReferenceImage { mean, standard_error, spp, seconds })
+        Ok(ReferenceImage {
+            mean,
+            standard_error,
+            spp,
+            seconds,
+        })
     }
 
     /// The tracer specialised for `self.features`, `nee`, `self.walk` and `sampler`, compiled on
@@ -633,11 +715,23 @@ impl ReferenceRenderer {
             self.gpu.destroy_image(stale);
         }
         // Every feature on is the shader as written, which reads the mode from the batch.
-        let nee = if features == SceneFeatures::ALL { NeeMode::Either } else { nee };
-        if let Some(&(_, _, _, _, id)) = self.pipelines.iter().find(|(f, n, w, s, _)| *f == features && *n == nee && *w == walk && *s == sampler) {
+        let nee = if features == SceneFeatures::ALL {
+            NeeMode::Either
+        } else {
+            nee
+        };
+        if let Some(&(_, _, _, _, id)) = self
+            .pipelines
+            .iter()
+            .find(|(f, n, w, s, _)| *f == features && *n == nee && *w == walk && *s == sampler)
+        {
             return Ok(id);
         }
-        let desc = ComputePipelineDesc { name: "reference path tracer".into(), shader: "reference/pathtrace.comp".into(), specialization: features.specialization(nee, walk, sampler) };
+        let desc = ComputePipelineDesc {
+            name: "reference path tracer".into(),
+            shader: "reference/pathtrace.comp".into(),
+            specialization: features.specialization(nee, walk, sampler),
+        };
         let id = self.gpu.create_compute_pipeline(&desc, &dev_shaders())?;
         self.pipelines.push((features, nee, walk, sampler, id));
         Ok(id)
@@ -666,12 +760,15 @@ impl ReferenceRenderer {
         let (width, height) = (self.width, self.height);
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
-        graph.pass("clear status").buffer(status, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status, 0));
-        let mut pass = graph.pass("path trace").storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute).storage_write("second_moment", m2, SubresourceRange::mip(0), compute).buffer(
-            status,
-            Access::StorageWrite { stages: compute },
-            Some("status"),
-        );
+        graph
+            .pass("clear status")
+            .buffer(status, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(status, 0));
+        let mut pass = graph
+            .pass("path trace")
+            .storage_write("mean_radiance", mean, SubresourceRange::mip(0), compute)
+            .storage_write("second_moment", m2, SubresourceRange::mip(0), compute)
+            .buffer(status, Access::StorageWrite { stages: compute }, Some("status"));
         pass = pass.storage_write("replicate_sums", replicates, all_layers, compute);
         pass = self.buffers.read(pass, compute);
         pass.record(move |ctx| {
@@ -682,13 +779,22 @@ impl ReferenceRenderer {
         });
         if read_back {
             for (name, image, buffer) in [("read back mean", mean, rb[0]), ("read back second moment", m2, rb[1])] {
-                graph.pass(name).transfer_read(image, SubresourceRange::mip(0)).buffer(buffer, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
+                graph
+                    .pass(name)
+                    .transfer_read(image, SubresourceRange::mip(0))
+                    .buffer(buffer, Access::TransferWrite, None)
+                    .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, buffer));
             }
             graph
                 .pass("read back replicate sums")
                 .transfer_read(replicates, all_layers)
                 .buffer(replicates_host, Access::TransferWrite, None)
-                .record(move |ctx| (0..SOBOL_REPLICATES).try_for_each(|r| ctx.rec.copy_image_to_buffer_at(replicates, 0, r, replicates_host, u64::from(r) * layer_bytes)));
+                .record(move |ctx| {
+                    (0..SOBOL_REPLICATES).try_for_each(|r| {
+                        ctx.rec
+                            .copy_image_to_buffer_at(replicates, 0, r, replicates_host, u64::from(r) * layer_bytes)
+                    })
+                });
             graph
                 .pass("host visibility")
                 .buffer(rb[0], Access::HostRead, None)
@@ -700,12 +806,18 @@ impl ReferenceRenderer {
             graph.output_image(mean);
             graph.output_image(m2);
             graph.output_image(replicates);
-            graph.pass("host visibility").buffer(status, Access::HostRead, None).record(|_| Ok(()));
+            graph
+                .pass("host visibility")
+                .buffer(status, Access::HostRead, None)
+                .record(|_| Ok(()));
         }
         let gpu = &self.gpu;
         graph.run_and_wait(gpu, self.frame, &mut self.states, "reference")?;
         let bytes = gpu.read_buffer(status)?;
-        Ok(bytes.get(..4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(u32::MAX))
+        Ok(bytes
+            .get(..4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .unwrap_or(u32::MAX))
     }
 }
 
@@ -758,14 +870,21 @@ fn replicate_standard_error(sums: &[[f32; 4]], spp: u32) -> [f32; 4] {
 /// the layers are copied to, one after another, at checkpoints.
 fn replicate_sums(gpu: &mut Gpu, width: u32, height: u32) -> Result<(ImageId, BufferId)> {
     let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-    let desc = ImageDesc::new_2d("reference replicate sums", ACCUMULATION_FORMAT, width, height).layers(SOBOL_REPLICATES).usage(usage);
+    let desc = ImageDesc::new_2d("reference replicate sums", ACCUMULATION_FORMAT, width, height)
+        .layers(SOBOL_REPLICATES)
+        .usage(usage);
     let sums = gpu.create_image(&desc)?;
     let bytes = width as u64 * height as u64 * u64::from(SOBOL_REPLICATES) * 16;
     Ok((sums, readback_buffer(gpu, "reference replicate sums readback", bytes)?))
 }
 
 fn readback_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
-    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?)
+    Ok(gpu.create_buffer(&BufferDesc {
+        name: name.into(),
+        size,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        memory: MemoryKind::GpuToCpu,
+    })?)
 }
 
 /// The standard-error image written next to `output`: `ref.exr` → `ref.stderr.exr`.
@@ -798,9 +917,16 @@ pub struct ReferenceReport {
 
 /// Renders the scene and writes the mean and standard-error EXRs, printing progress on stderr.
 pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
-    let is_exr = opts.output.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let is_exr = opts
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     if !is_exr {
-        return Err(Error::Usage(format!("{}: the reference is written as OpenEXR; give a file name ending in .exr", opts.output.display())));
+        return Err(Error::Usage(format!(
+            "{}: the reference is written as OpenEXR; give a file name ending in .exr",
+            opts.output.display()
+        )));
     }
     opts.settings.check()?;
     let scene = Scene::from_file(&opts.scene)?;
@@ -812,10 +938,20 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let image = match opts.target {
         Some(t) => {
             if !(t.max.is_finite() && t.max > 0.0) {
-                return Err(Error::Usage(format!("--max-stderr {}: expected a relative standard error above 0, e.g. 0.01", t.max)));
+                return Err(Error::Usage(format!(
+                    "--max-stderr {}: expected a relative standard error above 0, e.g. 0.01",
+                    t.max
+                )));
             }
             let mut check = |img: &ReferenceImage| relative_error(img, t.scope) / t.max;
-            renderer.render_until(&opts.settings, Some(Stop { min_spp: t.min_spp, check: &mut check }), &mut update)?
+            renderer.render_until(
+                &opts.settings,
+                Some(Stop {
+                    min_spp: t.min_spp,
+                    check: &mut check,
+                }),
+                &mut update,
+            )?
         }
         None => renderer.render(&opts.settings, &mut update)?,
     };
@@ -828,7 +964,11 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let stderr = stderr_path(&opts.output);
     image.mean.write_exr(&opts.output)?;
     image.standard_error.write_exr(&stderr)?;
-    Ok(ReferenceReport { written: vec![opts.output.clone(), stderr], image, achieved })
+    Ok(ReferenceReport {
+        written: vec![opts.output.clone(), stderr],
+        image,
+        achieved,
+    })
 }
 
 #[cfg(test)]
@@ -837,17 +977,29 @@ mod tests {
     use crate::image_io::HdrImage;
 
     fn image(width: u32, pixels: Vec<[f32; 4]>) -> HdrImage {
-        HdrImage { width, height: pixels.len() as u32 / width, pixels }
+        HdrImage {
+            width,
+            height: pixels.len() as u32 / width,
+            pixels,
+        }
     }
 
     #[test]
     fn relative_variance_per_sample_weighs_pixels_as_the_relative_mse() {
         // Pixel 0: s.e. 0.05 at 4 spp is a variance of 0.01 a sample, over 0.1² + 0.01 = 0.5 in
         // each channel; pixel 1: 0.5² · 4 / (1 + 0.01) in red only. Mean over the six values.
-        let img =
-            ReferenceImage { mean: image(2, vec![[0.1, 0.1, 0.1, 1.0], [1.0, 1.0, 1.0, 1.0]]), standard_error: image(2, vec![[0.05, 0.05, 0.05, 1.0], [0.5, 0.0, 0.0, 1.0]]), spp: 4, seconds: 1.0 };
+        let img = ReferenceImage {
+            mean: image(2, vec![[0.1, 0.1, 0.1, 1.0], [1.0, 1.0, 1.0, 1.0]]),
+            standard_error: image(2, vec![[0.05, 0.05, 0.05, 1.0], [0.5, 0.0, 0.0, 1.0]]),
+            spp: 4,
+            seconds: 1.0,
+        };
         let expected = (3.0 * 0.5 + 1.0 / 1.01) / 6.0;
-        assert!((img.relative_variance_per_sample() - expected).abs() < 1e-6, "{}", img.relative_variance_per_sample());
+        assert!(
+            (img.relative_variance_per_sample() - expected).abs() < 1e-6,
+            "{}",
+            img.relative_variance_per_sample()
+        );
     }
 
     /// Ten samples in eight replicates: counts 2, 2, 1, 1, 1, 1, 1, 1. The replicate means (red)

@@ -131,8 +131,15 @@ pub struct TracedScene {
 fn load_texture(path: &std::path::Path, srgb: bool) -> std::result::Result<TracedTexture, String> {
     let img = crate::image_io::open_image(path)?.to_rgba8();
     let decode = |b: u8| if srgb { srgb_decode(b) } else { b as f32 / 255.0 };
-    let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2]), p.0[3] as f32 / 255.0]).collect();
-    Ok(TracedTexture { width: img.width(), height: img.height(), texels })
+    let texels = img
+        .pixels()
+        .map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2]), p.0[3] as f32 / 255.0])
+        .collect();
+    Ok(TracedTexture {
+        width: img.width(),
+        height: img.height(),
+        texels,
+    })
 }
 
 impl TracedScene {
@@ -147,7 +154,12 @@ impl TracedScene {
     pub fn build_at(scene: &Scene, time_s: f32) -> Result<TracedScene> {
         let moved;
         let scene = if scene.has_motion() || scene.light_board.is_some() {
-            moved = Scene { lights: scene.lights_at(time_s), light_board: None, light_motion: None, ..scene.clone() };
+            moved = Scene {
+                lights: scene.lights_at(time_s),
+                light_board: None,
+                light_motion: None,
+                ..scene.clone()
+            };
             &moved
         } else {
             scene
@@ -157,20 +169,35 @@ impl TracedScene {
             None => (Vec3::ZERO, None),
             Some(Environment::Constant { radiance }) => (*radiance, None),
             Some(Environment::Image { path, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load(path, *scale, src)?)),
-            Some(Environment::Cube { faces, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load_cube(faces, *scale, src)?)),
+            Some(Environment::Cube { faces, scale }) => {
+                (Vec3::ZERO, Some(EnvironmentMap::load_cube(faces, *scale, src)?))
+            }
         };
         let mut textures = Vec::new();
         let mut loaded: Vec<(std::path::PathBuf, bool)> = Vec::new();
         let mut material_maps = Vec::with_capacity(scene.materials.len());
         for m in &scene.materials {
             let mut slots = [0u32; 4];
-            for (k, (field, map, srgb)) in [("albedo_map", &m.albedo_map, true), ("normal_map", &m.normal_map, false), ("specular_map", &m.specular_map, false)].into_iter().enumerate() {
+            for (k, (field, map, srgb)) in [
+                ("albedo_map", &m.albedo_map, true),
+                ("normal_map", &m.normal_map, false),
+                ("specular_map", &m.specular_map, false),
+            ]
+            .into_iter()
+            .enumerate()
+            {
                 let Some(path) = map else { continue };
                 let key = (path.clone(), srgb);
                 let index = match loaded.iter().position(|l| *l == key) {
                     Some(i) => i,
                     None => {
-                        textures.push(load_texture(path, srgb).map_err(|e| Error::Usage(format!("{src}: material \"{}\": {field}: cannot load {}: {e}", m.name, path.display())))?);
+                        textures.push(load_texture(path, srgb).map_err(|e| {
+                            Error::Usage(format!(
+                                "{src}: material \"{}\": {field}: cannot load {}: {e}",
+                                m.name,
+                                path.display()
+                            ))
+                        })?);
                         loaded.push(key);
                         textures.len() - 1
                     }
@@ -207,7 +234,12 @@ impl TracedScene {
                     continue;
                 }
                 let n = |i: usize| mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
-                let tangent_uv = |i: usize| (mesh.tangents.get(i).copied().unwrap_or(Vec4::X), mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO));
+                let tangent_uv = |i: usize| {
+                    (
+                        mesh.tangents.get(i).copied().unwrap_or(Vec4::X),
+                        mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
+                    )
+                };
                 corners.push(p);
                 normals.push([n(a), n(b), n(c)]);
                 frames.push([tangent_uv(a), tangent_uv(b), tangent_uv(c)]);
@@ -221,7 +253,11 @@ impl TracedScene {
             let [p0, p1, p2] = corners[t as usize];
             let [n0, n1, n2] = normals[t as usize];
             let [(t0, uv0), (t1, uv1), (t2, uv2)] = frames[t as usize];
-            triangles.push(TracedTriangle { p0: p0.extend(0.0).into(), e1: (p1 - p0).extend(0.0).into(), e2: (p2 - p0).extend(0.0).into() });
+            triangles.push(TracedTriangle {
+                p0: p0.extend(0.0).into(),
+                e1: (p1 - p0).extend(0.0).into(),
+                e2: (p2 - p0).extend(0.0).into(),
+            });
             shading.push(TriangleShading {
                 n0: n0.into(),
                 material: material_of[t as usize],
@@ -254,22 +290,52 @@ impl TracedScene {
         let punctual_lights = lights.len() as u32;
         for l in &scene.lights {
             match l {
-                Light::Sphere { center, radius, radiance, .. } => {
-                    lights.push(GpuLight { position: center.extend(LIGHT_SPHERE).into(), direction: [*radius, 0.0, 0.0, 0.0], intensity: radiance.extend(0.0).into(), cone: [0.0; 4] })
-                }
-                Light::Quad { corner, edge_u, edge_v, radiance, .. } => {
-                    lights.push(GpuLight { position: corner.extend(LIGHT_QUAD).into(), direction: edge_u.extend(0.0).into(), intensity: radiance.extend(0.0).into(), cone: edge_v.extend(0.0).into() })
-                }
+                Light::Sphere {
+                    center,
+                    radius,
+                    radiance,
+                    ..
+                } => lights.push(GpuLight {
+                    position: center.extend(LIGHT_SPHERE).into(),
+                    direction: [*radius, 0.0, 0.0, 0.0],
+                    intensity: radiance.extend(0.0).into(),
+                    cone: [0.0; 4],
+                }),
+                Light::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
+                    radiance,
+                    ..
+                } => lights.push(GpuLight {
+                    position: corner.extend(LIGHT_QUAD).into(),
+                    direction: edge_u.extend(0.0).into(),
+                    intensity: radiance.extend(0.0).into(),
+                    cone: edge_v.extend(0.0).into(),
+                }),
                 Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => {}
             }
         }
-        Ok(TracedScene { corners, bvh, triangles, shading, materials, lights, punctual_lights, textures, environment, environment_map })
+        Ok(TracedScene {
+            corners,
+            bvh,
+            triangles,
+            shading,
+            materials,
+            lights,
+            punctual_lights,
+            textures,
+            environment,
+            environment_map,
+        })
     }
 
     /// Whether a ray leaving a path's last vertex can still find light: some material emits or
     /// the environment is not black. Otherwise the tracer does not trace that ray.
     pub fn light_beyond_last_bounce(&self) -> bool {
-        self.materials.iter().any(|m| m.emission[..3].iter().any(|&e| e != 0.0)) || self.environment != Vec3::ZERO || self.environment_map.is_some()
+        self.materials.iter().any(|m| m.emission[..3].iter().any(|&e| e != 0.0))
+            || self.environment != Vec3::ZERO
+            || self.environment_map.is_some()
     }
 
     /// Every texture's texels, one after another, and per texture (first texel, width, height, 0):
@@ -303,8 +369,18 @@ impl TracedScene {
             shading: TexelTable::upload(gpu, states, "reference triangle shading", &self.shading)?,
             materials: TexelTable::upload(gpu, states, "reference materials", &self.materials)?,
             lights: storage(gpu, "reference lights", &self.lights)?,
-            environment_map: TexelTable::upload(gpu, states, "reference environment map", self.environment_map.as_ref().map_or(&[][..], |m| &m.texels))?,
-            environment_cdf: TexelTable::upload_packed(gpu, states, "reference environment cdf", self.environment_map.as_ref().map_or(&[][..], |m| &m.cdf))?,
+            environment_map: TexelTable::upload(
+                gpu,
+                states,
+                "reference environment map",
+                self.environment_map.as_ref().map_or(&[][..], |m| &m.texels),
+            )?,
+            environment_cdf: TexelTable::upload_packed(
+                gpu,
+                states,
+                "reference environment cdf",
+                self.environment_map.as_ref().map_or(&[][..], |m| &m.cdf),
+            )?,
         })
     }
 }

@@ -39,7 +39,10 @@ impl TexelTable {
     pub fn upload<T: Pod>(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, items: &[T]) -> Result<TexelTable> {
         let bytes: &[u8] = bytemuck::cast_slice(items);
         if !std::mem::size_of::<T>().is_multiple_of(16) {
-            return Err(Error::Usage(format!("{name}: items of {} bytes are not whole texels", std::mem::size_of::<T>())));
+            return Err(Error::Usage(format!(
+                "{name}: items of {} bytes are not whole texels",
+                std::mem::size_of::<T>()
+            )));
         }
         let texels = (bytes.len() as u64 / 16).max(1);
         let rows = texels.div_ceil(TABLE_WIDTH as u64);
@@ -49,18 +52,34 @@ impl TexelTable {
         }
         // Sampled too: the upload leaves its images in the shader-read layout.
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
-        let image = gpu.create_image(&ImageDesc::new_2d(name, vk::Format::R32G32B32A32_UINT, TABLE_WIDTH, rows as u32).usage(usage))?;
+        let image = gpu.create_image(
+            &ImageDesc::new_2d(name, vk::Format::R32G32B32A32_UINT, TABLE_WIDTH, rows as u32).usage(usage),
+        )?;
         gpu.upload_image_zero_padded(image, 0, bytes)?;
         // The upload leaves the image as sampled; the first pass that reads it as storage
         // moves it to the general layout.
-        states.set_image(gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        states.set_image(
+            gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
         Ok(TexelTable { image })
     }
 
     /// 4-byte `items` packed four a texel (value i is component i % 4 of texel i / 4).
-    pub fn upload_packed<T: Pod + Zeroable>(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, items: &[T]) -> Result<TexelTable> {
+    pub fn upload_packed<T: Pod + Zeroable>(
+        gpu: &mut Gpu,
+        states: &mut ResourceStates,
+        name: &str,
+        items: &[T],
+    ) -> Result<TexelTable> {
         if std::mem::size_of::<T>() != 4 {
-            return Err(Error::Usage(format!("{name}: items of {} bytes do not pack four a texel", std::mem::size_of::<T>())));
+            return Err(Error::Usage(format!(
+                "{name}: items of {} bytes do not pack four a texel",
+                std::mem::size_of::<T>()
+            )));
         }
         let mut texels = vec![[T::zeroed(); 4]; items.len().div_ceil(4)];
         for (i, &item) in items.iter().enumerate() {
@@ -70,7 +89,12 @@ impl TexelTable {
     }
 
     /// Declares the pass's read of the table through binding `name` in `stages`.
-    pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, name: &'static str, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
+    pub fn read<'g, 'a>(
+        &self,
+        pass: PassBuilder<'g, 'a>,
+        name: &'static str,
+        stages: vk::PipelineStageFlags2,
+    ) -> PassBuilder<'g, 'a> {
         pass.storage_read(name, self.image, SubresourceRange::mip(0), stages)
     }
 }
@@ -88,19 +112,37 @@ pub struct GpuBvh {
 impl GpuBvh {
     /// Uploads nodes and triangles (indices as the shader reads them: several trees one after
     /// another if the caller put them so) and the skip links where the shader walks them.
-    pub fn upload(gpu: &mut Gpu, states: &mut ResourceStates, label: &str, nodes: &[BvhNode], triangles: &[TracedTriangle], skips: Option<&[u32]>) -> Result<GpuBvh> {
+    pub fn upload(
+        gpu: &mut Gpu,
+        states: &mut ResourceStates,
+        label: &str,
+        nodes: &[BvhNode],
+        triangles: &[TracedTriangle],
+        skips: Option<&[u32]>,
+    ) -> Result<GpuBvh> {
         let nodes = TexelTable::upload(gpu, states, &format!("{label} bvh nodes"), nodes)?;
         let triangles = TexelTable::upload(gpu, states, &format!("{label} bvh triangles"), triangles)?;
         let skips = match skips {
-            Some(s) => Some(TexelTable::upload_packed(gpu, states, &format!("{label} bvh skip links"), s)?),
+            Some(s) => Some(TexelTable::upload_packed(
+                gpu,
+                states,
+                &format!("{label} bvh skip links"),
+                s,
+            )?),
             None => None,
         };
-        Ok(GpuBvh { nodes, triangles, skips })
+        Ok(GpuBvh {
+            nodes,
+            triangles,
+            skips,
+        })
     }
 
     /// Declares the pass's reads of the tables (and skip links) in `stages`.
     pub fn read<'g, 'a>(&self, pass: PassBuilder<'g, 'a>, stages: vk::PipelineStageFlags2) -> PassBuilder<'g, 'a> {
-        let pass = self.triangles.read(self.nodes.read(pass, "bvh_nodes", stages), "bvh_triangles", stages);
+        let pass = self
+            .triangles
+            .read(self.nodes.read(pass, "bvh_nodes", stages), "bvh_triangles", stages);
         match self.skips {
             Some(s) => s.read(pass, "bvh_skips", stages),
             None => pass,

@@ -1,7 +1,10 @@
 //! The passes the renderer owns around the methods: the background (targets cleared, the sky)
 //! and, for configurations without a base term, the scene's depth.
 
-use crate::backend::{vk, Bind, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SubresourceRange};
+use crate::backend::{
+    vk, Bind, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SamplerDesc,
+    SamplerId, SubresourceRange,
+};
 use crate::error::Result;
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, SceneGpu};
 use crate::graph::{Access, RenderGraph};
@@ -19,7 +22,11 @@ impl FramePasses {
         let ds_format = gpu.caps().depth_stencil_format;
         let mut sky = GraphicsPipelineDesc::new("sky", "frame/sky.vert", Some("frame/sky.frag"));
         sky.raster.cull = vk::CullModeFlags::NONE;
-        sky.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+        sky.depth = DepthState {
+            test: true,
+            write: false,
+            compare: vk::CompareOp::LESS_OR_EQUAL,
+        };
         sky.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         sky.depth_format = Some(ds_format);
         let sky = gpu.create_graphics_pipeline(&sky, shaders)?;
@@ -29,18 +36,38 @@ impl FramePasses {
         depth.raster.cull = vk::CullModeFlags::NONE;
         depth.depth_format = Some(ds_format);
         let depth = gpu.create_graphics_pipeline(&depth, shaders)?;
-        Ok(FramePasses { sky, sky_sampler: gpu.sampler(SamplerDesc::NEAREST_CLAMP)?, depth })
+        Ok(FramePasses {
+            sky,
+            sky_sampler: gpu.sampler(SamplerDesc::NEAREST_CLAMP)?,
+            depth,
+        })
     }
 
     /// Clears radiance to black, depth to 1 and stencil to 0; with `sky`, draws the environment
     /// over the whole target (nearest texel, as the reference looks it up).
-    pub fn add_background<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, t: FrameTargets, uniforms: &FrameUniforms, sky: bool) {
+    pub fn add_background<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        scene: &'a SceneGpu,
+        t: FrameTargets,
+        uniforms: &FrameUniforms,
+        sky: bool,
+    ) {
         let env = scene.environment.map;
         let cube = scene.environment.cube as u32;
         let inverse = glam::Mat4::from_cols_array(&uniforms.view_proj).inverse();
-        let mut pass = graph.pass("background").color_attachment(t.radiance, SubresourceRange::mip(0), true).depth_stencil_write(t.depth_stencil, true);
+        let mut pass = graph
+            .pass("background")
+            .color_attachment(t.radiance, SubresourceRange::mip(0), true)
+            .depth_stencil_write(t.depth_stencil, true);
         if sky {
-            pass = pass.sample("environment_map", env, SubresourceRange::mip(0), self.sky_sampler, vk::PipelineStageFlags2::FRAGMENT_SHADER);
+            pass = pass.sample(
+                "environment_map",
+                env,
+                SubresourceRange::mip(0),
+                self.sky_sampler,
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            );
         }
         pass.record(move |ctx| {
             let _ = ctx.rec.begin_rendering(&RenderingDesc {
@@ -62,15 +89,31 @@ impl FramePasses {
     }
 
     /// Every scene draw into the depth buffer, at its placement.
-    pub fn add_depth<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, t: FrameTargets, uniforms: &FrameUniforms) {
+    pub fn add_depth<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        scene: &'a SceneGpu,
+        t: FrameTargets,
+        uniforms: &FrameUniforms,
+    ) {
         let uniforms = *uniforms;
-        graph.pass("scene depth").depth_stencil_write(t.depth_stencil, false).buffer(scene.vertices, Access::VertexRead, None).buffer(scene.indices, Access::IndexRead, None).record(move |ctx| {
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: Vec::new(), depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
-            ctx.rec.bind_pipeline(self.depth)?;
-            let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
-            record_draws(ctx, scene, &calls, |ctx, _| ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))]))?;
-            ctx.rec.end_rendering();
-            Ok(())
-        });
+        graph
+            .pass("scene depth")
+            .depth_stencil_write(t.depth_stencil, false)
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: Vec::new(),
+                    depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+                })?;
+                ctx.rec.bind_pipeline(self.depth)?;
+                let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
+                record_draws(ctx, scene, &calls, |ctx, _| {
+                    ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])
+                })?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
     }
 }

@@ -10,8 +10,8 @@ pub mod wind;
 use glam::Mat4;
 
 use crate::backend::{
-    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PassTiming, PipelineId, RenderTarget, RenderingDesc, ResourceScope, SamplerDesc,
-    SubresourceRange,
+    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind,
+    PassTiming, PipelineId, RenderTarget, RenderingDesc, ResourceScope, SamplerDesc, SubresourceRange,
 };
 use crate::bake::{BakeReport, Baker};
 use crate::environment::EnvironmentMap;
@@ -19,7 +19,10 @@ use crate::error::{Error, Result};
 use crate::gpu_scene::{GpuLight, SceneGpu};
 use crate::graph::{Access, ExecutionReport, RenderGraph, ResourceStates};
 use crate::image_io::HdrImage;
-use crate::lighting::{registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod, Term, Terms, RADIANCE_FORMAT};
+use crate::lighting::{
+    registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod,
+    Term, Terms, RADIANCE_FORMAT,
+};
 use crate::scene::{Camera, Scene};
 use crate::shaders::ShaderLibrary;
 use crate::timing::TimingSummary;
@@ -33,7 +36,11 @@ pub enum FrameOutput {
     /// Tone-map into a swapchain image and leave it ready to present. With `readback`, the
     /// presented pixels are also copied to a host buffer (a screenshot of exactly what the
     /// window shows); fetch them with [`Renderer::presented_pixels`] once the frame completed.
-    Present { image: ImageId, exposure: f32, readback: bool },
+    Present {
+        image: ImageId,
+        exposure: f32,
+        readback: bool,
+    },
 }
 
 pub struct FrameResult {
@@ -74,7 +81,10 @@ pub struct Renderer {
 
 /// Creates a configuration's methods inside a resource scope; on failure, frees what the partial
 /// creation made.
-fn create_methods(configuration: &Configuration, ctx: &mut CreateContext<'_>) -> Result<(Vec<Box<dyn LightingMethod>>, ResourceScope)> {
+fn create_methods(
+    configuration: &Configuration,
+    ctx: &mut CreateContext<'_>,
+) -> Result<(Vec<Box<dyn LightingMethod>>, ResourceScope)> {
     ctx.gpu.begin_resource_scope();
     let created = registry::create(configuration, ctx);
     let scope = ctx.gpu.end_resource_scope();
@@ -101,13 +111,33 @@ impl Renderer {
     /// Uploads the scene and creates the configuration called `name` (a method or a
     /// combination; default the scene's first method). Bakes are cached in
     /// [`Baker::default_dir`].
-    pub fn new(gpu: Gpu, scene: Scene, name: Option<&str>, size: (u32, u32), frames_in_flight: usize) -> Result<Renderer> {
+    pub fn new(
+        gpu: Gpu,
+        scene: Scene,
+        name: Option<&str>,
+        size: (u32, u32),
+        frames_in_flight: usize,
+    ) -> Result<Renderer> {
         let configuration = registry::configuration(&scene, name)?;
-        Renderer::with_configuration(gpu, scene, configuration, size, frames_in_flight, Baker::new(Some(Baker::default_dir())))
+        Renderer::with_configuration(
+            gpu,
+            scene,
+            configuration,
+            size,
+            frames_in_flight,
+            Baker::new(Some(Baker::default_dir())),
+        )
     }
 
     /// Uploads the scene and creates `configuration`'s methods, baking through `bakes`.
-    pub fn with_configuration(mut gpu: Gpu, scene: Scene, configuration: Configuration, size: (u32, u32), frames_in_flight: usize, mut bakes: Baker) -> Result<Renderer> {
+    pub fn with_configuration(
+        mut gpu: Gpu,
+        scene: Scene,
+        configuration: Configuration,
+        size: (u32, u32),
+        frames_in_flight: usize,
+        mut bakes: Baker,
+    ) -> Result<Renderer> {
         scene.check_methods(&registry::schemas())?;
         let shaders = ShaderLibrary::Embedded;
         let mut states = ResourceStates::default();
@@ -115,13 +145,23 @@ impl Renderer {
         let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, &scene, &environment)?;
         let wind = wind::WindPass::new(&mut gpu, &mut states, &shaders, &scene, &scene_gpu)?;
         let (methods, method_resources) = {
-            let mut ctx =
-                CreateContext { gpu: &mut gpu, shaders: &shaders, states: &mut states, scene: &scene, scene_gpu: &scene_gpu, environment: &environment, bakes: &mut bakes, terms: Terms::NONE };
+            let mut ctx = CreateContext {
+                gpu: &mut gpu,
+                shaders: &shaders,
+                states: &mut states,
+                scene: &scene,
+                scene_gpu: &scene_gpu,
+                environment: &environment,
+                bakes: &mut bakes,
+                terms: Terms::NONE,
+            };
             create_methods(&configuration, &mut ctx)?
         };
         let passes = frame_passes::FramePasses::new(&mut gpu, &shaders)?;
         let targets = create_targets(&mut gpu, size)?;
-        let frames = (0..frames_in_flight.max(1)).map(|_| gpu.create_frame()).collect::<std::result::Result<Vec<_>, _>>()?;
+        let frames = (0..frames_in_flight.max(1))
+            .map(|_| gpu.create_frame())
+            .collect::<std::result::Result<Vec<_>, _>>()?;
         let static_lights = scene_gpu.lights.clone();
         Ok(Renderer {
             gpu,
@@ -241,24 +281,42 @@ impl Renderer {
         let uniforms = self.uniforms(camera);
         if matches!(output, FrameOutput::Readback) && self.readback.is_none() {
             let size = self.targets.width as u64 * self.targets.height as u64 * 16;
-            self.readback = Some(self.gpu.create_buffer(&BufferDesc { name: "radiance readback".into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?);
+            self.readback = Some(self.gpu.create_buffer(&BufferDesc {
+                name: "radiance readback".into(),
+                size,
+                usage: vk::BufferUsageFlags::TRANSFER_DST,
+                memory: MemoryKind::GpuToCpu,
+            })?);
         }
         if let FrameOutput::Present { image, readback, .. } = &output {
             let d = self.gpu.image_desc(*image)?;
             let format = d.format;
             let bytes = d.extent.width as u64 * d.extent.height as u64 * 4;
-            if *readback && self.present_readback.map(|b| self.gpu.buffer_desc(b).map(|d| d.size).unwrap_or(0)) != Some(bytes) {
+            if *readback
+                && self
+                    .present_readback
+                    .map(|b| self.gpu.buffer_desc(b).map(|d| d.size).unwrap_or(0))
+                    != Some(bytes)
+            {
                 if let Some(old) = self.present_readback.take() {
                     self.gpu.destroy_buffer(old);
                     self.states.forget_buffer(old);
                 }
-                self.present_readback =
-                    Some(self.gpu.create_buffer(&BufferDesc { name: "presented pixels".into(), size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?);
+                self.present_readback = Some(self.gpu.create_buffer(&BufferDesc {
+                    name: "presented pixels".into(),
+                    size: bytes,
+                    usage: vk::BufferUsageFlags::TRANSFER_DST,
+                    memory: MemoryKind::GpuToCpu,
+                })?);
             }
             if self.tonemap.map(|t| t.1) != Some(format) {
                 let mut desc = GraphicsPipelineDesc::new("tonemap", "post/fullscreen.vert", Some("post/tonemap.frag"));
                 desc.raster.cull = vk::CullModeFlags::NONE;
-                desc.depth = crate::backend::DepthState { test: false, write: false, compare: vk::CompareOp::ALWAYS };
+                desc.depth = crate::backend::DepthState {
+                    test: false,
+                    write: false,
+                    compare: vk::CompareOp::ALWAYS,
+                };
                 desc.color_targets = vec![ColorTarget::new(format)];
                 self.tonemap = Some((self.gpu.create_graphics_pipeline(&desc, &self.shaders)?, format));
             }
@@ -274,12 +332,18 @@ impl Renderer {
             // frame's intensities; `raster_lights` keeps one entry per scene light, in order.
             let factors = self.scene.light_factors(clock.time_s);
             for ((light, base), f) in self.scene_gpu.lights.iter_mut().zip(&self.static_lights).zip(factors) {
-                light.intensity = [base.intensity[0] * f, base.intensity[1] * f, base.intensity[2] * f, base.intensity[3]];
+                light.intensity = [
+                    base.intensity[0] * f,
+                    base.intensity[1] * f,
+                    base.intensity[2] * f,
+                    base.intensity[3],
+                ];
             }
         }
         if let Some(m) = &self.scene.light_motion {
             // The same for the light motion: every method reads the turned direction.
-            if let (Some(light), Some(base)) = (self.scene_gpu.lights.get_mut(m.light), self.static_lights.get(m.light)) {
+            if let (Some(light), Some(base)) = (self.scene_gpu.lights.get_mut(m.light), self.static_lights.get(m.light))
+            {
                 let d = m.direction_at(glam::Vec3::from_slice(&base.direction[..3]), clock.time_s);
                 light.direction = d.extend(0.0).into();
             }
@@ -287,7 +351,14 @@ impl Renderer {
         let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
         let has_base = terms.iter().any(|t| t.has(Term::Base));
         for (method, &terms) in self.methods.iter_mut().zip(&terms) {
-            let ctx = FrameContext { gpu: &self.gpu, scene: &self.scene_gpu, targets: self.targets, uniforms, clock, terms };
+            let ctx = FrameContext {
+                gpu: &self.gpu,
+                scene: &self.scene_gpu,
+                targets: self.targets,
+                uniforms,
+                clock,
+                terms,
+            };
             method.prepare(&ctx)?;
         }
         let gpu = &self.gpu;
@@ -297,37 +368,66 @@ impl Renderer {
         }
         // The background: targets cleared and, under a base term, the sky everywhere (the base
         // then draws over it, so the sky stays where no geometry is).
-        self.passes.add_background(&mut graph, &self.scene_gpu, self.targets, &uniforms, has_base);
+        self.passes
+            .add_background(&mut graph, &self.scene_gpu, self.targets, &uniforms, has_base);
         if !has_base {
-            self.passes.add_depth(&mut graph, &self.scene_gpu, self.targets, &uniforms);
+            self.passes
+                .add_depth(&mut graph, &self.scene_gpu, self.targets, &uniforms);
         }
         for (method, &terms) in self.methods.iter().zip(&terms) {
-            let ctx = FrameContext { gpu, scene: &self.scene_gpu, targets: self.targets, uniforms, clock, terms };
+            let ctx = FrameContext {
+                gpu,
+                scene: &self.scene_gpu,
+                targets: self.targets,
+                uniforms,
+                clock,
+                terms,
+            };
             method.add_passes(&mut graph, &ctx)?;
         }
         let t = self.targets;
         match &output {
             FrameOutput::None => graph.output_image(t.radiance),
             FrameOutput::Readback => {
-                let rb = self.readback.ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
+                let rb = self
+                    .readback
+                    .ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
                 graph
                     .pass("readback")
                     .transfer_read(t.radiance, SubresourceRange::mip(0))
                     .buffer(rb, Access::TransferWrite, None)
                     .record(move |ctx| ctx.rec.copy_image_to_buffer(t.radiance, 0, 0, rb));
                 // Makes the copy visible to the host once the frame's fence has signalled.
-                graph.pass("host visibility").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
+                graph
+                    .pass("host visibility")
+                    .buffer(rb, Access::HostRead, None)
+                    .record(|_| Ok(()));
             }
-            FrameOutput::Present { image, exposure, readback } => {
-                let (pipeline, _) = self.tonemap.ok_or_else(|| Error::Usage("tonemap pipeline missing".into()))?;
+            FrameOutput::Present {
+                image,
+                exposure,
+                readback,
+            } => {
+                let (pipeline, _) = self
+                    .tonemap
+                    .ok_or_else(|| Error::Usage("tonemap pipeline missing".into()))?;
                 let (image, exposure) = (*image, *exposure);
                 let present_readback = if *readback { self.present_readback } else { None };
                 graph
                     .pass("tonemap")
-                    .sample("hdr", t.radiance, SubresourceRange::mip(0), display_sampler, vk::PipelineStageFlags2::FRAGMENT_SHADER)
+                    .sample(
+                        "hdr",
+                        t.radiance,
+                        SubresourceRange::mip(0),
+                        display_sampler,
+                        vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                    )
                     .color_attachment(image, SubresourceRange::mip(0), true)
                     .record(move |ctx| {
-                        let _extent = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::clear_color(image, [0.0; 4])], depth_stencil: None })?;
+                        let _extent = ctx.rec.begin_rendering(&RenderingDesc {
+                            colors: vec![RenderTarget::clear_color(image, [0.0; 4])],
+                            depth_stencil: None,
+                        })?;
                         ctx.rec.bind_pipeline(pipeline)?;
                         ctx.bind(&[])?;
                         ctx.rec.push_constants(&exposure.to_le_bytes())?;
@@ -341,7 +441,10 @@ impl Renderer {
                         .transfer_read(image, SubresourceRange::mip(0))
                         .buffer(rb, Access::TransferWrite, None)
                         .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, rb));
-                    graph.pass("screenshot host visibility").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
+                    graph
+                        .pass("screenshot host visibility")
+                        .buffer(rb, Access::HostRead, None)
+                        .record(|_| Ok(()));
                 }
                 graph.pass("present").present(image).record(|_| Ok(()));
             }
@@ -354,7 +457,9 @@ impl Renderer {
         Ok(FrameResult { report, image: None }).and_then(|mut r| {
             if matches!(output, FrameOutput::Readback) {
                 gpu.submit_and_wait(frame)?;
-                let rb = self.readback.ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
+                let rb = self
+                    .readback
+                    .ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
                 let bytes = gpu.read_buffer(rb)?;
                 r.image = HdrImage::from_rgba32f_bytes(t.width, t.height, &bytes);
             }
@@ -365,7 +470,9 @@ impl Renderer {
     /// The pixels of the last frame rendered with `Present { readback: true }`, as 8-bit RGBA
     /// (display-encoded, as the window shows them). Call after that frame has completed.
     pub fn presented_pixels(&self, image: ImageId) -> Result<image::RgbaImage> {
-        let rb = self.present_readback.ok_or_else(|| Error::Usage("no frame was presented with readback".into()))?;
+        let rb = self
+            .present_readback
+            .ok_or_else(|| Error::Usage("no frame was presented with readback".into()))?;
         let d = self.gpu.image_desc(image)?;
         let mut bytes = self.gpu.read_buffer(rb)?;
         if matches!(d.format, vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM) {
@@ -373,7 +480,8 @@ impl Renderer {
                 px.swap(0, 2);
             }
         }
-        image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes).ok_or_else(|| Error::Usage("presented pixels do not match the image size".into()))
+        image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes)
+            .ok_or_else(|| Error::Usage("presented pixels do not match the image size".into()))
     }
 
     /// The frame slot the next [`Renderer::render`] records into (for presenting).
@@ -425,11 +533,21 @@ fn create_targets(gpu: &mut Gpu, (width, height): (u32, u32)) -> Result<FrameTar
     if width == 0 || height == 0 {
         return Err(Error::Usage(format!("image size {width}x{height} is empty")));
     }
-    let radiance = gpu.create_image(
-        &ImageDesc::new_2d("radiance", RADIANCE_FORMAT, width, height)
-            .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::STORAGE),
-    )?;
+    let radiance = gpu.create_image(&ImageDesc::new_2d("radiance", RADIANCE_FORMAT, width, height).usage(
+        vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::STORAGE,
+    ))?;
     let ds_format = gpu.caps().depth_stencil_format;
-    let depth_stencil = gpu.create_image(&ImageDesc::new_2d("depth-stencil", ds_format, width, height).usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
-    Ok(FrameTargets { radiance, depth_stencil, width, height })
+    let depth_stencil = gpu.create_image(
+        &ImageDesc::new_2d("depth-stencil", ds_format, width, height)
+            .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
+    )?;
+    Ok(FrameTargets {
+        radiance,
+        depth_stencil,
+        width,
+        height,
+    })
 }

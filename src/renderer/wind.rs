@@ -42,26 +42,56 @@ pub struct WindPass {
 
 impl WindPass {
     /// `None` when no object has wind.
-    pub fn new(gpu: &mut Gpu, states: &mut ResourceStates, shaders: &ShaderLibrary, scene: &Scene, scene_gpu: &SceneGpu) -> Result<Option<WindPass>> {
+    pub fn new(
+        gpu: &mut Gpu,
+        states: &mut ResourceStates,
+        shaders: &ShaderLibrary,
+        scene: &Scene,
+        scene_gpu: &SceneGpu,
+    ) -> Result<Option<WindPass>> {
         let mut objects = Vec::new();
         for (item, mesh) in scene_gpu.draws.iter().zip(&scene_gpu.meshes) {
-            let Some(object) = item.object.and_then(|o| scene.objects.get(o)) else { continue };
+            let Some(object) = item.object.and_then(|o| scene.objects.get(o)) else {
+                continue;
+            };
             let Some(wind) = object.wind else { continue };
             if mesh.positions.is_empty() {
                 continue;
             }
             let map = scene.material_of(object).and_then(|m| m.albedo_map.as_deref());
-            let weights = wind_weights(mesh, map).map_err(|e| Error::Usage(format!("{}: object {:?}: wind: albedo_map: {e}", scene.source, object.name)))?;
-            let rest = gpu.create_storage_buffer(&format!("{} rest pose", object.name), bytemuck::cast_slice(&vertices_of(mesh)))?;
-            let weights = gpu.create_storage_buffer(&format!("{} wind weights", object.name), bytemuck::cast_slice(&weights))?;
+            let weights = wind_weights(mesh, map).map_err(|e| {
+                Error::Usage(format!(
+                    "{}: object {:?}: wind: albedo_map: {e}",
+                    scene.source, object.name
+                ))
+            })?;
+            let rest = gpu.create_storage_buffer(
+                &format!("{} rest pose", object.name),
+                bytemuck::cast_slice(&vertices_of(mesh)),
+            )?;
+            let weights =
+                gpu.create_storage_buffer(&format!("{} wind weights", object.name), bytemuck::cast_slice(&weights))?;
             states.forget_buffer(rest);
             states.forget_buffer(weights);
-            objects.push(WindObject { rest, weights, first: item.vertex_offset as u32, count: mesh.positions.len() as u32, wind });
+            objects.push(WindObject {
+                rest,
+                weights,
+                first: item.vertex_offset as u32,
+                count: mesh.positions.len() as u32,
+                wind,
+            });
         }
         if objects.is_empty() {
             return Ok(None);
         }
-        let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "wind".into(), shader: "frame/wind.comp".into(), specialization: Vec::new() }, shaders)?;
+        let pipeline = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "wind".into(),
+                shader: "frame/wind.comp".into(),
+                specialization: Vec::new(),
+            },
+            shaders,
+        )?;
         Ok(Some(WindPass { pipeline, objects }))
     }
 
@@ -69,12 +99,23 @@ impl WindPass {
     pub fn add<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, time_s: f32) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         for (k, o) in self.objects.iter().enumerate() {
-            let push = WindPush { time: time_s, amplitude: o.wind.amplitude, rate: o.wind.rate, unit: o.wind.unit, first: o.first, count: o.count };
+            let push = WindPush {
+                time: time_s,
+                amplitude: o.wind.amplitude,
+                rate: o.wind.rate,
+                unit: o.wind.unit,
+                first: o.first,
+                count: o.count,
+            };
             graph
                 .pass(&format!("wind {k}"))
                 .buffer(o.rest, Access::StorageRead { stages: compute }, Some("rest"))
                 .buffer(o.weights, Access::StorageRead { stages: compute }, Some("weights"))
-                .buffer(scene.vertices, Access::StorageWrite { stages: compute }, Some("vertices"))
+                .buffer(
+                    scene.vertices,
+                    Access::StorageWrite { stages: compute },
+                    Some("vertices"),
+                )
                 .record(move |ctx| {
                     ctx.rec.bind_pipeline(self.pipeline)?;
                     ctx.bind(&[])?;

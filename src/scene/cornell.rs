@@ -21,7 +21,10 @@ pub fn builtin_material(name: &str) -> Option<Material> {
         "cornell_green" => Vec3::new(0.14, 0.45, 0.091),
         _ => return None,
     };
-    Some(Material { albedo, ..Material::default_grey(name) })
+    Some(Material {
+        albedo,
+        ..Material::default_grey(name)
+    })
 }
 
 /// Radiance of the ceiling light in W/(m²·sr) (the value common renderers' Cornell scenes use).
@@ -42,7 +45,12 @@ const MM: f32 = 2.0 / 555.0;
 pub(crate) fn parts(subdivisions: u32) -> Vec<Part> {
     let wall = |suffix, material, corner: [f32; 3], u: [f32; 3], v: [f32; 3]| Part {
         suffix,
-        mesh: MeshSource::Quad { corner: Vec3::from(corner), edge_u: Vec3::from(u), edge_v: Vec3::from(v), subdivisions },
+        mesh: MeshSource::Quad {
+            corner: Vec3::from(corner),
+            edge_u: Vec3::from(u),
+            edge_v: Vec3::from(v),
+            subdivisions,
+        },
         material,
         local: Mat4::IDENTITY,
     };
@@ -53,15 +61,46 @@ pub(crate) fn parts(subdivisions: u32) -> Vec<Part> {
             suffix,
             mesh: MeshSource::Box { size, subdivisions },
             material: "cornell_white",
-            local: Mat4::from_translation(Vec3::new(centre_xz_mm[0] * MM, 0.5 * size.y, centre_xz_mm[1] * MM)) * Mat4::from_rotation_y(rot_deg.to_radians()),
+            local: Mat4::from_translation(Vec3::new(centre_xz_mm[0] * MM, 0.5 * size.y, centre_xz_mm[1] * MM))
+                * Mat4::from_rotation_y(rot_deg.to_radians()),
         }
     };
     vec![
-        wall("floor", "cornell_white", [-1.0, 0.0, 1.0], [2.0, 0.0, 0.0], [0.0, 0.0, -2.0]),
-        wall("ceiling", "cornell_white", [-1.0, 2.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        wall("back", "cornell_white", [-1.0, 0.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        wall("left", "cornell_red", [-1.0, 0.0, 1.0], [0.0, 0.0, -2.0], [0.0, 2.0, 0.0]),
-        wall("right", "cornell_green", [1.0, 0.0, -1.0], [0.0, 0.0, 2.0], [0.0, 2.0, 0.0]),
+        wall(
+            "floor",
+            "cornell_white",
+            [-1.0, 0.0, 1.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 0.0, -2.0],
+        ),
+        wall(
+            "ceiling",
+            "cornell_white",
+            [-1.0, 2.0, -1.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 0.0, 2.0],
+        ),
+        wall(
+            "back",
+            "cornell_white",
+            [-1.0, 0.0, -1.0],
+            [2.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+        ),
+        wall(
+            "left",
+            "cornell_red",
+            [-1.0, 0.0, 1.0],
+            [0.0, 0.0, -2.0],
+            [0.0, 2.0, 0.0],
+        ),
+        wall(
+            "right",
+            "cornell_green",
+            [1.0, 0.0, -1.0],
+            [0.0, 0.0, 2.0],
+            [0.0, 2.0, 0.0],
+        ),
         // Original centres (185.5, 169) and (368.5, 351.25) mm, mapped by x' = 278 − x,
         // z' = 279.5 − z (a 180° turn about y, so the rotation angles carry over).
         block("short_block", 165.0, [92.5, 110.5], -16.6),

@@ -100,7 +100,10 @@ impl<'de> Visitor<'de> for NodeVisitor {
                 let end: usize = map.next_value()?;
                 let _value_key = map.next_key::<Node>()?;
                 let inner: Node = map.next_value_seed(AnyNode)?;
-                Ok(Node { span: Some(start..end), val: inner.val })
+                Ok(Node {
+                    span: Some(start..end),
+                    val: inner.val,
+                })
             }
             Val::Str(k) if k == DATETIME_KEY => {
                 let text: Node = map.next_value()?;
@@ -144,13 +147,29 @@ pub(crate) struct Ctx<'a> {
 
 impl<'a> Ctx<'a> {
     pub fn new(file: &'a str, text: &'a str, base_dir: &'a Path) -> Ctx<'a> {
-        Ctx { file, text, base_dir, line_starts: std::cell::OnceCell::new() }
+        Ctx {
+            file,
+            text,
+            base_dir,
+            line_starts: std::cell::OnceCell::new(),
+        }
     }
 
     pub fn line(&self, span: &Option<Range<usize>>) -> Option<usize> {
-        let starts = self.line_starts.get_or_init(|| std::iter::once(0).chain(self.text.bytes().enumerate().filter(|&(_, c)| c == b'\n').map(|(i, _)| i + 1)).collect());
+        let starts = self.line_starts.get_or_init(|| {
+            std::iter::once(0)
+                .chain(
+                    self.text
+                        .bytes()
+                        .enumerate()
+                        .filter(|&(_, c)| c == b'\n')
+                        .map(|(i, _)| i + 1),
+                )
+                .collect()
+        });
         // The 1-based line of a byte: how many lines start at or before it.
-        span.as_ref().map(|s| starts.partition_point(|&start| start <= s.start.min(self.text.len())))
+        span.as_ref()
+            .map(|s| starts.partition_point(|&start| start <= s.start.min(self.text.len())))
     }
 
     pub fn err(&self, line: Option<usize>, field: &str, msg: impl Into<String>) -> SceneError {
@@ -230,14 +249,24 @@ pub(crate) struct Table<'a> {
 
 impl<'a> Table<'a> {
     /// `fallback_line` is used when the table itself has no span (implicit tables).
-    pub fn new(ctx: &'a Ctx<'a>, path: String, node: &'a Node, fallback_line: Option<usize>) -> Result<Table<'a>, SceneError> {
+    pub fn new(
+        ctx: &'a Ctx<'a>,
+        path: String,
+        node: &'a Node,
+        fallback_line: Option<usize>,
+    ) -> Result<Table<'a>, SceneError> {
         let line = ctx.line(&node.span).or(fallback_line);
         let Val::Table(entries) = &node.val else {
             return Err(ctx.err(line, &path, format!("expected a table, got {}", describe(node))));
         };
         let mut entries: Vec<(&Node, &Node)> = entries.iter().map(|(k, v)| (k, v)).collect();
         entries.sort_by_key(|(k, _)| k.span.as_ref().map_or(usize::MAX, |s| s.start));
-        Ok(Table { ctx, path, line, entries })
+        Ok(Table {
+            ctx,
+            path,
+            line,
+            entries,
+        })
     }
 
     fn child_path(&self, key: &str) -> String {
@@ -281,9 +310,17 @@ impl<'a> Table<'a> {
 
     /// The field `key`, if present.
     pub fn get(&self, key: &str) -> Option<Field<'a>> {
-        let (k, v) = self.entries.iter().find(|(k, _)| matches!(&k.val, Val::Str(s) if s == key))?;
+        let (k, v) = self
+            .entries
+            .iter()
+            .find(|(k, _)| matches!(&k.val, Val::Str(s) if s == key))?;
         let line = self.ctx.line(&v.span).or(self.ctx.line(&k.span)).or(self.line);
-        Some(Field { ctx: self.ctx, path: self.child_path(key), line, node: v })
+        Some(Field {
+            ctx: self.ctx,
+            path: self.child_path(key),
+            line,
+            node: v,
+        })
     }
 
     /// The field `key`, or an error naming it as missing.
@@ -293,7 +330,11 @@ impl<'a> Table<'a> {
 
     /// The error for a missing `key`; `what` says what it should be.
     pub fn missing(&self, key: &str, what: &str) -> SceneError {
-        self.ctx.err(self.line, &self.child_path(key), format!("missing required field ({what})"))
+        self.ctx.err(
+            self.line,
+            &self.child_path(key),
+            format!("missing required field ({what})"),
+        )
     }
 }
 
@@ -325,7 +366,16 @@ impl<'a> Field<'a> {
         let Val::Array(items) = &self.node.val else {
             return Err(self.expected("an array"));
         };
-        Ok(items.iter().enumerate().map(|(i, n)| Field { ctx: self.ctx, path: format!("{}[{i}]", self.path), line: self.ctx.line(&n.span).or(self.line), node: n }).collect())
+        Ok(items
+            .iter()
+            .enumerate()
+            .map(|(i, n)| Field {
+                ctx: self.ctx,
+                path: format!("{}[{i}]", self.path),
+                line: self.ctx.line(&n.span).or(self.line),
+                node: n,
+            })
+            .collect())
     }
 
     pub fn string(&self) -> Result<&'a str, SceneError> {
@@ -359,7 +409,12 @@ impl<'a> Field<'a> {
     }
 
     /// Exactly `N` finite numbers accepted by `ok`; with `scalar_ok`, one number stands for all.
-    fn numbers<const N: usize>(&self, what: &str, scalar_ok: bool, ok: impl Fn(f32) -> bool) -> Result<[f32; N], SceneError> {
+    fn numbers<const N: usize>(
+        &self,
+        what: &str,
+        scalar_ok: bool,
+        ok: impl Fn(f32) -> bool,
+    ) -> Result<[f32; N], SceneError> {
         let good = |n: &Node| as_number(n).filter(|x| x.is_finite() && (*x as f32).is_finite() && ok(*x as f32));
         match &self.node.val {
             Val::Array(items) if items.len() == N => {
@@ -384,27 +439,32 @@ impl<'a> Field<'a> {
 
     /// 3 positive numbers, or one for all three (sizes, scales).
     pub fn positive3(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 positive numbers", true, |x| x > 0.0).map(Vec3::from)
+        self.numbers::<3>("3 positive numbers", true, |x| x > 0.0)
+            .map(Vec3::from)
     }
 
     /// 3 non-negative numbers (extents that may be zero).
     pub fn non_negative3(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 non-negative numbers", false, |x| x >= 0.0).map(Vec3::from)
+        self.numbers::<3>("3 non-negative numbers", false, |x| x >= 0.0)
+            .map(Vec3::from)
     }
 
     /// 2 positive numbers, or one for both.
     pub fn positive2(&self) -> Result<Vec2, SceneError> {
-        self.numbers::<2>("2 positive numbers", true, |x| x > 0.0).map(Vec2::from)
+        self.numbers::<2>("2 positive numbers", true, |x| x > 0.0)
+            .map(Vec2::from)
     }
 
     /// A linear RGB colour: 3 non-negative numbers (or one, meaning grey).
     pub fn colour(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 non-negative numbers", true, |x| x >= 0.0).map(Vec3::from)
+        self.numbers::<3>("3 non-negative numbers", true, |x| x >= 0.0)
+            .map(Vec3::from)
     }
 
     /// A reflectance-like colour: 3 numbers in [0, 1] (or one, meaning grey).
     pub fn unit_colour(&self) -> Result<Vec3, SceneError> {
-        self.numbers::<3>("3 numbers in [0, 1]", true, |x| (0.0..=1.0).contains(&x)).map(Vec3::from)
+        self.numbers::<3>("3 numbers in [0, 1]", true, |x| (0.0..=1.0).contains(&x))
+            .map(Vec3::from)
     }
 
     /// A path relative to the scene's directory that must name an existing file. Returns the
@@ -416,7 +476,11 @@ impl<'a> Field<'a> {
         }
         let joined = self.ctx.base_dir.join(raw);
         if !joined.is_file() {
-            let why = if joined.exists() { "not a file" } else { "file not found" };
+            let why = if joined.exists() {
+                "not a file"
+            } else {
+                "file not found"
+            };
             return Err(self.err(format!("{why}: {raw} (looked for {})", joined.display())));
         }
         Ok(std::path::absolute(&joined).unwrap_or(joined))
@@ -456,7 +520,11 @@ mod tests {
         let l1 = l[1].table().unwrap();
         let d = l1.get("d").unwrap();
         assert_eq!(d.line, Some(7));
-        assert!(d.number_where("a number", |_| true).unwrap_err().to_string().contains("date-time 1979-05-27"));
+        assert!(d
+            .number_where("a number", |_| true)
+            .unwrap_err()
+            .to_string()
+            .contains("date-time 1979-05-27"));
         let tt = t.get("t").unwrap().table().unwrap();
         let u = tt.get("u").unwrap().table().unwrap();
         let k = u.get("k").unwrap();

@@ -34,19 +34,36 @@ impl fmt::Display for LineSuffix {
 }
 
 impl SceneError {
-    pub fn new(file: impl Into<String>, line: Option<usize>, field: impl Into<String>, message: impl Into<String>) -> Self {
+    pub fn new(
+        file: impl Into<String>,
+        line: Option<usize>,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
         // Messages from other crates (toml, std::io) may span several lines; the format promises
         // one line, so fold them.
         let message: String = message.into();
-        let message = message.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>();
-        SceneError { file: file.into(), line, field: field.into(), message: message.join(", ") }
+        let message = message
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>();
+        SceneError {
+            file: file.into(),
+            line,
+            field: field.into(),
+            message: message.join(", "),
+        }
     }
 }
 
 /// 1-based line number of byte `offset` in `text` (offsets past the end give the last line).
 pub(crate) fn line_of(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
-    text.as_bytes().get(..end).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count()) + 1
+    text.as_bytes()
+        .get(..end)
+        .map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count())
+        + 1
 }
 
 /// 1-based column of byte `offset` in `text`, counted in characters.

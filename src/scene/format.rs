@@ -20,7 +20,18 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     let ctx = Ctx::new(source, text, base_dir);
     let root = ctx.parse()?;
     let top = Table::new(&ctx, String::new(), &root, None)?;
-    top.allow(&["camera", "materials", "objects", "lights", "environment", "methods", "combinations", "light_arrays", "light_board", "light_motion"])?;
+    top.allow(&[
+        "camera",
+        "materials",
+        "objects",
+        "lights",
+        "environment",
+        "methods",
+        "combinations",
+        "light_arrays",
+        "light_board",
+        "light_motion",
+    ])?;
 
     let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
     let mut materials: Vec<Material> = Vec::new();
@@ -45,7 +56,10 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     }
     lights.extend(extra_lights);
     let light_board = top.get("light_board").map(|f| read_light_board(&f)).transpose()?;
-    let light_motion = top.get("light_motion").map(|f| read_light_motion(&f, &lights)).transpose()?;
+    let light_motion = top
+        .get("light_motion")
+        .map(|f| read_light_motion(&f, &lights))
+        .transpose()?;
     let environment = top.get("environment").map(|f| read_environment(&f)).transpose()?;
     let mut methods = match top.get("methods") {
         Some(f) => methods::read(&f)?,
@@ -58,7 +72,18 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         Some(f) => methods::read_combinations(&f)?,
         None => Vec::new(),
     };
-    Ok(Scene { source: source.to_owned(), camera, materials, objects, lights, environment, methods, combinations, light_board, light_motion })
+    Ok(Scene {
+        source: source.to_owned(),
+        camera,
+        materials,
+        objects,
+        lights,
+        environment,
+        methods,
+        combinations,
+        light_board,
+        light_motion,
+    })
 }
 
 /// Elements of an optional array field (absent = empty).
@@ -67,7 +92,10 @@ fn array<'a>(f: Option<Field<'a>>) -> Result<Vec<Field<'a>>, SceneError> {
 }
 
 /// Converts an optional field, keeping its error.
-fn opt<'a, T>(f: Option<Field<'a>>, conv: impl FnOnce(&Field<'a>) -> Result<T, SceneError>) -> Result<Option<T>, SceneError> {
+fn opt<'a, T>(
+    f: Option<Field<'a>>,
+    conv: impl FnOnce(&Field<'a>) -> Result<T, SceneError>,
+) -> Result<Option<T>, SceneError> {
     f.as_ref().map(conv).transpose()
 }
 
@@ -89,7 +117,9 @@ fn name(f: &Field) -> Result<String, SceneError> {
 
 /// A unit direction from a non-zero vector.
 fn direction(f: &Field) -> Result<Vec3, SceneError> {
-    f.vec3()?.try_normalize().ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
+    f.vec3()?
+        .try_normalize()
+        .ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
 }
 
 /// The largest camera coordinate, metres.
@@ -104,15 +134,33 @@ fn read_camera(f: &Field) -> Result<Camera, SceneError> {
     let target = target_f.vec3()?;
     let up_f = t.get("up");
     let up = opt(up_f.clone(), |f| f.vec3())?.unwrap_or(Vec3::Y);
-    let fov_y_deg = opt(t.get("fov_y_deg"), |f| f.number_where("a vertical field of view in degrees, in (0, 180)", |x| x > 0.0 && x < 180.0))?.unwrap_or(60.0);
+    let fov_y_deg = opt(t.get("fov_y_deg"), |f| {
+        f.number_where("a vertical field of view in degrees, in (0, 180)", |x| {
+            x > 0.0 && x < 180.0
+        })
+    })?
+    .unwrap_or(60.0);
     let near = opt(t.get("near"), positive)?.unwrap_or(0.05);
 
     // 32-bit floats keep about a centimetre at a thousand kilometres; farther, the view matrix
     // (and the length of target − position) falls apart.
     for (f, p) in [(&position_f, position), (&target_f, target)] {
         if p.abs().max_element() > MAX_CAMERA_COORDINATE {
-            let coords: Vec<String> = p.to_array().iter().map(|c| if c.abs() >= 1e6 { format!("{c:e}") } else { c.to_string() }).collect();
-            return Err(f.err(format!("[{}] is too far from the origin: coordinates are limited to ±{MAX_CAMERA_COORDINATE:e} m", coords.join(", "))));
+            let coords: Vec<String> = p
+                .to_array()
+                .iter()
+                .map(|c| {
+                    if c.abs() >= 1e6 {
+                        format!("{c:e}")
+                    } else {
+                        c.to_string()
+                    }
+                })
+                .collect();
+            return Err(f.err(format!(
+                "[{}] is too far from the origin: coordinates are limited to ±{MAX_CAMERA_COORDINATE:e} m",
+                coords.join(", ")
+            )));
         }
     }
     let Some(forward) = (target - position).try_normalize() else {
@@ -122,15 +170,37 @@ fn read_camera(f: &Field) -> Result<Camera, SceneError> {
         let msg = "must not be zero or parallel to the view direction (target - position)";
         return Err(match &up_f {
             Some(u) => u.err(msg),
-            None => t.ctx.err(t.line, "camera.up", format!("the default [0, 1, 0] {msg}; set camera.up")),
+            None => t.ctx.err(
+                t.line,
+                "camera.up",
+                format!("the default [0, 1, 0] {msg}; set camera.up"),
+            ),
         });
     }
-    Ok(Camera { position, target, up, fov_y_deg, near })
+    Ok(Camera {
+        position,
+        target,
+        up,
+        fov_y_deg,
+        near,
+    })
 }
 
 fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError> {
     let t = f.table()?;
-    t.allow(&["name", "albedo", "specular", "exponent", "albedo_map", "normal_map", "specular_map", "transmittance", "emission", "opacity", "sky"])?;
+    t.allow(&[
+        "name",
+        "albedo",
+        "specular",
+        "exponent",
+        "albedo_map",
+        "normal_map",
+        "specular_map",
+        "transmittance",
+        "emission",
+        "opacity",
+        "sky",
+    ])?;
     let name_f = t.require("name", "a unique material name")?;
     let name = name(&name_f)?;
     if earlier.iter().any(|m| m.name == name) {
@@ -141,7 +211,11 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
     let transmittance = opt(transmittance_f.clone(), |f| f.unit_colour())?.unwrap_or(Vec3::ZERO);
     if let Some(tf) = &transmittance_f {
         if (albedo + transmittance).max_element() > 1.0 {
-            return Err(tf.err(format!("albedo + transmittance must not exceed 1 in any channel, got {} + {}", fmt3(albedo), fmt3(transmittance))));
+            return Err(tf.err(format!(
+                "albedo + transmittance must not exceed 1 in any channel, got {} + {}",
+                fmt3(albedo),
+                fmt3(transmittance)
+            )));
         }
     }
     Ok(Material {
@@ -154,7 +228,10 @@ fn read_material(f: &Field, earlier: &[Material]) -> Result<Material, SceneError
         specular_map: opt(t.get("specular_map"), |f| f.existing_image())?,
         transmittance,
         emission: opt(t.get("emission"), |f| f.colour())?.unwrap_or(Vec3::ZERO),
-        opacity: opt(t.get("opacity"), |f| f.number_where("a number in (0, 1]", |x| x > 0.0 && x <= 1.0))?.unwrap_or(1.0),
+        opacity: opt(t.get("opacity"), |f| {
+            f.number_where("a number in (0, 1]", |x| x > 0.0 && x <= 1.0)
+        })?
+        .unwrap_or(1.0),
         sky: opt(t.get("sky"), |f| f.boolean())?.unwrap_or(false),
     })
 }
@@ -163,7 +240,12 @@ fn fmt3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
-fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Object>, lights: &mut Vec<Light>) -> Result<(), SceneError> {
+fn read_object(
+    f: &Field,
+    materials: &mut Vec<Material>,
+    objects: &mut Vec<Object>,
+    lights: &mut Vec<Light>,
+) -> Result<(), SceneError> {
     let t = f.table()?;
     const PLACEMENT: [&str; 5] = ["name", "mesh", "translate", "rotate_deg", "scale"];
     let Some(mesh_f) = t.get("mesh") else {
@@ -173,13 +255,20 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
     };
     let kind = mesh_f.string()?;
     let Some((_, mesh_extra)) = MESH_KEYS.iter().find(|(n, _)| *n == kind) else {
-        let msg = format!("unknown mesh type {kind:?}; expected one of: {}", type_names(&MESH_KEYS));
+        let msg = format!(
+            "unknown mesh type {kind:?}; expected one of: {}",
+            type_names(&MESH_KEYS)
+        );
         return Err(mesh_f.err(msg));
     };
     let expands = matches!(kind, "cornell_box" | "bsp_rooms" | "bsp_fig8c");
     let material_key: &[&str] = if expands { &[] } else { &["material"] };
     let animation_keys: &[&str] = if expands { &[] } else { &ANIMATION_KEYS };
-    let wind_key: &[&str] = if expands || kind == "heightfield" { &[] } else { &["wind"] };
+    let wind_key: &[&str] = if expands || kind == "heightfield" {
+        &[]
+    } else {
+        &["wind"]
+    };
     t.allow(&[&PLACEMENT[..], material_key, animation_keys, wind_key, mesh_extra].concat())?;
 
     let obj_name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
@@ -187,8 +276,11 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
     let rot = opt(t.get("rotate_deg"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
     let scale = opt(t.get("scale"), |f| f.positive3())?.unwrap_or(Vec3::ONE);
     // x rotation first, then y, then z.
-    let transform =
-        Mat4::from_translation(translate) * Mat4::from_rotation_z(rot.z.to_radians()) * Mat4::from_rotation_y(rot.y.to_radians()) * Mat4::from_rotation_x(rot.x.to_radians()) * Mat4::from_scale(scale);
+    let transform = Mat4::from_translation(translate)
+        * Mat4::from_rotation_z(rot.z.to_radians())
+        * Mat4::from_rotation_y(rot.y.to_radians())
+        * Mat4::from_rotation_x(rot.x.to_radians())
+        * Mat4::from_scale(scale);
     let subdivisions = opt(t.get("subdivisions"), |f| f.int_in(1, generators::MAX_SUBDIVISIONS))?.unwrap_or(1);
 
     if kind == "bsp_rooms" || kind == "bsp_fig8c" {
@@ -215,15 +307,26 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
     }
 
     let mesh = match kind {
-        "plane" => MeshSource::Plane { size: opt(t.get("size"), |f| f.positive2())?.unwrap_or(glam::Vec2::ONE), subdivisions },
-        "box" => MeshSource::Box { size: opt(t.get("size"), |f| f.positive3())?.unwrap_or(Vec3::ONE), subdivisions },
+        "plane" => MeshSource::Plane {
+            size: opt(t.get("size"), |f| f.positive2())?.unwrap_or(glam::Vec2::ONE),
+            subdivisions,
+        },
+        "box" => MeshSource::Box {
+            size: opt(t.get("size"), |f| f.positive3())?.unwrap_or(Vec3::ONE),
+            subdivisions,
+        },
         "quad" => {
             let corner = t.require("corner", "3 numbers, metres")?.vec3()?;
             let edge_u = t.require("edge_u", "3 numbers, metres")?.vec3()?;
             let v_f = t.require("edge_v", "3 numbers, metres")?;
             let edge_v = v_f.vec3()?;
             check_quad_edges(&v_f, edge_u, edge_v)?;
-            MeshSource::Quad { corner, edge_u, edge_v, subdivisions }
+            MeshSource::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                subdivisions,
+            }
         }
         "sphere" => MeshSource::Sphere {
             radius: opt(t.get("radius"), positive)?.unwrap_or(1.0),
@@ -238,7 +341,10 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
             leaf_size: opt(t.get("leaf_size"), positive)?.unwrap_or(0.12),
         },
         "heightfield" => MeshSource::Heightfield(super::heightfield::read(&t)?),
-        _ => MeshSource::Obj(t.require("path", "an OBJ file relative to the scene file")?.existing_file()?),
+        _ => MeshSource::Obj(
+            t.require("path", "an OBJ file relative to the scene file")?
+                .existing_file()?,
+        ),
     };
     let material = match t.get("material") {
         None => material_index(materials, "default").unwrap_or(0),
@@ -251,11 +357,21 @@ fn read_object(f: &Field, materials: &mut Vec<Material>, objects: &mut Vec<Objec
                         names.push(b);
                     }
                 }
-                mf.err(format!("unknown material {wanted:?}; defined materials: {}", names.join(", ")))
+                mf.err(format!(
+                    "unknown material {wanted:?}; defined materials: {}",
+                    names.join(", ")
+                ))
             })?
         }
     };
-    objects.push(Object { name: obj_name, mesh, material, transform, animation, wind });
+    objects.push(Object {
+        name: obj_name,
+        mesh,
+        material,
+        transform,
+        animation,
+        wind,
+    });
     Ok(())
 }
 
@@ -269,17 +385,44 @@ fn read_animation(t: &Table) -> Result<Option<Animation>, SceneError> {
     if spin.is_none() && amplitude.is_none() && period.is_none() {
         return Ok(None);
     }
-    Ok(Some(Animation { spin_deg_per_s: spin.unwrap_or(Vec3::ZERO), bob_amplitude: amplitude.unwrap_or(Vec3::ZERO), bob_period_s: period.unwrap_or(4.0) }))
+    Ok(Some(Animation {
+        spin_deg_per_s: spin.unwrap_or(Vec3::ZERO),
+        bob_amplitude: amplitude.unwrap_or(Vec3::ZERO),
+        bob_period_s: period.unwrap_or(4.0),
+    }))
 }
 
 /// Keys of the world meshes besides the placement: the generator's parameters, then one material
 /// per face class (`<class>_material`).
-const ROOMS_KEYS: [&str; 10] = ["seed", "columns", "rows", "pillars", "floor_material", "ceiling_material", "wall_material", "pillar_material", "corridor_material", "cell_size"];
-const FIG8C_KEYS: [&str; 5] = ["floor_material", "ceiling_material", "wall_material", "pillar_material", "corridor_material"];
+const ROOMS_KEYS: [&str; 10] = [
+    "seed",
+    "columns",
+    "rows",
+    "pillars",
+    "floor_material",
+    "ceiling_material",
+    "wall_material",
+    "pillar_material",
+    "corridor_material",
+    "cell_size",
+];
+const FIG8C_KEYS: [&str; 5] = [
+    "floor_material",
+    "ceiling_material",
+    "wall_material",
+    "pillar_material",
+    "corridor_material",
+];
 
 /// `bsp_rooms` / `bsp_fig8c`: one object per face class, like `cornell_box`. Only a translation
 /// is allowed (methods map lights into the world's frame with it).
-fn read_world(t: &Table, kind: &str, obj_name: &str, materials: &mut Vec<Material>, objects: &mut Vec<Object>) -> Result<(), SceneError> {
+fn read_world(
+    t: &Table,
+    kind: &str,
+    obj_name: &str,
+    materials: &mut Vec<Material>,
+    objects: &mut Vec<Object>,
+) -> Result<(), SceneError> {
     for key in ["rotate_deg", "scale"] {
         if let Some(f) = t.get(key) {
             return Err(f.err(format!("{kind} allows only `translate` (the world's axes are fixed)")));
@@ -308,11 +451,16 @@ fn read_world(t: &Table, kind: &str, obj_name: &str, materials: &mut Vec<Materia
             let v = f.int_in(0, 6)? as usize;
             params.pillars = (v, v);
         }
-        if let Some(v) = opt(t.get("cell_size"), |f| f.number_where("a cell size in metres, from 12 to 40", |x| (12.0..=40.0).contains(&x)))? {
+        if let Some(v) = opt(t.get("cell_size"), |f| {
+            f.number_where("a cell size in metres, from 12 to 40", |x| (12.0..=40.0).contains(&x))
+        })? {
             params.cell_size = f64::from(v);
         }
         let seed = opt(t.get("seed"), |f| f.int_in(0, u32::MAX))?.unwrap_or(1);
-        WorldLevel::Rooms { seed: u64::from(seed), params }
+        WorldLevel::Rooms {
+            seed: u64::from(seed),
+            params,
+        }
     };
     for (suffix, class) in world_mesh::CLASSES {
         let key = format!("{suffix}_material");
@@ -322,13 +470,19 @@ fn read_world(t: &Table, kind: &str, obj_name: &str, materials: &mut Vec<Materia
                 let wanted = mf.string()?;
                 material_index(materials, wanted).ok_or_else(|| {
                     let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-                    mf.err(format!("unknown material {wanted:?}; defined materials: {}", names.join(", ")))
+                    mf.err(format!(
+                        "unknown material {wanted:?}; defined materials: {}",
+                        names.join(", ")
+                    ))
                 })?
             }
         };
         objects.push(Object {
             name: format!("{obj_name}.{suffix}"),
-            mesh: MeshSource::World { level: level.clone(), class },
+            mesh: MeshSource::World {
+                level: level.clone(),
+                class,
+            },
             material,
             transform: Mat4::from_translation(translate),
             animation: None,
@@ -358,7 +512,18 @@ fn check_quad_edges(v_field: &Field, u: Vec3, v: Vec3) -> Result<(), SceneError>
 /// Each light type and its keys besides `type` and `name`.
 const LIGHT_KEYS: [(&str, &[&str]); 5] = [
     ("point", &["position", "intensity", "radius"]),
-    ("spot", &["position", "direction", "target", "intensity", "inner_deg", "outer_deg", "radius"]),
+    (
+        "spot",
+        &[
+            "position",
+            "direction",
+            "target",
+            "intensity",
+            "inner_deg",
+            "outer_deg",
+            "radius",
+        ],
+    ),
     ("directional", &["direction", "irradiance"]),
     ("sphere", &["center", "radius", "radiance"]),
     ("quad", &["corner", "edge_u", "edge_v", "radiance"]),
@@ -402,7 +567,10 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
     };
     let kind = kind_f.string()?;
     let Some((_, keys)) = LIGHT_KEYS.iter().find(|(n, _)| *n == kind) else {
-        let msg = format!("unknown light type {kind:?}; expected one of: {}", type_names(&LIGHT_KEYS));
+        let msg = format!(
+            "unknown light type {kind:?}; expected one of: {}",
+            type_names(&LIGHT_KEYS)
+        );
         return Err(kind_f.err(msg));
     };
     t.allow(&[&["type", "name"][..], keys].concat())?;
@@ -410,19 +578,32 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
     let point = |k: &str| t.require(k, "3 numbers, metres").and_then(|f| f.vec3());
     let colour = |k: &str, what: &str| t.require(k, what).and_then(|f| f.colour());
     Ok(match kind {
-        "point" => Light::Point { name, position: point("position")?, intensity: colour("intensity", "W/sr, a number or 3")?, radius: opt(t.get("radius"), non_negative)?.unwrap_or(0.0) },
+        "point" => Light::Point {
+            name,
+            position: point("position")?,
+            intensity: colour("intensity", "W/sr, a number or 3")?,
+            radius: opt(t.get("radius"), non_negative)?.unwrap_or(0.0),
+        },
         "spot" => {
             let position = point("position")?;
             let direction = match (t.get("direction"), t.get("target")) {
                 (Some(d), None) => direction(&d)?,
-                (None, Some(tg)) => (tg.vec3()? - position).try_normalize().ok_or_else(|| tg.err("must differ from position"))?,
+                (None, Some(tg)) => (tg.vec3()? - position)
+                    .try_normalize()
+                    .ok_or_else(|| tg.err("must differ from position"))?,
                 (Some(_), Some(tg)) => return Err(tg.err("give either direction or target, not both")),
                 (None, None) => return Err(t.missing("direction", "3 numbers, or give target instead")),
             };
             let outer_f = t.get("outer_deg");
-            let outer_deg = opt(outer_f.clone(), |f| f.number_where("a half-angle in degrees in (0, 90]", |x| x > 0.0 && x <= 90.0))?.unwrap_or(30.0);
+            let outer_deg = opt(outer_f.clone(), |f| {
+                f.number_where("a half-angle in degrees in (0, 90]", |x| x > 0.0 && x <= 90.0)
+            })?
+            .unwrap_or(30.0);
             let inner_f = t.get("inner_deg");
-            let inner_deg = opt(inner_f.clone(), |f| f.number_where("a half-angle in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x)))?.unwrap_or(0.8 * outer_deg);
+            let inner_deg = opt(inner_f.clone(), |f| {
+                f.number_where("a half-angle in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x))
+            })?
+            .unwrap_or(0.8 * outer_deg);
             if inner_deg > outer_deg {
                 let msg = format!("inner_deg ({inner_deg}) must not exceed outer_deg ({outer_deg})");
                 let at = inner_f.or(outer_f);
@@ -433,24 +614,64 @@ fn read_light(f: &Field) -> Result<Light, SceneError> {
             }
             let intensity = colour("intensity", "W/sr, a number or 3")?;
             let radius = opt(t.get("radius"), non_negative)?.unwrap_or(0.0);
-            Light::Spot { name, position, direction, intensity, inner_deg, outer_deg, radius }
+            Light::Spot {
+                name,
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+                radius,
+            }
         }
-        "directional" => Light::Directional { name, direction: direction(&t.require("direction", "the direction the light travels")?)?, irradiance: colour("irradiance", "W/m², a number or 3")? },
-        "sphere" => Light::Sphere { name, center: point("center")?, radius: positive(&t.require("radius", "metres, > 0")?)?, radiance: colour("radiance", "W/(m²·sr), a number or 3")? },
+        "directional" => Light::Directional {
+            name,
+            direction: direction(&t.require("direction", "the direction the light travels")?)?,
+            irradiance: colour("irradiance", "W/m², a number or 3")?,
+        },
+        "sphere" => Light::Sphere {
+            name,
+            center: point("center")?,
+            radius: positive(&t.require("radius", "metres, > 0")?)?,
+            radiance: colour("radiance", "W/(m²·sr), a number or 3")?,
+        },
         _ => {
             let corner = point("corner")?;
             let edge_u = point("edge_u")?;
             let v_f = t.require("edge_v", "3 numbers, metres")?;
             let edge_v = v_f.vec3()?;
             check_quad_edges(&v_f, edge_u, edge_v)?;
-            Light::Quad { name, corner, edge_u, edge_v, radiance: colour("radiance", "W/(m²·sr), a number or 3")? }
+            Light::Quad {
+                name,
+                corner,
+                edge_u,
+                edge_v,
+                radiance: colour("radiance", "W/(m²·sr), a number or 3")?,
+            }
         }
     })
 }
 
 /// Keys of a `[[light_arrays]]` entry.
-const LIGHT_ARRAY_KEYS: [&str; 17] =
-    ["name", "type", "count", "grid", "min", "max", "center", "size", "direction", "target", "jitter_deg", "seed", "intensity", "colours", "inner_deg", "outer_deg", "radius"];
+const LIGHT_ARRAY_KEYS: [&str; 17] = [
+    "name",
+    "type",
+    "count",
+    "grid",
+    "min",
+    "max",
+    "center",
+    "size",
+    "direction",
+    "target",
+    "jitter_deg",
+    "seed",
+    "intensity",
+    "colours",
+    "inner_deg",
+    "outer_deg",
+    "radius",
+];
 
 /// One `[[light_arrays]]` entry expanded into its lights; `earlier` lights were generated by the
 /// arrays before it (the limit is on the scene's total).
@@ -466,8 +687,16 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
     };
     if kind == ArrayKind::Point {
         const AIM_KEYS: [&str; 5] = ["direction", "target", "jitter_deg", "inner_deg", "outer_deg"];
-        if let Some(k) = t.keys().into_iter().find(|(k, _)| AIM_KEYS.contains(k)).and_then(|(k, _)| t.get(k)) {
-            return Err(k.err(format!("only spot arrays aim; a point array takes none of {}", AIM_KEYS.join(", "))));
+        if let Some(k) = t
+            .keys()
+            .into_iter()
+            .find(|(k, _)| AIM_KEYS.contains(k))
+            .and_then(|(k, _)| t.get(k))
+        {
+            return Err(k.err(format!(
+                "only spot arrays aim; a point array takes none of {}",
+                AIM_KEYS.join(", ")
+            )));
         }
     }
     let name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
@@ -477,11 +706,19 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
         (None, Some(g)) => {
             let items = g.array()?;
             if items.len() != 3 {
-                return Err(g.err(format!("expected 3 integers [nx, ny, nz], got {}", super::doc::describe(g.node))));
+                return Err(g.err(format!(
+                    "expected 3 integers [nx, ny, nz], got {}",
+                    super::doc::describe(g.node)
+                )));
             }
             let mut n = [0u32; 3];
             for (k, item) in n.iter_mut().zip(&items) {
-                *k = item.int_in(1, MAX_ARRAY_LIGHTS).map_err(|_| g.err(format!("expected 3 integers from 1 to {MAX_ARRAY_LIGHTS}, got {}", super::doc::describe(g.node))))?;
+                *k = item.int_in(1, MAX_ARRAY_LIGHTS).map_err(|_| {
+                    g.err(format!(
+                        "expected 3 integers from 1 to {MAX_ARRAY_LIGHTS}, got {}",
+                        super::doc::describe(g.node)
+                    ))
+                })?;
             }
             (ArrayLayout::Grid(n), g)
         }
@@ -490,15 +727,25 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
     };
     let count = layout.count();
     if earlier + count > u64::from(MAX_ARRAY_LIGHTS) {
-        let before = if earlier > 0 { format!(" (after {earlier} from the arrays before it)") } else { String::new() };
-        return Err(size_f.err(format!("{count} lights{before}: the light arrays of a scene may make at most {MAX_ARRAY_LIGHTS}")));
+        let before = if earlier > 0 {
+            format!(" (after {earlier} from the arrays before it)")
+        } else {
+            String::new()
+        };
+        return Err(size_f.err(format!(
+            "{count} lights{before}: the light arrays of a scene may make at most {MAX_ARRAY_LIGHTS}"
+        )));
     }
 
     let (min, max) = match (t.get("min"), t.get("max"), t.get("center"), t.get("size")) {
         (Some(lo), Some(hi), None, None) => {
             let (a, b) = (lo.vec3()?, hi.vec3()?);
             if a.cmpgt(b).any() {
-                return Err(hi.err(format!("every coordinate must be at least min's, got min {} and max {}", fmt3(a), fmt3(b))));
+                return Err(hi.err(format!(
+                    "every coordinate must be at least min's, got min {} and max {}",
+                    fmt3(a),
+                    fmt3(b)
+                )));
             }
             (a, b)
         }
@@ -510,7 +757,9 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
         (None, Some(_), None, None) => return Err(t.missing("min", "3 numbers, metres")),
         (None, None, Some(_), None) => return Err(t.missing("size", "3 non-negative numbers, metres")),
         (None, None, None, Some(_)) => return Err(t.missing("center", "3 numbers, metres")),
-        (None, None, None, None) => return Err(t.missing("min", "3 numbers, metres (with max), or give center and size")),
+        (None, None, None, None) => {
+            return Err(t.missing("min", "3 numbers, metres (with max), or give center and size"))
+        }
         _ => {
             let at = t.get("center").or(t.get("size")).unwrap_or_else(|| size_f.clone());
             return Err(at.err("give either min and max, or center and size"));
@@ -519,7 +768,10 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
     for (v, key) in [(min, "min"), (max, "max")] {
         if v.abs().max_element() > MAX_CAMERA_COORDINATE {
             let at = t.get(key).or(t.get("center")).unwrap_or_else(|| size_f.clone());
-            return Err(at.err(format!("the box reaches {}: coordinates are limited to ±{MAX_CAMERA_COORDINATE:e} m", fmt3(v))));
+            return Err(at.err(format!(
+                "the box reaches {}: coordinates are limited to ±{MAX_CAMERA_COORDINATE:e} m",
+                fmt3(v)
+            )));
         }
     }
 
@@ -530,7 +782,10 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
         // Arrays are rigs: straight down unless told otherwise.
         (None, None) => ArrayAim::Direction(Vec3::NEG_Y),
     };
-    let jitter_deg = opt(t.get("jitter_deg"), |f| f.number_where("a tilt in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x)))?.unwrap_or(0.0);
+    let jitter_deg = opt(t.get("jitter_deg"), |f| {
+        f.number_where("a tilt in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x))
+    })?
+    .unwrap_or(0.0);
     let seed = opt(t.get("seed"), |f| f.int_in(0, u32::MAX))?.unwrap_or(1);
     let intensity = t.require("intensity", "W/sr, a number or 3")?.colour()?;
     let colours = match t.get("colours") {
@@ -544,24 +799,54 @@ fn read_light_array(f: &Field, earlier: u64) -> Result<Vec<Light>, SceneError> {
         }
     };
     let outer_f = t.get("outer_deg");
-    let outer_deg = opt(outer_f.clone(), |f| f.number_where("a half-angle in degrees in (0, 90]", |x| x > 0.0 && x <= 90.0))?.unwrap_or(30.0);
+    let outer_deg = opt(outer_f.clone(), |f| {
+        f.number_where("a half-angle in degrees in (0, 90]", |x| x > 0.0 && x <= 90.0)
+    })?
+    .unwrap_or(30.0);
     let inner_f = t.get("inner_deg");
-    let inner_deg = opt(inner_f.clone(), |f| f.number_where("a half-angle in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x)))?.unwrap_or(0.8 * outer_deg);
+    let inner_deg = opt(inner_f.clone(), |f| {
+        f.number_where("a half-angle in degrees in [0, 90]", |x| (0.0..=90.0).contains(&x))
+    })?
+    .unwrap_or(0.8 * outer_deg);
     if inner_deg > outer_deg {
         let msg = format!("inner_deg ({inner_deg}) must not exceed outer_deg ({outer_deg})");
-        return Err(inner_f.or(outer_f).map_or_else(|| t.ctx.err(t.line, &t.path, msg.clone()), |f| f.err(msg.clone())));
+        return Err(inner_f
+            .or(outer_f)
+            .map_or_else(|| t.ctx.err(t.line, &t.path, msg.clone()), |f| f.err(msg.clone())));
     }
     let radius = opt(t.get("radius"), non_negative)?.unwrap_or(0.0);
-    let array = LightArray { name, kind, layout, min, max, aim, jitter_deg, seed, intensity, colours, inner_deg, outer_deg, radius };
-    array.expand().map_err(|m| t.get("target").map_or_else(|| f.err(m.clone()), |tg| tg.err(m.clone())))
+    let array = LightArray {
+        name,
+        kind,
+        layout,
+        min,
+        max,
+        aim,
+        jitter_deg,
+        seed,
+        intensity,
+        colours,
+        inner_deg,
+        outer_deg,
+        radius,
+    };
+    array
+        .expand()
+        .map_err(|m| t.get("target").map_or_else(|| f.err(m.clone()), |tg| tg.err(m.clone())))
 }
 
 fn read_light_board(f: &Field) -> Result<super::types::LightBoard, SceneError> {
     let t = f.table()?;
     t.allow(&["depth", "rate_hz", "seed"])?;
     Ok(super::types::LightBoard {
-        depth: opt(t.get("depth"), |f| f.number_where("a dimming depth in [0, 1]", |x| (0.0..=1.0).contains(&x)))?.unwrap_or(0.5),
-        rate_hz: opt(t.get("rate_hz"), |f| f.number_where("a rate in Hz in (0, 1000]", |x| x > 0.0 && x <= 1000.0))?.unwrap_or(0.5),
+        depth: opt(t.get("depth"), |f| {
+            f.number_where("a dimming depth in [0, 1]", |x| (0.0..=1.0).contains(&x))
+        })?
+        .unwrap_or(0.5),
+        rate_hz: opt(t.get("rate_hz"), |f| {
+            f.number_where("a rate in Hz in (0, 1000]", |x| x > 0.0 && x <= 1000.0)
+        })?
+        .unwrap_or(0.5),
         seed: opt(t.get("seed"), |f| f.int_in(0, u32::MAX))?.unwrap_or(1),
     })
 }
@@ -573,9 +858,22 @@ fn read_wind(f: &Field) -> Result<Wind, SceneError> {
     t.allow(&["amplitude", "rate", "unit"])?;
     let d = Wind::default();
     Ok(Wind {
-        amplitude: opt(t.get("amplitude"), |f| f.number_where("a peak displacement in the document's units, from 0 to 100", |x| (0.0..=100.0).contains(&x)))?.unwrap_or(d.amplitude),
-        rate: opt(t.get("rate"), |f| f.number_where("a phase rate in rad/s, from -1000 to 1000", |x| x.abs() <= 1000.0))?.unwrap_or(d.rate),
-        unit: opt(t.get("unit"), |f| f.number_where("metres per the document's unit, from 1e-4 to 1e4", |x| (1e-4..=1e4).contains(&x)))?.unwrap_or(d.unit),
+        amplitude: opt(t.get("amplitude"), |f| {
+            f.number_where("a peak displacement in the document's units, from 0 to 100", |x| {
+                (0.0..=100.0).contains(&x)
+            })
+        })?
+        .unwrap_or(d.amplitude),
+        rate: opt(t.get("rate"), |f| {
+            f.number_where("a phase rate in rad/s, from -1000 to 1000", |x| x.abs() <= 1000.0)
+        })?
+        .unwrap_or(d.rate),
+        unit: opt(t.get("unit"), |f| {
+            f.number_where("metres per the document's unit, from 1e-4 to 1e4", |x| {
+                (1e-4..=1e4).contains(&x)
+            })
+        })?
+        .unwrap_or(d.unit),
     })
 }
 
@@ -587,22 +885,34 @@ fn read_light_motion(f: &Field, lights: &[Light]) -> Result<LightMotion, SceneEr
     let light = match t.get("light") {
         Some(lf) => {
             let wanted = lf.string()?;
-            let i = lights.iter().position(|l| l.name() == wanted).ok_or_else(|| lf.err(format!("no light is named {wanted:?}")))?;
+            let i = lights
+                .iter()
+                .position(|l| l.name() == wanted)
+                .ok_or_else(|| lf.err(format!("no light is named {wanted:?}")))?;
             if !matches!(lights[i], Light::Directional { .. }) {
-                return Err(lf.err(format!("light {wanted:?} is not directional: only a directional light turns")));
+                return Err(lf.err(format!(
+                    "light {wanted:?} is not directional: only a directional light turns"
+                )));
             }
             i
         }
-        None => lights.iter().position(|l| matches!(l, Light::Directional { .. })).ok_or_else(|| f.err("the scene has no directional light to turn"))?,
+        None => lights
+            .iter()
+            .position(|l| matches!(l, Light::Directional { .. }))
+            .ok_or_else(|| f.err("the scene has no directional light to turn"))?,
     };
     let axis = match t.get("axis") {
         Some(af) => {
             let a = af.vec3()?;
-            a.try_normalize().filter(|_| a.length() > 1e-6).ok_or_else(|| af.err("expected a non-zero axis"))?
+            a.try_normalize()
+                .filter(|_| a.length() > 1e-6)
+                .ok_or_else(|| af.err("expected a non-zero axis"))?
         }
         None => Vec3::Y,
     };
-    let deg_per_s = t.require("deg_per_s", "degrees per second")?.number_where("degrees per second, at most 3600 either way", |x| x.abs() <= 3600.0)?;
+    let deg_per_s = t
+        .require("deg_per_s", "degrees per second")?
+        .number_where("degrees per second, at most 3600 either way", |x| x.abs() <= 3600.0)?;
     Ok(LightMotion { light, axis, deg_per_s })
 }
 
@@ -615,11 +925,18 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
     match kind_f.string()? {
         "constant" => {
             t.allow(&["type", "radiance"])?;
-            Ok(Environment::Constant { radiance: t.require("radiance", "W/(m²·sr), a number or 3")?.colour()? })
+            Ok(Environment::Constant {
+                radiance: t.require("radiance", "W/(m²·sr), a number or 3")?.colour()?,
+            })
         }
         "image" => {
             t.allow(&["type", "path", "scale"])?;
-            Ok(Environment::Image { path: t.require("path", "an equirectangular .hdr or .exr file")?.existing_image()?, scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0) })
+            Ok(Environment::Image {
+                path: t
+                    .require("path", "an equirectangular .hdr or .exr file")?
+                    .existing_image()?,
+                scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
+            })
         }
         "cube" => {
             let mut keys = vec!["type", "scale"];
@@ -634,8 +951,13 @@ fn read_environment(f: &Field) -> Result<Environment, SceneError> {
             // Load the faces now, so that a bad one is an error here, with its line, and not a
             // surprise for whichever method reads it first.
             CubeFaces::load(&faces, 1.0).map_err(|(k, msg)| fields[k].1.err(msg))?;
-            Ok(Environment::Cube { faces, scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0) })
+            Ok(Environment::Cube {
+                faces,
+                scale: opt(t.get("scale"), non_negative)?.unwrap_or(1.0),
+            })
         }
-        other => Err(kind_f.err(format!("unknown environment type {other:?}; expected constant, image or cube"))),
+        other => Err(kind_f.err(format!(
+            "unknown environment type {other:?}; expected constant, image or cube"
+        ))),
     }
 }

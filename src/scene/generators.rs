@@ -27,7 +27,8 @@ fn push_grid(mesh: &mut Mesh, nu: u32, nv: u32, normal: Vec3, pos: impl Fn(u32, 
         for i in 0..=nu {
             mesh.positions.push(pos(i, j));
             mesh.normals.push(normal);
-            mesh.uvs.push(Vec2::new(i as f32 / nu as f32, 1.0 - j as f32 / nv as f32));
+            mesh.uvs
+                .push(Vec2::new(i as f32 / nu as f32, 1.0 - j as f32 / nv as f32));
         }
     }
     let row = nu + 1;
@@ -58,7 +59,9 @@ pub fn plane(size: Vec2, subdivisions: u32) -> Mesh {
     let h = size * 0.5;
     let mut m = Mesh::default();
     // right = +x, up = −z: (+x) × (−z) = +y.
-    push_grid(&mut m, n, n, Vec3::Y, |i, j| Vec3::new(lerp_exact(-h.x, h.x, i, n), 0.0, lerp_exact(h.y, -h.y, j, n)));
+    push_grid(&mut m, n, n, Vec3::Y, |i, j| {
+        Vec3::new(lerp_exact(-h.x, h.x, i, n), 0.0, lerp_exact(h.y, -h.y, j, n))
+    });
     m.compute_tangents();
     m
 }
@@ -69,7 +72,9 @@ pub fn quad(corner: Vec3, edge_u: Vec3, edge_v: Vec3, subdivisions: u32) -> Mesh
     let n = subdivisions.clamp(1, MAX_SUBDIVISIONS);
     let normal = edge_u.cross(edge_v).try_normalize().unwrap_or(Vec3::Y);
     let mut m = Mesh::default();
-    push_grid(&mut m, n, n, normal, |i, j| corner + edge_u * (i as f32 / n as f32) + edge_v * (j as f32 / n as f32));
+    push_grid(&mut m, n, n, normal, |i, j| {
+        corner + edge_u * (i as f32 / n as f32) + edge_v * (j as f32 / n as f32)
+    });
     m.compute_tangents();
     m
 }
@@ -181,7 +186,10 @@ impl Pcg32 {
     const MUL: u64 = 6_364_136_223_846_793_005;
 
     fn new(seed: u64, stream: u64) -> Pcg32 {
-        let mut rng = Pcg32 { state: 0, inc: (stream << 1) | 1 };
+        let mut rng = Pcg32 {
+            state: 0,
+            inc: (stream << 1) | 1,
+        };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(seed);
         rng.next_u32();
@@ -259,7 +267,9 @@ pub fn bush(leaves: u32, seed: u32, radius: f32, height: f32, leaf_size: f32) ->
         let n = Vec3::new(tilt.sin() * lean.cos(), tilt.cos(), tilt.sin() * lean.sin());
         // Tip direction: outward and a little random, in the leaf's plane.
         let outward = Vec3::new(dir.x, 0.0, dir.z).normalize_or_zero() + rng.direction() * 0.7;
-        let a = (outward - n * n.dot(outward)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+        let a = (outward - n * n.dot(outward))
+            .try_normalize()
+            .unwrap_or_else(|| n.any_orthonormal_vector());
         let t = a.cross(n); // toward +u; n × t = a points to the tip (−v)
         let length = leaf_size * rng.range(0.8, 1.2);
         let width = rng.range(0.5, 0.65);
@@ -298,7 +308,13 @@ fn push_leaf(m: &mut Mesh, c: Vec3, [t, a, n]: [Vec3; 3], length: f32, width: f3
         Vec3::new(0.0, -LEAF_STEM, 0.0),    // stem
         Vec3::new(0.5 * width, 0.0, fold),  // right (u = 1)
     ];
-    let uvs = [Vec2::new(0.5, LEAF_TIP), Vec2::new(0.5, 0.0), Vec2::new(0.0, LEAF_TIP), Vec2::new(0.5, 1.0), Vec2::new(1.0, LEAF_TIP)];
+    let uvs = [
+        Vec2::new(0.5, LEAF_TIP),
+        Vec2::new(0.5, 0.0),
+        Vec2::new(0.0, LEAF_TIP),
+        Vec2::new(0.5, 1.0),
+        Vec2::new(1.0, LEAF_TIP),
+    ];
     // Counter-clockwise seen from +n: (tip, left, centre), (tip, centre, right), (stem, centre,
     // left), (stem, right, centre).
     const TRIS: [[usize; 3]; 4] = [[1, 2, 0], [1, 0, 4], [3, 0, 2], [3, 4, 0]];
@@ -358,7 +374,8 @@ fn push_prism(m: &mut Mesh, b0: Vec3, b1: Vec3, r0: f32, r1: f32) {
         m.positions.push(b1 + d * r1);
         m.normals.push(axis);
         let phi = TAU * k as f32 / PRISM_SIDES as f32;
-        m.uvs.push(lo.lerp(hi, 0.5) + Vec2::new(phi.cos(), -phi.sin()) * 0.5 * (hi - lo));
+        m.uvs
+            .push(lo.lerp(hi, 0.5) + Vec2::new(phi.cos(), -phi.sin()) * 0.5 * (hi - lo));
     }
     for k in 1..sides - 1 {
         m.indices.extend_from_slice(&[cap, cap + k, cap + k + 1]);
@@ -439,14 +456,25 @@ impl LightArray {
         let mut out = Vec::with_capacity(positions.len());
         for (i, position) in positions.into_iter().enumerate() {
             let name = format!("{}[{i}]", self.name);
-            let tint = if self.colours.is_empty() { Vec3::ONE } else { self.colours[i % self.colours.len()] };
+            let tint = if self.colours.is_empty() {
+                Vec3::ONE
+            } else {
+                self.colours[i % self.colours.len()]
+            };
             let intensity = self.intensity * tint;
             let light = match self.kind {
-                ArrayKind::Point => Light::Point { name, position, intensity, radius: self.radius },
+                ArrayKind::Point => Light::Point {
+                    name,
+                    position,
+                    intensity,
+                    radius: self.radius,
+                },
                 ArrayKind::Spot => {
                     let axis = match self.aim {
                         ArrayAim::Direction(d) => d.normalize(),
-                        ArrayAim::Target(t) => (t - position).try_normalize().ok_or_else(|| format!("light {i} of the array sits exactly on the target"))?,
+                        ArrayAim::Target(t) => (t - position)
+                            .try_normalize()
+                            .ok_or_else(|| format!("light {i} of the array sits exactly on the target"))?,
                     };
                     // Uniform over the spherical cap of half-angle max_tilt: cos θ uniform.
                     let (u, v) = (aim_rng.unit(), aim_rng.unit());
@@ -455,7 +483,15 @@ impl LightArray {
                     let (e1, e2) = axis.any_orthonormal_pair();
                     let phi = TAU * v;
                     let direction = (axis * cos_t + (e1 * phi.cos() + e2 * phi.sin()) * sin_t).normalize();
-                    Light::Spot { name, position, direction, intensity, inner_deg: self.inner_deg, outer_deg: self.outer_deg, radius: self.radius }
+                    Light::Spot {
+                        name,
+                        position,
+                        direction,
+                        intensity,
+                        inner_deg: self.inner_deg,
+                        outer_deg: self.outer_deg,
+                        radius: self.radius,
+                    }
                 }
             };
             out.push(light);
@@ -480,7 +516,9 @@ impl LightArray {
             }
             ArrayLayout::Scatter(n) => {
                 let mut rng = Pcg32::new(u64::from(self.seed), 0x1405_7b7e_f767_814f);
-                (0..n).map(|_| self.min + extent * Vec3::new(rng.unit(), rng.unit(), rng.unit())).collect()
+                (0..n)
+                    .map(|_| self.min + extent * Vec3::new(rng.unit(), rng.unit(), rng.unit()))
+                    .collect()
             }
         }
     }
@@ -515,12 +553,20 @@ mod tests {
         assert_eq!(m.boundary_edge_count(), 12);
         assert_eq!(m.bounds(), Some((Vec3::new(-2.0, 0.0, -1.0), Vec3::new(2.0, 0.0, 1.0))));
         // Tangent along +x (u), bitangent toward −z (up in the image): w = +1.
-        assert!(m.tangents.iter().all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0));
+        assert!(m
+            .tangents
+            .iter()
+            .all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0));
     }
 
     #[test]
     fn quad_faces_edge_cross_product() {
-        let m = quad(Vec3::new(1.0, 2.0, 0.0), Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 3.0, 0.0), 2);
+        let m = quad(
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(0.0, 0.0, -2.0),
+            Vec3::new(0.0, 3.0, 0.0),
+            2,
+        );
         assert_eq!((m.vertex_count(), m.triangle_count()), (9, 8));
         assert_well_formed(&m);
         assert!((m.area() - 6.0).abs() < 1e-4);

@@ -59,7 +59,12 @@ pub enum HeightShape {
     Sine { wavelength: f32 },
     /// `count` cones on a circle of radius `ring_radius` about the origin; cone k has base radius
     /// radius·s_k and apex height height·s_k with s_k = 1 − size_variation·k/count.
-    Cones { count: u32, radius: f32, ring_radius: f32, size_variation: f32 },
+    Cones {
+        count: u32,
+        radius: f32,
+        ring_radius: f32,
+        size_variation: f32,
+    },
     /// Mountains from fractal value noise n ∈ [0, 1) (`octaves` octaves from `wavelength` down,
     /// each half the size and amplitude of the last): h = height·(max(n − 0.4, 0)/0.6)², plains
     /// where the noise is low and peaks where it is high.
@@ -104,7 +109,8 @@ impl HeightImage {
     /// EXR as stored.
     pub fn load(path: &Path) -> Result<HeightImage, SceneError> {
         let file = path.display().to_string();
-        let (_, w, h) = crate::image_io::image_header(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
+        let (_, w, h) = crate::image_io::image_header(path)
+            .map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
         if w > MAX_HEIGHT_IMAGE_SIDE || h > MAX_HEIGHT_IMAGE_SIDE {
             return Err(SceneError::new(
                 &file,
@@ -113,17 +119,30 @@ impl HeightImage {
                 format!("the height image is {w}×{h}; a height field samples at most {MAX_HEIGHTFIELD_RESOLUTION}² so penumbra reads height images of at most {MAX_HEIGHT_IMAGE_SIDE} on a side (downsample it)"),
             ));
         }
-        let img = crate::image_io::open_image(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
+        let img = crate::image_io::open_image(path)
+            .map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
         let (width, height) = (img.width(), img.height());
         let values: Vec<f32> = match &img {
-            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => img.to_rgba32f().pixels().map(|p| p.0[0]).collect(),
+            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
+                img.to_rgba32f().pixels().map(|p| p.0[0]).collect()
+            }
             _ => img.to_luma32f().pixels().map(|p| p.0[0]).collect(),
         };
         if width < 2 || height < 2 {
-            return Err(SceneError::new(&file, None, "file", format!("a height image needs at least 2×2 pixels, got {width}×{height}")));
+            return Err(SceneError::new(
+                &file,
+                None,
+                "file",
+                format!("a height image needs at least 2×2 pixels, got {width}×{height}"),
+            ));
         }
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-            return Err(SceneError::new(&file, None, format!("pixel ({}, {})", k as u32 % width, k as u32 / width), "is not a finite number"));
+            return Err(SceneError::new(
+                &file,
+                None,
+                format!("pixel ({}, {})", k as u32 % width, k as u32 / width),
+                "is not a finite number",
+            ));
         }
         Ok(HeightImage { width, height, values })
     }
@@ -144,7 +163,8 @@ impl HeightImage {
 
 /// Integer hash to [0, 1), identical to `hf_hash` in `glsl/heightfield/generate.glsl`.
 pub fn hash01(ix: i32, iz: i32, seed: u32) -> f32 {
-    let mut h = (ix as u32).wrapping_mul(0x8da6_b343) ^ (iz as u32).wrapping_mul(0xd816_3841) ^ seed.wrapping_mul(0xcb1a_b31f);
+    let mut h =
+        (ix as u32).wrapping_mul(0x8da6_b343) ^ (iz as u32).wrapping_mul(0xd816_3841) ^ seed.wrapping_mul(0xcb1a_b31f);
     h ^= h >> 16;
     h = h.wrapping_mul(0x7feb_352d);
     h ^= h >> 15;
@@ -180,7 +200,10 @@ impl HeightfieldSource {
     /// Object-space position (x, z) of sample (i, j) of a `res`-sample grid over this square.
     pub fn sample_xz(&self, i: u32, j: u32, res: u32) -> Vec2 {
         let s = self.size / res as f32;
-        Vec2::new(-0.5 * self.size + (i as f32 + 0.5) * s, -0.5 * self.size + (j as f32 + 0.5) * s)
+        Vec2::new(
+            -0.5 * self.size + (i as f32 + 0.5) * s,
+            -0.5 * self.size + (j as f32 + 0.5) * s,
+        )
     }
 
     /// Loads the image of an image source (`None` for generators).
@@ -215,7 +238,12 @@ impl HeightfieldSource {
                 }
             }
             HeightShape::Sine { wavelength } => a * (0.5 + 0.5 * (tau * qx / wavelength).sin()),
-            HeightShape::Cones { count, radius, ring_radius, size_variation } => {
+            HeightShape::Cones {
+                count,
+                radius,
+                ring_radius,
+                size_variation,
+            } => {
                 let mut h = 0.0f32;
                 for k in 0..*count {
                     let ang = tau * k as f32 / *count as f32 + self.speed * t;
@@ -226,7 +254,11 @@ impl HeightfieldSource {
                 }
                 h
             }
-            HeightShape::Fbm { wavelength, octaves, seed } => {
+            HeightShape::Fbm {
+                wavelength,
+                octaves,
+                seed,
+            } => {
                 let (mut sum, mut norm, mut amp, mut freq) = (0.0f32, 0.0f32, 1.0f32, 1.0 / wavelength);
                 for o in 0..*octaves {
                     sum += amp * value_noise(qx * freq, qz * freq, seed.wrapping_add(o));
@@ -238,8 +270,14 @@ impl HeightfieldSource {
                 let peak = (n - 0.4).max(0.0) / 0.6;
                 a * peak * peak
             }
-            HeightShape::EggTray { wavelength } => a * (0.5 + 0.5 * (tau * qx / wavelength).sin() * (tau * qz / wavelength).sin()),
-            HeightShape::City { wavelength, seed, street } => {
+            HeightShape::EggTray { wavelength } => {
+                a * (0.5 + 0.5 * (tau * qx / wavelength).sin() * (tau * qz / wavelength).sin())
+            }
+            HeightShape::City {
+                wavelength,
+                seed,
+                street,
+            } => {
                 let (u, v) = (qx / wavelength, qz / wavelength);
                 let (cu, cv) = (u.floor(), v.floor());
                 let (fu, fv) = (u - cu, v - cv);
@@ -316,7 +354,8 @@ pub fn grid_mesh(src: &HeightfieldSource, res: u32, h: &[f32]) -> Mesh {
             let p = src.sample_xz(i, j, res);
             m.positions.push(Vec3::new(p.x, h[(j * res + i) as usize], p.y));
             m.normals.push(grid_normal(h, res, spacing, i, j));
-            m.uvs.push(Vec2::new((i as f32 + 0.5) / res as f32, (j as f32 + 0.5) / res as f32));
+            m.uvs
+                .push(Vec2::new((i as f32 + 0.5) / res as f32, (j as f32 + 0.5) / res as f32));
         }
     }
     for j in 0..res - 1 {
@@ -359,8 +398,12 @@ const GENERATORS: [&str; 8] = ["flat", "slope", "step", "sine", "cones", "fbm", 
 
 /// Reads the keys of a `mesh = "heightfield"` object.
 pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
-    let opt_num = |k: &str, what: &str, ok: &dyn Fn(f32) -> bool| -> Result<Option<f32>, SceneError> { t.get(k).map(|f| f.number_where(what, ok)).transpose() };
-    let positive = |k: &str, default: f32| -> Result<f32, SceneError> { Ok(opt_num(k, "a positive number", &|x| x > 0.0)?.unwrap_or(default)) };
+    let opt_num = |k: &str, what: &str, ok: &dyn Fn(f32) -> bool| -> Result<Option<f32>, SceneError> {
+        t.get(k).map(|f| f.number_where(what, ok)).transpose()
+    };
+    let positive = |k: &str, default: f32| -> Result<f32, SceneError> {
+        Ok(opt_num(k, "a positive number", &|x| x > 0.0)?.unwrap_or(default))
+    };
     let size = positive("size", 1.0)?;
     let res_f = t.get("resolution");
     let mut resolution = match &res_f {
@@ -369,39 +412,79 @@ pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
     };
     let source = match (t.get("generator"), t.get("path")) {
         (Some(_), Some(p)) => return Err(p.err("give either generator or path, not both")),
-        (None, None) => return Err(t.missing("generator", &format!("one of: {}; or give path = a 16-bit PNG or EXR", GENERATORS.join(", ")))),
+        (None, None) => {
+            return Err(t.missing(
+                "generator",
+                &format!("one of: {}; or give path = a 16-bit PNG or EXR", GENERATORS.join(", ")),
+            ))
+        }
         (None, Some(p)) => {
             let path = p.existing_image()?;
             // The image is decoded here, so a corrupt one is an error with the field's line.
             let img = HeightImage::load(&path).map_err(|e| {
-                let at = if e.field == "file" { String::new() } else { format!("{}: ", e.field) };
+                let at = if e.field == "file" {
+                    String::new()
+                } else {
+                    format!("{}: ", e.field)
+                };
                 p.err(format!("{}: {at}{}", path.display(), e.message))
             })?;
             if resolution.is_none() {
                 // An image's own size when it is a power of two, else the next one up.
-                resolution = Some(img.width.max(img.height).next_power_of_two().clamp(MIN_HEIGHTFIELD_RESOLUTION, MAX_HEIGHTFIELD_RESOLUTION));
+                resolution = Some(
+                    img.width
+                        .max(img.height)
+                        .next_power_of_two()
+                        .clamp(MIN_HEIGHTFIELD_RESOLUTION, MAX_HEIGHTFIELD_RESOLUTION),
+                );
             }
             HeightShape::Image { path }
         }
         (Some(g), None) => {
             let kind = g.string()?;
             let wavelength = || positive("wavelength", 1.0);
-            let seed = || -> Result<u32, SceneError> { Ok(t.get("seed").map(|f| f.int_in(0, u32::MAX)).transpose()?.unwrap_or(1)) };
+            let seed = || -> Result<u32, SceneError> {
+                Ok(t.get("seed").map(|f| f.int_in(0, u32::MAX)).transpose()?.unwrap_or(1))
+            };
             match kind {
                 "flat" => HeightShape::Flat,
-                "slope" => HeightShape::Slope { slope_deg: opt_num("slope_deg", "an angle in degrees in (-89, 89)", &|x| x.abs() < 89.0)?.unwrap_or(30.0) },
-                "step" => HeightShape::Step { position: opt_num("position", "a number, metres", &|_| true)?.unwrap_or(0.0) },
-                "sine" => HeightShape::Sine { wavelength: wavelength()? },
+                "slope" => HeightShape::Slope {
+                    slope_deg: opt_num("slope_deg", "an angle in degrees in (-89, 89)", &|x| x.abs() < 89.0)?
+                        .unwrap_or(30.0),
+                },
+                "step" => HeightShape::Step {
+                    position: opt_num("position", "a number, metres", &|_| true)?.unwrap_or(0.0),
+                },
+                "sine" => HeightShape::Sine {
+                    wavelength: wavelength()?,
+                },
                 "cones" => HeightShape::Cones {
                     count: t.get("count").map(|f| f.int_in(1, 64)).transpose()?.unwrap_or(8),
                     radius: positive("radius", 0.25 * size)?,
-                    ring_radius: opt_num("ring_radius", "a non-negative number, metres", &|x| x >= 0.0)?.unwrap_or(0.25 * size),
-                    size_variation: opt_num("size_variation", "a number in [0, 1)", &|x| (0.0..1.0).contains(&x))?.unwrap_or(0.0),
+                    ring_radius: opt_num("ring_radius", "a non-negative number, metres", &|x| x >= 0.0)?
+                        .unwrap_or(0.25 * size),
+                    size_variation: opt_num("size_variation", "a number in [0, 1)", &|x| (0.0..1.0).contains(&x))?
+                        .unwrap_or(0.0),
                 },
-                "fbm" => HeightShape::Fbm { wavelength: wavelength()?, octaves: t.get("octaves").map(|f| f.int_in(1, 12)).transpose()?.unwrap_or(5), seed: seed()? },
-                "eggtray" => HeightShape::EggTray { wavelength: wavelength()? },
-                "city" => HeightShape::City { wavelength: wavelength()?, seed: seed()?, street: opt_num("street", "a number in [0, 1)", &|x| (0.0..1.0).contains(&x))?.unwrap_or(0.3) },
-                other => return Err(g.err(format!("unknown generator {other:?}; expected one of: {}", GENERATORS.join(", ")))),
+                "fbm" => HeightShape::Fbm {
+                    wavelength: wavelength()?,
+                    octaves: t.get("octaves").map(|f| f.int_in(1, 12)).transpose()?.unwrap_or(5),
+                    seed: seed()?,
+                },
+                "eggtray" => HeightShape::EggTray {
+                    wavelength: wavelength()?,
+                },
+                "city" => HeightShape::City {
+                    wavelength: wavelength()?,
+                    seed: seed()?,
+                    street: opt_num("street", "a number in [0, 1)", &|x| (0.0..1.0).contains(&x))?.unwrap_or(0.3),
+                },
+                other => {
+                    return Err(g.err(format!(
+                        "unknown generator {other:?}; expected one of: {}",
+                        GENERATORS.join(", ")
+                    )))
+                }
             }
         }
     };
@@ -416,14 +499,32 @@ pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
         HeightShape::City { .. } => &["wavelength", "seed", "street"],
         HeightShape::Image { .. } => &[],
     };
-    const SHAPE_KEYS: [&str; 10] = ["wavelength", "count", "radius", "ring_radius", "size_variation", "octaves", "seed", "street", "slope_deg", "position"];
+    const SHAPE_KEYS: [&str; 10] = [
+        "wavelength",
+        "count",
+        "radius",
+        "ring_radius",
+        "size_variation",
+        "octaves",
+        "seed",
+        "street",
+        "slope_deg",
+        "position",
+    ];
     for k in SHAPE_KEYS {
         if let (Some(f), false) = (t.get(k), used.contains(&k)) {
             let what = match &source {
                 HeightShape::Image { .. } => "an image height field".to_string(),
                 s => format!("generator {:?}", GENERATORS[s.code() as usize]),
             };
-            return Err(f.err(format!("not used by {what}; it takes: {}", if used.is_empty() { "no shape keys".to_string() } else { used.join(", ") })));
+            return Err(f.err(format!(
+                "not used by {what}; it takes: {}",
+                if used.is_empty() {
+                    "no shape keys".to_string()
+                } else {
+                    used.join(", ")
+                }
+            )));
         }
     }
     let resolution = resolution.unwrap_or(256);
@@ -446,7 +547,9 @@ pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
 fn power_of_two(f: &Field) -> Result<u32, SceneError> {
     let r = f.int_in(MIN_HEIGHTFIELD_RESOLUTION, MAX_HEIGHTFIELD_RESOLUTION)?;
     if !r.is_power_of_two() {
-        return Err(f.err(format!("expected a power of two from {MIN_HEIGHTFIELD_RESOLUTION} to {MAX_HEIGHTFIELD_RESOLUTION}, got {r}")));
+        return Err(f.err(format!(
+            "expected a power of two from {MIN_HEIGHTFIELD_RESOLUTION} to {MAX_HEIGHTFIELD_RESOLUTION}, got {r}"
+        )));
     }
     Ok(r)
 }
@@ -471,9 +574,14 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("wide.png");
         image::GrayImage::new(MAX_HEIGHT_IMAGE_SIDE + 1, 2).save(&path).unwrap();
-        let Err(e) = HeightImage::load(&path) else { panic!("a 4097-wide height image was accepted") };
+        let Err(e) = HeightImage::load(&path) else {
+            panic!("a 4097-wide height image was accepted")
+        };
         let e = e.to_string();
-        assert!(e.contains("wide.png") && e.contains("4097×2") && e.contains("at most 4096 on a side"), "{e}");
+        assert!(
+            e.contains("wide.png") && e.contains("4097×2") && e.contains("at most 4096 on a side"),
+            "{e}"
+        );
         let ok = dir.join("ok.png");
         image::GrayImage::new(MAX_HEIGHT_IMAGE_SIDE, 2).save(&ok).unwrap();
         assert!(HeightImage::load(&ok).is_ok());
@@ -481,7 +589,16 @@ mod tests {
     }
 
     fn src(shape: HeightShape) -> HeightfieldSource {
-        HeightfieldSource { size: 4.0, resolution: 16, shape, height: 1.0, taper: 0.0, offset: Vec2::ZERO, pattern_rotate_deg: 0.0, speed: 0.0 }
+        HeightfieldSource {
+            size: 4.0,
+            resolution: 16,
+            shape,
+            height: 1.0,
+            taper: 0.0,
+            offset: Vec2::ZERO,
+            pattern_rotate_deg: 0.0,
+            speed: 0.0,
+        }
     }
 
     #[test]
@@ -507,10 +624,23 @@ mod tests {
     fn generators_are_bounded_and_animate() {
         let shapes = [
             HeightShape::Sine { wavelength: 1.0 },
-            HeightShape::Cones { count: 5, radius: 0.5, ring_radius: 1.0, size_variation: 0.5 },
-            HeightShape::Fbm { wavelength: 1.0, octaves: 4, seed: 3 },
+            HeightShape::Cones {
+                count: 5,
+                radius: 0.5,
+                ring_radius: 1.0,
+                size_variation: 0.5,
+            },
+            HeightShape::Fbm {
+                wavelength: 1.0,
+                octaves: 4,
+                seed: 3,
+            },
             HeightShape::EggTray { wavelength: 1.0 },
-            HeightShape::City { wavelength: 0.5, seed: 2, street: 0.3 },
+            HeightShape::City {
+                wavelength: 0.5,
+                seed: 2,
+                street: 0.3,
+            },
         ];
         for shape in shapes {
             let mut s = src(shape.clone());
@@ -534,22 +664,41 @@ mod tests {
     }
 
     fn parse(field: &str) -> Result<crate::scene::Scene, SceneError> {
-        let text = format!("[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\n{field}\n");
+        let text = format!(
+            "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"heightfield\"\n{field}\n"
+        );
         crate::scene::Scene::from_str(&text, "t.toml", Path::new("."))
     }
 
     #[test]
     fn scene_keys_and_errors() {
-        let s = parse("size = 4\nresolution = 64\ngenerator = \"cones\"\ncount = 3\noffset = [0.5, -1]\nspeed = 0.2").unwrap();
-        let crate::scene::MeshSource::Heightfield(h) = &s.objects[0].mesh else { panic!() };
-        assert_eq!((h.size, h.resolution, h.offset, h.speed), (4.0, 64, Vec2::new(0.5, -1.0), 0.2));
+        let s = parse("size = 4\nresolution = 64\ngenerator = \"cones\"\ncount = 3\noffset = [0.5, -1]\nspeed = 0.2")
+            .unwrap();
+        let crate::scene::MeshSource::Heightfield(h) = &s.objects[0].mesh else {
+            panic!()
+        };
+        assert_eq!(
+            (h.size, h.resolution, h.offset, h.speed),
+            (4.0, 64, Vec2::new(0.5, -1.0), 0.2)
+        );
         assert!(matches!(h.shape, HeightShape::Cones { count: 3, .. }));
         let err = |field: &str| parse(field).unwrap_err().to_string();
         assert_eq!(err("generator = \"dunes\""), "t.toml:6: objects[0].generator: unknown generator \"dunes\"; expected one of: flat, slope, step, sine, cones, fbm, eggtray, city");
-        assert_eq!(err("generator = \"sine\"\nresolution = 100"), "t.toml:7: objects[0].resolution: expected a power of two from 8 to 1024, got 100");
-        assert_eq!(err("generator = \"sine\"\ncount = 3"), "t.toml:7: objects[0].count: not used by generator \"sine\"; it takes: wavelength");
-        assert!(err("size = 2").starts_with("t.toml:4: objects[0].generator: missing required field"), "{}", err("size = 2"));
-        assert!(err("generator = \"flat\"\npath = \"nope.png\"").contains("objects[0].path: give either generator or path, not both"));
+        assert_eq!(
+            err("generator = \"sine\"\nresolution = 100"),
+            "t.toml:7: objects[0].resolution: expected a power of two from 8 to 1024, got 100"
+        );
+        assert_eq!(
+            err("generator = \"sine\"\ncount = 3"),
+            "t.toml:7: objects[0].count: not used by generator \"sine\"; it takes: wavelength"
+        );
+        assert!(
+            err("size = 2").starts_with("t.toml:4: objects[0].generator: missing required field"),
+            "{}",
+            err("size = 2")
+        );
+        assert!(err("generator = \"flat\"\npath = \"nope.png\"")
+            .contains("objects[0].path: give either generator or path, not both"));
         assert!(err("generator = \"flat\"\noffset = [1]").contains("objects[0].offset: expected 2 numbers"));
     }
 
@@ -570,7 +719,10 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let png = dir.join("h.png");
         let raw: [u16; 6] = [0, 65535, 32768, 1000, 7, 40000];
-        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(3, 2, raw.to_vec()).unwrap().save(&png).unwrap();
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(3, 2, raw.to_vec())
+            .unwrap()
+            .save(&png)
+            .unwrap();
         let img = HeightImage::load(&png).unwrap();
         assert_eq!((img.width, img.height), (3, 2));
         for (v, r) in img.values.iter().zip(raw) {
@@ -582,11 +734,24 @@ mod tests {
         image::Rgb32FImage::from_raw(3, 2, rgb).unwrap().save(&exr).unwrap();
         assert_eq!(HeightImage::load(&exr).unwrap().values, floats.to_vec());
         let nan = dir.join("nan.exr");
-        image::Rgb32FImage::from_raw(2, 2, vec![0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap().save(&nan).unwrap();
+        image::Rgb32FImage::from_raw(
+            2,
+            2,
+            vec![0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        )
+        .unwrap()
+        .save(&nan)
+        .unwrap();
         let e = HeightImage::load(&nan).err().unwrap().to_string();
-        assert!(e.contains("nan.exr") && e.contains("pixel (1, 0)") && e.contains("not a finite number"), "{e}");
+        assert!(
+            e.contains("nan.exr") && e.contains("pixel (1, 0)") && e.contains("not a finite number"),
+            "{e}"
+        );
         let tiny = dir.join("tiny.png");
-        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(1, 1, vec![5]).unwrap().save(&tiny).unwrap();
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(1, 1, vec![5])
+            .unwrap()
+            .save(&tiny)
+            .unwrap();
         let e = HeightImage::load(&tiny).err().unwrap().to_string();
         assert!(e.contains("tiny.png") && e.contains("at least 2×2"), "{e}");
         let e = HeightImage::load(&dir.join("missing.png")).err().unwrap().to_string();

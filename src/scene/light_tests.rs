@@ -18,7 +18,11 @@ fn parse(text: &str) -> Result<Scene, SceneError> {
 #[track_caller]
 fn fails_at(text: &str, line: usize, field: &str) -> SceneError {
     let e = parse(text).expect_err("scene should be rejected");
-    assert_eq!((e.file.as_str(), e.line, e.field.as_str()), ("bad.toml", Some(line), field), "{e}");
+    assert_eq!(
+        (e.file.as_str(), e.line, e.field.as_str()),
+        ("bad.toml", Some(line), field),
+        "{e}"
+    );
     assert!(!e.to_string().contains('\n'), "error spans lines: {e}");
     e
 }
@@ -32,7 +36,15 @@ fn rig(extra: &str) -> String {
 
 fn spot(l: &Light) -> (&str, Vec3, Vec3, Vec3, f32, f32) {
     match l {
-        Light::Spot { name, position, direction, intensity, inner_deg, outer_deg, .. } => (name, *position, *direction, *intensity, *inner_deg, *outer_deg),
+        Light::Spot {
+            name,
+            position,
+            direction,
+            intensity,
+            inner_deg,
+            outer_deg,
+            ..
+        } => (name, *position, *direction, *intensity, *inner_deg, *outer_deg),
         other => panic!("expected a spot light, got {other:?}"),
     }
 }
@@ -43,7 +55,10 @@ fn inside(p: Vec3, lo: Vec3, hi: Vec3) -> bool {
 
 #[test]
 fn a_grid_expands_into_named_spots_at_cell_centres() {
-    let s = parse(&rig("[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1\n")).unwrap();
+    let s = parse(&rig(
+        "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1\n",
+    ))
+    .unwrap();
     // The hand-written light first, then the array's 12 in lattice order.
     assert_eq!(s.lights.len(), 13);
     assert!(matches!(s.lights[0], Light::Point { .. }));
@@ -67,19 +82,34 @@ fn a_scatter_stays_in_its_box_and_depends_on_its_seed_alone() {
         format!("{CAM}[[light_arrays]]\ntype = \"spot\"\ncount = 200\ncenter = [1, 4, 0]\nsize = [6, 0, 3]\ndirection = [0, -1, 0]\njitter_deg = {jitter}\nseed = {seed}\nintensity = [1, 2, 3]\n")
     };
     let a = parse(&text(7, 12.0)).unwrap();
-    assert_eq!(a.lights, parse(&text(7, 12.0)).unwrap().lights, "same seed, same lights");
+    assert_eq!(
+        a.lights,
+        parse(&text(7, 12.0)).unwrap().lights,
+        "same seed, same lights"
+    );
     let b = parse(&text(8, 12.0)).unwrap();
     assert_ne!(a.lights, b.lights, "another seed, other lights");
     let (lo, hi) = (Vec3::new(-2.0, 4.0, -1.5), Vec3::new(4.0, 4.0, 1.5));
     let mut max_tilt = 0f32;
     for (i, l) in a.lights.iter().enumerate() {
         let (name, p, d, intensity, inner, outer) = spot(l);
-        assert_eq!(name, format!("light_arrays[0][{i}]"), "unnamed arrays take their field path");
+        assert_eq!(
+            name,
+            format!("light_arrays[0][{i}]"),
+            "unnamed arrays take their field path"
+        );
         assert!(inside(p, lo, hi), "light {i} at {p} outside the box");
         let tilt = d.dot(Vec3::NEG_Y).clamp(-1.0, 1.0).acos().to_degrees();
-        assert!(tilt <= 12.0 + 1e-3 && (d.length() - 1.0).abs() < 1e-5, "light {i} tilted {tilt}°");
+        assert!(
+            tilt <= 12.0 + 1e-3 && (d.length() - 1.0).abs() < 1e-5,
+            "light {i} tilted {tilt}°"
+        );
         max_tilt = max_tilt.max(tilt);
-        assert_eq!((intensity, inner, outer), (Vec3::new(1.0, 2.0, 3.0), 24.0, 30.0), "defaults as a single spot's");
+        assert_eq!(
+            (intensity, inner, outer),
+            (Vec3::new(1.0, 2.0, 3.0), 24.0, 30.0),
+            "defaults as a single spot's"
+        );
     }
     assert!(max_tilt > 9.0, "the jitter is used: largest tilt {max_tilt}°");
     // The jitter draws from its own stream: changing it turns the lights without moving them.
@@ -105,7 +135,10 @@ fn targets_aim_every_spot_and_point_arrays_take_no_aim() {
     )
     .unwrap();
     assert_eq!(s.lights.len(), 8);
-    assert!(s.lights.iter().all(|l| matches!(l, Light::Point { radius, .. } if *radius == 4.0)));
+    assert!(s
+        .lights
+        .iter()
+        .all(|l| matches!(l, Light::Point { radius, .. } if *radius == 4.0)));
     assert_eq!(s.lights[7].name(), "bulbs[7]");
 }
 
@@ -120,34 +153,93 @@ fn malformed_arrays_name_their_field_and_line() {
     fails_at(&with("type = \"spot\"\n", ""), 4, "light_arrays[0].type");
     fails_at(&with("type = \"spot\"", "type = \"laser\""), 6, "light_arrays[0].type");
     fails_at(&with("intensity = 10\n", ""), 4, "light_arrays[0].intensity");
-    fails_at(&with("intensity = 10", "intensity = inf"), 10, "light_arrays[0].intensity");
+    fails_at(
+        &with("intensity = 10", "intensity = inf"),
+        10,
+        "light_arrays[0].intensity",
+    );
     fails_at(&with("grid = [4, 1, 3]\n", ""), 4, "light_arrays[0].grid");
     fails_at(&with("max = [2, 3, 1]\n", ""), 4, "light_arrays[0].max");
-    fails_at(&with("min = [-2, 3, -1]", "min = [nan, 3, -1]"), 8, "light_arrays[0].min");
+    fails_at(
+        &with("min = [-2, 3, -1]", "min = [nan, 3, -1]"),
+        8,
+        "light_arrays[0].min",
+    );
     fails_at(&with("max = [2, 3, 1]", "max = [2, 2, 1]"), 9, "light_arrays[0].max");
-    fails_at(&with("max = [2, 3, 1]", "max = [2, 3, 1]\ncenter = [0, 0, 0]"), 10, "light_arrays[0].center");
+    fails_at(
+        &with("max = [2, 3, 1]", "max = [2, 3, 1]\ncenter = [0, 0, 0]"),
+        10,
+        "light_arrays[0].center",
+    );
     fails_at(&with("grid = [4, 1, 3]", "grid = [4, 0, 3]"), 7, "light_arrays[0].grid");
     fails_at(&with("grid = [4, 1, 3]", "grid = [4, 3]"), 7, "light_arrays[0].grid");
-    fails_at(&with("grid = [4, 1, 3]", "grid = [4, 1, 3]\ncount = 5"), 7, "light_arrays[0].grid");
-    fails_at(&with("colours = [[1, 0, 0], [0, 0, 1], [0, 1, 0]]", "colours = []"), 11, "light_arrays[0].colours");
-    fails_at(&with("colours = [[1, 0, 0], [0, 0, 1], [0, 1, 0]]", "colours = [[1, 0, 0], [0, -1, 1]]"), 11, "light_arrays[0].colours[1]");
-    fails_at(&with("inner_deg = 20", "inner_deg = 50"), 13, "light_arrays[0].inner_deg");
-    fails_at(&with("outer_deg = 40", "outer_deg = 40\njitter_deg = 120"), 13, "light_arrays[0].jitter_deg");
-    fails_at(&with("name = \"rig\"", "name = \"rig\"\nintensty = 3"), 6, "light_arrays[0].intensty");
-    fails_at(&with("type = \"spot\"", "type = \"point\""), 12, "light_arrays[0].outer_deg");
+    fails_at(
+        &with("grid = [4, 1, 3]", "grid = [4, 1, 3]\ncount = 5"),
+        7,
+        "light_arrays[0].grid",
+    );
+    fails_at(
+        &with("colours = [[1, 0, 0], [0, 0, 1], [0, 1, 0]]", "colours = []"),
+        11,
+        "light_arrays[0].colours",
+    );
+    fails_at(
+        &with(
+            "colours = [[1, 0, 0], [0, 0, 1], [0, 1, 0]]",
+            "colours = [[1, 0, 0], [0, -1, 1]]",
+        ),
+        11,
+        "light_arrays[0].colours[1]",
+    );
+    fails_at(
+        &with("inner_deg = 20", "inner_deg = 50"),
+        13,
+        "light_arrays[0].inner_deg",
+    );
+    fails_at(
+        &with("outer_deg = 40", "outer_deg = 40\njitter_deg = 120"),
+        13,
+        "light_arrays[0].jitter_deg",
+    );
+    fails_at(
+        &with("name = \"rig\"", "name = \"rig\"\nintensty = 3"),
+        6,
+        "light_arrays[0].intensty",
+    );
+    fails_at(
+        &with("type = \"spot\"", "type = \"point\""),
+        12,
+        "light_arrays[0].outer_deg",
+    );
     // A light exactly on the target has no axis.
-    let on_target = with("grid = [4, 1, 3]", "grid = [1, 1, 1]").replace("max = [2, 3, 1]", "max = [2, 3, 1]\ntarget = [0, 3, 0]");
+    let on_target =
+        with("grid = [4, 1, 3]", "grid = [1, 1, 1]").replace("max = [2, 3, 1]", "max = [2, 3, 1]\ntarget = [0, 3, 0]");
     fails_at(&on_target, 10, "light_arrays[0].target");
 
     // The limit: one array, a grid whose product overflows a u32, and the scene's total.
-    let e = fails_at(&with("grid = [4, 1, 3]\n", &format!("count = {}\n", MAX_ARRAY_LIGHTS + 1)), 7, "light_arrays[0].count");
+    let e = fails_at(
+        &with("grid = [4, 1, 3]\n", &format!("count = {}\n", MAX_ARRAY_LIGHTS + 1)),
+        7,
+        "light_arrays[0].count",
+    );
     assert!(e.message.contains("65536"), "{e}");
-    let e = fails_at(&with("grid = [4, 1, 3]", "grid = [65536, 65536, 2]"), 7, "light_arrays[0].grid");
-    assert_eq!(e.message, "8589934592 lights: the light arrays of a scene may make at most 65536", "{e}");
+    let e = fails_at(
+        &with("grid = [4, 1, 3]", "grid = [65536, 65536, 2]"),
+        7,
+        "light_arrays[0].grid",
+    );
+    assert_eq!(
+        e.message, "8589934592 lights: the light arrays of a scene may make at most 65536",
+        "{e}"
+    );
     let two = |n: u32| {
         format!("{CAM}[[light_arrays]]\ntype = \"point\"\ncount = {n}\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nintensity = 1\n[[light_arrays]]\ntype = \"point\"\ncount = {n}\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nintensity = 1\n")
     };
-    assert_eq!(parse(&two(MAX_ARRAY_LIGHTS / 2)).unwrap().lights.len(), MAX_ARRAY_LIGHTS as usize, "exactly the limit loads");
+    assert_eq!(
+        parse(&two(MAX_ARRAY_LIGHTS / 2)).unwrap().lights.len(),
+        MAX_ARRAY_LIGHTS as usize,
+        "exactly the limit loads"
+    );
     let e = fails_at(&two(MAX_ARRAY_LIGHTS / 2 + 1), 12, "light_arrays[1].count");
     assert!(e.message.contains("after 32769 from the arrays before it"), "{e}");
 }
@@ -164,7 +256,15 @@ fn malformed_boards_name_their_field_and_line() {
     fails_at(&board("dept = 0.5\n"), 15, "light_board.dept");
     fails_at(&format!("light_board = 3\n{CAM}"), 1, "light_board");
     let s = parse(&board("")).unwrap();
-    assert_eq!(s.light_board, Some(LightBoard { depth: 0.5, rate_hz: 0.5, seed: 1 }), "documented defaults");
+    assert_eq!(
+        s.light_board,
+        Some(LightBoard {
+            depth: 0.5,
+            rate_hz: 0.5,
+            seed: 1
+        }),
+        "documented defaults"
+    );
 }
 
 #[test]
@@ -183,7 +283,11 @@ fn board_factors_start_at_one_change_every_frame_and_stay_in_range() {
         assert_eq!(f.len(), n);
         for l in 1..n {
             assert!(f[l] != previous[l], "light {l} unchanged at frame {frame}");
-            assert!(f[l] >= 1.0 - depth - 1e-6 && f[l] <= 1.0, "light {l} at frame {frame}: {}", f[l]);
+            assert!(
+                f[l] >= 1.0 - depth - 1e-6 && f[l] <= 1.0,
+                "light {l} at frame {frame}: {}",
+                f[l]
+            );
             lowest[l] = lowest[l].min(f[l]);
         }
         assert_eq!(f[0], 1.0, "the directional light is not on the board");
@@ -197,7 +301,9 @@ fn board_factors_start_at_one_change_every_frame_and_stay_in_range() {
     assert!(rates.windows(2).all(|w| w[0] != w[1]));
     // Without a board every factor is 1 at every time.
     let still = parse(&rig("")).unwrap();
-    assert!([0.0, 0.5, 17.25].iter().all(|&t| still.light_factors(t).iter().all(|&f| f == 1.0)));
+    assert!([0.0, 0.5, 17.25]
+        .iter()
+        .all(|&t| still.light_factors(t).iter().all(|&f| f == 1.0)));
 }
 
 /// Reading a scene is linear in its entries: 8,192 explicit `[[lights]]` load in well under a
@@ -207,7 +313,11 @@ fn board_factors_start_at_one_change_every_frame_and_stay_in_range() {
 fn many_explicit_lights_load_in_linear_time() {
     let mut text = String::from("[camera]\nposition = [0, 2, 5]\ntarget = [0, 0, 0]\n");
     for i in 0..8192 {
-        text += &format!("\n[[lights]]\nname = \"l{i}\"\ntype = \"point\"\nposition = [{}, 3, {}]\nintensity = [1, 1, 1]\n", i % 97, i / 97);
+        text += &format!(
+            "\n[[lights]]\nname = \"l{i}\"\ntype = \"point\"\nposition = [{}, 3, {}]\nintensity = [1, 1, 1]\n",
+            i % 97,
+            i / 97
+        );
     }
     let start = std::time::Instant::now();
     let scene = parse(&text).unwrap();
@@ -215,7 +325,10 @@ fn many_explicit_lights_load_in_linear_time() {
     assert_eq!(scene.lights.len(), 8192);
     assert!(seconds < 5.0, "8,192 lights took {seconds:.1} s to read");
     // Errors still name the right line deep in the file.
-    let bad = text.replace("name = \"l8000\"\ntype = \"point\"", "name = \"l8000\"\ntype = \"pointy\"");
+    let bad = text.replace(
+        "name = \"l8000\"\ntype = \"point\"",
+        "name = \"l8000\"\ntype = \"pointy\"",
+    );
     let e = parse(&bad).unwrap_err().to_string();
     let line = bad.lines().position(|l| l == "type = \"pointy\"").unwrap() + 1;
     assert!(e.contains(&format!(":{line}:")), "{e} (want line {line})");

@@ -33,23 +33,36 @@ impl Mesh {
 
     /// Vertex indices of each triangle. Assumes validated indices (see [`Mesh::validate`]).
     pub fn triangles(&self) -> impl Iterator<Item = [usize; 3]> + '_ {
-        self.indices.chunks_exact(3).map(|t| [t[0] as usize, t[1] as usize, t[2] as usize])
+        self.indices
+            .chunks_exact(3)
+            .map(|t| [t[0] as usize, t[1] as usize, t[2] as usize])
     }
 
     fn corners(&self, t: [usize; 3]) -> Option<[Vec3; 3]> {
-        Some([*self.positions.get(t[0])?, *self.positions.get(t[1])?, *self.positions.get(t[2])?])
+        Some([
+            *self.positions.get(t[0])?,
+            *self.positions.get(t[1])?,
+            *self.positions.get(t[2])?,
+        ])
     }
 
     /// Total surface area.
     pub fn area(&self) -> f32 {
-        let area = |t| self.corners(t).map_or(0.0, |[a, b, c]| 0.5 * (b - a).cross(c - a).length());
+        let area = |t| {
+            self.corners(t)
+                .map_or(0.0, |[a, b, c]| 0.5 * (b - a).cross(c - a).length())
+        };
         self.triangles().map(area).sum()
     }
 
     /// Axis-aligned bounds (min, max); `None` for an empty mesh.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let first = *self.positions.first()?;
-        Some(self.positions.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+        )
     }
 
     /// Checks counts, index ranges and finiteness. `file` names the mesh in the error, whose
@@ -58,19 +71,32 @@ impl Mesh {
         let n = self.positions.len();
         let err = |field: String, msg: String| SceneError::new(file, None, field, msg);
         if !self.indices.len().is_multiple_of(3) {
-            return Err(err("indices".into(), format!("{} indices is not a multiple of 3", self.indices.len())));
+            return Err(err(
+                "indices".into(),
+                format!("{} indices is not a multiple of 3", self.indices.len()),
+            ));
         }
         if n > u32::MAX as usize {
-            return Err(err("positions".into(), format!("{n} vertices is more than u32 indices address")));
+            return Err(err(
+                "positions".into(),
+                format!("{n} vertices is more than u32 indices address"),
+            ));
         }
-        for (name, len) in [("normals", self.normals.len()), ("uvs", self.uvs.len()), ("tangents", self.tangents.len())] {
+        for (name, len) in [
+            ("normals", self.normals.len()),
+            ("uvs", self.uvs.len()),
+            ("tangents", self.tangents.len()),
+        ] {
             if len != n {
                 return Err(err(name.into(), format!("{len} entries for {n} vertices")));
             }
         }
         for (t, tri) in self.indices.chunks_exact(3).enumerate() {
             if let Some(&i) = tri.iter().find(|&&i| i as usize >= n) {
-                return Err(err(format!("triangle {t}"), format!("vertex index {i} out of range (mesh has {n} vertices)")));
+                return Err(err(
+                    format!("triangle {t}"),
+                    format!("vertex index {i} out of range (mesh has {n} vertices)"),
+                ));
             }
         }
         for i in 0..n {
@@ -124,7 +150,11 @@ impl Mesh {
     /// 2-manifold: every undirected edge is used by exactly two triangles, once in each direction,
     /// and no triangle is degenerate (repeats a vertex). An empty mesh counts as closed.
     pub fn is_closed_manifold(&self) -> bool {
-        self.directed_edges().is_some_and(|edges| edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1)))
+        self.directed_edges().is_some_and(|edges| {
+            edges
+                .iter()
+                .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+        })
     }
 
     /// Number of undirected edges (welded by position) used by exactly one triangle.
@@ -158,13 +188,25 @@ impl Mesh {
             for k in 0..3 {
                 let (a, b) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
                 let angle = a.angle_between(b);
-                let slot = t.get(k).and_then(|&i| weld.get(i)).and_then(|&w| acc.get_mut(w as usize));
+                let slot = t
+                    .get(k)
+                    .and_then(|&i| weld.get(i))
+                    .and_then(|&w| acc.get_mut(w as usize));
                 if let (Some(slot), true) = (slot, angle.is_finite()) {
                     *slot += face_n * angle;
                 }
             }
         }
-        self.normals = weld.iter().map(|&w| acc.get(w as usize).copied().unwrap_or(Vec3::ZERO).try_normalize().unwrap_or(Vec3::Y)).collect();
+        self.normals = weld
+            .iter()
+            .map(|&w| {
+                acc.get(w as usize)
+                    .copied()
+                    .unwrap_or(Vec3::ZERO)
+                    .try_normalize()
+                    .unwrap_or(Vec3::Y)
+            })
+            .collect();
     }
 
     /// Makes every normal unit length; zero or non-finite ones are recomputed smoothly.
@@ -204,7 +246,12 @@ impl Mesh {
         let mut bitan = vec![Vec3::ZERO; n];
         if self.uvs.len() == n {
             for t in self.triangles() {
-                let (Some([p0, p1, p2]), Some(u0), Some(u1), Some(u2)) = (self.corners(t), self.uvs.get(t[0]), self.uvs.get(t[1]), self.uvs.get(t[2])) else {
+                let (Some([p0, p1, p2]), Some(u0), Some(u1), Some(u2)) = (
+                    self.corners(t),
+                    self.uvs.get(t[0]),
+                    self.uvs.get(t[1]),
+                    self.uvs.get(t[2]),
+                ) else {
                     continue;
                 };
                 let (e1, e2) = (p1 - p0, p2 - p0);
@@ -258,16 +305,26 @@ impl Mesh {
     pub fn transformed(&self, m: &Mat4) -> Mesh {
         let lin = Mat3::from_mat4(*m);
         let det = lin.determinant();
-        let normal_m = if det.abs() > f32::MIN_POSITIVE { lin.inverse().transpose() } else { lin };
+        let normal_m = if det.abs() > f32::MIN_POSITIVE {
+            lin.inverse().transpose()
+        } else {
+            lin
+        };
         let flip = det < 0.0;
-        let normals: Vec<Vec3> = self.normals.iter().map(|&n| (normal_m * n).try_normalize().unwrap_or(n)).collect();
+        let normals: Vec<Vec3> = self
+            .normals
+            .iter()
+            .map(|&n| (normal_m * n).try_normalize().unwrap_or(n))
+            .collect();
         let tangents = self
             .tangents
             .iter()
             .zip(normals.iter().chain(std::iter::repeat(&Vec3::Y)))
             .map(|(t, &n)| {
                 let d = lin * t.truncate();
-                let d = (d - n * n.dot(d)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+                let d = (d - n * n.dot(d))
+                    .try_normalize()
+                    .unwrap_or_else(|| n.any_orthonormal_vector());
                 d.extend(if flip { -t.w } else { t.w })
             })
             .collect();
@@ -277,7 +334,13 @@ impl Mesh {
                 tri.swap(1, 2);
             }
         }
-        Mesh { positions: self.positions.iter().map(|&p| m.transform_point3(p)).collect(), normals, uvs: self.uvs.clone(), tangents, indices }
+        Mesh {
+            positions: self.positions.iter().map(|&p| m.transform_point3(p)).collect(),
+            normals,
+            uvs: self.uvs.clone(),
+            tangents,
+            indices,
+        }
     }
 }
 
@@ -297,7 +360,11 @@ pub(crate) mod tests {
     }
 
     fn tetrahedron() -> Mesh {
-        let mut m = Mesh { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z], indices: vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3], ..Default::default() };
+        let mut m = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            indices: vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
+            ..Default::default()
+        };
         m.complete_attributes();
         m
     }
@@ -339,13 +406,21 @@ pub(crate) mod tests {
         m.indices[4] = 9;
         let e = m.validate("x.obj").unwrap_err();
         assert_eq!(e.field, "triangle 1");
-        assert!(e.to_string().starts_with("x.obj: triangle 1: vertex index 9 out of range"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("x.obj: triangle 1: vertex index 9 out of range"),
+            "{e}"
+        );
     }
 
     #[test]
     fn transformed_keeps_invariants_and_handles_mirroring() {
         let m = tetrahedron();
-        let xf = Mat4::from_scale_rotation_translation(Vec3::new(2.0, 0.5, 1.0), glam::Quat::from_rotation_y(0.7), Vec3::new(1.0, 2.0, 3.0));
+        let xf = Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 0.5, 1.0),
+            glam::Quat::from_rotation_y(0.7),
+            Vec3::new(1.0, 2.0, 3.0),
+        );
         let t = m.transformed(&xf);
         assert_well_formed(&t);
         assert!(t.is_closed_manifold());

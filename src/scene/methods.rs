@@ -19,7 +19,11 @@ pub struct MethodDecl {
 impl MethodDecl {
     /// The declaration used when a scene names no method.
     pub fn implicit_forward() -> MethodDecl {
-        MethodDecl { name: "forward".into(), line: 0, params: Vec::new() }
+        MethodDecl {
+            name: "forward".into(),
+            line: 0,
+            params: Vec::new(),
+        }
     }
 
     /// The value of parameter `name`, if given.
@@ -126,8 +130,16 @@ pub(crate) fn check(file: &str, methods: &[MethodDecl], known: &[MethodSchema]) 
                 let msg = if schema.params.is_empty() {
                     format!("unknown parameter; method {:?} takes no parameters", m.name)
                 } else {
-                    let list: Vec<String> = schema.params.iter().map(|p| format!("{} ({})", p.name, p.kind)).collect();
-                    format!("unknown parameter of method {:?}; known parameters: {}", m.name, list.join(", "))
+                    let list: Vec<String> = schema
+                        .params
+                        .iter()
+                        .map(|p| format!("{} ({})", p.name, p.kind))
+                        .collect();
+                    format!(
+                        "unknown parameter of method {:?}; known parameters: {}",
+                        m.name,
+                        list.join(", ")
+                    )
                 };
                 return Err(SceneError::new(file, line(*pline), field, msg));
             };
@@ -161,7 +173,9 @@ fn to_value(node: &Node) -> toml::Value {
         Val::Int(i) => toml::Value::Integer(*i),
         Val::Float(f) => toml::Value::Float(*f),
         Val::Bool(b) => toml::Value::Boolean(*b),
-        Val::Datetime(d) => d.parse().map_or_else(|_| toml::Value::String(d.clone()), toml::Value::Datetime),
+        Val::Datetime(d) => d
+            .parse()
+            .map_or_else(|_| toml::Value::String(d.clone()), toml::Value::Datetime),
         Val::Array(items) => toml::Value::Array(items.iter().map(to_value).collect()),
         Val::Table(entries) => toml::Value::Table(
             entries
@@ -181,7 +195,11 @@ pub(crate) fn read(field: &Field) -> Result<Vec<MethodDecl>, SceneError> {
     let mut out = Vec::new();
     for item in field.array()? {
         let decl = match &item.node.val {
-            Val::Str(_) => MethodDecl { name: method_name(&item)?, line: item.line.unwrap_or(0), params: Vec::new() },
+            Val::Str(_) => MethodDecl {
+                name: method_name(&item)?,
+                line: item.line.unwrap_or(0),
+                params: Vec::new(),
+            },
             Val::Table(_) => {
                 let t = item.table()?;
                 let name_field = t.require("name", "the method's name")?;
@@ -195,9 +213,18 @@ pub(crate) fn read(field: &Field) -> Result<Vec<MethodDecl>, SceneError> {
                         Some((k.to_owned(), to_value(f.node), kline.or(f.line).unwrap_or(0)))
                     })
                     .collect();
-                MethodDecl { name, line: name_field.line.unwrap_or(0), params }
+                MethodDecl {
+                    name,
+                    line: name_field.line.unwrap_or(0),
+                    params,
+                }
             }
-            _ => return Err(item.err(format!("expected a method name or a table with `name`, got {}", super::doc::describe(item.node)))),
+            _ => {
+                return Err(item.err(format!(
+                    "expected a method name or a table with `name`, got {}",
+                    super::doc::describe(item.node)
+                )))
+            }
         };
         out.push(decl);
     }
@@ -227,7 +254,11 @@ pub(crate) fn read_combinations(field: &Field) -> Result<Vec<CombinationDecl>, S
                 terms.push((key, method_name(&f)?, f.line.unwrap_or(0)));
             }
         }
-        out.push(CombinationDecl { name, line: name_field.line.unwrap_or(0), terms });
+        out.push(CombinationDecl {
+            name,
+            line: name_field.line.unwrap_or(0),
+            terms,
+        });
     }
     Ok(out)
 }

@@ -38,7 +38,9 @@ pub use heightfield::{HeightImage, HeightShape, HeightfieldSource};
 pub use mesh::Mesh;
 pub use methods::{CombinationDecl, MethodDecl, MethodSchema, ParamKind, ParamSchema};
 pub use obj::load_obj;
-pub use types::{Animation, Camera, CubeFaces, Environment, Light, LightBoard, Material, MeshSource, Object, CUBE_FACE_KEYS};
+pub use types::{
+    Animation, Camera, CubeFaces, Environment, Light, LightBoard, Material, MeshSource, Object, CUBE_FACE_KEYS,
+};
 
 /// The name a scene is known by in error messages: the path it was read from, or
 /// [`DEFAULT_SOURCE`].
@@ -76,7 +78,12 @@ impl Scene {
     /// `methods[i].name` (what every method's parameter checks report).
     pub fn method_param_error(&self, decl: &MethodDecl, name: &str, message: impl Into<String>) -> SceneError {
         let index = self.methods.iter().position(|m| m == decl).unwrap_or(0);
-        let line = decl.params.iter().find(|(n, _, _)| n == name).map(|p| p.2).filter(|&l| l > 0);
+        let line = decl
+            .params
+            .iter()
+            .find(|(n, _, _)| n == name)
+            .map(|p| p.2)
+            .filter(|&l| l > 0);
         SceneError::new(&self.source, line, format!("methods[{index}].{name}"), message)
     }
 
@@ -85,7 +92,8 @@ impl Scene {
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::new(&source, None, "file", format!("cannot read: {e}")))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::new(&source, None, "file", format!("cannot read: {e}")))?;
         let base_dir = match path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
@@ -104,7 +112,8 @@ impl Scene {
     pub fn default_scene() -> Scene {
         // The text is ours and a unit test parses it, so failure here is a build defect, not a
         // user error.
-        Scene::from_str(DEFAULT_SCENE_TOML, DEFAULT_SOURCE, Path::new(".")).unwrap_or_else(|e| panic!("the built-in default scene is invalid: {e}"))
+        Scene::from_str(DEFAULT_SCENE_TOML, DEFAULT_SOURCE, Path::new("."))
+            .unwrap_or_else(|e| panic!("the built-in default scene is invalid: {e}"))
     }
 
     /// Checks every declared method and parameter against the renderer's `known` methods.
@@ -116,7 +125,10 @@ impl Scene {
 
     /// The first translucent material (opacity < 1) an object uses, with its index.
     pub fn translucent_material(&self) -> Option<(usize, &Material)> {
-        self.objects.iter().filter_map(|o| self.materials.get(o.material).map(|m| (o.material, m))).find(|(_, m)| m.is_translucent())
+        self.objects
+            .iter()
+            .filter_map(|o| self.materials.get(o.material).map(|m| (o.material, m)))
+            .find(|(_, m)| m.is_translucent())
     }
 
     /// Refuses translucent materials for a consumer (`who`) that draws opaque surfaces only:
@@ -154,9 +166,19 @@ impl Scene {
 
     /// What moves, for a method that keeps the rest pose to say so: "wind (objects[1] "bush")".
     pub fn motion_summary(&self) -> Option<String> {
-        let mut parts: Vec<String> = self.objects.iter().enumerate().filter(|(_, o)| o.wind.is_some()).map(|(i, o)| format!("wind (objects[{i}] {:?})", o.name)).collect();
+        let mut parts: Vec<String> = self
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.wind.is_some())
+            .map(|(i, o)| format!("wind (objects[{i}] {:?})", o.name))
+            .collect();
         if let Some(m) = &self.light_motion {
-            parts.push(format!("light_motion (lights[{}] {:?})", m.light, self.lights.get(m.light).map(|l| l.name()).unwrap_or("")));
+            parts.push(format!(
+                "light_motion (lights[{}] {:?})",
+                m.light,
+                self.lights.get(m.light).map(|l| l.name()).unwrap_or("")
+            ));
         }
         (!parts.is_empty()).then(|| parts.join(", "))
     }
@@ -182,7 +204,14 @@ impl Scene {
     pub fn wind_mesh(&self, object: &Object, mut mesh: Mesh, time_s: f32) -> Result<Mesh, SceneError> {
         if let Some(wind) = &object.wind {
             let map = self.material_of(object).and_then(|m| m.albedo_map.as_deref());
-            let weights = motion::wind_weights(&mesh, map).map_err(|e| SceneError::new(&self.source, None, format!("object {:?}: wind: albedo_map", object.name), e))?;
+            let weights = motion::wind_weights(&mesh, map).map_err(|e| {
+                SceneError::new(
+                    &self.source,
+                    None,
+                    format!("object {:?}: wind: albedo_map", object.name),
+                    e,
+                )
+            })?;
             wind.deform(&mut mesh, &weights, time_s);
         }
         Ok(mesh)
@@ -202,12 +231,34 @@ impl Object {
         let mesh = match &self.mesh {
             MeshSource::Obj(path) => return load_obj(&base_dir.join(path)),
             MeshSource::Plane { size, subdivisions } => generators::plane(*size, *subdivisions),
-            MeshSource::Quad { corner, edge_u, edge_v, subdivisions } => generators::quad(*corner, *edge_u, *edge_v, *subdivisions),
+            MeshSource::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                subdivisions,
+            } => generators::quad(*corner, *edge_u, *edge_v, *subdivisions),
             MeshSource::Box { size, subdivisions } => generators::cuboid(*size, *subdivisions),
-            MeshSource::Sphere { radius, segments, rings } => generators::sphere(*radius, *segments, *rings),
-            MeshSource::Bush { leaves, seed, radius, height, leaf_size } => generators::bush(*leaves, *seed, *radius, *height, *leaf_size),
+            MeshSource::Sphere {
+                radius,
+                segments,
+                rings,
+            } => generators::sphere(*radius, *segments, *rings),
+            MeshSource::Bush {
+                leaves,
+                seed,
+                radius,
+                height,
+                leaf_size,
+            } => generators::bush(*leaves, *seed, *radius, *height, *leaf_size),
             MeshSource::World { level, class } => {
-                let world = world_mesh::compiled(level).map_err(|e| SceneError::new(format!("object {:?}", self.name), None, level.mesh_name(), format!("the world does not compile: {e}")))?;
+                let world = world_mesh::compiled(level).map_err(|e| {
+                    SceneError::new(
+                        format!("object {:?}", self.name),
+                        None,
+                        level.mesh_name(),
+                        format!("the world does not compile: {e}"),
+                    )
+                })?;
                 world_mesh::class_mesh(&world, *class).0
             }
             MeshSource::Heightfield(h) => h.mesh()?,

@@ -46,7 +46,11 @@ pub struct Wind {
 
 impl Default for Wind {
     fn default() -> Wind {
-        Wind { amplitude: 0.3, rate: 2.0, unit: 1.0 }
+        Wind {
+            amplitude: 0.3,
+            rate: 2.0,
+            unit: 1.0,
+        }
     }
 }
 
@@ -104,7 +108,9 @@ pub fn wind_weights(mesh: &Mesh, albedo_map: Option<&Path>) -> Result<Vec<f32>, 
     let Some(path) = albedo_map else {
         return Ok(vec![1.0; mesh.positions.len()]);
     };
-    let img = crate::image_io::open_image(path).map_err(|e| format!("{}: {e}", path.display()))?.to_rgba8();
+    let img = crate::image_io::open_image(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .to_rgba8();
     let (w, h) = (img.width(), img.height());
     let texel = |x: f32, n: u32| ((x * n as f32).floor().max(0.0) as u32).min(n - 1);
     Ok((0..mesh.positions.len())
@@ -152,12 +158,20 @@ mod tests {
     #[test]
     fn wind_lifts_by_the_documents_formula() {
         let d = Wind::default();
-        assert_eq!((d.amplitude, d.rate, d.unit), (0.3, 2.0, 1.0), "the document's constants");
+        assert_eq!(
+            (d.amplitude, d.rate, d.unit),
+            (0.3, 2.0, 1.0),
+            "the document's constants"
+        );
         // The origin at t = 0: cos 0 = 1; at t = π/2 (rate 2): cos π = −1.
         assert!((d.lift(Vec3::ZERO, 1.0, 0.0) - 0.3).abs() < 1e-7);
         assert!((d.lift(Vec3::ZERO, 1.0, std::f32::consts::FRAC_PI_2) + 0.3).abs() < 1e-6);
         // (x + z)/20 = 0.5 and z²/300 = 1/12 at (5, 0, 5); y²/70 = 1 at y = √70.
-        for (p, w, t) in [([5.0, 0.0, 5.0], 1.0, 0.0), ([0.0, 70f64.sqrt(), 0.0], 0.5, 0.25), ([3.0, 2.0, -7.0], 0.8, 1.3)] {
+        for (p, w, t) in [
+            ([5.0, 0.0, 5.0], 1.0, 0.0),
+            ([0.0, 70f64.sqrt(), 0.0], 0.5, 0.25),
+            ([3.0, 2.0, -7.0], 0.8, 1.3),
+        ] {
             let got = d.lift(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32), w as f32, t as f32) as f64;
             let want = lift(p, w, t, 0.3, 2.0, 1.0);
             assert!((got - want).abs() < 1e-6, "{p:?}: {got} vs {want}");
@@ -173,7 +187,11 @@ mod tests {
     #[test]
     fn zero_weight_and_zero_cosine_leave_the_vertex() {
         let d = Wind::default();
-        let (p, n, tan) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, 0.6, 0.8), Vec4::new(1.0, 0.0, 0.0, -1.0));
+        let (p, n, tan) = (
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.0, 0.6, 0.8),
+            Vec4::new(1.0, 0.0, 0.0, -1.0),
+        );
         assert_eq!(d.vertex(p, n, tan, 0.0, 0.7), (p, n, tan), "weight 0");
         // Where the phase is π/2 the cosine is 0: nothing moves (to rounding).
         let t = (std::f32::consts::FRAC_PI_2 - d.cosine(Vec3::ZERO, 0.0).acos()) / d.rate;
@@ -191,23 +209,46 @@ mod tests {
                     [[lights]]\ntype = \"point\"\nname = \"bulb\"\nposition = [0, 2, 0]\nintensity = 1\n[[objects]]\nmesh = \"plane\"\n";
         let parse = |extra: &str| Scene::from_str(&format!("{base}{extra}"), "s.toml", std::path::Path::new("."));
         let s = parse("wind = { unit = 0.1 }\n").unwrap();
-        assert_eq!(s.objects[0].wind, Some(Wind { unit: 0.1, ..Wind::default() }));
+        assert_eq!(
+            s.objects[0].wind,
+            Some(Wind {
+                unit: 0.1,
+                ..Wind::default()
+            })
+        );
         assert!(s.has_motion());
         let s = parse("[light_motion]\ndeg_per_s = 6\naxis = [0, 2, 0]\n").unwrap();
-        assert_eq!(s.light_motion, Some(LightMotion { light: 0, axis: Vec3::Y, deg_per_s: 6.0 }));
+        assert_eq!(
+            s.light_motion,
+            Some(LightMotion {
+                light: 0,
+                axis: Vec3::Y,
+                deg_per_s: 6.0
+            })
+        );
         // 15 s at 6°/s: the sun turned 90° about y; the board-less point light untouched.
         let lights = s.lights_at(15.0);
-        let crate::scene::Light::Directional { direction, .. } = lights[0] else { panic!() };
+        let crate::scene::Light::Directional { direction, .. } = lights[0] else {
+            panic!()
+        };
         assert!(direction.distance(Vec3::new(0.0, -1.0, 0.0)) < 1e-6);
         let s = parse("[light_motion]\ndeg_per_s = 6\naxis = [1, 0, 0]\n").unwrap();
-        let crate::scene::Light::Directional { direction, .. } = s.lights_at(15.0)[0] else { panic!() };
+        let crate::scene::Light::Directional { direction, .. } = s.lights_at(15.0)[0] else {
+            panic!()
+        };
         assert!(direction.distance(Vec3::new(0.0, 0.0, -1.0)) < 1e-6, "{direction}");
         for (extra, field) in [
             ("wind = { unit = 0 }\n", "objects[0].wind.unit"),
             ("wind = { gust = 1 }\n", "objects[0].wind.gust"),
             ("wind = 3\n", "objects[0].wind"),
-            ("[light_motion]\ndeg_per_s = 6\nlight = \"bulb\"\n", "light_motion.light"),
-            ("[light_motion]\ndeg_per_s = 6\nlight = \"moon\"\n", "light_motion.light"),
+            (
+                "[light_motion]\ndeg_per_s = 6\nlight = \"bulb\"\n",
+                "light_motion.light",
+            ),
+            (
+                "[light_motion]\ndeg_per_s = 6\nlight = \"moon\"\n",
+                "light_motion.light",
+            ),
             ("[light_motion]\ndeg_per_s = 6\naxis = [0, 0, 0]\n", "light_motion.axis"),
             ("[light_motion]\naxis = [0, 1, 0]\n", "light_motion.deg_per_s"),
         ] {

@@ -19,8 +19,16 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
 
     // `..Default::default()` covers fields that exist only with tobj features penumbra disables.
     #[allow(clippy::needless_update)]
-    let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
-    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(|e| SceneError::new(&file, None, "obj", format!("tobj: {e}")))?;
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| SceneError::new(&file, None, "obj", format!("tobj: {e}")))?;
 
     let mut mesh = Mesh::default();
     let mut all_normals = true;
@@ -28,15 +36,18 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
         let count = m.positions.len() / 3;
-        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        mesh.positions
+            .extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
         if m.normals.len() == m.positions.len() {
-            mesh.normals.extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
+            mesh.normals
+                .extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
         } else {
             all_normals = false;
             mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, count));
         }
         if m.texcoords.len() == 2 * count {
-            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])));
+            mesh.uvs
+                .extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])));
         } else {
             // Zero uvs are degenerate for tangent generation, which then falls back.
             mesh.uvs.extend(std::iter::repeat_n(Vec2::ZERO, count));
@@ -77,7 +88,10 @@ fn precheck(text: &str, file: &str) -> Result<(), SceneError> {
                 nf += 1;
                 let corners: Vec<&str> = words.collect();
                 if corners.len() < 3 {
-                    return Err(err(format!("face {nf}"), format!("has {} vertices, need at least 3", corners.len())));
+                    return Err(err(
+                        format!("face {nf}"),
+                        format!("has {} vertices, need at least 3", corners.len()),
+                    ));
                 }
                 for corner in corners {
                     for (slot, part) in corner.split('/').enumerate() {
@@ -90,8 +104,11 @@ fn precheck(text: &str, file: &str) -> Result<(), SceneError> {
                             2 => (nvn, "normal"),
                             _ => return Err(err(format!("face {nf}"), format!("malformed corner `{corner}`"))),
                         };
-                        let idx: i64 = part.parse().map_err(|_| err(format!("face {nf}"), format!("malformed corner `{corner}`")))?;
-                        let ok = (idx > 0 && idx as usize <= defined) || (idx < 0 && idx.unsigned_abs() as usize <= defined);
+                        let idx: i64 = part
+                            .parse()
+                            .map_err(|_| err(format!("face {nf}"), format!("malformed corner `{corner}`")))?;
+                        let ok =
+                            (idx > 0 && idx as usize <= defined) || (idx < 0 && idx.unsigned_abs() as usize <= defined);
                         if !ok {
                             let msg = format!("refers to {kind} {idx}, but {defined} are defined before this line");
                             return Err(err(format!("face {nf}"), msg));
@@ -106,15 +123,23 @@ fn precheck(text: &str, file: &str) -> Result<(), SceneError> {
         let n = *count;
         let mut values = Vec::new();
         for w in words {
-            let x: f32 = w.parse().map_err(|_| err(format!("{what} {n}"), format!("`{w}` is not a number")))?;
+            let x: f32 = w
+                .parse()
+                .map_err(|_| err(format!("{what} {n}"), format!("`{w}` is not a number")))?;
             values.push(x);
         }
         if values.len() < min {
-            return Err(err(format!("{what} {n}"), format!("has {} numbers, need at least {min}", values.len())));
+            return Err(err(
+                format!("{what} {n}"),
+                format!("has {} numbers, need at least {min}", values.len()),
+            ));
         }
         if values.iter().any(|x| !x.is_finite()) {
             let shown: Vec<String> = values.iter().map(|x| x.to_string()).collect();
-            return Err(err(format!("{what} {n}"), format!("has a non-finite coordinate: {}", shown.join(" "))));
+            return Err(err(
+                format!("{what} {n}"),
+                format!("has a non-finite coordinate: {}", shown.join(" ")),
+            ));
         }
         if tag == "v" && values.len() == 4 && values.get(3) == Some(&0.0) {
             return Err(err(format!("{what} {n}"), "has weight w = 0".into()));
@@ -152,7 +177,10 @@ f 1 2 3 4\nf 6 5 8 7\nf 5 1 4 8\nf 2 6 7 3\nf 4 3 7 8\nf 5 6 2 1\n";
         assert!(m.is_closed_manifold());
         assert!((m.area() - 24.0).abs() < 1e-4);
         for (p, n) in m.positions.iter().zip(&m.normals) {
-            assert!((*n - p.normalize()).length() < 1e-5, "smooth normal of corner {p} is {n}");
+            assert!(
+                (*n - p.normalize()).length() < 1e-5,
+                "smooth normal of corner {p} is {n}"
+            );
         }
     }
 
@@ -167,7 +195,10 @@ f 1 2 3 4\nf 6 5 8 7\nf 5 1 4 8\nf 2 6 7 3\nf 4 3 7 8\nf 5 6 2 1\n";
         assert!(m.normals.iter().all(|&n| n == Vec3::Z));
         assert!(m.uvs.contains(&Vec2::new(0.0, 0.75)));
         // u along +x, OBJ v (image up) along +y: tangent +x, bitangent +y = cross(z, x): w = +1.
-        assert!(m.tangents.iter().all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0));
+        assert!(m
+            .tangents
+            .iter()
+            .all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0));
     }
 
     #[test]
@@ -178,7 +209,11 @@ f 1 2 3 4\nf 6 5 8 7\nf 5 1 4 8\nf 2 6 7 3\nf 4 3 7 8\nf 5 6 2 1\n";
         let e = load_obj(&path).unwrap_err();
         assert_eq!(e.file, path.display().to_string());
         assert_eq!((e.line, e.field.as_str()), (Some(3), "vertex 2"));
-        assert!(e.to_string().contains("bad.obj:3: vertex 2: has a non-finite coordinate"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("bad.obj:3: vertex 2: has a non-finite coordinate"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -186,8 +221,18 @@ f 1 2 3 4\nf 6 5 8 7\nf 5 1 4 8\nf 2 6 7 3\nf 4 3 7 8\nf 5 6 2 1\n";
         let dir = temp_dir("faces");
         let cases = [
             ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", 4, "face 1", "vertex 4"),
-            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 -4 3\n", 5, "face 2", "vertex -4"),
-            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n", 4, "face 1", "texture coordinate 1"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 -4 3\n",
+                5,
+                "face 2",
+                "vertex -4",
+            ),
+            (
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n",
+                4,
+                "face 1",
+                "texture coordinate 1",
+            ),
             ("v 0 0 0\nv 1 0 0\nf 1 2\n", 3, "face 1", "need at least 3"),
             ("v 0 0 zero\n", 1, "vertex 1", "not a number"),
         ];

@@ -37,7 +37,12 @@ impl Camera {
     /// plane, → 1 at infinity). Use a `LESS` depth test cleared to 1.
     pub fn projection(&self, aspect: f32) -> Mat4 {
         let f = 1.0 / (0.5 * self.fov_y_deg.to_radians()).tan();
-        Mat4::from_cols(Vec4::new(f / aspect, 0.0, 0.0, 0.0), Vec4::new(0.0, -f, 0.0, 0.0), Vec4::new(0.0, 0.0, -1.0, -1.0), Vec4::new(0.0, 0.0, -self.near, 0.0))
+        Mat4::from_cols(
+            Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, -f, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, -1.0, -1.0),
+            Vec4::new(0.0, 0.0, -self.near, 0.0),
+        )
     }
 
     /// `projection(aspect) * view_matrix()`.
@@ -135,7 +140,12 @@ pub enum MeshSource {
     Plane { size: Vec2, subdivisions: u32 },
     /// A parallelogram `corner + s·edge_u + t·edge_v`, s, t ∈ [0, 1], facing
     /// `normalize(edge_u × edge_v)` (one-sided, like the quad light); `subdivisions` per side.
-    Quad { corner: Vec3, edge_u: Vec3, edge_v: Vec3, subdivisions: u32 },
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        subdivisions: u32,
+    },
     /// An axis-aligned box centred on the origin, each face split into `subdivisions²` cells.
     /// Closed 2-manifold.
     Box { size: Vec3, subdivisions: u32 },
@@ -146,13 +156,22 @@ pub enum MeshSource {
     /// of length about `leaf_size` scattered over an ellipsoidal crown of horizontal radius
     /// `radius` centred at height `height`, on a trunk and a few branches; deterministic in
     /// `seed`. See [`crate::scene::generators::bush`].
-    Bush { leaves: u32, seed: u32, radius: f32, height: f32, leaf_size: f32 },
+    Bush {
+        leaves: u32,
+        seed: u32,
+        radius: f32,
+        height: f32,
+        leaf_size: f32,
+    },
     /// A height field over a square in the xz-plane (see [`crate::scene::heightfield`]):
     /// generated or loaded from an image, traced and drawn at its time-0 shape.
     Heightfield(super::heightfield::HeightfieldSource),
     /// The faces of one material class (`class`, a [`crate::world::MaterialId`]) of a compiled
     /// BSP world, in scene axes: see [`crate::scene::world_mesh`].
-    World { level: super::world_mesh::WorldLevel, class: u32 },
+    World {
+        level: super::world_mesh::WorldLevel,
+        class: u32,
+    },
 }
 
 /// Simple rigid motion of an entity over time `t` (seconds): a spin about its own origin (in
@@ -172,7 +191,9 @@ impl Animation {
     /// The object → world transform at time `t` for placement `base`.
     pub fn transform_at(&self, base: Mat4, t: f32) -> Mat4 {
         let a = self.spin_deg_per_s * t;
-        let spin = Mat4::from_rotation_z(a.z.to_radians()) * Mat4::from_rotation_y(a.y.to_radians()) * Mat4::from_rotation_x(a.x.to_radians());
+        let spin = Mat4::from_rotation_z(a.z.to_radians())
+            * Mat4::from_rotation_y(a.y.to_radians())
+            * Mat4::from_rotation_x(a.x.to_radians());
         let phase = std::f32::consts::TAU * t / self.bob_period_s.max(1e-6);
         Mat4::from_translation(self.bob_amplitude * phase.sin()) * base * spin
     }
@@ -199,25 +220,57 @@ pub enum Light {
     /// Isotropic point light. `intensity` in W/sr; `radius` is an influence/culling radius in
     /// metres beyond which the renderer may ignore it (0 = infinite). It does not change the
     /// inverse-square falloff.
-    Point { name: String, position: Vec3, intensity: Vec3, radius: f32 },
+    Point {
+        name: String,
+        position: Vec3,
+        intensity: Vec3,
+        radius: f32,
+    },
     /// Spot light: `intensity` (W/sr) on the axis, full inside `inner_deg`, zero outside
     /// `outer_deg` (half-angles from `direction`, a unit vector). `radius` is an
     /// influence/culling radius as a point light's (0 = infinite).
-    Spot { name: String, position: Vec3, direction: Vec3, intensity: Vec3, inner_deg: f32, outer_deg: f32, radius: f32 },
+    Spot {
+        name: String,
+        position: Vec3,
+        direction: Vec3,
+        intensity: Vec3,
+        inner_deg: f32,
+        outer_deg: f32,
+        radius: f32,
+    },
     /// Distant light. `direction` is the unit direction the light travels (from the light toward
     /// the scene); `irradiance` in W/m² on a surface facing it.
-    Directional { name: String, direction: Vec3, irradiance: Vec3 },
+    Directional {
+        name: String,
+        direction: Vec3,
+        irradiance: Vec3,
+    },
     /// Spherical area light emitting uniform `radiance` (W/(m²·sr)) from its surface.
-    Sphere { name: String, center: Vec3, radius: f32, radiance: Vec3 },
+    Sphere {
+        name: String,
+        center: Vec3,
+        radius: f32,
+        radiance: Vec3,
+    },
     /// One-sided parallelogram area light `corner + s·edge_u + t·edge_v` emitting uniform
     /// `radiance` toward `normalize(edge_u × edge_v)`.
-    Quad { name: String, corner: Vec3, edge_u: Vec3, edge_v: Vec3, radiance: Vec3 },
+    Quad {
+        name: String,
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        radiance: Vec3,
+    },
 }
 
 impl Light {
     pub fn name(&self) -> &str {
         match self {
-            Light::Point { name, .. } | Light::Spot { name, .. } | Light::Directional { name, .. } | Light::Sphere { name, .. } | Light::Quad { name, .. } => name,
+            Light::Point { name, .. }
+            | Light::Spot { name, .. }
+            | Light::Directional { name, .. }
+            | Light::Sphere { name, .. }
+            | Light::Quad { name, .. } => name,
         }
     }
 }
@@ -293,20 +346,38 @@ impl CubeFaces {
         let mut size = 0;
         let mut texels = Vec::new();
         for (k, path) in faces.iter().enumerate() {
-            let img = image::open(path).map_err(|e| (k, format!("{}: cannot load: {e}", path.display())))?.to_rgba32f();
+            let img = image::open(path)
+                .map_err(|e| (k, format!("{}: cannot load: {e}", path.display())))?
+                .to_rgba32f();
             let (w, h) = img.dimensions();
             if w != h || w == 0 {
-                return Err((k, format!("{}: a cube face must be square and non-empty, this one is {w}x{h}", path.display())));
+                return Err((
+                    k,
+                    format!(
+                        "{}: a cube face must be square and non-empty, this one is {w}x{h}",
+                        path.display()
+                    ),
+                ));
             }
             if k == 0 {
                 size = w;
             } else if w != size {
-                return Err((k, format!("{}: is {w}x{w} but {} is {size}x{size}; all six faces must have one size", path.display(), CUBE_FACE_KEYS[0])));
+                return Err((
+                    k,
+                    format!(
+                        "{}: is {w}x{w} but {} is {size}x{size}; all six faces must have one size",
+                        path.display(),
+                        CUBE_FACE_KEYS[0]
+                    ),
+                ));
             }
             for (i, p) in img.pixels().enumerate() {
                 if !p.0[..3].iter().all(|c| c.is_finite()) {
                     let (x, y) = (i as u32 % w, i as u32 / w);
-                    return Err((k, format!("{}: texel ({x}, {y}) is not finite: {:?}", path.display(), &p.0[..3])));
+                    return Err((
+                        k,
+                        format!("{}: texel ({x}, {y}) is not finite: {:?}", path.display(), &p.0[..3]),
+                    ));
                 }
                 texels.push([p.0[0] * scale, p.0[1] * scale, p.0[2] * scale, 0.0]);
             }
@@ -382,7 +453,13 @@ mod tests {
     use super::*;
 
     fn cam() -> Camera {
-        Camera { position: Vec3::new(1.0, 2.0, 5.0), target: Vec3::new(0.0, 0.5, 0.0), up: Vec3::Y, fov_y_deg: 50.0, near: 0.1 }
+        Camera {
+            position: Vec3::new(1.0, 2.0, 5.0),
+            target: Vec3::new(0.0, 0.5, 0.0),
+            up: Vec3::Y,
+            fov_y_deg: 50.0,
+            near: 0.1,
+        }
     }
 
     /// Projects a world point to continuous pixel coordinates and depth.
@@ -436,7 +513,11 @@ mod tests {
         assert!((Environment::equirect_uv(Vec3::NEG_Z) - Vec2::new(0.5, 0.5)).length() < 1e-6);
         assert!((Environment::equirect_uv(Vec3::X) - Vec2::new(0.75, 0.5)).length() < 1e-6);
         assert!(Environment::equirect_uv(Vec3::Y).y.abs() < 1e-6);
-        for d in [Vec3::new(0.3, 0.5, -0.8), Vec3::new(-0.9, -0.2, 0.1), Vec3::new(0.1, 0.9, 0.4)] {
+        for d in [
+            Vec3::new(0.3, 0.5, -0.8),
+            Vec3::new(-0.9, -0.2, 0.1),
+            Vec3::new(0.1, 0.9, 0.4),
+        ] {
             let d = d.normalize();
             let back = Environment::equirect_dir(Environment::equirect_uv(d));
             assert!((back - d).length() < 1e-5, "{d} -> {back}");
@@ -452,7 +533,10 @@ mod tests {
             for (s, t) in [(-0.9, 0.3), (0.5, -0.7), (0.99, 0.99)] {
                 let (f, s2, t2) = Environment::cube_face(Environment::cube_dir(face, s, t).normalize());
                 assert_eq!(f, face);
-                assert!((s2 - s).abs() < 1e-5 && (t2 - t).abs() < 1e-5, "{face}: ({s}, {t}) -> ({s2}, {t2})");
+                assert!(
+                    (s2 - s).abs() < 1e-5 && (t2 - t).abs() < 1e-5,
+                    "{face}: ({s}, {t}) -> ({s2}, {t2})"
+                );
             }
         }
         // The +Y face's top row (t = -1) lies toward -z, its left column (s = -1) toward -x.

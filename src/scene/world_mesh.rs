@@ -50,8 +50,13 @@ impl WorldLevel {
 }
 
 /// The material classes a world's faces carry, with the suffix of the object holding them.
-pub const CLASSES: [(&str, MaterialId); 5] =
-    [("floor", materials::FLOOR), ("ceiling", materials::CEILING), ("wall", materials::WALL), ("pillar", materials::PILLAR), ("corridor", materials::CORRIDOR)];
+pub const CLASSES: [(&str, MaterialId); 5] = [
+    ("floor", materials::FLOOR),
+    ("ceiling", materials::CEILING),
+    ("wall", materials::WALL),
+    ("pillar", materials::PILLAR),
+    ("corridor", materials::CORRIDOR),
+];
 
 /// World (z up) to scene (y up) coordinates, before the object's translation.
 pub fn world_to_scene(p: DVec3) -> Vec3 {
@@ -110,12 +115,19 @@ pub fn class_mesh(world: &CompiledWorld, class: MaterialId) -> (Mesh, Vec<FaceSp
         for &p in &poly.vertices {
             mesh.positions.push(world_to_scene(p));
             mesh.normals.push(world_to_scene(n).normalize_or_zero());
-            mesh.uvs.push(Vec2::new((p.dot(u_axis) / TEXTURE_METRES) as f32, (p.dot(v_axis) / TEXTURE_METRES) as f32));
+            mesh.uvs.push(Vec2::new(
+                (p.dot(u_axis) / TEXTURE_METRES) as f32,
+                (p.dot(v_axis) / TEXTURE_METRES) as f32,
+            ));
         }
         for k in 1..poly.vertices.len().saturating_sub(1) as u32 {
             mesh.indices.extend_from_slice(&[base, base + k, base + k + 1]);
         }
-        spans.push(FaceSpan { face: id as FaceId, first_index, index_count: mesh.indices.len() as u32 - first_index });
+        spans.push(FaceSpan {
+            face: id as FaceId,
+            first_index,
+            index_count: mesh.indices.len() as u32 - first_index,
+        });
     }
     mesh.compute_tangents();
     (mesh, spans)
@@ -142,7 +154,11 @@ mod tests {
     fn axes_round_trip_and_keep_handedness() {
         let p = DVec3::new(1.5, -2.0, 3.25);
         assert_eq!(scene_to_world(world_to_scene(p)), p);
-        let (x, y, z) = (world_to_scene(DVec3::X), world_to_scene(DVec3::Y), world_to_scene(DVec3::Z));
+        let (x, y, z) = (
+            world_to_scene(DVec3::X),
+            world_to_scene(DVec3::Y),
+            world_to_scene(DVec3::Z),
+        );
         assert_eq!(z, Vec3::Y, "world up is scene up");
         assert!((x.cross(y) - z).length() < 1e-6, "a rotation, not a mirror");
     }

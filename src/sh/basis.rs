@@ -68,7 +68,11 @@ pub(crate) fn eval_unit(d: DVec3, bands: usize, out: &mut [f64]) {
 fn check_out(bands: usize, len: usize) -> ShResult<()> {
     check_bands(bands)?;
     if len < bands * bands {
-        return Err(ShError::Length { what: "basis output", expected: bands * bands, got: len });
+        return Err(ShError::Length {
+            what: "basis output",
+            expected: bands * bands,
+            got: len,
+        });
     }
     Ok(())
 }

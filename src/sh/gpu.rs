@@ -5,7 +5,10 @@
 //! solid angles and SH frame as [`project_equirect`](super::project_equirect) and
 //! [`project_cubemap`](super::project_cubemap), which are its CPU twins.
 
-use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, ImageId, MemoryKind, PipelineId, SamplerDesc, SamplerId, SubresourceRange};
+use crate::backend::{
+    vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, ImageId, MemoryKind, PipelineId, SamplerDesc, SamplerId,
+    SubresourceRange,
+};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::shaders::ShaderLibrary;
@@ -59,7 +62,12 @@ impl EnvImage {
             }
         };
         let e = d.mip_extent(0);
-        Ok(EnvImage { image, layout, width: e.width, height: e.height })
+        Ok(EnvImage {
+            image,
+            layout,
+            width: e.width,
+            height: e.height,
+        })
     }
 
     fn texels(&self) -> u64 {
@@ -84,7 +92,16 @@ pub struct ShProjector {
 
 impl ShProjector {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, name: &str) -> Result<ShProjector> {
-        let mut pipeline = |suffix: &str, shader: &str| gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{name} {suffix}"), shader: shader.into(), specialization: vec![] }, shaders);
+        let mut pipeline = |suffix: &str, shader: &str| {
+            gpu.create_compute_pipeline(
+                &ComputePipelineDesc {
+                    name: format!("{name} {suffix}"),
+                    shader: shader.into(),
+                    specialization: vec![],
+                },
+                shaders,
+            )
+        };
         let equirect = pipeline("equirect", "sh/project_equirect.comp")?;
         let cube = pipeline("cube", "sh/project_cube.comp")?;
         let reduce = pipeline("reduce", "sh/project_reduce.comp")?;
@@ -95,18 +112,37 @@ impl ShProjector {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER,
             memory: MemoryKind::GpuOnly,
         })?;
-        Ok(ShProjector { equirect, cube, reduce, nearest, partials })
+        Ok(ShProjector {
+            equirect,
+            cube,
+            reduce,
+            nearest,
+            partials,
+        })
     }
 
     /// Adds the passes `name` (partial sums) and `"{name} reduce"` that project mip 0 of `env`
     /// onto `bands` bands and write `out[k] = (r, g, b, 0)` for k < bands² (the coefficient
     /// `∫ L y_k dω` in the SH frame); `out` needs room for bands² vec4s and storage usage.
-    pub fn add_passes<'a>(&self, graph: &mut RenderGraph<'a>, name: &str, env: EnvImage, bands: u32, out: BufferId) -> Result<()> {
+    pub fn add_passes<'a>(
+        &self,
+        graph: &mut RenderGraph<'a>,
+        name: &str,
+        env: EnvImage,
+        bands: u32,
+        out: BufferId,
+    ) -> Result<()> {
         if !(1..=GPU_PROJECTION_MAX_BANDS).contains(&bands) {
-            return Err(Error::Usage(format!("SH projection `{name}`: {bands} bands is outside 1..={GPU_PROJECTION_MAX_BANDS}")));
+            return Err(Error::Usage(format!(
+                "SH projection `{name}`: {bands} bands is outside 1..={GPU_PROJECTION_MAX_BANDS}"
+            )));
         }
         let texels = env.texels();
-        if env.width == 0 || env.height == 0 || texels > MAX_TEXELS || (env.layout == EnvLayout::Cube && env.width != env.height) {
+        if env.width == 0
+            || env.height == 0
+            || texels > MAX_TEXELS
+            || (env.layout == EnvLayout::Cube && env.width != env.height)
+        {
             return Err(Error::Usage(format!("SH projection `{name}`: a {}x{} {:?} image cannot be projected (non-empty, square cube faces, at most 2^30 texels)", env.width, env.height, env.layout)));
         }
         let per_group = (texels.div_ceil(MAX_GROUPS as u64) as u32).max(TEXELS_PER_GROUP);
@@ -117,22 +153,28 @@ impl ShProjector {
             EnvLayout::Cube => (self.cube, SubresourceRange::new(0, 1, 0, 6)),
         };
         let partials = self.partials;
-        graph.pass(name).sample("env_image", env.image, range, self.nearest, COMPUTE).buffer(partials, Access::StorageWrite { stages: COMPUTE }, Some("partials")).record(move |ctx| {
-            ctx.rec.bind_pipeline(pipeline)?;
-            ctx.bind(&[])?;
-            ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
-            ctx.rec.dispatch([groups * GROUP_SIZE, 1, 1])
-        });
+        graph
+            .pass(name)
+            .sample("env_image", env.image, range, self.nearest, COMPUTE)
+            .buffer(partials, Access::StorageWrite { stages: COMPUTE }, Some("partials"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
+                ctx.rec.dispatch([groups * GROUP_SIZE, 1, 1])
+            });
         let reduce = self.reduce;
         let push: [i32; 4] = [groups as i32, bands as i32, 0, 0];
-        graph.pass(&format!("{name} reduce")).buffer(partials, Access::StorageRead { stages: COMPUTE }, Some("partials")).buffer(out, Access::StorageWrite { stages: COMPUTE }, Some("sh_out")).record(
-            move |ctx| {
+        graph
+            .pass(&format!("{name} reduce"))
+            .buffer(partials, Access::StorageRead { stages: COMPUTE }, Some("partials"))
+            .buffer(out, Access::StorageWrite { stages: COMPUTE }, Some("sh_out"))
+            .record(move |ctx| {
                 ctx.rec.bind_pipeline(reduce)?;
                 ctx.bind(&[])?;
                 ctx.rec.push_constants(bytemuck::cast_slice(&push))?;
                 ctx.rec.dispatch([GROUP_SIZE, 1, 1])
-            },
-        );
+            });
         Ok(())
     }
 }

@@ -57,11 +57,14 @@ pub use basis::{basis, dot, eval, eval_basis, eval_basis_f64, eval_f64};
 pub use gpu::{EnvImage, EnvLayout, ShProjector, GPU_PROJECTION_MAX_BANDS};
 pub use product::{product, product_matrix, product_terms, ProductMatrix, TripleProductTensor};
 pub use projection::{
-    cube_texel_dir_world, cube_texel_solid_angle, equirect_texel_dir_world, equirect_texel_solid_angle, gauss_legendre, project, project_cubemap, project_equirect, project_scalar, Quadrature,
+    cube_texel_dir_world, cube_texel_solid_angle, equirect_texel_dir_world, equirect_texel_solid_angle, gauss_legendre,
+    project, project_cubemap, project_equirect, project_scalar, Quadrature,
 };
 pub use rotation::{rotate_z, rotation_z_to, zh_rotate, ShRotation};
 pub use window::{apply_window, hanning, lanczos, zonal_minimum};
-pub use zonal::{cap_zh, clamped_cosine_zh, convolve, eval_zonal, hemisphere_zh, irradiance, lambert_kernel, legendre, project_zonal};
+pub use zonal::{
+    cap_zh, clamped_cosine_zh, convolve, eval_zonal, hemisphere_zh, irradiance, lambert_kernel, legendre, project_zonal,
+};
 
 use glam::{DVec3, Mat3, Vec3};
 use std::ops::{Add, AddAssign, Sub};
@@ -83,11 +86,19 @@ pub enum ShError {
     #[error("{0} coefficients is not a whole number of bands (1, 4, 9, 16, … up to {max})", max = MAX_BANDS * MAX_BANDS)]
     NotBands(usize),
     #[error("{what}: expected {expected} values, got {got}")]
-    Length { what: &'static str, expected: usize, got: usize },
+    Length {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
     #[error("{0} must be finite")]
     NonFinite(&'static str),
     #[error("{what} must be in {range}, got {got}")]
-    Range { what: &'static str, range: &'static str, got: f64 },
+    Range {
+        what: &'static str,
+        range: &'static str,
+        got: f64,
+    },
     #[error("not a rotation matrix: |RᵀR − I| = {orthogonality_error:.3e}, det = {det:.4}")]
     NotRotation { orthogonality_error: f64, det: f64 },
 }
@@ -183,7 +194,11 @@ pub const WORLD_TO_SH: Mat3 = Mat3::from_cols(
     Vec3::new(0.0, -1.0, 0.0), // world +z → SH −y
 );
 /// [`sh_to_world`] as a matrix; the transpose of [`WORLD_TO_SH`].
-pub const SH_TO_WORLD: Mat3 = Mat3::from_cols(Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 0.0));
+pub const SH_TO_WORLD: Mat3 = Mat3::from_cols(
+    Vec3::new(1.0, 0.0, 0.0),
+    Vec3::new(0.0, 0.0, -1.0),
+    Vec3::new(0.0, 1.0, 0.0),
+);
 
 /// Checks a coefficient slice is a whole number of bands and returns the band count.
 fn bands_of<C>(what: &'static str, c: &[C]) -> ShResult<usize> {

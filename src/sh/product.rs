@@ -49,7 +49,9 @@ impl TripleProductTensor {
         let mut theta = vec![0.0; nz * ntri];
         for (q, z) in zs.iter().enumerate() {
             let s = (1.0 - z * z).max(0.0).sqrt();
-            legendre_normalized(*z, bands, |l, m, p| theta[q * ntri + l * (l + 1) / 2 + m] = p * s.powi(m as i32));
+            legendre_normalized(*z, bands, |l, m, p| {
+                theta[q * ntri + l * (l + 1) / 2 + m] = p * s.powi(m as i32)
+            });
         }
 
         // φ factor: ∫ Φ_a Φ_b Φ_c dφ for a, b, c in −(B−1)..=B−1.
@@ -61,12 +63,22 @@ impl TripleProductTensor {
             m if m > 0 => std::f64::consts::SQRT_2 * (m as f64 * phi).cos(),
             m => std::f64::consts::SQRT_2 * (-m as f64 * phi).sin(),
         };
-        let samples: Vec<Vec<f64>> = (0..mr).map(|a| (0..nphi).map(|t| phi_val(a as i32 - off, (t as f64 + 0.5) * TAU / nphi as f64)).collect()).collect();
+        let samples: Vec<Vec<f64>> = (0..mr)
+            .map(|a| {
+                (0..nphi)
+                    .map(|t| phi_val(a as i32 - off, (t as f64 + 0.5) * TAU / nphi as f64))
+                    .collect()
+            })
+            .collect();
         let mut phi_int = vec![0.0; mr * mr * mr];
         for a in 0..mr {
             for b in a..mr {
                 for c in b..mr {
-                    let s: f64 = (0..nphi).map(|t| samples[a][t] * samples[b][t] * samples[c][t]).sum::<f64>() * TAU / nphi as f64;
+                    let s: f64 = (0..nphi)
+                        .map(|t| samples[a][t] * samples[b][t] * samples[c][t])
+                        .sum::<f64>()
+                        * TAU
+                        / nphi as f64;
                     let s = if s.abs() < 1e-12 { 0.0 } else { s };
                     for (x, y, z) in [(a, b, c), (a, c, b), (b, a, c), (b, c, a), (c, a, b), (c, b, a)] {
                         phi_int[(x * mr + y) * mr + z] = s;
@@ -91,7 +103,9 @@ impl TripleProductTensor {
                         continue;
                     }
                     let (ti, tj, tk) = (tri(li, mi), tri(lj, mj), tri(lk, mk));
-                    let zi: f64 = (0..nz).map(|q| zw[q] * theta[q * ntri + ti] * theta[q * ntri + tj] * theta[q * ntri + tk]).sum();
+                    let zi: f64 = (0..nz)
+                        .map(|q| zw[q] * theta[q * ntri + ti] * theta[q * ntri + tj] * theta[q * ntri + tk])
+                        .sum();
                     let v = f * zi;
                     if v.abs() > KEEP_ABOVE {
                         unique.push(([i as u16, j as u16, k as u16], v));
@@ -124,7 +138,13 @@ impl TripleProductTensor {
             }
         }
         row_start.push(pairs.len());
-        Ok(Self { bands, unique, row_start, pairs, values })
+        Ok(Self {
+            bands,
+            unique,
+            row_start,
+            pairs,
+            values,
+        })
     }
 
     /// A process-wide tensor for `bands`, computed on first use.
@@ -166,7 +186,10 @@ impl TripleProductTensor {
             return 0.0;
         }
         let key = key.map(|x| x as u16);
-        self.unique.binary_search_by(|(e, _)| e.cmp(&key)).map(|p| self.unique[p].1).unwrap_or(0.0)
+        self.unique
+            .binary_search_by(|(e, _)| e.cmp(&key))
+            .map(|p| self.unique[p].1)
+            .unwrap_or(0.0)
     }
 
     /// `(a • b)` onto `out_bands` bands. `a` and `b` are whole numbers of bands; every band count
@@ -211,7 +234,11 @@ pub fn product<C: Coeff, S: Copy + Into<f64>>(a: &[C], b: &[S], bands: usize) ->
 pub fn product_terms(bands: usize) -> ShResult<Vec<[u32; 2]>> {
     // The GLSL's coefficient arrays hold 8 bands; a longer list would only be skipped there.
     if !(1..=super::GLSL_MAX_BANDS).contains(&bands) {
-        return Err(ShError::Range { what: "bands of a GPU product term list", range: "1..=8", got: bands as f64 });
+        return Err(ShError::Range {
+            what: "bands of a GPU product term list",
+            range: "1..=8",
+            got: bands as f64,
+        });
     }
     let gamma = TripleProductTensor::shared(bands)?;
     let mut out = Vec::with_capacity(gamma.len());
@@ -249,9 +276,21 @@ impl<C: Coeff> ProductMatrix<C> {
     /// `M b`; `b.len()` must be [`ProductMatrix::dim`].
     pub fn apply<S: Copy + Into<f64>>(&self, b: &[S]) -> ShResult<Vec<C>> {
         if b.len() != self.dim {
-            return Err(ShError::Length { what: "product matrix operand", expected: self.dim, got: b.len() });
+            return Err(ShError::Length {
+                what: "product matrix operand",
+                expected: self.dim,
+                got: b.len(),
+            });
         }
-        Ok(self.data.chunks_exact(self.dim).map(|row| row.iter().zip(b).fold(C::default(), |acc, (m, x)| acc + m.scale((*x).into()))).collect())
+        Ok(self
+            .data
+            .chunks_exact(self.dim)
+            .map(|row| {
+                row.iter()
+                    .zip(b)
+                    .fold(C::default(), |acc, (m, x)| acc + m.scale((*x).into()))
+            })
+            .collect())
     }
 }
 

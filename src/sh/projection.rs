@@ -19,7 +19,11 @@ const MAX_NODES_TOTAL: usize = 1 << 22;
 /// Tricomi initial guess; converges to ~1e−15). `n` in 1..=4096.
 pub fn gauss_legendre(n: usize) -> ShResult<(Vec<f64>, Vec<f64>)> {
     if !(1..=MAX_NODES_AXIS).contains(&n) {
-        return Err(ShError::Range { what: "Gauss-Legendre node count", range: "1..=4096", got: n as f64 });
+        return Err(ShError::Range {
+            what: "Gauss-Legendre node count",
+            range: "1..=4096",
+            got: n as f64,
+        });
     }
     let mut x = vec![0.0; n];
     let mut w = vec![0.0; n];
@@ -71,10 +75,18 @@ impl Quadrature {
             return Err(ShError::NonFinite("zone bounds"));
         }
         if !(-1.0..=1.0).contains(&z_min) || !(z_min..=1.0).contains(&z_max) {
-            return Err(ShError::Range { what: "zone bounds", range: "-1 <= z_min <= z_max <= 1", got: z_min });
+            return Err(ShError::Range {
+                what: "zone bounds",
+                range: "-1 <= z_min <= z_max <= 1",
+                got: z_min,
+            });
         }
         if !(1..=MAX_NODES_AXIS).contains(&n_phi) || n_theta.saturating_mul(n_phi) > MAX_NODES_TOTAL {
-            return Err(ShError::Range { what: "quadrature size", range: "n_phi in 1..=4096, total <= 2^22", got: n_phi as f64 });
+            return Err(ShError::Range {
+                what: "quadrature size",
+                range: "n_phi in 1..=4096, total <= 2^22",
+                got: n_phi as f64,
+            });
         }
         let (x, w) = gauss_legendre(n_theta)?;
         let (mid, half) = (0.5 * (z_max + z_min), 0.5 * (z_max - z_min));
@@ -204,9 +216,17 @@ pub fn equirect_texel_solid_angle(y: usize, width: usize, height: usize) -> f64 
 /// in θ is second-order accurate; the φ sum is exact for band-limited content.
 pub fn project_equirect(pixels: &[[f32; 3]], width: usize, height: usize, bands: usize) -> ShResult<Vec<Vec3>> {
     check_bands(bands)?;
-    let expected = width.checked_mul(height).filter(|&n| n > 0).ok_or(ShError::Range { what: "equirect size", range: "width, height >= 1", got: 0.0 })?;
+    let expected = width.checked_mul(height).filter(|&n| n > 0).ok_or(ShError::Range {
+        what: "equirect size",
+        range: "width, height >= 1",
+        got: 0.0,
+    })?;
     if pixels.len() != expected {
-        return Err(ShError::Length { what: "equirect texels", expected, got: pixels.len() });
+        return Err(ShError::Length {
+            what: "equirect texels",
+            expected,
+            got: pixels.len(),
+        });
     }
     let n = bands * bands;
     let mut total = vec![DVec3::ZERO; n];
@@ -265,16 +285,30 @@ pub fn cube_texel_solid_angle(x: usize, y: usize, size: usize) -> f64 {
 /// exact solid angle. Coefficients are in the SH frame.
 pub fn project_cubemap(texels: &[[f32; 3]], size: usize, bands: usize) -> ShResult<Vec<Vec3>> {
     check_bands(bands)?;
-    let face_len = size.checked_mul(size).filter(|&n| n > 0).ok_or(ShError::Range { what: "cube face size", range: ">= 1", got: 0.0 })?;
-    let expected = face_len.checked_mul(6).ok_or(ShError::Range { what: "cube face size", range: "not overflowing", got: size as f64 })?;
+    let face_len = size.checked_mul(size).filter(|&n| n > 0).ok_or(ShError::Range {
+        what: "cube face size",
+        range: ">= 1",
+        got: 0.0,
+    })?;
+    let expected = face_len.checked_mul(6).ok_or(ShError::Range {
+        what: "cube face size",
+        range: "not overflowing",
+        got: size as f64,
+    })?;
     if texels.len() != expected {
-        return Err(ShError::Length { what: "cube map texels", expected, got: texels.len() });
+        return Err(ShError::Length {
+            what: "cube map texels",
+            expected,
+            got: texels.len(),
+        });
     }
     let n = bands * bands;
     let mut total = vec![DVec3::ZERO; n];
     let mut y = [0.0f64; MAX_BANDS * MAX_BANDS];
     // Solid angles are the same on every face: compute them once.
-    let omega: Vec<f64> = (0..face_len).map(|i| cube_texel_solid_angle(i % size, i / size, size)).collect();
+    let omega: Vec<f64> = (0..face_len)
+        .map(|i| cube_texel_solid_angle(i % size, i / size, size))
+        .collect();
     for (face, face_texels) in texels.chunks_exact(face_len).enumerate() {
         for (i, t) in face_texels.iter().enumerate() {
             let d = world_to_sh(cube_texel_dir_world(face, i % size, i / size, size)).as_dvec3();

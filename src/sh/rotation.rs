@@ -120,10 +120,18 @@ impl ShRotation {
     pub fn apply<C: Coeff>(&self, input: &[C], output: &mut [C]) -> ShResult<()> {
         let bands = bands_of("rotation input", input)?;
         if bands > self.bands {
-            return Err(ShError::Length { what: "rotation input (bands² of the rotation)", expected: self.bands * self.bands, got: input.len() });
+            return Err(ShError::Length {
+                what: "rotation input (bands² of the rotation)",
+                expected: self.bands * self.bands,
+                got: input.len(),
+            });
         }
         if output.len() != input.len() {
-            return Err(ShError::Length { what: "rotation output", expected: input.len(), got: output.len() });
+            return Err(ShError::Length {
+                what: "rotation output",
+                expected: input.len(),
+                got: output.len(),
+            });
         }
         for (l, block) in self.blocks.iter().enumerate().take(bands) {
             let (w, base) = (2 * l + 1, l * l);
@@ -152,10 +160,16 @@ fn orthonormalize(r: DMat3) -> ShResult<DMat3> {
         return Err(ShError::NonFinite("rotation matrix"));
     }
     let e = r.transpose() * r - DMat3::IDENTITY;
-    let err = [e.x_axis, e.y_axis, e.z_axis].iter().map(|c| c.abs().max_element()).fold(0.0, f64::max);
+    let err = [e.x_axis, e.y_axis, e.z_axis]
+        .iter()
+        .map(|c| c.abs().max_element())
+        .fold(0.0, f64::max);
     let det = r.determinant();
     if err > 1e-3 || det <= 0.0 {
-        return Err(ShError::NotRotation { orthogonality_error: err, det });
+        return Err(ShError::NotRotation {
+            orthogonality_error: err,
+            det,
+        });
     }
     let c0 = r.x_axis.normalize();
     let c1 = (r.y_axis - c0 * c0.dot(r.y_axis)).normalize();
@@ -187,7 +201,11 @@ fn band_block(l: usize, r1: &[f64], prev: &[f64]) -> Vec<f64> {
     for m in -li..=li {
         for n in -li..=li {
             let d0 = delta(m, 0);
-            let denom = if n.abs() == li { (2 * li * (2 * li - 1)) as f64 } else { ((li + n) * (li - n)) as f64 };
+            let denom = if n.abs() == li {
+                (2 * li * (2 * li - 1)) as f64
+            } else {
+                ((li + n) * (li - n)) as f64
+            };
             let am = m.abs();
             let u = (((li + m) * (li - m)) as f64 / denom).sqrt();
             let v = 0.5 * ((1.0 + d0) * ((li + am - 1) * (li + am)) as f64 / denom).sqrt() * (1.0 - 2.0 * d0);
@@ -208,7 +226,11 @@ fn band_block(l: usize, r1: &[f64], prev: &[f64]) -> Vec<f64> {
                 val += v * vv;
             }
             if ww != 0.0 {
-                let wv = if m > 0 { p(1, m + 1, n) + p(-1, -m - 1, n) } else { p(1, m - 1, n) - p(-1, -m + 1, n) };
+                let wv = if m > 0 {
+                    p(1, m + 1, n) + p(-1, -m - 1, n)
+                } else {
+                    p(1, m - 1, n) - p(-1, -m + 1, n)
+                };
                 val += ww * wv;
             }
             out[((m + li) as usize) * w + (n + li) as usize] = val;

@@ -35,7 +35,11 @@ fn check_width(width: f64) -> ShResult<()> {
         return Err(ShError::NonFinite("window width"));
     }
     if width <= 0.0 {
-        return Err(ShError::Range { what: "window width", range: "> 0", got: width });
+        return Err(ShError::Range {
+            what: "window width",
+            range: "> 0",
+            got: width,
+        });
     }
     Ok(())
 }
@@ -44,7 +48,15 @@ fn check_width(width: f64) -> ShResult<()> {
 pub fn hanning(bands: usize, width: f64) -> ShResult<Vec<f64>> {
     check_bands(bands)?;
     check_width(width)?;
-    Ok((0..bands).map(|l| if (l as f64) < width { 0.5 * (1.0 + (PI * l as f64 / width).cos()) } else { 0.0 }).collect())
+    Ok((0..bands)
+        .map(|l| {
+            if (l as f64) < width {
+                0.5 * (1.0 + (PI * l as f64 / width).cos())
+            } else {
+                0.0
+            }
+        })
+        .collect())
 }
 
 /// Lanczos σ-factor window of width `width` (> 0, in bands) for `bands` bands.
@@ -69,7 +81,11 @@ pub fn lanczos(bands: usize, width: f64) -> ShResult<Vec<f64>> {
 pub fn apply_window<C: Coeff>(coeffs: &mut [C], window: &[f64]) -> ShResult<()> {
     let bands = bands_of("windowed coefficients", coeffs)?;
     if window.len() < bands {
-        return Err(ShError::Length { what: "window bands", expected: bands, got: window.len() });
+        return Err(ShError::Length {
+            what: "window bands",
+            expected: bands,
+            got: window.len(),
+        });
     }
     for (l, w) in window.iter().enumerate().take(bands) {
         for c in &mut coeffs[l * l..(l + 1) * (l + 1)] {

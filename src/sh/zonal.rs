@@ -36,7 +36,15 @@ fn n_l(l: usize) -> f64 {
 /// `∫_c^1 P_k(x) dx` for k = 0..=n, from `P_0(c) … P_{n+1}(c)`.
 fn legendre_tail_integrals(n: usize, c: f64) -> Vec<f64> {
     let p = legendre(n + 1, c);
-    (0..=n).map(|k| if k == 0 { 1.0 - c } else { (p[k - 1] - p[k + 1]) / (2 * k + 1) as f64 }).collect()
+    (0..=n)
+        .map(|k| {
+            if k == 0 {
+                1.0 - c
+            } else {
+                (p[k - 1] - p[k + 1]) / (2 * k + 1) as f64
+            }
+        })
+        .collect()
 }
 
 /// ZH coefficients of the clamped cosine `max(cos θ, 0)` about +z:
@@ -60,7 +68,11 @@ pub fn clamped_cosine_zh(bands: usize) -> ShResult<Vec<f64>> {
 /// π, 2π/3, π/4, 0, −π/24, 0, π/64, … (Ramamoorthi–Hanrahan; seed 002 §5 test 1 `Â_l`).
 /// Irradiance is `E_lm = A_l L_lm`.
 pub fn lambert_kernel(bands: usize) -> ShResult<Vec<f64>> {
-    Ok(clamped_cosine_zh(bands)?.into_iter().enumerate().map(|(l, z)| (4.0 * PI / (2 * l + 1) as f64).sqrt() * z).collect())
+    Ok(clamped_cosine_zh(bands)?
+        .into_iter()
+        .enumerate()
+        .map(|(l, z)| (4.0 * PI / (2 * l + 1) as f64).sqrt() * z)
+        .collect())
 }
 
 /// ZH coefficients of the indicator of a spherical cap of half-angle `half_angle` (radians,
@@ -99,7 +111,13 @@ pub fn eval_zonal(zh: &[f64], cos_angle: f64) -> f64 {
 /// `z_min ≤ cos θ ≤ z_max`: `z_l = 2π N_l ∫ f(x) P_l(x) dx` by `nodes`-point Gauss–Legendre on
 /// that interval (exact for polynomial f of degree ≤ 2·nodes − bands). For kernels without a
 /// closed form (Phong lobes, cosine-weighted caps); the closed forms above are tested with it.
-pub fn project_zonal(mut f: impl FnMut(f64) -> f64, bands: usize, z_min: f64, z_max: f64, nodes: usize) -> ShResult<Vec<f64>> {
+pub fn project_zonal(
+    mut f: impl FnMut(f64) -> f64,
+    bands: usize,
+    z_min: f64,
+    z_max: f64,
+    nodes: usize,
+) -> ShResult<Vec<f64>> {
     check_bands(bands)?;
     if !z_min.is_finite() || !z_max.is_finite() {
         return Err(ShError::NonFinite("zonal integration bounds"));
@@ -124,7 +142,11 @@ pub fn project_zonal(mut f: impl FnMut(f64) -> f64, bands: usize, z_min: f64, z_
 pub fn convolve<C: Coeff>(coeffs: &mut [C], kernel_zh: &[f64]) -> ShResult<()> {
     let bands = bands_of("convolution coefficients", coeffs)?;
     if kernel_zh.len() < bands {
-        return Err(ShError::Length { what: "convolution kernel bands", expected: bands, got: kernel_zh.len() });
+        return Err(ShError::Length {
+            what: "convolution kernel bands",
+            expected: bands,
+            got: kernel_zh.len(),
+        });
     }
     for (l, k) in kernel_zh.iter().enumerate().take(bands) {
         let s = (4.0 * PI / (2 * l + 1) as f64).sqrt() * k;

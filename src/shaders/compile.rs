@@ -43,18 +43,31 @@ pub fn compile_glsl(root: &Path, rel: &str) -> Result<Vec<u32>, String> {
     options.set_generate_debug_info();
     let root_owned: PathBuf = root.to_path_buf();
     options.set_include_callback(move |name, _ty, from, _depth| {
-        let from_dir = root_owned.join(from).parent().map(Path::to_path_buf).unwrap_or_default();
+        let from_dir = root_owned
+            .join(from)
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
         for dir in [from_dir, root_owned.clone()] {
             let candidate = dir.join(name);
             if let Ok(content) = std::fs::read_to_string(&candidate) {
                 ascii_only(name, &content)?;
-                let resolved = candidate.strip_prefix(&root_owned).map(|p| p.to_string_lossy().into_owned()).unwrap_or_else(|_| candidate.to_string_lossy().into_owned());
-                return Ok(shaderc::ResolvedInclude { resolved_name: resolved, content });
+                let resolved = candidate
+                    .strip_prefix(&root_owned)
+                    .map(|p| p.to_string_lossy().into_owned())
+                    .unwrap_or_else(|_| candidate.to_string_lossy().into_owned());
+                return Ok(shaderc::ResolvedInclude {
+                    resolved_name: resolved,
+                    content,
+                });
             }
         }
         Err(format!("cannot find include `{name}` (from {from})"))
     });
-    compiler.compile_into_spirv(&source, kind, rel, "main", Some(&options)).map(|a| a.as_binary().to_vec()).map_err(|e| e.to_string())
+    compiler
+        .compile_into_spirv(&source, kind, rel, "main", Some(&options))
+        .map(|a| a.as_binary().to_vec())
+        .map_err(|e| e.to_string())
 }
 
 /// Every shader stage file under `root`, as sorted paths relative to it with `/` separators.

@@ -36,13 +36,20 @@ pub fn embedded_bytes() -> impl Iterator<Item = &'static [u8]> {
 }
 
 fn words(bytes: &[u8]) -> Vec<u32> {
-    bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
 }
 
 impl ShaderSource for ShaderLibrary {
     fn spirv(&self, path: &str) -> Result<Vec<u32>, String> {
         match self {
-            ShaderLibrary::Embedded => EMBEDDED.iter().find(|(n, _)| *n == path).map(|(_, b)| words(b)).ok_or_else(|| format!("no shader `{path}` is embedded (is it under glsl/?)")),
+            ShaderLibrary::Embedded => EMBEDDED
+                .iter()
+                .find(|(n, _)| *n == path)
+                .map(|(_, b)| words(b))
+                .ok_or_else(|| format!("no shader `{path}` is embedded (is it under glsl/?)")),
             ShaderLibrary::Directory(root) => compile::compile_glsl(root, path),
         }
     }
@@ -67,11 +74,19 @@ mod tests {
     fn runtime_compile_reports_errors_with_the_file_name() {
         let dir = std::env::temp_dir().join(format!("penumbra-shader-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("bad.comp"), "#version 460\nlayout(local_size_x=1) in;\nvoid main() { undefined_thing = 1; }\n").unwrap();
+        std::fs::write(
+            dir.join("bad.comp"),
+            "#version 460\nlayout(local_size_x=1) in;\nvoid main() { undefined_thing = 1; }\n",
+        )
+        .unwrap();
         let err = ShaderLibrary::Directory(dir.clone()).spirv("bad.comp").unwrap_err();
         assert!(err.contains("bad.comp") && err.contains("undefined_thing"), "{err}");
         // Warnings are errors too.
-        std::fs::write(dir.join("warn.comp"), "#version 460\nlayout(local_size_x=1) in;\nvoid main() { int x = 1.5; }\n").unwrap();
+        std::fs::write(
+            dir.join("warn.comp"),
+            "#version 460\nlayout(local_size_x=1) in;\nvoid main() { int x = 1.5; }\n",
+        )
+        .unwrap();
         assert!(ShaderLibrary::Directory(dir.clone()).spirv("warn.comp").is_err());
         std::fs::remove_dir_all(&dir).ok();
     }

@@ -34,7 +34,13 @@ impl Brush {
     /// An axis-aligned box with one material per face, ordered +x, −x, +y, −y, +z, −z.
     pub fn cuboid_materials(min: DVec3, max: DVec3, materials: [MaterialId; 6]) -> Brush {
         let planes = Aabb { min, max }.planes();
-        Brush { sides: planes.iter().zip(materials).map(|(&plane, material)| BrushSide { plane, material }).collect() }
+        Brush {
+            sides: planes
+                .iter()
+                .zip(materials)
+                .map(|(&plane, material)| BrushSide { plane, material })
+                .collect(),
+        }
     }
 
     /// The boundary polygon of every side (normals outward), `None` for sides that are
@@ -142,13 +148,20 @@ pub fn csg_faces(brushes: &[Brush]) -> (Vec<BrushFace>, CsgStats) {
                 if j == i || !bounds.overlaps(&face_bounds) {
                     continue;
                 }
-                pieces = pieces.into_iter().flat_map(|p| outside_of(p, &brushes[j], i < j)).collect();
+                pieces = pieces
+                    .into_iter()
+                    .flat_map(|p| outside_of(p, &brushes[j], i < j))
+                    .collect();
                 if pieces.is_empty() {
                     break;
                 }
             }
             let material = brushes[i].sides[side].material;
-            out.extend(pieces.into_iter().map(|polygon| BrushFace { polygon, material, brush: i as u32 }));
+            out.extend(pieces.into_iter().map(|polygon| BrushFace {
+                polygon,
+                material,
+                brush: i as u32,
+            }));
         }
     }
     stats.faces_out = out.len();

@@ -97,7 +97,13 @@ impl Tree {
     }
 
     fn new_leaf(&mut self) -> Child {
-        self.leaves.push(Leaf { solid: false, faces: Vec::new(), portals: Vec::new(), bounds: Aabb::EMPTY, touches_world_bounds: false });
+        self.leaves.push(Leaf {
+            solid: false,
+            faces: Vec::new(),
+            portals: Vec::new(),
+            bounds: Aabb::EMPTY,
+            touches_world_bounds: false,
+        });
         Child::Leaf((self.leaves.len() - 1) as LeafId)
     }
 
@@ -108,7 +114,12 @@ impl Tree {
         let plane = choose_plane(&fragments, heuristic, tolerance);
         let (mut front, mut back) = (Vec::new(), Vec::new());
         let node_id = self.nodes.len() as NodeId;
-        self.nodes.push(Node { plane, front: Child::Leaf(0), back: Child::Leaf(0), faces: Vec::new() });
+        self.nodes.push(Node {
+            plane,
+            front: Child::Leaf(0),
+            back: Child::Leaf(0),
+            faces: Vec::new(),
+        });
         for frag in fragments {
             match frag.polygon.split_in(&plane, tolerance) {
                 Split::Front(polygon) => front.push(Fragment { polygon, ..frag }),
@@ -119,8 +130,14 @@ impl Tree {
                 }
                 Split::Spanning { front: f, back: b } => {
                     self.degenerate_fragments += usize::from(f.is_none()) + usize::from(b.is_none());
-                    front.extend(f.map(|polygon| Fragment { polygon, source: frag.source }));
-                    back.extend(b.map(|polygon| Fragment { polygon, source: frag.source }));
+                    front.extend(f.map(|polygon| Fragment {
+                        polygon,
+                        source: frag.source,
+                    }));
+                    back.extend(b.map(|polygon| Fragment {
+                        polygon,
+                        source: frag.source,
+                    }));
                 }
             }
         }
@@ -140,7 +157,11 @@ impl Tree {
                 Child::Leaf(l) => return l,
                 Child::Node(n) => {
                     let node = &self.nodes[n as usize];
-                    child = if node.plane.distance(p) >= 0.0 { node.front } else { node.back };
+                    child = if node.plane.distance(p) >= 0.0 {
+                        node.front
+                    } else {
+                        node.back
+                    };
                 }
             }
         }
@@ -222,7 +243,13 @@ impl Tree {
     }
 
     /// `planes`: the cell of `child`, normals outward; the first six are the world bounds.
-    fn cells_rec(&self, child: Child, planes: &mut Vec<Plane>, windings: &mut [Option<Polygon>], cells: &mut [(Aabb, bool)]) {
+    fn cells_rec(
+        &self,
+        child: Child,
+        planes: &mut Vec<Plane>,
+        windings: &mut [Option<Polygon>],
+        cells: &mut [(Aabb, bool)],
+    ) {
         match child {
             Child::Leaf(l) => {
                 let faces = convex_faces(planes.iter().copied());
@@ -260,7 +287,11 @@ impl Tree {
                 out.extend_from_slice(&node.faces);
                 continue;
             }
-            let (near, far) = if node.plane.distance(eye) >= 0.0 { (node.front, node.back) } else { (node.back, node.front) };
+            let (near, far) = if node.plane.distance(eye) >= 0.0 {
+                (node.front, node.back)
+            } else {
+                (node.back, node.front)
+            };
             stack.push((near, false));
             stack.push((child, true));
             stack.push((far, false));
@@ -293,7 +324,11 @@ fn choose_plane(fragments: &[Fragment], heuristic: SplitHeuristic, tolerance: &T
                 Side::Spanning => splits += 1,
             }
         }
-        let score = (split_weight * splits + (front - back).abs(), u8::from(plane.axis().is_none()), -on);
+        let score = (
+            split_weight * splits + (front - back).abs(),
+            u8::from(plane.axis().is_none()),
+            -on,
+        );
         if best.as_ref().is_none_or(|(s, _)| score < *s) {
             best = Some((score, plane));
         }

@@ -57,7 +57,10 @@ impl CompiledWorld {
                 taken[f as usize] |= self.faces[f as usize].bounds.touches_sphere(light, radius);
             }
         }
-        (0..self.faces.len()).filter(|&f| taken[f]).map(|f| f as FaceId).collect()
+        (0..self.faces.len())
+            .filter(|&f| taken[f])
+            .map(|f| f as FaceId)
+            .collect()
     }
 
     /// (c): (b) together with the Potential Shadow-Casters Set. Ascending ids.
@@ -78,9 +81,16 @@ impl CompiledWorld {
         for &f in &self.back_facing(&in_pvs, light) {
             taken[f as usize] = true;
         }
-        let pyramids: Vec<Pyramid> = self.front_facing(&in_pvs, light).iter().filter_map(|&f| self.pyramid(light, f)).collect();
+        let pyramids: Vec<Pyramid> = self
+            .front_facing(&in_pvs, light)
+            .iter()
+            .filter_map(|&f| self.pyramid(light, f))
+            .collect();
         for (f, face) in self.faces.iter().enumerate() {
-            if taken[f] || face.polygon.plane.distance(light) >= -PLANE_EPSILON || !face.bounds.touches_sphere(light, radius) {
+            if taken[f]
+                || face.polygon.plane.distance(light) >= -PLANE_EPSILON
+                || !face.bounds.touches_sphere(light, radius)
+            {
                 continue;
             }
             taken[f] = pyramids.iter().any(|p| {
@@ -96,7 +106,10 @@ impl CompiledWorld {
                 }
             });
         }
-        (0..self.faces.len()).filter(|&f| taken[f]).map(|f| f as FaceId).collect()
+        (0..self.faces.len())
+            .filter(|&f| taken[f])
+            .map(|f| f as FaceId)
+            .collect()
     }
 
     /// The faces of `faces` the light is behind (by more than the plane epsilon): the casters
@@ -113,8 +126,16 @@ impl CompiledWorld {
 
     /// The ids of `faces` (unknown ids skipped) whose plane distance to the light passes `keep`.
     fn facing(&self, faces: &[FaceId], keep: impl Fn(f64) -> bool, light: DVec3) -> Vec<FaceId> {
-        let distance = |f: FaceId| self.faces.get(f as usize).map(|face| face.polygon.plane.distance(light));
-        faces.iter().copied().filter(|&f| distance(f).is_some_and(&keep)).collect()
+        let distance = |f: FaceId| {
+            self.faces
+                .get(f as usize)
+                .map(|face| face.polygon.plane.distance(light))
+        };
+        faces
+            .iter()
+            .copied()
+            .filter(|&f| distance(f).is_some_and(&keep))
+            .collect()
     }
 
     /// The pyramid from `light` over face `f` (which the light must be in front of).
@@ -125,10 +146,17 @@ impl CompiledWorld {
         let count = base.vertices.len();
         for i in 0..count {
             let side = Plane::from_points(light, base.vertices[i], base.vertices[(i + 1) % count])?;
-            planes.push(if side.distance(center) < 0.0 { side.flipped() } else { side });
+            planes.push(if side.distance(center) < 0.0 {
+                side.flipped()
+            } else {
+                side
+            });
         }
         let mut bounds = base.bounds();
         bounds.include(light);
-        Some(Pyramid { planes, bounds: bounds.expanded(PYRAMID_SLACK) })
+        Some(Pyramid {
+            planes,
+            bounds: bounds.expanded(PYRAMID_SLACK),
+        })
     }
 }

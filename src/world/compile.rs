@@ -24,7 +24,10 @@ pub struct CompileOptions {
 
 impl Default for CompileOptions {
     fn default() -> Self {
-        CompileOptions { heuristic: SplitHeuristic::default(), compute_pvs: true }
+        CompileOptions {
+            heuristic: SplitHeuristic::default(),
+            compute_pvs: true,
+        }
     }
 }
 
@@ -42,9 +45,19 @@ struct Pass {
 }
 
 fn run_pass(faces: &[BrushFace], start: DVec3, heuristic: SplitHeuristic) -> Result<Pass, CompileError> {
-    let fragments = faces.iter().enumerate().map(|(i, f)| Fragment { polygon: f.polygon.clone(), source: i }).collect();
+    let fragments = faces
+        .iter()
+        .enumerate()
+        .map(|(i, f)| Fragment {
+            polygon: f.polygon.clone(),
+            source: i,
+        })
+        .collect();
     let mut tree = Tree::build(fragments, heuristic);
-    let bounds = faces.iter().fold(Aabb::EMPTY, |b, f| b.union(&f.polygon.bounds())).expanded(BOUNDS_MARGIN);
+    let bounds = faces
+        .iter()
+        .fold(Aabb::EMPTY, |b, f| b.union(&f.polygon.bounds()))
+        .expanded(BOUNDS_MARGIN);
 
     let windings = tree.compute_cells(&bounds);
 
@@ -53,7 +66,10 @@ fn run_pass(faces: &[BrushFace], start: DVec3, heuristic: SplitHeuristic) -> Res
     let start_leaf = tree.leaf_of(start);
     let reached = flood_fill(tree.leaves.len(), &portals, start_leaf);
     if let Some(leaf) = (0..tree.leaves.len()).find(|&l| reached[l] && tree.leaves[l].touches_world_bounds) {
-        return Err(CompileError::Leak { start, leaf_center: tree.leaves[leaf].bounds.center() });
+        return Err(CompileError::Leak {
+            start,
+            leaf_center: tree.leaves[leaf].bounds.center(),
+        });
     }
 
     // A fragment bounds the leaves its front side touches: push it down the side it faces.
@@ -62,14 +78,29 @@ fn run_pass(faces: &[BrushFace], start: DVec3, heuristic: SplitHeuristic) -> Res
         .iter()
         .map(|(frag, node)| {
             let node = &tree.nodes[*node as usize];
-            let side = if frag.polygon.plane.normal.dot(node.plane.normal) > 0.0 { node.front } else { node.back };
-            let mut leaves: Vec<LeafId> = tree.push_down(frag.polygon.clone(), side).into_iter().map(|(l, _)| l).filter(|&l| reached[l as usize]).collect();
+            let side = if frag.polygon.plane.normal.dot(node.plane.normal) > 0.0 {
+                node.front
+            } else {
+                node.back
+            };
+            let mut leaves: Vec<LeafId> = tree
+                .push_down(frag.polygon.clone(), side)
+                .into_iter()
+                .map(|(l, _)| l)
+                .filter(|&l| reached[l as usize])
+                .collect();
             leaves.sort_unstable();
             leaves.dedup();
             leaves
         })
         .collect();
-    Ok(Pass { tree, portals, reached, fragment_leaves, bounds })
+    Ok(Pass {
+        tree,
+        portals,
+        reached,
+        fragment_leaves,
+        bounds,
+    })
 }
 
 impl World {
@@ -81,7 +112,10 @@ impl World {
     pub fn compile_with(&self, options: CompileOptions) -> Result<CompiledWorld, CompileError> {
         let t0 = Instant::now();
         if let Some(b) = self.brushes.iter().position(|b| b.contains_point(self.start)) {
-            return Err(CompileError::StartInSolid { start: self.start, brush: b });
+            return Err(CompileError::StartInSolid {
+                start: self.start,
+                brush: b,
+            });
         }
         let (csg, csg_stats) = csg_faces(&self.brushes);
         if csg.is_empty() {
@@ -94,7 +128,12 @@ impl World {
         for (i, (frag, _)) in first.tree.fragments.iter().enumerate() {
             keep[frag.source] |= !first.fragment_leaves[i].is_empty();
         }
-        let kept: Vec<BrushFace> = csg.iter().zip(&keep).filter(|(_, &k)| k).map(|(f, _)| f.clone()).collect();
+        let kept: Vec<BrushFace> = csg
+            .iter()
+            .zip(&keep)
+            .filter(|(_, &k)| k)
+            .map(|(f, _)| f.clone())
+            .collect();
         let unreachable_faces_dropped = csg.len() - kept.len();
         if kept.is_empty() {
             return Err(CompileError::NoFaces);
@@ -102,7 +141,13 @@ impl World {
 
         // Pass 2: the tree over the surviving faces only; the flood fill now defines solidity.
         let second = run_pass(&kept, self.start, options.heuristic)?;
-        let Pass { mut tree, portals, reached, fragment_leaves, bounds } = second;
+        let Pass {
+            mut tree,
+            portals,
+            reached,
+            fragment_leaves,
+            bounds,
+        } = second;
         let mut faces = Vec::new();
         let mut face_id_of_fragment: Vec<Option<FaceId>> = vec![None; tree.fragments.len()];
         for (i, ((frag, node), leaves)) in tree.fragments.iter().zip(fragment_leaves).enumerate() {
@@ -111,12 +156,23 @@ impl World {
             }
             let source = &kept[frag.source];
             face_id_of_fragment[i] = Some(faces.len() as FaceId);
-            faces.push(Face { bounds: frag.polygon.bounds(), polygon: frag.polygon.clone(), material: source.material, brush: source.brush, node: *node, leaves });
+            faces.push(Face {
+                bounds: frag.polygon.bounds(),
+                polygon: frag.polygon.clone(),
+                material: source.material,
+                brush: source.brush,
+                node: *node,
+                leaves,
+            });
         }
         let second_pass_faces_dropped = tree.fragments.len() - faces.len();
         tree.fragments.clear();
         for node in &mut tree.nodes {
-            node.faces = node.faces.iter().filter_map(|&f| face_id_of_fragment[f as usize]).collect();
+            node.faces = node
+                .faces
+                .iter()
+                .filter_map(|&f| face_id_of_fragment[f as usize])
+                .collect();
         }
         for (leaf, &r) in tree.leaves.iter_mut().zip(&reached) {
             leaf.solid = !r;
@@ -126,7 +182,10 @@ impl World {
                 tree.leaves[l as usize].faces.push(id as FaceId);
             }
         }
-        let portals: Vec<Portal> = portals.into_iter().filter(|p| reached[p.front as usize] && reached[p.back as usize]).collect();
+        let portals: Vec<Portal> = portals
+            .into_iter()
+            .filter(|p| reached[p.front as usize] && reached[p.back as usize])
+            .collect();
         for (id, p) in portals.iter().enumerate() {
             tree.leaves[p.front as usize].portals.push(id as u32);
             tree.leaves[p.back as usize].portals.push(id as u32);
@@ -134,7 +193,11 @@ impl World {
         let compile_time = t0.elapsed();
 
         let t1 = Instant::now();
-        let (pvs, pvs_stats) = if options.compute_pvs { compute_pvs(&tree, &portals) } else { (Pvs::all_visible(&tree.leaves), Default::default()) };
+        let (pvs, pvs_stats) = if options.compute_pvs {
+            compute_pvs(&tree, &portals)
+        } else {
+            (Pvs::all_visible(&tree.leaves), Default::default())
+        };
         let stats = CompileStats {
             brushes: self.brushes.len(),
             csg: csg_stats,
@@ -150,6 +213,13 @@ impl World {
             compile_time,
             pvs_time: t1.elapsed(),
         };
-        Ok(CompiledWorld { faces, tree, portals, pvs, bounds, stats })
+        Ok(CompiledWorld {
+            faces,
+            tree,
+            portals,
+            pvs,
+            bounds,
+            stats,
+        })
     }
 }

@@ -49,7 +49,11 @@ impl Rng {
     }
 
     pub fn point_in(&mut self, b: &Aabb) -> DVec3 {
-        DVec3::new(self.range(b.min.x, b.max.x), self.range(b.min.y, b.max.y), self.range(b.min.z, b.max.z))
+        DVec3::new(
+            self.range(b.min.x, b.max.x),
+            self.range(b.min.y, b.max.y),
+            self.range(b.min.z, b.max.z),
+        )
     }
 }
 
@@ -70,7 +74,10 @@ pub struct LevelBuilder {
 
 impl LevelBuilder {
     pub fn new(wall_thickness: f64) -> LevelBuilder {
-        LevelBuilder { brushes: Vec::new(), wall_thickness }
+        LevelBuilder {
+            brushes: Vec::new(),
+            wall_thickness,
+        }
     }
 
     /// Walls, floor and ceiling around the empty box `interior`, each a slab of the wall
@@ -107,9 +114,13 @@ impl LevelBuilder {
             };
             let mut pieces = vec![Aabb { min, max }];
             for hole in openings.iter().filter(|o| o.face == face) {
-                pieces = pieces.into_iter().flat_map(|p| box_minus_hole(p, &hole.rect, axis)).collect();
+                pieces = pieces
+                    .into_iter()
+                    .flat_map(|p| box_minus_hole(p, &hole.rect, axis))
+                    .collect();
             }
-            self.brushes.extend(pieces.into_iter().map(|b| Brush::cuboid(b.min, b.max, material)));
+            self.brushes
+                .extend(pieces.into_iter().map(|b| Brush::cuboid(b.min, b.max, material)));
         }
     }
 
@@ -118,7 +129,10 @@ impl LevelBuilder {
     }
 
     pub fn into_world(self, start: DVec3) -> World {
-        World { brushes: self.brushes, start }
+        World {
+            brushes: self.brushes,
+            start,
+        }
     }
 }
 
@@ -193,10 +207,21 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
     let rooms: Vec<Aabb> = (0..cols * rows)
         .map(|i| {
             let (cx, cy) = cell(i);
-            let center = DVec3::new((cx as f64 + 0.5) * params.cell_size, (cy as f64 + 0.5) * params.cell_size, 0.0);
-            let half = DVec3::new(rng.range(params.room_half_size.0, params.room_half_size.1), rng.range(params.room_half_size.0, params.room_half_size.1), 0.0);
+            let center = DVec3::new(
+                (cx as f64 + 0.5) * params.cell_size,
+                (cy as f64 + 0.5) * params.cell_size,
+                0.0,
+            );
+            let half = DVec3::new(
+                rng.range(params.room_half_size.0, params.room_half_size.1),
+                rng.range(params.room_half_size.0, params.room_half_size.1),
+                0.0,
+            );
             let height = rng.range(params.room_height.0, params.room_height.1);
-            Aabb { min: center - half, max: center + half + DVec3::Z * height }
+            Aabb {
+                min: center - half,
+                max: center + half + DVec3::Z * height,
+            }
         })
         .collect();
 
@@ -241,7 +266,10 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
         let axis = if b == a + 1 { 0 } else { 1 };
         let across = 1 - axis;
         let center = (rooms[a].center()[across] + rooms[b].center()[across]) * 0.5 + rng.range(-1.0, 1.0);
-        let mut interior = Aabb { min: DVec3::ZERO, max: DVec3::new(0.0, 0.0, params.door_height) };
+        let mut interior = Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::new(0.0, 0.0, params.door_height),
+        };
         interior.min[axis] = rooms[a].max[axis];
         interior.max[axis] = rooms[b].min[axis];
         interior.min[across] = center - half_door;
@@ -250,14 +278,23 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
         open[2 * axis] = true;
         open[2 * axis + 1] = true;
         builder.hollow_box(interior, &[], open, materials::CORRIDOR);
-        openings[a].push(Opening { face: 2 * axis, rect: interior });
-        openings[b].push(Opening { face: 2 * axis + 1, rect: interior });
+        openings[a].push(Opening {
+            face: 2 * axis,
+            rect: interior,
+        });
+        openings[b].push(Opening {
+            face: 2 * axis + 1,
+            rect: interior,
+        });
     }
 
     for (i, room) in rooms.iter().enumerate() {
         builder.hollow_box(*room, &openings[i], [false; 6], materials::WALL);
         // Keep-clear zones: the room centre (the start point) and 2 m in front of each door.
-        let mut clear: Vec<Aabb> = vec![Aabb { min: room.center() - DVec3::splat(1.2), max: room.center() + DVec3::splat(1.2) }];
+        let mut clear: Vec<Aabb> = vec![Aabb {
+            min: room.center() - DVec3::splat(1.2),
+            max: room.center() + DVec3::splat(1.2),
+        }];
         for o in &openings[i] {
             let mut zone = o.rect.expanded(0.6);
             let axis = o.face / 2;
@@ -274,8 +311,16 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
                 let half = rng.range(0.2, 0.4);
                 let x = rng.range(room.min.x + 1.0 + half, room.max.x - 1.0 - half);
                 let y = rng.range(room.min.y + 1.0 + half, room.max.y - 1.0 - half);
-                let foot = Aabb { min: DVec3::new(x - half, y - half, room.min.z), max: DVec3::new(x + half, y + half, room.max.z) };
-                let blocked = |z: &Aabb| foot.expanded(0.3).overlaps(&Aabb { min: z.min.with_z(room.min.z), max: z.max.with_z(room.max.z) });
+                let foot = Aabb {
+                    min: DVec3::new(x - half, y - half, room.min.z),
+                    max: DVec3::new(x + half, y + half, room.max.z),
+                };
+                let blocked = |z: &Aabb| {
+                    foot.expanded(0.3).overlaps(&Aabb {
+                        min: z.min.with_z(room.min.z),
+                        max: z.max.with_z(room.max.z),
+                    })
+                };
                 if clear.iter().any(blocked) {
                     continue;
                 }
@@ -321,10 +366,18 @@ pub fn fig8c_case() -> Fig8Case {
     for i in 0..3 {
         let (x0, x1) = (xs[i], xs[i + 1]);
         b.solid_box(DVec3::new(x0, -t, -t), DVec3::new(x1, 0.0, h + t), materials::WALL);
-        b.solid_box(DVec3::new(x0, 10.0, -t), DVec3::new(x1, 10.0 + t, h + t), materials::WALL);
+        b.solid_box(
+            DVec3::new(x0, 10.0, -t),
+            DVec3::new(x1, 10.0 + t, h + t),
+            materials::WALL,
+        );
         let (y0, y1) = (ys[i], ys[i + 1]);
         b.solid_box(DVec3::new(-t, y0, -t), DVec3::new(0.0, y1, h + t), materials::WALL);
-        b.solid_box(DVec3::new(12.0, y0, -t), DVec3::new(12.0 + t, y1, h + t), materials::WALL);
+        b.solid_box(
+            DVec3::new(12.0, y0, -t),
+            DVec3::new(12.0 + t, y1, h + t),
+            materials::WALL,
+        );
     }
     // Corner posts close the four vertical corner gaps between the wall runs.
     for (x, y) in [(-t, -t), (12.0, -t), (-t, 10.0), (12.0, 10.0)] {
@@ -335,5 +388,10 @@ pub fn fig8c_case() -> Fig8Case {
     // Through the back face near its −x edge, onward to the back wall left of the slab.
     let through = DVec3::new(5.05, 6.0, 1.5);
     let receiver_point = light + (through - light) * ((10.0 - light.y) / (through.y - light.y));
-    Fig8Case { world: b.into_world(DVec3::new(2.0, 2.0, 1.5)), light, caster_point: DVec3::new(6.0, 6.0, 1.5), receiver_point }
+    Fig8Case {
+        world: b.into_world(DVec3::new(2.0, 2.0, 1.5)),
+        light,
+        caster_point: DVec3::new(6.0, 6.0, 1.5),
+        receiver_point,
+    }
 }

@@ -169,6 +169,11 @@ impl CompiledWorld {
 
     /// Empty leaf ids.
     pub fn empty_leaves(&self) -> impl Iterator<Item = LeafId> + '_ {
-        self.tree.leaves.iter().enumerate().filter(|(_, l)| !l.solid).map(|(i, _)| i as LeafId)
+        self.tree
+            .leaves
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| !l.solid)
+            .map(|(i, _)| i as LeafId)
     }
 }

@@ -42,8 +42,14 @@ pub struct Tolerance {
 }
 
 impl Tolerance {
-    pub const EXACT: Tolerance = Tolerance { plane: PLANE_EPSILON, grid: None };
-    pub const THESIS: Tolerance = Tolerance { plane: 1e-4, grid: Some(1e-4) };
+    pub const EXACT: Tolerance = Tolerance {
+        plane: PLANE_EPSILON,
+        grid: None,
+    };
+    pub const THESIS: Tolerance = Tolerance {
+        plane: 1e-4,
+        grid: Some(1e-4),
+    };
 
     /// `p` rounded to the grid (unchanged without one).
     pub fn round(&self, p: DVec3) -> DVec3 {
@@ -68,7 +74,10 @@ impl Plane {
     /// A plane from a (not necessarily unit) normal and a point on it; `None` for a zero normal.
     pub fn from_normal_point(normal: DVec3, point: DVec3) -> Option<Plane> {
         let n = normal.try_normalize()?;
-        Some(Plane { normal: n, dist: n.dot(point) })
+        Some(Plane {
+            normal: n,
+            dist: n.dot(point),
+        })
     }
 
     /// The plane through three points, front side where `(b − a) × (c − a)` points, i.e. the
@@ -83,7 +92,10 @@ impl Plane {
     }
 
     pub fn flipped(&self) -> Plane {
-        Plane { normal: -self.normal, dist: -self.dist }
+        Plane {
+            normal: -self.normal,
+            dist: -self.dist,
+        }
     }
 
     pub fn side_of_point(&self, p: DVec3) -> Side {
@@ -125,7 +137,10 @@ pub struct Aabb {
 }
 
 impl Aabb {
-    pub const EMPTY: Aabb = Aabb { min: DVec3::splat(f64::INFINITY), max: DVec3::splat(f64::NEG_INFINITY) };
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
 
     pub fn from_points<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> Aabb {
         let mut b = Aabb::EMPTY;
@@ -141,7 +156,10 @@ impl Aabb {
     }
 
     pub fn union(&self, o: &Aabb) -> Aabb {
-        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -149,7 +167,10 @@ impl Aabb {
     }
 
     pub fn expanded(&self, by: f64) -> Aabb {
-        Aabb { min: self.min - DVec3::splat(by), max: self.max + DVec3::splat(by) }
+        Aabb {
+            min: self.min - DVec3::splat(by),
+            max: self.max + DVec3::splat(by),
+        }
     }
 
     pub fn overlaps(&self, o: &Aabb) -> bool {
@@ -172,12 +193,21 @@ impl Aabb {
 
     /// The six bounding planes, normals pointing out of the box.
     pub fn planes(&self) -> [Plane; 6] {
-        let mut out = [Plane { normal: DVec3::ZERO, dist: 0.0 }; 6];
+        let mut out = [Plane {
+            normal: DVec3::ZERO,
+            dist: 0.0,
+        }; 6];
         for axis in 0..3 {
             let mut n = DVec3::ZERO;
             n[axis] = 1.0;
-            out[2 * axis] = Plane { normal: n, dist: self.max[axis] };
-            out[2 * axis + 1] = Plane { normal: -n, dist: -self.min[axis] };
+            out[2 * axis] = Plane {
+                normal: n,
+                dist: self.max[axis],
+            };
+            out[2 * axis + 1] = Plane {
+                normal: -n,
+                dist: -self.min[axis],
+            };
         }
         out
     }
@@ -216,7 +246,10 @@ impl Polygon {
         let v = n.cross(u); // u × v = n, so (−,−),(+,−),(+,+),(−,+) is counter-clockwise.
         let c = n * plane.dist;
         let (u, v) = (u * half_size, v * half_size);
-        Polygon { vertices: vec![c - u - v, c + u - v, c + u + v, c - u + v], plane: *plane }
+        Polygon {
+            vertices: vec![c - u - v, c + u - v, c + u + v, c - u + v],
+            plane: *plane,
+        }
     }
 
     /// A polygon from vertices, taking the plane from Newell's normal. `None` if degenerate.
@@ -250,7 +283,10 @@ impl Polygon {
     }
 
     pub fn flipped(&self) -> Polygon {
-        Polygon { vertices: self.vertices.iter().rev().copied().collect(), plane: self.plane.flipped() }
+        Polygon {
+            vertices: self.vertices.iter().rev().copied().collect(),
+            plane: self.plane.flipped(),
+        }
     }
 
     /// Drops consecutive vertices closer than the epsilon; `None` if fewer than three remain or
@@ -315,8 +351,17 @@ impl Polygon {
             Side::Spanning => {}
         }
         let (front, back) = split_points_in(&self.vertices, plane, tolerance);
-        let piece = |vertices| Polygon { vertices, plane: self.plane }.cleaned_in(tolerance);
-        Split::Spanning { front: piece(front), back: piece(back) }
+        let piece = |vertices| {
+            Polygon {
+                vertices,
+                plane: self.plane,
+            }
+            .cleaned_in(tolerance)
+        };
+        Split::Spanning {
+            front: piece(front),
+            back: piece(back),
+        }
     }
 
     /// The part in front of `plane` (on-plane polygons kept when they face the same way).
@@ -350,7 +395,9 @@ impl Polygon {
     /// Distance from `p` to the closest edge of the polygon (in 3-D).
     pub fn distance_to_boundary(&self, p: DVec3) -> f64 {
         let count = self.vertices.len();
-        (0..count).map(|i| point_segment_distance(p, self.vertices[i], self.vertices[(i + 1) % count])).fold(f64::INFINITY, f64::min)
+        (0..count)
+            .map(|i| point_segment_distance(p, self.vertices[i], self.vertices[(i + 1) % count]))
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Ray–polygon intersection: the `t` along `origin + t·dir` in `(t_min, t_max]`, or `None`.
@@ -411,7 +458,10 @@ pub fn split_points_in(vertices: &[DVec3], plane: &Plane, tolerance: &Tolerance)
 /// [`Polygon::clip_front`] it never discards a thin result, which is what an intersection
 /// *test* wants (touching counts). Returns the clipped list, possibly empty.
 pub fn clip_points_front(vertices: &[DVec3], plane: &Plane, slack: f64) -> Vec<DVec3> {
-    let shifted = Plane { normal: plane.normal, dist: plane.dist - slack };
+    let shifted = Plane {
+        normal: plane.normal,
+        dist: plane.dist - slack,
+    };
     if vertices.iter().all(|&v| shifted.distance(v) >= 0.0) {
         return vertices.to_vec();
     }
@@ -433,6 +483,10 @@ pub fn clip_points_front(vertices: &[DVec3], plane: &Plane, slack: f64) -> Vec<D
 pub fn point_segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     let ab = b - a;
     let len2 = ab.length_squared();
-    let t = if len2 > 0.0 { ((p - a).dot(ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     p.distance(a + ab * t)
 }

@@ -55,10 +55,16 @@ pub fn make_portals(tree: &Tree, node_windings: &[Option<Polygon>], face_polygon
                 let center = piece.center();
                 let covered = node.faces.iter().any(|&f| {
                     let face = face_polygons[f as usize];
-                    face.bounds().expanded(COVER_TOLERANCE).contains(center) && face.contains_point(center, COVER_TOLERANCE)
+                    face.bounds().expanded(COVER_TOLERANCE).contains(center)
+                        && face.contains_point(center, COVER_TOLERANCE)
                 });
                 if !covered {
-                    portals.push(Portal { polygon: piece, front, back, node: n as NodeId });
+                    portals.push(Portal {
+                        polygon: piece,
+                        front,
+                        back,
+                        node: n as NodeId,
+                    });
                 }
             }
         }

@@ -54,7 +54,11 @@ pub struct PvsStats {
 impl Pvs {
     fn empty(leaf_count: usize) -> Pvs {
         let words = leaf_count.div_ceil(64);
-        Pvs { leaf_count, words, bits: vec![0; words * leaf_count] }
+        Pvs {
+            leaf_count,
+            words,
+            bits: vec![0; words * leaf_count],
+        }
     }
 
     /// Every empty leaf sees every empty leaf: the fallback without a PVS.
@@ -79,7 +83,11 @@ impl Pvs {
 
     /// The leaves `leaf` can see (itself included, unless solid), ascending.
     pub fn visible_leaves(&self, leaf: LeafId) -> impl Iterator<Item = LeafId> + '_ {
-        self.row(leaf).iter().enumerate().flat_map(|(w, &bits)| (0..64).filter(move |i| bits & (1 << i) != 0).map(move |i| (w * 64 + i) as LeafId))
+        self.row(leaf).iter().enumerate().flat_map(|(w, &bits)| {
+            (0..64)
+                .filter(move |i| bits & (1 << i) != 0)
+                .map(move |i| (w * 64 + i) as LeafId)
+        })
     }
 
     /// The packed row of `leaf`: bit `b` of word `b / 64` is `is_visible(leaf, b)`.
@@ -116,22 +124,40 @@ pub fn compute_pvs(tree: &Tree, portals: &[Portal]) -> (Pvs, PvsStats) {
     let words = leaf_count.div_ceil(64);
     let mut directed = Vec::with_capacity(portals.len() * 2);
     for p in portals {
-        directed.push(Directed { winding: p.polygon.vertices.clone(), plane: p.polygon.plane, from: p.back, to: p.front });
+        directed.push(Directed {
+            winding: p.polygon.vertices.clone(),
+            plane: p.polygon.plane,
+            from: p.back,
+            to: p.front,
+        });
         let flipped = p.polygon.flipped();
-        directed.push(Directed { winding: flipped.vertices, plane: flipped.plane, from: p.front, to: p.back });
+        directed.push(Directed {
+            winding: flipped.vertices,
+            plane: flipped.plane,
+            from: p.front,
+            to: p.back,
+        });
     }
     let mut leaving: Vec<Vec<usize>> = vec![Vec::new(); leaf_count];
     for (i, d) in directed.iter().enumerate() {
         leaving[d.from as usize].push(i);
     }
-    let might: Vec<Vec<u64>> = (0..directed.len()).map(|s| might_see(s, &directed, &leaving, words)).collect();
+    let might: Vec<Vec<u64>> = (0..directed.len())
+        .map(|s| might_see(s, &directed, &leaving, words))
+        .collect();
     let mut order: Vec<usize> = (0..directed.len()).collect();
     order.sort_by_key(|&s| might[s].iter().map(|w| w.count_ones()).sum::<u32>());
 
     let mut done: Vec<Option<Vec<u64>>> = vec![None; directed.len()];
     let mut steps = 0;
     for &s in &order {
-        let mut flow = Flow { directed: &directed, leaving: &leaving, might: &might, done: &done, steps: 0 };
+        let mut flow = Flow {
+            directed: &directed,
+            leaving: &leaving,
+            might: &might,
+            done: &done,
+            steps: 0,
+        };
         let mut vis = vec![0u64; words];
         let mut path = vec![0u64; words];
         set_bit(&mut path, directed[s].from as usize);
@@ -153,7 +179,11 @@ pub fn compute_pvs(tree: &Tree, portals: &[Portal]) -> (Pvs, PvsStats) {
             pvs.bits[row + w] |= bits;
         }
     }
-    let mut stats = PvsStats { directed_portals: directed.len(), flow_steps: steps, ..Default::default() };
+    let mut stats = PvsStats {
+        directed_portals: directed.len(),
+        flow_steps: steps,
+        ..Default::default()
+    };
     for a in 0..leaf_count {
         for b in 0..leaf_count {
             if pvs.is_visible(a as LeafId, b as LeafId) && !pvs.is_visible(b as LeafId, a as LeafId) {
@@ -162,7 +192,9 @@ pub fn compute_pvs(tree: &Tree, portals: &[Portal]) -> (Pvs, PvsStats) {
             }
         }
     }
-    stats.visible_pairs = (0..leaf_count).map(|a| pvs.visible_leaves(a as LeafId).filter(|&b| b as usize != a).count()).sum();
+    stats.visible_pairs = (0..leaf_count)
+        .map(|a| pvs.visible_leaves(a as LeafId).filter(|&b| b as usize != a).count())
+        .sum();
     (pvs, stats)
 }
 
@@ -198,7 +230,16 @@ fn might_see(s: usize, directed: &[Directed], leaving: &[Vec<usize>], words: usi
 impl Flow<'_> {
     /// Light from `source` (in plane `source_plane`) has reached `leaf`, last through `pass`.
     #[allow(clippy::too_many_arguments)]
-    fn recurse(&mut self, leaf: LeafId, source: &[DVec3], source_plane: &Plane, pass: Option<(&[DVec3], &Plane)>, might: &[u64], vis: &mut Vec<u64>, path: &mut Vec<u64>) {
+    fn recurse(
+        &mut self,
+        leaf: LeafId,
+        source: &[DVec3],
+        source_plane: &Plane,
+        pass: Option<(&[DVec3], &Plane)>,
+        might: &[u64],
+        vis: &mut Vec<u64>,
+        path: &mut Vec<u64>,
+    ) {
         set_bit(vis, leaf as usize);
         set_bit(path, leaf as usize);
         for &p in &self.leaving[leaf as usize] {
@@ -244,7 +285,15 @@ impl Flow<'_> {
                     continue;
                 }
             }
-            self.recurse(d.to, &src, source_plane, Some((&target, &d.plane)), &next_might, vis, path);
+            self.recurse(
+                d.to,
+                &src,
+                source_plane,
+                Some((&target, &d.plane)),
+                &next_might,
+                vis,
+                path,
+            );
         }
         path[leaf as usize / 64] &= !(1 << (leaf as usize % 64));
     }
@@ -261,7 +310,11 @@ fn clip_to_separators(from: &[DVec3], through: &[DVec3], mut target: Vec<DVec3>)
                 let Some(mut plane) = Plane::from_points(e0, e1, v) else {
                     continue;
                 };
-                let range = |w: &[DVec3]| w.iter().map(|&p| plane.distance(p)).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+                let range = |w: &[DVec3]| {
+                    w.iter()
+                        .map(|&p| plane.distance(p))
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)))
+                };
                 let ((from_lo, from_hi), (through_lo, through_hi)) = (range(from), range(through));
                 let flat = |lo: f64, hi: f64| lo > -SEPARATOR_EPSILON && hi < SEPARATOR_EPSILON;
                 if flat(from_lo, from_hi) && flat(through_lo, through_hi) {

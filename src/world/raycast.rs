@@ -47,7 +47,8 @@ impl CompiledWorld {
         let Some(root) = self.tree.root else {
             return false;
         };
-        self.trace(root, start, dir, 0.0, length - 2.0 * END_TOLERANCE, None).is_some()
+        self.trace(root, start, dir, 0.0, length - 2.0 * END_TOLERANCE, None)
+            .is_some()
     }
 
     /// The same as [`cast_ray`](Self::cast_ray) by testing every face: the reference for tests.
@@ -56,7 +57,11 @@ impl CompiledWorld {
         for (i, f) in self.faces.iter().enumerate() {
             if let Some(t) = f.polygon.intersect_ray(origin, dir, 0.0, max_t) {
                 if best.is_none_or(|b| t < b.t) {
-                    best = Some(RayHit { t, point: origin + dir * t, face: Some(i as FaceId) });
+                    best = Some(RayHit {
+                        t,
+                        point: origin + dir * t,
+                        face: Some(i as FaceId),
+                    });
                 }
             }
         }
@@ -64,7 +69,15 @@ impl CompiledWorld {
     }
 
     /// The first solid leaf entered on `[t0, t1]`, with the node whose plane was crossed.
-    fn trace(&self, child: Child, o: DVec3, dir: DVec3, t0: f64, t1: f64, entered: Option<NodeId>) -> Option<(f64, Option<NodeId>)> {
+    fn trace(
+        &self,
+        child: Child,
+        o: DVec3,
+        dir: DVec3,
+        t0: f64,
+        t1: f64,
+        entered: Option<NodeId>,
+    ) -> Option<(f64, Option<NodeId>)> {
         let n = match child {
             Child::Leaf(l) => return self.tree.leaves[l as usize].solid.then_some((t0, entered)),
             Child::Node(n) => n,
@@ -80,9 +93,16 @@ impl CompiledWorld {
         }
         // The signs differ, so the denominator is not zero. (max/min rather than clamp: no
         // panic on NaN input.)
-        let tm = ((node.plane.dist - node.plane.normal.dot(o)) / node.plane.normal.dot(dir)).max(t0).min(t1);
-        let (near, far) = if d0 >= 0.0 { (node.front, node.back) } else { (node.back, node.front) };
-        self.trace(near, o, dir, t0, tm, entered).or_else(|| self.trace(far, o, dir, tm, t1, Some(n)))
+        let tm = ((node.plane.dist - node.plane.normal.dot(o)) / node.plane.normal.dot(dir))
+            .max(t0)
+            .min(t1);
+        let (near, far) = if d0 >= 0.0 {
+            (node.front, node.back)
+        } else {
+            (node.back, node.front)
+        };
+        self.trace(near, o, dir, t0, tm, entered)
+            .or_else(|| self.trace(far, o, dir, tm, t1, Some(n)))
     }
 
     /// The face of node `n` containing `point`: preferably one facing the ray, else the nearest.

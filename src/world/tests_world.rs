@@ -21,7 +21,10 @@ fn rooms_with_corridors(rooms: &[Aabb], links: &[(usize, usize, usize, f64)]) ->
     let mut openings = vec![Vec::new(); rooms.len()];
     for &(a, c, axis, across_center) in links {
         let across = 1 - axis;
-        let mut interior = Aabb { min: DVec3::ZERO, max: DVec3::new(0.0, 0.0, 2.2) };
+        let mut interior = Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::new(0.0, 0.0, 2.2),
+        };
         interior.min[axis] = rooms[a].max[axis];
         interior.max[axis] = rooms[c].min[axis];
         interior.min[across] = across_center - 0.8;
@@ -30,8 +33,14 @@ fn rooms_with_corridors(rooms: &[Aabb], links: &[(usize, usize, usize, f64)]) ->
         open[2 * axis] = true;
         open[2 * axis + 1] = true;
         b.hollow_box(interior, &[], open, 4);
-        openings[a].push(Opening { face: 2 * axis, rect: interior });
-        openings[c].push(Opening { face: 2 * axis + 1, rect: interior });
+        openings[a].push(Opening {
+            face: 2 * axis,
+            rect: interior,
+        });
+        openings[c].push(Opening {
+            face: 2 * axis + 1,
+            rect: interior,
+        });
     }
     for (i, r) in rooms.iter().enumerate() {
         b.hollow_box(*r, &openings[i], [false; 6], 2);
@@ -40,11 +49,16 @@ fn rooms_with_corridors(rooms: &[Aabb], links: &[(usize, usize, usize, f64)]) ->
 }
 
 fn room(x: f64, y: f64) -> Aabb {
-    Aabb { min: DVec3::new(x, y, 0.0), max: DVec3::new(x + 6.0, y + 6.0, 3.0) }
+    Aabb {
+        min: DVec3::new(x, y, 0.0),
+        max: DVec3::new(x + 6.0, y + 6.0, 3.0),
+    }
 }
 
 fn leaves_in(w: &CompiledWorld, b: &Aabb) -> Vec<LeafId> {
-    w.empty_leaves().filter(|&l| w.leaves()[l as usize].bounds.overlaps(&b.expanded(-0.01))).collect()
+    w.empty_leaves()
+        .filter(|&l| w.leaves()[l as usize].bounds.overlaps(&b.expanded(-0.01)))
+        .collect()
 }
 
 fn assert_symmetric(w: &CompiledWorld) {
@@ -68,7 +82,10 @@ fn assert_conservative(w: &CompiledWorld, samples: usize, seed: u64) -> usize {
         };
         if !w.occluded(a, b) {
             clear += 1;
-            assert!(w.is_visible(la, lb), "leaf {la} sees leaf {lb} along {a} → {b}, but the PVS says no");
+            assert!(
+                w.is_visible(la, lb),
+                "leaf {la} sees leaf {lb} along {a} → {b}, but the PVS says no"
+            );
         }
     }
     clear
@@ -104,20 +121,34 @@ fn two_rooms_joined_by_a_doorway_see_each_other_through_exactly_tiled_portals() 
     assert_eq!(w.portals.len(), 2);
     // The portals in each door plane tile the door exactly: 1.6 × 2.2.
     for door_x in [6.0, 10.0] {
-        let area: f64 = w.portals.iter().filter(|p| p.polygon.plane.axis() == Some(0) && (p.polygon.center().x - door_x).abs() < 1e-9).map(|p| p.polygon.area()).sum();
-        assert!((area - 1.6 * 2.2).abs() < 1e-9, "door at x = {door_x}: portal area {area}");
+        let area: f64 = w
+            .portals
+            .iter()
+            .filter(|p| p.polygon.plane.axis() == Some(0) && (p.polygon.center().x - door_x).abs() < 1e-9)
+            .map(|p| p.polygon.area())
+            .sum();
+        assert!(
+            (area - 1.6 * 2.2).abs() < 1e-9,
+            "door at x = {door_x}: portal area {area}"
+        );
     }
     for p in &w.portals {
         assert!(!w.is_solid(p.front) && !w.is_solid(p.back));
     }
     assert_symmetric(&w);
-    let (a, b) = (w.leaf_of(DVec3::new(3.0, 3.0, 1.0)), w.leaf_of(DVec3::new(13.0, 3.0, 1.0)));
+    let (a, b) = (
+        w.leaf_of(DVec3::new(3.0, 3.0, 1.0)),
+        w.leaf_of(DVec3::new(13.0, 3.0, 1.0)),
+    );
     assert!(w.is_visible(a, b) && w.is_visible(b, a));
     // Every leaf of either room sees some leaf of the other.
     for (from, to) in [(&rooms[0], &rooms[1]), (&rooms[1], &rooms[0])] {
         let there = leaves_in(&w, to);
         for l in leaves_in(&w, from) {
-            assert!(there.iter().any(|&t| w.is_visible(l, t)), "leaf {l} sees nothing of the other room");
+            assert!(
+                there.iter().any(|&t| w.is_visible(l, t)),
+                "leaf {l} sees nothing of the other room"
+            );
         }
     }
     assert!(assert_conservative(&w, 400, 7) > 100);
@@ -127,9 +158,15 @@ fn two_rooms_joined_by_a_doorway_see_each_other_through_exactly_tiled_portals() 
 fn l_shaped_rooms_a_does_not_see_c_and_sampling_finds_nothing_the_pvs_misses() {
     // A and B side by side along x, C above B along y: A → B → C turns a corner.
     let rooms = [room(0.0, 0.0), room(10.0, 0.0), room(10.0, 10.0)];
-    let w = rooms_with_corridors(&rooms, &[(0, 1, 0, 3.0), (1, 2, 1, 13.0)]).compile().unwrap();
+    let w = rooms_with_corridors(&rooms, &[(0, 1, 0, 3.0), (1, 2, 1, 13.0)])
+        .compile()
+        .unwrap();
     assert_symmetric(&w);
-    let (in_a, in_b, in_c) = (leaves_in(&w, &rooms[0]), leaves_in(&w, &rooms[1]), leaves_in(&w, &rooms[2]));
+    let (in_a, in_b, in_c) = (
+        leaves_in(&w, &rooms[0]),
+        leaves_in(&w, &rooms[1]),
+        leaves_in(&w, &rooms[2]),
+    );
     assert!(!in_a.is_empty() && !in_c.is_empty());
     for &a in &in_a {
         for &c in &in_c {
@@ -159,7 +196,11 @@ fn generated_level_is_sealed_connected_and_its_pvs_conservative_and_symmetric() 
         }
         // The PVS must cull something on a multi-room level, or it is not doing its job.
         let empty = w.empty_leaves().count();
-        assert!(w.stats.pvs.visible_pairs < empty * (empty - 1) * 3 / 4, "{:?}", w.stats.pvs);
+        assert!(
+            w.stats.pvs.visible_pairs < empty * (empty - 1) * 3 / 4,
+            "{:?}",
+            w.stats.pvs
+        );
         assert!(assert_conservative(&w, 3000, seed) > 200);
         if seed == 1 {
             assert_invisible_pairs_are_occluded(&w, 40, 500);
@@ -167,7 +208,11 @@ fn generated_level_is_sealed_connected_and_its_pvs_conservative_and_symmetric() 
         // Faces bound their leaves: just in front of the centre of a face is one of its leaves.
         for f in &w.faces {
             let probe = f.polygon.center() + f.polygon.plane.normal * 1e-3;
-            assert!(f.leaves.contains(&w.leaf_of(probe)), "face at {} does not bound its leaf", f.polygon.center());
+            assert!(
+                f.leaves.contains(&w.leaf_of(probe)),
+                "face at {} does not bound its leaf",
+                f.polygon.center()
+            );
         }
     }
 }
@@ -175,8 +220,13 @@ fn generated_level_is_sealed_connected_and_its_pvs_conservative_and_symmetric() 
 #[test]
 fn ray_casts_through_the_tree_equal_brute_force_over_all_faces() {
     for heuristic in [SplitHeuristic::default(), SplitHeuristic::FirstFace] {
-        let options = CompileOptions { heuristic, compute_pvs: false };
-        let w = generate_rooms(5, &RoomsParams::default()).compile_with(options).unwrap();
+        let options = CompileOptions {
+            heuristic,
+            compute_pvs: false,
+        };
+        let w = generate_rooms(5, &RoomsParams::default())
+            .compile_with(options)
+            .unwrap();
         let leaves: Vec<LeafId> = w.empty_leaves().collect();
         let mut rng = Rng::new(99);
         let mut hits = 0;
@@ -193,7 +243,12 @@ fn ray_casts_through_the_tree_equal_brute_force_over_all_faces() {
                 (None, None) => {}
                 (Some(t), Some(b)) => {
                     hits += 1;
-                    assert!((t.t - b.t).abs() < 1e-9, "t {} vs {} from {origin} along {dir}", t.t, b.t);
+                    assert!(
+                        (t.t - b.t).abs() < 1e-9,
+                        "t {} vs {} from {origin} along {dir}",
+                        t.t,
+                        b.t
+                    );
                     if t.face != b.face {
                         // Only on a shared edge may two faces both be right.
                         let edge = w.faces[b.face.unwrap() as usize].polygon.distance_to_boundary(b.point);
@@ -229,11 +284,18 @@ fn back_to_front_order_paints_farther_faces_first_along_every_ray() {
         // the nearer ones come later.
         for _ in 0..50 {
             let dir = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
-            let mut hits: Vec<(f64, usize)> = (0..w.faces.len()).filter_map(|f| w.faces[f].polygon.intersect_ray(eye, dir, 0.0, 1e3).map(|t| (t, f))).collect();
+            let mut hits: Vec<(f64, usize)> = (0..w.faces.len())
+                .filter_map(|f| w.faces[f].polygon.intersect_ray(eye, dir, 0.0, 1e3).map(|t| (t, f)))
+                .collect();
             hits.sort_by(|a, b| a.0.total_cmp(&b.0));
             for pair in hits.windows(2) {
                 if pair[1].0 - pair[0].0 > 1e-6 {
-                    assert!(rank[pair[0].1] > rank[pair[1].1], "nearer face {} painted before farther {}", pair[0].1, pair[1].1);
+                    assert!(
+                        rank[pair[0].1] > rank[pair[1].1],
+                        "nearer face {} painted before farther {}",
+                        pair[0].1,
+                        pair[1].1
+                    );
                 }
             }
         }
@@ -241,7 +303,10 @@ fn back_to_front_order_paints_farther_faces_first_along_every_ray() {
 }
 
 fn oblique_transform() -> (glam::DQuat, DVec3) {
-    (glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.31, -0.47, 0.83), DVec3::new(3.3, -7.1, 2.9))
+    (
+        glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.31, -0.47, 0.83),
+        DVec3::new(3.3, -7.1, 2.9),
+    )
 }
 
 /// The L-shaped three-room level turned by an arbitrary rotation and moved: every plane is
@@ -253,7 +318,10 @@ fn oblique_l_rooms() -> World {
     for brush in &mut world.brushes {
         for side in &mut brush.sides {
             let n = rotation * side.plane.normal;
-            side.plane = super::Plane { normal: n, dist: side.plane.dist + n.dot(offset) };
+            side.plane = super::Plane {
+                normal: n,
+                dist: side.plane.dist + n.dot(offset),
+            };
         }
     }
     world.start = rotation * world.start + offset;
@@ -264,7 +332,11 @@ fn oblique_l_rooms() -> World {
 fn oblique_level_compiles_sealed_with_exact_ray_casts_and_a_conservative_pvs() {
     let w = oblique_l_rooms().compile().unwrap();
     let axial = oblique_l_rooms();
-    assert!(axial.brushes.iter().flat_map(|b| &b.sides).all(|s| s.plane.axis().is_none()));
+    assert!(axial
+        .brushes
+        .iter()
+        .flat_map(|b| &b.sides)
+        .all(|s| s.plane.axis().is_none()));
     assert_eq!(w.stats.second_pass_faces_dropped, 0);
     assert_symmetric(&w);
     assert!(assert_conservative(&w, 2000, 5) > 200);
@@ -272,7 +344,11 @@ fn oblique_level_compiles_sealed_with_exact_ray_casts_and_a_conservative_pvs() {
     // Still: A and C see B, not each other.
     let (rotation, offset) = oblique_transform();
     let at = |p: DVec3| w.leaf_of(rotation * p + offset);
-    let (a, b, c) = (at(DVec3::new(3.0, 3.0, 1.0)), at(DVec3::new(13.0, 3.0, 1.0)), at(DVec3::new(13.0, 13.0, 1.0)));
+    let (a, b, c) = (
+        at(DVec3::new(3.0, 3.0, 1.0)),
+        at(DVec3::new(13.0, 3.0, 1.0)),
+        at(DVec3::new(13.0, 13.0, 1.0)),
+    );
     assert!(w.is_visible(a, b) && w.is_visible(c, b) && !w.is_visible(a, c));
     let leaves: Vec<LeafId> = w.empty_leaves().collect();
     let mut rng = Rng::new(8);
@@ -281,8 +357,15 @@ fn oblique_level_compiles_sealed_with_exact_ray_casts_and_a_conservative_pvs() {
             continue;
         };
         let dir = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
-        let (t, b) = (w.cast_ray(origin, dir, 100.0), w.cast_ray_brute_force(origin, dir, 100.0));
-        assert_eq!(t.map(|h| (h.t * 1e6).round()), b.map(|h| (h.t * 1e6).round()), "from {origin} along {dir}");
+        let (t, b) = (
+            w.cast_ray(origin, dir, 100.0),
+            w.cast_ray_brute_force(origin, dir, 100.0),
+        );
+        assert_eq!(
+            t.map(|h| (h.t * 1e6).round()),
+            b.map(|h| (h.t * 1e6).round()),
+            "from {origin} along {dir}"
+        );
     }
 }
 
@@ -292,26 +375,56 @@ fn oblique_level_compiles_sealed_with_exact_ray_casts_and_a_conservative_pvs() {
 #[test]
 fn a_box_through_a_corridor_reaches_the_corridor_leaf_though_no_corner_is_in_it() {
     // Rooms x 0–6 and 7–13 joined by a 1 m corridor through both walls (y 2.2–3.8, z 0–2.2).
-    let w = rooms_with_corridors(&[room(0.0, 0.0), room(7.0, 0.0)], &[(0, 1, 0, 3.0)]).compile().unwrap();
+    let w = rooms_with_corridors(&[room(0.0, 0.0), room(7.0, 0.0)], &[(0, 1, 0, 3.0)])
+        .compile()
+        .unwrap();
     let corridor = w.leaf_of(DVec3::new(6.5, 3.0, 1.0));
-    let b = Aabb { min: DVec3::new(4.0, 2.5, 0.5), max: DVec3::new(7.5, 3.5, 1.5) };
+    let b = Aabb {
+        min: DVec3::new(4.0, 2.5, 0.5),
+        max: DVec3::new(7.5, 3.5, 1.5),
+    };
     let mut old_rule: Vec<LeafId> = (0..9)
-        .map(|i| if i == 8 { b.center() } else { DVec3::new(if i & 1 == 0 { b.min.x } else { b.max.x }, if i & 2 == 0 { b.min.y } else { b.max.y }, if i & 4 == 0 { b.min.z } else { b.max.z }) })
+        .map(|i| {
+            if i == 8 {
+                b.center()
+            } else {
+                DVec3::new(
+                    if i & 1 == 0 { b.min.x } else { b.max.x },
+                    if i & 2 == 0 { b.min.y } else { b.max.y },
+                    if i & 4 == 0 { b.min.z } else { b.max.z },
+                )
+            }
+        })
         .map(|p| w.leaf_of(p))
         .collect();
     old_rule.sort_unstable();
     old_rule.dedup();
-    assert!(!w.is_solid(corridor) && !old_rule.contains(&corridor), "the corner-and-centre rule gets {old_rule:?}, corridor leaf {corridor}");
+    assert!(
+        !w.is_solid(corridor) && !old_rule.contains(&corridor),
+        "the corner-and-centre rule gets {old_rule:?}, corridor leaf {corridor}"
+    );
     let reached = w.box_leaves(&b);
-    assert!(reached.contains(&corridor), "{reached:?} lacks the corridor leaf {corridor}");
-    assert!(old_rule.iter().all(|l| reached.contains(l)), "{reached:?} ⊉ {old_rule:?}");
+    assert!(
+        reached.contains(&corridor),
+        "{reached:?} lacks the corridor leaf {corridor}"
+    );
+    assert!(
+        old_rule.iter().all(|l| reached.contains(l)),
+        "{reached:?} ⊉ {old_rule:?}"
+    );
     // Conservative: every empty leaf holding a point of the box is reached.
     let mut rng = Rng::new(3);
     for _ in 0..2000 {
         let l = w.leaf_of(rng.point_in(&b));
-        assert!(w.is_solid(l) || reached.contains(&l), "leaf {l} holds a point of the box but is not in {reached:?}");
+        assert!(
+            w.is_solid(l) || reached.contains(&l),
+            "leaf {l} holds a point of the box but is not in {reached:?}"
+        );
     }
     // A box inside one room reaches that room's leaf alone.
-    let inside = Aabb { min: DVec3::new(1.0, 1.0, 0.5), max: DVec3::new(2.0, 2.0, 1.5) };
+    let inside = Aabb {
+        min: DVec3::new(1.0, 1.0, 0.5),
+        max: DVec3::new(2.0, 2.0, 1.5),
+    };
     assert_eq!(w.box_leaves(&inside), vec![w.leaf_of(inside.center())]);
 }

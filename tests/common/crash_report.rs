@@ -79,14 +79,28 @@ unsafe fn program_counter(_context: *mut c_void) -> usize {
 
 extern "C" fn on_signal(sig: c_int, info: *mut libc::siginfo_t, context: *mut c_void) {
     unsafe {
-        let mut line = Line { bytes: [0; 1024], len: 0 };
+        let mut line = Line {
+            bytes: [0; 1024],
+            len: 0,
+        };
         let mut name = [0 as libc::c_char; 64];
         libc::pthread_getname_np(libc::pthread_self(), name.as_mut_ptr(), name.len());
         let pc = program_counter(context);
-        let _ = write!(line, "\ncrash report: signal {sig} on thread '{}', fault address {:p}, pc {pc:#x}", c_str(name.as_ptr()), (*info).si_addr());
+        let _ = write!(
+            line,
+            "\ncrash report: signal {sig} on thread '{}', fault address {:p}, pc {pc:#x}",
+            c_str(name.as_ptr()),
+            (*info).si_addr()
+        );
         let mut place: libc::Dl_info = std::mem::zeroed();
         if pc != 0 && libc::dladdr(pc as *const c_void, &mut place) != 0 {
-            let _ = write!(line, " in {} (+{:#x}), symbol {}", c_str(place.dli_fname), pc - place.dli_fbase as usize, c_str(place.dli_sname));
+            let _ = write!(
+                line,
+                " in {} (+{:#x}), symbol {}",
+                c_str(place.dli_fname),
+                pc - place.dli_fbase as usize,
+                c_str(place.dli_sname)
+            );
         }
         let _ = writeln!(line);
         libc::write(2, line.bytes.as_ptr() as *const c_void, line.len);

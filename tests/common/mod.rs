@@ -8,7 +8,11 @@ pub mod crash_report;
 
 pub fn test_gpu_desc() -> GpuDesc {
     crash_report::install();
-    GpuDesc { validation: true, device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())), display: None }
+    GpuDesc {
+        validation: true,
+        device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())),
+        display: None,
+    }
 }
 
 pub fn test_gpu() -> Gpu {
@@ -18,7 +22,12 @@ pub fn test_gpu() -> Gpu {
 /// Fails the test if the validation layer reported anything.
 pub fn assert_clean(gpu: &Gpu) {
     let messages = gpu.validation_log().take();
-    assert!(messages.is_empty(), "{} validation message(s):\n{}", messages.len(), messages.join("\n"));
+    assert!(
+        messages.is_empty(),
+        "{} validation message(s):\n{}",
+        messages.len(),
+        messages.join("\n")
+    );
 }
 
 /// A deterministic xorshift64 stream in [0, 1) (53 bits) for test geometry.
@@ -165,6 +174,9 @@ material = "grey"
 
     /// `template` with the method and the subdivisions filled in.
     pub fn scene_text(template: &str, method: &str, floor_cells: u32, wall_cells: u32) -> String {
-        template.replace("METHOD", method).replace("FLOOR_CELLS", &floor_cells.to_string()).replace("WALL_CELLS", &wall_cells.to_string())
+        template
+            .replace("METHOD", method)
+            .replace("FLOOR_CELLS", &floor_cells.to_string())
+            .replace("WALL_CELLS", &wall_cells.to_string())
     }
 }

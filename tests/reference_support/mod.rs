@@ -30,7 +30,15 @@ pub struct Agreement {
 
 impl Agreement {
     pub fn new(what: &'static str) -> Self {
-        Agreement { what, pixels: 0, beyond_3: 0, worst: (0.0, String::new()), sum_diff: [0.0; 3], sum_var: [0.0; 3], sum_slack: [0.0; 3] }
+        Agreement {
+            what,
+            pixels: 0,
+            beyond_3: 0,
+            worst: (0.0, String::new()),
+            sum_diff: [0.0; 3],
+            sum_var: [0.0; 3],
+            sum_slack: [0.0; 3],
+        }
     }
 
     /// `slack`: known bias or closed-form inaccuracy allowed on top of the noise.
@@ -49,7 +57,13 @@ impl Agreement {
             };
             pixel_z = pixel_z.max(z);
             if z > self.worst.0 {
-                self.worst = (z, format!("pixel ({i},{j}) channel {c}: {} vs {} (s.e. {})", got[c], want[c], se[c]));
+                self.worst = (
+                    z,
+                    format!(
+                        "pixel ({i},{j}) channel {c}: {} vs {} (s.e. {})",
+                        got[c], want[c], se[c]
+                    ),
+                );
             }
             self.sum_diff[c] += (got[c] - want[c]) as f64;
             self.sum_var[c] += (se[c] as f64).powi(2);
@@ -60,15 +74,26 @@ impl Agreement {
     }
 
     pub fn assert(&self) {
-        let Agreement { what, pixels, beyond_3, .. } = *self;
+        let Agreement {
+            what, pixels, beyond_3, ..
+        } = *self;
         assert!(pixels > 0, "{what}: nothing checked");
         let (z, worst) = &self.worst;
-        assert!(beyond_3 as f64 <= (0.02 * pixels as f64).max(3.0), "{what}: {beyond_3} of {pixels} pixels beyond 3 s.e.; worst z = {z}: {worst}");
+        assert!(
+            beyond_3 as f64 <= (0.02 * pixels as f64).max(3.0),
+            "{what}: {beyond_3} of {pixels} pixels beyond 3 s.e.; worst z = {z}: {worst}"
+        );
         assert!(*z <= 6.0, "{what}: z = {z} at {worst}");
         let n = pixels as f64;
         for c in 0..3 {
-            let (diff, tol) = (self.sum_diff[c] / n, 4.0 * self.sum_var[c].sqrt() / n + self.sum_slack[c] / n);
-            assert!(diff.abs() <= tol, "{what}: channel {c}: mean difference {diff} over {pixels} pixels, allowed {tol}");
+            let (diff, tol) = (
+                self.sum_diff[c] / n,
+                4.0 * self.sum_var[c].sqrt() / n + self.sum_slack[c] / n,
+            );
+            assert!(
+                diff.abs() <= tol,
+                "{what}: channel {c}: mean difference {diff} over {pixels} pixels, allowed {tol}"
+            );
         }
     }
 }
@@ -79,7 +104,10 @@ pub fn pixel_average(i: u32, j: u32, n: u32, mut f: impl FnMut(f32, f32) -> Opti
     let mut sum = Vec3::ZERO;
     for a in 0..n {
         for b in 0..n {
-            sum += f(i as f32 + (a as f32 + 0.5) / n as f32, j as f32 + (b as f32 + 0.5) / n as f32)?;
+            sum += f(
+                i as f32 + (a as f32 + 0.5) / n as f32,
+                j as f32 + (b as f32 + 0.5) / n as f32,
+            )?;
         }
     }
     Some(sum / (n * n) as f32)
@@ -117,7 +145,10 @@ pub fn hemispherical_reflectance(v: Vec3, s: &Surface) -> Vec3 {
 pub fn polygon_irradiance(p: Vec3, n: Vec3, verts: &[Vec3]) -> f32 {
     let mut sum = 0.0;
     for k in 0..verts.len() {
-        let (a, b) = ((verts[k] - p).normalize(), (verts[(k + 1) % verts.len()] - p).normalize());
+        let (a, b) = (
+            (verts[k] - p).normalize(),
+            (verts[(k + 1) % verts.len()] - p).normalize(),
+        );
         let c = a.cross(b);
         sum += a.dot(b).clamp(-1.0, 1.0).acos() * n.dot(c.normalize_or_zero());
     }
@@ -139,7 +170,12 @@ pub fn rmse(a: &HdrImage, b: &HdrImage, keep: Option<&[bool]>) -> f64 {
 /// by camera rays: those pixels mix the light's radiance with the room's, a binomial of huge
 /// contrast whose few pixels would dominate any RMSE.
 pub fn off_light_outline(scene: &Scene, size: (u32, u32)) -> Vec<bool> {
-    let Some(penumbra::scene::Light::Quad { corner, edge_u, edge_v, .. }) = scene.lights.first() else { panic!("a quad light") };
+    let Some(penumbra::scene::Light::Quad {
+        corner, edge_u, edge_v, ..
+    }) = scene.lights.first()
+    else {
+        panic!("a quad light")
+    };
     // Slightly enlarged, so rays that graze the outline count as touching it.
     let (corner, edge_u, edge_v) = (*corner - 0.05 * (*edge_u + *edge_v), 1.1 * *edge_u, 1.1 * *edge_v);
     let hits = |x: f32, y: f32| {
@@ -154,7 +190,10 @@ pub fn off_light_outline(scene: &Scene, size: (u32, u32)) -> Vec<bool> {
     for j in 0..size.1 {
         for i in 0..size.0 {
             let n = 8;
-            let covered = (0..=n).flat_map(|a| (0..=n).map(move |b| (a, b))).filter(|&(a, b)| hits(i as f32 + a as f32 / n as f32, j as f32 + b as f32 / n as f32)).count();
+            let covered = (0..=n)
+                .flat_map(|a| (0..=n).map(move |b| (a, b)))
+                .filter(|&(a, b)| hits(i as f32 + a as f32 / n as f32, j as f32 + b as f32 / n as f32))
+                .count();
             keep.push(covered == 0 || covered == (n + 1) * (n + 1));
         }
     }
@@ -172,7 +211,10 @@ pub fn reflected_environment(map: &EnvironmentMap, v: Vec3, s: &Surface) -> Vec3
             let mut texel = glam::DVec3::ZERO;
             for a in 0..n {
                 for b in 0..n {
-                    let uv = glam::Vec2::new((i as f32 + (b as f32 + 0.5) / n as f32) / w as f32, (j as f32 + (a as f32 + 0.5) / n as f32) / h as f32);
+                    let uv = glam::Vec2::new(
+                        (i as f32 + (b as f32 + 0.5) / n as f32) / w as f32,
+                        (j as f32 + (a as f32 + 0.5) / n as f32) / h as f32,
+                    );
                     let d_omega = 2.0 * std::f64::consts::PI.powi(2) * (uv.y as f64 * std::f64::consts::PI).sin();
                     let l = penumbra::scene::Environment::equirect_dir(uv);
                     texel += penumbra::lighting::brdf::brdf_times_cos(Vec3::Y, v, l, s).as_dvec3() * d_omega;

@@ -50,12 +50,19 @@ pub struct MaskComparison {
 
 /// Compares `gpu_lit(x, y)` with `cpu_lit(px, py)` (continuous pixel coordinates; `None` where
 /// the pixel is not judged) over a `w × h` image.
-pub fn compare_masks(w: u32, h: u32, gpu_lit: impl Fn(u32, u32) -> bool, cpu_lit: impl Fn(f32, f32) -> Option<bool>) -> MaskComparison {
+pub fn compare_masks(
+    w: u32,
+    h: u32,
+    gpu_lit: impl Fn(u32, u32) -> bool,
+    cpu_lit: impl Fn(f32, f32) -> Option<bool>,
+) -> MaskComparison {
     let mut c = MaskComparison::default();
     let (mut inter, mut union) = (0usize, 0usize);
     for y in 0..h {
         for x in 0..w {
-            let Some(cpu) = cpu_lit(x as f32 + 0.5, y as f32 + 0.5) else { continue };
+            let Some(cpu) = cpu_lit(x as f32 + 0.5, y as f32 + 0.5) else {
+                continue;
+            };
             let gpu = gpu_lit(x, y);
             c.pixels += 1;
             c.gpu_shadow += usize::from(!gpu);
@@ -65,7 +72,9 @@ pub fn compare_masks(w: u32, h: u32, gpu_lit: impl Fn(u32, u32) -> bool, cpu_lit
             if gpu != cpu {
                 c.mismatches += 1;
                 let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
-                let uniform = corners.iter().all(|&(dx, dy)| cpu_lit(x as f32 + dx, y as f32 + dy).is_none_or(|v| v == cpu));
+                let uniform = corners
+                    .iter()
+                    .all(|&(dx, dy)| cpu_lit(x as f32 + dx, y as f32 + dy).is_none_or(|v| v == cpu));
                 c.interior_mismatches += usize::from(uniform);
             }
         }

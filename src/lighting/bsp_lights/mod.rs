@@ -30,7 +30,10 @@ mod tests;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::backend::{
+    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
+    SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+};
 use crate::bake::{BakeData, BakeKey};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -46,13 +49,34 @@ pub const NAME: &str = "bsp_lights";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "max_segment_area", kind: ParamKind::Float },
-        ParamSchema { name: "k", kind: ParamKind::Float },
-        ParamSchema { name: "threshold", kind: ParamKind::Float },
-        ParamSchema { name: "storage", kind: ParamKind::String },
-        ParamSchema { name: "layout", kind: ParamKind::String },
-        ParamSchema { name: "hidden", kind: ParamKind::String },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "max_segment_area",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "k",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "threshold",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "storage",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "layout",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "hidden",
+            kind: ParamKind::String,
+        },
     ],
 };
 
@@ -115,7 +139,10 @@ impl Storage {
 /// Bytes of the matrix on the GPU in each layout: `(dense, sparse)` for `vertices`, `lights`
 /// and `non_zero` entries (the sparse layout adds a row start per vertex and one at the end).
 pub fn layout_bytes(vertices: usize, lights: usize, non_zero: usize, storage: Storage) -> (u64, u64) {
-    (vertices as u64 * lights as u64 * storage.bytes_per_entry(), 4 * (vertices as u64 + 1) + non_zero as u64 * storage.bytes_per_sparse_entry())
+    (
+        vertices as u64 * lights as u64 * storage.bytes_per_entry(),
+        4 * (vertices as u64 + 1) + non_zero as u64 * storage.bytes_per_sparse_entry(),
+    )
 }
 
 /// The layout `layout` resolves to for a matrix of `vertices × lights` with `non_zero` entries.
@@ -162,7 +189,15 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Self {
-        Config { mode: Mode::Corrected, max_segment_area: 0.01, k: 1.0, threshold: 0.05, storage: Storage::F32, layout: Layout::Auto, hidden: Hidden::Depth }
+        Config {
+            mode: Mode::Corrected,
+            max_segment_area: 0.01,
+            k: 1.0,
+            threshold: 0.05,
+            storage: Storage::F32,
+            layout: Layout::Auto,
+            hidden: Hidden::Depth,
+        }
     }
 }
 
@@ -170,26 +205,48 @@ impl Config {
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let mut c = Config::default();
-        if let Some(mode) = params.get_choice("mode", &[("corrected", Mode::Corrected), ("faithful", Mode::Faithful)])? {
+        if let Some(mode) =
+            params.get_choice("mode", &[("corrected", Mode::Corrected), ("faithful", Mode::Faithful)])?
+        {
             c.mode = mode;
         }
         if let Some(storage) = params.get_choice("storage", &[("f32", Storage::F32), ("f16", Storage::F16)])? {
             c.storage = storage;
         }
-        if let Some(layout) = params.get_choice("layout", &[("auto", Layout::Auto), ("dense", Layout::Dense), ("sparse", Layout::Sparse)])? {
+        if let Some(layout) = params.get_choice(
+            "layout",
+            &[
+                ("auto", Layout::Auto),
+                ("dense", Layout::Dense),
+                ("sparse", Layout::Sparse),
+            ],
+        )? {
             c.layout = layout;
         }
-        if let Some(hidden) = params.get_choice("hidden", &[("depth", Hidden::Depth), ("painter", Hidden::Painter), ("fixed", Hidden::Fixed)])? {
+        if let Some(hidden) = params.get_choice(
+            "hidden",
+            &[
+                ("depth", Hidden::Depth),
+                ("painter", Hidden::Painter),
+                ("fixed", Hidden::Fixed),
+            ],
+        )? {
             c.hidden = hidden;
         }
         if let Some(v) = decl.param("max_segment_area") {
-            c.max_segment_area = Params::float(v).filter(|x| *x >= 1e-6 && *x <= 1e4).ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 m²", v))?;
+            c.max_segment_area = Params::float(v)
+                .filter(|x| *x >= 1e-6 && *x <= 1e4)
+                .ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 m²", v))?;
         }
         if let Some(v) = decl.param("k") {
-            c.k = Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| params.error("k", "a positive number", v))?;
+            c.k = Params::float(v)
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .ok_or_else(|| params.error("k", "a positive number", v))?;
         }
         if let Some(v) = decl.param("threshold") {
-            c.threshold = Params::float(v).filter(|x| (0.0..1.0).contains(x)).ok_or_else(|| params.error("threshold", "a fraction in [0, 1)", v))?;
+            c.threshold = Params::float(v)
+                .filter(|x| (0.0..1.0).contains(x))
+                .ok_or_else(|| params.error("threshold", "a fraction in [0, 1)", v))?;
         }
         Ok(c)
     }
@@ -238,11 +295,16 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         }
     };
     push(decl.clone());
-    let declared = Config::from_decl(decl, None).map(|c| c.max_segment_area).unwrap_or(Config::default().max_segment_area);
+    let declared = Config::from_decl(decl, None)
+        .map(|c| c.max_segment_area)
+        .unwrap_or(Config::default().max_segment_area);
     for a in [4.0 * declared, declared] {
         push(decl.with("max_segment_area", a.into()));
     }
-    push(decl.with("max_segment_area", (0.25 * declared).into()).with("storage", "f16".into()));
+    push(
+        decl.with("max_segment_area", (0.25 * declared).into())
+            .with("storage", "f16".into()),
+    );
     push(decl.with("mode", "faithful".into()));
     out
 }
@@ -296,10 +358,23 @@ impl BakeData for Baked {
     fn encode(&self) -> Vec<u8> {
         let p = &self.phases;
         let mut out = Vec::new();
-        for w in [BAKED_MAGIC, self.vertices.len() as u32, self.indices.len() as u32, self.lights as u32, self.polygons as u32, self.fragments as u32] {
+        for w in [
+            BAKED_MAGIC,
+            self.vertices.len() as u32,
+            self.indices.len() as u32,
+            self.lights as u32,
+            self.polygons as u32,
+            self.fragments as u32,
+        ] {
             out.extend_from_slice(&w.to_le_bytes());
         }
-        for t in [p.bsp_ms, p.segment_ms, p.colour_cpu_ms, p.shadow_cpu_ms, p.lights_wall_ms] {
+        for t in [
+            p.bsp_ms,
+            p.segment_ms,
+            p.colour_cpu_ms,
+            p.shadow_cpu_ms,
+            p.lights_wall_ms,
+        ] {
             out.extend_from_slice(&t.to_le_bytes());
         }
         out.extend_from_slice(bytemuck::cast_slice(&self.vertices));
@@ -318,7 +393,11 @@ impl BakeData for Baked {
         let (v, i, l) = (word(1)?, word(2)?, word(3)?);
         let head = 24 + 40;
         let vertex_bytes = v * std::mem::size_of::<SegmentVertex>();
-        let (vb, ib, cb) = (head..head + vertex_bytes, head + vertex_bytes..head + vertex_bytes + 4 * i, head + vertex_bytes + 4 * i..head + vertex_bytes + 4 * i + 12 * v * l);
+        let (vb, ib, cb) = (
+            head..head + vertex_bytes,
+            head + vertex_bytes..head + vertex_bytes + 4 * i,
+            head + vertex_bytes + 4 * i..head + vertex_bytes + 4 * i + 12 * v * l,
+        );
         let (painter, painter_bytes) = painter::PainterTree::decode(bytes.get(cb.end..)?, (i / 3) as u32)?;
         if bytes.len() != cb.end + painter_bytes {
             return None;
@@ -328,7 +407,13 @@ impl BakeData for Baked {
             indices: bytemuck::pod_collect_to_vec(&bytes[ib]),
             lights: l,
             colours: bytemuck::pod_collect_to_vec(&bytes[cb]),
-            phases: setup::Phases { bsp_ms: time(0)?, segment_ms: time(1)?, colour_cpu_ms: time(2)?, shadow_cpu_ms: time(3)?, lights_wall_ms: time(4)? },
+            phases: setup::Phases {
+                bsp_ms: time(0)?,
+                segment_ms: time(1)?,
+                colour_cpu_ms: time(2)?,
+                shadow_cpu_ms: time(3)?,
+                lights_wall_ms: time(4)?,
+            },
             polygons: word(4)?,
             fragments: word(5)?,
             painter,
@@ -360,7 +445,8 @@ pub fn bake_scene(
         max_matrix_bytes: MAX_MATRIX_BYTES,
         bytes_per_entry: config.storage.bytes_per_entry(),
     };
-    let s = setup::run(&polygons, &lights, &settings, progress).map_err(|m| field_error(scene, "max_segment_area", m))?;
+    let s =
+        setup::run(&polygons, &lights, &settings, progress).map_err(|m| field_error(scene, "max_segment_area", m))?;
     Ok((s, polygons))
 }
 
@@ -414,7 +500,11 @@ fn active_words(active: &[(u32, f32)], vertices: usize) -> Vec<u32> {
 /// then every light's scale (0 where it is below `threshold`).
 fn scale_words(scales: &[f32], threshold: f32, vertices: usize) -> Vec<u32> {
     let mut words = vec![scales.len() as u32, vertices as u32, 0, 0];
-    words.extend(scales.iter().map(|&s| if s >= threshold && s > 0.0 { s.to_bits() } else { 0 }));
+    words.extend(
+        scales
+            .iter()
+            .map(|&s| if s >= threshold && s > 0.0 { s.to_bits() } else { 0 }),
+    );
     words
 }
 
@@ -426,7 +516,11 @@ fn half_bits(x: f32) -> u32 {
 fn dense_words(baked: &Baked, storage: Storage) -> Vec<u32> {
     match storage {
         Storage::F32 => baked.colours.iter().map(|c| c.to_bits()).collect(),
-        Storage::F16 => baked.colours.chunks(2).map(|p| half_bits(p[0]) | half_bits(p.get(1).copied().unwrap_or(0.0)) << 16).collect(),
+        Storage::F16 => baked
+            .colours
+            .chunks(2)
+            .map(|p| half_bits(p[0]) | half_bits(p.get(1).copied().unwrap_or(0.0)) << 16)
+            .collect(),
     }
 }
 
@@ -447,7 +541,10 @@ pub fn sparse_words(baked: &Baked, storage: Storage) -> (Vec<u32>, Vec<u32>) {
             entries += 1;
             match storage {
                 Storage::F32 => words.extend([l as u32, c[0].to_bits(), c[1].to_bits(), c[2].to_bits()]),
-                Storage::F16 => words.extend([l as u32 | half_bits(c[0]) << 16, half_bits(c[1]) | half_bits(c[2]) << 16]),
+                Storage::F16 => words.extend([
+                    l as u32 | half_bits(c[0]) << 16,
+                    half_bits(c[1]) | half_bits(c[2]) << 16,
+                ]),
             }
         }
     }
@@ -491,14 +588,31 @@ impl BspLights {
         let config = Config::from_decl(decl, Some(scene))?;
         let lights = ManyLight::from_scene(scene, NAME)?;
         if lights.len() > MAX_LIGHTS {
-            return Err(Error::Usage(format!("{}: lights: {} lights, over the {MAX_LIGHTS} {NAME} relights in one pass", scene.source, lights.len())));
+            return Err(Error::Usage(format!(
+                "{}: lights: {} lights, over the {MAX_LIGHTS} {NAME} relights in one pass",
+                scene.source,
+                lights.len()
+            )));
         }
         let geometry = crate::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
         let polygons = scene_polygons(&scene.source, &geometry, NAME)?;
         if polygons.is_empty() {
-            return Err(Error::Usage(format!("{}: {NAME}: the scene has no static polygons to light", scene.source)));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the scene has no static polygons to light",
+                scene.source
+            )));
         }
-        let geometry_floats: Vec<f64> = polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array()).chain(p.emission.to_array())).collect();
+        let geometry_floats: Vec<f64> = polygons
+            .iter()
+            .flat_map(|p| {
+                p.polygon
+                    .vertices
+                    .iter()
+                    .flat_map(|v| v.to_array())
+                    .chain(p.albedo.to_array())
+                    .chain(p.emission.to_array())
+            })
+            .collect();
         let key = BakeKey::new("bsp_lights set-up")
             .with("version", SETUP_VERSION)
             .with("model", config.model())
@@ -508,7 +622,13 @@ impl BspLights {
             .with("max_segment_area", config.max_segment_area)
             .with("lights", &lights)
             .with_bytes("geometry", bytemuck::cast_slice(&geometry_floats));
-        let name = format!("{NAME} set-up {:?} area={} lights={}", config.mode, config.max_segment_area, lights.len()).to_lowercase();
+        let name = format!(
+            "{NAME} set-up {:?} area={} lights={}",
+            config.mode,
+            config.max_segment_area,
+            lights.len()
+        )
+        .to_lowercase();
         let geo = &geometry;
         let baked: Baked = cx.bakes.bake(&name, &key, |progress| {
             let (s, polygons) = bake_scene(scene, geo, &config, progress)?;
@@ -530,17 +650,38 @@ impl BspLights {
             Ok(Baked::from_setup(&s, &polygons))
         })?;
         // A cached bake may have been made for the other storage: check the limit again.
-        check_matrix(baked.vertices.len(), baked.lights, config.storage).map_err(|m| field_error(scene, "max_segment_area", m))?;
-        if baked.lights != lights.len() || baked.colours.len() != 3 * baked.vertices.len() * baked.lights || baked.vertices.is_empty() {
-            return Err(Error::Usage(format!("{}: {NAME}: the baked set-up does not match the scene", scene.source)));
+        check_matrix(baked.vertices.len(), baked.lights, config.storage)
+            .map_err(|m| field_error(scene, "max_segment_area", m))?;
+        if baked.lights != lights.len()
+            || baked.colours.len() != 3 * baked.vertices.len() * baked.lights
+            || baked.vertices.is_empty()
+        {
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the baked set-up does not match the scene",
+                scene.source
+            )));
         }
         let full = lights.iter().map(|l| l.intensity.max_element() as f32).collect();
 
         let gpu = &mut *cx.gpu;
-        let vertices = gpu.create_buffer_init(&format!("{NAME} vertices"), vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&baked.vertices))?;
-        let indices = gpu.create_buffer_init(&format!("{NAME} indices"), vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&baked.indices))?;
+        let vertices = gpu.create_buffer_init(
+            &format!("{NAME} vertices"),
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            bytemuck::cast_slice(&baked.vertices),
+        )?;
+        let indices = gpu.create_buffer_init(
+            &format!("{NAME} indices"),
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            bytemuck::cast_slice(&baked.indices),
+        )?;
         let non_zero = baked.colours.chunks(3).filter(|c| c.iter().any(|&x| x != 0.0)).count();
-        let layout = choose_layout(config.layout, baked.vertices.len(), baked.lights, non_zero, config.storage);
+        let layout = choose_layout(
+            config.layout,
+            baked.vertices.len(),
+            baked.lights,
+            non_zero,
+            config.storage,
+        );
         let (matrix_words, rows) = match layout {
             Layout::Sparse => {
                 let (rows, words) = sparse_words(&baked, config.storage);
@@ -548,7 +689,10 @@ impl BspLights {
                 if bytes > MAX_MATRIX_BYTES {
                     return Err(field_error(scene, "layout", format!("the sparse matrix takes {bytes} bytes, over the {MAX_MATRIX_BYTES} a storage buffer is sure to hold")));
                 }
-                (words, Some(gpu.create_storage_buffer(&format!("{NAME} matrix rows"), bytemuck::cast_slice(&rows))?))
+                (
+                    words,
+                    Some(gpu.create_storage_buffer(&format!("{NAME} matrix rows"), bytemuck::cast_slice(&rows))?),
+                )
             }
             _ => (dense_words(&baked, config.storage), None),
         };
@@ -564,27 +708,67 @@ impl BspLights {
         let colours = gpu.create_buffer(&BufferDesc {
             name: format!("{NAME} vertex colours"),
             size: 16 * baked.vertices.len() as u64,
-            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST,
             memory: MemoryKind::GpuOnly,
         })?;
         for b in [vertices, indices, matrix, colours].into_iter().chain(rows) {
             cx.states.forget_buffer(b);
         }
-        let half = SpecConstant { id: 0, bits: u32::from(config.storage == Storage::F16) };
-        let shader = if layout == Layout::Sparse { "bsp_lights/gemv_sparse.comp" } else { "bsp_lights/gemv.comp" };
-        let gemv = gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} gemv"), shader: shader.into(), specialization: vec![half] }, cx.shaders)?;
+        let half = SpecConstant {
+            id: 0,
+            bits: u32::from(config.storage == Storage::F16),
+        };
+        let shader = if layout == Layout::Sparse {
+            "bsp_lights/gemv_sparse.comp"
+        } else {
+            "bsp_lights/gemv.comp"
+        };
+        let gemv = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: format!("{NAME} gemv"),
+                shader: shader.into(),
+                specialization: vec![half],
+            },
+            cx.shaders,
+        )?;
         let ds_format = gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms, painter: bool| {
-            let vert = if terms.has(Term::Direct) { "bsp_lights/segments.vert" } else { "bsp_lights/segments_base.vert" };
-            let name = if painter { format!("{NAME} {terms} painter") } else { format!("{NAME} {terms}") };
+            let vert = if terms.has(Term::Direct) {
+                "bsp_lights/segments.vert"
+            } else {
+                "bsp_lights/segments_base.vert"
+            };
+            let name = if painter {
+                format!("{NAME} {terms} painter")
+            } else {
+                format!("{NAME} {terms}")
+            };
             let mut desc = term_pipeline_desc(&name, vert, "bsp_lights/segments.frag", terms, ds_format);
             if painter {
                 // The draw order decides what is seen; the depth is still written for the
                 // passes after this one (a disabled test would write nothing).
-                desc.depth = crate::backend::DepthState { test: true, write: true, compare: vk::CompareOp::ALWAYS };
+                desc.depth = crate::backend::DepthState {
+                    test: true,
+                    write: true,
+                    compare: vk::CompareOp::ALWAYS,
+                };
             }
-            let attr = |location: u32| VertexAttribute { location, binding: 0, format: if location < 4 { vk::Format::R32G32B32_SFLOAT } else { vk::Format::R32_UINT }, offset: 12 * location };
-            desc.vertex_layout = VertexLayout { buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)], attributes: (0..5).map(attr).collect() };
+            let attr = |location: u32| VertexAttribute {
+                location,
+                binding: 0,
+                format: if location < 4 {
+                    vk::Format::R32G32B32_SFLOAT
+                } else {
+                    vk::Format::R32_UINT
+                },
+                offset: 12 * location,
+            };
+            desc.vertex_layout = VertexLayout {
+                buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)],
+                attributes: (0..5).map(attr).collect(),
+            };
             if !terms.has(Term::Base) {
                 // Over another method's base: the segments' interior vertices are not the
                 // base's, so their depths differ by rounding; a small bias toward the eye keeps
@@ -593,26 +777,70 @@ impl BspLights {
             }
             gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
-        let (both, base, direct) = (pipeline(Terms::BASE_DIRECT, false)?, pipeline(Terms::BASE, false)?, pipeline(Terms::DIRECT, false)?);
-        let painter_pipelines = if config.hidden == Hidden::Depth { None } else { Some((pipeline(Terms::BASE_DIRECT, true)?, pipeline(Terms::BASE, true)?)) };
+        let (both, base, direct) = (
+            pipeline(Terms::BASE_DIRECT, false)?,
+            pipeline(Terms::BASE, false)?,
+            pipeline(Terms::DIRECT, false)?,
+        );
+        let painter_pipelines = if config.hidden == Hidden::Depth {
+            None
+        } else {
+            Some((pipeline(Terms::BASE_DIRECT, true)?, pipeline(Terms::BASE, true)?))
+        };
         let all: Vec<(u32, f32)> = (0..baked.lights as u32).map(|l| (l, 1.0)).collect();
         let active = active_words(&all, baked.vertices.len());
         let scales = scale_words(&vec![1.0; baked.lights], 0.0, baked.vertices.len());
-        Ok(BspLights { config, layout, baked, full, vertices, indices, matrix, rows, colours, gemv, both, base, direct, painter_pipelines, draws: Vec::new(), active, scales })
+        Ok(BspLights {
+            config,
+            layout,
+            baked,
+            full,
+            vertices,
+            indices,
+            matrix,
+            rows,
+            colours,
+            gemv,
+            both,
+            base,
+            direct,
+            painter_pipelines,
+            draws: Vec::new(),
+            active,
+            scales,
+        })
     }
 
     /// Sets each light's scale from its current intensity (RGB, as the frame's lights carry
     /// it): `s_l` = largest current channel / largest baked channel; lights below the threshold
     /// are left out of the GEMV.
     pub fn set_intensities(&mut self, current: &[[f32; 3]]) {
-        let scales: Vec<f32> = self.full.iter().enumerate().map(|(l, &full)| current.get(l).map_or(0.0, |c| if full > 0.0 { c[0].max(c[1]).max(c[2]) / full } else { 0.0 })).collect();
+        let scales: Vec<f32> = self
+            .full
+            .iter()
+            .enumerate()
+            .map(|(l, &full)| {
+                current.get(l).map_or(0.0, |c| {
+                    if full > 0.0 {
+                        c[0].max(c[1]).max(c[2]) / full
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect();
         self.set_scales(&scales);
     }
 
     /// Sets the lights' scales `s_l` directly (lights below the threshold skipped).
     pub fn set_scales(&mut self, scales: &[f32]) {
         let threshold = self.config.threshold as f32;
-        let active: Vec<(u32, f32)> = scales.iter().enumerate().filter(|(_, &s)| s >= threshold && s > 0.0).map(|(l, &s)| (l as u32, s)).collect();
+        let active: Vec<(u32, f32)> = scales
+            .iter()
+            .enumerate()
+            .filter(|(_, &s)| s >= threshold && s > 0.0)
+            .map(|(l, &s)| (l as u32, s))
+            .collect();
         self.active = active_words(&active, self.baked.vertices.len());
         let mut all = vec![0.0; self.baked.lights];
         for &(l, s) in &active {
@@ -655,11 +883,10 @@ impl BspLights {
     pub fn add_gemv<'a>(&'a self, graph: &mut RenderGraph<'a>) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let n = self.baked.vertices.len() as u32;
-        let mut pass = graph.pass(&format!("{NAME} gemv")).buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix")).buffer(
-            self.colours,
-            Access::StorageWrite { stages: compute },
-            Some("colours"),
-        );
+        let mut pass = graph
+            .pass(&format!("{NAME} gemv"))
+            .buffer(self.matrix, Access::StorageRead { stages: compute }, Some("matrix"))
+            .buffer(self.colours, Access::StorageWrite { stages: compute }, Some("colours"));
         let input: &[u32] = match self.rows {
             Some(rows) => {
                 pass = pass.buffer(rows, Access::StorageRead { stages: compute }, Some("rows"));
@@ -677,12 +904,24 @@ impl BspLights {
     /// Reads the vertex colour buffer back (after the frames that wrote it finished).
     pub fn read_colours(&self, gpu: &mut crate::backend::Gpu) -> Result<Vec<[f32; 4]>> {
         let size = 16 * self.baked.vertices.len() as u64;
-        let host = gpu.create_buffer(&BufferDesc { name: format!("{NAME} readback"), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;
+        let host = gpu.create_buffer(&BufferDesc {
+            name: format!("{NAME} readback"),
+            size,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })?;
         let frame = gpu.create_frame()?;
         let mut graph = RenderGraph::new();
         let colours = self.colours;
-        graph.pass("bsp_lights readback").buffer(colours, Access::TransferRead, None).buffer(host, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_buffer(colours, host, size));
-        graph.pass("bsp_lights readback host").buffer(host, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("bsp_lights readback")
+            .buffer(colours, Access::TransferRead, None)
+            .buffer(host, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.copy_buffer(colours, host, size));
+        graph
+            .pass("bsp_lights readback host")
+            .buffer(host, Access::HostRead, None)
+            .record(|_| Ok(()));
         let mut states = ResourceStates::default();
         graph.run_and_wait(gpu, frame, &mut states, "bsp_lights readback")?;
         let bytes = gpu.read_buffer(host)?;
@@ -698,7 +937,12 @@ impl LightingMethod for BspLights {
     }
 
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
-        let current: Vec<[f32; 3]> = frame.scene.lights.iter().map(|l| [l.intensity[0], l.intensity[1], l.intensity[2]]).collect();
+        let current: Vec<[f32; 3]> = frame
+            .scene
+            .lights
+            .iter()
+            .map(|l| [l.intensity[0], l.intensity[1], l.intensity[2]])
+            .collect();
         self.set_intensities(&current);
         let eye = frame.uniforms.camera_pos;
         self.set_eye(glam::DVec3::new(eye[0] as f64, eye[1] as f64, eye[2] as f64));
@@ -725,15 +969,36 @@ impl LightingMethod for BspLights {
         let t = frame.targets;
         let uniforms = frame.uniforms;
         let count = self.baked.indices.len() as u32;
-        let mut pass = graph.pass(&format!("{NAME} segments")).color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
-        pass = pass.buffer(self.vertices, Access::VertexRead, None).buffer(self.indices, Access::IndexRead, None);
+        let mut pass =
+            graph
+                .pass(&format!("{NAME} segments"))
+                .color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base {
+            pass.depth_stencil_write(t.depth_stencil, false)
+        } else {
+            pass.depth_stencil_read(t.depth_stencil)
+        };
+        pass = pass
+            .buffer(self.vertices, Access::VertexRead, None)
+            .buffer(self.indices, Access::IndexRead, None);
         if direct {
-            pass = pass.buffer(self.colours, Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER }, Some("colours"));
+            pass = pass.buffer(
+                self.colours,
+                Access::StorageRead {
+                    stages: vk::PipelineStageFlags2::VERTEX_SHADER,
+                },
+                Some("colours"),
+            );
         }
         pass.record(move |ctx| {
-            let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            let depth = RenderTarget {
+                read_only: !base,
+                ..RenderTarget::load(t.depth_stencil)
+            };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                colors: vec![RenderTarget::load(t.radiance)],
+                depth_stencil: Some(depth),
+            })?;
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
             ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;

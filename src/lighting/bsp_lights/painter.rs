@@ -40,9 +40,27 @@ impl PartialEq for PainterTree {
 impl PainterTree {
     /// From the set-up's tree and, per segment triangle, the fragment it belongs to.
     pub fn new(tree: &Tree, triangle_fragment: &[u32]) -> PainterTree {
-        let nodes = tree.nodes.iter().map(|n| Node { plane: n.plane, front: node_or_leaf(n.front), back: node_or_leaf(n.back), faces: n.faces.clone() }).collect();
-        let stripped = Tree { nodes, leaves: Vec::new(), root: tree.root.map(node_or_leaf), fragments: Vec::new(), degenerate_fragments: 0 };
-        PainterTree { tree: stripped, fragment_triangles: super::setup::owner_ranges(triangle_fragment, tree.fragments.len()) }
+        let nodes = tree
+            .nodes
+            .iter()
+            .map(|n| Node {
+                plane: n.plane,
+                front: node_or_leaf(n.front),
+                back: node_or_leaf(n.back),
+                faces: n.faces.clone(),
+            })
+            .collect();
+        let stripped = Tree {
+            nodes,
+            leaves: Vec::new(),
+            root: tree.root.map(node_or_leaf),
+            fragments: Vec::new(),
+            degenerate_fragments: 0,
+        };
+        PainterTree {
+            tree: stripped,
+            fragment_triangles: super::setup::owner_ranges(triangle_fragment, tree.fragments.len()),
+        }
     }
 
     pub fn fragments(&self) -> usize {
@@ -59,7 +77,9 @@ impl PainterTree {
     pub fn draws(&self, order: &[u32]) -> Vec<(u32, u32)> {
         let mut out: Vec<(u32, u32)> = Vec::new();
         for &f in order {
-            let Some(t) = self.fragment_triangles.get(f as usize) else { continue };
+            let Some(t) = self.fragment_triangles.get(f as usize) else {
+                continue;
+            };
             if t.is_empty() {
                 continue;
             }
@@ -73,7 +93,11 @@ impl PainterTree {
     }
 
     pub fn encode(&self) -> Vec<u8> {
-        let mut words: Vec<u32> = vec![self.tree.nodes.len() as u32, self.tree.root.map_or(LEAF, encode_child), self.fragment_triangles.len() as u32];
+        let mut words: Vec<u32> = vec![
+            self.tree.nodes.len() as u32,
+            self.tree.root.map_or(LEAF, encode_child),
+            self.fragment_triangles.len() as u32,
+        ];
         for r in &self.fragment_triangles {
             words.extend([r.start, r.end]);
         }
@@ -82,7 +106,10 @@ impl PainterTree {
             for x in [n.plane.normal.x, n.plane.normal.y, n.plane.normal.z, n.plane.dist] {
                 out.extend_from_slice(&x.to_le_bytes());
             }
-            for w in [encode_child(n.front), encode_child(n.back), n.faces.len() as u32].into_iter().chain(n.faces.iter().copied()) {
+            for w in [encode_child(n.front), encode_child(n.back), n.faces.len() as u32]
+                .into_iter()
+                .chain(n.faces.iter().copied())
+            {
                 out.extend_from_slice(&w.to_le_bytes());
             }
         }
@@ -102,13 +129,21 @@ impl PainterTree {
             }
             fragment_triangles.push(start..end);
         }
-        let mut tree = Tree { root: Some(decode_child(root, nodes)?), ..Tree::default() };
+        let mut tree = Tree {
+            root: Some(decode_child(root, nodes)?),
+            ..Tree::default()
+        };
         for _ in 0..nodes {
             let normal = DVec3::new(r.f64()?, r.f64()?, r.f64()?);
             let plane = Plane { normal, dist: r.f64()? };
             let (front, back, count) = (r.u32()?, r.u32()?, r.u32()?);
             let faces: Option<Vec<u32>> = (0..count).map(|_| r.u32().filter(|&f| f < fragments)).collect();
-            tree.nodes.push(Node { plane, front: decode_child(front, nodes)?, back: decode_child(back, nodes)?, faces: faces? });
+            tree.nodes.push(Node {
+                plane,
+                front: decode_child(front, nodes)?,
+                back: decode_child(back, nodes)?,
+                faces: faces?,
+            });
         }
         // Children come after their parent (the build numbers nodes depth first): a corrupt
         // link that points back up would make the walk loop.
@@ -121,7 +156,13 @@ impl PainterTree {
                 }
             }
         }
-        Some((PainterTree { tree, fragment_triangles }, r.at))
+        Some((
+            PainterTree {
+                tree,
+                fragment_triangles,
+            },
+            r.at,
+        ))
     }
 }
 

@@ -127,7 +127,13 @@ pub fn build_tree_in(polygons: &[ScenePolygon], tolerance: &Tolerance) -> Tree {
     let fragments = polygons
         .iter()
         .enumerate()
-        .map(|(i, p)| Fragment { polygon: Polygon { vertices: p.polygon.vertices.iter().map(|&v| tolerance.round(v)).collect(), plane: p.polygon.plane }, source: i })
+        .map(|(i, p)| Fragment {
+            polygon: Polygon {
+                vertices: p.polygon.vertices.iter().map(|&v| tolerance.round(v)).collect(),
+                plane: p.polygon.plane,
+            },
+            source: i,
+        })
         .collect();
     Tree::build_in(fragments, SplitHeuristic::FirstFace, tolerance)
 }
@@ -136,28 +142,53 @@ pub fn build_tree_in(polygons: &[ScenePolygon], tolerance: &Tolerance) -> Tree {
 type ThreadResult = (Vec<(usize, Vec<[f32; 3]>)>, f64, f64);
 
 /// Runs the whole set-up. Errors are one sentence (the caller names the file and field).
-pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings, progress: &mut Progress) -> Result<Setup, String> {
+pub fn run(
+    polygons: &[ScenePolygon],
+    lights: &[ManyLight],
+    settings: &Settings,
+    progress: &mut Progress,
+) -> Result<Setup, String> {
     let start = Instant::now();
     let tolerance = settings.tolerance;
     let tree = build_tree_in(polygons, &tolerance);
     let bsp_ms = ms(start);
 
     let start = Instant::now();
-    let mut segments = Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), settings.max_segment_area)?;
+    let mut segments = Segments::build(
+        tree.fragments.iter().map(|(f, _)| &f.polygon),
+        settings.max_segment_area,
+    )?;
     segments.positions.iter_mut().for_each(|p| *p = tolerance.round(*p));
     let fragment_vertices = owner_ranges(&segments.vertex_polygon, tree.fragments.len());
     let front_vertices = segments.positions.len();
     let planes: Vec<Plane> = tree.fragments.iter().map(|(f, _)| f.polygon.plane).collect();
-    let (back_row, fragment_back_vertices) =
-        if settings.two_sided { add_back_rows(&mut segments, &planes, &fragment_vertices, lights, &tolerance) } else { (vec![u32::MAX; front_vertices], vec![0..0; planes.len()]) };
+    let (back_row, fragment_back_vertices) = if settings.two_sided {
+        add_back_rows(&mut segments, &planes, &fragment_vertices, lights, &tolerance)
+    } else {
+        (vec![u32::MAX; front_vertices], vec![0..0; planes.len()])
+    };
     let segment_ms = ms(start);
 
-    check_matrix(segments.positions.len(), lights.len(), settings.bytes_per_entry, settings.max_matrix_bytes)?;
+    check_matrix(
+        segments.positions.len(),
+        lights.len(),
+        settings.bytes_per_entry,
+        settings.max_matrix_bytes,
+    )?;
     let fragment_source: Vec<u32> = tree.fragments.iter().map(|(f, _)| f.source as u32).collect();
-    let albedo: Vec<DVec3> = segments.vertex_polygon.iter().map(|&f| polygons[fragment_source[f as usize] as usize].albedo).collect();
+    let albedo: Vec<DVec3> = segments
+        .vertex_polygon
+        .iter()
+        .map(|&f| polygons[fragment_source[f as usize] as usize].albedo)
+        .collect();
 
     let start = Instant::now();
-    let threads = if settings.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { settings.threads }.clamp(1, lights.len().max(1));
+    let threads = if settings.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        settings.threads
+    }
+    .clamp(1, lights.len().max(1));
     let done = AtomicUsize::new(0);
     let fragments: Vec<&Polygon> = tree.fragments.iter().map(|(f, _)| &f.polygon).collect();
     let shared = Shared {
@@ -200,7 +231,12 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
     });
     let lights_wall_ms = ms(start);
     let mut colours = vec![[0.0f32; 3]; segments.positions.len() * lights.len()];
-    let mut phases = Phases { bsp_ms, segment_ms, lights_wall_ms, ..Phases::default() };
+    let mut phases = Phases {
+        bsp_ms,
+        segment_ms,
+        lights_wall_ms,
+        ..Phases::default()
+    };
     let mut filled = 0;
     for (columns, colour_ms, shadow_ms) in per_thread {
         phases.colour_cpu_ms += colour_ms;
@@ -211,20 +247,43 @@ pub fn run(polygons: &[ScenePolygon], lights: &[ManyLight], settings: &Settings,
         }
     }
     if filled != lights.len() {
-        return Err(format!("a set-up thread failed ({filled} of {} lights shaded)", lights.len()));
+        return Err(format!(
+            "a set-up thread failed ({filled} of {} lights shaded)",
+            lights.len()
+        ));
     }
-    Ok(Setup { tree, segments, fragment_source, fragment_vertices, front_vertices, back_row, fragment_back_vertices, lights: lights.len(), colours, phases })
+    Ok(Setup {
+        tree,
+        segments,
+        fragment_source,
+        fragment_vertices,
+        front_vertices,
+        back_row,
+        fragment_back_vertices,
+        lights: lights.len(),
+        colours,
+        phases,
+    })
 }
 
 /// Appends a back-side row (same position, normal turned) for every vertex of each fragment
 /// that has a light strictly behind its plane; returns each front vertex's back row
 /// (`u32::MAX`: none) and each fragment's back rows. A fragment every light is in front of
 /// gets none: its back side's direct light is zero, which the run time draws for a missing row.
-fn add_back_rows(segments: &mut Segments, planes: &[Plane], fragment_vertices: &[Range<u32>], lights: &[ManyLight], tolerance: &Tolerance) -> (Vec<u32>, Vec<Range<u32>>) {
+fn add_back_rows(
+    segments: &mut Segments,
+    planes: &[Plane],
+    fragment_vertices: &[Range<u32>],
+    lights: &[ManyLight],
+    tolerance: &Tolerance,
+) -> (Vec<u32>, Vec<Range<u32>>) {
     let mut back_row = vec![u32::MAX; segments.positions.len()];
     let mut ranges = vec![0u32..0u32; planes.len()];
     for (f, plane) in planes.iter().enumerate() {
-        if !lights.iter().any(|l| plane.side_of_point_in(l.position, tolerance) == Side::Back) {
+        if !lights
+            .iter()
+            .any(|l| plane.side_of_point_in(l.position, tolerance) == Side::Back)
+        {
             continue;
         }
         let first = segments.positions.len() as u32;
@@ -287,17 +346,35 @@ impl Shared<'_> {
     /// `C_l(v)` at full intensity, unshadowed.
     fn colour(&self, light: &ManyLight) -> Vec<[f32; 3]> {
         let s = self.segments;
-        (0..s.positions.len()).map(|v| light.shade(&self.model, s.positions[v], s.normals[v], self.albedo[v]).as_vec3().to_array()).collect()
+        (0..s.positions.len())
+            .map(|v| {
+                light
+                    .shade(&self.model, s.positions[v], s.normals[v], self.albedo[v])
+                    .as_vec3()
+                    .to_array()
+            })
+            .collect()
     }
 
     /// The painter's pass from the light: every fragment, in back-to-front order, projected
     /// onto each fragment before it; that target's lit vertices inside the projection go dark.
     fn shadow(&self, light: DVec3, column: &mut [[f32; 3]]) {
-        let order: Vec<usize> = self.tree.faces_back_to_front(light).into_iter().map(|f| f as usize).collect();
+        let order: Vec<usize> = self
+            .tree
+            .faces_back_to_front(light)
+            .into_iter()
+            .map(|f| f as usize)
+            .collect();
         let positions = &self.segments.positions;
         // Lit vertices left per fragment: a target gone dark is never projected onto again.
-        let rows = |t: usize| self.fragment_vertices[t].clone().chain(self.fragment_back_vertices[t].clone());
-        let mut lit: Vec<usize> = (0..self.fragments.len()).map(|t| rows(t).filter(|&v| column[v as usize] != [0.0; 3]).count()).collect();
+        let rows = |t: usize| {
+            self.fragment_vertices[t]
+                .clone()
+                .chain(self.fragment_back_vertices[t].clone())
+        };
+        let mut lit: Vec<usize> = (0..self.fragments.len())
+            .map(|t| rows(t).filter(|&v| column[v as usize] != [0.0; 3]).count())
+            .collect();
         for (i, &o) in order.iter().enumerate() {
             let occluder = self.fragments[o];
             for &t in &order[..i] {
@@ -305,7 +382,15 @@ impl Shared<'_> {
                     continue;
                 }
                 let target = self.fragments[t];
-                let Some(shadow) = project(light, &occluder.vertices, &target.plane, self.projection, &self.tolerance) else { continue };
+                let Some(shadow) = project(
+                    light,
+                    &occluder.vertices,
+                    &target.plane,
+                    self.projection,
+                    &self.tolerance,
+                ) else {
+                    continue;
+                };
                 // The test on the projected polygon's bounds first: most pairs miss entirely.
                 let (lo, hi) = bounds(&shadow);
                 for v in rows(t) {
@@ -335,12 +420,20 @@ fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
 /// `None` where it casts nothing there. An occluder lying in the target's plane casts nothing in
 /// either mode (it is beside the target, not in front of it; the thesis's rounding served the
 /// same end). `tolerance` says what "in the plane" means and rounds the shadow's vertices.
-pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Projection, tolerance: &Tolerance) -> Option<Vec<DVec3>> {
+pub fn project(
+    light: DVec3,
+    occluder: &[DVec3],
+    target: &Plane,
+    projection: Projection,
+    tolerance: &Tolerance,
+) -> Option<Vec<DVec3>> {
     let h_light = target.distance(light);
     if h_light.abs() <= tolerance.plane {
         return None;
     }
-    let on_plane = occluder.iter().all(|&x| target.side_of_point_in(x, tolerance) == Side::On);
+    let on_plane = occluder
+        .iter()
+        .all(|&x| target.side_of_point_in(x, tolerance) == Side::On);
     if on_plane {
         return None;
     }
@@ -350,8 +443,14 @@ pub fn project(light: DVec3, occluder: &[DVec3], target: &Plane, projection: Pro
             // Keep s·h_x ∈ [0, |h_L|·(1 − slack)]: on the light's side of the target, and short
             // of the plane through the light.
             let s = h_light.signum();
-            let toward_light = Plane { normal: target.normal * s, dist: target.dist * s };
-            let short_of_light = Plane { normal: -target.normal * s, dist: -(target.dist * s + h_light.abs() * (1.0 - PARALLEL_SLACK)) };
+            let toward_light = Plane {
+                normal: target.normal * s,
+                dist: target.dist * s,
+            };
+            let short_of_light = Plane {
+                normal: -target.normal * s,
+                dist: -(target.dist * s + h_light.abs() * (1.0 - PARALLEL_SLACK)),
+            };
             let clipped = clip_points_front(occluder, &toward_light, 0.0);
             let clipped = clip_points_front(&clipped, &short_of_light, 0.0);
             if clipped.len() < 3 {

@@ -20,7 +20,10 @@ fn v(x: f64, y: f64, z: f64) -> DVec3 {
 struct Lcg(u64);
 impl Lcg {
     fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
@@ -39,7 +42,12 @@ impl Lcg {
 /// The quad `corner, corner + u, corner + u + w, corner + w` (front where `u × w` points).
 fn quad(corner: DVec3, u: DVec3, w: DVec3) -> ScenePolygon {
     let polygon = Polygon::from_vertices(vec![corner, corner + u, corner + u + w, corner + w]).expect("a quad");
-    ScenePolygon { polygon, albedo: DVec3::splat(0.5), emission: DVec3::ZERO, draw: 0 }
+    ScenePolygon {
+        polygon,
+        albedo: DVec3::splat(0.5),
+        emission: DVec3::ZERO,
+        draw: 0,
+    }
 }
 
 /// A floor at y = 0 of side `side` centred on the origin, facing up.
@@ -49,24 +57,47 @@ fn floor(side: f64) -> ScenePolygon {
 
 /// A horizontal square facing up at height `y`, centre `(x, z)`, side `side`.
 fn plate(x: f64, y: f64, z: f64, side: f64) -> ScenePolygon {
-    quad(v(x - side / 2.0, y, z + side / 2.0), v(side, 0.0, 0.0), v(0.0, 0.0, -side))
+    quad(
+        v(x - side / 2.0, y, z + side / 2.0),
+        v(side, 0.0, 0.0),
+        v(0.0, 0.0, -side),
+    )
 }
 
 fn point(position: DVec3, rgb: DVec3) -> ManyLight {
-    ManyLight { position, direction: DVec3::NEG_Y, intensity: rgb, cone: None }
+    ManyLight {
+        position,
+        direction: DVec3::NEG_Y,
+        intensity: rgb,
+        cone: None,
+    }
 }
 
 fn run(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projection, area: f64) -> Setup {
     run_in(polygons, lights, projection, crate::world::Tolerance::EXACT, area)
 }
 
-fn run_in(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projection, tolerance: crate::world::Tolerance, area: f64) -> Setup {
+fn run_in(
+    polygons: &[ScenePolygon],
+    lights: &[ManyLight],
+    projection: Projection,
+    tolerance: crate::world::Tolerance,
+    area: f64,
+) -> Setup {
     let model = match projection {
         Projection::Valid => LightModel::Physical,
         Projection::Thesis => LightModel::Seed { k: 1.0 },
     };
-    let settings =
-        Settings { model, projection, tolerance, max_segment_area: area, two_sided: projection == Projection::Valid, threads: 2, max_matrix_bytes: super::MAX_MATRIX_BYTES, bytes_per_entry: 12 };
+    let settings = Settings {
+        model,
+        projection,
+        tolerance,
+        max_segment_area: area,
+        two_sided: projection == Projection::Valid,
+        threads: 2,
+        max_matrix_bytes: super::MAX_MATRIX_BYTES,
+        bytes_per_entry: 12,
+    };
     setup::run(polygons, lights, &settings, &mut Progress::new("test")).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -75,12 +106,25 @@ fn run_in(polygons: &[ScenePolygon], lights: &[ManyLight], projection: Projectio
 /// reaches, vertices in shadow by the ray cast). Whether a vertex is near the edge is decided
 /// by the ray cast itself (a verdict that flips within `eps` of the vertex), independent of any
 /// projection. Vertices the light does not reach (facing away, outside a cone) are not counted.
-fn against_ray_cast(s: &Setup, polygons: &[ScenePolygon], lights: &[ManyLight], l: usize, eps: f64) -> (usize, usize, usize, usize) {
+fn against_ray_cast(
+    s: &Setup,
+    polygons: &[ScenePolygon],
+    lights: &[ManyLight],
+    l: usize,
+    eps: f64,
+) -> (usize, usize, usize, usize) {
     against_ray_cast_rows(s, polygons, lights, l, eps, 0..s.vertices())
 }
 
 /// [`against_ray_cast`] over the matrix rows `rows` only.
-fn against_ray_cast_rows(s: &Setup, polygons: &[ScenePolygon], lights: &[ManyLight], l: usize, eps: f64, rows: std::ops::Range<usize>) -> (usize, usize, usize, usize) {
+fn against_ray_cast_rows(
+    s: &Setup,
+    polygons: &[ScenePolygon],
+    lights: &[ManyLight],
+    l: usize,
+    eps: f64,
+    rows: std::ops::Range<usize>,
+) -> (usize, usize, usize, usize) {
     let occluders = Occluders::new(polygons.iter().map(|p| &p.polygon));
     let light = &lights[l];
     let (mut far, mut near, mut reached, mut blocked_count) = (0, 0, 0, 0);
@@ -142,9 +186,16 @@ fn assert_convex_planar(p: &Polygon, normal: DVec3, what: &str) {
     assert!(n >= 3, "{what}: {n} vertices");
     for i in 0..n {
         let (a, b, c) = (p.vertices[i], p.vertices[(i + 1) % n], p.vertices[(i + 2) % n]);
-        assert!(p.plane.distance(a).abs() < 1e-9, "{what}: vertex {i} off its plane by {}", p.plane.distance(a));
+        assert!(
+            p.plane.distance(a).abs() < 1e-9,
+            "{what}: vertex {i} off its plane by {}",
+            p.plane.distance(a)
+        );
         // Counter-clockwise about the original normal at every corner: convex, cyclic order.
-        assert!((b - a).cross(c - b).dot(normal) >= -1e-9, "{what}: reflex or reordered corner {i}");
+        assert!(
+            (b - a).cross(c - b).dot(normal) >= -1e-9,
+            "{what}: reflex or reordered corner {i}"
+        );
     }
 }
 
@@ -163,13 +214,22 @@ fn item_7_splitting_conserves_area_sides_and_convexity() {
                 let ba = back.as_ref().map_or(0.0, |p| p.area());
                 // A piece thinner than the epsilon is dropped as degenerate (at most its area).
                 let dropped = f64::from(u8::from(front.is_none()) + u8::from(back.is_none())) * 1e-4;
-                assert!((fa + ba - area).abs() <= 1e-12 * area.max(1.0) + dropped, "case {case}: {fa} + {ba} != {area}");
+                assert!(
+                    (fa + ba - area).abs() <= 1e-12 * area.max(1.0) + dropped,
+                    "case {case}: {fa} + {ba} != {area}"
+                );
                 if let Some(f) = &front {
-                    assert!(f.vertices.iter().all(|&x| plane.distance(x) >= -PLANE_EPSILON), "case {case}: front piece behind the plane");
+                    assert!(
+                        f.vertices.iter().all(|&x| plane.distance(x) >= -PLANE_EPSILON),
+                        "case {case}: front piece behind the plane"
+                    );
                     assert_convex_planar(f, normal, &format!("case {case} front"));
                 }
                 if let Some(b) = &back {
-                    assert!(b.vertices.iter().all(|&x| plane.distance(x) <= PLANE_EPSILON), "case {case}: back piece in front of the plane");
+                    assert!(
+                        b.vertices.iter().all(|&x| plane.distance(x) <= PLANE_EPSILON),
+                        "case {case}: back piece in front of the plane"
+                    );
                     assert_convex_planar(b, normal, &format!("case {case} back"));
                 }
             }
@@ -195,7 +255,14 @@ fn check_sides(tree: &Tree, child: Child, path: &mut Vec<(Plane, bool)>, visited
         for (plane, front) in path.iter() {
             for &x in &polygon.vertices {
                 let d = plane.distance(x);
-                assert!(if *front { d >= -PLANE_EPSILON } else { d <= PLANE_EPSILON }, "fragment {f} on the wrong side of an ancestor ({d})");
+                assert!(
+                    if *front {
+                        d >= -PLANE_EPSILON
+                    } else {
+                        d <= PLANE_EPSILON
+                    },
+                    "fragment {f} on the wrong side of an ancestor ({d})"
+                );
             }
         }
     }
@@ -211,13 +278,26 @@ fn check_sides(tree: &Tree, child: Child, path: &mut Vec<(Plane, bool)>, visited
 fn item_8_the_first_polygon_tree_conserves_area_and_keeps_fragments_on_their_side() {
     let mut rng = Lcg(11);
     for scene in 0..5 {
-        let polygons: Vec<ScenePolygon> = (0..40).map(|_| ScenePolygon { polygon: random_convex(&mut rng), albedo: DVec3::ONE, emission: DVec3::ZERO, draw: 0 }).collect();
+        let polygons: Vec<ScenePolygon> = (0..40)
+            .map(|_| ScenePolygon {
+                polygon: random_convex(&mut rng),
+                albedo: DVec3::ONE,
+                emission: DVec3::ZERO,
+                draw: 0,
+            })
+            .collect();
         let tree = build_tree(&polygons);
         let before: f64 = polygons.iter().map(|p| p.polygon.area()).sum();
         let after: f64 = tree.fragments.iter().map(|(f, _)| f.polygon.area()).sum();
         let slack = tree.degenerate_fragments as f64 * crate::world::MIN_POLYGON_AREA;
-        assert!((before - after).abs() <= 1e-9 * before + slack, "scene {scene}: area {before} -> {after}");
-        assert!(tree.fragments.len() > polygons.len(), "scene {scene}: random polygons should split");
+        assert!(
+            (before - after).abs() <= 1e-9 * before + slack,
+            "scene {scene}: area {before} -> {after}"
+        );
+        assert!(
+            tree.fragments.len() > polygons.len(),
+            "scene {scene}: random polygons should split"
+        );
         // The first polygon is the root's splitter.
         assert_eq!(tree.nodes[0].plane, polygons[0].polygon.plane);
         let mut visited = 0;
@@ -225,8 +305,16 @@ fn item_8_the_first_polygon_tree_conserves_area_and_keeps_fragments_on_their_sid
         assert_eq!(visited, tree.fragments.len());
         // Each source's fragments add up to its area.
         for (i, p) in polygons.iter().enumerate() {
-            let a: f64 = tree.fragments.iter().filter(|(f, _)| f.source == i).map(|(f, _)| f.polygon.area()).sum();
-            assert!((a - p.polygon.area()).abs() <= 1e-9 * p.polygon.area() + slack, "scene {scene}: polygon {i}");
+            let a: f64 = tree
+                .fragments
+                .iter()
+                .filter(|(f, _)| f.source == i)
+                .map(|(f, _)| f.polygon.area())
+                .sum();
+            assert!(
+                (a - p.polygon.area()).abs() <= 1e-9 * p.polygon.area() + slack,
+                "scene {scene}: polygon {i}"
+            );
         }
     }
 }
@@ -254,25 +342,38 @@ fn item_12_a_box_above_a_plane_under_an_overhead_light() {
     polygons.extend(cube(0.5));
     for (i, p) in polygons.iter().enumerate().skip(1) {
         // The faces point out of the box.
-        assert!(p.polygon.plane.normal.dot(p.polygon.center() - v(0.0, 1.0, 0.0)) > 0.0, "face {i}");
+        assert!(
+            p.polygon.plane.normal.dot(p.polygon.center() - v(0.0, 1.0, 0.0)) > 0.0,
+            "face {i}"
+        );
     }
     // Nearly overhead: the +x and +z sides see the light at a grazing angle.
     let light = v(1.0, 5.0, 0.6);
     let lights = [point(light, DVec3::splat(10.0))];
     let s = run(&polygons, &lights, Projection::Valid, 0.01);
     // The front sides (the back rows of the faces the light is behind are inside the box).
-    let by_source = |src: u32| -> Vec<f32> { (0..s.front_vertices).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == src).map(|x| s.colour(0, x)[0]).collect() };
+    let by_source = |src: u32| -> Vec<f32> {
+        (0..s.front_vertices)
+            .filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == src)
+            .map(|x| s.colour(0, x)[0])
+            .collect()
+    };
     let top = by_source(1);
     let bottom = by_source(2);
     let sides: Vec<f32> = (3..7).flat_map(by_source).collect();
     let min_top = top.iter().copied().fold(f32::INFINITY, f32::min);
     let max_side = sides.iter().copied().fold(0.0, f32::max);
     println!("top {min_top:.5}..; sides ..{max_side:.5}");
-    assert!(max_side > 0.0 && max_side < 0.25 * min_top, "sides {max_side} vs top {min_top}");
+    assert!(
+        max_side > 0.0 && max_side < 0.25 * min_top,
+        "sides {max_side} vs top {min_top}"
+    );
     assert!(bottom.iter().all(|&c| c == 0.0), "the bottom faces away");
     // Closed form at the top's centre: I·ρ·cos/(π·d²).
     let top_centre = v(0.0, 1.5, 0.0);
-    let centre = (0..s.vertices()).find(|&x| s.segments.positions[x].distance(top_centre) < 1e-9).expect("a vertex at the top's centre");
+    let centre = (0..s.vertices())
+        .find(|&x| s.segments.positions[x].distance(top_centre) < 1e-9)
+        .expect("a vertex at the top's centre");
     let d = light.distance(top_centre);
     let want = 10.0 * 0.5 * (3.5 / d) / (std::f64::consts::PI * d * d);
     assert!((s.colour(0, centre)[0] as f64 - want).abs() < 1e-6 * want);
@@ -280,7 +381,11 @@ fn item_12_a_box_above_a_plane_under_an_overhead_light() {
     let floor_at = |p: DVec3| {
         (0..s.vertices())
             .filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 0)
-            .min_by(|&a, &b| s.segments.positions[a].distance(p).total_cmp(&s.segments.positions[b].distance(p)))
+            .min_by(|&a, &b| {
+                s.segments.positions[a]
+                    .distance(p)
+                    .total_cmp(&s.segments.positions[b].distance(p))
+            })
             .unwrap()
     };
     assert_eq!(s.colour(0, floor_at(v(0.1, 0.0, 0.1)))[0], 0.0);
@@ -300,12 +405,25 @@ fn two_sided_rows_light_the_back_of_a_surface_with_its_shadows() {
     let lights = [point(above, v(4.0, 0.0, 0.0)), point(below, v(0.0, 0.0, 4.0))];
     let s = run(&polygons, &lights, Projection::Valid, 0.005);
     let panel = |x: usize| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 0;
-    let (front, back): (Vec<usize>, Vec<usize>) = (0..s.vertices()).filter(|&x| panel(x)).partition(|&x| x < s.front_vertices);
-    assert!(!back.is_empty() && front.len() == back.len(), "every vertex of the panel has its back row ({} front, {} back)", front.len(), back.len());
+    let (front, back): (Vec<usize>, Vec<usize>) = (0..s.vertices())
+        .filter(|&x| panel(x))
+        .partition(|&x| x < s.front_vertices);
+    assert!(
+        !back.is_empty() && front.len() == back.len(),
+        "every vertex of the panel has its back row ({} front, {} back)",
+        front.len(),
+        back.len()
+    );
     for &x in &front {
-        assert!(s.colour(0, x)[0] > 0.0 && s.colour(1, x) == [0.0; 3], "front row {x}: red only");
+        assert!(
+            s.colour(0, x)[0] > 0.0 && s.colour(1, x) == [0.0; 3],
+            "front row {x}: red only"
+        );
         let b = s.back_row[x] as usize;
-        assert!(back.contains(&b) && s.segments.positions[b] == s.segments.positions[x], "front row {x}: its back row {b} is at the same place");
+        assert!(
+            back.contains(&b) && s.segments.positions[b] == s.segments.positions[x],
+            "front row {x}: its back row {b} is at the same place"
+        );
     }
     for &x in &back {
         assert_eq!(s.colour(0, x), [0.0; 3], "back row {x}: no red");
@@ -315,15 +433,34 @@ fn two_sided_rows_light_the_back_of_a_surface_with_its_shadows() {
     println!("blue light: {reached} rows reached, {blocked} blocked, {far} far from the edge disagree, {near} near");
     assert_eq!(far, 0);
     let dark = back.iter().filter(|&&x| s.colour(1, x) == [0.0; 3]).count();
-    assert!(dark > 20 && dark < back.len() / 4, "the small plate shadows part of the underside ({dark} of {} rows)", back.len());
+    assert!(
+        dark > 20 && dark < back.len() / 4,
+        "the small plate shadows part of the underside ({dark} of {} rows)",
+        back.len()
+    );
     // I·ρ·cos/(π·d²) at the underside's corner, far from the shadow.
-    let corner = *back.iter().min_by(|&&a, &&b| s.segments.positions[a].distance(v(-1.0, 1.0, 1.0)).total_cmp(&s.segments.positions[b].distance(v(-1.0, 1.0, 1.0)))).unwrap();
+    let corner = *back
+        .iter()
+        .min_by(|&&a, &&b| {
+            s.segments.positions[a]
+                .distance(v(-1.0, 1.0, 1.0))
+                .total_cmp(&s.segments.positions[b].distance(v(-1.0, 1.0, 1.0)))
+        })
+        .unwrap();
     let p = s.segments.positions[corner];
     let d = p.distance(below);
     let want = 4.0 * 0.5 * (1.0 / d) / (std::f64::consts::PI * d * d);
-    assert!((s.colour(1, corner)[2] as f64 - want).abs() < 1e-6 * want, "{} against {want}", s.colour(1, corner)[2]);
+    assert!(
+        (s.colour(1, corner)[2] as f64 - want).abs() < 1e-6 * want,
+        "{} against {want}",
+        s.colour(1, corner)[2]
+    );
     let faithful = run(&polygons, &lights, Projection::Thesis, 0.005);
-    assert_eq!(faithful.vertices(), faithful.front_vertices, "the thesis lights the front only");
+    assert_eq!(
+        faithful.vertices(),
+        faithful.front_vertices,
+        "the thesis lights the front only"
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -335,18 +472,33 @@ fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
     let light = v(0.3, 3.0, 0.2);
     let lights = [point(light, DVec3::splat(5.0))];
     // Analytic shadow: the square's corners projected from the light onto y = 0.
-    let shadow: Vec<DVec3> = polygons[1].polygon.vertices.iter().map(|&c| c + (c - light) * (c.y / (light.y - c.y))).collect();
+    let shadow: Vec<DVec3> = polygons[1]
+        .polygon
+        .vertices
+        .iter()
+        .map(|&c| c + (c - light) * (c.y / (light.y - c.y)))
+        .collect();
     let (area, perimeter) = (area_of(&shadow), 4.0 * shadow[0].distance(shadow[1]));
-    assert!((area - 2.25).abs() < 1e-9, "the analytic shadow is the square scaled 1.5x: {area}");
+    assert!(
+        (area - 2.25).abs() < 1e-9,
+        "the analytic shadow is the square scaled 1.5x: {area}"
+    );
     // The thesis's rounding moves a vertex and a shadow's corners by at most 0.5e-4 per axis
     // (7.1e-5 in the floor's plane), less than the 1e-4 margin.
-    for (projection, tolerance) in [(Projection::Valid, Tolerance::EXACT), (Projection::Thesis, Tolerance::EXACT), (Projection::Thesis, Tolerance::THESIS)] {
+    for (projection, tolerance) in [
+        (Projection::Valid, Tolerance::EXACT),
+        (Projection::Thesis, Tolerance::EXACT),
+        (Projection::Thesis, Tolerance::THESIS),
+    ] {
         let projection_name = format!("{projection:?} {tolerance:?}");
         // Floor segments of about 2 cm (2^8 steps along its 5 m edges).
         let s = run_in(&polygons, &lights, projection, tolerance, 2e-4);
         let (far, near, reached, blocked) = against_ray_cast(&s, &polygons, &lights, 0, 1e-4);
         println!("{projection_name}: {reached} vertices lit by the model, {blocked} blocked; {far} disagree farther than 1e-4 from the edge, {near} within");
-        assert_eq!(far, 0, "{projection_name}: vertices away from the shadow's edge disagree with the ray cast");
+        assert_eq!(
+            far, 0,
+            "{projection_name}: vertices away from the shadow's edge disagree with the ray cast"
+        );
         // Agreement by the analytic boundary too.
         let mut disagreements_off_edge = 0;
         let (mut dark_floor, mut floor_vertices) = (0usize, 0usize);
@@ -359,7 +511,9 @@ fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
             let dark = s.colour(0, x) == [0.0; 3];
             dark_floor += usize::from(dark);
             let inside = Polygon::from_vertices(shadow.clone()).unwrap().contains_point(p, 0.0);
-            let edge = (0..4).map(|i| point_segment_distance(p, shadow[i], shadow[(i + 1) % 4])).fold(f64::INFINITY, f64::min);
+            let edge = (0..4)
+                .map(|i| point_segment_distance(p, shadow[i], shadow[(i + 1) % 4]))
+                .fold(f64::INFINITY, f64::min);
             if edge > 1e-4 && dark != inside {
                 disagreements_off_edge += 1;
             }
@@ -369,8 +523,14 @@ fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
         // within one vertex spacing along the perimeter.
         let h = 5.0 / 256.0;
         let measured = dark_floor as f64 * 25.0 / floor_vertices as f64;
-        println!("{projection_name}: shadowed area {measured:.4} m² vs analytic {area:.4} (allowed ±{:.4})", perimeter * h);
-        assert!((measured - area).abs() <= perimeter * h, "{projection_name}: {measured} vs {area}");
+        println!(
+            "{projection_name}: shadowed area {measured:.4} m² vs analytic {area:.4} (allowed ±{:.4})",
+            perimeter * h
+        );
+        assert!(
+            (measured - area).abs() <= perimeter * h,
+            "{projection_name}: {measured} vs {area}"
+        );
     }
 }
 
@@ -379,7 +539,13 @@ fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
 
 /// Floor vertices darkened for light 0.
 fn dark_floor(s: &Setup, pred: impl Fn(DVec3) -> bool) -> usize {
-    (0..s.vertices()).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 0 && pred(s.segments.positions[x]) && s.colour(0, x) == [0.0; 3]).count()
+    (0..s.vertices())
+        .filter(|&x| {
+            s.fragment_source[s.segments.vertex_polygon[x] as usize] == 0
+                && pred(s.segments.positions[x])
+                && s.colour(0, x) == [0.0; 3]
+        })
+        .count()
 }
 
 #[test]
@@ -395,7 +561,10 @@ fn item_14_a_light_between_occluder_and_receiver_casts_nothing_there() {
     let faithful = run(&polygons, &lights, Projection::Thesis, 0.002);
     let inverted = dark_floor(&faithful, |p| p.x < 0.0);
     println!("faithful: {inverted} floor vertices under the inverted shadow");
-    assert!(inverted > 100, "the thesis's projection should show the inverted shadow");
+    assert!(
+        inverted > 100,
+        "the thesis's projection should show the inverted shadow"
+    );
 }
 
 #[test]
@@ -409,13 +578,20 @@ fn item_14_an_occluder_straddling_the_lights_parallel_plane_is_clipped_not_inver
     println!("corrected: {reached} reached, {blocked} blocked, {far} disagree away from the edge, {near} near it");
     assert_eq!(far, 0, "corrected");
     assert!(blocked > 100, "the lower half casts a real shadow beyond x = 1");
-    assert_eq!(dark_floor(&corrected, |p| p.x < 0.9), 0, "corrected: nothing dark on the light's side of the shadow");
+    assert_eq!(
+        dark_floor(&corrected, |p| p.x < 0.9),
+        0,
+        "corrected: nothing dark on the light's side of the shadow"
+    );
     // The thesis's projection of the upper half lands through the light, at negative x.
     let faithful = run(&polygons, &lights, Projection::Thesis, 0.002);
     let (far, ..) = against_ray_cast(&faithful, &polygons, &lights, 0, 1e-4);
     let inverted = dark_floor(&faithful, |p| p.x < 0.0);
     println!("faithful: {far} disagree with the ray cast, {inverted} dark at x < 0");
-    assert!(far > 100 && inverted > 100, "the thesis's projection should show the inverted shadow");
+    assert!(
+        far > 100 && inverted > 100,
+        "the thesis's projection should show the inverted shadow"
+    );
 }
 
 #[test]
@@ -428,7 +604,11 @@ fn item_14_a_receiver_in_front_of_the_occluder_is_not_shadowed_by_it() {
         let front = (0..s.vertices()).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 2);
         assert!(front.clone().count() > 0);
         for x in front {
-            assert_ne!(s.colour(0, x), [0.0; 3], "{projection:?}: the front plate is lit everywhere");
+            assert_ne!(
+                s.colour(0, x),
+                [0.0; 3],
+                "{projection:?}: the front plate is lit everywhere"
+            );
         }
         let (far, ..) = against_ray_cast(&s, &polygons, &lights, 0, 1e-4);
         assert_eq!(far, 0, "{projection:?}");
@@ -438,12 +618,18 @@ fn item_14_a_receiver_in_front_of_the_occluder_is_not_shadowed_by_it() {
 #[test]
 fn item_14_coplanar_and_touching_polygons_cast_no_slivers_and_do_not_shadow_themselves() {
     // Two floor tiles sharing an edge, and a box standing on one of them (touching it).
-    let tiles = vec![quad(v(-2.0, 0.0, 2.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -4.0)), quad(v(0.0, 0.0, 2.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -4.0))];
+    let tiles = vec![
+        quad(v(-2.0, 0.0, 2.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -4.0)),
+        quad(v(0.0, 0.0, 2.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -4.0)),
+    ];
     let light = v(0.0, 4.0, 0.0);
     let lights = [point(light, DVec3::splat(5.0))];
     for projection in [Projection::Valid, Projection::Thesis] {
         let s = run(&tiles, &lights, projection, 0.005);
-        assert!((0..s.vertices()).all(|x| s.colour(0, x) != [0.0; 3]), "{projection:?}: coplanar tiles darken each other");
+        assert!(
+            (0..s.vertices()).all(|x| s.colour(0, x) != [0.0; 3]),
+            "{projection:?}: coplanar tiles darken each other"
+        );
     }
     let mut polygons = tiles.clone();
     polygons.extend(cube(0.0).into_iter().map(|mut p| {
@@ -453,10 +639,18 @@ fn item_14_coplanar_and_touching_polygons_cast_no_slivers_and_do_not_shadow_them
     }));
     let s = run(&polygons, &lights, Projection::Valid, 0.005);
     let top = (0..s.vertices()).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 2);
-    assert!(top.clone().all(|x| s.colour(0, x) != [0.0; 3]), "the box's top is lit everywhere");
+    assert!(
+        top.clone().all(|x| s.colour(0, x) != [0.0; 3]),
+        "the box's top is lit everywhere"
+    );
     // The other face that sees the light (−x) is not shadowed by the box itself.
     let minus_x = (0..s.front_vertices).filter(|&x| s.fragment_source[s.segments.vertex_polygon[x] as usize] == 5);
-    assert!(minus_x.clone().all(|x| s.colour(0, x) != [0.0; 3] || s.segments.positions[x].y < 1e-9), "the −x face shadows itself");
+    assert!(
+        minus_x
+            .clone()
+            .all(|x| s.colour(0, x) != [0.0; 3] || s.segments.positions[x].y < 1e-9),
+        "the −x face shadows itself"
+    );
     // The front sides: the back rows here are the box's inside, where three vertices' rays to
     // the light run exactly along the box's edges (either verdict is right there).
     let (far, near, reached, blocked) = against_ray_cast_rows(&s, &polygons, &lights, 0, 1e-4, 0..s.front_vertices);
@@ -483,9 +677,22 @@ fn item_14_a_light_inside_another_lights_cone_is_unaffected() {
     let polygons = vec![floor(6.0), plate(0.0, 1.0, 0.0, 1.0)];
     // The second light sits in the first's cone: lights are not occluders, so neither column
     // changes with the other present.
-    let a = ManyLight { position: v(0.0, 4.0, 0.0), direction: DVec3::NEG_Y, intensity: DVec3::splat(8.0), cone: Some((0.5, 0.7)) };
-    let b = ManyLight { position: v(0.3, 2.5, 0.0), direction: v(0.3, -1.0, 0.0).normalize(), intensity: DVec3::new(0.0, 4.0, 0.0), cone: Some((0.4, 0.6)) };
-    assert!(a.reach(&LightModel::Physical, b.position).is_some(), "b is inside a's cone");
+    let a = ManyLight {
+        position: v(0.0, 4.0, 0.0),
+        direction: DVec3::NEG_Y,
+        intensity: DVec3::splat(8.0),
+        cone: Some((0.5, 0.7)),
+    };
+    let b = ManyLight {
+        position: v(0.3, 2.5, 0.0),
+        direction: v(0.3, -1.0, 0.0).normalize(),
+        intensity: DVec3::new(0.0, 4.0, 0.0),
+        cone: Some((0.4, 0.6)),
+    };
+    assert!(
+        a.reach(&LightModel::Physical, b.position).is_some(),
+        "b is inside a's cone"
+    );
     let both = run(&polygons, &[a, b], Projection::Valid, 0.01);
     let alone_a = run(&polygons, &[a], Projection::Valid, 0.01);
     let alone_b = run(&polygons, &[b], Projection::Valid, 0.01);
@@ -505,7 +712,11 @@ fn item_14_a_light_inside_another_lights_cone_is_unaffected() {
 #[test]
 fn item_15_three_coloured_lights_darken_exactly_their_own_channel_where_their_ray_is_blocked() {
     let polygons = vec![floor(6.0), plate(0.0, 1.0, 0.0, 1.0)];
-    let lights = [point(v(-1.5, 3.0, 0.0), v(6.0, 0.0, 0.0)), point(v(1.5, 3.0, 0.5), v(0.0, 6.0, 0.0)), point(v(0.0, 3.0, -1.5), v(0.0, 0.0, 6.0))];
+    let lights = [
+        point(v(-1.5, 3.0, 0.0), v(6.0, 0.0, 0.0)),
+        point(v(1.5, 3.0, 0.5), v(0.0, 6.0, 0.0)),
+        point(v(0.0, 3.0, -1.5), v(0.0, 0.0, 6.0)),
+    ];
     for projection in [Projection::Valid, Projection::Thesis] {
         let s = run(&polygons, &lights, projection, 0.002);
         for l in 0..lights.len() {
@@ -536,7 +747,8 @@ fn scene(methods: &str, lights: usize) -> crate::scene::Scene {
         let x = -1.5 + 3.0 * (i as f64 + 0.5) / lights as f64;
         text += &format!("[[lights]]\ntype = \"point\"\nposition = [{x}, 2.5, 0.3]\nintensity = [2, 2, 2]\n");
     }
-    crate::scene::Scene::from_str(&text, "bsp test.toml", std::path::Path::new("scenes")).unwrap_or_else(|e| panic!("{e}"))
+    crate::scene::Scene::from_str(&text, "bsp test.toml", std::path::Path::new("scenes"))
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
@@ -552,7 +764,11 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     // The painter's tree survives the round trip: the same order from any eye as the set-up's
     // tree, and a cut-off or trailing byte is refused.
     let decoded = Baked::decode(&baked.encode()).unwrap();
-    for eye in [DVec3::new(0.0, 3.0, 4.0), DVec3::new(-2.0, 0.5, -3.0), DVec3::new(1.0, -1.0, 0.2)] {
+    for eye in [
+        DVec3::new(0.0, 3.0, 4.0),
+        DVec3::new(-2.0, 0.5, -3.0),
+        DVec3::new(1.0, -1.0, 0.2),
+    ] {
         let order = s.tree.faces_back_to_front(eye);
         assert_eq!(order.len(), s.tree.fragments.len());
         assert_eq!(decoded.painter.back_to_front(eye), order);
@@ -591,32 +807,56 @@ fn too_large_a_matrix_is_one_error_naming_the_file_and_the_parameter() {
         Err(e) => e.to_string(),
     };
     println!("{err}");
-    assert!(!err.contains('\n') && err.contains("bsp test.toml") && err.contains("methods[0].max_segment_area") && err.contains("MiB limit"), "{err}");
+    assert!(
+        !err.contains('\n')
+            && err.contains("bsp test.toml")
+            && err.contains("methods[0].max_segment_area")
+            && err.contains("MiB limit"),
+        "{err}"
+    );
 }
 
 #[test]
 fn bad_parameters_are_one_line_naming_the_file_and_field() {
     for (decl, field) in [
         ("{ name = \"bsp_lights\", mode = \"exact\" }", "methods[0].mode"),
-        ("{ name = \"bsp_lights\", max_segment_area = 0 }", "methods[0].max_segment_area"),
+        (
+            "{ name = \"bsp_lights\", max_segment_area = 0 }",
+            "methods[0].max_segment_area",
+        ),
         ("{ name = \"bsp_lights\", k = -1 }", "methods[0].k"),
         ("{ name = \"bsp_lights\", threshold = 1.5 }", "methods[0].threshold"),
         ("{ name = \"bsp_lights\", storage = \"f8\" }", "methods[0].storage"),
     ] {
         let sc = scene(decl, 1);
-        let err = Config::from_decl(&sc.methods[0], Some(&sc)).err().unwrap_or_else(|| panic!("{decl}: accepted")).to_string();
-        assert!(!err.contains('\n') && err.contains(field) && err.contains("bsp test.toml"), "{decl}: {err}");
+        let err = Config::from_decl(&sc.methods[0], Some(&sc))
+            .err()
+            .unwrap_or_else(|| panic!("{decl}: accepted"))
+            .to_string();
+        assert!(
+            !err.contains('\n') && err.contains(field) && err.contains("bsp test.toml"),
+            "{decl}: {err}"
+        );
     }
-    let ok = scene("{ name = \"bsp_lights\", mode = \"faithful\", k = 2, threshold = 0, storage = \"f16\", max_segment_area = 1 }", 1);
+    let ok = scene(
+        "{ name = \"bsp_lights\", mode = \"faithful\", k = 2, threshold = 0, storage = \"f16\", max_segment_area = 1 }",
+        1,
+    );
     let c = Config::from_decl(&ok.methods[0], Some(&ok)).unwrap();
-    assert_eq!((c.mode, c.k, c.threshold, c.storage, c.max_segment_area), (Mode::Faithful, 2.0, 0.0, Storage::F16, 1.0));
+    assert_eq!(
+        (c.mode, c.k, c.threshold, c.storage, c.max_segment_area),
+        (Mode::Faithful, 2.0, 0.0, Storage::F16, 1.0)
+    );
     assert_eq!(c.model(), LightModel::Seed { k: 2.0 });
     // A directional light is refused by name.
     let text =
         "methods = [\"bsp_lights\"]\n[camera]\nposition = [0, 2, 3]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\n[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1\n";
     let sc = crate::scene::Scene::from_str(text, "bsp test.toml", std::path::Path::new("scenes")).unwrap();
     let err = ManyLight::from_scene(&sc, super::NAME).err().unwrap().to_string();
-    assert!(!err.contains('\n') && err.contains("lights[0]") && err.contains("bsp test.toml"), "{err}");
+    assert!(
+        !err.contains('\n') && err.contains("lights[0]") && err.contains("bsp test.toml"),
+        "{err}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -632,9 +872,22 @@ fn pixel_hits(tree: &Tree, eye: DVec3, size: usize) -> Vec<Vec<(usize, f64)>> {
     let mut out = Vec::with_capacity(size * size);
     for j in 0..size {
         for i in 0..size {
-            let (x, y) = (((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * tan, ((j as f64 + 0.5) / size as f64 * 2.0 - 1.0) * tan);
+            let (x, y) = (
+                ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * tan,
+                ((j as f64 + 0.5) / size as f64 * 2.0 - 1.0) * tan,
+            );
             let dir = (f + r * x - u * y).normalize();
-            out.push(tree.fragments.iter().enumerate().filter_map(|(k, (frag, _))| frag.polygon.intersect_ray(eye, dir, 1e-9, f64::INFINITY).map(|t| (k, t))).collect());
+            out.push(
+                tree.fragments
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(k, (frag, _))| {
+                        frag.polygon
+                            .intersect_ray(eye, dir, 1e-9, f64::INFINITY)
+                            .map(|t| (k, t))
+                    })
+                    .collect(),
+            );
         }
     }
     out
@@ -645,7 +898,14 @@ fn item_9_the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_do
     let mut rng = Lcg(21);
     // Random polygons crossing each other (cyclic overlaps a sort cannot resolve), and the
     // thesis's two intersecting polygons (Fig. 6-8).
-    let mut polygons: Vec<ScenePolygon> = (0..12).map(|_| ScenePolygon { polygon: random_convex(&mut rng), albedo: DVec3::ONE, emission: DVec3::ZERO, draw: 0 }).collect();
+    let mut polygons: Vec<ScenePolygon> = (0..12)
+        .map(|_| ScenePolygon {
+            polygon: random_convex(&mut rng),
+            albedo: DVec3::ONE,
+            emission: DVec3::ZERO,
+            draw: 0,
+        })
+        .collect();
     polygons.push(quad(v(-1.0, -0.5, 0.0), v(2.0, 0.0, 0.0), v(0.0, 1.0, 0.3)));
     polygons.push(quad(v(-1.0, -0.5, 0.3), v(2.0, 0.0, 0.0), v(0.0, 1.0, -0.3)));
     let tree = build_tree(&polygons);
@@ -660,14 +920,23 @@ fn item_9_the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_do
         }
         // The naive painter: fragments sorted far to near by their centre's distance.
         let mut sorted: Vec<usize> = (0..tree.fragments.len()).collect();
-        sorted.sort_by(|&a, &b| tree.fragments[b].0.polygon.center().distance(eye).total_cmp(&tree.fragments[a].0.polygon.center().distance(eye)));
+        sorted.sort_by(|&a, &b| {
+            tree.fragments[b]
+                .0
+                .polygon
+                .center()
+                .distance(eye)
+                .total_cmp(&tree.fragments[a].0.polygon.center().distance(eye))
+        });
         let mut sort_rank = vec![0usize; tree.fragments.len()];
         for (k, &f) in sorted.iter().enumerate() {
             sort_rank[f] = k;
         }
         let source = |k: usize| tree.fragments[k].0.source;
         for hits in pixel_hits(&tree, eye, size) {
-            let Some(&(nearest, _)) = hits.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else { continue };
+            let Some(&(nearest, _)) = hits.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+                continue;
+            };
             covered += 1;
             let painted = hits.iter().max_by_key(|h| rank[h.0]).unwrap().0;
             let naive = hits.iter().max_by_key(|h| sort_rank[h.0]).unwrap().0;
@@ -677,15 +946,29 @@ fn item_9_the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_do
     }
     println!("{} fragments from {} polygons; over 100 eyes, {covered} covered pixels: BSP order wrong at {bsp_wrong}, centroid sort at {sort_wrong}", tree.fragments.len(), polygons.len());
     assert!(tree.fragments.len() > polygons.len());
-    assert!(bsp_wrong as f64 <= 1e-3 * covered as f64, "BSP painter's order differs from the depth buffer at {bsp_wrong} of {covered} pixels");
-    assert!(sort_wrong > 10 * bsp_wrong.max(1), "the scene should defeat a centroid sort ({sort_wrong})");
+    assert!(
+        bsp_wrong as f64 <= 1e-3 * covered as f64,
+        "BSP painter's order differs from the depth buffer at {bsp_wrong} of {covered} pixels"
+    );
+    assert!(
+        sort_wrong > 10 * bsp_wrong.max(1),
+        "the scene should defeat a centroid sort ({sort_wrong})"
+    );
 }
 
 #[test]
 fn the_sweep_covers_segment_areas_and_both_modes() {
     let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.02 }", 1);
     let labels: Vec<String> = super::sweep(&sc.methods[0]).into_iter().map(|(l, _)| l).collect();
-    assert_eq!(labels, ["bsp_lights corrected area=0.02", "bsp_lights corrected area=0.08", "bsp_lights corrected area=0.005 f16", "bsp_lights faithful area=0.02"]);
+    assert_eq!(
+        labels,
+        [
+            "bsp_lights corrected area=0.02",
+            "bsp_lights corrected area=0.08",
+            "bsp_lights corrected area=0.005 f16",
+            "bsp_lights faithful area=0.02"
+        ]
+    );
 }
 
 /// The thesis's rounding (§5.6.1, its fix for "zero-width sliver polygons when polygons just
@@ -700,15 +983,52 @@ fn faithful_numerics_round_to_four_decimals_and_leave_no_sliver_where_polygons_t
     let lights = [point(v(0.3, 3.0, 2.0), DVec3::splat(5.0))];
     let exact = run_in(&polygons, &lights, Projection::Thesis, Tolerance::EXACT, 0.01);
     let thesis = run_in(&polygons, &lights, Projection::Thesis, Tolerance::THESIS, 0.01);
-    let wall_pieces = |s: &Setup| s.tree.fragments.iter().filter(|(f, _)| f.source == 1).map(|(f, _)| f.polygon.bounds()).collect::<Vec<_>>();
+    let wall_pieces = |s: &Setup| {
+        s.tree
+            .fragments
+            .iter()
+            .filter(|(f, _)| f.source == 1)
+            .map(|(f, _)| f.polygon.bounds())
+            .collect::<Vec<_>>()
+    };
     let (exact_wall, thesis_wall) = (wall_pieces(&exact), wall_pieces(&thesis));
-    assert_eq!(exact_wall.len(), 2, "exact numerics cut the wall's foot off: {exact_wall:?}");
-    assert!(exact_wall.iter().any(|b| (b.max.y - b.min.y) < 1e-4), "one piece is a sliver under 1e-4 tall: {exact_wall:?}");
-    assert_eq!(thesis_wall.len(), 1, "the rounded wall stands on the floor uncut: {thesis_wall:?}");
+    assert_eq!(
+        exact_wall.len(),
+        2,
+        "exact numerics cut the wall's foot off: {exact_wall:?}"
+    );
+    assert!(
+        exact_wall.iter().any(|b| (b.max.y - b.min.y) < 1e-4),
+        "one piece is a sliver under 1e-4 tall: {exact_wall:?}"
+    );
+    assert_eq!(
+        thesis_wall.len(),
+        1,
+        "the rounded wall stands on the floor uncut: {thesis_wall:?}"
+    );
     let on_grid = |p: DVec3| (0..3).all(|i| ((p[i] / 1e-4) - (p[i] / 1e-4).round()).abs() < 1e-6);
-    assert!(thesis.segments.positions.iter().all(|&p| on_grid(p)), "every segment vertex on the 1e-4 grid");
-    assert!(thesis.tree.fragments.iter().all(|(f, _)| f.polygon.vertices.iter().all(|&p| on_grid(p))), "every fragment vertex on the grid");
-    assert!(!exact.segments.positions.iter().all(|&p| on_grid(p)), "exact numerics keep the wall's foot at -4e-5");
-    let faithful = Config { mode: Mode::Faithful, ..Config::default() };
-    assert_eq!((faithful.tolerance(), Config::default().tolerance()), (Tolerance::THESIS, Tolerance::EXACT));
+    assert!(
+        thesis.segments.positions.iter().all(|&p| on_grid(p)),
+        "every segment vertex on the 1e-4 grid"
+    );
+    assert!(
+        thesis
+            .tree
+            .fragments
+            .iter()
+            .all(|(f, _)| f.polygon.vertices.iter().all(|&p| on_grid(p))),
+        "every fragment vertex on the grid"
+    );
+    assert!(
+        !exact.segments.positions.iter().all(|&p| on_grid(p)),
+        "exact numerics keep the wall's foot at -4e-5"
+    );
+    let faithful = Config {
+        mode: Mode::Faithful,
+        ..Config::default()
+    };
+    assert_eq!(
+        (faithful.tolerance(), Config::default().tolerance()),
+        (Tolerance::THESIS, Tolerance::EXACT)
+    );
 }

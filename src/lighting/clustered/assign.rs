@@ -64,7 +64,14 @@ pub fn decompose(view_proj: &[f32; 16]) -> Option<(Mat4, f32, f32, f32)> {
 
 /// The block for one frame: the grid of `config` over a `width × height` target, slices from the
 /// near plane to `far` (view depth).
-pub fn block(config: &Config, view_proj: &[f32; 16], width: u32, height: u32, far: f32, lights: u32) -> Option<ClusterBlock> {
+pub fn block(
+    config: &Config,
+    view_proj: &[f32; 16],
+    width: u32,
+    height: u32,
+    far: f32,
+    lights: u32,
+) -> Option<ClusterBlock> {
     let (view, sx, sy, near) = decompose(view_proj)?;
     let far = far.max(near * 1.01);
     let log_ratio = (far / near).ln();
@@ -81,7 +88,11 @@ pub fn block(config: &Config, view_proj: &[f32; 16], width: u32, height: u32, fa
 pub fn far_depth(view: &Mat4, min: Vec3, max: Vec3) -> f32 {
     let mut far = 0.0f32;
     for i in 0..8 {
-        let c = Vec3::new(if i & 1 == 0 { min.x } else { max.x }, if i & 2 == 0 { min.y } else { max.y }, if i & 4 == 0 { min.z } else { max.z });
+        let c = Vec3::new(
+            if i & 1 == 0 { min.x } else { max.x },
+            if i & 2 == 0 { min.y } else { max.y },
+            if i & 4 == 0 { min.z } else { max.z },
+        );
         far = far.max(-view.transform_point3(c).z);
     }
     far
@@ -116,15 +127,30 @@ pub fn light_volumes(lights: &[GpuLight], radii: &[f32], cutoff: f32, view: &Mat
             let r = range(l, radii.get(i).copied().unwrap_or(0.0), cutoff);
             let (apex, axis) = NO_CONE;
             if r.is_infinite() {
-                return LightVolume { sphere: [0.0, 0.0, 0.0, f32::INFINITY], range: [f32::INFINITY, 0.0, 0.0, 0.0], apex, axis };
+                return LightVolume {
+                    sphere: [0.0, 0.0, 0.0, f32::INFINITY],
+                    range: [f32::INFINITY, 0.0, 0.0, 0.0],
+                    apex,
+                    axis,
+                };
             }
             if r <= 0.0 {
-                return LightVolume { sphere: [0.0, 0.0, 0.0, -1.0], range: [0.0; 4], apex, axis };
+                return LightVolume {
+                    sphere: [0.0, 0.0, 0.0, -1.0],
+                    range: [0.0; 4],
+                    apex,
+                    axis,
+                };
             }
             let p = Vec3::from_slice(&l.position[..3]);
             let direction = Vec3::from_slice(&l.direction[..3]).normalize_or_zero();
             if l.position[3] != LIGHT_SPOT || direction == Vec3::ZERO {
-                return LightVolume { sphere: view.transform_point3(p).extend(r).into(), range: [r, 0.0, 0.0, 0.0], apex, axis };
+                return LightVolume {
+                    sphere: view.transform_point3(p).extend(r).into(),
+                    range: [r, 0.0, 0.0, 0.0],
+                    apex,
+                    axis,
+                };
             }
             let cos_outer = l.cone[1].clamp(-1.0, 1.0);
             let (centre, radius) = cone_sphere(p, direction, cos_outer, r);
@@ -133,7 +159,11 @@ pub fn light_volumes(lights: &[GpuLight], radii: &[f32], cutoff: f32, view: &Mat
                 sphere: view.transform_point3(centre).extend(radius).into(),
                 range: [r, 0.0, 0.0, 0.0],
                 apex: view.transform_point3(p).extend(cos_outer).into(),
-                axis: view.transform_vector3(direction).normalize_or_zero().extend(sin_outer).into(),
+                axis: view
+                    .transform_vector3(direction)
+                    .normalize_or_zero()
+                    .extend(sin_outer)
+                    .into(),
             }
         })
         .collect()
@@ -220,7 +250,9 @@ pub fn cone_reaches(volume: &LightVolume, centre: Vec3, radius: f32) -> bool {
     let to_c = centre - Vec3::from_slice(&volume.apex[..3]);
     let along = to_c.dot(Vec3::from_slice(&volume.axis[..3]));
     let off = (to_c.length_squared() - along * along).max(0.0).sqrt();
-    cos_outer * off - sin_outer * along <= radius && (along >= -radius || cos_outer < 0.0) && along <= radius + volume.range[0]
+    cos_outer * off - sin_outer * along <= radius
+        && (along >= -radius || cos_outer < 0.0)
+        && along <= radius + volume.range[0]
 }
 
 /// Whether `volume` reaches the column of tile (`x`, `y`) between the near and far depths, as
@@ -233,11 +265,22 @@ pub fn reaches_column(block: &ClusterBlock, x: u32, y: u32, volume: &LightVolume
     }
     let [cols, rows, _, _] = block.grid;
     let [_, _, sx, sy] = block.screen;
-    let (x0, x1) = (x as f32 / cols as f32 * 2.0 - 1.0, (x + 1) as f32 / cols as f32 * 2.0 - 1.0);
-    let (y0, y1) = (y as f32 / rows as f32 * 2.0 - 1.0, (y + 1) as f32 / rows as f32 * 2.0 - 1.0);
+    let (x0, x1) = (
+        x as f32 / cols as f32 * 2.0 - 1.0,
+        (x + 1) as f32 / cols as f32 * 2.0 - 1.0,
+    );
+    let (y0, y1) = (
+        y as f32 / rows as f32 * 2.0 - 1.0,
+        (y + 1) as f32 / rows as f32 * 2.0 - 1.0,
+    );
     let c = Vec3::from_slice(&s[..3]);
     let r = s[3] + 1e-4 * c.length();
-    let planes = [Vec3::new(1.0, 0.0, x0 * sx), Vec3::new(-1.0, 0.0, -x1 * sx), Vec3::new(0.0, 1.0, -y1 * sy), Vec3::new(0.0, -1.0, y0 * sy)];
+    let planes = [
+        Vec3::new(1.0, 0.0, x0 * sx),
+        Vec3::new(-1.0, 0.0, -x1 * sx),
+        Vec3::new(0.0, 1.0, -y1 * sy),
+        Vec3::new(0.0, -1.0, y0 * sy),
+    ];
     planes.iter().all(|p| p.normalize().dot(c) >= -r) && -c.z + r >= block.depth[0] && -c.z - r <= block.depth[1]
 }
 
@@ -249,7 +292,12 @@ pub fn assign_cpu(block: &ClusterBlock, volumes: &[LightVolume]) -> Vec<Vec<u32>
         .map(|c| {
             let (x, y) = (c % block.grid[0], (c / block.grid[0]) % block.grid[1]);
             let (min, max) = froxel_bounds(block, c);
-            volumes.iter().enumerate().filter(|(_, v)| reaches_column(block, x, y, v) && touches(v, min, max)).map(|(i, _)| i as u32).collect()
+            volumes
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| reaches_column(block, x, y, v) && touches(v, min, max))
+                .map(|(i, _)| i as u32)
+                .collect()
         })
         .collect()
 }
@@ -277,8 +325,16 @@ pub struct Assignment {
 impl Assignment {
     pub fn from_words(counts: &[u32], indices: &[u32], max_per_cluster: u32) -> Assignment {
         let cap = max_per_cluster as usize;
-        let lights = counts.iter().enumerate().map(|(c, &n)| indices[c * cap..c * cap + (n as usize).min(cap)].to_vec()).collect();
-        Assignment { counts: counts.to_vec(), lights, max_per_cluster }
+        let lights = counts
+            .iter()
+            .enumerate()
+            .map(|(c, &n)| indices[c * cap..c * cap + (n as usize).min(cap)].to_vec())
+            .collect();
+        Assignment {
+            counts: counts.to_vec(),
+            lights,
+            max_per_cluster,
+        }
     }
 
     /// Clusters that had more lights than slots.
@@ -293,6 +349,11 @@ impl Assignment {
 
     /// The clusters holding light `i`.
     pub fn clusters_of(&self, i: u32) -> Vec<usize> {
-        self.lights.iter().enumerate().filter(|(_, l)| l.contains(&i)).map(|(c, _)| c).collect()
+        self.lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.contains(&i))
+            .map(|(c, _)| c)
+            .collect()
     }
 }

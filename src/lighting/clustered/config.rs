@@ -32,7 +32,12 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Config {
-        Config { tiles: [32, 18], slices: 24, max_per_cluster: 128, cutoff: 0.01 }
+        Config {
+            tiles: [32, 18],
+            slices: 24,
+            max_per_cluster: 128,
+            cutoff: 0.01,
+        }
     }
 }
 
@@ -54,39 +59,86 @@ impl Config {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         let mut c = Config::default();
-        let int = |p: &str, v: &toml::Value, range: std::ops::RangeInclusive<i64>, want: &str| v.as_integer().filter(|n| range.contains(n)).map(|n| n as u32).ok_or_else(|| bad(p, want, v));
+        let int = |p: &str, v: &toml::Value, range: std::ops::RangeInclusive<i64>, want: &str| {
+            v.as_integer()
+                .filter(|n| range.contains(n))
+                .map(|n| n as u32)
+                .ok_or_else(|| bad(p, want, v))
+        };
         for (p, v, _) in &decl.params {
             let p = p.as_str();
             match p {
                 "tiles" => {
                     let want = "[columns, rows], two integers from 1 to 256";
-                    let grid: Option<Vec<u32>> = v.as_array().filter(|a| a.len() == 2).and_then(|a| a.iter().map(|x| x.as_integer().filter(|n| (1..=256).contains(n)).map(|n| n as u32)).collect());
+                    let grid: Option<Vec<u32>> = v.as_array().filter(|a| a.len() == 2).and_then(|a| {
+                        a.iter()
+                            .map(|x| x.as_integer().filter(|n| (1..=256).contains(n)).map(|n| n as u32))
+                            .collect()
+                    });
                     let grid = grid.ok_or_else(|| bad(p, want, v))?;
                     c.tiles = [grid[0], grid[1]];
                 }
-                "slices" => c.slices = int(p, v, 1..=super::MAX_SLICES as i64, &format!("a depth slice count from 1 to {}", super::MAX_SLICES))?,
+                "slices" => {
+                    c.slices = int(
+                        p,
+                        v,
+                        1..=super::MAX_SLICES as i64,
+                        &format!("a depth slice count from 1 to {}", super::MAX_SLICES),
+                    )?
+                }
                 // Up to every light a scene may have: a dense rig can put all of them in one cluster.
-                "max_per_cluster" => c.max_per_cluster = int(p, v, 1..=super::MAX_LIGHTS as i64, &format!("index slots per cluster from 1 to {}", super::MAX_LIGHTS))?,
-                "cutoff" => c.cutoff = Params::float(v).filter(|x| x.is_finite() && *x > 0.0).map(|x| x as f32).ok_or_else(|| bad(p, "an irradiance > 0 (W/m²)", v))?,
+                "max_per_cluster" => {
+                    c.max_per_cluster = int(
+                        p,
+                        v,
+                        1..=super::MAX_LIGHTS as i64,
+                        &format!("index slots per cluster from 1 to {}", super::MAX_LIGHTS),
+                    )?
+                }
+                "cutoff" => {
+                    c.cutoff = Params::float(v)
+                        .filter(|x| x.is_finite() && *x > 0.0)
+                        .map(|x| x as f32)
+                        .ok_or_else(|| bad(p, "an irradiance > 0 (W/m²)", v))?
+                }
                 _ => {}
             }
         }
         // Blame the last of the grid's parameters the scene gives.
         let blame = |order: &[&'static str]| {
-            let p = order.iter().copied().find(|p| decl.param(p).is_some()).unwrap_or(order[0]);
+            let p = order
+                .iter()
+                .copied()
+                .find(|p| decl.param(p).is_some())
+                .unwrap_or(order[0]);
             (p, decl.param(p).cloned().unwrap_or(toml::Value::from("the default")))
         };
         if c.tiles[0] * c.tiles[1] > MAX_TILES {
             let (p, got) = blame(&["tiles"]);
-            return Err(bad(p, &format!("at most {MAX_TILES} tiles in all (one workgroup each)"), &got));
+            return Err(bad(
+                p,
+                &format!("at most {MAX_TILES} tiles in all (one workgroup each)"),
+                &got,
+            ));
         }
         if c.clusters() > MAX_CLUSTERS {
             let (p, got) = blame(&["slices", "tiles"]);
-            return Err(bad(p, &format!("at most {MAX_CLUSTERS} clusters (columns × rows × slices is {})", c.clusters()), &got));
+            return Err(bad(
+                p,
+                &format!(
+                    "at most {MAX_CLUSTERS} clusters (columns × rows × slices is {})",
+                    c.clusters()
+                ),
+                &got,
+            ));
         }
         if c.grid_bytes() > MAX_GRID_BYTES {
             let (p, got) = blame(&["max_per_cluster", "slices", "tiles"]);
-            let want = format!("a grid that fits in {} MiB (boxes, counts and max_per_cluster index slots per cluster: {} MiB)", MAX_GRID_BYTES >> 20, c.grid_bytes() >> 20);
+            let want = format!(
+                "a grid that fits in {} MiB (boxes, counts and max_per_cluster index slots per cluster: {} MiB)",
+                MAX_GRID_BYTES >> 20,
+                c.grid_bytes() >> 20
+            );
             return Err(bad(p, &want, &got));
         }
         Ok(c)

@@ -19,7 +19,10 @@ mod tests;
 
 use glam::Vec3;
 
-use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::backend::{
+    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
+    SubresourceRange,
+};
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -33,10 +36,22 @@ pub const NAME: &str = "clustered";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "tiles", kind: ParamKind::FloatArray },
-        ParamSchema { name: "slices", kind: ParamKind::Int },
-        ParamSchema { name: "max_per_cluster", kind: ParamKind::Int },
-        ParamSchema { name: "cutoff", kind: ParamKind::Float },
+        ParamSchema {
+            name: "tiles",
+            kind: ParamKind::FloatArray,
+        },
+        ParamSchema {
+            name: "slices",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "max_per_cluster",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "cutoff",
+            kind: ParamKind::Float,
+        },
     ],
 };
 
@@ -58,7 +73,10 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d, None) {
-            let label = format!("{NAME} {}x{}x{} cap {}", c.tiles[0], c.tiles[1], c.slices, c.max_per_cluster);
+            let label = format!(
+                "{NAME} {}x{}x{} cap {}",
+                c.tiles[0], c.tiles[1], c.slices, c.max_per_cluster
+            );
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
             }
@@ -119,14 +137,23 @@ pub(crate) const COARSE: u32 = 4;
 
 fn cluster_buffer(gpu: &mut Gpu, name: &str, size: u64) -> Result<BufferId> {
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(16), usage, memory: MemoryKind::GpuOnly })?)
+    Ok(gpu.create_buffer(&BufferDesc {
+        name: name.into(),
+        size: size.max(16),
+        usage,
+        memory: MemoryKind::GpuOnly,
+    })?)
 }
 
 impl Clustered {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Clustered> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
         if cx.scene_gpu.lights.len() > MAX_LIGHTS {
-            return Err(Error::Usage(format!("{}: {NAME}: the scene has {} lights; the cluster assignment handles at most {MAX_LIGHTS}", cx.scene.source, cx.scene_gpu.lights.len())));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the scene has {} lights; the cluster assignment handles at most {MAX_LIGHTS}",
+                cx.scene.source,
+                cx.scene_gpu.lights.len()
+            )));
         }
         // The GPU scene lists the scene's lights one for one, in order.
         let radii = cx
@@ -142,18 +169,41 @@ impl Clustered {
         let bounds = cluster_buffer(cx.gpu, "clustered bounds", clusters * 32)?;
         let counts = cluster_buffer(cx.gpu, "clustered counts", clusters * 4)?;
         let indices = cluster_buffer(cx.gpu, "clustered indices", config.index_bytes())?;
-        let coarse = cluster_buffer(cx.gpu, "clustered coarse", coarse_tiles(&config) as u64 * (MAX_LIGHTS as u64 / 32) * 4)?;
-        let compute = |gpu: &mut Gpu, name: &str, shader: &str| gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, cx.shaders);
+        let coarse = cluster_buffer(
+            cx.gpu,
+            "clustered coarse",
+            coarse_tiles(&config) as u64 * (MAX_LIGHTS as u64 / 32) * 4,
+        )?;
+        let compute = |gpu: &mut Gpu, name: &str, shader: &str| {
+            gpu.create_compute_pipeline(
+                &ComputePipelineDesc {
+                    name: name.into(),
+                    shader: shader.into(),
+                    specialization: vec![],
+                },
+                cx.shaders,
+            )
+        };
         let bounds_pipeline = compute(cx.gpu, "clustered bounds", "clustered/bounds.comp")?;
         let coarse_pipeline = compute(cx.gpu, "clustered coarse", "clustered/coarse.comp")?;
         let assign_pipeline = compute(cx.gpu, "clustered assign", "clustered/assign.comp")?;
         let ds_format = cx.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
-            let mut desc = term_pipeline_desc(&format!("{NAME} {terms}"), "clustered/clustered.vert", "clustered/clustered.frag", terms, ds_format);
+            let mut desc = term_pipeline_desc(
+                &format!("{NAME} {terms}"),
+                "clustered/clustered.vert",
+                "clustered/clustered.frag",
+                terms,
+                ds_format,
+            );
             desc.vertex_layout = vertex_layout();
             cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
-        let (both, base, direct) = (pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?);
+        let (both, base, direct) = (
+            pipeline(Terms::BASE_DIRECT)?,
+            pipeline(Terms::BASE)?,
+            pipeline(Terms::DIRECT)?,
+        );
         let mut method = Clustered {
             config,
             radii,
@@ -183,11 +233,24 @@ impl Clustered {
 
     /// The grid and the light volumes for a frame seen through `view_proj` into a `width ×
     /// height` target, with the lights as they are this frame.
-    pub fn plan(&mut self, view_proj: &[f32; 16], lights: &[crate::gpu_scene::GpuLight], width: u32, height: u32) -> Result<()> {
-        let (view, _, _, near) = assign::decompose(view_proj).ok_or_else(|| Error::Usage(format!("{NAME}: the frame's projection is not a perspective with a near plane")))?;
-        let far = self.scene_box.map_or(2.0 * near, |(min, max)| assign::far_depth(&view, min, max) * 1.01);
+    pub fn plan(
+        &mut self,
+        view_proj: &[f32; 16],
+        lights: &[crate::gpu_scene::GpuLight],
+        width: u32,
+        height: u32,
+    ) -> Result<()> {
+        let (view, _, _, near) = assign::decompose(view_proj).ok_or_else(|| {
+            Error::Usage(format!(
+                "{NAME}: the frame's projection is not a perspective with a near plane"
+            ))
+        })?;
+        let far = self
+            .scene_box
+            .map_or(2.0 * near, |(min, max)| assign::far_depth(&view, min, max) * 1.01);
         let lights_len = lights.len().min(MAX_LIGHTS);
-        self.block = assign::block(&self.config, view_proj, width, height, far, lights_len as u32).ok_or_else(|| Error::Usage(format!("{NAME}: degenerate projection")))?;
+        self.block = assign::block(&self.config, view_proj, width, height, far, lights_len as u32)
+            .ok_or_else(|| Error::Usage(format!("{NAME}: degenerate projection")))?;
         self.volumes = assign::light_volumes(&lights[..lights_len], &self.radii, self.config.cutoff, &view);
         Ok(())
     }
@@ -196,22 +259,34 @@ impl Clustered {
     /// [`Clustered::indices`].
     pub fn add_assignment_passes<'a>(&'a self, graph: &mut RenderGraph<'a>) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let (read, write) = (Access::StorageRead { stages: compute }, Access::StorageWrite { stages: compute });
+        let (read, write) = (
+            Access::StorageRead { stages: compute },
+            Access::StorageWrite { stages: compute },
+        );
         let clusters = self.config.clusters();
         let block = bytemuck::bytes_of(&self.block);
-        graph.pass("clustered bounds").buffer(self.bounds, write, Some("bounds")).record(move |ctx| {
-            ctx.rec.bind_pipeline(self.bounds_pipeline)?;
-            ctx.bind(&[("clusters", Bind::UniformData(block))])?;
-            ctx.rec.dispatch([clusters, 1, 1])
-        });
+        graph
+            .pass("clustered bounds")
+            .buffer(self.bounds, write, Some("bounds"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(self.bounds_pipeline)?;
+                ctx.bind(&[("clusters", Bind::UniformData(block))])?;
+                ctx.rec.dispatch([clusters, 1, 1])
+            });
         let volumes = self.volume_bytes();
         let coarse = coarse_tiles(&self.config);
-        graph.pass("clustered coarse").buffer(self.coarse, write, Some("coarse")).record(move |ctx| {
-            ctx.rec.bind_pipeline(self.coarse_pipeline)?;
-            ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
-            // One workgroup per coarse tile.
-            ctx.rec.dispatch([coarse * ASSIGN_LANES, 1, 1])
-        });
+        graph
+            .pass("clustered coarse")
+            .buffer(self.coarse, write, Some("coarse"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(self.coarse_pipeline)?;
+                ctx.bind(&[
+                    ("clusters", Bind::UniformData(block)),
+                    ("volumes", Bind::StorageData(volumes)),
+                ])?;
+                // One workgroup per coarse tile.
+                ctx.rec.dispatch([coarse * ASSIGN_LANES, 1, 1])
+            });
         let tiles = self.config.tiles[0] * self.config.tiles[1];
         graph
             .pass("clustered assign")
@@ -221,7 +296,10 @@ impl Clustered {
             .buffer(self.indices, write, Some("indices"))
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(self.assign_pipeline)?;
-                ctx.bind(&[("clusters", Bind::UniformData(block)), ("volumes", Bind::StorageData(volumes))])?;
+                ctx.bind(&[
+                    ("clusters", Bind::UniformData(block)),
+                    ("volumes", Bind::StorageData(volumes)),
+                ])?;
                 // One workgroup per tile.
                 ctx.rec.dispatch([tiles * ASSIGN_LANES, 1, 1])
             });
@@ -240,7 +318,11 @@ impl Clustered {
         let clusters = self.config.clusters() as usize;
         let counts = read_words(gpu, self.counts)?;
         let indices = read_words(gpu, self.indices)?;
-        Ok(Assignment::from_words(&counts[..clusters], &indices, self.config.max_per_cluster))
+        Ok(Assignment::from_words(
+            &counts[..clusters],
+            &indices,
+            self.config.max_per_cluster,
+        ))
     }
 
     /// The last frame's uncapped light count per cluster, read back (after it finished).
@@ -268,11 +350,23 @@ pub fn overflow_warning(counts: &[u32], max_per_cluster: u32) -> Option<String> 
 
 fn read_words(gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
     let size = gpu.buffer_desc(buffer)?.size;
-    let host = gpu.create_buffer(&BufferDesc { name: "clustered readback".into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;
+    let host = gpu.create_buffer(&BufferDesc {
+        name: "clustered readback".into(),
+        size,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        memory: MemoryKind::GpuToCpu,
+    })?;
     let frame = gpu.create_frame()?;
     let mut graph = RenderGraph::new();
-    graph.pass("clustered readback").buffer(buffer, Access::TransferRead, None).buffer(host, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
-    graph.pass("clustered readback host").buffer(host, Access::HostRead, None).record(|_| Ok(()));
+    graph
+        .pass("clustered readback")
+        .buffer(buffer, Access::TransferRead, None)
+        .buffer(host, Access::TransferWrite, None)
+        .record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
+    graph
+        .pass("clustered readback host")
+        .buffer(host, Access::HostRead, None)
+        .record(|_| Ok(()));
     let mut states = ResourceStates::default();
     graph.run_and_wait(gpu, frame, &mut states, "clustered readback")?;
     let bytes = gpu.read_buffer(host)?;
@@ -287,11 +381,18 @@ impl LightingMethod for Clustered {
     }
 
     fn warnings(&self, gpu: &mut Gpu) -> Result<Vec<String>> {
-        Ok(overflow_warning(&self.read_counts(gpu)?, self.config.max_per_cluster).into_iter().collect())
+        Ok(overflow_warning(&self.read_counts(gpu)?, self.config.max_per_cluster)
+            .into_iter()
+            .collect())
     }
 
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
-        self.plan(&frame.uniforms.view_proj, &frame.scene.lights, frame.targets.width, frame.targets.height)
+        self.plan(
+            &frame.uniforms.view_proj,
+            &frame.scene.lights,
+            frame.targets.width,
+            frame.targets.height,
+        )
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
@@ -310,19 +411,40 @@ impl LightingMethod for Clustered {
         if direct {
             self.add_assignment_passes(graph);
         }
-        let mut pass = graph.pass(if base { NAME } else { "clustered direct" }).color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
-        pass = pass.buffer(scene.vertices, Access::VertexRead, None).buffer(scene.indices, Access::IndexRead, None).buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"));
+        let mut pass = graph
+            .pass(if base { NAME } else { "clustered direct" })
+            .color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base {
+            pass.depth_stencil_write(t.depth_stencil, false)
+        } else {
+            pass.depth_stencil_read(t.depth_stencil)
+        };
+        pass = pass
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"));
         if direct {
-            pass = pass.buffer(self.counts, Access::StorageRead { stages: frag }, Some("counts")).buffer(self.indices, Access::StorageRead { stages: frag }, Some("indices"));
+            pass = pass
+                .buffer(self.counts, Access::StorageRead { stages: frag }, Some("counts"))
+                .buffer(self.indices, Access::StorageRead { stages: frag }, Some("indices"));
         }
         let volumes = self.volume_bytes();
         let block = bytemuck::bytes_of(&self.block);
         pass.record(move |ctx| {
-            let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            let depth = RenderTarget {
+                read_only: !base,
+                ..RenderTarget::load(t.depth_stencil)
+            };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                colors: vec![RenderTarget::load(t.radiance)],
+                depth_stencil: Some(depth),
+            })?;
             ctx.rec.bind_pipeline(pipeline)?;
-            let lights: &[u8] = if scene.lights.is_empty() { &[0u8; 64] } else { bytemuck::cast_slice(&scene.lights) };
+            let lights: &[u8] = if scene.lights.is_empty() {
+                &[0u8; 64]
+            } else {
+                bytemuck::cast_slice(&scene.lights)
+            };
             let uniform_bytes = bytemuck::bytes_of(&uniforms);
             let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
             record_draws(ctx, scene, &calls, |ctx, material| {
@@ -331,15 +453,39 @@ impl LightingMethod for Clustered {
                 let mut binds = vec![
                     ("frame", Bind::UniformData(uniform_bytes)),
                     ("lights", Bind::StorageData(lights)),
-                    ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
-                    ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
-                    ("specular_map", Bind::Sampled { image: maps.specular, range: whole, sampler: s }),
+                    (
+                        "albedo_map",
+                        Bind::Sampled {
+                            image: maps.albedo,
+                            range: whole,
+                            sampler: s,
+                        },
+                    ),
+                    (
+                        "normal_map",
+                        Bind::Sampled {
+                            image: maps.normal,
+                            range: whole,
+                            sampler: s,
+                        },
+                    ),
+                    (
+                        "specular_map",
+                        Bind::Sampled {
+                            image: maps.specular,
+                            range: whole,
+                            sampler: s,
+                        },
+                    ),
                     ("clusters", Bind::UniformData(block)),
                     ("volumes", Bind::StorageData(volumes)),
                 ];
                 if !direct {
                     // The base alone reads no cluster (the shader's branch is off).
-                    binds.extend([("counts", Bind::StorageData(&[0u8; 16])), ("indices", Bind::StorageData(&[0u8; 16]))]);
+                    binds.extend([
+                        ("counts", Bind::StorageData(&[0u8; 16])),
+                        ("indices", Bind::StorageData(&[0u8; 16])),
+                    ]);
                 }
                 ctx.bind(&binds)
             })?;

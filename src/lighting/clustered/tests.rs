@@ -10,7 +10,13 @@ use crate::scene::Camera;
 use crate::world::level_gen::Rng;
 
 fn camera() -> Camera {
-    Camera { position: Vec3::new(1.0, 4.0, 6.0), target: Vec3::new(-1.0, 0.0, -2.0), up: Vec3::Y, fov_y_deg: 55.0, near: 0.1 }
+    Camera {
+        position: Vec3::new(1.0, 4.0, 6.0),
+        target: Vec3::new(-1.0, 0.0, -2.0),
+        up: Vec3::Y,
+        fov_y_deg: 55.0,
+        near: 0.1,
+    }
 }
 
 #[test]
@@ -19,8 +25,15 @@ fn the_camera_is_recovered_from_the_view_projection() {
     let aspect = 4.0 / 3.0;
     let (view, sx, sy, near) = decompose(&cam.view_projection(aspect).to_cols_array()).unwrap();
     let f = 1.0 / (0.5 * cam.fov_y_deg.to_radians()).tan();
-    assert!((near - cam.near).abs() < 1e-5 && (sx - aspect / f).abs() < 1e-5 && (sy - 1.0 / f).abs() < 1e-5, "{near} {sx} {sy}");
-    assert!(view.abs_diff_eq(cam.view_matrix(), 1e-5), "{view} vs {}", cam.view_matrix());
+    assert!(
+        (near - cam.near).abs() < 1e-5 && (sx - aspect / f).abs() < 1e-5 && (sy - 1.0 / f).abs() < 1e-5,
+        "{near} {sx} {sy}"
+    );
+    assert!(
+        view.abs_diff_eq(cam.view_matrix(), 1e-5),
+        "{view} vs {}",
+        cam.view_matrix()
+    );
     assert!(decompose(&Mat4::IDENTITY.to_cols_array()).is_none());
 }
 
@@ -35,7 +48,10 @@ fn the_cone_sphere_holds_the_cut_cone() {
             let angle = outer_deg.to_radians() * k as f32 / 20.0;
             for t in [0.0, 0.5, 1.0] {
                 let p = apex + (axis * angle.cos() + side * angle.sin()) * 3.0 * t;
-                assert!((p - c).length() <= r * (1.0 + 1e-5), "outer {outer_deg}: {p} outside ({c}, {r})");
+                assert!(
+                    (p - c).length() <= r * (1.0 + 1e-5),
+                    "outer {outer_deg}: {p} outside ({c}, {r})"
+                );
             }
         }
         // Never larger than the plain sphere about the apex.
@@ -45,12 +61,23 @@ fn the_cone_sphere_holds_the_cut_cone() {
 
 #[test]
 fn ranges_come_from_the_radius_or_the_cutoff() {
-    let point = GpuLight { position: [0.0, 0.0, 0.0, LIGHT_POINT], direction: [0.0; 4], intensity: [4.0, 1.0, 2.0, 0.0], cone: [0.0; 4] };
+    let point = GpuLight {
+        position: [0.0, 0.0, 0.0, LIGHT_POINT],
+        direction: [0.0; 4],
+        intensity: [4.0, 1.0, 2.0, 0.0],
+        cone: [0.0; 4],
+    };
     assert_eq!(range(&point, 2.5, 0.01), 2.5);
     assert!((range(&point, 0.0, 0.01) - 20.0).abs() < 1e-4);
-    let dark = GpuLight { intensity: [0.0; 4], ..point };
+    let dark = GpuLight {
+        intensity: [0.0; 4],
+        ..point
+    };
     assert_eq!(range(&dark, 0.0, 0.01), 0.0);
-    let sun = GpuLight { position: [0.0, 0.0, 0.0, LIGHT_DIRECTIONAL], ..point };
+    let sun = GpuLight {
+        position: [0.0, 0.0, 0.0, LIGHT_DIRECTIONAL],
+        ..point
+    };
     assert!(range(&sun, 0.0, 0.01).is_infinite());
     let v = assign::light_volumes(&[dark, sun], &[], 0.01, &Mat4::IDENTITY);
     assert!(v[0].sphere[3] < 0.0 && v[1].sphere[3].is_infinite());
@@ -61,7 +88,11 @@ fn ranges_come_from_the_radius_or_the_cutoff() {
 #[test]
 fn the_cluster_boxes_cover_the_view() {
     let cam = camera();
-    let config = Config { tiles: [7, 5], slices: 9, ..Config::default() };
+    let config = Config {
+        tiles: [7, 5],
+        slices: 9,
+        ..Config::default()
+    };
     let (w, h) = (70u32, 50u32);
     let vp = cam.view_projection(w as f32 / h as f32).to_cols_array();
     let b = block(&config, &vp, w, h, 30.0, 0).unwrap();
@@ -79,9 +110,18 @@ fn the_cluster_boxes_cover_the_view() {
                 let y = ((j as f32 + 0.5) * 5.0 / h as f32) as u32;
                 let k = ((depth / b.depth[0]).ln() * b.depth[3]).floor().clamp(0.0, 8.0) as u32;
                 let (min, max) = froxel_bounds(&b, assign::cluster_index(&b, x, y, k));
-                assert!(p.cmpge(min).all() && p.cmple(max).all(), "pixel ({i},{j}) t {t}: {p} outside {min}..{max}");
-                let touching = LightVolume { sphere: p.extend(0.0).into(), ..LightVolume::default() };
-                assert!(assign::reaches_column(&b, x, y, &touching), "pixel ({i},{j}) t {t}: a point in the column is not reached");
+                assert!(
+                    p.cmpge(min).all() && p.cmple(max).all(),
+                    "pixel ({i},{j}) t {t}: {p} outside {min}..{max}"
+                );
+                let touching = LightVolume {
+                    sphere: p.extend(0.0).into(),
+                    ..LightVolume::default()
+                };
+                assert!(
+                    assign::reaches_column(&b, x, y, &touching),
+                    "pixel ({i},{j}) t {t}: a point in the column is not reached"
+                );
             }
         }
     }
@@ -91,7 +131,12 @@ fn the_cluster_boxes_cover_the_view() {
 /// outer half-angle of `outer_deg` and `range`.
 fn spot_volume(apex: Vec3, axis: Vec3, outer_deg: f32, range: f32) -> LightVolume {
     let cos_outer = outer_deg.to_radians().cos();
-    let spot = GpuLight { position: apex.extend(LIGHT_SPOT).into(), direction: axis.extend(0.0).into(), intensity: [1.0; 4], cone: [1.0, cos_outer, 0.0, 0.0] };
+    let spot = GpuLight {
+        position: apex.extend(LIGHT_SPOT).into(),
+        direction: axis.extend(0.0).into(),
+        intensity: [1.0; 4],
+        cone: [1.0, cos_outer, 0.0, 0.0],
+    };
     assign::light_volumes(&[spot], &[range], 0.01, &Mat4::IDENTITY)[0]
 }
 
@@ -118,9 +163,13 @@ fn the_cone_test_keeps_every_box_the_cut_cone_reaches() {
                 let d = p - apex;
                 d.length() <= range && d.dot(axis) >= d.length() * outer_deg.to_radians().cos()
             };
-            let grid = (0..7 * 7 * 7).map(|k| min + (max - min) * Vec3::new((k % 7) as f32, (k / 7 % 7) as f32, (k / 49) as f32) / 6.0);
+            let grid = (0..7 * 7 * 7)
+                .map(|k| min + (max - min) * Vec3::new((k % 7) as f32, (k / 7 % 7) as f32, (k / 49) as f32) / 6.0);
             let hits = grid.clone().any(inside_cut_cone) || inside_cut_cone(centre);
-            let sphere_only = LightVolume { axis: [0.0, 0.0, 0.0, -1.0], ..volume };
+            let sphere_only = LightVolume {
+                axis: [0.0, 0.0, 0.0, -1.0],
+                ..volume
+            };
             let kept = assign::touches(&volume, min, max);
             if hits {
                 reached += 1;
@@ -131,8 +180,14 @@ fn the_cone_test_keeps_every_box_the_cut_cone_reaches() {
             }
         }
     }
-    assert!(reached > 500 && outside > 500, "{reached} boxes in reach, {outside} outside the cone but in its sphere");
-    assert!(culled_outside * 3 > outside, "the cone test culled {culled_outside} of {outside} boxes outside the cone");
+    assert!(
+        reached > 500 && outside > 500,
+        "{reached} boxes in reach, {outside} outside the cone but in its sphere"
+    );
+    assert!(
+        culled_outside * 3 > outside,
+        "the cone test culled {culled_outside} of {outside} boxes outside the cone"
+    );
 }
 
 /// A 30° spot 4 m above a floor, aimed straight down with a 7 m range: its bounding sphere
@@ -143,11 +198,23 @@ fn a_spot_light_is_not_assigned_beside_its_cone() {
     let volume = spot_volume(Vec3::new(0.0, 4.0, 0.0), -Vec3::Y, 30.0, 7.0);
     let floor_box = |x: f32| (Vec3::new(x - 0.25, -0.05, -0.25), Vec3::new(x + 0.25, 0.05, 0.25));
     let (min, max) = floor_box(3.5);
-    let sphere_only = LightVolume { axis: [0.0, 0.0, 0.0, -1.0], ..volume };
-    assert!(assign::touches(&sphere_only, min, max), "the bounding sphere reaches the box beside the cone");
-    assert!(!assign::touches(&volume, min, max), "a box beside the cone was assigned the spot light");
+    let sphere_only = LightVolume {
+        axis: [0.0, 0.0, 0.0, -1.0],
+        ..volume
+    };
+    assert!(
+        assign::touches(&sphere_only, min, max),
+        "the bounding sphere reaches the box beside the cone"
+    );
+    assert!(
+        !assign::touches(&volume, min, max),
+        "a box beside the cone was assigned the spot light"
+    );
     let (min, max) = floor_box(2.0);
-    assert!(assign::touches(&volume, min, max), "a box in the cone's footprint lost the spot light");
+    assert!(
+        assign::touches(&volume, min, max),
+        "a box in the cone's footprint lost the spot light"
+    );
 }
 
 /// The assignment shader's limits are copies of the Rust ones (the config checks against these,
@@ -155,15 +222,27 @@ fn a_spot_light_is_not_assigned_beside_its_cone() {
 #[test]
 fn the_assignment_shader_has_the_same_limits() {
     let shader = include_str!("../../../glsl/clustered/assign.comp");
-    for line in [format!("const uint MAX_LIGHTS = {}u;", super::MAX_LIGHTS), format!("const uint MAX_SLICES = {}u;", super::MAX_SLICES)] {
-        assert!(shader.lines().any(|l| l.trim() == line), "glsl/clustered/assign.comp lacks `{line}`");
+    for line in [
+        format!("const uint MAX_LIGHTS = {}u;", super::MAX_LIGHTS),
+        format!("const uint MAX_SLICES = {}u;", super::MAX_SLICES),
+    ] {
+        assert!(
+            shader.lines().any(|l| l.trim() == line),
+            "glsl/clustered/assign.comp lacks `{line}`"
+        );
     }
     // The coarse pass strides its masks by MAX_LIGHTS / 32 words, as the assignment reads them,
     // and the coarse buffer is sized by the Rust COARSE.
     let coarse = include_str!("../../../glsl/clustered/coarse.comp");
     let line = format!("const uint MAX_LIGHTS = {}u;", super::MAX_LIGHTS);
-    assert!(coarse.lines().any(|l| l.trim() == line), "glsl/clustered/coarse.comp lacks `{line}`");
+    assert!(
+        coarse.lines().any(|l| l.trim() == line),
+        "glsl/clustered/coarse.comp lacks `{line}`"
+    );
     let common = include_str!("../../../glsl/clustered/clusters.glsl");
     let line = format!("const uint COARSE = {}u;", super::COARSE);
-    assert!(common.lines().any(|l| l.trim() == line), "glsl/clustered/clusters.glsl lacks `{line}`");
+    assert!(
+        common.lines().any(|l| l.trim() == line),
+        "glsl/clustered/clusters.glsl lacks `{line}`"
+    );
 }

@@ -15,7 +15,10 @@ use crate::graph::{Access, RenderGraph};
 use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
 use crate::scene::{MethodDecl, MethodSchema};
 
-pub const SCHEMA: MethodSchema = MethodSchema { name: "forward", params: &[] };
+pub const SCHEMA: MethodSchema = MethodSchema {
+    name: "forward",
+    params: &[],
+};
 
 /// Forward has no quality settings: one configuration.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
@@ -33,11 +36,21 @@ impl Forward {
     pub fn new(c: &mut CreateContext<'_>, _decl: &MethodDecl) -> Result<Self> {
         let ds_format = c.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
-            let mut desc = term_pipeline_desc(&format!("forward {terms}"), "forward/forward.vert", "forward/forward.frag", terms, ds_format);
+            let mut desc = term_pipeline_desc(
+                &format!("forward {terms}"),
+                "forward/forward.vert",
+                "forward/forward.frag",
+                terms,
+                ds_format,
+            );
             desc.vertex_layout = vertex_layout();
             c.gpu.create_graphics_pipeline(&desc, c.shaders)
         };
-        Ok(Forward { both: pipeline(Terms::BASE_DIRECT)?, base: pipeline(Terms::BASE)?, direct: pipeline(Terms::DIRECT)? })
+        Ok(Forward {
+            both: pipeline(Terms::BASE_DIRECT)?,
+            base: pipeline(Terms::BASE)?,
+            direct: pipeline(Terms::DIRECT)?,
+        })
     }
 }
 
@@ -58,14 +71,32 @@ impl LightingMethod for Forward {
             (false, true) => self.direct,
             (false, false) => return Ok(()),
         };
-        let mut pass = graph.pass(if base { "forward" } else { "forward direct" }).color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
-        pass.buffer(scene.vertices, Access::VertexRead, None).buffer(scene.indices, Access::IndexRead, None).buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials")).record(
-            move |ctx| {
-                let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+        let mut pass = graph
+            .pass(if base { "forward" } else { "forward direct" })
+            .color_attachment(t.radiance, SubresourceRange::mip(0), false);
+        pass = if base {
+            pass.depth_stencil_write(t.depth_stencil, false)
+        } else {
+            pass.depth_stencil_read(t.depth_stencil)
+        };
+        pass.buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .record(move |ctx| {
+                let depth = RenderTarget {
+                    read_only: !base,
+                    ..RenderTarget::load(t.depth_stencil)
+                };
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(t.radiance)],
+                    depth_stencil: Some(depth),
+                })?;
                 ctx.rec.bind_pipeline(pipeline)?;
-                let lights: &[u8] = if scene.lights.is_empty() { &[0u8; 64] } else { bytemuck::cast_slice(&scene.lights) };
+                let lights: &[u8] = if scene.lights.is_empty() {
+                    &[0u8; 64]
+                } else {
+                    bytemuck::cast_slice(&scene.lights)
+                };
                 let uniform_bytes = bytemuck::bytes_of(&uniforms);
                 let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
                 record_draws(ctx, scene, &calls, |ctx, material| {
@@ -74,15 +105,35 @@ impl LightingMethod for Forward {
                     ctx.bind(&[
                         ("frame", Bind::UniformData(uniform_bytes)),
                         ("lights", Bind::StorageData(lights)),
-                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
-                        ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
-                        ("specular_map", Bind::Sampled { image: maps.specular, range: whole, sampler: s }),
+                        (
+                            "albedo_map",
+                            Bind::Sampled {
+                                image: maps.albedo,
+                                range: whole,
+                                sampler: s,
+                            },
+                        ),
+                        (
+                            "normal_map",
+                            Bind::Sampled {
+                                image: maps.normal,
+                                range: whole,
+                                sampler: s,
+                            },
+                        ),
+                        (
+                            "specular_map",
+                            Bind::Sampled {
+                                image: maps.specular,
+                                range: whole,
+                                sampler: s,
+                            },
+                        ),
                     ])
                 })?;
                 ctx.rec.end_rendering();
                 Ok(())
-            },
-        );
+            });
         Ok(())
     }
 }

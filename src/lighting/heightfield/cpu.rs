@@ -79,8 +79,16 @@ impl PyramidHorizon<'_> {
     pub fn light(&self, p: (i64, i64), dir: (f64, f64), d_li: f64) -> f64 {
         let n = self.levels.len();
         let corrected = self.mode == Mode::Corrected;
-        let t_li = if d_li > 0.0 { d_li.ln() / (std::f64::consts::LN_2 / self.ls as f64) } else { -1.0 };
-        let k = if t_li < 0.0 { 0 } else { ((t_li.floor() as usize) + 1).min(n - 1) };
+        let t_li = if d_li > 0.0 {
+            d_li.ln() / (std::f64::consts::LN_2 / self.ls as f64)
+        } else {
+            -1.0
+        };
+        let k = if t_li < 0.0 {
+            0
+        } else {
+            ((t_li.floor() as usize) + 1).min(n - 1)
+        };
         let w = self.samples(p, dir, k + 1);
         if t_li < 0.0 {
             return knot(&w, 0, 0);
@@ -179,10 +187,20 @@ pub fn sphere_light(dir: DVec3, sin_half_angle: f64, bands: usize) -> ShResult<V
 
 /// Shading (ρ = 1) of one receiver from horizons through the settings' table, lookup mode and
 /// window.
-pub fn shade_horizons(horizons: &[f64], kind: TableKind, settings: &Settings, normal: DVec3, light: &[f64]) -> ShResult<f64> {
+pub fn shade_horizons(
+    horizons: &[f64],
+    kind: TableKind,
+    settings: &Settings,
+    normal: DVec3,
+    light: &[f64],
+) -> ShResult<f64> {
     let bands = settings.bands as usize;
     let table = WedgeTable::shared(kind, horizons.len(), settings.table_size as usize, bands)?;
-    let v = wedge::visibility(horizons, WedgeSource::Table(&table, settings.mode == Mode::Corrected), bands)?;
+    let v = wedge::visibility(
+        horizons,
+        WedgeSource::Table(&table, settings.mode == Mode::Corrected),
+        bands,
+    )?;
     let window: Vec<f64> = settings.window_factors().iter().map(|&f| f as f64).collect();
     shade_windowed(&v, &transfer_cosine(normal, bands)?, light, bands, &window)
 }
@@ -215,13 +233,24 @@ mod tests {
     #[test]
     fn overhead_sphere_ratios() {
         let s = corrected();
-        for (deg, ratio) in [(1.0f64, 1.053), (10.0, 1.051), (30.0, 1.031), (45.0, 1.008), (60.0, 0.985), (80.0, 0.978)] {
+        for (deg, ratio) in [
+            (1.0f64, 1.053),
+            (10.0, 1.051),
+            (30.0, 1.031),
+            (45.0, 1.008),
+            (60.0, 0.985),
+            (80.0, 0.978),
+        ] {
             let a = deg.to_radians();
             let light = sphere_light(DVec3::Z, a.sin(), 4).unwrap();
             // Flat field: every local horizon is 0.
             let got = shade_horizons(&[0.0; 32], TableKind::Local, &s, DVec3::Z, &light).unwrap();
             let exact = a.sin().powi(2);
-            assert!((got / exact - ratio).abs() < 0.005 * ratio, "θ {deg}: SH/exact {} vs {ratio}", got / exact);
+            assert!(
+                (got / exact - ratio).abs() < 0.005 * ratio,
+                "θ {deg}: SH/exact {} vs {ratio}",
+                got / exact
+            );
         }
     }
 
@@ -231,8 +260,22 @@ mod tests {
     fn light_below_leaks() {
         let s = corrected();
         let a = 10f64.to_radians();
-        let below = shade_horizons(&[0.0; 32], TableKind::Local, &s, DVec3::Z, &sphere_light(-DVec3::Z, a.sin(), 4).unwrap()).unwrap();
-        let above = shade_horizons(&[0.0; 32], TableKind::Local, &s, DVec3::Z, &sphere_light(DVec3::Z, a.sin(), 4).unwrap()).unwrap();
+        let below = shade_horizons(
+            &[0.0; 32],
+            TableKind::Local,
+            &s,
+            DVec3::Z,
+            &sphere_light(-DVec3::Z, a.sin(), 4).unwrap(),
+        )
+        .unwrap();
+        let above = shade_horizons(
+            &[0.0; 32],
+            TableKind::Local,
+            &s,
+            DVec3::Z,
+            &sphere_light(DVec3::Z, a.sin(), 4).unwrap(),
+        )
+        .unwrap();
         assert!((below - 0.0021).abs() < 2e-4, "{below}");
         assert!((above - 0.0317).abs() < 5e-4, "{above}");
     }
@@ -252,7 +295,14 @@ mod tests {
         let q = sh::Quadrature::sphere(600, 1200).unwrap();
         let unoccluded = exact_cap_cosine(elev, half);
         // (β, the digest's SH value, its exact value)
-        for (beta_deg, want_sh, want_exact) in [(20.0f64, 0.01079, 0.01508), (30.0, 0.00813, 0.00851), (40.0, 0.00510, 0.0), (50.0, 0.00207, 0.0), (60.0, -0.00058, 0.0), (85.0, -0.00381, 0.0)] {
+        for (beta_deg, want_sh, want_exact) in [
+            (20.0f64, 0.01079, 0.01508),
+            (30.0, 0.00813, 0.00851),
+            (40.0, 0.00510, 0.0),
+            (50.0, 0.00207, 0.0),
+            (60.0, -0.00058, 0.0),
+            (85.0, -0.00381, 0.0),
+        ] {
             let tb = beta_deg.to_radians().tan();
             let horizon = |phi: f64| if phi.cos() > 0.0 { (tb * phi.cos()).atan() } else { 0.0 };
             let horizons: Vec<f64> = (0..32).map(|j| horizon(TAU * j as f64 / 32.0)).collect();
@@ -266,8 +316,14 @@ mod tests {
                     0.0
                 }
             }) / PI;
-            assert!((got - want_sh).abs() < 2e-4, "β {beta_deg}°: SH {got:.5}, digest {want_sh}");
-            assert!((exact - want_exact).abs() < 3e-4, "β {beta_deg}°: exact {exact:.5}, digest {want_exact}");
+            assert!(
+                (got - want_sh).abs() < 2e-4,
+                "β {beta_deg}°: SH {got:.5}, digest {want_sh}"
+            );
+            assert!(
+                (exact - want_exact).abs() < 3e-4,
+                "β {beta_deg}°: exact {exact:.5}, digest {want_exact}"
+            );
             if beta_deg == 40.0 {
                 // Fully hidden, yet about a third of the unoccluded light comes through.
                 assert!((0.3..0.4).contains(&(got / unoccluded)), "{}", got / unoccluded);
@@ -308,9 +364,15 @@ mod tests {
         let res = 64u32;
         let (h, d) = (6.0f32, 10.0f64);
         let wall_x = 32.0 + d;
-        let values = (0..res * res).map(|i| if (i % res) as f64 >= wall_x { h } else { 0.0 }).collect();
+        let values = (0..res * res)
+            .map(|i| if (i % res) as f64 >= wall_x { h } else { 0.0 })
+            .collect();
         let g = Grid { size: res, values };
-        let b = BruteHorizon { heights: &g, step: 1.0 / 32.0, spacing: 1.0 };
+        let b = BruteHorizon {
+            heights: &g,
+            step: 1.0 / 32.0,
+            spacing: 1.0,
+        };
         let mut worst = 0.0f64;
         for j in 0..32 {
             let dir = direction(j, 32);
@@ -318,9 +380,18 @@ mod tests {
             // The bilinear step rises over the texel before the wall and tops out at distance d;
             // the wall spans every row (and the edge clamp continues it), so every direction
             // toward it meets its top within the 64-texel march.
-            let want = if dir.0 > 1e-9 { (h as f64 * dir.0 / d).atan() } else { 0.0 };
+            let want = if dir.0 > 1e-9 {
+                (h as f64 * dir.0 / d).atan()
+            } else {
+                0.0
+            };
             worst = worst.max((got - want).abs());
-            assert!((got - want).abs().to_degrees() < 0.1, "direction {j}: {:.4}° vs {:.4}°", got.to_degrees(), want.to_degrees());
+            assert!(
+                (got - want).abs().to_degrees() < 0.1,
+                "direction {j}: {:.4}° vs {:.4}°",
+                got.to_degrees(),
+                want.to_degrees()
+            );
         }
         eprintln!("brute-force wall: worst {:.4}°", worst.to_degrees());
     }

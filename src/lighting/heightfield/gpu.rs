@@ -11,7 +11,10 @@ use glam::{Vec2, Vec3};
 use super::pyramid;
 use super::settings::{Decimation, Horizon, Mode, Settings, MAX_BANDS, MAX_LEVELS, MAX_LIGHTS, MAX_NPHI};
 use super::wedge::{TableKind, WedgeTable};
-use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, ImageDesc, ImageId, MemoryKind, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
+use crate::backend::{
+    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, ImageDesc, ImageId, MemoryKind, PipelineId, SamplerDesc,
+    SamplerId, SpecConstant, SubresourceRange,
+};
 use crate::bake::{BakeKey, Baker};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
@@ -43,10 +46,25 @@ impl GenParams {
             HeightShape::Flat | HeightShape::Image { .. } => (0, 0, [0.0; 4]),
             HeightShape::Slope { slope_deg } => (0, 0, [slope_deg.to_radians().tan(), 0.0, 0.0, 0.0]),
             HeightShape::Step { position } => (0, 0, [*position, 0.0, 0.0, 0.0]),
-            HeightShape::Sine { wavelength } | HeightShape::EggTray { wavelength } => (0, 0, [*wavelength, 0.0, 0.0, 0.0]),
-            HeightShape::Cones { count, radius, ring_radius, size_variation } => (*count, 0, [0.0, *radius, *ring_radius, *size_variation]),
-            HeightShape::Fbm { wavelength, octaves, seed } => (*octaves, *seed, [*wavelength, 0.0, 0.0, 0.0]),
-            HeightShape::City { wavelength, seed, street } => (0, *seed, [*wavelength, 0.0, 0.0, *street]),
+            HeightShape::Sine { wavelength } | HeightShape::EggTray { wavelength } => {
+                (0, 0, [*wavelength, 0.0, 0.0, 0.0])
+            }
+            HeightShape::Cones {
+                count,
+                radius,
+                ring_radius,
+                size_variation,
+            } => (*count, 0, [0.0, *radius, *ring_radius, *size_variation]),
+            HeightShape::Fbm {
+                wavelength,
+                octaves,
+                seed,
+            } => (*octaves, *seed, [*wavelength, 0.0, 0.0, 0.0]),
+            HeightShape::City {
+                wavelength,
+                seed,
+                street,
+            } => (0, *seed, [*wavelength, 0.0, 0.0, *street]),
         };
         let (s, c) = src.pattern_rotate_deg.to_radians().sin_cos();
         let (iw, ih) = image.unwrap_or((1, 1));
@@ -89,7 +107,14 @@ impl PassParams {
         let mut out = Vec::with_capacity(16 * (6 + MAX_NPHI as usize * 4 + MAX_LEVELS as usize));
         out.extend_from_slice(bytemuck::cast_slice(&self.dims));
         out.extend_from_slice(bytemuck::cast_slice(&self.cfg));
-        for v in [self.grid, self.horizon, self.light_pos, self.light_radiance, self.window[0], self.window[1]] {
+        for v in [
+            self.grid,
+            self.horizon,
+            self.light_pos,
+            self.light_radiance,
+            self.window[0],
+            self.window[1],
+        ] {
             out.extend_from_slice(bytemuck::cast_slice(&v));
         }
         let mut push = |v: &[[f32; 4]], n: usize| {
@@ -168,8 +193,14 @@ impl FieldInputs {
             .iter()
             .enumerate()
             .find(|(_, o)| matches!(o.mesh, MeshSource::Heightfield(_)))
-            .ok_or_else(|| Error::Usage(format!("{src}: methods: {method} needs an object with mesh = \"heightfield\"")))?;
-        let MeshSource::Heightfield(source) = &obj.mesh else { unreachable!("matched above") };
+            .ok_or_else(|| {
+                Error::Usage(format!(
+                    "{src}: methods: {method} needs an object with mesh = \"heightfield\""
+                ))
+            })?;
+        let MeshSource::Heightfield(source) = &obj.mesh else {
+            unreachable!("matched above")
+        };
         let (scale, rotation, translation) = obj.transform.to_scale_rotation_translation();
         if (scale - Vec3::ONE).abs().max_element() > 1e-6 || rotation.angle_between(glam::Quat::IDENTITY) > 1e-6 {
             return Err(Error::Usage(format!(
@@ -177,7 +208,10 @@ impl FieldInputs {
                 obj.name
             )));
         }
-        let material = scene.materials.get(obj.material).ok_or_else(|| Error::Usage(format!("{src}: objects[{object}]: material index out of range")))?;
+        let material = scene
+            .materials
+            .get(obj.material)
+            .ok_or_else(|| Error::Usage(format!("{src}: objects[{object}]: material index out of range")))?;
         // The shading comes from the field's own normals through the SH transfer, computed per
         // texel before any material is known, so a normal map cannot be honoured; refusing it
         // keeps the method from silently disagreeing with the reference, which applies it.
@@ -190,7 +224,16 @@ impl FieldInputs {
         let mut lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
             match l {
-                Light::Sphere { center, radius, radiance, .. } => lights.push(SphereLight { center: *center, radius: *radius, radiance: *radiance }),
+                Light::Sphere {
+                    center,
+                    radius,
+                    radiance,
+                    ..
+                } => lights.push(SphereLight {
+                    center: *center,
+                    radius: *radius,
+                    radiance: *radiance,
+                }),
                 other => {
                     let kind = match other {
                         Light::Point { .. } => "point",
@@ -203,21 +246,37 @@ impl FieldInputs {
             }
         }
         if lights.len() > MAX_LIGHTS {
-            return Err(Error::Usage(format!("{src}: lights: {method} takes at most {MAX_LIGHTS} sphere lights, the scene has {}", lights.len())));
+            return Err(Error::Usage(format!(
+                "{src}: lights: {method} takes at most {MAX_LIGHTS} sphere lights, the scene has {}",
+                lights.len()
+            )));
         }
         let environment = match &scene.environment {
             None => EnvInput::None,
             Some(Environment::Constant { radiance }) => EnvInput::Constant(*radiance),
             Some(Environment::Image { .. }) => {
                 let (width, texels) = env.reduced(MAX_ENV_WIDTH);
-                EnvInput::Map { width, height: texels.len() as u32 / width, texels }
+                EnvInput::Map {
+                    width,
+                    height: texels.len() as u32 / width,
+                    texels,
+                }
             }
             Some(Environment::Cube { .. }) => {
                 let (size, texels) = env.reduced(MAX_ENV_WIDTH);
                 EnvInput::Cube { size, texels }
             }
         };
-        Ok(FieldInputs { object, source: source.clone(), translation, material: obj.material, albedo: material.albedo, emission: material.emission, lights, environment })
+        Ok(FieldInputs {
+            object,
+            source: source.clone(),
+            translation,
+            material: obj.material,
+            albedo: material.albedo,
+            emission: material.emission,
+            lights,
+            environment,
+        })
     }
 }
 
@@ -226,14 +285,37 @@ impl FieldInputs {
 const WEDGE_TABLE_VERSION: u32 = 1;
 
 /// A wedge table through the bake stage (a precomputed visibility table, keyed by its settings).
-fn baked_wedge_table(bakes: &mut Baker, kind: TableKind, nphi: usize, nodes: usize, bands: usize) -> Result<WedgeTable> {
-    let key = BakeKey::new("heightfield wedge table").with("version", WEDGE_TABLE_VERSION).with("kind", kind).with("nphi", nphi).with("nodes", nodes).with("bands", bands);
+fn baked_wedge_table(
+    bakes: &mut Baker,
+    kind: TableKind,
+    nphi: usize,
+    nodes: usize,
+    bands: usize,
+) -> Result<WedgeTable> {
+    let key = BakeKey::new("heightfield wedge table")
+        .with("version", WEDGE_TABLE_VERSION)
+        .with("kind", kind)
+        .with("nphi", nphi)
+        .with("nodes", nodes)
+        .with("bands", bands);
     let name = format!("hf wedge table {kind:?} nphi={nphi} nodes={nodes} bands={bands}");
     let table_err = |e: crate::sh::ShError| Error::Usage(format!("wedge table: {e}"));
-    let data: Vec<f64> = bakes.bake(&name, &key, |_| Ok(WedgeTable::build(kind, nphi, nodes, bands).map_err(table_err)?.data))?;
-    let table = WedgeTable { kind, nphi, nodes: nodes.max(2), bands, data };
+    let data: Vec<f64> = bakes.bake(&name, &key, |_| {
+        Ok(WedgeTable::build(kind, nphi, nodes, bands).map_err(table_err)?.data)
+    })?;
+    let table = WedgeTable {
+        kind,
+        nphi,
+        nodes: nodes.max(2),
+        bands,
+        data,
+    };
     if table.data.len() != table.nodes * table.nodes * bands * bands {
-        return Err(Error::Usage(format!("{name}: the baked table has {} values, expected {}", table.data.len(), table.nodes * table.nodes * bands * bands)));
+        return Err(Error::Usage(format!(
+            "{name}: the baked table has {} values, expected {}",
+            table.data.len(),
+            table.nodes * table.nodes * bands * bands
+        )));
     }
     Ok(table)
 }
@@ -287,8 +369,21 @@ fn compute(gpu: &mut Gpu, shaders: &ShaderLibrary, name: &str, shader: &str) -> 
     compute_spec(gpu, shaders, name, shader, vec![])
 }
 
-fn compute_spec(gpu: &mut Gpu, shaders: &ShaderLibrary, name: &str, shader: &str, specialization: Vec<SpecConstant>) -> Result<PipelineId> {
-    Ok(gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization }, shaders)?)
+fn compute_spec(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    name: &str,
+    shader: &str,
+    specialization: Vec<SpecConstant>,
+) -> Result<PipelineId> {
+    Ok(gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: name.into(),
+            shader: shader.into(),
+            specialization,
+        },
+        shaders,
+    )?)
 }
 
 fn storage_buffer(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, bytes: &[u8]) -> Result<BufferId> {
@@ -297,29 +392,61 @@ fn storage_buffer(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, bytes:
     Ok(b)
 }
 
-fn texture(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, format: vk::Format, w: u32, h: u32, bytes: &[u8]) -> Result<ImageId> {
-    let id = gpu.create_image(&ImageDesc::new_2d(name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+fn texture(
+    gpu: &mut Gpu,
+    states: &mut ResourceStates,
+    name: &str,
+    format: vk::Format,
+    w: u32,
+    h: u32,
+    bytes: &[u8],
+) -> Result<ImageId> {
+    let id = gpu.create_image(
+        &ImageDesc::new_2d(name, format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
     gpu.upload_image(id, 0, bytes)?;
-    states.set_image(gpu, id, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    states.set_image(
+        gpu,
+        id,
+        Access::SampledRead {
+            stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+        },
+    )?;
     Ok(id)
 }
 
 impl HeightfieldGpu {
     /// The wedge tables come through `bakes` (cached on disk when it has a directory).
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, bakes: &mut Baker, settings: Settings, inputs: FieldInputs) -> Result<HeightfieldGpu> {
+    pub fn new(
+        gpu: &mut Gpu,
+        shaders: &ShaderLibrary,
+        states: &mut ResourceStates,
+        bakes: &mut Baker,
+        settings: Settings,
+        inputs: FieldInputs,
+    ) -> Result<HeightfieldGpu> {
         let res = settings.resolution.unwrap_or(inputs.source.resolution);
         let levels = pyramid::level_count(res, settings.ls);
         if levels > MAX_LEVELS {
-            return Err(Error::Usage(format!("ls = {} at {res}² gives {levels} pyramid levels; at most {MAX_LEVELS} are supported", settings.ls)));
+            return Err(Error::Usage(format!(
+                "ls = {} at {res}² gives {levels} pyramid levels; at most {MAX_LEVELS} are supported",
+                settings.ls
+            )));
         }
         if settings.bands > MAX_BANDS || settings.nphi > MAX_NPHI {
-            return Err(Error::Usage(format!("bands ≤ {MAX_BANDS} and nphi ≤ {MAX_NPHI} are supported")));
+            return Err(Error::Usage(format!(
+                "bands ≤ {MAX_BANDS} and nphi ≤ {MAX_NPHI} are supported"
+            )));
         }
         if settings.horizon == Horizon::BruteForce && gpu.caps().name.contains("llvmpipe") {
             // llvmpipe ends a shader invocation's loops after 65535 iterations in all (shared by
             // every loop), silently; the march takes 8 positions per iteration, over res texels
             // (environment) or up to 2·res (lights), in every direction.
-            let reach = if settings.max_distance > 0.0 { settings.max_distance } else { 2.0 * res as f32 };
+            let reach = if settings.max_distance > 0.0 {
+                settings.max_distance
+            } else {
+                2.0 * res as f32
+            };
             // The march, then the visibility, product and basis loops (≤ 2907 product terms).
             let trips = settings.nphi as f32 * ((reach / settings.march_step / 8.0).ceil() + 66.0) + 3000.0;
             if trips > LLVMPIPE_LOOP_BUDGET {
@@ -331,55 +458,154 @@ impl HeightfieldGpu {
         }
         let level_sizes: Vec<u32> = (0..levels).map(|k| pyramid::level_size(res, settings.ls, k)).collect();
         let spacing = inputs.source.size / res as f32;
-        let origin = Vec2::new(inputs.translation.x - 0.5 * inputs.source.size + 0.5 * spacing, inputs.translation.z - 0.5 * inputs.source.size + 0.5 * spacing);
+        let origin = Vec2::new(
+            inputs.translation.x - 0.5 * inputs.source.size + 0.5 * spacing,
+            inputs.translation.z - 0.5 * inputs.source.size + 0.5 * spacing,
+        );
         let rw = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
         let heights = gpu.create_image(&ImageDesc::new_2d("hf heights", R32F, res, res).usage(rw))?;
         let (source_image, image_size) = match inputs.source.load_image()? {
-            Some(HeightImage { width, height, values }) => (texture(gpu, states, "hf height image", R32F, width, height, bytemuck::cast_slice(&values))?, Some((width, height))),
-            None => (texture(gpu, states, "hf height image (none)", R32F, 1, 1, bytemuck::bytes_of(&0.0f32))?, None),
+            Some(HeightImage { width, height, values }) => (
+                texture(
+                    gpu,
+                    states,
+                    "hf height image",
+                    R32F,
+                    width,
+                    height,
+                    bytemuck::cast_slice(&values),
+                )?,
+                Some((width, height)),
+            ),
+            None => (
+                texture(
+                    gpu,
+                    states,
+                    "hf height image (none)",
+                    R32F,
+                    1,
+                    1,
+                    bytemuck::bytes_of(&0.0f32),
+                )?,
+                None,
+            ),
         };
         let (decimated, pyramid_img, bounds) = match settings.horizon {
             Horizon::Pyramid => (
-                Some(gpu.create_image(&ImageDesc::new_2d("hf decimated levels", R32F, res, res).layers(levels).usage(rw))?),
+                Some(
+                    gpu.create_image(
+                        &ImageDesc::new_2d("hf decimated levels", R32F, res, res)
+                            .layers(levels)
+                            .usage(rw),
+                    )?,
+                ),
                 Some(gpu.create_image(&ImageDesc::new_2d("hf pyramid", R32F, res, res).layers(levels).usage(rw))?),
                 None,
             ),
             Horizon::BruteForce => {
-                let b = gpu.create_buffer(&BufferDesc { name: "hf bounds".into(), size: 16, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuOnly })?;
+                let b = gpu.create_buffer(&BufferDesc {
+                    name: "hf bounds".into(),
+                    size: 16,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                    memory: MemoryKind::GpuOnly,
+                })?;
                 (None, None, Some(b))
             }
         };
         let env_map = match &inputs.environment {
-            EnvInput::Map { width, height, texels } => texture(gpu, states, "hf environment map", RGBA32F, *width, *height, bytemuck::cast_slice(texels))?,
+            EnvInput::Map { width, height, texels } => texture(
+                gpu,
+                states,
+                "hf environment map",
+                RGBA32F,
+                *width,
+                *height,
+                bytemuck::cast_slice(texels),
+            )?,
             EnvInput::Cube { size, texels } => {
-                let id = gpu.create_image(&ImageDesc::new_cube("hf environment cube", RGBA32F, *size).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+                let id = gpu.create_image(
+                    &ImageDesc::new_cube("hf environment cube", RGBA32F, *size)
+                        .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+                )?;
                 gpu.upload_image(id, 0, bytemuck::cast_slice(texels))?;
-                states.set_image(gpu, id, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+                states.set_image(
+                    gpu,
+                    id,
+                    Access::SampledRead {
+                        stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+                    },
+                )?;
                 id
             }
-            _ => texture(gpu, states, "hf environment map (none)", RGBA32F, 1, 1, bytemuck::cast_slice(&[0.0f32; 4]))?,
+            _ => texture(
+                gpu,
+                states,
+                "hf environment map (none)",
+                RGBA32F,
+                1,
+                1,
+                bytemuck::cast_slice(&[0.0f32; 4]),
+            )?,
         };
         let env_image = crate::sh::EnvImage::of(gpu, env_map)?;
-        let env_sh = gpu.create_buffer(&BufferDesc { name: "hf environment SH".into(), size: 16 * 64, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuOnly })?;
-        let (nphi, nodes, bands) = (settings.nphi as usize, settings.table_size as usize, settings.bands as usize);
+        let env_sh = gpu.create_buffer(&BufferDesc {
+            name: "hf environment SH".into(),
+            size: 16 * 64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuOnly,
+        })?;
+        let (nphi, nodes, bands) = (
+            settings.nphi as usize,
+            settings.table_size as usize,
+            settings.bands as usize,
+        );
         let env_t = baked_wedge_table(bakes, TableKind::Environment, nphi, nodes, bands)?;
         let local_t = baked_wedge_table(bakes, TableKind::Local, nphi, nodes, bands)?;
-        let env_table = storage_buffer(gpu, states, "hf environment wedge table", bytemuck::cast_slice(&env_t.to_f32()))?;
-        let local_table = storage_buffer(gpu, states, "hf local wedge table", bytemuck::cast_slice(&local_t.to_f32()))?;
+        let env_table = storage_buffer(
+            gpu,
+            states,
+            "hf environment wedge table",
+            bytemuck::cast_slice(&env_t.to_f32()),
+        )?;
+        let local_table = storage_buffer(
+            gpu,
+            states,
+            "hf local wedge table",
+            bytemuck::cast_slice(&local_t.to_f32()),
+        )?;
         let entries = product_entries(settings.bands)?;
         let product = storage_buffer(gpu, states, "hf SH product", bytemuck::cast_slice(&entries))?;
         let out = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
-        let env_radiance = gpu.create_image(&ImageDesc::new_2d("hf environment radiance", RGBA32F, res, res).usage(out))?;
+        let env_radiance =
+            gpu.create_image(&ImageDesc::new_2d("hf environment radiance", RGBA32F, res, res).usage(out))?;
         // At least two layers, so that the accumulation's whole-image view is an array view.
-        let light_radiance = gpu.create_image(&ImageDesc::new_2d("hf light radiance", RGBA32F, res, res).layers(light_layers(inputs.lights.len())).usage(out))?;
+        let light_radiance = gpu.create_image(
+            &ImageDesc::new_2d("hf light radiance", RGBA32F, res, res)
+                .layers(light_layers(inputs.lights.len()))
+                .usage(out),
+        )?;
         let shading = gpu.create_image(&ImageDesc::new_2d("hf shading", RGBA32F, res, res).usage(out))?;
         let (env_shader, light_shader, horizon_shader) = match settings.horizon {
-            Horizon::Pyramid => ("heightfield/env_pyramid.comp", "heightfield/light_pyramid.comp", "heightfield/horizon_pyramid.comp"),
-            Horizon::BruteForce => ("heightfield/env_brute.comp", "heightfield/light_brute.comp", "heightfield/horizon_brute.comp"),
+            Horizon::Pyramid => (
+                "heightfield/env_pyramid.comp",
+                "heightfield/light_pyramid.comp",
+                "heightfield/horizon_pyramid.comp",
+            ),
+            Horizon::BruteForce => (
+                "heightfield/env_brute.comp",
+                "heightfield/light_brute.comp",
+                "heightfield/horizon_brute.comp",
+            ),
         };
         // One filtered fetch per height sample where the device filters R32_SFLOAT.
-        let hardware_bilinear = settings.hardware_bilinear && gpu.format_features(R32F).contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
-        let spec = vec![SpecConstant { id: 0, bits: hardware_bilinear as u32 }];
+        let hardware_bilinear = settings.hardware_bilinear
+            && gpu
+                .format_features(R32F)
+                .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+        let spec = vec![SpecConstant {
+            id: 0,
+            bits: hardware_bilinear as u32,
+        }];
         let pipelines = Pipelines {
             height: compute(gpu, shaders, "hf height update", "heightfield/height_update.comp")?,
             decimate: compute(gpu, shaders, "hf decimate", "heightfield/decimate.comp")?,
@@ -449,7 +675,12 @@ impl HeightfieldGpu {
         let samples = (0..self.levels)
             .map(|i| {
                 let d = pyramid::sample_distance(s.ls, i);
-                [d as f32, (1.0 / d) as f32, pyramid::sample_level(i, s.ls, s.lo, self.levels) as f32, 0.0]
+                [
+                    d as f32,
+                    (1.0 / d) as f32,
+                    pyramid::sample_level(i, s.ls, s.lo, self.levels) as f32,
+                    0.0,
+                ]
             })
             .collect();
         let base = self.inputs.translation.y;
@@ -463,7 +694,12 @@ impl HeightfieldGpu {
         }
         PassParams {
             dims: [self.res as i32, self.levels as i32, s.nphi as i32, s.bands as i32],
-            cfg: [s.table_size as i32, (s.mode == Mode::Corrected) as i32, self.product_count as i32, s.ls as i32],
+            cfg: [
+                s.table_size as i32,
+                (s.mode == Mode::Corrected) as i32,
+                self.product_count as i32,
+                s.ls as i32,
+            ],
             grid: [self.spacing, self.origin.x, self.origin.y, 1.0 / self.spacing],
             horizon: [s.lo, std::f32::consts::LN_2 / s.ls as f32, s.march_step, s.max_distance],
             light_pos,
@@ -482,7 +718,13 @@ impl HeightfieldGpu {
         let gen = self.gen_params(t);
         graph
             .pass("hf height update")
-            .sample("source_image", self.source_image, SubresourceRange::mip(0), self.nearest, COMPUTE)
+            .sample(
+                "source_image",
+                self.source_image,
+                SubresourceRange::mip(0),
+                self.nearest,
+                COMPUTE,
+            )
             .storage_write("heights_out", self.heights, SubresourceRange::mip(0), COMPUTE)
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(p.height)?;
@@ -498,25 +740,32 @@ impl HeightfieldGpu {
                 let mut push = [0u8; 20];
                 push[..12].copy_from_slice(bytemuck::cast_slice(&c.to_array()));
                 push[16..20].copy_from_slice(&(self.settings.bands as i32).to_le_bytes());
-                graph.pass("hf environment SH").buffer(self.env_sh, Access::StorageWrite { stages: COMPUTE }, Some("env_sh")).record(move |ctx| {
-                    ctx.rec.bind_pipeline(p.env_sh)?;
-                    ctx.bind(&[])?;
-                    ctx.rec.push_constants(&push)?;
-                    ctx.rec.dispatch([64, 1, 1])
-                });
+                graph
+                    .pass("hf environment SH")
+                    .buffer(self.env_sh, Access::StorageWrite { stages: COMPUTE }, Some("env_sh"))
+                    .record(move |ctx| {
+                        ctx.rec.bind_pipeline(p.env_sh)?;
+                        ctx.bind(&[])?;
+                        ctx.rec.push_constants(&push)?;
+                        ctx.rec.dispatch([64, 1, 1])
+                    });
             }
             EnvInput::Map { .. } | EnvInput::Cube { .. } => {
-                p.env_project.add_passes(graph, "hf environment SH", self.env_image, self.settings.bands, self.env_sh)?;
+                p.env_project.add_passes(
+                    graph,
+                    "hf environment SH",
+                    self.env_image,
+                    self.settings.bands,
+                    self.env_sh,
+                )?;
             }
         }
         if has_env {
             let params = self.pass_params(None).bytes();
-            let pass = self.lighting_pass(graph, "hf environment", Some(self.env_table)).buffer(self.env_sh, Access::StorageRead { stages: COMPUTE }, Some("env_sh")).storage_write(
-                "out_radiance",
-                self.env_radiance,
-                SubresourceRange::mip(0),
-                COMPUTE,
-            );
+            let pass = self
+                .lighting_pass(graph, "hf environment", Some(self.env_table))
+                .buffer(self.env_sh, Access::StorageRead { stages: COMPUTE }, Some("env_sh"))
+                .storage_write("out_radiance", self.env_radiance, SubresourceRange::mip(0), COMPUTE);
             pass.record(move |ctx| {
                 ctx.rec.bind_pipeline(p.env)?;
                 ctx.bind(&[("params", Bind::UniformData(&params))])?;
@@ -526,11 +775,18 @@ impl HeightfieldGpu {
         for (k, light) in self.inputs.lights.iter().enumerate() {
             let params = self.pass_params(Some(light)).bytes();
             let name = format!("hf light {}", k + 1);
-            self.lighting_pass(graph, &name, Some(self.local_table)).storage_write("out_radiance", self.light_radiance, SubresourceRange::mip_layer(0, k as u32), COMPUTE).record(move |ctx| {
-                ctx.rec.bind_pipeline(p.light)?;
-                ctx.bind(&[("params", Bind::UniformData(&params))])?;
-                ctx.rec.dispatch([res, res, 1])
-            });
+            self.lighting_pass(graph, &name, Some(self.local_table))
+                .storage_write(
+                    "out_radiance",
+                    self.light_radiance,
+                    SubresourceRange::mip_layer(0, k as u32),
+                    COMPUTE,
+                )
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(p.light)?;
+                    ctx.bind(&[("params", Bind::UniformData(&params))])?;
+                    ctx.rec.dispatch([res, res, 1])
+                });
         }
         let layers = light_layers(self.inputs.lights.len());
         let mut push = [0u8; 12];
@@ -539,8 +795,20 @@ impl HeightfieldGpu {
         push[8..12].copy_from_slice(&(self.inputs.lights.len() as i32).to_le_bytes());
         graph
             .pass("hf accumulate")
-            .sample("env_radiance", self.env_radiance, SubresourceRange::mip(0), self.nearest, COMPUTE)
-            .sample("light_radiance", self.light_radiance, SubresourceRange::new(0, 1, 0, layers), self.nearest, COMPUTE)
+            .sample(
+                "env_radiance",
+                self.env_radiance,
+                SubresourceRange::mip(0),
+                self.nearest,
+                COMPUTE,
+            )
+            .sample(
+                "light_radiance",
+                self.light_radiance,
+                SubresourceRange::new(0, 1, 0, layers),
+                self.nearest,
+                COMPUTE,
+            )
             .storage_write("shading", self.shading, SubresourceRange::mip(0), COMPUTE)
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(p.accumulate)?;
@@ -574,20 +842,36 @@ impl HeightfieldGpu {
             Decimation::Bicubic => 1,
         };
         for k in 0..self.levels {
-            let (src, src_range, src_size, kind) =
-                if k == 0 { (self.heights, SubresourceRange::mip(0), res, 2) } else { (dec, SubresourceRange::mip_layer(0, k - 1), self.level_sizes[k as usize - 1], filter) };
+            let (src, src_range, src_size, kind) = if k == 0 {
+                (self.heights, SubresourceRange::mip(0), res, 2)
+            } else {
+                (
+                    dec,
+                    SubresourceRange::mip_layer(0, k - 1),
+                    self.level_sizes[k as usize - 1],
+                    filter,
+                )
+            };
             let dst_size = self.level_sizes[k as usize];
             let mut push = [0u8; 12];
             push[..4].copy_from_slice(&(src_size as i32).to_le_bytes());
             push[4..8].copy_from_slice(&(dst_size as i32).to_le_bytes());
             push[8..12].copy_from_slice(&kind.to_le_bytes());
-            let name = if k == 0 { "hf pyramid level 0".to_string() } else { format!("hf pyramid decimate {k}") };
-            graph.pass(&name).sample("src", src, src_range, self.nearest, COMPUTE).storage_write("dst", dec, SubresourceRange::mip_layer(0, k), COMPUTE).record(move |ctx| {
-                ctx.rec.bind_pipeline(p.decimate)?;
-                ctx.bind(&[])?;
-                ctx.rec.push_constants(&push)?;
-                ctx.rec.dispatch([dst_size, dst_size, 1])
-            });
+            let name = if k == 0 {
+                "hf pyramid level 0".to_string()
+            } else {
+                format!("hf pyramid decimate {k}")
+            };
+            graph
+                .pass(&name)
+                .sample("src", src, src_range, self.nearest, COMPUTE)
+                .storage_write("dst", dec, SubresourceRange::mip_layer(0, k), COMPUTE)
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(p.decimate)?;
+                    ctx.bind(&[])?;
+                    ctx.rec.push_constants(&push)?;
+                    ctx.rec.dispatch([dst_size, dst_size, 1])
+                });
         }
         let levels = self.levels;
         let mut sizes = vec![0u8; 16 * MAX_LEVELS as usize];
@@ -600,7 +884,13 @@ impl HeightfieldGpu {
         push[8..12].copy_from_slice(&((self.settings.mode == Mode::Corrected) as i32).to_le_bytes());
         graph
             .pass("hf pyramid reconstruct")
-            .sample("levels", dec, SubresourceRange::new(0, 1, 0, levels), self.nearest, COMPUTE)
+            .sample(
+                "levels",
+                dec,
+                SubresourceRange::new(0, 1, 0, levels),
+                self.nearest,
+                COMPUTE,
+            )
             .storage_write("pyramid_out", pyr, SubresourceRange::new(0, 1, 0, levels), COMPUTE)
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(p.reconstruct)?;
@@ -612,13 +902,32 @@ impl HeightfieldGpu {
 
     /// A lighting pass (environment, light or horizon kernel) with the inputs every one reads.
     /// `table`: the wedge table (with the product list); `None` for the horizon kernel.
-    fn lighting_pass<'g, 'a>(&'a self, graph: &'g mut RenderGraph<'a>, name: &str, table: Option<BufferId>) -> crate::graph::PassBuilder<'g, 'a> {
-        let mut pass = graph.pass(name).sample("heights", self.heights, SubresourceRange::mip(0), self.height_sampler, COMPUTE);
+    fn lighting_pass<'g, 'a>(
+        &'a self,
+        graph: &'g mut RenderGraph<'a>,
+        name: &str,
+        table: Option<BufferId>,
+    ) -> crate::graph::PassBuilder<'g, 'a> {
+        let mut pass = graph.pass(name).sample(
+            "heights",
+            self.heights,
+            SubresourceRange::mip(0),
+            self.height_sampler,
+            COMPUTE,
+        );
         if let Some(table) = table {
-            pass = pass.buffer(table, Access::StorageRead { stages: COMPUTE }, Some("wedge")).buffer(self.product, Access::StorageRead { stages: COMPUTE }, Some("product"));
+            pass = pass
+                .buffer(table, Access::StorageRead { stages: COMPUTE }, Some("wedge"))
+                .buffer(self.product, Access::StorageRead { stages: COMPUTE }, Some("product"));
         }
         if let Some(pyr) = self.pyramid {
-            pass = pass.sample("pyramid", pyr, SubresourceRange::new(0, 1, 0, self.levels), self.height_sampler, COMPUTE);
+            pass = pass.sample(
+                "pyramid",
+                pyr,
+                SubresourceRange::new(0, 1, 0, self.levels),
+                self.height_sampler,
+                COMPUTE,
+            );
         }
         if let Some(b) = self.bounds {
             pass = pass.buffer(b, Access::StorageRead { stages: COMPUTE }, Some("bounds"));
@@ -633,11 +942,13 @@ impl HeightfieldGpu {
         let p = &self.pipelines;
         let params = self.pass_params(light.and_then(|k| self.inputs.lights.get(k))).bytes();
         let flag = light.is_some() as i32;
-        self.lighting_pass(graph, "hf horizons", None).buffer(out, Access::StorageWrite { stages: COMPUTE }, Some("horizons")).record(move |ctx| {
-            ctx.rec.bind_pipeline(p.horizon)?;
-            ctx.bind(&[("params", Bind::UniformData(&params))])?;
-            ctx.rec.push_constants(&flag.to_le_bytes())?;
-            ctx.rec.dispatch([res, res, 1])
-        });
+        self.lighting_pass(graph, "hf horizons", None)
+            .buffer(out, Access::StorageWrite { stages: COMPUTE }, Some("horizons"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(p.horizon)?;
+                ctx.bind(&[("params", Bind::UniformData(&params))])?;
+                ctx.rec.push_constants(&flag.to_le_bytes())?;
+                ctx.rec.dispatch([res, res, 1])
+            });
     }
 }

@@ -12,18 +12,29 @@ use super::standalone::Standalone;
 /// Per-pass medians grouped as the seed's Table 6.6 (pyramid, environment, each local light)
 /// plus the rest of the frame; `None` when the passes are not a height-field method's.
 pub fn table_6_6(passes: &[PassStats]) -> Option<String> {
-    let sum = |pred: &dyn Fn(&str) -> bool| passes.iter().filter(|p| pred(&p.name)).map(|p| p.median_ms).sum::<f64>();
+    let sum = |pred: &dyn Fn(&str) -> bool| {
+        passes
+            .iter()
+            .filter(|p| pred(&p.name))
+            .map(|p| p.median_ms)
+            .sum::<f64>()
+    };
     let has = |prefix: &str| passes.iter().any(|p| p.name.starts_with(prefix));
     if !has("hf ") {
         return None;
     }
     let pyramid = sum(&|n| n.starts_with("hf pyramid") || n == "hf bounds");
     let env = sum(&|n| n == "hf environment" || n.starts_with("hf environment SH"));
-    let lights: Vec<(String, f64)> = passes.iter().filter(|p| p.name.starts_with("hf light ")).map(|p| (p.name.clone(), p.median_ms)).collect();
+    let lights: Vec<(String, f64)> = passes
+        .iter()
+        .filter(|p| p.name.starts_with("hf light "))
+        .map(|p| (p.name.clone(), p.median_ms))
+        .collect();
     let height = sum(&|n| n == "hf height update");
     let rest = sum(&|n| n == "hf accumulate" || n == "hf raster" || n == "hf emitters");
     let pyramid_label = if has("hf bounds") { "Bounds" } else { "Pyramid" };
-    let mut s = String::from("seed 001 Table 6.6 layout (ms, medians; pyramid = level 0 + decimations + reconstruction):\n");
+    let mut s =
+        String::from("seed 001 Table 6.6 layout (ms, medians; pyramid = level 0 + decimations + reconstruction):\n");
     s += &format!("| Height update | {pyramid_label} | Env. Light |");
     for (i, _) in lights.iter().enumerate() {
         s += &format!(" L-Light {} |", i + 1);
@@ -106,7 +117,13 @@ fn mean_p99(mut v: Vec<f64>) -> (f64, f64) {
     (mean, v[k])
 }
 
-pub fn temporal_stability(gpu: &GpuDesc, scene: &Scene, decl: &MethodDecl, frames: usize, dt: f32) -> Result<Stability> {
+pub fn temporal_stability(
+    gpu: &GpuDesc,
+    scene: &Scene,
+    decl: &MethodDecl,
+    frames: usize,
+    dt: f32,
+) -> Result<Stability> {
     let mut h = Standalone::new(crate::backend::Gpu::new(gpu)?, scene, decl)?;
     let mut prev: Option<Vec<f64>> = None;
     let mut prev_delta: Option<Vec<f64>> = None;
@@ -125,7 +142,12 @@ pub fn temporal_stability(gpu: &GpuDesc, scene: &Scene, decl: &MethodDecl, frame
     }
     let (mean, p99) = mean_p99(first);
     let (mean_second, p99_second) = mean_p99(second);
-    Ok(Stability { mean, p99, mean_second, p99_second })
+    Ok(Stability {
+        mean,
+        p99,
+        mean_second,
+        p99_second,
+    })
 }
 
 #[cfg(test)]
@@ -133,7 +155,12 @@ mod tests {
     use super::*;
 
     fn pt(ms: f64, error: f64) -> Point {
-        Point { method: "b".into(), config: format!("{ms}"), ms, error }
+        Point {
+            method: "b".into(),
+            config: format!("{ms}"),
+            ms,
+            error,
+        }
     }
 
     #[test]
@@ -147,7 +174,12 @@ mod tests {
 
     #[test]
     fn table_groups_passes() {
-        let p = |n: &str, ms: f64| PassStats { name: n.into(), median_ms: ms, min_ms: ms, max_ms: ms };
+        let p = |n: &str, ms: f64| PassStats {
+            name: n.into(),
+            median_ms: ms,
+            min_ms: ms,
+            max_ms: ms,
+        };
         let passes = vec![
             p("frame", 10.0),
             p("hf height update", 0.5),

@@ -36,7 +36,9 @@ pub mod settings;
 pub mod standalone;
 pub mod wedge;
 
-use crate::backend::{vk, Bind, ColorTarget, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::backend::{
+    vk, Bind, ColorTarget, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange,
+};
 use crate::error::Result;
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph};
@@ -48,11 +50,19 @@ pub use settings::{Decimation, Horizon, Mode, Settings, Window};
 pub const PYRAMID: &str = "heightfield_pyramid";
 pub const BRUTE_FORCE: &str = "heightfield_bruteforce";
 
-pub const PYRAMID_SCHEMA: MethodSchema = MethodSchema { name: PYRAMID, params: settings::PYRAMID_PARAMS };
-pub const BRUTE_FORCE_SCHEMA: MethodSchema = MethodSchema { name: BRUTE_FORCE, params: settings::BRUTE_PARAMS };
+pub const PYRAMID_SCHEMA: MethodSchema = MethodSchema {
+    name: PYRAMID,
+    params: settings::PYRAMID_PARAMS,
+};
+pub const BRUTE_FORCE_SCHEMA: MethodSchema = MethodSchema {
+    name: BRUTE_FORCE,
+    params: settings::BRUTE_PARAMS,
+};
 
 fn push_unique(out: &mut Vec<(String, MethodDecl)>, decl: MethodDecl, horizon: Horizon) {
-    let Ok(s) = Settings::from_decl(&decl, horizon) else { return };
+    let Ok(s) = Settings::from_decl(&decl, horizon) else {
+        return;
+    };
     let prefix = match horizon {
         Horizon::Pyramid => "pyramid",
         Horizon::BruteForce => "brute",
@@ -122,7 +132,11 @@ pub struct HeightfieldMethod {
 impl HeightfieldMethod {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Self> {
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
-        let (name, horizon) = if decl.name == BRUTE_FORCE { (BRUTE_FORCE, Horizon::BruteForce) } else { (PYRAMID, Horizon::Pyramid) };
+        let (name, horizon) = if decl.name == BRUTE_FORCE {
+            (BRUTE_FORCE, Horizon::BruteForce)
+        } else {
+            (PYRAMID, Horizon::Pyramid)
+        };
         let settings = Settings::from_scene_decl(decl, horizon, cx.scene)?;
         let inputs = FieldInputs::from_scene(cx.scene, cx.environment, name)?;
         let object = inputs.object;
@@ -130,19 +144,41 @@ impl HeightfieldMethod {
         if let Some(warning) = slow_warning(core.res, gpu.caps().device_type, &gpu.caps().name) {
             crate::errln!("{}: {name}: {warning}", cx.scene.source);
         }
-        let mut desc = GraphicsPipelineDesc::new("hf terrain", "heightfield/terrain.vert", Some("heightfield/terrain.frag"));
+        let mut desc = GraphicsPipelineDesc::new(
+            "hf terrain",
+            "heightfield/terrain.vert",
+            Some("heightfield/terrain.frag"),
+        );
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(gpu.caps().depth_stencil_format);
         let terrain = gpu.create_graphics_pipeline(&desc, shaders)?;
-        let mut desc = GraphicsPipelineDesc::new("hf emitters", "heightfield/emitter.vert", Some("heightfield/emitter.frag"));
+        let mut desc = GraphicsPipelineDesc::new(
+            "hf emitters",
+            "heightfield/emitter.vert",
+            Some("heightfield/emitter.frag"),
+        );
         desc.vertex_layout = vertex_layout();
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(gpu.caps().depth_stencil_format);
         let emitter = gpu.create_graphics_pipeline(&desc, shaders)?;
-        let others = cx.scene_gpu.draws.iter().enumerate().filter(|(_, d)| d.object != Some(object)).map(|(i, _)| i).collect();
-        Ok(HeightfieldMethod { name, core, terrain, emitter, time: 0.0, others })
+        let others = cx
+            .scene_gpu
+            .draws
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d.object != Some(object))
+            .map(|(i, _)| i)
+            .collect();
+        Ok(HeightfieldMethod {
+            name,
+            core,
+            terrain,
+            emitter,
+            time: 0.0,
+            others,
+        })
     }
 }
 
@@ -196,19 +232,49 @@ impl LightingMethod for HeightfieldMethod {
         let terrain = self.terrain;
         // The material's maps as the forward method binds them (uploaded once, never written).
         let scene = frame.scene;
-        let albedo_map =
-            scene.material_maps.get(core.inputs.material).map(|m| m.albedo).ok_or_else(|| crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name)))?;
+        let albedo_map = scene
+            .material_maps
+            .get(core.inputs.material)
+            .map(|m| m.albedo)
+            .ok_or_else(|| {
+                crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name))
+            })?;
         let map_sampler = scene.sampler;
         graph
             .pass("hf raster")
             .color_attachment(targets.radiance, SubresourceRange::mip(0), false)
             .depth_stencil_write(targets.depth_stencil, false)
-            .sample("heights", core.heights, SubresourceRange::mip(0), core.nearest, vk::PipelineStageFlags2::VERTEX_SHADER)
-            .sample("shading", core.shading, SubresourceRange::mip(0), core.linear, vk::PipelineStageFlags2::FRAGMENT_SHADER)
+            .sample(
+                "heights",
+                core.heights,
+                SubresourceRange::mip(0),
+                core.nearest,
+                vk::PipelineStageFlags2::VERTEX_SHADER,
+            )
+            .sample(
+                "shading",
+                core.shading,
+                SubresourceRange::mip(0),
+                core.linear,
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            )
             .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(targets.radiance)], depth_stencil: Some(RenderTarget::load(targets.depth_stencil)) })?;
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(targets.radiance)],
+                    depth_stencil: Some(RenderTarget::load(targets.depth_stencil)),
+                })?;
                 ctx.rec.bind_pipeline(terrain)?;
-                ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))), ("albedo_map", Bind::Sampled { image: albedo_map, range: SubresourceRange::mip(0), sampler: map_sampler })])?;
+                ctx.bind(&[
+                    ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
+                    (
+                        "albedo_map",
+                        Bind::Sampled {
+                            image: albedo_map,
+                            range: SubresourceRange::mip(0),
+                            sampler: map_sampler,
+                        },
+                    ),
+                ])?;
                 ctx.rec.push_constants(&push)?;
                 ctx.rec.draw(vertices, 1)?;
                 ctx.rec.end_rendering();
@@ -226,10 +292,17 @@ impl LightingMethod for HeightfieldMethod {
                 .buffer(scene.indices, Access::IndexRead, None)
                 .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
                 .record(move |ctx| {
-                    let _extent = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(targets.radiance)], depth_stencil: Some(RenderTarget::load(targets.depth_stencil)) })?;
+                    let _extent = ctx.rec.begin_rendering(&RenderingDesc {
+                        colors: vec![RenderTarget::load(targets.radiance)],
+                        depth_stencil: Some(RenderTarget::load(targets.depth_stencil)),
+                    })?;
                     ctx.rec.bind_pipeline(emitter)?;
                     ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
-                    let calls: Vec<DrawCall> = others.iter().filter_map(|&i| scene.draws.get(i)).map(DrawCall::whole).collect();
+                    let calls: Vec<DrawCall> = others
+                        .iter()
+                        .filter_map(|&i| scene.draws.get(i))
+                        .map(DrawCall::whole)
+                        .collect();
                     record_draws(ctx, scene, &calls, |_, _| Ok(()))?;
                     ctx.rec.end_rendering();
                     Ok(())
@@ -261,26 +334,49 @@ mod tests {
 
     #[test]
     fn inputs_need_sphere_lights_and_a_translated_field() {
-        let ok = scene("translate = [1, 0, 2]\n[[lights]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.1\nradiance = 2");
+        let ok = scene(
+            "translate = [1, 0, 2]\n[[lights]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 0.1\nradiance = 2",
+        );
         let inputs = FieldInputs::from_scene(&ok, &EnvironmentMap::of_scene(&ok).unwrap(), PYRAMID).unwrap();
         assert_eq!(inputs.lights.len(), 1);
         assert_eq!(inputs.translation, glam::Vec3::new(1.0, 0.0, 2.0));
         let point = scene("[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1");
-        let e = FieldInputs::from_scene(&point, &EnvironmentMap::of_scene(&point).unwrap(), PYRAMID).err().unwrap().to_string();
+        let e = FieldInputs::from_scene(&point, &EnvironmentMap::of_scene(&point).unwrap(), PYRAMID)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains("t.toml: lights[0] (\"lights[0]\"): heightfield_pyramid lights with sphere lights and the environment only, not a point light"), "{e}");
         let rotated = scene("rotate_deg = [0, 30, 0]");
-        let e = FieldInputs::from_scene(&rotated, &EnvironmentMap::of_scene(&rotated).unwrap(), PYRAMID).err().unwrap().to_string();
+        let e = FieldInputs::from_scene(&rotated, &EnvironmentMap::of_scene(&rotated).unwrap(), PYRAMID)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains("objects[0]") && e.contains("translate only"), "{e}");
     }
 
     #[test]
     fn settings_ranges_and_sweeps() {
-        let decl = |params: &[(&str, toml::Value)]| MethodDecl { name: PYRAMID.into(), line: 3, params: params.iter().map(|(k, v)| (k.to_string(), v.clone(), 3)).collect() };
-        let s = Settings::from_decl(&decl(&[("nphi", 16.into()), ("lo", 2.5.into()), ("mode", "faithful".into())]), Horizon::Pyramid).unwrap();
+        let decl = |params: &[(&str, toml::Value)]| MethodDecl {
+            name: PYRAMID.into(),
+            line: 3,
+            params: params.iter().map(|(k, v)| (k.to_string(), v.clone(), 3)).collect(),
+        };
+        let s = Settings::from_decl(
+            &decl(&[("nphi", 16.into()), ("lo", 2.5.into()), ("mode", "faithful".into())]),
+            Horizon::Pyramid,
+        )
+        .unwrap();
         assert_eq!((s.nphi, s.lo, s.mode), (16, 2.5, Mode::Faithful));
-        let e = Settings::from_decl(&decl(&[("bands", 9.into())]), Horizon::Pyramid).unwrap_err().to_string();
-        assert!(e.contains("heightfield_pyramid.bands: expected an integer from 1 to 6, got 9"), "{e}");
-        let e = Settings::from_decl(&decl(&[("resolution", 300.into())]), Horizon::Pyramid).unwrap_err().to_string();
+        let e = Settings::from_decl(&decl(&[("bands", 9.into())]), Horizon::Pyramid)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("heightfield_pyramid.bands: expected an integer from 1 to 6, got 9"),
+            "{e}"
+        );
+        let e = Settings::from_decl(&decl(&[("resolution", 300.into())]), Horizon::Pyramid)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("resolution: expected a power of two"), "{e}");
         let sweep: Vec<String> = pyramid_sweep(&decl(&[])).into_iter().map(|(l, _)| l).collect();
         for want in [
@@ -292,17 +388,43 @@ mod tests {
         ] {
             assert!(sweep.iter().any(|l| l == want), "{want} missing from {sweep:?}");
         }
-        assert!(sweep.iter().any(|l| l == "pyramid nphi=32 ls=4 lo=4 bands=4 corrected hanning=5"), "{sweep:?}");
+        assert!(
+            sweep
+                .iter()
+                .any(|l| l == "pyramid nphi=32 ls=4 lo=4 bands=4 corrected hanning=5"),
+            "{sweep:?}"
+        );
         assert_eq!(sweep.len(), 14, "{sweep:?}");
-        let w = Settings::from_decl(&decl(&[("window", "lanczos".into()), ("window_width", 3.0.into())]), Horizon::Pyramid).unwrap();
+        let w = Settings::from_decl(
+            &decl(&[("window", "lanczos".into()), ("window_width", 3.0.into())]),
+            Horizon::Pyramid,
+        )
+        .unwrap();
         assert_eq!(w.window, Window::Lanczos(3.0));
         assert_eq!(w.window_factors()[0], 1.0);
         assert_eq!(Settings::default().window_factors(), vec![1.0; 4]);
-        let e = Settings::from_decl(&decl(&[("window_width", 3.0.into())]), Horizon::Pyramid).unwrap_err().to_string();
+        let e = Settings::from_decl(&decl(&[("window_width", 3.0.into())]), Horizon::Pyramid)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("heightfield_pyramid.window_width: needs window"), "{e}");
-        let e = Settings::from_decl(&decl(&[("window", "box".into())]), Horizon::Pyramid).unwrap_err().to_string();
-        assert!(e.contains("heightfield_pyramid.window: expected one of \"none\", \"hanning\", \"lanczos\""), "{e}");
-        let brute: Vec<String> = brute_sweep(&MethodDecl { name: BRUTE_FORCE.into(), line: 0, params: vec![] }).into_iter().map(|(l, _)| l).collect();
-        assert!(brute.contains(&"brute nphi=32 step=2 bands=4 corrected".to_string()), "{brute:?}");
+        let e = Settings::from_decl(&decl(&[("window", "box".into())]), Horizon::Pyramid)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("heightfield_pyramid.window: expected one of \"none\", \"hanning\", \"lanczos\""),
+            "{e}"
+        );
+        let brute: Vec<String> = brute_sweep(&MethodDecl {
+            name: BRUTE_FORCE.into(),
+            line: 0,
+            params: vec![],
+        })
+        .into_iter()
+        .map(|(l, _)| l)
+        .collect();
+        assert!(
+            brute.contains(&"brute nphi=32 step=2 bands=4 corrected".to_string()),
+            "{brute:?}"
+        );
     }
 }

@@ -98,7 +98,12 @@ pub fn decimate(src: &Grid, dst_size: u32, decimation: Decimation) -> Grid {
 /// Uniform cubic B-spline weights at fraction u (Eq. 4.9–4.12).
 pub fn bspline_weights(u: f64) -> [f64; 4] {
     let (u2, u3) = (u * u, u * u * u);
-    [(1.0 - u).powi(3) / 6.0, (3.0 * u3 - 6.0 * u2 + 4.0) / 6.0, (-3.0 * u3 + 3.0 * u2 + 3.0 * u + 1.0) / 6.0, u3 / 6.0]
+    [
+        (1.0 - u).powi(3) / 6.0,
+        (3.0 * u3 - 6.0 * u2 + 4.0) / 6.0,
+        (-3.0 * u3 + 3.0 * u2 + 3.0 * u + 1.0) / 6.0,
+        u3 / 6.0,
+    ]
 }
 
 /// A level reconstructed to `res²` with the cubic B-spline (mirrors `reconstruct.comp`).
@@ -107,7 +112,10 @@ pub fn reconstruct(level: &Grid, res: u32) -> Grid {
     let mut values = Vec::with_capacity((res * res) as usize);
     for y in 0..res {
         for x in 0..res {
-            let (ux, uy) = ((x as f64 + 0.5) * n / res as f64 - 0.5, (y as f64 + 0.5) * n / res as f64 - 0.5);
+            let (ux, uy) = (
+                (x as f64 + 0.5) * n / res as f64 - 0.5,
+                (y as f64 + 0.5) * n / res as f64 - 0.5,
+            );
             let (fx, fy) = (ux.floor(), uy.floor());
             let (wx, wy) = (bspline_weights(ux - fx), bspline_weights(uy - fy));
             let mut sum = 0.0;
@@ -132,7 +140,17 @@ pub fn build(heights: &Grid, ls: u32, decimation: Decimation, exact_level0: bool
         let next = decimate(&decimated[k as usize - 1], level_size(res, ls, k), decimation);
         decimated.push(next);
     }
-    decimated.iter().enumerate().map(|(k, l)| if k == 0 && exact_level0 { l.clone() } else { reconstruct(l, res) }).collect()
+    decimated
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            if k == 0 && exact_level0 {
+                l.clone()
+            } else {
+                reconstruct(l, res)
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -144,7 +162,10 @@ mod tests {
         // Eq. 4.4 for 256²: ls = 1, 2, 3, 4 give 9, 17, 25, 33 levels.
         assert_eq!([1, 2, 3, 4].map(|ls| level_count(256, ls)), [9, 17, 25, 33]);
         // Digest §1.3: 256, 215, 181, 152, 128, 108, …, 1.
-        assert_eq!((0..6).map(|k| level_size(256, 4, k)).collect::<Vec<_>>(), vec![256, 215, 181, 152, 128, 108]);
+        assert_eq!(
+            (0..6).map(|k| level_size(256, 4, k)).collect::<Vec<_>>(),
+            vec![256, 215, 181, 152, 128, 108]
+        );
         assert_eq!(level_size(256, 4, 32), 1);
         assert!((sample_distance(4, 32) - 256.0).abs() < 1e-9);
         // lo = 4 octaves at ls = 4: the first 16 samples read level 0, sample 20 level 4.
@@ -158,7 +179,10 @@ mod tests {
     fn smoothing_keeps_planes_and_means() {
         // A linear ramp is kept by both filters away from the borders; a constant everywhere.
         let res = 32;
-        let ramp = Grid { size: res, values: (0..res * res).map(|i| (i % res) as f32 * 0.5).collect() };
+        let ramp = Grid {
+            size: res,
+            values: (0..res * res).map(|i| (i % res) as f32 * 0.5).collect(),
+        };
         for d in [Decimation::Bilinear, Decimation::Bicubic] {
             let levels = build(&ramp, 2, d, false);
             assert_eq!(levels.len(), 11);
@@ -166,7 +190,10 @@ mod tests {
                 let v = l.at(16, 16) as f64;
                 assert!((v - 8.0).abs() < 0.3, "{d:?}: {v}");
             }
-            let flat = Grid { size: res, values: vec![3.0; (res * res) as usize] };
+            let flat = Grid {
+                size: res,
+                values: vec![3.0; (res * res) as usize],
+            };
             for l in build(&flat, 2, d, false) {
                 assert!(l.values.iter().all(|v| (v - 3.0).abs() < 1e-5));
             }

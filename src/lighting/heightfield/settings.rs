@@ -156,12 +156,25 @@ impl Settings {
     }
 
     fn read(decl: &MethodDecl, horizon: Horizon, scene: Option<&Scene>) -> Result<Settings> {
-        let mut s = Settings { horizon, ..Settings::default() };
+        let mut s = Settings {
+            horizon,
+            ..Settings::default()
+        };
         let bad = |name: &str, msg: String| match scene {
             Some(scene) => {
                 let index = scene.methods.iter().position(|m| m == decl).unwrap_or(0);
-                let line = decl.params.iter().find(|(n, _, _)| n == name).map(|p| p.2).filter(|&l| l > 0);
-                Error::Scene(SceneError::new(&scene.source, line, format!("methods[{index}].{name}"), msg))
+                let line = decl
+                    .params
+                    .iter()
+                    .find(|(n, _, _)| n == name)
+                    .map(|p| p.2)
+                    .filter(|&l| l > 0);
+                Error::Scene(SceneError::new(
+                    &scene.source,
+                    line,
+                    format!("methods[{index}].{name}"),
+                    msg,
+                ))
             }
             None => Error::Usage(format!("methods: {}.{name}: {msg}", decl.name)),
         };
@@ -188,16 +201,33 @@ impl Settings {
                 None => Ok(None),
                 Some(v) => match v.as_str() {
                     Some(x) if options.contains(&x) => Ok(Some(x.to_string())),
-                    _ => Err(bad(name, format!("expected one of {}, got {v}", options.iter().map(|o| format!("\"{o}\"")).collect::<Vec<_>>().join(", ")))),
+                    _ => Err(bad(
+                        name,
+                        format!(
+                            "expected one of {}, got {v}",
+                            options
+                                .iter()
+                                .map(|o| format!("\"{o}\""))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    )),
                 },
             }
         };
         if let Some(m) = string("mode", &["faithful", "corrected"])? {
-            s.mode = if m == "faithful" { Mode::Faithful } else { Mode::Corrected };
+            s.mode = if m == "faithful" {
+                Mode::Faithful
+            } else {
+                Mode::Corrected
+            };
         }
         if let Some(r) = int("resolution", 8, 1024)? {
             if !r.is_power_of_two() {
-                return Err(bad("resolution", format!("expected a power of two from 8 to 1024, got {r}")));
+                return Err(bad(
+                    "resolution",
+                    format!("expected a power of two from 8 to 1024, got {r}"),
+                ));
             }
             s.resolution = Some(r);
         }
@@ -217,12 +247,22 @@ impl Settings {
             s.table_size = v;
         }
         if let Some(d) = string("decimation", &["bilinear", "bicubic"])? {
-            s.decimation = if d == "bilinear" { Decimation::Bilinear } else { Decimation::Bicubic };
+            s.decimation = if d == "bilinear" {
+                Decimation::Bilinear
+            } else {
+                Decimation::Bicubic
+            };
         }
-        if let Some(v) = num("march_step", "a number of texels from 0.01 to 16", &|x| (0.01..=16.0).contains(&x))? {
+        if let Some(v) = num("march_step", "a number of texels from 0.01 to 16", &|x| {
+            (0.01..=16.0).contains(&x)
+        })? {
             s.march_step = v;
         }
-        if let Some(v) = num("max_distance", "a number of texels ≥ 0 (0: the field's resolution)", &|x| x >= 0.0)? {
+        if let Some(v) = num(
+            "max_distance",
+            "a number of texels ≥ 0 (0: the field's resolution)",
+            &|x| x >= 0.0,
+        )? {
             s.max_distance = v;
         }
         if let Some(v) = num("time_step", "a number of seconds ≥ 0", &|x| x >= 0.0)? {
@@ -231,11 +271,15 @@ impl Settings {
         if let Some(b) = string("bilinear", &["hardware", "shader"])? {
             s.hardware_bilinear = b == "hardware";
         }
-        let width = num("window_width", "a number of bands from 0.5 to 16", &|x| (0.5..=16.0).contains(&x))?;
+        let width = num("window_width", "a number of bands from 0.5 to 16", &|x| {
+            (0.5..=16.0).contains(&x)
+        })?;
         match string("window", &["none", "hanning", "lanczos"])?.as_deref() {
             Some("hanning") => s.window = Window::Hanning(width.unwrap_or(s.bands as f32 + 1.0)),
             Some("lanczos") => s.window = Window::Lanczos(width.unwrap_or(s.bands as f32 + 1.0)),
-            _ if width.is_some() => return Err(bad("window_width", "needs window = \"hanning\" or \"lanczos\"".into())),
+            _ if width.is_some() => {
+                return Err(bad("window_width", "needs window = \"hanning\" or \"lanczos\"".into()))
+            }
             _ => {}
         }
         Ok(s)
@@ -250,7 +294,8 @@ impl Settings {
             Window::Lanczos(w) => crate::sh::lanczos(bands, w as f64),
         };
         // The width was range-checked when read, so the window cannot fail.
-        f.map(|v| v.iter().map(|&x| x as f32).collect()).unwrap_or_else(|_| vec![1.0; bands])
+        f.map(|v| v.iter().map(|&x| x as f32).collect())
+            .unwrap_or_else(|_| vec![1.0; bands])
     }
 
     /// The configuration as `key=value` pairs for labels (only what the horizon kind uses).
@@ -265,8 +310,14 @@ impl Settings {
             Window::Lanczos(w) => format!("{mode} lanczos={w}"),
         };
         match self.horizon {
-            Horizon::Pyramid => format!("nphi={} ls={} lo={} bands={} {mode}", self.nphi, self.ls, self.lo, self.bands),
-            Horizon::BruteForce => format!("nphi={} step={} bands={} {mode}", self.nphi, self.march_step, self.bands),
+            Horizon::Pyramid => format!(
+                "nphi={} ls={} lo={} bands={} {mode}",
+                self.nphi, self.ls, self.lo, self.bands
+            ),
+            Horizon::BruteForce => format!(
+                "nphi={} step={} bands={} {mode}",
+                self.nphi, self.march_step, self.bands
+            ),
         }
     }
 }

@@ -22,18 +22,42 @@ pub struct Standalone {
 impl Standalone {
     /// `decl` names `heightfield_pyramid` or `heightfield_bruteforce` with its parameters.
     pub fn new(mut gpu: Gpu, scene: &Scene, decl: &MethodDecl) -> Result<Standalone> {
-        scene.refuse_translucency(&format!("the {} method", decl.name)).map_err(Error::Usage)?;
-        let horizon = if decl.name == super::BRUTE_FORCE { Horizon::BruteForce } else { Horizon::Pyramid };
+        scene
+            .refuse_translucency(&format!("the {} method", decl.name))
+            .map_err(Error::Usage)?;
+        let horizon = if decl.name == super::BRUTE_FORCE {
+            Horizon::BruteForce
+        } else {
+            Horizon::Pyramid
+        };
         let settings = Settings::from_decl(decl, horizon)?;
         let env = crate::environment::EnvironmentMap::of_scene(scene)?;
         let inputs = FieldInputs::from_scene(scene, &env, &decl.name)?;
         let mut states = ResourceStates::default();
         let mut bakes = crate::bake::Baker::new(Some(crate::bake::Baker::default_dir()));
-        let core = HeightfieldGpu::new(&mut gpu, &ShaderLibrary::Embedded, &mut states, &mut bakes, settings, inputs)?;
+        let core = HeightfieldGpu::new(
+            &mut gpu,
+            &ShaderLibrary::Embedded,
+            &mut states,
+            &mut bakes,
+            settings,
+            inputs,
+        )?;
         let frame = gpu.create_frame()?;
         let bytes = core.res as u64 * core.res as u64 * 16;
-        let readback = gpu.create_buffer(&BufferDesc { name: "hf readback".into(), size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;
-        Ok(Standalone { gpu, core, states, frame, readback })
+        let readback = gpu.create_buffer(&BufferDesc {
+            name: "hf readback".into(),
+            size: bytes,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })?;
+        Ok(Standalone {
+            gpu,
+            core,
+            states,
+            frame,
+            readback,
+        })
     }
 
     fn copy_out<'a>(graph: &mut RenderGraph<'a>, image: ImageId, layer: u32, rb: BufferId) {
@@ -42,7 +66,10 @@ impl Standalone {
             .transfer_read(image, SubresourceRange::mip_layer(0, layer))
             .buffer(rb, Access::TransferWrite, None)
             .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, layer, rb));
-        graph.pass("hf host").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("hf host")
+            .buffer(rb, Access::HostRead, None)
+            .record(|_| Ok(()));
     }
 
     fn pixels(&self) -> Result<Vec<[f32; 4]>> {
@@ -60,7 +87,10 @@ impl Standalone {
     /// (unclamped).
     pub fn light_radiance(&mut self, t: f32, k: usize) -> Result<Vec<[f32; 4]>> {
         if k >= self.core.inputs.lights.len() {
-            return Err(Error::Usage(format!("the scene has {} sphere light(s), no light {k}", self.core.inputs.lights.len())));
+            return Err(Error::Usage(format!(
+                "the scene has {} sphere light(s), no light {k}",
+                self.core.inputs.lights.len()
+            )));
         }
         self.image_after_frame(t, Some(k))
     }
@@ -72,7 +102,14 @@ impl Standalone {
         let res = self.core.res as u64;
         let bytes = res * res * 16;
         let buffers = (0..n)
-            .map(|k| self.gpu.create_buffer(&BufferDesc { name: format!("hf light {k} readback"), size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu }))
+            .map(|k| {
+                self.gpu.create_buffer(&BufferDesc {
+                    name: format!("hf light {k} readback"),
+                    size: bytes,
+                    usage: vk::BufferUsageFlags::TRANSFER_DST,
+                    memory: MemoryKind::GpuToCpu,
+                })
+            })
             .collect::<std::result::Result<Vec<_>, _>>()?;
         let result = (|| {
             let core = &self.core;
@@ -85,10 +122,16 @@ impl Standalone {
                     .transfer_read(image, SubresourceRange::mip_layer(0, k as u32))
                     .buffer(rb, Access::TransferWrite, None)
                     .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, k as u32, rb));
-                graph.pass("hf host").buffer(rb, Access::HostRead, None).record(|_| Ok(()));
+                graph
+                    .pass("hf host")
+                    .buffer(rb, Access::HostRead, None)
+                    .record(|_| Ok(()));
             }
             run_graph(&self.gpu, &mut self.states, self.frame, graph)?;
-            buffers.iter().map(|&b| Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&self.gpu.read_buffer(b)?).to_vec())).collect::<Result<Vec<_>>>()
+            buffers
+                .iter()
+                .map(|&b| Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&self.gpu.read_buffer(b)?).to_vec()))
+                .collect::<Result<Vec<_>>>()
         })();
         for b in buffers {
             self.gpu.destroy_buffer(b);
@@ -135,16 +178,27 @@ impl Standalone {
     pub fn horizons_timed(&mut self, t: f32, light: Option<usize>) -> Result<(Vec<f32>, Vec<PassTiming>)> {
         let res = self.core.res as u64;
         let n = self.core.settings.nphi as u64 * res * res;
-        let out = self.gpu.create_buffer(&BufferDesc { name: "hf horizons".into(), size: 4 * n, usage: vk::BufferUsageFlags::STORAGE_BUFFER, memory: MemoryKind::GpuToCpu })?;
+        let out = self.gpu.create_buffer(&BufferDesc {
+            name: "hf horizons".into(),
+            size: 4 * n,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuToCpu,
+        })?;
         let result = (|| {
             let core = &self.core;
             let mut graph = RenderGraph::new();
             core.add_compute_passes(&mut graph, t)?;
             core.add_horizon_pass(&mut graph, out, light);
-            graph.pass("hf host").buffer(out, Access::HostRead, None).record(|_| Ok(()));
+            graph
+                .pass("hf host")
+                .buffer(out, Access::HostRead, None)
+                .record(|_| Ok(()));
             run_graph(&self.gpu, &mut self.states, self.frame, graph)?;
             let timings = self.gpu.frame_timings(self.frame)?.unwrap_or_default();
-            Ok((bytemuck::cast_slice::<u8, f32>(&self.gpu.read_buffer(out)?).to_vec(), timings))
+            Ok((
+                bytemuck::cast_slice::<u8, f32>(&self.gpu.read_buffer(out)?).to_vec(),
+                timings,
+            ))
         })();
         self.gpu.destroy_buffer(out);
         self.states.forget_buffer(out);

@@ -96,7 +96,13 @@ impl WedgeTable {
         let nc = bands * bands;
         let dphi = TAU / nphi.max(1) as f64;
         let mut data = Vec::with_capacity(nodes * nodes * nc);
-        let t = WedgeTable { kind, nphi, nodes, bands, data: Vec::new() };
+        let t = WedgeTable {
+            kind,
+            nphi,
+            nodes,
+            bands,
+            data: Vec::new(),
+        };
         for a in 0..nodes {
             for b in 0..nodes {
                 data.extend(exact_wedge(t.node(a), t.node(b), dphi, bands)?);
@@ -140,13 +146,20 @@ impl WedgeTable {
         let x = |w: f64| ((w - lo) / (hi - lo) * last).clamp(0.0, last);
         let (xl, xr) = (x(wl), x(wr));
         if !bilinear {
-            return self.entry((xl + 0.5).floor() as usize, (xr + 0.5).floor() as usize).to_vec();
+            return self
+                .entry((xl + 0.5).floor() as usize, (xr + 0.5).floor() as usize)
+                .to_vec();
         }
         let a0 = (xl.floor() as usize).min(self.nodes - 2);
         let b0 = (xr.floor() as usize).min(self.nodes - 2);
         let (ta, tb) = (xl - a0 as f64, xr - b0 as f64);
         let mut out = vec![0.0; self.bands * self.bands];
-        for (a, b, w) in [(a0, b0, (1.0 - ta) * (1.0 - tb)), (a0, b0 + 1, (1.0 - ta) * tb), (a0 + 1, b0, ta * (1.0 - tb)), (a0 + 1, b0 + 1, ta * tb)] {
+        for (a, b, w) in [
+            (a0, b0, (1.0 - ta) * (1.0 - tb)),
+            (a0, b0 + 1, (1.0 - ta) * tb),
+            (a0 + 1, b0, ta * (1.0 - tb)),
+            (a0 + 1, b0 + 1, ta * tb),
+        ] {
             for (o, v) in out.iter_mut().zip(self.entry(a, b)) {
                 *o += w * v;
             }
@@ -239,13 +252,21 @@ mod tests {
     #[test]
     fn swath_closure() {
         for nphi in [8usize, 16, 32] {
-            for (kind, omegas) in [(TableKind::Environment, vec![0.0, 0.3, 1.2]), (TableKind::Local, vec![-0.4, 0.0, 0.3, -1.5])] {
+            for (kind, omegas) in [
+                (TableKind::Environment, vec![0.0, 0.3, 1.2]),
+                (TableKind::Local, vec![-0.4, 0.0, 0.3, -1.5]),
+            ] {
                 for w in omegas {
                     let v = visibility(&vec![w; nphi], WedgeSource::Exact, 4).unwrap();
                     let zh = cap(FRAC_PI_2 - w, 4);
                     let want = sh::zh_rotate(&zh, glam::Vec3::Z).unwrap();
                     for k in 0..16 {
-                        assert!((v[k] - want[k]).abs() < 1e-6, "{kind:?} nphi {nphi} ω {w} coefficient {k}: {} vs {}", v[k], want[k]);
+                        assert!(
+                            (v[k] - want[k]).abs() < 1e-6,
+                            "{kind:?} nphi {nphi} ω {w} coefficient {k}: {} vs {}",
+                            v[k],
+                            want[k]
+                        );
                     }
                 }
                 let t = WedgeTable::shared(kind, nphi, 64, 4).unwrap();
@@ -300,13 +321,21 @@ mod tests {
     fn mirror_symmetry() {
         let nphi = 12;
         let dphi = TAU / nphi as f64;
-        for (kind, pairs) in [(TableKind::Environment, [(0.1, 0.9), (0.0, 1.3)]), (TableKind::Local, [(-0.7, 0.4), (0.2, -1.1)])] {
+        for (kind, pairs) in [
+            (TableKind::Environment, [(0.1, 0.9), (0.0, 1.3)]),
+            (TableKind::Local, [(-0.7, 0.4), (0.2, -1.1)]),
+        ] {
             for (wl, wr) in pairs {
                 let a = exact_wedge(wl, wr, dphi, 4).unwrap();
                 let b = exact_wedge(wr, wl, dphi, 4).unwrap();
                 let m = mirrored(&a, dphi);
                 for k in 0..16 {
-                    assert!((m[k] - b[k]).abs() < 1e-12, "exact ({wl}, {wr}) coefficient {k}: {} vs {}", m[k], b[k]);
+                    assert!(
+                        (m[k] - b[k]).abs() < 1e-12,
+                        "exact ({wl}, {wr}) coefficient {k}: {} vs {}",
+                        m[k],
+                        b[k]
+                    );
                 }
             }
             let t = WedgeTable::shared(kind, nphi, 64, 4).unwrap();
@@ -319,7 +348,12 @@ mod tests {
                     let m = mirrored(&a, dphi);
                     let exact = exact_wedge(wl, wr, dphi, 4).unwrap();
                     for k in 0..16 {
-                        assert!((m[k] - b[k]).abs() < 1e-10, "{kind:?} table, nodes ({na}, {nb}), bilinear {bilinear}, coefficient {k}: {} vs {}", m[k], b[k]);
+                        assert!(
+                            (m[k] - b[k]).abs() < 1e-10,
+                            "{kind:?} table, nodes ({na}, {nb}), bilinear {bilinear}, coefficient {k}: {} vs {}",
+                            m[k],
+                            b[k]
+                        );
                         assert!((a[k] - exact[k]).abs() < 1e-10, "{kind:?} table entry ({na}, {nb}), bilinear {bilinear}, coefficient {k}: {} vs the exact wedge {}", a[k], exact[k]);
                     }
                 }
@@ -348,7 +382,9 @@ mod tests {
         let t = WedgeTable::build(TableKind::Environment, 32, 64, 4).unwrap();
         let mut state = 12345u64;
         let mut rnd = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let (mut worst_nearest, mut worst_bilinear) = (0.0f64, 0.0f64);
@@ -370,7 +406,11 @@ mod tests {
     /// shaded by the SH pipeline with exact wedges at nφ = 32 against the exact (1 + cos β)/2.
     #[test]
     fn wall_table_matches_the_digest() {
-        let cc = sh::clamped_cosine_zh(4).unwrap().iter().map(|z| z / PI).collect::<Vec<_>>();
+        let cc = sh::clamped_cosine_zh(4)
+            .unwrap()
+            .iter()
+            .map(|z| z / PI)
+            .collect::<Vec<_>>();
         let c = sh::zh_rotate(&cc, glam::Vec3::Z).unwrap();
         let l = {
             let mut l = vec![0.0; 16];
@@ -380,13 +420,18 @@ mod tests {
         let gamma = sh::TripleProductTensor::shared(4).unwrap();
         for (beta_deg, want_sh) in [(15.0f64, 0.9748), (30.0, 0.9266), (45.0, 0.8523), (60.0, 0.7529)] {
             let tb = beta_deg.to_radians().tan();
-            let h: Vec<f64> = (0..32).map(|j| (tb * (TAU * j as f64 / 32.0).cos()).atan().max(0.0)).collect();
+            let h: Vec<f64> = (0..32)
+                .map(|j| (tb * (TAU * j as f64 / 32.0).cos()).atan().max(0.0))
+                .collect();
             let v = visibility(&h, WedgeSource::Exact, 4).unwrap();
             let tr = gamma.product(&v, &c, 4).unwrap();
             let got: f64 = tr.iter().zip(&l).map(|(a, b)| a * b).sum();
             assert!((got - want_sh).abs() < 2e-4, "β {beta_deg}: {got} vs {want_sh}");
             let exact = 0.5 * (1.0 + beta_deg.to_radians().cos());
-            assert!((got - exact).abs() / exact < 0.01, "β {beta_deg}: {got} vs exact {exact}");
+            assert!(
+                (got - exact).abs() / exact < 0.01,
+                "β {beta_deg}: {got} vs exact {exact}"
+            );
         }
     }
 }

@@ -112,7 +112,12 @@ pub struct Config {
 
 fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
     let a = v.as_array().filter(|a| a.len() == 3)?;
-    let x: Vec<f32> = a.iter().filter_map(Params::float).filter(|x| x.is_finite()).map(|x| x as f32).collect();
+    let x: Vec<f32> = a
+        .iter()
+        .filter_map(Params::float)
+        .filter(|x| x.is_finite())
+        .map(|x| x as f32)
+        .collect();
     (x.len() == 3).then(|| [x[0], x[1], x[2]])
 }
 
@@ -125,7 +130,11 @@ impl Config {
             // The document runs "as many times as desired" and shows 2 (Fig. 6.1).
             iterations: if corrected { 8 } else { 2 },
             rsm: 256,
-            injection: if corrected { Injection::Scatter } else { Injection::Gather },
+            injection: if corrected {
+                Injection::Scatter
+            } else {
+                Injection::Gather
+            },
             lookup: if corrected { Lookup::Irradiance } else { Lookup::Point },
             occlusion: corrected,
             clamp: true,
@@ -147,9 +156,16 @@ impl Config {
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
-        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
+        let mode = params
+            .get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
+            .unwrap_or(Mode::Corrected);
         let mut c = Config::defaults(mode);
-        let int = |p: &str, v: &toml::Value, range: std::ops::RangeInclusive<i64>, want: &str| v.as_integer().filter(|n| range.contains(n)).map(|n| n as u32).ok_or_else(|| bad(p, want, v));
+        let int = |p: &str, v: &toml::Value, range: std::ops::RangeInclusive<i64>, want: &str| {
+            v.as_integer()
+                .filter(|n| range.contains(n))
+                .map(|n| n as u32)
+                .ok_or_else(|| bad(p, want, v))
+        };
         let flag = |p: &str, v: &toml::Value| v.as_bool().ok_or_else(|| bad(p, "true or false", v));
         for (p, v, _) in &decl.params {
             let p = p.as_str();
@@ -158,8 +174,13 @@ impl Config {
                 "grid" => c.grid = int(p, v, 2..=128, "cells per side from 2 to 128")?,
                 "iterations" => c.iterations = int(p, v, 0..=256, "a propagation count from 0 to 256")?,
                 "rsm" => c.rsm = int(p, v, 16..=4096, "RSM texels per side from 16 to 4096")?,
-                "injection" => c.injection = params.choice(p, v, &[("scatter", Injection::Scatter), ("gather", Injection::Gather)])?,
-                "lookup" => c.lookup = params.choice(p, v, &[("irradiance", Lookup::Irradiance), ("point", Lookup::Point)])?,
+                "injection" => {
+                    c.injection =
+                        params.choice(p, v, &[("scatter", Injection::Scatter), ("gather", Injection::Gather)])?
+                }
+                "lookup" => {
+                    c.lookup = params.choice(p, v, &[("irradiance", Lookup::Irradiance), ("point", Lookup::Point)])?
+                }
                 "geometry_volume" => c.occlusion = flag(p, v)?,
                 "clamp" => c.clamp = flag(p, v)?,
                 "storage" => c.half = params.choice(p, v, &[("f16", true), ("f32", false)])?,
@@ -167,11 +188,17 @@ impl Config {
                 "transform_bug" => c.transform_bug = flag(p, v)?,
                 "published_omega" => c.published_omega = flag(p, v)?,
                 "light" => c.light = int(p, v, 0..=65535, "the index of a point, spot or directional light")? as usize,
-                "light_spin" => c.light_spin = Params::float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
+                "light_spin" => {
+                    c.light_spin = Params::float(v)
+                        .filter(|x| x.is_finite() && x.abs() <= 3600.0)
+                        .ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?
+                }
                 "snap" => c.snap = flag(p, v)?,
                 "blend" => c.blend = flag(p, v)?,
                 "cascades" => c.cascades = int(p, v, 1..=4, "a cascade count from 1 to 4")?,
-                "camera_surfels" => c.camera_surfels = int(p, v, 0..=4096, "texels per side from 16 to 4096, or 0 for none")?,
+                "camera_surfels" => {
+                    c.camera_surfels = int(p, v, 0..=4096, "texels per side from 16 to 4096, or 0 for none")?
+                }
                 "view" => {
                     let views = [
                         ("indirect", View::Indirect),
@@ -190,8 +217,18 @@ impl Config {
                 _ => {}
             }
         }
-        let centre = decl.param("centre").map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v))).transpose()?;
-        let size = decl.param("size").map(|v| Params::float(v).filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| bad("size", "a side > 0 (metres)", v))).transpose()?;
+        let centre = decl
+            .param("centre")
+            .map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v)))
+            .transpose()?;
+        let size = decl
+            .param("size")
+            .map(|v| {
+                Params::float(v)
+                    .filter(|x| x.is_finite() && *x > 0.0)
+                    .ok_or_else(|| bad("size", "a side > 0 (metres)", v))
+            })
+            .transpose()?;
         if c.lookup != Lookup::Point && decl.param("blend").and_then(toml::Value::as_bool) == Some(true) {
             return Err(bad(
                 "blend",
@@ -201,7 +238,11 @@ impl Config {
         }
         c.blend &= c.lookup == Lookup::Point;
         if (1..16).contains(&c.camera_surfels) {
-            return Err(bad("camera_surfels", "texels per side from 16 to 4096, or 0 for none", decl.param("camera_surfels").unwrap_or(&toml::Value::from(0))));
+            return Err(bad(
+                "camera_surfels",
+                "texels per side from 16 to 4096, or 0 for none",
+                decl.param("camera_surfels").unwrap_or(&toml::Value::from(0)),
+            ));
         }
         // The camera's surfels feed the geometry volume only: without it they would cost a pass
         // and change nothing.
@@ -209,7 +250,13 @@ impl Config {
             c.camera_surfels = 0;
         }
         c.region = match (centre, size, c.cascades) {
-            (Some(_), _, 2..) => return Err(bad("centre", "no centre: cascades follow the camera (`size` sets the finest one's side)", decl.param("centre").unwrap_or(&toml::Value::from(0)))),
+            (Some(_), _, 2..) => {
+                return Err(bad(
+                    "centre",
+                    "no centre: cascades follow the camera (`size` sets the finest one's side)",
+                    decl.param("centre").unwrap_or(&toml::Value::from(0)),
+                ))
+            }
             (None, Some(s), 2..) => Some(([0.0; 3], s as f32)),
             (Some(c), Some(s), _) => Some((c, s as f32)),
             (None, None, _) => None,

@@ -34,7 +34,10 @@ pub struct Grid {
 
 impl Grid {
     pub fn new(size: [usize; 3]) -> Grid {
-        Grid { size, cells: vec![[0.0; 4]; size[0] * size[1] * size[2]] }
+        Grid {
+            size,
+            cells: vec![[0.0; 4]; size[0] * size[1] * size[2]],
+        }
     }
 
     pub fn cube(n: usize) -> Grid {
@@ -66,7 +69,11 @@ impl Grid {
     }
 
     pub fn centre(&self) -> IVec3 {
-        IVec3::new(self.size[0] as i32 / 2, self.size[1] as i32 / 2, self.size[2] as i32 / 2)
+        IVec3::new(
+            self.size[0] as i32 / 2,
+            self.size[1] as i32 / 2,
+            self.size[2] as i32 / 2,
+        )
     }
 
     /// Total flux, Σ 2√π c₀.
@@ -83,7 +90,9 @@ impl Grid {
         let mut out = [0.0; 4];
         for corner in 0..8 {
             let o = IVec3::new(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-            let w = (if o.x == 1 { f.x } else { 1.0 - f.x }) * (if o.y == 1 { f.y } else { 1.0 - f.y }) * (if o.z == 1 { f.z } else { 1.0 - f.z });
+            let w = (if o.x == 1 { f.x } else { 1.0 - f.x })
+                * (if o.y == 1 { f.y } else { 1.0 - f.y })
+                * (if o.z == 1 { f.z } else { 1.0 - f.z });
             if w == 0.0 {
                 continue;
             }
@@ -121,7 +130,12 @@ pub struct Corrected<'a> {
 
 impl Default for Corrected<'_> {
     fn default() -> Self {
-        Corrected { clamp: true, omega_front: omega_front(), omega_side: omega_side(), occlusion: None }
+        Corrected {
+            clamp: true,
+            omega_front: omega_front(),
+            omega_side: omega_side(),
+            occlusion: None,
+        }
     }
 }
 
@@ -139,12 +153,20 @@ pub struct Face {
 /// The five faces of the destination cell at `d` from the source that do not touch it.
 pub fn faces(d: IVec3, omega_front: f64, omega_side: f64) -> [Face; 5] {
     let dd = d.as_dvec3();
-    let mut out = [Face { direction: dd, normal: dd, omega: omega_front }; 5];
+    let mut out = [Face {
+        direction: dd,
+        normal: dd,
+        omega: omega_front,
+    }; 5];
     let mut k = 1;
     for a in AXES {
         if a.dot(d) == 0 {
             let ad = a.as_dvec3();
-            out[k] = Face { direction: (dd + 0.5 * ad).normalize(), normal: ad, omega: omega_side };
+            out[k] = Face {
+                direction: (dd + 0.5 * ad).normalize(),
+                normal: ad,
+                omega: omega_side,
+            };
             k += 1;
         }
     }
@@ -162,7 +184,12 @@ pub fn step_corrected(src: &Grid, c: &Corrected<'_>) -> Grid {
         .iter()
         .map(|&d| {
             let f = faces(d, c.omega_front, c.omega_side);
-            (d, f, f.map(|f| sh::basis(f.direction)), f.map(|f| sh::cosine_lobe(f.normal).map(|x| x * f.omega / std::f64::consts::PI)))
+            (
+                d,
+                f,
+                f.map(|f| sh::basis(f.direction)),
+                f.map(|f| sh::cosine_lobe(f.normal).map(|x| x * f.omega / std::f64::consts::PI)),
+            )
         })
         .collect();
     for i in 0..out.cells.len() {

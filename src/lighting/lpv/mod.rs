@@ -23,7 +23,10 @@ mod tests;
 
 use glam::Vec3;
 
-use crate::backend::{vk, Bind, BlendMode, BufferId, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange};
+use crate::backend::{
+    vk, Bind, BlendMode, BufferId, ColorTarget, DepthState, GraphicsPipelineDesc, PipelineId, RenderTarget,
+    RenderingDesc, SpecConstant, SubresourceRange,
+};
 use crate::error::{Error, Result};
 use crate::gpu_scene::{punctual_lights, record_draws, vertex_layout, DrawCall, GpuLight};
 use crate::graph::{Access, RenderGraph};
@@ -38,27 +41,90 @@ pub const NAME: &str = "lpv";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "grid", kind: ParamKind::Int },
-        ParamSchema { name: "iterations", kind: ParamKind::Int },
-        ParamSchema { name: "rsm", kind: ParamKind::Int },
-        ParamSchema { name: "injection", kind: ParamKind::String },
-        ParamSchema { name: "lookup", kind: ParamKind::String },
-        ParamSchema { name: "geometry_volume", kind: ParamKind::Bool },
-        ParamSchema { name: "clamp", kind: ParamKind::Bool },
-        ParamSchema { name: "storage", kind: ParamKind::String },
-        ParamSchema { name: "samples", kind: ParamKind::Int },
-        ParamSchema { name: "transform_bug", kind: ParamKind::Bool },
-        ParamSchema { name: "published_omega", kind: ParamKind::Bool },
-        ParamSchema { name: "light", kind: ParamKind::Int },
-        ParamSchema { name: "light_spin", kind: ParamKind::Float },
-        ParamSchema { name: "snap", kind: ParamKind::Bool },
-        ParamSchema { name: "blend", kind: ParamKind::Bool },
-        ParamSchema { name: "centre", kind: ParamKind::FloatArray },
-        ParamSchema { name: "size", kind: ParamKind::Float },
-        ParamSchema { name: "view", kind: ParamKind::String },
-        ParamSchema { name: "cascades", kind: ParamKind::Int },
-        ParamSchema { name: "camera_surfels", kind: ParamKind::Int },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "grid",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "iterations",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "rsm",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "injection",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "lookup",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "geometry_volume",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "clamp",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "storage",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "samples",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "transform_bug",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "published_omega",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "light",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "light_spin",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "snap",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "blend",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "centre",
+            kind: ParamKind::FloatArray,
+        },
+        ParamSchema {
+            name: "size",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "view",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "cascades",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "camera_surfels",
+            kind: ParamKind::Int,
+        },
     ],
 };
 
@@ -146,11 +212,16 @@ struct CascadeBlock {
 /// The cascades around `eye`: the finest of side `finest`, each next twice as wide, each snapped
 /// to its own cells.
 fn cascade_placements(eye: Vec3, finest: f32, config: &Config) -> Vec<Placement> {
-    (0..config.cascades).map(|k| Placement::around(eye, finest * (1 << k) as f32, config.grid)).collect()
+    (0..config.cascades)
+        .map(|k| Placement::around(eye, finest * (1 << k) as f32, config.grid))
+        .collect()
 }
 
 fn cascade_block(placements: &[Placement]) -> CascadeBlock {
-    let mut b = CascadeBlock { count: [placements.len() as u32, 0, 0, 0], ..Default::default() };
+    let mut b = CascadeBlock {
+        count: [placements.len() as u32, 0, 0, 0],
+        ..Default::default()
+    };
     for (o, p) in b.origin.iter_mut().zip(placements) {
         *o = p.origin.extend(p.cell).into();
     }
@@ -193,35 +264,55 @@ impl Lpv {
         let config = Config::from_decl(decl, Some(cx.scene))?;
         let lights = punctual_lights(cx.scene);
         let light = lights.get(config.light).ok_or_else(|| {
-            let msg = format!("light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one", config.light, lights.len());
+            let msg = format!(
+                "light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one",
+                config.light,
+                lights.len()
+            );
             Error::from(cx.scene.method_param_error(decl, "light", msg))
         })?;
-        let bounds = scene_bounds(cx).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
+        let bounds = scene_bounds(cx)
+            .ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
         let finest = (config.cascades > 1).then(|| {
             // Without a size, the largest cascade reaches every object from the camera it is
             // centred on: twice the farthest bound along any axis (a camera outside the scene,
             // as in a Cornell box seen through its open side, would otherwise light nothing).
             let eye = cx.scene.camera.position;
             let reach = (bounds.0 - eye).abs().max((bounds.1 - eye).abs()).max_element();
-            config.region.map_or(2.0 * reach / (1 << (config.cascades - 1)) as f32, |r| r.1).max(1e-3)
+            config
+                .region
+                .map_or(2.0 * reach / (1 << (config.cascades - 1)) as f32, |r| r.1)
+                .max(1e-3)
         });
         let placements = match (config.region, finest) {
             (_, Some(side)) => cascade_placements(cx.scene.camera.position, side, &config),
             (Some((centre, size)), None) => {
                 let half = glam::Vec3::splat(0.5 * size);
-                vec![Placement::fit(glam::Vec3::from(centre) - half, glam::Vec3::from(centre) + half, config.grid)]
+                vec![Placement::fit(
+                    glam::Vec3::from(centre) - half,
+                    glam::Vec3::from(centre) + half,
+                    config.grid,
+                )]
             }
             (None, None) => vec![Placement::fit(bounds.0, bounds.1, config.grid)],
         };
         let light = *light;
         // The frame's lights are `raster_lights`, one per scene light: the punctual light's slot.
-        let light_index = crate::gpu_scene::raster_lights(cx.scene).iter().position(|l| *l == light).unwrap_or(0);
+        let light_index = crate::gpu_scene::raster_lights(cx.scene)
+            .iter()
+            .position(|l| *l == light)
+            .unwrap_or(0);
         let largest = placements[placements.len() - 1];
-        let camera = LightCamera::new(&light, &largest, config.rsm, config.snap).map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
+        let camera = LightCamera::new(&light, &largest, config.rsm, config.snap)
+            .map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
         let blocks: Vec<VolumeBlock> = placements.iter().map(|p| camera.block(p, &config)).collect();
         let mut volumes = Vec::new();
         for k in 0..placements.len() {
-            let label = if k == 0 { NAME.to_string() } else { format!("{NAME} cascade {k}") };
+            let label = if k == 0 {
+                NAME.to_string()
+            } else {
+                format!("{NAME} cascade {k}")
+            };
             volumes.push(VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config, &label)?);
         }
         let cascade_block = cascade_block(&placements);
@@ -229,12 +320,22 @@ impl Lpv {
         let eye = cx.scene.camera.position.extend(1.0).into();
         let view_proj = cx.scene.camera.view_projection(1.0).to_cols_array();
         let camera_raster = rsm::camera_block(&blocks[0], view_proj, eye, config.camera_surfels);
-        let camera_blocks = blocks.iter().map(|b| rsm::camera_block(b, view_proj, eye, config.camera_surfels)).collect();
+        let camera_blocks = blocks
+            .iter()
+            .map(|b| rsm::camera_block(b, view_proj, eye, config.camera_surfels))
+            .collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
-        let mut tau: Vec<[f32; 4]> = cx.scene.materials.iter().map(|m| m.transmittance.extend(0.0).into()).collect();
+        let mut tau: Vec<[f32; 4]> = cx
+            .scene
+            .materials
+            .iter()
+            .map(|m| m.transmittance.extend(0.0).into())
+            .collect();
         // Emitters' materials come after the scene's: they transmit nothing.
         tau.resize(tau.len().max(cx.scene_gpu.material_maps.len()).max(1), [0.0; 4]);
-        let transmittance = cx.gpu.create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
+        let transmittance = cx
+            .gpu
+            .create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
         cx.states.forget_buffer(transmittance);
 
         let mut desc = GraphicsPipelineDesc::new("lpv composite", "lpv/surface.vert", Some("lpv/composite.frag"));
@@ -242,28 +343,60 @@ impl Lpv {
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
-        desc.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+        desc.depth = DepthState {
+            test: true,
+            write: false,
+            compare: vk::CompareOp::LESS_OR_EQUAL,
+        };
         desc.color_targets[0].blend = BlendMode::Additive;
         let view = if config.view.full_screen() { 0 } else { config.view.id() };
         desc.specialization = vec![
-            SpecConstant { id: 0, bits: (config.lookup == Lookup::Point) as u32 },
+            SpecConstant {
+                id: 0,
+                bits: (config.lookup == Lookup::Point) as u32,
+            },
             SpecConstant { id: 1, bits: view },
-            SpecConstant { id: 2, bits: config.blend as u32 },
-            SpecConstant { id: 10, bits: config.half as u32 },
+            SpecConstant {
+                id: 2,
+                bits: config.blend as u32,
+            },
+            SpecConstant {
+                id: 10,
+                bits: config.half as u32,
+            },
         ];
         let composite = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let debug = if config.view.full_screen() {
             let mut desc = GraphicsPipelineDesc::new("lpv debug view", "post/fullscreen.vert", Some("lpv/debug.frag"));
             desc.raster.cull = vk::CullModeFlags::NONE;
-            desc.depth = DepthState { test: false, write: false, compare: vk::CompareOp::ALWAYS };
+            desc.depth = DepthState {
+                test: false,
+                write: false,
+                compare: vk::CompareOp::ALWAYS,
+            };
             desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            desc.specialization = vec![SpecConstant { id: 0, bits: config.view.id() }, SpecConstant { id: 10, bits: config.half as u32 }];
+            desc.specialization = vec![
+                SpecConstant {
+                    id: 0,
+                    bits: config.view.id(),
+                },
+                SpecConstant {
+                    id: 10,
+                    bits: config.half as u32,
+                },
+            ];
             Some(cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?)
         } else {
             None
         };
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
-        let calls = cx.scene_gpu.draws.iter().filter(|d| d.object.is_some()).map(DrawCall::whole).collect();
+        let calls = cx
+            .scene_gpu
+            .draws
+            .iter()
+            .filter(|d| d.object.is_some())
+            .map(DrawCall::whole)
+            .collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
         Ok(Lpv {
             config,
@@ -299,8 +432,10 @@ impl Lpv {
     /// ([`VolumeGpu::result`]).
     pub fn add_volume_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a crate::gpu_scene::SceneGpu) {
         let largest = self.blocks.len() - 1;
-        self.rsm.add_raster(graph, scene, &self.calls, self.transmittance, &self.blocks[largest]);
-        self.rsm.add_camera_raster(graph, scene, &self.calls, self.transmittance, &self.camera_raster);
+        self.rsm
+            .add_raster(graph, scene, &self.calls, self.transmittance, &self.blocks[largest]);
+        self.rsm
+            .add_camera_raster(graph, scene, &self.calls, self.transmittance, &self.camera_raster);
         for ((volume, block), camera) in self.volumes.iter().zip(&self.blocks).zip(&self.camera_blocks) {
             self.rsm.add_injection(graph, volume, block, camera);
             volume.add_propagation(graph, block);
@@ -320,18 +455,39 @@ impl Lpv {
             _ => self.rsm.map.layers[0],
         };
         let (t, s) = (frame.targets, frame.scene.sampler);
-        let mut pass = graph.pass("lpv debug view").color_attachment(t.radiance, mip, false).sample("rsm_flux", self.rsm.map.layers[0], mip, s, frag);
+        let mut pass = graph
+            .pass("lpv debug view")
+            .color_attachment(t.radiance, mip, false)
+            .sample("rsm_flux", self.rsm.map.layers[0], mip, s, frag);
         // The flux layer is declared once; another layer is declared by its own name.
         let same = layer == self.rsm.map.layers[0];
         if !same {
             pass = pass.sample("rsm_layer", layer, mip, s, frag);
         }
-        pass.buffer(self.volumes[0].result(), Access::StorageRead { stages: frag }, Some("light")).record(move |ctx| {
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: None })?;
+        pass.buffer(
+            self.volumes[0].result(),
+            Access::StorageRead { stages: frag },
+            Some("light"),
+        )
+        .record(move |ctx| {
+            let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                colors: vec![RenderTarget::load(t.radiance)],
+                depth_stencil: None,
+            })?;
             ctx.rec.bind_pipeline(pipeline)?;
             let volume = ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0])));
             if same {
-                ctx.bind(&[volume, ("rsm_layer", Bind::Sampled { image: layer, range: mip, sampler: s })])?;
+                ctx.bind(&[
+                    volume,
+                    (
+                        "rsm_layer",
+                        Bind::Sampled {
+                            image: layer,
+                            range: mip,
+                            sampler: s,
+                        },
+                    ),
+                ])?;
             } else {
                 ctx.bind(&[volume])?;
             }
@@ -373,14 +529,31 @@ impl LightingMethod for Lpv {
         }
         if light != self.light || moved {
             self.light = light;
-            self.camera = LightCamera::new(&light, &self.placements[self.placements.len() - 1], self.config.rsm, self.config.snap)?;
-            self.blocks = self.placements.iter().map(|p| self.camera.block(p, &self.config)).collect();
+            self.camera = LightCamera::new(
+                &light,
+                &self.placements[self.placements.len() - 1],
+                self.config.rsm,
+                self.config.snap,
+            )?;
+            self.blocks = self
+                .placements
+                .iter()
+                .map(|p| self.camera.block(p, &self.config))
+                .collect();
             self.cascade_block = cascade_block(&self.placements);
         }
         if self.config.camera_surfels > 0 {
-            let (view_proj, eye, size) = (frame.uniforms.view_proj, frame.uniforms.camera_pos, self.config.camera_surfels);
+            let (view_proj, eye, size) = (
+                frame.uniforms.view_proj,
+                frame.uniforms.camera_pos,
+                self.config.camera_surfels,
+            );
             self.camera_raster = rsm::camera_block(&self.blocks[0], view_proj, eye, size);
-            self.camera_blocks = self.blocks.iter().map(|b| rsm::camera_block(b, view_proj, eye, size)).collect();
+            self.camera_blocks = self
+                .blocks
+                .iter()
+                .map(|b| rsm::camera_block(b, view_proj, eye, size))
+                .collect();
         }
         Ok(())
     }
@@ -389,7 +562,12 @@ impl LightingMethod for Lpv {
     /// document's 3 × 8 B × N³ per set in fp16), the fixed-point injection sums and the geometry
     /// volume; then the RSM and the camera's surfels.
     fn memory(&self, gpu: &crate::backend::Gpu) -> Result<Vec<crate::lighting::MemoryItem>> {
-        let item = |resource: String, requested: u64, allocated: u64| crate::lighting::MemoryItem { method: NAME, resource, requested, allocated };
+        let item = |resource: String, requested: u64, allocated: u64| crate::lighting::MemoryItem {
+            method: NAME,
+            resource,
+            requested,
+            allocated,
+        };
         let mut out = Vec::new();
         for v in &self.volumes {
             for (name, requested, allocated) in v.memory(gpu)? {
@@ -397,10 +575,18 @@ impl LightingMethod for Lpv {
             }
         }
         let (requested, allocated) = self.rsm.map.memory(gpu)?;
-        out.push(item(format!("{NAME} rsm ({0}x{0}, 4 x RGBA32F + depth)", self.rsm.map.size), requested, allocated));
+        out.push(item(
+            format!("{NAME} rsm ({0}x{0}, 4 x RGBA32F + depth)", self.rsm.map.size),
+            requested,
+            allocated,
+        ));
         if let Some(c) = &self.rsm.camera {
             let (requested, allocated) = c.memory(gpu)?;
-            out.push(item(format!("{NAME} camera surfels ({0}x{0})", c.size), requested, allocated));
+            out.push(item(
+                format!("{NAME} camera surfels ({0}x{0})", c.size),
+                requested,
+                allocated,
+            ));
         }
         Ok(out)
     }
@@ -425,8 +611,18 @@ impl LightingMethod for Lpv {
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .buffer(self.transmittance, Access::StorageRead { stages: frag }, Some("transmittance"))
-            .sample("rsm_position", self.rsm.map.layers[2], SubresourceRange::mip(0), scene.sampler, frag);
+            .buffer(
+                self.transmittance,
+                Access::StorageRead { stages: frag },
+                Some("transmittance"),
+            )
+            .sample(
+                "rsm_position",
+                self.rsm.map.layers[2],
+                SubresourceRange::mip(0),
+                scene.sampler,
+                frag,
+            );
         for (volume, name) in self.volumes.iter().zip(NAMES) {
             pass = pass.buffer(volume.result(), Access::StorageRead { stages: frag }, Some(name));
         }
@@ -434,8 +630,14 @@ impl LightingMethod for Lpv {
         let spare = self.volumes[0].result();
         let used = self.volumes.len();
         pass.record(move |ctx| {
-            let depth = RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
+            let depth = RenderTarget {
+                read_only: true,
+                ..RenderTarget::load(t.depth_stencil)
+            };
+            let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                colors: vec![RenderTarget::load(t.radiance)],
+                depth_stencil: Some(depth),
+            })?;
             ctx.rec.bind_pipeline(self.composite)?;
             let uniform_bytes = bytemuck::bytes_of(&uniforms);
             let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
@@ -445,8 +647,22 @@ impl LightingMethod for Lpv {
                     ("frame", Bind::UniformData(uniform_bytes)),
                     ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0]))),
                     ("cascades", Bind::UniformData(bytemuck::bytes_of(&self.cascade_block))),
-                    ("albedo_map", Bind::Sampled { image: maps.albedo, range: whole, sampler: s }),
-                    ("normal_map", Bind::Sampled { image: maps.normal, range: whole, sampler: s }),
+                    (
+                        "albedo_map",
+                        Bind::Sampled {
+                            image: maps.albedo,
+                            range: whole,
+                            sampler: s,
+                        },
+                    ),
+                    (
+                        "normal_map",
+                        Bind::Sampled {
+                            image: maps.normal,
+                            range: whole,
+                            sampler: s,
+                        },
+                    ),
                 ];
                 binds.extend(NAMES[used..].iter().map(|&n| (n, Bind::StorageBuffer(spare))));
                 ctx.bind(&binds)

@@ -6,8 +6,8 @@ use glam::{Mat4, Vec3};
 use super::config::{Config, Injection, Mode};
 use super::volume::{Placement, VolumeBlock, VolumeGpu, BLOCKING_UNITS};
 use crate::backend::{
-    vk, Bind, BufferId, ColorTarget, ComputePipelineDesc, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SpecConstant,
-    SubresourceRange,
+    vk, Bind, BufferId, ColorTarget, ComputePipelineDesc, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, PipelineId,
+    RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SpecConstant, SubresourceRange,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, GpuLight, SceneGpu};
@@ -56,7 +56,9 @@ impl LightCamera {
             // does not make the RSM's texels crawl.
             let snap = |x: f32| if snap { (x / texel).round() * texel } else { x };
             let depth = 2.0 * radius + 2.0 * placement.cell;
-            let eye = right * snap(centre.dot(right)) + up * snap(centre.dot(up)) + direction * (centre.dot(direction) - 0.5 * depth);
+            let eye = right * snap(centre.dot(right))
+                + up * snap(centre.dot(up))
+                + direction * (centre.dot(direction) - 0.5 * depth);
             let view = Mat4::look_to_rh(eye, direction, up);
             let proj = Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.0, depth);
             Ok(LightCamera {
@@ -90,7 +92,9 @@ impl LightCamera {
                 flux_bound: intensity.max_element() * 2.0 * std::f32::consts::PI,
             })
         } else {
-            Err(Error::Usage("lpv: a point light would need a cube RSM; light the volume with a spot or directional light".into()))
+            Err(Error::Usage(
+                "lpv: a point light would need a cube RSM; light the volume with a spot or directional light".into(),
+            ))
         }
     }
 
@@ -108,7 +112,12 @@ impl LightCamera {
             light: self.direction.extend(if self.spot { 1.0 } else { 0.0 }).into(),
             light_pos: self.position.extend(self.depth_per_metre).into(),
             light_intensity: self.intensity.extend(self.texel).into(),
-            light_cone: [self.cone[0], self.cone[1], if config.mode == Mode::Faithful { 1.0 } else { 0.0 }, 0.0],
+            light_cone: [
+                self.cone[0],
+                self.cone[1],
+                if config.mode == Mode::Faithful { 1.0 } else { 0.0 },
+                0.0,
+            ],
         }
     }
 }
@@ -126,11 +135,20 @@ impl SurfelMap {
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
         let mut made = Vec::new();
         for layer in ["flux", "transmitted", "position", "normal"] {
-            made.push(gpu.create_image(&ImageDesc::new_2d(&format!("{name} {layer}"), RADIANCE_FORMAT, size, size).usage(usage))?);
+            made.push(gpu.create_image(
+                &ImageDesc::new_2d(&format!("{name} {layer}"), RADIANCE_FORMAT, size, size).usage(usage),
+            )?);
         }
         let ds = gpu.caps().depth_stencil_format;
-        let depth = gpu.create_image(&ImageDesc::new_2d(&format!("{name} depth"), ds, size, size).usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT))?;
-        Ok(SurfelMap { size, layers: [made[0], made[1], made[2], made[3]], depth })
+        let depth = gpu.create_image(
+            &ImageDesc::new_2d(&format!("{name} depth"), ds, size, size)
+                .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
+        )?;
+        Ok(SurfelMap {
+            size,
+            layers: [made[0], made[1], made[2], made[3]],
+            depth,
+        })
     }
 }
 
@@ -165,7 +183,11 @@ pub struct Rsm {
 impl Rsm {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config) -> Result<Rsm> {
         let map = SurfelMap::new(gpu, "lpv rsm", config.rsm)?;
-        let camera = if config.camera_surfels > 0 { Some(SurfelMap::new(gpu, "lpv camera surfels", config.camera_surfels)?) } else { None };
+        let camera = if config.camera_surfels > 0 {
+            Some(SurfelMap::new(gpu, "lpv camera surfels", config.camera_surfels)?)
+        } else {
+            None
+        };
         let ds = gpu.caps().depth_stencil_format;
         let mut desc = GraphicsPipelineDesc::new("lpv rsm", "lpv/rsm.vert", Some("lpv/rsm.frag"));
         desc.vertex_layout = vertex_layout();
@@ -173,30 +195,79 @@ impl Rsm {
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT); 4];
         desc.depth_format = Some(ds);
         let raster = gpu.create_graphics_pipeline(&desc, shaders)?;
-        let half = SpecConstant { id: 10, bits: config.half as u32 };
-        let inject = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv inject".into(), shader: "lpv/inject.comp".into(), specialization: vec![half] }, shaders)?;
-        let gather = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv gather".into(), shader: "lpv/gather.comp".into(), specialization: vec![half] }, shaders)?;
+        let half = SpecConstant {
+            id: 10,
+            bits: config.half as u32,
+        };
+        let inject = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "lpv inject".into(),
+                shader: "lpv/inject.comp".into(),
+                specialization: vec![half],
+            },
+            shaders,
+        )?;
+        let gather = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "lpv gather".into(),
+                shader: "lpv/gather.comp".into(),
+                specialization: vec![half],
+            },
+            shaders,
+        )?;
         let nearest = gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
         let offsets: Vec<[f32; 4]> = offset_table().iter().map(|o| [o[0], o[1], o[2], 0.0]).collect();
         let offsets = gpu.create_storage_buffer("lpv gather offsets", bytemuck::cast_slice(&offsets))?;
         states.forget_buffer(offsets);
-        Ok(Rsm { map, camera, raster, inject, gather, nearest, offsets, injection: config.injection })
+        Ok(Rsm {
+            map,
+            camera,
+            raster,
+            inject,
+            gather,
+            nearest,
+            offsets,
+            injection: config.injection,
+        })
     }
 
     /// Draws the RSM (`block`: the light's camera over the largest volume).
-    pub fn add_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
+    pub fn add_raster<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        scene: &'a SceneGpu,
+        calls: &'a [DrawCall],
+        transmittance: BufferId,
+        block: &'a VolumeBlock,
+    ) {
         self.add_surfels(graph, "lpv rsm", &self.map, scene, calls, transmittance, block);
     }
 
     /// Draws the camera's surfels (`block`: the camera as the viewpoint, no light).
-    pub fn add_camera_raster<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
+    pub fn add_camera_raster<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        scene: &'a SceneGpu,
+        calls: &'a [DrawCall],
+        transmittance: BufferId,
+        block: &'a VolumeBlock,
+    ) {
         if let Some(map) = &self.camera {
             self.add_surfels(graph, "lpv camera surfels", map, scene, calls, transmittance, block);
         }
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn add_surfels<'a>(&'a self, graph: &mut RenderGraph<'a>, name: &str, map: &SurfelMap, scene: &'a SceneGpu, calls: &'a [DrawCall], transmittance: BufferId, block: &'a VolumeBlock) {
+    fn add_surfels<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        name: &str,
+        map: &SurfelMap,
+        scene: &'a SceneGpu,
+        calls: &'a [DrawCall],
+        transmittance: BufferId,
+        block: &'a VolumeBlock,
+    ) {
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let mip = SubresourceRange::mip(0);
         let (layers, depth) = (map.layers, map.depth);
@@ -208,14 +279,31 @@ impl Rsm {
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-            .buffer(transmittance, Access::StorageRead { stages: frag }, Some("transmittance"))
+            .buffer(
+                transmittance,
+                Access::StorageRead { stages: frag },
+                Some("transmittance"),
+            )
             .record(move |ctx| {
                 let colors = layers.iter().map(|&l| RenderTarget::clear_color(l, [0.0; 4])).collect();
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors, depth_stencil: Some(RenderTarget::clear_depth(depth, 1.0, 0)) })?;
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors,
+                    depth_stencil: Some(RenderTarget::clear_depth(depth, 1.0, 0)),
+                })?;
                 ctx.rec.bind_pipeline(self.raster)?;
                 record_draws(ctx, scene, calls, |ctx, material| {
                     let maps = scene.material_maps[material as usize];
-                    ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block))), ("albedo_map", Bind::Sampled { image: maps.albedo, range: mip, sampler: scene.sampler })])
+                    ctx.bind(&[
+                        ("volume", Bind::UniformData(bytemuck::bytes_of(block))),
+                        (
+                            "albedo_map",
+                            Bind::Sampled {
+                                image: maps.albedo,
+                                range: mip,
+                                sampler: scene.sampler,
+                            },
+                        ),
+                    ])
                 })?;
                 ctx.rec.end_rendering();
                 Ok(())
@@ -223,7 +311,14 @@ impl Rsm {
     }
 
     /// Scatters the surfels of `map` into `volume`'s fixed-point sums.
-    fn add_scatter<'a>(&'a self, graph: &mut RenderGraph<'a>, name: &str, map: &SurfelMap, volume: &'a VolumeGpu, block: &'a VolumeBlock) {
+    fn add_scatter<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        name: &str,
+        map: &SurfelMap,
+        volume: &'a VolumeGpu,
+        block: &'a VolumeBlock,
+    ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let (mip, s) = (SubresourceRange::mip(0), self.nearest);
         let write = Access::StorageWrite { stages: compute };
@@ -246,7 +341,13 @@ impl Rsm {
     /// Injects the RSM into `volume`: scatter into the fixed-point sums (and the camera's
     /// surfels' blocking, with `camera_block`), then resolve; or the document's gather straight
     /// into the first wavefront.
-    pub fn add_injection<'a>(&'a self, graph: &mut RenderGraph<'a>, volume: &'a VolumeGpu, block: &'a VolumeBlock, camera_block: &'a VolumeBlock) {
+    pub fn add_injection<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        volume: &'a VolumeGpu,
+        block: &'a VolumeBlock,
+        camera_block: &'a VolumeBlock,
+    ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let mip = SubresourceRange::mip(0);
         let layers = self.map.layers;
@@ -257,7 +358,13 @@ impl Rsm {
                 self.add_scatter(graph, &format!("{} inject", volume.label), &self.map, volume, block);
                 if let Some(map) = &self.camera {
                     // Only blocking: the camera's surfels carry no flux.
-                    self.add_scatter(graph, &format!("{} inject camera surfels", volume.label), map, volume, camera_block);
+                    self.add_scatter(
+                        graph,
+                        &format!("{} inject camera surfels", volume.label),
+                        map,
+                        volume,
+                        camera_block,
+                    );
                 }
                 volume.add_resolve(graph, block);
             }

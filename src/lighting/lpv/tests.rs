@@ -108,9 +108,16 @@ fn t4_energy_in_an_empty_grid() {
         assert!((front.flux() - 1.0).abs() < 1e-6, "step {step}: flux {}", front.flux());
     }
     // The published side constant gains 1.9e-5 per step.
-    let published = Corrected { omega_side: grid::OMEGA_SIDE_PUBLISHED, ..Corrected::default() };
+    let published = Corrected {
+        omega_side: grid::OMEGA_SIDE_PUBLISHED,
+        ..Corrected::default()
+    };
     let once = grid::step_corrected(&isotropic(9), &published);
-    assert!((once.flux() - 1.0000191).abs() < 2e-7, "published constant: {}", once.flux());
+    assert!(
+        (once.flux() - 1.0000191).abs() < 2e-7,
+        "published constant: {}",
+        once.flux()
+    );
     // A cosine lobe: its negative half is clamped on the first step, a 13.8 % gain; without the
     // clamp the flux is conserved. Later steps keep it (nothing negative is left to clamp).
     let mut lobe = Grid::cube(25);
@@ -118,7 +125,13 @@ fn t4_energy_in_an_empty_grid() {
     lobe.add(c, &sh::vpl(1.0, DVec3::X));
     assert!((lobe.flux() - 1.0).abs() < 1e-12);
     let clamped = grid::step_corrected(&lobe, &Corrected::default());
-    let unclamped = grid::step_corrected(&lobe, &Corrected { clamp: false, ..Corrected::default() });
+    let unclamped = grid::step_corrected(
+        &lobe,
+        &Corrected {
+            clamp: false,
+            ..Corrected::default()
+        },
+    );
     assert!((clamped.flux() - 1.138208).abs() < 1e-6, "clamped {}", clamped.flux());
     assert!((unclamped.flux() - 1.0).abs() < 1e-9, "unclamped {}", unclamped.flux());
     let second = grid::step_corrected(&clamped, &Corrected::default());
@@ -148,14 +161,19 @@ fn t5_wavefronts_spread_diffusively() {
             k += 1;
         }
         let r = mean_radius(&front);
-        assert!((r / radius - 1.0).abs() < 0.01, "wavefront {steps}: mean radius {r}, digest {radius}");
+        assert!(
+            (r / radius - 1.0).abs() < 0.01,
+            "wavefront {steps}: mean radius {r}, digest {radius}"
+        );
     }
 }
 
 /// E·4πr² at (r, 0, 0) from the source, the normal facing it, after `k` steps (accumulated).
 fn inverse_square_row(acc: &Grid, rs: &[i32]) -> Vec<f64> {
     let c = acc.centre();
-    rs.iter().map(|&r| sh::incident(&acc.at(c + IVec3::new(r, 0, 0)), DVec3::NEG_X) * 4.0 * PI * (r * r) as f64).collect()
+    rs.iter()
+        .map(|&r| sh::incident(&acc.at(c + IVec3::new(r, 0, 0)), DVec3::NEG_X) * 4.0 * PI * (r * r) as f64)
+        .collect()
 }
 
 #[test]
@@ -180,7 +198,11 @@ fn t6_against_the_inverse_square_law() {
         let got = inverse_square_row(&acc, &rs);
         for ((r, g), want) in rs.iter().zip(&got).zip(row) {
             // ±2 % of the value, or the table's rounding where it prints 0.000.
-            let ok = if want < 0.01 { (g - want).abs() < 0.0015 } else { (g / want - 1.0).abs() < 0.02 };
+            let ok = if want < 0.01 {
+                (g - want).abs() < 0.0015
+            } else {
+                (g / want - 1.0).abs() < 0.02
+            };
             assert!(ok, "K = {steps}, r = {r}: {g:.4}, digest {want}");
         }
     }
@@ -190,7 +212,10 @@ fn t6_against_the_inverse_square_law() {
 fn isotropy(acc: &Grid, r: f64) -> (f64, f64) {
     let c = acc.centre().as_dvec3();
     let dirs = fibonacci(2000);
-    let v: Vec<f64> = dirs.iter().map(|d| sh::incident(&acc.trilinear(c + *d * r), -*d) * 4.0 * PI * r * r).collect();
+    let v: Vec<f64> = dirs
+        .iter()
+        .map(|d| sh::incident(&acc.trilinear(c + *d * r), -*d) * 4.0 * PI * r * r)
+        .collect();
     let mean = v.iter().sum::<f64>() / v.len() as f64;
     let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64;
     (mean, var.sqrt() / mean)
@@ -198,7 +223,15 @@ fn isotropy(acc: &Grid, r: f64) -> (f64, f64) {
 
 #[test]
 fn t7_isotropy() {
-    let rows = [(16, 3.0, 1.048, 0.075), (16, 4.0, 0.745, 0.077), (16, 6.0, 0.215, 0.133), (32, 3.0, 1.584, 0.049), (32, 4.0, 1.450, 0.041), (32, 6.0, 0.874, 0.042), (32, 8.0, 0.366, 0.062)];
+    let rows = [
+        (16, 3.0, 1.048, 0.075),
+        (16, 4.0, 0.745, 0.077),
+        (16, 6.0, 0.215, 0.133),
+        (32, 3.0, 1.584, 0.049),
+        (32, 4.0, 1.450, 0.041),
+        (32, 6.0, 0.874, 0.042),
+        (32, 8.0, 0.366, 0.062),
+    ];
     let source = isotropic(48);
     let (mut acc, mut front, mut k) = (source.clone(), source, 0);
     for (steps, r, mean, cov) in rows {
@@ -208,7 +241,10 @@ fn t7_isotropy() {
             k += 1;
         }
         let (m, v) = isotropy(&acc, r);
-        assert!((m / mean - 1.0).abs() < 0.03, "K = {steps}, r = {r}: mean {m:.4}, digest {mean}");
+        assert!(
+            (m / mean - 1.0).abs() < 0.03,
+            "K = {steps}, r = {r}: mean {m:.4}, digest {mean}"
+        );
         assert!((v - cov).abs() < 0.01, "K = {steps}, r = {r}: CoV {v:.4}, digest {cov}");
     }
 }
@@ -232,12 +268,25 @@ fn t9_the_documents_propagation_gains_energy() {
             g = grid::step_faithful(&g);
             k += 1;
         }
-        let close = |got: f64, want: f64| if want == 0.0 { got.abs() < 1e-15 } else { (got / want - 1.0).abs() < 2e-4 };
+        let close = |got: f64, want: f64| {
+            if want == 0.0 {
+                got.abs() < 1e-15
+            } else {
+                (got / want - 1.0).abs() < 2e-4
+            }
+        };
         assert!(close(total(&g), gain), "{steps} iterations: total DC {}", total(&g));
-        assert!((g.at(c)[0] - 1.0).abs() < 1e-12, "the source's DC changed: {}", g.at(c)[0]);
+        assert!(
+            (g.at(c)[0] - 1.0).abs() < 1e-12,
+            "the source's DC changed: {}",
+            g.at(c)[0]
+        );
         for (r, want) in [(1, r1), (2, r2), (4, r4)] {
             let got = g.at(c + IVec3::new(r, 0, 0))[0];
-            assert!(close(got, want), "{steps} iterations: DC(r = {r}) = {got:e}, digest {want:e}");
+            assert!(
+                close(got, want),
+                "{steps} iterations: DC(r = {r}) = {got:e}, digest {want:e}"
+            );
         }
     }
 }

@@ -115,7 +115,10 @@ fn pack_half(a: f32, b: f32) -> u32 {
 }
 
 fn unpack_half(w: u32) -> (f32, f32) {
-    (half::f16::from_bits(w as u16).to_f32(), half::f16::from_bits((w >> 16) as u16).to_f32())
+    (
+        half::f16::from_bits(w as u16).to_f32(),
+        half::f16::from_bits((w >> 16) as u16).to_f32(),
+    )
 }
 
 /// The volume's buffers and its compute pipelines.
@@ -149,35 +152,80 @@ fn storage(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, bytes: u64) -
 }
 
 impl VolumeGpu {
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config, label: &str) -> Result<VolumeGpu> {
+    pub fn new(
+        gpu: &mut Gpu,
+        shaders: &ShaderLibrary,
+        states: &mut ResourceStates,
+        config: &Config,
+        label: &str,
+    ) -> Result<VolumeGpu> {
         let n = config.grid;
         let cells = (n as u64).pow(3);
         let bytes = set_bytes(n, config.half);
-        let sets = [storage(gpu, states, "lpv wavefront a", bytes)?, storage(gpu, states, "lpv wavefront b", bytes)?];
+        let sets = [
+            storage(gpu, states, "lpv wavefront a", bytes)?,
+            storage(gpu, states, "lpv wavefront b", bytes)?,
+        ];
         let accumulation = storage(gpu, states, "lpv accumulation", bytes)?;
         let fixed_light = storage(gpu, states, "lpv injection sums", cells * 12 * 4)?;
         let fixed_blocking = storage(gpu, states, "lpv blocking sums", cells * 4 * 4)?;
         let blocking = storage(gpu, states, "lpv geometry volume", cells * 16)?;
         let blocking_faces = storage(gpu, states, "lpv geometry volume faces", cells * 3 * 16)?;
-        let half = SpecConstant { id: 10, bits: config.half as u32 };
-        let side = if config.published_omega { grid::OMEGA_SIDE_PUBLISHED } else { grid::omega_side() };
+        let half = SpecConstant {
+            id: 10,
+            bits: config.half as u32,
+        };
+        let side = if config.published_omega {
+            grid::OMEGA_SIDE_PUBLISHED
+        } else {
+            grid::omega_side()
+        };
         let propagate = gpu.create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "lpv propagate".into(),
                 shader: "lpv/propagate.comp".into(),
                 specialization: vec![
-                    SpecConstant { id: 0, bits: config.faithful_propagation() as u32 },
-                    SpecConstant { id: 1, bits: config.clamp as u32 },
-                    SpecConstant { id: 2, bits: config.occlusion as u32 },
-                    SpecConstant { id: 3, bits: (grid::omega_front() as f32).to_bits() },
-                    SpecConstant { id: 4, bits: (side as f32).to_bits() },
+                    SpecConstant {
+                        id: 0,
+                        bits: config.faithful_propagation() as u32,
+                    },
+                    SpecConstant {
+                        id: 1,
+                        bits: config.clamp as u32,
+                    },
+                    SpecConstant {
+                        id: 2,
+                        bits: config.occlusion as u32,
+                    },
+                    SpecConstant {
+                        id: 3,
+                        bits: (grid::omega_front() as f32).to_bits(),
+                    },
+                    SpecConstant {
+                        id: 4,
+                        bits: (side as f32).to_bits(),
+                    },
                     half,
                 ],
             },
             shaders,
         )?;
-        let resolve = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv resolve".into(), shader: "lpv/resolve.comp".into(), specialization: vec![half] }, shaders)?;
-        let faces = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "lpv blocking faces".into(), shader: "lpv/blocking_faces.comp".into(), specialization: vec![half] }, shaders)?;
+        let resolve = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "lpv resolve".into(),
+                shader: "lpv/resolve.comp".into(),
+                specialization: vec![half],
+            },
+            shaders,
+        )?;
+        let faces = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "lpv blocking faces".into(),
+                shader: "lpv/blocking_faces.comp".into(),
+                specialization: vec![half],
+            },
+            shaders,
+        )?;
         Ok(VolumeGpu {
             label: label.to_string(),
             n,
@@ -200,9 +248,15 @@ impl VolumeGpu {
     /// Device memory per group of buffers: (group, requested bytes, allocated bytes).
     pub fn memory(&self, gpu: &Gpu) -> Result<Vec<(String, u64, u64)>> {
         let groups = [
-            ("sets (2 wavefronts + accumulation)", vec![self.sets[0], self.sets[1], self.accumulation]),
+            (
+                "sets (2 wavefronts + accumulation)",
+                vec![self.sets[0], self.sets[1], self.accumulation],
+            ),
             ("injection sums", vec![self.fixed_light]),
-            ("geometry volume (sums, corners, faces)", vec![self.fixed_blocking, self.blocking, self.blocking_faces]),
+            (
+                "geometry volume (sums, corners, faces)",
+                vec![self.fixed_blocking, self.blocking, self.blocking_faces],
+            ),
         ];
         let mut out = Vec::new();
         for (name, ids) in groups {
@@ -247,14 +301,21 @@ impl VolumeGpu {
     /// The configured iterations, one dispatch each, from `sets[0]`.
     pub fn add_propagation<'a>(&'a self, graph: &mut RenderGraph<'a>, block: &'a VolumeBlock) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let (read, write) = (Access::StorageRead { stages: compute }, Access::StorageWrite { stages: compute });
+        let (read, write) = (
+            Access::StorageRead { stages: compute },
+            Access::StorageWrite { stages: compute },
+        );
         let n = self.n;
         if self.occlusion && self.iterations > 0 {
-            graph.pass(&format!("{} blocking faces", self.label)).buffer(self.blocking, read, Some("blocking")).buffer(self.blocking_faces, write, Some("faces")).record(move |ctx| {
-                ctx.rec.bind_pipeline(self.faces)?;
-                ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
-                ctx.rec.dispatch([n, n, n])
-            });
+            graph
+                .pass(&format!("{} blocking faces", self.label))
+                .buffer(self.blocking, read, Some("blocking"))
+                .buffer(self.blocking_faces, write, Some("faces"))
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(self.faces)?;
+                    ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
+                    ctx.rec.dispatch([n, n, n])
+                });
         }
         for k in 0..self.iterations {
             let (src, dst) = (self.sets[(k % 2) as usize], self.sets[((k + 1) % 2) as usize]);
@@ -281,11 +342,23 @@ impl VolumeGpu {
     /// Reads a buffer of the volume back to the host (after the frames that wrote it finished).
     pub fn read_words(&self, gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
         let size = gpu.buffer_desc(buffer)?.size;
-        let host = gpu.create_buffer(&BufferDesc { name: "lpv readback".into(), size, usage: vk::BufferUsageFlags::TRANSFER_DST, memory: MemoryKind::GpuToCpu })?;
+        let host = gpu.create_buffer(&BufferDesc {
+            name: "lpv readback".into(),
+            size,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })?;
         let frame = gpu.create_frame()?;
         let mut graph = RenderGraph::new();
-        graph.pass("lpv readback").buffer(buffer, Access::TransferRead, None).buffer(host, Access::TransferWrite, None).record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
-        graph.pass("lpv readback host").buffer(host, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("lpv readback")
+            .buffer(buffer, Access::TransferRead, None)
+            .buffer(host, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
+        graph
+            .pass("lpv readback host")
+            .buffer(host, Access::HostRead, None)
+            .record(|_| Ok(()));
         let mut states = ResourceStates::default();
         graph.run_and_wait(gpu, frame, &mut states, "LPV readback")?;
         let bytes = gpu.read_buffer(host)?;
@@ -302,9 +375,18 @@ impl VolumeGpu {
 
 /// Propagates `injected` on the GPU with `config`'s scheme (and `blocking`, corner SH, when the
 /// geometry volume is on): the CPU reference's twin for tests. Returns the result set.
-pub fn propagate_standalone(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, injected: &[Grid; 3], blocking: Option<&Grid>) -> Result<[Grid; 3]> {
+pub fn propagate_standalone(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    config: &Config,
+    injected: &[Grid; 3],
+    blocking: Option<&Grid>,
+) -> Result<[Grid; 3]> {
     if injected.iter().any(|g| g.size != [config.grid as usize; 3]) {
-        return Err(Error::Usage(format!("lpv: the injected grids are not {}³", config.grid)));
+        return Err(Error::Usage(format!(
+            "lpv: the injected grids are not {}³",
+            config.grid
+        )));
     }
     let mut states = ResourceStates::default();
     let volume = VolumeGpu::new(gpu, shaders, &mut states, config, "lpv")?;
@@ -316,7 +398,11 @@ pub fn propagate_standalone(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Con
         volume.upload(gpu, volume.blocking, &floats)?;
     }
     let n = config.grid as i32;
-    let block = VolumeBlock { size: [n, n, n, n * n * n], origin: [0.0, 0.0, 0.0, 1.0], ..Default::default() };
+    let block = VolumeBlock {
+        size: [n, n, n, n * n * n],
+        origin: [0.0, 0.0, 0.0, 1.0],
+        ..Default::default()
+    };
     let frame = gpu.create_frame()?;
     let mut graph = RenderGraph::new();
     volume.add_propagation(&mut graph, &block);

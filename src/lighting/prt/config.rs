@@ -144,9 +144,17 @@ impl Config {
             mapping: Mapping::Orthographic,
             depth: if faithful { Depth::Planar } else { Depth::Radial },
             weights: if faithful { Weights::Legacy } else { Weights::Exact },
-            reduction: if faithful { Reduction::Passes } else { Reduction::Compute },
+            reduction: if faithful {
+                Reduction::Passes
+            } else {
+                Reduction::Compute
+            },
             coverage: if faithful { Coverage::Projected } else { Coverage::Exact },
-            directions: if faithful { Directions::Sphere } else { Directions::Analytic },
+            directions: if faithful {
+                Directions::Sphere
+            } else {
+                Directions::Analytic
+            },
             tile: 32,
             batch: 1024,
             coefficients: 16,
@@ -172,7 +180,11 @@ impl Config {
 
     /// What the bake depends on (the run-time parameters left out), as a cache key part.
     pub fn bake_key(&self) -> String {
-        let far = if self.far.is_finite() { format!("{}", self.far) } else { "inf".into() };
+        let far = if self.far.is_finite() {
+            format!("{}", self.far)
+        } else {
+            "inf".into()
+        };
         match self.baker {
             Baker::Raster => format!(
                 "raster {:?} {:?} {:?} {:?} {:?} {:?} tile={} batch={} bands={} near={} far={far} gradient={} twist={}",
@@ -189,7 +201,13 @@ impl Config {
                 self.gradient,
                 self.twist
             ),
-            _ => format!("rays samples={} bands={} near={} far={far} twist={}", self.samples, self.bands(), self.near, self.twist),
+            _ => format!(
+                "rays samples={} bands={} near={} far={far} twist={}",
+                self.samples,
+                self.bands(),
+                self.near,
+                self.twist
+            ),
         }
     }
 
@@ -197,42 +215,146 @@ impl Config {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         let float = Params::float;
-        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
+        let mode = params
+            .get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
+            .unwrap_or(Mode::Corrected);
         let mut c = Config::defaults(mode);
         for (p, v, _) in &decl.params {
             let p = p.as_str();
             match p {
                 "mode" => {}
-                "baker" => c.baker = params.choice(p, v, &[("raster", Baker::Raster), ("rays", Baker::Rays), ("rays_cpu", Baker::RaysCpu)])?,
-                "mapping" => c.mapping = params.choice(p, v, &[("orthographic", Mapping::Orthographic), ("stereographic", Mapping::Stereographic), ("equal_area", Mapping::EqualArea)])?,
-                "depth" => c.depth = params.choice(p, v, &[("planar", Depth::Planar), ("radial", Depth::Radial)])?,
-                "weights" => c.weights = params.choice(p, v, &[("legacy", Weights::Legacy), ("exact", Weights::Exact)])?,
-                "reduction" => c.reduction = params.choice(p, v, &[("passes", Reduction::Passes), ("compute", Reduction::Compute)])?,
-                "directions" => c.directions = params.choice(p, v, &[("analytic", Directions::Analytic), ("sphere", Directions::Sphere)])?,
-                "coverage" => c.coverage = params.choice(p, v, &[("projected", Coverage::Projected), ("exact", Coverage::Exact)])?,
-                "storage" => c.storage = params.choice(p, v, &[("f32", Storage::F32), ("shared_by_band", Storage::SharedByBand), ("shared_by_vertex", Storage::SharedByVertex)])?,
-                "tile" => c.tile = v.as_integer().filter(|t| [8, 16, 32, 64, 128].contains(t)).ok_or_else(|| bad(p, "a tile side of 8, 16, 32, 64 or 128", v))? as u32,
-                "batch" => c.batch = v.as_integer().filter(|b| (1..=4096).contains(b)).ok_or_else(|| bad(p, "a vertex count from 1 to 4096", v))? as u32,
-                "coefficients" => {
-                    c.coefficients = v.as_integer().filter(|n| [4, 8, 9, 12, 16].contains(n)).ok_or_else(|| bad(p, "4, 9 or 16 (complete bands), or the document's 8 or 12", v))? as usize
+                "baker" => {
+                    c.baker = params.choice(
+                        p,
+                        v,
+                        &[
+                            ("raster", Baker::Raster),
+                            ("rays", Baker::Rays),
+                            ("rays_cpu", Baker::RaysCpu),
+                        ],
+                    )?
                 }
-                "near" => c.near = float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| bad(p, "a distance >= 0", v))?,
-                "far" => c.far = float(v).filter(|x| x.is_finite() && *x >= 0.0).map(|x| if x == 0.0 { f64::INFINITY } else { x }).ok_or_else(|| bad(p, "a distance > near, or 0 for none", v))?,
+                "mapping" => {
+                    c.mapping = params.choice(
+                        p,
+                        v,
+                        &[
+                            ("orthographic", Mapping::Orthographic),
+                            ("stereographic", Mapping::Stereographic),
+                            ("equal_area", Mapping::EqualArea),
+                        ],
+                    )?
+                }
+                "depth" => c.depth = params.choice(p, v, &[("planar", Depth::Planar), ("radial", Depth::Radial)])?,
+                "weights" => {
+                    c.weights = params.choice(p, v, &[("legacy", Weights::Legacy), ("exact", Weights::Exact)])?
+                }
+                "reduction" => {
+                    c.reduction =
+                        params.choice(p, v, &[("passes", Reduction::Passes), ("compute", Reduction::Compute)])?
+                }
+                "directions" => {
+                    c.directions = params.choice(
+                        p,
+                        v,
+                        &[("analytic", Directions::Analytic), ("sphere", Directions::Sphere)],
+                    )?
+                }
+                "coverage" => {
+                    c.coverage =
+                        params.choice(p, v, &[("projected", Coverage::Projected), ("exact", Coverage::Exact)])?
+                }
+                "storage" => {
+                    c.storage = params.choice(
+                        p,
+                        v,
+                        &[
+                            ("f32", Storage::F32),
+                            ("shared_by_band", Storage::SharedByBand),
+                            ("shared_by_vertex", Storage::SharedByVertex),
+                        ],
+                    )?
+                }
+                "tile" => {
+                    c.tile = v
+                        .as_integer()
+                        .filter(|t| [8, 16, 32, 64, 128].contains(t))
+                        .ok_or_else(|| bad(p, "a tile side of 8, 16, 32, 64 or 128", v))?
+                        as u32
+                }
+                "batch" => {
+                    c.batch = v
+                        .as_integer()
+                        .filter(|b| (1..=4096).contains(b))
+                        .ok_or_else(|| bad(p, "a vertex count from 1 to 4096", v))? as u32
+                }
+                "coefficients" => {
+                    c.coefficients = v
+                        .as_integer()
+                        .filter(|n| [4, 8, 9, 12, 16].contains(n))
+                        .ok_or_else(|| bad(p, "4, 9 or 16 (complete bands), or the document's 8 or 12", v))?
+                        as usize
+                }
+                "near" => {
+                    c.near = float(v)
+                        .filter(|x| x.is_finite() && *x >= 0.0)
+                        .ok_or_else(|| bad(p, "a distance >= 0", v))?
+                }
+                "far" => {
+                    c.far = float(v)
+                        .filter(|x| x.is_finite() && *x >= 0.0)
+                        .map(|x| if x == 0.0 { f64::INFINITY } else { x })
+                        .ok_or_else(|| bad(p, "a distance > near, or 0 for none", v))?
+                }
                 "gradient" => c.gradient = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
-                "occluders" => c.occluders = v.as_str().ok_or_else(|| bad(p, "a string of `receiver: occluders…` rules separated by `;`", v))?.to_string(),
-                "samples" => c.samples = v.as_integer().filter(|n| (16..=1 << 20).contains(n)).ok_or_else(|| bad(p, "a ray count from 16 to 1048576", v))? as usize,
-                "env_spin" => c.env_spin = float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
-                "key_rate" => c.key_rate = float(v).filter(|x| (1.0..=60.0).contains(x)).ok_or_else(|| bad(p, "keys per second from 1 to 60", v))?,
-                "loop_s" => c.loop_s = float(v).filter(|x| *x > 0.0 && *x <= 600.0).ok_or_else(|| bad(p, "seconds in (0, 600]", v))?,
+                "occluders" => {
+                    c.occluders = v
+                        .as_str()
+                        .ok_or_else(|| bad(p, "a string of `receiver: occluders…` rules separated by `;`", v))?
+                        .to_string()
+                }
+                "samples" => {
+                    c.samples = v
+                        .as_integer()
+                        .filter(|n| (16..=1 << 20).contains(n))
+                        .ok_or_else(|| bad(p, "a ray count from 16 to 1048576", v))?
+                        as usize
+                }
+                "env_spin" => {
+                    c.env_spin = float(v)
+                        .filter(|x| x.is_finite() && x.abs() <= 3600.0)
+                        .ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?
+                }
+                "key_rate" => {
+                    c.key_rate = float(v)
+                        .filter(|x| (1.0..=60.0).contains(x))
+                        .ok_or_else(|| bad(p, "keys per second from 1 to 60", v))?
+                }
+                "loop_s" => {
+                    c.loop_s = float(v)
+                        .filter(|x| *x > 0.0 && *x <= 600.0)
+                        .ok_or_else(|| bad(p, "seconds in (0, 600]", v))?
+                }
                 _ => {}
             }
         }
         if c.far <= c.near {
-            return Err(bad("far", "a distance greater than near", decl.param("far").unwrap_or(&toml::Value::from(0))));
+            return Err(bad(
+                "far",
+                "a distance greater than near",
+                decl.param("far").unwrap_or(&toml::Value::from(0)),
+            ));
         }
         let side = c.atlas_side();
         if side > 16384 {
-            return Err(bad("batch", &format!("a batch whose atlas fits 16384 pixels (tile {} × ⌈√batch⌉ = {side})", c.tile), decl.param("batch").unwrap_or(&toml::Value::from(c.batch as i64))));
+            return Err(bad(
+                "batch",
+                &format!(
+                    "a batch whose atlas fits 16384 pixels (tile {} × ⌈√batch⌉ = {side})",
+                    c.tile
+                ),
+                decl.param("batch").unwrap_or(&toml::Value::from(c.batch as i64)),
+            ));
         }
         Ok(c)
     }

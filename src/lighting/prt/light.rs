@@ -32,7 +32,10 @@ pub fn project(scene: &Scene, env: &EnvironmentMap, bands: usize) -> Result<Vec<
     };
     let mut y = vec![0.0f64; bands * bands];
     for l in &scene.lights {
-        if let Light::Directional { direction, irradiance, .. } = l {
+        if let Light::Directional {
+            direction, irradiance, ..
+        } = l
+        {
             let from = -direction.normalize().as_dvec3();
             sh::eval_basis_f64(world_to_sh(from), bands, &mut y).map_err(err)?;
             for (c, yi) in out.iter_mut().zip(&y) {
@@ -45,7 +48,12 @@ pub fn project(scene: &Scene, env: &EnvironmentMap, bands: usize) -> Result<Vec<
 
 /// The lights penumbra's PRT cannot represent (local lights), for a warning.
 pub fn local_lights(scene: &Scene) -> Vec<String> {
-    scene.lights.iter().filter(|l| !matches!(l, Light::Directional { .. })).map(|l| l.name().to_string()).collect()
+    scene
+        .lights
+        .iter()
+        .filter(|l| !matches!(l, Light::Directional { .. }))
+        .map(|l| l.name().to_string())
+        .collect()
 }
 
 fn world_to_sh(d: DVec3) -> DVec3 {
@@ -56,8 +64,10 @@ fn world_to_sh(d: DVec3) -> DVec3 {
 /// core's), the same as re-projecting the rotated environment.
 pub fn rotate(coeffs: &[Vec3], angle: f64) -> Result<Vec<Vec3>> {
     let bands = sh::bands_of_len(coeffs.len()).map_err(|e| Error::Usage(format!("prt light rotation: {e}")))?;
-    let r = sh::ShRotation::from_world(Mat3::from_rotation_y(angle as f32), bands).map_err(|e| Error::Usage(format!("prt light rotation: {e}")))?;
-    r.rotate(coeffs).map_err(|e| Error::Usage(format!("prt light rotation: {e}")))
+    let r = sh::ShRotation::from_world(Mat3::from_rotation_y(angle as f32), bands)
+        .map_err(|e| Error::Usage(format!("prt light rotation: {e}")))?;
+    r.rotate(coeffs)
+        .map_err(|e| Error::Usage(format!("prt light rotation: {e}")))
 }
 
 /// The light uniform block of glsl/prt/shade.vert: 16 RGB coefficients (zero past `count`,
@@ -66,10 +76,19 @@ pub fn rotate(coeffs: &[Vec3], angle: f64) -> Result<Vec<Vec3>> {
 pub fn uniform(coeffs: &[Vec3], count: usize, keys: (u32, u32, f32), per_key: u32) -> Vec<f32> {
     let mut out = Vec::with_capacity(16 * 4 + 8);
     for i in 0..16 {
-        let c = if i < count { coeffs.get(i).copied().unwrap_or(Vec3::ZERO) } else { Vec3::ZERO };
+        let c = if i < count {
+            coeffs.get(i).copied().unwrap_or(Vec3::ZERO)
+        } else {
+            Vec3::ZERO
+        };
         out.extend([c.x, c.y, c.z, 0.0]);
     }
-    out.extend([f32::from_bits(keys.0), f32::from_bits(keys.1), f32::from_bits(per_key), f32::from_bits(count as u32)]);
+    out.extend([
+        f32::from_bits(keys.0),
+        f32::from_bits(keys.1),
+        f32::from_bits(per_key),
+        f32::from_bits(count as u32),
+    ]);
     out.extend([keys.2, 0.0, 0.0, 0.0]);
     out
 }

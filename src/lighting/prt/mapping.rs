@@ -100,7 +100,10 @@ pub fn weights(mapping: Mapping, kind: Weights, tile: u32) -> Vec<f32> {
     match kind {
         Weights::Legacy => {
             let scale = 2.0 * std::f64::consts::PI / (tile * tile) as f64;
-            legacy_cosine_texture(tile).into_iter().map(|c| (c as f64 / 255.0 * scale) as f32).collect()
+            legacy_cosine_texture(tile)
+                .into_iter()
+                .map(|c| (c as f64 / 255.0 * scale) as f32)
+                .collect()
         }
         Weights::Exact => {
             // ∫ cos θ dω over the part of the pixel inside the disk, by a SUB × SUB midpoint rule
@@ -131,7 +134,13 @@ pub fn weights(mapping: Mapping, kind: Weights, tile: u32) -> Vec<f32> {
 /// The transfer an unoccluded vertex with normal `n` (world) gets from the tile quadrature, with
 /// the tangent frame `(t, b)`: the CPU mirror of the multiplicative and integration stages for
 /// V ≡ 1 (digest §3.2's table, test 1).
-pub fn unoccluded_transfer(mapping: Mapping, kind: Weights, tile: u32, frame: (DVec3, DVec3, DVec3), bands: usize) -> crate::sh::ShResult<Vec<f64>> {
+pub fn unoccluded_transfer(
+    mapping: Mapping,
+    kind: Weights,
+    tile: u32,
+    frame: (DVec3, DVec3, DVec3),
+    bands: usize,
+) -> crate::sh::ShResult<Vec<f64>> {
     crate::sh::check_bands(bands)?;
     let w = weights(mapping, kind, tile);
     let (t, b, n) = frame;
@@ -163,10 +172,19 @@ pub fn colour_sphere() -> Vec<[f32; 5]> {
     const PHI: usize = 32;
     const THETA: usize = 16;
     let vertex = |i: usize, j: usize| {
-        let (theta, phi) = (std::f64::consts::PI * i as f64 / THETA as f64, std::f64::consts::TAU * j as f64 / PHI as f64);
+        let (theta, phi) = (
+            std::f64::consts::PI * i as f64 / THETA as f64,
+            std::f64::consts::TAU * j as f64 / PHI as f64,
+        );
         let sh = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
         // The SH frame's (x, y, z) is world (x, −z, y).
-        [sh.x as f32, sh.z as f32, -sh.y as f32, (j as f64 / PHI as f64) as f32, (i as f64 / THETA as f64) as f32]
+        [
+            sh.x as f32,
+            sh.z as f32,
+            -sh.y as f32,
+            (j as f64 / PHI as f64) as f32,
+            (i as f64 / THETA as f64) as f32,
+        ]
     };
     let mut out = Vec::with_capacity(THETA * PHI * 6);
     for i in 0..THETA {
@@ -187,7 +205,10 @@ pub fn basis_textures() -> Vec<f32> {
     for layer in 0..4 {
         for k in 0..32 {
             for l in 0..64 {
-                let (theta, phi) = (std::f64::consts::PI * k as f64 / 31.0, std::f64::consts::TAU * l as f64 / 63.0);
+                let (theta, phi) = (
+                    std::f64::consts::PI * k as f64 / 31.0,
+                    std::f64::consts::TAU * l as f64 / 63.0,
+                );
                 let sh = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
                 if crate::sh::eval_basis_f64(sh, 4, &mut y).is_err() {
                     y = [0.0; 16];

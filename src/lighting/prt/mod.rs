@@ -16,7 +16,9 @@ mod tests;
 
 use glam::Vec3;
 
-use crate::backend::{vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::backend::{
+    vk, Bind, BufferId, ColorTarget, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc, SubresourceRange,
+};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
@@ -32,26 +34,86 @@ pub const NAME: &str = "prt";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "baker", kind: ParamKind::String },
-        ParamSchema { name: "mapping", kind: ParamKind::String },
-        ParamSchema { name: "depth", kind: ParamKind::String },
-        ParamSchema { name: "weights", kind: ParamKind::String },
-        ParamSchema { name: "reduction", kind: ParamKind::String },
-        ParamSchema { name: "coverage", kind: ParamKind::String },
-        ParamSchema { name: "directions", kind: ParamKind::String },
-        ParamSchema { name: "storage", kind: ParamKind::String },
-        ParamSchema { name: "tile", kind: ParamKind::Int },
-        ParamSchema { name: "batch", kind: ParamKind::Int },
-        ParamSchema { name: "coefficients", kind: ParamKind::Int },
-        ParamSchema { name: "near", kind: ParamKind::Float },
-        ParamSchema { name: "far", kind: ParamKind::Float },
-        ParamSchema { name: "gradient", kind: ParamKind::Bool },
-        ParamSchema { name: "occluders", kind: ParamKind::String },
-        ParamSchema { name: "samples", kind: ParamKind::Int },
-        ParamSchema { name: "env_spin", kind: ParamKind::Float },
-        ParamSchema { name: "key_rate", kind: ParamKind::Float },
-        ParamSchema { name: "loop_s", kind: ParamKind::Float },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "baker",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "mapping",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "depth",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "weights",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "reduction",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "coverage",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "directions",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "storage",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "tile",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "batch",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "coefficients",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "near",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "far",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "gradient",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "occluders",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "samples",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "env_spin",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "key_rate",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "loop_s",
+            kind: ParamKind::Float,
+        },
     ],
 };
 
@@ -119,18 +181,39 @@ pub struct SceneMesh<'a> {
 
 /// The scene's draws as uploaded.
 fn scene_meshes<'a>(cx: &'a CreateContext<'_>) -> Vec<SceneMesh<'a>> {
-    cx.scene_gpu.draws.iter().zip(&cx.scene_gpu.meshes).map(|(d, mesh)| SceneMesh { object: d.object, model: d.model, mesh, vertex_offset: d.vertex_offset as u32 }).collect()
+    cx.scene_gpu
+        .draws
+        .iter()
+        .zip(&cx.scene_gpu.meshes)
+        .map(|(d, mesh)| SceneMesh {
+            object: d.object,
+            model: d.model,
+            mesh,
+            vertex_offset: d.vertex_offset as u32,
+        })
+        .collect()
 }
 
 /// The receivers of the scene at animation time `t` (every object's vertices, animated objects
 /// where they are at `t`), with each receiver's global vertex index.
-pub fn receivers_at(scene: &crate::scene::Scene, meshes: &[SceneMesh<'_>], rules: &OccluderRules, t: f32) -> Result<(Receivers, Vec<u32>)> {
+pub fn receivers_at(
+    scene: &crate::scene::Scene,
+    meshes: &[SceneMesh<'_>],
+    rules: &OccluderRules,
+    t: f32,
+) -> Result<(Receivers, Vec<u32>)> {
     let mut placed = Vec::new();
     let mut global = Vec::new();
     for m in meshes {
         let Some(o) = m.object else { continue };
-        let model = scene.objects[o].animation.map_or(m.model, |a| a.transform_at(m.model, t));
-        placed.push(Placed { object: o, model, mesh: m.mesh });
+        let model = scene.objects[o]
+            .animation
+            .map_or(m.model, |a| a.transform_at(m.model, t));
+        placed.push(Placed {
+            object: o,
+            model,
+            mesh: m.mesh,
+        });
         global.extend((0..m.mesh.vertex_count() as u32).map(|v| m.vertex_offset + v));
     }
     let r = receivers::gather(&placed, rules).map_err(|e| Error::Usage(format!("{}: {NAME}: {e}", scene.source)))?;
@@ -155,12 +238,22 @@ pub fn stored(values: Vec<f32>, dim: usize, storage: config::Storage) -> Result<
         config::Storage::SharedByVertex => storage::Grouping::ByVertex,
     };
     let n = values.len() / dim.max(1);
-    storage::decode(&storage::encode(&values, dim, grouping), n, dim, grouping).ok_or_else(|| Error::Usage(format!("{NAME}: the shared-exponent storage does not round-trip")))
+    storage::decode(&storage::encode(&values, dim, grouping), n, dim, grouping)
+        .ok_or_else(|| Error::Usage(format!("{NAME}: the shared-exponent storage does not round-trip")))
 }
 
 /// Bakes one key with the configured baker.
-pub fn bake_transfer(gpu: &mut crate::backend::Gpu, shaders: &crate::shaders::ShaderLibrary, r: &Receivers, config: &Config, progress: &mut Progress) -> Result<Vec<f32>> {
-    let clip = receivers::Clip { near: config.near, far: config.far };
+pub fn bake_transfer(
+    gpu: &mut crate::backend::Gpu,
+    shaders: &crate::shaders::ShaderLibrary,
+    r: &Receivers,
+    config: &Config,
+    progress: &mut Progress,
+) -> Result<Vec<f32>> {
+    let clip = receivers::Clip {
+        near: config.near,
+        far: config.far,
+    };
     match config.baker {
         Baker::Raster => raster::bake(gpu, shaders, r, config, progress),
         Baker::Rays => raycast::bake_gpu(gpu, shaders, r, config.bands(), config.samples, clip, progress),
@@ -196,7 +289,11 @@ impl Prt {
         }
         let local = light::local_lights(cx.scene);
         if !local.is_empty() {
-            crate::errln!("warning: {}: {NAME} lights with distant light only; it leaves out {}", cx.scene.source, local.join(", "));
+            crate::errln!(
+                "warning: {}: {NAME} lights with distant light only; it leaves out {}",
+                cx.scene.source,
+                local.join(", ")
+            );
         }
         let rules = OccluderRules::parse(&config.occluders, cx.scene, &format!("methods: {NAME}.occluders"))?;
         let times = key_times(cx.scene, &config);
@@ -204,19 +301,42 @@ impl Prt {
         let vertices = cx.scene_gpu.meshes.iter().map(|m| m.vertex_count()).sum::<usize>() as u32;
         let dim = config.bands() * config.bands();
 
-        let mut key = BakeKey::new("PRT transfer").with("version", BAKER_VERSION).with("config", config.bake_key()).with("occluders", &rules).with("keys", (keys, config.key_rate));
-        let geometry: Vec<f32> = cx.scene_gpu.meshes.iter().flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array())).collect();
-        let placements: Vec<f32> = cx.scene_gpu.draws.iter().flat_map(|d| d.model.to_cols_array()).collect();
+        let mut key = BakeKey::new("PRT transfer")
+            .with("version", BAKER_VERSION)
+            .with("config", config.bake_key())
+            .with("occluders", &rules)
+            .with("keys", (keys, config.key_rate));
+        let geometry: Vec<f32> = cx
+            .scene_gpu
+            .meshes
+            .iter()
+            .flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array()))
+            .collect();
+        let placements: Vec<f32> = cx
+            .scene_gpu
+            .draws
+            .iter()
+            .flat_map(|d| d.model.to_cols_array())
+            .collect();
         key = key
             .with_bytes("geometry", bytemuck::cast_slice(&geometry))
             .with_bytes("placements", bytemuck::cast_slice(&placements))
-            .with("animation", cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>());
+            .with(
+                "animation",
+                cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>(),
+            );
         key = key.with_shaders("prt/");
         let meshes = scene_meshes(cx);
-        let all_keys: Vec<(Receivers, Vec<u32>)> = times.iter().map(|&t| receivers_at(cx.scene, &meshes, &rules, t)).collect::<Result<_>>()?;
+        let all_keys: Vec<(Receivers, Vec<u32>)> = times
+            .iter()
+            .map(|&t| receivers_at(cx.scene, &meshes, &rules, t))
+            .collect::<Result<_>>()?;
         let receivers = all_keys[0].0.len();
         if receivers == 0 {
-            return Err(Error::Usage(format!("{}: {NAME}: the scene has no object whose vertices could carry a transfer", cx.scene.source)));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the scene has no object whose vertices could carry a transfer",
+                cx.scene.source
+            )));
         }
         // The label names the cache entry: only what the bake depends on (not the run-time
         // coefficient count, which every count's configuration shares).
@@ -224,7 +344,14 @@ impl Prt {
             Baker::Raster => format!("raster {:?} {:?} {}²", config.mode, config.mapping, config.tile),
             _ => format!("{:?} {} rays", config.baker, config.samples),
         };
-        let label = format!("{NAME} {baker} ({receivers} vertices{})", if keys > 1 { format!(" × {keys} keys") } else { String::new() });
+        let label = format!(
+            "{NAME} {baker} ({receivers} vertices{})",
+            if keys > 1 {
+                format!(" × {keys} keys")
+            } else {
+                String::new()
+            }
+        );
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         let baked: Vec<f32> = cx.bakes.bake(&label, &key, |progress| {
             let mut out = Vec::new();
@@ -235,7 +362,10 @@ impl Prt {
         })?;
         let per_key = receivers * dim;
         if baked.len() != per_key * keys as usize {
-            return Err(Error::Usage(format!("{}: {NAME}: the baked transfer does not match the scene (delete the cache entry)", cx.scene.source)));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the baked transfer does not match the scene (delete the cache entry)",
+                cx.scene.source
+            )));
         }
         let baked = stored(baked, dim, config.storage)?;
         let mut transfer = vec![0.0f32; keys as usize * vertices as usize * 16];
@@ -246,7 +376,11 @@ impl Prt {
                 transfer[dst..dst + dim].copy_from_slice(src);
             }
         }
-        let transfer = cx.gpu.create_buffer_init("prt transfer", vk::BufferUsageFlags::STORAGE_BUFFER, bytemuck::cast_slice(&transfer))?;
+        let transfer = cx.gpu.create_buffer_init(
+            "prt transfer",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            bytemuck::cast_slice(&transfer),
+        )?;
         cx.states.forget_buffer(transfer);
         let light = light::project(cx.scene, cx.environment, 4)?;
 
@@ -256,11 +390,27 @@ impl Prt {
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
         let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
-        let draws = cx.scene_gpu.draws.iter().map(|d| DrawInfo { object: d.object }).collect();
+        let draws = cx
+            .scene_gpu
+            .draws
+            .iter()
+            .map(|d| DrawInfo { object: d.object })
+            .collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
         let calls = cx.scene_gpu.draws.iter().map(DrawCall::whole).collect();
         let uniform = light::uniform(&light, config.coefficients, (0, 0, 0.0), vertices);
-        Ok(Prt { config, pipeline, transfer, light, keys, vertices, draws, animation, calls, uniform })
+        Ok(Prt {
+            config,
+            pipeline,
+            transfer,
+            light,
+            keys,
+            vertices,
+            draws,
+            animation,
+            calls,
+            uniform,
+        })
     }
 
     /// The keys bound at time `t` and the blend between them.
@@ -286,7 +436,11 @@ impl LightingMethod for Prt {
 
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
         let t = frame.clock.time_s;
-        let light = if self.config.env_spin != 0.0 { light::rotate(&self.light, (self.config.env_spin * t as f64).to_radians())? } else { self.light.clone() };
+        let light = if self.config.env_spin != 0.0 {
+            light::rotate(&self.light, (self.config.env_spin * t as f64).to_radians())?
+        } else {
+            self.light.clone()
+        };
         self.uniform = light::uniform(&light, self.config.coefficients, self.keys_at(t as f64), self.vertices);
         for (call, (d, item)) in self.calls.iter_mut().zip(self.draws.iter().zip(&frame.scene.draws)) {
             let anim = d.object.and_then(|o| self.animation.get(o).copied().flatten());
@@ -300,7 +454,10 @@ impl LightingMethod for Prt {
             return Ok(());
         }
         let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
-        let (vert, frag) = (vk::PipelineStageFlags2::VERTEX_SHADER, vk::PipelineStageFlags2::FRAGMENT_SHADER);
+        let (vert, frag) = (
+            vk::PipelineStageFlags2::VERTEX_SHADER,
+            vk::PipelineStageFlags2::FRAGMENT_SHADER,
+        );
         graph
             .pass("prt")
             .color_attachment(t.radiance, SubresourceRange::mip(0), false)
@@ -310,7 +467,10 @@ impl LightingMethod for Prt {
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
             .buffer(self.transfer, Access::StorageRead { stages: vert }, Some("transfer"))
             .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(t.radiance)],
+                    depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+                })?;
                 ctx.rec.bind_pipeline(self.pipeline)?;
                 let uniform_bytes = bytemuck::bytes_of(&uniforms);
                 let light: &[u8] = bytemuck::cast_slice(&self.uniform);
@@ -319,7 +479,14 @@ impl LightingMethod for Prt {
                     ctx.bind(&[
                         ("frame", Bind::UniformData(uniform_bytes)),
                         ("light", Bind::StorageData(light)),
-                        ("albedo_map", Bind::Sampled { image: maps.albedo, range: SubresourceRange::mip(0), sampler: scene.sampler }),
+                        (
+                            "albedo_map",
+                            Bind::Sampled {
+                                image: maps.albedo,
+                                range: SubresourceRange::mip(0),
+                                sampler: scene.sampler,
+                            },
+                        ),
                     ])
                 })?;
                 ctx.rec.end_rendering();

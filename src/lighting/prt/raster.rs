@@ -17,8 +17,9 @@ use super::config::{Config, Coverage, Depth, Directions, Reduction};
 use super::mapping;
 use super::receivers::{tangent_frame, Receivers};
 use crate::backend::{
-    vk, Bind, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc,
-    SamplerId, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc,
+    ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SamplerDesc, SamplerId, SpecConstant,
+    SubresourceRange, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -75,7 +76,11 @@ impl Slots {
             }
             next += (members.len() as u32).div_ceil(batch) * batch;
         }
-        Slots { slot, batches, total: next }
+        Slots {
+            slot,
+            batches,
+            total: next,
+        }
     }
 }
 
@@ -133,7 +138,13 @@ struct ChunkPush {
 const RECT_BYTES: u64 = 64;
 
 /// Bakes the transfer of every receiver (`bands²` per receiver, receiver-major) on the device.
-pub fn bake(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, progress: &mut Progress) -> Result<Vec<f32>> {
+pub fn bake(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    r: &Receivers,
+    config: &Config,
+    progress: &mut Progress,
+) -> Result<Vec<f32>> {
     gpu.scoped(|gpu| run(gpu, shaders, r, config, None, progress))
 }
 
@@ -143,7 +154,16 @@ pub fn bake(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Conf
 pub fn reduce_only(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, product: &[f32]) -> Result<Vec<f32>> {
     let n = config.batch as usize;
     let r = Receivers::explicit(&vec![(DVec3::ZERO, DVec3::Y); n], Vec::new());
-    let all = gpu.scoped(|gpu| run(gpu, shaders, &r, config, Some(product), &mut Progress::new("prt reduction")))?;
+    let all = gpu.scoped(|gpu| {
+        run(
+            gpu,
+            shaders,
+            &r,
+            config,
+            Some(product),
+            &mut Progress::new("prt reduction"),
+        )
+    })?;
     // Every group reduces the same uploaded atlas: the first group's four are the sums.
     let dim = config.bands() * config.bands();
     Ok(all.chunks(dim).flat_map(|c| c[..4].to_vec()).collect())
@@ -153,7 +173,14 @@ fn image(gpu: &mut Gpu, name: &str, format: vk::Format, w: u32, h: u32, usage: v
     Ok(gpu.create_image(&ImageDesc::new_2d(name, format, w, h).usage(usage))?)
 }
 
-fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, product_override: Option<&[f32]>, progress: &mut Progress) -> Result<Vec<f32>> {
+fn run(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    r: &Receivers,
+    config: &Config,
+    product_override: Option<&[f32]>,
+    progress: &mut Progress,
+) -> Result<Vec<f32>> {
     let bands = config.bands();
     let dim = bands * bands;
     if r.is_empty() {
@@ -165,12 +192,20 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
     let rows = config.batch.div_ceil(config.tiles_per_row());
     let (w, h) = (side, rows * config.tile);
     if w > gpu.caps().max_image_dimension_2d || h > gpu.caps().max_image_dimension_2d {
-        return Err(Error::Usage(format!("prt: a {w}x{h} visibility atlas exceeds the device's {} pixels; lower batch or tile", gpu.caps().max_image_dimension_2d)));
+        return Err(Error::Usage(format!(
+            "prt: a {w}x{h} visibility atlas exceeds the device's {} pixels; lower batch or tile",
+            gpu.caps().max_image_dimension_2d
+        )));
     }
     let mut receivers = vec![GpuReceiver::default(); slots.total as usize];
     for i in 0..r.len() {
         let (t, b) = tangent_frame(r.normals[i], config.twist);
-        receivers[slots.slot[i] as usize] = GpuReceiver { position: v4(r.positions[i], 1.0), tangent: v4(t, 0.0), bitangent: v4(b, 0.0), normal: v4(r.normals[i], 0.0) };
+        receivers[slots.slot[i] as usize] = GpuReceiver {
+            position: v4(r.positions[i], 1.0),
+            tangent: v4(t, 0.0),
+            bitangent: v4(b, 0.0),
+            normal: v4(r.normals[i], 0.0),
+        };
     }
     let mut vertices: Vec<[f32; 3]> = Vec::new();
     let mut set_vertices = Vec::new();
@@ -194,7 +229,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
         corners.push([0.0; 4]);
     }
     // An unbounded far plane becomes one past everything (depth only orders occluders).
-    let far = if config.far.is_finite() { config.far } else { config.near + 2.0 * (hi - lo).length().max(1.0) };
+    let far = if config.far.is_finite() {
+        config.far
+    } else {
+        config.near + 2.0 * (hi - lo).length().max(1.0)
+    };
     let weights = mapping::weights(config.mapping, config.weights, config.tile);
 
     let usage_storage = vk::ImageUsageFlags::STORAGE;
@@ -206,16 +245,45 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
         weights: gpu.create_storage_buffer("prt weights", bytemuck::cast_slice(&weights))?,
         batch: gpu.create_storage_output("prt batch", 4, MemoryKind::GpuOnly)?,
         coefficients: gpu.create_storage_output("prt coefficients", slots.total as u64 * 64, MemoryKind::GpuToCpu)?,
-        occluders: gpu.create_buffer_init("prt occluders", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(if vertices.is_empty() { &[[0.0f32; 3]][..] } else { &vertices }))?,
+        occluders: gpu.create_buffer_init(
+            "prt occluders",
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            bytemuck::cast_slice(if vertices.is_empty() {
+                &[[0.0f32; 3]][..]
+            } else {
+                &vertices
+            }),
+        )?,
         triangles: gpu.create_storage_buffer("prt occluder triangles", bytemuck::cast_slice(&corners))?,
         cull: match config.coverage {
             Coverage::Projected => None,
             Coverage::Exact => Some(cull(gpu, shaders, config)?),
         },
         set_vertices,
-        atlas: image(gpu, "prt visibility atlas", rgba, w, h, vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage)?,
-        depth: image(gpu, "prt visibility depth", vk::Format::D32_SFLOAT, w, h, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?,
-        product: image(gpu, "prt product", rgba, w, h, usage_storage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED)?,
+        atlas: image(
+            gpu,
+            "prt visibility atlas",
+            rgba,
+            w,
+            h,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage,
+        )?,
+        depth: image(
+            gpu,
+            "prt visibility depth",
+            vk::Format::D32_SFLOAT,
+            w,
+            h,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        )?,
+        product: image(
+            gpu,
+            "prt product",
+            rgba,
+            w,
+            h,
+            usage_storage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
+        )?,
         stages: [
             image(gpu, "prt reduction 1", rgba, w / ta, h, usage_storage)?,
             image(gpu, "prt reduction 2", rgba, w / config.tile, h, usage_storage)?,
@@ -226,12 +294,24 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
             Directions::Analytic => None,
             Directions::Sphere => {
                 let vertices = mapping::colour_sphere();
-                let buffer = gpu.create_buffer_init("prt colour sphere", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&vertices))?;
-                Some((sphere_pipeline(gpu, shaders, config, w, h)?, buffer, vertices.len() as u32))
+                let buffer = gpu.create_buffer_init(
+                    "prt colour sphere",
+                    vk::BufferUsageFlags::VERTEX_BUFFER,
+                    bytemuck::cast_slice(&vertices),
+                )?;
+                Some((
+                    sphere_pipeline(gpu, shaders, config, w, h)?,
+                    buffer,
+                    vertices.len() as u32,
+                ))
             }
         },
         basis: {
-            let basis = gpu.create_image(&ImageDesc::new_2d("prt SH basis textures", rgba, 64, 32).layers(4).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+            let basis = gpu.create_image(
+                &ImageDesc::new_2d("prt SH basis textures", rgba, 64, 32)
+                    .layers(4)
+                    .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+            )?;
             gpu.upload_image(basis, 0, bytemuck::cast_slice(&mapping::basis_textures()))?;
             basis
         },
@@ -242,54 +322,117 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, config: &Config, p
     let mut bake = bake;
     let common = |id: u32, bits: u32| SpecConstant { id, bits };
     for g in 0..groups as u32 {
-        let base = vec![common(0, config.mapping as u32), common(2, config.tile), common(3, config.tiles_per_row()), common(4, config.batch), common(10, g)];
+        let base = vec![
+            common(0, config.mapping as u32),
+            common(2, config.tile),
+            common(3, config.tiles_per_row()),
+            common(4, config.batch),
+            common(10, g),
+        ];
         let mut multiply = base.clone();
         multiply.push(common(14, u32::from(config.directions == Directions::Sphere)));
-        bake.multiply.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt multiply {g}"), shader: "prt/multiply.comp".into(), specialization: multiply }, shaders)?);
+        bake.multiply.push(gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: format!("prt multiply {g}"),
+                shader: "prt/multiply.comp".into(),
+                specialization: multiply,
+            },
+            shaders,
+        )?);
         let mut reduce = Vec::new();
         match config.reduction {
             Reduction::Passes => {
                 for (i, (taps, axis)) in [(ta, 0), (tb, 0), (ta, 1)].into_iter().enumerate() {
                     reduce.push(gpu.create_compute_pipeline(
-                        &ComputePipelineDesc { name: format!("prt reduce pass {} group {g}", i + 1), shader: "prt/reduce_axis.comp".into(), specialization: vec![common(11, taps), common(12, axis)] },
+                        &ComputePipelineDesc {
+                            name: format!("prt reduce pass {} group {g}", i + 1),
+                            shader: "prt/reduce_axis.comp".into(),
+                            specialization: vec![common(11, taps), common(12, axis)],
+                        },
                         shaders,
                     )?);
                 }
                 let mut last = base.clone();
                 last.push(common(11, tb));
-                reduce.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt reduce pass 4 group {g}"), shader: "prt/reduce_last.comp".into(), specialization: last }, shaders)?);
+                reduce.push(gpu.create_compute_pipeline(
+                    &ComputePipelineDesc {
+                        name: format!("prt reduce pass 4 group {g}"),
+                        shader: "prt/reduce_last.comp".into(),
+                        specialization: last,
+                    },
+                    shaders,
+                )?);
             }
             Reduction::Compute => {
-                reduce.push(gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("prt reduce tiles {g}"), shader: "prt/reduce_tile.comp".into(), specialization: base }, shaders)?);
+                reduce.push(gpu.create_compute_pipeline(
+                    &ComputePipelineDesc {
+                        name: format!("prt reduce tiles {g}"),
+                        shader: "prt/reduce_tile.comp".into(),
+                        specialization: base,
+                    },
+                    shaders,
+                )?);
             }
         }
         bake.reduce.push(reduce);
     }
     if let Some(product) = product_override {
         if product.len() != (w * h * 4) as usize {
-            return Err(Error::Usage(format!("prt: a product atlas of {} floats, expected {}", product.len(), w * h * 4)));
+            return Err(Error::Usage(format!(
+                "prt: a product atlas of {} floats, expected {}",
+                product.len(),
+                w * h * 4
+            )));
         }
         gpu.upload_image(bake.product, 0, bytemuck::cast_slice(product))?;
     }
 
     let frame = gpu.create_frame()?;
     let mut states = ResourceStates::default();
-    states.set_image(gpu, bake.basis, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    states.set_image(
+        gpu,
+        bake.basis,
+        Access::SampledRead {
+            stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+        },
+    )?;
     if product_override.is_some() {
-        states.set_image(gpu, bake.product, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        states.set_image(
+            gpu,
+            bake.product,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
     }
     let t_start = std::time::Instant::now();
     for (k, &(set, first, count)) in slots.batches.iter().enumerate() {
         let mut graph = RenderGraph::new();
-        record_batch(&mut graph, &bake, config, (set, first, count), (w, h), product_override.is_none());
-        graph.pass("prt readback").buffer(bake.coefficients, Access::HostRead, None).record(|_| Ok(()));
+        record_batch(
+            &mut graph,
+            &bake,
+            config,
+            (set, first, count),
+            (w, h),
+            product_override.is_none(),
+        );
+        graph
+            .pass("prt readback")
+            .buffer(bake.coefficients, Access::HostRead, None)
+            .record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "prt raster bake")?;
-        progress.set_detail(format!("batch {}/{}, {:.0} vertices/s", k + 1, slots.batches.len(), (k + 1) as f64 * config.batch as f64 / t_start.elapsed().as_secs_f64().max(1e-9)));
+        progress.set_detail(format!(
+            "batch {}/{}, {:.0} vertices/s",
+            k + 1,
+            slots.batches.len(),
+            (k + 1) as f64 * config.batch as f64 / t_start.elapsed().as_secs_f64().max(1e-9)
+        ));
         progress.update(k as u64 + 1, slots.batches.len() as u64);
     }
     progress.finish();
     let bytes = gpu.read_buffer(bake.coefficients)?;
-    let all: &[f32] = bytemuck::try_cast_slice(&bytes[..slots.total as usize * 64]).map_err(|e| Error::Usage(format!("prt: coefficient readback: {e}")))?;
+    let all: &[f32] = bytemuck::try_cast_slice(&bytes[..slots.total as usize * 64])
+        .map_err(|e| Error::Usage(format!("prt: coefficient readback: {e}")))?;
     let mut out = vec![0.0f32; r.len() * dim];
     for i in 0..r.len() {
         let s = slots.slot[i] as usize;
@@ -302,33 +445,81 @@ fn cull(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config) -> Result<Cull>
     let chunk_triangles = (config.rect_budget / config.batch).max(1);
     let rects = u64::from(chunk_triangles) * u64::from(config.batch);
     let c = |id: u32, bits: u32| SpecConstant { id, bits };
-    let pipeline =
-        gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt cull".into(), shader: "prt/cull.comp".into(), specialization: vec![c(0, config.mapping as u32), c(2, config.tile)] }, shaders)?;
+    let pipeline = gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: "prt cull".into(),
+            shader: "prt/cull.comp".into(),
+            specialization: vec![c(0, config.mapping as u32), c(2, config.tile)],
+        },
+        shaders,
+    )?;
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let indices: Vec<u32> = (0..rects as u32).flat_map(|k| [0, 1, 2, 0, 2, 3].map(|i| 4 * k + i)).collect();
+    let indices: Vec<u32> = (0..rects as u32)
+        .flat_map(|k| [0, 1, 2, 0, 2, 3].map(|i| 4 * k + i))
+        .collect();
     Ok(Cull {
         pipeline,
-        indices: gpu.create_buffer_init("prt rectangle indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&indices))?,
-        rects: gpu.create_buffer(&BufferDesc { name: "prt rectangles".into(), size: rects * RECT_BYTES, usage, memory: MemoryKind::GpuOnly })?,
-        command: gpu.create_buffer(&BufferDesc { name: "prt draw command".into(), size: 20, usage: usage | vk::BufferUsageFlags::INDIRECT_BUFFER, memory: MemoryKind::GpuOnly })?,
+        indices: gpu.create_buffer_init(
+            "prt rectangle indices",
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            bytemuck::cast_slice(&indices),
+        )?,
+        rects: gpu.create_buffer(&BufferDesc {
+            name: "prt rectangles".into(),
+            size: rects * RECT_BYTES,
+            usage,
+            memory: MemoryKind::GpuOnly,
+        })?,
+        command: gpu.create_buffer(&BufferDesc {
+            name: "prt draw command".into(),
+            size: 20,
+            usage: usage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            memory: MemoryKind::GpuOnly,
+        })?,
         chunk_triangles,
     })
 }
 
-fn visibility_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, w: u32, h: u32, far: f64) -> Result<PipelineId> {
+fn visibility_pipeline(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    config: &Config,
+    w: u32,
+    h: u32,
+    far: f64,
+) -> Result<PipelineId> {
     let mut desc = match config.coverage {
         Coverage::Projected => {
             let mut d = GraphicsPipelineDesc::new("prt visibility", "prt/visibility.vert", Some("prt/visibility.frag"));
-            d.vertex_layout = VertexLayout { buffers: vec![(0, 12)], attributes: vec![VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 }] };
+            d.vertex_layout = VertexLayout {
+                buffers: vec![(0, 12)],
+                attributes: vec![VertexAttribute {
+                    location: 0,
+                    binding: 0,
+                    format: vk::Format::R32G32B32_SFLOAT,
+                    offset: 0,
+                }],
+            };
             d
         }
-        Coverage::Exact => GraphicsPipelineDesc::new("prt visibility exact", "prt/visibility_exact.vert", Some("prt/visibility_exact.frag")),
+        Coverage::Exact => GraphicsPipelineDesc::new(
+            "prt visibility exact",
+            "prt/visibility_exact.vert",
+            Some("prt/visibility_exact.frag"),
+        ),
     };
     // Occluders block from both sides.
     desc.raster.cull = vk::CullModeFlags::NONE;
-    desc.depth = DepthState { test: true, write: true, compare: vk::CompareOp::LESS };
+    desc.depth = DepthState {
+        test: true,
+        write: true,
+        compare: vk::CompareOp::LESS,
+    };
     // Occluders write B only: R and G hold the colour-coded sphere's angles.
-    desc.color_targets = vec![ColorTarget { write_mask: vk::ColorComponentFlags::B, ..ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT) }];
+    desc.color_targets = vec![ColorTarget {
+        write_mask: vk::ColorComponentFlags::B,
+        ..ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT)
+    }];
     desc.depth_format = Some(vk::Format::D32_SFLOAT);
     let c = |id: u32, bits: u32| SpecConstant { id, bits };
     desc.specialization = vec![
@@ -348,40 +539,64 @@ fn visibility_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, 
 
 /// One batch: its first slot into the batch buffer, the visibility atlas, then per group the
 /// multiplicative stage and the integration into the coefficient buffer.
-fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config, (set, first, count): (usize, u32, u32), (w, h): (u32, u32), render: bool) {
+fn record_batch<'a>(
+    graph: &mut RenderGraph<'a>,
+    b: &'a Bake,
+    config: &'a Config,
+    (set, first, count): (usize, u32, u32),
+    (w, h): (u32, u32),
+    render: bool,
+) {
     let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let full = SubresourceRange::full();
     let batch = b.batch;
-    graph.pass("prt batch").buffer(batch, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(batch, first));
+    graph
+        .pass("prt batch")
+        .buffer(batch, Access::TransferWrite, None)
+        .record(move |ctx| ctx.rec.fill_buffer(batch, first));
     if render {
         let (first_vertex, vertex_count) = b.set_vertices[set];
         // Buffers are bound by name per pipeline: the sphere's and the occluders' pipelines
         // share the pass and read different ones.
-        let vertex = Access::StorageRead { stages: vk::PipelineStageFlags2::VERTEX_SHADER };
+        let vertex = Access::StorageRead {
+            stages: vk::PipelineStageFlags2::VERTEX_SHADER,
+        };
         // B (visibility) starts at 1; R and G (the sphere's angles) at 0, where the document
         // leaves pixels the sphere does not reach.
-        let clear = [RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0]), RenderTarget::clear_depth(b.depth, 1.0, 0)];
+        let clear = [
+            RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0]),
+            RenderTarget::clear_depth(b.depth, 1.0, 0),
+        ];
         let load = [RenderTarget::load(b.atlas), RenderTarget::load(b.depth)];
         let begin = move |rec: &mut crate::backend::Recorder<'_>, first: bool| {
             let [colour, depth] = if first { clear } else { load };
-            rec.begin_rendering(&RenderingDesc { colors: vec![colour], depth_stencil: Some(depth) }).map(|_| ())
+            rec.begin_rendering(&RenderingDesc {
+                colors: vec![colour],
+                depth_stencil: Some(depth),
+            })
+            .map(|_| ())
         };
         match &b.cull {
             None => {
-                graph.pass("prt visibility").color_attachment(b.atlas, full, true).depth_stencil_write(b.depth, true).buffer(b.receivers, vertex, None).record(move |ctx| {
-                    begin(ctx.rec, true)?;
-                    draw_sphere(ctx, b, first, count)?;
-                    if vertex_count > 0 {
-                        ctx.rec.bind_pipeline(b.visibility)?;
-                        ctx.bind(&[("receivers", Bind::StorageBuffer(b.receivers))])?;
-                        ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
-                        ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
-                    }
-                    ctx.rec.end_rendering();
-                    Ok(())
-                });
+                graph
+                    .pass("prt visibility")
+                    .color_attachment(b.atlas, full, true)
+                    .depth_stencil_write(b.depth, true)
+                    .buffer(b.receivers, vertex, None)
+                    .record(move |ctx| {
+                        begin(ctx.rec, true)?;
+                        draw_sphere(ctx, b, first, count)?;
+                        if vertex_count > 0 {
+                            ctx.rec.bind_pipeline(b.visibility)?;
+                            ctx.bind(&[("receivers", Bind::StorageBuffer(b.receivers))])?;
+                            ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
+                            ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
+                        }
+                        ctx.rec.end_rendering();
+                        Ok(())
+                    });
             }
             Some(cull) => {
                 // Per chunk of triangles: list the rectangles with something to draw, then draw
@@ -392,8 +607,16 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
                     let start = k * cull.chunk_triangles;
                     let n = cull.chunk_triangles.min(triangles - start);
                     let command = cull.command;
-                    graph.pass("prt cull reset").buffer(command, Access::TransferWrite, None).record(move |ctx| ctx.rec.update_buffer(command, &[0, 1, 0, 0, 0]));
-                    let push = ChunkPush { first_slot: first, receivers: count, first_triangle: first_triangle + start, triangle_count: n };
+                    graph
+                        .pass("prt cull reset")
+                        .buffer(command, Access::TransferWrite, None)
+                        .record(move |ctx| ctx.rec.update_buffer(command, &[0, 1, 0, 0, 0]));
+                    let push = ChunkPush {
+                        first_slot: first,
+                        receivers: count,
+                        first_triangle: first_triangle + start,
+                        triangle_count: n,
+                    };
                     let (pipeline, rects, indices) = (cull.pipeline, cull.rects, cull.indices);
                     graph
                         .pass("prt cull")
@@ -467,13 +690,23 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
                 let chain = [b.product, b.stages[0], b.stages[1], b.stages[2]];
                 for i in 0..3 {
                     let (src, dst, p) = (chain[i], chain[i + 1], reduce[i]);
-                    graph.pass(&format!("prt reduce pass {}", i + 1)).storage_read("src", src, full, compute).storage_write("dst", dst, full, compute).record(move |ctx| {
-                        ctx.rec.bind_pipeline(p)?;
-                        ctx.bind(&[])?;
-                        ctx.rec.dispatch([w, h, 1])
-                    });
+                    graph
+                        .pass(&format!("prt reduce pass {}", i + 1))
+                        .storage_read("src", src, full, compute)
+                        .storage_write("dst", dst, full, compute)
+                        .record(move |ctx| {
+                            ctx.rec.bind_pipeline(p)?;
+                            ctx.bind(&[])?;
+                            ctx.rec.dispatch([w, h, 1])
+                        });
                 }
-                to_slots(graph, "prt reduce pass 4", b.stages[2], reduce[3], [w / config.tile, h / config.tile, 1]);
+                to_slots(
+                    graph,
+                    "prt reduce pass 4",
+                    b.stages[2],
+                    reduce[3],
+                    [w / config.tile, h / config.tile, 1],
+                );
             }
             Reduction::Compute => {
                 let tiles = (w / config.tile) * (h / config.tile);
@@ -484,7 +717,12 @@ fn record_batch<'a>(graph: &mut RenderGraph<'a>, b: &'a Bake, config: &'a Config
 }
 
 /// The document's directions: the colour-coded sphere drawn into every receiver's tile.
-fn draw_sphere(ctx: &mut crate::graph::PassContext<'_, '_>, b: &Bake, first: u32, count: u32) -> std::result::Result<(), crate::backend::BackendError> {
+fn draw_sphere(
+    ctx: &mut crate::graph::PassContext<'_, '_>,
+    b: &Bake,
+    first: u32,
+    count: u32,
+) -> std::result::Result<(), crate::backend::BackendError> {
     if let Some((pipeline, vertices, n)) = b.sphere {
         ctx.rec.bind_pipeline(pipeline)?;
         ctx.bind(&[("receivers", Bind::StorageBuffer(b.receivers))])?;
@@ -500,15 +738,39 @@ fn sphere_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, w: u
     desc.vertex_layout = VertexLayout {
         buffers: vec![(0, 20)],
         attributes: vec![
-            VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 },
-            VertexAttribute { location: 1, binding: 0, format: vk::Format::R32G32_SFLOAT, offset: 12 },
+            VertexAttribute {
+                location: 0,
+                binding: 0,
+                format: vk::Format::R32G32B32_SFLOAT,
+                offset: 0,
+            },
+            VertexAttribute {
+                location: 1,
+                binding: 0,
+                format: vk::Format::R32G32_SFLOAT,
+                offset: 12,
+            },
         ],
     };
     desc.raster.cull = vk::CullModeFlags::NONE;
-    desc.depth = DepthState { test: false, write: false, compare: vk::CompareOp::ALWAYS };
-    desc.color_targets = vec![ColorTarget { write_mask: vk::ColorComponentFlags::R | vk::ColorComponentFlags::G, ..ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT) }];
+    desc.depth = DepthState {
+        test: false,
+        write: false,
+        compare: vk::CompareOp::ALWAYS,
+    };
+    desc.color_targets = vec![ColorTarget {
+        write_mask: vk::ColorComponentFlags::R | vk::ColorComponentFlags::G,
+        ..ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT)
+    }];
     desc.depth_format = Some(vk::Format::D32_SFLOAT);
     let c = |id: u32, bits: u32| SpecConstant { id, bits };
-    desc.specialization = vec![c(0, config.mapping as u32), c(2, config.tile), c(3, config.tiles_per_row()), c(4, config.batch), c(5, w), c(6, h)];
+    desc.specialization = vec![
+        c(0, config.mapping as u32),
+        c(2, config.tile),
+        c(3, config.tiles_per_row()),
+        c(4, config.batch),
+        c(5, w),
+        c(6, h),
+    ];
     Ok(gpu.create_graphics_pipeline(&desc, shaders)?)
 }

@@ -43,11 +43,15 @@ const UNBOUNDED: f32 = 3.0e38;
 /// Checks the band and sample counts (`samples` must be a square: a √N×√N grid).
 pub fn check(bands: usize, samples: usize) -> Result<()> {
     if !(1..=MAX_BANDS).contains(&bands) {
-        return Err(Error::Usage(format!("PRT ray cast: bands must be 1 to {MAX_BANDS}, not {bands}")));
+        return Err(Error::Usage(format!(
+            "PRT ray cast: bands must be 1 to {MAX_BANDS}, not {bands}"
+        )));
     }
     let side = samples.isqrt();
     if samples == 0 || samples > MAX_SAMPLES || side * side != samples {
-        return Err(Error::Usage(format!("PRT ray cast: samples must be a square number (16, 256, 1024, 4096…) up to {MAX_SAMPLES}, not {samples}")));
+        return Err(Error::Usage(format!(
+            "PRT ray cast: samples must be a square number (16, 256, 1024, 4096…) up to {MAX_SAMPLES}, not {samples}"
+        )));
     }
     Ok(())
 }
@@ -56,13 +60,25 @@ pub fn check(bands: usize, samples: usize) -> Result<()> {
 fn check_all(r: &Receivers, bands: usize, samples: usize, clip: Clip) -> Result<()> {
     check(bands, samples)?;
     if !(clip.near >= 0.0 && clip.near.is_finite() && clip.far > clip.near) {
-        return Err(Error::Usage(format!("PRT ray cast: the clip needs 0 ≤ near < far (near {}, far {})", clip.near, clip.far)));
+        return Err(Error::Usage(format!(
+            "PRT ray cast: the clip needs 0 ≤ near < far (near {}, far {})",
+            clip.near, clip.far
+        )));
     }
     if r.set.len() != r.len() || r.normals.len() != r.len() {
-        return Err(Error::Usage(format!("PRT ray cast: {} receivers with {} normals and {} set indices", r.len(), r.normals.len(), r.set.len())));
+        return Err(Error::Usage(format!(
+            "PRT ray cast: {} receivers with {} normals and {} set indices",
+            r.len(),
+            r.normals.len(),
+            r.set.len()
+        )));
     }
     if let Some(k) = r.set.iter().position(|&s| s as usize >= r.sets.len()) {
-        return Err(Error::Usage(format!("PRT ray cast: receiver {k} names occluder set {} of {}", r.set[k], r.sets.len())));
+        return Err(Error::Usage(format!(
+            "PRT ray cast: receiver {k} names occluder set {} of {}",
+            r.set[k],
+            r.sets.len()
+        )));
     }
     Ok(())
 }
@@ -136,7 +152,11 @@ impl SetBvh {
                 [a, b - a, c - a]
             })
             .collect();
-        Some(SetBvh { skips: bvh.skip_links(), nodes: bvh.nodes, triangles })
+        Some(SetBvh {
+            skips: bvh.skip_links(),
+            nodes: bvh.nodes,
+            triangles,
+        })
     }
 
     /// Whether a triangle lies on the ray closer than `t_max`: `occluded` of
@@ -177,7 +197,11 @@ pub fn bake_cpu(r: &Receivers, bands: usize, samples: usize, clip: Clip, progres
     let mut out = vec![0.0f32; r.len() * dim];
     let bvhs: Vec<Option<SetBvh>> = r.sets.iter().map(|s| SetBvh::build(&s.triangles)).collect();
     let local: Vec<Vec3> = cosine_directions(samples).iter().map(|d| d.as_vec3()).collect();
-    let (near, t_max, weight) = (clip.near as f32, ray_length(clip), std::f64::consts::PI / samples as f64);
+    let (near, t_max, weight) = (
+        clip.near as f32,
+        ray_length(clip),
+        std::f64::consts::PI / samples as f64,
+    );
     let receiver = |k: usize, row: &mut [f32]| {
         let bvh = bvhs[r.set[k] as usize].as_ref();
         let f = frame(r.normals[k]);
@@ -207,7 +231,11 @@ pub fn bake_cpu(r: &Receivers, bands: usize, samples: usize, clip: Clip, progres
         std::thread::scope(|scope| {
             for (c, rows) in part.chunks_mut(CPU_CHUNK * dim).enumerate() {
                 let receiver = &receiver;
-                scope.spawn(move || rows.chunks_mut(dim).enumerate().for_each(|(i, row)| receiver(first + c * CPU_CHUNK + i, row)));
+                scope.spawn(move || {
+                    rows.chunks_mut(dim)
+                        .enumerate()
+                        .for_each(|(i, row)| receiver(first + c * CPU_CHUNK + i, row))
+                });
             }
         });
         done += part.len() / dim;
@@ -284,7 +312,15 @@ const MAP_PIECE: usize = 16_384;
 /// pass (`glsl/prt/reduce_lanes.comp`) adds up in a fixed order. Where the device bounds an
 /// invocation's loop iterations (llvmpipe: 65,535) and a walk is cut short, the chunk is traced
 /// again with fewer rays per invocation, down to one, and then the bake is refused.
-pub fn bake_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
+pub fn bake_gpu(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    r: &Receivers,
+    bands: usize,
+    samples: usize,
+    clip: Clip,
+    progress: &mut Progress,
+) -> Result<Vec<f32>> {
     check_all(r, bands, samples, clip)?;
     if r.is_empty() {
         progress.finish();
@@ -294,7 +330,15 @@ pub fn bake_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: us
     gpu.scoped(|gpu| run(gpu, shaders, r, bands, samples, clip, progress))
 }
 
-fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samples: usize, clip: Clip, progress: &mut Progress) -> Result<Vec<f32>> {
+fn run(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    r: &Receivers,
+    bands: usize,
+    samples: usize,
+    clip: Clip,
+    progress: &mut Progress,
+) -> Result<Vec<f32>> {
     // Where a bake's time goes, printed at the end: on a fast GPU the set-up, not the rays, is
     // most of it (measured on an H200: 533 ms at 256 rays, 572 ms at 1,024).
     let start = std::time::Instant::now();
@@ -315,7 +359,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
             // SetBvh's (p0, p1 - p0, p2 - p0).
             let set_traced = parallel::map(&bvh.order, MAP_PIECE, |&t| {
                 let [a, b, c] = s.triangles[t as usize];
-                TracedTriangle { p0: v4(a), e1: v4(b - a), e2: v4(c - a) }
+                TracedTriangle {
+                    p0: v4(a),
+                    e1: v4(b - a),
+                    e2: v4(c - a),
+                }
             });
             let (node_base, slot_base) = (nodes.len() as u32, traced.len() as u32);
             if nodes.is_empty() {
@@ -323,19 +371,30 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
                 // (3.5 M nodes and 2 M triangles for a 2 M-triangle set).
                 (nodes, traced) = (bvh.nodes, set_traced);
             } else {
-                nodes.extend(bvh.nodes.iter().map(|n| BvhNode { index: n.index + if n.is_leaf() { slot_base } else { node_base }, ..*n }));
+                nodes.extend(bvh.nodes.iter().map(|n| BvhNode {
+                    index: n.index + if n.is_leaf() { slot_base } else { node_base },
+                    ..*n
+                }));
                 traced.extend(set_traced);
             }
             node_base
         })
         .collect();
     if nodes.len() >= NO_BVH as usize || traced.len() > u32::MAX as usize {
-        return Err(Error::Usage("PRT ray cast: the occluder sets are too large for one GPU bake".into()));
+        return Err(Error::Usage(
+            "PRT ray cast: the occluder sets are too large for one GPU bake".into(),
+        ));
     }
     let indices: Vec<usize> = (0..total).collect();
     let receivers: Vec<GpuReceiver> = parallel::map(&indices, MAP_PIECE, |&k| {
         let f = frame(r.normals[k]);
-        GpuReceiver { position: v4(r.positions[k].as_vec3()), tangent: v4(f[0]), bitangent: v4(f[1]), normal: v4(f[2]), bvh: [roots[r.set[k] as usize], 0, 0, 0] }
+        GpuReceiver {
+            position: v4(r.positions[k].as_vec3()),
+            tangent: v4(f[0]),
+            bitangent: v4(f[1]),
+            normal: v4(f[2]),
+            bvh: [roots[r.set[k] as usize], 0, 0, 0],
+        }
     });
     let local: Vec<[f32; 4]> = cosine_directions(samples).iter().map(|d| v4(d.as_vec3())).collect();
 
@@ -348,24 +407,56 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
     let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
     let sums_buf = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuOnly)?;
     let most_receivers = total.min(sums_bytes / (4 * dim));
-    let transfer_buf = gpu.create_storage_output("prt rays transfer", (most_receivers * dim * 4) as u64, MemoryKind::GpuToCpu)?;
+    let transfer_buf = gpu.create_storage_output(
+        "prt rays transfer",
+        (most_receivers * dim * 4) as u64,
+        MemoryKind::GpuToCpu,
+    )?;
     let status_buf = gpu.create_storage_output("prt rays status", 4, MemoryKind::GpuToCpu)?;
     let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
     let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
     let per_buf = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
     phases.set_up[1] = start.elapsed() - phases.trees - phases.set_up[0];
     // The bands as a constant: the shader then keeps only the SH evaluation it needs.
-    let specialization = vec![SpecConstant { id: 0, bits: bands as u32 }];
+    let specialization = vec![SpecConstant {
+        id: 0,
+        bits: bands as u32,
+    }];
     let t = std::time::Instant::now();
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays".into(), shader: "prt/rays.comp".into(), specialization }, shaders)?;
-    let reduce = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "prt rays reduce".into(), shader: "prt/reduce_lanes.comp".into(), specialization: Vec::new() }, shaders)?;
+    let pipeline = gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: "prt rays".into(),
+            shader: "prt/rays.comp".into(),
+            specialization,
+        },
+        shaders,
+    )?;
+    let reduce = gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: "prt rays reduce".into(),
+            shader: "prt/reduce_lanes.comp".into(),
+            specialization: Vec::new(),
+        },
+        shaders,
+    )?;
     phases.pipeline = t.elapsed();
     let t = std::time::Instant::now();
     let frame = gpu.create_frame()?;
     phases.set_up[2] = t.elapsed();
 
-    let push = Push { receiver_count: total as u32, sample_count: samples as u32, bands: bands as u32, triangle_count: traced.len() as u32, near: clip.near as f32, t_max: ray_length(clip) };
-    let reduce_push = ReducePush { sample_count: samples as u32, dim: dim as u32, weight: (std::f64::consts::PI / samples as f64) as f32 };
+    let push = Push {
+        receiver_count: total as u32,
+        sample_count: samples as u32,
+        bands: bands as u32,
+        triangle_count: traced.len() as u32,
+        near: clip.near as f32,
+        t_max: ray_length(clip),
+    };
+    let reduce_push = ReducePush {
+        sample_count: samples as u32,
+        dim: dim as u32,
+        weight: (std::f64::consts::PI / samples as f64) as f32,
+    };
     let mut out = vec![0.0f32; total * dim];
     let mut per = FIRST_RAYS_PER_LANE.min(samples as u32);
     let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -381,15 +472,29 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
         let lanes = samples.div_ceil(per as usize);
         // Both dispatches within the guaranteed workgroup count: the trace's lanes, the
         // reduction's coefficients.
-        let fits = (MAX_INVOCATIONS / lanes.max(dim)).min(sums_bytes / (4 * lanes * dim)).max(1);
+        let fits = (MAX_INVOCATIONS / lanes.max(dim))
+            .min(sums_bytes / (4 * lanes * dim))
+            .max(1);
         let n = chunk.min(total - base).min(fits);
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
         let (first, count) = (base as u32, n as u32);
-        graph.pass("prt rays chunk base").buffer(base_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(base_buf, first));
-        graph.pass("prt rays chunk count").buffer(count_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(count_buf, count));
-        graph.pass("prt rays per lane").buffer(per_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(per_buf, per));
-        graph.pass("prt rays clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
+        graph
+            .pass("prt rays chunk base")
+            .buffer(base_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(base_buf, first));
+        graph
+            .pass("prt rays chunk count")
+            .buffer(count_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(count_buf, count));
+        graph
+            .pass("prt rays per lane")
+            .buffer(per_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(per_buf, per));
+        graph
+            .pass("prt rays clear status")
+            .buffer(status_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
         bvh_tables
             .read(graph.pass("prt rays"), vk::PipelineStageFlags2::COMPUTE_SHADER)
             .buffer(receivers_buf, read, Some("receivers"))
@@ -418,12 +523,18 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, r: &Receivers, bands: usize, samp
                 ctx.rec.push_constants(bytemuck::bytes_of(&reduce_push))?;
                 ctx.rec.dispatch([(n * dim) as u32, 1, 1])
             });
-        graph.pass("prt rays host").buffer(transfer_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("prt rays host")
+            .buffer(transfer_buf, Access::HostRead, None)
+            .buffer(status_buf, Access::HostRead, None)
+            .record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "PRT ray cast")?;
         phases.record_submission(n, t0.elapsed());
         let t_sum = std::time::Instant::now();
         let status = gpu.read_buffer(status_buf)?;
-        let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let cut = status
+            .get(..4)
+            .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
         if cut > 0 {
             if per == 1 {
                 return Err(Error::Usage(format!(
@@ -485,8 +596,12 @@ impl BakePhases {
 
     fn report(&self, receivers: usize, samples: usize) -> String {
         let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-        let other = self.total.saturating_sub(self.trees + self.pipeline + self.buffers + self.traced + self.read_back);
-        let one = |s: Option<(usize, std::time::Duration)>| s.map_or("none".to_string(), |(n, d)| format!("{n} receivers in {:.1} ms", ms(d)));
+        let other = self
+            .total
+            .saturating_sub(self.trees + self.pipeline + self.buffers + self.traced + self.read_back);
+        let one = |s: Option<(usize, std::time::Duration)>| {
+            s.map_or("none".to_string(), |(n, d)| format!("{n} receivers in {:.1} ms", ms(d)))
+        };
         format!(
             "prt rays: {receivers} receivers x {samples} rays in {:.0} ms: trees {:.0} ms, pipeline {:.0} ms, buffers and uploads {:.0} ms (receivers {:.0}, outputs {:.0}, frame {:.0}, trees {:.0}), {} submissions {:.0} ms (first {}, largest {}), read back {:.0} ms, the rest {:.0} ms",
             ms(self.total),
@@ -546,7 +661,9 @@ mod tests {
             let a = 2.0 * PI * (k as f64 + 0.3) / n as f64;
             Vec3::new((rim * a.cos()) as f32, h as f32, (rim * a.sin()) as f32)
         };
-        (0..n).map(|k| [Vec3::new(0.0, h as f32, 0.0), at(k + 1), at(k)]).collect()
+        (0..n)
+            .map(|k| [Vec3::new(0.0, h as f32, 0.0), at(k + 1), at(k)])
+            .collect()
     }
 
     /// The largest difference between two rows.
@@ -559,7 +676,9 @@ mod tests {
         let n = n.normalize();
         let mut y = vec![0.0; bands * bands];
         crate::sh::eval_basis_f64(DVec3::new(n.x, -n.z, n.y), bands, &mut y).unwrap_or_else(|e| panic!("{e}"));
-        (0..bands * bands).map(|i| LAMBERT[crate::sh::band_of(i).0] * y[i]).collect()
+        (0..bands * bands)
+            .map(|i| LAMBERT[crate::sh::band_of(i).0] * y[i])
+            .collect()
     }
 
     #[test]
@@ -570,7 +689,10 @@ mod tests {
         // Under the density cos θ/π: E[z] = 2/3, E[x] = E[y] = 0, E[z²] = 1/2.
         let mean = dirs.iter().sum::<DVec3>() / 4096.0;
         let z2 = dirs.iter().map(|d| d.z * d.z).sum::<f64>() / 4096.0;
-        assert!((mean.z - 2.0 / 3.0).abs() < 2e-4 && mean.x.abs() < 1e-12 && mean.y.abs() < 1e-12, "{mean}");
+        assert!(
+            (mean.z - 2.0 / 3.0).abs() < 2e-4 && mean.x.abs() < 1e-12 && mean.y.abs() < 1e-12,
+            "{mean}"
+        );
         assert!((z2 - 0.5).abs() < 1e-4, "{z2}");
         // Not a square: the largest square below.
         assert_eq!(cosine_directions(1000).len(), 961);
@@ -595,9 +717,23 @@ mod tests {
             s ^= s << 17;
             (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
         };
-        let points: Vec<(DVec3, DVec3)> = (0..40).map(|_| (DVec3::new(random(), random(), random()) * 5.0, DVec3::new(random(), random(), random()))).collect();
+        let points: Vec<(DVec3, DVec3)> = (0..40)
+            .map(|_| {
+                (
+                    DVec3::new(random(), random(), random()) * 5.0,
+                    DVec3::new(random(), random(), random()),
+                )
+            })
+            .collect();
         // Far off: a triangle that no ray reaches (the set is not empty, so rays are traced).
-        let r = Receivers::explicit(&points, vec![[Vec3::splat(100.0), Vec3::new(101.0, 100.0, 100.0), Vec3::new(100.0, 101.0, 100.0)]]);
+        let r = Receivers::explicit(
+            &points,
+            vec![[
+                Vec3::splat(100.0),
+                Vec3::new(101.0, 100.0, 100.0),
+                Vec3::new(100.0, 101.0, 100.0),
+            ]],
+        );
         for bands in [4, 6] {
             let t = bake(&r, bands, 4096, Clip::default());
             let dim = bands * bands;
@@ -611,24 +747,40 @@ mod tests {
     #[test]
     fn a_disk_overhead_leaves_the_cosine_outside_its_cone() {
         // 40°: sin²α is no multiple of 1/64, so the edge cuts a ring of cells.
-        for (deg, t00, t10) in [(30.0f64, 0.66467, 0.66467), (40.0, 0.52006, 0.46002), (45.0, 0.44311, 0.36180), (60.0, 0.22156, 0.12792)] {
+        for (deg, t00, t10) in [
+            (30.0f64, 0.66467, 0.66467),
+            (40.0, 0.52006, 0.46002),
+            (45.0, 0.44311, 0.36180),
+            (60.0, 0.22156, 0.12792),
+        ] {
             let a = deg.to_radians();
             // The closed forms: the visible cone is θ > α.
             assert!((T00 * a.cos().powi(2) - t00).abs() < 1e-5 && (T10 * a.cos().powi(3) - t10).abs() < 1e-5);
             let h = 1.5;
             let r = Receivers::explicit(&[up()], disk(h * a.tan(), h));
             let t = bake(&r, 4, 4096, Clip::default());
-            assert!((t[0] as f64 - t00).abs() < 0.01 && (t[2] as f64 - t10).abs() < 0.01, "α = {deg}°: T00 {} want {t00}, T10 {} want {t10}", t[0], t[2]);
+            assert!(
+                (t[0] as f64 - t00).abs() < 0.01 && (t[2] as f64 - t10).abs() < 0.01,
+                "α = {deg}°: T00 {} want {t00}, T10 {} want {t10}",
+                t[0],
+                t[2]
+            );
             // Symmetric about the normal: no m ≠ 0 terms.
             for (i, &x) in t.iter().enumerate() {
-                assert!(crate::sh::band_of(i).1 == 0 || x.abs() < 2e-3, "α = {deg}°: T[{i}] = {x}");
+                assert!(
+                    crate::sh::band_of(i).1 == 0 || x.abs() < 2e-3,
+                    "α = {deg}°: T[{i}] = {x}"
+                );
             }
         }
     }
 
     #[test]
     fn a_receiver_inside_a_closed_box_sees_nothing() {
-        let r = Receivers::explicit(&[(DVec3::new(0.1, -0.2, 0.3), DVec3::new(0.3, 1.0, -0.5)), up()], closed_box(2.0));
+        let r = Receivers::explicit(
+            &[(DVec3::new(0.1, -0.2, 0.3), DVec3::new(0.3, 1.0, -0.5)), up()],
+            closed_box(2.0),
+        );
         let t = bake(&r, 4, 1024, Clip::default());
         assert!(t.iter().all(|x| x.abs() < 1e-6), "{t:?}");
     }
@@ -639,7 +791,11 @@ mod tests {
         r.sets.push(OccluderSet::default());
         r.set[1] = 1;
         let t = bake(&r, 4, 4096, Clip::default());
-        assert!(t[..16].iter().all(|x| x.abs() < 1e-6), "in the box's set: {:?}", &t[..16]);
+        assert!(
+            t[..16].iter().all(|x| x.abs() < 1e-6),
+            "in the box's set: {:?}",
+            &t[..16]
+        );
         let err = worst(&t[16..], &unoccluded(DVec3::Y, 4));
         assert!(err < 2e-3, "in the empty set: {:?}, max error {err}", &t[16..]);
     }
@@ -651,21 +807,52 @@ mod tests {
         let free = unoccluded(DVec3::Y, 4);
         let short = bake(&r, 4, 4096, Clip { near: 1e-3, far: 0.95 });
         assert!(worst(&short, &free) < 2e-3, "far 0.95: {short:?}");
-        let long = bake(&r, 4, 4096, Clip { near: 1e-3, far: f64::INFINITY });
+        let long = bake(
+            &r,
+            4,
+            4096,
+            Clip {
+                near: 1e-3,
+                far: f64::INFINITY,
+            },
+        );
         assert!(long.iter().all(|x| x.abs() < 1e-6), "far ∞: {long:?}");
         // Far between the nearest wall and the corners: only part of the box blocks.
         let some = bake(&r, 4, 4096, Clip { near: 1e-3, far: 1.2 });
-        assert!(some[0] > 0.05 && some[0] < (T00 - 0.05) as f32, "far 1.2: T00 {}", some[0]);
+        assert!(
+            some[0] > 0.05 && some[0] < (T00 - 0.05) as f32,
+            "far 1.2: T00 {}",
+            some[0]
+        );
     }
 
     #[test]
     fn near_ignores_an_occluder_closer_than_it() {
         // A disk 0.5 above, 60° half-angle; its points are 0.5 to 1.0 away.
         let r = Receivers::explicit(&[up()], disk(0.5 * 3f64.sqrt(), 0.5));
-        let behind = bake(&r, 4, 4096, Clip { near: 1.01, far: f64::INFINITY });
+        let behind = bake(
+            &r,
+            4,
+            4096,
+            Clip {
+                near: 1.01,
+                far: f64::INFINITY,
+            },
+        );
         assert!(worst(&behind, &unoccluded(DVec3::Y, 4)) < 2e-3, "near 1.01: {behind:?}");
-        let before = bake(&r, 4, 4096, Clip { near: 0.45, far: f64::INFINITY });
-        assert!((before[0] as f64 - 0.22156).abs() < 0.01 && (before[2] as f64 - 0.12792).abs() < 0.01, "near 0.45: {before:?}");
+        let before = bake(
+            &r,
+            4,
+            4096,
+            Clip {
+                near: 0.45,
+                far: f64::INFINITY,
+            },
+        );
+        assert!(
+            (before[0] as f64 - 0.22156).abs() < 0.01 && (before[2] as f64 - 0.12792).abs() < 0.01,
+            "near 0.45: {before:?}"
+        );
     }
 
     #[test]
@@ -673,14 +860,33 @@ mod tests {
         let r = Receivers::explicit(&[up()], Vec::new());
         let mut p = Progress::new("test");
         for (bands, samples) in [(0, 1024), (9, 1024), (4, 0), (4, 1000), (4, 2)] {
-            assert!(matches!(bake_cpu(&r, bands, samples, Clip::default(), &mut p), Err(Error::Usage(_))), "{bands} bands, {samples} samples");
+            assert!(
+                matches!(
+                    bake_cpu(&r, bands, samples, Clip::default(), &mut p),
+                    Err(Error::Usage(_))
+                ),
+                "{bands} bands, {samples} samples"
+            );
         }
-        for clip in [Clip { near: 1.0, far: 0.5 }, Clip { near: -1.0, far: 1.0 }, Clip { near: f64::NAN, far: 1.0 }] {
-            assert!(matches!(bake_cpu(&r, 4, 1024, clip, &mut p), Err(Error::Usage(_))), "{clip:?}");
+        for clip in [
+            Clip { near: 1.0, far: 0.5 },
+            Clip { near: -1.0, far: 1.0 },
+            Clip {
+                near: f64::NAN,
+                far: 1.0,
+            },
+        ] {
+            assert!(
+                matches!(bake_cpu(&r, 4, 1024, clip, &mut p), Err(Error::Usage(_))),
+                "{clip:?}"
+            );
         }
         let mut bad = r.clone();
         bad.set[0] = 1;
-        assert!(matches!(bake_cpu(&bad, 4, 1024, Clip::default(), &mut p), Err(Error::Usage(_))));
+        assert!(matches!(
+            bake_cpu(&bad, 4, 1024, Clip::default(), &mut p),
+            Err(Error::Usage(_))
+        ));
         assert!(bake_cpu(&Receivers::default(), 4, 1024, Clip::default(), &mut p).is_ok_and(|t| t.is_empty()));
     }
 }

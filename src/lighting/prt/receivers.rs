@@ -18,7 +18,10 @@ pub struct Clip {
 
 impl Default for Clip {
     fn default() -> Clip {
-        Clip { near: 1e-3, far: f64::INFINITY }
+        Clip {
+            near: 1e-3,
+            far: f64::INFINITY,
+        }
     }
 }
 
@@ -59,7 +62,10 @@ impl Receivers {
             positions: points.iter().map(|p| p.0).collect(),
             normals: points.iter().map(|p| p.1.normalize()).collect(),
             set: vec![0; points.len()],
-            sets: vec![OccluderSet { objects: Vec::new(), triangles: occluders }],
+            sets: vec![OccluderSet {
+                objects: Vec::new(),
+                triangles: occluders,
+            }],
         }
     }
 
@@ -85,15 +91,28 @@ impl OccluderRules {
         let find = |name: &str| -> Result<usize> {
             scene.objects.iter().position(|o| o.name == name).ok_or_else(|| {
                 let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
-                Error::Usage(format!("{}: {field}: no object is called {name:?} (objects: {})", scene.source, names.join(", ")))
+                Error::Usage(format!(
+                    "{}: {field}: no object is called {name:?} (objects: {})",
+                    scene.source,
+                    names.join(", ")
+                ))
             })
         };
         let mut rules = Vec::new();
         for entry in text.split(';').map(str::trim).filter(|e| !e.is_empty()) {
-            let (receiver, list) = entry.split_once(':').ok_or_else(|| Error::Usage(format!("{}: {field}: {entry:?} is not `receiver: occluders…`", scene.source)))?;
+            let (receiver, list) = entry.split_once(':').ok_or_else(|| {
+                Error::Usage(format!(
+                    "{}: {field}: {entry:?} is not `receiver: occluders…`",
+                    scene.source
+                ))
+            })?;
             let r = find(receiver.trim())?;
             if rules.iter().any(|(x, _): &(usize, Vec<usize>)| *x == r) {
-                return Err(Error::Usage(format!("{}: {field}: {:?} is listed twice", scene.source, receiver.trim())));
+                return Err(Error::Usage(format!(
+                    "{}: {field}: {:?} is listed twice",
+                    scene.source,
+                    receiver.trim()
+                )));
             }
             let mut occ = Vec::new();
             for name in list.split([',', ' ']).map(str::trim).filter(|n| !n.is_empty()) {
@@ -110,7 +129,10 @@ impl OccluderRules {
 
     /// The occluders of receiver object `o` among `all` objects.
     pub fn occluders_of(&self, o: usize, all: &[usize]) -> Vec<usize> {
-        self.rules.iter().find(|(r, _)| *r == o).map_or_else(|| all.to_vec(), |(_, occ)| occ.clone())
+        self.rules
+            .iter()
+            .find(|(r, _)| *r == o)
+            .map_or_else(|| all.to_vec(), |(_, occ)| occ.clone())
     }
 }
 
@@ -130,8 +152,15 @@ pub fn gather(objects: &[Placed<'_>], rules: &OccluderRules) -> Result<Receivers
         let set = match out.sets.iter().position(|s| s.objects == occ) {
             Some(s) => s,
             None => {
-                let triangles = objects.iter().filter(|q| occ.contains(&q.object)).flat_map(|q| world_triangles(q)).collect();
-                out.sets.push(OccluderSet { objects: occ, triangles });
+                let triangles = objects
+                    .iter()
+                    .filter(|q| occ.contains(&q.object))
+                    .flat_map(|q| world_triangles(q))
+                    .collect();
+                out.sets.push(OccluderSet {
+                    objects: occ,
+                    triangles,
+                });
                 out.sets.len() - 1
             }
         };
@@ -141,7 +170,10 @@ pub fn gather(objects: &[Placed<'_>], rules: &OccluderRules) -> Result<Receivers
             let n = normal_matrix.transform_vector3(n).as_dvec3();
             let pos = p.model.transform_point3(pos).as_dvec3();
             if !pos.is_finite() || !n.is_finite() || n.length_squared() == 0.0 {
-                return Err(Error::Usage(format!("objects[{}]: vertex {i} has a non-finite position or a zero normal", p.object)));
+                return Err(Error::Usage(format!(
+                    "objects[{}]: vertex {i} has a non-finite position or a zero normal",
+                    p.object
+                )));
             }
             out.positions.push(pos);
             out.normals.push(n.normalize());
@@ -152,7 +184,10 @@ pub fn gather(objects: &[Placed<'_>], rules: &OccluderRules) -> Result<Receivers
 }
 
 fn world_triangles<'a>(p: &'a Placed<'_>) -> impl Iterator<Item = [Vec3; 3]> + 'a {
-    p.mesh.indices.chunks_exact(3).map(move |t| [0, 1, 2].map(|k| p.model.transform_point3(p.mesh.positions[t[k] as usize])))
+    p.mesh
+        .indices
+        .chunks_exact(3)
+        .map(move |t| [0, 1, 2].map(|k| p.model.transform_point3(p.mesh.positions[t[k] as usize])))
 }
 
 /// An orthonormal tangent frame (t, b) around the unit normal `n`, rotated by `twist` radians

@@ -120,7 +120,10 @@ pub fn round_trip(values: &[f32], dim: usize, grouping: Grouping) -> RoundTrip {
     let n = values.len() / dim.max(1);
     let bytes = encode(values, dim, grouping);
     let back = decode(&bytes, n, dim, grouping).unwrap_or_default();
-    let mut r = RoundTrip { bytes: bytes.len(), ..RoundTrip::default() };
+    let mut r = RoundTrip {
+        bytes: bytes.len(),
+        ..RoundTrip::default()
+    };
     let mut sum = 0.0;
     for g in groups(n, dim, grouping) {
         let max = g.iter().fold(0.0f64, |m, &i| m.max(values[i].abs() as f64));
@@ -156,11 +159,25 @@ mod tests {
         for grouping in [Grouping::ByBand, Grouping::ByVertex] {
             let r = round_trip(&values, 16, grouping);
             assert!(r.max_over_group <= 1.0 / 127.5, "{grouping:?}: {}", r.max_over_group);
-            assert!(r.max_over_group > 1.0 / 1024.0, "{grouping:?}: a quantiser this fine is not 8 bits: {}", r.max_over_group);
-            assert_eq!(r.bytes, if grouping == Grouping::ByBand { 16 * 257usize.div_ceil(4) } else { 257 * 4 } * GROUP_BYTES);
+            assert!(
+                r.max_over_group > 1.0 / 1024.0,
+                "{grouping:?}: a quantiser this fine is not 8 bits: {}",
+                r.max_over_group
+            );
+            assert_eq!(
+                r.bytes,
+                if grouping == Grouping::ByBand {
+                    16 * 257usize.div_ceil(4)
+                } else {
+                    257 * 4
+                } * GROUP_BYTES
+            );
         }
         let zeros = vec![0.0f32; 32];
-        assert_eq!(decode(&encode(&zeros, 16, Grouping::ByBand), 2, 16, Grouping::ByBand).unwrap(), zeros);
+        assert_eq!(
+            decode(&encode(&zeros, 16, Grouping::ByBand), 2, 16, Grouping::ByBand).unwrap(),
+            zeros
+        );
         // The largest value of a group rounds inside the mantissa range.
         let edge = [0.999f32, 1.0, -1.0, 0.5];
         let back = decode(&encode(&edge, 4, Grouping::ByVertex), 1, 4, Grouping::ByVertex).unwrap();

@@ -18,7 +18,12 @@ fn scene(text: &str) -> crate::scene::Scene {
 fn clamped_cosine(n: DVec3) -> Vec<f64> {
     let mut y = vec![0.0; 16];
     sh::eval_basis_f64(DVec3::new(n.x, -n.z, n.y), 4, &mut y).unwrap();
-    let a = [std::f64::consts::PI, 2.0 * std::f64::consts::PI / 3.0, std::f64::consts::PI / 4.0, 0.0];
+    let a = [
+        std::f64::consts::PI,
+        2.0 * std::f64::consts::PI / 3.0,
+        std::f64::consts::PI / 4.0,
+        0.0,
+    ];
     (0..16).map(|i| a[sh::band_of(i).0] * y[i]).collect()
 }
 
@@ -67,7 +72,12 @@ fn aligned_clamped_cosine_light() {
     let l = light::project(&s, &env, 4).unwrap();
     let want = clamped_cosine(d.as_dvec3());
     for i in 0..16 {
-        assert!((l[i].x as f64 - want[i]).abs() < 0.01 * want[0], "coefficient {i}: {} against {}", l[i].x, want[i]);
+        assert!(
+            (l[i].x as f64 - want[i]).abs() < 0.01 * want[0],
+            "coefficient {i}: {} against {}",
+            l[i].x,
+            want[i]
+        );
     }
     let e = dot(&clamped_cosine(d.as_dvec3()), &l).x;
     assert!((e - 2.07803).abs() < 0.01 * 2.07803, "n = d: {e}");
@@ -78,7 +88,13 @@ fn aligned_clamped_cosine_light() {
 #[test]
 fn projection_round_trip_and_rotation() {
     let s = scene("");
-    let known: Vec<f64> = (0..16).map(|i| [2.0, 0.4, -0.7, 0.3, 0.25, -0.2, 0.15, 0.1, -0.3, 0.05, -0.1, 0.12, 0.08, -0.06, 0.04, 0.09][i]).collect();
+    let known: Vec<f64> = (0..16)
+        .map(|i| {
+            [
+                2.0, 0.4, -0.7, 0.3, 0.25, -0.2, 0.15, 0.1, -0.3, 0.05, -0.1, 0.12, 0.08, -0.06, 0.04, 0.09,
+            ][i]
+        })
+        .collect();
     let eval = |w: Vec3| sh::eval_f64(&known, sh::world_to_sh(w).as_dvec3()).unwrap();
     let n = 64;
     let mut texels = Vec::new();
@@ -92,7 +108,12 @@ fn projection_round_trip_and_rotation() {
     }
     let l = light::project(&s, &EnvironmentMap::from_cube(n as u32, texels.clone()), 4).unwrap();
     for i in 0..16 {
-        assert!((l[i].x as f64 - known[i]).abs() <= 1e-3 * known[0].abs(), "coefficient {i}: {} against {}", l[i].x, known[i]);
+        assert!(
+            (l[i].x as f64 - known[i]).abs() <= 1e-3 * known[0].abs(),
+            "coefficient {i}: {} against {}",
+            l[i].x,
+            known[i]
+        );
     }
     // Turn by 40° about up: rotate the coefficients, and re-project the map looked up at the
     // inversely rotated direction.
@@ -110,7 +131,12 @@ fn projection_round_trip_and_rotation() {
     }
     let reprojected = light::project(&s, &EnvironmentMap::from_cube(n as u32, turned), 4).unwrap();
     for i in 0..16 {
-        assert!((rotated[i].x - reprojected[i].x).abs() <= 2e-3 * known[0] as f32, "coefficient {i}: rotated {} re-projected {}", rotated[i].x, reprojected[i].x);
+        assert!(
+            (rotated[i].x - reprojected[i].x).abs() <= 2e-3 * known[0] as f32,
+            "coefficient {i}: rotated {} re-projected {}",
+            rotated[i].x,
+            reprojected[i].x
+        );
     }
 }
 
@@ -136,9 +162,15 @@ fn incomplete_bands_depend_on_rotation() {
         let spread = values.iter().cloned().fold(f64::MIN, f64::max) - values.iter().cloned().fold(f64::MAX, f64::min);
         println!("{count} coefficients: spread {spread:.2e}");
         if count == 8 {
-            assert!(spread > 0.01, "{count} coefficients should depend on the rotation about n: spread {spread}");
+            assert!(
+                spread > 0.01,
+                "{count} coefficients should depend on the rotation about n: spread {spread}"
+            );
         } else {
-            assert!(spread < 1e-9, "{count} coefficients must not depend on the rotation about n: spread {spread}");
+            assert!(
+                spread < 1e-9,
+                "{count} coefficients must not depend on the rotation about n: spread {spread}"
+            );
         }
     }
 }
@@ -150,7 +182,9 @@ fn incomplete_bands_depend_on_rotation() {
 fn keys_blend_linearly() {
     let ta: Vec<f64> = (0..16).map(|i| (i as f64 * 0.37).sin()).collect();
     let tb: Vec<f64> = (0..16).map(|i| (i as f64 * 0.91).cos()).collect();
-    let l: Vec<Vec3> = (0..16).map(|i| Vec3::new(1.0 + i as f32 * 0.1, 0.5, -0.2 * i as f32)).collect();
+    let l: Vec<Vec3> = (0..16)
+        .map(|i| Vec3::new(1.0 + i as f32 * 0.1, 0.5, -0.2 * i as f32))
+        .collect();
     let (sa, sb) = (dot(&ta, &l), dot(&tb, &l));
     for s in [0.0, 0.25, 0.5, 1.0] {
         let blended: Vec<f64> = ta.iter().zip(&tb).map(|(a, b)| a + (b - a) * s).collect();
@@ -181,7 +215,12 @@ fn exact_weights_integrate_the_cosine() {
     // The legacy weights integrate cos² × π/2, not cos: T20 +72 % (the digest's table).
     let frame = super::receivers::frame(DVec3::Y, 0.0);
     let legacy = mapping::unoccluded_transfer(Mapping::Orthographic, Weights::Legacy, 32, frame, 4).unwrap();
-    assert!((legacy[6] / 0.495416 - 1.0 - 0.72).abs() < 0.01 && (legacy[0] - 0.8659).abs() < 1e-3, "legacy T00 {} T20 {}", legacy[0], legacy[6]);
+    assert!(
+        (legacy[6] / 0.495416 - 1.0 - 0.72).abs() < 0.01 && (legacy[0] - 0.8659).abs() < 1e-3,
+        "legacy T00 {} T20 {}",
+        legacy[0],
+        legacy[6]
+    );
     // Every mapping lands a direction where its inverse finds it again.
     for m in [Mapping::Orthographic, Mapping::Stereographic, Mapping::EqualArea] {
         let d = DVec3::new(0.3, -0.5, 0.6).normalize();
@@ -203,7 +242,13 @@ fn occluder_rules_make_the_sets() {
     let sphere = s.objects[0].load_mesh(std::path::Path::new(".")).unwrap();
     let lid = s.objects[1].load_mesh(std::path::Path::new(".")).unwrap();
     // The lower half of the sphere, its normals turned inward: a bowl opening upward.
-    let mut bowl = crate::scene::Mesh { positions: Vec::new(), normals: Vec::new(), uvs: Vec::new(), tangents: Vec::new(), indices: Vec::new() };
+    let mut bowl = crate::scene::Mesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        tangents: Vec::new(),
+        indices: Vec::new(),
+    };
     let keep: Vec<Option<u32>> = sphere
         .positions
         .iter()
@@ -221,11 +266,29 @@ fn occluder_rules_make_the_sets() {
             bowl.indices.extend([a, c, b]);
         }
     }
-    let objects = [super::receivers::Placed { object: 0, model: glam::Mat4::IDENTITY, mesh: &bowl }, super::receivers::Placed { object: 1, model: glam::Mat4::IDENTITY, mesh: &lid }];
+    let objects = [
+        super::receivers::Placed {
+            object: 0,
+            model: glam::Mat4::IDENTITY,
+            mesh: &bowl,
+        },
+        super::receivers::Placed {
+            object: 1,
+            model: glam::Mat4::IDENTITY,
+            mesh: &lid,
+        },
+    ];
     let bake = |rules: &str| {
         let rules = super::receivers::OccluderRules::parse(rules, &s, "occluders").unwrap();
         let r = super::receivers::gather(&objects, &rules).unwrap();
-        let t = super::raycast::bake_cpu(&r, 2, 1024, super::receivers::Clip::default(), &mut crate::progress::Progress::new("test")).unwrap();
+        let t = super::raycast::bake_cpu(
+            &r,
+            2,
+            1024,
+            super::receivers::Clip::default(),
+            &mut crate::progress::Progress::new("test"),
+        )
+        .unwrap();
         let n = bowl.positions.len();
         let mean = (0..n).map(|i| t[i * 4] as f64).sum::<f64>() / n as f64;
         (r, mean)
@@ -236,14 +299,25 @@ fn occluder_rules_make_the_sets() {
     assert_eq!(r_open.sets.len(), 1, "both unshadowed: one empty set");
     assert!(r_open.sets[0].triangles.is_empty());
     // Unshadowed: the clamped cosine exactly (T00 = 0.886 for every normal).
-    assert!((unshadowed - 0.886227).abs() < 2e-3, "unshadowed bowl: mean T00 {unshadowed}");
-    assert!(with_self < 0.9 * unshadowed, "self-shadowing must darken the bowl: {with_self} against {unshadowed}");
+    assert!(
+        (unshadowed - 0.886227).abs() < 2e-3,
+        "unshadowed bowl: mean T00 {unshadowed}"
+    );
+    assert!(
+        with_self < 0.9 * unshadowed,
+        "self-shadowing must darken the bowl: {with_self} against {unshadowed}"
+    );
     // Not listed: every object shadows it — here the lid above the bowl as well.
     let (_, everything) = bake("lid:");
-    assert!(everything < with_self, "the lid must shadow a receiver not listed: {everything} against {with_self}");
+    assert!(
+        everything < with_self,
+        "the lid must shadow a receiver not listed: {everything} against {with_self}"
+    );
     // Unknown names and malformed entries are one error line naming the field.
     for bad in ["cup: self", "bowl self", "bowl: self; bowl: lid"] {
-        let e = super::receivers::OccluderRules::parse(bad, &s, "methods[0].occluders").unwrap_err().to_string();
+        let e = super::receivers::OccluderRules::parse(bad, &s, "methods[0].occluders")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("occluders") && !e.contains('\n'), "{bad}: {e}");
     }
 }

@@ -101,17 +101,36 @@ fn storage_buffer(gpu: &mut Gpu, name: &str, usage: vk::BufferUsageFlags, data: 
 
 /// A buffer the host reads back.
 fn host_buffer(gpu: &mut Gpu, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<BufferId> {
-    Ok(gpu.create_buffer(&BufferDesc { name: name.into(), size: size.max(4), usage, memory: MemoryKind::GpuToCpu })?)
+    Ok(gpu.create_buffer(&BufferDesc {
+        name: name.into(),
+        size: size.max(4),
+        usage,
+        memory: MemoryKind::GpuToCpu,
+    })?)
 }
 
 /// Shoots on the GPU until the settings' stop, then writes every patch's total and unshot
 /// radiosity back into `p`.
-pub fn solve(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress) -> Result<Report> {
+pub fn solve(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    p: &mut Patches,
+    triangles: &[Triangle],
+    settings: &Settings,
+    progress: &mut Progress,
+) -> Result<Report> {
     // Every buffer, pipeline and frame of the solve is freed on every exit path.
     gpu.scoped(|gpu| run(gpu, shaders, p, triangles, settings, progress))
 }
 
-fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Triangle], settings: &Settings, progress: &mut Progress) -> Result<Report> {
+fn run(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    p: &mut Patches,
+    triangles: &[Triangle],
+    settings: &Settings,
+    progress: &mut Progress,
+) -> Result<Report> {
     let blocks = solve::blocks(p, settings.block.max(1));
     let mut report = Report::default();
     if blocks.is_empty() {
@@ -129,7 +148,10 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
             c[0] = b as u32;
         }
         c[1] += 1;
-        gpu_blocks.push(GpuBlock { range: [members.len() as u32, block.members.len() as u32, block.chart as u32, 0], corners: block.corners.map(|q| v4(q, 1.0)) });
+        gpu_blocks.push(GpuBlock {
+            range: [members.len() as u32, block.members.len() as u32, block.chart as u32, 0],
+            corners: block.corners.map(|q| v4(q, 1.0)),
+        });
         for &k in &block.members {
             block_of[k] = b as u32;
             members.push(k as u32);
@@ -139,9 +161,21 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         .patches
         .iter()
         .enumerate()
-        .map(|(k, q)| GpuPatch { centre: v4(q.centre, q.area as f32), normal: v4(q.normal, 0.0), albedo: v4(q.albedo, 0.0), ids: [q.chart as u32, block_of[k], 0, 0] })
+        .map(|(k, q)| GpuPatch {
+            centre: v4(q.centre, q.area as f32),
+            normal: v4(q.normal, 0.0),
+            albedo: v4(q.albedo, 0.0),
+            ids: [q.chart as u32, block_of[k], 0, 0],
+        })
         .collect();
-    let state: Vec<GpuRadiosity> = p.patches.iter().map(|q| GpuRadiosity { total: v4(q.total, 0.0), unshot: v4(q.unshot, 0.0) }).collect();
+    let state: Vec<GpuRadiosity> = p
+        .patches
+        .iter()
+        .map(|q| GpuRadiosity {
+            total: v4(q.total, 0.0),
+            unshot: v4(q.unshot, 0.0),
+        })
+        .collect();
     // The CPU solve's visibility matrix, 2 bits per ordered chart pair (i·charts + j).
     let matrix = Matrix::build(triangles, p, settings.full_visibility);
     report.visibility = matrix.counts();
@@ -160,26 +194,57 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         .iter()
         .map(|&t| {
             let [a, b, c] = tris[t as usize];
-            TracedTriangle { p0: a.extend(0.0).into(), e1: (b - a).extend(0.0).into(), e2: (c - a).extend(0.0).into() }
+            TracedTriangle {
+                p0: a.extend(0.0).into(),
+                e1: (b - a).extend(0.0).into(),
+                e2: (c - a).extend(0.0).into(),
+            }
         })
         .collect();
 
     let none = vk::BufferUsageFlags::empty();
     let patches_buf = storage_buffer(gpu, "radiosity patches", none, bytemuck::cast_slice(&patches))?;
-    let state_buf = storage_buffer(gpu, "radiosity state", vk::BufferUsageFlags::TRANSFER_SRC, bytemuck::cast_slice(&state))?;
+    let state_buf = storage_buffer(
+        gpu,
+        "radiosity state",
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        bytemuck::cast_slice(&state),
+    )?;
     let blocks_buf = storage_buffer(gpu, "radiosity blocks", none, bytemuck::cast_slice(&gpu_blocks))?;
     let members_buf = storage_buffer(gpu, "radiosity block members", none, bytemuck::cast_slice(&members))?;
     let charts_buf = storage_buffer(gpu, "radiosity charts", none, bytemuck::cast_slice(&charts))?;
     let power_buf = storage_buffer(gpu, "radiosity block power", none, &vec![0u8; 4 * blocks.len()])?;
-    let visibility_buf = storage_buffer(gpu, "radiosity visibility matrix", none, bytemuck::cast_slice(&visibility))?;
+    let visibility_buf = storage_buffer(
+        gpu,
+        "radiosity visibility matrix",
+        none,
+        bytemuck::cast_slice(&visibility),
+    )?;
     let storage_host = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let shot_buf = host_buffer(gpu, "radiosity shot", std::mem::size_of::<GpuShot>() as u64, storage_host)?;
+    let shot_buf = host_buffer(
+        gpu,
+        "radiosity shot",
+        std::mem::size_of::<GpuShot>() as u64,
+        storage_host,
+    )?;
     let status_buf = host_buffer(gpu, "radiosity status", 4, storage_host)?;
     let log_capacity = settings.max_shots.saturating_add(1).min(1 << 22);
     let log_buf = host_buffer(gpu, "radiosity unshot log", 4 * log_capacity as u64, storage_host)?;
-    let readback = host_buffer(gpu, "radiosity state readback", std::mem::size_of_val(state.as_slice()) as u64, vk::BufferUsageFlags::TRANSFER_DST)?;
+    let readback = host_buffer(
+        gpu,
+        "radiosity state readback",
+        std::mem::size_of_val(state.as_slice()) as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+    )?;
     let pipeline = |gpu: &mut Gpu, name: &str, shader: &str| -> Result<PipelineId> {
-        Ok(gpu.create_compute_pipeline(&ComputePipelineDesc { name: name.into(), shader: shader.into(), specialization: vec![] }, shaders)?)
+        Ok(gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: name.into(),
+                shader: shader.into(),
+                specialization: vec![],
+            },
+            shaders,
+        )?)
     };
     let power_pipeline = pipeline(gpu, "radiosity block power", "radiosity/block_power.comp")?;
     let select_pipeline = pipeline(gpu, "radiosity select", "radiosity/select.comp")?;
@@ -187,7 +252,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
     let frame = gpu.create_frame()?;
 
     // The initial unshot power, as the CPU solve measures it (its stop is a fraction of it).
-    let initial: f64 = blocks.iter().flat_map(|b| &b.members).map(|&k| p.patches[k].unshot.abs().element_sum() * p.patches[k].area).sum();
+    let initial: f64 = blocks
+        .iter()
+        .flat_map(|b| &b.members)
+        .map(|&k| p.patches[k].unshot.abs().element_sum() * p.patches[k].area)
+        .sum();
     let base = ShootPush {
         patch_count: p.patches.len() as u32,
         block_count: blocks.len() as u32,
@@ -209,15 +278,28 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
-    let bvh_tables = GpuBvh::upload(gpu, &mut states, "radiosity", &bvh.nodes, &traced, Some(&bvh.skip_links()))?;
+    let bvh_tables = GpuBvh::upload(
+        gpu,
+        &mut states,
+        "radiosity",
+        &bvh.nodes,
+        &traced,
+        Some(&bvh.skip_links()),
+    )?;
     let mut recorded = 0usize;
     let mut batch = 4usize;
     let shot = loop {
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
         if recorded == 0 {
-            graph.pass("radiosity clear shot").buffer(shot_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(shot_buf, 0));
-            graph.pass("radiosity clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
+            graph
+                .pass("radiosity clear shot")
+                .buffer(shot_buf, Access::TransferWrite, None)
+                .record(move |ctx| ctx.rec.fill_buffer(shot_buf, 0));
+            graph
+                .pass("radiosity clear status")
+                .buffer(status_buf, Access::TransferWrite, None)
+                .record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
         }
         for _ in 0..batch {
             let push = base;
@@ -266,22 +348,40 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
                 });
         }
         graph.output_buffer(state_buf);
-        graph.pass("radiosity host").buffer(shot_buf, Access::HostRead, None).buffer(log_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("radiosity host")
+            .buffer(shot_buf, Access::HostRead, None)
+            .buffer(log_buf, Access::HostRead, None)
+            .buffer(status_buf, Access::HostRead, None)
+            .record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "radiosity shooting")?;
         recorded += batch;
         let status = gpu.read_buffer(status_buf)?;
-        let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let cut = status
+            .get(..4)
+            .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
         if cut > 0 {
             return Err(Error::Usage(format!("{}: {cut} radiosity visibility ray(s) ran more loop iterations than the device allows one shader invocation; use baker = \"cpu\"", gpu.caps().name)));
         }
         let bytes = gpu.read_buffer(shot_buf)?;
-        let shot: GpuShot = bytemuck::pod_read_unaligned(bytes.get(..std::mem::size_of::<GpuShot>()).ok_or_else(|| Error::Usage("radiosity: the shot record read back short".into()))?);
+        let shot: GpuShot = bytemuck::pod_read_unaligned(
+            bytes
+                .get(..std::mem::size_of::<GpuShot>())
+                .ok_or_else(|| Error::Usage("radiosity: the shot record read back short".into()))?,
+        );
         let log = gpu.read_buffer(log_buf)?;
         let logged = (shot.state[3] as usize).min(log.len() / 4);
-        let left = if logged > 0 { bytemuck::pod_read_unaligned::<f32>(&log[4 * (logged - 1)..4 * logged]) as f64 } else { initial };
+        let left = if logged > 0 {
+            bytemuck::pod_read_unaligned::<f32>(&log[4 * (logged - 1)..4 * logged]) as f64
+        } else {
+            initial
+        };
         show_progress(progress, shot.shots[0] as usize, left, initial, settings.threshold);
         if shot.state[1] != 0 {
-            report.unshot_power = bytemuck::cast_slice::<u8, f32>(&log[..4 * logged]).iter().map(|&x| x as f64).collect();
+            report.unshot_power = bytemuck::cast_slice::<u8, f32>(&log[..4 * logged])
+                .iter()
+                .map(|&x| x as f64)
+                .collect();
             break shot;
         }
         let seconds = t0.elapsed().as_secs_f64();
@@ -299,10 +399,16 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &mut Patches, triangles: &[Tri
         .buffer(state_buf, Access::TransferRead, None)
         .buffer(readback, Access::TransferWrite, None)
         .record(move |ctx| ctx.rec.copy_buffer(state_buf, readback, state_bytes as u64));
-    graph.pass("radiosity host").buffer(readback, Access::HostRead, None).record(|_| Ok(()));
+    graph
+        .pass("radiosity host")
+        .buffer(readback, Access::HostRead, None)
+        .record(|_| Ok(()));
     graph.run_and_wait(gpu, frame, &mut states, "radiosity readback")?;
     let bytes = gpu.read_buffer(readback)?;
-    let solved: Vec<GpuRadiosity> = bytes.get(..state_bytes).map(bytemuck::pod_collect_to_vec).ok_or_else(|| Error::Usage("radiosity: the read-back state is short".into()))?;
+    let solved: Vec<GpuRadiosity> = bytes
+        .get(..state_bytes)
+        .map(bytemuck::pod_collect_to_vec)
+        .ok_or_else(|| Error::Usage("radiosity: the read-back state is short".into()))?;
     for (q, s) in p.patches.iter_mut().zip(&solved) {
         q.total = glam::DVec3::new(s.total[0] as f64, s.total[1] as f64, s.total[2] as f64);
         q.unshot = glam::DVec3::new(s.unshot[0] as f64, s.unshot[1] as f64, s.unshot[2] as f64);

@@ -36,7 +36,13 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
 fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::CompiledWorld>, Vec3)>> {
     for obj in &scene.objects {
         if let crate::scene::MeshSource::World { level, .. } = &obj.mesh {
-            let compiled = crate::scene::world_mesh::compiled(level).map_err(|e| Error::Usage(format!("{}: {}: the world does not compile: {e}", scene.source, level.mesh_name())))?;
+            let compiled = crate::scene::world_mesh::compiled(level).map_err(|e| {
+                Error::Usage(format!(
+                    "{}: {}: the world does not compile: {e}",
+                    scene.source,
+                    level.mesh_name()
+                ))
+            })?;
             return Ok(Some((compiled, obj.transform.w_axis.truncate())));
         }
     }
@@ -46,11 +52,23 @@ fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::Compi
 /// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing) and
 /// point lights (faithful, in a BSP world: CaLight lights every patch in the light's PVS, with no
 /// ray, so a pillar casts no shadow in the light-map; elsewhere, and corrected, a shadow ray).
-pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene, mode: solve::Mode) -> Result<Vec<DVec3>> {
+pub fn add_direct_light_in(
+    p: &mut Patches,
+    occluders: &Occluders,
+    scene: &Scene,
+    mode: solve::Mode,
+) -> Result<Vec<DVec3>> {
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
     let eps = 1e-4 * p.size;
-    let pvs = if mode == solve::Mode::Faithful { bsp_world(scene)? } else { None };
-    let leaf = |x: DVec3| pvs.as_ref().map(|(w, translate)| w.leaf_of(crate::scene::world_mesh::scene_to_world(x.as_vec3() - *translate)));
+    let pvs = if mode == solve::Mode::Faithful {
+        bsp_world(scene)?
+    } else {
+        None
+    };
+    let leaf = |x: DVec3| {
+        pvs.as_ref()
+            .map(|(w, translate)| w.leaf_of(crate::scene::world_mesh::scene_to_world(x.as_vec3() - *translate)))
+    };
     for (k, q) in p.patches.iter().enumerate() {
         if !q.inside() {
             continue;
@@ -59,15 +77,36 @@ pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene
         let mut e = DVec3::ZERO;
         for l in &scene.lights {
             let (to_light, irradiance, far) = match l {
-                Light::Point { position, intensity, .. } => {
+                Light::Point {
+                    position, intensity, ..
+                } => {
                     let d = position.as_dvec3() - x;
-                    (d.normalize_or_zero(), intensity.as_dvec3() / d.length_squared().max(1e-12), position.as_dvec3())
+                    (
+                        d.normalize_or_zero(),
+                        intensity.as_dvec3() / d.length_squared().max(1e-12),
+                        position.as_dvec3(),
+                    )
                 }
-                Light::Spot { position, direction, intensity, inner_deg, outer_deg, .. } => {
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    inner_deg,
+                    outer_deg,
+                    ..
+                } => {
                     let d = position.as_dvec3() - x;
                     let l = d.normalize_or_zero();
-                    let falloff = crate::lighting::brdf::spot_falloff(outer_deg.to_radians().cos(), inner_deg.to_radians().cos(), (-l).as_vec3().dot(direction.normalize()));
-                    (l, intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12), position.as_dvec3())
+                    let falloff = crate::lighting::brdf::spot_falloff(
+                        outer_deg.to_radians().cos(),
+                        inner_deg.to_radians().cos(),
+                        (-l).as_vec3().dot(direction.normalize()),
+                    );
+                    (
+                        l,
+                        intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12),
+                        position.as_dvec3(),
+                    )
                 }
                 _ => continue,
             };
@@ -84,7 +123,10 @@ pub fn add_direct_light_in(p: &mut Patches, occluders: &Occluders, scene: &Scene
         direct[k] = q.albedo * e;
     }
     for l in &scene.lights {
-        if let Light::Directional { direction, irradiance, .. } = l {
+        if let Light::Directional {
+            direction, irradiance, ..
+        } = l
+        {
             let to_sun = -direction.as_dvec3().normalize_or_zero();
             let lit = super::sun::lit_fraction(p, occluders, to_sun, mode);
             for (k, q) in p.patches.iter().enumerate() {

@@ -17,7 +17,9 @@ mod tests;
 
 pub mod lightmap;
 
-use crate::backend::{vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
+use crate::backend::{
+    vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange,
+};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
@@ -31,14 +33,38 @@ pub const NAME: &str = "radiosity";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "patch_size", kind: ParamKind::Float },
-        ParamSchema { name: "block", kind: ParamKind::Int },
-        ParamSchema { name: "threshold", kind: ParamKind::Float },
-        ParamSchema { name: "light", kind: ParamKind::String },
-        ParamSchema { name: "baker", kind: ParamKind::String },
-        ParamSchema { name: "full_visibility", kind: ParamKind::Bool },
-        ParamSchema { name: "ambient_nz", kind: ParamKind::Bool },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "patch_size",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "block",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "threshold",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "light",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "baker",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "full_visibility",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "ambient_nz",
+            kind: ParamKind::Bool,
+        },
     ],
 };
 
@@ -70,18 +96,37 @@ impl Config {
     pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = crate::lighting::params::Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
-        let mut c = Config { settings: Settings::default(), patch_size: 0.1, content: Content::All, ambient_nz: false, on_gpu: None };
-        if let Some(mode) = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])? {
+        let mut c = Config {
+            settings: Settings::default(),
+            patch_size: 0.1,
+            content: Content::All,
+            ambient_nz: false,
+            on_gpu: None,
+        };
+        if let Some(mode) =
+            params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
+        {
             c.settings.mode = mode;
         }
         if let Some(v) = decl.param("patch_size") {
-            c.patch_size = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| (0.005..=10.0).contains(x)).ok_or_else(|| bad("patch_size", "a size from 0.005 to 10 metres", v))?;
+            c.patch_size = v
+                .as_float()
+                .or(v.as_integer().map(|i| i as f64))
+                .filter(|x| (0.005..=10.0).contains(x))
+                .ok_or_else(|| bad("patch_size", "a size from 0.005 to 10 metres", v))?;
         }
         if let Some(v) = decl.param("block") {
-            c.settings.block = v.as_integer().filter(|b| (1..=16).contains(b)).ok_or_else(|| bad("block", "an integer from 1 to 16", v))? as usize;
+            c.settings.block = v
+                .as_integer()
+                .filter(|b| (1..=16).contains(b))
+                .ok_or_else(|| bad("block", "an integer from 1 to 16", v))? as usize;
         }
         if let Some(v) = decl.param("threshold") {
-            c.settings.threshold = v.as_float().or(v.as_integer().map(|i| i as f64)).filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| bad("threshold", "a fraction in (0, 1)", v))?;
+            c.settings.threshold = v
+                .as_float()
+                .or(v.as_integer().map(|i| i as f64))
+                .filter(|x| *x > 0.0 && *x < 1.0)
+                .ok_or_else(|| bad("threshold", "a fraction in (0, 1)", v))?;
         }
         if let Some(v) = decl.param("full_visibility") {
             c.settings.full_visibility = v.as_bool().ok_or_else(|| bad("full_visibility", "true or false", v))?;
@@ -123,7 +168,11 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d) {
-            let label = format!("radiosity {:?} patch={} block={} threshold={}", c.settings.mode, c.patch_size, c.settings.block, c.settings.threshold).to_lowercase();
+            let label = format!(
+                "radiosity {:?} patch={} block={} threshold={}",
+                c.settings.mode, c.patch_size, c.settings.block, c.settings.threshold
+            )
+            .to_lowercase();
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
             }
@@ -162,52 +211,117 @@ impl Radiosity {
         let config = Config::from_decl_in(decl, Some(cx.scene))?;
         let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
-            return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the scene has no static geometry to light-map",
+                cx.scene.source
+            )));
         }
-        let mut key =
-            BakeKey::new("radiosity light-map").with("version", BAKER_VERSION).with("config", Config { ambient_nz: false, ..config }).with("lights", &cx.scene.lights).with_shaders("radiosity/");
+        let mut key = BakeKey::new("radiosity light-map")
+            .with("version", BAKER_VERSION)
+            .with(
+                "config",
+                Config {
+                    ambient_nz: false,
+                    ..config
+                },
+            )
+            .with("lights", &cx.scene.lights)
+            .with_shaders("radiosity/");
         let geometry_bytes: Vec<f64> = geometry
             .triangles
             .iter()
-            .flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain(t.emission.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))]))
+            .flat_map(|t| {
+                t.p.iter()
+                    .flat_map(|p| p.to_array())
+                    .chain(t.albedo.to_array())
+                    .chain(t.emission.to_array())
+                    .chain([t.object as f64, f64::from(u8::from(t.sky))])
+            })
             .collect();
         key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
         let scene = cx.scene;
         let geo = &geometry;
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         // Baked: the atlas size, its texels, and each triangle corner's light-map coordinate.
-        let baked: Vec<f32> = cx.bakes.bake(&format!("{NAME} light-map patch={}", config.patch_size), &key, |progress| {
-            let on_gpu = config.on_gpu.unwrap_or(gpu.caps().device_type != vk::PhysicalDeviceType::CPU);
-            let shooter = if on_gpu { lightmap::Shooter::Gpu(gpu, shaders) } else { lightmap::Shooter::Cpu };
-            let (patches, atlas, texels, _report) = lightmap::bake(geo, scene, config.patch_size, &config.settings, config.content, shooter, progress)?;
-            let mut out = vec![atlas.width as f32, atlas.height as f32];
-            out.extend(texels.iter().flatten());
-            let uv = crate::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
-            out.extend(uv.iter().flatten());
-            Ok(out)
-        })?;
-        let (w, h) = (baked.first().copied().unwrap_or(0.0) as u32, baked.get(1).copied().unwrap_or(0.0) as u32);
+        let baked: Vec<f32> = cx.bakes.bake(
+            &format!("{NAME} light-map patch={}", config.patch_size),
+            &key,
+            |progress| {
+                let on_gpu = config
+                    .on_gpu
+                    .unwrap_or(gpu.caps().device_type != vk::PhysicalDeviceType::CPU);
+                let shooter = if on_gpu {
+                    lightmap::Shooter::Gpu(gpu, shaders)
+                } else {
+                    lightmap::Shooter::Cpu
+                };
+                let (patches, atlas, texels, _report) = lightmap::bake(
+                    geo,
+                    scene,
+                    config.patch_size,
+                    &config.settings,
+                    config.content,
+                    shooter,
+                    progress,
+                )?;
+                let mut out = vec![atlas.width as f32, atlas.height as f32];
+                out.extend(texels.iter().flatten());
+                let uv = crate::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
+                out.extend(uv.iter().flatten());
+                Ok(out)
+            },
+        )?;
+        let (w, h) = (
+            baked.first().copied().unwrap_or(0.0) as u32,
+            baked.get(1).copied().unwrap_or(0.0) as u32,
+        );
         let texel_floats = 4 * (w as usize) * (h as usize);
         if w == 0 || h == 0 || baked.len() != 2 + texel_floats + 6 * geometry.triangles.len() {
-            return Err(Error::Usage(format!("{}: {NAME}: the baked light-map does not match the scene ({} values)", cx.scene.source, baked.len())));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the baked light-map does not match the scene ({} values)",
+                cx.scene.source,
+                baked.len()
+            )));
         }
         let texels = &baked[2..2 + texel_floats];
         let mesh = crate::lighting::lightmap_mesh::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
         let format = lightmap_format(config.settings.mode);
-        let lightmap = cx.gpu.create_image(&ImageDesc::new_2d("radiosity light-map", format, w, h).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        let lightmap = cx.gpu.create_image(
+            &ImageDesc::new_2d("radiosity light-map", format, w, h)
+                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+        )?;
         match format {
-            vk::Format::R8G8B8A8_UNORM => cx.gpu.upload_image(lightmap, 0, &crate::lightmap::atlas::to_rgb8(texels))?,
+            vk::Format::R8G8B8A8_UNORM => cx
+                .gpu
+                .upload_image(lightmap, 0, &crate::lightmap::atlas::to_rgb8(texels))?,
             _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
         }
-        cx.states.set_image(cx.gpu, lightmap, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        let mut desc = crate::lighting::lightmap_mesh::Mesh::pipeline_desc(&format!("{NAME} light-map"), "radiosity/lightmap.frag");
+        cx.states.set_image(
+            cx.gpu,
+            lightmap,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
+        let mut desc = crate::lighting::lightmap_mesh::Mesh::pipeline_desc(
+            &format!("{NAME} light-map"),
+            "radiosity/lightmap.frag",
+        );
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
-        desc.specialization = vec![SpecConstant { id: 0, bits: u32::from(config.ambient_nz) }];
+        desc.specialization = vec![SpecConstant {
+            id: 0,
+            bits: u32::from(config.ambient_nz),
+        }];
         let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let sampler = cx.gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
-        Ok(Radiosity { pipeline, mesh, lightmap, sampler })
+        Ok(Radiosity {
+            pipeline,
+            mesh,
+            lightmap,
+            sampler,
+        })
     }
 }
 
@@ -221,7 +335,10 @@ impl LightingMethod for Radiosity {
             return Ok(());
         }
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
-        let pass = graph.pass("light-map").sample("lightmap", self.lightmap, SubresourceRange::mip(0), self.sampler, frag);
+        let pass =
+            graph
+                .pass("light-map")
+                .sample("lightmap", self.lightmap, SubresourceRange::mip(0), self.sampler, frag);
         self.mesh.draw(pass, frame, self.pipeline, Vec::new());
         Ok(())
     }

@@ -29,7 +29,15 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
         if c.sky || c.normal.dot(to_sun) <= 0.0 {
             continue;
         }
-        let tris: Vec<[DVec2; 3]> = c.triangles.iter().map(|&t| occluders.triangles[t].p.map(|q| DVec2::new((q - c.origin).dot(c.u), (q - c.origin).dot(c.v)))).collect();
+        let tris: Vec<[DVec2; 3]> = c
+            .triangles
+            .iter()
+            .map(|&t| {
+                occluders.triangles[t]
+                    .p
+                    .map(|q| DVec2::new((q - c.origin).dot(c.u), (q - c.origin).dot(c.v)))
+            })
+            .collect();
         for j in 0..c.height {
             for i in 0..c.width {
                 let k = c.first + j * c.width + i;
@@ -39,7 +47,10 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
                 let (mut inside, mut lit) = (0usize, 0usize);
                 for sj in 0..SAMPLES {
                     for si in 0..SAMPLES {
-                        let q = DVec2::new(i as f64 + (si as f64 + 0.5) / SAMPLES as f64, j as f64 + (sj as f64 + 0.5) / SAMPLES as f64) * p.size;
+                        let q = DVec2::new(
+                            i as f64 + (si as f64 + 0.5) / SAMPLES as f64,
+                            j as f64 + (sj as f64 + 0.5) / SAMPLES as f64,
+                        ) * p.size;
                         if !tris.iter().any(|t| crate::lightmap::patches::inside_triangle(q, t)) {
                             continue;
                         }

@@ -60,9 +60,18 @@ pub struct Config {
 impl Config {
     pub fn defaults(mode: Mode) -> Config {
         let faithful = mode == Mode::Faithful;
-        let solve = solve::Settings { mode, threshold: if faithful { 0.1 } else { 1e-3 }, ..solve::Settings::default() };
+        let solve = solve::Settings {
+            mode,
+            threshold: if faithful { 0.1 } else { 1e-3 },
+            ..solve::Settings::default()
+        };
         Config {
-            transfer: super::transfer::Settings { solve, bands: 4, bounces: true, tone: faithful },
+            transfer: super::transfer::Settings {
+                solve,
+                bands: 4,
+                bounces: true,
+                tone: faithful,
+            },
             samples: 10_000,
             patch_size: 0.25,
             reps: 0,
@@ -81,23 +90,53 @@ impl Config {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         let float = Params::float;
-        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
+        let mode = params
+            .get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
+            .unwrap_or(Mode::Corrected);
         let mut c = Config::defaults(mode);
         for (p, v, _) in &decl.params {
             match p.as_str() {
                 "mode" => {}
-                "bands" => c.transfer.bands = v.as_integer().filter(|b| (2..=8).contains(b)).ok_or_else(|| bad(p, "a band count from 2 to 8", v))? as usize,
-                "samples" => {
-                    c.samples =
-                        v.as_integer().filter(|n| (super::samples::MIN_SAMPLES as i64..=super::samples::MAX_SAMPLES as i64).contains(n)).ok_or_else(|| bad(p, "a sample count from 20 to 100000", v))?
-                            as usize
+                "bands" => {
+                    c.transfer.bands =
+                        v.as_integer()
+                            .filter(|b| (2..=8).contains(b))
+                            .ok_or_else(|| bad(p, "a band count from 2 to 8", v))? as usize
                 }
-                "patch_size" => c.patch_size = float(v).filter(|x| (0.005..=10.0).contains(x)).ok_or_else(|| bad(p, "a size from 0.005 to 10 metres", v))?,
-                "block" => c.transfer.solve.block = v.as_integer().filter(|b| (1..=8).contains(b)).ok_or_else(|| bad(p, "an integer from 1 to 8", v))? as usize,
-                "threshold" => c.transfer.solve.threshold = float(v).filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| bad(p, "a fraction in (0, 1)", v))?,
+                "samples" => {
+                    c.samples = v
+                        .as_integer()
+                        .filter(|n| {
+                            (super::samples::MIN_SAMPLES as i64..=super::samples::MAX_SAMPLES as i64).contains(n)
+                        })
+                        .ok_or_else(|| bad(p, "a sample count from 20 to 100000", v))?
+                        as usize
+                }
+                "patch_size" => {
+                    c.patch_size = float(v)
+                        .filter(|x| (0.005..=10.0).contains(x))
+                        .ok_or_else(|| bad(p, "a size from 0.005 to 10 metres", v))?
+                }
+                "block" => {
+                    c.transfer.solve.block =
+                        v.as_integer()
+                            .filter(|b| (1..=8).contains(b))
+                            .ok_or_else(|| bad(p, "an integer from 1 to 8", v))? as usize
+                }
+                "threshold" => {
+                    c.transfer.solve.threshold = float(v)
+                        .filter(|x| *x > 0.0 && *x < 1.0)
+                        .ok_or_else(|| bad(p, "a fraction in (0, 1)", v))?
+                }
                 "bounces" => c.transfer.bounces = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
                 "tone" => c.transfer.tone = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
-                "reps" => c.reps = v.as_integer().filter(|r| (0..=65_536).contains(r)).ok_or_else(|| bad(p, "0 (uncompressed) or a representative count up to 65536", v))? as usize,
+                "reps" => {
+                    c.reps = v
+                        .as_integer()
+                        .filter(|r| (0..=65_536).contains(r))
+                        .ok_or_else(|| bad(p, "0 (uncompressed) or a representative count up to 65536", v))?
+                        as usize
+                }
                 "filter" => c.filter = v.as_bool().ok_or_else(|| bad(p, "true or false", v))?,
                 "storage" => {
                     c.storage = match v.as_str() {
@@ -107,8 +146,17 @@ impl Config {
                         _ => return Err(bad(p, "\"rgba8\", \"f16\" or \"f32\"", v)),
                     }
                 }
-                "normal_samples" => c.normal_samples = v.as_integer().filter(|k| (0..=1024).contains(k)).ok_or_else(|| bad(p, "a sample count from 0 to 1024", v))? as usize,
-                "sun_speed" => c.sun_speed = float(v).filter(|x| x.is_finite() && x.abs() <= 3600.0).ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?,
+                "normal_samples" => {
+                    c.normal_samples =
+                        v.as_integer()
+                            .filter(|k| (0..=1024).contains(k))
+                            .ok_or_else(|| bad(p, "a sample count from 0 to 1024", v))? as usize
+                }
+                "sun_speed" => {
+                    c.sun_speed = float(v)
+                        .filter(|x| x.is_finite() && x.abs() <= 3600.0)
+                        .ok_or_else(|| bad(p, "degrees per second, at most 3600", v))?
+                }
                 "sky" => {
                     c.sky = match v.as_str() {
                         Some("scene") => Sky::Scene,
@@ -116,7 +164,11 @@ impl Config {
                         _ => return Err(bad(p, "\"scene\" or \"cie\"", v)),
                     }
                 }
-                "cie_zenith" => c.cie_zenith = float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| bad(p, "a radiance >= 0", v))?,
+                "cie_zenith" => {
+                    c.cie_zenith = float(v)
+                        .filter(|x| x.is_finite() && *x >= 0.0)
+                        .ok_or_else(|| bad(p, "a radiance >= 0", v))?
+                }
                 "view" => {
                     c.view = match v.as_str() {
                         Some("final") => View::Final,
@@ -138,7 +190,11 @@ impl Config {
             }
         }
         if c.view == View::Indices && c.reps == 0 {
-            return Err(bad("view", "a view of this storage (\"indices\" needs reps > 0)", &toml::Value::from("indices")));
+            return Err(bad(
+                "view",
+                "a view of this storage (\"indices\" needs reps > 0)",
+                &toml::Value::from("indices"),
+            ));
         }
         Ok(c)
     }

@@ -69,13 +69,29 @@ fn v4(v: DVec3) -> [f32; 4] {
 /// [`super::transfer::visibility_cpu`] lays them out (`⌈N/32⌉` words per patch, patch-major;
 /// the rows of border patches stay 0). `triangles` are the occluders the CPU path builds its
 /// [`Occluders`](crate::lightmap::solve::Occluders) from.
-pub fn visibility_gpu(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Result<Vec<u32>> {
+pub fn visibility_gpu(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    p: &Patches,
+    triangles: &[Triangle],
+    samples: &SampleSet,
+    mode: Mode,
+    progress: &mut Progress,
+) -> Result<Vec<u32>> {
     // Every buffer, pipeline and frame of the pass is freed on every exit path.
     gpu.scoped(|gpu| run(gpu, shaders, p, triangles, samples, mode, progress))
 }
 
 #[allow(clippy::too_many_arguments)]
-fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangle], samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Result<Vec<u32>> {
+fn run(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    p: &Patches,
+    triangles: &[Triangle],
+    samples: &SampleSet,
+    mode: Mode,
+    progress: &mut Progress,
+) -> Result<Vec<u32>> {
     let words = samples.len().div_ceil(32);
     let mut bits = vec![0u32; p.patches.len() * words];
     let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
@@ -85,7 +101,10 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
         return Ok(bits);
     }
     if total > u32::MAX as usize {
-        return Err(Error::Usage(format!("SH light-map visibility: {} patches × {words} words are too many for one GPU bake", inside.len())));
+        return Err(Error::Usage(format!(
+            "SH light-map visibility: {} patches × {words} words are too many for one GPU bake",
+            inside.len()
+        )));
     }
     let eps = 1e-4 * p.size;
     let patches: Vec<GpuPatch> = inside
@@ -93,7 +112,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
         .map(|&k| {
             let q = &p.patches[k];
             let plane = p.charts[q.chart].normal;
-            GpuPatch { origin: v4(q.centre + plane * eps), plane: v4(plane), normal: v4(q.normal) }
+            GpuPatch {
+                origin: v4(q.centre + plane * eps),
+                plane: v4(plane),
+                normal: v4(q.normal),
+            }
         })
         .collect();
     let dirs: Vec<[f32; 4]> = samples.dirs.iter().map(|&d| v4(d)).collect();
@@ -104,7 +127,11 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
         .iter()
         .map(|&t| {
             let [a, b, c] = tris[t as usize];
-            TracedTriangle { p0: a.extend(0.0).into(), e1: (b - a).extend(0.0).into(), e2: (c - a).extend(0.0).into() }
+            TracedTriangle {
+                p0: a.extend(0.0).into(),
+                e1: (b - a).extend(0.0).into(),
+                e2: (c - a).extend(0.0).into(),
+            }
         })
         .collect();
     let mut sky = vec![0u32; traced.len().div_ceil(32)];
@@ -123,7 +150,14 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
     let status_buf = gpu.create_storage_output("sh visibility status", 4, MemoryKind::GpuToCpu)?;
     let chunk_buf = gpu.create_storage_output("sh visibility chunk", 4, MemoryKind::GpuOnly)?;
     let lanes_buf = gpu.create_storage_output("sh visibility lanes", 4, MemoryKind::GpuOnly)?;
-    let pipeline = gpu.create_compute_pipeline(&ComputePipelineDesc { name: "sh visibility".into(), shader: "sh_lightmap/visibility.comp".into(), specialization: vec![] }, shaders)?;
+    let pipeline = gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: "sh visibility".into(),
+            shader: "sh_lightmap/visibility.comp".into(),
+            specialization: vec![],
+        },
+        shaders,
+    )?;
     let frame = gpu.create_frame()?;
 
     let push = Push {
@@ -141,17 +175,36 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
     let read = Access::StorageRead { stages: compute };
     let write = Access::StorageWrite { stages: compute };
     let mut states = ResourceStates::default();
-    let bvh_tables = GpuBvh::upload(gpu, &mut states, "sh visibility", &bvh.nodes, &traced, Some(&bvh.skip_links()))?;
+    let bvh_tables = GpuBvh::upload(
+        gpu,
+        &mut states,
+        "sh visibility",
+        &bvh.nodes,
+        &traced,
+        Some(&bvh.skip_links()),
+    )?;
     let (mut base, mut chunk) = (0usize, FIRST_CHUNK.min(max_chunk));
     while base < total {
         let n = chunk.min(total - base).min(MAX_INVOCATIONS / lanes as usize);
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
         let first = base as u32;
-        graph.pass("sh visibility chunk").buffer(chunk_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(chunk_buf, first));
-        graph.pass("sh visibility lanes").buffer(lanes_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(lanes_buf, lanes));
-        graph.pass("sh visibility clear bits").buffer(out_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(out_buf, 0));
-        graph.pass("sh visibility clear status").buffer(status_buf, Access::TransferWrite, None).record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
+        graph
+            .pass("sh visibility chunk")
+            .buffer(chunk_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(chunk_buf, first));
+        graph
+            .pass("sh visibility lanes")
+            .buffer(lanes_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(lanes_buf, lanes));
+        graph
+            .pass("sh visibility clear bits")
+            .buffer(out_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(out_buf, 0));
+        graph
+            .pass("sh visibility clear status")
+            .buffer(status_buf, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
         bvh_tables
             .read(graph.pass("sh visibility"), vk::PipelineStageFlags2::COMPUTE_SHADER)
             .buffer(patches_buf, read, Some("patches"))
@@ -167,10 +220,16 @@ fn run(gpu: &mut Gpu, shaders: &ShaderLibrary, p: &Patches, triangles: &[Triangl
                 ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                 ctx.rec.dispatch([n as u32 * lanes, 1, 1])
             });
-        graph.pass("sh visibility host").buffer(out_buf, Access::HostRead, None).buffer(status_buf, Access::HostRead, None).record(|_| Ok(()));
+        graph
+            .pass("sh visibility host")
+            .buffer(out_buf, Access::HostRead, None)
+            .buffer(status_buf, Access::HostRead, None)
+            .record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "sh light-map visibility")?;
         let status = gpu.read_buffer(status_buf)?;
-        let cut = status.get(..4).map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let cut = status
+            .get(..4)
+            .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
         if cut > 0 {
             if lanes >= MAX_LANES {
                 return Err(Error::Usage(format!(

@@ -40,18 +40,30 @@ impl Lights {
             .lights
             .iter()
             .filter_map(|l| match l {
-                Light::Directional { direction, irradiance, .. } => Some((-direction.as_dvec3().normalize(), irradiance.as_dvec3())),
+                Light::Directional {
+                    direction, irradiance, ..
+                } => Some((-direction.as_dvec3().normalize(), irradiance.as_dvec3())),
                 _ => None,
             })
             .collect();
-        Ok(Lights { bands, environment, suns, sun_speed: config.sun_speed, sky: config.sky, cie_zenith: config.cie_zenith })
+        Ok(Lights {
+            bands,
+            environment,
+            suns,
+            sun_speed: config.sun_speed,
+            sky: config.sky,
+            cie_zenith: config.cie_zenith,
+        })
     }
 
     /// The directions toward the suns at `time_s` (turned about world up).
     pub fn suns_at(&self, time_s: f64) -> Vec<(DVec3, DVec3)> {
         let a = (self.sun_speed * time_s).to_radians();
         let (s, c) = a.sin_cos();
-        self.suns.iter().map(|&(d, e)| (DVec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z), e)).collect()
+        self.suns
+            .iter()
+            .map(|&(d, e)| (DVec3::new(c * d.x + s * d.z, d.y, -s * d.x + c * d.z), e))
+            .collect()
     }
 
     /// The RGB radiance coefficients at `time_s`.
@@ -160,7 +172,10 @@ mod tests {
         assert!(cie_clear_sky_radiance(near_sun, sun, 1.0) > 2.0);
         let away = DVec3::new(-0.6, 1.2, -0.2).normalize();
         assert!((cie_clear_sky_radiance(away, sun, 1.0) - 0.6841).abs() < 1e-3);
-        assert_eq!(cie_clear_sky_radiance(DVec3::new(0.0, -0.1, 1.0).normalize(), sun, 1.0), 0.0);
+        assert_eq!(
+            cie_clear_sky_radiance(DVec3::new(0.0, -0.1, 1.0).normalize(), sun, 1.0),
+            0.0
+        );
         // The projection's power (c₀₀·2√π = ∫L dω) against an independent quadrature of the
         // same function (a finer θ-φ midpoint grid in sin θ dθ dφ).
         let c = cie_clear_sky(sun, 4, 1.0);
@@ -171,10 +186,16 @@ mod tests {
             for j in 0..np {
                 let p = (j as f64 + 0.5) / np as f64 * 2.0 * std::f64::consts::PI;
                 let d = DVec3::new(t.sin() * p.cos(), t.cos(), t.sin() * p.sin());
-                power += cie_clear_sky_radiance(d, sun, 1.0) * t.sin() * (std::f64::consts::FRAC_PI_2 / nt as f64) * (2.0 * std::f64::consts::PI / np as f64);
+                power += cie_clear_sky_radiance(d, sun, 1.0)
+                    * t.sin()
+                    * (std::f64::consts::FRAC_PI_2 / nt as f64)
+                    * (2.0 * std::f64::consts::PI / np as f64);
             }
         }
         let projected = c[0] * sh::CONSTANT_ONE_C00;
-        assert!((projected / power - 1.0).abs() < 0.01, "projected {projected}, quadrature {power}");
+        assert!(
+            (projected / power - 1.0).abs() < 0.01,
+            "projected {projected}, quadrature {power}"
+        );
     }
 }

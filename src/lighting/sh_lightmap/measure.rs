@@ -75,15 +75,31 @@ pub struct Row {
 
 pub fn row(baked: &Baked, q: &Quantized, dirs: &[DVec3], vq_seconds: f64, reps: usize) -> Row {
     let texels = (baked.width * baked.height) as usize;
-    let ratio = match (StorageReport::uncompressed(texels, baked.bands), StorageReport::compressed(texels, baked.bands, reps.max(1))) {
+    let ratio = match (
+        StorageReport::uncompressed(texels, baked.bands),
+        StorageReport::compressed(texels, baked.bands, reps.max(1)),
+    ) {
         (Ok(u), Ok(c)) => compression_ratio(&u, &c),
         _ => f64::NAN,
     };
-    Row { bands: baked.bands, reps, texels, iterations: q.iterations, unused: q.unused, psnr_db: shaded_psnr(baked, q, dirs), ratio, vq_seconds }
+    Row {
+        bands: baked.bands,
+        reps,
+        texels,
+        iterations: q.iterations,
+        unused: q.unused,
+        psnr_db: shaded_psnr(baked, q, dirs),
+        ratio,
+        vq_seconds,
+    }
 }
 
 impl std::fmt::Display for Row {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "| {} | {} | {} | {:.1} | {:.2} | {} | {} | {:.1} |", self.bands, self.reps, self.texels, self.psnr_db, self.ratio, self.iterations, self.unused, self.vq_seconds)
+        write!(
+            f,
+            "| {} | {} | {} | {:.1} | {:.2} | {} | {} | {:.1} |",
+            self.bands, self.reps, self.texels, self.psnr_db, self.ratio, self.iterations, self.unused, self.vq_seconds
+        )
     }
 }

@@ -22,7 +22,9 @@ pub mod vq;
 #[cfg(test)]
 mod tests;
 
-use crate::backend::{vk, BufferId, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange};
+use crate::backend::{
+    vk, BufferId, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange,
+};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
@@ -41,23 +43,74 @@ pub const NAME: &str = "sh_lightmap";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "bands", kind: ParamKind::Int },
-        ParamSchema { name: "samples", kind: ParamKind::Int },
-        ParamSchema { name: "patch_size", kind: ParamKind::Float },
-        ParamSchema { name: "block", kind: ParamKind::Int },
-        ParamSchema { name: "threshold", kind: ParamKind::Float },
-        ParamSchema { name: "bounces", kind: ParamKind::Bool },
-        ParamSchema { name: "tone", kind: ParamKind::Bool },
-        ParamSchema { name: "reps", kind: ParamKind::Int },
-        ParamSchema { name: "filter", kind: ParamKind::Bool },
-        ParamSchema { name: "storage", kind: ParamKind::String },
-        ParamSchema { name: "normal_samples", kind: ParamKind::Int },
-        ParamSchema { name: "sun_speed", kind: ParamKind::Float },
-        ParamSchema { name: "sky", kind: ParamKind::String },
-        ParamSchema { name: "cie_zenith", kind: ParamKind::Float },
-        ParamSchema { name: "view", kind: ParamKind::String },
-        ParamSchema { name: "baker", kind: ParamKind::String },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "bands",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "samples",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "patch_size",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "block",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "threshold",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "bounces",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "tone",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "reps",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "filter",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "storage",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "normal_samples",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "sun_speed",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "sky",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "cie_zenith",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "view",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "baker",
+            kind: ParamKind::String,
+        },
     ],
 };
 
@@ -78,7 +131,11 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
     let mut push = |d: MethodDecl| {
         if let Ok(c) = Config::from_decl(&d, None) {
-            let label = format!("sh_lightmap {:?} bands={} reps={}", c.transfer.solve.mode, c.transfer.bands, c.reps).to_lowercase();
+            let label = format!(
+                "sh_lightmap {:?} bands={} reps={}",
+                c.transfer.solve.mode, c.transfer.bands, c.reps
+            )
+            .to_lowercase();
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
             }
@@ -116,7 +173,13 @@ impl Baked {
     fn from_floats(v: &[f32], triangles: usize) -> Option<Baked> {
         let (w, h, b) = (*v.first()? as u32, *v.get(1)? as u32, *v.get(2)? as usize);
         let n = (w as usize) * (h as usize) * b * b;
-        (v.len() == 3 + n + 6 * triangles && w > 0 && h > 0 && (2..=8).contains(&b)).then(|| Baked { width: w, height: h, bands: b, coeffs: v[3..3 + n].to_vec(), uvs: v[3 + n..].to_vec() })
+        (v.len() == 3 + n + 6 * triangles && w > 0 && h > 0 && (2..=8).contains(&b)).then(|| Baked {
+            width: w,
+            height: h,
+            bands: b,
+            coeffs: v[3..3 + n].to_vec(),
+            uvs: v[3 + n..].to_vec(),
+        })
     }
 }
 
@@ -127,7 +190,13 @@ pub enum Rays<'a> {
 }
 
 /// Bakes `geometry`'s SH light-map: patches, normal-mapped normals, visibility, transfer, atlas.
-pub fn bake(geometry: &StaticGeometry, surfaces: Option<&Surfaces<'_>>, config: &Config, rays: Rays<'_>, progress: &mut Progress) -> Result<Baked> {
+pub fn bake(
+    geometry: &StaticGeometry,
+    surfaces: Option<&Surfaces<'_>>,
+    config: &Config,
+    rays: Rays<'_>,
+    progress: &mut Progress,
+) -> Result<Baked> {
     let mut p = Patches::build(&geometry.triangles, config.patch_size);
     if let (Some(s), true) = (surfaces, config.normal_samples > 0) {
         normals::perturb(&mut p, &geometry.triangles, s, config.normal_samples);
@@ -137,7 +206,9 @@ pub fn bake(geometry: &StaticGeometry, surfaces: Option<&Surfaces<'_>>, config: 
     let mode = config.transfer.solve.mode;
     let bits = match rays {
         Rays::Cpu => transfer::visibility_cpu(&p, &occluders, &samples, mode, progress),
-        Rays::Gpu(gpu, shaders) => gpu::visibility_gpu(gpu, shaders, &p, &geometry.triangles, &samples, mode, progress)?,
+        Rays::Gpu(gpu, shaders) => {
+            gpu::visibility_gpu(gpu, shaders, &p, &geometry.triangles, &samples, mode, progress)?
+        }
     };
     let t = transfer::bake(&p, &occluders, &samples, &bits, &config.transfer, progress);
     let atlas = crate::lightmap::atlas::pack(&p);
@@ -155,8 +226,17 @@ pub fn bake(geometry: &StaticGeometry, surfaces: Option<&Surfaces<'_>>, config: 
             }
         }
     }
-    let uvs = crate::lightmap::atlas::triangle_uvs(&geometry.triangles, &p, &atlas).into_iter().flatten().collect();
-    Ok(Baked { width: atlas.width, height: atlas.height, bands: samples.bands, coeffs, uvs })
+    let uvs = crate::lightmap::atlas::triangle_uvs(&geometry.triangles, &p, &atlas)
+        .into_iter()
+        .flatten()
+        .collect();
+    Ok(Baked {
+        width: atlas.width,
+        height: atlas.height,
+        bands: samples.bands,
+        coeffs,
+        uvs,
+    })
 }
 
 /// The scene's normal maps, decoded, per material.
@@ -167,8 +247,21 @@ fn load_normal_maps(scene: &Scene) -> Result<Vec<Option<NormalImage>>> {
         .map(|m| match &m.normal_map {
             None => Ok(None),
             Some(path) => {
-                let img = crate::image_io::open_image(path).map_err(|e| Error::Usage(format!("{}: material {:?}: normal_map: cannot load {}: {e}", scene.source, m.name, path.display())))?.to_rgb8();
-                Ok(Some(NormalImage::from_rgb8(img.width() as usize, img.height() as usize, img.as_raw())))
+                let img = crate::image_io::open_image(path)
+                    .map_err(|e| {
+                        Error::Usage(format!(
+                            "{}: material {:?}: normal_map: cannot load {}: {e}",
+                            scene.source,
+                            m.name,
+                            path.display()
+                        ))
+                    })?
+                    .to_rgb8();
+                Ok(Some(NormalImage::from_rgb8(
+                    img.width() as usize,
+                    img.height() as usize,
+                    img.as_raw(),
+                )))
             }
         })
         .collect()
@@ -188,12 +281,28 @@ impl EnvProjection {
         // Box-filtered to at most 256 texels wide: an SH projection of ≤ 8 bands needs no more.
         let (w, texels) = env.reduced(256);
         let rgba32f = vk::Format::R32G32B32A32_SFLOAT;
-        let desc = if env.cube { ImageDesc::new_cube("SH light-map environment", rgba32f, w) } else { ImageDesc::new_2d("SH light-map environment", rgba32f, w, texels.len() as u32 / w) };
-        let image = cx.gpu.create_image(&desc.usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        let desc = if env.cube {
+            ImageDesc::new_cube("SH light-map environment", rgba32f, w)
+        } else {
+            ImageDesc::new_2d("SH light-map environment", rgba32f, w, texels.len() as u32 / w)
+        };
+        let image = cx
+            .gpu
+            .create_image(&desc.usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
         cx.gpu.upload_image(image, 0, bytemuck::cast_slice(&texels))?;
-        cx.states.set_image(cx.gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        cx.states.set_image(
+            cx.gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
         let image = crate::sh::EnvImage::of(cx.gpu, image)?;
-        Ok(EnvProjection { projector: crate::sh::ShProjector::new(cx.gpu, cx.shaders, "SH light-map environment")?, image, bands: bands as u32 })
+        Ok(EnvProjection {
+            projector: crate::sh::ShProjector::new(cx.gpu, cx.shaders, "SH light-map environment")?,
+            image,
+            bands: bands as u32,
+        })
     }
 }
 
@@ -219,14 +328,44 @@ impl ShLightmap {
         let config = Config::from_decl(decl, Some(cx.scene))?;
         let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
-            return Err(Error::Usage(format!("{}: {NAME}: the scene has no static geometry to light-map", cx.scene.source)));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the scene has no static geometry to light-map",
+                cx.scene.source
+            )));
         }
         let maps = load_normal_maps(cx.scene)?;
-        let surfaces = Surfaces { uvs: &geometry.uvs, maps: geometry.material.iter().map(|m| m.and_then(|m| maps.get(m).and_then(|x| x.as_ref()))).collect() };
-        let bake_config = Config { view: View::Final, filter: false, storage: Storage::Single, reps: 0, sun_speed: 0.0, sky: config::Sky::Scene, cie_zenith: 0.0, on_gpu: None, ..config };
-        let mut key = BakeKey::new("SH light-map").with("version", BAKER_VERSION).with("config", bake_config);
-        let geometry_bytes: Vec<f64> =
-            geometry.triangles.iter().flat_map(|t| t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain([t.object as f64, f64::from(u8::from(t.sky))])).collect();
+        let surfaces = Surfaces {
+            uvs: &geometry.uvs,
+            maps: geometry
+                .material
+                .iter()
+                .map(|m| m.and_then(|m| maps.get(m).and_then(|x| x.as_ref())))
+                .collect(),
+        };
+        let bake_config = Config {
+            view: View::Final,
+            filter: false,
+            storage: Storage::Single,
+            reps: 0,
+            sun_speed: 0.0,
+            sky: config::Sky::Scene,
+            cie_zenith: 0.0,
+            on_gpu: None,
+            ..config
+        };
+        let mut key = BakeKey::new("SH light-map")
+            .with("version", BAKER_VERSION)
+            .with("config", bake_config);
+        let geometry_bytes: Vec<f64> = geometry
+            .triangles
+            .iter()
+            .flat_map(|t| {
+                t.p.iter()
+                    .flat_map(|p| p.to_array())
+                    .chain(t.albedo.to_array())
+                    .chain([t.object as f64, f64::from(u8::from(t.sky))])
+            })
+            .collect();
         key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
         let uv_bytes: Vec<f32> = geometry.uvs.iter().flatten().flatten().copied().collect();
         key = key.with_bytes("uvs", bytemuck::cast_slice(&uv_bytes));
@@ -241,41 +380,94 @@ impl ShLightmap {
         key = key.with_shaders("sh_lightmap/visibility");
         let (geo, surf) = (&geometry, &surfaces);
         let (device, shaders) = (&mut *cx.gpu, cx.shaders);
-        let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} bands={} patch={}", config.transfer.bands, config.patch_size), &key, |progress| {
-            // Auto: the GPU, unless it is a CPU implementation (lavapipe), where the native rays
-            // measured 5x faster (tests/sh_lightmap_gpu.rs, ignored measurement).
-            let on_gpu = config.on_gpu.unwrap_or(device.caps().device_type != vk::PhysicalDeviceType::CPU);
-            let rays = if on_gpu { Rays::Gpu(device, shaders) } else { Rays::Cpu };
-            Ok(bake(geo, Some(surf), &bake_config, rays, progress)?.to_floats())
+        let floats: Vec<f32> = cx.bakes.bake(
+            &format!("{NAME} bands={} patch={}", config.transfer.bands, config.patch_size),
+            &key,
+            |progress| {
+                // Auto: the GPU, unless it is a CPU implementation (lavapipe), where the native rays
+                // measured 5x faster (tests/sh_lightmap_gpu.rs, ignored measurement).
+                let on_gpu = config
+                    .on_gpu
+                    .unwrap_or(device.caps().device_type != vk::PhysicalDeviceType::CPU);
+                let rays = if on_gpu { Rays::Gpu(device, shaders) } else { Rays::Cpu };
+                Ok(bake(geo, Some(surf), &bake_config, rays, progress)?.to_floats())
+            },
+        )?;
+        let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| {
+            Error::Usage(format!(
+                "{}: {NAME}: the baked SH light-map does not match the scene",
+                cx.scene.source
+            ))
         })?;
-        let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| Error::Usage(format!("{}: {NAME}: the baked SH light-map does not match the scene", cx.scene.source)))?;
         let mesh = crate::lighting::lightmap_mesh::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
-        let images = if config.reps == 0 { upload_native(cx, &baked, config.storage)? } else { upload_compressed(cx, &baked, &config, &key)? };
+        let images = if config.reps == 0 {
+            upload_native(cx, &baked, config.storage)?
+        } else {
+            upload_compressed(cx, &baked, &config, &key)?
+        };
         let (fragment, encoded) = match config.reps {
             0 => ("sh_lightmap/native.frag", config.storage == Storage::Rgba8),
             _ => ("sh_lightmap/compressed.frag", config.storage == Storage::Rgba8),
         };
-        let mut desc = crate::lighting::lightmap_mesh::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
+        let mut desc =
+            crate::lighting::lightmap_mesh::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
         let faithful = config.transfer.solve.mode == Mode::Faithful;
         desc.specialization = vec![
-            SpecConstant { id: 0, bits: baked.bands as u32 },
-            SpecConstant { id: 1, bits: u32::from(encoded) },
-            SpecConstant { id: 2, bits: u32::from(faithful) },
-            SpecConstant { id: 3, bits: config.view as u32 },
-            SpecConstant { id: 4, bits: u32::from(config.filter) },
+            SpecConstant {
+                id: 0,
+                bits: baked.bands as u32,
+            },
+            SpecConstant {
+                id: 1,
+                bits: u32::from(encoded),
+            },
+            SpecConstant {
+                id: 2,
+                bits: u32::from(faithful),
+            },
+            SpecConstant {
+                id: 3,
+                bits: config.view as u32,
+            },
+            SpecConstant {
+                id: 4,
+                bits: u32::from(config.filter),
+            },
         ];
         let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
-        let sampler = cx.gpu.sampler(if config.reps == 0 { SamplerDesc::LINEAR_CLAMP } else { SamplerDesc::NEAREST_CLAMP })?;
+        let sampler = cx.gpu.sampler(if config.reps == 0 {
+            SamplerDesc::LINEAR_CLAMP
+        } else {
+            SamplerDesc::NEAREST_CLAMP
+        })?;
         let lights = light::Lights::new(cx.scene, cx.environment, &config)?;
         let light = lights.uniform(0.0, faithful);
-        let env = if config.sky == config::Sky::Scene && !light::is_constant(cx.environment) { Some(EnvProjection::new(cx, baked.bands)?) } else { None };
+        let env = if config.sky == config::Sky::Scene && !light::is_constant(cx.environment) {
+            Some(EnvProjection::new(cx, baked.bands)?)
+        } else {
+            None
+        };
         // 64 vec4 (8 bands), zero where the projection writes nothing.
-        let env_coeffs = cx.gpu.create_buffer_init("SH light-map environment SH", vk::BufferUsageFlags::STORAGE_BUFFER, &[0u8; 16 * 64])?;
+        let env_coeffs = cx.gpu.create_buffer_init(
+            "SH light-map environment SH",
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            &[0u8; 16 * 64],
+        )?;
         cx.states.forget_buffer(env_coeffs);
-        Ok(ShLightmap { config, pipeline, mesh, images, sampler, lights, light, env, env_coeffs })
+        Ok(ShLightmap {
+            config,
+            pipeline,
+            mesh,
+            images,
+            sampler,
+            lights,
+            light,
+            env,
+            env_coeffs,
+        })
     }
 }
 
@@ -288,18 +480,42 @@ fn upload_native(cx: &mut CreateContext<'_>, baked: &Baked, storage: Storage) ->
     let texels = (w * h) as usize;
     let (format, mut bytes, zero): (vk::Format, Vec<u8>, Vec<u8>) = match storage {
         // A zero coefficient encodes as 128 (the seed's range encoding has no exact zero).
-        Storage::Rgba8 => (vk::Format::R8G8B8A8_UNORM, storage::pack_layers_rgba8(&baked.coeffs, bands, w, h).map_err(storage_error)?, vec![storage::encode_range(0.0); 4 * texels]),
-        Storage::Half => (vk::Format::R16G16B16A16_SFLOAT, bytemuck::cast_slice(&storage::pack_layers_f16(&baked.coeffs, bands, w, h).map_err(storage_error)?).to_vec(), vec![0; 8 * texels]),
-        Storage::Single => (vk::Format::R32G32B32A32_SFLOAT, bytemuck::cast_slice(&storage::pack_layers_f32(&baked.coeffs, bands, w, h).map_err(storage_error)?).to_vec(), vec![0; 16 * texels]),
+        Storage::Rgba8 => (
+            vk::Format::R8G8B8A8_UNORM,
+            storage::pack_layers_rgba8(&baked.coeffs, bands, w, h).map_err(storage_error)?,
+            vec![storage::encode_range(0.0); 4 * texels],
+        ),
+        Storage::Half => (
+            vk::Format::R16G16B16A16_SFLOAT,
+            bytemuck::cast_slice(&storage::pack_layers_f16(&baked.coeffs, bands, w, h).map_err(storage_error)?)
+                .to_vec(),
+            vec![0; 8 * texels],
+        ),
+        Storage::Single => (
+            vk::Format::R32G32B32A32_SFLOAT,
+            bytemuck::cast_slice(&storage::pack_layers_f32(&baked.coeffs, bands, w, h).map_err(storage_error)?)
+                .to_vec(),
+            vec![0; 16 * texels],
+        ),
     };
     // At least two layers, so that the view is always an array (2 bands fill one).
     let layers = storage::layers(bands).max(2) as u32;
     if storage::layers(bands) < 2 {
         bytes.extend(zero);
     }
-    let image = cx.gpu.create_image(&ImageDesc::new_2d("SH light-map layers", format, w, h).layers(layers).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+    let image = cx.gpu.create_image(
+        &ImageDesc::new_2d("SH light-map layers", format, w, h)
+            .layers(layers)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
     cx.gpu.upload_image(image, 0, &bytes)?;
-    cx.states.set_image(cx.gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+    cx.states.set_image(
+        cx.gpu,
+        image,
+        Access::SampledRead {
+            stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+        },
+    )?;
     Ok(vec![("layers", image)])
 }
 
@@ -308,8 +524,13 @@ fn upload_native(cx: &mut CreateContext<'_>, baked: &Baked, storage: Storage) ->
 /// gap texels get index 0.
 pub fn quantize(baked: &Baked, reps: usize, progress: &mut Progress) -> Result<vq::Quantized> {
     let dim = baked.bands * baked.bands;
-    let used: Vec<usize> = (0..baked.coeffs.len() / dim).filter(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().any(|&c| c != 0.0)).collect();
-    let vectors: Vec<f32> = used.iter().flat_map(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().copied()).collect();
+    let used: Vec<usize> = (0..baked.coeffs.len() / dim)
+        .filter(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().any(|&c| c != 0.0))
+        .collect();
+    let vectors: Vec<f32> = used
+        .iter()
+        .flat_map(|&t| baked.coeffs[t * dim..(t + 1) * dim].iter().copied())
+        .collect();
     let settings = vq::VqSettings::new(reps);
     let mut q = vq::quantize(&vectors, dim, &settings, |iteration, max| {
         progress.set_detail(format!("VQ iteration {iteration}, max nearest distance² {max:.3e}"));
@@ -324,12 +545,20 @@ pub fn quantize(baked: &Baked, reps: usize, progress: &mut Progress) -> Result<v
     Ok(q)
 }
 
-fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config, key: &BakeKey) -> Result<Vec<(&'static str, ImageId)>> {
+fn upload_compressed(
+    cx: &mut CreateContext<'_>,
+    baked: &Baked,
+    config: &Config,
+    key: &BakeKey,
+) -> Result<Vec<(&'static str, ImageId)>> {
     let dim = baked.bands * baked.bands;
     let key = key.clone().with("reps", config.reps);
     // The seed's world-size accounting (Table 4) in the bake's name, so `penumbra bake` reports it.
     let texels = (baked.width * baked.height) as usize;
-    let size = match (storage::StorageReport::uncompressed(texels, baked.bands), storage::StorageReport::compressed(texels, baked.bands, config.reps)) {
+    let size = match (
+        storage::StorageReport::uncompressed(texels, baked.bands),
+        storage::StorageReport::compressed(texels, baked.bands, config.reps),
+    ) {
         (Ok(u), Ok(c)) => format!(
             "; {texels} texels, SH payload {:.0} kB against {:.0} kB native ({:.1}x)",
             c.payload_bytes_model as f64 / storage::KB as f64,
@@ -338,32 +567,59 @@ fn upload_compressed(cx: &mut CreateContext<'_>, baked: &Baked, config: &Config,
         ),
         _ => String::new(),
     };
-    let floats: Vec<f32> = cx.bakes.bake(&format!("{NAME} VQ reps={}{size}", config.reps), &key, |progress| {
-        let q = quantize(baked, config.reps, progress)?;
-        let mut out: Vec<f32> = q.indices.iter().map(|&i| i as f32).collect();
-        out.extend(&q.codebook);
-        Ok(out)
-    })?;
+    let floats: Vec<f32> = cx
+        .bakes
+        .bake(&format!("{NAME} VQ reps={}{size}", config.reps), &key, |progress| {
+            let q = quantize(baked, config.reps, progress)?;
+            let mut out: Vec<f32> = q.indices.iter().map(|&i| i as f32).collect();
+            out.extend(&q.codebook);
+            Ok(out)
+        })?;
     if floats.len() < texels || !(floats.len() - texels).is_multiple_of(dim) {
-        return Err(Error::Usage(format!("{}: {NAME}: the cached VQ does not match the light-map", cx.scene.source)));
+        return Err(Error::Usage(format!(
+            "{}: {NAME}: the cached VQ does not match the light-map",
+            cx.scene.source
+        )));
     }
     let indices: Vec<u16> = floats[..texels].iter().map(|&i| i as u16).collect();
     let codebook = &floats[texels..];
-    let index_image = cx
-        .gpu
-        .create_image(&ImageDesc::new_2d("SH light-map indices", vk::Format::R8G8B8A8_UINT, baked.width, baked.height).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
-    cx.gpu.upload_image(index_image, 0, &storage::pack_indices_rgba8(&indices))?;
+    let index_image = cx.gpu.create_image(
+        &ImageDesc::new_2d(
+            "SH light-map indices",
+            vk::Format::R8G8B8A8_UINT,
+            baked.width,
+            baked.height,
+        )
+        .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
+    cx.gpu
+        .upload_image(index_image, 0, &storage::pack_indices_rgba8(&indices))?;
     let (table_format, (tw, th, table_bytes)) = match config.storage {
-        Storage::Rgba8 => (vk::Format::R8G8B8A8_UNORM, storage::pack_table_rgba8(codebook, baked.bands).map_err(storage_error)?),
+        Storage::Rgba8 => (
+            vk::Format::R8G8B8A8_UNORM,
+            storage::pack_table_rgba8(codebook, baked.bands).map_err(storage_error)?,
+        ),
         _ => {
             let (w, h, t) = storage::pack_table_f32(codebook, baked.bands).map_err(storage_error)?;
-            (vk::Format::R32G32B32A32_SFLOAT, (w, h, bytemuck::cast_slice(&t).to_vec()))
+            (
+                vk::Format::R32G32B32A32_SFLOAT,
+                (w, h, bytemuck::cast_slice(&t).to_vec()),
+            )
         }
     };
-    let table = cx.gpu.create_image(&ImageDesc::new_2d("SH light-map representatives", table_format, tw, th).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+    let table = cx.gpu.create_image(
+        &ImageDesc::new_2d("SH light-map representatives", table_format, tw, th)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
     cx.gpu.upload_image(table, 0, &table_bytes)?;
     for image in [index_image, table] {
-        cx.states.set_image(cx.gpu, image, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
+        cx.states.set_image(
+            cx.gpu,
+            image,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
     }
     Ok(vec![("indices", index_image), ("table", table)])
 }
@@ -374,7 +630,10 @@ impl LightingMethod for ShLightmap {
     }
 
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
-        self.light = self.lights.uniform(frame.clock.time_s as f64, self.config.transfer.solve.mode == Mode::Faithful);
+        self.light = self.lights.uniform(
+            frame.clock.time_s as f64,
+            self.config.transfer.solve.mode == Mode::Faithful,
+        );
         Ok(())
     }
 
@@ -384,13 +643,22 @@ impl LightingMethod for ShLightmap {
         }
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         if let Some(env) = &self.env {
-            env.projector.add_passes(graph, "SH light-map environment", env.image, env.bands, self.env_coeffs)?;
+            env.projector
+                .add_passes(graph, "SH light-map environment", env.image, env.bands, self.env_coeffs)?;
         }
-        let mut pass = graph.pass("SH light-map").buffer(self.env_coeffs, Access::StorageRead { stages: frag }, Some("env_sh"));
+        let mut pass =
+            graph
+                .pass("SH light-map")
+                .buffer(self.env_coeffs, Access::StorageRead { stages: frag }, Some("env_sh"));
         for &(name, image) in &self.images {
             pass = pass.sample(name, image, SubresourceRange::full(), self.sampler, frag);
         }
-        self.mesh.draw(pass, frame, self.pipeline, vec![("light", bytemuck::cast_slice(&self.light).to_vec())]);
+        self.mesh.draw(
+            pass,
+            frame,
+            self.pipeline,
+            vec![("light", bytemuck::cast_slice(&self.light).to_vec())],
+        );
         Ok(())
     }
 }

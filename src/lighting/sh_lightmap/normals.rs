@@ -18,7 +18,10 @@ pub struct NormalImage {
 impl NormalImage {
     /// From 8-bit RGB, decoded as the raster methods decode their normal maps: `2·c/255 − 1`.
     pub fn from_rgb8(width: usize, height: usize, rgb: &[u8]) -> NormalImage {
-        let texels = rgb.chunks_exact(3).map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0 * 2.0 - DVec3::ONE).collect();
+        let texels = rgb
+            .chunks_exact(3)
+            .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0 * 2.0 - DVec3::ONE)
+            .collect();
         NormalImage { width, height, texels }
     }
 
@@ -64,7 +67,9 @@ pub fn perturb(p: &mut Patches, triangles: &[Triangle], surfaces: &Surfaces<'_>,
                 let mut sum = DVec3::ZERO;
                 for _ in 0..samples {
                     let q = DVec2::new(i as f64 + random(), j as f64 + random()) * p.size;
-                    let Some(slot) = tris2d.iter().position(|t| patches::inside_triangle(q, t)) else { continue };
+                    let Some(slot) = tris2d.iter().position(|t| patches::inside_triangle(q, t)) else {
+                        continue;
+                    };
                     let t = chart.triangles[slot];
                     if let Some(map) = surfaces.maps[t] {
                         sum += world_normal(&triangles[t], chart.normal, surfaces.uvs[t], &tris2d[slot], q, map);
@@ -88,7 +93,11 @@ fn world_normal(t: &Triangle, n: DVec3, uv: [[f32; 2]; 3], flat: &[DVec2; 3], q:
     let uv = uv.map(|c| DVec2::new(c[0] as f64, c[1] as f64));
     let (e1, e2) = (flat[1] - flat[0], flat[2] - flat[0]);
     let det = e1.perp_dot(e2);
-    let (b1, b2) = if det.abs() > 0.0 { ((q - flat[0]).perp_dot(e2) / det, e1.perp_dot(q - flat[0]) / det) } else { (0.0, 0.0) };
+    let (b1, b2) = if det.abs() > 0.0 {
+        ((q - flat[0]).perp_dot(e2) / det, e1.perp_dot(q - flat[0]) / det)
+    } else {
+        (0.0, 0.0)
+    };
     let at = uv[0] + (uv[1] - uv[0]) * b1 + (uv[2] - uv[0]) * b2;
     let m = map.at(at);
     // The tangent toward +u and the bitangent's sign, from the triangle's uv derivatives (as the
@@ -101,7 +110,9 @@ fn world_normal(t: &Triangle, n: DVec3, uv: [[f32; 2]; 3], flat: &[DVec2; 3], q:
     }
     let dpdu = (dp1 * du2.y - dp2 * du1.y) / r;
     let dpdv = (dp2 * du1.x - dp1 * du2.x) / r;
-    let Some(tangent) = (dpdu - n * n.dot(dpdu)).try_normalize() else { return n };
+    let Some(tangent) = (dpdu - n * n.dot(dpdu)).try_normalize() else {
+        return n;
+    };
     let sign = if n.cross(tangent).dot(dpdv) < 0.0 { -1.0 } else { 1.0 };
     let bitangent = n.cross(tangent) * sign;
     tangent * m.x + bitangent * m.y + n * m.z

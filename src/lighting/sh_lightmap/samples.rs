@@ -26,7 +26,9 @@ impl SampleSet {
     /// About `count` samples (the grid's side is ⌈√count⌉), for `bands` bands.
     pub fn new(count: usize, bands: usize) -> Result<SampleSet> {
         if !(MIN_SAMPLES..=MAX_SAMPLES).contains(&count) {
-            return Err(Error::Usage(format!("SH light-map samples: {count} is outside {MIN_SAMPLES}..={MAX_SAMPLES}")));
+            return Err(Error::Usage(format!(
+                "SH light-map samples: {count} is outside {MIN_SAMPLES}..={MAX_SAMPLES}"
+            )));
         }
         sh::check_bands(bands).map_err(|e| Error::Usage(format!("SH light-map bands: {e}")))?;
         let side = (count as f64).sqrt().ceil() as usize;
@@ -41,12 +43,18 @@ impl SampleSet {
                 let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / side as f64;
                 let s = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
                 let k = dirs.len();
-                sh::eval_basis_f64(s, bands, &mut basis[k * dim..(k + 1) * dim]).map_err(|e| Error::Usage(format!("SH light-map basis: {e}")))?;
+                sh::eval_basis_f64(s, bands, &mut basis[k * dim..(k + 1) * dim])
+                    .map_err(|e| Error::Usage(format!("SH light-map basis: {e}")))?;
                 // The SH frame's z is world up (`sh::sh_to_world`), in f64.
                 dirs.push(DVec3::new(s.x, s.z, -s.y));
             }
         }
-        Ok(SampleSet { weight: 4.0 * std::f64::consts::PI / n as f64, dirs, basis, bands })
+        Ok(SampleSet {
+            weight: 4.0 * std::f64::consts::PI / n as f64,
+            dirs,
+            basis,
+            bands,
+        })
     }
 
     pub fn len(&self) -> usize {

@@ -29,7 +29,11 @@ pub enum StorageError {
     #[error("representative count {0} is outside 1..={MAX_REPS} (indices are 16 bits)")]
     Reps(usize),
     #[error("{what}: expected {expected} values, got {got}")]
-    Length { what: &'static str, expected: usize, got: usize },
+    Length {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
     #[error("{width}×{height} texels overflow the address space")]
     Size { width: u32, height: u32 },
 }
@@ -68,18 +72,30 @@ fn check_bands(bands: usize) -> StorageResult<usize> {
 }
 
 fn texel_count(width: u32, height: u32) -> StorageResult<usize> {
-    (width as usize).checked_mul(height as usize).ok_or(StorageError::Size { width, height })
+    (width as usize)
+        .checked_mul(height as usize)
+        .ok_or(StorageError::Size { width, height })
 }
 
 /// Native (uncompressed) storage: `⌈n²/4⌉` layers one after the other, each `width×height` RGBA
 /// values row-major; layer k holds coefficients `4k .. 4k+3` of every texel, and coefficients
 /// past n² (the last layer's padding) encode 0. `encode` maps one coefficient to a channel.
-fn pack_layers<T: Copy>(coeffs: &[f32], bands: usize, width: u32, height: u32, encode: impl Fn(f32) -> T) -> StorageResult<Vec<T>> {
+fn pack_layers<T: Copy>(
+    coeffs: &[f32],
+    bands: usize,
+    width: u32,
+    height: u32,
+    encode: impl Fn(f32) -> T,
+) -> StorageResult<Vec<T>> {
     let dim = check_bands(bands)?;
     let texels = texel_count(width, height)?;
     let expected = texels.checked_mul(dim).ok_or(StorageError::Size { width, height })?;
     if coeffs.len() != expected {
-        return Err(StorageError::Length { what: "SH light-map coefficients (texels·n²)", expected, got: coeffs.len() });
+        return Err(StorageError::Length {
+            what: "SH light-map coefficients (texels·n²)",
+            expected,
+            got: coeffs.len(),
+        });
     }
     let p = layers(bands);
     let zero = encode(0.0);
@@ -145,7 +161,11 @@ fn pack_table<T: Copy>(codebook: &[f32], bands: usize, encode: impl Fn(f32) -> T
     let dim = check_bands(bands)?;
     if !codebook.len().is_multiple_of(dim) {
         let expected = codebook.len().div_ceil(dim) * dim;
-        return Err(StorageError::Length { what: "codebook (representatives·n²)", expected, got: codebook.len() });
+        return Err(StorageError::Length {
+            what: "codebook (representatives·n²)",
+            expected,
+            got: codebook.len(),
+        });
     }
     let reps = codebook.len() / dim;
     let (width, height) = table_size(reps, bands)?;
@@ -216,7 +236,13 @@ impl StorageReport {
     pub fn uncompressed(texels: usize, bands: usize) -> StorageResult<StorageReport> {
         let dim = check_bands(bands)? as u64;
         let s = texels as u64;
-        Ok(StorageReport { texels, bands, reps: 0, payload_bytes_model: s * dim * 4, gpu_bytes: s * 4 * layers(bands) as u64 })
+        Ok(StorageReport {
+            texels,
+            bands,
+            reps: 0,
+            payload_bytes_model: s * dim * 4,
+            gpu_bytes: s * 4 * layers(bands) as u64,
+        })
     }
 
     /// VQ-compressed storage: `reps` representatives plus one index per texel.
@@ -225,7 +251,13 @@ impl StorageReport {
         let (s, dim) = (texels as u64, (bands * bands) as u64);
         let payload_bytes_model = s * 2 + reps as u64 * dim * 4;
         let gpu_bytes = s * 4 + u64::from(width) * u64::from(height) * 4;
-        Ok(StorageReport { texels, bands, reps, payload_bytes_model, gpu_bytes })
+        Ok(StorageReport {
+            texels,
+            bands,
+            reps,
+            payload_bytes_model,
+            gpu_bytes,
+        })
     }
 }
 
@@ -245,7 +277,12 @@ impl fmt::Display for StorageReport {
         } else {
             write!(f, "{} Reps.", self.reps)?;
         }
-        write!(f, " | payload {:.0} kB | GPU {:.0} kB", kb(self.payload_bytes_model), kb(self.gpu_bytes))
+        write!(
+            f,
+            " | payload {:.0} kB | GPU {:.0} kB",
+            kb(self.payload_bytes_model),
+            kb(self.gpu_bytes)
+        )
     }
 }
 
@@ -264,7 +301,10 @@ mod tests {
     #[test]
     fn range_round_trip_is_within_half_a_step() {
         let steps = 200_000;
-        let worst = (0..=steps).map(|i| -2.0 + 4.0 * i as f32 / steps as f32).map(|c| (decode_range(encode_range(c)) - c).abs()).fold(0.0f32, f32::max);
+        let worst = (0..=steps)
+            .map(|i| -2.0 + 4.0 * i as f32 / steps as f32)
+            .map(|c| (decode_range(encode_range(c)) - c).abs())
+            .fold(0.0f32, f32::max);
         assert!(worst <= 2.0 / 255.0 + 1e-6, "worst round-trip error {worst}");
         // The bound is tight: a value midway between two codes is half a step off.
         assert!(worst >= 2.0 / 255.0 - 1e-4, "worst round-trip error {worst}");
@@ -303,7 +343,11 @@ mod tests {
                     let c = if i < 9 { coeffs[t * 9 + i] } else { 0.0 };
                     assert_eq!(bytes[at], encode_range(c), "texel {t} layer {k} channel {ch}");
                     assert_eq!(floats[at], c, "texel {t} layer {k} channel {ch}");
-                    assert_eq!(halves[at], half::f16::from_f32(c).to_bits(), "texel {t} layer {k} channel {ch}");
+                    assert_eq!(
+                        halves[at],
+                        half::f16::from_f32(c).to_bits(),
+                        "texel {t} layer {k} channel {ch}"
+                    );
                 }
             }
         }
@@ -311,9 +355,19 @@ mod tests {
 
     #[test]
     fn packers_reject_bad_lengths_and_bands() {
-        assert!(matches!(pack_layers_rgba8(&[0.0; 15], 4, 1, 1), Err(StorageError::Length { expected: 16, got: 15, .. })));
+        assert!(matches!(
+            pack_layers_rgba8(&[0.0; 15], 4, 1, 1),
+            Err(StorageError::Length {
+                expected: 16,
+                got: 15,
+                ..
+            })
+        ));
         assert_eq!(pack_layers_f32(&[], 0, 1, 1), Err(StorageError::Bands(0)));
-        assert!(matches!(pack_table_rgba8(&[0.0; 17], 4), Err(StorageError::Length { .. })));
+        assert!(matches!(
+            pack_table_rgba8(&[0.0; 17], 4),
+            Err(StorageError::Length { .. })
+        ));
         assert_eq!(pack_table_f32(&[], 4).map(|t| t.0), Err(StorageError::Reps(0)));
         assert_eq!(table_size(MAX_REPS + 1, 4), Err(StorageError::Reps(MAX_REPS + 1)));
         assert_eq!(table_size(16, MAX_BANDS + 1), Err(StorageError::Bands(MAX_BANDS + 1)));
@@ -332,7 +386,9 @@ mod tests {
     #[test]
     fn table_puts_every_representative_at_its_documented_pixels() {
         let (reps, bands) = (4096, 4);
-        let codebook: Vec<f32> = (0..reps * 16).map(|i| ((i * 37 % 509) as f32 / 509.0) * 4.0 - 2.0).collect();
+        let codebook: Vec<f32> = (0..reps * 16)
+            .map(|i| ((i * 37 % 509) as f32 / 509.0) * 4.0 - 2.0)
+            .collect();
         let (width, height, bytes) = pack_table_rgba8(&codebook, bands).unwrap();
         let (fw, fh, floats) = pack_table_f32(&codebook, bands).unwrap();
         assert_eq!((width, height, fw, fh), (64, 256, 64, 256));
@@ -369,7 +425,11 @@ mod tests {
                 for ch in 0..4 {
                     let at = (y * 4 + x) * 4 + ch;
                     let i = 4 * x + ch;
-                    let c = if y < 3 && x < 3 && i < 9 { codebook[y * 9 + i] } else { 0.0 };
+                    let c = if y < 3 && x < 3 && i < 9 {
+                        codebook[y * 9 + i]
+                    } else {
+                        0.0
+                    };
                     assert_eq!(floats[at], c, "pixel ({x}, {y}) channel {ch}");
                     assert_eq!(bytes[at], encode_range(c), "pixel ({x}, {y}) channel {ch}");
                 }
@@ -380,11 +440,17 @@ mod tests {
     #[test]
     fn index_map_is_low_byte_high_byte() {
         let bytes = pack_indices_rgba8(&[0, 1, 255, 256, 0x1234, 65535]);
-        assert_eq!(bytes, [0, 0, 0, 255, 1, 0, 0, 255, 255, 0, 0, 255, 0, 1, 0, 255, 0x34, 0x12, 0, 255, 255, 255, 0, 255]);
+        assert_eq!(
+            bytes,
+            [0, 0, 0, 255, 1, 0, 0, 255, 255, 0, 0, 255, 0, 1, 0, 255, 0x34, 0x12, 0, 255, 255, 255, 0, 255]
+        );
         // Every index survives the two bytes.
         let all: Vec<u16> = (0..=u16::MAX).collect();
         let bytes = pack_indices_rgba8(&all);
-        assert!(all.iter().zip(bytes.chunks_exact(4)).all(|(&i, px)| u16::from(px[0]) | u16::from(px[1]) << 8 == i));
+        assert!(all
+            .iter()
+            .zip(bytes.chunks_exact(4))
+            .all(|(&i, px)| u16::from(px[0]) | u16::from(px[1]) << 8 == i));
     }
 
     #[test]
@@ -394,7 +460,10 @@ mod tests {
         let small = StorageReport::compressed(DMBASE_TEXELS, 4, 4096).unwrap();
         let large = StorageReport::compressed(DMBASE_TEXELS, 4, 16384).unwrap();
         let eight = StorageReport::compressed(DMBASE_TEXELS, 8, 16384).unwrap();
-        assert_eq!([native, small, large, eight].map(|r| r.payload_bytes_model % KB), [0; 4]);
+        assert_eq!(
+            [native, small, large, eight].map(|r| r.payload_bytes_model % KB),
+            [0; 4]
+        );
         assert_eq!([kb(native), kb(small), kb(large), kb(eight)], [19_200, 856, 1624, 4696]);
         assert!((compression_ratio(&native, &large) - 19_200.0 / 1624.0).abs() < 1e-12);
         // The seed's 11.83 is this ratio with the file's 12 kB of headers on the native side.
@@ -403,7 +472,13 @@ mod tests {
         assert_eq!(native.gpu_bytes, 307_200 * 16);
         assert_eq!(small.gpu_bytes, 307_200 * 4 + 64 * 256 * 4);
         assert_eq!(eight.gpu_bytes, 307_200 * 4 + 1024 * 256 * 4);
-        assert_eq!(small.to_string(), "307200 texels | 4 SH bands | 4096 Reps. | payload 856 kB | GPU 1264 kB");
-        assert_eq!(native.to_string(), "307200 texels | 4 SH bands | 0 Reps. (no compression) | payload 19200 kB | GPU 4800 kB");
+        assert_eq!(
+            small.to_string(),
+            "307200 texels | 4 SH bands | 4096 Reps. | payload 856 kB | GPU 1264 kB"
+        );
+        assert_eq!(
+            native.to_string(),
+            "307200 texels | 4 SH bands | 0 Reps. (no compression) | payload 19200 kB | GPU 4800 kB"
+        );
     }
 }

@@ -15,21 +15,49 @@ const BANDS: [usize; 5] = [2, 3, 4, 6, 8];
 
 /// A quad `o + s·u + t·v` (s, t ∈ [0, 1]) as two triangles facing `u × v`.
 fn quad(o: DVec3, u: DVec3, v: DVec3, object: usize, albedo: f64) -> [Triangle; 2] {
-    let t = |p| Triangle { p, object, albedo: DVec3::splat(albedo), emission: DVec3::ZERO, sky: false };
+    let t = |p| Triangle {
+        p,
+        object,
+        albedo: DVec3::splat(albedo),
+        emission: DVec3::ZERO,
+        sky: false,
+    };
     [t([o, o + u, o + u + v]), t([o, o + u + v, o + v])]
 }
 
 fn settings(bands: usize, bounces: bool) -> Settings {
-    let solve = solve::Settings { mode: Mode::Corrected, threshold: 1e-4, ..solve::Settings::default() };
-    Settings { solve, bands, bounces, tone: false }
+    let solve = solve::Settings {
+        mode: Mode::Corrected,
+        threshold: 1e-4,
+        ..solve::Settings::default()
+    };
+    Settings {
+        solve,
+        bands,
+        bounces,
+        tone: false,
+    }
 }
 
-fn bake(tris: &[Triangle], size: f64, samples: &SampleSet, s: &Settings, normal_maps: Option<&Surfaces<'_>>) -> (Patches, Vec<f64>) {
+fn bake(
+    tris: &[Triangle],
+    size: f64,
+    samples: &SampleSet,
+    s: &Settings,
+    normal_maps: Option<&Surfaces<'_>>,
+) -> (Patches, Vec<f64>) {
     bake_among(tris, &[], size, samples, s, normal_maps)
 }
 
 /// [`bake`] with `others` occluding but not patched (after `tris`, so chart indices hold).
-fn bake_among(tris: &[Triangle], others: &[Triangle], size: f64, samples: &SampleSet, s: &Settings, normal_maps: Option<&Surfaces<'_>>) -> (Patches, Vec<f64>) {
+fn bake_among(
+    tris: &[Triangle],
+    others: &[Triangle],
+    size: f64,
+    samples: &SampleSet,
+    s: &Settings,
+    normal_maps: Option<&Surfaces<'_>>,
+) -> (Patches, Vec<f64>) {
     let mut p = Patches::build(tris, size);
     if let Some(surfaces) = normal_maps {
         normals::perturb(&mut p, tris, surfaces, 16);
@@ -42,7 +70,14 @@ fn bake_among(tris: &[Triangle], others: &[Triangle], size: f64, samples: &Sampl
 
 /// The patch whose sample point is nearest `at`, inside its polygon.
 fn patch_at(p: &Patches, at: DVec3) -> usize {
-    (0..p.patches.len()).filter(|&k| p.patches[k].coverage >= 1.0).min_by(|&a, &b| (p.patches[a].centre - at).length().total_cmp(&(p.patches[b].centre - at).length())).unwrap_or(0)
+    (0..p.patches.len())
+        .filter(|&k| p.patches[k].coverage >= 1.0)
+        .min_by(|&a, &b| {
+            (p.patches[a].centre - at)
+                .length()
+                .total_cmp(&(p.patches[b].centre - at).length())
+        })
+        .unwrap_or(0)
 }
 
 fn coeffs(p: &[f64], k: usize, dim: usize) -> &[f64] {
@@ -66,15 +101,41 @@ fn a_constant_sky_gives_rho_l0_at_every_band_count_and_orientation() {
     for bands in BANDS {
         let samples = SampleSet::new(10_000, bands).unwrap_or_else(|e| panic!("{e}"));
         // A floor, a wall and a ceiling, each alone.
-        let floor = quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 2.0), DVec3::new(2.0, 0.0, 0.0), 0, 0.5);
-        let wall = quad(DVec3::new(5.0, 0.0, -1.0), DVec3::new(0.0, 2.0, 0.0), DVec3::new(0.0, 0.0, 2.0), 0, 0.5);
-        let ceiling = quad(DVec3::new(-1.0, 3.0, -1.0), DVec3::new(2.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 2.0), 0, 0.5);
+        let floor = quad(
+            DVec3::new(-1.0, 0.0, -1.0),
+            DVec3::new(0.0, 0.0, 2.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            0,
+            0.5,
+        );
+        let wall = quad(
+            DVec3::new(5.0, 0.0, -1.0),
+            DVec3::new(0.0, 2.0, 0.0),
+            DVec3::new(0.0, 0.0, 2.0),
+            0,
+            0.5,
+        );
+        let ceiling = quad(
+            DVec3::new(-1.0, 3.0, -1.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 2.0),
+            0,
+            0.5,
+        );
         let light = constant_sky(bands, 2.0);
-        for (tris, at) in [(floor, DVec3::new(0.25, 0.0, 0.25)), (wall, DVec3::new(5.0, 0.75, 0.25)), (ceiling, DVec3::new(0.25, 3.0, 0.25))] {
+        for (tris, at) in [
+            (floor, DVec3::new(0.25, 0.0, 0.25)),
+            (wall, DVec3::new(5.0, 0.75, 0.25)),
+            (ceiling, DVec3::new(0.25, 3.0, 0.25)),
+        ] {
             let (p, t) = bake(&tris, 0.5, &samples, &settings(bands, false), None);
             let k = patch_at(&p, at);
             let e = transfer::shade(coeffs(&t, k, bands * bands), &light);
-            assert!((e - 2.0).abs() < 2e-3, "bands {bands} at {at}: {e} (normal {})", p.patches[k].normal);
+            assert!(
+                (e - 2.0).abs() < 2e-3,
+                "bands {bands} at {at}: {e} (normal {})",
+                p.patches[k].normal
+            );
         }
     }
 }
@@ -112,7 +173,13 @@ fn c_a_ground_plane_hides_the_sky_below_the_horizon() {
         let (u, v) = (DVec3::Z * 0.2, n.cross(DVec3::Z) * 0.2);
         // A small patch 0.5 above a black ground 2000 wide: the horizon it sees is within 0.03°.
         let tris = quad(DVec3::new(0.0, 0.5, 0.0) - u * 0.5 - v * 0.5, u, v, 0, 0.5);
-        let ground = quad(DVec3::new(-1000.0, 0.0, -1000.0), DVec3::new(0.0, 0.0, 2000.0), DVec3::new(2000.0, 0.0, 0.0), 1, 0.0);
+        let ground = quad(
+            DVec3::new(-1000.0, 0.0, -1000.0),
+            DVec3::new(0.0, 0.0, 2000.0),
+            DVec3::new(2000.0, 0.0, 0.0),
+            1,
+            0.0,
+        );
         let (p, t) = bake_among(&tris, &ground, 0.2, &samples, &settings(bands, false), None);
         let k = patch_at(&p, DVec3::new(0.0, 0.5, 0.0));
         let e = transfer::shade(coeffs(&t, k, bands * bands), &light);
@@ -133,13 +200,20 @@ fn d_a_directional_light_rings_as_the_golden_values() {
     ];
     for (bands, want) in golden {
         let samples = SampleSet::new(10_000, bands).unwrap_or_else(|e| panic!("{e}"));
-        let tris = quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 2.0), DVec3::new(2.0, 0.0, 0.0), 0, 0.5);
+        let tris = quad(
+            DVec3::new(-1.0, 0.0, -1.0),
+            DVec3::new(0.0, 0.0, 2.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            0,
+            0.5,
+        );
         let (p, t) = bake(&tris, 0.5, &samples, &settings(bands, false), None);
         let k = patch_at(&p, DVec3::ZERO);
         for (cos, w) in [1.0f64, 0.5, 0.0, -0.5, -1.0].iter().zip(want) {
             let to_light = DVec3::new((1.0 - cos * cos).max(0.0).sqrt(), *cos, 0.0);
             let mut light = vec![0.0; bands * bands];
-            sh::eval_basis_f64(sh::world_to_sh(to_light.as_vec3()).as_dvec3(), bands, &mut light).unwrap_or_else(|e| panic!("{e}"));
+            sh::eval_basis_f64(sh::world_to_sh(to_light.as_vec3()).as_dvec3(), bands, &mut light)
+                .unwrap_or_else(|e| panic!("{e}"));
             let e = transfer::shade(coeffs(&t, k, bands * bands), &light);
             // The exact band-limited value (the clamped cosine's ZH, a closed form) matches the
             // golden table to its 4 decimals; the baked transfer adds the 100 × 100 grid's
@@ -147,8 +221,14 @@ fn d_a_directional_light_rings_as_the_golden_values() {
             // 6, 2.8e-3 at 8, all at cos = 1).
             let zh = sh::clamped_cosine_zh(bands).unwrap_or_else(|e| panic!("{e}"));
             let p = sh::legendre(bands, *cos);
-            let exact: f64 = (0..bands).map(|l| zh[l] * ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt() * p[l]).sum::<f64>() / std::f64::consts::PI;
-            assert!((exact - w).abs() < 1e-4, "bands {bands} cos {cos}: exact {exact} want {w}");
+            let exact: f64 = (0..bands)
+                .map(|l| zh[l] * ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt() * p[l])
+                .sum::<f64>()
+                / std::f64::consts::PI;
+            assert!(
+                (exact - w).abs() < 1e-4,
+                "bands {bands} cos {cos}: exact {exact} want {w}"
+            );
             let tolerance = match bands {
                 0..=4 => 3e-4,
                 6 => 1.5e-3,
@@ -241,7 +321,8 @@ fn f_radiosity_and_sh_agree_under_a_constant_sky_with_bounces() {
         let sh_e = transfer::shade(coeffs(&t, k, bands * bands), &light) * std::f64::consts::PI;
         let rad_e = radiosity.patches[k].total.x / 0.6;
         worst = worst.max((sh_e / rad_e - 1.0).abs());
-        bounce_share = bounce_share.max(1.0 - transfer::shade(coeffs(&direct_only, k, bands * bands), &light) * std::f64::consts::PI / sh_e);
+        bounce_share = bounce_share
+            .max(1.0 - transfer::shade(coeffs(&direct_only, k, bands * bands), &light) * std::f64::consts::PI / sh_e);
     }
     assert!(worst < 0.01, "worst relative difference {worst}");
     // The bounces matter here (the test would not see a broken shooting loop otherwise).
@@ -252,21 +333,60 @@ fn f_radiosity_and_sh_agree_under_a_constant_sky_with_bounces() {
 fn g_normal_maps_flat_is_neutral_and_tilted_equals_a_tilted_patch() {
     let bands = 4;
     let samples = SampleSet::new(10_000, bands).unwrap_or_else(|e| panic!("{e}"));
-    let tris = quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 2.0), DVec3::new(2.0, 0.0, 0.0), 0, 0.5);
-    let uvs: Vec<[[f32; 2]; 3]> = vec![[[0.0, 0.0], [0.0, 1.0], [1.0, 1.0]], [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0]]];
+    let tris = quad(
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::new(0.0, 0.0, 2.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        0,
+        0.5,
+    );
+    let uvs: Vec<[[f32; 2]; 3]> = vec![
+        [[0.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
+        [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0]],
+    ];
     let s = settings(bands, false);
     let (_, plain) = bake(&tris, 0.5, &samples, &s, None);
-    let flat = NormalImage { width: 2, height: 2, texels: vec![DVec3::Z; 4] };
-    let (_, mapped) = bake(&tris, 0.5, &samples, &s, Some(&Surfaces { uvs: &uvs, maps: vec![Some(&flat); 2] }));
+    let flat = NormalImage {
+        width: 2,
+        height: 2,
+        texels: vec![DVec3::Z; 4],
+    };
+    let (_, mapped) = bake(
+        &tris,
+        0.5,
+        &samples,
+        &s,
+        Some(&Surfaces {
+            uvs: &uvs,
+            maps: vec![Some(&flat); 2],
+        }),
+    );
     let diff = plain.iter().zip(&mapped).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(diff <= 1e-12, "a flat map changed the transfer by {diff}");
     // A constant map tilted by β: the patch leans β but keeps the plane's cut-off, so a constant
     // sky gives (1 + cos β)/2 (the hemisphere of the plane seen by a β-tilted cosine).
     let beta = 40f64.to_radians();
-    let tilted = NormalImage { width: 1, height: 1, texels: vec![DVec3::new(beta.sin(), 0.0, beta.cos())] };
-    let (p, t) = bake(&tris, 0.5, &samples, &s, Some(&Surfaces { uvs: &uvs, maps: vec![Some(&tilted); 2] }));
+    let tilted = NormalImage {
+        width: 1,
+        height: 1,
+        texels: vec![DVec3::new(beta.sin(), 0.0, beta.cos())],
+    };
+    let (p, t) = bake(
+        &tris,
+        0.5,
+        &samples,
+        &s,
+        Some(&Surfaces {
+            uvs: &uvs,
+            maps: vec![Some(&tilted); 2],
+        }),
+    );
     let k = patch_at(&p, DVec3::new(0.25, 0.0, 0.25));
-    assert!((p.patches[k].normal.dot(DVec3::Y) - beta.cos()).abs() < 1e-9, "{}", p.patches[k].normal);
+    assert!(
+        (p.patches[k].normal.dot(DVec3::Y) - beta.cos()).abs() < 1e-9,
+        "{}",
+        p.patches[k].normal
+    );
     let e = transfer::shade(coeffs(&t, k, 16), &constant_sky(bands, 1.0));
     assert!((e - (1.0 + beta.cos()) / 2.0).abs() < 2e-3, "{e}");
     // Without the plane's cut-off the tilted normal would see its whole hemisphere (e = 1).

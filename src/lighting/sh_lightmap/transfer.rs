@@ -61,7 +61,13 @@ fn counts(p: &Patches, k: usize, dir: DVec3) -> bool {
 
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky (CPU path; the GPU
 /// path is [`super::gpu`]). Words are `⌈N/32⌉` per patch.
-pub fn visibility_cpu(p: &Patches, occluders: &Occluders, samples: &SampleSet, mode: Mode, progress: &mut Progress) -> Vec<u32> {
+pub fn visibility_cpu(
+    p: &Patches,
+    occluders: &Occluders,
+    samples: &SampleSet,
+    mode: Mode,
+    progress: &mut Progress,
+) -> Vec<u32> {
     let words = samples.len().div_ceil(32);
     let mut bits = vec![0u32; p.patches.len() * words];
     let eps = 1e-4 * p.size;
@@ -89,12 +95,18 @@ pub fn visibility_cpu(p: &Patches, occluders: &Occluders, samples: &SampleSet, m
                     })
                 })
                 .collect();
-            handles.into_iter().flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))).collect()
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
         });
         for (k, row) in rows {
             bits[k * words..(k + 1) * words].copy_from_slice(&row);
         }
-        progress.update(((done + 1) * chunk * threads).min(inside.len()) as u64, inside.len() as u64);
+        progress.update(
+            ((done + 1) * chunk * threads).min(inside.len()) as u64,
+            inside.len() as u64,
+        );
     }
     bits
 }
@@ -140,7 +152,10 @@ struct Vectors {
 
 impl Unshot for Vectors {
     fn magnitude(&self, k: usize) -> f64 {
-        self.unshot[k * self.dim..(k + 1) * self.dim].iter().map(|c| c.abs()).sum()
+        self.unshot[k * self.dim..(k + 1) * self.dim]
+            .iter()
+            .map(|c| c.abs())
+            .sum()
     }
     fn reflects(&self, k: usize) -> bool {
         self.reflectance[k] > 0.0
@@ -157,7 +172,10 @@ impl Unshot for Vectors {
         for &(r, f) in shares {
             let rho = self.reflectance[r];
             let to_total = if self.corrected { f } else { rho * f };
-            let (total, unshot) = (&mut self.total[r * dim..(r + 1) * dim], &mut self.unshot[r * dim..(r + 1) * dim]);
+            let (total, unshot) = (
+                &mut self.total[r * dim..(r + 1) * dim],
+                &mut self.unshot[r * dim..(r + 1) * dim],
+            );
             for ((t, u), x) in total.iter_mut().zip(unshot.iter_mut()).zip(&flux) {
                 *t += to_total * x;
                 *u += rho * f * x;
@@ -167,7 +185,14 @@ impl Unshot for Vectors {
 }
 
 /// Bakes every patch's transfer: direct from `bits`, bounces, tone mapping, the border passes.
-pub fn bake(p: &Patches, occluders: &Occluders, samples: &SampleSet, bits: &[u32], settings: &Settings, progress: &mut Progress) -> Transfer {
+pub fn bake(
+    p: &Patches,
+    occluders: &Occluders,
+    samples: &SampleSet,
+    bits: &[u32],
+    settings: &Settings,
+    progress: &mut Progress,
+) -> Transfer {
     let dim = samples.dim();
     let direct = project(p, samples, bits);
     let corrected = settings.solve.mode == Mode::Corrected;
@@ -184,9 +209,27 @@ pub fn bake(p: &Patches, occluders: &Occluders, samples: &SampleSet, bits: &[u32
             }
         })
         .collect();
-    let unshot: Vec<f64> = if corrected { direct.iter().enumerate().map(|(i, c)| c * reflectance[i / dim]).collect() } else { direct.clone() };
-    let mut v = Vectors { dim, total: direct, unshot, reflectance, corrected };
-    let report = if settings.bounces { solve::shoot(Geometry::from(p), occluders, &settings.solve, progress, &mut v) } else { solve::Report::default() };
+    let unshot: Vec<f64> = if corrected {
+        direct
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c * reflectance[i / dim])
+            .collect()
+    } else {
+        direct.clone()
+    };
+    let mut v = Vectors {
+        dim,
+        total: direct,
+        unshot,
+        reflectance,
+        corrected,
+    };
+    let report = if settings.bounces {
+        solve::shoot(Geometry::from(p), occluders, &settings.solve, progress, &mut v)
+    } else {
+        solve::Report::default()
+    };
     let mut coeffs = v.total;
     if corrected {
         for c in &mut coeffs {
@@ -198,14 +241,31 @@ pub fn bake(p: &Patches, occluders: &Occluders, samples: &SampleSet, bits: &[u32
     }
     let plan = border::Plan::new(p, occluders);
     plan.apply_flat(&mut coeffs, dim);
-    Transfer { coeffs, bands: samples.bands, report: solve::Report { border_refused: plan.refused, ..report } }
+    Transfer {
+        coeffs,
+        bands: samples.bands,
+        report: solve::Report {
+            border_refused: plan.refused,
+            ..report
+        },
+    }
 }
 
 /// The seed's transfer tone mapping ([CAFU-SRC], digest §1.5): the luminance proxy of a patch is
 /// its max |c|; its vector is scaled by the [LRP97] display/world ratio of that proxy; then all
 /// coefficients are rescaled together so that max |c| = 1.
 pub fn tone_map(p: &Patches, coeffs: &mut [f64], dim: usize) {
-    let lum: Vec<f64> = (0..p.patches.len()).map(|k| if p.patches[k].inside() { coeffs[k * dim..(k + 1) * dim].iter().fold(0.0f64, |m, c| m.max(c.abs())) } else { 0.0 }).collect();
+    let lum: Vec<f64> = (0..p.patches.len())
+        .map(|k| {
+            if p.patches[k].inside() {
+                coeffs[k * dim..(k + 1) * dim]
+                    .iter()
+                    .fold(0.0f64, |m, c| m.max(c.abs()))
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let scale = tone::display_scale(&lum);
     for (k, s) in scale.iter().enumerate() {
         for c in &mut coeffs[k * dim..(k + 1) * dim] {

@@ -30,7 +30,11 @@ pub struct VqSettings {
 impl VqSettings {
     /// The seed's termination (3 strikes) with a cap of 100 passes.
     pub fn new(reps: usize) -> VqSettings {
-        VqSettings { reps, max_iterations: 100, strikes: 3 }
+        VqSettings {
+            reps,
+            max_iterations: 100,
+            strikes: 3,
+        }
     }
 }
 
@@ -107,14 +111,35 @@ impl Quantized {
 /// Passes end with an assignment, so `indices` always refer to the returned `codebook`. The
 /// nearest search is a linear scan like CAFU's, split over threads; every vector's result is
 /// independent of the split, so the output does not depend on the thread count.
-pub fn quantize(vectors: &[f32], dim: usize, settings: &VqSettings, mut progress: impl FnMut(usize, f64)) -> Result<Quantized, VqError> {
+pub fn quantize(
+    vectors: &[f32],
+    dim: usize,
+    settings: &VqSettings,
+    mut progress: impl FnMut(usize, f64),
+) -> Result<Quantized, VqError> {
     validate(vectors, dim, settings)?;
     if let Some((codebook, indices)) = distinct_codebook(vectors, dim, settings.reps) {
         progress(0, 0.0);
-        return Ok(Quantized { dim, codebook, indices, iterations: 1, max_distance: vec![0.0], sse: vec![0.0], unused: 0 });
+        return Ok(Quantized {
+            dim,
+            codebook,
+            indices,
+            iterations: 1,
+            max_distance: vec![0.0],
+            sse: vec![0.0],
+            unused: 0,
+        });
     }
     let mut codebook = strided_codebook(vectors, dim, settings.reps);
-    let mut q = Quantized { dim, codebook: Vec::new(), indices: Vec::new(), iterations: 0, max_distance: Vec::new(), sse: Vec::new(), unused: 0 };
+    let mut q = Quantized {
+        dim,
+        codebook: Vec::new(),
+        indices: Vec::new(),
+        iterations: 0,
+        max_distance: Vec::new(),
+        sse: Vec::new(),
+        unused: 0,
+    };
     let (mut previous, mut strikes) = (INITIAL_PREVIOUS_ERROR, 0);
     loop {
         let (indices, distances) = assign(vectors, dim, &codebook);
@@ -150,7 +175,10 @@ fn validate(vectors: &[f32], dim: usize, settings: &VqSettings) -> Result<(), Vq
         return Err(VqError::Dim);
     }
     if !vectors.len().is_multiple_of(dim) {
-        return Err(VqError::Length { len: vectors.len(), dim });
+        return Err(VqError::Length {
+            len: vectors.len(),
+            dim,
+        });
     }
     if vectors.is_empty() {
         return Err(VqError::Empty);
@@ -208,7 +236,10 @@ fn strided_codebook(vectors: &[f32], dim: usize, reps: usize) -> Vec<f32> {
     let count = vectors.len() / dim;
     let reps = reps.min(count);
     let stride = count / reps;
-    (0..reps).flat_map(|k| &vectors[k * stride * dim..(k * stride + 1) * dim]).copied().collect()
+    (0..reps)
+        .flat_map(|k| &vectors[k * stride * dim..(k * stride + 1) * dim])
+        .copied()
+        .collect()
 }
 
 /// Every vector's nearest representative (lowest index on ties) and its squared distance.
@@ -217,13 +248,19 @@ fn assign(vectors: &[f32], dim: usize, codebook: &[f32]) -> (Vec<u16>, Vec<f64>)
     let mut indices = vec![0u16; count];
     let mut distances = vec![0.0f64; count];
     let work = count.saturating_mul(codebook.len());
-    let threads = if work < PARALLEL_WORK { 1 } else { std::thread::available_parallelism().map_or(1, |n| n.get()) };
+    let threads = if work < PARALLEL_WORK {
+        1
+    } else {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    };
     let chunk = count.div_ceil(threads).max(1);
     if threads == 1 {
         assign_range(vectors, dim, codebook, &mut indices, &mut distances);
     } else {
         std::thread::scope(|scope| {
-            let parts = vectors.chunks(chunk * dim).zip(indices.chunks_mut(chunk).zip(distances.chunks_mut(chunk)));
+            let parts = vectors
+                .chunks(chunk * dim)
+                .zip(indices.chunks_mut(chunk).zip(distances.chunks_mut(chunk)));
             for (part, (idx, dist)) in parts {
                 scope.spawn(move || assign_range(part, dim, codebook, idx, dist));
             }
@@ -247,7 +284,11 @@ fn assign_range(vectors: &[f32], dim: usize, codebook: &[f32], indices: &mut [u1
         // The search compares in f32 for speed; the reported errors are recomputed in f64 so
         // the SSE the tests assert on is not f32 rounding noise.
         let rep = &codebook[best.0 * dim..(best.0 + 1) * dim];
-        *distance = v.iter().zip(rep).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum();
+        *distance = v
+            .iter()
+            .zip(rep)
+            .map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2))
+            .sum();
     }
 }
 
@@ -262,7 +303,10 @@ fn squared_distance_below(a: &[f32], b: &[f32], bound: f32) -> f32 {
     // `chunks_exact`/`as_chunks` iterators, which it does not fully inline. The conversions
     // cannot fail (both slices are 4 long).
     for g in 0..groups {
-        let (x, y): (&[f32; 4], &[f32; 4]) = (a[4 * g..4 * g + 4].try_into().unwrap(), b[4 * g..4 * g + 4].try_into().unwrap());
+        let (x, y): (&[f32; 4], &[f32; 4]) = (
+            a[4 * g..4 * g + 4].try_into().unwrap(),
+            b[4 * g..4 * g + 4].try_into().unwrap(),
+        );
         let d = [x[0] - y[0], x[1] - y[1], x[2] - y[2], x[3] - y[3]];
         sum += (d[0] * d[0] + d[1] * d[1]) + (d[2] * d[2] + d[3] * d[3]);
         if sum >= bound {
@@ -284,11 +328,16 @@ fn update_means(vectors: &[f32], dim: usize, indices: &[u16], codebook: &mut [f3
     for (v, &i) in vectors.chunks_exact(dim).zip(indices) {
         let i = usize::from(i);
         counts[i] += 1;
-        sums[i * dim..(i + 1) * dim].iter_mut().zip(v).for_each(|(s, &c)| *s += f64::from(c));
+        sums[i * dim..(i + 1) * dim]
+            .iter_mut()
+            .zip(v)
+            .for_each(|(s, &c)| *s += f64::from(c));
     }
     for ((rep, sum), &count) in codebook.chunks_exact_mut(dim).zip(sums.chunks_exact(dim)).zip(&counts) {
         if count > 0 {
-            rep.iter_mut().zip(sum).for_each(|(c, &s)| *c = (s / f64::from(count)) as f32);
+            rep.iter_mut()
+                .zip(sum)
+                .for_each(|(c, &s)| *c = (s / f64::from(count)) as f32);
         }
     }
 }
@@ -331,11 +380,19 @@ mod tests {
         assert_eq!((q.max_distance.len(), q.sse.len()), (q.iterations, q.iterations));
         let (mut sse, mut max) = (0.0f64, 0.0f64);
         for (v, &i) in vectors.chunks_exact(dim).zip(&q.indices) {
-            let d = |r: usize| v.iter().zip(&q.codebook[r * dim..(r + 1) * dim]).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum::<f64>();
+            let d = |r: usize| {
+                v.iter()
+                    .zip(&q.codebook[r * dim..(r + 1) * dim])
+                    .map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2))
+                    .sum::<f64>()
+            };
             let nearest = (0..q.reps()).map(d).fold(f64::INFINITY, f64::min);
             let first = (0..q.reps()).find(|&r| d(r) == nearest).unwrap();
             // The search compares in f32, so allow its rounding before insisting on the lowest index.
-            assert!(d(usize::from(i)) <= nearest * (1.0 + 1e-5) + 1e-12, "vector {v:?} is not at its nearest representative");
+            assert!(
+                d(usize::from(i)) <= nearest * (1.0 + 1e-5) + 1e-12,
+                "vector {v:?} is not at its nearest representative"
+            );
             if d(usize::from(i)) == nearest {
                 assert_eq!(usize::from(i), first, "tie not resolved to the lowest index");
             }
@@ -344,7 +401,10 @@ mod tests {
         }
         assert!((sse - q.sse.last().unwrap()).abs() <= 1e-9 * sse.max(1e-30));
         assert_eq!(max, q.error());
-        assert_eq!(q.unused, (0..q.reps()).filter(|&r| !q.indices.contains(&(r as u16))).count());
+        assert_eq!(
+            q.unused,
+            (0..q.reps()).filter(|&r| !q.indices.contains(&(r as u16))).count()
+        );
     }
 
     #[test]
@@ -354,11 +414,18 @@ mod tests {
         let distinct: Vec<f32> = (0..50 * dim).map(|_| rng.signed()).collect();
         // 600 vectors cycling through the 50; the seed's stride-12 picks would take only every
         // other one (gcd(12, 50) = 2) and leave error.
-        let vectors: Vec<f32> = (0..600).flat_map(|i| &distinct[(i % 50) * dim..(i % 50 + 1) * dim]).copied().collect();
+        let vectors: Vec<f32> = (0..600)
+            .flat_map(|i| &distinct[(i % 50) * dim..(i % 50 + 1) * dim])
+            .copied()
+            .collect();
         for reps in [50, 64, 4096] {
             let q = run(&vectors, dim, &VqSettings::new(reps));
             assert_eq!(q.reps(), 50, "reps {reps}");
-            assert_eq!((q.error(), *q.sse.last().unwrap(), q.unused), (0.0, 0.0, 0), "reps {reps}");
+            assert_eq!(
+                (q.error(), *q.sse.last().unwrap(), q.unused),
+                (0.0, 0.0, 0),
+                "reps {reps}"
+            );
             for (v, &i) in vectors.chunks_exact(dim).zip(&q.indices) {
                 assert_eq!(v, &q.codebook[usize::from(i) * dim..(usize::from(i) + 1) * dim]);
             }
@@ -375,12 +442,29 @@ mod tests {
         let dim = 16;
         // Clustered data (64 centres, noise 0.1) so Lloyd has something to improve for many passes.
         let centres: Vec<f32> = (0..64 * dim).map(|_| rng.signed()).collect();
-        let vectors: Vec<f32> = (0..3000).flat_map(|i| centres[(i * 7 % 64) * dim..(i * 7 % 64 + 1) * dim].to_vec()).map(|c| c + 0.1 * rng.signed()).collect();
+        let vectors: Vec<f32> = (0..3000)
+            .flat_map(|i| centres[(i * 7 % 64) * dim..(i * 7 % 64 + 1) * dim].to_vec())
+            .map(|c| c + 0.1 * rng.signed())
+            .collect();
         // Many strikes so that SSE is followed well past the seed's stop.
-        let q = run(&vectors, dim, &VqSettings { reps: 48, max_iterations: 60, strikes: 20 });
+        let q = run(
+            &vectors,
+            dim,
+            &VqSettings {
+                reps: 48,
+                max_iterations: 60,
+                strikes: 20,
+            },
+        );
         assert!(q.iterations >= 5, "only {} passes", q.iterations);
         for (i, pair) in q.sse.windows(2).enumerate() {
-            assert!(pair[1] <= pair[0] * (1.0 + 1e-9), "SSE rose at pass {}: {} → {}", i + 1, pair[0], pair[1]);
+            assert!(
+                pair[1] <= pair[0] * (1.0 + 1e-9),
+                "SSE rose at pass {}: {} → {}",
+                i + 1,
+                pair[0],
+                pair[1]
+            );
         }
         // Non-increasing alone would pass with representatives that never move.
         assert!(*q.sse.last().unwrap() < 0.8 * q.sse[0], "SSE {:?}", q.sse);
@@ -398,10 +482,19 @@ mod tests {
             }
         }
         for reps in [2, 3, 4, 7, 16, 33] {
-            let settings = VqSettings { reps, max_iterations: 1000, strikes: 3 };
+            let settings = VqSettings {
+                reps,
+                max_iterations: 1000,
+                strikes: 3,
+            };
             let mut reported = Vec::new();
             let q = quantize(&vectors, 2, &settings, |pass, error| reported.push((pass, error))).unwrap();
-            assert!(q.iterations <= 20, "reps {reps}: {} passes, errors {:?}", q.iterations, q.max_distance);
+            assert!(
+                q.iterations <= 20,
+                "reps {reps}: {} passes, errors {:?}",
+                q.iterations,
+                q.max_distance
+            );
             // The rule itself: the run stops at the first third consecutive non-decrease.
             let mut previous = INITIAL_PREVIOUS_ERROR;
             let mut strikes = 0;
@@ -443,21 +536,48 @@ mod tests {
         let q = run(&vectors, 1, &VqSettings::new(MAX_REPS));
         assert_eq!((q.reps(), q.error(), q.unused), (MAX_REPS, 0.0, 0));
         assert_eq!(q.indices.iter().max(), Some(&u16::MAX));
-        assert!(vectors.iter().zip(&q.indices).all(|(&v, &i)| q.codebook[usize::from(i)] == v));
+        assert!(vectors
+            .iter()
+            .zip(&q.indices)
+            .all(|(&v, &i)| q.codebook[usize::from(i)] == v));
     }
 
     #[test]
     fn bad_input_is_an_error_not_a_panic() {
         let v = [0.0f32; 8];
-        let err = |vectors: &[f32], dim, settings: VqSettings| quantize(vectors, dim, &settings, |_, _| {}).unwrap_err();
+        let err =
+            |vectors: &[f32], dim, settings: VqSettings| quantize(vectors, dim, &settings, |_, _| {}).unwrap_err();
         assert_eq!(err(&v, 2, VqSettings::new(0)), VqError::Reps(0));
         assert_eq!(err(&v, 2, VqSettings::new(MAX_REPS + 1)), VqError::Reps(MAX_REPS + 1));
         assert_eq!(err(&v, 0, VqSettings::new(4)), VqError::Dim);
         assert_eq!(err(&v, 3, VqSettings::new(4)), VqError::Length { len: 8, dim: 3 });
         assert_eq!(err(&[], 3, VqSettings::new(4)), VqError::Empty);
-        assert_eq!(err(&[0.0, 1.0, f32::NAN, 0.0], 2, VqSettings::new(4)), VqError::NonFinite(1));
-        assert_eq!(err(&v, 2, VqSettings { max_iterations: 0, ..VqSettings::new(4) }), VqError::Setting("max_iterations"));
-        assert_eq!(err(&v, 2, VqSettings { strikes: 0, ..VqSettings::new(4) }), VqError::Setting("strikes"));
+        assert_eq!(
+            err(&[0.0, 1.0, f32::NAN, 0.0], 2, VqSettings::new(4)),
+            VqError::NonFinite(1)
+        );
+        assert_eq!(
+            err(
+                &v,
+                2,
+                VqSettings {
+                    max_iterations: 0,
+                    ..VqSettings::new(4)
+                }
+            ),
+            VqError::Setting("max_iterations")
+        );
+        assert_eq!(
+            err(
+                &v,
+                2,
+                VqSettings {
+                    strikes: 0,
+                    ..VqSettings::new(4)
+                }
+            ),
+            VqError::Setting("strikes")
+        );
     }
 
     #[test]
@@ -497,7 +617,13 @@ mod tests {
             let start = std::time::Instant::now();
             let q = run(&vectors, dim, &VqSettings::new(reps));
             let s = start.elapsed().as_secs_f64();
-            println!("S 20000 dim 16 reps {reps}: {s:.2} s, {} passes ({:.3} s/pass), error {:.4}, unused {}", q.iterations, s / q.iterations as f64, q.error(), q.unused);
+            println!(
+                "S 20000 dim 16 reps {reps}: {s:.2} s, {} passes ({:.3} s/pass), error {:.4}, unused {}",
+                q.iterations,
+                s / q.iterations as f64,
+                q.error(),
+                q.unused
+            );
         }
     }
 }

@@ -11,19 +11,58 @@ pub const NAME: &str = "shadow_volumes";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "casters", kind: ParamKind::String },
-        ParamSchema { name: "stencil", kind: ParamKind::String },
-        ParamSchema { name: "materials", kind: ParamKind::String },
-        ParamSchema { name: "pvs", kind: ParamKind::Bool },
-        ParamSchema { name: "radius_culling", kind: ParamKind::Bool },
-        ParamSchema { name: "atten", kind: ParamKind::Int },
-        ParamSchema { name: "ambient_nz", kind: ParamKind::Bool },
-        ParamSchema { name: "lightmap", kind: ParamKind::FloatArray },
-        ParamSchema { name: "depth_clamp", kind: ParamKind::Bool },
-        ParamSchema { name: "time_s", kind: ParamKind::Float },
-        ParamSchema { name: "animate", kind: ParamKind::Bool },
-        ParamSchema { name: "stencil_wrap", kind: ParamKind::Bool },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "casters",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "stencil",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "materials",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "pvs",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "radius_culling",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "atten",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "ambient_nz",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "lightmap",
+            kind: ParamKind::FloatArray,
+        },
+        ParamSchema {
+            name: "depth_clamp",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "time_s",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "animate",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "stencil_wrap",
+            kind: ParamKind::Bool,
+        },
     ],
 };
 
@@ -104,7 +143,10 @@ impl Config {
             match decl.param(name).and_then(|v| v.as_str()) {
                 None => Ok(default.to_string()),
                 Some(s) if allowed.contains(&s) => Ok(s.to_string()),
-                Some(s) => Err(bad(name, format!("unknown value {s:?}; expected one of: {}", allowed.join(", ")))),
+                Some(s) => Err(bad(
+                    name,
+                    format!("unknown value {s:?}; expected one of: {}", allowed.join(", ")),
+                )),
             }
         };
         let boolean = |name: &str, default: bool| decl.param(name).and_then(|v| v.as_bool()).unwrap_or(default);
@@ -136,7 +178,11 @@ impl Config {
                 _ => Vec3::ZERO,
             },
             Some(a) => {
-                let xs: Vec<f32> = a.iter().filter_map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))).map(|x| x as f32).collect();
+                let xs: Vec<f32> = a
+                    .iter()
+                    .filter_map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+                    .map(|x| x as f32)
+                    .collect();
                 match xs[..] {
                     [x] if x >= 0.0 => Vec3::splat(x),
                     [r, g, b] if r >= 0.0 && g >= 0.0 && b >= 0.0 => Vec3::new(r, g, b),
@@ -144,7 +190,10 @@ impl Config {
                 }
             }
         };
-        let time_s = decl.param("time_s").and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64))).unwrap_or(0.0) as f32;
+        let time_s = decl
+            .param("time_s")
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+            .unwrap_or(0.0) as f32;
         Ok(Config {
             mode,
             casters,
@@ -165,7 +214,9 @@ impl Config {
 
 /// A copy of `decl` with `params` set (replacing any the scene gave).
 pub fn with_params(decl: &MethodDecl, params: &[(&str, toml::Value)]) -> MethodDecl {
-    params.iter().fold(decl.clone(), |d, (name, value)| d.with(name, value.clone()))
+    params
+        .iter()
+        .fold(decl.clone(), |d, (name, value)| d.with(name, value.clone()))
 }
 
 /// The chart's sweep: for each mode, the three caster strategies (z-fail, special-case
@@ -181,12 +232,27 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
             ("pvs-only casters", vec![("casters", s("pvs"))]),
             ("naive casters", vec![("casters", s("naive"))]),
             ("pscs z-pass", vec![("casters", s("pscs")), ("stencil", s("zpass"))]),
-            ("pscs default maps", vec![("casters", s("pscs")), ("materials", s("default_maps"))]),
+            (
+                "pscs default maps",
+                vec![("casters", s("pscs")), ("materials", s("default_maps"))],
+            ),
             ("pscs PVS off", vec![("casters", s("pscs")), ("pvs", b(false))]),
-            ("pscs default maps PVS off", vec![("casters", s("pscs")), ("materials", s("default_maps")), ("pvs", b(false))]),
+            (
+                "pscs default maps PVS off",
+                vec![
+                    ("casters", s("pscs")),
+                    ("materials", s("default_maps")),
+                    ("pvs", b(false)),
+                ],
+            ),
         ];
         for (label, params) in points {
-            let mut all = vec![("mode", s(mode)), ("stencil", s("zfail")), ("materials", s("special")), ("pvs", b(true))];
+            let mut all = vec![
+                ("mode", s(mode)),
+                ("stencil", s("zfail")),
+                ("materials", s("special")),
+                ("pvs", b(true)),
+            ];
             for (k, v) in params {
                 all.retain(|(n, _)| *n != k);
                 all.push((k, v));
@@ -210,20 +276,44 @@ mod tests {
     fn defaults_are_the_seeds_choices() {
         let s = scene("\"shadow_volumes\"");
         let c = Config::from_decl(&s.methods[0], &s).unwrap();
-        assert_eq!((c.mode, c.casters, c.stencil, c.materials, c.atten), (Mode::Faithful, Casters::Pscs, Stencil::ZFail, MaterialPath::SpecialCase, 4));
+        assert_eq!(
+            (c.mode, c.casters, c.stencil, c.materials, c.atten),
+            (
+                Mode::Faithful,
+                Casters::Pscs,
+                Stencil::ZFail,
+                MaterialPath::SpecialCase,
+                4
+            )
+        );
         assert!(c.pvs && c.radius_culling && c.ambient_nz && c.depth_clamp && c.stencil_wrap);
     }
 
     #[test]
     fn bad_values_are_one_line_errors_naming_the_field() {
         for (method, field, hint) in [
-            ("{ name = \"shadow_volumes\", casters = \"all\" }", "methods[0].casters", "naive, pvs, pscs"),
-            ("{ name = \"shadow_volumes\", atten = 5 }", "methods[0].atten", "1, 2, 3 or 4"),
-            ("{ name = \"shadow_volumes\", lightmap = [1, 2] }", "methods[0].lightmap", "1 or 3"),
+            (
+                "{ name = \"shadow_volumes\", casters = \"all\" }",
+                "methods[0].casters",
+                "naive, pvs, pscs",
+            ),
+            (
+                "{ name = \"shadow_volumes\", atten = 5 }",
+                "methods[0].atten",
+                "1, 2, 3 or 4",
+            ),
+            (
+                "{ name = \"shadow_volumes\", lightmap = [1, 2] }",
+                "methods[0].lightmap",
+                "1 or 3",
+            ),
         ] {
             let s = scene(method);
             let e = Config::from_decl(&s.methods[0], &s).unwrap_err().to_string();
-            assert!(e.starts_with("s.toml:1: ") && e.contains(field) && e.contains(hint) && !e.contains('\n'), "{e}");
+            assert!(
+                e.starts_with("s.toml:1: ") && e.contains(field) && e.contains(hint) && !e.contains('\n'),
+                "{e}"
+            );
         }
     }
 
@@ -237,7 +327,9 @@ mod tests {
             assert!(configs.iter().any(|c| c.casters == casters && c.mode == Mode::Physical));
         }
         assert!(configs.iter().any(|c| c.stencil == Stencil::ZPass));
-        assert!(configs.iter().any(|c| c.materials == MaterialPath::DefaultMaps && !c.pvs));
+        assert!(configs
+            .iter()
+            .any(|c| c.materials == MaterialPath::DefaultMaps && !c.pvs));
         assert_eq!(configs.iter().filter(|c| c.mode == Mode::Faithful).count(), 7);
     }
 }

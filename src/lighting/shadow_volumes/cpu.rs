@@ -65,11 +65,25 @@ pub fn faithful_light_colour(intensity: Vec3, radius: f32, kind: u32) -> Vec3 {
 /// `dist` is the world-space distance used for the attenuation only — the seed's separate
 /// light vectors.
 #[allow(clippy::too_many_arguments)]
-pub fn faithful_light(n: Vec3, l_ts: Vec3, e_ts: Vec3, dist: f32, diffuse: Vec3, specular: Vec3, colour: Vec3, kind: u32, radius: f32) -> Vec3 {
+pub fn faithful_light(
+    n: Vec3,
+    l_ts: Vec3,
+    e_ts: Vec3,
+    dist: f32,
+    diffuse: Vec3,
+    specular: Vec3,
+    colour: Vec3,
+    kind: u32,
+    radius: f32,
+) -> Vec3 {
     let l = l_ts.normalize();
     let e = e_ts.normalize();
     let diff = n.dot(l).clamp(0.0, 1.0);
-    let spec = if diff > 0.0 { n.dot((l + e).normalize()).clamp(0.0, 1.0) } else { 0.0 };
+    let spec = if diff > 0.0 {
+        n.dot((l + e).normalize()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     attenuation(kind, dist, radius) * colour * (diff * diffuse + spec.powi(FAITHFUL_EXPONENT) * specular)
 }
 
@@ -98,7 +112,11 @@ mod tests {
     fn attenuation_values_of_the_digest() {
         let r = 8.0;
         let at = |k, d| attenuation(k, d, r);
-        for (k, want) in [(2, [1.0, 0.5, 0.0, 0.0]), (3, [1.0, 0.25, 0.0, 0.0]), (4, [1.0, 0.75, 0.0, 0.0])] {
+        for (k, want) in [
+            (2, [1.0, 0.5, 0.0, 0.0]),
+            (3, [1.0, 0.25, 0.0, 0.0]),
+            (4, [1.0, 0.75, 0.0, 0.0]),
+        ] {
             let got = [at(k, 0.0), at(k, r / 2.0), at(k, r), at(k, 2.0 * r)];
             assert_eq!(got, want, "atten{k} at 0, r/2, r, 2r");
         }
@@ -125,16 +143,39 @@ mod tests {
             let d = r / 2.0;
             let faithful = faithful_light(Vec3::Z, Vec3::Z * d, Vec3::Z, d, Vec3::ONE, Vec3::ZERO, c, k, r);
             let physical = i / (d * d) / std::f32::consts::PI;
-            assert!((faithful - physical).abs().max_element() < 1e-5, "atten{k}: {faithful} vs {physical}");
+            assert!(
+                (faithful - physical).abs().max_element() < 1e-5,
+                "atten{k}: {faithful} vs {physical}"
+            );
         }
     }
 
     #[test]
     fn specular_is_gated_on_the_diffuse_term() {
         // Light below the surface, eye above: N·L < 0, so no specular even though N·H could be > 0.
-        let out = faithful_light(Vec3::Z, Vec3::new(1.0, 0.0, -0.01), Vec3::new(-1.0, 0.0, 0.2), 1.0, Vec3::ZERO, Vec3::ONE, Vec3::ONE, 4, 0.0);
+        let out = faithful_light(
+            Vec3::Z,
+            Vec3::new(1.0, 0.0, -0.01),
+            Vec3::new(-1.0, 0.0, 0.2),
+            1.0,
+            Vec3::ZERO,
+            Vec3::ONE,
+            Vec3::ONE,
+            4,
+            0.0,
+        );
         assert_eq!(out, Vec3::ZERO);
-        let lit = faithful_light(Vec3::Z, Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, 1.0), 1.0, Vec3::ZERO, Vec3::ONE, Vec3::ONE, 4, 0.0);
+        let lit = faithful_light(
+            Vec3::Z,
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+            1.0,
+            Vec3::ZERO,
+            Vec3::ONE,
+            Vec3::ONE,
+            4,
+            0.0,
+        );
         assert!((lit - Vec3::ONE).abs().max_element() < 1e-6, "N = L = E: (N·H)^32 = 1");
     }
 }

@@ -36,7 +36,13 @@ fn noise(x: f32, y: f32, cells: u32, seed: u32) -> f32 {
     let (ix, iy) = (fx.floor() as i64, fy.floor() as i64);
     let (tx, ty) = (fx - ix as f32, fy - iy as f32);
     let s = |t: f32| t * t * (3.0 - 2.0 * t);
-    let at = |i: i64, j: i64| hash(i.rem_euclid(cells as i64) as u32, j.rem_euclid(cells as i64) as u32, seed);
+    let at = |i: i64, j: i64| {
+        hash(
+            i.rem_euclid(cells as i64) as u32,
+            j.rem_euclid(cells as i64) as u32,
+            seed,
+        )
+    };
     let a = at(ix, iy) + (at(ix + 1, iy) - at(ix, iy)) * s(tx);
     let b = at(ix, iy + 1) + (at(ix + 1, iy + 1) - at(ix, iy + 1)) * s(tx);
     a + (b - a) * s(ty)
@@ -44,7 +50,11 @@ fn noise(x: f32, y: f32, cells: u32, seed: u32) -> f32 {
 
 fn srgb_encode(linear: f32) -> u8 {
     let c = linear.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
     (s * 255.0 + 0.5) as u8
 }
 
@@ -99,7 +109,11 @@ fn tiles(size: u32) -> (RgbaImage, Vec<f32>) {
             let h = ((edge - 0.03) / 0.04).clamp(0.0, 1.0);
             let checker = ((u * n).floor() + (v * n).floor()) as u32 % 2;
             let grain = noise(u, v, 16, 11);
-            let tile = if checker == 0 { Vec3::new(0.62, 0.6, 0.55) } else { Vec3::new(0.25, 0.27, 0.3) } * (0.9 + 0.2 * grain);
+            let tile = if checker == 0 {
+                Vec3::new(0.62, 0.6, 0.55)
+            } else {
+                Vec3::new(0.25, 0.27, 0.3)
+            } * (0.9 + 0.2 * grain);
             albedo.put_pixel(x, y, colour_pixel(Vec3::splat(0.15).lerp(tile, h)));
             height[(y * size + x) as usize] = h;
         }
@@ -154,8 +168,14 @@ mod tests {
                 std::fs::create_dir_all(&dir).unwrap();
                 img.save(&path).unwrap();
             }
-            let on_disk = image::open(&path).unwrap_or_else(|e| panic!("{}: {e} (PENUMBRA_WRITE_MAPS=1 writes it)", path.display())).to_rgba8();
-            assert!(on_disk == img, "{}: differs from the generator (PENUMBRA_WRITE_MAPS=1 rewrites it)", path.display());
+            let on_disk = image::open(&path)
+                .unwrap_or_else(|e| panic!("{}: {e} (PENUMBRA_WRITE_MAPS=1 writes it)", path.display()))
+                .to_rgba8();
+            assert!(
+                on_disk == img,
+                "{}: differs from the generator (PENUMBRA_WRITE_MAPS=1 rewrites it)",
+                path.display()
+            );
         }
     }
 

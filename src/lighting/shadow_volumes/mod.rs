@@ -39,8 +39,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
 use crate::backend::{
-    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
-    SpecConstant, StencilFace, StencilFaces, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc,
+    ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, StencilFace, StencilFaces,
+    SubresourceRange, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, SceneGpu};
@@ -74,7 +75,11 @@ pub struct Setup {
 impl Setup {
     /// The setup of a scene on the CPU alone (tests, tools): meshes are loaded from the scene.
     pub fn new(scene: &Scene, decl: &MethodDecl) -> Result<Setup> {
-        let meshes = scene.objects.iter().map(|o| o.load_mesh(std::path::Path::new("."))).collect::<std::result::Result<Vec<_>, _>>()?;
+        let meshes = scene
+            .objects
+            .iter()
+            .map(|o| o.load_mesh(std::path::Path::new(".")))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
         Setup::with_meshes(scene, &meshes, decl)
     }
 
@@ -98,7 +103,11 @@ impl Setup {
                 Light::Sphere { .. } => "a sphere light is an area light, whose soft shadows one stencil volume cannot represent",
                 Light::Quad { .. } => "a quad light is an area light, whose soft shadows one stencil volume cannot represent",
             };
-            return Err(Error::Usage(format!("{}: lights[{i}] ({}): the {NAME} method lights with point and spot lights only: {why}", scene.source, l.name())));
+            return Err(Error::Usage(format!(
+                "{}: lights[{i}] ({}): the {NAME} method lights with point and spot lights only: {why}",
+                scene.source,
+                l.name()
+            )));
         }
         let mut level: Option<(WorldLevel, Vec3)> = None;
         let mut world_objects = Vec::new();
@@ -119,34 +128,71 @@ impl Setup {
                 let translate = obj.transform.w_axis.truncate();
                 match &level {
                     Some((other, t)) if other != l || *t != translate => {
-                        return Err(Error::Usage(format!("{}: objects[{i}] ({}): the {NAME} method supports one BSP world per scene", scene.source, obj.name)));
+                        return Err(Error::Usage(format!(
+                            "{}: objects[{i}] ({}): the {NAME} method supports one BSP world per scene",
+                            scene.source, obj.name
+                        )));
                     }
                     _ => level = Some((l.clone(), translate)),
                 }
                 world_objects.push(i);
                 continue;
             }
-            let mesh = meshes.get(i).ok_or_else(|| Error::Usage(format!("{}: objects[{i}]: no uploaded mesh", scene.source)))?;
+            let mesh = meshes
+                .get(i)
+                .ok_or_else(|| Error::Usage(format!("{}: objects[{i}]: no uploaded mesh", scene.source)))?;
             let topology = volumes::Topology::new(mesh);
-            entities.push(Entity { draw: i, name: obj.name.clone(), bounds: mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO)), topology, base: obj.transform, animation: obj.animation, opacity });
+            entities.push(Entity {
+                draw: i,
+                name: obj.name.clone(),
+                bounds: mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO)),
+                topology,
+                base: obj.transform,
+                animation: obj.animation,
+                opacity,
+            });
         }
         let world = match level {
             None => None,
             Some((l, translate)) => {
-                let compiled = world_mesh::compiled(&l).map_err(|e| Error::Usage(format!("{}: {}: the world does not compile: {e}", scene.source, l.mesh_name())))?;
-                Some(WorldFrame { world: compiled, translate })
+                let compiled = world_mesh::compiled(&l).map_err(|e| {
+                    Error::Usage(format!(
+                        "{}: {}: the world does not compile: {e}",
+                        scene.source,
+                        l.mesh_name()
+                    ))
+                })?;
+                Some(WorldFrame {
+                    world: compiled,
+                    translate,
+                })
             }
         };
         let sets = match &world {
             Some(w) => lights.iter().map(|l| plan::light_world_sets(&config, w, l)).collect(),
             None => vec![LightWorldSets::default(); lights.len()],
         };
-        Ok(Setup { config, world, world_objects, entities, lights, sets })
+        Ok(Setup {
+            config,
+            world,
+            world_objects,
+            entities,
+            lights,
+            sets,
+        })
     }
 
     /// The frame plan for an eye at `camera` (scene space) at animation time `t`.
     pub fn plan(&self, camera: Vec3, t: f32) -> FramePlan {
-        plan::plan_frame(&self.config, self.world.as_ref(), &self.sets, &self.lights, &self.entities, camera, t)
+        plan::plan_frame(
+            &self.config,
+            self.world.as_ref(),
+            &self.sets,
+            &self.lights,
+            &self.entities,
+            camera,
+            t,
+        )
     }
 }
 
@@ -277,21 +323,40 @@ impl ShadowVolumes {
         };
         let mut ambient = Vec::with_capacity(2);
         for nm in [false, true] {
-            let d = surface(&format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }), "shadow_volumes/ambient.frag", vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)]);
+            let d = surface(
+                &format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }),
+                "shadow_volumes/ambient.frag",
+                vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
+            );
             ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
         }
         let mut light = Vec::with_capacity(4);
         for nm in [false, true] {
             for sp in [false, true] {
                 let mut d = surface(
-                    &format!("{NAME} light{}{}", if nm { " normal-mapped" } else { "" }, if sp { " specular" } else { "" }),
+                    &format!(
+                        "{NAME} light{}{}",
+                        if nm { " normal-mapped" } else { "" },
+                        if sp { " specular" } else { "" }
+                    ),
                     "shadow_volumes/light.frag",
                     vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)],
                 );
-                d.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS_OR_EQUAL };
+                d.depth = DepthState {
+                    test: true,
+                    write: false,
+                    compare: vk::CompareOp::LESS_OR_EQUAL,
+                };
                 d.color_targets[0].blend = BlendMode::Additive;
-                let outside = StencilFace { compare_mask: 0xff, write_mask: 0, ..StencilFace::test(vk::CompareOp::EQUAL, 0) };
-                d.stencil = Some(StencilFaces { front: outside, back: outside });
+                let outside = StencilFace {
+                    compare_mask: 0xff,
+                    write_mask: 0,
+                    ..StencilFace::test(vk::CompareOp::EQUAL, 0)
+                };
+                d.stencil = Some(StencilFaces {
+                    front: outside,
+                    back: outside,
+                });
                 light.push(gpu.create_graphics_pipeline(&d, shaders)?);
             }
         }
@@ -310,35 +375,96 @@ impl ShadowVolumes {
         let translucent_ambient = [translucent_ambient[0], translucent_ambient[1]];
         let ambient = [ambient[0], ambient[1]];
         let light = [[light[0], light[1]], [light[2], light[3]]];
-        let (inc, dec) = if c.stencil_wrap { (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP) } else { (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP) };
-        let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace { pass, depth_fail, ..StencilFace::test(vk::CompareOp::ALWAYS, 0) };
+        let (inc, dec) = if c.stencil_wrap {
+            (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
+        } else {
+            (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
+        };
+        let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace {
+            pass,
+            depth_fail,
+            ..StencilFace::test(vk::CompareOp::ALWAYS, 0)
+        };
         let keep = vk::StencilOp::KEEP;
         // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
         // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
         let faces = match c.stencil {
-            Stencil::ZFail => StencilFaces { front: count(keep, dec), back: count(keep, inc) },
-            Stencil::ZPass => StencilFaces { front: count(inc, keep), back: count(dec, keep) },
+            Stencil::ZFail => StencilFaces {
+                front: count(keep, dec),
+                back: count(keep, inc),
+            },
+            Stencil::ZPass => StencilFaces {
+                front: count(inc, keep),
+                back: count(dec, keep),
+            },
         };
         let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
         let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
-        vd.vertex_layout = VertexLayout { buffers: vec![(0, 16)], attributes: vec![VertexAttribute { location: 0, binding: 0, format: vk::Format::R32G32B32A32_SFLOAT, offset: 0 }] };
+        vd.vertex_layout = VertexLayout {
+            buffers: vec![(0, 16)],
+            attributes: vec![VertexAttribute {
+                location: 0,
+                binding: 0,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                offset: 0,
+            }],
+        };
         vd.raster.cull = vk::CullModeFlags::NONE;
         vd.raster.depth_clamp = depth_clamp;
-        vd.depth = DepthState { test: true, write: false, compare: vk::CompareOp::LESS };
+        vd.depth = DepthState {
+            test: true,
+            write: false,
+            compare: vk::CompareOp::LESS,
+        };
         vd.stencil = Some(faces);
         vd.depth_format = Some(ds_format);
         let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
-        let silhouette =
-            gpu.create_compute_pipeline(&ComputePipelineDesc { name: format!("{NAME} silhouettes"), shader: "shadow_volumes/silhouette.comp".into(), specialization: Vec::new() }, shaders)?;
+        let silhouette = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: format!("{NAME} silhouettes"),
+                shader: "shadow_volumes/silhouette.comp".into(),
+                specialization: Vec::new(),
+            },
+            shaders,
+        )?;
 
-        let features = scene.materials.iter().map(|m| Features { normal_map: m.normal_map.is_some(), specular: m.specular.max_element() > 0.0 }).collect();
+        let features = scene
+            .materials
+            .iter()
+            .map(|m| Features {
+                normal_map: m.normal_map.is_some(),
+                specular: m.specular.max_element() > 0.0,
+            })
+            .collect();
         let (faces, templates) = Self::world_geometry(gpu, scene, cx.scene_gpu, &setup)?;
         let silhouettes = Self::silhouette_buffers(gpu, &setup)?;
-        let default_normal =
-            gpu.create_image(&ImageDesc::new_2d("flat normal (exact)", vk::Format::R32G32B32A32_SFLOAT, 1, 1).usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST))?;
+        let default_normal = gpu.create_image(
+            &ImageDesc::new_2d("flat normal (exact)", vk::Format::R32G32B32A32_SFLOAT, 1, 1)
+                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+        )?;
         gpu.upload_image(default_normal, 0, bytemuck::cast_slice(&[0.5f32, 0.5, 1.0, 1.0]))?;
-        cx.states.set_image(gpu, default_normal, Access::SampledRead { stages: vk::PipelineStageFlags2::ALL_COMMANDS })?;
-        Ok(ShadowVolumes { setup, faces, templates, silhouettes, features, ambient, translucent_ambient, light, volume, silhouette, nudge_far: !depth_clamp, default_normal, plan: None })
+        cx.states.set_image(
+            gpu,
+            default_normal,
+            Access::SampledRead {
+                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+            },
+        )?;
+        Ok(ShadowVolumes {
+            setup,
+            faces,
+            templates,
+            silhouettes,
+            features,
+            ambient,
+            translucent_ambient,
+            light,
+            volume,
+            silhouette,
+            nudge_far: !depth_clamp,
+            default_normal,
+            plan: None,
+        })
     }
 
     pub fn setup(&self) -> &Setup {
@@ -352,8 +478,15 @@ impl ShadowVolumes {
 
     /// Per world face: its draw and index range (the class meshes are built as in the scene),
     /// and the volume templates of every face in one vertex buffer.
-    fn world_geometry(gpu: &mut Gpu, scene: &Scene, scene_gpu: &SceneGpu, setup: &Setup) -> Result<(Vec<FaceDraw>, Option<BufferId>)> {
-        let Some(frame) = &setup.world else { return Ok((Vec::new(), None)) };
+    fn world_geometry(
+        gpu: &mut Gpu,
+        scene: &Scene,
+        scene_gpu: &SceneGpu,
+        setup: &Setup,
+    ) -> Result<(Vec<FaceDraw>, Option<BufferId>)> {
+        let Some(frame) = &setup.world else {
+            return Ok((Vec::new(), None));
+        };
         let w = &frame.world;
         let mut faces = vec![FaceDraw::default(); w.faces.len()];
         for (i, obj) in scene.objects.iter().enumerate() {
@@ -378,7 +511,11 @@ impl ShadowVolumes {
         if data.is_empty() {
             return Ok((faces, None));
         }
-        let buffer = gpu.create_buffer_init("shadow volume templates", vk::BufferUsageFlags::VERTEX_BUFFER, bytemuck::cast_slice(&data))?;
+        let buffer = gpu.create_buffer_init(
+            "shadow volume templates",
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            bytemuck::cast_slice(&data),
+        )?;
         Ok((faces, Some(buffer)))
     }
 
@@ -386,13 +523,20 @@ impl ShadowVolumes {
         if setup.entities.is_empty() || setup.lights.is_empty() {
             return Ok(None);
         }
-        let (mut positions, mut triangles, mut edges) = (Vec::<Vec4>::new(), Vec::<[u32; 4]>::new(), Vec::<[u32; 4]>::new());
+        let (mut positions, mut triangles, mut edges) =
+            (Vec::<Vec4>::new(), Vec::<[u32; 4]>::new(), Vec::<[u32; 4]>::new());
         let mut slots = Vec::new();
         let mut out = 0u32;
         for e in &setup.entities {
             let t = &e.topology;
             let out_vertices = 3 * t.volume_triangles() as u32;
-            slots.push(EntitySlots { vertex_offset: positions.len() as u32, triangle_offset: triangles.len() as u32, edge_offset: edges.len() as u32, out_offset: out, out_vertices });
+            slots.push(EntitySlots {
+                vertex_offset: positions.len() as u32,
+                triangle_offset: triangles.len() as u32,
+                edge_offset: edges.len() as u32,
+                out_offset: out,
+                out_vertices,
+            });
             positions.extend(t.positions.iter().map(|p| p.extend(1.0)));
             triangles.extend(t.triangles.iter().map(|t| [t[0], t[1], t[2], 0]));
             edges.extend(t.edges.iter().copied());
@@ -400,7 +544,11 @@ impl ShadowVolumes {
         }
         let storage = |gpu: &mut Gpu, name: &str, bytes: &[u8]| -> Result<BufferId> {
             let zero = [0u8; 16];
-            Ok(gpu.create_buffer_init(name, vk::BufferUsageFlags::STORAGE_BUFFER, if bytes.is_empty() { &zero } else { bytes })?)
+            Ok(gpu.create_buffer_init(
+                name,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                if bytes.is_empty() { &zero } else { bytes },
+            )?)
         };
         let positions = storage(gpu, "entity positions", bytemuck::cast_slice(&positions))?;
         let triangles = storage(gpu, "entity triangles", bytemuck::cast_slice(&triangles))?;
@@ -411,7 +559,14 @@ impl ShadowVolumes {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER,
             memory: MemoryKind::GpuOnly,
         })?;
-        Ok(Some(SilhouetteBuffers { positions, triangles, edges, volumes, stride: out, slots }))
+        Ok(Some(SilhouetteBuffers {
+            positions,
+            triangles,
+            edges,
+            volumes,
+            stride: out,
+            slots,
+        }))
     }
 
     /// The entities' animation time at renderer time `t`.
@@ -447,15 +602,31 @@ impl ShadowVolumes {
 
     /// The draws of a pass in the order given (world ranges first): the translucent path keeps
     /// its back-to-front entity order.
-    fn draws_in_order(&self, scene: &SceneGpu, plan: &FramePlan, faces: &[FaceId], entities: &[usize]) -> Vec<DrawCall> {
+    fn draws_in_order(
+        &self,
+        scene: &SceneGpu,
+        plan: &FramePlan,
+        faces: &[FaceId],
+        entities: &[usize],
+    ) -> Vec<DrawCall> {
         let mut calls = Vec::new();
         for (draw, ranges) in self.face_ranges(faces) {
             let d = &scene.draws[draw];
-            calls.push(DrawCall { material: d.material, model: d.model, vertex_offset: d.vertex_offset, ranges });
+            calls.push(DrawCall {
+                material: d.material,
+                model: d.model,
+                vertex_offset: d.vertex_offset,
+                ranges,
+            });
         }
         for &e in entities {
             let d = &scene.draws[self.setup.entities[e].draw];
-            calls.push(DrawCall { material: d.material, model: plan.entity_transforms[e], vertex_offset: d.vertex_offset, ranges: vec![(d.first_index, d.index_count)] });
+            calls.push(DrawCall {
+                material: d.material,
+                model: plan.entity_transforms[e],
+                vertex_offset: d.vertex_offset,
+                ranges: vec![(d.first_index, d.index_count)],
+            });
         }
         calls
     }
@@ -463,8 +634,14 @@ impl ShadowVolumes {
     fn features_of(&self, material: u32) -> Features {
         match self.setup.config.materials {
             // The default-map path draws everything with the full pipeline.
-            MaterialPath::DefaultMaps => Features { normal_map: true, specular: true },
-            MaterialPath::SpecialCase => self.features.get(material as usize).copied().unwrap_or(Features { normal_map: false, specular: false }),
+            MaterialPath::DefaultMaps => Features {
+                normal_map: true,
+                specular: true,
+            },
+            MaterialPath::SpecialCase => self.features.get(material as usize).copied().unwrap_or(Features {
+                normal_map: false,
+                specular: false,
+            }),
         }
     }
 
@@ -473,7 +650,11 @@ impl ShadowVolumes {
     fn maps(&self, scene: &SceneGpu, material: u32) -> (ImageId, ImageId, ImageId) {
         let m = scene.material_maps[material as usize];
         let has_normal = self.features.get(material as usize).is_some_and(|f| f.normal_map);
-        let normal = if has_normal || self.setup.config.materials == MaterialPath::SpecialCase { m.normal } else { self.default_normal };
+        let normal = if has_normal || self.setup.config.materials == MaterialPath::SpecialCase {
+            m.normal
+        } else {
+            self.default_normal
+        };
         (m.albedo, normal, m.specular)
     }
 
@@ -482,7 +663,9 @@ impl ShadowVolumes {
     fn light_block(&self, light: usize, scene: &SceneGpu) -> LightBlock {
         let l = &self.setup.lights[light];
         let c = &self.setup.config;
-        let intensity = scene.lights.get(light).map_or(l.intensity, |g| Vec3::new(g.intensity[0], g.intensity[1], g.intensity[2]));
+        let intensity = scene.lights.get(light).map_or(l.intensity, |g| {
+            Vec3::new(g.intensity[0], g.intensity[1], g.intensity[2])
+        });
         let colour = match c.mode {
             Mode::Faithful => cpu::faithful_light_colour(intensity, l.radius, c.atten),
             Mode::Physical => intensity,
@@ -491,7 +674,12 @@ impl ShadowVolumes {
             Some(s) => (s.direction.extend(1.0).into(), [s.cos_inner, s.cos_outer, 0.0, 0.0]),
             None => ([0.0; 4], [0.0; 4]),
         };
-        LightBlock { position: l.position.extend(l.radius).into(), colour: colour.extend(0.0).into(), spot_direction, cone }
+        LightBlock {
+            position: l.position.extend(l.radius).into(),
+            colour: colour.extend(0.0).into(),
+            spot_direction,
+            cone,
+        }
     }
 }
 
@@ -518,7 +706,10 @@ fn record_surface<'b>(
             bound_pipeline = Some(pipeline);
         }
         let (albedo, normal, specular) = method.maps(scene, material);
-        let mut binds: Vec<(&str, Bind<'b>)> = vec![("frame", Bind::UniformData(frame_bytes)), ("light", Bind::UniformData(light_bytes))];
+        let mut binds: Vec<(&str, Bind<'b>)> = vec![
+            ("frame", Bind::UniformData(frame_bytes)),
+            ("light", Bind::UniformData(light_bytes)),
+        ];
         binds.extend(extra(albedo, normal, specular));
         ctx.bind(&binds)
     })
@@ -540,14 +731,20 @@ impl LightingMethod for ShadowVolumes {
         let t = frame.targets;
         let uniforms = frame.uniforms;
         let (base, direct) = (frame.terms.has(Term::Base), frame.terms.has(Term::Direct));
-        let plan = self.plan.clone().ok_or_else(|| Error::Usage(format!("{NAME}: a frame was recorded before it was prepared")))?;
+        let plan = self
+            .plan
+            .clone()
+            .ok_or_else(|| Error::Usage(format!("{NAME}: a frame was recorded before it was prepared")))?;
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let sampler = scene.sampler;
         let whole = SubresourceRange::mip(0);
 
         // Silhouettes of every entity for every light of the frame.
-        let silhouettes = self.silhouettes.as_ref().filter(|_| direct && plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
+        let silhouettes = self
+            .silhouettes
+            .as_ref()
+            .filter(|_| direct && plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
         if let Some(s) = silhouettes {
             let p = plan.clone();
             graph
@@ -557,7 +754,11 @@ impl LightingMethod for ShadowVolumes {
                 .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
                 .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
                 .record(move |ctx| {
-                    let lights: Vec<Vec4> = p.lights.iter().map(|l| self.setup.lights[l.light].position.extend(1.0)).collect();
+                    let lights: Vec<Vec4> = p
+                        .lights
+                        .iter()
+                        .map(|l| self.setup.lights[l.light].position.extend(1.0))
+                        .collect();
                     ctx.rec.bind_pipeline(self.silhouette)?;
                     ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&lights)))])?;
                     for (e, slot) in s.slots.iter().enumerate() {
@@ -594,9 +795,16 @@ impl LightingMethod for ShadowVolumes {
                 break;
             }
             let prefix = if translucent { "translucent " } else { "" };
-            let ambient_calls =
-                if translucent { self.draws_in_order(scene, &plan, &[], &plan.translucent_entities) } else { self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities) };
-            let ambient_pipelines = if translucent { self.translucent_ambient } else { self.ambient };
+            let ambient_calls = if translucent {
+                self.draws_in_order(scene, &plan, &[], &plan.translucent_entities)
+            } else {
+                self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities)
+            };
+            let ambient_pipelines = if translucent {
+                self.translucent_ambient
+            } else {
+                self.ambient
+            };
             let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
             if translucent || base {
                 graph
@@ -607,17 +815,43 @@ impl LightingMethod for ShadowVolumes {
                     .buffer(scene.indices, Access::IndexRead, None)
                     .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
                     .record(move |ctx| {
-                        let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                        let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                            colors: vec![RenderTarget::load(t.radiance)],
+                            depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+                        })?;
                         let zero_light = LightBlock::zeroed();
                         let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
                         let extra = |albedo, normal, _specular| {
                             vec![
-                                ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
-                                ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
+                                (
+                                    "albedo_map",
+                                    Bind::Sampled {
+                                        image: albedo,
+                                        range: whole,
+                                        sampler,
+                                    },
+                                ),
+                                (
+                                    "normal_map",
+                                    Bind::Sampled {
+                                        image: normal,
+                                        range: whole,
+                                        sampler,
+                                    },
+                                ),
                                 ("ambient", Bind::UniformData(ambient_bytes)),
                             ]
                         };
-                        record_surface(ctx, self, scene, &ambient_calls, |f| ambient_pipelines[f.normal_map as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&zero_light))?;
+                        record_surface(
+                            ctx,
+                            self,
+                            scene,
+                            &ambient_calls,
+                            |f| ambient_pipelines[f.normal_map as usize],
+                            extra,
+                            bytemuck::bytes_of(&uniforms),
+                            bytemuck::bytes_of(&zero_light),
+                        )?;
                         ctx.rec.end_rendering();
                         Ok(())
                     });
@@ -627,7 +861,11 @@ impl LightingMethod for ShadowVolumes {
             }
 
             for (li, lp) in plan.lights.iter().enumerate() {
-                let (receiver_faces, receiver_entities): (&[FaceId], &[usize]) = if translucent { (&[], &lp.translucent_receivers) } else { (&lp.receiver_faces, &lp.receiver_entities) };
+                let (receiver_faces, receiver_entities): (&[FaceId], &[usize]) = if translucent {
+                    (&[], &lp.translucent_receivers)
+                } else {
+                    (&lp.receiver_faces, &lp.receiver_entities)
+                };
                 if translucent && receiver_entities.is_empty() {
                     continue;
                 }
@@ -635,14 +873,25 @@ impl LightingMethod for ShadowVolumes {
                 let li = li as u32;
                 let light_index = lp.light;
                 let light = &self.setup.lights[light_index];
-                let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| (self.faces[f as usize].template_first, self.faces[f as usize].template_count)));
+                let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| {
+                    (
+                        self.faces[f as usize].template_first,
+                        self.faces[f as usize].template_count,
+                    )
+                }));
                 let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
-                    Some(s) => lp.caster_entities.iter().map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices)).collect(),
+                    Some(s) => lp
+                        .caster_entities
+                        .iter()
+                        .map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices))
+                        .collect(),
                     None => Vec::new(),
                 };
                 let light_pos = light.position;
                 let nudge = self.nudge_far as u32;
-                let mut pass = graph.pass(&format!("light {light_index} {prefix}volumes")).depth_stencil_write(t.depth_stencil, false);
+                let mut pass = graph
+                    .pass(&format!("light {light_index} {prefix}volumes"))
+                    .depth_stencil_write(t.depth_stencil, false);
                 if let Some(b) = self.templates {
                     pass = pass.buffer(b, Access::VertexRead, None);
                 }
@@ -652,20 +901,29 @@ impl LightingMethod for ShadowVolumes {
                 let templates = self.templates;
                 let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
                 pass.record(move |ctx| {
-                    let extent = ctx.rec.begin_rendering(&RenderingDesc { colors: Vec::new(), depth_stencil: Some(RenderTarget::load(t.depth_stencil)) })?;
+                    let extent = ctx.rec.begin_rendering(&RenderingDesc {
+                        colors: Vec::new(),
+                        depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+                    })?;
                     ctx.rec.clear_stencil(extent, 0)?;
                     ctx.rec.bind_pipeline(self.volume)?;
                     ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
                     if let (Some(b), false) = (templates, world_ranges.is_empty()) {
                         ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
-                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(1.0).into(), nudge_far: nudge }))?;
+                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
+                            light: light_pos.extend(1.0).into(),
+                            nudge_far: nudge,
+                        }))?;
                         for &(first, count) in &world_ranges {
                             ctx.rec.draw_from(count, first)?;
                         }
                     }
                     if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
                         ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
-                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush { light: light_pos.extend(0.0).into(), nudge_far: nudge }))?;
+                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
+                            light: light_pos.extend(0.0).into(),
+                            nudge_far: nudge,
+                        }))?;
                         for &(first, count) in &entity_ranges {
                             ctx.rec.draw_from(count, first)?;
                         }
@@ -677,7 +935,11 @@ impl LightingMethod for ShadowVolumes {
                 // Translucent receivers: the depth test (LESS_OR_EQUAL, no writes) passes only
                 // where a layer's depth is the stored one, i.e. the nearest translucent layer;
                 // light.frag scales the light by the material's opacity.
-                let calls = if translucent { self.draws_in_order(scene, &plan, receiver_faces, receiver_entities) } else { self.draw_list(scene, &plan, receiver_faces, receiver_entities) };
+                let calls = if translucent {
+                    self.draws_in_order(scene, &plan, receiver_faces, receiver_entities)
+                } else {
+                    self.draw_list(scene, &plan, receiver_faces, receiver_entities)
+                };
                 let block = self.light_block(light_index, scene);
                 graph
                     .pass(&format!("light {light_index} {prefix}lighting"))
@@ -689,16 +951,49 @@ impl LightingMethod for ShadowVolumes {
                     .record(move |ctx| {
                         let _ = ctx.rec.begin_rendering(&RenderingDesc {
                             colors: vec![RenderTarget::load(t.radiance)],
-                            depth_stencil: Some(RenderTarget { read_only: true, ..RenderTarget::load(t.depth_stencil) }),
+                            depth_stencil: Some(RenderTarget {
+                                read_only: true,
+                                ..RenderTarget::load(t.depth_stencil)
+                            }),
                         })?;
                         let extra = |albedo, normal, specular| {
                             vec![
-                                ("albedo_map", Bind::Sampled { image: albedo, range: whole, sampler }),
-                                ("normal_map", Bind::Sampled { image: normal, range: whole, sampler }),
-                                ("specular_map", Bind::Sampled { image: specular, range: whole, sampler }),
+                                (
+                                    "albedo_map",
+                                    Bind::Sampled {
+                                        image: albedo,
+                                        range: whole,
+                                        sampler,
+                                    },
+                                ),
+                                (
+                                    "normal_map",
+                                    Bind::Sampled {
+                                        image: normal,
+                                        range: whole,
+                                        sampler,
+                                    },
+                                ),
+                                (
+                                    "specular_map",
+                                    Bind::Sampled {
+                                        image: specular,
+                                        range: whole,
+                                        sampler,
+                                    },
+                                ),
                             ]
                         };
-                        record_surface(ctx, self, scene, &calls, |f| self.light[f.normal_map as usize][f.specular as usize], extra, bytemuck::bytes_of(&uniforms), bytemuck::bytes_of(&block))?;
+                        record_surface(
+                            ctx,
+                            self,
+                            scene,
+                            &calls,
+                            |f| self.light[f.normal_map as usize][f.specular as usize],
+                            extra,
+                            bytemuck::bytes_of(&uniforms),
+                            bytemuck::bytes_of(&block),
+                        )?;
                         ctx.rec.end_rendering();
                         Ok(())
                     });

@@ -108,7 +108,11 @@ impl Entity {
         let (lo, hi) = self.bounds;
         let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for i in 0..8 {
-            let c = Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z });
+            let c = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
             let p = m.transform_point3(c);
             out = (out.0.min(p), out.1.max(p));
         }
@@ -144,11 +148,18 @@ pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &PointLight)
     let r = culling_radius(config, light);
     let leaf = w.leaf_of(p);
     if w.is_solid(leaf) {
-        return LightWorldSets { leaf: None, ..Default::default() };
+        return LightWorldSets {
+            leaf: None,
+            ..Default::default()
+        };
     }
     let in_radius = |f: &FaceId| w.faces[*f as usize].bounds.touches_sphere(p, r);
     let all_in_radius: Vec<FaceId> = (0..w.faces.len() as FaceId).filter(in_radius).collect();
-    let reachable = if config.pvs { w.casters_light_pvs(p, r) } else { all_in_radius.clone() };
+    let reachable = if config.pvs {
+        w.casters_light_pvs(p, r)
+    } else {
+        all_in_radius.clone()
+    };
     let candidates = match (config.casters, config.pvs) {
         (Casters::Naive, _) | (_, false) => all_in_radius,
         (Casters::Pvs, true) => reachable.clone(),
@@ -158,13 +169,19 @@ pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &PointLight)
     let mut casters = w.back_facing(&candidates, p);
     receivers.retain(|&f| face_in_cone(config, frame, light, f));
     casters.retain(|&f| face_in_cone(config, frame, light, f));
-    LightWorldSets { leaf: Some(leaf), receivers, casters }
+    LightWorldSets {
+        leaf: Some(leaf),
+        receivers,
+        casters,
+    }
 }
 
 /// Whether world face `f` may be within the light's cone (always for a point light, and
 /// without culling).
 fn face_in_cone(config: &Config, frame: &WorldFrame, light: &PointLight, f: FaceId) -> bool {
-    let Some(spot) = cone_culling(config, light) else { return true };
+    let Some(spot) = cone_culling(config, light) else {
+        return true;
+    };
     let b = &frame.world.faces[f as usize].bounds;
     let (a, c) = (frame.to_scene(b.min), frame.to_scene(b.max));
     spot.may_reach_box(light.position, (a.min(c), a.max(c)))
@@ -218,7 +235,10 @@ fn occupied_leaves(w: &CompiledWorld, b: &Aabb) -> Vec<LeafId> {
 
 fn world_aabb(frame: &WorldFrame, (lo, hi): (Vec3, Vec3)) -> Aabb {
     let (a, b) = (frame.to_world(lo), frame.to_world(hi));
-    Aabb { min: a.min(b), max: a.max(b) }
+    Aabb {
+        min: a.min(b),
+        max: a.max(b),
+    }
 }
 
 /// Bounding planes (front = inside) of the pyramid from `apex` over a convex polygon that faces
@@ -226,11 +246,19 @@ fn world_aabb(frame: &WorldFrame, (lo, hi): (Vec3, Vec3)) -> Aabb {
 fn pyramid(apex: DVec3, base: &[DVec3]) -> Option<(Vec<Plane>, Aabb)> {
     let center = base.iter().copied().sum::<DVec3>() / base.len() as f64;
     let base_plane = Plane::from_points(base[0], base[1], base[2])?;
-    let base_plane = if base_plane.distance(apex) < 0.0 { base_plane.flipped() } else { base_plane };
+    let base_plane = if base_plane.distance(apex) < 0.0 {
+        base_plane.flipped()
+    } else {
+        base_plane
+    };
     let mut planes = vec![base_plane];
     for i in 0..base.len() {
         let side = Plane::from_points(apex, base[i], base[(i + 1) % base.len()])?;
-        planes.push(if side.distance(center) < 0.0 { side.flipped() } else { side });
+        planes.push(if side.distance(center) < 0.0 {
+            side.flipped()
+        } else {
+            side
+        });
     }
     let mut bounds = Aabb::from_points(base);
     bounds.include(apex);
@@ -245,11 +273,21 @@ fn entity_pyramid_casters(w: &CompiledWorld, light: DVec3, r: f64, b: &Aabb) -> 
         return Vec::new();
     }
     let (lo, hi) = (b.min, b.max);
-    let corner = |x: bool, y: bool, z: bool| DVec3::new(if x { hi.x } else { lo.x }, if y { hi.y } else { lo.y }, if z { hi.z } else { lo.z });
+    let corner = |x: bool, y: bool, z: bool| {
+        DVec3::new(
+            if x { hi.x } else { lo.x },
+            if y { hi.y } else { lo.y },
+            if z { hi.z } else { lo.z },
+        )
+    };
     let mut pyramids = Vec::new();
     for axis in 0..3 {
         for high in [false, true] {
-            let outside = if high { light[axis] > hi[axis] } else { light[axis] < lo[axis] };
+            let outside = if high {
+                light[axis] > hi[axis]
+            } else {
+                light[axis] < lo[axis]
+            };
             if !outside {
                 continue;
             }
@@ -294,7 +332,15 @@ fn entity_pyramid_casters(w: &CompiledWorld, light: DVec3, r: f64, b: &Aabb) -> 
 /// without a world), `camera` the eye (scene space), `t` the animation time. Translucent
 /// entities are taken out of the opaque path (the seed's compromise: light shines through
 /// them) and listed back to front for the translucent path.
-pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets], lights: &[PointLight], entities: &[Entity], camera: Vec3, t: f32) -> FramePlan {
+pub fn plan_frame(
+    config: &Config,
+    world: Option<&WorldFrame>,
+    sets: &[LightWorldSets],
+    lights: &[PointLight],
+    entities: &[Entity],
+    camera: Vec3,
+    t: f32,
+) -> FramePlan {
     let mut plan = plan_all(config, world, sets, lights, entities, camera, t);
     if !entities.iter().any(|e| e.opacity < 1.0) {
         return plan;
@@ -324,14 +370,27 @@ pub fn plan_frame(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorl
     plan
 }
 
-fn plan_all(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets], lights: &[PointLight], entities: &[Entity], camera: Vec3, t: f32) -> FramePlan {
+fn plan_all(
+    config: &Config,
+    world: Option<&WorldFrame>,
+    sets: &[LightWorldSets],
+    lights: &[PointLight],
+    entities: &[Entity],
+    camera: Vec3,
+    t: f32,
+) -> FramePlan {
     let entity_transforms: Vec<Mat4> = entities.iter().map(|e| e.transform_at(t)).collect();
-    let entity_bounds: Vec<(Vec3, Vec3)> = entities.iter().zip(&entity_transforms).map(|(e, m)| e.world_bounds(m)).collect();
+    let entity_bounds: Vec<(Vec3, Vec3)> = entities
+        .iter()
+        .zip(&entity_transforms)
+        .map(|(e, m)| e.world_bounds(m))
+        .collect();
     let touches = |(lo, hi): (Vec3, Vec3), p: Vec3, r: f64| {
         let nearest = p.clamp(lo, hi);
         f64::from(nearest.distance_squared(p)) <= r * r
     };
-    let in_cone = |l: &PointLight, b: (Vec3, Vec3)| cone_culling(config, l).is_none_or(|s| s.may_reach_box(l.position, b));
+    let in_cone =
+        |l: &PointLight, b: (Vec3, Vec3)| cone_culling(config, l).is_none_or(|s| s.may_reach_box(l.position, b));
     let Some(frame) = world else {
         // No world: every entity is drawn, lit within the radius and casts within it.
         let visible_entities: Vec<usize> = (0..entities.len()).collect();
@@ -340,11 +399,24 @@ fn plan_all(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets]
             .enumerate()
             .filter_map(|(i, l)| {
                 let r = culling_radius(config, l);
-                let near: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], l.position, r) && in_cone(l, entity_bounds[e])).collect();
-                (!near.is_empty()).then(|| LightPlan { light: i, receiver_entities: near.clone(), caster_entities: near, ..Default::default() })
+                let near: Vec<usize> = (0..entities.len())
+                    .filter(|&e| touches(entity_bounds[e], l.position, r) && in_cone(l, entity_bounds[e]))
+                    .collect();
+                (!near.is_empty()).then(|| LightPlan {
+                    light: i,
+                    receiver_entities: near.clone(),
+                    caster_entities: near,
+                    ..Default::default()
+                })
             })
             .collect();
-        return FramePlan { visible_faces: Vec::new(), visible_entities, lights: plans, entity_transforms, ..Default::default() };
+        return FramePlan {
+            visible_faces: Vec::new(),
+            visible_entities,
+            lights: plans,
+            entity_transforms,
+            ..Default::default()
+        };
     };
     let w = &frame.world;
     let cam_leaf = w.leaf_of(frame.to_world(camera));
@@ -360,16 +432,28 @@ fn plan_all(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets]
             }
         }
     }
-    let entity_leaves: Vec<Vec<LeafId>> = entity_bounds.iter().map(|&b| occupied_leaves(w, &world_aabb(frame, b))).collect();
-    let visible_entities: Vec<usize> = (0..entities.len()).filter(|&e| !cull || entity_leaves[e].iter().any(|&l| leaf_visible[l as usize])).collect();
-    let visible_faces: Vec<FaceId> = (0..w.faces.len() as FaceId).filter(|&f| face_visible[f as usize]).collect();
+    let entity_leaves: Vec<Vec<LeafId>> = entity_bounds
+        .iter()
+        .map(|&b| occupied_leaves(w, &world_aabb(frame, b)))
+        .collect();
+    let visible_entities: Vec<usize> = (0..entities.len())
+        .filter(|&e| !cull || entity_leaves[e].iter().any(|&l| leaf_visible[l as usize]))
+        .collect();
+    let visible_faces: Vec<FaceId> = (0..w.faces.len() as FaceId)
+        .filter(|&f| face_visible[f as usize])
+        .collect();
     let mut plans = Vec::new();
     for (i, light) in lights.iter().enumerate() {
         let Some(s) = sets.get(i) else { continue };
         let Some(light_leaf) = s.leaf else { continue };
         let r = culling_radius(config, light);
         let p = frame.to_world(light.position);
-        let receiver_faces: Vec<FaceId> = s.receivers.iter().copied().filter(|&f| face_visible[f as usize]).collect();
+        let receiver_faces: Vec<FaceId> = s
+            .receivers
+            .iter()
+            .copied()
+            .filter(|&f| face_visible[f as usize])
+            .collect();
         let receiver_entities: Vec<usize> = visible_entities
             .iter()
             .copied()
@@ -397,10 +481,26 @@ fn plan_all(config: &Config, world: Option<&WorldFrame>, sets: &[LightWorldSets]
             }
             caster_faces.sort_unstable();
         }
-        let caster_entities: Vec<usize> = (0..entities.len()).filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e])).collect();
-        plans.push(LightPlan { light: i, receiver_faces, receiver_entities, caster_faces, caster_entities, added_by_entity_pyramids: added, ..Default::default() });
+        let caster_entities: Vec<usize> = (0..entities.len())
+            .filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e]))
+            .collect();
+        plans.push(LightPlan {
+            light: i,
+            receiver_faces,
+            receiver_entities,
+            caster_faces,
+            caster_entities,
+            added_by_entity_pyramids: added,
+            ..Default::default()
+        });
     }
-    FramePlan { visible_faces, visible_entities, lights: plans, entity_transforms, ..Default::default() }
+    FramePlan {
+        visible_faces,
+        visible_entities,
+        lights: plans,
+        entity_transforms,
+        ..Default::default()
+    }
 }
 
 /// Merges ascending `(first, count)` ranges that touch.
@@ -424,18 +524,28 @@ mod tests {
 
     #[test]
     fn a_spot_cone_reaches_balls_that_meet_it_only() {
-        let s = Spot { direction: Vec3::NEG_Y, cos_inner: 20f32.to_radians().cos(), cos_outer: 30f32.to_radians().cos() };
+        let s = Spot {
+            direction: Vec3::NEG_Y,
+            cos_inner: 20f32.to_radians().cos(),
+            cos_outer: 30f32.to_radians().cos(),
+        };
         let apex = Vec3::new(0.0, 10.0, 0.0);
         // On the ground 10 m below: the outer edge is at 10 tan 30 = 5.77 m from the axis.
         assert!(s.may_reach(apex, Vec3::new(5.5, 0.0, 0.0), 0.0));
         assert!(!s.may_reach(apex, Vec3::new(6.0, 0.0, 0.0), 0.0));
-        assert!(s.may_reach(apex, Vec3::new(6.0, 0.0, 0.0), 0.3), "a ball straddling the edge");
+        assert!(
+            s.may_reach(apex, Vec3::new(6.0, 0.0, 0.0), 0.3),
+            "a ball straddling the edge"
+        );
         assert!(!s.may_reach(apex, Vec3::new(0.0, 12.0, 0.0), 1.0), "behind the light");
         assert!(s.may_reach(apex, Vec3::new(0.0, 10.5, 0.0), 1.0), "around the apex");
     }
 
     #[test]
     fn ranges_merge_only_when_contiguous() {
-        assert_eq!(merge_ranges([(0, 3), (3, 6), (12, 3), (15, 0), (15, 3)]), vec![(0, 9), (12, 6)]);
+        assert_eq!(
+            merge_ranges([(0, 3), (3, 6), (12, 3), (15, 0), (15, 3)]),
+            vec![(0, 9), (12, 6)]
+        );
     }
 }

@@ -102,7 +102,12 @@ impl Topology {
             }
         }
         let (edges, closed) = adjacency(&triangles);
-        Topology { positions, triangles, edges: if closed { edges } else { Vec::new() }, closed }
+        Topology {
+            positions,
+            triangles,
+            edges: if closed { edges } else { Vec::new() },
+            closed,
+        }
     }
 
     /// Volume triangles the silhouette pass writes per light (degenerate ones included).
@@ -211,7 +216,16 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec3) -> Ve
 /// For tests: replaces points at infinity by points at distance `k` along their direction from
 /// the light, making the volume finite so its closedness and orientation can be measured.
 pub fn finite(volume: &[Vec4], light: Vec3, k: f32) -> Vec<Vec3> {
-    volume.iter().map(|v| if v.w == 0.0 { light + v.truncate() * k } else { v.truncate() }).collect()
+    volume
+        .iter()
+        .map(|v| {
+            if v.w == 0.0 {
+                light + v.truncate() * k
+            } else {
+                v.truncate()
+            }
+        })
+        .collect()
 }
 
 /// Signed volume of a triangle list (positive when the triangles face outward) and whether its
@@ -245,7 +259,12 @@ mod tests {
     #[test]
     fn polygon_volumes_are_closed_and_outward_for_a_light_behind() {
         // A square facing +y (counter-clockwise seen from +y), the light below it.
-        let square = [Vec3::new(-1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(-1.0, 0.0, -1.0)];
+        let square = [
+            Vec3::new(-1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(-1.0, 0.0, -1.0),
+        ];
         let n = (square[1] - square[0]).cross(square[2] - square[0]);
         assert!(n.y > 0.0);
         let light = Vec3::new(0.3, -4.0, 0.2);
@@ -257,12 +276,18 @@ mod tests {
         // The frustum between the square (4 m from the light, area 4) and its image 8× farther
         // out (area 256), 28 m apart: h/3 · (A1 + A2 + √(A1·A2)).
         let expected = 28.0 / 3.0 * (4.0 + 256.0 + 32.0);
-        assert!(vol > 0.0 && ((vol - expected) / expected).abs() < 1e-4, "{vol} vs {expected}");
+        assert!(
+            vol > 0.0 && ((vol - expected) / expected).abs() < 1e-4,
+            "{vol} vs {expected}"
+        );
     }
 
     #[test]
     fn closed_mesh_silhouette_volumes_are_closed_and_outward() {
-        for mesh in [generators::cuboid(Vec3::new(1.0, 2.0, 0.5), 2), generators::sphere(0.7, 12, 7)] {
+        for mesh in [
+            generators::cuboid(Vec3::new(1.0, 2.0, 0.5), 2),
+            generators::sphere(0.7, 12, 7),
+        ] {
             let topo = Topology::new(&mesh);
             assert!(topo.closed);
             assert_eq!(topo.edges.len() * 2, topo.triangles.len() * 3);
@@ -277,7 +302,12 @@ mod tests {
 
     #[test]
     fn open_meshes_get_one_closed_volume_per_triangle() {
-        let quad = generators::quad(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 2.0), Vec3::new(2.0, 0.0, 0.0), 1);
+        let quad = generators::quad(
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(0.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            1,
+        );
         let topo = Topology::new(&quad);
         assert!(!topo.closed && topo.edges.is_empty());
         // From either side of the quad.

@@ -22,7 +22,10 @@ mod tests;
 
 use glam::DVec3;
 
-use crate::backend::{vk, Bind, BufferId, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute, VertexLayout};
+use crate::backend::{
+    vk, Bind, BufferId, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute,
+    VertexLayout,
+};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
@@ -37,18 +40,54 @@ pub const NAME: &str = "vls";
 pub const SCHEMA: MethodSchema = MethodSchema {
     name: NAME,
     params: &[
-        ParamSchema { name: "mode", kind: ParamKind::String },
-        ParamSchema { name: "k", kind: ParamKind::Int },
-        ParamSchema { name: "selection", kind: ParamKind::String },
-        ParamSchema { name: "can_illuminate", kind: ParamKind::Bool },
-        ParamSchema { name: "feeler", kind: ParamKind::String },
-        ParamSchema { name: "max_segment_area", kind: ParamKind::Float },
-        ParamSchema { name: "point", kind: ParamKind::String },
-        ParamSchema { name: "model", kind: ParamKind::String },
-        ParamSchema { name: "seed_k", kind: ParamKind::Float },
-        ParamSchema { name: "kc", kind: ParamKind::Float },
-        ParamSchema { name: "kl", kind: ParamKind::Float },
-        ParamSchema { name: "kq", kind: ParamKind::Float },
+        ParamSchema {
+            name: "mode",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "k",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
+            name: "selection",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "can_illuminate",
+            kind: ParamKind::Bool,
+        },
+        ParamSchema {
+            name: "feeler",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "max_segment_area",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "point",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "model",
+            kind: ParamKind::String,
+        },
+        ParamSchema {
+            name: "seed_k",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "kc",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "kl",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "kq",
+            kind: ParamKind::Float,
+        },
     ],
 };
 
@@ -81,7 +120,9 @@ impl Config {
     /// The parameters of `decl`; a bad value is one line naming the scene file and parameter.
     pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
-        let mode = params.get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?.unwrap_or(Mode::Corrected);
+        let mode = params
+            .get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
+            .unwrap_or(Mode::Corrected);
         let mut c = match mode {
             Mode::Faithful => Config {
                 mode,
@@ -90,57 +131,96 @@ impl Config {
                     selection: Selection::Closest,
                     can_illuminate: false,
                     feeler: Feeler::Thesis,
-                    model: LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 },
+                    model: LightModel::OpenGl {
+                        kc: 1.0,
+                        kl: 0.0,
+                        kq: 1.0,
+                    },
                     point: Point::Centroid,
                 },
                 max_segment_area: 0.05,
             },
             Mode::Corrected => Config {
                 mode,
-                setup: SetupParams { k: 8, selection: Selection::Contribution, can_illuminate: true, feeler: Feeler::Bvh, model: LightModel::Physical, point: Point::Centroid },
+                setup: SetupParams {
+                    k: 8,
+                    selection: Selection::Contribution,
+                    can_illuminate: true,
+                    feeler: Feeler::Bvh,
+                    model: LightModel::Physical,
+                    point: Point::Centroid,
+                },
                 max_segment_area: 0.05,
             },
         };
         if let Some(v) = decl.param("k") {
-            c.setup.k = v.as_integer().filter(|k| (1..=MAX_K).contains(k)).ok_or_else(|| params.error("k", &format!("an integer from 1 to {MAX_K}"), v))? as usize;
+            c.setup.k = v
+                .as_integer()
+                .filter(|k| (1..=MAX_K).contains(k))
+                .ok_or_else(|| params.error("k", &format!("an integer from 1 to {MAX_K}"), v))?
+                as usize;
         }
-        if let Some(s) = params.get_choice("selection", &[("closest", Selection::Closest), ("contribution", Selection::Contribution)])? {
+        if let Some(s) = params.get_choice(
+            "selection",
+            &[
+                ("closest", Selection::Closest),
+                ("contribution", Selection::Contribution),
+            ],
+        )? {
             c.setup.selection = s;
         }
         if let Some(v) = decl.param("can_illuminate") {
-            c.setup.can_illuminate = v.as_bool().ok_or_else(|| params.error("can_illuminate", "true or false", v))?;
+            c.setup.can_illuminate = v
+                .as_bool()
+                .ok_or_else(|| params.error("can_illuminate", "true or false", v))?;
         }
-        if let Some(f) = params.get_choice("feeler", &[("thesis", Feeler::Thesis), ("bvh", Feeler::Bvh), ("none", Feeler::None)])? {
+        if let Some(f) = params.get_choice(
+            "feeler",
+            &[("thesis", Feeler::Thesis), ("bvh", Feeler::Bvh), ("none", Feeler::None)],
+        )? {
             c.setup.feeler = f;
         }
         if let Some(p) = params.get_choice("point", &[("centroid", Point::Centroid), ("vertex", Point::Vertex)])? {
             c.setup.point = p;
         }
         if let Some(v) = decl.param("max_segment_area") {
-            c.max_segment_area =
-                Params::float(v).filter(|a| a.is_finite() && (1e-6..=1e4).contains(a)).ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 (world units²)", v))?;
+            c.max_segment_area = Params::float(v)
+                .filter(|a| a.is_finite() && (1e-6..=1e4).contains(a))
+                .ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 (world units²)", v))?;
         }
         let number = |p: &str, default: f64| -> Result<f64> {
             match decl.param(p) {
                 None => Ok(default),
-                Some(v) => Params::float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| params.error(p, "a number ≥ 0", v)),
+                Some(v) => Params::float(v)
+                    .filter(|x| x.is_finite() && *x >= 0.0)
+                    .ok_or_else(|| params.error(p, "a number ≥ 0", v)),
             }
         };
         if let Some(m) = params.get_choice("model", &[("physical", 0u8), ("seed", 1), ("opengl", 2)])? {
             c.setup.model = match m {
                 0 => LightModel::Physical,
                 1 => LightModel::Seed { k: 1.0 },
-                _ => LightModel::OpenGl { kc: 1.0, kl: 0.0, kq: 1.0 },
+                _ => LightModel::OpenGl {
+                    kc: 1.0,
+                    kl: 0.0,
+                    kq: 1.0,
+                },
             };
         }
         c.setup.model = match c.setup.model {
             LightModel::Physical => LightModel::Physical,
-            LightModel::Seed { k } => LightModel::Seed { k: number("seed_k", k)? },
+            LightModel::Seed { k } => LightModel::Seed {
+                k: number("seed_k", k)?,
+            },
             LightModel::OpenGl { kc, kl, kq } => {
                 let (kc, kl, kq) = (number("kc", kc)?, number("kl", kl)?, number("kq", kq)?);
                 if kc + kl + kq <= 0.0 {
                     let v = decl.param("kc").cloned().unwrap_or(toml::Value::Float(kc));
-                    return Err(params.error("kc", "kc, kl and kq not all zero (the attenuation would divide by zero)", &v));
+                    return Err(params.error(
+                        "kc",
+                        "kc, kl and kq not all zero (the attenuation would divide by zero)",
+                        &v,
+                    ));
                 }
                 LightModel::OpenGl { kc, kl, kq }
             }
@@ -152,7 +232,11 @@ impl Config {
     pub fn label(&self) -> String {
         let s = &self.setup;
         let point = if s.point == Point::Vertex { " per-vertex" } else { "" };
-        format!("vls {:?} k={} {:?} feeler={:?} area={}{point}", self.mode, s.k, s.selection, s.feeler, self.max_segment_area).to_lowercase()
+        format!(
+            "vls {:?} k={} {:?} feeler={:?} area={}{point}",
+            self.mode, s.k, s.selection, s.feeler, self.max_segment_area
+        )
+        .to_lowercase()
     }
 }
 
@@ -200,19 +284,46 @@ pub struct Layout {
 
 impl Layout {
     /// `geometry` is the scene's static geometry (`static_geometry` or `scene_geometry`).
-    pub fn new(scene: &Scene, geometry: &crate::lightmap::geometry::StaticGeometry, decl: &MethodDecl, config: &Config) -> Result<Layout> {
+    pub fn new(
+        scene: &Scene,
+        geometry: &crate::lightmap::geometry::StaticGeometry,
+        decl: &MethodDecl,
+        config: &Config,
+    ) -> Result<Layout> {
         let lights = ManyLight::from_scene(scene, NAME)?;
         let polygons = scene_polygons(&scene.source, geometry, NAME)?;
-        let segments = Segments::build(polygons.iter().map(|p| &p.polygon), config.max_segment_area).map_err(|why| {
-            let v = decl.param("max_segment_area").cloned().unwrap_or(toml::Value::Float(config.max_segment_area));
-            Params::new(decl, Some(scene)).error("max_segment_area", &format!("an area giving fewer segments ({why})"), &v)
-        })?;
-        Ok(Layout { polygons, segments, lights })
+        let segments =
+            Segments::build(polygons.iter().map(|p| &p.polygon), config.max_segment_area).map_err(|why| {
+                let v = decl
+                    .param("max_segment_area")
+                    .cloned()
+                    .unwrap_or(toml::Value::Float(config.max_segment_area));
+                Params::new(decl, Some(scene)).error(
+                    "max_segment_area",
+                    &format!("an area giving fewer segments ({why})"),
+                    &v,
+                )
+            })?;
+        Ok(Layout {
+            polygons,
+            segments,
+            lights,
+        })
     }
 
     /// Everything the light sets depend on.
     pub fn key(&self, config: &Config) -> BakeKey {
-        let geometry: Vec<f64> = self.polygons.iter().flat_map(|p| p.polygon.vertices.iter().flat_map(|v| v.to_array()).chain(p.albedo.to_array())).collect();
+        let geometry: Vec<f64> = self
+            .polygons
+            .iter()
+            .flat_map(|p| {
+                p.polygon
+                    .vertices
+                    .iter()
+                    .flat_map(|v| v.to_array())
+                    .chain(p.albedo.to_array())
+            })
+            .collect();
         BakeKey::new("vls light sets")
             .with("version", SETUP_VERSION)
             .with("setup", config.setup)
@@ -224,7 +335,14 @@ impl Layout {
     /// The light sets (the bake's work).
     pub fn select(&self, setup: &SetupParams, progress: &mut crate::bake::Progress) -> LightSets {
         let occluders = (setup.feeler == Feeler::Bvh).then(|| Occluders::new(self.polygons.iter().map(|p| &p.polygon)));
-        setup::select(&self.polygons, &self.segments, &self.lights, setup, occluders.as_ref(), progress)
+        setup::select(
+            &self.polygons,
+            &self.segments,
+            &self.lights,
+            setup,
+            occluders.as_ref(),
+            progress,
+        )
     }
 }
 
@@ -261,29 +379,68 @@ impl Vls {
         let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         let layout = Layout::new(cx.scene, &geometry, decl, &config)?;
         let key = layout.key(&config);
-        let sets = cx.bakes.bake(&config.label(), &key, |progress| Ok(layout.select(&config.setup, progress)))?;
+        let sets = cx.bakes.bake(&config.label(), &key, |progress| {
+            Ok(layout.select(&config.setup, progress))
+        })?;
         let count = setup::points(&layout.segments, config.setup.point).len();
         if sets.k != config.setup.k || sets.segments() != count {
-            return Err(Error::Usage(format!("{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} points)", cx.scene.source, sets.segments(), sets.k)));
+            return Err(Error::Usage(format!(
+                "{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} points)",
+                cx.scene.source,
+                sets.segments(),
+                sets.k
+            )));
         }
         let vertices = segment_vertices(&layout, config.setup.point);
         let vertex_count = vertices.len() as u32;
-        let vertex_bytes: &[u8] = if vertices.is_empty() { &[0u8; std::mem::size_of::<SegmentVertex>()] } else { bytemuck::cast_slice(&vertices) };
-        let vertices = cx.gpu.create_buffer_init("vls segments", vk::BufferUsageFlags::VERTEX_BUFFER, vertex_bytes)?;
+        let vertex_bytes: &[u8] = if vertices.is_empty() {
+            &[0u8; std::mem::size_of::<SegmentVertex>()]
+        } else {
+            bytemuck::cast_slice(&vertices)
+        };
+        let vertices = cx
+            .gpu
+            .create_buffer_init("vls segments", vk::BufferUsageFlags::VERTEX_BUFFER, vertex_bytes)?;
         cx.states.forget_buffer(vertices);
-        let set_bytes: &[u8] = if sets.indices.is_empty() { &[0xffu8; 4] } else { bytemuck::cast_slice(&sets.indices) };
-        let sets_buffer = cx.gpu.create_buffer_init("vls light sets", vk::BufferUsageFlags::STORAGE_BUFFER, set_bytes)?;
+        let set_bytes: &[u8] = if sets.indices.is_empty() {
+            &[0xffu8; 4]
+        } else {
+            bytemuck::cast_slice(&sets.indices)
+        };
+        let sets_buffer =
+            cx.gpu
+                .create_buffer_init("vls light sets", vk::BufferUsageFlags::STORAGE_BUFFER, set_bytes)?;
         cx.states.forget_buffer(sets_buffer);
         let ds_format = cx.gpu.caps().depth_stencil_format;
         let mut pipeline = |terms: Terms| {
-            let attr = |location, format, offset| VertexAttribute { location, binding: 0, format, offset };
-            let mut desc = term_pipeline_desc(&format!("vls {terms}"), "vls/vls.vert", "vls/vls.frag", terms, ds_format);
+            let attr = |location, format, offset| VertexAttribute {
+                location,
+                binding: 0,
+                format,
+                offset,
+            };
+            let mut desc = term_pipeline_desc(
+                &format!("vls {terms}"),
+                "vls/vls.vert",
+                "vls/vls.frag",
+                terms,
+                ds_format,
+            );
             let f3 = vk::Format::R32G32B32_SFLOAT;
             desc.vertex_layout = VertexLayout {
                 buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)],
-                attributes: vec![attr(0, f3, 0), attr(1, f3, 12), attr(2, f3, 24), attr(3, f3, 36), attr(4, vk::Format::R32_UINT, 48)],
+                attributes: vec![
+                    attr(0, f3, 0),
+                    attr(1, f3, 12),
+                    attr(2, f3, 24),
+                    attr(3, f3, 36),
+                    attr(4, vk::Format::R32_UINT, 48),
+                ],
             };
-            desc.specialization.push(SpecConstant { id: 1, bits: u32::from(config.setup.point == Point::Vertex) });
+            desc.specialization.push(SpecConstant {
+                id: 1,
+                bits: u32::from(config.setup.point == Point::Vertex),
+            });
             if !terms.has(Term::Base) {
                 // Over another method's base, whose triangles are not these segments: a pull
                 // towards the eye lets the segments pass the base's equal depth.
@@ -291,9 +448,22 @@ impl Vls {
             }
             cx.gpu.create_graphics_pipeline(&desc, cx.shaders)
         };
-        let pipelines = [pipeline(Terms::BASE_DIRECT)?, pipeline(Terms::BASE)?, pipeline(Terms::DIRECT)?];
-        let params = ShaderParams { info: [config.setup.model.code(), config.setup.k as u32, 0, 0], constants: config.setup.model.constants() };
-        Ok(Vls { pipelines, vertices, vertex_count, sets: sets_buffer, params })
+        let pipelines = [
+            pipeline(Terms::BASE_DIRECT)?,
+            pipeline(Terms::BASE)?,
+            pipeline(Terms::DIRECT)?,
+        ];
+        let params = ShaderParams {
+            info: [config.setup.model.code(), config.setup.k as u32, 0, 0],
+            constants: config.setup.model.constants(),
+        };
+        Ok(Vls {
+            pipelines,
+            vertices,
+            vertex_count,
+            sets: sets_buffer,
+            params,
+        })
     }
 }
 
@@ -307,7 +477,13 @@ fn segment_vertices(layout: &Layout, point: Point) -> Vec<SegmentVertex> {
         let p = &layout.polygons[s.triangle_polygon[t] as usize];
         for &i in tri {
             let set = if point == Point::Vertex { i } else { t as u32 };
-            out.push(SegmentVertex { position: f(s.positions[i as usize]), normal: f(p.polygon.plane.normal), albedo: f(p.albedo), emission: f(p.emission), segment: set });
+            out.push(SegmentVertex {
+                position: f(s.positions[i as usize]),
+                normal: f(p.polygon.plane.normal),
+                albedo: f(p.albedo),
+                emission: f(p.emission),
+                segment: set,
+            });
         }
     }
     out
@@ -328,23 +504,47 @@ impl LightingMethod for Vls {
             (false, true) => self.pipelines[2],
             (false, false) => return Ok(()),
         };
-        let mut pass = graph.pass(if base { "vls" } else { "vls direct" }).color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base { pass.depth_stencil_write(t.depth_stencil, false) } else { pass.depth_stencil_read(t.depth_stencil) };
+        let mut pass = graph.pass(if base { "vls" } else { "vls direct" }).color_attachment(
+            t.radiance,
+            SubresourceRange::mip(0),
+            false,
+        );
+        pass = if base {
+            pass.depth_stencil_write(t.depth_stencil, false)
+        } else {
+            pass.depth_stencil_read(t.depth_stencil)
+        };
         let vertex_count = self.vertex_count;
         let params = self.params;
-        pass.buffer(self.vertices, Access::VertexRead, None).buffer(self.sets, Access::StorageRead { stages }, Some("sets")).record(move |ctx| {
-            let depth = RenderTarget { read_only: !base, ..RenderTarget::load(t.depth_stencil) };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc { colors: vec![RenderTarget::load(t.radiance)], depth_stencil: Some(depth) })?;
-            ctx.rec.bind_pipeline(pipeline)?;
-            let lights: &[u8] = if scene.lights.is_empty() { &[0u8; 64] } else { bytemuck::cast_slice(&scene.lights) };
-            ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))), ("lights", Bind::StorageData(lights)), ("params", Bind::UniformData(bytemuck::bytes_of(&params)))])?;
-            if vertex_count > 0 {
-                ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
-                ctx.rec.draw(vertex_count, 1)?;
-            }
-            ctx.rec.end_rendering();
-            Ok(())
-        });
+        pass.buffer(self.vertices, Access::VertexRead, None)
+            .buffer(self.sets, Access::StorageRead { stages }, Some("sets"))
+            .record(move |ctx| {
+                let depth = RenderTarget {
+                    read_only: !base,
+                    ..RenderTarget::load(t.depth_stencil)
+                };
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(t.radiance)],
+                    depth_stencil: Some(depth),
+                })?;
+                ctx.rec.bind_pipeline(pipeline)?;
+                let lights: &[u8] = if scene.lights.is_empty() {
+                    &[0u8; 64]
+                } else {
+                    bytemuck::cast_slice(&scene.lights)
+                };
+                ctx.bind(&[
+                    ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
+                    ("lights", Bind::StorageData(lights)),
+                    ("params", Bind::UniformData(bytemuck::bytes_of(&params))),
+                ])?;
+                if vertex_count > 0 {
+                    ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
+                    ctx.rec.draw(vertex_count, 1)?;
+                }
+                ctx.rec.end_rendering();
+                Ok(())
+            });
         Ok(())
     }
 }

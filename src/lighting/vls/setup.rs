@@ -73,19 +73,28 @@ impl LightSets {
 
     /// The lights of segment `s`, in the order they were chosen.
     pub fn of(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
-        self.indices[s * self.k..(s + 1) * self.k].iter().take_while(|&&i| i != EMPTY).map(|&i| i as usize)
+        self.indices[s * self.k..(s + 1) * self.k]
+            .iter()
+            .take_while(|&&i| i != EMPTY)
+            .map(|&i| i as usize)
     }
 }
 
 impl BakeData for LightSets {
     fn encode(&self) -> Vec<u8> {
-        std::iter::once(self.k as u32).chain(self.indices.iter().copied()).flat_map(u32::to_le_bytes).collect()
+        std::iter::once(self.k as u32)
+            .chain(self.indices.iter().copied())
+            .flat_map(u32::to_le_bytes)
+            .collect()
     }
     fn decode(bytes: &[u8]) -> Option<Self> {
         if !bytes.len().is_multiple_of(4) || bytes.len() < 4 {
             return None;
         }
-        let words: Vec<u32> = bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let words: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
         let k = words[0] as usize;
         let indices = words[1..].to_vec();
         (k > 0 && indices.len().is_multiple_of(k)).then_some(LightSets { k, indices })
@@ -116,7 +125,9 @@ impl<'a> ThesisFeeler<'a> {
             if i == own || own_plane.is_some_and(|o| o.coplanar_facing(&q.polygon.plane).is_some()) {
                 continue;
             }
-            let Some(hit) = segment_plane(p, light, &q.polygon.plane) else { continue };
+            let Some(hit) = segment_plane(p, light, &q.polygon.plane) else {
+                continue;
+            };
             let t = (hit - p).length();
             if t < END_CLEARANCE || t > len - END_CLEARANCE {
                 continue;
@@ -132,8 +143,24 @@ impl<'a> ThesisFeeler<'a> {
 /// The points the set-up chooses lights for, as (point, its polygon's normal, its polygon).
 pub fn points(segments: &Segments, point: Point) -> Vec<(DVec3, DVec3, usize)> {
     match point {
-        Point::Centroid => (0..segments.triangles.len()).map(|t| (segments.centroid(t), segments.normals[segments.triangles[t][0] as usize], segments.triangle_polygon[t] as usize)).collect(),
-        Point::Vertex => (0..segments.positions.len()).map(|i| (segments.positions[i], segments.normals[i], segments.vertex_polygon[i] as usize)).collect(),
+        Point::Centroid => (0..segments.triangles.len())
+            .map(|t| {
+                (
+                    segments.centroid(t),
+                    segments.normals[segments.triangles[t][0] as usize],
+                    segments.triangle_polygon[t] as usize,
+                )
+            })
+            .collect(),
+        Point::Vertex => (0..segments.positions.len())
+            .map(|i| {
+                (
+                    segments.positions[i],
+                    segments.normals[i],
+                    segments.vertex_polygon[i] as usize,
+                )
+            })
+            .collect(),
     }
 }
 
@@ -155,20 +182,31 @@ pub fn can_illuminate(light: &ManyLight, p: DVec3, n: DVec3) -> bool {
 
 /// Luminance-weighted potential contribution of `light` at full intensity (unit albedo).
 pub fn potential(model: &LightModel, light: &ManyLight, p: DVec3, n: DVec3) -> f64 {
-    light.shade(model, p, n, DVec3::ONE).dot(DVec3::new(0.2126, 0.7152, 0.0722))
+    light
+        .shade(model, p, n, DVec3::ONE)
+        .dot(DVec3::new(0.2126, 0.7152, 0.0722))
 }
 
 /// The light sets of every segment (or segment vertex, per `params.point`). `polygons` are the
 /// scene polygons the segments were built from (`segments.triangle_polygon` indexes them);
 /// `occluders` is used by the BVH feeler.
-pub fn select(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLight], params: &SetupParams, occluders: Option<&Occluders>, progress: &mut Progress) -> LightSets {
+pub fn select(
+    polygons: &[ScenePolygon],
+    segments: &Segments,
+    lights: &[ManyLight],
+    params: &SetupParams,
+    occluders: Option<&Occluders>,
+    progress: &mut Progress,
+) -> LightSets {
     let points = points(segments, params.point);
     let count = points.len();
     let k = params.k.max(1);
     let mut indices = vec![EMPTY; count * k];
     let thesis = ThesisFeeler::new(polygons);
     let done = AtomicU64::new(0);
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(count.max(1));
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(count.max(1));
     let chunk = count.div_ceil(threads).max(1);
     std::thread::scope(|scope| {
         let mut handles = Vec::new();
@@ -202,10 +240,27 @@ pub fn select(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLigh
 }
 
 /// The ≤ k lights one point keeps, in the order of preference, feelers cast only until k pass.
-pub fn choose(lights: &[ManyLight], params: &SetupParams, p: DVec3, n: DVec3, k: usize, blocked: impl Fn(&ManyLight) -> bool) -> Vec<usize> {
+pub fn choose(
+    lights: &[ManyLight],
+    params: &SetupParams,
+    p: DVec3,
+    n: DVec3,
+    k: usize,
+    blocked: impl Fn(&ManyLight) -> bool,
+) -> Vec<usize> {
     let mut order: Vec<(f64, usize)> = match params.selection {
-        Selection::Closest => lights.iter().enumerate().filter(|(_, l)| !params.can_illuminate || can_illuminate(l, p, n)).map(|(i, l)| (l.position.distance(p), i)).collect(),
-        Selection::Contribution => lights.iter().enumerate().map(|(i, l)| (-potential(&params.model, l, p, n), i)).filter(|&(c, _)| c < 0.0).collect(),
+        Selection::Closest => lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| !params.can_illuminate || can_illuminate(l, p, n))
+            .map(|(i, l)| (l.position.distance(p), i))
+            .collect(),
+        Selection::Contribution => lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (-potential(&params.model, l, p, n), i))
+            .filter(|&(c, _)| c < 0.0)
+            .collect(),
     };
     // Ties by index: the same scene always gives the same sets.
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));

@@ -20,7 +20,10 @@ fn v(x: f64, y: f64, z: f64) -> DVec3 {
 struct Lcg(u64);
 impl Lcg {
     fn f(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
@@ -31,17 +34,44 @@ impl Lcg {
 /// A horizontal square (facing +z) of side `side` centred at (cx, cy, z), as two triangles.
 fn square(cx: f64, cy: f64, z: f64, side: f64) -> Vec<ScenePolygon> {
     let h = side / 2.0;
-    let (a, b, c, d) = (v(cx - h, cy - h, z), v(cx + h, cy - h, z), v(cx + h, cy + h, z), v(cx - h, cy + h, z));
-    [vec![a, b, c], vec![a, c, d]].into_iter().map(|p| ScenePolygon { polygon: Polygon::from_vertices(p).unwrap(), albedo: DVec3::splat(0.5), emission: DVec3::ZERO, draw: 0 }).collect()
+    let (a, b, c, d) = (
+        v(cx - h, cy - h, z),
+        v(cx + h, cy - h, z),
+        v(cx + h, cy + h, z),
+        v(cx - h, cy + h, z),
+    );
+    [vec![a, b, c], vec![a, c, d]]
+        .into_iter()
+        .map(|p| ScenePolygon {
+            polygon: Polygon::from_vertices(p).unwrap(),
+            albedo: DVec3::splat(0.5),
+            emission: DVec3::ZERO,
+            draw: 0,
+        })
+        .collect()
 }
 
 fn params(k: usize, selection: Selection, feeler: Feeler, model: LightModel) -> SetupParams {
-    SetupParams { k, selection, can_illuminate: false, feeler, model, point: Point::Centroid }
+    SetupParams {
+        k,
+        selection,
+        can_illuminate: false,
+        feeler,
+        model,
+        point: Point::Centroid,
+    }
 }
 
 fn sets(polygons: &[ScenePolygon], segments: &Segments, lights: &[ManyLight], p: &SetupParams) -> LightSets {
     let occluders = Occluders::new(polygons.iter().map(|q| &q.polygon));
-    setup::select(polygons, segments, lights, p, Some(&occluders), &mut Progress::new("test"))
+    setup::select(
+        polygons,
+        segments,
+        lights,
+        p,
+        Some(&occluders),
+        &mut Progress::new("test"),
+    )
 }
 
 fn segments(polygons: &[ScenePolygon], max_area: f64) -> Segments {
@@ -50,10 +80,19 @@ fn segments(polygons: &[ScenePolygon], max_area: f64) -> Segments {
 
 /// Σ over `lights` (in index order, so two sums over the same lights are bit-identical) of
 /// intensity × full-intensity shade.
-fn sum(model: &LightModel, lights: &[ManyLight], which: impl Iterator<Item = usize>, scale: &[f64], p: DVec3, n: DVec3) -> DVec3 {
+fn sum(
+    model: &LightModel,
+    lights: &[ManyLight],
+    which: impl Iterator<Item = usize>,
+    scale: &[f64],
+    p: DVec3,
+    n: DVec3,
+) -> DVec3 {
     let mut w: Vec<usize> = which.collect();
     w.sort_unstable();
-    w.iter().map(|&i| lights[i].shade(model, p, n, DVec3::splat(0.5)) * scale[i]).fold(DVec3::ZERO, |a, b| a + b)
+    w.iter()
+        .map(|&i| lights[i].shade(model, p, n, DVec3::splat(0.5)) * scale[i])
+        .fold(DVec3::ZERO, |a, b| a + b)
 }
 
 /// Three spots and two points over a floor with a square occluder above it.
@@ -68,7 +107,12 @@ fn small_scene() -> (Vec<ScenePolygon>, Vec<ManyLight>) {
         intensity: DVec3::new(i, 0.8 * i, 0.6 * i),
         cone: Some((25f64.to_radians(), 40f64.to_radians())),
     };
-    let point = |p: DVec3, i: f64| ManyLight { position: p, direction: -DVec3::Z, intensity: DVec3::splat(i), cone: None };
+    let point = |p: DVec3, i: f64| ManyLight {
+        position: p,
+        direction: -DVec3::Z,
+        intensity: DVec3::splat(i),
+        cone: None,
+    };
     let lights = vec![
         spot(v(0.3, 0.2, 3.0), v(0.0, 0.0, 0.0), 10.0),
         spot(v(-1.5, 1.0, 2.5), v(0.5, -0.5, 0.0), 7.0),
@@ -88,27 +132,58 @@ fn with_at_most_k_lights_vls_is_the_full_sum() {
     let ones = vec![1.0; lights.len()];
     let occluders = Occluders::new(polygons.iter().map(|q| &q.polygon));
     let mut shadowed = 0;
-    for model in [LightModel::Physical, LightModel::Seed { k: 1.0 }, LightModel::OpenGl { kc: 1.0, kl: 0.2, kq: 0.5 }] {
+    for model in [
+        LightModel::Physical,
+        LightModel::Seed { k: 1.0 },
+        LightModel::OpenGl {
+            kc: 1.0,
+            kl: 0.2,
+            kq: 0.5,
+        },
+    ] {
         for selection in [Selection::Closest, Selection::Contribution] {
-            for (feeler, point) in [(Feeler::Thesis, Point::Centroid), (Feeler::Bvh, Point::Centroid), (Feeler::Bvh, Point::Vertex)] {
-                let p = SetupParams { point, ..params(8, selection, feeler, model) };
+            for (feeler, point) in [
+                (Feeler::Thesis, Point::Centroid),
+                (Feeler::Bvh, Point::Centroid),
+                (Feeler::Bvh, Point::Vertex),
+            ] {
+                let p = SetupParams {
+                    point,
+                    ..params(8, selection, feeler, model)
+                };
                 let s = sets(&polygons, &segs, &lights, &p);
                 for (t, &(c, n, _)) in setup::points(&segs, point).iter().enumerate() {
-                    let unblocked: Vec<usize> = (0..lights.len()).filter(|&i| !occluders.blocked(c, lights[i].position)).collect();
+                    let unblocked: Vec<usize> = (0..lights.len())
+                        .filter(|&i| !occluders.blocked(c, lights[i].position))
+                        .collect();
                     shadowed += lights.len() - unblocked.len();
                     let full = sum(&model, &lights, unblocked.into_iter(), &ones, c, n);
                     let vls = sum(&model, &lights, s.of(t), &ones, c, n);
-                    assert_eq!(vls, full, "{point:?} {t} ({selection:?}, {feeler:?}, {model:?}): {:?}", s.of(t).collect::<Vec<_>>());
+                    assert_eq!(
+                        vls,
+                        full,
+                        "{point:?} {t} ({selection:?}, {feeler:?}, {model:?}): {:?}",
+                        s.of(t).collect::<Vec<_>>()
+                    );
                 }
             }
         }
     }
-    assert!(shadowed > 0, "the occluder must shadow some segments for the test to mean anything");
+    assert!(
+        shadowed > 0,
+        "the occluder must shadow some segments for the test to mean anything"
+    );
 }
 
 /// Digest §3.3 item 8's layout: 100 (or 25) spots on a grid over a 10 m floor aimed down with
 /// ±0.3 jitter, random intensities in U(0, 1), no occluders.
-fn theatre(lights_side: usize, height: f64, full_deg: f64, null_deg: f64, seed: u64) -> (Vec<ScenePolygon>, Vec<ManyLight>, Vec<f64>) {
+fn theatre(
+    lights_side: usize,
+    height: f64,
+    full_deg: f64,
+    null_deg: f64,
+    seed: u64,
+) -> (Vec<ScenePolygon>, Vec<ManyLight>, Vec<f64>) {
     let mut r = Lcg(seed);
     let mut lights = Vec::new();
     let cell = 10.0 / lights_side as f64;
@@ -116,7 +191,12 @@ fn theatre(lights_side: usize, height: f64, full_deg: f64, null_deg: f64, seed: 
         for i in 0..lights_side {
             let p = v(-5.0 + cell * (i as f64 + 0.5), -5.0 + cell * (j as f64 + 0.5), height);
             let d = v(r.range(-0.3, 0.3), r.range(-0.3, 0.3), -1.0).normalize();
-            lights.push(ManyLight { position: p, direction: d, intensity: DVec3::ONE, cone: Some((full_deg.to_radians(), null_deg.to_radians())) });
+            lights.push(ManyLight {
+                position: p,
+                direction: d,
+                intensity: DVec3::ONE,
+                cone: Some((full_deg.to_radians(), null_deg.to_radians())),
+            });
         }
     }
     let intensities = (0..lights.len()).map(|_| r.f()).collect();
@@ -133,7 +213,13 @@ struct ErrorStats {
     energy_ratio: f64,
 }
 
-fn error_stats(polygons: &[ScenePolygon], segs: &Segments, lights: &[ManyLight], intensities: &[f64], p: &SetupParams) -> ErrorStats {
+fn error_stats(
+    polygons: &[ScenePolygon],
+    segs: &Segments,
+    lights: &[ManyLight],
+    intensities: &[f64],
+    p: &SetupParams,
+) -> ErrorStats {
     let s = sets(polygons, segs, lights, p);
     let (mut errors, mut e_all, mut e_vls) = (Vec::new(), 0.0, 0.0);
     for t in 0..segs.triangles.len() {
@@ -162,18 +248,45 @@ fn error_stats(polygons: &[ScenePolygon], segs: &Segments, lights: &[ManyLight],
 /// under 25 sparse ones (0.029); ranking by potential contribution loses less in both.
 #[test]
 fn many_lights_error_closest_against_contribution() {
-    for (side, height, full, null, want_closest) in [(10, 4.0, 20.0, 30.0, (0.2, 0.5)), (5, 3.0, 30.0, 45.0, (0.0, 0.08))] {
+    for (side, height, full, null, want_closest) in
+        [(10, 4.0, 20.0, 30.0, (0.2, 0.5)), (5, 3.0, 30.0, 45.0, (0.0, 0.08))]
+    {
         let (polygons, lights, intensities) = theatre(side, height, full, null, 3);
         let segs = segments(&polygons, 0.02);
         let model = LightModel::Seed { k: 1.0 };
-        let closest = error_stats(&polygons, &segs, &lights, &intensities, &params(8, Selection::Closest, Feeler::None, model));
-        let contribution = error_stats(&polygons, &segs, &lights, &intensities, &params(8, Selection::Contribution, Feeler::None, model));
+        let closest = error_stats(
+            &polygons,
+            &segs,
+            &lights,
+            &intensities,
+            &params(8, Selection::Closest, Feeler::None, model),
+        );
+        let contribution = error_stats(
+            &polygons,
+            &segs,
+            &lights,
+            &intensities,
+            &params(8, Selection::Contribution, Feeler::None, model),
+        );
         println!("{} lights, {} segments, 1/d, {full}°/{null}° at {height} m:\n  closest      {closest:.3?}\n  contribution {contribution:.3?}", lights.len(), segs.triangles.len());
-        assert!(closest.mean > want_closest.0 && closest.mean < want_closest.1, "closest mean {} outside the digest's ballpark {want_closest:?}", closest.mean);
-        assert!(contribution.mean < closest.mean && contribution.energy_ratio > closest.energy_ratio, "contribution should lose less: {contribution:?} vs {closest:?}");
-        assert!(contribution.over_5_percent < closest.over_5_percent && contribution.p95 < closest.p95, "{contribution:?} vs {closest:?}");
+        assert!(
+            closest.mean > want_closest.0 && closest.mean < want_closest.1,
+            "closest mean {} outside the digest's ballpark {want_closest:?}",
+            closest.mean
+        );
+        assert!(
+            contribution.mean < closest.mean && contribution.energy_ratio > closest.energy_ratio,
+            "contribution should lose less: {contribution:?} vs {closest:?}"
+        );
+        assert!(
+            contribution.over_5_percent < closest.over_5_percent && contribution.p95 < closest.p95,
+            "{contribution:?} vs {closest:?}"
+        );
         for e in [&closest, &contribution] {
-            assert!(e.energy_ratio < 1.0 + 1e-12 && e.max <= 1.0 && e.p95 >= e.mean * 0.5, "dropped lights can only remove light: {e:?}");
+            assert!(
+                e.energy_ratio < 1.0 + 1e-12 && e.max <= 1.0 && e.p95 >= e.mean * 0.5,
+                "dropped lights can only remove light: {e:?}"
+            );
         }
     }
 }
@@ -200,7 +313,9 @@ fn clipped_area(poly: &[DVec3], (x0, x1, y0, y1): (f64, f64, f64, f64)) -> f64 {
             return 0.0;
         }
     }
-    (1..pts.len().saturating_sub(1)).map(|k| 0.5 * (pts[k] - pts[0]).cross(pts[k + 1] - pts[0]).z).sum()
+    (1..pts.len().saturating_sub(1))
+        .map(|k| 0.5 * (pts[k] - pts[0]).cross(pts[k + 1] - pts[0]).z)
+        .sum()
 }
 
 /// Item 16: a 1 m square at z = 1 over a floor, a light at (0.3, 0.2, 3) (and five more near it,
@@ -212,7 +327,9 @@ fn clipped_area(poly: &[DVec3], (x0, x1, y0, y1): (f64, f64, f64, f64)) -> f64 {
 fn feeler_misclassification_falls_linearly_with_segment_edge() {
     let mut polygons = square(0.0, 0.0, 0.0, 4.0);
     polygons.extend(square(0.0, 0.0, 1.0, 1.0));
-    let lights: Vec<DVec3> = (0..6).map(|j| v(0.3 + 0.137 * j as f64, 0.2 - 0.093 * j as f64, 3.0)).collect();
+    let lights: Vec<DVec3> = (0..6)
+        .map(|j| v(0.3 + 0.137 * j as f64, 0.2 - 0.093 * j as f64, 3.0))
+        .collect();
     // Central projection from z = 3 through z = 1 onto z = 0: x → 1.5·x − 0.5·L.x.
     let shadow = |l: DVec3| (-0.75 - 0.5 * l.x, 0.75 - 0.5 * l.x, -0.75 - 0.5 * l.y, 0.75 - 0.5 * l.y);
     let shadow_area = 1.5 * 1.5 * lights.len() as f64;
@@ -232,12 +349,19 @@ fn feeler_misclassification_falls_linearly_with_segment_edge() {
                 wrong += if by_thesis { area - inside } else { inside };
             }
         }
-        println!("segment legs {:.4} m: misclassified {:.3} % of the shadows' area", 4.0 / 2f64.powi(depth), 100.0 * wrong / shadow_area);
+        println!(
+            "segment legs {:.4} m: misclassified {:.3} % of the shadows' area",
+            4.0 / 2f64.powi(depth),
+            100.0 * wrong / shadow_area
+        );
         fractions.push(wrong / shadow_area);
     }
     for w in fractions.windows(2) {
         let ratio = w[0] / w[1];
-        assert!((1.6..=2.5).contains(&ratio), "misclassification should halve with the edge: {fractions:?}");
+        assert!(
+            (1.6..=2.5).contains(&ratio),
+            "misclassification should halve with the edge: {fractions:?}"
+        );
     }
 }
 
@@ -248,7 +372,12 @@ fn thesis_feeler_equals_the_bvh_feeler() {
     let mut polygons = polygons;
     // A slanted occluder too, so not every plane is axis-aligned.
     let slanted = Polygon::from_vertices(vec![v(-1.5, 0.5, 0.6), v(-0.5, 0.7, 1.4), v(-0.7, 1.6, 1.2)]).unwrap();
-    polygons.push(ScenePolygon { polygon: slanted, albedo: DVec3::splat(0.5), emission: DVec3::ZERO, draw: 0 });
+    polygons.push(ScenePolygon {
+        polygon: slanted,
+        albedo: DVec3::splat(0.5),
+        emission: DVec3::ZERO,
+        draw: 0,
+    });
     let segs = segments(&polygons, 0.05);
     let thesis = ThesisFeeler::new(&polygons);
     let occluders = Occluders::new(polygons.iter().map(|q| &q.polygon));
@@ -276,7 +405,12 @@ fn seams_show_where_neighbouring_light_sets_differ() {
     let segs = segments(&polygons, 0.08);
     let model = LightModel::Seed { k: 1.0 };
     let seam = |k: usize| -> (f64, usize) {
-        let s = sets(&polygons, &segs, &lights, &params(k, Selection::Closest, Feeler::None, model));
+        let s = sets(
+            &polygons,
+            &segs,
+            &lights,
+            &params(k, Selection::Closest, Feeler::None, model),
+        );
         let mut by_vertex: Vec<Vec<usize>> = vec![Vec::new(); segs.positions.len()];
         for (t, tri) in segs.triangles.iter().enumerate() {
             for &i in tri {
@@ -285,7 +419,10 @@ fn seams_show_where_neighbouring_light_sets_differ() {
         }
         let (mut worst, mut seams) = (0.0f64, 0);
         for (vi, ts) in by_vertex.iter().enumerate() {
-            let colours: Vec<f64> = ts.iter().map(|&t| sum(&model, &lights, s.of(t), &intensities, segs.positions[vi], DVec3::Z).x).collect();
+            let colours: Vec<f64> = ts
+                .iter()
+                .map(|&t| sum(&model, &lights, s.of(t), &intensities, segs.positions[vi], DVec3::Z).x)
+                .collect();
             let differ = ts.windows(2).any(|w| {
                 let (mut a, mut b): (Vec<usize>, Vec<usize>) = (s.of(w[0]).collect(), s.of(w[1]).collect());
                 a.sort_unstable();
@@ -294,7 +431,9 @@ fn seams_show_where_neighbouring_light_sets_differ() {
             });
             if differ {
                 seams += 1;
-                let (lo, hi) = colours.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+                let (lo, hi) = colours
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(lo, hi), &c| (lo.min(c), hi.max(c)));
                 worst = worst.max(hi - lo);
             }
         }
@@ -303,7 +442,10 @@ fn seams_show_where_neighbouring_light_sets_differ() {
     let (vls, seams) = seam(8);
     let (full, full_seams) = seam(lights.len());
     println!("seam metric: VLS k=8 {vls:.4} over {seams} vertices; k = all {full} over {full_seams}");
-    assert!(seams > 0 && vls > 0.01, "VLS should show seams: {vls} at {seams} vertices");
+    assert!(
+        seams > 0 && vls > 0.01,
+        "VLS should show seams: {vls} at {seams} vertices"
+    );
     assert_eq!((full, full_seams), (0.0, 0));
 }
 
@@ -316,10 +458,19 @@ fn light_sets_do_not_depend_on_intensities() {
     let segs = segments(&polygons, 0.05);
     let mut r = Lcg(9);
     for can in [false, true] {
-        let p = SetupParams { can_illuminate: can, ..params(3, Selection::Closest, Feeler::Bvh, LightModel::Physical) };
+        let p = SetupParams {
+            can_illuminate: can,
+            ..params(3, Selection::Closest, Feeler::Bvh, LightModel::Physical)
+        };
         let base = sets(&polygons, &segs, &lights, &p);
         for _ in 0..5 {
-            let dimmed: Vec<ManyLight> = lights.iter().map(|l| ManyLight { intensity: l.intensity * r.range(0.0, 1.0), ..*l }).collect();
+            let dimmed: Vec<ManyLight> = lights
+                .iter()
+                .map(|l| ManyLight {
+                    intensity: l.intensity * r.range(0.0, 1.0),
+                    ..*l
+                })
+                .collect();
             assert_eq!(sets(&polygons, &segs, &dimmed, &p), base);
         }
     }
@@ -330,9 +481,24 @@ fn light_sets_do_not_depend_on_intensities() {
 #[test]
 fn can_illuminate_skips_lights_that_cannot_reach() {
     let p = v(0.0, 0.0, 0.0);
-    let below = ManyLight { position: v(0.0, 0.0, -0.5), direction: DVec3::Z, intensity: DVec3::ONE, cone: None };
-    let away = ManyLight { position: v(0.0, 0.0, 0.6), direction: DVec3::Z, intensity: DVec3::ONE, cone: Some((0.3, 0.5)) };
-    let good = ManyLight { position: v(0.0, 0.0, 3.0), direction: -DVec3::Z, intensity: DVec3::ONE, cone: Some((0.3, 0.5)) };
+    let below = ManyLight {
+        position: v(0.0, 0.0, -0.5),
+        direction: DVec3::Z,
+        intensity: DVec3::ONE,
+        cone: None,
+    };
+    let away = ManyLight {
+        position: v(0.0, 0.0, 0.6),
+        direction: DVec3::Z,
+        intensity: DVec3::ONE,
+        cone: Some((0.3, 0.5)),
+    };
+    let good = ManyLight {
+        position: v(0.0, 0.0, 3.0),
+        direction: -DVec3::Z,
+        intensity: DVec3::ONE,
+        cone: Some((0.3, 0.5)),
+    };
     let lights = [below, away, good];
     let mut sp = params(1, Selection::Closest, Feeler::None, LightModel::Physical);
     assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false), vec![0]);
@@ -372,7 +538,12 @@ outer_deg = 30
 "#;
 
 fn scene(method: &str) -> Scene {
-    Scene::from_str(&SCENE.replace("METHOD", method), "scenes/vls_test.toml", std::path::Path::new("scenes")).unwrap_or_else(|e| panic!("{e}"))
+    Scene::from_str(
+        &SCENE.replace("METHOD", method),
+        "scenes/vls_test.toml",
+        std::path::Path::new("scenes"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Bad parameters: one line naming the scene file and the parameter.
@@ -391,20 +562,33 @@ fn bad_parameters_name_the_file_and_the_parameter() {
         let s = scene(decl);
         let e = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap_err().to_string();
         println!("{e}");
-        assert!(e.contains("scenes/vls_test.toml") && e.contains(&format!("methods[0].{param}")) && !e.contains('\n'), "{decl}: {e}");
+        assert!(
+            e.contains("scenes/vls_test.toml") && e.contains(&format!("methods[0].{param}")) && !e.contains('\n'),
+            "{decl}: {e}"
+        );
     }
     // Too fine a segmentation for the scene is refused by the same parameter, at creation.
     let s = scene(r#"{ name = "vls", max_segment_area = 1e-6 }"#);
     let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
     let geometry = crate::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
-    let e = Layout::new(&s, &geometry, &s.methods[0], &config).err().expect("too many segments").to_string();
-    assert!(e.contains("scenes/vls_test.toml") && e.contains("methods[0].max_segment_area") && !e.contains('\n'), "{e}");
+    let e = Layout::new(&s, &geometry, &s.methods[0], &config)
+        .err()
+        .expect("too many segments")
+        .to_string();
+    assert!(
+        e.contains("scenes/vls_test.toml") && e.contains("methods[0].max_segment_area") && !e.contains('\n'),
+        "{e}"
+    );
     // A directional light is not one of seed 003's lights.
-    let text = SCENE.replace("METHOD", r#""vls""#) + "\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1.0\n";
+    let text = SCENE.replace("METHOD", r#""vls""#)
+        + "\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1.0\n";
     let s = Scene::from_str(&text, "scenes/vls_test.toml", std::path::Path::new("scenes")).unwrap();
     let config = Config::from_decl(&s.methods[0]).unwrap();
     let geometry = crate::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
-    let e = Layout::new(&s, &geometry, &s.methods[0], &config).err().expect("a directional light").to_string();
+    let e = Layout::new(&s, &geometry, &s.methods[0], &config)
+        .err()
+        .expect("a directional light")
+        .to_string();
     assert!(e.contains("scenes/vls_test.toml") && e.contains("lights[1]"), "{e}");
 }
 
@@ -419,13 +603,23 @@ fn the_setup_is_a_cached_bake() {
     let dir = std::env::temp_dir().join(format!("penumbra-vls-bake-{}", std::process::id()));
     let mut baker = Baker::new(Some(dir.clone()));
     let key = layout.key(&config);
-    let a = baker.bake("vls", &key, |p| Ok(layout.select(&config.setup, p))).unwrap();
-    let b = baker.bake("vls", &key, |_| panic!("should come from the cache")).unwrap();
+    let a = baker
+        .bake("vls", &key, |p| Ok(layout.select(&config.setup, p)))
+        .unwrap();
+    let b = baker
+        .bake("vls", &key, |_| panic!("should come from the cache"))
+        .unwrap();
     assert_eq!(a, b);
     assert_eq!(a.segments(), layout.segments.triangles.len());
     assert!(a.indices.contains(&0) && a.indices.contains(&EMPTY));
-    assert_eq!(baker.reports().iter().map(|r| r.cached).collect::<Vec<_>>(), vec![false, true]);
-    let other = Config { setup: SetupParams { k: 4, ..config.setup }, ..config };
+    assert_eq!(
+        baker.reports().iter().map(|r| r.cached).collect::<Vec<_>>(),
+        vec![false, true]
+    );
+    let other = Config {
+        setup: SetupParams { k: 4, ..config.setup },
+        ..config
+    };
     assert_ne!(layout.key(&other).hash(), key.hash());
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -433,10 +627,25 @@ fn the_setup_is_a_cached_bake() {
 /// The chart's sweep covers K, both selections, three segment sizes and the faithful mode.
 #[test]
 fn the_sweep_covers_k_selection_and_area() {
-    let decl = MethodDecl { name: "vls".into(), line: 1, params: Vec::new() };
+    let decl = MethodDecl {
+        name: "vls".into(),
+        line: 1,
+        params: Vec::new(),
+    };
     let labels: Vec<String> = super::sweep(&decl).into_iter().map(|(l, _)| l).collect();
-    for want in ["k=1 ", "k=32 ", "closest", "contribution", "area=0.2", "area=0.0125", "faithful"] {
-        assert!(labels.iter().any(|l| l.contains(want)), "{want} missing from {labels:?}");
+    for want in [
+        "k=1 ",
+        "k=32 ",
+        "closest",
+        "contribution",
+        "area=0.2",
+        "area=0.0125",
+        "faithful",
+    ] {
+        assert!(
+            labels.iter().any(|l| l.contains(want)),
+            "{want} missing from {labels:?}"
+        );
     }
 }
 
@@ -445,8 +654,18 @@ fn the_sweep_covers_k_selection_and_area() {
 #[test]
 #[ignore]
 fn setup_time() {
-    println!("{:>8} {:>7} {:>9} {:>8} {:>12} {:>10}", "segments", "lights", "polygons", "feeler", "S·L·P", "ms");
-    for (area, side, occluders) in [(0.08, 5, 8), (0.02, 5, 8), (0.02, 10, 8), (0.02, 10, 32), (0.02, 10, 128), (0.005, 10, 32)] {
+    println!(
+        "{:>8} {:>7} {:>9} {:>8} {:>12} {:>10}",
+        "segments", "lights", "polygons", "feeler", "S·L·P", "ms"
+    );
+    for (area, side, occluders) in [
+        (0.08, 5, 8),
+        (0.02, 5, 8),
+        (0.02, 10, 8),
+        (0.02, 10, 32),
+        (0.02, 10, 128),
+        (0.005, 10, 32),
+    ] {
         let (mut polygons, lights, _) = theatre(side, 4.0, 20.0, 30.0, 3);
         let mut r = Lcg(1);
         for _ in 0..occluders / 2 {
@@ -459,7 +678,15 @@ fn setup_time() {
             let _ = sets(&polygons, &segs, &lights, &p);
             let ms = start.elapsed().as_secs_f64() * 1e3;
             let work = segs.triangles.len() * lights.len() * polygons.len();
-            println!("{:>8} {:>7} {:>9} {:>8} {:>12} {:>10.1}", segs.triangles.len(), lights.len(), polygons.len(), format!("{feeler:?}"), work, ms);
+            println!(
+                "{:>8} {:>7} {:>9} {:>8} {:>12} {:>10.1}",
+                segs.triangles.len(),
+                lights.len(),
+                polygons.len(),
+                format!("{feeler:?}"),
+                work,
+                ms
+            );
         }
     }
 }

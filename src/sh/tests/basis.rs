@@ -53,7 +53,12 @@ fn seed000_5_1_y00_and_band1_constants_with_condon_shortley_signs() {
 #[test]
 fn seed000_5_1_scale_factors_and_recurrence_match_textbook_definition() {
     // seed 000 §5.1 test 1: K_l^0 and √2·K_l^m for l ≤ 3, as the factor in front of P_l^m·trig.
-    let table: [&[f64]; 4] = [&[0.282095], &[0.488603, 0.488603], &[0.630783, 0.364183, 0.182091], &[0.746353, 0.304697, 0.096354, 0.039336]];
+    let table: [&[f64]; 4] = [
+        &[0.282095],
+        &[0.488603, 0.488603],
+        &[0.630783, 0.364183, 0.182091],
+        &[0.746353, 0.304697, 0.096354, 0.039336],
+    ];
     let fact = |n: usize| (1..=n).map(|k| k as f64).product::<f64>();
     for (l, row) in table.iter().enumerate() {
         for (m, expected) in row.iter().enumerate() {
@@ -122,7 +127,10 @@ fn seed001_a1_orthonormality_gram_matrix() {
             }
         }
     }
-    let err = (0..n).flat_map(|i| (i..n).map(move |j| (i, j))).map(|(i, j)| (g[i * n + j] - if i == j { 1.0 } else { 0.0 }).abs()).fold(0.0, f64::max);
+    let err = (0..n)
+        .flat_map(|i| (i..n).map(move |j| (i, j)))
+        .map(|(i, j)| (g[i * n + j] - if i == j { 1.0 } else { 0.0 }).abs())
+        .fold(0.0, f64::max);
     assert!(err < 1e-12, "f64 Gram error {err:e}");
 
     // The f32 path (what the GPU and `eval_basis` give), 8 bands: 1e−5.
@@ -138,7 +146,9 @@ fn seed001_a1_orthonormality_gram_matrix() {
             }
         }
     }
-    let err = (0..n * n).map(|k| (g[k] - if k / n == k % n { 1.0 } else { 0.0 }).abs()).fold(0.0, f64::max);
+    let err = (0..n * n)
+        .map(|k| (g[k] - if k / n == k % n { 1.0 } else { 0.0 }).abs())
+        .fold(0.0, f64::max);
     assert!(err < 1e-5, "f32 Gram error {err:e}");
 }
 
@@ -153,7 +163,11 @@ fn directions_are_normalised_and_degenerate_ones_are_plus_z() {
     }
     // At the pole only m = 0 survives: y_l0(+z) = √((2l+1)/4π).
     for l in 0..5 {
-        close(z[l * (l + 1)] as f64, ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt(), 1e-6);
+        close(
+            z[l * (l + 1)] as f64,
+            ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt(),
+            1e-6,
+        );
     }
     assert_eq!(z.iter().filter(|v| **v != 0.0).count(), 5);
 }
@@ -163,7 +177,14 @@ fn bad_band_counts_and_lengths_are_errors() {
     let mut out = [0.0f32; 16];
     assert_eq!(eval_basis(Vec3::Z, 0, &mut out), Err(ShError::Bands(0)));
     assert_eq!(eval_basis(Vec3::Z, 17, &mut out), Err(ShError::Bands(17)));
-    assert!(matches!(eval_basis(Vec3::Z, 5, &mut out), Err(ShError::Length { expected: 25, got: 16, .. })));
+    assert!(matches!(
+        eval_basis(Vec3::Z, 5, &mut out),
+        Err(ShError::Length {
+            expected: 25,
+            got: 16,
+            ..
+        })
+    ));
     assert!(eval(&[1.0f32; 5], Vec3::Z).is_err());
     assert!(dot(&[1.0f32; 4], &[1.0f32; 3]).is_err());
     assert_eq!(bands_of_len(257), Err(ShError::NotBands(257)));

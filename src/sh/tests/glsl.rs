@@ -16,12 +16,25 @@ fn constants() -> HashMap<String, Vec<f64>> {
     text = text.replace(",\n", ", ");
     for line in text.lines() {
         let line = line.trim();
-        let Some(rest) = line.strip_prefix("const float ").or_else(|| line.strip_prefix("const int ")) else { continue };
-        let Some((name, value)) = rest.split_once('=') else { continue };
+        let Some(rest) = line
+            .strip_prefix("const float ")
+            .or_else(|| line.strip_prefix("const int "))
+        else {
+            continue;
+        };
+        let Some((name, value)) = rest.split_once('=') else {
+            continue;
+        };
         let name = name.trim().split('[').next().unwrap_or_default().to_string();
         let value = value.split(';').next().unwrap_or_default();
-        let value = value.rsplit_once('(').map(|(_, v)| v.trim_end().trim_end_matches(')')).unwrap_or(value);
-        let nums: Vec<f64> = value.split(',').map(|v| v.trim().parse().unwrap_or_else(|_| panic!("{name}: {v}"))).collect();
+        let value = value
+            .rsplit_once('(')
+            .map(|(_, v)| v.trim_end().trim_end_matches(')'))
+            .unwrap_or(value);
+        let nums: Vec<f64> = value
+            .split(',')
+            .map(|v| v.trim().parse().unwrap_or_else(|_| panic!("{name}: {v}")))
+            .collect();
         out.insert(name, nums);
     }
     out
@@ -60,7 +73,12 @@ fn glsl_constants_match_the_cpu_values() {
     // Cap factors: sh_cap_zh4 at cos α = 0.3 equals cap_zh (s² = 0.91).
     let ck = &c["SH_CAP_K"];
     let (cc, s2) = (0.3, 0.91);
-    let glsl = [ck[0] * (1.0 - cc), ck[1] * s2, ck[2] * cc * s2, ck[3] * s2 * (5.0 * cc * cc - 1.0)];
+    let glsl = [
+        ck[0] * (1.0 - cc),
+        ck[1] * s2,
+        ck[2] * cc * s2,
+        ck[3] * s2 * (5.0 * cc * cc - 1.0),
+    ];
     assert!(max_diff(&glsl, &cap_zh(0.3f64.acos(), 4).unwrap()) < 1e-15);
 }
 
@@ -92,7 +110,12 @@ fn glsl_texel_solid_angle_formulas_are_exact_in_float() {
     // The four-term atan formula in f32 loses ~1% at 1024² (why the GLSL does not use it).
     let a = |u: f32, v: f32| (u * v).atan2((u * u + v * v + 1.0).sqrt());
     let (n, x, y) = (1024.0f32, 1000.0f32, 1000.0f32);
-    let (x0, x1, y0, y1) = (2.0 * x / n - 1.0, 2.0 * (x + 1.0) / n - 1.0, 2.0 * y / n - 1.0, 2.0 * (y + 1.0) / n - 1.0);
+    let (x0, x1, y0, y1) = (
+        2.0 * x / n - 1.0,
+        2.0 * (x + 1.0) / n - 1.0,
+        2.0 * y / n - 1.0,
+        2.0 * (y + 1.0) / n - 1.0,
+    );
     let naive = (a(x0, y0) - a(x0, y1) - a(x1, y0) + a(x1, y1)) as f64;
     let exact = cube_texel_solid_angle(1000, 1000, 1024);
     assert!((naive - exact).abs() / exact > 1e-3);

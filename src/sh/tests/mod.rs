@@ -47,7 +47,12 @@ impl Rng {
     }
     /// A random rotation (uniform unit quaternion).
     pub fn rotation(&mut self) -> Mat3 {
-        let q = Quat::from_xyzw(self.signed() as f32, self.signed() as f32, self.signed() as f32, self.signed() as f32);
+        let q = Quat::from_xyzw(
+            self.signed() as f32,
+            self.signed() as f32,
+            self.signed() as f32,
+            self.signed() as f32,
+        );
         Mat3::from_quat(q.normalize())
     }
 }
@@ -61,7 +66,11 @@ pub(super) fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 /// Asserts |actual − expected| ≤ tol with a readable message.
 #[track_caller]
 pub(super) fn close(actual: f64, expected: f64, tol: f64) {
-    assert!((actual - expected).abs() <= tol, "got {actual}, expected {expected} ± {tol} (diff {:e})", (actual - expected).abs());
+    assert!(
+        (actual - expected).abs() <= tol,
+        "got {actual}, expected {expected} ± {tol} (diff {:e})",
+        (actual - expected).abs()
+    );
 }
 
 /// The exact projection rule for products up to total degree `degree`, f64.
@@ -73,5 +82,6 @@ pub(super) fn exact_rule(degree: usize) -> super::Quadrature {
 /// reference for rotations.
 pub(super) fn reproject_rotated(c: &[f64], r: glam::DMat3, bands: usize) -> Vec<f64> {
     let q = exact_rule(2 * bands);
-    q.project_scalar(|d| super::eval_f64(c, r.transpose() * d).expect("valid"), bands).expect("valid")
+    q.project_scalar(|d| super::eval_f64(c, r.transpose() * d).expect("valid"), bands)
+        .expect("valid")
 }

@@ -66,7 +66,9 @@ fn product_equals_projection_of_the_pointwise_product() {
     let (a, b) = (rng.coeffs(4), rng.coeffs(4));
     // a·b is band-limited to 7 bands: the 7-band product is exact, its first 16 are the truncation.
     let full = product(&a, &b, 7).unwrap();
-    let brute = exact_rule(18).project_scalar(|d| eval_f64(&a, d).unwrap() * eval_f64(&b, d).unwrap(), 7).unwrap();
+    let brute = exact_rule(18)
+        .project_scalar(|d| eval_f64(&a, d).unwrap() * eval_f64(&b, d).unwrap(), 7)
+        .unwrap();
     assert!(max_diff(&full, &brute) < 1e-12, "{}", max_diff(&full, &brute));
     let truncated = product(&a, &b, 4).unwrap();
     assert!(max_diff(&truncated, &full[..16]) < 1e-15);
@@ -74,7 +76,11 @@ fn product_equals_projection_of_the_pointwise_product() {
     let c = rng.coeffs(3);
     let p = product(&a, &c, 6).unwrap();
     let d = rng.dir();
-    close(eval_f64(&p, d).unwrap(), eval_f64(&a, d).unwrap() * eval_f64(&c, d).unwrap(), 1e-12);
+    close(
+        eval_f64(&p, d).unwrap(),
+        eval_f64(&a, d).unwrap() * eval_f64(&c, d).unwrap(),
+        1e-12,
+    );
     // RGB • scalar.
     let rgb: Vec<Vec3> = a.iter().map(|v| Vec3::new(*v as f32, 0.0, -*v as f32)).collect();
     let prgb = product(&rgb, &c, 4).unwrap();
@@ -127,7 +133,14 @@ fn seed001_d1_overhead_sphere_light_sh_over_exact() {
     let v = zh_rotate(&hemisphere_zh(4).unwrap(), Vec3::Z).unwrap();
     let c = zh_rotate(&clamped_cosine_zh(4).unwrap(), Vec3::Z).unwrap();
     let t = product(&v, &c, 4).unwrap();
-    for (deg, ratio) in [(1.0f64, 1.053), (10.0, 1.051), (30.0, 1.031), (45.0, 1.008), (60.0, 0.985), (80.0, 0.978)] {
+    for (deg, ratio) in [
+        (1.0f64, 1.053),
+        (10.0, 1.051),
+        (30.0, 1.031),
+        (45.0, 1.008),
+        (60.0, 0.985),
+        (80.0, 0.978),
+    ] {
         let th = deg.to_radians();
         let l = zh_rotate(&cap_zh(th, 4).unwrap(), Vec3::Z).unwrap();
         close(dot(&l, &t).unwrap() / (PI * th.sin().powi(2)), ratio, 6e-4);
@@ -165,7 +178,11 @@ fn gpu_product_term_list_applies_like_the_tensor() {
         let (a, b) = (rng.coeffs(bands), rng.coeffs(bands));
         let mut c = vec![0.0; bands * bands];
         for [packed, bits] in &terms {
-            let (i, j, k) = ((packed & 0xff) as usize, ((packed >> 8) & 0xff) as usize, (packed >> 16) as usize);
+            let (i, j, k) = (
+                (packed & 0xff) as usize,
+                ((packed >> 8) & 0xff) as usize,
+                (packed >> 16) as usize,
+            );
             c[k] += f32::from_bits(*bits) as f64 * a[i] * b[j];
         }
         assert!(max_diff(&c, &product(&a, &b, bands).unwrap()) < 1e-6 * bands as f64);

@@ -20,7 +20,11 @@ fn gauss_legendre_is_exact_to_degree_2n_minus_1() {
 
 #[test]
 fn zone_rules_sum_to_the_zone_solid_angle() {
-    close(Quadrature::sphere(7, 13).unwrap().weights().iter().sum(), 4.0 * PI, 1e-12);
+    close(
+        Quadrature::sphere(7, 13).unwrap().weights().iter().sum(),
+        4.0 * PI,
+        1e-12,
+    );
     let hemi = Quadrature::zone(0.0, 1.0, 6, 9).unwrap();
     close(hemi.weights().iter().sum(), 2.0 * PI, 1e-12);
     // ∫_{upper hemisphere} z² dω = 2π/3, exact on the zone rule.
@@ -46,11 +50,17 @@ fn closure_projection_recovers_a_band_limited_function() {
     let c = exact_rule(14).project_scalar(|d| eval_f64(&f, d).unwrap(), 8).unwrap();
     assert!(max_diff(&c, &f) < 1e-12);
     // The f32 RGB front end with its default rule.
-    let rgb = project(|d| Vec3::splat(eval_f64(&f, d.as_dvec3()).unwrap() as f32) * Vec3::new(1.0, -2.0, 0.5), 8).unwrap();
+    let rgb = project(
+        |d| Vec3::splat(eval_f64(&f, d.as_dvec3()).unwrap() as f32) * Vec3::new(1.0, -2.0, 0.5),
+        8,
+    )
+    .unwrap();
     let r: Vec<f64> = rgb.iter().map(|v| v.y as f64 / -2.0).collect();
     assert!(max_diff(&r, &f) < 2e-5);
     // Linearity (seed 000 §5.1 test 6): proj(2f + 1) = 2 proj(f) + proj(1).
-    let lin = exact_rule(14).project_scalar(|d| 2.0 * eval_f64(&f, d).unwrap() + 1.0, 8).unwrap();
+    let lin = exact_rule(14)
+        .project_scalar(|d| 2.0 * eval_f64(&f, d).unwrap() + 1.0, 8)
+        .unwrap();
     for (i, v) in lin.iter().enumerate() {
         close(*v, 2.0 * f[i] + if i == 0 { CONSTANT_ONE_C00 } else { 0.0 }, 1e-12);
     }
@@ -68,7 +78,11 @@ fn equirect_texels_follow_penumbra_mapping_and_exact_solid_angles() {
     assert!(d.x > 0.99, "{d}");
     assert!(equirect_texel_dir_world(0, 0, w, h).y > 0.99);
     // Row y = 0 spans θ ∈ [0, π/h]: Ω = (2π/w)(1 − cos(π/h)).
-    close(equirect_texel_solid_angle(0, w, h), 2.0 * PI / w as f64 * (1.0 - (PI / h as f64).cos()), 1e-15);
+    close(
+        equirect_texel_solid_angle(0, w, h),
+        2.0 * PI / w as f64 * (1.0 - (PI / h as f64).cos()),
+        1e-15,
+    );
 }
 
 /// A random 8-band function sampled per texel into RGB (r = f, g = 2f, b = 0).
@@ -117,7 +131,11 @@ fn cube_texels_follow_the_vulkan_face_table_and_sum_to_4pi() {
     assert!(c.x < -0.9 && c.y > 0.9);
     // Small texel: Ω ≈ area·cos/r² = (2/n)²/r³ at its centre.
     let d = cube_texel_dir_world(0, 3, 11, 256).as_dvec3();
-    close(cube_texel_solid_angle(3, 11, 256), (2.0 / 256.0f64).powi(2) / d.length().powi(3), 1e-9);
+    close(
+        cube_texel_solid_angle(3, 11, 256),
+        (2.0 / 256.0f64).powi(2) / d.length().powi(3),
+        1e-9,
+    );
 }
 
 #[test]
@@ -125,7 +143,10 @@ fn cubemap_round_trip_recovers_coefficients_to_1e3() {
     let mut rng = Rng::new(9);
     let f = rng.coeffs(8);
     let n = 64;
-    let px = sample(&f, (0..6 * n * n).map(|i| cube_texel_dir_world(i / (n * n), i % n, (i % (n * n)) / n, n)));
+    let px = sample(
+        &f,
+        (0..6 * n * n).map(|i| cube_texel_dir_world(i / (n * n), i % n, (i % (n * n)) / n, n)),
+    );
     let c = project_cubemap(&px, n, 8).unwrap();
     let r: Vec<f64> = c.iter().map(|v| v.x as f64).collect();
     assert!(max_diff(&r, &f) < 1e-3, "{}", max_diff(&r, &f));

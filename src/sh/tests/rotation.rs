@@ -21,7 +21,11 @@ fn z_rotation_matches_brute_force_reprojection() {
     // A lobe at +x rotated by +90° points at +y (counter-clockwise seen from +z).
     let mut lobe = zh_rotate(&clamped_cosine_zh(3).unwrap(), Vec3::X).unwrap();
     rotate_z(&mut lobe, PI / 2.0).unwrap();
-    close(eval_f64(&lobe, DVec3::Y).unwrap(), eval_zonal(&clamped_cosine_zh(3).unwrap(), 1.0), 1e-12);
+    close(
+        eval_f64(&lobe, DVec3::Y).unwrap(),
+        eval_zonal(&clamped_cosine_zh(3).unwrap(), 1.0),
+        1e-12,
+    );
 }
 
 #[test]
@@ -71,7 +75,11 @@ fn general_rotation_preserves_band_energy_and_inverse_undoes_it() {
     let rot = ShRotation::new(r, MAX_BANDS).unwrap();
     let g = rot.rotate(&f).unwrap();
     for l in 0..MAX_BANDS {
-        close(band_energy(&g, l), band_energy(&f, l), 1e-10 * band_energy(&f, l).max(1.0));
+        close(
+            band_energy(&g, l),
+            band_energy(&f, l),
+            1e-10 * band_energy(&f, l).max(1.0),
+        );
     }
     let back = ShRotation::new(r.transpose(), MAX_BANDS).unwrap().rotate(&g).unwrap();
     assert!(max_diff(&back, &f) < 1e-6, "{}", max_diff(&back, &f)); // f32 input matrix
@@ -86,7 +94,10 @@ fn general_rotation_preserves_band_energy_and_inverse_undoes_it() {
     }
     // Composition: rot(R2)·rot(R1) = rot(R2 R1).
     let r2 = rng.rotation();
-    let two = ShRotation::new(r2, 6).unwrap().rotate(&ShRotation::new(r, 6).unwrap().rotate(&f[..36]).unwrap()).unwrap();
+    let two = ShRotation::new(r2, 6)
+        .unwrap()
+        .rotate(&ShRotation::new(r, 6).unwrap().rotate(&f[..36]).unwrap())
+        .unwrap();
     let one = ShRotation::new(r2 * r, 6).unwrap().rotate(&f[..36]).unwrap();
     assert!(max_diff(&two, &one) < 1e-5);
 }
@@ -97,7 +108,10 @@ fn z_rotation_equals_general_rotation_about_z() {
     let f = rng.coeffs(8);
     let mut z = f.clone();
     rotate_z(&mut z, 2.3).unwrap();
-    let g = ShRotation::new(Mat3::from_rotation_z(2.3), 8).unwrap().rotate(&f).unwrap();
+    let g = ShRotation::new(Mat3::from_rotation_z(2.3), 8)
+        .unwrap()
+        .rotate(&f)
+        .unwrap();
     assert!(max_diff(&z, &g) < 1e-6, "{}", max_diff(&z, &g));
 }
 
@@ -139,14 +153,27 @@ fn world_rotations_move_world_lobes_where_expected() {
     let rotated = ShRotation::from_world(rw, 4).unwrap().rotate(&lobe).unwrap();
     let expected = zh_rotate(&zh, world_to_sh(rw * Vec3::X)).unwrap();
     assert!(max_diff(&rotated, &expected) < 1e-6);
-    close(eval_f64(&rotated, world_to_sh(Vec3::NEG_Z).as_dvec3()).unwrap(), eval_zonal(&zh, 1.0), 1e-6);
+    close(
+        eval_f64(&rotated, world_to_sh(Vec3::NEG_Z).as_dvec3()).unwrap(),
+        eval_zonal(&zh, 1.0),
+        1e-6,
+    );
 }
 
 #[test]
 fn non_rotations_are_rejected() {
-    assert!(matches!(ShRotation::new(Mat3::from_diagonal(Vec3::splat(2.0)), 4), Err(ShError::NotRotation { .. })));
-    assert!(matches!(ShRotation::new(Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0)), 4), Err(ShError::NotRotation { .. })));
-    assert!(matches!(ShRotation::new(Mat3::from_diagonal(Vec3::new(f32::NAN, 1.0, 1.0)), 4), Err(ShError::NonFinite(_))));
+    assert!(matches!(
+        ShRotation::new(Mat3::from_diagonal(Vec3::splat(2.0)), 4),
+        Err(ShError::NotRotation { .. })
+    ));
+    assert!(matches!(
+        ShRotation::new(Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0)), 4),
+        Err(ShError::NotRotation { .. })
+    ));
+    assert!(matches!(
+        ShRotation::new(Mat3::from_diagonal(Vec3::new(f32::NAN, 1.0, 1.0)), 4),
+        Err(ShError::NonFinite(_))
+    ));
     let rot = ShRotation::new(Mat3::IDENTITY, 3).unwrap();
     assert!(rot.rotate(&[0.0f32; 16]).is_err()); // more bands than the rotation has
     assert!(rot.apply(&[0.0f32; 4], &mut [0.0f32; 9]).is_err());

@@ -5,14 +5,29 @@ use crate::sh::*;
 use std::f64::consts::PI;
 
 fn windowed_cosine(bands: usize, window: &[f64]) -> Vec<f64> {
-    clamped_cosine_zh(bands).unwrap().iter().zip(window).map(|(z, w)| z * w).collect()
+    clamped_cosine_zh(bands)
+        .unwrap()
+        .iter()
+        .zip(window)
+        .map(|(z, w)| z * w)
+        .collect()
 }
 
 #[test]
 fn window_formulas() {
     // Hanning (1 + cos(πl/w))/2 and Lanczos sin(πl/w)/(πl/w), w = 4.
     let h = hanning(4, 4.0).unwrap();
-    assert!(max_diff(&h, &[1.0, 0.5 * (1.0 + (PI / 4.0).cos()), 0.5, 0.5 * (1.0 + (3.0 * PI / 4.0).cos())]) < 1e-15);
+    assert!(
+        max_diff(
+            &h,
+            &[
+                1.0,
+                0.5 * (1.0 + (PI / 4.0).cos()),
+                0.5,
+                0.5 * (1.0 + (3.0 * PI / 4.0).cos())
+            ]
+        ) < 1e-15
+    );
     close(h[1], 0.853553, 1e-6);
     let l = lanczos(4, 4.0).unwrap();
     assert!(max_diff(&l, &[1.0, 0.900316, std::f64::consts::FRAC_2_PI, 0.300105]) < 1e-6);
@@ -35,7 +50,12 @@ fn seed000_5_2_d_unwindowed_clamped_cosine_minima() {
 #[test]
 fn windowed_clamped_cosine_negative_lobe_bound() {
     // The table in window.rs: (bands, Hanning min, Lanczos min) at w = bands.
-    for (bands, hann, lanc) in [(3, -0.0469, -0.0343), (4, -0.0224, -0.0192), (6, -0.0119, -0.0107), (8, -0.0081, -0.0072)] {
+    for (bands, hann, lanc) in [
+        (3, -0.0469, -0.0343),
+        (4, -0.0224, -0.0192),
+        (6, -0.0119, -0.0107),
+        (8, -0.0081, -0.0072),
+    ] {
         let h = windowed_cosine(bands, &hanning(bands, bands as f64).unwrap());
         let l = windowed_cosine(bands, &lanczos(bands, bands as f64).unwrap());
         let (mh, ml) = (zonal_minimum(&h, 20001).1, zonal_minimum(&l, 20001).1);
@@ -54,8 +74,16 @@ fn windowed_clamped_cosine_negative_lobe_bound() {
     close(eval_zonal(&h, 1.0), 0.5, 1e-15);
     assert!(zonal_minimum(&windowed_cosine(4, &hanning(4, 2.05).unwrap()), 20001).1 < -1e-4);
     // Peak at 4 bands: 0.833 Hanning, 0.899 Lanczos (vs 1.0625 unwindowed).
-    close(eval_zonal(&windowed_cosine(4, &hanning(4, 4.0).unwrap()), 1.0), 0.8330, 1e-4);
-    close(eval_zonal(&windowed_cosine(4, &lanczos(4, 4.0).unwrap()), 1.0), 0.8991, 1e-4);
+    close(
+        eval_zonal(&windowed_cosine(4, &hanning(4, 4.0).unwrap()), 1.0),
+        0.8330,
+        1e-4,
+    );
+    close(
+        eval_zonal(&windowed_cosine(4, &lanczos(4, 4.0).unwrap()), 1.0),
+        0.8991,
+        1e-4,
+    );
 }
 
 #[test]

@@ -20,10 +20,17 @@ fn seed000_5_1_clamped_cosine_zh_l0_to_l7() {
     // [0, 1] and the sphere-zone rule projecting max(z, 0) (both exact: polynomials on [0, 1]).
     let zz = clamped_cosine_zh(16).unwrap();
     assert!(max_diff(&zz, &project_zonal(|x| x, 16, 0.0, 1.0, 16).unwrap()) < 1e-13);
-    let full = Quadrature::zone(0.0, 1.0, 16, 33).unwrap().project_scalar(|d| d.z, 16).unwrap();
+    let full = Quadrature::zone(0.0, 1.0, 16, 33)
+        .unwrap()
+        .project_scalar(|d| d.z, 16)
+        .unwrap();
     let m0: Vec<f64> = (0..16).map(|l| full[l * (l + 1)]).collect();
     assert!(max_diff(&zz, &m0) < 1e-13);
-    assert!(full.iter().enumerate().filter(|(i, _)| band_of(*i).1 != 0).all(|(_, v)| v.abs() < 1e-13));
+    assert!(full
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| band_of(*i).1 != 0)
+        .all(|(_, v)| v.abs() < 1e-13));
 }
 
 #[test]
@@ -59,7 +66,11 @@ fn seed000_5_2_d_directional_light_golden_values() {
         }
     }
     // n = 3 equals n = 4 (the l = 3 coefficient is 0).
-    close(eval_zonal(&clamped_cosine_zh(3).unwrap(), 0.5), eval_zonal(&clamped_cosine_zh(4).unwrap(), 0.5), 1e-15);
+    close(
+        eval_zonal(&clamped_cosine_zh(3).unwrap(), 0.5),
+        eval_zonal(&clamped_cosine_zh(4).unwrap(), 0.5),
+        1e-15,
+    );
 }
 
 #[test]
@@ -75,7 +86,12 @@ fn seed001_a6_cap_zh_table() {
         assert!(max_diff(&cap_zh(theta, 4).unwrap(), &row) < 1e-6, "θ = {theta}");
         // Seed 001 Appendix A.1 forms (digest §1.8).
         let (c, s) = (theta.cos(), theta.sin());
-        let appendix = [PI.sqrt() * (1.0 - c), (3.0 * PI).sqrt() / 2.0 * s * s, (5.0 * PI).sqrt() / 2.0 * c * s * s, (7.0 * PI).sqrt() / 8.0 * s * s * (5.0 * c * c - 1.0)];
+        let appendix = [
+            PI.sqrt() * (1.0 - c),
+            (3.0 * PI).sqrt() / 2.0 * s * s,
+            (5.0 * PI).sqrt() / 2.0 * c * s * s,
+            (7.0 * PI).sqrt() / 8.0 * s * s * (5.0 * c * c - 1.0),
+        ];
         assert!(max_diff(&cap_zh(theta, 4).unwrap(), &appendix) < 1e-14);
     }
 }
@@ -85,7 +101,10 @@ fn cap_closed_form_matches_numerical_integration_to_16_bands() {
     for alpha in [0.05, 0.4, 1.3, 2.2, 3.0] {
         let closed = cap_zh(alpha, 16).unwrap();
         // Exact zone rule over the cap (indicator = 1 there).
-        let zone = Quadrature::zone(alpha.cos(), 1.0, 12, 33).unwrap().project_scalar(|_| 1.0, 16).unwrap();
+        let zone = Quadrature::zone(alpha.cos(), 1.0, 12, 33)
+            .unwrap()
+            .project_scalar(|_| 1.0, 16)
+            .unwrap();
         let m0: Vec<f64> = (0..16).map(|l| zone[l * (l + 1)]).collect();
         assert!(max_diff(&closed, &m0) < 1e-13, "α = {alpha}");
         // And a crude independent check: midpoint rule in θ with the indicator on the whole sphere.
@@ -113,7 +132,11 @@ fn cap_of_90_degrees_is_the_hemisphere_and_c00_gives_the_solid_angle() {
     assert!(max_diff(&hemi, &expected) < 1e-6, "{hemi:?}");
     for alpha in [0.0, 0.3, 1.0, PI / 2.0, 2.5, PI] {
         // ∫ cap = z_0 ∫ y00 = z_0·4π·Y00: the solid angle 2π(1 − cos α).
-        close(cap_zh(alpha, 4).unwrap()[0] * 4.0 * PI * Y00, 2.0 * PI * (1.0 - alpha.cos()), 1e-13);
+        close(
+            cap_zh(alpha, 4).unwrap()[0] * 4.0 * PI * Y00,
+            2.0 * PI * (1.0 - alpha.cos()),
+            1e-13,
+        );
     }
     // Whole sphere: only band 0, 2√π (seed 001 §7 A6 limit); beyond π clamps.
     let all = cap_zh(PI, 6).unwrap();
@@ -140,7 +163,11 @@ fn seed002_5_uniform_sky_gives_pi_and_aligned_cosine_light_gives_127pi_over_192(
 fn seed002_5_disk_occluder_transfer_t00_t10() {
     // Test 4: opaque disk of angular radius α about the normal: visible = α < θ < π/2, so
     // T_l = 2π N_l ∫_0^{cos α} x P_l(x) dx; T00 = 0.886227 cos²α, T10 = 1.023327 cos³α.
-    for (deg, t00, t10) in [(30.0f64, 0.66467, 0.66467), (45.0, 0.44311, 0.36180), (60.0, 0.22156, 0.12792)] {
+    for (deg, t00, t10) in [
+        (30.0f64, 0.66467, 0.66467),
+        (45.0, 0.44311, 0.36180),
+        (60.0, 0.22156, 0.12792),
+    ] {
         let a = deg.to_radians();
         let t = project_zonal(|x| x, 2, 0.0, a.cos(), 8).unwrap();
         close(t[0], t00, 1e-5);
@@ -176,7 +203,11 @@ fn seed000_5_1_zonal_dot_is_sum_of_products_times_legendre() {
     let (u, v) = (rng.dir(), rng.dir());
     let f = cap_zh(0.7, 8).unwrap();
     let g = clamped_cosine_zh(8).unwrap();
-    let lhs = dot(&zh_rotate(&f, u.as_vec3()).unwrap(), &zh_rotate(&g, v.as_vec3()).unwrap()).unwrap();
+    let lhs = dot(
+        &zh_rotate(&f, u.as_vec3()).unwrap(),
+        &zh_rotate(&g, v.as_vec3()).unwrap(),
+    )
+    .unwrap();
     let p = legendre(7, u.dot(v));
     let rhs: f64 = (0..8).map(|l| f[l] * g[l] * p[l]).sum();
     close(lhs, rhs, 1e-6);

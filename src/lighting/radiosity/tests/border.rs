@@ -22,19 +22,45 @@ pub(super) struct Baked {
 
 pub(super) fn bake_scene(scene: Scene, size: f64, settings: &Settings) -> Baked {
     let geo = crate::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
-    let (p, atlas, texels, report) = lightmap::bake(&geo, &scene, size, settings, Content::All, lightmap::Shooter::Cpu, &mut Progress::new("test")).unwrap();
-    Baked { scene, p, atlas, texels, report }
+    let (p, atlas, texels, report) = lightmap::bake(
+        &geo,
+        &scene,
+        size,
+        settings,
+        Content::All,
+        lightmap::Shooter::Cpu,
+        &mut Progress::new("test"),
+    )
+    .unwrap();
+    Baked {
+        scene,
+        p,
+        atlas,
+        texels,
+        report,
+    }
 }
 
 pub(super) fn bake_text(text: &str, size: f64, settings: &Settings) -> Baked {
-    bake_scene(Scene::from_str(text, "test.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}")), size, settings)
+    bake_scene(
+        Scene::from_str(text, "test.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}")),
+        size,
+        settings,
+    )
 }
 
 impl Baked {
     /// The charts of the scene object named `name`.
     pub fn charts_of(&self, name: &str) -> Vec<usize> {
-        let o = self.scene.objects.iter().position(|o| o.name == name).unwrap_or_else(|| panic!("no object {name}"));
-        (0..self.p.charts.len()).filter(|&c| self.p.charts[c].object == o).collect()
+        let o = self
+            .scene
+            .objects
+            .iter()
+            .position(|o| o.name == name)
+            .unwrap_or_else(|| panic!("no object {name}"));
+        (0..self.p.charts.len())
+            .filter(|&c| self.p.charts[c].object == o)
+            .collect()
     }
 
     /// The light-map as the renderer samples it at world point `q` of chart `c`
@@ -43,7 +69,10 @@ impl Baked {
         let ch = &self.p.charts[c];
         let (ox, oy) = self.atlas.offsets[c];
         let d = q - ch.origin;
-        let (x, y) = (d.dot(ch.u) / self.p.size + ox as f64 - 0.5, d.dot(ch.v) / self.p.size + oy as f64 - 0.5);
+        let (x, y) = (
+            d.dot(ch.u) / self.p.size + ox as f64 - 0.5,
+            d.dot(ch.v) / self.p.size + oy as f64 - 0.5,
+        );
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let at = |i: f64, j: f64| {
@@ -52,23 +81,36 @@ impl Baked {
             let t = self.texels[j * self.atlas.width as usize + i];
             DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)
         };
-        at(x0, y0) * (1.0 - fx) * (1.0 - fy) + at(x0 + 1.0, y0) * fx * (1.0 - fy) + at(x0, y0 + 1.0) * (1.0 - fx) * fy + at(x0 + 1.0, y0 + 1.0) * fx * fy
+        at(x0, y0) * (1.0 - fx) * (1.0 - fy)
+            + at(x0 + 1.0, y0) * fx * (1.0 - fy)
+            + at(x0, y0 + 1.0) * (1.0 - fx) * fy
+            + at(x0 + 1.0, y0 + 1.0) * fx * fy
     }
 
     /// Every texel of chart `c`'s rectangle in the atlas.
     pub fn chart_texels(&self, c: usize) -> Vec<[f32; 4]> {
         let ch = &self.p.charts[c];
         let (ox, oy) = self.atlas.offsets[c];
-        (0..ch.height).flat_map(|j| (0..ch.width).map(move |i| (i, j))).map(|(i, j)| self.texels[(oy as usize + j) * self.atlas.width as usize + ox as usize + i]).collect()
+        (0..ch.height)
+            .flat_map(|j| (0..ch.width).map(move |i| (i, j)))
+            .map(|(i, j)| self.texels[(oy as usize + j) * self.atlas.width as usize + ox as usize + i])
+            .collect()
     }
 }
 
 fn corrected(threshold: f64) -> Settings {
-    Settings { threshold, ..Settings::default() }
+    Settings {
+        threshold,
+        ..Settings::default()
+    }
 }
 
 fn faithful(threshold: f64) -> Settings {
-    Settings { mode: Mode::Faithful, threshold, ..Settings::default() }
+    Settings {
+        mode: Mode::Faithful,
+        threshold,
+        ..Settings::default()
+    }
 }
 
 fn luminance(c: DVec3) -> f64 {
@@ -102,19 +144,35 @@ irradiance = 2
     for settings in [corrected(1e-4), faithful(1e-4)] {
         let b = bake_text(text, 0.1, &settings);
         let c = b.charts_of("plane")[0];
-        let (corner, eu, ev) = (DVec3::new(-0.73, 0.0, -0.61), DVec3::new(0.0, 0.0, 1.37), DVec3::new(1.18, 0.0, 0.0));
+        let (corner, eu, ev) = (
+            DVec3::new(-0.73, 0.0, -0.61),
+            DVec3::new(0.0, 0.0, 1.37),
+            DVec3::new(1.18, 0.0, 0.0),
+        );
         let interior = luminance(b.sample(c, corner + 0.5 * (eu + ev)));
         let inset = 1e-6;
         let mut worst = f64::INFINITY;
         for k in 0..=400 {
             let t = k as f64 / 400.0;
-            for q in [corner + eu * t + ev * inset, corner + eu * t + ev * (1.0 - inset), corner + ev * t + eu * inset, corner + ev * t + eu * (1.0 - inset)] {
+            for q in [
+                corner + eu * t + ev * inset,
+                corner + eu * t + ev * (1.0 - inset),
+                corner + ev * t + eu * inset,
+                corner + ev * t + eu * (1.0 - inset),
+            ] {
                 worst = worst.min(luminance(b.sample(c, q)) / interior);
             }
         }
-        eprintln!("{:?}: edge/interior minimum {worst:.6} (interior {interior:.4})", settings.mode);
+        eprintln!(
+            "{:?}: edge/interior minimum {worst:.6} (interior {interior:.4})",
+            settings.mode
+        );
         assert!(interior > 0.0);
-        assert!(worst >= 0.99, "{:?}: an edge reads {worst:.4} of the interior", settings.mode);
+        assert!(
+            worst >= 0.99,
+            "{:?}: an edge reads {worst:.4} of the interior",
+            settings.mode
+        );
     }
 }
 
@@ -160,22 +218,36 @@ intensity = 1
     for settings in [corrected(1e-4), faithful(1e-4)] {
         let b = bake_text(text, 0.1, &settings);
         let (l, r) = (b.charts_of("left")[0], b.charts_of("right")[0]);
-        let brightest = [l, r].iter().flat_map(|&c| b.chart_texels(c)).map(|t| t[0].max(t[1]).max(t[2]) as f64).fold(0.0, f64::max);
+        let brightest = [l, r]
+            .iter()
+            .flat_map(|&c| b.chart_texels(c))
+            .map(|t| t[0].max(t[1]).max(t[2]) as f64)
+            .fold(0.0, f64::max);
         let lsb = brightest / 255.0;
         let (mut worst, mut at) = (0.0f64, 0.0);
         let delta = 1e-7;
         for k in 0..=500 {
             let z = -1.0 + 2.5 * (k as f64 + 0.5) / 501.0;
-            let step = (b.sample(l, DVec3::new(0.53 - delta, 0.0, z)) - b.sample(r, DVec3::new(0.53 + delta, 0.0, z))).abs().max_element() / lsb;
+            let step = (b.sample(l, DVec3::new(0.53 - delta, 0.0, z)) - b.sample(r, DVec3::new(0.53 + delta, 0.0, z)))
+                .abs()
+                .max_element()
+                / lsb;
             if step > worst {
                 (worst, at) = (step, z);
             }
         }
         // The shadow's edge (z = 0.6 on the floor) crosses the seam: the floor is lit and dark.
-        let (lit, dark) = (b.sample(l, DVec3::new(0.4, 0.0, 0.0)).x, b.sample(l, DVec3::new(0.4, 0.0, 1.2)).x);
+        let (lit, dark) = (
+            b.sample(l, DVec3::new(0.4, 0.0, 0.0)).x,
+            b.sample(l, DVec3::new(0.4, 0.0, 1.2)).x,
+        );
         eprintln!("{:?}: largest step across the seam {worst:.4} LSB at z = {at:.3} (lit {lit:.4}, shadow {dark:.4}, LSB {lsb:.2e})", settings.mode);
         assert!(dark < 0.5 * lit, "the blocker shadows the floor: {dark} vs {lit}");
-        assert!(worst <= 1.0, "{:?}: the seam steps by {worst:.2} LSB at z = {at}", settings.mode);
+        assert!(
+            worst <= 1.0,
+            "{:?}: the seam steps by {worst:.2} LSB at z = {at}",
+            settings.mode
+        );
     }
 }
 
@@ -185,21 +257,43 @@ intensity = 1
 /// texel of room B stays exactly 0, in both modes.
 #[test]
 fn no_light_bleeds_through_a_thin_wall() {
-    let scene = Scene::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/two_rooms.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let scene = Scene::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/two_rooms.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
     let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
     for settings in [corrected(1e-2), faithful(1e-2)] {
         let b = bake_scene(scene.clone(), 0.2, &settings);
-        let room = |prefix: &str| names.iter().filter(|n| n.starts_with(prefix)).flat_map(|n| b.charts_of(n)).collect::<Vec<usize>>();
+        let room = |prefix: &str| {
+            names
+                .iter()
+                .filter(|n| n.starts_with(prefix))
+                .flat_map(|n| b.charts_of(n))
+                .collect::<Vec<usize>>()
+        };
         let (a, dark) = (room("A "), room("B "));
         assert_eq!(dark.len(), 6);
-        let patches_b = dark.iter().flat_map(|&c| b.p.patches.iter().filter(move |q| q.chart == c)).map(|q| q.total.max_element()).fold(0.0f64, f64::max);
-        let texels_b = dark.iter().flat_map(|&c| b.chart_texels(c)).map(|t| t[0].max(t[1]).max(t[2])).fold(0.0f32, f32::max);
-        let lit_a = a.iter().flat_map(|&c| b.chart_texels(c)).map(|t| t[0]).fold(0.0f32, f32::max);
+        let patches_b = dark
+            .iter()
+            .flat_map(|&c| b.p.patches.iter().filter(move |q| q.chart == c))
+            .map(|q| q.total.max_element())
+            .fold(0.0f64, f64::max);
+        let texels_b = dark
+            .iter()
+            .flat_map(|&c| b.chart_texels(c))
+            .map(|t| t[0].max(t[1]).max(t[2]))
+            .fold(0.0f32, f32::max);
+        let lit_a = a
+            .iter()
+            .flat_map(|&c| b.chart_texels(c))
+            .map(|t| t[0])
+            .fold(0.0f32, f32::max);
         eprintln!("{:?}: room B max patch {patches_b}, max texel {texels_b}; room A max texel {lit_a}; pass 2 refused {} contributions", settings.mode, b.report.border_refused);
         assert!(lit_a > 0.05, "room A is lit: {lit_a}");
         assert_eq!(patches_b, 0.0, "{:?}: light reached a patch of room B", settings.mode);
         assert_eq!(texels_b, 0.0, "{:?}: light bled into a texel of room B", settings.mode);
-        assert!(b.report.border_refused > 0, "the anti-bleeding check was never exercised");
+        assert!(
+            b.report.border_refused > 0,
+            "the anti-bleeding check was never exercised"
+        );
     }
 }
 
@@ -214,13 +308,32 @@ fn faithful_texels_are_bytes() {
     let b = bake_text(&text, 0.2, &faithful(1e-2));
     let flat: Vec<f32> = b.texels.iter().flatten().copied().collect();
     let bytes = to_rgb8(&flat);
-    let off = flat.chunks_exact(4).zip(bytes.chunks_exact(4)).map(|(t, c)| (0..3).map(|i| (t[i] - c[i] as f32 / 255.0).abs()).fold(0.0f32, f32::max)).fold(0.0f32, f32::max);
+    let off = flat
+        .chunks_exact(4)
+        .zip(bytes.chunks_exact(4))
+        .map(|(t, c)| {
+            (0..3)
+                .map(|i| (t[i] - c[i] as f32 / 255.0).abs())
+                .fold(0.0f32, f32::max)
+        })
+        .fold(0.0f32, f32::max);
     let levels: std::collections::BTreeSet<u8> = bytes.chunks_exact(4).map(|c| c[0]).collect();
-    eprintln!("faithful: {} distinct red bytes, largest texel-byte difference {off:e}", levels.len());
+    eprintln!(
+        "faithful: {} distinct red bytes, largest texel-byte difference {off:e}",
+        levels.len()
+    );
     assert!(off < 1e-6, "a faithful texel is not a byte: {off}");
-    assert!(levels.len() > 20 && levels.contains(&0) && levels.contains(&255), "{levels:?}");
+    assert!(
+        levels.len() > 20 && levels.contains(&0) && levels.contains(&255),
+        "{levels:?}"
+    );
     assert_eq!(lightmap_format(Mode::Faithful), vk::Format::R8G8B8A8_UNORM);
     assert_eq!(lightmap_format(Mode::Corrected), vk::Format::R32G32B32A32_SFLOAT);
     let c = bake_text(&text, 0.2, &corrected(1e-2));
-    assert!(c.texels.iter().any(|t| ((t[0] * 255.0).round() - t[0] * 255.0).abs() > 1e-3), "corrected texels are floats");
+    assert!(
+        c.texels
+            .iter()
+            .any(|t| ((t[0] * 255.0).round() - t[0] * 255.0).abs() > 1e-3),
+        "corrected texels are floats"
+    );
 }

@@ -68,7 +68,12 @@ fn shadow_overlap(x0: f64, z0: f64, s: f64) -> f64 {
 #[test]
 fn a_square_occluder_casts_the_analytic_shadow() {
     let size = 0.05;
-    for (sky, mode) in [(true, Mode::Faithful), (true, Mode::Corrected), (false, Mode::Corrected), (false, Mode::Faithful)] {
+    for (sky, mode) in [
+        (true, Mode::Faithful),
+        (true, Mode::Corrected),
+        (false, Mode::Corrected),
+        (false, Mode::Faithful),
+    ] {
         let text = scene(sky);
         let sc = Scene::from_str(&text, "sun.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
         let geo = crate::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
@@ -106,20 +111,47 @@ fn sky_is_neither_lit_nor_patched_and_rays_must_reach_it() {
     // With a sky ceiling the faithful sun lights the floor; with the ceiling an ordinary surface
     // instead, no ray reaches sky and the faithful floor is dark. The sky chart is one black
     // texel, and its pairs are NONE (3 charts: 6 pairs, all counted).
-    let faithful = Settings { mode: Mode::Faithful, threshold: 1e-2, ..Settings::default() };
+    let faithful = Settings {
+        mode: Mode::Faithful,
+        threshold: 1e-2,
+        ..Settings::default()
+    };
     let b = bake_text(&scene(true), 0.2, &faithful);
     let sky = b.charts_of("sky")[0];
     assert_eq!((b.p.charts[sky].width, b.p.charts[sky].height), (1, 1));
-    assert!(b.chart_texels(sky).iter().all(|t| t[..3] == [0.0; 3]), "sky texels are black");
-    let floor_max = |b: &super::border::Baked| b.chart_texels(b.charts_of("floor")[0]).iter().map(|t| t[0]).fold(0.0f32, f32::max);
+    assert!(
+        b.chart_texels(sky).iter().all(|t| t[..3] == [0.0; 3]),
+        "sky texels are black"
+    );
+    let floor_max = |b: &super::border::Baked| {
+        b.chart_texels(b.charts_of("floor")[0])
+            .iter()
+            .map(|t| t[0])
+            .fold(0.0f32, f32::max)
+    };
     assert!(floor_max(&b) > 0.5, "the sun reaches the floor: {}", floor_max(&b));
-    assert_eq!(b.report.visibility.2 + b.report.visibility.1 + b.report.visibility.0, 6, "3 charts");
+    assert_eq!(
+        b.report.visibility.2 + b.report.visibility.1 + b.report.visibility.0,
+        6,
+        "3 charts"
+    );
     let closed = scene(true).replace("sky = true", "sky = false");
-    assert_eq!(floor_max(&bake_text(&closed, 0.2, &faithful)), 0.0, "faithful: no ray reaches sky");
+    assert_eq!(
+        floor_max(&bake_text(&closed, 0.2, &faithful)),
+        0.0,
+        "faithful: no ray reaches sky"
+    );
     // Errors name the file and the field.
-    let e = match Scene::from_str(&scene(true).replace("sky = true", "sky = 1"), "sun.toml", std::path::Path::new(".")) {
+    let e = match Scene::from_str(
+        &scene(true).replace("sky = true", "sky = 1"),
+        "sun.toml",
+        std::path::Path::new("."),
+    ) {
         Ok(_) => panic!("sky = 1 accepted"),
         Err(e) => e.to_string(),
     };
-    assert!(e.contains("sun.toml") && e.contains("materials[1].sky") && !e.contains('\n'), "{e}");
+    assert!(
+        e.contains("sun.toml") && e.contains("materials[1].sky") && !e.contains('\n'),
+        "{e}"
+    );
 }

@@ -11,7 +11,8 @@ use crate::progress::Progress;
 use crate::scene::Scene;
 
 fn triangles(file: &str) -> (Scene, Vec<Triangle>) {
-    let scene = Scene::from_file(format!("{}/scenes/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("{e}"));
+    let scene =
+        Scene::from_file(format!("{}/scenes/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("{e}"));
     let geo = crate::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
     (scene, geo.triangles)
 }
@@ -74,7 +75,11 @@ fn the_matrix_is_symmetric_and_every_full_pair_is_unoccluded() {
         for i in 0..n {
             for j in 0..n {
                 assert_eq!(m.get(i, j), m.get(j, i));
-                assert_eq!(tester.classify(i, j, true), tester.classify(j, i, true), "{file}: charts {i}, {j}");
+                assert_eq!(
+                    tester.classify(i, j, true),
+                    tester.classify(j, i, true),
+                    "{file}: charts {i}, {j}"
+                );
             }
             assert_eq!(m.get(i, i), Vis::None);
         }
@@ -87,7 +92,12 @@ fn the_matrix_is_symmetric_and_every_full_pair_is_unoccluded() {
                 if vis == Vis::None {
                     continue;
                 }
-                let others: Vec<&Triangle> = tris.iter().enumerate().filter(|(t, _)| !p.charts[i].triangles.contains(t) && !p.charts[j].triangles.contains(t)).map(|(_, t)| t).collect();
+                let others: Vec<&Triangle> = tris
+                    .iter()
+                    .enumerate()
+                    .filter(|(t, _)| !p.charts[i].triangles.contains(t) && !p.charts[j].triangles.contains(t))
+                    .map(|(_, t)| t)
+                    .collect();
                 let (ti, tj) = (of(i), of(j));
                 let segments = if vis == Vis::Full { 1000 } else { 100 };
                 let hit = (0..segments).find_map(|_| {
@@ -96,7 +106,10 @@ fn the_matrix_is_symmetric_and_every_full_pair_is_unoccluded() {
                 });
                 match vis {
                     Vis::Full => {
-                        assert!(hit.is_none(), "{file}: charts {i} and {j} are FULL but segment {hit:?} is blocked");
+                        assert!(
+                            hit.is_none(),
+                            "{file}: charts {i} and {j} are FULL but segment {hit:?} is blocked"
+                        );
                         confirmed += 1;
                     }
                     _ => partial_blocked += usize::from(hit.is_some()),
@@ -117,9 +130,21 @@ fn the_matrix_is_symmetric_and_every_full_pair_is_unoccluded() {
         p.charts.iter().position(|c| c.object == o).unwrap()
     };
     assert_eq!(m.get(chart("A wall +x"), chart("B wall -x")), Vis::None);
-    assert_eq!(m.get(chart("A floor"), chart("B ceiling")), Vis::Partial, "room A's floor sees room B's ceiling's plane, through the wall");
-    assert_eq!(m.get(chart("B floor"), chart("B ceiling")), Vis::Full, "an empty room's floor and ceiling");
-    assert_eq!(m.get(chart("A floor"), chart("A ceiling")), Vis::Partial, "room A's ceiling light hangs between them");
+    assert_eq!(
+        m.get(chart("A floor"), chart("B ceiling")),
+        Vis::Partial,
+        "room A's floor sees room B's ceiling's plane, through the wall"
+    );
+    assert_eq!(
+        m.get(chart("B floor"), chart("B ceiling")),
+        Vis::Full,
+        "an empty room's floor and ceiling"
+    );
+    assert_eq!(
+        m.get(chart("A floor"), chart("A ceiling")),
+        Vis::Partial,
+        "room A's ceiling light hangs between them"
+    );
 }
 
 fn run(tris: &[Triangle], settings: &Settings) -> (Patches, Report) {
@@ -133,11 +158,30 @@ fn run(tris: &[Triangle], settings: &Settings) -> (Patches, Report) {
 fn full_pairs_only_save_rays() {
     let (_, tris) = triangles("cornell_radiosity.toml");
     for mode in [Mode::Corrected, Mode::Faithful] {
-        let settings = Settings { mode, threshold: 1e-3, ..Settings::default() };
+        let settings = Settings {
+            mode,
+            threshold: 1e-3,
+            ..Settings::default()
+        };
         let (with, r1) = run(&tris, &settings);
-        let (without, r2) = run(&tris, &Settings { full_visibility: false, ..settings });
-        let worst = with.patches.iter().zip(&without.patches).map(|(a, b)| (a.total - b.total).abs().max_element()).fold(0.0f64, f64::max);
-        let peak = without.patches.iter().map(|q| q.total.max_element()).fold(0.0f64, f64::max);
+        let (without, r2) = run(
+            &tris,
+            &Settings {
+                full_visibility: false,
+                ..settings
+            },
+        );
+        let worst = with
+            .patches
+            .iter()
+            .zip(&without.patches)
+            .map(|(a, b)| (a.total - b.total).abs().max_element())
+            .fold(0.0f64, f64::max);
+        let peak = without
+            .patches
+            .iter()
+            .map(|q| q.total.max_element())
+            .fold(0.0f64, f64::max);
         eprintln!(
             "{mode:?}: {} shots; rays {} with FULL (+{} saved, {:.1}%), {} without; largest difference {worst:.3e} of peak {peak:.3}; pairs {:?}",
             r1.shots,
@@ -149,8 +193,15 @@ fn full_pairs_only_save_rays() {
         );
         assert_eq!(r1.shots, r2.shots);
         assert_eq!(r2.rays_saved, 0);
-        assert_eq!(r1.rays + r1.rays_saved, r2.rays, "every skipped ray is one the unskipped solve casts");
+        assert_eq!(
+            r1.rays + r1.rays_saved,
+            r2.rays,
+            "every skipped ray is one the unskipped solve casts"
+        );
         assert!(r1.rays_saved > 0);
-        assert!(worst <= 1e-12 * peak, "{mode:?}: skipping FULL rays changed a patch by {worst}");
+        assert!(
+            worst <= 1e-12 * peak,
+            "{mode:?}: skipping FULL rays changed a patch by {worst}"
+        );
     }
 }
