@@ -1,8 +1,8 @@
 //! The crate-level error: every failure a user can cause or meet, printed as one line.
 
 use crate::backend::BackendError;
-use crate::image_io::ImageIoError;
 use crate::scene::SceneError;
+use crate::util::image_io::ImageIoError;
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {

@@ -1,11 +1,13 @@
 //! The `penumbra` command line.
 
+#![deny(unsafe_code)]
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use penumbra::backend::{Gpu, GpuDesc};
-use penumbra::capture::CaptureOptions;
+use penumbra::commands::capture::CaptureOptions;
 
 #[derive(Parser)]
 #[command(
@@ -396,26 +398,26 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 ..options(&render)
             };
             if let Some(e) = max_error {
-                let (decl, why) = penumbra::capture::choose_configuration(&opts, e, &cache_dir)?;
+                let (decl, why) = penumbra::commands::capture::choose_configuration(&opts, e, &cache_dir)?;
                 penumbra::outln!("{why}");
                 opts.config = Some(decl);
             }
-            for path in penumbra::capture::run(&opts)? {
+            for path in penumbra::commands::capture::run(&opts)? {
                 penumbra::outln!("wrote {path}");
             }
         }
         Command::Profile { render, frames, json } => {
-            let report = penumbra::profile::run(&options(&render), frames)?;
+            let report = penumbra::commands::profile::run(&options(&render), frames)?;
             penumbra::out!("{}", report.table());
             if let Some(p) = json {
                 let text = serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Usage(e.to_string()))?;
-                penumbra::image_io::write_file(&p, text.as_bytes())
+                penumbra::util::image_io::write_file(&p, text.as_bytes())
                     .map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
                 penumbra::outln!("wrote {}", p.display());
             }
         }
         Command::Bake { render } => {
-            for (config, reports) in penumbra::bake_scene::run(&options(&render))? {
+            for (config, reports) in penumbra::commands::bake::run(&options(&render))? {
                 if reports.is_empty() {
                     penumbra::outln!("{config}: nothing to bake");
                 } else {
@@ -430,8 +432,8 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             exposure,
             json,
         } => {
-            use penumbra::image_io::HdrImage;
             use penumbra::metrics::{colorize, compare_with_map, CompareOptions};
+            use penumbra::util::image_io::HdrImage;
             let (t, r) = (HdrImage::read_exr(&test)?, HdrImage::read_exr(&reference)?);
             let (metrics, map) = compare_with_map(
                 &t,
@@ -450,7 +452,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::out!("{}", metrics.table());
             }
             if let Some(p) = diff {
-                penumbra::image_io::save_image(&p, colorize(&map).into(), image::ImageFormat::Png)?;
+                penumbra::util::image_io::save_image(&p, colorize(&map).into(), image::ImageFormat::Png)?;
                 penumbra::outln!("wrote {}", p.display());
             }
         }
@@ -470,7 +472,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             frame,
             device,
         } => {
-            let opts = penumbra::chart::ChartOptions {
+            let opts = penumbra::commands::chart::ChartOptions {
                 scene,
                 size,
                 frames,
@@ -487,7 +489,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 frame,
             };
             let start = std::time::Instant::now();
-            let chart = penumbra::chart::run(&opts)?;
+            let chart = penumbra::commands::chart::run(&opts)?;
             penumbra::outln!(
                 "{}; each metric is followed by [the reference's own error: what an exact method would score]",
                 chart.comparison()
@@ -547,9 +549,9 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             cycle_every,
         } => {
             let opts = options(&render);
-            penumbra::demo::run(
+            penumbra::commands::demo::run(
                 &opts,
-                penumbra::demo::DemoScript {
+                penumbra::commands::demo::DemoScript {
                     frames,
                     screenshot,
                     resize_at,
@@ -669,7 +671,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
-        Ok(()) => match penumbra::console::stdout_failure() {
+        Ok(()) => match penumbra::util::console::stdout_failure() {
             None => ExitCode::SUCCESS,
             Some(e) => {
                 penumbra::errln!("error: {e}");

@@ -1,5 +1,6 @@
-//! The shape of the source tree: no dependency cycle between top-level modules, and techniques
-//! named only inside the lighting layer (its registry for everything above it).
+//! The shape of the source tree: top-level modules in layers with every dependency pointing down,
+//! `unsafe` code only in the backend, and techniques named only inside the lighting layer (its
+//! registry for everything above it), where they share the layer's cores but not each other.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -119,6 +120,86 @@ fn no_dependency_cycle_between_top_level_modules() {
     }
 }
 
+/// The top-level modules, bottom up; a module may use only modules of lower layers.
+const LAYERS: &[&[&str]] = &[
+    &["backend", "world"],
+    &["shaders", "graph", "util"],
+    &["scene", "metrics"],
+    &["error"],
+    &["sh", "bake", "raytrace"],
+    &["environment"],
+    &["gpu_scene"],
+    &["lighting"],
+    &["renderer", "reference"],
+    &["commands"],
+];
+
+/// Folders of the lighting layer that every technique may share; every other folder there is a
+/// technique.
+const LIGHTING_CORES: &[&str] = &["lightmap", "many_lights"];
+
+#[test]
+fn every_dependency_points_to_a_lower_layer() {
+    let graph = module_graph();
+    let layer = |m: &str| LAYERS.iter().position(|l| l.contains(&m));
+    for (from, uses) in &graph {
+        let Some(own) = layer(from) else {
+            panic!("top-level module `{from}` is in no layer of LAYERS")
+        };
+        for to in uses {
+            let theirs = layer(to).unwrap_or_else(|| panic!("top-level module `{to}` is in no layer of LAYERS"));
+            assert!(
+                theirs < own,
+                "`{from}` (layer {own}) uses `{to}` (layer {theirs}): dependencies point down"
+            );
+        }
+    }
+    for l in LAYERS.iter().flat_map(|l| l.iter()) {
+        assert!(
+            graph.contains_key(*l),
+            "LAYERS names `{l}`, which is not a top-level module"
+        );
+    }
+}
+
+#[test]
+fn unsafe_code_lives_in_the_backend_only() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    assert!(
+        lib.contains("#![deny(unsafe_code)]"),
+        "src/lib.rs must deny unsafe code"
+    );
+    let allowed: Vec<&str> = lib.lines().filter(|l| l.contains("allow(unsafe_code)")).collect();
+    assert_eq!(allowed.len(), 1, "one allow(unsafe_code), on the backend: {allowed:?}");
+    let after_allow = lib.split("#[allow(unsafe_code)]").nth(1).unwrap().trim_start();
+    assert!(
+        after_allow.starts_with("pub mod backend;"),
+        "the allow must be on `backend`"
+    );
+    let main = std::fs::read_to_string(src.join("main.rs")).unwrap();
+    assert!(
+        main.contains("#![deny(unsafe_code)]"),
+        "src/main.rs must deny unsafe code"
+    );
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    for f in files.iter().filter(|f| !f.starts_with(src.join("backend"))) {
+        let text = code(f);
+        let words = text.split(|c: char| !(c.is_alphanumeric() || c == '_'));
+        assert!(
+            !words.clone().any(|w| w == "unsafe") || text.contains("deny(unsafe_code)"),
+            "{} has `unsafe` outside src/backend",
+            f.display()
+        );
+        assert!(
+            !text.contains("allow(unsafe_code)") || f.ends_with("lib.rs"),
+            "{} allows unsafe",
+            f.display()
+        );
+    }
+}
+
 #[test]
 fn only_the_lighting_layer_names_techniques() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -129,6 +210,7 @@ fn only_the_lighting_layer_names_techniques() {
         .filter_map(|e| e.ok())
         .filter(|e| e.path().is_dir())
         .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|name| !LIGHTING_CORES.contains(&name.as_str()))
         .collect();
     assert!(techniques.len() >= 3, "{techniques:?}");
     for f in files.iter().filter(|f| !f.starts_with(src.join("lighting"))) {
@@ -141,7 +223,8 @@ fn only_the_lighting_layer_names_techniques() {
             );
         }
     }
-    // Inside the layer, techniques do not use each other: shared code lives in the layer itself.
+    // Inside the layer, techniques do not use each other: shared code lives in the layer itself
+    // (its files and LIGHTING_CORES), and the shared cores use no technique.
     for f in files.iter().filter(|f| f.starts_with(src.join("lighting"))) {
         let own = f
             .strip_prefix(src.join("lighting"))
@@ -152,6 +235,17 @@ fn only_the_lighting_layer_names_techniques() {
             .as_os_str()
             .to_string_lossy()
             .to_string();
+        if LIGHTING_CORES.contains(&own.as_str()) {
+            let text = code(f);
+            for t in &techniques {
+                assert!(
+                    !text.contains(&format!("lighting::{t}")),
+                    "{} (a shared core) uses technique `{t}`",
+                    f.display()
+                );
+            }
+            continue;
+        }
         if !techniques.contains(&own) {
             continue;
         }

@@ -166,7 +166,7 @@ fn item_19_relighting_is_linear_in_random_intensities() {
 /// The GEMV pass's median time over 7 profiled frames.
 fn gemv_median_ms(r: &mut Renderer, cam: &penumbra::scene::Camera) -> f64 {
     let frames = r.profile(cam, 7).unwrap();
-    let stats = penumbra::timing::summarise(&frames);
+    let stats = penumbra::util::timing::summarise(&frames);
     stats
         .iter()
         .find(|s| s.name == "bsp_lights gemv")
@@ -301,7 +301,7 @@ fn current_intensities_scale_the_frame() {
 }
 
 fn mean_of(path: &std::path::Path) -> (f64, Vec<f64>) {
-    let img = penumbra::image_io::HdrImage::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
+    let img = penumbra::util::image_io::HdrImage::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
     let lum: Vec<f64> = img.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).collect();
     (lum.iter().sum::<f64>() / lum.len() as f64, lum)
 }
@@ -416,7 +416,7 @@ fn the_direct_term_adds_over_another_methods_base() {
         + "[environment]\ntype = \"constant\"\nradiance = 0.2\n";
     let sc = scene(&text);
     let mut images = Vec::new();
-    let mean = |img: &penumbra::image_io::HdrImage| {
+    let mean = |img: &penumbra::util::image_io::HdrImage| {
         img.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / img.pixels.len() as f64
     };
     for config in ["bsp_lights", "bsp_over_forward", "forward", "forward_over_bsp"] {
@@ -537,13 +537,13 @@ fn measure_setup_and_gemv() {
         .collect();
     for (label, lights, text) in rows {
         let sc = scene(&text);
-        let geometry = penumbra::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
+        let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
         let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
         let (s, polygons) = bake_scene(
             &sc,
             &geometry,
             &config,
-            &mut penumbra::progress::Progress::new("measure"),
+            &mut penumbra::util::progress::Progress::new("measure"),
         )
         .unwrap();
         let p = s.phases;
@@ -569,13 +569,14 @@ fn measure_setup_and_gemv() {
             500,
             8,
         ));
-        let geometry = penumbra::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
-        let polygons = penumbra::many_lights::scene_polygons(&sc.source, &geometry, "bsp_lights").unwrap();
+        let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
+        let polygons = penumbra::lighting::many_lights::scene_polygons(&sc.source, &geometry, "bsp_lights").unwrap();
         let tree = penumbra::lighting::bsp_lights::setup::build_tree(&polygons);
-        let vertices = penumbra::many_lights::Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), 0.002)
-            .unwrap()
-            .positions
-            .len();
+        let vertices =
+            penumbra::lighting::many_lights::Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), 0.002)
+                .unwrap()
+                .positions
+                .len();
         let mut r =
             Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (64, 48), 1).unwrap_or_else(|e| panic!("{e}"));
         let cam = r.scene.camera.clone();
@@ -585,7 +586,7 @@ fn measure_setup_and_gemv() {
                 light.intensity = if l < active { full[l] } else { [0.0; 4] };
             }
             let frames = r.profile(&cam, 7).unwrap();
-            let stats = penumbra::timing::summarise(&frames);
+            let stats = penumbra::util::timing::summarise(&frames);
             let ms = stats
                 .iter()
                 .find(|s| s.name == "bsp_lights gemv")
@@ -795,7 +796,7 @@ fn crossing_panels(hidden: &str) -> String {
 }
 
 /// Pixels whose radiance differs by more than 1e-4 relative.
-fn differing(a: &penumbra::image_io::HdrImage, b: &penumbra::image_io::HdrImage) -> usize {
+fn differing(a: &penumbra::util::image_io::HdrImage, b: &penumbra::util::image_io::HdrImage) -> usize {
     a.pixels
         .iter()
         .zip(&b.pixels)
@@ -911,7 +912,7 @@ fn the_underside_of_a_panel_shows_the_light_below_it() {
         "the panel's underside fills the view ({} pixels)",
         seen.len()
     );
-    let mean = |img: &penumbra::image_io::HdrImage, c: usize| {
+    let mean = |img: &penumbra::util::image_io::HdrImage, c: usize| {
         seen.iter().map(|&i| img.pixels[i][c] as f64).sum::<f64>() / seen.len() as f64
     };
     let (blue, red) = (mean(&got, 2), mean(&got, 0));

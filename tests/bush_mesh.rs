@@ -7,9 +7,9 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
-use penumbra::image_io::HdrImage;
 use penumbra::scene::generators::{bush, BUSH_WOOD_TRIANGLES, CROWN_FLATTENING, LEAF_TRIANGLES, LEAF_VERTICES};
 use penumbra::scene::{Environment, Light, Mesh, MeshSource, Scene};
+use penumbra::util::image_io::HdrImage;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -4,7 +4,7 @@ mod common;
 
 use common::{ok, penumbra};
 
-use penumbra::image_io::HdrImage;
+use penumbra::util::image_io::HdrImage;
 
 /// `penumbra chart SCENE OPTIONS...` writing its reference cache, PNG and CSV to the given paths.
 fn chart(
@@ -89,7 +89,7 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     ok(&first);
     assert!(String::from_utf8_lossy(&first.stderr).contains("rendering the reference"));
     let table = std::fs::read_to_string(&csv).unwrap();
-    let rows = penumbra::chart::parse_csv(&table).unwrap();
+    let rows = penumbra::commands::chart::parse_csv(&table).unwrap();
     assert_eq!(rows.len(), 1);
     assert_eq!(
         (rows[0].method.as_str(), rows[0].config.as_str()),
@@ -116,7 +116,7 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     let second = chart(scene, &options, &cache, &png, &csv);
     ok(&second);
     assert!(!String::from_utf8_lossy(&second.stderr).contains("rendering the reference"));
-    let again = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    let again = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     assert_eq!(again[0].rel_mse, rows[0].rel_mse);
 
     // --max-error picks from these measurements, or says none qualifies and names the closest.
@@ -196,7 +196,7 @@ fn chart_measures_the_textured_shadow_volume_level() {
     ];
     let stdout = ok(&chart(scene, &options, &cache, &png, &csv));
     assert!(stdout.contains("supersampled 4x4"), "{stdout}");
-    let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let configs: Vec<&str> = rows.iter().map(|r| r.config.as_str()).collect();
     assert_eq!(rows.len(), 14, "{configs:?}");
     for want in [
@@ -267,7 +267,7 @@ fn chart_measures_the_spot_light_level() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bsp_spot.toml");
     let options = ["--size", "64x64", "--reference-spp", "64", "--frames", "1"];
     ok(&chart(scene, &options, &cache, &png, &csv));
-    let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let err = |c: &str| rows.iter().find(|r| r.config.ends_with(c)).map(|r| r.rel_mse).unwrap();
     println!(
         "spot level, relative MSE: faithful {:.4}, physical {:.4}",
@@ -341,7 +341,7 @@ radiance = 0.3
         "1e-6",
     ];
     ok(&chart(scene.to_str().unwrap(), &options, &cache, &png, &csv));
-    let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let count = |m: &str| rows.iter().filter(|r| r.method == m).count();
     assert_eq!((count("heightfield_pyramid"), count("heightfield_bruteforce")), (14, 7));
     let timed = column(&std::fs::read_to_string(&csv).unwrap(), "frames_timed");
@@ -567,7 +567,7 @@ fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
             frame != "0",
             "the comparison names the frame: {stdout}"
         );
-        let rows = penumbra::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+        let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
         rows[0].rel_mse
     };
     let (at_0, at_2) = (rel_mse("0"), rel_mse("2"));

@@ -45,7 +45,7 @@ fn capture_is_deterministic_and_writes_both_files() {
         std::fs::read(&exr2).unwrap(),
         "EXR differs between runs"
     );
-    let hdr = penumbra::image_io::HdrImage::read_exr(&exr1).unwrap();
+    let hdr = penumbra::util::image_io::HdrImage::read_exr(&exr1).unwrap();
     assert_eq!((hdr.width, hdr.height), (64, 48));
     // The EXR is unclamped linear radiance: the glossy sphere's highlight exceeds 1.
     let max = hdr

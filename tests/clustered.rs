@@ -11,7 +11,6 @@ use penumbra::bake::Baker;
 use penumbra::environment::EnvironmentMap;
 use penumbra::gpu_scene::SceneGpu;
 use penumbra::graph::{RenderGraph, ResourceStates};
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::lighting::clustered::assign::{assign_cpu, Assignment, LightVolume};
 use penumbra::lighting::clustered::config::Config;
@@ -20,6 +19,7 @@ use penumbra::lighting::{CreateContext, Terms};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Light, Scene};
 use penumbra::shaders::ShaderLibrary;
+use penumbra::util::image_io::HdrImage;
 
 const W: u32 = 64;
 const H: u32 = 48;

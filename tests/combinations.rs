@@ -4,10 +4,10 @@
 
 mod common;
 
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::registry;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 const SIZE: (u32, u32) = (64, 48);
 

@@ -15,11 +15,11 @@ use std::path::Path;
 
 use glam::Vec3;
 use penumbra::environment::EnvironmentMap;
-use penumbra::image_io::HdrImage;
 use penumbra::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Environment, Scene, CUBE_FACE_KEYS};
 use penumbra::sh;
+use penumbra::util::image_io::HdrImage;
 use reference_support::{pixel_average, polygon_irradiance, Agreement};
 
 /// Writes six `n`² EXR faces whose texel centres hold `f(direction)` and returns the

@@ -5,7 +5,7 @@
 
 mod common;
 
-use penumbra::image_io::HdrImage;
+use penumbra::util::image_io::HdrImage;
 
 fn scene_with_sky(name: &str, bad: [f32; 4], methods: &str, object: &str) -> (std::path::PathBuf, std::path::PathBuf) {
     let mut img = HdrImage::new(16, 8);

@@ -12,9 +12,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use penumbra::environment::EnvironmentMap;
-use penumbra::image_io::HdrImage;
 use penumbra::metrics::{compare, CompareOptions};
 use penumbra::scene::{load_obj, HeightImage, Scene};
+use penumbra::util::image_io::HdrImage;
 
 /// xorshift64*: a fixed sequence for a fixed seed.
 struct Rng(u64);

@@ -197,7 +197,7 @@ fn wall_against_one_plus_cos_beta() {
 /// `height = 1`: texel (i, j) of the field reads `values[j·res + i]` exactly.
 fn write_heights(name: &str, res: u32, values: &[f32]) -> std::path::PathBuf {
     let path = common::temp_path(name);
-    penumbra::image_io::HdrImage {
+    penumbra::util::image_io::HdrImage {
         width: res,
         height: res,
         pixels: values.iter().map(|&v| [v, v, v, 1.0]).collect(),

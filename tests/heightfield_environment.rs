@@ -8,12 +8,12 @@ mod hf_common;
 
 use glam::{DVec3, Vec3};
 use hf_common::{clean, harness, scene};
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::heightfield::cpu;
 use penumbra::lighting::heightfield::standalone::Standalone;
 use penumbra::lighting::heightfield::wedge::TableKind;
 use penumbra::scene::Scene;
 use penumbra::sh;
+use penumbra::util::image_io::HdrImage;
 
 fn shading(s: &Scene) -> Vec<[f32; 4]> {
     let mut h = harness(s);

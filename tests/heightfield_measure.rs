@@ -8,9 +8,9 @@ mod common;
 use std::fmt::Write as _;
 
 use penumbra::backend::Gpu;
+use penumbra::commands::profile::summarise;
 use penumbra::lighting::heightfield::measure::{self, brute_cost_at, temporal_stability, Point};
 use penumbra::lighting::heightfield::standalone::Standalone;
-use penumbra::profile::summarise;
 use penumbra::scene::{MethodDecl, Scene};
 
 /// The teddy bear of the seed's static scenes, as a bas-relief: ellipsoids (centre, radii,
@@ -225,7 +225,7 @@ fn chart_and_speedup_at_equal_error() {
             continue;
         }
         let path = std::path::PathBuf::from(format!("scenes/terrain_{name}.toml"));
-        let opts = penumbra::chart::ChartOptions {
+        let opts = penumbra::commands::chart::ChartOptions {
             scene: path,
             size: (128, 128),
             frames,
@@ -244,7 +244,7 @@ fn chart_and_speedup_at_equal_error() {
             methods: Vec::new(),
             frame: 0,
         };
-        let chart = penumbra::chart::run(&opts).unwrap();
+        let chart = penumbra::commands::chart::run(&opts).unwrap();
         let points = |m: &str| -> Vec<Point> {
             chart
                 .rows

@@ -9,9 +9,9 @@ mod common;
 use common::{ok, penumbra};
 use std::path::{Path, PathBuf};
 
-use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 /// Checker cells of `cell` texels on a `texels`² sRGB PNG, colours `a` (cell (0, 0)) and `b`.
 fn checker_png(name: &str, texels: u32, cell: u32, a: [u8; 3], b: [u8; 3]) -> PathBuf {

@@ -4,10 +4,10 @@
 mod common;
 
 use glam::Vec3;
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 const W: u32 = 64;
 const H: u32 = 48;

@@ -6,11 +6,11 @@
 
 mod common;
 
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::registry;
 use penumbra::lighting::FrameClock;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Light, Scene};
+use penumbra::util::image_io::HdrImage;
 
 const SIZE: (u32, u32) = (48, 32);
 /// The frame compared with frame 0 (0.75 s: the factors are well away from 1).

@@ -352,7 +352,7 @@ fn a_thin_surface_blocks_light_meeting_its_back() {
 }
 
 fn mean(path: &std::path::Path) -> f64 {
-    let img = penumbra::image_io::HdrImage::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
+    let img = penumbra::util::image_io::HdrImage::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
     img.pixels
         .iter()
         .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
@@ -850,7 +850,7 @@ fn the_memory_readout_matches_the_formula() {
             text.replace("\"textures/", &format!("\"{}/textures/", dir.display())),
         )
         .unwrap();
-        let opts = penumbra::capture::CaptureOptions {
+        let opts = penumbra::commands::capture::CaptureOptions {
             scene: Some(path),
             png: None,
             exr: None,
@@ -862,7 +862,7 @@ fn the_memory_readout_matches_the_formula() {
             config: None,
             supersample: 1,
         };
-        let report = penumbra::profile::run(&opts, 1).unwrap_or_else(|e| panic!("{e}"));
+        let report = penumbra::commands::profile::run(&opts, 1).unwrap_or_else(|e| panic!("{e}"));
         let table = report.table();
         let find = |name: &str| {
             report

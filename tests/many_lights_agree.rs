@@ -15,10 +15,10 @@
 mod common;
 
 use glam::DVec3;
-use penumbra::image_io::HdrImage;
-use penumbra::many_lights::Occluders;
+use penumbra::lighting::many_lights::Occluders;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 use penumbra::world::Polygon;
 
 const SIZE: (u32, u32) = (64, 48);

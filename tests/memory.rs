@@ -29,7 +29,8 @@ fn rss_anon_mib() -> f64 {
 }
 
 fn shipped(name: &str) -> Scene {
-    penumbra::capture::load_scene(Some(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name))).unwrap()
+    penumbra::commands::capture::load_scene(Some(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)))
+        .unwrap()
 }
 
 /// A 16² sine field that moves every frame (so the generator block is uploaded and bound every
@@ -214,7 +215,7 @@ fn soak_every_shipped_scene_and_method() {
     }
     println!("scene,method,frame,rss_anon_mib,device_mib");
     for name in names {
-        let scene = penumbra::capture::load_scene(Some(&dir.join(&name))).unwrap();
+        let scene = penumbra::commands::capture::load_scene(Some(&dir.join(&name))).unwrap();
         // Every configuration: each method alone, then each declared combination.
         let mut methods: Vec<String> = penumbra::lighting::registry::configurations(&scene)
             .unwrap()

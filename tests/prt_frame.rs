@@ -6,9 +6,9 @@
 
 mod common;
 
-use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 use common::scenes::{scene_text, OPEN_BOX, WALL};
 

@@ -9,8 +9,8 @@ use penumbra::backend::Gpu;
 use penumbra::lighting::prt::config::{Config, Coverage, Depth, Directions, Mapping, Mode, Reduction, Weights};
 use penumbra::lighting::prt::receivers::Receivers;
 use penumbra::lighting::prt::{mapping, raster};
-use penumbra::progress::Progress;
 use penumbra::shaders::ShaderLibrary;
+use penumbra::util::progress::Progress;
 
 /// T_lm = Â_l y_lm(n) for n = world up (SH +z): only the m = 0 terms.
 const UP: [(usize, f64); 4] = [(0, 0.886227), (2, 1.023327), (6, 0.495416), (12, 0.0)];

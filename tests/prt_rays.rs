@@ -10,9 +10,9 @@ use glam::{Mat4, Vec2, Vec3};
 use penumbra::backend::Gpu;
 use penumbra::lighting::prt::raycast::{bake_cpu, bake_gpu};
 use penumbra::lighting::prt::receivers::{gather, Clip, OccluderRules, OccluderSet, Placed, Receivers};
-use penumbra::progress::Progress;
 use penumbra::scene::{generators, Mesh};
 use penumbra::shaders::ShaderLibrary;
+use penumbra::util::progress::Progress;
 
 /// A disk of radius 1 in the xz-plane facing down: a fan around its centre (the spokes turned
 /// off the ray directions' azimuths, through which fp32 Moller-Trumbore may let a ray pass).

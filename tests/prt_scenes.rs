@@ -12,9 +12,9 @@ use penumbra::lighting::prt::config::{Config, Coverage, Depth, Mode};
 use penumbra::lighting::prt::receivers::{Clip, OccluderRules, Receivers};
 use penumbra::lighting::prt::storage::{round_trip, Grouping};
 use penumbra::lighting::prt::{key_blend, key_times, light, raster, raycast, receivers_at, SceneMesh};
-use penumbra::progress::Progress;
 use penumbra::scene::{Mesh, Scene};
 use penumbra::shaders::ShaderLibrary;
+use penumbra::util::progress::Progress;
 
 /// T00 of an unoccluded vertex, √π/2.
 const T00: f64 = 0.886227;

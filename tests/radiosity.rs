@@ -28,7 +28,7 @@ fn furnace_box(method: &str, emission: f32, albedo: f32) -> String {
     s
 }
 
-fn render(text: &str, size: (u32, u32)) -> penumbra::image_io::HdrImage {
+fn render(text: &str, size: (u32, u32)) -> penumbra::util::image_io::HdrImage {
     let scene = Scene::from_str(text, "box.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
     let mut r = Renderer::new(common::test_gpu(), scene, None, size, 1).unwrap_or_else(|e| panic!("{e}"));
     let cam = r.scene.camera.clone();

@@ -6,14 +6,14 @@
 mod common;
 
 use glam::DVec3;
+use penumbra::lighting::lightmap::geometry::StaticGeometry;
+use penumbra::lighting::lightmap::patches::{Patches, Triangle};
+use penumbra::lighting::lightmap::solve::{self, Mode, Occluders, Settings};
+use penumbra::lighting::radiosity::bake;
 use penumbra::lighting::radiosity::gpu;
-use penumbra::lighting::radiosity::lightmap;
-use penumbra::lightmap::geometry::StaticGeometry;
-use penumbra::lightmap::patches::{Patches, Triangle};
-use penumbra::lightmap::solve::{self, Mode, Occluders, Settings};
-use penumbra::progress::Progress;
 use penumbra::scene::Scene;
 use penumbra::shaders::ShaderLibrary;
+use penumbra::util::progress::Progress;
 
 fn gpu_solve(p: &mut Patches, triangles: &[Triangle], settings: &Settings) -> solve::Report {
     let mut device = common::test_gpu();
@@ -96,7 +96,7 @@ fn the_gpu_shooter_closes_the_furnace() {
 /// renderer draws them: objects, then emitters), and each draw's object name.
 fn patched(path: &str, size: f64) -> (Scene, StaticGeometry, Patches, Vec<String>) {
     let scene = Scene::from_file(path).unwrap();
-    let geometry = penumbra::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
+    let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
     let p = Patches::build(&geometry.triangles, size);
     let names = scene.objects.iter().map(|o| o.name.clone()).collect();
     (scene, geometry, p, names)
@@ -168,7 +168,7 @@ fn the_gpu_shooter_keeps_the_dark_room_dark() {
     for mode in [Mode::Corrected, Mode::Faithful] {
         let (scene, geometry, mut p, names) = patched("scenes/two_rooms.toml", 0.2);
         let occluders = Occluders::new(&geometry.triangles);
-        lightmap::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
+        bake::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
         let settings = Settings {
             mode,
             threshold: 1e-3,

@@ -11,13 +11,13 @@ use std::path::Path;
 use glam::Vec3;
 use penumbra::environment::EnvironmentMap;
 use penumbra::gpu_scene::punctual_lights;
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::reference::{
     Batching, LightPaths, LightSelection, ReferenceImage, ReferenceOptions, ReferenceRenderer, Sampler, Settings,
     DEFAULT_BOUNCES,
 };
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 use reference_support::{
     ground_point, hemispherical_reflectance, off_light_outline, pixel_average, polygon_irradiance,
     reflected_environment, rmse, Agreement,
@@ -438,11 +438,11 @@ fn point_light_and_shadow_over_a_plane_direct_only() {
     // Segment or ray against the box grown (or shrunk) by `grow`, for margins at silhouettes.
     let hits_box = |o: Vec3, d: Vec3, t_max: f32, grow: f32| {
         let h = Vec3::splat(half + grow);
-        penumbra::reference::bvh::box_entry(
+        penumbra::raytrace::bvh::box_entry(
             box_center - h,
             box_center + h,
             o,
-            penumbra::reference::bvh::safe_inverse(d),
+            penumbra::raytrace::bvh::safe_inverse(d),
             t_max,
         )
         .is_some()
@@ -1384,7 +1384,7 @@ fn albedo_and_specular_maps_give_each_texel_region_its_closed_form() {
         );
     }
     let surface_of = |q: usize| Surface {
-        albedo: base_albedo * Vec3::from(albedo_bytes[q].map(penumbra::reference::srgb_decode)),
+        albedo: base_albedo * Vec3::from(albedo_bytes[q].map(penumbra::util::image_io::srgb_decode)),
         specular: Vec3::from(specular_bytes[q].map(|b| b as f32 / 255.0)) * base_specular,
         exponent,
         emission: Vec3::ZERO,
@@ -1484,7 +1484,7 @@ fn albedo_map_is_filtered_bilinearly_with_repeat_wrapping() {
     let traced = penumbra::reference::TracedScene::build(&scene).unwrap();
     let map = &traced.textures[0];
     // The lookup itself: at a texel centre the texel; on the left edge half the far right texel.
-    let decoded = |k: usize| Vec3::from(texels[k].map(penumbra::reference::srgb_decode));
+    let decoded = |k: usize| Vec3::from(texels[k].map(penumbra::util::image_io::srgb_decode));
     assert!(
         (map.sample(glam::Vec2::new(0.625, 0.25)).truncate() - decoded(2))
             .abs()

@@ -5,9 +5,9 @@
 
 mod common;
 
-use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 /// bsp_rooms.toml with a coarser light-map (a quicker bake; the composition is the same) and the
 /// shadow volumes' constant ambient set to `ambient`.
@@ -76,8 +76,8 @@ fn the_seed000_frame_is_the_light_map_under_the_direct_light() {
 #[test]
 fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     use glam::DVec3;
-    use penumbra::lighting::radiosity::lightmap;
-    use penumbra::lightmap::{patches::Patches, solve::Mode, solve::Occluders};
+    use penumbra::lighting::lightmap::{patches::Patches, solve::Mode, solve::Occluders};
+    use penumbra::lighting::radiosity::bake;
     use penumbra::scene::{world_mesh, Light, MeshSource};
     let mut scene = scene(0.0);
     // One light: the warm one of room 0.
@@ -88,7 +88,7 @@ fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     else {
         panic!("a point light")
     };
-    let geometry = penumbra::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
+    let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
     let occluders = Occluders::new(&geometry.triangles);
     let (level, translate) = scene
         .objects
@@ -103,7 +103,7 @@ fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     let light_leaf = leaf(position.as_dvec3());
     let lit = |mode| {
         let mut p = Patches::build(&geometry.triangles, 1.0);
-        let direct = lightmap::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
+        let direct = bake::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
         (p, direct)
     };
     let (p, faithful) = lit(Mode::Faithful);

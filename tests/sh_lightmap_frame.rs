@@ -5,9 +5,9 @@
 
 mod common;
 
-use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 use common::scenes::{scene_text, OPEN_BOX, WALL};
 
@@ -174,7 +174,7 @@ fn an_image_environment_is_projected_on_the_device_every_frame() {
     // open box as the constant sky does: ρ·L₀·F. (The pass takes each texel's centre value times
     // its exact solid angle: at 16 × 8 the aliasing into band 2 showed as +2.1%.)
     let path = common::temp_path("sh_constant_sky.exr");
-    penumbra::image_io::HdrImage {
+    penumbra::util::image_io::HdrImage {
         width: 128,
         height: 64,
         pixels: vec![[1.0, 1.0, 1.0, 1.0]; 128 * 64],

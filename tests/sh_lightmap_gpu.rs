@@ -8,14 +8,14 @@ mod common;
 
 use glam::DVec3;
 use penumbra::backend::Gpu;
+use penumbra::lighting::lightmap::patches::{Patches, Triangle};
+use penumbra::lighting::lightmap::solve::{self, Mode, Occluders};
 use penumbra::lighting::sh_lightmap::gpu::visibility_gpu;
 use penumbra::lighting::sh_lightmap::samples::SampleSet;
 use penumbra::lighting::sh_lightmap::transfer::{self, Settings};
-use penumbra::lightmap::patches::{Patches, Triangle};
-use penumbra::lightmap::solve::{self, Mode, Occluders};
-use penumbra::progress::Progress;
 use penumbra::sh;
 use penumbra::shaders::ShaderLibrary;
+use penumbra::util::progress::Progress;
 
 /// A quad `o + s·u + t·v` (s, t ∈ [0, 1]) as two triangles facing `u × v`.
 fn quad(o: DVec3, u: DVec3, v: DVec3, object: usize, albedo: f64) -> [Triangle; 2] {

@@ -4,16 +4,16 @@
 //! courtyard; `psnr_table` (ignored, long) prints the README's table.
 
 use penumbra::lighting::sh_lightmap::{self, config::Config, measure, Rays};
-use penumbra::progress::Progress;
 use penumbra::scene::Scene;
+use penumbra::util::progress::Progress;
 
 /// The courtyard's transfers at `patch` metres, `bands` bands, direct only (the bounces change
 /// the vectors' spread little and cost most of the bake).
 fn bake(patch: f64, bands: usize, samples: usize) -> sh_lightmap::Baked {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let scene = Scene::from_file(dir.join("sh_courtyard.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let geometry = penumbra::lightmap::geometry::scene_geometry(&scene, "sh_lightmap").unwrap();
-    let mut config = Config::defaults(penumbra::lightmap::solve::Mode::Corrected);
+    let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&scene, "sh_lightmap").unwrap();
+    let mut config = Config::defaults(penumbra::lighting::lightmap::solve::Mode::Corrected);
     config.patch_size = patch;
     config.samples = samples;
     config.transfer.bands = bands;

@@ -11,13 +11,13 @@ mod common;
 mod sv_common;
 
 use glam::{Vec2, Vec3, Vec4};
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::Surface;
 use penumbra::lighting::shadow_volumes::cpu::{
     faithful_ambient, faithful_light, faithful_light_colour, physical_light, spot_factor,
 };
 use penumbra::lighting::shadow_volumes::Spot;
 use penumbra::scene::{load_obj, Mesh, Scene};
+use penumbra::util::image_io::HdrImage;
 use sv_common::{hit_plane_y, method, render_in, render_scene};
 
 const SIZE: (u32, u32) = (64, 64);

@@ -10,10 +10,10 @@ mod common;
 mod sv_common;
 
 use glam::Vec3;
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::Surface;
 use penumbra::renderer::Renderer;
 use penumbra::scene::{Camera, Scene};
+use penumbra::util::image_io::HdrImage;
 use sv_common::{method, render, render_scene};
 
 const SIZE: (u32, u32) = (96, 96);

@@ -8,10 +8,10 @@ mod common;
 mod sv_common;
 
 use glam::{DVec3, Vec3};
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::shadow_volumes::Setup;
 use penumbra::scene::world_mesh::{self, scene_to_world, WorldLevel};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 use penumbra::world::level_gen::RoomsParams;
 use sv_common::{compare_masks, lit, method, render_scene};
 
@@ -346,7 +346,7 @@ fn spot_cone_culling_changes_draws_not_pixels() {
 #[test]
 fn profile_breaks_out_every_pass() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bsp_rooms.toml");
-    let opts = penumbra::capture::CaptureOptions {
+    let opts = penumbra::commands::capture::CaptureOptions {
         scene: Some(path),
         png: None,
         exr: None,
@@ -358,7 +358,7 @@ fn profile_breaks_out_every_pass() {
         config: None,
         supersample: 1,
     };
-    let report = penumbra::profile::run(&opts, 2).unwrap();
+    let report = penumbra::commands::profile::run(&opts, 2).unwrap();
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
     println!("{}", report.table());
     for want in ["frame", "silhouettes", "ambient", "light 0 volumes", "light 0 lighting"] {
@@ -424,7 +424,7 @@ intensity = 0.01
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("many_passes.toml");
     std::fs::write(&path, text).unwrap();
-    let opts = penumbra::capture::CaptureOptions {
+    let opts = penumbra::commands::capture::CaptureOptions {
         scene: Some(path),
         png: None,
         exr: None,
@@ -436,7 +436,7 @@ intensity = 0.01
         config: None,
         supersample: 1,
     };
-    let report = penumbra::profile::run(&opts, 1).unwrap();
+    let report = penumbra::commands::profile::run(&opts, 1).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
     let lighting = names.iter().filter(|n| n.ends_with(" lighting")).count();

@@ -6,13 +6,13 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use penumbra::image_io::HdrImage;
+use penumbra::lighting::lightmap::geometry::scene_geometry;
+use penumbra::lighting::many_lights::{LightModel, ManyLight};
 use penumbra::lighting::vls::{Config, Layout};
 use penumbra::lighting::{registry, ReferenceKind};
-use penumbra::lightmap::geometry::scene_geometry;
-use penumbra::many_lights::{LightModel, ManyLight};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 const SIZE: (u32, u32) = (64, 48);
 
@@ -238,7 +238,7 @@ fn a_segment_shades_with_exactly_its_light_set() {
     let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
     let geometry = scene_geometry(&s, "vls").unwrap();
     let layout = Layout::new(&s, &geometry, &s.methods[0], &config).unwrap();
-    let sets = layout.select(&config.setup, &mut penumbra::progress::Progress::new("test"));
+    let sets = layout.select(&config.setup, &mut penumbra::util::progress::Progress::new("test"));
     let (segments, lights) = (&layout.segments, &layout.lights);
     let pixels = floor_pixels(&s);
     let model = LightModel::OpenGl {

@@ -1,4 +1,4 @@
-// Closest or any hit of a ray against a BVH over triangles, built by src/reference/bvh.rs
+// Closest or any hit of a ray against a BVH over triangles, built by src/raytrace/bvh.rs
 // (whose CPU traversal mirrors this one). The including shader defines BVH_NODES_BINDING and
 // BVH_TRIANGLES_BINDING (set 0 bindings of the tables `bvh_nodes` and `bvh_triangles`: corner
 // and two edges in BVH leaf order) and BVH_TRIANGLE_COUNT before including this file.

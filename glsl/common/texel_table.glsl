@@ -1,5 +1,5 @@
 // Read-only arrays as RGBA32UI storage images used as tables, read with imageLoad
-// (src/reference/texel_table.rs says why):
+// (src/raytrace/texel_table.rs says why):
 // element i of 16 * K bytes is texels K*i .. K*i + K - 1, TABLE_WIDTH texels a row. Floats are
 // stored as their bits.
 #ifndef PENUMBRA_COMMON_TEXEL_TABLE_GLSL

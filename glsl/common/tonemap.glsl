@@ -1,5 +1,5 @@
 // Display transform for the window: exposure, Narkowicz's ACES fit, then the swapchain's sRGB
-// format encodes. Matches `tonemap` in src/image_io.rs (used for PNG captures).
+// format encodes. Matches `tonemap` in src/util/image_io.rs (used for PNG captures).
 #ifndef PENUMBRA_TONEMAP_GLSL
 #define PENUMBRA_TONEMAP_GLSL
 

@@ -182,7 +182,7 @@ impl<'g> Recorder<'g> {
         unsafe { self.gpu.device.end_command_buffer(self.cb) }.vk("vkEndCommandBuffer")
     }
 
-    /// Opens a debug label and a timestamp scope. Scopes nest; each is closed by [`end_scope`].
+    /// Opens a debug label and a timestamp scope. Scopes nest; each is closed by [`Self::end_scope`].
     pub fn begin_scope(&mut self, name: &str) {
         if let Some(dd) = &self.gpu.debug_device {
             if let Ok(c) = CString::new(name) {

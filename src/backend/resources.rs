@@ -45,7 +45,7 @@ pub struct SamplerId(pub(crate) u32);
 /// (colour, or depth+stencil together); see [`SubresourceRange::to_vk`].
 ///
 /// `mip_count` / `layer_count` may be `vk::REMAINING_MIP_LEVELS` /
-/// `vk::REMAINING_ARRAY_LAYERS`; [`ImageState`] resolves them, and the ranges
+/// `vk::REMAINING_ARRAY_LAYERS`; the graph's `ImageState` resolves them, and the ranges
 /// in the barriers it returns are always explicit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SubresourceRange {

@@ -16,7 +16,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::Result;
-pub use crate::progress::Progress;
+pub use crate::util::progress::Progress;
 
 /// FNV-1a: a stable content hash (std's hasher may change between releases).
 pub fn fnv1a(bytes: &[u8]) -> u64 {

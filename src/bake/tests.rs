@@ -118,6 +118,6 @@ fn shader_and_byte_inputs_change_the_key() {
         BakeKey::new("t").hash(),
         "embedded height-field shaders are part of the key"
     );
-    let line = crate::progress::line("wedge", 250, 1000, std::time::Duration::from_secs(2));
+    let line = crate::util::progress::line("wedge", 250, 1000, std::time::Duration::from_secs(2));
     assert_eq!(line, "wedge:  25% (250/1000) 125.0/s, 2.0 s elapsed, 6.0 s left");
 }

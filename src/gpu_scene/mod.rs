@@ -299,7 +299,7 @@ fn load_texture(
 ) -> Result<ImageId> {
     let (w, h, data) = match path {
         Some(p) => {
-            let img = crate::image_io::open_image(p)
+            let img = crate::util::image_io::open_image(p)
                 .map_err(|e| Error::Usage(format!("{what}: {}: {e}", p.display())))?
                 .to_rgba8();
             (img.width(), img.height(), img.into_raw())

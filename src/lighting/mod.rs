@@ -13,7 +13,8 @@
 //! Only [`registry`] names techniques; the commands above this layer go through it.
 
 pub mod brdf;
-pub mod lightmap_mesh;
+pub mod lightmap;
+pub mod many_lights;
 pub mod params;
 pub mod registry;
 mod terms;

@@ -13,7 +13,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::scene::{MethodDecl, MethodSchema, Scene};
-use crate::timing::PassStats;
+use crate::util::timing::PassStats;
 
 /// Creates a method from its declaration.
 pub type CreateFn = fn(&mut CreateContext<'_>, &MethodDecl) -> Result<Box<dyn LightingMethod>>;

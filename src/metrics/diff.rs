@@ -9,7 +9,7 @@
 
 use super::flip::FlipMap;
 use super::{CompareOptions, MetricsError};
-use crate::image_io::HdrImage;
+use crate::util::image_io::HdrImage;
 
 /// (position in [0, 1], sRGB colour) knots of magma: entry i of the 256-entry map sits at i/255.
 const MAGMA: [(f32, [f32; 3]); 17] = [

@@ -34,7 +34,7 @@
 
 use super::color::{hunt, hyab, linear_rgb_to_lab, linear_rgb_to_xyz, xyz_to_linear_rgb, xyz_to_ycxcz, ycxcz_to_xyz};
 use super::{CompareOptions, MetricsError};
-use crate::image_io::{aces_fit, HdrImage};
+use crate::util::image_io::{aces_fit, HdrImage};
 
 /// Colour-error exponent q_c.
 pub const QC: f32 = 0.7;

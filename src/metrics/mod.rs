@@ -19,7 +19,7 @@ pub mod stats;
 #[cfg(test)]
 mod tests;
 
-use crate::image_io::HdrImage;
+use crate::util::image_io::HdrImage;
 
 pub use diff::{colorize, diff_image, magma};
 pub use flip::{flip_error_map, FlipMap};

@@ -2,7 +2,7 @@
 //! the published formulas evaluated independently in f64 here.
 
 use super::*;
-use crate::image_io::HdrImage;
+use crate::util::image_io::HdrImage;
 
 fn image(w: u32, h: u32, mut f: impl FnMut(u32, u32) -> [f32; 3]) -> HdrImage {
     let mut img = HdrImage::new(w, h);
@@ -226,7 +226,7 @@ fn flip_of_grey_offsets_matches_closed_form_and_grows() {
 }
 
 fn image_io_aces(x: f32) -> f32 {
-    crate::image_io::aces_fit(x)
+    crate::util::image_io::aces_fit(x)
 }
 
 #[test]

@@ -12,7 +12,7 @@
 //!   on it) and counts it weighted by the inverse of that probability, so a vertex costs one to
 //!   three shadow rays instead of one per light;
 //! - a ray that escapes sees the environment: a constant, found by BSDF sampling alone, or an
-//!   equirectangular map ([`environment`]), also sampled at every vertex in proportion to
+//!   equirectangular map ([`crate::environment`]), also sampled at every vertex in proportion to
 //!   luminance × sin θ and combined with BSDF sampling by multiple importance sampling (power
 //!   heuristic);
 //! - a ray that hits an area light after a bounce ends there without adding its radiance
@@ -64,9 +64,6 @@
 //! pixel's standard error is itself rougher than with independent samples; `tests/reference.rs`,
 //! README "The Sobol sampler").
 
-pub mod bvh;
-pub mod texel_table;
-
 pub mod export;
 
 pub mod features;
@@ -84,14 +81,13 @@ use crate::backend::{
 };
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::image_io::HdrImage;
 use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
+use crate::util::image_io::HdrImage;
 pub use features::Sampler;
 use features::{BvhWalk, NeeMode, SceneFeatures};
 pub use scene_data::{
-    srgb_decode, SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TracedTriangle, TriangleShading, LIGHT_QUAD,
-    LIGHT_SPHERE,
+    SceneBuffers, TracedMaterial, TracedScene, TracedTexture, TriangleShading, LIGHT_QUAD, LIGHT_SPHERE,
 };
 
 /// Which light the estimator counts, by the surface interactions along its path.
@@ -933,7 +929,7 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let gpu = Gpu::new(&opts.gpu)?;
     let mut renderer = ReferenceRenderer::at_frame(gpu, &scene, opts.size, opts.frame)?;
     // Progress (rate, elapsed, remaining) on a terminal only: a log or a pipe gets the summary.
-    let mut progress = crate::progress::Progress::new("reference (spp)");
+    let mut progress = crate::util::progress::Progress::new("reference (spp)");
     let mut update = |done: u32, total: u32| progress.update(done as u64, total as u64);
     let image = match opts.target {
         Some(t) => {
@@ -974,7 +970,7 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
 #[cfg(test)]
 mod tests {
     use super::{replicate_standard_error, ReferenceImage};
-    use crate::image_io::HdrImage;
+    use crate::util::image_io::HdrImage;
 
     fn image(width: u32, pixels: Vec<[f32; 4]>) -> HdrImage {
         HdrImage {

@@ -12,28 +12,21 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
-use super::bvh::Bvh;
 use super::features::BvhWalk;
-use super::texel_table::TexelTable;
 use crate::backend::{vk, BufferId, Gpu};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::gpu_scene::{punctual_lights, GpuLight};
 use crate::graph::{Access, PassBuilder, ResourceStates};
+use crate::raytrace::bvh::Bvh;
+use crate::raytrace::texel_table::TexelTable;
+use crate::raytrace::TracedTriangle;
 use crate::scene::{Environment, Light, Scene};
+use crate::util::image_io::srgb_decode;
 
 /// Light types beyond the punctual ones of `glsl/common/lights.glsl` (stored in `position.w`).
 pub const LIGHT_SPHERE: f32 = 3.0;
 pub const LIGHT_QUAD: f32 = 4.0;
-
-/// What a ray is intersected with: corner and two edges (`Triangle` in the shader).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct TracedTriangle {
-    pub p0: [f32; 4],
-    pub e1: [f32; 4],
-    pub e2: [f32; 4],
-}
 
 /// What the closest hit reads (`Shading` in the shader): world-space vertex normals, tangents
 /// (xyz orthogonal to the normal, w the bitangent's sign, as the raster vertex shaders make
@@ -96,16 +89,6 @@ impl TracedTexture {
     }
 }
 
-/// The sRGB transfer function's inverse, exactly as an `_SRGB` format decodes a byte.
-pub fn srgb_decode(byte: u8) -> f32 {
-    let c = byte as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 /// The scene flattened for tracing, on the CPU.
 pub struct TracedScene {
     /// World-space corners in input order (for CPU checks); the GPU arrays are in BVH order.
@@ -129,7 +112,7 @@ pub struct TracedScene {
 
 /// A map as the raster methods upload it: 8 bits per channel, sRGB-decoded for albedo.
 fn load_texture(path: &std::path::Path, srgb: bool) -> std::result::Result<TracedTexture, String> {
-    let img = crate::image_io::open_image(path)?.to_rgba8();
+    let img = crate::util::image_io::open_image(path)?.to_rgba8();
     let decode = |b: u8| if srgb { srgb_decode(b) } else { b as f32 / 255.0 };
     let texels = img
         .pixels()

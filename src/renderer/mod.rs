@@ -18,14 +18,14 @@ use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::gpu_scene::{GpuLight, SceneGpu};
 use crate::graph::{Access, ExecutionReport, RenderGraph, ResourceStates};
-use crate::image_io::HdrImage;
 use crate::lighting::{
     registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod,
     Term, Terms, RADIANCE_FORMAT,
 };
 use crate::scene::{Camera, Scene};
 use crate::shaders::ShaderLibrary;
-use crate::timing::TimingSummary;
+use crate::util::image_io::HdrImage;
+use crate::util::timing::TimingSummary;
 
 /// Where a frame goes besides the radiance target.
 pub enum FrameOutput {

@@ -487,11 +487,11 @@ impl<'a> Field<'a> {
     }
 
     /// [`Field::existing_file`] holding an image penumbra reads, judged by its header (format and
-    /// size, see [`crate::image_io::image_header`]), so a file that is no image or claims an
+    /// size, see [`crate::util::image_io::image_header`]), so a file that is no image or claims an
     /// absurd size is an error here, with the field's line, before anything is decoded.
     pub fn existing_image(&self) -> Result<PathBuf, SceneError> {
         let path = self.existing_file()?;
-        crate::image_io::image_header(&path).map_err(|m| self.err(format!("{}: {m}", path.display())))?;
+        crate::util::image_io::image_header(&path).map_err(|m| self.err(format!("{}: {m}", path.display())))?;
         Ok(path)
     }
 }

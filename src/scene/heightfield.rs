@@ -109,7 +109,7 @@ impl HeightImage {
     /// EXR as stored.
     pub fn load(path: &Path) -> Result<HeightImage, SceneError> {
         let file = path.display().to_string();
-        let (_, w, h) = crate::image_io::image_header(path)
+        let (_, w, h) = crate::util::image_io::image_header(path)
             .map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
         if w > MAX_HEIGHT_IMAGE_SIDE || h > MAX_HEIGHT_IMAGE_SIDE {
             return Err(SceneError::new(
@@ -119,7 +119,7 @@ impl HeightImage {
                 format!("the height image is {w}×{h}; a height field samples at most {MAX_HEIGHTFIELD_RESOLUTION}² so penumbra reads height images of at most {MAX_HEIGHT_IMAGE_SIDE} on a side (downsample it)"),
             ));
         }
-        let img = crate::image_io::open_image(path)
+        let img = crate::util::image_io::open_image(path)
             .map_err(|e| SceneError::new(&file, None, "file", format!("cannot load the height image: {e}")))?;
         let (width, height) = (img.width(), img.height());
         let values: Vec<f32> = match &img {

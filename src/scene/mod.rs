@@ -164,7 +164,7 @@ impl Scene {
         self.light_motion.is_some() || self.objects.iter().any(|o| o.wind.is_some())
     }
 
-    /// What moves, for a method that keeps the rest pose to say so: "wind (objects[1] "bush")".
+    /// What moves, for a method that keeps the rest pose to say so: "wind (objects\[1\] "bush")".
     pub fn motion_summary(&self) -> Option<String> {
         let mut parts: Vec<String> = self
             .objects

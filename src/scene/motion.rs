@@ -108,7 +108,7 @@ pub fn wind_weights(mesh: &Mesh, albedo_map: Option<&Path>) -> Result<Vec<f32>, 
     let Some(path) = albedo_map else {
         return Ok(vec![1.0; mesh.positions.len()]);
     };
-    let img = crate::image_io::open_image(path)
+    let img = crate::util::image_io::open_image(path)
         .map_err(|e| format!("{}: {e}", path.display()))?
         .to_rgba8();
     let (w, h) = (img.width(), img.height());

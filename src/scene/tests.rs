@@ -576,7 +576,7 @@ fn cube_env(dir: &Path, sizes: [(u32, u32); 6], poison: Option<(usize, f32)>) ->
     let mut text = format!("{CAM}[environment]\ntype = \"cube\"\nscale = 2\n");
     for (k, key) in CUBE_FACE_KEYS.into_iter().enumerate() {
         let (w, h) = sizes[k];
-        let mut img = crate::image_io::HdrImage::new(w, h);
+        let mut img = crate::util::image_io::HdrImage::new(w, h);
         for p in &mut img.pixels {
             *p = [k as f32 + 1.0, 0.5, 0.25, 1.0];
         }

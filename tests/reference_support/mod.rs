@@ -4,10 +4,10 @@
 
 use glam::Vec3;
 use penumbra::environment::EnvironmentMap;
-use penumbra::image_io::HdrImage;
 use penumbra::lighting::brdf::Surface;
 use penumbra::reference::ReferenceImage;
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 /// Agreement of a rendered image with closed-form values, judged by the renderer's own
 /// standard errors. Per pixel and channel z = (|got − want| − slack) / s.e.; an unbiased

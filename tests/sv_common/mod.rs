@@ -3,9 +3,9 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use penumbra::image_io::HdrImage;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Camera, Scene};
+use penumbra::util::image_io::HdrImage;
 
 use crate::common;
 

@@ -37,9 +37,9 @@ use crate::backend::{
 use crate::bake::{BakeData, BakeKey};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::lighting::many_lights::{scene_polygons, LightModel, ManyLight};
 use crate::lighting::params::Params;
 use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms};
-use crate::many_lights::{scene_polygons, LightModel, ManyLight};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use crate::world::Tolerance;
 use setup::Projection;
@@ -429,10 +429,10 @@ fn check_matrix(vertices: usize, lights: usize, storage: Storage) -> std::result
 /// The full set-up of `scene`'s polygons and lights on the CPU, as the bake runs it.
 pub fn bake_scene(
     scene: &Scene,
-    geometry: &crate::lightmap::geometry::StaticGeometry,
+    geometry: &crate::lighting::lightmap::geometry::StaticGeometry,
     config: &Config,
-    progress: &mut crate::progress::Progress,
-) -> Result<(setup::Setup, Vec<crate::many_lights::ScenePolygon>)> {
+    progress: &mut crate::util::progress::Progress,
+) -> Result<(setup::Setup, Vec<crate::lighting::many_lights::ScenePolygon>)> {
     let lights = ManyLight::from_scene(scene, NAME)?;
     let polygons = scene_polygons(&scene.source, geometry, NAME)?;
     let settings = setup::Settings {
@@ -459,7 +459,7 @@ fn field_error(scene: &Scene, field: &str, message: String) -> Error {
 }
 
 impl Baked {
-    pub fn from_setup(s: &setup::Setup, polygons: &[crate::many_lights::ScenePolygon]) -> Baked {
+    pub fn from_setup(s: &setup::Setup, polygons: &[crate::lighting::many_lights::ScenePolygon]) -> Baked {
         let seg = &s.segments;
         let vertices = (0..seg.positions.len())
             .map(|v| {
@@ -594,7 +594,7 @@ impl BspLights {
                 lights.len()
             )));
         }
-        let geometry = crate::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
+        let geometry = crate::lighting::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
         let polygons = scene_polygons(&scene.source, &geometry, NAME)?;
         if polygons.is_empty() {
             return Err(Error::Usage(format!(

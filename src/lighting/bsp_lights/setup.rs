@@ -14,9 +14,9 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::many_lights::geometry::point_in_convex_polygon;
-use crate::many_lights::{LightModel, ManyLight, ScenePolygon, Segments};
-use crate::progress::Progress;
+use crate::lighting::many_lights::geometry::point_in_convex_polygon;
+use crate::lighting::many_lights::{LightModel, ManyLight, ScenePolygon, Segments};
+use crate::util::progress::Progress;
 use crate::world::bsp::{Fragment, Tree};
 use crate::world::polygon::clip_points_front;
 use crate::world::{Plane, Polygon, Side, SplitHeuristic, Tolerance};

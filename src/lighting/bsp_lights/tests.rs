@@ -7,8 +7,8 @@ use glam::DVec3;
 
 use super::setup::{self, build_tree, Projection, Settings, Setup};
 use super::{Baked, Config, Mode, Storage};
-use crate::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon};
-use crate::progress::Progress;
+use crate::lighting::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon};
+use crate::util::progress::Progress;
 use crate::world::bsp::{Child, Tree};
 use crate::world::polygon::point_segment_distance;
 use crate::world::{Plane, Polygon, Split, Tolerance, PLANE_EPSILON};
@@ -755,7 +755,7 @@ fn scene(methods: &str, lights: usize) -> crate::scene::Scene {
 fn the_bake_round_trips_through_the_cache_and_its_key() {
     use crate::bake::{BakeData, BakeKey, Baker};
     let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.05 }", 3);
-    let geometry = crate::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
     let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
     let (s, polygons) = super::bake_scene(&sc, &geometry, &config, &mut Progress::new("test")).unwrap();
     let baked = Baked::from_setup(&s, &polygons);
@@ -800,7 +800,7 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
 fn too_large_a_matrix_is_one_error_naming_the_file_and_the_parameter() {
     // 2,000 lights over ~9k vertices at 12 bytes: about 200 MiB.
     let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.002 }", 2000);
-    let geometry = crate::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
     let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
     let err = match super::bake_scene(&sc, &geometry, &config, &mut Progress::new("test")) {
         Ok(_) => panic!("accepted"),

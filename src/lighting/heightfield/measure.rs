@@ -5,7 +5,7 @@
 use crate::backend::GpuDesc;
 use crate::error::Result;
 use crate::scene::{MethodDecl, Scene};
-use crate::timing::PassStats;
+use crate::util::timing::PassStats;
 
 use super::standalone::Standalone;
 

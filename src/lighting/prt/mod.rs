@@ -24,8 +24,8 @@ use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
-use crate::progress::Progress;
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
+use crate::util::progress::Progress;
 use config::{Baker, Config};
 use receivers::{OccluderRules, Placed, Receivers};
 

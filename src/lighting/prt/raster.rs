@@ -23,8 +23,8 @@ use crate::backend::{
 };
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::progress::Progress;
 use crate::shaders::ShaderLibrary;
+use crate::util::progress::Progress;
 
 /// `PrtReceiver` in glsl/prt/mapping.glsl.
 #[repr(C)]

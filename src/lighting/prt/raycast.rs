@@ -26,12 +26,12 @@ use super::receivers::{tangent_frame, Clip, Receivers};
 use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind, SpecConstant};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::parallel;
-use crate::progress::Progress;
-use crate::reference::bvh::{box_entry, intersect_triangle, safe_inverse, Bvh, BvhNode};
-use crate::reference::scene_data::TracedTriangle;
-use crate::reference::texel_table::GpuBvh;
+use crate::raytrace::bvh::{box_entry, intersect_triangle, safe_inverse, Bvh, BvhNode};
+use crate::raytrace::texel_table::GpuBvh;
+use crate::raytrace::TracedTriangle;
 use crate::shaders::ShaderLibrary;
+use crate::util::parallel;
+use crate::util::progress::Progress;
 
 /// Most SH bands either path bakes (the shader's `SH_MAX_BANDS`).
 pub const MAX_BANDS: usize = 8;

@@ -286,7 +286,7 @@ fn occluder_rules_make_the_sets() {
             2,
             1024,
             super::receivers::Clip::default(),
-            &mut crate::progress::Progress::new("test"),
+            &mut crate::util::progress::Progress::new("test"),
         )
         .unwrap();
         let n = bowl.positions.len();

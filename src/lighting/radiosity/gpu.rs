@@ -1,5 +1,5 @@
-//! The shooting step on the GPU (issue 12, deliverable 4): the same progressive refinement as
-//! [`solve`](crate::lightmap::solve) — the same blocks, selection rules, form factors and visibility rays
+//! The shooting step on the GPU: the same progressive refinement as
+//! [`crate::lighting::lightmap::solve`] — the same blocks, selection rules, form factors and visibility rays
 //! through a BVH of the static triangles — with every shot run as three compute passes
 //! (`glsl/radiosity/`: block powers, the selection in one workgroup, the receivers' gather). Many
 //! shots go in one submission; the host reads back only the shot record between submissions (to
@@ -15,14 +15,14 @@ use glam::Vec3;
 use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::lightmap::patches::{Patches, Triangle};
-use crate::lightmap::solve::{self, show_progress, Mode, Report, Settings};
-use crate::lightmap::visibility::Matrix;
-use crate::progress::Progress;
-use crate::reference::bvh::Bvh;
-use crate::reference::scene_data::TracedTriangle;
-use crate::reference::texel_table::GpuBvh;
+use crate::lighting::lightmap::patches::{Patches, Triangle};
+use crate::lighting::lightmap::solve::{self, show_progress, Mode, Report, Settings};
+use crate::lighting::lightmap::visibility::Matrix;
+use crate::raytrace::bvh::Bvh;
+use crate::raytrace::texel_table::GpuBvh;
+use crate::raytrace::TracedTriangle;
 use crate::shaders::ShaderLibrary;
+use crate::util::progress::Progress;
 
 /// `Patch` in glsl/radiosity/shooting.glsl.
 #[repr(C)]

@@ -1,11 +1,11 @@
 //! Radiosity light-maps (seed 000 §3, CaLight; digest §1.2) on the light-map substrate
-//! ([`crate::lightmap`]: patches, the surface-visibility matrix, form factors, the shooting loop,
-//! border passes, tone reproduction): direct light and the sun ([`lightmap`], [`sun`]), and the
+//! ([`crate::lighting::lightmap`]: patches, the surface-visibility matrix, form factors, the shooting loop,
+//! border passes, tone reproduction): direct light and the sun ([`bake`], [`sun`]), and the
 //! shooting on the CPU or the GPU ([`gpu`]); faithful to CaLight or corrected (exact form factors,
 //! energy that closes, radiometric light-maps).
 //!
 //! The method supplies the base term: the scene's static triangles drawn as emission + albedo ×
-//! light-map ([`lightmap`] bakes it through the bake stage's cache), entities with their emission
+//! light-map ([`bake`] bakes it through the bake stage's cache), entities with their emission
 //! only. Bounces reflect each material's albedo times its albedo map's mean, not the map texel by
 //! texel.
 
@@ -15,7 +15,7 @@ pub mod sun;
 #[cfg(test)]
 mod tests;
 
-pub mod lightmap;
+pub mod bake;
 
 use crate::backend::{
     vk, ColorTarget, ImageDesc, ImageId, PipelineId, SamplerDesc, SamplerId, SpecConstant, SubresourceRange,
@@ -23,10 +23,10 @@ use crate::backend::{
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
+use crate::lighting::lightmap::solve::{Mode, Settings};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
-use crate::lightmap::solve::{Mode, Settings};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
-use lightmap::Content;
+use bake::Content;
 
 pub const NAME: &str = "radiosity";
 
@@ -201,7 +201,7 @@ pub fn lightmap_format(mode: Mode) -> vk::Format {
 /// light-map.
 pub struct Radiosity {
     pipeline: PipelineId,
-    mesh: crate::lighting::lightmap_mesh::Mesh,
+    mesh: crate::lighting::lightmap::mesh::Mesh,
     lightmap: ImageId,
     sampler: SamplerId,
 }
@@ -209,7 +209,7 @@ pub struct Radiosity {
 impl Radiosity {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Radiosity> {
         let config = Config::from_decl_in(decl, Some(cx.scene))?;
-        let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!(
                 "{}: {NAME}: the scene has no static geometry to light-map",
@@ -251,11 +251,11 @@ impl Radiosity {
                     .on_gpu
                     .unwrap_or(gpu.caps().device_type != vk::PhysicalDeviceType::CPU);
                 let shooter = if on_gpu {
-                    lightmap::Shooter::Gpu(gpu, shaders)
+                    bake::Shooter::Gpu(gpu, shaders)
                 } else {
-                    lightmap::Shooter::Cpu
+                    bake::Shooter::Cpu
                 };
-                let (patches, atlas, texels, _report) = lightmap::bake(
+                let (patches, atlas, texels, _report) = bake::bake(
                     geo,
                     scene,
                     config.patch_size,
@@ -266,7 +266,7 @@ impl Radiosity {
                 )?;
                 let mut out = vec![atlas.width as f32, atlas.height as f32];
                 out.extend(texels.iter().flatten());
-                let uv = crate::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
+                let uv = crate::lighting::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
                 out.extend(uv.iter().flatten());
                 Ok(out)
             },
@@ -284,16 +284,17 @@ impl Radiosity {
             )));
         }
         let texels = &baked[2..2 + texel_floats];
-        let mesh = crate::lighting::lightmap_mesh::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
+        let mesh = crate::lighting::lightmap::mesh::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
         let format = lightmap_format(config.settings.mode);
         let lightmap = cx.gpu.create_image(
             &ImageDesc::new_2d("radiosity light-map", format, w, h)
                 .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
         )?;
         match format {
-            vk::Format::R8G8B8A8_UNORM => cx
-                .gpu
-                .upload_image(lightmap, 0, &crate::lightmap::atlas::to_rgb8(texels))?,
+            vk::Format::R8G8B8A8_UNORM => {
+                cx.gpu
+                    .upload_image(lightmap, 0, &crate::lighting::lightmap::atlas::to_rgb8(texels))?
+            }
             _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
         }
         cx.states.set_image(
@@ -303,7 +304,7 @@ impl Radiosity {
                 stages: vk::PipelineStageFlags2::ALL_COMMANDS,
             },
         )?;
-        let mut desc = crate::lighting::lightmap_mesh::Mesh::pipeline_desc(
+        let mut desc = crate::lighting::lightmap::mesh::Mesh::pipeline_desc(
             &format!("{NAME} light-map"),
             "radiosity/lightmap.frag",
         );

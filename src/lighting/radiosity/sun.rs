@@ -13,8 +13,8 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::lightmap::patches::Patches;
-use crate::lightmap::solve::{Mode, Occluders};
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::{Mode, Occluders};
 
 /// Sub-samples per patch side (as the coverage estimate's).
 const SAMPLES: usize = 4;
@@ -51,7 +51,10 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
                             i as f64 + (si as f64 + 0.5) / SAMPLES as f64,
                             j as f64 + (sj as f64 + 0.5) / SAMPLES as f64,
                         ) * p.size;
-                        if !tris.iter().any(|t| crate::lightmap::patches::inside_triangle(q, t)) {
+                        if !tris
+                            .iter()
+                            .any(|t| crate::lighting::lightmap::patches::inside_triangle(q, t))
+                        {
                             continue;
                         }
                         inside += 1;

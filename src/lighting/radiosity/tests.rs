@@ -4,9 +4,9 @@ mod border;
 mod sun;
 mod visibility;
 
-use crate::lightmap::patches::{Patches, Triangle};
-use crate::lightmap::solve::{solve, Mode, Occluders, Settings};
-use crate::progress::Progress;
+use crate::lighting::lightmap::patches::{Patches, Triangle};
+use crate::lighting::lightmap::solve::{solve, Mode, Occluders, Settings};
+use crate::util::progress::Progress;
 
 /// A closed box [0, s]³ of inward-facing quads (two triangles each) of one albedo; `emit(face)`
 /// gives each face's emitted radiance.
@@ -43,7 +43,7 @@ fn closed_box(s: f64, albedo: f64, emit: impl Fn(usize) -> f64) -> Vec<Triangle>
     out
 }
 
-fn run(tris: &[Triangle], size: f64, settings: &Settings) -> (Patches, crate::lightmap::solve::Report) {
+fn run(tris: &[Triangle], size: f64, settings: &Settings) -> (Patches, crate::lighting::lightmap::solve::Report) {
     let mut p = Patches::build(tris, size);
     let occ = Occluders::new(tris);
     let report = solve(&mut p, &occ, settings, &mut Progress::new("test"));

@@ -1,8 +1,8 @@
 //! The method's parameters, each checked with one error line naming the scene file, line and field.
 
 use crate::error::Result;
+use crate::lighting::lightmap::solve::{self, Mode};
 use crate::lighting::params::Params;
-use crate::lightmap::solve::{self, Mode};
 use crate::scene::{MethodDecl, Scene};
 
 /// How the coefficients are stored on the GPU.

@@ -20,13 +20,13 @@ use super::samples::SampleSet;
 use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::lightmap::patches::{Patches, Triangle};
-use crate::lightmap::solve::Mode;
-use crate::progress::Progress;
-use crate::reference::bvh::Bvh;
-use crate::reference::scene_data::TracedTriangle;
-use crate::reference::texel_table::GpuBvh;
+use crate::lighting::lightmap::patches::{Patches, Triangle};
+use crate::lighting::lightmap::solve::Mode;
+use crate::raytrace::bvh::Bvh;
+use crate::raytrace::texel_table::GpuBvh;
+use crate::raytrace::TracedTriangle;
 use crate::shaders::ShaderLibrary;
+use crate::util::progress::Progress;
 
 /// `Patch` in glsl/sh_lightmap/visibility.comp.
 #[repr(C)]
@@ -68,7 +68,7 @@ fn v4(v: DVec3) -> [f32; 4] {
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky, as
 /// [`super::transfer::visibility_cpu`] lays them out (`⌈N/32⌉` words per patch, patch-major;
 /// the rows of border patches stay 0). `triangles` are the occluders the CPU path builds its
-/// [`Occluders`](crate::lightmap::solve::Occluders) from.
+/// [`Occluders`](crate::lighting::lightmap::solve::Occluders) from.
 pub fn visibility_gpu(
     gpu: &mut Gpu,
     shaders: &ShaderLibrary,

@@ -28,12 +28,12 @@ use crate::backend::{
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
+use crate::lighting::lightmap::geometry::StaticGeometry;
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::{Mode, Occluders};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
-use crate::lightmap::geometry::StaticGeometry;
-use crate::lightmap::patches::Patches;
-use crate::lightmap::solve::{Mode, Occluders};
-use crate::progress::Progress;
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
+use crate::util::progress::Progress;
 use config::{Config, Storage, View};
 use normals::{NormalImage, Surfaces};
 use samples::SampleSet;
@@ -211,7 +211,7 @@ pub fn bake(
         }
     };
     let t = transfer::bake(&p, &occluders, &samples, &bits, &config.transfer, progress);
-    let atlas = crate::lightmap::atlas::pack(&p);
+    let atlas = crate::lighting::lightmap::atlas::pack(&p);
     let dim = samples.dim();
     let mut coeffs = vec![0.0f32; (atlas.width * atlas.height) as usize * dim];
     for (ci, c) in p.charts.iter().enumerate() {
@@ -226,7 +226,7 @@ pub fn bake(
             }
         }
     }
-    let uvs = crate::lightmap::atlas::triangle_uvs(&geometry.triangles, &p, &atlas)
+    let uvs = crate::lighting::lightmap::atlas::triangle_uvs(&geometry.triangles, &p, &atlas)
         .into_iter()
         .flatten()
         .collect();
@@ -247,7 +247,7 @@ fn load_normal_maps(scene: &Scene) -> Result<Vec<Option<NormalImage>>> {
         .map(|m| match &m.normal_map {
             None => Ok(None),
             Some(path) => {
-                let img = crate::image_io::open_image(path)
+                let img = crate::util::image_io::open_image(path)
                     .map_err(|e| {
                         Error::Usage(format!(
                             "{}: material {:?}: normal_map: cannot load {}: {e}",
@@ -310,7 +310,7 @@ impl EnvProjection {
 pub struct ShLightmap {
     config: Config,
     pipeline: PipelineId,
-    mesh: crate::lighting::lightmap_mesh::Mesh,
+    mesh: crate::lighting::lightmap::mesh::Mesh,
     /// Native: the coefficient layers. Compressed: the index map and the representative table.
     images: Vec<(&'static str, ImageId)>,
     sampler: SamplerId,
@@ -326,7 +326,7 @@ pub struct ShLightmap {
 impl ShLightmap {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShLightmap> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
-        let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!(
                 "{}: {NAME}: the scene has no static geometry to light-map",
@@ -399,7 +399,7 @@ impl ShLightmap {
                 cx.scene.source
             ))
         })?;
-        let mesh = crate::lighting::lightmap_mesh::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
+        let mesh = crate::lighting::lightmap::mesh::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
         let images = if config.reps == 0 {
             upload_native(cx, &baked, config.storage)?
         } else {
@@ -410,7 +410,7 @@ impl ShLightmap {
             _ => ("sh_lightmap/compressed.frag", config.storage == Storage::Rgba8),
         };
         let mut desc =
-            crate::lighting::lightmap_mesh::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
+            crate::lighting::lightmap::mesh::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
         desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);

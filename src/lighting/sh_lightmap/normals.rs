@@ -5,7 +5,7 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::lightmap::patches::{self, Patches, Triangle};
+use crate::lighting::lightmap::patches::{self, Patches, Triangle};
 
 /// A normal map's texels, decoded to tangent-space unit vectors (x toward +u, y toward the
 /// bitangent, z along the surface normal), row-major from the top.

@@ -6,10 +6,10 @@ use glam::{DVec3, Vec3};
 use super::normals::{self, NormalImage, Surfaces};
 use super::samples::SampleSet;
 use super::transfer::{self, Settings};
-use crate::lightmap::patches::{Patches, Triangle};
-use crate::lightmap::solve::{self, Mode, Occluders};
-use crate::progress::Progress;
+use crate::lighting::lightmap::patches::{Patches, Triangle};
+use crate::lighting::lightmap::solve::{self, Mode, Occluders};
 use crate::sh;
+use crate::util::progress::Progress;
 
 const BANDS: [usize; 5] = [2, 3, 4, 6, 8];
 

@@ -9,17 +9,17 @@
 //!   Bounces reflect the mean of the albedo's RGB (the transfer is one scalar function: an RGB
 //!   light is three dot products, seed 000's cheapest colour extension, digest §6 item 9).
 //! * *faithful* ([CAFU-SRC]): the direct transfer is Σ cos·y·4π/N without ρ/π, bounces reflect
-//!   ρ = 0.3 everywhere, then the [LRP97] tone mapping of transfer vectors (per patch, the vector
+//!   ρ = 0.3 everywhere, then the \[LRP97\] tone mapping of transfer vectors (per patch, the vector
 //!   scaled by display/world of its max |c|; then globally to max |c| = 1).
 
 use glam::DVec3;
 
 use super::samples::SampleSet;
-use crate::lightmap::border;
-use crate::lightmap::patches::Patches;
-use crate::lightmap::solve::{self, Geometry, Mode, Occluders, Unshot};
-use crate::lightmap::tone;
-use crate::progress::Progress;
+use crate::lighting::lightmap::border;
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::{self, Geometry, Mode, Occluders, Unshot};
+use crate::lighting::lightmap::tone;
+use crate::util::progress::Progress;
 
 /// The seed's bounce reflectance ([CAFU-SRC]: ρ = 0.3 for every surface).
 pub const FAITHFUL_REFLECTANCE: f64 = 0.3;
@@ -252,7 +252,7 @@ pub fn bake(
 }
 
 /// The seed's transfer tone mapping ([CAFU-SRC], digest §1.5): the luminance proxy of a patch is
-/// its max |c|; its vector is scaled by the [LRP97] display/world ratio of that proxy; then all
+/// its max |c|; its vector is scaled by the \[LRP97\] display/world ratio of that proxy; then all
 /// coefficients are rescaled together so that max |c| = 1.
 pub fn tone_map(p: &Patches, coeffs: &mut [f64], dim: usize) {
     let lum: Vec<f64> = (0..p.patches.len())

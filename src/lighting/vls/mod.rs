@@ -29,9 +29,9 @@ use crate::backend::{
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
+use crate::lighting::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::lighting::params::Params;
 use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
-use crate::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use setup::{Feeler, LightSets, Point, Selection, SetupParams};
 
@@ -286,7 +286,7 @@ impl Layout {
     /// `geometry` is the scene's static geometry (`static_geometry` or `scene_geometry`).
     pub fn new(
         scene: &Scene,
-        geometry: &crate::lightmap::geometry::StaticGeometry,
+        geometry: &crate::lighting::lightmap::geometry::StaticGeometry,
         decl: &MethodDecl,
         config: &Config,
     ) -> Result<Layout> {
@@ -376,7 +376,7 @@ pub struct Vls {
 impl Vls {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Vls> {
         let config = Config::from_decl_in(decl, Some(cx.scene))?;
-        let geometry = crate::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         let layout = Layout::new(cx.scene, &geometry, decl, &config)?;
         let key = layout.key(&config);
         let sets = cx.bakes.bake(&config.label(), &key, |progress| {

@@ -7,9 +7,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::DVec3;
 
 use crate::bake::{BakeData, Progress};
-use crate::many_lights::geometry::{point_in_convex_polygon, segment_plane};
-use crate::many_lights::occluders::END_CLEARANCE;
-use crate::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon, Segments};
+use crate::lighting::many_lights::geometry::{point_in_convex_polygon, segment_plane};
+use crate::lighting::many_lights::occluders::END_CLEARANCE;
+use crate::lighting::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 
 /// Marks an empty slot of a segment's light set (fewer than K lights passed).
 pub const EMPTY: u32 = u32::MAX;

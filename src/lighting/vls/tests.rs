@@ -9,7 +9,7 @@ use glam::DVec3;
 use super::setup::{self, choose, Feeler, LightSets, Point, Selection, SetupParams, ThesisFeeler, EMPTY};
 use super::{Config, Layout};
 use crate::bake::{Baker, Progress};
-use crate::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon, Segments};
+use crate::lighting::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::scene::{MethodDecl, Scene};
 use crate::world::Polygon;
 
@@ -570,7 +570,7 @@ fn bad_parameters_name_the_file_and_the_parameter() {
     // Too fine a segmentation for the scene is refused by the same parameter, at creation.
     let s = scene(r#"{ name = "vls", max_segment_area = 1e-6 }"#);
     let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
-    let geometry = crate::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
     let e = Layout::new(&s, &geometry, &s.methods[0], &config)
         .err()
         .expect("too many segments")
@@ -584,7 +584,7 @@ fn bad_parameters_name_the_file_and_the_parameter() {
         + "\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1.0\n";
     let s = Scene::from_str(&text, "scenes/vls_test.toml", std::path::Path::new("scenes")).unwrap();
     let config = Config::from_decl(&s.methods[0]).unwrap();
-    let geometry = crate::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
     let e = Layout::new(&s, &geometry, &s.methods[0], &config)
         .err()
         .expect("a directional light")
@@ -598,7 +598,7 @@ fn bad_parameters_name_the_file_and_the_parameter() {
 fn the_setup_is_a_cached_bake() {
     let s = scene(r#"{ name = "vls", max_segment_area = 0.5 }"#);
     let config = Config::from_decl(&s.methods[0]).unwrap();
-    let geometry = crate::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
     let layout = Layout::new(&s, &geometry, &s.methods[0], &config).unwrap();
     let dir = std::env::temp_dir().join(format!("penumbra-vls-bake-{}", std::process::id()));
     let mut baker = Baker::new(Some(dir.clone()));

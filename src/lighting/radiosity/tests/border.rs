@@ -5,12 +5,12 @@
 
 use glam::DVec3;
 
-use crate::lighting::radiosity::lightmap::{self, Content};
-use crate::lightmap::atlas::Atlas;
-use crate::lightmap::patches::Patches;
-use crate::lightmap::solve::{Mode, Report, Settings};
-use crate::progress::Progress;
+use crate::lighting::lightmap::atlas::Atlas;
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::{Mode, Report, Settings};
+use crate::lighting::radiosity::bake::{self, Content};
 use crate::scene::Scene;
+use crate::util::progress::Progress;
 
 pub(super) struct Baked {
     pub scene: Scene,
@@ -21,14 +21,15 @@ pub(super) struct Baked {
 }
 
 pub(super) fn bake_scene(scene: Scene, size: f64, settings: &Settings) -> Baked {
-    let geo = crate::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
-    let (p, atlas, texels, report) = lightmap::bake(
+    let geo =
+        crate::lighting::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
+    let (p, atlas, texels, report) = bake::bake(
         &geo,
         &scene,
         size,
         settings,
         Content::All,
-        lightmap::Shooter::Cpu,
+        bake::Shooter::Cpu,
         &mut Progress::new("test"),
     )
     .unwrap();
@@ -302,8 +303,8 @@ fn no_light_bleeds_through_a_thin_wall() {
 #[test]
 fn faithful_texels_are_bytes() {
     use crate::backend::vk;
+    use crate::lighting::lightmap::atlas::to_rgb8;
     use crate::lighting::radiosity::lightmap_format;
-    use crate::lightmap::atlas::to_rgb8;
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/two_rooms.toml")).unwrap();
     let b = bake_text(&text, 0.2, &faithful(1e-2));
     let flat: Vec<f32> = b.texels.iter().flatten().copied().collect();

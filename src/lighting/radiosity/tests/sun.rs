@@ -5,9 +5,9 @@ use glam::DVec3;
 
 use super::border::bake_text;
 
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::{Mode, Occluders, Settings};
 use crate::lighting::radiosity::sun;
-use crate::lightmap::patches::Patches;
-use crate::lightmap::solve::{Mode, Occluders, Settings};
 use crate::scene::Scene;
 
 const SUN: [f64; 3] = [0.35, -1.0, 0.2];
@@ -76,7 +76,7 @@ fn a_square_occluder_casts_the_analytic_shadow() {
     ] {
         let text = scene(sky);
         let sc = Scene::from_str(&text, "sun.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
-        let geo = crate::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
+        let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
         let p = Patches::build(&geo.triangles, size);
         let occ = Occluders::new(&geo.triangles);
         let to_sun = -DVec3::from_array(SUN).normalize();

@@ -4,16 +4,17 @@
 
 use glam::DVec3;
 
-use crate::lightmap::patches::{Patches, Triangle};
-use crate::lightmap::solve::{solve, Mode, Occluders, Report, Settings};
-use crate::lightmap::visibility::{Matrix, Tester, Vis};
-use crate::progress::Progress;
+use crate::lighting::lightmap::patches::{Patches, Triangle};
+use crate::lighting::lightmap::solve::{solve, Mode, Occluders, Report, Settings};
+use crate::lighting::lightmap::visibility::{Matrix, Tester, Vis};
 use crate::scene::Scene;
+use crate::util::progress::Progress;
 
 fn triangles(file: &str) -> (Scene, Vec<Triangle>) {
     let scene =
         Scene::from_file(format!("{}/scenes/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("{e}"));
-    let geo = crate::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
+    let geo =
+        crate::lighting::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap_or_else(|e| panic!("{e}"));
     (scene, geo.triangles)
 }
 

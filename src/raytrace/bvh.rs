@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::parallel::{cores, fold_ranges};
+use crate::util::parallel::{cores, fold_ranges};
 
 /// One node as the shader reads it (std430 `struct { vec3 lo; uint index; vec3 hi; uint count; }`).
 #[repr(C)]

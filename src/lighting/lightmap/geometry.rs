@@ -7,8 +7,8 @@ use glam::{Mat4, Vec3};
 use super::patches::Triangle;
 use crate::error::{Error, Result};
 use crate::gpu_scene::SceneGpu;
-use crate::reference::scene_data::srgb_decode;
 use crate::scene::{Light, Scene};
+use crate::util::image_io::srgb_decode;
 
 /// One scene draw's triangles as the baker sees them, and what the renderer draws them with.
 pub struct StaticGeometry {
@@ -140,7 +140,7 @@ fn from_draws<'a>(
 
 /// The mean of an albedo map's texels, sRGB-decoded as the raster methods decode them.
 fn mean_albedo(path: &std::path::Path) -> std::result::Result<Vec3, String> {
-    let img = crate::image_io::open_image(path)?.to_rgba8();
+    let img = crate::util::image_io::open_image(path)?.to_rgba8();
     let n = (img.width() as f64 * img.height() as f64).max(1.0);
     let mut sum = glam::DVec3::ZERO;
     for p in img.pixels() {

@@ -158,7 +158,11 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
         root.present().map_err(plot_err)?;
     }
     let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| Error::Usage("chart: bitmap size mismatch".into()))?;
-    Ok(crate::image_io::save_image(path, img.into(), image::ImageFormat::Png)?)
+    Ok(crate::util::image_io::save_image(
+        path,
+        img.into(),
+        image::ImageFormat::Png,
+    )?)
 }
 
 /// Axis text with as many decimals as the value's size needs (log axes span decades, and

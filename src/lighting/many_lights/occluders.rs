@@ -4,7 +4,7 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::reference::bvh::Bvh;
+use crate::raytrace::bvh::Bvh;
 use crate::world::Polygon;
 
 pub struct Occluders {

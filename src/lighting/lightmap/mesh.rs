@@ -1,5 +1,5 @@
 //! The static triangles with their light-map coordinates, drawn by every light-mapped base term
-//! (radiosity's light-maps, SH light-maps) through glsl/radiosity/lightmap.vert.
+//! (radiosity's light-maps, SH light-maps) through glsl/lightmap/mesh.vert.
 
 use glam::Vec3;
 
@@ -10,10 +10,10 @@ use crate::backend::{
 use crate::error::Result;
 use crate::gpu_scene::DrawPush;
 use crate::graph::{Access, PassBuilder};
+use crate::lighting::lightmap::geometry::StaticGeometry;
 use crate::lighting::{CreateContext, FrameContext};
-use crate::lightmap::geometry::StaticGeometry;
 
-/// `LightmapVertex` of glsl/radiosity/lightmap.vert (object space: the draw's model matrix is
+/// `LightmapVertex` of glsl/lightmap/mesh.vert (object space: the draw's model matrix is
 /// pushed, so the depth is the one every other method computes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -94,7 +94,7 @@ impl Mesh {
         })
     }
 
-    /// A pipeline drawing the mesh with `fragment` (and glsl/radiosity/lightmap.vert) into the
+    /// A pipeline drawing the mesh with `fragment` (and glsl/lightmap/mesh.vert) into the
     /// radiance target, depth tested and written.
     pub fn pipeline_desc(name: &str, fragment: &str) -> GraphicsPipelineDesc {
         let attr = |location, format, offset| VertexAttribute {
@@ -103,7 +103,7 @@ impl Mesh {
             format,
             offset,
         };
-        let mut desc = GraphicsPipelineDesc::new(name, "radiosity/lightmap.vert", Some(fragment));
+        let mut desc = GraphicsPipelineDesc::new(name, "lightmap/mesh.vert", Some(fragment));
         desc.vertex_layout = VertexLayout {
             buffers: vec![(0, std::mem::size_of::<LightmapVertex>() as u32)],
             attributes: vec![

@@ -263,6 +263,16 @@ pub fn srgb_encode(c: f32) -> f32 {
     }
 }
 
+/// The sRGB transfer function's inverse, exactly as an `_SRGB` format decodes a byte.
+pub fn srgb_decode(byte: u8) -> f32 {
+    let c = byte as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -5,7 +5,7 @@
 use glam::DVec3;
 
 use crate::error::{Error, Result};
-use crate::lightmap::geometry::StaticGeometry;
+use crate::lighting::lightmap::geometry::StaticGeometry;
 use crate::world::Polygon;
 
 /// One convex polygon of the scene, counter-clockwise seen from the side its normal points to.

@@ -26,13 +26,13 @@ use std::path::{Path, PathBuf};
 use crate::backend::{Gpu, GpuDesc};
 use crate::bake::{BakeReport, Baker};
 use crate::error::{Error, Result};
-use crate::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, ReferenceKind};
 use crate::metrics::{self, CompareOptions, Metrics};
 use crate::reference::{LightPaths, ReferenceImage, ReferenceRenderer, Sampler, Settings, Stop, MIN_ADAPTIVE_SPP};
 use crate::renderer::{FrameOutput, Renderer};
 use crate::scene::Scene;
-use crate::timing::summarise;
+use crate::util::image_io::HdrImage;
+use crate::util::timing::summarise;
 
 #[derive(Clone, Debug)]
 pub struct ChartOptions {
@@ -264,7 +264,7 @@ pub fn reference_image(
         scene.source
     );
     let mut tracer = ReferenceRenderer::at_frame(Gpu::new(&opts.gpu)?, scene, size, opts.frame)?;
-    let mut progress = crate::progress::Progress::new("reference (spp)");
+    let mut progress = crate::util::progress::Progress::new("reference (spp)");
     let mut update = |done: u32, total: u32| progress.update(done as u64, total as u64);
     let image = if opts.reference_noise > 0.0 {
         let mut check = |img: &ReferenceImage| ratio(img);
@@ -284,7 +284,7 @@ pub fn reference_image(
     std::fs::create_dir_all(dir).map_err(|e| Error::Usage(format!("{}: {e}", dir.display())))?;
     image.mean.write_exr(&path)?;
     image.standard_error.write_exr(&se_path)?;
-    crate::image_io::write_file(&spp_path, image.spp.to_string().as_bytes())
+    crate::util::image_io::write_file(&spp_path, image.spp.to_string().as_bytes())
         .map_err(|e| Error::Usage(format!("{}: {e}", spp_path.display())))?;
     Ok(labelled(image))
 }
@@ -430,7 +430,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     let bakes = renderer.bakes.clone();
     drop(renderer);
     let supersampled = if opts.supersample > 1 {
-        let size = crate::supersample::supersampled_size(opts.size, opts.supersample)?;
+        let size = crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
         let mut big = Renderer::with_configuration(
             Gpu::new(&opts.gpu)?,
             scene.clone(),
@@ -445,7 +445,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
             .render(&camera, FrameOutput::Readback)?
             .image
             .ok_or_else(|| Error::Usage("readback returned no image".into()))?;
-        Some(crate::supersample::box_filter(&image, opts.supersample)?)
+        Some(crate::commands::supersample::box_filter(&image, opts.supersample)?)
     } else {
         None
     };
@@ -475,7 +475,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             opts.reference_noise
         )));
     }
-    crate::supersample::supersampled_size(opts.size, opts.supersample)?;
+    crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
     let mut device = String::new();
     let mut skipped: Vec<String> = Vec::new();
     let all = registry::configurations(&scene)?;
@@ -499,7 +499,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         swept.push((configuration.name.clone(), kind, registry::sweep(&configuration)?));
     }
     let total = swept.iter().map(|(_, _, p)| p.len() as u64).sum();
-    let mut progress = crate::progress::Progress::new("chart (configurations)");
+    let mut progress = crate::util::progress::Progress::new("chart (configurations)");
     let mut measured: Vec<(String, String, ReferenceKind, Measured)> = Vec::new();
     let mut done = 0;
     for (method, kind, points) in swept {
@@ -579,10 +579,11 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     let cached = opts
         .cache_dir
         .join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
-    crate::image_io::write_file(&cached, csv.as_bytes())
+    crate::util::image_io::write_file(&cached, csv.as_bytes())
         .map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
     if let Some(p) = &opts.csv {
-        crate::image_io::write_file(p, csv.as_bytes()).map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
+        crate::util::image_io::write_file(p, csv.as_bytes())
+            .map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
     }
     if let Some(p) = &opts.png {
         plot::draw(&chart, p)?;

@@ -3,7 +3,7 @@
 
 use crate::backend::Gpu;
 use crate::bake::{BakeReport, Baker};
-use crate::capture::{load_scene, CaptureOptions};
+use crate::commands::capture::{load_scene, CaptureOptions};
 use crate::error::Result;
 use crate::lighting::registry;
 use crate::renderer::Renderer;

@@ -13,7 +13,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use crate::backend::{vk, Gpu, Swapchain};
-use crate::capture::{load_scene, CaptureOptions};
+use crate::commands::capture::{load_scene, CaptureOptions};
 use crate::error::{Error, Result};
 use crate::renderer::{FrameOutput, Renderer};
 use crate::scene::Camera;
@@ -266,7 +266,7 @@ impl Running {
             .grabbed
             .take()
             .ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
-        Ok(crate::image_io::save_image(
+        Ok(crate::util::image_io::save_image(
             path,
             image.into(),
             image::ImageFormat::Png,

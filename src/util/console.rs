@@ -36,25 +36,25 @@ pub fn stdout_failure() -> Option<String> {
 /// `println!` to standard output without the panic on a closed pipe.
 #[macro_export]
 macro_rules! outln {
-    () => { $crate::console::out(format_args!("\n")) };
-    ($($t:tt)*) => { $crate::console::out(format_args!("{}\n", format_args!($($t)*))) };
+    () => { $crate::util::console::out(format_args!("\n")) };
+    ($($t:tt)*) => { $crate::util::console::out(format_args!("{}\n", format_args!($($t)*))) };
 }
 
 /// `print!` to standard output without the panic on a closed pipe.
 #[macro_export]
 macro_rules! out {
-    ($($t:tt)*) => { $crate::console::out(format_args!($($t)*)) };
+    ($($t:tt)*) => { $crate::util::console::out(format_args!($($t)*)) };
 }
 
 /// `eprintln!` without the panic on a closed standard error.
 #[macro_export]
 macro_rules! errln {
-    () => { $crate::console::err(format_args!("\n")) };
-    ($($t:tt)*) => { $crate::console::err(format_args!("{}\n", format_args!($($t)*))) };
+    () => { $crate::util::console::err(format_args!("\n")) };
+    ($($t:tt)*) => { $crate::util::console::err(format_args!("{}\n", format_args!($($t)*))) };
 }
 
 /// `eprint!` without the panic on a closed standard error.
 #[macro_export]
 macro_rules! err {
-    ($($t:tt)*) => { $crate::console::err(format_args!($($t)*)) };
+    ($($t:tt)*) => { $crate::util::console::err(format_args!($($t)*)) };
 }

@@ -1,19 +1,19 @@
 //! From a scene to a baked light-map: the static triangles the baker sees, direct light from the
 //! scene's punctual lights as initial energy, the solve, and the atlas (charts shelf-packed with
-//! one-texel gaps, border patches filled by the seed's passes 1 and 2, [`crate::lightmap::border`], so
+//! one-texel gaps, border patches filled by the seed's passes 1 and 2, [`crate::lighting::lightmap::border`], so
 //! bilinear filtering never reads black at a polygon's edge nor steps at a seam).
 
 use glam::{DVec3, Vec3};
 
 use crate::backend::Gpu;
 use crate::error::{Error, Result};
-use crate::lightmap::atlas::{pack, texels, Atlas};
-use crate::lightmap::geometry::StaticGeometry;
-use crate::lightmap::patches::Patches;
-use crate::lightmap::solve::{self, Occluders, Settings};
-use crate::progress::Progress;
+use crate::lighting::lightmap::atlas::{pack, texels, Atlas};
+use crate::lighting::lightmap::geometry::StaticGeometry;
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::{self, Occluders, Settings};
 use crate::scene::{Light, Scene};
 use crate::shaders::ShaderLibrary;
+use crate::util::progress::Progress;
 
 /// What the light-map holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,12 +181,12 @@ pub fn bake(
     if settings.mode == solve::Mode::Faithful {
         // CaLight's light-maps are display values: tone reproduction, 8 bits, read as [0, 1].
         let inside: Vec<usize> = (0..values.len()).filter(|&k| p.patches[k].inside()).collect();
-        let mapped = crate::lightmap::tone::reproduce(&inside.iter().map(|&k| values[k]).collect::<Vec<_>>());
+        let mapped = crate::lighting::lightmap::tone::reproduce(&inside.iter().map(|&k| values[k]).collect::<Vec<_>>());
         for (&k, c) in inside.iter().zip(mapped) {
             values[k] = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
         }
     }
-    report.border_refused = crate::lightmap::border::apply(&p, &occluders, &mut values);
+    report.border_refused = crate::lighting::lightmap::border::apply(&p, &occluders, &mut values);
     if settings.mode == solve::Mode::Faithful {
         // CaLight stores light-maps as RGB8: the border passes averaged display values, which
         // are quantized again here, so the texels are exactly the bytes the texture holds.

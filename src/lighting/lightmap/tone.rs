@@ -1,5 +1,5 @@
 //! CaLight's tone reproduction (seed 000 §3.3.5, digest §1.2 step F): Ward Larson, Rushmeier and
-//! Piatko's histogram adjustment [LRP97] applied to the light-map's world luminances instead of
+//! Piatko's histogram adjustment \[LRP97\] applied to the light-map's world luminances instead of
 //! screen pixels, then a linear rescale to 8 bits. The faithful mode's light-maps are these display
 //! values, not radiometric ones.
 
@@ -43,7 +43,7 @@ pub fn display_scale(lum: &[f64]) -> Vec<f64> {
     for &l in lum.iter().filter(|&&l| l > MIN_LUMINANCE) {
         hist[bin(l)] += 1.0;
     }
-    // [LRP97]'s ceiling: no bin may hold more than Total·Δb / ln(display range), so that contrast
+    // \[LRP97\]'s ceiling: no bin may hold more than Total·Δb / ln(display range), so that contrast
     // is never exaggerated beyond what the display's range needs; trimming lowers the total, so
     // it repeats until it trims less than the tolerance.
     let original = hist.clone();
@@ -51,7 +51,7 @@ pub fn display_scale(lum: &[f64]) -> Vec<f64> {
     loop {
         let total: f64 = hist.iter().sum();
         // A sparse histogram (fewer values than bins) would be trimmed away entirely: keep the
-        // plain cumulative histogram then, as [LRP97] falls back when the ceiling cannot hold.
+        // plain cumulative histogram then, as \[LRP97\] falls back when the ceiling cannot hold.
         if total < TOLERANCE * count {
             hist = original;
             break;

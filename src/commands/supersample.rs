@@ -4,7 +4,7 @@
 //! depending on each other.
 
 use crate::error::Result;
-use crate::image_io::HdrImage;
+use crate::util::image_io::HdrImage;
 
 /// The most `--supersample` may be.
 pub const MAX_SUPERSAMPLE: u32 = 16;

@@ -12,8 +12,8 @@ use glam::{DVec3, Vec3};
 use super::form_factor;
 use super::patches::{Patches, Triangle};
 use super::visibility::{Matrix, Vis};
-use crate::progress::Progress;
-use crate::reference::bvh::Bvh;
+use crate::raytrace::bvh::Bvh;
+use crate::util::progress::Progress;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {

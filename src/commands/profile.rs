@@ -4,11 +4,11 @@ use serde::Serialize;
 
 use crate::backend::Gpu;
 use crate::bake::BakeReport;
-use crate::capture::{load_scene, CaptureOptions};
+use crate::commands::capture::{load_scene, CaptureOptions};
 use crate::error::{Error, Result};
 use crate::lighting::registry;
 use crate::renderer::Renderer;
-pub use crate::timing::{median, summarise, PassStats, TimingSummary};
+pub use crate::util::timing::{median, summarise, PassStats, TimingSummary};
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ProfileReport {

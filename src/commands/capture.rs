@@ -5,10 +5,10 @@ use std::path::PathBuf;
 use crate::backend::{Gpu, GpuDesc};
 use crate::bake::Baker;
 use crate::error::Result;
-use crate::image_io::HdrImage;
 use crate::lighting::{registry, Configuration};
 use crate::renderer::{FrameOutput, Renderer};
 use crate::scene::Scene;
+use crate::util::image_io::HdrImage;
 
 #[derive(Clone, Debug)]
 pub struct CaptureOptions {
@@ -37,7 +37,7 @@ pub fn load_scene(path: Option<&std::path::Path>) -> Result<Scene> {
 /// Renders `frames` frames and returns the last one's radiance (at `size × supersample`,
 /// box-filtered down to `size`).
 pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
-    let render_size = crate::supersample::supersampled_size(opts.size, opts.supersample)?;
+    let render_size = crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
     let scene = load_scene(opts.scene.as_deref())?;
     let config = match &opts.config {
         Some(c) => c.clone(),
@@ -59,7 +59,7 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
     }
     let image = image.ok_or_else(|| crate::error::Error::Usage("readback returned no image".into()))?;
     let image = if opts.supersample > 1 {
-        crate::supersample::box_filter(&image, opts.supersample)?
+        crate::commands::supersample::box_filter(&image, opts.supersample)?
     } else {
         image
     };
@@ -101,7 +101,7 @@ pub fn choose_configuration(
     max_rel_mse: f64,
     cache_dir: &std::path::Path,
 ) -> Result<(Configuration, String)> {
-    use crate::chart::{cached_table, choose, parse_csv, Choice};
+    use crate::commands::chart::{cached_table, choose, parse_csv, Choice};
     use crate::error::Error;
     let path = opts
         .scene

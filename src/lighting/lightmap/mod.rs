@@ -10,6 +10,7 @@ pub mod atlas;
 pub mod border;
 pub mod form_factor;
 pub mod geometry;
+pub mod mesh;
 pub mod patches;
 pub mod solve;
 pub mod tone;

@@ -17,7 +17,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use super::bvh::BvhNode;
-use super::scene_data::TracedTriangle;
+use super::TracedTriangle;
 use crate::backend::{vk, Gpu, ImageDesc, ImageId, SubresourceRange};
 use crate::error::{Error, Result};
 use crate::graph::{Access, PassBuilder, ResourceStates};

@@ -1,0 +1,9 @@
+//! Utilities that know nothing of scenes or lighting: console output that survives a closed
+//! stream, the progress line, CPU parallelism, the backend's GPU pass timings summarised over
+//! frames, and image files (PNG, EXR, HDR).
+
+pub mod console;
+pub mod image_io;
+pub mod parallel;
+pub mod progress;
+pub mod timing;
