@@ -1,4 +1,5 @@
-//! Compiles every shader under `glsl/` to SPIR-V (warnings are errors) and embeds them.
+//! Compiles every shader under `glsl/` to SPIR-V (warnings are errors) and embeds them, except the
+//! check kernels under `glsl/tests/`, which the tests compile when they run them.
 
 #[path = "src/shaders/compile.rs"]
 mod compile;
@@ -13,7 +14,10 @@ fn main() {
     println!("cargo:rerun-if-changed=src/shaders/compile.rs");
     let mut table = String::from("/// Every shader under glsl/, compiled at build time: (path, SPIR-V bytes).\npub static EMBEDDED: &[(&str, &[u8])] = &[\n");
     let mut failures = Vec::new();
-    for rel in compile::list_shaders(&root) {
+    for rel in compile::list_shaders(&root)
+        .into_iter()
+        .filter(|p| !p.starts_with(compile::TEST_KERNELS))
+    {
         match compile::compile_glsl(&root, &rel) {
             Ok(words) => {
                 let file = out.join(format!("{}.spv", rel.replace('/', "__")));

@@ -125,7 +125,7 @@ fn a_zero_padded_upload_fills_the_rest_of_the_image_with_zeros() {
     common::assert_clean(&gpu);
 }
 
-/// Runs util/downsample.comp on a 2×2 image of constant `value` and returns the 1×1 result.
+/// Runs tests/downsample.comp on a 2×2 image of constant `value` and returns the 1×1 result.
 fn downsample_once(gpu: &mut Gpu, pipeline: PipelineId, value: f32) -> f32 {
     let usage = vk::ImageUsageFlags::SAMPLED
         | vk::ImageUsageFlags::STORAGE
@@ -175,10 +175,10 @@ fn downsample_once(gpu: &mut Gpu, pipeline: PipelineId, value: f32) -> f32 {
 #[test]
 fn specialization_constants_reach_the_shader() {
     let mut gpu = common::test_gpu();
-    let lib = ShaderLibrary::Embedded;
+    let lib = ShaderLibrary::test_kernels();
     let desc = |scale: f32| ComputePipelineDesc {
         name: format!("downsample x{scale}"),
-        shader: "util/downsample.comp".into(),
+        shader: "tests/downsample.comp".into(),
         specialization: vec![SpecConstant {
             id: 0,
             bits: scale.to_bits(),
@@ -203,7 +203,7 @@ fn specialization_constants_reach_the_shader() {
 fn hot_reload_swaps_pipelines_and_keeps_the_old_one_on_errors() {
     // A private copy of glsl/ to edit, as a user would edit the checkout's.
     let root = common::temp_path("glsl-reload");
-    let rel = "util/downsample.comp";
+    let rel = "tests/downsample.comp";
     let dst = root.join(rel);
     std::fs::create_dir_all(dst.parent().unwrap()).unwrap();
     std::fs::copy(ShaderLibrary::source_dir().join(rel), &dst).unwrap();
@@ -213,7 +213,7 @@ fn hot_reload_swaps_pipelines_and_keeps_the_old_one_on_errors() {
         .create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "downsample".into(),
-                shader: "util/downsample.comp".into(),
+                shader: "tests/downsample.comp".into(),
                 specialization: vec![],
             },
             &lib,
@@ -221,7 +221,7 @@ fn hot_reload_swaps_pipelines_and_keeps_the_old_one_on_errors() {
         .unwrap();
     assert_eq!(downsample_once(&mut gpu, p, 1.0), 1.0);
 
-    let file = root.join("util/downsample.comp");
+    let file = root.join("tests/downsample.comp");
     let source = std::fs::read_to_string(&file).unwrap();
     std::fs::write(&file, source.replace("r * SCALE", "r * SCALE * 4.0")).unwrap();
     gpu.reload_pipeline(p, &lib).unwrap();
@@ -259,10 +259,10 @@ fn a_scoped_computation_leaves_nothing_behind_on_success_or_error() {
         gpu.create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "scoped".into(),
-                shader: "util/sh_check.comp".into(),
+                shader: "tests/sh_check.comp".into(),
                 specialization: vec![],
             },
-            &penumbra::shaders::ShaderLibrary::Embedded,
+            &penumbra::shaders::ShaderLibrary::test_kernels(),
         )?;
         gpu.create_frame()?;
         Ok(())
@@ -296,15 +296,15 @@ fn a_scoped_computation_leaves_nothing_behind_on_success_or_error() {
     common::assert_clean(&gpu);
 }
 
-/// The check kernel of glsl/util/upload_check.comp.
+/// The check kernel of glsl/tests/upload_check.comp.
 fn upload_check_pipeline(gpu: &mut Gpu) -> PipelineId {
     gpu.create_compute_pipeline(
         &ComputePipelineDesc {
             name: "upload check".into(),
-            shader: "util/upload_check.comp".into(),
+            shader: "tests/upload_check.comp".into(),
             specialization: vec![],
         },
-        &ShaderLibrary::Embedded,
+        &ShaderLibrary::test_kernels(),
     )
     .unwrap()
 }

@@ -36,12 +36,12 @@ fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
 #[test]
 fn mip_pyramid_barriers_are_exact_and_values_correct() {
     let mut gpu = common::test_gpu();
-    let shaders = ShaderLibrary::Embedded;
+    let shaders = ShaderLibrary::test_kernels();
     let pipeline = gpu
         .create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "downsample".into(),
-                shader: "util/downsample.comp".into(),
+                shader: "tests/downsample.comp".into(),
                 specialization: vec![],
             },
             &shaders,
@@ -171,10 +171,10 @@ fn bindings_are_checked_against_reflection() {
         .create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "downsample".into(),
-                shader: "util/downsample.comp".into(),
+                shader: "tests/downsample.comp".into(),
                 specialization: vec![],
             },
-            &ShaderLibrary::Embedded,
+            &ShaderLibrary::test_kernels(),
         )
         .unwrap();
     let refl = gpu.pipeline_reflection(pipeline).unwrap();

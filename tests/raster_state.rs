@@ -34,7 +34,7 @@ fn quad(x0: f32, x1: f32, z: f32, ccw: bool) -> Vec<[f32; 4]> {
 #[test]
 fn two_sided_stencil_and_depth_clamp() {
     let mut gpu = common::test_gpu();
-    let lib = ShaderLibrary::Embedded;
+    let lib = ShaderLibrary::test_kernels();
     let ds_format = gpu.caps().depth_stencil_format;
     let layout = VertexLayout {
         buffers: vec![(0, 16)],
@@ -46,7 +46,7 @@ fn two_sided_stencil_and_depth_clamp() {
         }],
     };
     let base = |name: &str| {
-        let mut d = GraphicsPipelineDesc::new(name, "util/solid.vert", Some("util/solid.frag"));
+        let mut d = GraphicsPipelineDesc::new(name, "tests/solid.vert", Some("tests/solid.frag"));
         d.vertex_layout = layout.clone();
         d.raster.cull = vk::CullModeFlags::NONE;
         d.color_targets = vec![ColorTarget::new(vk::Format::R32G32B32A32_SFLOAT)];

@@ -1,10 +1,10 @@
 //! glsl/common/sh.glsl on the device against src/sh on the CPU: basis to 8 bands, z-rotation, ZH
 //! rotation of caps and the clamped cosine, equirect and cube texel solid angles and directions.
-//! The check kernel's output layout is documented in glsl/util/sh_check.comp. Then the
+//! The check kernel's output layout is documented in glsl/tests/sh_check.comp. Then the
 //! environment projection pass (ShProjector) against the CPU projections: a band-limited sky, a
 //! random image and a constant one, each equirectangular and as a cube map. Then the general
 //! rotation (against ShRotation, identity, band energies, composition, the 4-band build), the
-//! windows and the triple product over sh::product_terms (glsl/util/sh_ops_check*.comp).
+//! windows and the triple product over sh::product_terms (glsl/tests/sh_ops_check*.comp).
 
 mod common;
 
@@ -66,10 +66,10 @@ fn glsl_sh_matches_the_cpu_library() {
         .create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "sh check".into(),
-                shader: "util/sh_check.comp".into(),
+                shader: "tests/sh_check.comp".into(),
                 specialization: vec![],
             },
-            &ShaderLibrary::Embedded,
+            &ShaderLibrary::test_kernels(),
         )
         .unwrap();
     let size = 128 * 128 * 4;
@@ -456,7 +456,7 @@ fn gpu_projection_of_a_constant_image_is_band_zero() {
 }
 
 // ---- General rotation, windows and the triple product of glsl/common/sh.glsl against src/sh/
-// (check kernels glsl/util/sh_ops_check*.comp; layout in sh_ops_check.glsl).
+// (check kernels glsl/tests/sh_ops_check*.comp; layout in sh_ops_check.glsl).
 
 const OPS_CASES: usize = 64;
 const OPS_STRIDE: usize = 512;
@@ -510,7 +510,7 @@ fn run_ops_check(shader: &str, cases: &[OpsCase]) -> Vec<Vec<f32>> {
                 shader: shader.into(),
                 specialization: vec![],
             },
-            &ShaderLibrary::Embedded,
+            &ShaderLibrary::test_kernels(),
         )
         .unwrap();
     let mut input = Vec::<f32>::with_capacity(OPS_CASES * 48 * 4);
@@ -606,7 +606,7 @@ fn band1_lobe(c: &[f32]) -> glam::DVec3 {
 #[test]
 fn glsl_general_rotation_matches_the_cpu() {
     let cases = ops_cases();
-    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let got = run_ops_check("tests/sh_ops_check.comp", &cases);
     let (mut w8, mut w4, mut ww, mut wl) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
         let a = f64s(&c.a);
@@ -648,7 +648,7 @@ fn glsl_general_rotation_matches_the_cpu() {
 #[test]
 fn glsl_rotation_identity_and_band_energies() {
     let cases = ops_cases();
-    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let got = run_ops_check("tests/sh_ops_check.comp", &cases);
     let (mut wid, mut wen) = (0.0f64, 0.0f64);
     for (c, g) in cases.iter().zip(&got) {
         wid = wid.max(worst(&g[128..192], &f64s(&c.a)));
@@ -670,7 +670,7 @@ fn glsl_rotation_identity_and_band_energies() {
 #[test]
 fn glsl_rotation_composes() {
     let cases = ops_cases();
-    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let got = run_ops_check("tests/sh_ops_check.comp", &cases);
     let mut w = 0.0f64;
     for (c, g) in cases.iter().zip(&got) {
         let cpu = sh::ShRotation::new(c.r2 * c.r1, 8)
@@ -688,7 +688,7 @@ fn glsl_rotation_composes() {
 #[test]
 fn glsl_rotation_with_4_band_scratch() {
     let cases = ops_cases();
-    let got = run_ops_check("util/sh_ops_check4.comp", &cases);
+    let got = run_ops_check("tests/sh_ops_check4.comp", &cases);
     let mut w = 0.0f64;
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
         let cpu = sh::ShRotation::new(c.r1, 4).unwrap().rotate(&f64s(&c.a[..16])).unwrap();
@@ -709,7 +709,7 @@ fn glsl_rotation_with_4_band_scratch() {
 #[test]
 fn glsl_windows_match_the_cpu() {
     let cases = ops_cases();
-    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let got = run_ops_check("tests/sh_ops_check.comp", &cases);
     let mut w = 0.0f64;
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {
         if c.width.is_nan() || c.width <= 0.0 {
@@ -759,7 +759,7 @@ fn glsl_windows_match_the_cpu() {
 #[test]
 fn glsl_triple_product_matches_the_cpu() {
     let cases = ops_cases();
-    let got = run_ops_check("util/sh_ops_check.comp", &cases);
+    let got = run_ops_check("tests/sh_ops_check.comp", &cases);
     let terms = sh::product_terms(8).unwrap();
     let mut w = 0.0f64;
     for (i, (c, g)) in cases.iter().zip(&got).enumerate() {

@@ -1,5 +1,5 @@
 //! The compressed SH light-map's look-ups on the device (glsl/sh_lightmap/vq.glsl through the check
-//! kernel glsl/util/shl_vq_check.comp), against the storage layout written on the CPU
+//! kernel glsl/tests/shl_vq_check.comp), against the storage layout written on the CPU
 //! (src/lighting/sh_lightmap/storage.rs) — seed 000 §5.6.2 and §5.8, digest §5.3: every one of
 //! the 65,536 indices read back bit-exact (and a LINEAR sampler shown to break them), the
 //! 256-row table fetched for every representative, and the 4-tap filter's profile.
@@ -98,10 +98,10 @@ fn check(
         .create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "shl vq check".into(),
-                shader: "util/shl_vq_check.comp".into(),
+                shader: "tests/shl_vq_check.comp".into(),
                 specialization: spec,
             },
-            &ShaderLibrary::Embedded,
+            &ShaderLibrary::test_kernels(),
         )
         .unwrap();
     let out = gpu

@@ -3,6 +3,7 @@
 // environment irradiance, the material's mean albedo) and the baked, relit direct term.
 #include "common/frame.glsl"
 #include "common/sh.glsl"
+#include "common/environment.glsl"
 
 // The terms drawn (src/lighting/terms.rs): 1 base, 2 direct.
 layout(constant_id = 0) const uint TERMS = 3u;
@@ -15,17 +16,6 @@ layout(location = 4) in vec3 in_direct;
 layout(location = 5) in vec3 in_direct_back;
 
 layout(location = 0) out vec4 out_radiance;
-
-// Unshadowed irradiance from the environment (clamped: a 3-band fit can dip below zero).
-vec3 environment_irradiance(vec3 n) {
-    float y[16];
-    sh_eval16(sh_world_to_sh(n), y);
-    vec3 e = vec3(0.0);
-    for (int i = 0; i < 9; ++i) {
-        e += frame.env_irradiance[i].rgb * y[i];
-    }
-    return max(e, vec3(0.0));
-}
 
 void main() {
     vec3 n = normalize(in_normal);

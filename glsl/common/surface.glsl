@@ -1,9 +1,11 @@
 // The shading inputs of a scene surface as the raster direct-lighting methods read them: the
 // material and its maps, the normal flipped toward the viewer and normal-mapped, and the
-// unshadowed environment irradiance. Include after common/frame.glsl, common/sh.glsl and
-// common/scene.glsl.
+// unshadowed environment irradiance (common/environment.glsl). Include after common/frame.glsl,
+// common/sh.glsl and common/scene.glsl.
 #ifndef PENUMBRA_SURFACE_GLSL
 #define PENUMBRA_SURFACE_GLSL
+
+#include "common/environment.glsl"
 
 struct SurfacePoint {
     vec3 n;         // shading normal, toward the viewer
@@ -13,18 +15,6 @@ struct SurfacePoint {
     vec3 specular;
     float exponent;
 };
-
-// Unshadowed irradiance from the environment (clamped: a 3-band fit can dip below zero).
-vec3 environment_irradiance(vec3 n) {
-    // The unrolled 4-band evaluation; only the first 3 bands (9 coefficients) are used.
-    float y[16];
-    sh_eval16(sh_world_to_sh(n), y);
-    vec3 e = vec3(0.0);
-    for (int i = 0; i < 9; ++i) {
-        e += frame.env_irradiance[i].rgb * y[i];
-    }
-    return max(e, vec3(0.0));
-}
 
 SurfacePoint surface_point(Material m, vec3 world, vec3 normal, vec2 uv, vec4 tangent, sampler2D albedo_map, sampler2D normal_map, sampler2D specular_map) {
     SurfacePoint s;

@@ -1,5 +1,5 @@
 // The compressed SH light-map's look-ups (seed 000 listings 3-5, section 5.8), shared by
-// compressed.frag and the check kernel glsl/util/shl_vq_check.comp. Needs GROUPS, ENCODED and
+// compressed.frag and the check kernel glsl/tests/shl_vq_check.comp. Needs GROUPS, ENCODED and
 // shade_rep(uint) defined before it is included.
 //
 // A 16-bit index per texel (R low byte, G high byte) into the 256-row table of representatives,

@@ -4,6 +4,7 @@
 // nothing and shadows are only the set-up's feeler (a blocked light is not in the set).
 #include "vls/vls.glsl"
 #include "common/sh.glsl"
+#include "common/environment.glsl"
 
 layout(location = 0) in vec3 in_world;
 layout(location = 1) flat in vec3 in_normal;
@@ -13,17 +14,6 @@ layout(location = 4) flat in uint in_set;
 layout(location = 5) in vec3 in_direct;
 
 layout(location = 0) out vec4 out_radiance;
-
-// As glsl/forward/forward.frag: unshadowed environment irradiance, clamped.
-vec3 environment_irradiance(vec3 n) {
-    float y[16];
-    sh_eval16(sh_world_to_sh(n), y);
-    vec3 e = vec3(0.0);
-    for (int i = 0; i < 9; ++i) {
-        e += frame.env_irradiance[i].rgb * y[i];
-    }
-    return max(e, vec3(0.0));
-}
 
 void main() {
     vec3 n = facing_normal(in_normal, in_world);

@@ -70,6 +70,10 @@ pub fn compile_glsl(root: &Path, rel: &str) -> Result<Vec<u32>, String> {
         .map_err(|e| e.to_string())
 }
 
+/// The folder under `glsl/` of the check kernels only the tests run (not embedded).
+#[cfg_attr(not(test), allow(dead_code))] // the runtime only uses it in tests
+pub const TEST_KERNELS: &str = "tests/";
+
 /// Every shader stage file under `root`, as sorted paths relative to it with `/` separators.
 #[cfg_attr(not(test), allow(dead_code))] // the runtime only uses it in tests
 pub fn list_shaders(root: &Path) -> Vec<String> {

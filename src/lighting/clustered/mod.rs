@@ -191,7 +191,7 @@ impl Clustered {
         let mut pipeline = |terms: Terms| {
             let mut desc = term_pipeline_desc(
                 &format!("{NAME} {terms}"),
-                "clustered/clustered.vert",
+                "frame/surface.vert",
                 "clustered/clustered.frag",
                 terms,
                 ds_format,

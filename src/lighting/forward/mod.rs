@@ -38,7 +38,7 @@ impl Forward {
         let mut pipeline = |terms: Terms| {
             let mut desc = term_pipeline_desc(
                 &format!("forward {terms}"),
-                "forward/forward.vert",
+                "frame/surface.vert",
                 "forward/forward.frag",
                 terms,
                 ds_format,

@@ -338,7 +338,7 @@ impl Lpv {
             .create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
         cx.states.forget_buffer(transmittance);
 
-        let mut desc = GraphicsPipelineDesc::new("lpv composite", "lpv/surface.vert", Some("lpv/composite.frag"));
+        let mut desc = GraphicsPipelineDesc::new("lpv composite", "frame/surface.vert", Some("lpv/composite.frag"));
         desc.vertex_layout = vertex_layout();
         desc.raster.cull = vk::CullModeFlags::NONE;
         desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];

@@ -2,4 +2,4 @@
 // come out 0); see sh_ops_check.glsl.
 #version 460
 #define SH_ROTATE_MAX_BANDS 4
-#include "util/sh_ops_check.glsl"
+#include "tests/sh_ops_check.glsl"

@@ -1,5 +1,7 @@
 #version 460
-// The scene's surfaces as the camera sees them, for the LPV look-up.
+// The scene's surfaces as the camera sees them, for every method that shades the scene's own
+// draws per pixel (forward, clustered, the LPV composite): world position, normal, texture
+// coordinates and tangent of the interleaved vertex.
 #include "common/frame.glsl"
 #define PENUMBRA_SCENE_VERTEX
 #include "common/scene.glsl"
