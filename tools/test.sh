@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
-# Installs what is missing, checks formatting (rustfmt.toml) and lints (clippy, warnings are
-# errors), then runs every test on lavapipe with the Khronos validation layer
+# Installs what is missing, checks formatting (rustfmt.toml), lints (clippy, warnings are
+# errors), the API docs (rustdoc, warnings are errors) and the build at the declared minimum Rust
+# version (tools/msrv_check.sh), then runs every test on lavapipe with the Khronos validation layer
 # (synchronization validation on; the tests fail on any message). The demo test needs an X
 # display, so the suite runs under Xvfb.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
-# Formatting and lints first: they are part of the suite, so CI keeps them.
+# Formatting, lints and the API docs first: they are part of the suite, so CI keeps them.
 cargo fmt --check
 cargo clippy --quiet --all-targets -- -D warnings
+RUSTDOCFLAGS="-D warnings" cargo doc --quiet --no-deps
+bash tools/msrv_check.sh
 # Force lavapipe so results do not depend on whatever GPU the machine has.
 export PENUMBRA_TEST_DEVICE="${PENUMBRA_TEST_DEVICE:-llvmpipe}"
 # Every target runs even after one fails (--no-fail-fast), so one run shows every failure. A
