@@ -17,6 +17,14 @@ pub enum Error {
     /// A request that cannot be honoured as asked (a method the scene doesn't enable, a size of 0…).
     #[error("{0}")]
     Usage(String),
+    /// The validation layer reported messages, printed as they came.
+    #[error("{0} validation message(s) (see above)")]
+    Validation(usize),
+    /// A fault inside penumbra, not in what the user gave it: a read-back shorter than what was
+    /// written, a pipeline the frame should have made, a cached bake that passed its checks but
+    /// does not fit the scene. The context says where.
+    #[error("internal error: {0} (a fault in penumbra, not in the input; please report it)")]
+    Internal(String),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -410,7 +410,8 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             let report = penumbra::commands::profile::run(&options(&render), frames)?;
             penumbra::out!("{}", report.table());
             if let Some(p) = json {
-                let text = serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Usage(e.to_string()))?;
+                let text =
+                    serde_json::to_string_pretty(&report).map_err(|e| penumbra::Error::Internal(e.to_string()))?;
                 penumbra::util::image_io::write_file(&p, text.as_bytes())
                     .map_err(|e| penumbra::Error::Usage(format!("{}: {e}", p.display())))?;
                 penumbra::outln!("wrote {}", p.display());
@@ -446,7 +447,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             if json {
                 penumbra::outln!(
                     "{}",
-                    serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Usage(e.to_string()))?
+                    serde_json::to_string_pretty(&metrics).map_err(|e| penumbra::Error::Internal(e.to_string()))?
                 );
             } else {
                 penumbra::out!("{}", metrics.table());

@@ -57,7 +57,7 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
     for _ in 0..opts.frames.max(1) {
         image = renderer.render(&camera, FrameOutput::Readback)?.image;
     }
-    let image = image.ok_or_else(|| crate::error::Error::Usage("readback returned no image".into()))?;
+    let image = image.ok_or_else(|| crate::error::Error::Internal("readback returned no image".into()))?;
     let image = if opts.supersample > 1 {
         crate::commands::supersample::box_filter(&image, opts.supersample)?
     } else {
@@ -87,9 +87,7 @@ pub fn run(opts: &CaptureOptions) -> Result<Vec<String>> {
     }
     let n = renderer.gpu.validation_log().count();
     if n > 0 {
-        return Err(crate::error::Error::Usage(format!(
-            "{n} validation message(s) (see above)"
-        )));
+        return Err(crate::error::Error::Validation(n));
     }
     Ok(written)
 }

@@ -265,7 +265,7 @@ impl Running {
         let image = self
             .grabbed
             .take()
-            .ok_or_else(|| Error::Usage("no frame was grabbed".into()))?;
+            .ok_or_else(|| Error::Internal("no frame was grabbed".into()))?;
         Ok(crate::util::image_io::save_image(
             path,
             image.into(),
@@ -407,7 +407,7 @@ pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
         let mut renderer = renderer;
         renderer.gpu.destroy_swapchain(swapchain);
         if n > 0 {
-            return Err(Error::Usage(format!("{n} validation message(s) (see above)")));
+            return Err(Error::Validation(n));
         }
     }
     Ok(())

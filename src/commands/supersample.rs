@@ -40,7 +40,7 @@ pub fn supersampled_size(size: (u32, u32), n: u32) -> Result<(u32, u32)> {
 /// image's sides must be multiples of n.
 pub fn box_filter(image: &HdrImage, n: u32) -> Result<HdrImage> {
     if n == 0 || !image.width.is_multiple_of(n) || !image.height.is_multiple_of(n) {
-        return Err(crate::error::Error::Usage(format!(
+        return Err(crate::error::Error::Internal(format!(
             "box filter: {}x{} is not a whole number of {n}x{n} blocks",
             image.width, image.height
         )));

@@ -39,7 +39,7 @@ impl TexelTable {
     pub fn upload<T: Pod>(gpu: &mut Gpu, states: &mut ResourceStates, name: &str, items: &[T]) -> Result<TexelTable> {
         let bytes: &[u8] = bytemuck::cast_slice(items);
         if !std::mem::size_of::<T>().is_multiple_of(16) {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "{name}: items of {} bytes are not whole texels",
                 std::mem::size_of::<T>()
             )));
@@ -76,7 +76,7 @@ impl TexelTable {
         items: &[T],
     ) -> Result<TexelTable> {
         if std::mem::size_of::<T>() != 4 {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "{name}: items of {} bytes do not pack four a texel",
                 std::mem::size_of::<T>()
             )));

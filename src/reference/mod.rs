@@ -641,7 +641,7 @@ impl ReferenceRenderer {
             }
             progress(done, expected);
         }
-        readback.ok_or_else(|| Error::Usage("reference: no samples were rendered".into()))
+        readback.ok_or_else(|| Error::Internal("reference: no samples were rendered".into()))
     }
 
     /// The accumulation images as read back by the last checkpoint, holding `spp` samples each.
@@ -650,7 +650,7 @@ impl ReferenceRenderer {
         let read = |b: BufferId| -> Result<HdrImage> {
             let bytes = self.gpu.read_buffer(b)?;
             HdrImage::from_rgba32f_bytes(self.width, self.height, &bytes)
-                .ok_or_else(|| Error::Usage("reference readback has the wrong size".into()))
+                .ok_or_else(|| Error::Internal("reference readback has the wrong size".into()))
         };
         let mean = read(self.readback[0])?;
         let mut standard_error = read(self.readback[1])?;
@@ -955,7 +955,7 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
     let achieved = opts.target.map(|t| relative_error(&image, t.scope));
     let n = renderer.gpu.validation_log().count();
     if n > 0 {
-        return Err(Error::Usage(format!("{n} validation message(s) (see above)")));
+        return Err(Error::Validation(n));
     }
     let stderr = stderr_path(&opts.output);
     image.mean.write_exr(&opts.output)?;

@@ -391,7 +391,7 @@ impl Renderer {
             FrameOutput::Readback => {
                 let rb = self
                     .readback
-                    .ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
+                    .ok_or_else(|| Error::Internal("readback buffer missing".into()))?;
                 graph
                     .pass("readback")
                     .transfer_read(t.radiance, SubresourceRange::mip(0))
@@ -410,7 +410,7 @@ impl Renderer {
             } => {
                 let (pipeline, _) = self
                     .tonemap
-                    .ok_or_else(|| Error::Usage("tonemap pipeline missing".into()))?;
+                    .ok_or_else(|| Error::Internal("tonemap pipeline missing".into()))?;
                 let (image, exposure) = (*image, *exposure);
                 let present_readback = if *readback { self.present_readback } else { None };
                 graph
@@ -459,7 +459,7 @@ impl Renderer {
                 gpu.submit_and_wait(frame)?;
                 let rb = self
                     .readback
-                    .ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
+                    .ok_or_else(|| Error::Internal("readback buffer missing".into()))?;
                 let bytes = gpu.read_buffer(rb)?;
                 r.image = HdrImage::from_rgba32f_bytes(t.width, t.height, &bytes);
             }
@@ -472,7 +472,7 @@ impl Renderer {
     pub fn presented_pixels(&self, image: ImageId) -> Result<image::RgbaImage> {
         let rb = self
             .present_readback
-            .ok_or_else(|| Error::Usage("no frame was presented with readback".into()))?;
+            .ok_or_else(|| Error::Internal("no frame was presented with readback".into()))?;
         let d = self.gpu.image_desc(image)?;
         let mut bytes = self.gpu.read_buffer(rb)?;
         if matches!(d.format, vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM) {
@@ -481,7 +481,7 @@ impl Renderer {
             }
         }
         image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes)
-            .ok_or_else(|| Error::Usage("presented pixels do not match the image size".into()))
+            .ok_or_else(|| Error::Internal("presented pixels do not match the image size".into()))
     }
 
     /// The frame slot the next [`Renderer::render`] records into (for presenting).

@@ -398,7 +398,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
     let image = renderer
         .render(&camera, FrameOutput::Readback)?
         .image
-        .ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+        .ok_or_else(|| Error::Internal("readback returned no image".into()))?;
     let warnings = renderer.method_warnings()?;
     let mut timings = Vec::new();
     let start = std::time::Instant::now();
@@ -444,7 +444,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
         let image = big
             .render(&camera, FrameOutput::Readback)?
             .image
-            .ok_or_else(|| Error::Usage("readback returned no image".into()))?;
+            .ok_or_else(|| Error::Internal("readback returned no image".into()))?;
         Some(crate::commands::supersample::box_filter(&image, opts.supersample)?)
     } else {
         None

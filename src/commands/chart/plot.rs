@@ -35,7 +35,7 @@ fn register_font() -> Result<()> {
 }
 
 fn plot_err<E: std::fmt::Debug>(e: E) -> Error {
-    Error::Usage(format!("chart: drawing failed: {e:?}"))
+    Error::Internal(format!("chart: drawing failed: {e:?}"))
 }
 
 /// Log-axis range covering `values` with some margin; non-positive values are clamped.
@@ -157,7 +157,8 @@ pub fn draw(chart: &Chart, path: &Path) -> Result<()> {
             .map_err(plot_err)?;
         root.present().map_err(plot_err)?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| Error::Usage("chart: bitmap size mismatch".into()))?;
+    let img =
+        image::RgbImage::from_raw(w, h, buf).ok_or_else(|| Error::Internal("chart: bitmap size mismatch".into()))?;
     Ok(crate::util::image_io::save_image(
         path,
         img.into(),

@@ -656,7 +656,7 @@ impl BspLights {
             || baked.colours.len() != 3 * baked.vertices.len() * baked.lights
             || baked.vertices.is_empty()
         {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "{}: {NAME}: the baked set-up does not match the scene",
                 scene.source
             )));

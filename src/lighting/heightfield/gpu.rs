@@ -211,7 +211,7 @@ impl FieldInputs {
         let material = scene
             .materials
             .get(obj.material)
-            .ok_or_else(|| Error::Usage(format!("{src}: objects[{object}]: material index out of range")))?;
+            .ok_or_else(|| Error::Internal(format!("{src}: objects[{object}]: material index out of range")))?;
         // The shading comes from the field's own normals through the SH transfer, computed per
         // texel before any material is known, so a normal map cannot be honoured; refusing it
         // keeps the method from silently disagreeing with the reference, which applies it.
@@ -311,7 +311,7 @@ fn baked_wedge_table(
         data,
     };
     if table.data.len() != table.nodes * table.nodes * bands * bands {
-        return Err(Error::Usage(format!(
+        return Err(Error::Internal(format!(
             "{name}: the baked table has {} values, expected {}",
             table.data.len(),
             table.nodes * table.nodes * bands * bands

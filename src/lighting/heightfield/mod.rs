@@ -237,7 +237,7 @@ impl LightingMethod for HeightfieldMethod {
             .get(core.inputs.material)
             .map(|m| m.albedo)
             .ok_or_else(|| {
-                crate::error::Error::Usage(format!("{}: the height field's material has no GPU maps", self.name))
+                crate::error::Error::Internal(format!("{}: the height field's material has no GPU maps", self.name))
             })?;
         let map_sampler = scene.sampler;
         graph

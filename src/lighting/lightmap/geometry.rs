@@ -96,7 +96,7 @@ fn from_draws<'a>(
                 let m = scene
                     .materials
                     .get(obj.material)
-                    .ok_or_else(|| Error::Usage(format!("{src}: objects[{o}]: material index out of range")))?;
+                    .ok_or_else(|| Error::Internal(format!("{src}: objects[{o}]: material index out of range")))?;
                 // The light-map is multiplied by the albedo map texel by texel when drawn; a
                 // bounce reflects the map's mean (what qrad does with a texture's average).
                 let map_mean = match &m.albedo_map {

@@ -383,7 +383,7 @@ pub fn propagate_standalone(
     blocking: Option<&Grid>,
 ) -> Result<[Grid; 3]> {
     if injected.iter().any(|g| g.size != [config.grid as usize; 3]) {
-        return Err(Error::Usage(format!(
+        return Err(Error::Internal(format!(
             "lpv: the injected grids are not {}³",
             config.grid
         )));

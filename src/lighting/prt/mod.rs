@@ -239,7 +239,7 @@ pub fn stored(values: Vec<f32>, dim: usize, storage: config::Storage) -> Result<
     };
     let n = values.len() / dim.max(1);
     storage::decode(&storage::encode(&values, dim, grouping), n, dim, grouping)
-        .ok_or_else(|| Error::Usage(format!("{NAME}: the shared-exponent storage does not round-trip")))
+        .ok_or_else(|| Error::Internal(format!("{NAME}: the shared-exponent storage does not round-trip")))
 }
 
 /// Bakes one key with the configured baker.
@@ -362,7 +362,7 @@ impl Prt {
         })?;
         let per_key = receivers * dim;
         if baked.len() != per_key * keys as usize {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "{}: {NAME}: the baked transfer does not match the scene (delete the cache entry)",
                 cx.scene.source
             )));

@@ -378,7 +378,7 @@ fn run(
     }
     if let Some(product) = product_override {
         if product.len() != (w * h * 4) as usize {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "prt: a product atlas of {} floats, expected {}",
                 product.len(),
                 w * h * 4
@@ -432,7 +432,7 @@ fn run(
     progress.finish();
     let bytes = gpu.read_buffer(bake.coefficients)?;
     let all: &[f32] = bytemuck::try_cast_slice(&bytes[..slots.total as usize * 64])
-        .map_err(|e| Error::Usage(format!("prt: coefficient readback: {e}")))?;
+        .map_err(|e| Error::Internal(format!("prt: coefficient readback: {e}")))?;
     let mut out = vec![0.0f32; r.len() * dim];
     for i in 0..r.len() {
         let s = slots.slot[i] as usize;

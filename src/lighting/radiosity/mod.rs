@@ -277,7 +277,7 @@ impl Radiosity {
         );
         let texel_floats = 4 * (w as usize) * (h as usize);
         if w == 0 || h == 0 || baked.len() != 2 + texel_floats + 6 * geometry.triangles.len() {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "{}: {NAME}: the baked light-map does not match the scene ({} values)",
                 cx.scene.source,
                 baked.len()

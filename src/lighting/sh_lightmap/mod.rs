@@ -394,7 +394,7 @@ impl ShLightmap {
             },
         )?;
         let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| {
-            Error::Usage(format!(
+            Error::Internal(format!(
                 "{}: {NAME}: the baked SH light-map does not match the scene",
                 cx.scene.source
             ))
@@ -576,7 +576,7 @@ fn upload_compressed(
             Ok(out)
         })?;
     if floats.len() < texels || !(floats.len() - texels).is_multiple_of(dim) {
-        return Err(Error::Usage(format!(
+        return Err(Error::Internal(format!(
             "{}: {NAME}: the cached VQ does not match the light-map",
             cx.scene.source
         )));

@@ -140,7 +140,7 @@ impl Setup {
             }
             let mesh = meshes
                 .get(i)
-                .ok_or_else(|| Error::Usage(format!("{}: objects[{i}]: no uploaded mesh", scene.source)))?;
+                .ok_or_else(|| Error::Internal(format!("{}: objects[{i}]: no uploaded mesh", scene.source)))?;
             let topology = volumes::Topology::new(mesh);
             entities.push(Entity {
                 draw: i,
@@ -734,7 +734,7 @@ impl LightingMethod for ShadowVolumes {
         let plan = self
             .plan
             .clone()
-            .ok_or_else(|| Error::Usage(format!("{NAME}: a frame was recorded before it was prepared")))?;
+            .ok_or_else(|| Error::Internal(format!("{NAME}: a frame was recorded before it was prepared")))?;
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let sampler = scene.sampler;

@@ -384,7 +384,7 @@ impl Vls {
         })?;
         let count = setup::points(&layout.segments, config.setup.point).len();
         if sets.k != config.setup.k || sets.segments() != count {
-            return Err(Error::Usage(format!(
+            return Err(Error::Internal(format!(
                 "{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} points)",
                 cx.scene.source,
                 sets.segments(),
