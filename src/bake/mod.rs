@@ -18,6 +18,8 @@ use serde::Serialize;
 use crate::error::Result;
 pub use crate::util::progress::Progress;
 
+pub mod gpu_loop;
+
 /// FNV-1a: a stable content hash (std's hasher may change between releases).
 pub fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {

@@ -16,3 +16,23 @@ pub struct TracedTriangle {
     pub e1: [f32; 4],
     pub e2: [f32; 4],
 }
+
+impl TracedTriangle {
+    /// The triangle with corners `a`, `b`, `c`, stored as `a`, `b - a`, `c - a` (the arithmetic the
+    /// CPU walks use, so both sides intersect the same edges).
+    pub fn new([a, b, c]: [glam::Vec3; 3]) -> TracedTriangle {
+        TracedTriangle {
+            p0: a.extend(0.0).into(),
+            e1: (b - a).extend(0.0).into(),
+            e2: (c - a).extend(0.0).into(),
+        }
+    }
+
+    /// `triangles` in the order of the BVH's leaves, as the shaders index them.
+    pub fn in_leaf_order(bvh: &bvh::Bvh, triangles: &[[glam::Vec3; 3]]) -> Vec<TracedTriangle> {
+        bvh.order
+            .iter()
+            .map(|&t| TracedTriangle::new(triangles[t as usize]))
+            .collect()
+    }
+}

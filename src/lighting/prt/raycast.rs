@@ -24,6 +24,7 @@ use glam::{DVec3, Vec3};
 
 use super::receivers::{tangent_frame, Clip, Receivers};
 use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind, SpecConstant};
+use crate::bake::gpu_loop::{cut_invocations, loop_limit_error, status_buffer, vec4, BatchSizer};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::raytrace::bvh::{box_entry, intersect_triangle, safe_inverse, Bvh, BvhNode};
@@ -290,18 +291,12 @@ const MAX_INVOCATIONS: usize = 65_535 * 64;
 /// The partial sums one submission writes, at most (bytes; more where one receiver's sums at one
 /// ray per invocation need more).
 const MAX_SUMS_BYTES: usize = 64 << 20;
-/// A submission long enough that its fixed cost is small, short enough for a lively progress line.
-const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
 /// How much a submission may grow over the last one. A small submission on a GPU costs its
 /// latency (each invocation walks its rays one after another), not its size, so its time
 /// understates the rate and the fit alone would grow slowly; doubling took 12 submissions to
 /// cover 114k receivers whatever the device. A factor of 8 reaches the sums buffer's limit in
 /// four, and still bounds what a chunk traced again after a cut loop wastes.
 const MAX_CHUNK_GROWTH: usize = 8;
-
-fn v4(v: Vec3) -> [f32; 4] {
-    [v.x, v.y, v.z, 0.0]
-}
 
 /// Items one thread maps at a time where the GPU bake's inputs are prepared on every core (a
 /// million receivers and 2 M triangles took about 0.1 s on one core here).
@@ -359,11 +354,7 @@ fn run(
             // SetBvh's (p0, p1 - p0, p2 - p0).
             let set_traced = parallel::map(&bvh.order, MAP_PIECE, |&t| {
                 let [a, b, c] = s.triangles[t as usize];
-                TracedTriangle {
-                    p0: v4(a),
-                    e1: v4(b - a),
-                    e2: v4(c - a),
-                }
+                TracedTriangle::new([a, b, c])
             });
             let (node_base, slot_base) = (nodes.len() as u32, traced.len() as u32);
             if nodes.is_empty() {
@@ -389,14 +380,17 @@ fn run(
     let receivers: Vec<GpuReceiver> = parallel::map(&indices, MAP_PIECE, |&k| {
         let f = frame(r.normals[k]);
         GpuReceiver {
-            position: v4(r.positions[k].as_vec3()),
-            tangent: v4(f[0]),
-            bitangent: v4(f[1]),
-            normal: v4(f[2]),
+            position: vec4(r.positions[k].as_vec3(), 0.0),
+            tangent: vec4(f[0], 0.0),
+            bitangent: vec4(f[1], 0.0),
+            normal: vec4(f[2], 0.0),
             bvh: [roots[r.set[k] as usize], 0, 0, 0],
         }
     });
-    let local: Vec<[f32; 4]> = cosine_directions(samples).iter().map(|d| v4(d.as_vec3())).collect();
+    let local: Vec<[f32; 4]> = cosine_directions(samples)
+        .iter()
+        .map(|d| vec4(d.as_vec3(), 0.0))
+        .collect();
 
     phases.trees = start.elapsed();
     let receivers_buf = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(&receivers))?;
@@ -412,7 +406,7 @@ fn run(
         (most_receivers * dim * 4) as u64,
         MemoryKind::GpuToCpu,
     )?;
-    let status_buf = gpu.create_storage_output("prt rays status", 4, MemoryKind::GpuToCpu)?;
+    let status_buf = status_buffer(gpu, "prt rays")?;
     let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
     let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
     let per_buf = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
@@ -467,7 +461,8 @@ fn run(
     let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, None)?;
     phases.set_up[3] = t.elapsed();
     phases.buffers = start.elapsed().saturating_sub(phases.trees + phases.pipeline);
-    let (mut base, mut chunk) = (0usize, FIRST_CHUNK);
+    let mut sizer = BatchSizer::new(FIRST_CHUNK, 16, usize::MAX, MAX_CHUNK_GROWTH);
+    let mut base = 0usize;
     while base < total {
         let lanes = samples.div_ceil(per as usize);
         // Both dispatches within the guaranteed workgroup count: the trace's lanes, the
@@ -475,7 +470,7 @@ fn run(
         let fits = (MAX_INVOCATIONS / lanes.max(dim))
             .min(sums_bytes / (4 * lanes * dim))
             .max(1);
-        let n = chunk.min(total - base).min(fits);
+        let n = sizer.size().min(total - base).min(fits);
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
         let (first, count) = (base as u32, n as u32);
@@ -531,20 +526,14 @@ fn run(
         graph.run_and_wait(gpu, frame, &mut states, "PRT ray cast")?;
         phases.record_submission(n, t0.elapsed());
         let t_sum = std::time::Instant::now();
-        let status = gpu.read_buffer(status_buf)?;
-        let cut = status
-            .get(..4)
-            .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let cut = cut_invocations(gpu, status_buf, "PRT ray cast")?;
         if cut > 0 {
             if per == 1 {
-                return Err(Error::Usage(format!(
-                    "{}: {cut} PRT ray(s), traced one per shader invocation, ran more loop iterations than the device allows an invocation; use the CPU baker",
-                    gpu.caps().name
-                )));
+                return Err(loop_limit_error(gpu, cut, "PRT ray(s)", "use the CPU baker"));
             }
             // Fewer rays per invocation, and the same chunk again.
             per = per.div_ceil(2);
-            chunk = chunk.div_ceil(2).max(16);
+            sizer.shrink();
             continue;
         }
         let transfer = gpu.read_buffer_prefix(transfer_buf, 4 * n * dim)?;
@@ -552,9 +541,7 @@ fn run(
         phases.read_back += t_sum.elapsed();
         base += n;
         progress.update(base as u64, total as u64);
-        let seconds = t0.elapsed().as_secs_f64();
-        let fit = (SUBMISSION_TARGET_SECONDS * n as f64 / seconds.max(1e-9)) as usize;
-        chunk = fit.clamp(16, (MAX_CHUNK_GROWTH * n).max(16));
+        sizer.record(n, t0.elapsed());
     }
     progress.finish();
     phases.total = start.elapsed();

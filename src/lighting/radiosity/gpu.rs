@@ -13,6 +13,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
+use crate::bake::gpu_loop::{cut_invocations, dvec4, loop_limit_error, storage_buffer, BatchSizer};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lighting::lightmap::patches::{Patches, Triangle};
@@ -87,17 +88,6 @@ struct ShootPush {
 const NO_BLOCK: u32 = u32::MAX;
 /// Each shot is three passes and three descriptor sets; a frame's pool holds 2048 sets.
 const MAX_SHOTS_PER_SUBMISSION: usize = 512;
-/// A submission long enough that its fixed cost is small, short enough for a lively progress line.
-const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
-
-fn v4(v: glam::DVec3, w: f32) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, w]
-}
-
-/// A storage buffer filled with `data` (`usage` added).
-fn storage_buffer(gpu: &mut Gpu, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<BufferId> {
-    Ok(gpu.create_buffer_init(name, usage | vk::BufferUsageFlags::STORAGE_BUFFER, data)?)
-}
 
 /// A buffer the host reads back.
 fn host_buffer(gpu: &mut Gpu, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<BufferId> {
@@ -150,7 +140,7 @@ fn run(
         c[1] += 1;
         gpu_blocks.push(GpuBlock {
             range: [members.len() as u32, block.members.len() as u32, block.chart as u32, 0],
-            corners: block.corners.map(|q| v4(q, 1.0)),
+            corners: block.corners.map(|q| dvec4(q, 1.0)),
         });
         for &k in &block.members {
             block_of[k] = b as u32;
@@ -162,9 +152,9 @@ fn run(
         .iter()
         .enumerate()
         .map(|(k, q)| GpuPatch {
-            centre: v4(q.centre, q.area as f32),
-            normal: v4(q.normal, 0.0),
-            albedo: v4(q.albedo, 0.0),
+            centre: dvec4(q.centre, q.area as f32),
+            normal: dvec4(q.normal, 0.0),
+            albedo: dvec4(q.albedo, 0.0),
             ids: [q.chart as u32, block_of[k], 0, 0],
         })
         .collect();
@@ -172,8 +162,8 @@ fn run(
         .patches
         .iter()
         .map(|q| GpuRadiosity {
-            total: v4(q.total, 0.0),
-            unshot: v4(q.unshot, 0.0),
+            total: dvec4(q.total, 0.0),
+            unshot: dvec4(q.unshot, 0.0),
         })
         .collect();
     // The CPU solve's visibility matrix, 2 bits per ordered chart pair (i·charts + j).
@@ -189,18 +179,7 @@ fn run(
     }
     let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
     let bvh = Bvh::build(&tris);
-    let traced: Vec<TracedTriangle> = bvh
-        .order
-        .iter()
-        .map(|&t| {
-            let [a, b, c] = tris[t as usize];
-            TracedTriangle {
-                p0: a.extend(0.0).into(),
-                e1: (b - a).extend(0.0).into(),
-                e2: (c - a).extend(0.0).into(),
-            }
-        })
-        .collect();
+    let traced = TracedTriangle::in_leaf_order(&bvh, &tris);
 
     let none = vk::BufferUsageFlags::empty();
     let patches_buf = storage_buffer(gpu, "radiosity patches", none, bytemuck::cast_slice(&patches))?;
@@ -287,8 +266,9 @@ fn run(
         Some(&bvh.skip_links()),
     )?;
     let mut recorded = 0usize;
-    let mut batch = 4usize;
+    let mut sizer = BatchSizer::new(4, 1, MAX_SHOTS_PER_SUBMISSION, 2);
     let shot = loop {
+        let batch = sizer.size();
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
         if recorded == 0 {
@@ -356,18 +336,20 @@ fn run(
             .record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "radiosity shooting")?;
         recorded += batch;
-        let status = gpu.read_buffer(status_buf)?;
-        let cut = status
-            .get(..4)
-            .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let cut = cut_invocations(gpu, status_buf, "radiosity shooting")?;
         if cut > 0 {
-            return Err(Error::Usage(format!("{}: {cut} radiosity visibility ray(s) ran more loop iterations than the device allows one shader invocation; use baker = \"cpu\"", gpu.caps().name)));
+            return Err(loop_limit_error(
+                gpu,
+                cut,
+                "radiosity visibility ray(s)",
+                "use baker = \"cpu\"",
+            ));
         }
         let bytes = gpu.read_buffer(shot_buf)?;
         let shot: GpuShot = bytemuck::pod_read_unaligned(
             bytes
                 .get(..std::mem::size_of::<GpuShot>())
-                .ok_or_else(|| Error::Usage("radiosity: the shot record read back short".into()))?,
+                .ok_or_else(|| Error::Internal("radiosity: the shot record read back short".into()))?,
         );
         let log = gpu.read_buffer(log_buf)?;
         let logged = (shot.state[3] as usize).min(log.len() / 4);
@@ -384,9 +366,7 @@ fn run(
                 .collect();
             break shot;
         }
-        let seconds = t0.elapsed().as_secs_f64();
-        let fit = (SUBMISSION_TARGET_SECONDS / (seconds / batch as f64).max(1e-9)) as usize;
-        batch = fit.clamp(1, (2 * batch).min(MAX_SHOTS_PER_SUBMISSION));
+        sizer.record(batch, t0.elapsed());
     };
     report.shots = shot.shots[0] as usize;
     report.full_searches = shot.state[2] as usize;
@@ -408,7 +388,7 @@ fn run(
     let solved: Vec<GpuRadiosity> = bytes
         .get(..state_bytes)
         .map(bytemuck::pod_collect_to_vec)
-        .ok_or_else(|| Error::Usage("radiosity: the read-back state is short".into()))?;
+        .ok_or_else(|| Error::Internal("radiosity: the read-back state is short".into()))?;
     for (q, s) in p.patches.iter_mut().zip(&solved) {
         q.total = glam::DVec3::new(s.total[0] as f64, s.total[1] as f64, s.total[2] as f64);
         q.unshot = glam::DVec3::new(s.unshot[0] as f64, s.unshot[1] as f64, s.unshot[2] as f64);

@@ -14,10 +14,11 @@
 //! [`transfer::visibility_cpu`]: super::transfer::visibility_cpu
 
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
 use super::samples::SampleSet;
 use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind};
+use crate::bake::gpu_loop::{cut_invocations, dvec4, loop_limit_error, status_buffer, BatchSizer};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lighting::lightmap::patches::{Patches, Triangle};
@@ -56,14 +57,8 @@ const FIRST_CHUNK: usize = 256;
 const MAX_CHUNK: usize = 1 << 20;
 /// Invocations per dispatch at most: the guaranteed 65,535 workgroups of the shader's 64.
 const MAX_INVOCATIONS: usize = 65_535 * 64;
-/// A submission long enough that its fixed cost is small, short enough for a lively progress line.
-const SUBMISSION_TARGET_SECONDS: f64 = 0.25;
 /// Invocations per word at most: one sample each.
 const MAX_LANES: u32 = 32;
-
-fn v4(v: DVec3) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, 0.0]
-}
 
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky, as
 /// [`super::transfer::visibility_cpu`] lays them out (`⌈N/32⌉` words per patch, patch-major;
@@ -113,27 +108,16 @@ fn run(
             let q = &p.patches[k];
             let plane = p.charts[q.chart].normal;
             GpuPatch {
-                origin: v4(q.centre + plane * eps),
-                plane: v4(plane),
-                normal: v4(q.normal),
+                origin: dvec4(q.centre + plane * eps, 0.0),
+                plane: dvec4(plane, 0.0),
+                normal: dvec4(q.normal, 0.0),
             }
         })
         .collect();
-    let dirs: Vec<[f32; 4]> = samples.dirs.iter().map(|&d| v4(d)).collect();
+    let dirs: Vec<[f32; 4]> = samples.dirs.iter().map(|&d| dvec4(d, 0.0)).collect();
     let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
     let bvh = Bvh::build(&tris);
-    let traced: Vec<TracedTriangle> = bvh
-        .order
-        .iter()
-        .map(|&t| {
-            let [a, b, c] = tris[t as usize];
-            TracedTriangle {
-                p0: a.extend(0.0).into(),
-                e1: (b - a).extend(0.0).into(),
-                e2: (c - a).extend(0.0).into(),
-            }
-        })
-        .collect();
+    let traced = TracedTriangle::in_leaf_order(&bvh, &tris);
     let mut sky = vec![0u32; traced.len().div_ceil(32)];
     for (slot, &t) in bvh.order.iter().enumerate() {
         if triangles[t as usize].sky {
@@ -147,7 +131,7 @@ fn run(
     let sky_buf = gpu.create_storage_buffer("sh visibility sky flags", bytemuck::cast_slice(&sky))?;
     let max_chunk = MAX_CHUNK.min(total);
     let out_buf = gpu.create_storage_output("sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
-    let status_buf = gpu.create_storage_output("sh visibility status", 4, MemoryKind::GpuToCpu)?;
+    let status_buf = status_buffer(gpu, "sh visibility")?;
     let chunk_buf = gpu.create_storage_output("sh visibility chunk", 4, MemoryKind::GpuOnly)?;
     let lanes_buf = gpu.create_storage_output("sh visibility lanes", 4, MemoryKind::GpuOnly)?;
     let pipeline = gpu.create_compute_pipeline(
@@ -183,9 +167,12 @@ fn run(
         &traced,
         Some(&bvh.skip_links()),
     )?;
-    let (mut base, mut chunk) = (0usize, FIRST_CHUNK.min(max_chunk));
+    // A last, short chunk (or a bake of fewer than 32 words) must not bring the ceiling under the
+    // floor of 64.
+    let mut sizer = BatchSizer::new(FIRST_CHUNK, 64, max_chunk, 2);
+    let mut base = 0usize;
     while base < total {
-        let n = chunk.min(total - base).min(MAX_INVOCATIONS / lanes as usize);
+        let n = sizer.size().min(total - base).min(MAX_INVOCATIONS / lanes as usize);
         let t0 = std::time::Instant::now();
         let mut graph = RenderGraph::new();
         let first = base as u32;
@@ -226,20 +213,19 @@ fn run(
             .buffer(status_buf, Access::HostRead, None)
             .record(|_| Ok(()));
         graph.run_and_wait(gpu, frame, &mut states, "sh light-map visibility")?;
-        let status = gpu.read_buffer(status_buf)?;
-        let cut = status
-            .get(..4)
-            .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        let cut = cut_invocations(gpu, status_buf, "sh light-map visibility")?;
         if cut > 0 {
             if lanes >= MAX_LANES {
-                return Err(Error::Usage(format!(
-                    "{}: {cut} SH light-map visibility ray(s), traced one per shader invocation, ran more loop iterations than the device allows an invocation; use baker = \"cpu\"",
-                    gpu.caps().name
-                )));
+                return Err(loop_limit_error(
+                    gpu,
+                    cut,
+                    "SH light-map visibility ray(s)",
+                    "use baker = \"cpu\"",
+                ));
             }
             // Fewer rays per invocation, and the same chunk again.
             lanes *= 2;
-            chunk = chunk.div_ceil(2).max(64);
+            sizer.shrink();
             continue;
         }
         let out = gpu.read_buffer_prefix(out_buf, 4 * n)?;
@@ -251,11 +237,7 @@ fn run(
         }
         base += n;
         progress.update(base as u64, total as u64);
-        let seconds = t0.elapsed().as_secs_f64();
-        let fit = (SUBMISSION_TARGET_SECONDS * n as f64 / seconds.max(1e-9)) as usize;
-        // A last, short chunk (or a bake of fewer than 32 words) must not bring the ceiling under
-        // the floor: clamp panics when max < min.
-        chunk = fit.clamp(64, (2 * n).min(max_chunk).max(64));
+        sizer.record(n, t0.elapsed());
     }
     progress.finish();
     Ok(bits)
