@@ -2104,7 +2104,7 @@ fn a_batch_cut_short_for_some_pixels_counts_no_sample_twice() {
     common::assert_clean(&r.gpu);
 }
 
-/// Measurement behind `ONE_LIGHT_ABOVE` (README, "Many punctual lights in the reference"): per
+/// Measurement behind `ONE_LIGHT_ABOVE` (docs/reference.md, light selection): per
 /// scene, samples per second and variance per sample with every light visited and with one
 /// drawn, and their efficiency ratio (samples/s ÷ variance). `cargo test --release --test
 /// reference light_selection_efficiency -- --ignored --nocapture`.
