@@ -688,7 +688,7 @@ fn flat_receiver_light_closed_form(a: f64, up: bool, window: [f64; 4]) -> f64 {
 
 /// The `window` setting damps the 4-band ringing where the method fails: a light below the
 /// surface (θ_l = 10°, on a flat field) leaks 6.51% of its overhead value without a window
-/// (the digest's 6.5%) and 0.70% with Hanning of width 5 (the README's claim), each judged
+/// (the digest's 6.5%) and 0.70% with Hanning of width 5 (docs/methods/heightfield.md), each judged
 /// against the closed form above (Hanning σ_l = (1 + cos(πl/5))/2) — independent of the tables
 /// and term lists — and against the CPU mirror. Measured (lavapipe): the GPU within 3.2e-4
 /// (relative) of the closed form overhead and 5.7e-6 below (the local table's bilinear lookup

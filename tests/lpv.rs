@@ -795,7 +795,7 @@ fn camera_surfels_add_what_the_light_cannot_see_to_the_geometry_volume() {
 
 /// The atrium (scenes/lpv_atrium.toml: a court of boxes with thin gallery floors and coloured
 /// banners under a low sun): the corrected LPV's one-bounce light in mean against the path
-/// tracer's, at 32×24 — measured 1.40× at 64×48: the lit court floor lights itself (README,
+/// tracer's, at 32×24 — measured 1.40× at 64×48: the lit court floor lights itself (docs/methods/lpv.md,
 /// where it breaks); held between 1.1 and 1.7 so a change either way is seen.
 #[test]
 fn the_atrium_indirect_light_is_measured_against_the_path_tracer() {

@@ -118,7 +118,7 @@ fn bounced_light_under_shadow_volumes_approaches_the_path_tracer() {
         "relative MSE against the tracer: gi {:.4}, direct only {:.4}; light-map against indirect only {:.4}",
         gi.rel_mse, direct.rel_mse, bounces.rel_mse
     );
-    // Measured at 64×48, 512 spp: 0.0060 and 0.0243 (README).
+    // Measured at 64×48, 512 spp: 0.0060 and 0.0243 (docs/methods/radiosity.md).
     assert!(
         gi.rel_mse < 0.5 * direct.rel_mse,
         "gi {} vs direct {}",

@@ -194,8 +194,8 @@ fn the_gpu_shooter_keeps_the_dark_room_dark() {
     }
 }
 
-/// Bake cost against patch count, CPU solve and GPU shooter side by side in one run (the
-/// README's table): `cargo test --release --test radiosity_gpu -- --ignored --nocapture`.
+/// Bake cost against patch count, CPU solve and GPU shooter side by side in one run (data:
+/// docs/results/lavapipe/radiosity_bake_cost.csv): `cargo test --release --test radiosity_gpu -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn measure_bake_time_against_patch_count() {

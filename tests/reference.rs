@@ -2104,7 +2104,7 @@ fn a_batch_cut_short_for_some_pixels_counts_no_sample_twice() {
     common::assert_clean(&r.gpu);
 }
 
-/// Measurement behind `ONE_LIGHT_ABOVE` (README, "Many punctual lights in the reference"): per
+/// Measurement behind `ONE_LIGHT_ABOVE` (docs/reference.md, light selection): per
 /// scene, samples per second and variance per sample with every light visited and with one
 /// drawn, and their efficiency ratio (samples/s ÷ variance). `cargo test --release --test
 /// reference light_selection_efficiency -- --ignored --nocapture`.
@@ -2159,8 +2159,7 @@ fn light_selection_efficiency() {
 /// A GPU's compiler may fuse a multiply and an add in one compilation and not in the other, and
 /// a path whose random decisions then differ goes another way: there the image means must agree
 /// within four standard errors (on the H200, 78 of 640 values of `terrain_cones` at 3 spp
-/// differed between the specialised and the general tracer, 2026-12-04,
-/// tools/results/h200/log17_walk_per_device.txt).
+/// differed between the specialised and the general tracer).
 fn assert_same_image(gpu: &penumbra::backend::Gpu, what: &str, a: &ReferenceImage, b: &ReferenceImage) {
     assert!(
         a.mean.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0),

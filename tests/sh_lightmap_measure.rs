@@ -1,7 +1,7 @@
 //! What VQ compression of SH light-maps costs (issue 16, seed 000 §5.6.3): PSNR of bare-SHL
 //! shading over 64 random directional lights, compressed against native, and the seed storage
 //! model's compression ratio. The target (≥ 10× at ≥ 40 dB, 4 bands) is asserted on the
-//! courtyard; `psnr_table` (ignored, long) prints the README's table.
+//! courtyard; `psnr_table` (ignored, long) prints docs/results/lavapipe/sh_lightmap_vq_psnr.csv.
 
 use penumbra::lighting::sh_lightmap::{self, config::Config, measure, Rays};
 use penumbra::scene::Scene;
@@ -51,7 +51,7 @@ fn ten_times_smaller_at_40_db_with_4_bands() {
 }
 
 #[test]
-#[ignore = "measurement: several minutes; prints the README's PSNR table"]
+#[ignore = "measurement: several minutes; prints the PSNR table of docs/methods/sh_lightmap.md"]
 fn psnr_table() {
     println!(
         "| bands | reps | texels | PSNR dB | ratio | iterations | unused | VQ s |\n|---|---|---|---|---|---|---|---|"
@@ -70,7 +70,7 @@ fn psnr_table() {
 }
 
 #[test]
-#[ignore = "measurement: a few minutes; the README's large-map rows (4 bands, 5 cm, S ≈ 87k texels)"]
+#[ignore = "measurement: a few minutes; the large-map rows of docs/methods/sh_lightmap.md (4 bands, 5 cm, S ≈ 87k texels)"]
 fn psnr_large_map() {
     let t = std::time::Instant::now();
     let baked = bake(0.05, 4, 2500);

@@ -18,7 +18,7 @@
 #
 # Needs python3 (the scene variants and the two tools), a TrueType font for the charts
 # (fonts-dejavu-core); vulkaninfo and the validation layer are used when present. The results of
-# its first run on an NVIDIA H200 are in tools/results/h200/ (README.md there).
+# its runs on an NVIDIA H200 are kept as data in docs/results/h200/ (docs/results/README.md).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${1:?usage: tools/gpu_bench.sh OUTDIR [PACK.tar.gz]}

@@ -3,7 +3,7 @@
 from one run: one stage scene per light count, every method profiled on it with
 `penumbra profile`, the medians written as CSV and drawn as one SVG plot (log-log).
 
-    python3 tools/many_lights_scaling.py --out scaling            # 1 ... 4,096 lights (about 6 min here)
+    python3 tools/many_lights_scaling.py                          # 1 ... 4,096 lights (about 6 min on lavapipe)
     python3 tools/many_lights_scaling.py --counts 1,64,1024 --frames 5 --size 160x90
 
 The scene is a 12 m x 10 m stage with a back wall and four set pieces under a rig of
@@ -22,8 +22,9 @@ A method whose run fails or takes longer than --timeout seconds is reported and 
 larger counts (the per-light stencil method at 4,096 lights may not finish on a CPU device).
 Also written: each method's bake time (set-up) per count.
 
-Timings come from GPU timestamp queries on whatever device penumbra picks (lavapipe here);
-the device is printed with the table.
+Timings come from GPU timestamp queries on whatever device penumbra picks; the CSV starts with
+`# key: value` lines naming the device, driver, commit, date and command (the form of every data
+file in docs/results/, which tools/results_tables.py reads).
 """
 
 import argparse
@@ -155,7 +156,7 @@ def profile(binary, scene, method, frames, size, timeout):
     bake_ms = sum(b["ms"] for b in report.get("bakes", []) if not b.get("cached"))
     # A method that could not render everything (a cluster out of slots) says so in a warning.
     warnings = [l[len("warning: "):] for l in (r.stdout + r.stderr).splitlines() if l.startswith("warning: ")]
-    return {"frame_ms": frame["median_ms"], "bake_ms": bake_ms, "wall_s": wall, "device": report["device"], "note": "; ".join(warnings)}, None
+    return {"frame_ms": frame["median_ms"], "bake_ms": bake_ms, "wall_s": wall, "device": report["device"], "driver": report.get("driver", "?"), "note": "; ".join(warnings)}, None
 
 
 def svg_plot(rows, methods, path, device):
@@ -215,7 +216,7 @@ def measure(args, counts, methods, tmp, rows, stopped):
                 rows.append({"lights": n, "method": m, "frame_ms": None, "bake_ms": None, "note": err})
                 print("%6d %-15s %s" % (n, m, err), flush=True)
                 continue
-            rows.append({"lights": n, "method": m, "frame_ms": res["frame_ms"], "bake_ms": res["bake_ms"], "note": res["note"], "device": res["device"]})
+            rows.append({"lights": n, "method": m, "frame_ms": res["frame_ms"], "bake_ms": res["bake_ms"], "note": res["note"], "device": res["device"], "driver": res["driver"]})
             print("%6d %-15s frame %10.3f ms   bake %10.1f ms%s" % (n, m, res["frame_ms"], res["bake_ms"], "   warning: " + res["note"] if res["note"] else ""), flush=True)
 
 
@@ -226,7 +227,7 @@ def main():
     ap.add_argument("--frames", type=int, default=10)
     ap.add_argument("--size", default="320x180")
     ap.add_argument("--timeout", type=int, default=600)
-    ap.add_argument("--out", default="many_lights_scaling", help="prefix of the .csv and .svg written")
+    ap.add_argument("--out", default=None, help="prefix of the .csv and .svg written (default docs/results/many_lights_scaling[_constant])")
     ap.add_argument("--binary", default="target/release/penumbra")
     ap.add_argument(
         "--coverage",
@@ -249,9 +250,17 @@ def main():
         os.environ["PENUMBRA_CACHE"] = tmp
         measure(args, counts, methods, tmp, rows, stopped)
     device = next((r["device"] for r in rows if "device" in r), "?")
+    driver = next((r["driver"] for r in rows if "driver" in r), "?")
     for r in rows:
         r.pop("device", None)
+        r.pop("driver", None)
+    if args.out is None:
+        args.out = "docs/results/many_lights_scaling" + ("_constant" if args.coverage == "constant" else "")
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip() or "?"
     with open(args.out + ".csv", "w", newline="") as f:
+        f.write("# device: %s\n# driver: %s\n# commit: %s\n" % (device, driver, commit))
+        f.write("# date: %s\n" % time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()))
+        f.write("# command: python3 tools/many_lights_scaling.py %s\n" % " ".join(sys.argv[1:]))
         wr = csv.DictWriter(f, fieldnames=["lights", "method", "frame_ms", "bake_ms", "note"])
         wr.writeheader()
         wr.writerows(rows)

@@ -98,7 +98,7 @@ struct Builder<'a> {
 const PARALLEL_MIN: usize = 8192;
 /// Threads a build may run at once, per core. More than one: SAH splits are uneven, and with a
 /// thread per core the largest subtree would keep one core busy while the others idle. Measured
-/// on an H200 host's 16 cores with the top nodes' scans shared (tools/results/h200/log13), a
+/// on an NVIDIA H200 host's 16 cores with the top nodes' scans shared, a
 /// 524k-triangle plane: 76–87 ms at 2 a core, 80–81 at 4, 83–100 at 1 (without shared scans),
 /// 364–405 on one thread; four such planes, 2 M triangles: 345–364, 357–395, 427–443 and
 /// 1,553–2,255 ms. On this 2-core machine one extra thread does best (87–100 ms against 108–111

@@ -1,0 +1,90 @@
+//! The tables of numbers in README.md and docs/ are generated from the data files in
+//! docs/results/ by tools/results_tables.py; these tests fail when a committed table no longer
+//! matches its data, and check that the tool's check notices an edited number.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run_tool(root: &Path) -> Output {
+    match Command::new("python3")
+        .arg(root.join("tools/results_tables.py"))
+        .arg("--check")
+        .output()
+    {
+        Ok(out) => out,
+        Err(e) => panic!(
+            "cannot run python3 ({e}): the docs' tables are checked by tools/results_tables.py, \
+             which needs python3 (tools/setup.sh installs it)"
+        ),
+    }
+}
+
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let dest = to.join(path.file_name().unwrap());
+        if path.is_dir() {
+            copy_tree(&path, &dest);
+        } else {
+            std::fs::copy(&path, &dest).unwrap();
+        }
+    }
+}
+
+#[test]
+fn committed_tables_match_their_data() {
+    let out = run_tool(&repo());
+    assert!(
+        out.status.success(),
+        "a table in README.md or docs/ differs from its data; run `python3 tools/results_tables.py`:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let said = String::from_utf8_lossy(&out.stderr);
+    let count: usize = said
+        .split_whitespace()
+        .skip_while(|w| *w != "results_tables:")
+        .nth(1)
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
+    assert!(
+        count >= 20,
+        "expected the docs to hold at least 20 generated tables, the tool found {count}"
+    );
+}
+
+#[test]
+fn an_edited_number_fails_the_check() {
+    let dir = std::env::temp_dir().join(format!("penumbra-docs-tables-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    copy_tree(&repo().join("docs"), &dir.join("docs"));
+    std::fs::copy(repo().join("README.md"), dir.join("README.md")).unwrap();
+    std::fs::create_dir_all(dir.join("tools")).unwrap();
+    std::fs::copy(
+        repo().join("tools/results_tables.py"),
+        dir.join("tools/results_tables.py"),
+    )
+    .unwrap();
+    assert!(run_tool(&dir).status.success(), "the copy should pass before the edit");
+
+    // One cell of a data file behind a table changes; the committed table still shows the old one.
+    let data = dir.join("docs/results/lavapipe/radiosity_chart_cornell.csv");
+    let text = std::fs::read_to_string(&data).unwrap();
+    assert!(
+        text.contains(",0.0092,"),
+        "the test's data row moved; pick another cell"
+    );
+    std::fs::write(&data, text.replacen(",0.0092,", ",0.0093,", 1)).unwrap();
+    let out = run_tool(&dir);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(!out.status.success(), "--check passed with a number edited in the data");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("differs from its data"),
+        "the failure should name the stale table: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
