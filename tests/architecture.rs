@@ -1,6 +1,8 @@
 //! The shape of the source tree: top-level modules in layers with every dependency pointing down,
 //! `unsafe` code only in the backend, and techniques named only inside the lighting layer (its
 //! registry for everything above it), where they share the layer's cores but not each other.
+//!
+//! Its own test binary: it reads the sources and needs no device, so it builds and runs alone.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

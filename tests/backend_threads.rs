@@ -9,8 +9,12 @@
 //! on purpose, in a binary of its own so that a crash names it. Measured by hand (debug build,
 //! this 2-core machine): with the backend of before the lock all 8 of 8 runs crashed, with only
 //! the exclusive side (no shared holds around other calls) 4 of 6, with the lock none of 12.
+//!
+//! Its own test binary: it races device creation against other threads' Vulkan calls, and the
+//! race it guards needs no other tests' devices in the process.
 
-mod common;
+mod support;
+use support as common;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

@@ -1,10 +1,13 @@
 //! The windowed demo under an X server (tools/test.sh runs the suite under Xvfb): it opens,
 //! presents frames with validation on, and its screenshot — the presented swapchain pixels — shows
 //! the same image as a headless capture of the same scene.
+//!
+//! Its own test binary: it opens a window and owns the process's display connection.
 
 use std::process::Command;
 
-mod common;
+mod support;
+use support as common;
 
 #[test]
 fn demo_presents_the_scene_under_xvfb() {

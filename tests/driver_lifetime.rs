@@ -8,7 +8,8 @@
 //! Its own test binary: in one shared with other tests, their devices would keep the driver
 //! loaded whatever this process does.
 
-mod common;
+mod support;
+use support as common;
 
 use std::collections::BTreeSet;
 

@@ -9,13 +9,17 @@
 //!
 //! `soak_every_shipped_scene_and_method` (ignored; `tools/soak.sh` runs it) renders every shipped
 //! scene with every method it enables for many frames and prints RSS per 100 frames.
+//!
+//! Its own test binary: it measures the process's resident memory, which other tests in the
+//! same process would disturb.
 
 use std::path::Path;
 
 use penumbra::renderer::Renderer;
 use penumbra::scene::Scene;
 
-mod common;
+mod support;
+use support as common;
 
 /// Resident anonymous memory of this process, in MiB (Linux).
 fn rss_anon_mib() -> f64 {

@@ -16,7 +16,7 @@ bash tools/msrv_check.sh
 export PENUMBRA_TEST_DEVICE="${PENUMBRA_TEST_DEVICE:-llvmpipe}"
 # Every target runs even after one fails (--no-fail-fast), so one run shows every failure. A
 # target killed by a signal (a crash in the driver, the layer or penumbra; the crash report of
-# tests/common/crash_report.rs names the thread and library) is run once more on its own. The
+# tests/support/crash_report.rs names the thread and library) is run once more on its own. The
 # crashes seen until 2026-12-04 (about one suite in six) came from devices made or dropped on one
 # test's thread while another test's thread called Vulkan, a race in the loader and the
 # validation layer that the backend now locks out (tests/backend_threads.rs); the rerun stays for

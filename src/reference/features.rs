@@ -9,7 +9,7 @@
 //! 155 k to 100 k samples/s, whether the condition varied per lane or came from the uniform
 //! buffer. Each constant is true in the shader, which traces any scene; the host makes it false
 //! only where the scene has none of the thing, so the compiler drops code no path can reach and
-//! the image stays the same bit for bit (`tests/reference.rs`,
+//! the image stays the same bit for bit (`tests/reference/reference.rs`,
 //! `specialised_tracer_matches_the_general_one`).
 
 use crate::backend::SpecConstant;

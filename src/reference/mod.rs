@@ -61,7 +61,7 @@
 //! unbiased and its error is smaller (stratification). A replicate's samples are not
 //! independent, so their scatter would overstate that error; the replicates are, and the
 //! standard error is the scatter of their means (R − 1 degrees of freedom per pixel, so a
-//! pixel's standard error is itself rougher than with independent samples; `tests/reference.rs`,
+//! pixel's standard error is itself rougher than with independent samples; `tests/reference/reference.rs`,
 //! README "The Sobol sampler").
 
 pub mod export;

@@ -1,5 +1,5 @@
 //! `[[light_arrays]]` and `[light_board]`: expansion into ordinary lights, the board's factors,
-//! and errors naming file, line and field. (tests/light_board.rs loads the shipped scenes against
+//! and errors naming file, line and field. (tests/methods/light_board.rs loads the shipped scenes against
 //! the registry's method schemas.)
 
 use std::path::Path;

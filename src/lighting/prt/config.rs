@@ -140,7 +140,7 @@ impl Config {
             baker: Baker::Raster,
             // Corrected: the orthographic disk with exact weights is the cosine-weighted estimator (as
             // the ray-cast truth's); equal-area spends fewer pixels near the normal, where the
-            // cosine is largest (+2.3 % on the open box's floor at 32², tests/prt_frame.rs).
+            // cosine is largest (+2.3 % on the open box's floor at 32², tests/methods/prt_frame.rs).
             mapping: Mapping::Orthographic,
             depth: if faithful { Depth::Planar } else { Depth::Radial },
             weights: if faithful { Weights::Legacy } else { Weights::Exact },

@@ -15,7 +15,7 @@
 //!   shader marks them `precise`) and intersect them with the same fp32 Möller–Trumbore and slab
 //!   tests over the same BVHs, so they agree ray for ray but where the last bit of a hit test
 //!   decides; the SH basis and the sums differ only by rounding (fp64 against fp32).
-//!   tests/prt_rays.rs measured no ray that differs on lavapipe, and coefficients within 4e-7.
+//!   tests/methods/prt_rays.rs measured no ray that differs on lavapipe, and coefficients within 4e-7.
 //! * Möller–Trumbore is not watertight: a ray exactly along an edge shared by two triangles may
 //!   pass between them (both paths alike).
 

@@ -8,7 +8,7 @@
 //! smallest power of two with the group's largest magnitude M at most 127.5/128 of it (so that
 //! it rounds inside the range): every value comes back within half a step, 2^(e−8) < M/127.5
 //! (a group whose M lies just below a power of two takes the next exponent; measured on the
-//! bunny: 0.0078157·M, just over 1/128, tests/prt_scenes.rs).
+//! bunny: 0.0078157·M, just over 1/128, tests/methods/prt_scenes.rs).
 //! The transfer is decoded when loaded; the GPU keeps fp32 (what is measured is the storage's
 //! error, which the chart shows in the image).
 

@@ -6,7 +6,7 @@
 //! stop and show progress) and the patches' radiosity at the end.
 //!
 //! It differs from the CPU solve in precision (fp32 against fp64) and, in faithful mode, in the
-//! random numbers that pick candidate shooters; tests/radiosity_gpu.rs checks that both converge
+//! random numbers that pick candidate shooters; tests/methods/radiosity_gpu.rs checks that both converge
 //! to the same light-map.
 
 use bytemuck::{Pod, Zeroable};

@@ -8,7 +8,7 @@
 //!
 //! The rays are the CPU's in fp32 (the CPU BVH is fp32 too), with the direction tests in fp32
 //! rather than fp64: bits may differ only where the last bit of the arithmetic decides, for rays
-//! through the seam between two triangles and for grazing directions (tests/sh_lightmap_gpu.rs:
+//! through the seam between two triangles and for grazing directions (tests/methods/sh_lightmap_gpu.rs:
 //! measured 7.6e-6 of the bits on the open box, all rays into its corner edges).
 //!
 //! [`transfer::visibility_cpu`]: super::transfer::visibility_cpu

@@ -375,7 +375,7 @@ impl ShLightmap {
                 key = key.with_bytes(&format!("normal map {i}"), bytemuck::cast_slice(&texels));
             }
         }
-        // The GPU's rays give the CPU's bits but for a few seam rays (tests/sh_lightmap_gpu.rs):
+        // The GPU's rays give the CPU's bits but for a few seam rays (tests/methods/sh_lightmap_gpu.rs):
         // one cache entry serves both.
         key = key.with_shaders("sh_lightmap/visibility");
         let (geo, surf) = (&geometry, &surfaces);
@@ -385,7 +385,7 @@ impl ShLightmap {
             &key,
             |progress| {
                 // Auto: the GPU, unless it is a CPU implementation (lavapipe), where the native rays
-                // measured 5x faster (tests/sh_lightmap_gpu.rs, ignored measurement).
+                // measured 5x faster (tests/methods/sh_lightmap_gpu.rs, ignored measurement).
                 let on_gpu = config
                     .on_gpu
                     .unwrap_or(device.caps().device_type != vk::PhysicalDeviceType::CPU);

@@ -1,0 +1,508 @@
+//! The `penumbra` binary as users meet it: deterministic captures, profiling output, device
+//! info, and one clear error line (never a panic) for every kind of bad input.
+
+use crate::support as common;
+
+use common::penumbra;
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+fn path_str(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn capture_is_deterministic_and_writes_both_files() {
+    let (png1, exr1, png2, exr2) = (
+        common::temp_path("a.png"),
+        common::temp_path("a.exr"),
+        common::temp_path("b.png"),
+        common::temp_path("b.exr"),
+    );
+    for (png, exr) in [(&png1, &exr1), (&png2, &exr2)] {
+        let o = penumbra(&[
+            "capture",
+            "--size",
+            "64x48",
+            "-o",
+            path_str(png),
+            "--exr",
+            path_str(exr),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert_eq!(
+        std::fs::read(&png1).unwrap(),
+        std::fs::read(&png2).unwrap(),
+        "PNG differs between runs"
+    );
+    assert_eq!(
+        std::fs::read(&exr1).unwrap(),
+        std::fs::read(&exr2).unwrap(),
+        "EXR differs between runs"
+    );
+    let hdr = penumbra::util::image_io::HdrImage::read_exr(&exr1).unwrap();
+    assert_eq!((hdr.width, hdr.height), (64, 48));
+    // The EXR is unclamped linear radiance: the glossy sphere's highlight exceeds 1.
+    let max = hdr
+        .pixels
+        .iter()
+        .map(|p| p[0].max(p[1]).max(p[2]))
+        .fold(0.0f32, f32::max);
+    assert!(max > 1.0, "brightest radiance {max}");
+    // The PNG is its tone-mapped image.
+    let png = image::open(&png1).unwrap().to_rgba8();
+    assert_eq!(png, hdr.to_display(1.0));
+}
+
+#[test]
+fn profile_reports_every_pass_as_json() {
+    let json = common::temp_path("profile.json");
+    let o = penumbra(&["profile", "--size", "64x48", "--frames", "5", "--json", path_str(&json)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("forward") && table.contains("median ms"), "{table}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(
+        v["device"].as_str().unwrap().to_lowercase().contains("llvmpipe")
+            || std::env::var("PENUMBRA_TEST_DEVICE").is_ok()
+    );
+    assert!(!v["driver"].as_str().unwrap().is_empty());
+    assert_eq!(v["frames"], 5);
+    let passes: Vec<&str> = v["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    // The renderer's background pass (targets cleared, the sky), then the method's.
+    assert_eq!(passes, vec!["frame", "background", "forward"]);
+    assert_eq!(v["configuration"], "forward");
+    assert_eq!(v["methods"], serde_json::json!(["forward"]));
+    assert_eq!(v["bakes"], serde_json::json!([]), "forward bakes nothing");
+    for p in v["passes"].as_array().unwrap() {
+        let (lo, med, hi) = (
+            p["min_ms"].as_f64().unwrap(),
+            p["median_ms"].as_f64().unwrap(),
+            p["max_ms"].as_f64().unwrap(),
+        );
+        assert!(0.0 < lo && lo <= med && med <= hi, "{p}");
+    }
+}
+
+#[test]
+fn info_names_the_device_and_its_limits() {
+    let o = penumbra(&["info"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for key in [
+        "device",
+        "driver",
+        "depth clamp",
+        "timestamps",
+        "max push constants",
+        "validation",
+    ] {
+        assert!(text.contains(key), "missing {key}: {text}");
+    }
+}
+
+/// Writes `content` as a scene file and returns the error line of `capture` on it.
+fn scene_error(name: &str, content: &str) -> (String, PathBuf) {
+    let path = common::temp_path(name);
+    std::fs::write(&path, content).unwrap();
+    let out = common::temp_path(&format!("{name}.png"));
+    let o = penumbra(&["capture", path_str(&path), "--size", "16x16", "-o", path_str(&out)]);
+    assert!(!o.status.success(), "{name}: bad scene was accepted");
+    assert!(!out.exists(), "{name}: an output was written for a bad scene");
+    let err = stderr(&o);
+    assert!(!err.contains("panicked"), "{name}: panic: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{name}: expected one error line, got:\n{err}");
+    (lines[0].to_string(), path)
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n";
+
+#[test]
+fn malformed_scenes_get_one_clear_error_line() {
+    let cases: Vec<(&str, String, &str, &str)> = vec![
+        (
+            "syntax.toml",
+            format!("{CAMERA}[[lights]\ntype = \"point\"\n"),
+            ":4:",
+            "",
+        ),
+        (
+            "unknown_key.toml",
+            format!("{CAMERA}colour = 3\n"),
+            ":4: camera.colour",
+            "unknown field",
+        ),
+        (
+            "negative.toml",
+            format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, -2, 1]\n"),
+            ":7: lights[0].intensity",
+            "non-negative",
+        ),
+        (
+            "material.toml",
+            format!("{CAMERA}[[objects]]\nmesh = \"box\"\nmaterial = \"marble\"\n"),
+            ":6: objects[0].material",
+            "marble",
+        ),
+        (
+            "method.toml",
+            format!("methods = [\"raytraced_gi\"]\n{CAMERA}"),
+            ":1: methods[0]",
+            "forward",
+        ),
+        (
+            "obj_missing.toml",
+            format!("{CAMERA}[[objects]]\nmesh = \"obj\"\npath = \"nowhere.obj\"\n"),
+            ":6: objects[0].path",
+            "nowhere.obj",
+        ),
+        (
+            "fov.toml",
+            "[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\nfov_y_deg = 190\n".to_string(),
+            ":4: camera.fov_y_deg",
+            "180",
+        ),
+    ];
+    for (name, content, location, detail) in cases {
+        let (line, path) = scene_error(name, &content);
+        assert!(
+            line.starts_with(&format!("error: {}", path.display())),
+            "{name}: {line}"
+        );
+        assert!(line.contains(location), "{name}: expected `{location}` in: {line}");
+        assert!(line.contains(detail), "{name}: expected `{detail}` in: {line}");
+    }
+}
+
+#[test]
+fn nan_in_a_mesh_names_the_obj_and_vertex() {
+    let obj = common::temp_path("nan.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n").unwrap();
+    let (line, _) = scene_error(
+        "nan_mesh.toml",
+        &format!("{CAMERA}[[objects]]\nmesh = \"obj\"\npath = \"{}\"\n", path_str(&obj)),
+    );
+    assert!(
+        line.contains("nan.obj") && line.to_lowercase().contains("vertex 3"),
+        "{line}"
+    );
+}
+
+#[test]
+fn bad_command_line_values_are_reported() {
+    let o = penumbra(&["capture", "no/such/scene.toml"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).starts_with("error: no/such/scene.toml: file: cannot read"),
+        "{}",
+        stderr(&o)
+    );
+    let o = penumbra(&["capture", "--size", "64by48"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("WIDTHxHEIGHT"),
+        "{}",
+        stderr(&o)
+    );
+    // A method the renderer knows but the scene does not enable, and one nobody knows.
+    let o = penumbra(&["capture", "--method", "shadow_volumes", "--size", "8x8"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("method `shadow_volumes` is not enabled") && e.contains("forward"),
+        "{e}"
+    );
+    let o = penumbra(&["capture", "--method", "bogus", "--size", "8x8"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.starts_with("error: --method bogus: unknown method; known methods: forward, shadow_volumes"),
+        "{e}"
+    );
+    // Numbers that mean nothing are refused before anything runs.
+    for (args, says) in [
+        (vec!["capture", "--frames", "0"], "--frames"),
+        (vec!["profile", "--frames", "0"], "--frames"),
+        (vec!["chart", "scenes/default.toml", "--frames", "0"], "--frames"),
+        (
+            vec!["capture", "scenes/default.toml", "--max-error", "NaN"],
+            "--max-error",
+        ),
+        (vec!["capture", "scenes/default.toml", "--max-error=-1"], "--max-error"),
+        (vec!["capture", "--exposure", "inf"], "--exposure"),
+    ] {
+        let o = penumbra(&args);
+        let e = stderr(&o);
+        assert!(
+            !o.status.success() && e.starts_with("error: invalid value") && e.contains(says),
+            "{args:?}: {e}"
+        );
+    }
+}
+
+/// Bad data in the files a scene names: one line with the scene file, the field (and its line
+/// where the scene parser finds it), and what is wrong, never a decoder's Debug dump.
+#[test]
+fn bad_images_and_parameters_name_the_scene_file_and_field() {
+    let dir = common::temp_path("bad-data");
+    std::fs::create_dir_all(&dir).unwrap();
+    let good_png =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/textures/bricks_albedo.png")).unwrap();
+    // Header CRC broken; image data scrambled; the file cut short; a 99999² HDR header.
+    let mut crc = good_png.clone();
+    crc[29] ^= 0xff;
+    let mut scrambled = good_png.clone();
+    for b in &mut scrambled[200..260] {
+        *b ^= 0x5a;
+    }
+    std::fs::write(dir.join("crc.png"), crc).unwrap();
+    std::fs::write(dir.join("scrambled.png"), scrambled).unwrap();
+    std::fs::write(dir.join("short.png"), &good_png[..100]).unwrap();
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 99999 +X 99999\n".to_vec();
+    hdr.extend([7u8; 64]);
+    std::fs::write(dir.join("huge.hdr"), hdr).unwrap();
+    let texture = |file: &str| {
+        format!("{CAMERA}[[materials]]\nname = \"m\"\nalbedo_map = \"{}\"\n[[objects]]\nmesh = \"sphere\"\nmaterial = \"m\"\n", dir.join(file).display())
+    };
+    let field = |extra: &str| {
+        format!("methods = [{{ name = \"heightfield_pyramid\"{extra} }}]\n{CAMERA}[[materials]]\nname = \"g\"\n[[objects]]\nmesh = \"heightfield\"\nmaterial = \"g\"\nresolution = 16\n")
+    };
+    let heights = |file: &str| format!("{}path = \"{}\"\n", field(""), dir.join(file).display());
+    let cases: Vec<(&str, String, &str, &str)> = vec![
+        (
+            "tex_crc.toml",
+            texture("crc.png"),
+            ":6: materials[0].albedo_map",
+            "CRC error",
+        ),
+        (
+            "tex_scrambled.toml",
+            texture("scrambled.png"),
+            ": materials[0] (\"m\").albedo_map",
+            "corrupt or truncated PNG data",
+        ),
+        (
+            "tex_short.toml",
+            texture("short.png"),
+            ": materials[0] (\"m\").albedo_map",
+            "truncated",
+        ),
+        ("hf_crc.toml", heights("crc.png"), ":11: objects[0].path", "CRC error"),
+        (
+            "hf_scrambled.toml",
+            heights("scrambled.png"),
+            ":11: objects[0].path",
+            "corrupt or truncated PNG data",
+        ),
+        (
+            "env_huge.toml",
+            format!(
+                "{CAMERA}[environment]\ntype = \"image\"\npath = \"{}\"\n",
+                dir.join("huge.hdr").display()
+            ),
+            ":6: environment.path",
+            "99999×99999",
+        ),
+        (
+            "bands.toml",
+            format!("{}generator = \"sine\"\n", field(", bands = 99")),
+            ":1: methods[0].bands",
+            "from 1 to 6, got 99",
+        ),
+        (
+            "far_camera.toml",
+            "[camera]\nposition = [1e30, 1, 3]\ntarget = [0, 0, 0]\n".to_string(),
+            ":2: camera.position",
+            "too far from the origin",
+        ),
+    ];
+    for (name, content, location, detail) in cases {
+        let (line, path) = scene_error(name, &content);
+        assert!(
+            line.starts_with(&format!("error: {}", path.display())),
+            "{name}: {line}"
+        );
+        assert!(line.contains(location), "{name}: expected `{location}` in: {line}");
+        assert!(line.contains(detail), "{name}: expected `{detail}` in: {line}");
+        assert!(
+            !line.contains('{') && !line.contains("Memory limit"),
+            "{name}: a decoder's internals: {line}"
+        );
+    }
+}
+
+/// `compare` reads linear radiance: an 8-bit PNG is refused, not read as radiance.
+#[test]
+fn compare_refuses_a_png_as_radiance() {
+    let (png, exr) = (common::temp_path("cmp.png"), common::temp_path("cmp.exr"));
+    common::ok(&penumbra(&[
+        "capture",
+        "--size",
+        "16x16",
+        "-o",
+        path_str(&png),
+        "--exr",
+        path_str(&exr),
+    ]));
+    for (test, reference) in [(&png, &exr), (&exr, &png)] {
+        let o = penumbra(&["compare", path_str(test), path_str(reference)]);
+        let e = stderr(&o);
+        assert!(
+            !o.status.success() && e.starts_with(&format!("error: {}: is a PNG image, not OpenEXR", png.display())),
+            "{e}"
+        );
+    }
+    common::ok(&penumbra(&["compare", path_str(&exr), path_str(&exr)]));
+}
+
+/// `penumbra info | true`, `capture … | true` and `reference … | true` used to exit 101 with
+/// "failed printing to stdout: Broken pipe". A closed standard output (or standard error) now
+/// loses only the text: the command does its work and exits 0.
+#[test]
+fn a_closed_pipe_loses_the_text_not_the_work() {
+    use std::process::{Command, Stdio};
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let (png, exr) = (common::temp_path("pipe.png"), common::temp_path("pipe.exr"));
+    let furnace = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/furnace.toml");
+    let runs: [Vec<&str>; 3] = [
+        vec!["info"],
+        vec!["capture", "--size", "16x16", "-o", path_str(&png)],
+        vec![
+            "reference",
+            path_str(&furnace),
+            "--size",
+            "4x4",
+            "--spp",
+            "4",
+            "-o",
+            path_str(&exr),
+        ],
+    ];
+    for args in &runs {
+        for close_stderr in [false, true] {
+            let _ = std::fs::remove_file(&png);
+            let _ = std::fs::remove_file(&exr);
+            let mut child = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+                .args(args)
+                .args(["--device", &device])
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            // Closed before the command gets to print (starting Vulkan alone takes longer).
+            drop(child.stdout.take());
+            if close_stderr {
+                drop(child.stderr.take());
+            }
+            let o = child.wait_with_output().unwrap();
+            let e = stderr(&o);
+            assert!(
+                o.status.success() && !e.contains("panicked"),
+                "{args:?} (stderr closed: {close_stderr}): {:?}\n{e}",
+                o.status
+            );
+            match args[0] {
+                "capture" => assert!(png.exists(), "{args:?} wrote no PNG"),
+                "reference" => assert!(exr.exists(), "{args:?} wrote no EXR"),
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Outputs are written to a hidden partial file and renamed into place, so a capture or chart
+/// killed halfway through writing never leaves a truncated file under the real name, and the
+/// chart's cache stays usable. The kill is injected (PENUMBRA_FAULT_ABORT_WRITE=N aborts the
+/// process halfway through its N-th file).
+#[test]
+fn an_interrupted_write_never_leaves_a_truncated_output() {
+    let dir = common::temp_path("interrupted");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, exr) = (dir.join("shot.png"), dir.join("shot.exr"));
+    let capture = |abort: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args([
+            "capture",
+            "--size",
+            "32x24",
+            "--device",
+            &std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()),
+        ]);
+        cmd.args(["-o", path_str(&png), "--exr", path_str(&exr)]);
+        if let Some(n) = abort {
+            cmd.env("PENUMBRA_FAULT_ABORT_WRITE", n);
+        }
+        cmd.output().unwrap()
+    };
+    assert!(capture(None).status.success());
+    let (old_png, old_exr) = (std::fs::read(&png).unwrap(), std::fs::read(&exr).unwrap());
+    // Killed while writing the EXR (written first), then while writing the PNG: each output is
+    // the previous complete file or the new complete file, never a part.
+    for n in ["1", "2"] {
+        let o = capture(Some(n));
+        assert!(!o.status.success(), "the injected abort did not happen");
+        assert!(
+            std::fs::read(&exr).unwrap() == old_exr,
+            "abort in write {n}: shot.exr changed"
+        );
+        if n == "1" {
+            assert!(
+                std::fs::read(&png).unwrap() == old_png,
+                "abort in write {n}: shot.png changed"
+            );
+        }
+        assert!(
+            image::open(&png).is_ok(),
+            "abort in write {n}: shot.png does not decode"
+        );
+    }
+    // A chart killed while caching its reference leaves no cache entry; the next run renders it.
+    let cache = dir.join("cache");
+    let chart_png = dir.join("chart.png");
+    let chart = |abort: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args([
+            "chart",
+            "scenes/default.toml",
+            "--size",
+            "16x16",
+            "--reference-spp",
+            "4",
+            "--frames",
+            "1",
+            "--cache-dir",
+            path_str(&cache),
+            "-o",
+            path_str(&chart_png),
+        ]);
+        cmd.args([
+            "--device",
+            &std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()),
+        ]);
+        if let Some(n) = abort {
+            cmd.env("PENUMBRA_FAULT_ABORT_WRITE", n);
+        }
+        cmd.output().unwrap()
+    };
+    assert!(!chart(Some("1")).status.success());
+    let visible: Vec<String> = std::fs::read_dir(&cache)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| !n.starts_with('.'))
+        .collect();
+    assert!(visible.is_empty(), "a killed chart left {visible:?} in its cache");
+    assert!(!chart_png.exists());
+    let o = chart(None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(image::open(&chart_png).is_ok());
+}

@@ -1,0 +1,6 @@
+//! Tests of the reference path tracer (`penumbra reference`).
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod reference;

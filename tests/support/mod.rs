@@ -1,0 +1,186 @@
+//! Shared by the integration tests (each test binary declares `mod support;`): every GPU test
+//! runs on lavapipe (or PENUMBRA_TEST_DEVICE) with the Khronos validation layer and
+//! synchronization validation, and fails on any message.
+#![allow(dead_code)]
+
+use penumbra::backend::{Gpu, GpuDesc};
+
+pub mod crash_report;
+pub mod heightfield;
+pub mod reference;
+pub mod shadow_volumes;
+
+pub fn test_gpu_desc() -> GpuDesc {
+    crash_report::install();
+    GpuDesc {
+        validation: true,
+        device_name: Some(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into())),
+        display: None,
+    }
+}
+
+pub fn test_gpu() -> Gpu {
+    Gpu::new(&test_gpu_desc()).expect("create a validated Vulkan device (is lavapipe installed? run tools/setup.sh)")
+}
+
+/// Fails the test if the validation layer reported anything.
+pub fn assert_clean(gpu: &Gpu) {
+    let messages = gpu.validation_log().take();
+    assert!(
+        messages.is_empty(),
+        "{} validation message(s):\n{}",
+        messages.len(),
+        messages.join("\n")
+    );
+}
+
+/// A deterministic xorshift64 stream in [0, 1) (53 bits) for test geometry.
+pub fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+pub fn temp_path(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("penumbra-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir.join(name)
+}
+
+/// Records `graph` into `frame` with fresh resource states, submits it and waits.
+pub fn run_once(gpu: &Gpu, frame: penumbra::backend::Frame, graph: penumbra::graph::RenderGraph<'_>) {
+    let mut states = penumbra::graph::ResourceStates::default();
+    let mut rec = gpu.begin_frame(frame).unwrap();
+    graph.execute(&mut rec, &mut states).unwrap();
+    rec.finish().unwrap();
+    gpu.submit_and_wait(frame).unwrap();
+}
+
+/// Runs the `penumbra` binary as a user would: validation on, the test device chosen (`compare`
+/// takes no device).
+pub fn penumbra(args: &[&str]) -> std::process::Output {
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+    cmd.args(args).env("PENUMBRA_VALIDATION", "1");
+    if args.first() != Some(&"compare") {
+        cmd.args(["--device", &device]);
+    }
+    cmd.output().expect("run penumbra")
+}
+
+/// The command's standard output, failing the test with its standard error if it failed.
+pub fn ok(o: &std::process::Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Scenes the frame tests share (tests/methods/sh_lightmap_frame.rs, tests/methods/prt_frame.rs). `METHOD` is
+/// the method declaration; `FLOOR_CELLS` and `WALL_CELLS` the quads' subdivisions (per-vertex
+/// methods need vertices where the light-map methods need none). Replace them with
+/// [`scene_text`].
+pub mod scenes {
+    /// An open box, 2 × 1 × 2, under a constant sky of radiance 1, seen from above: its floor's
+    /// centre sees the sky through the opening with view factor 0.554126.
+    pub const OPEN_BOX: &str = r#"
+methods = [METHOD]
+
+[camera]
+position = [0.125, 3.0, 0.6]
+target = [0.125, 0.0, 0.125]
+fov_y_deg = 40
+
+[environment]
+type = "constant"
+radiance = 1.0
+
+[[materials]]
+name = "grey"
+albedo = 0.5
+
+[[objects]]
+name = "floor"
+mesh = "quad"
+corner = [-0.875, 0, -0.875]
+edge_u = [0, 0, 2]
+edge_v = [2, 0, 0]
+subdivisions = FLOOR_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall -x"
+mesh = "quad"
+corner = [-0.875, 0, -0.875]
+edge_u = [0, 1, 0]
+edge_v = [0, 0, 2]
+subdivisions = WALL_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall +x"
+mesh = "quad"
+corner = [1.125, 0, -0.875]
+edge_u = [0, 0, 2]
+edge_v = [0, 1, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall -z"
+mesh = "quad"
+corner = [-0.875, 0, -0.875]
+edge_u = [2, 0, 0]
+edge_v = [0, 1, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+
+[[objects]]
+name = "wall +z"
+mesh = "quad"
+corner = [-0.875, 0, 1.125]
+edge_u = [0, 1, 0]
+edge_v = [2, 0, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+"#;
+
+    /// A 2 × 2 wall facing +z, lit by a sun along −z of irradiance 2, ρ = 0.5.
+    pub const WALL: &str = r#"
+methods = [METHOD]
+
+[camera]
+position = [0.0, 1.0, 3.0]
+target = [0.0, 1.0, 0.0]
+fov_y_deg = 40
+
+[[lights]]
+name = "sun"
+type = "directional"
+direction = [0.0, 0.0, -1.0]
+irradiance = 2.0
+
+[[materials]]
+name = "grey"
+albedo = 0.5
+
+[[objects]]
+name = "wall"
+mesh = "quad"
+corner = [-1, 0, 0]
+edge_u = [2, 0, 0]
+edge_v = [0, 2, 0]
+subdivisions = WALL_CELLS
+material = "grey"
+"#;
+
+    /// `template` with the method and the subdivisions filled in.
+    pub fn scene_text(template: &str, method: &str, floor_cells: u32, wall_cells: u32) -> String {
+        template
+            .replace("METHOD", method)
+            .replace("FLOOR_CELLS", &floor_cells.to_string())
+            .replace("WALL_CELLS", &wall_cells.to_string())
+    }
+}
