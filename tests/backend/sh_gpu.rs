@@ -274,16 +274,8 @@ fn abs_scale(cube: bool, w: usize, h: usize, texels: &[[f32; 4]], bands: usize) 
     s
 }
 
-/// A small deterministic generator (xorshift) for the random images.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
+// The random images' stream.
+use crate::support::rng::XorShift as Rng;
 
 /// (a) A band-limited environment L = Σ f_k y_k (4 bands, per channel f, 2f, −f) sampled at
 /// the texel centres comes back as f. The only error is the texels' quadrature: the φ sum is
@@ -294,7 +286,7 @@ impl Rng {
 fn gpu_projection_recovers_a_band_limited_environment() {
     let mut gpu = common::test_gpu();
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let f: Vec<f32> = (0..16).map(|_| rng.next() - 0.5).collect();
+    let f: Vec<f32> = (0..16).map(|_| rng.next_f32() - 0.5).collect();
     for (cube, w, h, tol) in [(false, 64usize, 32usize, 1e-3f32), (true, 32, 32, 1e-3)] {
         let texels: Vec<[f32; 4]> = texel_dirs(cube, w, h)
             .into_iter()
@@ -365,7 +357,9 @@ fn gpu_projection_of_a_random_image_matches_the_cpu() {
         (true, 32, 32, 1e-5),
     ] {
         let n = if cube { 6 * w * w } else { w * h };
-        let texels: Vec<[f32; 4]> = (0..n).map(|_| [rng.next(), rng.next(), rng.next(), 0.0]).collect();
+        let texels: Vec<[f32; 4]> = (0..n)
+            .map(|_| [rng.next_f32(), rng.next_f32(), rng.next_f32(), 0.0])
+            .collect();
         let rgb: Vec<[f32; 3]> = texels.iter().map(|t| [t[0], t[1], t[2]]).collect();
         let cpu = if cube {
             sh::project_cubemap(&rgb, w, 8).unwrap()
@@ -476,7 +470,7 @@ struct OpsCase {
 /// widths are 0 and NaN (refused on the CPU; all-zero windows on the GPU).
 fn ops_cases() -> Vec<OpsCase> {
     let mut rng = Rng(0x5eed_0f5b_0007);
-    let mut s = move || 2.0 * rng.next() - 1.0;
+    let mut s = move || 2.0 * rng.next_f32() - 1.0;
     (0..OPS_CASES)
         .map(|i| {
             let mut rot = || glam::Mat3::from_quat(glam::Quat::from_xyzw(s(), s(), s(), s()).normalize());

@@ -16,18 +16,12 @@ use penumbra::metrics::{compare, CompareOptions};
 use penumbra::scene::{load_obj, HeightImage, Scene};
 use penumbra::util::image_io::HdrImage;
 
-/// xorshift64*: a fixed sequence for a fixed seed.
-struct Rng(u64);
+// xorshift64*: a fixed sequence for a fixed seed.
+use crate::support::rng::XorShiftStar as Rng;
 
 impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
     fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
+        (self.next_u64() % n.max(1) as u64) as usize
     }
 }
 
@@ -397,7 +391,7 @@ fn metric_identities_hold_on_random_images() {
         pixels: (0..w * h)
             .map(|_| {
                 [0, 1, 2]
-                    .map(|_| (rng.next() % 10_000) as f32 / 1000.0)
+                    .map(|_| (rng.next_u64() % 10_000) as f32 / 1000.0)
                     .into_iter()
                     .chain([1.0])
                     .collect::<Vec<_>>()

@@ -15,16 +15,7 @@ use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
 use penumbra::shaders::ShaderLibrary;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f64 / (1u64 << 24) as f64) as f32
-    }
-}
+use crate::support::rng::Lcg as Rng;
 
 /// A plane under a floating box and `lights` point lights in a row above them.
 fn scene_text(method: &str, lights: usize, box_subdivisions: u32) -> String {
@@ -141,7 +132,7 @@ fn item_19_relighting_is_linear_in_random_intensities() {
         let mut rng = Rng(5);
         let largest = bsp.baked.colours.iter().fold(0.0f32, |m, &c| m.max(c)) as f64;
         for frame in 0..5 {
-            let scales: Vec<f32> = (0..12).map(|_| rng.next()).collect();
+            let scales: Vec<f32> = (0..12).map(|_| rng.next_f32()).collect();
             let got = gemv(&mut setup, &mut bsp, &scales);
             let want = cpu_sum(&bsp, &scales, 0.0);
             let worst = got
@@ -190,9 +181,9 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
     let scales: Vec<f32> = (0..lights)
         .map(|l| {
             if l % 10 == 0 {
-                0.5 + 0.5 * rng.next()
+                0.5 + 0.5 * rng.next_f32()
             } else {
-                0.055 * rng.next()
+                0.055 * rng.next_f32()
             }
         })
         .collect();
@@ -498,11 +489,11 @@ fn tilted_boxes(n: usize, lights: usize) -> String {
         text += &format!(
             "[[objects]]\nmesh = \"box\"\nsize = 0.4\ntranslate = [{:.3}, {:.3}, {:.3}]\nrotate_deg = [{:.1}, {:.1}, {:.1}]\n",
             1.2 * a.cos(),
-            0.4 + 0.3 * rng.next(),
+            0.4 + 0.3 * rng.next_f32(),
             1.2 * a.sin(),
-            90.0 * rng.next(),
-            90.0 * rng.next(),
-            90.0 * rng.next()
+            90.0 * rng.next_f32(),
+            90.0 * rng.next_f32(),
+            90.0 * rng.next_f32()
         );
     }
     text
@@ -727,7 +718,7 @@ fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
         .count() as f64
         / (bsp.baked.colours.len() / 3) as f64;
     let mut rng = Rng(3);
-    let scales: Vec<f32> = (0..64).map(|_| 0.1 + rng.next()).collect();
+    let scales: Vec<f32> = (0..64).map(|_| 0.1 + rng.next_f32()).collect();
     let got = gemv(&mut setup, &mut bsp, &scales);
     let want = cpu_sum(&bsp, &scales, 0.05);
     let largest = want.iter().flatten().fold(0.0f64, |m, &x| m.max(x));

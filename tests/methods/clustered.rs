@@ -24,19 +24,11 @@ use penumbra::util::image_io::HdrImage;
 const W: u32 = 64;
 const H: u32 = 48;
 
-/// A deterministic generator in [0, 1).
-struct Rng(u64);
+use crate::support::rng::Lcg as Rng;
 
 impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f64 / (1u64 << 24) as f64) as f32
-    }
     fn range(&mut self, a: f32, b: f32) -> f32 {
-        a + (b - a) * self.next()
+        a + (b - a) * self.next_f32()
     }
 }
 

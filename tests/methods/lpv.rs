@@ -20,23 +20,15 @@ use penumbra::lighting::{CreateContext, Terms};
 use penumbra::scene::Scene;
 use penumbra::shaders::ShaderLibrary;
 
-/// A deterministic generator in [0, 1).
-struct Rng(u64);
+use crate::support::rng::Lcg as Rng;
 
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
     fn unit(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(
-                self.next() * 2.0 - 1.0,
-                self.next() * 2.0 - 1.0,
-                self.next() * 2.0 - 1.0,
+                self.next_f64() * 2.0 - 1.0,
+                self.next_f64() * 2.0 - 1.0,
+                self.next_f64() * 2.0 - 1.0,
             );
             if v.length_squared() > 0.05 && v.length_squared() < 1.0 {
                 return v.normalize();
@@ -52,23 +44,23 @@ fn random_volume(n: usize, seed: u64) -> ([Grid; 3], Grid) {
     let mut channels = [Grid::cube(n), Grid::cube(n), Grid::cube(n)];
     let cell = |rng: &mut Rng| {
         IVec3::new(
-            (rng.next() * n as f64) as i32,
-            (rng.next() * n as f64) as i32,
-            (rng.next() * n as f64) as i32,
+            (rng.next_f64() * n as f64) as i32,
+            (rng.next_f64() * n as f64) as i32,
+            (rng.next_f64() * n as f64) as i32,
         )
     };
     for _ in 0..12 {
         let c = cell(&mut rng);
         let normal = rng.unit();
         for g in channels.iter_mut() {
-            let phi = 0.2 + rng.next();
+            let phi = 0.2 + rng.next_f64();
             g.add(c, &sh::vpl(phi, normal));
         }
     }
     let mut gv = Grid::cube(n);
     for _ in 0..40 {
         let c = cell(&mut rng);
-        let b = sh::cosine_lobe(rng.unit()).map(|x| x * (0.3 + 0.7 * rng.next()));
+        let b = sh::cosine_lobe(rng.unit()).map(|x| x * (0.3 + 0.7 * rng.next_f64()));
         gv.add(c, &b);
     }
     (channels, gv)

@@ -269,15 +269,15 @@ fn a_segment_shades_with_exactly_its_light_set() {
     let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
     // Item 19 on the GPU: new intensities every frame (as a light board sets them), the same
     // sets, and every pixel the sum over its set at this frame's intensities.
-    let mut seed = 12345u64;
+    let mut rng = crate::support::rng::Lcg(12345);
     for frame in 0..3 {
         let scale: Vec<f64> = (0..full.len())
             .map(|_| {
-                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let u = rng.next_f32() as f64;
                 if frame == 0 {
                     1.0
                 } else {
-                    (seed >> 40) as f64 / (1u64 << 24) as f64
+                    u
                 }
             })
             .collect();

@@ -8,6 +8,7 @@ use penumbra::backend::{Gpu, GpuDesc};
 pub mod crash_report;
 pub mod heightfield;
 pub mod reference;
+pub mod rng;
 pub mod shadow_volumes;
 
 pub fn test_gpu_desc() -> GpuDesc {
@@ -36,13 +37,8 @@ pub fn assert_clean(gpu: &Gpu) {
 
 /// A deterministic xorshift64 stream in [0, 1) (53 bits) for test geometry.
 pub fn xorshift(seed: u64) -> impl FnMut() -> f64 {
-    let mut state = seed;
-    move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    let mut rng = rng::XorShift(seed);
+    move || rng.next_f64()
 }
 
 pub fn temp_path(name: &str) -> std::path::PathBuf {
