@@ -7,7 +7,7 @@ use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Camera, Scene};
 use penumbra::util::image_io::HdrImage;
 
-use crate::support;
+use crate::support as common;
 
 /// Parses `toml` (relative paths against `base`) and renders one frame with its first method.
 pub fn render_in(toml: &str, base: &std::path::Path, size: (u32, u32)) -> (HdrImage, Scene) {
