@@ -3,8 +3,6 @@
 //! `cargo test --release --test methods -- --ignored --nocapture heightfield_measure::<name>`; each prints
 //! its table and writes it under `target/heightfield-measure/`.
 
-use crate::support as common;
-
 use std::fmt::Write as _;
 
 use penumbra::backend::Gpu;
