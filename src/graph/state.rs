@@ -746,5 +746,4 @@ impl BufferState {
 }
 
 #[cfg(test)]
-#[path = "state_tests.rs"]
 mod tests;

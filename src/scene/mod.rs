@@ -19,8 +19,6 @@ mod error;
 mod format;
 pub mod generators;
 pub mod heightfield;
-#[cfg(test)]
-mod light_tests;
 mod mesh;
 mod methods;
 pub mod motion;

@@ -27,10 +27,6 @@ pub mod raycast;
 
 #[cfg(test)]
 mod tests;
-#[cfg(test)]
-mod tests_casters;
-#[cfg(test)]
-mod tests_world;
 
 use std::time::Duration;
 

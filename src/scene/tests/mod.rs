@@ -1,6 +1,8 @@
 //! Scene-level tests: the shipped scenes parse, and malformed scenes fail with the exact file,
 //! line and field.
 
+mod lights;
+
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};

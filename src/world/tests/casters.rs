@@ -3,9 +3,9 @@
 
 use glam::DVec3;
 
-use super::level_gen::{fig8c_case, generate_rooms, Rng, RoomsParams};
-use super::tests_world::point_in_leaf;
-use super::CompiledWorld;
+use super::super::level_gen::{fig8c_case, generate_rooms, Rng, RoomsParams};
+use super::super::CompiledWorld;
+use super::world::point_in_leaf;
 
 #[test]
 fn fig8c_caster_outside_the_light_pvs_is_missed_by_b_and_found_by_c() {
@@ -55,7 +55,7 @@ fn fig8c_caster_outside_the_light_pvs_is_missed_by_b_and_found_by_c() {
 
 #[test]
 fn empty_room_has_six_front_facing_and_no_back_facing_casters_as_the_seed_says() {
-    let w = super::tests::box_room().compile().unwrap();
+    let w = super::box_room().compile().unwrap();
     let light = DVec3::new(1.0, 1.0, 2.0);
     let in_pvs = w.casters_light_pvs(light, 100.0);
     assert_eq!(w.front_facing(&in_pvs, light).len(), 6, "the seed's approach (a)");

@@ -1,5 +1,8 @@
 //! Geometry and single-room tests: polygon splitting, brushes, CSG, the box room.
 
+mod casters;
+mod world;
+
 use glam::DVec3;
 
 use super::brush::{csg_faces, Brush};

@@ -3,10 +3,10 @@
 
 use glam::DVec3;
 
-use super::compile::CompileOptions;
-use super::level_gen::{generate_rooms, LevelBuilder, Opening, Rng, RoomsParams};
-use super::polygon::Aabb;
-use super::{CompiledWorld, LeafId, SplitHeuristic, World};
+use super::super::compile::CompileOptions;
+use super::super::level_gen::{generate_rooms, LevelBuilder, Opening, Rng, RoomsParams};
+use super::super::polygon::Aabb;
+use super::super::{CompiledWorld, LeafId, SplitHeuristic, World};
 
 /// A uniformly random point of an empty leaf (rejection sampling in its bounds).
 pub(super) fn point_in_leaf(w: &CompiledWorld, leaf: LeafId, rng: &mut Rng) -> Option<DVec3> {
@@ -318,7 +318,7 @@ fn oblique_l_rooms() -> World {
     for brush in &mut world.brushes {
         for side in &mut brush.sides {
             let n = rotation * side.plane.normal;
-            side.plane = super::Plane {
+            side.plane = super::super::Plane {
                 normal: n,
                 dist: side.plane.dist + n.dot(offset),
             };

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::generators::MAX_ARRAY_LIGHTS;
-use super::*;
+use super::super::generators::MAX_ARRAY_LIGHTS;
+use super::super::*;
 
 const CAM: &str = "[camera]\nposition = [0, 1, 5]\ntarget = [0, 0, 0]\n"; // lines 1-3
 
