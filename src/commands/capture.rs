@@ -43,6 +43,11 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
         Some(c) => c.clone(),
         None => registry::configuration(&scene, opts.method.as_deref())?,
     };
+    // Before the device exists: a method over its memory budget is refused without allocating.
+    let (config, notes) = registry::plan(&config, &scene)?;
+    for line in notes {
+        crate::errln!("{line}");
+    }
     let gpu = Gpu::new(&opts.gpu)?;
     let mut renderer = Renderer::with_configuration(
         gpu,

@@ -16,6 +16,7 @@ pub mod brdf;
 pub mod lightmap;
 pub mod many_lights;
 pub mod params;
+pub mod plan;
 pub mod registry;
 mod terms;
 

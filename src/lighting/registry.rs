@@ -6,6 +6,7 @@
 //! Adding a technique: a folder under `src/lighting/` with a type implementing
 //! [`LightingMethod`], its shaders in `glsl/<technique>/`, and one entry in [`registry`].
 
+use super::plan::{Derived, Facts};
 use super::terms::{self, Supply};
 use super::{
     bsp_lights, clustered, forward, heightfield, lpv, prt, radiosity, sh_lightmap, shadow_volumes, vls, Configuration,
@@ -17,6 +18,10 @@ use crate::util::timing::PassStats;
 
 /// Creates a method from its declaration.
 pub type CreateFn = fn(&mut CreateContext<'_>, &MethodDecl) -> Result<Box<dyn LightingMethod>>;
+
+/// The parameters a declaration leaves unset, derived from the scene, after refusing what would
+/// not fit the memory budget (nothing is allocated yet).
+pub type PlanFn = fn(&MethodDecl, &Facts<'_>) -> Result<Vec<Derived>>;
 
 /// Extra lines for `profile`'s report, from the frame's pass timings (`None`: nothing to add).
 pub type ReportFn = fn(&[PassStats]) -> Option<String>;
@@ -40,6 +45,8 @@ pub struct MethodInfo {
     /// the scene's wind and light motion; otherwise why it keeps the rest pose (it says so when
     /// created for a scene that moves).
     pub rest_pose: Option<&'static str>,
+    /// Derives unset parameters from the scene and checks the memory budget.
+    pub plan: Option<PlanFn>,
 }
 
 /// Every method penumbra implements.
@@ -55,6 +62,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(forward::Forward::new(c, d)?)),
             rest_pose: None,
             report: None,
+            plan: None,
         },
         MethodInfo {
             schema: shadow_volumes::SCHEMA,
@@ -66,6 +74,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(shadow_volumes::ShadowVolumes::new(c, d)?)),
             rest_pose: Some("its shadow volumes are extruded from the entities' rest-pose positions"),
             report: None,
+            plan: None,
         },
         MethodInfo {
             schema: heightfield::PYRAMID_SCHEMA,
@@ -77,6 +86,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
             rest_pose: Some("it traces its height field's time-0 shape"),
             report: Some(heightfield::measure::table_6_6),
+            plan: None,
         },
         MethodInfo {
             schema: heightfield::BRUTE_FORCE_SCHEMA,
@@ -88,6 +98,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
             rest_pose: Some("it traces its height field's time-0 shape"),
             report: Some(heightfield::measure::table_6_6),
+            plan: None,
         },
         MethodInfo {
             schema: radiosity::SCHEMA,
@@ -99,6 +110,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(radiosity::Radiosity::new(c, d)?)),
             rest_pose: Some("its light-map is baked from the rest pose and the scene's lights"),
             report: None,
+            plan: Some(radiosity::plan),
         },
         MethodInfo {
             schema: sh_lightmap::SCHEMA,
@@ -110,6 +122,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(sh_lightmap::ShLightmap::new(c, d)?)),
             rest_pose: Some("its light-map is baked from the rest pose"),
             report: None,
+            plan: Some(sh_lightmap::plan),
         },
         MethodInfo {
             schema: prt::SCHEMA,
@@ -121,6 +134,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(prt::Prt::new(c, d)?)),
             rest_pose: Some("its transfer is baked from the rest pose"),
             report: None,
+            plan: None,
         },
         MethodInfo {
             schema: lpv::SCHEMA,
@@ -132,6 +146,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(lpv::Lpv::new(c, d)?)),
             rest_pose: None,
             report: None,
+            plan: Some(lpv::plan),
         },
         MethodInfo {
             schema: clustered::SCHEMA,
@@ -144,6 +159,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(clustered::Clustered::new(c, d)?)),
             rest_pose: None,
             report: None,
+            plan: None,
         },
         MethodInfo {
             schema: vls::SCHEMA,
@@ -155,6 +171,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(vls::Vls::new(c, d)?)),
             rest_pose: Some("each segment's lights and shadow feelers are chosen once, from the rest pose"),
             report: None,
+            plan: Some(vls::plan),
         },
         MethodInfo {
             schema: bsp_lights::SCHEMA,
@@ -166,6 +183,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(bsp_lights::BspLights::new(c, d)?)),
             rest_pose: Some("its per-light vertex colours are baked from the rest pose"),
             report: None,
+            plan: Some(bsp_lights::plan),
         },
     ]
 }
@@ -274,6 +292,27 @@ pub fn motion_notes(config: &Configuration, scene: &Scene) -> Vec<String> {
     out
 }
 
+/// `config` with every part's unset parameters derived from the scene, and the lines saying
+/// what was derived and why; refused in one line when a part would not fit the memory budget.
+/// Nothing is allocated: `capture` and `chart` call it before the device is created.
+pub fn plan(config: &Configuration, scene: &Scene) -> Result<(Configuration, Vec<String>)> {
+    let facts = Facts::new(scene);
+    let mut out = config.clone();
+    let mut notes = Vec::new();
+    for p in &mut out.parts {
+        if let Some(f) = info(&p.decl.name)?.plan {
+            let derived = f(&p.decl, &facts)?;
+            for line in super::plan::notes(&p.decl.name, &derived) {
+                if !notes.contains(&line) {
+                    notes.push(line);
+                }
+            }
+            p.decl = super::plan::apply(&p.decl, &derived);
+        }
+    }
+    Ok((out, notes))
+}
+
 /// Creates the methods of a configuration, in frame order, refusing translucent materials for
 /// methods that do not draw them. A method that keeps the rest pose of a moving scene says so on
 /// standard error ([`motion_notes`]).
@@ -281,6 +320,8 @@ pub fn create(config: &Configuration, ctx: &mut CreateContext<'_>) -> Result<Vec
     for line in motion_notes(config, ctx.scene) {
         crate::errln!("{line}");
     }
+    // A configuration already planned derives nothing more; one that was not is planned here.
+    let (config, _) = plan(config, ctx.scene)?;
     let mut out = Vec::new();
     for p in &config.parts {
         let info = info(&p.decl.name)?;

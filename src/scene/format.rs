@@ -31,6 +31,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         "light_arrays",
         "light_board",
         "light_motion",
+        "memory_budget_mb",
     ])?;
 
     let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
@@ -61,6 +62,10 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         .map(|f| read_light_motion(&f, &lights))
         .transpose()?;
     let environment = top.get("environment").map(|f| read_environment(&f)).transpose()?;
+    let memory_budget_mb = opt(top.get("memory_budget_mb"), |f| {
+        f.number_where("a memory budget in MB, at least 1", |x| x.is_finite() && x >= 1.0)
+    })?
+    .map(f64::from);
     let mut methods = match top.get("methods") {
         Some(f) => methods::read(&f)?,
         None => Vec::new(),
@@ -83,6 +88,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         combinations,
         light_board,
         light_motion,
+        memory_budget_mb,
     })
 }
 

@@ -69,13 +69,27 @@ pub struct Scene {
     pub light_board: Option<LightBoard>,
     /// A directional light turning per frame (`[light_motion]`); none: static.
     pub light_motion: Option<motion::LightMotion>,
+    /// What a method may allocate for its bake and volumes (`memory_budget_mb`); none: the
+    /// default budget.
+    pub memory_budget_mb: Option<f64>,
 }
 
 impl Scene {
     /// One line for a bad value of a method's parameter: the scene file, the parameter's line and
     /// `methods[i].name` (what every method's parameter checks report).
     pub fn method_param_error(&self, decl: &MethodDecl, name: &str, message: impl Into<String>) -> SceneError {
-        let index = self.methods.iter().position(|m| m == decl).unwrap_or(0);
+        // By the name's line, not by value: a declaration with derived or swept parameters set is
+        // still the scene's.
+        let index = self
+            .methods
+            .iter()
+            .position(|m| m == decl)
+            .or_else(|| {
+                self.methods
+                    .iter()
+                    .position(|m| m.name == decl.name && m.line == decl.line)
+            })
+            .unwrap_or(0);
         let line = decl
             .params
             .iter()

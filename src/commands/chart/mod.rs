@@ -495,6 +495,11 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         .into_iter()
         .filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name))
     {
+        // Defaults derived from the scene are part of what is measured: said once, swept around.
+        let (configuration, notes) = registry::plan(&configuration, &scene)?;
+        for line in notes {
+            crate::errln!("{line}");
+        }
         let kind = registry::reference_kind(&configuration)?;
         swept.push((configuration.name.clone(), kind, registry::sweep(&configuration)?));
     }

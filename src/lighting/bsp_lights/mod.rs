@@ -421,6 +421,36 @@ impl BakeData for Baked {
     }
 }
 
+/// `max_segment_area` when unset: the scene's area over the segment budget, or larger where
+/// the light matrix (a row per segment vertex, about one per segment) would otherwise pass
+/// [`MAX_MATRIX_BYTES`]. The matrix is refused against that limit by the set-up itself.
+pub fn plan(
+    decl: &MethodDecl,
+    facts: &crate::lighting::plan::Facts<'_>,
+) -> Result<Vec<crate::lighting::plan::Derived>> {
+    use crate::lighting::plan::{round2, Derived, SEGMENT_BUDGET};
+    let config = Config::from_decl(decl, Some(facts.scene))?;
+    let area = facts.area(NAME)?;
+    if decl.param("max_segment_area").is_some() || area <= 0.0 {
+        return Ok(Vec::new());
+    }
+    let lights = facts.scene.lights.len().max(1) as u64;
+    let triangles = facts.triangles(NAME)?.len() as f64;
+    // Rows the matrix holds: each triangle's corners, plus a vertex per segment.
+    let rows = (MAX_MATRIX_BYTES / (lights * config.storage.bytes_per_entry())) as f64 - 3.0 * triangles;
+    let budget = SEGMENT_BUDGET.min(rows.max(1.0));
+    let chosen = round2(area / budget).clamp(1e-6, 1e4);
+    let why = if budget < SEGMENT_BUDGET {
+        format!(
+            "the scene's {area:.3} m² over the {budget:.0} vertex rows a {} matrix of {lights} lights holds in {MAX_MATRIX_BYTES} bytes",
+            if config.storage == Storage::F16 { "f16" } else { "f32" }
+        )
+    } else {
+        format!("the scene's {area:.3} m² over a budget of {SEGMENT_BUDGET} segments")
+    };
+    Ok(vec![Derived::new("max_segment_area", chosen, why)])
+}
+
 /// `V·L·bytes` against [`MAX_MATRIX_BYTES`], as the set-up checks it.
 fn check_matrix(vertices: usize, lights: usize, storage: Storage) -> std::result::Result<(), String> {
     setup::check_matrix(vertices, lights, storage.bytes_per_entry(), MAX_MATRIX_BYTES)

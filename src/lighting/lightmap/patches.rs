@@ -90,50 +90,7 @@ impl Patches {
     /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
     /// of the scene's size) and lays a grid of `size` patches on each.
     pub fn build(triangles: &[Triangle], size: f64) -> Patches {
-        let scale = triangles
-            .iter()
-            .flat_map(|t| t.p)
-            .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
-            .max(1.0);
-        let mut charts: Vec<Chart> = Vec::new();
-        for (ti, t) in triangles.iter().enumerate() {
-            let n = t.normal();
-            if n == DVec3::ZERO {
-                continue;
-            }
-            let d = n.dot(t.p[0]);
-            let same = charts.iter_mut().find(|c| {
-                let tc = &triangles[c.triangles[0]];
-                c.object == t.object
-                    && c.normal.dot(n) > 1.0 - 1e-4
-                    && (c.normal.dot(t.p[0]) - c.normal.dot(tc.p[0])).abs() < 1e-5 * scale
-                    && (tc.albedo - t.albedo).abs().max_element() < 1e-9
-                    && (tc.emission - t.emission).abs().max_element() < 1e-9
-                    && tc.sky == t.sky
-            });
-            match same {
-                Some(c) => c.triangles.push(ti),
-                None => {
-                    let helper = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-                    let u = helper.cross(n).normalize();
-                    let v = n.cross(u);
-                    let _ = d;
-                    charts.push(Chart {
-                        object: t.object,
-                        normal: n,
-                        origin: DVec3::ZERO,
-                        u,
-                        v,
-                        width: 0,
-                        height: 0,
-                        first: 0,
-                        triangles: vec![ti],
-                        cell: (0, 0),
-                        sky: t.sky,
-                    });
-                }
-            }
-        }
+        let mut charts = group_charts(triangles);
         let mut patches = Vec::new();
         for (ci, c) in charts.iter_mut().enumerate() {
             let t0 = &triangles[c.triangles[0]];
@@ -141,13 +98,7 @@ impl Patches {
             // Coordinates from the world origin's projection, so that every chart of a plane
             // shares one grid.
             let flat = |p: DVec3| DVec2::new(p.dot(c.u), p.dot(c.v));
-            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-            for &ti in &c.triangles {
-                for p in triangles[ti].p {
-                    lo = lo.min(flat(p));
-                    hi = hi.max(flat(p));
-                }
-            }
+            let (lo, hi) = flat_bounds(c, triangles);
             c.origin = plane;
             c.first = patches.len();
             if c.sky {
@@ -163,10 +114,7 @@ impl Patches {
                 });
                 continue;
             }
-            // Snap outward to the world grid (a vertex on a grid line within 1e-9 of a cell stays on it).
-            let lo_cell = (lo / size + 1e-9).floor();
-            let hi_cell = (hi / size - 1e-9).ceil();
-            let cells = (hi_cell - lo_cell).max(DVec2::ONE);
+            let (lo_cell, cells) = grid_cells(lo, hi, size);
             let lo = lo_cell * size;
             c.width = cells.x as usize + 2;
             c.height = cells.y as usize + 2;
@@ -235,6 +183,91 @@ impl Patches {
     pub fn power(&self, f: impl Fn(&Patch) -> DVec3) -> DVec3 {
         self.patches.iter().map(|p| f(p) * p.area).sum()
     }
+}
+
+/// The patches [`Patches::build`] would make of `triangles` at `size`, border frames included,
+/// counted without making them (what a bake's memory is estimated from).
+pub fn count(triangles: &[Triangle], size: f64) -> u64 {
+    group_charts(triangles)
+        .iter()
+        .map(|c| {
+            if c.sky {
+                return 1;
+            }
+            let (lo, hi) = flat_bounds(c, triangles);
+            let (_, cells) = grid_cells(lo, hi, size);
+            (cells.x + 2.0) as u64 * (cells.y + 2.0) as u64
+        })
+        .sum()
+}
+
+/// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
+/// of the scene's size, same material); their grids are not laid yet.
+fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
+    let scale = triangles
+        .iter()
+        .flat_map(|t| t.p)
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
+        .max(1.0);
+    let mut charts: Vec<Chart> = Vec::new();
+    for (ti, t) in triangles.iter().enumerate() {
+        let n = t.normal();
+        if n == DVec3::ZERO {
+            continue;
+        }
+        let same = charts.iter_mut().find(|c| {
+            let tc = &triangles[c.triangles[0]];
+            c.object == t.object
+                && c.normal.dot(n) > 1.0 - 1e-4
+                && (c.normal.dot(t.p[0]) - c.normal.dot(tc.p[0])).abs() < 1e-5 * scale
+                && (tc.albedo - t.albedo).abs().max_element() < 1e-9
+                && (tc.emission - t.emission).abs().max_element() < 1e-9
+                && tc.sky == t.sky
+        });
+        match same {
+            Some(c) => c.triangles.push(ti),
+            None => {
+                let helper = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+                let u = helper.cross(n).normalize();
+                let v = n.cross(u);
+                charts.push(Chart {
+                    object: t.object,
+                    normal: n,
+                    origin: DVec3::ZERO,
+                    u,
+                    v,
+                    width: 0,
+                    height: 0,
+                    first: 0,
+                    triangles: vec![ti],
+                    cell: (0, 0),
+                    sky: t.sky,
+                });
+            }
+        }
+    }
+    charts
+}
+
+/// A chart's triangles' bounds in its (u, v) plane coordinates.
+fn flat_bounds(c: &Chart, triangles: &[Triangle]) -> (DVec2, DVec2) {
+    let flat = |p: DVec3| DVec2::new(p.dot(c.u), p.dot(c.v));
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for &ti in &c.triangles {
+        for p in triangles[ti].p {
+            lo = lo.min(flat(p));
+            hi = hi.max(flat(p));
+        }
+    }
+    (lo, hi)
+}
+
+/// The world-grid cell of a chart's lowest corner and its cells per side, borders excluded:
+/// snapped outward (a vertex on a grid line within 1e-9 of a cell stays on it).
+fn grid_cells(lo: DVec2, hi: DVec2, size: f64) -> (DVec2, DVec2) {
+    let lo_cell = (lo / size + 1e-9).floor();
+    let hi_cell = (hi / size - 1e-9).ceil();
+    (lo_cell, (hi_cell - lo_cell).max(DVec2::ONE))
 }
 
 pub(crate) fn inside_triangle(q: DVec2, t: &[DVec2; 3]) -> bool {

@@ -24,6 +24,7 @@ use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::lightmap::solve::{Mode, Settings};
+use crate::lighting::plan::{patch_size_for, Derived, Facts};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use bake::Content;
@@ -186,6 +187,40 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     push(decl.with("threshold", 1e-2.into()));
     push(decl.with("mode", "faithful".into()));
     out
+}
+
+/// The patches a light-map gets when the scene sets no `patch_size`: the solve's time grows with
+/// the patch count times the shots, so the count, not the scene's size, is what is budgeted.
+pub const PATCH_BUDGET: f64 = 4096.0;
+
+/// Bytes the bake holds per patch: the patch, its direct light and final value, its texel, and
+/// the solve's per-patch area and receiver index.
+const BYTES_PER_PATCH: u64 =
+    (std::mem::size_of::<crate::lighting::lightmap::patches::Patch>() + 2 * 24 + 16 + 16) as u64;
+
+/// `patch_size` from the scene's area and [`PATCH_BUDGET`] when unset; the bake refused when its
+/// patches would not fit the memory budget.
+pub fn plan(decl: &MethodDecl, facts: &Facts<'_>) -> Result<Vec<Derived>> {
+    let config = Config::from_decl_in(decl, Some(facts.scene))?;
+    let mut derived = Vec::new();
+    let mut size = config.patch_size;
+    let area = facts.area(NAME)?;
+    if decl.param("patch_size").is_none() && area > 0.0 {
+        size = patch_size_for(area, PATCH_BUDGET);
+        derived.push(Derived::new(
+            "patch_size",
+            size,
+            format!("the scene's {area:.3} m² over a budget of {PATCH_BUDGET} patches"),
+        ));
+    }
+    let patches = crate::lighting::lightmap::patches::count(facts.triangles(NAME)?, size);
+    facts.check(
+        NAME,
+        &format!("the light-map at patch_size = {size} ({patches} patches)"),
+        patches * BYTES_PER_PATCH,
+        "set a larger patch_size",
+    )?;
+    Ok(derived)
 }
 
 /// The light-map's texture format: CaLight's 8-bit display values in faithful mode (the bake

@@ -183,6 +183,66 @@ impl Baked {
     }
 }
 
+/// The patches an SH light-map gets when the scene sets no `patch_size`: each casts `samples`
+/// rays and keeps a bit per ray, so it costs far more than a radiosity patch.
+pub const PATCH_BUDGET: f64 = 2048.0;
+
+/// Bytes the bake holds per patch at `config`: the patch, its visibility bits, its transfer
+/// vector four times over (the solve's total, unshot and reflectance, the result) in f64 and
+/// once in the atlas in f32; with VQ, the quantiser's copy and index.
+fn bytes_per_patch(config: &Config) -> u64 {
+    let dim = (config.transfer.bands * config.transfer.bands) as u64;
+    let words = config.samples.div_ceil(32) as u64;
+    let vq = if config.reps > 0 { dim * 8 + 4 } else { 0 };
+    std::mem::size_of::<crate::lighting::lightmap::patches::Patch>() as u64 + 4 * words + dim * (4 * 8 + 4) + vq
+}
+
+/// `patch_size` from the scene's area and [`PATCH_BUDGET`] when unset; the bake (and its VQ
+/// table) refused when it would not fit the memory budget.
+pub fn plan(
+    decl: &MethodDecl,
+    facts: &crate::lighting::plan::Facts<'_>,
+) -> Result<Vec<crate::lighting::plan::Derived>> {
+    use crate::lighting::plan::{patch_size_for, Derived};
+    let mut config = Config::from_decl(decl, Some(facts.scene))?;
+    let mut derived = Vec::new();
+    let area = facts.area(NAME)?;
+    if decl.param("patch_size").is_none() && area > 0.0 {
+        config.patch_size = patch_size_for(area, PATCH_BUDGET);
+        derived.push(Derived::new(
+            "patch_size",
+            config.patch_size,
+            format!("the scene's {area:.3} m² over a budget of {PATCH_BUDGET} patches"),
+        ));
+    }
+    let size = config.patch_size;
+    let patches = crate::lighting::lightmap::patches::count(facts.triangles(NAME)?, size);
+    let dim = (config.transfer.bands * config.transfer.bands) as u64;
+    let table = if config.reps > 0 {
+        config.reps as u64 * dim * 8
+    } else {
+        0
+    };
+    let what = if config.reps > 0 {
+        format!(
+            "the light-map at patch_size = {size} ({patches} patches of {} rays) with its VQ table of {} representatives",
+            config.samples, config.reps
+        )
+    } else {
+        format!(
+            "the light-map at patch_size = {size} ({patches} patches of {} rays)",
+            config.samples
+        )
+    };
+    facts.check(
+        NAME,
+        &what,
+        patches * bytes_per_patch(&config) + table,
+        "set a larger patch_size or fewer samples",
+    )?;
+    Ok(derived)
+}
+
 /// Where the visibility rays are cast.
 pub enum Rays<'a> {
     Cpu,

@@ -103,6 +103,43 @@ pub enum Mode {
     Corrected,
 }
 
+/// Bytes the set-up holds per segment: its vertices' positions, normals and polygons, its
+/// triangle and polygon, and `k` light indices.
+fn bytes_per_segment(k: usize) -> u64 {
+    (24 + 24 + 4 + 12 + 4 + 4 * k) as u64
+}
+
+/// `max_segment_area` from the scene's area and the segment budget when unset; the set-up
+/// refused when its segments would not fit the memory budget.
+pub fn plan(
+    decl: &MethodDecl,
+    facts: &crate::lighting::plan::Facts<'_>,
+) -> Result<Vec<crate::lighting::plan::Derived>> {
+    use crate::lighting::plan::{round2, segments_for, Derived, SEGMENT_BUDGET};
+    let mut config = Config::from_decl_in(decl, Some(facts.scene))?;
+    let mut derived = Vec::new();
+    let area = facts.area(NAME)?;
+    if decl.param("max_segment_area").is_none() && area > 0.0 {
+        config.max_segment_area = round2(area / SEGMENT_BUDGET).clamp(1e-6, 1e4);
+        derived.push(Derived::new(
+            "max_segment_area",
+            config.max_segment_area,
+            format!("the scene's {area:.3} m² over a budget of {SEGMENT_BUDGET} segments"),
+        ));
+    }
+    let segments = segments_for(facts.triangles(NAME)?, config.max_segment_area);
+    facts.check(
+        NAME,
+        &format!(
+            "{segments} segments at max_segment_area = {} with {} lights each",
+            config.max_segment_area, config.setup.k
+        ),
+        segments * bytes_per_segment(config.setup.k),
+        "set a larger max_segment_area",
+    )?;
+    Ok(derived)
+}
+
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {

@@ -1,0 +1,305 @@
+//! Defaults derived from the scene, and methods over their memory budget refused before anything
+//! is allocated: `registry::plan` runs on the CPU alone, before a device exists.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use penumbra::lighting::registry;
+use penumbra::scene::Scene;
+
+fn shipped(name: &str) -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    Scene::from_file(dir.join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `scene` with its methods replaced by `methods` (a TOML array) and a budget when given.
+fn with_methods(name: &str, methods: &str, budget_mb: Option<u32>) -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join(name)).unwrap();
+    let mut out = String::new();
+    if let Some(mb) = budget_mb {
+        out += &format!("memory_budget_mb = {mb}\n");
+    }
+    out += &format!("methods = {methods}\n");
+    let mut skipping = false;
+    for line in text.lines() {
+        // The file's own `methods = [...]`, on one line or several, and its combinations.
+        if line.starts_with("methods") {
+            skipping = !line.trim_end().ends_with(']');
+            continue;
+        }
+        if skipping {
+            skipping = line.trim() != "]";
+            continue;
+        }
+        out += line;
+        out += "\n";
+    }
+    let out = out.replace("[[combinations]]", "[[unused]]");
+    let out = strip_table(&out, "[[unused]]");
+    Scene::from_str(&out, name, &dir).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `text` without the tables headed `header` (up to the next header).
+fn strip_table(text: &str, header: &str) -> String {
+    let mut out = String::new();
+    let mut inside = false;
+    for line in text.lines() {
+        if line.starts_with('[') {
+            inside = line.trim() == header;
+        }
+        if !inside {
+            out += line;
+            out += "\n";
+        }
+    }
+    out
+}
+
+/// `method`'s plan on `scene`: its refusal's message and how long it took to come.
+fn refusal(scene: &Scene, method: &str) -> (String, Duration) {
+    let config = registry::configuration(scene, Some(method)).unwrap_or_else(|e| panic!("{e}"));
+    let start = Instant::now();
+    let result = registry::plan(&config, scene);
+    let took = start.elapsed();
+    match result {
+        Err(e) => (e.to_string(), took),
+        Ok((c, _)) => panic!("{method} was not refused: {:?}", c.parts[0].decl),
+    }
+}
+
+fn assert_refusal(message: &str, took: Duration, needs: &[&str]) {
+    println!("{message} ({took:?})");
+    assert!(!message.contains('\n'), "one line: {message}");
+    for n in needs.iter().chain(&["would need", "memory_budget_mb"]) {
+        assert!(message.contains(n), "`{n}` missing from: {message}");
+    }
+    assert!(took < Duration::from_secs(1), "refused after {took:?}");
+}
+
+/// The size a refusal names, in MB.
+fn needed_mb(message: &str) -> f64 {
+    let tail = message.split("would need ").nth(1).unwrap();
+    let mut words = tail.split_whitespace();
+    let value: f64 = words.next().unwrap().parse().unwrap();
+    match words.next().unwrap().trim_end_matches(',') {
+        "GB" => value * 1024.0,
+        "MB" => value,
+        other => panic!("unit {other}"),
+    }
+}
+
+/// Radiosity at 5 mm patches on the BSP rooms grew to 6 GB before anything was said: the patches
+/// are counted before any is made and the bake refused with the size it would need.
+#[test]
+fn radiosity_over_the_budget_is_refused_before_baking() {
+    let scene = with_methods(
+        "bsp_rooms.toml",
+        r#"[{ name = "radiosity", patch_size = 0.005 }]"#,
+        None,
+    );
+    let (message, took) = refusal(&scene, "radiosity");
+    assert_refusal(
+        &message,
+        took,
+        &["bsp_rooms.toml", "radiosity", "patch_size = 0.005", "patches", "GB"],
+    );
+    assert!(needed_mb(&message) > 2048.0, "{message}");
+    // The same bake at the shipped 50 cm fits.
+    let scene = with_methods("bsp_rooms.toml", r#"[{ name = "radiosity", patch_size = 0.5 }]"#, None);
+    let config = registry::configuration(&scene, Some("radiosity")).unwrap();
+    registry::plan(&config, &scene).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// The SH light-map's CPU baker never checked its patch count (2.2 GB at 5 mm on the courtyard).
+#[test]
+fn sh_lightmap_over_the_budget_is_refused_before_baking() {
+    let scene = with_methods(
+        "sh_courtyard.toml",
+        r#"[{ name = "sh_lightmap", patch_size = 0.005, baker = "cpu" }]"#,
+        None,
+    );
+    let (message, took) = refusal(&scene, "sh_lightmap");
+    assert_refusal(
+        &message,
+        took,
+        &["sh_lightmap", "patch_size = 0.005", "patches", "rays"],
+    );
+    assert!(needed_mb(&message) > 2048.0, "{message}");
+}
+
+/// A budget the scene raises lets the same bake through; one it lowers refuses the shipped one.
+#[test]
+fn the_scene_sets_the_budget() {
+    let raised = with_methods(
+        "bsp_rooms.toml",
+        r#"[{ name = "radiosity", patch_size = 0.005 }]"#,
+        Some(1 << 20),
+    );
+    let config = registry::configuration(&raised, Some("radiosity")).unwrap();
+    registry::plan(&config, &raised).unwrap_or_else(|e| panic!("{e}"));
+    let lowered = with_methods(
+        "bsp_rooms.toml",
+        r#"[{ name = "radiosity", patch_size = 0.5 }]"#,
+        Some(1),
+    );
+    let (message, took) = refusal(&lowered, "radiosity");
+    assert_refusal(&message, took, &["the scene's memory_budget_mb", "budget of 1.0 MB"]);
+    let bad = Scene::from_str(
+        "memory_budget_mb = 0\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n",
+        "b.toml",
+        Path::new("."),
+    );
+    let e = bad.err().expect("a budget of 0 MB is refused").to_string();
+    assert!(e.contains("b.toml") && e.contains("memory_budget_mb"), "{e}");
+}
+
+/// The VQ table is part of what the SH light-map needs: the same small bake fits without it and
+/// is refused with 65,536 representatives (8 MB of f64 at 16 coefficients) in an 8 MB budget.
+#[test]
+fn sh_lightmap_vq_table_over_the_budget_is_refused() {
+    let plain = with_methods(
+        "sh_courtyard.toml",
+        r#"[{ name = "sh_lightmap", patch_size = 2.0, samples = 1024 }]"#,
+        Some(8),
+    );
+    let config = registry::configuration(&plain, Some("sh_lightmap")).unwrap();
+    registry::plan(&config, &plain).unwrap_or_else(|e| panic!("{e}"));
+    let vq = with_methods(
+        "sh_courtyard.toml",
+        r#"[{ name = "sh_lightmap", patch_size = 2.0, samples = 1024, reps = 65536 }]"#,
+        Some(8),
+    );
+    let (message, took) = refusal(&vq, "sh_lightmap");
+    assert_refusal(&message, took, &["VQ table of 65536 representatives"]);
+    assert!(needed_mb(&message) > 8.0, "{message}");
+}
+
+/// The LPV at its largest (128³ in f32, 4 cascades: 2.2 GB of volumes) is refused.
+#[test]
+fn lpv_volume_over_the_budget_is_refused() {
+    let scene = with_methods(
+        "lpv_cornell.toml",
+        r#"[{ name = "lpv", grid = 128, storage = "f32", cascades = 4 }]"#,
+        None,
+    );
+    let (message, took) = refusal(&scene, "lpv");
+    assert_refusal(&message, took, &["4 volume(s) of 128³ cells in f32", "GB"]);
+    // 4 × (3 sets of 128³ × 48 bytes + 128³ × 128 bytes): 2,281 MB, and the 256² RSM.
+    let want = 4.0 * (3.0 * 48.0 + 128.0) * 128f64.powi(3) / (1024.0 * 1024.0);
+    assert!(
+        (needed_mb(&message) - want).abs() < 0.05 * 1024.0,
+        "{message}: want {want} MB"
+    );
+    let fits = with_methods(
+        "lpv_cornell.toml",
+        r#"[{ name = "lpv", grid = 128, storage = "f32" }]"#,
+        None,
+    );
+    let config = registry::configuration(&fits, Some("lpv")).unwrap();
+    registry::plan(&config, &fits).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// VLS's set-up over the 1,024-light stage at 1 cm² segments does not fit 16 MB.
+#[test]
+fn vls_setup_over_the_budget_is_refused() {
+    let scene = with_methods(
+        "many_stress.toml",
+        r#"[{ name = "vls", max_segment_area = 0.0001 }]"#,
+        Some(16),
+    );
+    let (message, took) = refusal(&scene, "vls");
+    assert_refusal(
+        &message,
+        took,
+        &["segments at max_segment_area = 0.0001", "budget of 16.0 MB"],
+    );
+}
+
+/// Parameters the scene leaves unset are derived from it and said in one line each; set ones
+/// are kept and draw no line.
+#[test]
+fn unset_parameters_are_derived_from_the_scene() {
+    // Two rooms side by side, 6.05 m along x: the fitted 32³ volume spans them in 30 cells, and
+    // light from their middle crosses 15.
+    let scene = shipped("lpv_two_rooms.toml");
+    let config = registry::configuration(&scene, Some("lpv")).unwrap();
+    let (planned, notes) = registry::plan(&config, &scene).unwrap();
+    println!("{notes:?}");
+    assert_eq!(
+        planned.parts[0].decl.param("iterations").and_then(|v| v.as_integer()),
+        Some(15)
+    );
+    assert!(
+        notes.iter().any(
+            |n| n.starts_with("lpv: iterations = 15 (grid 32 cells: the scene's 6.05 m spans 30")
+                && n.ends_with("set iterations to override)")
+        ),
+        "{notes:?}"
+    );
+    // Set by the scene: kept, nothing said.
+    let set = with_methods("lpv_two_rooms.toml", r#"[{ name = "lpv", iterations = 8 }]"#, None);
+    let config = registry::configuration(&set, Some("lpv")).unwrap();
+    let (planned, notes) = registry::plan(&config, &set).unwrap();
+    assert_eq!(
+        planned.parts[0].decl.param("iterations").and_then(|v| v.as_integer()),
+        Some(8)
+    );
+    assert!(notes.is_empty(), "{notes:?}");
+    // A region of 3 m at 32³ (cells of 9.4 cm) over the 6.05 m rooms: all 32 cells, 16 passes.
+    let region = with_methods(
+        "lpv_two_rooms.toml",
+        r#"[{ name = "lpv", centre = [0, 1, 0], size = 3.0 }]"#,
+        None,
+    );
+    let config = registry::configuration(&region, Some("lpv")).unwrap();
+    let (planned, _) = registry::plan(&config, &region).unwrap();
+    assert_eq!(
+        planned.parts[0].decl.param("iterations").and_then(|v| v.as_integer()),
+        Some(16)
+    );
+    // ... and one of 12 m: the rooms span 6.05 / 0.375 → 17 cells, 9 passes.
+    let region = with_methods(
+        "lpv_two_rooms.toml",
+        r#"[{ name = "lpv", centre = [0, 1, 0], size = 12.0 }]"#,
+        None,
+    );
+    let config = registry::configuration(&region, Some("lpv")).unwrap();
+    let (planned, _) = registry::plan(&config, &region).unwrap();
+    assert_eq!(
+        planned.parts[0].decl.param("iterations").and_then(|v| v.as_integer()),
+        Some(9)
+    );
+    // The document's mode keeps its own 2.
+    let faithful = with_methods("lpv_two_rooms.toml", r#"[{ name = "lpv", mode = "faithful" }]"#, None);
+    let config = registry::configuration(&faithful, Some("lpv")).unwrap();
+    let (planned, _) = registry::plan(&config, &faithful).unwrap();
+    assert_eq!(planned.parts[0].decl.param("iterations"), None);
+}
+
+/// Light-map patches and many-light segments from the scene's area: the two rooms' 24 quads
+/// hold 2 × (2 × 12 + 2 × 7.5 + 2 × 10) − 2 × 2 (the door) + 4 × 0.05-wide door faces m².
+#[test]
+fn patch_and_segment_sizes_follow_the_scene_area() {
+    let area: f64 = 2.0 * (2.0 * 12.0 + 2.0 * 7.5 + 2.0 * 10.0) - 2.0 * 2.0 + 0.05 * (1.0 + 2.0 + 2.0 + 1.0);
+    let derived = |method: &str, param: &str| {
+        let scene = with_methods("lpv_two_rooms.toml", &format!(r#"["{method}"]"#), None);
+        let config = registry::configuration(&scene, Some(method)).unwrap();
+        let (planned, notes) = registry::plan(&config, &scene).unwrap();
+        println!("{notes:?}");
+        assert!(notes.iter().any(|n| n.contains(&format!("{area:.3} m²"))), "{notes:?}");
+        planned.parts[0].decl.param(param).and_then(|v| v.as_float()).unwrap()
+    };
+    let close = |got: f64, want: f64| (got / want - 1.0).abs() < 0.03;
+    let radiosity = derived("radiosity", "patch_size");
+    assert!(
+        close(radiosity, (area / 4096.0).sqrt()),
+        "radiosity patch_size {radiosity}"
+    );
+    let sh = derived("sh_lightmap", "patch_size");
+    assert!(close(sh, (area / 2048.0).sqrt()), "sh_lightmap patch_size {sh}");
+    let vls = derived("vls", "max_segment_area");
+    assert!(close(vls, area / 16384.0), "vls max_segment_area {vls}");
+    let bsp = derived("bsp_lights", "max_segment_area");
+    assert!(close(bsp, area / 16384.0), "bsp_lights max_segment_area {bsp}");
+}
