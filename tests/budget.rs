@@ -303,3 +303,62 @@ fn patch_and_segment_sizes_follow_the_scene_area() {
     let bsp = derived("bsp_lights", "max_segment_area");
     assert!(close(bsp, area / 16384.0), "bsp_lights max_segment_area {bsp}");
 }
+
+#[test]
+fn derived_sizes_keep_two_significant_digits_and_sizes_read_in_mb_or_gb() {
+    use penumbra::lighting::plan::{bytes, round2};
+    assert_eq!(round2(0.012345), 0.012);
+    assert_eq!(round2(1234.0), 1200.0);
+    assert_eq!(round2(0.1), 0.1);
+    assert_eq!(bytes(512 * 1024 * 1024), "512.0 MB");
+    assert_eq!(bytes(3 * 1024 * 1024 * 1024), "3.0 GB");
+}
+
+mod prt_vertex_spacing {
+    use glam::Vec3;
+    use penumbra::lighting::prt::sampling::{undersampled, Object};
+
+    /// A square of side `side` at height 0 cut into `n` × `n` quads.
+    fn ground(side: f32, n: u32) -> Object {
+        let mut triangles = Vec::new();
+        let step = side / n as f32;
+        for j in 0..n {
+            for i in 0..n {
+                let p = |a: u32, b: u32| Vec3::new(a as f32 * step, 0.0, b as f32 * step);
+                triangles.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+                triangles.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+            }
+        }
+        Object {
+            name: "ground".into(),
+            triangles,
+        }
+    }
+
+    /// An object `side` across (one triangle spanning a cube's diagonal).
+    fn small(side: f32) -> Object {
+        Object {
+            name: "box".into(),
+            triangles: vec![[Vec3::ZERO, Vec3::new(side, 0.0, 0.0), Vec3::splat(side)]],
+        }
+    }
+
+    /// A 4 m ground in two triangles under a 0.5 m object: its vertices are 4 m apart.
+    #[test]
+    fn a_ground_in_two_triangles_under_a_small_object_is_undersampled() {
+        let lines = undersampled(&[ground(4.0, 1), small(0.5)]);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(
+            lines[0].contains("\"ground\"") && lines[0].contains("4.000 m apart"),
+            "{lines:?}"
+        );
+        assert!(lines[0].contains("to 0.250 m"), "{lines:?}");
+    }
+
+    /// 32 × 32 quads of 0.125 m hold 4 vertices across the object's shadow; 8 × 8 of 0.5 m one.
+    #[test]
+    fn a_ground_finer_than_half_the_object_is_not() {
+        assert!(undersampled(&[ground(4.0, 32), small(0.5)]).is_empty());
+        assert_eq!(undersampled(&[ground(4.0, 8), small(0.5)]).len(), 1);
+    }
+}

@@ -172,21 +172,3 @@ pub fn apply(decl: &MethodDecl, derived: &[Derived]) -> MethodDecl {
         .iter()
         .fold(decl.clone(), |d, x| d.with(x.param, x.value.clone()))
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn round2_keeps_two_significant_digits() {
-        assert_eq!(round2(0.012345), 0.012);
-        assert_eq!(round2(1234.0), 1200.0);
-        assert_eq!(round2(0.1), 0.1);
-    }
-
-    #[test]
-    fn bytes_switch_to_gigabytes() {
-        assert_eq!(bytes(512 * 1024 * 1024), "512.0 MB");
-        assert_eq!(bytes(3 * 1024 * 1024 * 1024), "3.0 GB");
-    }
-}

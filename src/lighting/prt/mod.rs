@@ -9,6 +9,7 @@ pub mod mapping;
 pub mod raster;
 pub mod raycast;
 pub mod receivers;
+pub mod sampling;
 pub mod storage;
 
 #[cfg(test)]
@@ -261,6 +262,28 @@ pub fn bake_transfer(
     }
 }
 
+/// The scene's objects in world space, for [`sampling::undersampled`].
+fn sampling_objects(cx: &CreateContext<'_>) -> Vec<sampling::Object> {
+    cx.scene_gpu
+        .draws
+        .iter()
+        .zip(&cx.scene_gpu.meshes)
+        .filter_map(|(d, mesh)| {
+            let object = cx.scene.objects.get(d.object?)?;
+            let p = |k: u32| d.model.transform_point3(mesh.positions[k as usize]);
+            let triangles = mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [p(t[0]), p(t[1]), p(t[2])])
+                .collect();
+            Some(sampling::Object {
+                name: object.name.clone(),
+                triangles,
+            })
+        })
+        .collect()
+}
+
 /// Per-vertex PRT: the base term lit by the scene's distant light.
 pub struct Prt {
     config: Config,
@@ -294,6 +317,9 @@ impl Prt {
                 cx.scene.source,
                 local.join(", ")
             );
+        }
+        for line in sampling::undersampled(&sampling_objects(cx)) {
+            crate::errln!("warning: {}: {NAME}: {line}", cx.scene.source);
         }
         let rules = OccluderRules::parse(&config.occluders, cx.scene, &format!("methods: {NAME}.occluders"))?;
         let times = key_times(cx.scene, &config);
