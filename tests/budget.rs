@@ -150,7 +150,10 @@ fn the_scene_sets_the_budget() {
         "b.toml",
         Path::new("."),
     );
-    let e = bad.err().expect("a budget of 0 MB is refused").to_string();
+    let Err(e) = bad else {
+        panic!("a budget of 0 MB is refused")
+    };
+    let e = e.to_string();
     assert!(e.contains("b.toml") && e.contains("memory_budget_mb"), "{e}");
 }
 
@@ -361,4 +364,20 @@ mod prt_vertex_spacing {
         assert!(undersampled(&[ground(4.0, 32), small(0.5)]).is_empty());
         assert_eq!(undersampled(&[ground(4.0, 8), small(0.5)]).len(), 1);
     }
+}
+
+/// A sphere light, which the light-map bakers refuse when they bake, does not stop the others'
+/// defaults from being derived from the scene.
+#[test]
+fn a_sphere_light_leaves_the_derivations_to_run() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("lpv_two_rooms.toml")).unwrap()
+        + "\n[[lights]]\ntype = \"sphere\"\ncenter = [2.0, 1.5, 0.0]\nradius = 0.1\nradiance = 5\n";
+    let scene = Scene::from_str(&text, "lpv_two_rooms.toml", &dir).unwrap_or_else(|e| panic!("{e}"));
+    let config = registry::configuration(&scene, Some("lpv")).unwrap();
+    let (planned, _) = registry::plan(&config, &scene).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        planned.parts[0].decl.param("iterations").and_then(|v| v.as_integer()),
+        Some(15)
+    );
 }

@@ -51,7 +51,16 @@ impl<'a> Facts<'a> {
     pub fn triangles(&self, method: &str) -> Result<&[Triangle]> {
         self.triangles
             .get_or_init(|| {
-                crate::lighting::lightmap::geometry::scene_geometry(self.scene, method)
+                // Measured, not patched: sphere lights (which the light-map bakers refuse when
+                // they bake) have no emitter triangles and leave the measure as it is.
+                let measured = Scene {
+                    lights: (self.scene.lights.iter())
+                        .filter(|l| !matches!(l, crate::scene::Light::Sphere { .. }))
+                        .cloned()
+                        .collect(),
+                    ..self.scene.clone()
+                };
+                crate::lighting::lightmap::geometry::scene_geometry(&measured, method)
                     .map(|g| g.triangles)
                     .map_err(|e| e.to_string())
             })
