@@ -302,9 +302,9 @@ fn patch_and_segment_sizes_follow_the_scene_area() {
     let sh = derived("sh_lightmap", "patch_size");
     assert!(close(sh, (area / 2048.0).sqrt()), "sh_lightmap patch_size {sh}");
     let vls = derived("vls", "max_segment_area");
-    assert!(close(vls, area / 16384.0), "vls max_segment_area {vls}");
+    assert!(close(vls, area / 8192.0), "vls max_segment_area {vls}");
     let bsp = derived("bsp_lights", "max_segment_area");
-    assert!(close(bsp, area / 16384.0), "bsp_lights max_segment_area {bsp}");
+    assert!(close(bsp, area / 8192.0), "bsp_lights max_segment_area {bsp}");
 }
 
 #[test]
