@@ -381,3 +381,24 @@ fn a_sphere_light_leaves_the_derivations_to_run() {
         Some(15)
     );
 }
+
+/// On the 1,024-light stage the BSP light matrix (a row per segment vertex, 12 bytes per light
+/// in f32) bounds the segments before the budget does: the derived area leaves room for four
+/// rows per segment in the 2²⁷ bytes a storage buffer is sure to hold (the stage's set-up then
+/// made 6,753 vertices, 83 MB, on lavapipe).
+#[test]
+fn bsp_lights_segments_fit_the_light_matrix() {
+    let scene = with_methods("many_stress.toml", r#"["bsp_lights"]"#, None);
+    let config = registry::configuration(&scene, Some("bsp_lights")).unwrap();
+    let (planned, notes) = registry::plan(&config, &scene).unwrap();
+    println!("{notes:?}");
+    let area = planned.parts[0]
+        .decl
+        .param("max_segment_area")
+        .and_then(|v| v.as_float())
+        .unwrap();
+    let rows = (1u64 << 27) as f64 / (1024.0 * 12.0);
+    let stage = 351.46;
+    assert!(4.0 * stage / area <= rows, "max_segment_area {area}: {rows} rows");
+    assert!(notes.iter().any(|n| n.contains("matrix of 1024 lights")), "{notes:?}");
+}
