@@ -383,7 +383,7 @@ fn cornell_indirect_light_faithful_is_off_and_cascades_reach_the_box() {
 /// MSE 0.131), under the target's 0.8. At 8 iterations it carried 0.39 (0.109), at 30 0.74
 /// (0.164), and at the 16³ and 16 iterations this test used to set 0.85 (0.133): at 32³ the
 /// box's light needs more passes than half its width to spread over its walls, while rooms
-/// and the bush are over-lit at that many (tests/budget.rs, scenes/lpv_two_rooms.toml).
+/// and the bush are over-lit at that many (tests/methods/budget.rs, scenes/lpv_two_rooms.toml).
 #[test]
 #[ignore = "known failure: 0.55 of the path tracer's one-bounce light at the shipped defaults (target 0.8-1.25)"]
 fn cornell_indirect_light_at_the_shipped_defaults_is_within_a_quarter_of_the_path_tracer() {

@@ -5,6 +5,7 @@
 mod support;
 
 mod bsp_lights;
+mod budget;
 mod bush_mesh;
 mod clustered;
 mod combinations;
