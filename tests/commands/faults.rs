@@ -90,7 +90,7 @@ fn a_crash_is_reported_with_its_thread_and_place_and_still_kills() {
     let out = std::process::Command::new(&exe)
         .args([
             "--exact",
-            "a_crash_is_reported_with_its_thread_and_place_and_still_kills",
+            "faults::a_crash_is_reported_with_its_thread_and_place_and_still_kills",
             "--nocapture",
             "--test-threads=1",
         ])
