@@ -133,15 +133,12 @@ mod tests {
             Scene::from_str(&text, "lights.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
         };
         let bulb = scene("[[lights]]\ntype = \"point\"\nname = \"bulb\"\nposition = [0, 1, 0]\nintensity = 1\n");
-        let w = crate::lighting::prt::light::distant_only_warning(&bulb, "sh_lightmap");
+        let w = crate::lighting::distant_only_warning(&bulb, "sh_lightmap");
         assert_eq!(
             w.as_deref(),
             Some("warning: lights.toml: sh_lightmap lights with distant light only; it leaves out bulb")
         );
         let sun = scene("[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1\n");
-        assert_eq!(
-            crate::lighting::prt::light::distant_only_warning(&sun, "sh_lightmap"),
-            None
-        );
+        assert_eq!(crate::lighting::distant_only_warning(&sun, "sh_lightmap"), None);
     }
 }

@@ -46,30 +46,6 @@ pub fn project(scene: &Scene, env: &EnvironmentMap, bands: usize) -> Result<Vec<
     Ok(out)
 }
 
-/// The one-line warning for a method that lights with distant light only (the environment and
-/// directional lights) in a scene with other lights, which it would otherwise drop in silence
-/// (a scene lit by a point light alone renders black).
-pub fn distant_only_warning(scene: &Scene, method: &str) -> Option<String> {
-    let local = local_light_names(scene);
-    (!local.is_empty()).then(|| {
-        format!(
-            "warning: {}: {method} lights with distant light only; it leaves out {}",
-            scene.source,
-            local.join(", ")
-        )
-    })
-}
-
-/// The names of the scene's lights that are not directional.
-fn local_light_names(scene: &Scene) -> Vec<String> {
-    scene
-        .lights
-        .iter()
-        .filter(|l| !matches!(l, Light::Directional { .. }))
-        .map(|l| l.name().to_string())
-        .collect()
-}
-
 fn world_to_sh(d: DVec3) -> DVec3 {
     DVec3::new(d.x, -d.z, d.y)
 }

@@ -290,7 +290,7 @@ impl Prt {
                 config.coefficients
             );
         }
-        if let Some(w) = light::distant_only_warning(cx.scene, NAME) {
+        if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
             crate::errln!("{w}");
         }
         // The transfer is baked per vertex on the normal's side (a scene the light-map geometry

@@ -329,7 +329,7 @@ impl ShLightmap {
         for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
             crate::errln!("{w}");
         }
-        if let Some(w) = crate::lighting::prt::light::distant_only_warning(cx.scene, NAME) {
+        if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
             crate::errln!("{w}");
         }
         let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
