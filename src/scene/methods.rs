@@ -130,7 +130,7 @@ pub(crate) fn check(file: &str, methods: &[MethodDecl], known: &[MethodSchema]) 
     let line = |l: usize| (l > 0).then_some(l);
     for (i, m) in methods.iter().enumerate() {
         if let Some((_, v, l)) = m.params.iter().find(|(n, _, _)| n == ID) {
-            if !v.as_str().is_some_and(|s| !s.trim().is_empty()) {
+            if v.as_str().is_none_or(|s| s.trim().is_empty()) {
                 let msg = format!("expected a non-empty string, got {}", describe_value(v));
                 return Err(SceneError::new(file, line(*l), format!("methods[{i}].{ID}"), msg));
             }

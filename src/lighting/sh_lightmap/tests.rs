@@ -421,10 +421,10 @@ fn block_takes_one_to_sixteen_patches_per_side() {
         assert_eq!(c.transfer.solve.block, b as usize);
     }
     for b in [0, 17] {
-        let e = super::config::Config::from_decl(&decl(b), None)
-            .err()
-            .expect("refused")
-            .to_string();
+        let e = match super::config::Config::from_decl(&decl(b), None) {
+            Ok(_) => panic!("block = {b} accepted"),
+            Err(e) => e.to_string(),
+        };
         assert!(e.contains("block") && e.contains("1 to 16"), "{e}");
     }
 }
