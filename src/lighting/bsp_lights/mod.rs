@@ -205,7 +205,10 @@ impl Config {
     /// The parameters that do nothing with this configuration, and why.
     pub fn inert(&self) -> Vec<(&'static str, &'static str)> {
         match self.mode {
-            Mode::Corrected => vec![("k", "in corrected mode (the seed's light model's k is faithful mode's)")],
+            Mode::Corrected => vec![(
+                "k",
+                "in corrected mode (the thesis's light model's k is faithful mode's)",
+            )],
             Mode::Faithful => Vec::new(),
         }
     }

@@ -4,7 +4,7 @@
 //! between them can be blocked: the shooting skips its rays) or PARTIAL (ray-test each patch
 //! pair). Symmetric, stored as CaLight's packed lower triangle of 2-bit entries.
 //!
-//! The seed's first step starts PARTIAL only the pairs in each other's leaf PVS: where the scene
+//! The document's first step starts PARTIAL only the pairs in each other's leaf PVS: where the scene
 //! has a BSP world with a PVS ([`ChartPvs`]), pairs of charts no leaf of which sees a leaf of the
 //! other start NONE; arbitrary static geometry has no PVS, and there every pair starts PARTIAL.
 

@@ -144,7 +144,7 @@ pub fn add_direct_light_in(
 
 /// The charts' leaves in `world` (every empty leaf a chart's bounds reach, a hair enlarged so a
 /// face on a leaf's boundary is in the leaf in front of it) and the world's leaf PVS over them:
-/// the seed's start of the surface-visibility matrix.
+/// the document's start of the surface-visibility matrix.
 pub fn chart_pvs(
     p: &Patches,
     triangles: &[crate::lighting::lightmap::patches::Triangle],

@@ -207,7 +207,7 @@ fn full_pairs_only_save_rays() {
     }
 }
 
-/// The seed's start of the matrix from the leaf PVS (scenes/bsp_rooms.toml, a compiled BSP world
+/// The document's start of the matrix from the leaf PVS (scenes/bsp_rooms.toml, a compiled BSP world
 /// with a PVS): the pairs it rules out become NONE, none of them a pair the geometric test finds
 /// FULL (sure to see each other), every other pair classified as without it; the solve's light
 /// changes by less than its stop, and the time saved is printed.
