@@ -424,6 +424,11 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 } else {
                     penumbra::out!("{config}:\n{}", penumbra::bake::table(&reports));
                 }
+                if let Some(why) = reports.iter().find_map(|r| r.not_stored.as_ref()) {
+                    return Err(penumbra::Error::Usage(format!(
+                        "{config}: a bake could not be stored in the cache: {why}"
+                    )));
+                }
             }
         }
         Command::Compare {

@@ -4,7 +4,8 @@
 //! A bake is named and keyed by everything it depends on ([`BakeKey`]: geometry, materials, the
 //! lights it bakes, parameters, the SPIR-V of the shaders it runs). Its result is cached on disk
 //! under `.penumbra-cache/bake/` (or `$PENUMBRA_CACHE/bake/`), written to a temporary file and
-//! renamed so a crash mid-write never leaves a file that looks complete. A file is checked on
+//! renamed so a crash mid-write never leaves a file that looks complete (the first bake that
+//! writes removes temporaries whose writer is gone, so a killed run's never pile up). A file is checked on
 //! the way in (magic, key, length, checksum, decoding): a corrupt or truncated one is rebuilt
 //! with a one-line warning. Every bake's time, size and whether it came from the cache are
 //! reported ([`BakeReport`]) apart from frame time, for `profile`, `chart` and `penumbra bake`.
@@ -115,6 +116,8 @@ pub struct BakeReport {
     pub cached: bool,
     /// Why a cached file was not used, when there was one.
     pub rebuilt: Option<String>,
+    /// Why a built result could not be stored in the cache, when it could not.
+    pub not_stored: Option<String>,
 }
 
 /// Runs bakes through the cache and keeps their reports.
@@ -122,6 +125,8 @@ pub struct BakeReport {
 pub struct Baker {
     dir: Option<PathBuf>,
     reports: Vec<BakeReport>,
+    /// The cache directory was swept of temporaries that killed runs left behind.
+    swept: bool,
 }
 
 const MAGIC: &[u8; 8] = b"PNBAKE01";
@@ -133,6 +138,7 @@ impl Baker {
         Baker {
             dir,
             reports: Vec::new(),
+            swept: false,
         }
     }
 
@@ -189,6 +195,7 @@ impl Baker {
                         bytes,
                         cached: true,
                         rebuilt: None,
+                        not_stored: None,
                     });
                     return Ok(value);
                 }
@@ -206,10 +213,19 @@ impl Baker {
         let value = build(&mut progress)?;
         progress.finish();
         let payload = value.encode();
+        let mut not_stored = None;
         if let Some(p) = &path {
-            // A cache that cannot be written costs the next run a rebuild, nothing else.
+            if !self.swept {
+                self.swept = true;
+                if let Some(dir) = p.parent() {
+                    remove_stale_temporaries(dir);
+                }
+            }
+            // A cache that cannot be written costs the next run a rebuild, nothing else here
+            // (`penumbra bake`, whose whole point is storing, fails on it).
             if let Err(e) = write_cached(p, key.hash(), &payload) {
                 crate::errln!("warning: {}: cannot write the bake cache: {e}", p.display());
+                not_stored = Some(format!("{}: {e}", p.display()));
             }
         }
         self.reports.push(BakeReport {
@@ -219,6 +235,7 @@ impl Baker {
             bytes: payload.len() as u64,
             cached: false,
             rebuilt,
+            not_stored,
         });
         Ok(value)
     }
@@ -267,9 +284,48 @@ fn write_cached(path: &Path, key: u64, payload: &[u8]) -> std::io::Result<()> {
     // Unique per process and call: two threads baking the same key never share a temporary.
     static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp = path.with_extension(format!("tmp{}-{n}", std::process::id()));
-    std::fs::write(&tmp, &bytes)?;
-    std::fs::rename(&tmp, path)
+    let tmp = path.with_extension(format!("{TEMPORARY}{}-{n}", std::process::id()));
+    let written = std::fs::write(&tmp, &bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+/// A temporary's extension: this, the writer's process id, `-`, a counter.
+const TEMPORARY: &str = "tmp";
+
+/// Removes the temporaries in `dir` whose writer is gone (a run killed while writing): on Linux
+/// those of processes that no longer exist, elsewhere those over a day old. A live writer's are
+/// left alone, so two runs sharing a cache never delete each other's files.
+fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let proc = Path::new("/proc/self").exists();
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let Some(pid) = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .and_then(|e| e.strip_prefix(TEMPORARY))
+            .and_then(|e| e.split('-').next())
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let gone = if proc {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        } else {
+            entry
+                .metadata()
+                .and_then(|m| m.modified())
+                .is_ok_and(|t| t.elapsed().is_ok_and(|age| age.as_secs() > 86_400))
+        };
+        if gone {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
 }
 
 /// Prints bake reports as a table (for `profile` and `penumbra bake`).
@@ -280,6 +336,7 @@ pub fn table(reports: &[BakeReport]) -> String {
     let mut s = format!("{:<48} {:>10} {:>12}  {}\n", "bake", "ms", "bytes", "source");
     for r in reports {
         let source = match (&r.rebuilt, r.cached) {
+            _ if r.not_stored.is_some() => "built, NOT stored".to_string(),
             (_, true) => "cache".to_string(),
             (Some(why), false) => format!("built (cache rebuilt: {why})"),
             (None, false) => "built".to_string(),

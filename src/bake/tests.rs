@@ -121,3 +121,41 @@ fn shader_and_byte_inputs_change_the_key() {
     let line = crate::util::progress::line("wedge", 250, 1000, std::time::Duration::from_secs(2));
     assert_eq!(line, "wedge:  25% (250/1000) 125.0/s, 2.0 s elapsed, 6.0 s left");
 }
+
+#[test]
+fn a_killed_writers_temporaries_are_removed_and_a_live_ones_kept() {
+    let dir = temp_dir("stale");
+    std::fs::create_dir_all(&dir).unwrap();
+    // No process has id 999999999 (Linux's largest is 4194304); process 1 always runs.
+    let stale = dir.join("t-0000000000000001.tmp999999999-0");
+    let live = dir.join("t-0000000000000002.tmp1-0");
+    let other = dir.join("notes.txt");
+    for f in [&stale, &live, &other] {
+        std::fs::write(f, b"partial").unwrap();
+    }
+    let mut calls = 0;
+    Baker::new(Some(dir.clone()))
+        .bake("t", &BakeKey::new("t"), build_counting(&mut calls, vec![1.0]))
+        .unwrap();
+    assert!(!stale.exists(), "a temporary of a gone process is left");
+    assert!(
+        live.exists() && other.exists(),
+        "a live writer's temporary or another file was removed"
+    );
+}
+
+#[test]
+fn a_result_that_cannot_be_stored_is_reported_so() {
+    let dir = temp_dir("unwritable");
+    // A file where the cache directory should be: nothing can be stored under it.
+    std::fs::write(&dir, b"not a directory").unwrap();
+    let mut calls = 0;
+    let mut baker = Baker::new(Some(dir.join("bake")));
+    baker
+        .bake("t", &BakeKey::new("t"), build_counting(&mut calls, vec![1.0]))
+        .unwrap();
+    let r = &baker.reports()[0];
+    assert!(r.not_stored.is_some() && !r.cached, "{r:?}");
+    assert!(table(baker.reports()).contains("NOT stored"));
+    let _ = std::fs::remove_file(&dir);
+}

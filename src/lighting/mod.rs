@@ -202,3 +202,27 @@ impl ReferenceKind {
         }
     }
 }
+
+/// The one-line warning for a method that lights with distant light only (the environment and
+/// directional lights) in a scene with other lights, which it would otherwise drop in silence
+/// (a scene lit by a point light alone renders black).
+pub fn distant_only_warning(scene: &crate::scene::Scene, method: &str) -> Option<String> {
+    let local = local_light_names(scene);
+    (!local.is_empty()).then(|| {
+        format!(
+            "warning: {}: {method} lights with distant light only; it leaves out {}",
+            scene.source,
+            local.join(", ")
+        )
+    })
+}
+
+/// The names of the scene's lights that are not directional.
+fn local_light_names(scene: &crate::scene::Scene) -> Vec<String> {
+    scene
+        .lights
+        .iter()
+        .filter(|l| !matches!(l, crate::scene::Light::Directional { .. }))
+        .map(|l| l.name().to_string())
+        .collect()
+}

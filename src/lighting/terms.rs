@@ -114,7 +114,7 @@ pub fn alone(decl: &MethodDecl, supply: &[Supply]) -> Configuration {
         .find(|s| s.name == decl.name)
         .map_or(Terms::BASE_DIRECT, |s| s.terms);
     Configuration {
-        name: decl.name.clone(),
+        name: decl.label().to_string(),
         parts: vec![Part {
             decl: decl.clone(),
             terms,
@@ -145,15 +145,15 @@ pub fn configurations(scene: &Scene, supply: &[Supply]) -> Result<Vec<Configurat
                 _ => Term::Indirect,
             };
             let field = format!("combinations[{i}].{}", term.key());
-            let decl = scene.methods.iter().find(|d| d.name == *method).ok_or_else(|| {
-                let names: Vec<&str> = scene.methods.iter().map(|d| d.name.as_str()).collect();
+            let decl = scene.methods.iter().find(|d| d.label() == *method).ok_or_else(|| {
+                let names: Vec<&str> = scene.methods.iter().map(|d| d.label()).collect();
                 err(
                     *line,
                     field.clone(),
                     format!("{method:?} is not one of the scene's methods ({})", names.join(", ")),
                 )
             })?;
-            let s = supply.iter().find(|s| s.name == *method).copied().unwrap_or(Supply {
+            let s = supply.iter().find(|s| s.name == decl.name).copied().unwrap_or(Supply {
                 name: "",
                 terms: Terms::NONE,
                 separable: false,
@@ -163,13 +163,14 @@ pub fn configurations(scene: &Scene, supply: &[Supply]) -> Result<Vec<Configurat
                     *line,
                     field,
                     format!(
-                        "{method} cannot supply the {} term (it supplies {})",
+                        "{} cannot supply the {} term (it supplies {})",
+                        decl.name,
                         term.key(),
                         s.terms
                     ),
                 ));
             }
-            match parts.iter_mut().find(|p| p.decl.name == *method) {
+            match parts.iter_mut().find(|p| p.decl.label() == *method) {
                 Some(p) => p.terms = p.terms.union(Terms::of(&[term])),
                 None => parts.push(Part {
                     decl: decl.clone(),
@@ -190,7 +191,7 @@ pub fn configurations(scene: &Scene, supply: &[Supply]) -> Result<Vec<Configurat
                 let (key, line) = c
                     .terms
                     .iter()
-                    .find(|(_, m, _)| *m == p.decl.name)
+                    .find(|(_, m, _)| *m == p.decl.label())
                     .map_or(("name", c.line), |t| (t.0, t.2));
                 return Err(err(
                     line,

@@ -121,11 +121,16 @@ fn name(f: &Field) -> Result<String, SceneError> {
     Ok(s.to_owned())
 }
 
-/// A unit direction from a non-zero vector.
+/// A unit direction from a non-zero vector (normalized in f64: in f32 the squared length of a
+/// tiny vector such as [1e-30, 0, 0] underflows to zero).
 fn direction(f: &Field) -> Result<Vec3, SceneError> {
-    f.vec3()?
-        .try_normalize()
-        .ok_or_else(|| f.err("expected a non-zero direction, got [0, 0, 0]"))
+    let v = f.vec3()?;
+    v.as_dvec3().try_normalize().map(|d| d.as_vec3()).ok_or_else(|| {
+        f.err(format!(
+            "expected a non-zero direction, got [{}, {}, {}]",
+            v.x, v.y, v.z
+        ))
+    })
 }
 
 /// The largest camera coordinate, metres.

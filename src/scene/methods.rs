@@ -26,6 +26,12 @@ impl MethodDecl {
         }
     }
 
+    /// What `--method` and combinations call this declaration: its `id` if it has one, else the
+    /// method's name.
+    pub fn label(&self) -> &str {
+        self.param(ID).and_then(|v| v.as_str()).unwrap_or(self.name.as_str())
+    }
+
     /// The value of parameter `name`, if given.
     pub fn param(&self, name: &str) -> Option<&toml::Value> {
         self.params.iter().find(|(n, _, _)| n == name).map(|(_, v, _)| v)
@@ -115,16 +121,36 @@ impl ParamKind {
     }
 }
 
+/// The key every method takes besides its own parameters: the name `--method` and combinations
+/// use for the declaration (so one method can be declared twice with different parameters).
+pub const ID: &str = "id";
+
 /// Checks `methods` against `known`; the first problem is returned.
 pub(crate) fn check(file: &str, methods: &[MethodDecl], known: &[MethodSchema]) -> Result<(), SceneError> {
     let line = |l: usize| (l > 0).then_some(l);
     for (i, m) in methods.iter().enumerate() {
+        if let Some((_, v, l)) = m.params.iter().find(|(n, _, _)| n == ID) {
+            if v.as_str().is_none_or(|s| s.trim().is_empty()) {
+                let msg = format!("expected a non-empty string, got {}", describe_value(v));
+                return Err(SceneError::new(file, line(*l), format!("methods[{i}].{ID}"), msg));
+            }
+        }
+        // One label for two different declarations: `--method` and combinations would silently
+        // take the first.
+        if let Some(j) = (0..i).find(|&j| methods[j].label() == m.label() && !same_params(&methods[j], m)) {
+            let msg = format!(
+                "{:?} names methods[{j}] (line {}) too, with other parameters: give one of them an `id = \"...\"` to tell them apart",
+                m.label(),
+                methods[j].line
+            );
+            return Err(SceneError::new(file, line(m.line), format!("methods[{i}]"), msg));
+        }
         let Some(schema) = known.iter().find(|s| s.name == m.name) else {
             let names: Vec<&str> = known.iter().map(|s| s.name).collect();
             let msg = format!("unknown method {:?}; known methods: {}", m.name, names.join(", "));
             return Err(SceneError::new(file, line(m.line), format!("methods[{i}]"), msg));
         };
-        for (pname, value, pline) in &m.params {
+        for (pname, value, pline) in m.params.iter().filter(|(n, _, _)| n != ID) {
             let field = format!("methods[{i}].{pname}");
             let Some(p) = schema.params.iter().find(|p| p.name == pname) else {
                 let msg = if schema.params.is_empty() {
@@ -150,6 +176,11 @@ pub(crate) fn check(file: &str, methods: &[MethodDecl], known: &[MethodSchema]) 
         }
     }
     Ok(())
+}
+
+/// The same parameters with the same values, wherever they are written.
+fn same_params(a: &MethodDecl, b: &MethodDecl) -> bool {
+    a.params.len() == b.params.len() && a.params.iter().all(|(n, v, _)| b.param(n) == Some(v))
 }
 
 fn describe_value(v: &toml::Value) -> String {

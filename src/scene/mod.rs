@@ -95,7 +95,9 @@ impl Scene {
             .iter()
             .find(|(n, _, _)| n == name)
             .map(|p| p.2)
-            .filter(|&l| l > 0);
+            .filter(|&l| l > 0)
+            // A parameter missing where another needs it: the method's own line.
+            .or((decl.line > 0).then_some(decl.line));
         SceneError::new(&self.source, line, format!("methods[{index}].{name}"), message)
     }
 

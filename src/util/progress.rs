@@ -1,6 +1,8 @@
 //! A progress line for long work (bakes, the reference, the chart): rate, elapsed and remaining
-//! time, on stderr only when stderr is a terminal and only once the work has taken more than a
-//! second.
+//! time on stderr. On a terminal one line redrawn in place once the work has taken more than a
+//! second; otherwise (a log, a pipe) nothing for the first ten seconds, then one line every five,
+//! so a long bake is never silent. Either way, once two seconds of work give a rate, work that
+//! will take over a minute in all says so once, with the estimate.
 
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
@@ -8,21 +10,39 @@ use std::time::{Duration, Instant};
 pub struct Progress {
     name: String,
     start: Instant,
-    last: Option<Instant>,
+    /// Elapsed time at the last line shown.
+    last: Option<Duration>,
     shown: bool,
     terminal: bool,
+    warned: bool,
     /// Shown after the counts (e.g. a solve's remaining energy).
     detail: String,
 }
 
+/// A terminal's line appears after this much work, and is redrawn at most this often.
+const TERMINAL_AFTER: Duration = Duration::from_secs(1);
+const TERMINAL_EVERY: Duration = Duration::from_millis(200);
+/// Without a terminal, lines appear after this much work, one per period.
+const LOG_AFTER: Duration = Duration::from_secs(10);
+const LOG_EVERY: Duration = Duration::from_secs(5);
+/// The estimate is made once this much work gives a rate, and warned about over the limit.
+const ESTIMATE_AFTER: Duration = Duration::from_secs(2);
+const ESTIMATE_LIMIT: Duration = Duration::from_secs(60);
+
 impl Progress {
     pub fn new(name: &str) -> Progress {
+        Progress::to(name, std::io::stderr().is_terminal())
+    }
+
+    /// A progress line written as to a terminal (`terminal`) or to a log.
+    pub fn to(name: &str, terminal: bool) -> Progress {
         Progress {
             name: name.to_string(),
             start: Instant::now(),
             last: None,
             shown: false,
-            terminal: std::io::stderr().is_terminal(),
+            terminal,
+            warned: false,
             detail: String::new(),
         }
     }
@@ -34,23 +54,52 @@ impl Progress {
 
     /// `done` of `total` units finished.
     pub fn update(&mut self, done: u64, total: u64) {
-        let now = Instant::now();
-        let elapsed = now - self.start;
-        if !self.terminal
-            || elapsed < Duration::from_secs(1)
-            || self.last.is_some_and(|l| now - l < Duration::from_millis(200))
-        {
-            return;
+        let text = self.text_at(self.start.elapsed(), done, total);
+        if !text.is_empty() {
+            crate::err!("{text}");
+            let _ = std::io::stderr().flush();
         }
-        self.last = Some(now);
-        self.shown = true;
+    }
+
+    /// What an update `elapsed` into the work writes to stderr (empty: nothing).
+    pub fn text_at(&mut self, elapsed: Duration, done: u64, total: u64) -> String {
+        let mut text = String::new();
+        if !self.warned && elapsed >= ESTIMATE_AFTER && done > 0 && done < total {
+            self.warned = true;
+            let all = elapsed.mul_f64(total as f64 / done as f64);
+            if all > ESTIMATE_LIMIT {
+                let clear = if self.shown { "\r\x1b[K" } else { "" };
+                text += &format!(
+                    "{clear}warning: {}: about {} in all at the rate so far ({:.0}% after {:.1} s)\n",
+                    self.name,
+                    duration_words(all),
+                    100.0 * done as f64 / total as f64,
+                    elapsed.as_secs_f64()
+                );
+            }
+        }
+        let (after, every) = if self.terminal {
+            (TERMINAL_AFTER, TERMINAL_EVERY)
+        } else {
+            (LOG_AFTER, LOG_EVERY)
+        };
+        if elapsed < after || self.last.is_some_and(|l| elapsed - l < every) {
+            return text;
+        }
+        self.last = Some(elapsed);
         let detail = if self.detail.is_empty() {
             String::new()
         } else {
             format!(", {}", self.detail)
         };
-        crate::err!("\r{}{detail}\x1b[K", line(&self.name, done, total, elapsed));
-        let _ = std::io::stderr().flush();
+        let body = line(&self.name, done, total, elapsed);
+        if self.terminal {
+            self.shown = true;
+            text += &format!("\r{body}{detail}\x1b[K");
+        } else {
+            text += &format!("{body}{detail}\n");
+        }
+        text
     }
 
     /// Ends the line if one was shown.
@@ -59,6 +108,18 @@ impl Progress {
             crate::errln!();
             self.shown = false;
         }
+    }
+}
+
+/// `75 s`, `12.5 min`, `3.2 h`.
+fn duration_words(d: Duration) -> String {
+    let s = d.as_secs_f64();
+    if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
     }
 }
 
@@ -77,4 +138,55 @@ pub fn line(name: &str, done: u64, total: u64, elapsed: Duration) -> String {
         f64::NAN
     };
     format!("{name}: {pct:3.0}% ({done}/{total}) {rate:.1}/s, {secs:.1} s elapsed, {left:.1} s left")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const S: fn(f64) -> Duration = Duration::from_secs_f64;
+
+    /// Without a terminal: silent for ten seconds, then a whole line every five seconds.
+    #[test]
+    fn a_log_gets_a_line_every_five_seconds_after_ten() {
+        let mut p = Progress::to("bake", false);
+        let shown: Vec<f64> = (0..=60)
+            .map(|t| t as f64 * 0.5)
+            .filter(|&t| !p.text_at(S(t), 1, 1).is_empty())
+            .collect();
+        assert_eq!(shown, vec![10.0, 15.0, 20.0, 25.0, 30.0]);
+        let mut p = Progress::to("bake", false);
+        let text = p.text_at(S(12.0), 1, 1);
+        assert!(
+            text.starts_with("bake: 100% (1/1)") && text.ends_with('\n') && !text.contains('\r'),
+            "{text:?}"
+        );
+    }
+
+    /// On a terminal: the redrawn line after a second, at most five times a second.
+    #[test]
+    fn a_terminal_gets_a_redrawn_line_after_one_second() {
+        let mut p = Progress::to("bake", true);
+        assert!(p.text_at(S(0.9), 1, 1).is_empty());
+        assert!(p.text_at(S(1.0), 1, 1).starts_with("\rbake:"));
+        assert!(p.text_at(S(1.1), 1, 1).is_empty());
+        assert!(p.text_at(S(1.3), 1, 1).starts_with("\rbake:"));
+    }
+
+    /// Work that will take over a minute says so once, with the estimate from the rate so far;
+    /// work that will not says nothing.
+    #[test]
+    fn long_work_is_warned_about_once_with_its_estimate() {
+        let mut p = Progress::to("radiosity", false);
+        assert!(p.text_at(S(1.0), 1, 100).is_empty(), "no estimate before two seconds");
+        let text = p.text_at(S(2.0), 2, 100);
+        assert_eq!(
+            text,
+            "warning: radiosity: about 100 s in all at the rate so far (2% after 2.0 s)\n"
+        );
+        assert!(p.text_at(S(3.0), 3, 100).is_empty(), "warned once");
+        let mut quick = Progress::to("radiosity", false);
+        assert!(quick.text_at(S(2.0), 50, 100).is_empty(), "4 s in all");
+        assert!(quick.text_at(S(2.5), 51, 100).is_empty());
+    }
 }

@@ -506,3 +506,35 @@ fn an_interrupted_write_never_leaves_a_truncated_output() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(image::open(&chart_png).is_ok());
 }
+
+/// A report printed to a standard output closed from the start (`>&-`) is an error, not a
+/// silent exit 0; `>/dev/null` is the user's choice and succeeds.
+#[test]
+fn a_closed_standard_output_is_reported() {
+    let scene = common::temp_path("closed_stdout.toml");
+    std::fs::write(&scene, format!("methods = [\"forward\"]\n{CAMERA}")).unwrap();
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let run = |redirect: &str| {
+        std::process::Command::new("sh")
+            .args([
+                "-c",
+                &format!("exec \"$0\" \"$@\" {redirect}"),
+                env!("CARGO_BIN_EXE_penumbra"),
+                "bake",
+                path_str(&scene),
+                "--device",
+                &device,
+            ])
+            .output()
+            .expect("run penumbra")
+    };
+    let closed = run(">&-");
+    assert!(!closed.status.success(), "exit 0 with standard output closed");
+    assert!(
+        stderr(&closed).contains("error: standard output is closed"),
+        "{}",
+        stderr(&closed)
+    );
+    let null = run(">/dev/null");
+    assert!(null.status.success(), "{}", stderr(&null));
+}

@@ -260,6 +260,54 @@ fn bad_combinations_are_one_line_naming_file_line_and_field() {
     assert!(e.starts_with("mix.toml:6: combinations[0].ambient"), "{e}");
 }
 
+/// One method declared twice with different parameters is refused unless an `id` tells the
+/// two apart; with one, `--method` and combinations reach each declaration by its label.
+#[test]
+fn a_method_declared_twice_needs_an_id() {
+    let e = config_error(
+        "",
+        r#"["forward", { name = "shadow_volumes", mode = "physical" }, { name = "shadow_volumes", mode = "faithful" }]"#,
+    );
+    assert_eq!(
+        e,
+        "mix.toml:1: methods[2]: \"shadow_volumes\" names methods[1] (line 1) too, with other parameters: give one of them an `id = \"...\"` to tell them apart"
+    );
+    let text = format!(
+        "methods = {}\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n[[combinations]]\nname = \"mix\"\nbase = \"forward\"\ndirect = \"sv_faithful\"\n",
+        r#"["forward", { name = "shadow_volumes", mode = "physical" }, { name = "shadow_volumes", id = "sv_faithful", mode = "faithful" }]"#
+    );
+    let scene = Scene::from_str(&text, "mix.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let all = registry::configurations(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let names: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["forward", "shadow_volumes", "sv_faithful", "mix"]);
+    let mode = |c: &penumbra::lighting::Configuration, i: usize| {
+        c.parts[i]
+            .decl
+            .param("mode")
+            .and_then(|v| v.as_str())
+            .map(str::to_owned)
+    };
+    let by_id = registry::configuration(&scene, Some("sv_faithful")).unwrap();
+    assert_eq!(
+        (by_id.parts[0].decl.name.as_str(), mode(&by_id, 0).as_deref()),
+        ("shadow_volumes", Some("faithful"))
+    );
+    let plain = registry::configuration(&scene, Some("shadow_volumes")).unwrap();
+    assert_eq!(mode(&plain, 0).as_deref(), Some("physical"));
+    let mix = registry::configuration(&scene, Some("mix")).unwrap();
+    assert_eq!(
+        mode(&mix, 1).as_deref(),
+        Some("faithful"),
+        "the combination takes the declaration it names"
+    );
+    // The same declaration written twice is no ambiguity.
+    let text = text
+        .replace("id = \"sv_faithful\", mode = \"faithful\"", "mode = \"physical\"")
+        .replace("sv_faithful", "shadow_volumes");
+    let scene = Scene::from_str(&text, "mix.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    registry::configurations(&scene).unwrap_or_else(|e| panic!("{e}"));
+}
+
 /// Switching configurations (the demo's M key) frees what the previous methods created: after
 /// each full cycle through every configuration, the device holds exactly as many buffers, images
 /// and pipelines as after the first, and the frames still render.

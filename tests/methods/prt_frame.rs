@@ -128,14 +128,77 @@ fn bad_parameters_name_the_field() {
         (r#"{ name = "prt", tile = 30 }"#, "methods[0].tile"),
         (r#"{ name = "prt", mapping = "fisheye" }"#, "methods[0].mapping"),
         (r#"{ name = "prt", near = 2, far = 1 }"#, "methods[0].far"),
-        (r#"{ name = "prt", occluders = "wall: nothing_here" }"#, "prt.occluders"),
-        (r#"{ name = "prt", occluders = "wall" }"#, "prt.occluders"),
-        (r#"{ name = "prt", baker = "rays_cpu", samples = 1000 }"#, "samples"),
+        (
+            r#"{ name = "prt", occluders = "wall: nothing_here" }"#,
+            "methods[0].occluders",
+        ),
+        (r#"{ name = "prt", occluders = "wall" }"#, "methods[0].occluders"),
+        (
+            r#"{ name = "prt", baker = "rays_cpu", samples = 1000 }"#,
+            "methods[0].samples",
+        ),
     ] {
         let err = match Renderer::new(common::test_gpu(), wall(method), Some("prt"), (8, 8), 1) {
             Ok(_) => panic!("{method}: accepted"),
             Err(e) => e.to_string(),
         };
-        assert!(!err.contains('\n') && err.contains(field), "{method}: {err}");
+        // One line naming the file, the line and the field.
+        let located = err
+            .strip_prefix("prt test:")
+            .and_then(|rest| rest.split_once(": "))
+            .is_some_and(|(line, rest)| line.parse::<usize>().is_ok() && rest.starts_with(field));
+        assert!(!err.contains('\n') && located, "{method}: {err}");
+    }
+}
+
+/// The document's 8 and 12 coefficients through the renderer (`penumbra capture`): a wall facing
+/// +x (ρ = 0.5) lit head-on by a sun of irradiance 1, nothing else. Unoccluded, its transfer is
+/// the clamped cosine's (zonal 0.886227, 1.023327, 0.495416, 0), so the band-limited radiance is
+/// ρ/π·S with S = 1.0625 through two or three bands (9, 12 or 16 coefficients: band 3's term is
+/// zero), and S = 1.0625 − 0.234375 = 0.828125 with 8, which drops band 2's m = 2 term
+/// (√(4π/5)·0.495416·Y₂₂(x̂)² with Y₂₂(x̂) = 0.546274). Both incomplete sets are warned about.
+#[test]
+fn eight_and_twelve_coefficients_render_their_truncation_and_warn() {
+    let text = |n: u32| {
+        format!(
+            "methods = [{{ name = \"prt\", coefficients = {n} }}]\n[camera]\nposition = [3, 0.5, 0]\ntarget = [0, 0.5, 0]\nfov_y_deg = 20\n\
+             [environment]\ntype = \"constant\"\nradiance = 0\n[[materials]]\nname = \"grey\"\nalbedo = 0.5\n\
+             [[objects]]\nname = \"wall\"\nmesh = \"quad\"\ncorner = [0, -1, -1.5]\nedge_u = [0, 3, 0]\nedge_v = [0, 0, 3]\nmaterial = \"grey\"\n\
+             [[lights]]\ntype = \"directional\"\ndirection = [-1, 0, 0]\nirradiance = 1\n"
+        )
+    };
+    let rho_pi = 0.5 / std::f64::consts::PI;
+    for (n, s) in [(8u32, 0.828125f64), (9, 1.0625), (12, 1.0625), (16, 1.0625)] {
+        let scene = common::temp_path(&format!("prt_coefficients_{n}.toml"));
+        let out = common::temp_path(&format!("prt_coefficients_{n}.exr"));
+        std::fs::write(&scene, text(n)).unwrap();
+        let o = common::penumbra(&[
+            "capture",
+            scene.to_str().unwrap(),
+            "--size",
+            "12x12",
+            "--exr",
+            out.to_str().unwrap(),
+        ]);
+        common::ok(&o);
+        let err = String::from_utf8_lossy(&o.stderr);
+        let warned = err.contains(&format!("prt: {n} coefficients is not a whole number of bands"));
+        assert_eq!(warned, n == 8 || n == 12, "{n} coefficients: {err}");
+        let img = HdrImage::read_exr(&out).unwrap();
+        let c = centre(&img);
+        let want = rho_pi * s;
+        println!(
+            "{n} coefficients: centre {:.5}, band-limited closed form {want:.5}",
+            c[0]
+        );
+        // The raster baker's transfer is within 0.005 of the clamped cosine's (tests/prt_raster.rs):
+        // under 1% here; dropping the m = 2 term changes the radiance by 22%.
+        assert!(
+            (c[0] as f64 - want).abs() < 0.01 * want,
+            "{n} coefficients: {} against {want}",
+            c[0]
+        );
+        let _ = std::fs::remove_file(&scene);
+        let _ = std::fs::remove_file(&out);
     }
 }

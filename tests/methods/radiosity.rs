@@ -60,6 +60,31 @@ fn a_closed_emitting_box_shows_the_furnace_series_everywhere() {
     assert!(img.pixels.iter().all(|p| p[0] > 1.5 * le));
 }
 
+/// CaLight's one reflectivity for every surface: the bounces reflect 0.3 whatever the material,
+/// so the light-map holds irradiance H = E/(1 − 0.3) over π and the box shows
+/// L_e + ρ_material·H/π = L_e·(1 + ρ/0.7), not the material's own series L_e/(1 − ρ).
+#[test]
+fn a_fixed_reflectivity_replaces_the_materials_in_the_bounces() {
+    let (le, rho) = (0.5f32, 0.6f32);
+    let img = render(
+        &furnace_box(
+            r#"{ name = "radiosity", patch_size = 0.25, threshold = 1e-4, reflectivity = 0.3 }"#,
+            le,
+            rho,
+        ),
+        (24, 16),
+    );
+    let want = le * (1.0 + rho / 0.7);
+    let worst = img
+        .pixels
+        .iter()
+        .map(|p| (p[0] - want).abs() / want)
+        .fold(0.0f32, f32::max);
+    // As the furnace above: 1e-4 of the light left unshot, exact form factors. The material's
+    // own series would be 2.5·L_e, 35% brighter.
+    assert!(worst < 2e-3, "worst pixel {worst:.2e} off L_e·(1 + ρ/0.7) = {want}");
+}
+
 #[test]
 fn bad_parameters_name_the_field() {
     let text = furnace_box(r#"{ name = "radiosity", patch_size = -1 }"#, 0.5, 0.5);
@@ -191,4 +216,63 @@ fn no_light_bleeds_into_the_dark_room_on_screen() {
         assert_eq!(dark, 0.0, "{mode}: light on screen in room B");
         assert!(lit > 0.05, "{mode}: room A is lit: {lit}");
     }
+}
+
+/// A room lit by a ceiling quad light only, out of view: the light-map of bounced light
+/// (`light = "bounces"`) holds none of the quad light's direct light, so its mean over the frame
+/// is that of the path tracer's indirect-only image, well below the direct-only image's.
+#[test]
+fn a_quad_lights_bounces_leave_out_its_direct_light() {
+    use penumbra::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
+    let mut text = String::from(
+        "methods = [{ name = \"radiosity\", light = \"bounces\", patch_size = 0.25, threshold = 1e-3 }]\n\
+         [camera]\nposition = [0.0, 1.0, 1.4]\ntarget = [0.0, 0.6, -1.5]\nfov_y_deg = 60\n\
+         [[materials]]\nname = \"white\"\nalbedo = 0.7\n\
+         [[lights]]\ntype = \"quad\"\ncorner = [-0.5, 2.49, -1.0]\nedge_u = [1, 0, 0]\nedge_v = [0, 0, 1]\nradiance = 4\n",
+    );
+    // Floor, ceiling, back, left and right walls of [-1.5, 1.5] × [0, 2.5] × [-1.5, 1.5], facing in.
+    for (c, u, v) in [
+        ([-1.5, 0.0, -1.5], [0.0, 0.0, 3.0], [3.0, 0.0, 0.0]),
+        ([-1.5, 2.5, -1.5], [3.0, 0.0, 0.0], [0.0, 0.0, 3.0]),
+        ([-1.5, 0.0, -1.5], [3.0, 0.0, 0.0], [0.0, 2.5, 0.0]),
+        ([-1.5, 0.0, -1.5], [0.0, 2.5, 0.0], [0.0, 0.0, 3.0]),
+        ([1.5, 0.0, -1.5], [0.0, 0.0, 3.0], [0.0, 2.5, 0.0]),
+    ] {
+        text += &format!(
+            "[[objects]]\nmesh = \"quad\"\ncorner = {c:?}\nedge_u = {u:?}\nedge_v = {v:?}\nmaterial = \"white\"\n"
+        );
+    }
+    let scene = Scene::from_str(&text, "quad_room.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let size = (32, 24);
+    let mut tracer = ReferenceRenderer::new(common::test_gpu(), &scene, size).unwrap();
+    let mut truth = |paths| {
+        let s = Settings {
+            spp: 64,
+            bounces: 12,
+            paths,
+            seed: 5,
+            batching: Batching::Adaptive,
+            ..Settings::default()
+        };
+        tracer.render(&s, &mut |_, _| {}).unwrap().mean
+    };
+    let (indirect, direct) = (truth(LightPaths::Indirect), truth(LightPaths::Direct));
+    common::assert_clean(&tracer.gpu);
+    let mut r = Renderer::new(common::test_gpu(), scene, None, size, 1).unwrap_or_else(|e| panic!("{e}"));
+    let cam = r.scene.camera.clone();
+    let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+    common::assert_clean(&r.gpu);
+    let mean = |i: &penumbra::util::image_io::HdrImage| {
+        i.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>() / i.pixels.len() as f64
+    };
+    let (got, want, first) = (mean(&img), mean(&indirect), mean(&direct));
+    eprintln!("frame means: light-map of bounces {got:.4}, tracer indirect only {want:.4}, direct only {first:.4}");
+    assert!(
+        first > want,
+        "the quad light must light the room directly more than by bounces"
+    );
+    assert!(
+        (got - want).abs() < 0.05 * want,
+        "bounces {got:.4} against indirect only {want:.4} (direct only {first:.4})"
+    );
 }

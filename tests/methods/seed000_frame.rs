@@ -70,6 +70,39 @@ fn the_seed000_frame_is_the_light_map_under_the_direct_light() {
     assert_eq!(with_ambient.pixels, composed.pixels);
 }
 
+/// `seed000_faithful`: the faithful CaLight light-map (8-bit display values, reflectivity 0.3)
+/// as the base under the same direct light: the frame is the sum of its parts, and the map
+/// differs from the corrected one (tone-reproduced, not radiometric).
+#[test]
+fn the_faithful_seed000_frame_is_calights_light_map_under_the_direct_light() {
+    let composed = render(scene(0.0), "seed000_faithful");
+    let base = render(scene(0.0), "radiosity_faithful");
+    let direct = render(scene(0.0), "shadow_volumes");
+    let mut worst = 0.0f32;
+    for ((c, b), d) in composed.pixels.iter().zip(&base.pixels).zip(&direct.pixels) {
+        for k in 0..3 {
+            worst = worst.max((c[k] - (b[k] + d[k])).abs() / (b[k] + d[k]).max(1e-3));
+        }
+    }
+    assert!(
+        worst < 1e-3,
+        "composed ≠ light-map + direct light: worst relative difference {worst}"
+    );
+    let mean = |img: &HdrImage| img.pixels.iter().map(luminance).sum::<f32>() / img.pixels.len() as f32;
+    let corrected = render(scene(0.0), "radiosity");
+    eprintln!(
+        "mean luminance: faithful light-map {:.4}, corrected light-map {:.4}, direct {:.4}",
+        mean(&base),
+        mean(&corrected),
+        mean(&direct)
+    );
+    assert!(
+        mean(&base) > 0.01 * mean(&direct),
+        "the faithful light-map carries light"
+    );
+    assert_ne!(base.pixels, corrected.pixels);
+}
+
 /// CaLight's point lights (digest §1.2 step D): in faithful mode every patch in the light's PVS
 /// facing it receives I·cos θ/d² with no shadow ray; a patch outside the PVS receives nothing.
 /// The corrected mode's shadow rays light fewer patches (the level's pillars and door frames).

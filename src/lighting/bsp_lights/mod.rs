@@ -81,7 +81,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the set-up's output for the same inputs changes.
-const SETUP_VERSION: u32 = 3;
+const SETUP_VERSION: u32 = 4;
 
 /// The matrix is bound whole as one storage buffer by the GEMV: Vulkan guarantees a storage
 /// buffer range of 2²⁷ bytes (`maxStorageBufferRange`'s required minimum) and no more.
@@ -202,6 +202,17 @@ impl Default for Config {
 }
 
 impl Config {
+    /// The parameters that do nothing with this configuration, and why.
+    pub fn inert(&self) -> Vec<(&'static str, &'static str)> {
+        match self.mode {
+            Mode::Corrected => vec![(
+                "k",
+                "in corrected mode (the thesis's light model's k is faithful mode's)",
+            )],
+            Mode::Faithful => Vec::new(),
+        }
+    }
+
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let mut c = Config::default();
@@ -337,8 +348,6 @@ pub struct Baked {
     pub lights: usize,
     /// `C_l(v)` light-major, RGB: `3·(l·V + v) + channel`.
     pub colours: Vec<f32>,
-    /// The set-up's times as it ran (a cached bake keeps them).
-    pub phases: setup::Phases,
     pub polygons: usize,
     pub fragments: usize,
     /// The BSP and each fragment's triangles, for drawing without a depth test.
@@ -356,7 +365,8 @@ const BAKED_MAGIC: u32 = 0x4253_504c;
 
 impl BakeData for Baked {
     fn encode(&self) -> Vec<u8> {
-        let p = &self.phases;
+        // The set-up's timings are not stored: the same inputs always give the same bytes, and a
+        // cache hit has no timings of its own to report as new.
         let mut out = Vec::new();
         for w in [
             BAKED_MAGIC,
@@ -368,15 +378,6 @@ impl BakeData for Baked {
         ] {
             out.extend_from_slice(&w.to_le_bytes());
         }
-        for t in [
-            p.bsp_ms,
-            p.segment_ms,
-            p.colour_cpu_ms,
-            p.shadow_cpu_ms,
-            p.lights_wall_ms,
-        ] {
-            out.extend_from_slice(&t.to_le_bytes());
-        }
         out.extend_from_slice(bytemuck::cast_slice(&self.vertices));
         out.extend_from_slice(bytemuck::cast_slice(&self.indices));
         out.extend_from_slice(bytemuck::cast_slice(&self.colours));
@@ -386,12 +387,11 @@ impl BakeData for Baked {
 
     fn decode(bytes: &[u8]) -> Option<Self> {
         let word = |i: usize| Some(u32::from_le_bytes(bytes.get(4 * i..4 * i + 4)?.try_into().ok()?) as usize);
-        let time = |i: usize| Some(f64::from_le_bytes(bytes.get(24 + 8 * i..32 + 8 * i)?.try_into().ok()?));
         if word(0)? != BAKED_MAGIC as usize {
             return None;
         }
         let (v, i, l) = (word(1)?, word(2)?, word(3)?);
-        let head = 24 + 40;
+        let head = 24;
         let vertex_bytes = v * std::mem::size_of::<SegmentVertex>();
         let (vb, ib, cb) = (
             head..head + vertex_bytes,
@@ -407,13 +407,6 @@ impl BakeData for Baked {
             indices: bytemuck::pod_collect_to_vec(&bytes[ib]),
             lights: l,
             colours: bytemuck::pod_collect_to_vec(&bytes[cb]),
-            phases: setup::Phases {
-                bsp_ms: time(0)?,
-                segment_ms: time(1)?,
-                colour_cpu_ms: time(2)?,
-                shadow_cpu_ms: time(3)?,
-                lights_wall_ms: time(4)?,
-            },
             polygons: word(4)?,
             fragments: word(5)?,
             painter,
@@ -510,7 +503,6 @@ impl Baked {
             indices: seg.triangles.iter().flatten().copied().collect(),
             lights: s.lights,
             colours: s.colours.iter().flatten().copied().collect(),
-            phases: s.phases,
             polygons: polygons.len(),
             fragments: s.tree.fragments.len(),
             painter: painter::PainterTree::new(&s.tree, &s.segments.triangle_polygon),
@@ -618,6 +610,9 @@ impl BspLights {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<BspLights> {
         let scene = cx.scene;
         let config = Config::from_decl(decl, Some(scene))?;
+        for w in Params::new(decl, Some(scene)).inert_warnings(&config.inert()) {
+            crate::errln!("{w}");
+        }
         let lights = ManyLight::from_scene(scene, NAME)?;
         if lights.len() > MAX_LIGHTS {
             return Err(Error::Usage(format!(

@@ -152,3 +152,43 @@ fn mean_albedo(path: &std::path::Path) -> std::result::Result<Vec3, String> {
     }
     Ok((sum / n).as_vec3())
 }
+
+/// Share of the view seen from behind under which no warning is given (grazing rays at the
+/// silhouettes of thin surfaces).
+const BEHIND_WARNING_SHARE: f64 = 0.01;
+
+/// The share of `camera`'s view (a 64 × 48 grid of rays) whose first surface among `triangles`
+/// (sky and emitters excluded: neither holds baked light) is seen from behind its normal.
+pub fn seen_from_behind(triangles: &[Triangle], camera: &crate::scene::Camera) -> f64 {
+    let occluders = super::solve::Occluders::new(triangles);
+    let (w, h) = (64u32, 48u32);
+    let mut behind = 0usize;
+    for j in 0..h {
+        for i in 0..w {
+            let (o, d) = camera.pixel_center_ray(i, j, w, h);
+            let (o, d) = (o.as_dvec3(), d.as_dvec3());
+            if let Some((_, t)) = occluders.first_hit(o, d) {
+                let t = &triangles[t];
+                if !t.sky && t.albedo != glam::DVec3::ZERO && t.normal().dot(d) > 0.0 {
+                    behind += 1;
+                }
+            }
+        }
+    }
+    behind as f64 / (w * h) as f64
+}
+
+/// One warning line when the scene's camera sees a one-sided bake's surfaces from behind (a
+/// closed mesh around the camera, such as a box mesh, whose faces point out): the bake lights
+/// each surface on its front only, and the back shows the front's light, where the reference
+/// lights each side by what reaches it.
+pub fn behind_warning(scene: &Scene, triangles: &[Triangle], method: &str) -> Option<String> {
+    let share = seen_from_behind(triangles, &scene.camera);
+    (share > BEHIND_WARNING_SHARE).then(|| {
+        format!(
+            "warning: {}: {method}: {:.0}% of the camera's view sees surfaces from behind, which the bake lights on their front side only (the back shows the front's light); turn them to face the camera",
+            scene.source,
+            100.0 * share
+        )
+    })
+}

@@ -36,6 +36,9 @@ pub struct Settings {
     /// Let the visibility matrix mark pairs FULL, whose rays are skipped (false: CaLight's
     /// `-NoFullVis`, every visible pair ray-tested).
     pub full_visibility: bool,
+    /// One reflectivity for every surface and wavelength in the bounces, instead of each
+    /// material's albedo (CaLight's `REFLECTIVITY = 0.3`); `None`: the materials'.
+    pub reflectivity: Option<f64>,
 }
 
 impl Default for Settings {
@@ -47,6 +50,7 @@ impl Default for Settings {
             max_shots: 100_000,
             samples_per_chart: 10,
             full_visibility: true,
+            reflectivity: None,
         }
     }
 }
@@ -75,6 +79,9 @@ pub struct Occluders {
     bvh: Bvh,
     /// The triangles as the baker sees them (the visibility matrix's hull test).
     pub triangles: Vec<Triangle>,
+    /// The charts' leaf PVS in a BSP world (the visibility matrix starts from it), set by the
+    /// bake once the charts exist.
+    pub pvs: Option<super::visibility::ChartPvs>,
 }
 
 impl Occluders {
@@ -85,6 +92,7 @@ impl Occluders {
             tris,
             bvh,
             triangles: triangles.to_vec(),
+            pvs: None,
         }
     }
 
@@ -250,6 +258,62 @@ pub fn solve(p: &mut Patches, occluders: &Occluders, settings: &Settings, progre
     shoot(g, occluders, settings, progress, &mut Radiosity(&mut p.patches))
 }
 
+/// What each patch reflects of the emitters' first shot (quad lights and emissive surfaces): their
+/// emitted radiosity shot once through the same form factors and visibility as [`solve`], the
+/// reflected light received never shot on. This is the direct light of area emitters, which a
+/// light-map of bounced light only must leave out (point, spot and sun light never enters the
+/// solve as emission: a bake subtracts it as it adds it).
+pub fn emitters_first_shot(p: &Patches, occluders: &Occluders, settings: &Settings) -> Vec<DVec3> {
+    let mut first = FirstShot {
+        unshot: p.patches.iter().map(|q| q.emission).collect(),
+        albedo: p.patches.iter().map(|q| q.albedo).collect(),
+        received: vec![DVec3::ZERO; p.patches.len()],
+    };
+    if first.unshot.iter().all(|e| *e == DVec3::ZERO) {
+        return first.received;
+    }
+    // Every block with emission shoots once: nothing else ever holds unshot energy, so the loop
+    // ends when the last emitting block has shot (the stop at zero left).
+    let once = Settings {
+        threshold: 0.0,
+        max_shots: usize::MAX,
+        ..*settings
+    };
+    shoot(
+        Geometry::from(p),
+        occluders,
+        &once,
+        &mut Progress::new("emitters' direct light"),
+        &mut first,
+    );
+    first.received
+}
+
+/// [`emitters_first_shot`]'s payload: the emission shot, what it lands as kept apart.
+struct FirstShot {
+    unshot: Vec<DVec3>,
+    albedo: Vec<DVec3>,
+    received: Vec<DVec3>,
+}
+
+impl Unshot for FirstShot {
+    fn magnitude(&self, k: usize) -> f64 {
+        magnitude(self.unshot[k])
+    }
+    fn reflects(&self, k: usize) -> bool {
+        self.albedo[k] != DVec3::ZERO
+    }
+    fn shoot(&mut self, members: &[usize], area: &[f64], shares: &[(usize, f64)]) {
+        let flux: DVec3 = members.iter().map(|&k| self.unshot[k] * area[k]).sum();
+        for &k in members {
+            self.unshot[k] = DVec3::ZERO;
+        }
+        for &(r, f) in shares {
+            self.received[r] += self.albedo[r] * flux * f;
+        }
+    }
+}
+
 /// The patch geometry the loop reads.
 #[derive(Clone, Copy)]
 pub struct Geometry<'a> {
@@ -286,7 +350,12 @@ pub fn shoot(
     // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and in
     // corrected mode only a block square's overhang beyond its polygon could reach them);
     // FULL pairs need no rays. The same matrix in both modes.
-    let matrix = Matrix::build_for(&occluders.triangles, g.charts, settings.full_visibility);
+    let matrix = Matrix::build_in(
+        &occluders.triangles,
+        g.charts,
+        settings.full_visibility,
+        occluders.pvs.as_ref(),
+    );
     report.visibility = matrix.counts();
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let by_chart: Vec<Vec<usize>> = (0..g.charts.len())

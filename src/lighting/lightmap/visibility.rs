@@ -4,8 +4,9 @@
 //! between them can be blocked: the shooting skips its rays) or PARTIAL (ray-test each patch
 //! pair). Symmetric, stored as CaLight's packed lower triangle of 2-bit entries.
 //!
-//! penumbra has no PVS for arbitrary static geometry, so the seed's first step (pairs in each
-//! other's leaf PVS start PARTIAL) starts every pair PARTIAL.
+//! The document's first step starts PARTIAL only the pairs in each other's leaf PVS: where the scene
+//! has a BSP world with a PVS ([`ChartPvs`]), pairs of charts no leaf of which sees a leaf of the
+//! other start NONE; arbitrary static geometry has no PVS, and there every pair starts PARTIAL.
 
 use glam::{DVec2, DVec3};
 
@@ -21,6 +22,41 @@ pub enum Vis {
 pub struct Matrix {
     n: usize,
     bits: Vec<u8>,
+}
+
+/// Which charts may see each other by a leaf PVS: chart pairs (i, j) none of whose leaves sees
+/// a leaf of the other are out. Conservative as the PVS is, and as the leaves a chart is given
+/// are (every leaf its bounds reach).
+#[derive(Clone, Debug)]
+pub struct ChartPvs {
+    n: usize,
+    visible: Vec<bool>,
+}
+
+impl ChartPvs {
+    /// From each chart's leaves and the leaf PVS `visible(a, b)`.
+    pub fn new(leaves: &[Vec<u32>], visible: impl Fn(u32, u32) -> bool) -> ChartPvs {
+        let n = leaves.len();
+        let mut out = ChartPvs {
+            n,
+            visible: vec![true; n * n],
+        };
+        for i in 0..n {
+            for j in 0..i {
+                // A chart in no leaf (outside the world) is given every pair, as without a PVS.
+                let seen = leaves[i].is_empty()
+                    || leaves[j].is_empty()
+                    || leaves[i].iter().any(|&a| leaves[j].iter().any(|&b| visible(a, b)));
+                out.visible[i * n + j] = seen;
+                out.visible[j * n + i] = seen;
+            }
+        }
+        out
+    }
+
+    pub fn sees(&self, i: usize, j: usize) -> bool {
+        self.visible[i * self.n + j]
+    }
 }
 
 /// A chart's polygon as the test sees it: the convex hull of its vertices (in its plane), its
@@ -91,6 +127,12 @@ impl Matrix {
 
     /// [`Matrix::build`] from the charts alone.
     pub fn build_for(triangles: &[Triangle], charts: &[Chart], full: bool) -> Matrix {
+        Matrix::build_in(triangles, charts, full, None)
+    }
+
+    /// [`Matrix::build_for`] started from a leaf PVS where there is one: pairs it rules out are
+    /// NONE without the geometric tests.
+    pub fn build_in(triangles: &[Triangle], charts: &[Chart], full: bool, pvs: Option<&ChartPvs>) -> Matrix {
         let n = charts.len();
         let mut m = Matrix {
             n,
@@ -99,7 +141,11 @@ impl Matrix {
         let test = Tester::of_charts(triangles, charts);
         for i in 0..n {
             for j in 0..=i {
-                m.set(i, j, test.classify(i, j, full));
+                let v = match pvs {
+                    Some(pvs) if pvs.n == n && !pvs.sees(i, j) => Vis::None,
+                    _ => test.classify(i, j, full),
+                };
+                m.set(i, j, v);
             }
         }
         m

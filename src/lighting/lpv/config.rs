@@ -122,6 +122,18 @@ fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
 }
 
 impl Config {
+    /// The parameters that do nothing with this configuration, and why.
+    pub fn inert(&self) -> Vec<(&'static str, &'static str)> {
+        if self.occlusion {
+            Vec::new()
+        } else {
+            vec![(
+                "camera_surfels",
+                "without the geometry volume (`geometry_volume = false`)",
+            )]
+        }
+    }
+
     pub fn defaults(mode: Mode) -> Config {
         let corrected = mode == Mode::Corrected;
         Config {

@@ -331,6 +331,9 @@ pub struct Lpv {
 impl Lpv {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Lpv> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
+        for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
+            crate::errln!("{w}");
+        }
         let lights = punctual_lights(cx.scene);
         let light = lights.get(config.light).ok_or_else(|| {
             let msg = format!(

@@ -1,6 +1,6 @@
 //! The method's parameters, each checked with one error line naming the scene file, line and field.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lighting::params::Params;
 use crate::scene::{MethodDecl, Scene};
 
@@ -211,6 +211,17 @@ impl Config {
         }
     }
 
+    /// The parameters that do nothing with this configuration, and why.
+    pub fn inert(&self) -> Vec<(&'static str, &'static str)> {
+        match self.baker {
+            Baker::Raster => vec![(
+                "samples",
+                "with the raster baker (it renders each vertex's tile instead)",
+            )],
+            _ => Vec::new(),
+        }
+    }
+
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
@@ -316,8 +327,8 @@ impl Config {
                 "samples" => {
                     c.samples = v
                         .as_integer()
-                        .filter(|n| (16..=1 << 20).contains(n))
-                        .ok_or_else(|| bad(p, "a ray count from 16 to 1048576", v))?
+                        .filter(|n| (16..=1 << 20).contains(n) && n.isqrt() * n.isqrt() == *n)
+                        .ok_or_else(|| bad(p, "a square ray count (16, 256, 1024, 4096...) up to 1048576", v))?
                         as usize
                 }
                 "env_spin" => {
@@ -337,6 +348,11 @@ impl Config {
                 }
                 _ => {}
             }
+        }
+        if let Some(scene) = scene {
+            // The rules name objects: checked here, where an error can point at the line.
+            super::receivers::OccluderRules::parse(&c.occluders, scene)
+                .map_err(|m| Error::from(scene.method_param_error(decl, "occluders", m)))?;
         }
         if c.far <= c.near {
             return Err(bad(

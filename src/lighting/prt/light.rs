@@ -46,16 +46,6 @@ pub fn project(scene: &Scene, env: &EnvironmentMap, bands: usize) -> Result<Vec<
     Ok(out)
 }
 
-/// The lights penumbra's PRT cannot represent (local lights), for a warning.
-pub fn local_lights(scene: &Scene) -> Vec<String> {
-    scene
-        .lights
-        .iter()
-        .filter(|l| !matches!(l, Light::Directional { .. }))
-        .map(|l| l.name().to_string())
-        .collect()
-}
-
 fn world_to_sh(d: DVec3) -> DVec3 {
     DVec3::new(d.x, -d.z, d.y)
 }

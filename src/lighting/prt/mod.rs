@@ -303,6 +303,9 @@ pub struct Prt {
 impl Prt {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Prt> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
+        for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
+            crate::errln!("{w}");
+        }
         if config.legacy_coefficients() {
             crate::errln!(
                 "warning: {}: {NAME}: {} coefficients is not a whole number of bands: shading changes as the light turns about a normal (digest §3.2 item 7)",
@@ -310,18 +313,21 @@ impl Prt {
                 config.coefficients
             );
         }
-        let local = light::local_lights(cx.scene);
-        if !local.is_empty() {
-            crate::errln!(
-                "warning: {}: {NAME} lights with distant light only; it leaves out {}",
-                cx.scene.source,
-                local.join(", ")
-            );
+        if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
+            crate::errln!("{w}");
         }
         for line in sampling::undersampled(&sampling_objects(cx)) {
             crate::errln!("warning: {}: {NAME}: {line}", cx.scene.source);
         }
-        let rules = OccluderRules::parse(&config.occluders, cx.scene, &format!("methods: {NAME}.occluders"))?;
+        // The transfer is baked per vertex on the normal's side (a scene the light-map geometry
+        // cannot take, with a sphere light, goes without the check).
+        if let Ok(g) = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME) {
+            if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &g.triangles, NAME) {
+                crate::errln!("{w}");
+            }
+        }
+        let rules = OccluderRules::parse(&config.occluders, cx.scene)
+            .map_err(|m| Error::from(cx.scene.method_param_error(decl, "occluders", m)))?;
         let times = key_times(cx.scene, &config);
         let keys = times.len() as u32;
         let vertices = cx.scene_gpu.meshes.iter().map(|m| m.vertex_count()).sum::<usize>() as u32;

@@ -86,33 +86,23 @@ pub struct OccluderRules {
 impl OccluderRules {
     /// Parses `receiver: occluder occluder …; receiver: …` with object names, `self` for the
     /// receiver itself and nothing after the colon for an unshadowed receiver; receivers not
-    /// listed are shadowed by every object. `field` names the parameter in errors.
-    pub fn parse(text: &str, scene: &Scene, field: &str) -> Result<OccluderRules> {
-        let find = |name: &str| -> Result<usize> {
+    /// listed are shadowed by every object. An error is the message alone: the caller names the
+    /// file, line and parameter.
+    pub fn parse(text: &str, scene: &Scene) -> std::result::Result<OccluderRules, String> {
+        let find = |name: &str| -> std::result::Result<usize, String> {
             scene.objects.iter().position(|o| o.name == name).ok_or_else(|| {
                 let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
-                Error::Usage(format!(
-                    "{}: {field}: no object is called {name:?} (objects: {})",
-                    scene.source,
-                    names.join(", ")
-                ))
+                format!("no object is called {name:?} (objects: {})", names.join(", "))
             })
         };
         let mut rules = Vec::new();
         for entry in text.split(';').map(str::trim).filter(|e| !e.is_empty()) {
-            let (receiver, list) = entry.split_once(':').ok_or_else(|| {
-                Error::Usage(format!(
-                    "{}: {field}: {entry:?} is not `receiver: occluders…`",
-                    scene.source
-                ))
-            })?;
+            let (receiver, list) = entry
+                .split_once(':')
+                .ok_or_else(|| format!("{entry:?} is not `receiver: occluders…`"))?;
             let r = find(receiver.trim())?;
             if rules.iter().any(|(x, _): &(usize, Vec<usize>)| *x == r) {
-                return Err(Error::Usage(format!(
-                    "{}: {field}: {:?} is listed twice",
-                    scene.source,
-                    receiver.trim()
-                )));
+                return Err(format!("{:?} is listed twice", receiver.trim()));
             }
             let mut occ = Vec::new();
             for name in list.split([',', ' ']).map(str::trim).filter(|n| !n.is_empty()) {

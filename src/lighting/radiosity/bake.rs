@@ -20,7 +20,8 @@ use crate::util::progress::Progress;
 pub enum Content {
     /// Direct light from the scene's lights and emitters, and every bounce: the whole static frame.
     All,
-    /// Only light that bounced at least once (for drawing under a direct method).
+    /// Only light that bounced at least once (for drawing under a direct method): no direct
+    /// light of any light, quad lights and emissive surfaces included.
     Bounces,
 }
 
@@ -33,7 +34,7 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
 
 /// The scene's BSP world, if it has one, and where it sits (world point `w` is scene point
 /// `world_to_scene(w) + translate`).
-fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::CompiledWorld>, Vec3)>> {
+pub(crate) fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::CompiledWorld>, Vec3)>> {
     for obj in &scene.objects {
         if let crate::scene::MeshSource::World { level, .. } = &obj.mesh {
             let compiled = crate::scene::world_mesh::compiled(level).map_err(|e| {
@@ -141,6 +142,38 @@ pub fn add_direct_light_in(
     Ok(direct)
 }
 
+/// The charts' leaves in `world` (every empty leaf a chart's bounds reach, a hair enlarged so a
+/// face on a leaf's boundary is in the leaf in front of it) and the world's leaf PVS over them:
+/// the document's start of the surface-visibility matrix.
+pub fn chart_pvs(
+    p: &Patches,
+    triangles: &[crate::lighting::lightmap::patches::Triangle],
+    world: &crate::world::CompiledWorld,
+    translate: Vec3,
+) -> crate::lighting::lightmap::visibility::ChartPvs {
+    let to_world = |x: DVec3| crate::scene::world_mesh::scene_to_world(x.as_vec3() - translate);
+    let leaves: Vec<Vec<u32>> = p
+        .charts
+        .iter()
+        .map(|c| {
+            let mut b = crate::world::Aabb::EMPTY;
+            for q in c.triangles.iter().flat_map(|&t| triangles[t].p) {
+                let w = to_world(q);
+                b.min = b.min.min(w);
+                b.max = b.max.max(w);
+            }
+            if c.triangles.is_empty() {
+                return Vec::new();
+            }
+            let margin = 1e-3 * (b.max - b.min).max_element().max(1.0);
+            b.min -= DVec3::splat(margin);
+            b.max += DVec3::splat(margin);
+            world.box_leaves(&b)
+        })
+        .collect();
+    crate::lighting::lightmap::visibility::ChartPvs::new(&leaves, |a, b| world.is_visible(a, b))
+}
+
 /// Where the shooting runs.
 pub enum Shooter<'a> {
     Cpu,
@@ -158,11 +191,36 @@ pub fn bake(
     progress: &mut Progress,
 ) -> Result<(Patches, Atlas, Vec<[f32; 4]>, solve::Report)> {
     let mut p = Patches::build(&geometry.triangles, patch_size);
-    let occluders = Occluders::new(&geometry.triangles);
+    if let Some(r) = settings.reflectivity {
+        // Every reflecting patch reflects `r`; the light-map then holds irradiance/π, drawn
+        // times the material's albedo as ever.
+        for q in p.patches.iter_mut().filter(|q| q.albedo != DVec3::ZERO) {
+            q.albedo = DVec3::splat(r);
+        }
+    }
+    let mut occluders = Occluders::new(&geometry.triangles);
+    occluders.pvs = bsp_world(scene)?.map(|(world, translate)| chart_pvs(&p, &geometry.triangles, &world, translate));
     let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode)?;
     let mut report = match shooter {
         Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),
-        Shooter::Gpu(gpu, shaders) => super::gpu::solve(gpu, shaders, &mut p, &geometry.triangles, settings, progress)?,
+        Shooter::Gpu(gpu, shaders) => super::gpu::solve_in(
+            gpu,
+            shaders,
+            &mut p,
+            &geometry.triangles,
+            occluders.pvs.as_ref(),
+            settings,
+            progress,
+        )?,
+    };
+    // Light that bounced leaves out all direct light: the punctual lights' (added above) and the
+    // area emitters' first shot, which the solve mixed into every receiver's total.
+    let direct = match content {
+        Content::All => direct,
+        Content::Bounces => {
+            let emitted = solve::emitters_first_shot(&p, &occluders, settings);
+            direct.iter().zip(emitted).map(|(a, b)| *a + b).collect()
+        }
     };
     let atlas = pack(&p);
     let mut values: Vec<DVec3> = p

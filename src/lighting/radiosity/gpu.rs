@@ -109,8 +109,22 @@ pub fn solve(
     settings: &Settings,
     progress: &mut Progress,
 ) -> Result<Report> {
+    solve_in(gpu, shaders, p, triangles, None, settings, progress)
+}
+
+/// [`solve`] with the visibility matrix started from a leaf PVS, as the CPU solve starts it
+/// from [`solve::Occluders::pvs`].
+pub fn solve_in(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    p: &mut Patches,
+    triangles: &[Triangle],
+    pvs: Option<&crate::lighting::lightmap::visibility::ChartPvs>,
+    settings: &Settings,
+    progress: &mut Progress,
+) -> Result<Report> {
     // Every buffer, pipeline and frame of the solve is freed on every exit path.
-    gpu.scoped(|gpu| run(gpu, shaders, p, triangles, settings, progress))
+    gpu.scoped(|gpu| run(gpu, shaders, p, triangles, pvs, settings, progress))
 }
 
 fn run(
@@ -118,6 +132,7 @@ fn run(
     shaders: &ShaderLibrary,
     p: &mut Patches,
     triangles: &[Triangle],
+    pvs: Option<&crate::lighting::lightmap::visibility::ChartPvs>,
     settings: &Settings,
     progress: &mut Progress,
 ) -> Result<Report> {
@@ -167,7 +182,7 @@ fn run(
         })
         .collect();
     // The CPU solve's visibility matrix, 2 bits per ordered chart pair (i·charts + j).
-    let matrix = Matrix::build(triangles, p, settings.full_visibility);
+    let matrix = Matrix::build_in(triangles, &p.charts, settings.full_visibility, pvs);
     report.visibility = matrix.counts();
     let n = p.charts.len();
     let mut visibility = vec![0u32; (n * n).div_ceil(16)];

@@ -66,12 +66,16 @@ pub const SCHEMA: MethodSchema = MethodSchema {
             name: "ambient_nz",
             kind: ParamKind::Bool,
         },
+        ParamSchema {
+            name: "reflectivity",
+            kind: ParamKind::Float,
+        },
     ],
 };
 
 /// Bumped whenever the CPU baker's output for the same inputs changes (the GPU shooter's SPIR-V is
 /// hashed into the key).
-const BAKER_VERSION: u32 = 8;
+const BAKER_VERSION: u32 = 9;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,6 +142,20 @@ impl Config {
                 Some("bounces") => Content::Bounces,
                 _ => return Err(bad("light", "\"all\" or \"bounces\"", v)),
             };
+        }
+        if let Some(v) = decl.param("reflectivity") {
+            c.settings.reflectivity = Some(
+                v.as_float()
+                    .or(v.as_integer().map(|i| i as f64))
+                    .filter(|r| *r > 0.0 && *r < 1.0)
+                    .ok_or_else(|| {
+                        bad(
+                            "reflectivity",
+                            "one reflectivity in (0, 1) for every surface, such as CaLight's 0.3",
+                            v,
+                        )
+                    })?,
+            );
         }
         if let Some(v) = decl.param("ambient_nz") {
             c.ambient_nz = v.as_bool().ok_or_else(|| bad("ambient_nz", "true or false", v))?;
@@ -245,6 +263,9 @@ impl Radiosity {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Radiosity> {
         let config = Config::from_decl_in(decl, Some(cx.scene))?;
         let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &geometry.triangles, NAME) {
+            crate::errln!("{w}");
+        }
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!(
                 "{}: {NAME}: the scene has no static geometry to light-map",

@@ -86,6 +86,18 @@ impl Config {
         }
     }
 
+    /// The parameters that do nothing with this configuration, and why.
+    pub fn inert(&self) -> Vec<(&'static str, &'static str)> {
+        let mut out = Vec::new();
+        if self.reps == 0 {
+            out.push(("filter", "without `reps` (it filters the representatives' index map)"));
+        }
+        if self.sky != Sky::Cie {
+            out.push(("cie_zenith", "without `sky = \"cie\"`"));
+        }
+        out
+    }
+
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
@@ -120,8 +132,8 @@ impl Config {
                 "block" => {
                     c.transfer.solve.block =
                         v.as_integer()
-                            .filter(|b| (1..=8).contains(b))
-                            .ok_or_else(|| bad(p, "an integer from 1 to 8", v))? as usize
+                            .filter(|b| (1..=16).contains(b))
+                            .ok_or_else(|| bad(p, "an integer from 1 to 16", v))? as usize
                 }
                 "threshold" => {
                     c.transfer.solve.threshold = float(v)

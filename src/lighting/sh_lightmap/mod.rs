@@ -386,7 +386,16 @@ pub struct ShLightmap {
 impl ShLightmap {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShLightmap> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
+        for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
+            crate::errln!("{w}");
+        }
+        if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
+            crate::errln!("{w}");
+        }
         let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &geometry.triangles, NAME) {
+            crate::errln!("{w}");
+        }
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!(
                 "{}: {NAME}: the scene has no static geometry to light-map",

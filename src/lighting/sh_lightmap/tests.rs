@@ -407,3 +407,24 @@ fn the_sample_set_is_orthonormal_to_the_digests_bound() {
     assert!(worst <= 2e-3 && worst > 1e-4, "{worst}");
     assert!(SampleSet::new(10, 4).is_err() && SampleSet::new(200_000, 4).is_err());
 }
+
+/// `block` takes what the documentation and `radiosity` take: 1 to 16 patches per side.
+#[test]
+fn block_takes_one_to_sixteen_patches_per_side() {
+    let decl = |b: i64| crate::scene::MethodDecl {
+        name: super::NAME.into(),
+        line: 1,
+        params: vec![("block".into(), toml::Value::Integer(b), 1)],
+    };
+    for b in [1, 8, 16] {
+        let c = super::config::Config::from_decl(&decl(b), None).unwrap_or_else(|e| panic!("block = {b}: {e}"));
+        assert_eq!(c.transfer.solve.block, b as usize);
+    }
+    for b in [0, 17] {
+        let e = match super::config::Config::from_decl(&decl(b), None) {
+            Ok(_) => panic!("block = {b} accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("block") && e.contains("1 to 16"), "{e}");
+    }
+}

@@ -180,11 +180,17 @@ pub fn can_illuminate(light: &ManyLight, p: DVec3, n: DVec3) -> bool {
     }
 }
 
-/// Luminance-weighted potential contribution of `light` at full intensity (unit albedo).
+/// Luminance-weighted potential contribution of `light` at full intensity (unit albedo), on the
+/// better lit of the surface's two sides: the shader lights a surface from the viewer's side
+/// (thin surfaces, and closed meshes seen from inside), so a light behind the polygon's normal
+/// lights it for a viewer on that side and must be kept as forward and clustered keep it.
 pub fn potential(model: &LightModel, light: &ManyLight, p: DVec3, n: DVec3) -> f64 {
-    light
-        .shade(model, p, n, DVec3::ONE)
-        .dot(DVec3::new(0.2126, 0.7152, 0.0722))
+    let side = |n: DVec3| {
+        light
+            .shade(model, p, n, DVec3::ONE)
+            .dot(DVec3::new(0.2126, 0.7152, 0.0722))
+    };
+    side(n).max(side(-n))
 }
 
 /// The light sets of every segment (or segment vertex, per `params.point`). `polygons` are the

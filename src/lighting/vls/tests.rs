@@ -476,8 +476,9 @@ fn light_sets_do_not_depend_on_intensities() {
     }
 }
 
-/// `can_illuminate` and `contribution` skip lights behind the surface and outside the cone;
-/// plain `closest` wastes slots on them (the thesis's pseudocode).
+/// `can_illuminate` skips lights behind the surface and outside the cone; plain `closest` wastes
+/// slots on them (the thesis's pseudocode). `contribution` skips the light outside its cone only:
+/// the shader lights a surface from the viewer's side, so a light behind it counts on that side.
 #[test]
 fn can_illuminate_skips_lights_that_cannot_reach() {
     let p = v(0.0, 0.0, 0.0);
@@ -505,7 +506,32 @@ fn can_illuminate_skips_lights_that_cannot_reach() {
     sp.can_illuminate = true;
     assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false), vec![2]);
     sp = params(3, Selection::Contribution, Feeler::None, LightModel::Physical);
-    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 3, |_| false), vec![2]);
+    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 3, |_| false), vec![0, 2]);
+}
+
+/// A spot light inside a closed box (faces outward, as a box mesh's are) pointed at one face:
+/// the face's segments, seen from inside, keep it under `contribution`, as the two-sided
+/// shading lights them with it; a spot light outside its cone stays dropped.
+#[test]
+fn contribution_keeps_a_spot_light_inside_a_closed_box() {
+    let wall = v(0.0, 0.0, -1.0);
+    let outward = -DVec3::Z;
+    let inside = ManyLight {
+        position: v(0.0, 0.0, 0.5),
+        direction: -DVec3::Z,
+        intensity: DVec3::ONE,
+        cone: Some((0.3, 0.5)),
+    };
+    let turned = ManyLight {
+        direction: DVec3::Z,
+        ..inside
+    };
+    let sp = params(2, Selection::Contribution, Feeler::None, LightModel::Physical);
+    assert_eq!(choose(&[inside, turned], &sp, wall, outward, 2, |_| false), vec![0]);
+    // The potential seen from inside equals that of the same wall facing the light.
+    let lit = setup::potential(&LightModel::Physical, &inside, wall, -outward);
+    assert!(lit > 0.0);
+    assert_eq!(setup::potential(&LightModel::Physical, &inside, wall, outward), lit);
 }
 
 const SCENE: &str = r#"

@@ -333,3 +333,20 @@ fn many_explicit_lights_load_in_linear_time() {
     let line = bad.lines().position(|l| l == "type = \"pointy\"").unwrap() + 1;
     assert!(e.contains(&format!(":{line}:")), "{e} (want line {line})");
 }
+
+/// A tiny but non-zero direction is a direction (its f32 squared length underflows, not the
+/// vector), and a zero one is refused naming the values given.
+#[test]
+fn a_tiny_direction_is_kept_and_a_zero_one_reported_as_given() {
+    let sun = |d: &str| format!("{CAM}[[lights]]\ntype = \"directional\"\ndirection = {d}\nirradiance = 1\n");
+    let s = parse(&sun("[1e-30, -2e-30, 0]")).unwrap_or_else(|e| panic!("{e}"));
+    match &s.lights[0] {
+        Light::Directional { direction, .. } => {
+            let want = Vec3::new(1.0, -2.0, 0.0).normalize();
+            assert!((*direction - want).length() < 1e-6, "{direction}");
+        }
+        l => panic!("{l:?}"),
+    }
+    let e = fails_at(&sun("[0, 0, -0.0]"), 6, "lights[0].direction");
+    assert!(e.to_string().contains("got [0, 0, -0]"), "{e}");
+}

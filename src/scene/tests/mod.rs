@@ -567,8 +567,11 @@ fn readme_examples_parse() {
     for methods in &blocks[..2] {
         let s = parse(&format!("{methods}\n{CAM}")).unwrap();
         let names: Vec<&str> = s.methods.iter().map(|m| m.name.as_str()).collect();
-        assert_eq!(names, ["forward", "shadow_map"]);
-        assert_eq!(s.methods[1].param("resolution"), Some(&toml::Value::Integer(2048)));
+        assert_eq!(names, ["forward", "shadow_volumes"]);
+        assert_eq!(
+            s.methods[1].param("mode"),
+            Some(&toml::Value::String("physical".into()))
+        );
     }
 }
 

@@ -219,3 +219,95 @@ fn a_one_sided_emitter_lights_only_what_it_faces() {
     // than the floor gets.
     assert!(lit(2) < 0.1 * lit(0), "ceiling {} vs floor {}", lit(2), lit(0));
 }
+
+/// A camera inside a box mesh (faces pointing out) sees every light-mapped surface from behind
+/// and is warned; outside the same box, or inside a room of inward quads, it is not.
+#[test]
+fn a_view_of_surfaces_from_behind_is_warned_about() {
+    use crate::lighting::lightmap::geometry::{behind_warning, scene_geometry, seen_from_behind};
+    let scene = |camera: &str, objects: &str| {
+        let text = format!(
+            "methods = [\"radiosity\"]\n[camera]\n{camera}\n[[materials]]\nname = \"m\"\nalbedo = 0.5\n{objects}"
+        );
+        crate::scene::Scene::from_str(&text, "box.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let boxed = "[[objects]]\nmesh = \"box\"\nsize = 4\nmaterial = \"m\"\n";
+    let inside = scene("position = [0.3, 0.2, 0.5]\ntarget = [0, 0, -1]", boxed);
+    let g = scene_geometry(&inside, "radiosity").unwrap();
+    assert_eq!(seen_from_behind(&g.triangles, &inside.camera), 1.0);
+    let w = behind_warning(&inside, &g.triangles, "radiosity").expect("warned");
+    assert!(
+        w.starts_with("warning: box.toml: radiosity: 100% of the camera's view sees surfaces from behind"),
+        "{w}"
+    );
+    let outside = scene("position = [0, 1, 8]\ntarget = [0, 0, 0]", boxed);
+    assert_eq!(seen_from_behind(&g.triangles, &outside.camera), 0.0);
+    assert!(behind_warning(&outside, &g.triangles, "radiosity").is_none());
+}
+
+/// The emitters' first shot alone: in a closed box whose every face emits radiosity 1 and
+/// reflects ρ, each patch receives ρ·ΣF = ρ (the form factors to the other faces sum to 1), the
+/// first term of the furnace series, and nothing of the later bounces.
+#[test]
+fn the_emitters_first_shot_is_the_furnace_series_first_term() {
+    let rho = 0.5;
+    let tris = closed_box(1.0, rho, |_| 1.0 / std::f64::consts::PI);
+    let p = Patches::build(&tris, 0.25);
+    let occ = Occluders::new(&tris);
+    let first = crate::lighting::lightmap::solve::emitters_first_shot(&p, &occ, &Settings::default());
+    let worst = p
+        .patches
+        .iter()
+        .zip(&first)
+        .filter(|(q, _)| q.inside())
+        .map(|(_, f)| (f.x - rho).abs())
+        .fold(0.0f64, f64::max);
+    assert!(worst < 1e-9 + 1e-3 * rho, "worst patch off ρ = {rho} by {worst:.2e}");
+    // One face alone emitting: its own patches receive nothing (they only see the others).
+    let one = closed_box(1.0, rho, |f| if f == 0 { 1.0 / std::f64::consts::PI } else { 0.0 });
+    let p = Patches::build(&one, 0.25);
+    let first = crate::lighting::lightmap::solve::emitters_first_shot(&p, &Occluders::new(&one), &Settings::default());
+    let (own, others): (Vec<_>, Vec<_>) = p
+        .patches
+        .iter()
+        .zip(&first)
+        .filter(|(q, _)| q.inside())
+        .partition(|(q, _)| p.charts[q.chart].object == 0);
+    assert!(own.iter().all(|(_, f)| f.x == 0.0));
+    assert!(others.iter().all(|(_, f)| f.x > 0.0));
+}
+
+/// The atlas keeps one empty texel between charts (and inside its bounds): no chart's texels
+/// touch another's, even diagonally, so bilinear filtering at a chart's edge never reads a
+/// neighbour's light.
+#[test]
+fn the_atlas_keeps_a_one_texel_gap_between_charts() {
+    let scene = crate::scene::Scene::from_file(format!("{}/scenes/two_rooms.toml", env!("CARGO_MANIFEST_DIR")))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let g = crate::lighting::lightmap::geometry::scene_geometry(&scene, "radiosity").unwrap();
+    for size in [0.2, 0.35] {
+        let p = Patches::build(&g.triangles, size);
+        let atlas = crate::lighting::lightmap::atlas::pack(&p);
+        let rects: Vec<(u32, u32, u32, u32)> = p
+            .charts
+            .iter()
+            .zip(&atlas.offsets)
+            .map(|(c, &(x, y))| (x, y, x + c.width as u32, y + c.height as u32))
+            .collect();
+        assert!(rects.len() > 10);
+        for (i, a) in rects.iter().enumerate() {
+            assert!(
+                a.2 <= atlas.width && a.3 <= atlas.height,
+                "chart {i} {a:?} outside the atlas"
+            );
+            for (j, b) in rects.iter().enumerate().filter(|&(j, _)| j != i) {
+                // Separated by at least one column or one row of empty texels.
+                let apart = a.2 < b.0 || b.2 < a.0 || a.3 < b.1 || b.3 < a.1;
+                assert!(
+                    apart,
+                    "patch {size}: charts {i} {a:?} and {j} {b:?} have no texel between them"
+                );
+            }
+        }
+    }
+}

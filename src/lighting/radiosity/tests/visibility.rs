@@ -206,3 +206,56 @@ fn full_pairs_only_save_rays() {
         );
     }
 }
+
+/// The document's start of the matrix from the leaf PVS (scenes/bsp_rooms.toml, a compiled BSP world
+/// with a PVS): the pairs it rules out become NONE, none of them a pair the geometric test finds
+/// FULL (sure to see each other), every other pair classified as without it; the solve's light
+/// changes by less than its stop, and the time saved is printed.
+#[test]
+fn the_leaf_pvs_starts_the_matrix_in_a_bsp_world() {
+    use crate::lighting::radiosity::bake::{bsp_world, chart_pvs};
+    let (scene, tris) = triangles("bsp_rooms.toml");
+    let p = Patches::build(&tris, 1.0);
+    let (world, translate) = bsp_world(&scene).unwrap().expect("a BSP world");
+    let pvs = chart_pvs(&p, &tris, &world, translate);
+    let plain = Matrix::build(&tris, &p, true);
+    let started = Matrix::build_in(&tris, &p.charts, true, Some(&pvs));
+    let n = p.charts.len();
+    let mut ruled_out = 0;
+    for i in 0..n {
+        for j in 0..i {
+            if pvs.sees(i, j) {
+                assert_eq!(started.get(i, j), plain.get(i, j));
+            } else {
+                assert_eq!(started.get(i, j), Vis::None);
+                assert_ne!(
+                    plain.get(i, j),
+                    Vis::Full,
+                    "charts {i}, {j}: the PVS rules out a FULL pair"
+                );
+                ruled_out += usize::from(plain.get(i, j) != Vis::None);
+            }
+        }
+    }
+    let (none, partial, full) = plain.counts();
+    eprintln!("bsp_rooms at 1 m: {n} charts; without the PVS NONE {none}, PARTIAL {partial}, FULL {full}; the PVS rules out {ruled_out} more");
+    assert!(ruled_out > 0, "the PVS rules out no pair the geometry leaves open");
+    let solve_with = |pvs: Option<crate::lighting::lightmap::visibility::ChartPvs>| {
+        let mut p = Patches::build(&tris, 1.0);
+        let mut occ = Occluders::new(&tris);
+        occ.pvs = pvs;
+        crate::lighting::radiosity::bake::add_direct_light(&mut p, &occ, &scene).unwrap();
+        let start = std::time::Instant::now();
+        let report = solve(&mut p, &occ, &Settings::default(), &mut Progress::new("test"));
+        (p.power(|q| q.total), report, start.elapsed().as_secs_f64())
+    };
+    let (with, r_with, t_with) = solve_with(Some(pvs));
+    let (without, r_without, t_without) = solve_with(None);
+    let diff = (with - without).abs().max_element() / without.max_element();
+    eprintln!(
+        "solve: {t_with:.2} s and {} rays with the PVS, {t_without:.2} s and {} rays without; light differs by {diff:.2e}",
+        r_with.rays, r_without.rays
+    );
+    assert!(r_with.rays < r_without.rays);
+    assert!(diff < Settings::default().threshold, "{diff:.2e}");
+}
