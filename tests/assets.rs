@@ -108,8 +108,8 @@ fn obj_want(p: Vec3, margin: f32) -> Option<Vec3> {
     Some(if q.x < 0.0 { lit(KD_A, TEXEL_A) } else { lit(KD_B, TEXEL_B) })
 }
 
-/// Checks every pixel with a sure answer against `want` (relative `tol`), returning how many
-/// pixels showed each quad.
+/// Checks every pixel with a sure answer against `want` (relative `tol`, of at least 0.05 for
+/// dim channels), returning how many pixels were lit and how many dark.
 fn check(img: &HdrImage, want: impl Fn(u32, u32) -> Option<Vec3>, tol: f32) -> (u32, u32) {
     let (mut lit, mut dark) = (0, 0);
     for j in 0..H {
@@ -118,7 +118,7 @@ fn check(img: &HdrImage, want: impl Fn(u32, u32) -> Option<Vec3>, tol: f32) -> (
             let p = img.get(i, j);
             for c in 0..3 {
                 let err = (p[c] - w[c]).abs();
-                assert!(err <= tol * w[c].max(1e-3), "pixel ({i},{j}) channel {c}: {} vs {}", p[c], w[c]);
+                assert!(err <= tol * w[c].max(0.05), "pixel ({i},{j}) channel {c}: {} vs {}", p[c], w[c]);
             }
             if w == Vec3::ZERO {
                 dark += 1;
@@ -136,7 +136,9 @@ fn obj_mtl_textured_quads_under_a_directional_light() {
     assert_eq!(scene.objects.len(), 2, "one draw per material");
     let img = forward(&scene);
     let want = |i: u32, j: u32| obj_want(ground(&scene, i as f32 + 0.5, j as f32 + 0.5)?, 0.05);
-    let (lit, dark) = check(&img, want, 2e-3);
+    // The sampler's 8-bit sRGB decoding is approximate (lavapipe: 0.67% at byte 100, 4e-4 of
+    // 0.05 at byte 40, measured); the two materials differ by far more than that.
+    let (lit, dark) = check(&img, want, 8e-3);
     assert!(lit > 300 && dark > 100, "{lit} lit, {dark} dark pixels");
 }
 

@@ -310,11 +310,7 @@ fn read_object(f: &Field, out: &mut Expanded) -> Result<(), SceneError> {
     let obj_name = opt(t.get("name"), name)?.unwrap_or_else(|| f.path.clone());
     let translate = opt(t.get("translate"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
     let rot = opt(t.get("rotate_deg"), |f| f.vec3())?.unwrap_or(Vec3::ZERO);
-    let scale = opt(t.get("scale"), |f| match f.number_where("a positive number", |x| x > 0.0) {
-        Ok(s) => Ok(Vec3::splat(s)),
-        Err(_) => f.positive3(),
-    })?
-    .unwrap_or(Vec3::ONE);
+    let scale = opt(t.get("scale"), |f| f.positive3())?.unwrap_or(Vec3::ONE);
     // x rotation first, then y, then z.
     let transform = Mat4::from_translation(translate)
         * Mat4::from_rotation_z(rot.z.to_radians())

@@ -237,7 +237,12 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, Scen
         ));
     }
     for (sem, acc) in prim.attributes() {
-        check_accessor(cx, &acc, &format!("{field}: {}", semantic_name(&sem)))?;
+        let afield = format!("{field}: {}", semantic_name(&sem));
+        check_accessor(cx, &acc, &afield)?;
+        let vec3_float = acc.data_type() == gltf::accessor::DataType::F32 && acc.dimensions() == gltf::accessor::Dimensions::Vec3;
+        if matches!(sem, gltf::Semantic::Positions | gltf::Semantic::Normals) && !vec3_float {
+            return Err(cx.err(afield, "must be a VEC3 of FLOAT (quantized attributes are not supported)"));
+        }
     }
     if let Some(acc) = prim.indices() {
         check_accessor(cx, &acc, &format!("{field}: indices"))?;
