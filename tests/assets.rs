@@ -24,7 +24,9 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn write_png(path: &Path, rgba: [u8; 4]) {
-    image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba)).save(path).unwrap();
+    image::RgbaImage::from_pixel(1, 1, image::Rgba(rgba))
+        .save(path)
+        .unwrap();
 }
 
 /// The sRGB decoding curve (IEC 61966-2-1), independent of the renderer's tables.
@@ -98,14 +100,19 @@ fn obj_scene(name: &str) -> Scene {
 fn obj_want(p: Vec3, margin: f32) -> Option<Vec3> {
     let q = Vec3::new((p.x - 0.5) / 2.0, 0.0, p.z / 2.0);
     let cos = (-SUN.normalize()).y;
-    let lit = |kd: Vec3, t: [u8; 4]| kd * Vec3::new(srgb(t[0]), srgb(t[1]), srgb(t[2])) / std::f32::consts::PI * E * cos;
+    let lit =
+        |kd: Vec3, t: [u8; 4]| kd * Vec3::new(srgb(t[0]), srgb(t[1]), srgb(t[2])) / std::f32::consts::PI * E * cos;
     if q.x.abs() > 1.0 + margin || q.z.abs() > 1.0 + margin {
         return Some(Vec3::ZERO);
     }
     if q.z.abs() > 1.0 - margin || q.x.abs() > 1.0 - margin || q.x.abs() < margin {
         return None;
     }
-    Some(if q.x < 0.0 { lit(KD_A, TEXEL_A) } else { lit(KD_B, TEXEL_B) })
+    Some(if q.x < 0.0 {
+        lit(KD_A, TEXEL_A)
+    } else {
+        lit(KD_B, TEXEL_B)
+    })
 }
 
 /// Checks every pixel with a sure answer against `want` (relative `tol`, of at least 0.05 for
@@ -118,7 +125,12 @@ fn check(img: &HdrImage, want: impl Fn(u32, u32) -> Option<Vec3>, tol: f32) -> (
             let p = img.get(i, j);
             for c in 0..3 {
                 let err = (p[c] - w[c]).abs();
-                assert!(err <= tol * w[c].max(0.05), "pixel ({i},{j}) channel {c}: {} vs {}", p[c], w[c]);
+                assert!(
+                    err <= tol * w[c].max(0.05),
+                    "pixel ({i},{j}) channel {c}: {} vs {}",
+                    p[c],
+                    w[c]
+                );
             }
             if w == Vec3::ZERO {
                 dark += 1;
@@ -170,9 +182,15 @@ fn reference_sees_the_asset_materials() {
 /// A glTF with a 2 × 2 quad (y = 0, facing +y) under a node hierarchy, a point light in candela
 /// and a camera, written with its buffer as a data URI.
 fn gltf_file(dir: &Path) -> PathBuf {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
     use base64::Engine as _;
     let mut bytes = Vec::new();
-    let positions = [[-1.0f32, 0.0, -1.0], [-1.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]];
+    let positions = [
+        [-1.0f32, 0.0, -1.0],
+        [-1.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [1.0, 0.0, -1.0],
+    ];
     for p in positions {
         bytes.extend(p.iter().flat_map(|c| c.to_le_bytes()));
     }
@@ -193,7 +211,7 @@ fn gltf_file(dir: &Path) -> PathBuf {
             {"translation": [1.0, 0.0, 0.0], "children": [1]},
             {"mesh": 0, "scale": [1.5, 1.0, 1.0]},
             {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0.7, 1.2, 0.3]},
-            {"camera": 0, "translation": [1.0, 4.0, 0.0], "rotation": [-0.7071068, 0.0, 0.0, 0.7071068]}
+            {"camera": 0, "translation": [1.0, 4.0, 0.0], "rotation": [-h, 0.0, 0.0, h]}
         ],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]}],
         "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.4, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}}],

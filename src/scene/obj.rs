@@ -43,10 +43,7 @@ pub(crate) fn read_obj(
 
 /// Merges tobj models into one mesh: uv v flipped to the top-left convention, smooth normals
 /// where the models have none, tangents generated. `file` names the mesh in errors.
-pub(crate) fn models_mesh<'a>(
-    models: impl Iterator<Item = &'a tobj::Model>,
-    file: &str,
-) -> Result<Mesh, SceneError> {
+pub(crate) fn models_mesh<'a>(models: impl Iterator<Item = &'a tobj::Model>, file: &str) -> Result<Mesh, SceneError> {
     let mut mesh = Mesh::default();
     let mut all_normals = true;
     for model in models {

@@ -63,7 +63,10 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
     if let Err(e) = gltf.document.clone().into_json().pipe_validate() {
         return Err(SceneError::new(&file, None, e.0, e.1));
     }
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let mut cx = Ctx {
         file,
         dir,
@@ -82,7 +85,13 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
     let mut parts = Vec::new();
     for (key, mesh) in out.meshes {
         let material = match key {
-            Some(i) => material(&cx, &cx.doc.materials().nth(i).ok_or_else(|| cx.err("materials", "missing"))?)?,
+            Some(i) => material(
+                &cx,
+                &cx.doc
+                    .materials()
+                    .nth(i)
+                    .ok_or_else(|| cx.err("materials", "missing"))?,
+            )?,
             None => Some(Material::default_grey("default")),
         };
         let Some(material) = material else { continue };
@@ -233,15 +242,22 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, Scen
     if prim.mode() != gltf::mesh::Mode::Triangles {
         return Err(cx.err(
             field,
-            format!("mode {:?} is not supported (penumbra draws triangle lists)", prim.mode()),
+            format!(
+                "mode {:?} is not supported (penumbra draws triangle lists)",
+                prim.mode()
+            ),
         ));
     }
     for (sem, acc) in prim.attributes() {
         let afield = format!("{field}: {}", semantic_name(&sem));
         check_accessor(cx, &acc, &afield)?;
-        let vec3_float = acc.data_type() == gltf::accessor::DataType::F32 && acc.dimensions() == gltf::accessor::Dimensions::Vec3;
+        let vec3_float =
+            acc.data_type() == gltf::accessor::DataType::F32 && acc.dimensions() == gltf::accessor::Dimensions::Vec3;
         if matches!(sem, gltf::Semantic::Positions | gltf::Semantic::Normals) && !vec3_float {
-            return Err(cx.err(afield, "must be a VEC3 of FLOAT (quantized attributes are not supported)"));
+            return Err(cx.err(
+                afield,
+                "must be a VEC3 of FLOAT (quantized attributes are not supported)",
+            ));
         }
     }
     if let Some(acc) = prim.indices() {
@@ -322,7 +338,11 @@ fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, field: &str) -> Result<(), Sce
     if end > view.length() {
         return Err(cx.err(
             field,
-            format!("accessors[{}] reads past the end of bufferViews[{}]", acc.index(), view.index()),
+            format!(
+                "accessors[{}] reads past the end of bufferViews[{}]",
+                acc.index(),
+                view.index()
+            ),
         ));
     }
     Ok(())
@@ -334,8 +354,11 @@ fn camera_of(cx: &Ctx, camera: &gltf::Camera, world: &Mat4) -> Result<Camera, Sc
         return Err(cx.err(field, "orthographic cameras are not supported"));
     };
     let fov_y_deg = p.yfov().to_degrees();
-    if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) || !(p.znear() > 0.0 && p.znear().is_finite()) {
-        return Err(cx.err(field, format!("yfov {} rad or znear {} is out of range", p.yfov(), p.znear())));
+    if !(fov_y_deg > 0.0 && fov_y_deg < 180.0 && p.znear() > 0.0 && p.znear().is_finite()) {
+        return Err(cx.err(
+            field,
+            format!("yfov {} rad or znear {} is out of range", p.yfov(), p.znear()),
+        ));
     }
     let position = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).try_normalize();
@@ -405,7 +428,10 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
     let mut metallic = pbr.metallic_factor();
     let mut roughness = pbr.roughness_factor();
     if !(0.0..=1.0).contains(&metallic) || !(0.0..=1.0).contains(&roughness) {
-        return Err(cx.err(field("pbrMetallicRoughness"), "metallicFactor and roughnessFactor must be in [0, 1]"));
+        return Err(cx.err(
+            field("pbrMetallicRoughness"),
+            "metallicFactor and roughnessFactor must be in [0, 1]",
+        ));
     }
     let albedo_map = match pbr.base_color_texture() {
         Some(t) => Some(texture(cx, &t.texture(), t.tex_coord(), &field("baseColorTexture"))?),
@@ -450,7 +476,10 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
     };
     let f0 = Vec3::splat(0.04).lerp(base, metallic);
     Ok(Some(Material {
-        name: m.name().map(str::to_owned).unwrap_or_else(|| format!("material{index}")),
+        name: m
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("material{index}")),
         albedo: base * (1.0 - metallic),
         specular: f0,
         exponent: exponent_of_roughness(roughness),
@@ -466,7 +495,12 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
 
 /// Per-texel alpha cannot be honoured (penumbra's opacity is one number per material): a base
 /// colour texture any of whose texels `hides` is refused.
-fn refuse_texture_alpha(cx: &Ctx, map: Option<&Path>, hides: impl Fn(f32) -> bool, field: &str) -> Result<(), SceneError> {
+fn refuse_texture_alpha(
+    cx: &Ctx,
+    map: Option<&Path>,
+    hides: impl Fn(f32) -> bool,
+    field: &str,
+) -> Result<(), SceneError> {
     let Some(path) = map else { return Ok(()) };
     let img = crate::image_io::open_image(path)
         .map_err(|e| cx.err(field, format!("{}: {e}", path.display())))?
@@ -487,9 +521,9 @@ fn refuse_texture_alpha(cx: &Ctx, map: Option<&Path>, hides: impl Fn(f32) -> boo
 fn mean_green_blue(path: &Path) -> Result<(f32, f32), String> {
     let img = crate::image_io::open_image(path)?.to_rgba8();
     let n = (img.width() as f64 * img.height() as f64).max(1.0);
-    let (g, b) = img
-        .pixels()
-        .fold((0.0f64, 0.0f64), |(g, b), p| (g + f64::from(p.0[1]), b + f64::from(p.0[2])));
+    let (g, b) = img.pixels().fold((0.0f64, 0.0f64), |(g, b), p| {
+        (g + f64::from(p.0[1]), b + f64::from(p.0[2]))
+    });
     Ok(((g / n / 255.0) as f32, (b / n / 255.0) as f32))
 }
 
@@ -528,9 +562,9 @@ fn embedded_image(cx: &Ctx, bytes: &[u8], index: usize, field: &str) -> Result<P
         _ => return Err(cx.err(field, "an embedded image must be PNG or JPEG")),
     };
     // FNV-1a: a stable name for the same bytes.
-    let hash = bytes
-        .iter()
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    });
     let dir = std::env::temp_dir().join("penumbra-assets");
     let path = dir.join(format!("{hash:016x}-{}.{ext}", bytes.len()));
     if !path.is_file() {
@@ -542,4 +576,3 @@ fn embedded_image(cx: &Ctx, bytes: &[u8], index: usize, field: &str) -> Result<P
     }
     checked_image(&path, &cx.file, field)
 }
-

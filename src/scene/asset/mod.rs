@@ -65,7 +65,12 @@ pub fn load_asset(path: &Path) -> Result<Asset, SceneError> {
         }
     };
     if asset.parts.is_empty() {
-        return Err(SceneError::new(&file, None, "file", "the asset has no visible triangles"));
+        return Err(SceneError::new(
+            &file,
+            None,
+            "file",
+            "the asset has no visible triangles",
+        ));
     }
     Ok(asset)
 }

@@ -14,7 +14,10 @@ use crate::scene::types::Material;
 
 pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
     let file = path.display().to_string();
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
     let mtl_files: RefCell<Vec<PathBuf>> = RefCell::new(Vec::new());
     let loaded = read_obj(path, |name| {
@@ -26,7 +29,9 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
             }
             Err(e) => {
                 let msg = format!("cannot read {}: {e}", p.display());
-                mtl_error.borrow_mut().get_or_insert(SceneError::new(&file, None, "mtllib", msg));
+                mtl_error
+                    .borrow_mut()
+                    .get_or_insert(SceneError::new(&file, None, "mtllib", msg));
                 Err(tobj::LoadError::OpenFileFailed)
             }
         }
@@ -77,7 +82,9 @@ fn check_usemtl(path: &Path, file: &str, materials: &[tobj::Material]) -> Result
     let text = std::fs::read(path).map_err(|e| SceneError::new(file, None, "file", format!("cannot read: {e}")))?;
     for (n, line) in String::from_utf8_lossy(&text).lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
-        let Some(name) = line.strip_prefix("usemtl") else { continue };
+        let Some(name) = line.strip_prefix("usemtl") else {
+            continue;
+        };
         let name = name.trim();
         if !name.is_empty() && !materials.iter().any(|m| m.name == name) {
             let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
@@ -120,7 +127,12 @@ fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<M
         ("map_Pr", "PBR maps"),
     ] {
         if m.unknown_param.contains_key(key) {
-            return Err(SceneError::new(mtl, None, field(key), format!("{what} are not supported")));
+            return Err(SceneError::new(
+                mtl,
+                None,
+                field(key),
+                format!("{what} are not supported"),
+            ));
         }
     }
     if m.dissolve_texture.is_some() {

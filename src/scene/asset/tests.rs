@@ -43,13 +43,15 @@ pub(crate) fn quad_buffer(positions: [[f32; 3]; 4]) -> (Vec<u8>, serde_json::Val
         {"buffer": 0, "byteOffset": 96, "byteLength": 32},
         {"buffer": 0, "byteOffset": 128, "byteLength": 12}
     ]);
-    let (lo, hi) = positions.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(mut lo, mut hi), p| {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-        (lo, hi)
-    });
+    let (lo, hi) = positions
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(mut lo, mut hi), p| {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            (lo, hi)
+        });
     let accessors = json!([
         {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": lo, "max": hi},
         {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
@@ -68,6 +70,7 @@ fn primitive(material: usize) -> serde_json::Value {
 /// A glTF document: one quad mesh used by two nodes (the second a child of the first), a camera
 /// and a point light, with the buffer as a data URI.
 fn document(bytes: &[u8]) -> serde_json::Value {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
     let (_, views, accessors) = quad_buffer(UNIT_QUAD);
     let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
     json!({
@@ -77,7 +80,7 @@ fn document(bytes: &[u8]) -> serde_json::Value {
         "scenes": [{"nodes": [0, 3]}],
         "nodes": [
             {"mesh": 0, "translation": [2.0, 0.0, 0.0], "children": [1]},
-            {"mesh": 0, "rotation": [0.0, 0.7071068, 0.0, 0.7071068], "scale": [2.0, 2.0, 2.0], "translation": [0.0, 1.0, 0.0], "children": [2]},
+            {"mesh": 0, "rotation": [0.0, h, 0.0, h], "scale": [2.0, 2.0, 2.0], "translation": [0.0, 1.0, 0.0], "children": [2]},
             {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0.0, 0.0, 1.0]},
             {"camera": 0, "translation": [0.0, 0.5, 5.0]}
         ],
@@ -120,7 +123,10 @@ fn gltf_node_hierarchy_material_light_and_camera() {
     for (k, p) in UNIT_QUAD.iter().enumerate() {
         let p = Vec3::from(*p);
         assert!((mesh.positions[k] - (p + Vec3::X * 2.0)).length() < 1e-5);
-        assert!((mesh.positions[4 + k] - world1.transform_point3(p)).length() < 1e-5, "{k}");
+        assert!(
+            (mesh.positions[4 + k] - world1.transform_point3(p)).length() < 1e-5,
+            "{k}"
+        );
     }
     // The rotated copy faces +x (R_y(90°) takes +z to +x).
     assert!((mesh.normals[4] - Vec3::X).length() < 1e-5);
@@ -143,7 +149,10 @@ fn gltf_node_hierarchy_material_light_and_camera() {
     else {
         panic!("{:?}", asset.lights)
     };
-    assert!((*position - world1.transform_point3(Vec3::Z)).length() < 1e-5, "{position}");
+    assert!(
+        (*position - world1.transform_point3(Vec3::Z)).length() < 1e-5,
+        "{position}"
+    );
     assert!((*intensity - Vec3::new(1.0, 0.5, 1.0)).length() < 1e-6);
     assert_eq!(*radius, 9.0);
 
@@ -162,7 +171,7 @@ fn glb_with_embedded_texture_reads_the_same_texels() {
     let (mut bytes, _, _) = quad_buffer(UNIT_QUAD);
     let image_offset = bytes.len();
     bytes.extend_from_slice(&png_bytes);
-    while bytes.len() % 4 != 0 {
+    while !bytes.len().is_multiple_of(4) {
         bytes.push(0);
     }
     let mut doc = document(&bytes);
@@ -175,7 +184,7 @@ fn glb_with_embedded_texture_reads_the_same_texels() {
     doc["textures"] = json!([{"source": 0}]);
     doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
     let mut text = serde_json::to_vec(&doc).unwrap();
-    while text.len() % 4 != 0 {
+    while !text.len().is_multiple_of(4) {
         text.push(b' ');
     }
     let mut glb = Vec::new();
@@ -192,7 +201,11 @@ fn glb_with_embedded_texture_reads_the_same_texels() {
     let path = dir.join("quad.glb");
     std::fs::write(&path, glb).unwrap();
     let asset = load_asset(&path).unwrap();
-    let map = asset.parts[0].material.albedo_map.as_ref().expect("the base colour texture");
+    let map = asset.parts[0]
+        .material
+        .albedo_map
+        .as_ref()
+        .expect("the base colour texture");
     let img = crate::image_io::open_image(map).unwrap().to_rgba8();
     assert_eq!(img.get_pixel(0, 0).0, [200, 100, 50, 255]);
     assert_eq!(asset.parts[0].mesh.triangle_count(), 4);
@@ -204,7 +217,9 @@ fn gltf_error(name: &str, edit: impl FnOnce(&mut serde_json::Value, &Path), byte
     let mut doc = document(&bytes);
     edit(&mut doc, &dir);
     let path = write_json(&dir, "model.gltf", &doc);
-    load_asset(&path).unwrap_err().to_string()
+    let e = load_asset(&path).unwrap_err().to_string();
+    assert!(!e.contains('\n'), "{e}");
+    e
 }
 
 #[test]
@@ -237,23 +252,43 @@ fn gltf_bad_input_is_one_line_naming_file_and_element() {
         },
         bytes.clone(),
     );
-    assert!(e.contains("materials[0].normalTexture: images[0]: texture not found"), "{e}");
+    assert!(
+        e.contains("materials[0].normalTexture: images[0]: texture not found"),
+        "{e}"
+    );
 
     let mut bad_index = bytes.clone();
     let n = bad_index.len();
     bad_index[n - 2..].copy_from_slice(&9u16.to_le_bytes());
     let e = gltf_error("index", |_, _| {}, bad_index);
-    assert!(e.contains("meshes[0].primitives[0]: index 9 is out of range (4 vertices)"), "{e}");
+    assert!(
+        e.contains("meshes[0].primitives[0]: index 9 is out of range (4 vertices)"),
+        "{e}"
+    );
 
-    let e = gltf_error("lines", |d, _| d["meshes"][0]["primitives"][0]["mode"] = json!(1), bytes.clone());
-    assert!(e.contains("meshes[0].primitives[0]: mode Lines is not supported"), "{e}");
+    let e = gltf_error(
+        "lines",
+        |d, _| d["meshes"][0]["primitives"][0]["mode"] = json!(1),
+        bytes.clone(),
+    );
+    assert!(
+        e.contains("meshes[0].primitives[0]: mode Lines is not supported"),
+        "{e}"
+    );
 
-    let e = gltf_error("short", |d, _| d["buffers"][0]["byteLength"] = json!(4000), bytes.clone());
+    let e = gltf_error(
+        "short",
+        |d, _| d["buffers"][0]["byteLength"] = json!(4000),
+        bytes.clone(),
+    );
     assert!(e.contains("buffers[0]: byteLength is 4000"), "{e}");
 
     let e = gltf_error(
         "ortho",
-        |d, _| d["cameras"] = json!([{"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 9}}]),
+        |d, _| {
+            d["cameras"] =
+                json!([{"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 9}}])
+        },
         bytes.clone(),
     );
     assert!(e.contains("cameras[0]: orthographic cameras are not supported"), "{e}");
@@ -269,10 +304,10 @@ fn gltf_bad_input_is_one_line_naming_file_and_element() {
         },
         bytes.clone(),
     );
-    assert!(e.contains("materials[0].alphaMode: ") && e.contains("per-texel alpha"), "{e}");
-    for e in [&e] {
-        assert!(!e.contains('\n'), "{e}");
-    }
+    assert!(
+        e.contains("materials[0].alphaMode: ") && e.contains("per-texel alpha"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -293,7 +328,11 @@ fn gltf_alpha_modes_and_metallic_roughness_texture() {
     let m = load_asset(&path).unwrap().parts[0].material.clone();
     assert!((m.opacity - 0.4).abs() < 1e-6);
     assert!((m.exponent - 30.0).abs() < 0.5, "{}", m.exponent);
-    assert!(m.albedo.max_element() < 1e-6, "fully metallic: no diffuse, got {}", m.albedo);
+    assert!(
+        m.albedo.max_element() < 1e-6,
+        "fully metallic: no diffuse, got {}",
+        m.albedo
+    );
 
     // MASK with the factor's alpha under the cutoff hides the primitive: no part is left.
     doc["materials"][0]["alphaMode"] = json!("MASK");
@@ -361,12 +400,30 @@ fn obj_mtl_one_part_per_material() {
 #[test]
 fn obj_mtl_bad_input_is_one_line() {
     let cases = [
-        (MTL.replace("map_Kd brick.png", "map_Kd gone.png"), "materials[0] \"brick\".map_Kd: texture not found"),
-        (MTL.replace("d 0.25", "map_d brick.png"), "\"glass\".map_d: per-texel opacity is not supported"),
-        (MTL.replace("Kd 0.2 0.3 0.4", "Kd 0.2 NaN 0.4"), "\"glass\".Kd: is not finite"),
-        (MTL.replace("Kd 0.9 0.8 0.7", "Kd 1.9 0.8 0.7"), "\"brick\".Kd: each channel must be in [0, 1]"),
-        (MTL.replace("newmtl glass", "newmtl glas"), "usemtl: material \"glass\" is not in the MTL"),
-        (MTL.replace("map_Kd brick.png", "map_Kd -bm 2 brick.png"), "texture options are not supported"),
+        (
+            MTL.replace("map_Kd brick.png", "map_Kd gone.png"),
+            "materials[0] \"brick\".map_Kd: texture not found",
+        ),
+        (
+            MTL.replace("d 0.25", "map_d brick.png"),
+            "\"glass\".map_d: per-texel opacity is not supported",
+        ),
+        (
+            MTL.replace("Kd 0.2 0.3 0.4", "Kd 0.2 NaN 0.4"),
+            "\"glass\".Kd: is not finite",
+        ),
+        (
+            MTL.replace("Kd 0.9 0.8 0.7", "Kd 1.9 0.8 0.7"),
+            "\"brick\".Kd: each channel must be in [0, 1]",
+        ),
+        (
+            MTL.replace("newmtl glass", "newmtl glas"),
+            "usemtl: material \"glass\" is not in the MTL",
+        ),
+        (
+            MTL.replace("map_Kd brick.png", "map_Kd -bm 2 brick.png"),
+            "texture options are not supported",
+        ),
     ];
     for (i, (mtl, needle)) in cases.iter().enumerate() {
         let dir = temp_dir(&format!("objbad{i}"));
@@ -402,11 +459,15 @@ camera = 0
     assert_eq!(scene.objects[0].transform, m);
     assert!((scene.camera.position - m.transform_point3(Vec3::new(0.0, 0.5, 5.0))).length() < 1e-6);
     // The light sits at world1 · (0, 0, 1) = (4, 1, 0) in the asset, then the placement applies.
-    let Light::Point { position, .. } = &scene.lights[0] else { panic!() };
+    let Light::Point { position, .. } = &scene.lights[0] else {
+        panic!()
+    };
     assert!((*position - Vec3::new(2.0, 0.5, -3.0)).length() < 1e-5, "{position}");
 
     let bad = toml.replace("camera = 0", "camera = 3");
-    let e = crate::scene::Scene::from_str(&bad, "s.toml", &dir).unwrap_err().to_string();
+    let e = crate::scene::Scene::from_str(&bad, "s.toml", &dir)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("s.toml:8: objects[0].camera: camera 3 asked for"), "{e}");
 }
 
