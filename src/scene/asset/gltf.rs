@@ -287,6 +287,9 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, Scen
         Some(ix) => ix.into_u32().collect(),
         None => (0..n as u32).collect(),
     };
+    if !indices.len().is_multiple_of(3) {
+        return Err(cx.err(field, format!("{} indices do not make whole triangles", indices.len())));
+    }
     if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
         return Err(cx.err(field, format!("index {bad} is out of range ({n} vertices)")));
     }
@@ -296,7 +299,7 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, Scen
         // glTF's uv origin is the top-left texel, as penumbra's.
         uvs: uvs.filter(|v| v.len() == n).unwrap_or_else(|| vec![Vec2::ZERO; n]),
         tangents: Vec::new(),
-        indices: indices[..indices.len() / 3 * 3].to_vec(),
+        indices,
     };
     mesh.normalize_normals();
     mesh.compute_tangents();

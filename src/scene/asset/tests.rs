@@ -277,6 +277,26 @@ fn gltf_bad_input_is_one_line_naming_file_and_element() {
     );
 
     let e = gltf_error(
+        "two-indices",
+        |d, _| {
+            d["accessors"][3]["count"] = json!(5);
+            d["bufferViews"][3]["byteLength"] = json!(10);
+        },
+        bytes.clone(),
+    );
+    assert!(
+        e.contains("meshes[0].primitives[0]: 5 indices do not make whole triangles"),
+        "{e}"
+    );
+
+    let dir = temp_dir("garbage");
+    for (name, content) in [("g.glb", &b"glTF\x02\0\0\0garbage"[..]), ("g.gltf", &b"{not json"[..])] {
+        std::fs::write(dir.join(name), content).unwrap();
+        let e = load_asset(&dir.join(name)).unwrap_err().to_string();
+        assert!(e.contains(&format!("{name}: file: not a glTF 2.0 file")), "{e}");
+    }
+
+    let e = gltf_error(
         "short",
         |d, _| d["buffers"][0]["byteLength"] = json!(4000),
         bytes.clone(),
@@ -484,4 +504,47 @@ fn an_asset_alone_is_a_scene_framed_and_lit_when_it_has_no_camera_or_light() {
     let (_, _, fwd) = scene.camera.basis();
     let to_centre = (Vec3::new(1.0, 0.5, 0.0) - scene.camera.position).normalize();
     assert!(fwd.dot(to_centre) > 0.9999);
+}
+
+#[test]
+fn gltf_spot_and_directional_lights_in_photometric_units() {
+    let dir = temp_dir("lights");
+    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    doc["extensions"]["KHR_lights_punctual"]["lights"] = json!([
+        {"type": "spot", "color": [1.0, 1.0, 0.5], "intensity": 1366.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
+        {"type": "directional", "color": [0.5, 1.0, 1.0], "intensity": 6830.0}
+    ]);
+    // Node 2 (under node 1, turned 90 degrees about y) holds the spot; a root node turned -90
+    // degrees about x (so its -z points down) holds the sun.
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    doc["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"extensions": {"KHR_lights_punctual": {"light": 1}}, "rotation": [-h, 0.0, 0.0, h]}));
+    doc["scenes"][0]["nodes"] = json!([0, 3, 4]);
+    let path = write_json(&dir, "lights.gltf", &doc);
+    let asset = load_asset(&path).unwrap();
+    let Light::Spot {
+        direction,
+        intensity,
+        inner_deg,
+        outer_deg,
+        ..
+    } = &asset.lights[0]
+    else {
+        panic!("{:?}", asset.lights)
+    };
+    // Node 1 turns -z to -x: the spot shines along -x.
+    assert!((*direction - Vec3::NEG_X).length() < 1e-5, "{direction}");
+    assert!((*intensity - Vec3::new(2.0, 2.0, 1.0)).length() < 1e-5);
+    assert!((inner_deg - 0.2f32.to_degrees()).abs() < 1e-4 && (outer_deg - 0.5f32.to_degrees()).abs() < 1e-4);
+    let Light::Directional {
+        direction, irradiance, ..
+    } = &asset.lights[1]
+    else {
+        panic!("{:?}", asset.lights)
+    };
+    assert!((*direction - Vec3::NEG_Y).length() < 1e-5, "{direction}");
+    assert!((*irradiance - Vec3::new(5.0, 10.0, 10.0)).length() < 1e-4);
 }
