@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use penumbra::gpu_scene::punctual_lights;
-use penumbra::image_io::HdrImage;
+use penumbra::util::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
 use penumbra::renderer::{FrameOutput, Renderer};

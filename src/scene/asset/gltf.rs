@@ -505,7 +505,7 @@ fn refuse_texture_alpha(
     field: &str,
 ) -> Result<(), SceneError> {
     let Some(path) = map else { return Ok(()) };
-    let img = crate::image_io::open_image(path)
+    let img = crate::util::image_io::open_image(path)
         .map_err(|e| cx.err(field, format!("{}: {e}", path.display())))?
         .to_rgba8();
     if img.pixels().any(|p| hides(f32::from(p.0[3]) / 255.0)) {
@@ -522,7 +522,7 @@ fn refuse_texture_alpha(
 
 /// The mean of a texture's green and blue channels (linear, [0, 1]).
 fn mean_green_blue(path: &Path) -> Result<(f32, f32), String> {
-    let img = crate::image_io::open_image(path)?.to_rgba8();
+    let img = crate::util::image_io::open_image(path)?.to_rgba8();
     let n = (img.width() as f64 * img.height() as f64).max(1.0);
     let (g, b) = img.pixels().fold((0.0f64, 0.0f64), |(g, b), p| {
         (g + f64::from(p.0[1]), b + f64::from(p.0[2]))

@@ -256,7 +256,7 @@ fn checked_image(path: &Path, file: &str, field: &str) -> Result<PathBuf, SceneE
             format!("texture not found: {}", path.display()),
         ));
     }
-    crate::image_io::image_header(path)
+    crate::util::image_io::image_header(path)
         .map_err(|m| SceneError::new(file, None, field, format!("{}: {m}", path.display())))?;
     Ok(std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()))
 }

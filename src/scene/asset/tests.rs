@@ -206,7 +206,7 @@ fn glb_with_embedded_texture_reads_the_same_texels() {
         .albedo_map
         .as_ref()
         .expect("the base colour texture");
-    let img = crate::image_io::open_image(map).unwrap().to_rgba8();
+    let img = crate::util::image_io::open_image(map).unwrap().to_rgba8();
     assert_eq!(img.get_pixel(0, 0).0, [200, 100, 50, 255]);
     assert_eq!(asset.parts[0].mesh.triangle_count(), 4);
 }
