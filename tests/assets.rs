@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use penumbra::gpu_scene::punctual_lights;
-use penumbra::util::image_io::HdrImage;
 use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
+use penumbra::util::image_io::HdrImage;
 
 const W: u32 = 48;
 const H: u32 = 36;
