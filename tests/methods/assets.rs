@@ -1,7 +1,7 @@
 //! Assets rendered: an OBJ + MTL and a glTF file written by the test, drawn by `forward` and traced
 //! by the reference, each pixel compared with the closed form at the point its centre ray hits.
 
-mod common;
+use crate::support as common;
 
 use std::path::{Path, PathBuf};
 
