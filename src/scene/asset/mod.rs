@@ -227,6 +227,7 @@ pub fn asset_scene(path: &Path, camera: Option<usize>) -> Result<super::Scene, S
         combinations: Vec::new(),
         light_board: None,
         light_motion: None,
+        memory_budget_mb: None,
     })
 }
 
