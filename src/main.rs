@@ -33,7 +33,8 @@ struct DeviceArgs {
 
 #[derive(Args, Clone)]
 struct RenderArgs {
-    /// Scene file (TOML, see scenes/README.md); the built-in default scene when omitted.
+    /// Scene file (TOML, see scenes/README.md), or an asset (.obj, .gltf, .glb) shown alone with its
+    /// own cameras and lights (docs/assets.md); the built-in default scene when omitted.
     scene: Option<PathBuf>,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = parse_size)]

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 
+use super::asset;
 use super::cornell;
 use super::doc::{Ctx, Field, Table};
 use super::error::SceneError;
@@ -34,17 +35,41 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
         "memory_budget_mb",
     ])?;
 
-    let camera = read_camera(&top.require("camera", "a [camera] table")?)?;
+    // Read first, so its errors come before the materials' and objects'.
+    let given_camera = top.get("camera").map(|f| read_camera(&f).map(|c| (c, f))).transpose()?;
+    let asset_gives_camera = top.get("objects").and_then(|f| f.array().ok()).is_some_and(|items| {
+        items
+            .iter()
+            .any(|i| i.table().ok().is_some_and(|t| t.get("camera").is_some()))
+    });
+    if given_camera.is_none() && !asset_gives_camera {
+        top.require("camera", "a [camera] table")?;
+    }
     let mut materials: Vec<Material> = Vec::new();
     for item in array(top.get("materials"))? {
         materials.push(read_material(&item, &materials)?);
     }
-    // Objects may pull in built-in materials and (Cornell box) lights.
+    // Objects may pull in built-in materials, lights (Cornell box, assets) and a camera (assets).
     let mut objects = Vec::new();
     let mut extra_lights = Vec::new();
+    let mut asset_camera = None;
     for item in array(top.get("objects"))? {
-        read_object(&item, &mut materials, &mut objects, &mut extra_lights)?;
+        let mut out = Expanded {
+            materials: &mut materials,
+            objects: &mut objects,
+            lights: &mut extra_lights,
+            camera: &mut asset_camera,
+        };
+        read_object(&item, &mut out)?;
     }
+    let camera = match (given_camera, asset_camera) {
+        (Some((c, _)), None) => c,
+        (Some((_, f)), Some(_)) => {
+            return Err(f.err("an object's `camera` gives the scene's camera; remove one of the two"))
+        }
+        (None, Some(c)) => c,
+        (None, None) => read_camera(&top.require("camera", "a [camera] table")?)?,
+    };
     let mut lights = Vec::new();
     for item in array(top.get("lights"))? {
         lights.push(read_light(&item)?);
@@ -251,12 +276,17 @@ fn fmt3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
-fn read_object(
-    f: &Field,
-    materials: &mut Vec<Material>,
-    objects: &mut Vec<Object>,
-    lights: &mut Vec<Light>,
-) -> Result<(), SceneError> {
+/// What an object adds to the scene besides itself.
+struct Expanded<'a> {
+    materials: &'a mut Vec<Material>,
+    objects: &'a mut Vec<Object>,
+    lights: &'a mut Vec<Light>,
+    /// The camera of an asset object that names one (`camera = N`).
+    camera: &'a mut Option<Camera>,
+}
+
+fn read_object(f: &Field, out: &mut Expanded) -> Result<(), SceneError> {
+    let (materials, objects, lights) = (&mut *out.materials, &mut *out.objects, &mut *out.lights);
     let t = f.table()?;
     const PLACEMENT: [&str; 5] = ["name", "mesh", "translate", "rotate_deg", "scale"];
     let Some(mesh_f) = t.get("mesh") else {
@@ -273,9 +303,9 @@ fn read_object(
         return Err(mesh_f.err(msg));
     };
     let expands = matches!(kind, "cornell_box" | "bsp_rooms" | "bsp_fig8c");
-    let material_key: &[&str] = if expands { &[] } else { &["material"] };
+    let material_key: &[&str] = if expands || kind == "asset" { &[] } else { &["material"] };
     let animation_keys: &[&str] = if expands { &[] } else { &ANIMATION_KEYS };
-    let wind_key: &[&str] = if expands || kind == "heightfield" {
+    let wind_key: &[&str] = if expands || kind == "heightfield" || kind == "asset" {
         &[]
     } else {
         &["wind"]
@@ -298,6 +328,9 @@ fn read_object(
         return read_world(&t, kind, &obj_name, materials, objects);
     }
     let animation = read_animation(&t)?;
+    if kind == "asset" {
+        return read_asset(&t, &obj_name, transform, animation, out);
+    }
     let wind = opt(t.get("wind"), read_wind)?;
 
     if kind == "cornell_box" {
@@ -383,6 +416,41 @@ fn read_object(
         animation,
         wind,
     });
+    Ok(())
+}
+
+/// An asset object: one object per material of the file, its lights, and its camera `camera`
+/// when the object names one; all placed by `transform`.
+fn read_asset(
+    t: &Table,
+    name: &str,
+    transform: Mat4,
+    animation: Option<Animation>,
+    out: &mut Expanded,
+) -> Result<(), SceneError> {
+    let path_f = t.require("path", "an .obj, .gltf or .glb file relative to the scene file")?;
+    let path = path_f.existing_file()?;
+    if !asset::is_asset_path(&path) {
+        return Err(path_f.err("expected an .obj, .gltf or .glb file"));
+    }
+    let loaded = asset::load_asset(&path)?;
+    let first = out.objects.len();
+    let lights = loaded.place(&path, name, transform, out.materials, out.objects);
+    out.lights.extend(lights);
+    for o in &mut out.objects[first..] {
+        o.animation = animation;
+    }
+    if let Some(cf) = t.get("camera") {
+        let n = loaded.cameras.len();
+        let i = cf.int_in(0, u32::MAX)? as usize;
+        let Some(c) = loaded.cameras.get(i) else {
+            return Err(cf.err(format!("camera {i} asked for, {} has {n}", path.display())));
+        };
+        if out.camera.is_some() {
+            return Err(cf.err("another object already gives the scene's camera"));
+        }
+        *out.camera = Some(asset::transform_camera(c, &transform));
+    }
     Ok(())
 }
 
@@ -541,7 +609,8 @@ const LIGHT_KEYS: [(&str, &[&str]); 5] = [
 ];
 
 /// Each mesh type and its keys besides the placement ones and `material`.
-const MESH_KEYS: [(&str, &[&str]); 10] = [
+const MESH_KEYS: [(&str, &[&str]); 11] = [
+    ("asset", &["path", "camera"]),
     ("plane", &["size", "subdivisions"]),
     ("quad", &["corner", "edge_u", "edge_v", "subdivisions"]),
     ("box", &["size", "subdivisions"]),

@@ -13,6 +13,7 @@
 //! Conventions: right-handed world, y up, metres, linear RGB, radiometric units (W/sr, W/m²,
 //! W/(m²·sr)). Every error is a [`SceneError`] naming file, line and field on one line.
 
+pub mod asset;
 mod cornell;
 mod doc;
 mod error;
@@ -102,9 +103,13 @@ impl Scene {
     }
 
     /// Reads and checks a scene file. Relative paths inside it are relative to its directory.
-    /// Errors name the file as `path` was given.
+    /// Errors name the file as `path` was given. An asset file (`.obj`, `.gltf`, `.glb`) is a
+    /// scene of its own ([`asset::asset_scene`]).
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        if asset::is_asset_path(path) {
+            return asset::asset_scene(path, None);
+        }
         let source = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|e| SceneError::new(&source, None, "file", format!("cannot read: {e}")))?;
@@ -244,6 +249,7 @@ impl Object {
     pub fn load_mesh(&self, base_dir: &Path) -> Result<Mesh, SceneError> {
         let mesh = match &self.mesh {
             MeshSource::Obj(path) => return load_obj(&base_dir.join(path)),
+            MeshSource::Asset { mesh, .. } => return Ok((**mesh).clone()),
             MeshSource::Plane { size, subdivisions } => generators::plane(*size, *subdivisions),
             MeshSource::Quad {
                 corner,

@@ -13,6 +13,18 @@ use super::mesh::Mesh;
 /// tangents generated. Materials (`mtllib`) are ignored; the scene assigns one material.
 pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
     let file = path.display().to_string();
+    let (models, _materials) = read_obj(path, |_| Err(tobj::LoadError::OpenFileFailed))?
+        .map_err(|e| SceneError::new(&file, None, "obj", format!("tobj: {e}")))?;
+    models_mesh(models.iter(), &file)
+}
+
+/// Reads and pre-checks an OBJ file and hands it to tobj (triangulated, one index per vertex);
+/// `load_mtl` is tobj's material loader, given the `mtllib` name.
+pub(crate) fn read_obj(
+    path: &Path,
+    load_mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
+) -> Result<tobj::LoadResult, SceneError> {
+    let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot read: {e}")))?;
     let text = String::from_utf8_lossy(&bytes);
     precheck(&text, &file)?;
@@ -26,13 +38,15 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
         ignore_lines: true,
         ..Default::default()
     };
-    let (models, _materials) =
-        tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| SceneError::new(&file, None, "obj", format!("tobj: {e}")))?;
+    Ok(tobj::load_obj_buf(&mut text.as_bytes(), &options, load_mtl))
+}
 
+/// Merges tobj models into one mesh: uv v flipped to the top-left convention, smooth normals
+/// where the models have none, tangents generated. `file` names the mesh in errors.
+pub(crate) fn models_mesh<'a>(models: impl Iterator<Item = &'a tobj::Model>, file: &str) -> Result<Mesh, SceneError> {
     let mut mesh = Mesh::default();
     let mut all_normals = true;
-    for model in &models {
+    for model in models {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
         let count = m.positions.len() / 3;
@@ -55,18 +69,18 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
         mesh.indices.extend(m.indices.iter().map(|&i| base.saturating_add(i)));
     }
     if mesh.indices.is_empty() {
-        return Err(SceneError::new(&file, None, "f", "the file has no faces"));
+        return Err(SceneError::new(file, None, "f", "the file has no faces"));
     }
     mesh.tangents = vec![glam::Vec4::ZERO; mesh.positions.len()];
     // Validate before deriving attributes, so bad input is reported rather than smeared.
-    mesh.validate(&file)?;
+    mesh.validate(file)?;
     if all_normals {
         mesh.normalize_normals();
     } else {
         mesh.compute_smooth_normals(); // a partial set would leave seams; recompute them all
     }
     mesh.compute_tangents();
-    mesh.validate(&file)?;
+    mesh.validate(file)?;
     Ok(mesh)
 }
 

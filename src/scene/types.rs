@@ -135,6 +135,13 @@ impl Material {
 pub enum MeshSource {
     /// A Wavefront OBJ file (absolute path once parsed).
     Obj(PathBuf),
+    /// Part `part` (the triangles of one material) of an asset file (OBJ + MTL or glTF, see
+    /// [`crate::scene::asset`]), as read when the scene was parsed, in the asset's space.
+    Asset {
+        path: PathBuf,
+        part: usize,
+        mesh: std::sync::Arc<super::mesh::Mesh>,
+    },
     /// A square grid in the xz-plane at y = 0, facing +y; `size.x` along x, `size.y` along z;
     /// `subdivisions` cells per side.
     Plane { size: Vec2, subdivisions: u32 },

@@ -35,10 +35,10 @@ pub fn image_header(path: &Path) -> Result<(image::ImageFormat, u32, u32), Strin
     let Some(format) = reader.format().filter(|f| {
         matches!(
             f,
-            image::ImageFormat::Png | image::ImageFormat::OpenExr | image::ImageFormat::Hdr
+            image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::OpenExr | image::ImageFormat::Hdr
         )
     }) else {
-        return Err("not an image penumbra reads (PNG, OpenEXR or Radiance HDR)".into());
+        return Err("not an image penumbra reads (PNG, JPEG, OpenEXR or Radiance HDR)".into());
     };
     let (w, h) = reader.into_dimensions().map_err(describe_image_error)?;
     if w == 0 || h == 0 {

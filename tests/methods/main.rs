@@ -4,6 +4,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod assets;
 mod bsp_lights;
 mod budget;
 mod bush_mesh;

@@ -1,0 +1,581 @@
+//! glTF 2.0 (`.gltf` with external or data-URI buffers, `.glb`) through the `gltf` crate: the
+//! default scene's node hierarchy, every triangle primitive with its material, KHR_lights_punctual
+//! lights and perspective cameras. The material mapping is written in `docs/assets.md`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use base64::Engine as _;
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+use super::{checked_image, unit_colour, Asset, AssetPart};
+use crate::scene::error::SceneError;
+use crate::scene::mesh::Mesh;
+use crate::scene::types::{Camera, Light, Material};
+
+/// Extensions an asset may require: penumbra reads them.
+const SUPPORTED_REQUIRED: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+/// Luminous efficacy used to turn photometric light units into radiometric ones, lm/W: the
+/// maximum, that of 555 nm light (so 1 cd = 1/683 W/sr, 1 lx = 1/683 W/m²).
+pub const LUMINOUS_EFFICACY: f32 = 683.0;
+
+/// Largest Blinn-Phong exponent a roughness maps to (roughness 0 would give infinity).
+pub const MAX_EXPONENT: f32 = 8192.0;
+
+/// The Blinn-Phong exponent of a glTF roughness: α = roughness², n = 2/α² − 2, in [0, MAX_EXPONENT].
+pub fn exponent_of_roughness(roughness: f32) -> f32 {
+    let alpha = (roughness * roughness).max(1e-4);
+    (2.0 / (alpha * alpha) - 2.0).clamp(0.0, MAX_EXPONENT)
+}
+
+struct Ctx<'a> {
+    file: String,
+    dir: &'a Path,
+    doc: &'a gltf::Document,
+    buffers: Vec<Vec<u8>>,
+}
+
+impl Ctx<'_> {
+    fn err(&self, field: impl Into<String>, msg: impl Into<String>) -> SceneError {
+        SceneError::new(&self.file, None, field, msg)
+    }
+}
+
+pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| SceneError::new(&file, None, "file", format!("cannot read: {e}")))?;
+    let gltf = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| SceneError::new(&file, None, "file", format!("not a glTF 2.0 file: {e}")))?;
+    for (i, ext) in gltf.document.extensions_required().enumerate() {
+        if !SUPPORTED_REQUIRED.contains(&ext) {
+            return Err(SceneError::new(
+                &file,
+                None,
+                format!("extensionsRequired[{i}]"),
+                format!(
+                    "{ext} is not supported (penumbra reads {})",
+                    SUPPORTED_REQUIRED.join(", ")
+                ),
+            ));
+        }
+    }
+    if let Err(e) = gltf.document.clone().into_json().pipe_validate() {
+        return Err(SceneError::new(&file, None, e.0, e.1));
+    }
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut cx = Ctx {
+        file,
+        dir,
+        doc: &gltf.document,
+        buffers: Vec::new(),
+    };
+    cx.buffers = load_buffers(&cx, gltf.blob.as_deref())?;
+    let mut out = Walk::default();
+    let scene = gltf.document.default_scene().or_else(|| gltf.document.scenes().next());
+    let Some(scene) = scene else {
+        return Err(cx.err("scenes", "the file has no scene"));
+    };
+    for node in scene.nodes() {
+        walk(&cx, &node, Mat4::IDENTITY, &mut out, 0)?;
+    }
+    let mut parts = Vec::new();
+    for (key, mesh) in out.meshes {
+        let material = match key {
+            Some(i) => material(
+                &cx,
+                &cx.doc
+                    .materials()
+                    .nth(i)
+                    .ok_or_else(|| cx.err("materials", "missing"))?,
+            )?,
+            None => Some(Material::default_grey("default")),
+        };
+        let Some(material) = material else { continue };
+        parts.push(AssetPart {
+            mesh: Arc::new(mesh),
+            material,
+        });
+    }
+    Ok(Asset {
+        parts,
+        lights: out.lights,
+        cameras: out.cameras,
+    })
+}
+
+/// Runs the `gltf` crate's validation, turning its report into (element, message).
+trait PipeValidate {
+    fn pipe_validate(self) -> Result<(), (String, String)>;
+}
+
+impl PipeValidate for gltf::json::Root {
+    fn pipe_validate(self) -> Result<(), (String, String)> {
+        match gltf::Document::from_json(self) {
+            Ok(_) => Ok(()),
+            Err(gltf::Error::Validation(list)) => {
+                let (path, e) = list
+                    .first()
+                    .map(|(p, e)| (p.to_string(), e.to_string()))
+                    .unwrap_or_else(|| ("file".into(), "invalid".into()));
+                Err((path, format!("invalid glTF: {e}")))
+            }
+            Err(e) => Err(("file".into(), format!("invalid glTF: {e}"))),
+        }
+    }
+}
+
+fn load_buffers(cx: &Ctx, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, SceneError> {
+    let mut out = Vec::new();
+    for b in cx.doc.buffers() {
+        let field = format!("buffers[{}]", b.index());
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => blob
+                .map(<[u8]>::to_vec)
+                .ok_or_else(|| cx.err(&field, "refers to the binary chunk, but the file has none"))?,
+            gltf::buffer::Source::Uri(uri) => read_uri(cx, uri, &field)?,
+        };
+        if data.len() < b.length() {
+            return Err(cx.err(
+                &field,
+                format!("byteLength is {} but the data holds {} bytes", b.length(), data.len()),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// The bytes of a `data:` URI, or of a file relative to the asset.
+fn read_uri(cx: &Ctx, uri: &str, field: &str) -> Result<Vec<u8>, SceneError> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let Some((_, payload)) = rest.split_once(";base64,") else {
+            return Err(cx.err(field, "a data URI must be base64-encoded"));
+        };
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| cx.err(field, format!("bad base64 data: {e}")));
+    }
+    let path = cx.dir.join(percent_decode(uri));
+    std::fs::read(&path).map_err(|e| cx.err(field, format!("cannot read {}: {e}", path.display())))
+}
+
+/// Decodes `%XX` escapes of a relative URI.
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok());
+        match (bytes[i], hex.and_then(|h| u8::from_str_radix(h, 16).ok())) {
+            (b'%', Some(v)) => {
+                out.push(v);
+                i += 3;
+            }
+            (c, _) => {
+                out.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+#[derive(Default)]
+struct Walk {
+    /// Triangles per material index (`None`: the default material), in first-use order.
+    meshes: Vec<(Option<usize>, Mesh)>,
+    lights: Vec<Light>,
+    cameras: Vec<Camera>,
+}
+
+/// Deepest node hierarchy followed (a cycle is invalid glTF; this bounds the recursion).
+const MAX_DEPTH: usize = 256;
+
+fn walk(cx: &Ctx, node: &gltf::Node, parent: Mat4, out: &mut Walk, depth: usize) -> Result<(), SceneError> {
+    let field = format!("nodes[{}]", node.index());
+    if depth > MAX_DEPTH {
+        return Err(cx.err(field, format!("the node hierarchy is deeper than {MAX_DEPTH}")));
+    }
+    let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+    if !local.is_finite() {
+        return Err(cx.err(field, "its transform is not finite"));
+    }
+    let world = parent * local;
+    if let Some(mesh) = node.mesh() {
+        for prim in mesh.primitives() {
+            let pfield = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+            let tris = primitive(cx, &prim, &pfield)?.transformed(&world);
+            let key = prim.material().index();
+            match out.meshes.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, m)) => append(m, &tris),
+                None => out.meshes.push((key, tris)),
+            }
+        }
+    }
+    if let Some(camera) = node.camera() {
+        out.cameras.push(camera_of(cx, &camera, &world)?);
+    }
+    if let Some(light) = node.light() {
+        out.lights.push(light_of(cx, &light, &world)?);
+    }
+    for child in node.children() {
+        walk(cx, &child, world, out, depth + 1)?;
+    }
+    Ok(())
+}
+
+fn append(to: &mut Mesh, from: &Mesh) {
+    let base = to.positions.len() as u32;
+    to.positions.extend_from_slice(&from.positions);
+    to.normals.extend_from_slice(&from.normals);
+    to.uvs.extend_from_slice(&from.uvs);
+    to.tangents.extend_from_slice(&from.tangents);
+    to.indices.extend(from.indices.iter().map(|i| base + i));
+}
+
+/// One triangle primitive in its mesh's space, checked: finite attributes, indices in range.
+fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, SceneError> {
+    if prim.mode() != gltf::mesh::Mode::Triangles {
+        return Err(cx.err(
+            field,
+            format!(
+                "mode {:?} is not supported (penumbra draws triangle lists)",
+                prim.mode()
+            ),
+        ));
+    }
+    for (sem, acc) in prim.attributes() {
+        let afield = format!("{field}: {}", semantic_name(&sem));
+        check_accessor(cx, &acc, &afield)?;
+        let vec3_float =
+            acc.data_type() == gltf::accessor::DataType::F32 && acc.dimensions() == gltf::accessor::Dimensions::Vec3;
+        if matches!(sem, gltf::Semantic::Positions | gltf::Semantic::Normals) && !vec3_float {
+            return Err(cx.err(
+                afield,
+                "must be a VEC3 of FLOAT (quantized attributes are not supported)",
+            ));
+        }
+    }
+    if let Some(acc) = prim.indices() {
+        check_accessor(cx, &acc, &format!("{field}: indices"))?;
+    }
+    let reader = prim.reader(|b| cx.buffers.get(b.index()).map(Vec::as_slice));
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or_else(|| cx.err(field, "has no POSITION"))?
+        .map(Vec3::from)
+        .collect();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(cx.err(field, format!("POSITION has NaN or infinity (vertex {i})")));
+    }
+    let n = positions.len();
+    let normals: Option<Vec<Vec3>> = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+    if let Some(i) = normals.as_ref().and_then(|ns| ns.iter().position(|v| !v.is_finite())) {
+        return Err(cx.err(field, format!("NORMAL has NaN or infinity (vertex {i})")));
+    }
+    let uvs: Option<Vec<Vec2>> = reader
+        .read_tex_coords(0)
+        .map(|t| t.into_f32().map(Vec2::from).collect());
+    if let Some(i) = uvs.as_ref().and_then(|t| t.iter().position(|v| !v.is_finite())) {
+        return Err(cx.err(field, format!("TEXCOORD_0 has NaN or infinity (vertex {i})")));
+    }
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(ix) => ix.into_u32().collect(),
+        None => (0..n as u32).collect(),
+    };
+    if !indices.len().is_multiple_of(3) {
+        return Err(cx.err(field, format!("{} indices do not make whole triangles", indices.len())));
+    }
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+        return Err(cx.err(field, format!("index {bad} is out of range ({n} vertices)")));
+    }
+    let mut mesh = Mesh {
+        positions,
+        normals: normals.filter(|v| v.len() == n).unwrap_or_default(),
+        // glTF's uv origin is the top-left texel, as penumbra's.
+        uvs: uvs.filter(|v| v.len() == n).unwrap_or_else(|| vec![Vec2::ZERO; n]),
+        tangents: Vec::new(),
+        indices,
+    };
+    mesh.normalize_normals();
+    mesh.compute_tangents();
+    mesh.validate(&format!("{}: {field}", cx.file))?;
+    Ok(mesh)
+}
+
+fn semantic_name(s: &gltf::Semantic) -> String {
+    s.to_string()
+}
+
+/// An accessor's bytes must lie inside its buffer view, and the view inside its buffer (the
+/// reader would otherwise read past the data).
+fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, field: &str) -> Result<(), SceneError> {
+    if acc.sparse().is_some() {
+        return Err(cx.err(field, "sparse accessors are not supported"));
+    }
+    let Some(view) = acc.view() else {
+        return Err(cx.err(field, "an accessor without a bufferView is not supported"));
+    };
+    let data_len = cx.buffers.get(view.buffer().index()).map_or(0, Vec::len);
+    if view.offset() + view.length() > data_len {
+        return Err(cx.err(
+            field,
+            format!(
+                "bufferViews[{}] ends at byte {} of a {data_len}-byte buffer",
+                view.index(),
+                view.offset() + view.length()
+            ),
+        ));
+    }
+    let elem = acc.size();
+    let stride = view.stride().unwrap_or(elem);
+    let end = if acc.count() == 0 {
+        0
+    } else {
+        acc.offset() + stride * (acc.count() - 1) + elem
+    };
+    if end > view.length() {
+        return Err(cx.err(
+            field,
+            format!(
+                "accessors[{}] reads past the end of bufferViews[{}]",
+                acc.index(),
+                view.index()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn camera_of(cx: &Ctx, camera: &gltf::Camera, world: &Mat4) -> Result<Camera, SceneError> {
+    let field = format!("cameras[{}]", camera.index());
+    let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+        return Err(cx.err(field, "orthographic cameras are not supported"));
+    };
+    let fov_y_deg = p.yfov().to_degrees();
+    if !(fov_y_deg > 0.0 && fov_y_deg < 180.0 && p.znear() > 0.0 && p.znear().is_finite()) {
+        return Err(cx.err(
+            field,
+            format!("yfov {} rad or znear {} is out of range", p.yfov(), p.znear()),
+        ));
+    }
+    let position = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).try_normalize();
+    let up = world.transform_vector3(Vec3::Y).try_normalize();
+    let (Some(forward), Some(up)) = (forward, up) else {
+        return Err(cx.err(field, "its node's transform is degenerate"));
+    };
+    Ok(Camera {
+        position,
+        target: position + forward,
+        up,
+        fov_y_deg,
+        near: p.znear(),
+    })
+}
+
+fn light_of(cx: &Ctx, light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Result<Light, SceneError> {
+    let field = format!("KHR_lights_punctual.lights[{}]", light.index());
+    let colour = Vec3::from(light.color());
+    let intensity = light.intensity();
+    if !colour.is_finite() || !intensity.is_finite() || colour.min_element() < 0.0 || intensity < 0.0 {
+        return Err(cx.err(field, "color and intensity must be finite and non-negative"));
+    }
+    let radiometric = colour * intensity / LUMINOUS_EFFICACY;
+    let name = light.name().map(str::to_owned).unwrap_or_else(|| field.clone());
+    let position = world.transform_point3(Vec3::ZERO);
+    let direction = world
+        .transform_vector3(Vec3::NEG_Z)
+        .try_normalize()
+        .ok_or_else(|| cx.err(&field, "its node's transform is degenerate"))?;
+    let radius = light.range().unwrap_or(0.0).max(0.0);
+    Ok(match light.kind() {
+        gltf::khr_lights_punctual::Kind::Directional => Light::Directional {
+            name,
+            direction,
+            irradiance: radiometric,
+        },
+        gltf::khr_lights_punctual::Kind::Point => Light::Point {
+            name,
+            position,
+            intensity: radiometric,
+            radius,
+        },
+        gltf::khr_lights_punctual::Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => Light::Spot {
+            name,
+            position,
+            direction,
+            intensity: radiometric,
+            inner_deg: inner_cone_angle.to_degrees(),
+            outer_deg: outer_cone_angle.to_degrees(),
+            radius,
+        },
+    })
+}
+
+/// Maps a glTF material (see `docs/assets.md`); `None` for one that hides its primitives
+/// (MASK with a base alpha under the cutoff, or BLEND with alpha 0).
+fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError> {
+    let index = m.index().unwrap_or(0);
+    let field = |what: &str| format!("materials[{index}].{what}");
+    let pbr = m.pbr_metallic_roughness();
+    let base4 = Vec4::from(pbr.base_color_factor());
+    let base = unit_colour(base4.truncate(), &cx.file, &field("baseColorFactor"))?;
+    let mut metallic = pbr.metallic_factor();
+    let mut roughness = pbr.roughness_factor();
+    if !(0.0..=1.0).contains(&metallic) || !(0.0..=1.0).contains(&roughness) {
+        return Err(cx.err(
+            field("pbrMetallicRoughness"),
+            "metallicFactor and roughnessFactor must be in [0, 1]",
+        ));
+    }
+    let albedo_map = match pbr.base_color_texture() {
+        Some(t) => Some(texture(cx, &t.texture(), t.tex_coord(), &field("baseColorTexture"))?),
+        None => None,
+    };
+    if let Some(t) = pbr.metallic_roughness_texture() {
+        let path = texture(cx, &t.texture(), t.tex_coord(), &field("metallicRoughnessTexture"))?;
+        let (g, b) = mean_green_blue(&path).map_err(|e| cx.err(field("metallicRoughnessTexture"), e))?;
+        roughness *= g;
+        metallic *= b;
+    }
+    let normal_map = match m.normal_texture() {
+        Some(t) => Some(texture(cx, &t.texture(), t.tex_coord(), &field("normalTexture"))?),
+        None => None,
+    };
+    if m.emissive_texture().is_some() {
+        return Err(cx.err(field("emissiveTexture"), "per-texel emission is not supported"));
+    }
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let emission = Vec3::from(m.emissive_factor()) * strength;
+    if !emission.is_finite() || emission.min_element() < 0.0 {
+        return Err(cx.err(field("emissiveFactor"), "must be finite and non-negative"));
+    }
+    let alpha = base4.w;
+    let opacity = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => 1.0,
+        gltf::material::AlphaMode::Mask => {
+            let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+            if alpha < cutoff {
+                return Ok(None);
+            }
+            refuse_texture_alpha(cx, albedo_map.as_deref(), |a| a * alpha < cutoff, &field("alphaMode"))?;
+            1.0
+        }
+        gltf::material::AlphaMode::Blend => {
+            if alpha <= 0.0 {
+                return Ok(None);
+            }
+            refuse_texture_alpha(cx, albedo_map.as_deref(), |a| a < 1.0, &field("alphaMode"))?;
+            alpha.min(1.0)
+        }
+    };
+    let f0 = Vec3::splat(0.04).lerp(base, metallic);
+    Ok(Some(Material {
+        name: m
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("material{index}")),
+        albedo: base * (1.0 - metallic),
+        specular: f0,
+        exponent: exponent_of_roughness(roughness),
+        albedo_map,
+        normal_map,
+        specular_map: None,
+        transmittance: Vec3::ZERO,
+        emission,
+        opacity,
+        sky: false,
+    }))
+}
+
+/// Per-texel alpha cannot be honoured (penumbra's opacity is one number per material): a base
+/// colour texture any of whose texels `hides` is refused.
+fn refuse_texture_alpha(
+    cx: &Ctx,
+    map: Option<&Path>,
+    hides: impl Fn(f32) -> bool,
+    field: &str,
+) -> Result<(), SceneError> {
+    let Some(path) = map else { return Ok(()) };
+    let img = crate::util::image_io::open_image(path)
+        .map_err(|e| cx.err(field, format!("{}: {e}", path.display())))?
+        .to_rgba8();
+    if img.pixels().any(|p| hides(f32::from(p.0[3]) / 255.0)) {
+        return Err(cx.err(
+            field,
+            format!(
+                "{}: per-texel alpha (cut-outs, blending) is not supported: penumbra's opacity is one number per material",
+                path.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The mean of a texture's green and blue channels (linear, [0, 1]).
+fn mean_green_blue(path: &Path) -> Result<(f32, f32), String> {
+    let img = crate::util::image_io::open_image(path)?.to_rgba8();
+    let n = (img.width() as f64 * img.height() as f64).max(1.0);
+    let (g, b) = img.pixels().fold((0.0f64, 0.0f64), |(g, b), p| {
+        (g + f64::from(p.0[1]), b + f64::from(p.0[2]))
+    });
+    Ok(((g / n / 255.0) as f32, (b / n / 255.0) as f32))
+}
+
+/// The file of a texture's image: its URI relative to the asset, or (a data URI or an image
+/// in a buffer) the bytes written once to a cache folder.
+fn texture(cx: &Ctx, tex: &gltf::Texture, tex_coord: u32, field: &str) -> Result<PathBuf, SceneError> {
+    if tex_coord != 0 {
+        return Err(cx.err(field, format!("texCoord {tex_coord}: only TEXCOORD_0 is supported")));
+    }
+    let image = tex.source();
+    let ifield = format!("{field}: images[{}]", image.index());
+    match image.source() {
+        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+            checked_image(&cx.dir.join(percent_decode(uri)), &cx.file, &ifield)
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let bytes = read_uri(cx, uri, &ifield)?;
+            embedded_image(cx, &bytes, image.index(), &ifield)
+        }
+        gltf::image::Source::View { view, .. } => {
+            let data = cx.buffers.get(view.buffer().index()).map(Vec::as_slice).unwrap_or(&[]);
+            let bytes = data
+                .get(view.offset()..view.offset() + view.length())
+                .ok_or_else(|| cx.err(&ifield, "its bufferView lies outside the buffer"))?;
+            embedded_image(cx, bytes, image.index(), &ifield)
+        }
+    }
+}
+
+/// Writes an embedded image into `<temp>/penumbra-assets/<hash of the bytes>.<ext>` (once) so
+/// that every method and the reference read it by path as any texture.
+fn embedded_image(cx: &Ctx, bytes: &[u8], index: usize, field: &str) -> Result<PathBuf, SceneError> {
+    let ext = match image::guess_format(bytes) {
+        Ok(image::ImageFormat::Png) => "png",
+        Ok(image::ImageFormat::Jpeg) => "jpg",
+        _ => return Err(cx.err(field, "an embedded image must be PNG or JPEG")),
+    };
+    // FNV-1a: a stable name for the same bytes.
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    });
+    let dir = std::env::temp_dir().join("penumbra-assets");
+    let path = dir.join(format!("{hash:016x}-{}.{ext}", bytes.len()));
+    if !path.is_file() {
+        let tmp = dir.join(format!("{hash:016x}-{}.{}.tmp", bytes.len(), std::process::id()));
+        std::fs::create_dir_all(&dir)
+            .and_then(|()| std::fs::write(&tmp, bytes))
+            .and_then(|()| std::fs::rename(&tmp, &path))
+            .map_err(|e| cx.err(field, format!("cannot write images[{index}] to {}: {e}", dir.display())))?;
+    }
+    checked_image(&path, &cx.file, field)
+}
