@@ -1,6 +1,8 @@
 //! The windowed demo under an X server (tools/test.sh runs the suite under Xvfb): it opens,
 //! presents frames with validation on, and its screenshot — the presented swapchain pixels — shows
-//! the same image as a headless capture of the same scene.
+//! the same image as a headless capture of the same scene; the panel is drawn over it; the live
+//! reference grows while the camera is still and restarts when it moves; the error view shows
+//! the shadows a method leaves out; the panel's relative MSE converges to `compare`'s.
 //!
 //! Its own test binary: it opens a window and owns the process's display connection.
 
@@ -25,6 +27,7 @@ fn demo_presents_the_scene_under_xvfb() {
             "96x64",
             "--frames",
             "4",
+            "--hide-panel",
             "--validation",
             "--device",
             &device,
@@ -144,4 +147,257 @@ fn demo_cycles_through_the_scenes_methods_and_combinations() {
         ["shadow_volumes", "mixed", "forward", "shadow_volumes"],
         "{out}"
     );
+}
+
+/// A floor, a box on it and a point light beside it: `forward` draws no shadow, the shadow
+/// volumes draw it.
+const SHADOW_SCENE: &str = "methods = [\"forward\", { name = \"shadow_volumes\", mode = \"physical\" }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";
+
+fn report(path: &std::path::Path) -> Vec<serde_json::Value> {
+    let text = std::fs::read_to_string(path).unwrap();
+    serde_json::from_str::<Vec<serde_json::Value>>(&text).unwrap()
+}
+
+fn f(v: &serde_json::Value, key: &str) -> f64 {
+    v["error"][key].as_f64().unwrap_or(f64::NAN)
+}
+
+#[test]
+fn demo_draws_its_panel_over_the_frame() {
+    // The same frame with and without the panel: the panel covers the top-left corner.
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let shots = [common::temp_path("panel-on.png"), common::temp_path("panel-off.png")];
+    for (shot, hide) in shots.iter().zip([false, true]) {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args([
+            "demo",
+            "--size",
+            "320x240",
+            "--frames",
+            "3",
+            "--validation",
+            "--device",
+            &device,
+        ]);
+        if hide {
+            cmd.arg("--hide-panel");
+        }
+        let o = cmd.arg("--screenshot").arg(shot).output().unwrap();
+        assert!(
+            o.status.success(),
+            "demo failed:\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let (on, off) = (
+        image::open(&shots[0]).unwrap().to_rgba8(),
+        image::open(&shots[1]).unwrap().to_rgba8(),
+    );
+    let changed = |x0: u32, x1: u32, y0: u32, y1: u32| {
+        let mut n = 0;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let (a, b) = (on.get_pixel(x, y), off.get_pixel(x, y));
+                n += (0..3).any(|c| (a[c] as i32 - b[c] as i32).abs() > 8) as u32;
+            }
+        }
+        n as f64 / ((x1 - x0) * (y1 - y0)) as f64
+    };
+    let corner = changed(10, 60, 10, 30);
+    let far = changed(280, 320, 200, 240);
+    assert!(
+        corner > 0.5,
+        "the panel's corner changed at {:.0}% of pixels",
+        corner * 100.0
+    );
+    assert!(far < 0.01, "far from the panel {:.1}% changed", far * 100.0);
+}
+
+#[test]
+fn live_reference_grows_resets_and_its_error_view_shows_missing_shadows() {
+    let scene = common::temp_path("demo-shadow.toml");
+    std::fs::write(&scene, SHADOW_SCENE).unwrap();
+    let dir = common::temp_path("demo-views");
+    std::fs::create_dir_all(&dir).unwrap();
+    let shot = |n: &str| dir.join(n).display().to_string();
+    // Still in the error view for 12 frames (saved at 11), the reference, split and difference
+    // views saved at 12-14, a move at 15 and back at 17 (two restarts), a switch to the shadow
+    // volumes at 22 and its error view saved at 23.
+    let script = format!(
+        "0 key 4\n11 screenshot {}\n12 key 2\n12 screenshot {}\n13 key 3\n13 screenshot {}\n14 key 5\n14 screenshot {}\n15 key 4\n15 move 0 0 0.3\n17 move 0 0 -0.3\n22 key M\n23 screenshot {}\n",
+        shot("forward-error.png"),
+        shot("reference.png"),
+        shot("split.png"),
+        shot("difference.png"),
+        shot("shadow-volumes-error.png"),
+    );
+    let script_path = common::temp_path("demo-script.txt");
+    std::fs::write(&script_path, script).unwrap();
+    let json = common::temp_path("demo-report.json");
+    let o = common::penumbra(&[
+        "demo",
+        scene.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--frames",
+        "24",
+        "--hide-panel",
+        "--reference-budget",
+        "0.9",
+        "--script",
+        script_path.to_str().unwrap(),
+        "--report-json",
+        json.to_str().unwrap(),
+        "--validation",
+    ]);
+    let out = common::ok(&o);
+    let r = report(&json);
+    assert_eq!(r.len(), 24, "{out}");
+    let spp: Vec<u64> = r.iter().map(|f| f["spp"].as_u64().unwrap()).collect();
+    let restarts: Vec<u64> = r.iter().map(|f| f["restarts"].as_u64().unwrap()).collect();
+    // Still: the samples grow; the moves restart the reference.
+    assert!(spp[2] > 0 && spp[14] > spp[2], "spp while still: {spp:?}");
+    assert_eq!(restarts[15], restarts[14] + 1, "restarts: {restarts:?}");
+    assert_eq!(restarts[17], restarts[15] + 1, "restarts: {restarts:?}");
+    assert!(spp[15] < spp[14] && spp[21] > spp[17], "spp after the moves: {spp:?}");
+    // The switch changes the numbers in the frame it happens (the reference stays: both
+    // methods are judged against direct light).
+    assert_eq!(r[21]["configuration"], "forward");
+    assert_eq!(r[22]["configuration"], "shadow_volumes");
+    assert_eq!(restarts[22], restarts[21], "the reference kind did not change");
+    let (before, after) = (f(&r[21], "rel_mse"), f(&r[22], "rel_mse"));
+    assert!(
+        after < 0.5 * before,
+        "relative MSE forward {before} -> shadow volumes {after}"
+    );
+
+    // The error view: where the reference is in shadow and forward is lit, forward's error is
+    // high and the shadow volumes' low.
+    let read = |n: &str| penumbra::image_io::HdrImage::read_exr(&dir.join(n)).unwrap();
+    let (fwd, sv, reference) = (
+        read("forward-error.exr"),
+        read("shadow-volumes-error.exr"),
+        read("reference.exr"),
+    );
+    // Method = reference + difference (the difference view's values, same view).
+    let diff = read("difference.exr");
+    let shadowed: Vec<usize> = (0..reference.pixels.len())
+        .filter(|&i| diff.pixels[i][1] > 3.0 * reference.pixels[i][1] + 0.05)
+        .collect();
+    assert!(shadowed.len() > 20, "only {} shadowed pixels", shadowed.len());
+    let median = |img: &penumbra::image_io::HdrImage| {
+        let mut v: Vec<f32> = shadowed.iter().map(|&i| img.pixels[i][0]).collect();
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    assert!(median(&fwd) > 0.5, "forward's error in the shadow: {}", median(&fwd));
+    assert!(
+        median(&sv) < 0.2,
+        "shadow volumes' error in the shadow: {}",
+        median(&sv)
+    );
+    // The PNGs are the views as displayed: the error view's colour bar, the difference's colours.
+    let err_png = image::open(dir.join("forward-error.png")).unwrap().to_rgba8();
+    assert_ne!(err_png.get_pixel(0, 47), err_png.get_pixel(63, 47), "colour bar");
+    assert!(diff.pixels.iter().any(|p| p[1] > 0.05), "forward is brighter somewhere");
+}
+
+#[test]
+fn still_frames_converge_to_compare_against_a_converged_reference() {
+    let scene = common::temp_path("demo-converge.toml");
+    std::fs::write(&scene, SHADOW_SCENE).unwrap();
+    let json = common::temp_path("demo-converge.json");
+    let s = scene.to_str().unwrap();
+    common::ok(&common::penumbra(&[
+        "demo",
+        s,
+        "--size",
+        "32x24",
+        "--frames",
+        "40",
+        "--hide-panel",
+        "--reference-budget",
+        "0.9",
+        "--report-json",
+        json.to_str().unwrap(),
+    ]));
+    let r = report(&json);
+    let last = r.last().unwrap();
+    let (panel, noise, spp) = (
+        f(last, "rel_mse"),
+        f(last, "noise_rel_mse"),
+        last["spp"].as_u64().unwrap(),
+    );
+    let (method, reference) = (
+        common::temp_path("converge-method.exr"),
+        common::temp_path("converge-ref.exr"),
+    );
+    common::ok(&common::penumbra(&[
+        "capture",
+        s,
+        "--size",
+        "32x24",
+        "--exr",
+        method.to_str().unwrap(),
+    ]));
+    common::ok(&common::penumbra(&[
+        "reference",
+        s,
+        "--size",
+        "32x24",
+        "--spp",
+        "1024",
+        "--direct-only",
+        "--sampler",
+        "independent",
+        "-o",
+        reference.to_str().unwrap(),
+    ]));
+    let out = common::ok(&common::penumbra(&[
+        "compare",
+        method.to_str().unwrap(),
+        reference.to_str().unwrap(),
+        "--json",
+    ]));
+    let compare: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let truth = compare["rel_mse"].as_f64().unwrap();
+    // The live number carries the live reference's noise (its expected excess is `noise`).
+    let tolerance = 3.0 * noise + 0.02 * truth;
+    assert!(
+        (panel - truth).abs() <= tolerance,
+        "panel {panel:.5} at {spp} spp (noise {noise:.2e}) vs compare {truth:.5}"
+    );
+    assert!(spp >= 8, "only {spp} spp after 40 still frames");
+}
+
+/// Measurement (timing, so not in the default run): the frame rate with the live reference at
+/// half the frame time against without it, same window, same scene, medians over the frames
+/// after the first 10 (the tracer's compile). Run with `--ignored --nocapture` to see the numbers.
+#[test]
+#[ignore]
+fn measure_frame_rate_with_the_live_reference_at_half_the_frame() {
+    let size = std::env::var("PENUMBRA_DEMO_SIZE").unwrap_or_else(|_| "320x180".into());
+    let median = |budget: Option<&str>| {
+        let json = common::temp_path(&format!("budget-{}.json", budget.unwrap_or("off")));
+        let mut args = vec!["demo", "--size", &size, "--frames", "80", "--hide-panel"];
+        if let Some(b) = budget {
+            args.extend(["--reference-budget", b]);
+        }
+        args.extend(["--report-json", json.to_str().unwrap()]);
+        common::ok(&common::penumbra(&args));
+        let r = report(&json);
+        let mut ms: Vec<f64> = r[10..].iter().map(|f| f["frame_ms"].as_f64().unwrap()).collect();
+        ms.sort_by(f64::total_cmp);
+        let spp = r.last().unwrap()["spp"].as_u64().unwrap();
+        (ms[ms.len() / 2], spp)
+    };
+    let (off, _) = median(None);
+    let (on, spp) = median(Some("0.5"));
+    println!(
+        "{size}: without the reference {off:.2} ms ({:.1} fps), with it at 0.5 {on:.2} ms ({:.1} fps, {spp} spp after 80 frames): {:.2} of the frame rate",
+        1000.0 / off,
+        1000.0 / on,
+        off / on
+    );
+    assert!(off / on >= 0.5, "the frame rate fell to {:.2} of its value", off / on);
 }

@@ -279,6 +279,18 @@ struct Params {
     options: [u32; 4],
 }
 
+impl Params {
+    /// The primary rays' frame: the eye, and the image plane's half extents at distance 1.
+    fn set_camera(&mut self, cam: &crate::scene::Camera, width: u32, height: u32) {
+        let (right, up, forward) = cam.basis();
+        let tan_half = (0.5 * cam.fov_y_deg.to_radians()).tan();
+        self.eye = cam.position.extend(1.0).into();
+        self.right = (right * tan_half * (width as f32 / height as f32)).extend(0.0).into();
+        self.up = (up * tan_half).extend(0.0).into();
+        self.forward = forward.extend(0.0).into();
+    }
+}
+
 /// `Batch` push constants in the shader.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -505,14 +517,11 @@ impl ReferenceRenderer {
         })?;
         let replicates = replicate_sums(&mut gpu, 1, 1)?;
         let frame = gpu.create_frame()?;
-        let cam = &scene.camera;
-        let (right, up, forward) = cam.basis();
-        let tan_half = (0.5 * cam.fov_y_deg.to_radians()).tan();
-        let params = Params {
-            eye: cam.position.extend(1.0).into(),
-            right: (right * tan_half * (width as f32 / height as f32)).extend(0.0).into(),
-            up: (up * tan_half).extend(0.0).into(),
-            forward: forward.extend(0.0).into(),
+        let mut params = Params {
+            eye: [0.0; 4],
+            right: [0.0; 4],
+            up: [0.0; 4],
+            forward: [0.0; 4],
             environment: traced.environment.extend(0.0).into(),
             counts: [traced.lights.len() as u32, traced.triangles.len() as u32, width, height],
             environment_map: match &traced.environment_map {
@@ -521,6 +530,7 @@ impl ReferenceRenderer {
             },
             options: [traced.light_beyond_last_bounce() as u32, traced.punctual_lights, 0, 0],
         };
+        params.set_camera(&scene.camera, width, height);
         let features = SceneFeatures::of(&traced);
         Ok(ReferenceRenderer {
             gpu,
@@ -642,6 +652,48 @@ impl ReferenceRenderer {
             progress(done, expected);
         }
         readback.ok_or_else(|| Error::Internal("reference: no samples were rendered".into()))
+    }
+
+    /// Traces from `camera` from now on (the scene's camera at creation); samples already
+    /// accumulated were for the old view, so the next batch should start at sample 0.
+    pub fn set_camera(&mut self, camera: &crate::scene::Camera) {
+        self.params.set_camera(camera, self.width, self.height);
+    }
+
+    /// Progressive rendering a batch at a time (the demo's live reference): adds samples
+    /// `done..done + count` to every pixel (from 0, the accumulation restarts) and with
+    /// `read_back` returns the image of the `done + count` samples. `Ok(None)` without
+    /// `read_back`, and also when the device cut the batch short, which then added nothing:
+    /// try fewer samples.
+    pub fn accumulate(
+        &mut self,
+        settings: &Settings,
+        done: u32,
+        count: u32,
+        read_back: bool,
+    ) -> Result<Option<ReferenceImage>> {
+        if count == 0 {
+            return Err(Error::Usage("reference: a batch of no samples".into()));
+        }
+        let start = Instant::now();
+        let short = self.dispatch(
+            settings.push(done, count, self.params.counts[0]),
+            settings.sampler,
+            read_back,
+        )?;
+        if short > 0 {
+            if count == 1 {
+                return Err(Error::Usage(format!(
+                    "{}: one path-traced sample runs more loop iterations than the device allows one shader invocation ({short} pixel(s) cut short)",
+                    self.gpu.caps().name
+                )));
+            }
+            return Ok(None);
+        }
+        if !read_back {
+            return Ok(None);
+        }
+        self.read_image(done + count, settings.sampler, start).map(Some)
     }
 
     /// The accumulation images as read back by the last checkpoint, holding `spp` samples each.
