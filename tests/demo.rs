@@ -361,6 +361,7 @@ fn still_frames_converge_to_compare_against_a_converged_reference() {
     ]));
     let compare: serde_json::Value = serde_json::from_str(&out).unwrap();
     let truth = compare["rel_mse"].as_f64().unwrap();
+    println!("panel {panel:.6} at {spp} spp (noise {noise:.2e}) vs compare {truth:.6}");
     // The live number carries the live reference's noise (its expected excess is `noise`).
     let tolerance = 3.0 * noise + 0.02 * truth;
     assert!(
@@ -400,4 +401,72 @@ fn measure_frame_rate_with_the_live_reference_at_half_the_frame() {
         off / on
     );
     assert!(off / on >= 0.5, "the frame rate fell to {:.2} of its value", off / on);
+}
+
+#[test]
+fn capture_writes_the_views_the_demo_shows() {
+    // The error view of the same scene from the window (a scripted screenshot after 10 still
+    // frames) and from `capture --view error`: the same composition against references of
+    // different sample counts, so equal but for the reference's noise at the shadow's edges.
+    let scene = common::temp_path("demo-parity.toml");
+    std::fs::write(&scene, SHADOW_SCENE).unwrap();
+    let (window, headless) = (
+        common::temp_path("parity-demo.png"),
+        common::temp_path("parity-capture.png"),
+    );
+    let script = common::temp_path("parity-script.txt");
+    std::fs::write(&script, format!("10 screenshot {}\n", window.display())).unwrap();
+    let s = scene.to_str().unwrap();
+    common::ok(&common::penumbra(&[
+        "demo",
+        s,
+        "--size",
+        "64x48",
+        "--frames",
+        "11",
+        "--hide-panel",
+        "--view",
+        "error",
+        "--reference-budget",
+        "0.9",
+        "--script",
+        script.to_str().unwrap(),
+    ]));
+    common::ok(&common::penumbra(&[
+        "capture",
+        s,
+        "--size",
+        "64x48",
+        "--view",
+        "error",
+        "--reference-spp",
+        "32",
+        "-o",
+        headless.to_str().unwrap(),
+    ]));
+    let read = |p: &std::path::Path| penumbra::image_io::HdrImage::read_exr(&p.with_extension("exr")).unwrap();
+    let (a, b) = (read(&window), read(&headless));
+    assert_eq!((a.width, a.height), (64, 48));
+    let close = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(p, q)| (p[0] - q[0]).abs() < 0.05)
+        .count() as f64
+        / a.pixels.len() as f64;
+    let high = b.pixels.iter().filter(|p| p[0] > 0.5).count();
+    assert!(
+        close > 0.9,
+        "only {:.1}% of the error views' pixels agree",
+        close * 100.0
+    );
+    assert!(
+        high > 20,
+        "the capture's error view shows no missing shadow ({high} pixels)"
+    );
+    let (pa, pb) = (
+        image::open(&window).unwrap().to_rgba8(),
+        image::open(&headless).unwrap().to_rgba8(),
+    );
+    assert_eq!(pa.get_pixel(10, 47), pb.get_pixel(10, 47), "the same colour bar");
 }

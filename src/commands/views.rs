@@ -100,29 +100,32 @@ pub const SCALE_BAR_HEIGHT: u32 = 4;
 /// needs, at the same size).
 pub fn compose(method: &HdrImage, reference: Option<&HdrImage>, settings: &ViewSettings) -> Result<Composed> {
     let exposure = settings.exposure;
-    if settings.view == View::Method {
-        return Ok(Composed {
+    let reference = || -> Result<&HdrImage> {
+        let r =
+            reference.ok_or_else(|| Error::Usage(format!("the {} view needs a reference", settings.view.name())))?;
+        if (method.width, method.height) != (r.width, r.height) {
+            return Err(Error::Usage(format!(
+                "the method is {}x{} and the reference {}x{}",
+                method.width, method.height, r.width, r.height
+            )));
+        }
+        Ok(r)
+    };
+    Ok(match settings.view {
+        View::Method => Composed {
             display: method.to_display(exposure),
             values: method.clone(),
-        });
-    }
-    let reference =
-        reference.ok_or_else(|| Error::Usage(format!("the {} view needs a reference", settings.view.name())))?;
-    if (method.width, method.height) != (reference.width, reference.height) {
-        return Err(Error::Usage(format!(
-            "the method is {}x{} and the reference {}x{}",
-            method.width, method.height, reference.width, reference.height
-        )));
-    }
-    Ok(match settings.view {
-        View::Method => unreachable!("handled above"),
-        View::Reference => Composed {
-            display: reference.to_display(exposure),
-            values: reference.clone(),
         },
-        View::Split => split(method, reference, settings),
-        View::Error => error_view(method, reference, settings)?,
-        View::Difference => difference(method, reference, settings),
+        View::Reference => {
+            let r = reference()?;
+            Composed {
+                display: r.to_display(exposure),
+                values: r.clone(),
+            }
+        }
+        View::Split => split(method, reference()?, settings),
+        View::Error => error_view(method, reference()?, settings)?,
+        View::Difference => difference(method, reference()?, settings),
     })
 }
 
