@@ -247,6 +247,7 @@ impl Settings {
             bounces,
             flags,
             roulette_after: self.roulette_after.unwrap_or(u32::MAX),
+            first_row: 0,
         }
     }
 }
@@ -302,6 +303,8 @@ struct BatchPush {
     flags: u32,
     /// First interaction subject to Russian roulette; u32::MAX: none.
     roulette_after: u32,
+    /// The dispatch covers the rows from this one on (a band, or the whole image from 0).
+    first_row: u32,
 }
 
 /// A finished render: per-pixel mean radiance and the standard error of that mean.
@@ -609,6 +612,7 @@ impl ReferenceRenderer {
                 settings.push(done, count, self.params.counts[0]),
                 settings.sampler,
                 checkpoint,
+                self.height,
             )?;
             if short > 0 {
                 if count == 1 {
@@ -661,26 +665,28 @@ impl ReferenceRenderer {
     }
 
     /// Progressive rendering a batch at a time (the demo's live reference): adds samples
-    /// `done..done + count` to every pixel (from 0, the accumulation restarts) and with
-    /// `read_back` returns the image of the `done + count` samples. `Ok(None)` without
-    /// `read_back`, and also when the device cut the batch short, which then added nothing:
-    /// try fewer samples.
+    /// `done..done + count` to the pixels of `rows` (from sample 0, those pixels start afresh)
+    /// and with `read_back` returns the image, whose every pixel must then hold `done + count`
+    /// samples (the rows of a sample may come in bands over several calls, the last one reading
+    /// back). `Ok(None)` without `read_back`, and also when the device cut the batch short,
+    /// which then added nothing: try fewer samples.
     pub fn accumulate(
         &mut self,
         settings: &Settings,
-        done: u32,
-        count: u32,
+        (done, count): (u32, u32),
+        rows: std::ops::Range<u32>,
         read_back: bool,
     ) -> Result<Option<ReferenceImage>> {
-        if count == 0 {
-            return Err(Error::Usage("reference: a batch of no samples".into()));
+        if count == 0 || rows.is_empty() || rows.end > self.height {
+            return Err(Error::Usage(format!(
+                "reference: a batch of {count} samples over rows {rows:?} of {}",
+                self.height
+            )));
         }
         let start = Instant::now();
-        let short = self.dispatch(
-            settings.push(done, count, self.params.counts[0]),
-            settings.sampler,
-            read_back,
-        )?;
+        let mut push = settings.push(done, count, self.params.counts[0]);
+        push.first_row = rows.start;
+        let short = self.dispatch(push, settings.sampler, read_back, rows.end - rows.start)?;
         if short > 0 {
             if count == 1 {
                 return Err(Error::Usage(format!(
@@ -787,7 +793,7 @@ impl ReferenceRenderer {
 
     /// One submitted and waited-for batch; the last one also copies the results to the host.
     /// Returns how many pixels' batches were cut short (and so left as they were).
-    fn dispatch(&mut self, push: BatchPush, sampler: Sampler, read_back: bool) -> Result<u32> {
+    fn dispatch(&mut self, push: BatchPush, sampler: Sampler, read_back: bool, rows: u32) -> Result<u32> {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let pipeline = self.pipeline(nee_mode(push.flags), sampler)?;
         if sampler == Sampler::Sobol {
@@ -805,7 +811,7 @@ impl ReferenceRenderer {
         let (replicates, replicates_host) = self.replicates;
         let layer_bytes = self.gpu.buffer_desc(replicates_host)?.size / u64::from(SOBOL_REPLICATES);
         let all_layers = SubresourceRange::all(1, SOBOL_REPLICATES);
-        let (width, height) = (self.width, self.height);
+        let width = self.width;
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
         graph
@@ -823,7 +829,7 @@ impl ReferenceRenderer {
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("params", Bind::UniformData(params))])?;
             ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-            ctx.rec.dispatch([width, height, 1])
+            ctx.rec.dispatch([width, rows, 1])
         });
         if read_back {
             for (name, image, buffer) in [("read back mean", mean, rb[0]), ("read back second moment", m2, rb[1])] {

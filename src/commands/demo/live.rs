@@ -50,8 +50,11 @@ pub struct LiveReference {
     pub budget: f32,
     /// Seconds of reference work earned and not yet spent.
     credit: f64,
-    /// Seconds per sample per pixel, smoothed; `None` until the first batch.
-    per_sample: Option<f64>,
+    /// Seconds per sample of one pixel, smoothed; `None` until the first timed batch.
+    per_pixel_sample: Option<f64>,
+    /// The sample in progress band by band (where one sample of the image costs more than a
+    /// frame's share): the next row to trace.
+    band: u32,
     /// The frame time without the reference's work, smoothed.
     other: Option<f64>,
     pub restarts: u32,
@@ -74,7 +77,8 @@ impl LiveReference {
             noise: None,
             budget,
             credit: 0.0,
-            per_sample: None,
+            per_pixel_sample: None,
+            band: 0,
             other: None,
             restarts: 0,
             compiling: false,
@@ -128,6 +132,7 @@ impl LiveReference {
         self.noise = None;
         self.error = None;
         self.credit = 0.0;
+        self.band = 0;
         self.restarts += 1;
         Ok(())
     }
@@ -139,11 +144,12 @@ impl LiveReference {
         let b = self.budget.clamp(0.0, 0.95) as f64;
         let earned = self.other.unwrap_or(s) * b / (1.0 - b);
         // Credit does not pile up while nothing can be spent (a still camera is needed).
-        self.credit = (self.credit + earned).min(earned * 4.0 + self.per_sample.unwrap_or(0.0));
+        self.credit = (self.credit + earned).min(earned * 4.0);
     }
 
-    /// Adds the samples the credit pays for (none when it pays for less than one) and reads the
-    /// image back. Returns whether the image grew.
+    /// Adds the samples the credit pays for and reads the image back when a sample of every
+    /// pixel is complete. Where a sample of the whole image costs more than the credit, it is
+    /// traced in bands of rows over several frames. Returns whether the image grew.
     pub fn step(&mut self) -> Result<bool> {
         if self.budget <= 0.0 {
             return Ok(false);
@@ -151,20 +157,31 @@ impl LiveReference {
         let Some(tracer) = self.tracer.as_mut() else {
             return Ok(false);
         };
-        let count = match self.per_sample {
-            // The first batch of a new tracer also compiles it, and the first timed one
-            // measures the cost of a sample: one sample each, whatever it costs.
-            _ if self.compiling => 1,
-            None => 1,
-            Some(p) if self.credit < p => return Ok(false),
-            Some(p) => ((self.credit / p) as u32).clamp(1, MAX_FRAME_BATCH),
-        };
+        let (width, height) = self.traced.as_ref().map_or((1, 1), |t| t.size);
         let done = self.image.as_ref().map_or(0, |i| i.spp);
-        let mut count = count;
+        // The first batch of a new tracer also compiles it: a whole sample, whatever it costs.
+        let (mut count, rows) = match self.per_pixel_sample {
+            _ if self.compiling => (1, 0..height),
+            None => (1, 0..height),
+            Some(p) => {
+                let row = p * width as f64;
+                let image = row * height as f64;
+                if self.band == 0 && self.credit >= image {
+                    (((self.credit / image) as u32).clamp(1, MAX_FRAME_BATCH), 0..height)
+                } else if self.credit >= row {
+                    let rows = ((self.credit / row) as u32).clamp(1, height - self.band);
+                    (1, self.band..self.band + rows)
+                } else {
+                    return Ok(false);
+                }
+            }
+        };
+        let last_band = rows.end == height;
         let start = Instant::now();
         let image = loop {
-            match tracer.accumulate(&self.settings, done, count, true)? {
-                Some(image) => break image,
+            match tracer.accumulate(&self.settings, (done, count), rows.clone(), last_band)? {
+                Some(image) => break Some(image),
+                None if !last_band => break None,
                 // Cut short by the device: the same batch, halved.
                 None => count = (count / 2).max(1),
             }
@@ -175,13 +192,19 @@ impl LiveReference {
         if std::mem::take(&mut self.compiling) {
             self.credit = 0.0;
         } else {
-            let p = took / count as f64;
-            self.per_sample = Some(self.per_sample.map_or(p, |q| 0.7 * q + 0.3 * p));
+            let p = took / (count as f64 * (rows.end - rows.start) as f64 * width as f64);
+            self.per_pixel_sample = Some(self.per_pixel_sample.map_or(p, |q| 0.7 * q + 0.3 * p));
             self.spend(took);
         }
-        self.image = Some(image);
-        self.noise = None;
-        Ok(true)
+        self.band = if last_band { 0 } else { rows.end };
+        match image {
+            Some(image) => {
+                self.image = Some(image);
+                self.noise = None;
+                Ok(true)
+            }
+            None => Ok(false),
+        }
     }
 
     /// Charges reference work done outside [`LiveReference::step`] (the metrics).

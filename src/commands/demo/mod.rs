@@ -35,7 +35,8 @@ const FRAMES_IN_FLIGHT: usize = 2;
 /// Frame intervals kept for the panel's graph.
 const HISTORY: usize = 240;
 /// Error metrics are refreshed at most this often while the reference grows (a switch of
-/// method refreshes them at once), so that the CPU's FLIP does not eat the reference's budget.
+/// method refreshes them at once), and no more often than every four times what they cost, so
+/// that the CPU's FLIP leaves most of the reference's budget to tracing.
 const METRICS_INTERVAL_S: f64 = 0.25;
 
 /// One frame as the report (`--report-json`) records it.
@@ -86,6 +87,8 @@ struct Running {
     live_on: bool,
     reference_s: f64,
     metrics_at: Option<Instant>,
+    /// What the last refresh of the metrics cost.
+    metrics_s: f64,
     view: ViewSettings,
     view_texture: Option<egui::TextureHandle>,
     composed: Option<Composed>,
@@ -215,6 +218,7 @@ impl App {
             live_on: budget > 0.0,
             reference_s: 0.0,
             metrics_at: None,
+            metrics_s: 0.0,
             view: ViewSettings {
                 view: self.script.view,
                 exposure: self.opts.exposure,
@@ -568,9 +572,8 @@ impl Running {
         self.renderer.states.acquired_image(acquired.image, wait_stage);
         let camera = self.camera.camera();
         let readback = self.grab_next;
-        let due = self
-            .metrics_at
-            .is_none_or(|t| t.elapsed().as_secs_f64() >= METRICS_INTERVAL_S);
+        let interval_s = METRICS_INTERVAL_S.max(4.0 * self.metrics_s);
+        let due = self.metrics_at.is_none_or(|t| t.elapsed().as_secs_f64() >= interval_s);
         let measure = self.live_on && self.live.image.is_some() && (self.switched || (grew && (due || self.scripted)));
         let radiance = measure || self.save_view.is_some() || (self.view.view != View::Method && self.live_on);
         self.renderer.render(
@@ -591,7 +594,15 @@ impl Running {
         )?;
         let presented = gpu.present(&self.swapchain, &acquired)?;
         if readback || radiance {
+            let t0 = Instant::now();
             gpu.wait_frame(self.renderer.last_frame())?;
+            // Waiting for the frame is what the radiance read-back costs the window (the next
+            // frame's work cannot overlap this one's): the live reference's when it asked.
+            if radiance && self.live_on {
+                let waited = t0.elapsed().as_secs_f64();
+                self.live.spend(waited);
+                reference_s += waited;
+            }
         }
         if readback {
             self.grabbed = Some(self.renderer.presented_pixels(acquired.image)?);
@@ -617,7 +628,9 @@ impl Running {
     fn after_radiance(&mut self, measure: bool) -> Result<()> {
         let method = self.renderer.radiance_pixels()?;
         if measure {
+            let t0 = Instant::now();
             self.live.measure(&method, self.view.exposure)?;
+            self.metrics_s = t0.elapsed().as_secs_f64();
             self.metrics_at = Some(Instant::now());
             self.switched = false;
         }
