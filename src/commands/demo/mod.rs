@@ -95,6 +95,8 @@ struct Running {
     method_image: Option<HdrImage>,
     timings: Vec<PassTiming>,
     frame_ms: VecDeque<f32>,
+    /// The GPU time of recent frames (ms, the sum of the timestamped passes), oldest first.
+    gpu_ms: VecDeque<f32>,
     messages: Vec<String>,
     bookmarks: Bookmarks,
     bookmarks_file: PathBuf,
@@ -229,6 +231,7 @@ impl App {
             method_image: None,
             timings: Vec::new(),
             frame_ms: VecDeque::new(),
+            gpu_ms: VecDeque::new(),
             messages: Vec::new(),
             bookmarks,
             bookmarks_file,
@@ -480,6 +483,7 @@ impl Running {
             current: self.current,
             timings: &self.timings,
             frame_ms: &self.frame_ms,
+            gpu_ms: &self.gpu_ms,
             live: &self.live,
             position: self.camera.base.position,
             bookmarks: self.bookmarks.bookmark.len(),
@@ -549,6 +553,10 @@ impl Running {
         // Waiting for the slot's previous frame also makes its acquire semaphore reusable.
         self.renderer.gpu.wait_frame(slot)?;
         if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
+            self.gpu_ms.push_back(t.iter().map(|p| p.ms as f32).sum());
+            if self.gpu_ms.len() > HISTORY {
+                self.gpu_ms.pop_front();
+            }
             self.timings = t;
         }
         let reference_start = Instant::now();

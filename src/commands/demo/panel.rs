@@ -38,6 +38,8 @@ pub struct PanelInfo<'a> {
     pub timings: &'a [PassTiming],
     /// Recent frame intervals (ms), oldest first.
     pub frame_ms: &'a VecDeque<f32>,
+    /// Recent frames' GPU time (ms, from the timestamp queries), oldest first.
+    pub gpu_ms: &'a VecDeque<f32>,
     pub live: &'a LiveReference,
     pub position: glam::Vec3,
     pub bookmarks: usize,
@@ -136,34 +138,37 @@ fn timings(ui: &mut egui::Ui, info: &PanelInfo<'_>) {
             }
         });
         let last = info.frame_ms.back().copied().unwrap_or(0.0);
-        ui.label(format!("frame {last:.1} ms ({:.1} fps)", 1000.0 / last.max(1e-3)));
-        frame_graph(ui, info.frame_ms);
+        let gpu = info.gpu_ms.back().copied().unwrap_or(0.0);
+        ui.label(format!(
+            "GPU {gpu:.2} ms, frame {last:.1} ms ({:.1} fps)",
+            1000.0 / last.max(1e-3)
+        ));
+        frame_graph(ui, info.gpu_ms, info.frame_ms);
     })
     .header_response
-    .on_hover_text("GPU time per pass from timestamp queries; the graph is the frame interval");
+    .on_hover_text("GPU time per pass from timestamp queries; graph: GPU time (orange), frame interval (green)");
 }
 
-/// The frame intervals as a line, scaled to the largest.
-fn frame_graph(ui: &mut egui::Ui, ms: &VecDeque<f32>) {
+/// The frames' GPU times and intervals as two lines, scaled to the largest of either.
+fn frame_graph(ui: &mut egui::Ui, gpu: &VecDeque<f32>, frame: &VecDeque<f32>) {
     let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width().max(100.0), 48.0), egui::Sense::hover());
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 2.0, egui::Color32::from_gray(20));
-    let top = ms.iter().copied().fold(1.0f32, f32::max);
-    let n = ms.len().max(2) as f32;
-    let points: Vec<egui::Pos2> = ms
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            egui::pos2(
-                rect.left() + rect.width() * i as f32 / (n - 1.0),
-                rect.bottom() - rect.height() * v / top,
-            )
-        })
-        .collect();
-    painter.add(egui::Shape::line(
-        points,
-        egui::Stroke::new(1.0, egui::Color32::LIGHT_GREEN),
-    ));
+    let top = gpu.iter().chain(frame).copied().fold(1.0f32, f32::max);
+    for (ms, colour) in [(frame, egui::Color32::LIGHT_GREEN), (gpu, egui::Color32::ORANGE)] {
+        let n = ms.len().max(2) as f32;
+        let points: Vec<egui::Pos2> = ms
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                egui::pos2(
+                    rect.left() + rect.width() * i as f32 / (n - 1.0),
+                    rect.bottom() - rect.height() * v / top,
+                )
+            })
+            .collect();
+        painter.add(egui::Shape::line(points, egui::Stroke::new(1.0, colour)));
+    }
     painter.text(
         rect.left_top(),
         egui::Align2::LEFT_TOP,
