@@ -273,7 +273,7 @@ fn live_reference_grows_resets_and_its_error_view_shows_missing_shadows() {
 
     // The error view: where the reference is in shadow and forward is lit, forward's error is
     // high and the shadow volumes' low.
-    let read = |n: &str| penumbra::image_io::HdrImage::read_exr(&dir.join(n)).unwrap();
+    let read = |n: &str| penumbra::util::image_io::HdrImage::read_exr(&dir.join(n)).unwrap();
     let (fwd, sv, reference) = (
         read("forward-error.exr"),
         read("shadow-volumes-error.exr"),
@@ -285,7 +285,7 @@ fn live_reference_grows_resets_and_its_error_view_shows_missing_shadows() {
         .filter(|&i| diff.pixels[i][1] > 3.0 * reference.pixels[i][1] + 0.05)
         .collect();
     assert!(shadowed.len() > 20, "only {} shadowed pixels", shadowed.len());
-    let median = |img: &penumbra::image_io::HdrImage| {
+    let median = |img: &penumbra::util::image_io::HdrImage| {
         let mut v: Vec<f32> = shadowed.iter().map(|&i| img.pixels[i][0]).collect();
         v.sort_by(f32::total_cmp);
         v[v.len() / 2]
@@ -366,7 +366,7 @@ fn still_frames_converge_to_compare_against_a_converged_reference() {
     // one's the same per-pixel variance at 1024 spp), and scatters the number by the first-order
     // term 2 e (r - r_true) / (r^2 + 0.01): its standard deviation comes from the converged
     // reference's standard errors, the live one's being those scaled to its spp.
-    let read = |p: &std::path::Path| penumbra::image_io::HdrImage::read_exr(p).unwrap();
+    let read = |p: &std::path::Path| penumbra::util::image_io::HdrImage::read_exr(p).unwrap();
     let (m, r, se) = (
         read(&method),
         read(&reference),
@@ -470,7 +470,7 @@ fn capture_writes_the_views_the_demo_shows() {
         "-o",
         headless.to_str().unwrap(),
     ]));
-    let read = |p: &std::path::Path| penumbra::image_io::HdrImage::read_exr(&p.with_extension("exr")).unwrap();
+    let read = |p: &std::path::Path| penumbra::util::image_io::HdrImage::read_exr(&p.with_extension("exr")).unwrap();
     let (a, b) = (read(&window), read(&headless));
     assert_eq!((a.width, a.height), (64, 48));
     let close = a
