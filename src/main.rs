@@ -77,6 +77,24 @@ enum Command {
         /// rendered pixels in all).
         #[arg(long, value_name = "N", default_value_t = 1)]
         supersample: u32,
+        /// What to write, as the demo shows it: method, reference, split, error or difference.
+        /// Every view but the method's path-traces the reference the configuration is judged
+        /// against (--reference-spp samples); the EXR then holds the view's linear values.
+        #[arg(long, default_value = "method", value_parser = parse_view)]
+        view: penumbra::commands::views::View,
+        /// Samples per pixel of the reference the views compare against.
+        #[arg(long, value_name = "N", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+        reference_spp: u32,
+        /// The split view's divider, as a fraction of the width.
+        #[arg(long, value_name = "F", default_value_t = 0.5)]
+        split: f32,
+        /// The error view's per-pixel error: relative or flip.
+        #[arg(long, value_name = "MAP", default_value = "relative", value_parser = parse_error_map)]
+        error_map: penumbra::commands::views::ErrorMap,
+        /// The error at the top of the error view's colour scale (the difference view's full
+        /// colour, relative to the reference's mean).
+        #[arg(long, value_name = "E", default_value_t = 1.0, value_parser = parse_exposure)]
+        scale: f32,
     },
     /// Image metrics of TEST against REF (linear radiance EXRs): RMSE, relative MSE, mean bias,
     /// 99th-percentile and max per-pixel error, FLIP on the tone-mapped pair, the mean ratio and
@@ -188,6 +206,22 @@ enum Command {
         /// (as the M key does).
         #[arg(long, value_name = "N")]
         cycle_every: Option<u64>,
+        /// Timed input events, one a line: `FRAME key M`, `FRAME move DX DY DZ`, `FRAME turn YAW
+        /// PITCH`, `FRAME budget SHARE`, `FRAME split F`, `FRAME screenshot PATH` (docs/demo.md).
+        #[arg(long, value_name = "FILE")]
+        script: Option<PathBuf>,
+        /// Write each frame's configuration, view, reference spp and error (JSON) when quitting.
+        #[arg(long, value_name = "FILE")]
+        report_json: Option<PathBuf>,
+        /// Start with the panel hidden (F1 toggles it).
+        #[arg(long)]
+        hide_panel: bool,
+        /// Start with the live reference on, taking this share of the frame time (0 < S < 1).
+        #[arg(long, value_name = "S", value_parser = parse_budget)]
+        reference_budget: Option<f32>,
+        /// The view to start in: method, reference, split, error or difference.
+        #[arg(long, default_value = "method", value_parser = parse_view)]
+        view: penumbra::commands::views::View,
     },
     /// Ground truth: path-trace a scene (Monte Carlo, compute shader) and write the mean radiance
     /// EXR plus the per-pixel standard error of that mean as NAME.stderr.exr next to it. Prints
@@ -333,6 +367,27 @@ fn parse_scope(s: &str) -> Result<penumbra::reference::ErrorScope, String> {
 }
 
 /// An exposure multiplier: a finite number above 0.
+fn parse_view(s: &str) -> Result<penumbra::commands::views::View, String> {
+    penumbra::commands::views::View::parse(s).map_err(|e| e.to_string())
+}
+
+fn parse_error_map(s: &str) -> Result<penumbra::commands::views::ErrorMap, String> {
+    match s {
+        "relative" => Ok(penumbra::commands::views::ErrorMap::Relative),
+        "flip" => Ok(penumbra::commands::views::ErrorMap::Flip),
+        _ => Err(format!("`{s}`: expected relative or flip")),
+    }
+}
+
+fn parse_budget(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(b) if b > 0.0 && b < 1.0 => Ok(b),
+        _ => Err(format!(
+            "`{s}`: expected a share of the frame time, above 0 and below 1"
+        )),
+    }
+}
+
 fn parse_exposure(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
@@ -389,6 +444,11 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             max_error,
             cache_dir,
             supersample,
+            view,
+            reference_spp,
+            split,
+            error_map,
+            scale,
         } => {
             let mut opts = CaptureOptions {
                 png: output,
@@ -403,7 +463,19 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::outln!("{why}");
                 opts.config = Some(decl);
             }
-            for path in penumbra::commands::capture::run(&opts)? {
+            let written = if view == penumbra::commands::views::View::Method {
+                penumbra::commands::capture::run(&opts)?
+            } else {
+                let settings = penumbra::commands::views::ViewSettings {
+                    view,
+                    exposure,
+                    split,
+                    error_map,
+                    scale,
+                };
+                penumbra::commands::capture::run_view(&opts, &settings, reference_spp)?
+            };
+            for path in written {
                 penumbra::outln!("wrote {path}");
             }
         }
@@ -554,8 +626,14 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             screenshot,
             resize_at,
             cycle_every,
+            script,
+            report_json,
+            hide_panel,
+            reference_budget,
+            view,
         } => {
             let opts = options(&render);
+            let script = script.map(|p| penumbra::commands::demo::Script::load(&p)).transpose()?;
             penumbra::commands::demo::run(
                 &opts,
                 penumbra::commands::demo::DemoScript {
@@ -563,6 +641,11 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                     screenshot,
                     resize_at,
                     cycle_every,
+                    script,
+                    report_json,
+                    hide_panel,
+                    reference_budget: reference_budget.unwrap_or(0.0),
+                    view,
                 },
             )?;
         }

@@ -182,6 +182,7 @@ layout(push_constant) uniform Batch {
     uint bounces;        // surface interactions followed after the first hit
     uint flags;
     uint roulette_after; // first interaction subject to Russian roulette (0xffffffff: none)
+    uint first_row;      // the dispatch covers rows first_row.. (a band of the image, or all of it)
 } batch;
 
 // Leave out light that reaches the camera after fewer than two surface interactions.
@@ -494,7 +495,7 @@ vec3 path_radiance(vec2 film, inout uint rng, uint light_key) {
 
 void main() {
     uvec2 size = params.counts.zw;
-    uvec2 pixel = gl_GlobalInvocationID.xy;
+    uvec2 pixel = gl_GlobalInvocationID.xy + uvec2(0u, batch.first_row);
     if (any(greaterThanEqual(pixel, size))) {
         return;
     }

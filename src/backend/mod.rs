@@ -14,6 +14,7 @@ mod descriptors;
 mod device;
 mod error;
 mod frame;
+mod overlay;
 mod pipeline;
 mod recorder;
 mod reflect;
@@ -26,6 +27,7 @@ pub use descriptors::Bind;
 pub use device::{DeviceCaps, Gpu, GpuDesc, ValidationLog};
 pub use error::{BackendError, BackendResult};
 pub use frame::{Frame, FrameFootprint};
+pub use overlay::{Overlay, OverlayFrame};
 pub use pipeline::{
     BlendMode, ColorTarget, ComputePipelineDesc, DepthState, GraphicsPipelineDesc, PipelineId, RasterState,
     ShaderSource, SpecConstant, StencilFace, StencilFaces, VertexAttribute, VertexLayout,

@@ -415,6 +415,12 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// Commands recorded around the recorder (the overlay's renderer) bound a pipeline of their
+    /// own: the next `bind_pipeline` must bind again.
+    pub(crate) fn forget_pipeline(&mut self) {
+        self.pipeline = None;
+    }
+
     pub fn end_rendering(&mut self) {
         if self.rendering {
             unsafe { self.gpu.device.cmd_end_rendering(self.cb) };

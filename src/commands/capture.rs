@@ -97,6 +97,43 @@ pub fn run(opts: &CaptureOptions) -> Result<Vec<String>> {
     Ok(written)
 }
 
+/// `capture --view V`: the method's image composed with its reference (path-traced now at the
+/// capture's size, `reference_spp` samples, the kind the configuration is judged against) as
+/// the demo composes them; writes the PNG (default `capture-VIEW.png`) and the view's linear
+/// values as the EXR (`--exr`, default beside the PNG).
+pub fn run_view(
+    opts: &CaptureOptions,
+    settings: &crate::commands::views::ViewSettings,
+    reference_spp: u32,
+) -> Result<Vec<String>> {
+    let (image, renderer) = render_image(opts)?;
+    let kind = registry::reference_kind(&renderer.configuration)?;
+    let (mut rs, label) =
+        crate::commands::chart::reference_settings(kind, reference_spp, crate::reference::Sampler::Independent);
+    rs.spp = reference_spp;
+    let mut tracer = crate::reference::ReferenceRenderer::at_frame(
+        Gpu::new(&opts.gpu)?,
+        &renderer.scene,
+        opts.size,
+        u64::from(opts.frames.max(1) - 1),
+    )?;
+    let reference = tracer.render(&rs, &mut |_, _| {})?;
+    crate::errln!("reference: {label}, {} spp", reference.spp);
+    let composed = crate::commands::views::compose(&image, Some(&reference.mean), settings)?;
+    let png = opts
+        .png
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("capture-{}.png", settings.view.name())));
+    crate::util::image_io::save_image(&png, composed.display.clone().into(), image::ImageFormat::Png)?;
+    let exr = opts.exr.clone().unwrap_or_else(|| png.with_extension("exr"));
+    composed.values.write_exr(&exr)?;
+    let n = renderer.gpu.validation_log().count() + tracer.gpu.validation_log().count();
+    if n > 0 {
+        return Err(crate::error::Error::Validation(n));
+    }
+    Ok(vec![png.display().to_string(), exr.display().to_string()])
+}
+
 /// `capture --max-error E`: the cheapest configuration within E (relative MSE) from the chart
 /// data cached for this scene and size, and a sentence saying why it was chosen.
 pub fn choose_configuration(

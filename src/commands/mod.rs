@@ -9,3 +9,4 @@ pub mod chart;
 pub mod demo;
 pub mod profile;
 pub mod supersample;
+pub mod views;

@@ -247,6 +247,7 @@ impl Settings {
             bounces,
             flags,
             roulette_after: self.roulette_after.unwrap_or(u32::MAX),
+            first_row: 0,
         }
     }
 }
@@ -279,6 +280,18 @@ struct Params {
     options: [u32; 4],
 }
 
+impl Params {
+    /// The primary rays' frame: the eye, and the image plane's half extents at distance 1.
+    fn set_camera(&mut self, cam: &crate::scene::Camera, width: u32, height: u32) {
+        let (right, up, forward) = cam.basis();
+        let tan_half = (0.5 * cam.fov_y_deg.to_radians()).tan();
+        self.eye = cam.position.extend(1.0).into();
+        self.right = (right * tan_half * (width as f32 / height as f32)).extend(0.0).into();
+        self.up = (up * tan_half).extend(0.0).into();
+        self.forward = forward.extend(0.0).into();
+    }
+}
+
 /// `Batch` push constants in the shader.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -290,6 +303,8 @@ struct BatchPush {
     flags: u32,
     /// First interaction subject to Russian roulette; u32::MAX: none.
     roulette_after: u32,
+    /// The dispatch covers the rows from this one on (a band, or the whole image from 0).
+    first_row: u32,
 }
 
 /// A finished render: per-pixel mean radiance and the standard error of that mean.
@@ -505,14 +520,11 @@ impl ReferenceRenderer {
         })?;
         let replicates = replicate_sums(&mut gpu, 1, 1)?;
         let frame = gpu.create_frame()?;
-        let cam = &scene.camera;
-        let (right, up, forward) = cam.basis();
-        let tan_half = (0.5 * cam.fov_y_deg.to_radians()).tan();
-        let params = Params {
-            eye: cam.position.extend(1.0).into(),
-            right: (right * tan_half * (width as f32 / height as f32)).extend(0.0).into(),
-            up: (up * tan_half).extend(0.0).into(),
-            forward: forward.extend(0.0).into(),
+        let mut params = Params {
+            eye: [0.0; 4],
+            right: [0.0; 4],
+            up: [0.0; 4],
+            forward: [0.0; 4],
             environment: traced.environment.extend(0.0).into(),
             counts: [traced.lights.len() as u32, traced.triangles.len() as u32, width, height],
             environment_map: match &traced.environment_map {
@@ -521,6 +533,7 @@ impl ReferenceRenderer {
             },
             options: [traced.light_beyond_last_bounce() as u32, traced.punctual_lights, 0, 0],
         };
+        params.set_camera(&scene.camera, width, height);
         let features = SceneFeatures::of(&traced);
         Ok(ReferenceRenderer {
             gpu,
@@ -599,6 +612,7 @@ impl ReferenceRenderer {
                 settings.push(done, count, self.params.counts[0]),
                 settings.sampler,
                 checkpoint,
+                self.height,
             )?;
             if short > 0 {
                 if count == 1 {
@@ -642,6 +656,50 @@ impl ReferenceRenderer {
             progress(done, expected);
         }
         readback.ok_or_else(|| Error::Internal("reference: no samples were rendered".into()))
+    }
+
+    /// Traces from `camera` from now on (the scene's camera at creation); samples already
+    /// accumulated were for the old view, so the next batch should start at sample 0.
+    pub fn set_camera(&mut self, camera: &crate::scene::Camera) {
+        self.params.set_camera(camera, self.width, self.height);
+    }
+
+    /// Progressive rendering a batch at a time (the demo's live reference): adds samples
+    /// `done..done + count` to the pixels of `rows` (from sample 0, those pixels start afresh)
+    /// and with `read_back` returns the image, whose every pixel must then hold `done + count`
+    /// samples (the rows of a sample may come in bands over several calls, the last one reading
+    /// back). `Ok(None)` without `read_back`, and also when the device cut the batch short,
+    /// which then added nothing: try fewer samples.
+    pub fn accumulate(
+        &mut self,
+        settings: &Settings,
+        (done, count): (u32, u32),
+        rows: std::ops::Range<u32>,
+        read_back: bool,
+    ) -> Result<Option<ReferenceImage>> {
+        if count == 0 || rows.is_empty() || rows.end > self.height {
+            return Err(Error::Usage(format!(
+                "reference: a batch of {count} samples over rows {rows:?} of {}",
+                self.height
+            )));
+        }
+        let start = Instant::now();
+        let mut push = settings.push(done, count, self.params.counts[0]);
+        push.first_row = rows.start;
+        let short = self.dispatch(push, settings.sampler, read_back, rows.end - rows.start)?;
+        if short > 0 {
+            if count == 1 {
+                return Err(Error::Usage(format!(
+                    "{}: one path-traced sample runs more loop iterations than the device allows one shader invocation ({short} pixel(s) cut short)",
+                    self.gpu.caps().name
+                )));
+            }
+            return Ok(None);
+        }
+        if !read_back {
+            return Ok(None);
+        }
+        self.read_image(done + count, settings.sampler, start).map(Some)
     }
 
     /// The accumulation images as read back by the last checkpoint, holding `spp` samples each.
@@ -735,7 +793,7 @@ impl ReferenceRenderer {
 
     /// One submitted and waited-for batch; the last one also copies the results to the host.
     /// Returns how many pixels' batches were cut short (and so left as they were).
-    fn dispatch(&mut self, push: BatchPush, sampler: Sampler, read_back: bool) -> Result<u32> {
+    fn dispatch(&mut self, push: BatchPush, sampler: Sampler, read_back: bool, rows: u32) -> Result<u32> {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let pipeline = self.pipeline(nee_mode(push.flags), sampler)?;
         if sampler == Sampler::Sobol {
@@ -753,7 +811,7 @@ impl ReferenceRenderer {
         let (replicates, replicates_host) = self.replicates;
         let layer_bytes = self.gpu.buffer_desc(replicates_host)?.size / u64::from(SOBOL_REPLICATES);
         let all_layers = SubresourceRange::all(1, SOBOL_REPLICATES);
-        let (width, height) = (self.width, self.height);
+        let width = self.width;
         let params = bytemuck::bytes_of(&self.params);
         let mut graph = RenderGraph::new();
         graph
@@ -771,7 +829,7 @@ impl ReferenceRenderer {
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("params", Bind::UniformData(params))])?;
             ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-            ctx.rec.dispatch([width, height, 1])
+            ctx.rec.dispatch([width, rows, 1])
         });
         if read_back {
             for (name, image, buffer) in [("read back mean", mean, rb[0]), ("read back second moment", m2, rb[1])] {

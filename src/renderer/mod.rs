@@ -10,7 +10,7 @@ pub mod wind;
 use glam::Mat4;
 
 use crate::backend::{
-    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind,
+    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, Overlay,
     PassTiming, PipelineId, RenderTarget, RenderingDesc, ResourceScope, SamplerDesc, SubresourceRange,
 };
 use crate::bake::{BakeReport, Baker};
@@ -28,7 +28,7 @@ use crate::util::image_io::HdrImage;
 use crate::util::timing::TimingSummary;
 
 /// Where a frame goes besides the radiance target.
-pub enum FrameOutput {
+pub enum FrameOutput<'o> {
     /// Nothing: profiling.
     None,
     /// Copy radiance into a host buffer and return it.
@@ -36,10 +36,16 @@ pub enum FrameOutput {
     /// Tone-map into a swapchain image and leave it ready to present. With `readback`, the
     /// presented pixels are also copied to a host buffer (a screenshot of exactly what the
     /// window shows); fetch them with [`Renderer::presented_pixels`] once the frame completed.
+    ///
+    /// With `radiance`, the frame's radiance is also copied to the host (fetch it with
+    /// [`Renderer::radiance_pixels`] once the frame completed), and an `overlay` is drawn over the
+    /// tone-mapped image before it is presented.
     Present {
         image: ImageId,
         exposure: f32,
         readback: bool,
+        radiance: bool,
+        overlay: Option<&'o mut Overlay>,
     },
 }
 
@@ -277,9 +283,14 @@ impl Renderer {
     }
 
     /// Renders one frame and waits for it when the output is a readback.
-    pub fn render(&mut self, camera: &Camera, output: FrameOutput) -> Result<FrameResult> {
+    pub fn render(&mut self, camera: &Camera, output: FrameOutput<'_>) -> Result<FrameResult> {
         let uniforms = self.uniforms(camera);
-        if matches!(output, FrameOutput::Readback) && self.readback.is_none() {
+        let radiance_readback = match &output {
+            FrameOutput::Readback => true,
+            FrameOutput::Present { radiance, .. } => *radiance,
+            FrameOutput::None => false,
+        };
+        if radiance_readback && self.readback.is_none() {
             let size = self.targets.width as u64 * self.targets.height as u64 * 16;
             self.readback = Some(self.gpu.create_buffer(&BufferDesc {
                 name: "radiance readback".into(),
@@ -386,7 +397,8 @@ impl Renderer {
             method.add_passes(&mut graph, &ctx)?;
         }
         let t = self.targets;
-        match &output {
+        let mut output = output;
+        match &mut output {
             FrameOutput::None => graph.output_image(t.radiance),
             FrameOutput::Readback => {
                 let rb = self
@@ -407,7 +419,23 @@ impl Renderer {
                 image,
                 exposure,
                 readback,
+                radiance,
+                overlay,
             } => {
+                if *radiance {
+                    let rb = self
+                        .readback
+                        .ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
+                    graph
+                        .pass("radiance readback")
+                        .transfer_read(t.radiance, SubresourceRange::mip(0))
+                        .buffer(rb, Access::TransferWrite, None)
+                        .record(move |ctx| ctx.rec.copy_image_to_buffer(t.radiance, 0, 0, rb));
+                    graph
+                        .pass("radiance host visibility")
+                        .buffer(rb, Access::HostRead, None)
+                        .record(|_| Ok(()));
+                }
                 let (pipeline, _) = self
                     .tonemap
                     .ok_or_else(|| Error::Internal("tonemap pipeline missing".into()))?;
@@ -435,6 +463,12 @@ impl Renderer {
                         ctx.rec.end_rendering();
                         Ok(())
                     });
+                if let Some(overlay) = overlay.take() {
+                    graph
+                        .pass("overlay")
+                        .color_attachment(image, SubresourceRange::mip(0), false)
+                        .record(move |ctx| overlay.record(ctx.rec, image));
+                }
                 if let Some(rb) = present_readback {
                     graph
                         .pass("screenshot readback")
@@ -482,6 +516,23 @@ impl Renderer {
         }
         image::RgbaImage::from_raw(d.extent.width, d.extent.height, bytes)
             .ok_or_else(|| Error::Internal("presented pixels do not match the image size".into()))
+    }
+
+    /// The radiance of the last frame rendered with `Present { radiance: true }` (or
+    /// `Readback`). Call after that frame has completed.
+    pub fn radiance_pixels(&self) -> Result<HdrImage> {
+        let rb = self
+            .readback
+            .ok_or_else(|| Error::Usage("no frame was rendered with a radiance readback".into()))?;
+        let bytes = self.gpu.read_buffer(rb)?;
+        HdrImage::from_rgba32f_bytes(self.targets.width, self.targets.height, &bytes)
+            .ok_or_else(|| Error::Usage("radiance readback does not match the target size".into()))
+    }
+
+    /// Frames rendered with the current configuration: the clock's frame, what animation has
+    /// moved the scene to.
+    pub fn clock_frame(&self) -> u64 {
+        self.clock_frame
     }
 
     /// The frame slot the next [`Renderer::render`] records into (for presenting).

@@ -1186,6 +1186,48 @@ fn direct_plus_indirect_is_everything_and_batching_changes_nothing() {
     }
 }
 
+#[test]
+fn samples_traced_in_bands_of_rows_equal_the_whole_image_at_once() {
+    // The demo's live reference traces a sample in bands of rows over several frames: samples
+    // are keyed by pixel and index, so the bands give the image a whole-image render gives,
+    // bit for bit, and a camera moved with `set_camera` gives that camera's render.
+    let scene = scene_file("cornell.toml");
+    let s = Settings {
+        batching: Batching::Fixed(1),
+        ..settings(3, 2, LightPaths::All, 5)
+    };
+    let whole = render(&scene, (12, 10), std::slice::from_ref(&s)).remove(0);
+    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (12, 10)).expect("reference renderer");
+    let mut last = None;
+    for done in 0..3 {
+        for rows in [0..3, 3..4, 4..10] {
+            let read = rows.end == 10;
+            last = r.accumulate(&s, (done, 1), rows, read).expect("band");
+            assert_eq!(last.is_some(), read);
+        }
+    }
+    let banded = last.expect("read back");
+    assert_eq!(banded.spp, 3);
+    assert_eq!(banded.mean, whole.mean, "bands change nothing");
+    assert_eq!(banded.standard_error, whole.standard_error);
+    assert!(r.accumulate(&s, (3, 1), 4..11, false).is_err(), "rows past the image");
+
+    let mut moved = scene.clone();
+    moved.camera.position.x += 0.3;
+    moved.camera.target.x += 0.3;
+    let want = render(&moved, (12, 10), std::slice::from_ref(&s)).remove(0);
+    r.set_camera(&moved.camera);
+    let got = r
+        .accumulate(&s, (0, 3), 0..10, true)
+        .expect("moved")
+        .expect("read back");
+    assert_eq!(
+        got.mean, want.mean,
+        "set_camera traces the new view, afresh from sample 0"
+    );
+    common::assert_clean(&r.gpu);
+}
+
 fn direct_plus_indirect_and_batching(sampler: Sampler) {
     let scene = scene_file("cornell.toml");
     let with = |paths| Settings {

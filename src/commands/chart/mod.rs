@@ -133,7 +133,8 @@ fn scene_without_source(scene: &Scene) -> Scene {
     s
 }
 
-fn reference_settings(kind: ReferenceKind, spp: u32, sampler: Sampler) -> (Settings, String) {
+/// The tracer settings for a kind of reference (direct, bounces, indirect only) and its label.
+pub fn reference_settings(kind: ReferenceKind, spp: u32, sampler: Sampler) -> (Settings, String) {
     let (paths, bounces, label) = match kind {
         ReferenceKind::Direct => (LightPaths::Direct, 0, "direct"),
         ReferenceKind::Bounces(k) => (LightPaths::All, k, "bounces"),

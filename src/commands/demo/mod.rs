@@ -1,0 +1,934 @@
+//! `penumbra demo`: the scene in a window with a fly camera, an on-screen panel (egui) of the
+//! configuration, the GPU pass times, the camera and the view, and a live reference: the path
+//! tracer accumulating the current view while the camera is still, with the method's error
+//! against it and the views that show it (method, reference, split, error map, difference).
+
+mod camera;
+mod live;
+mod panel;
+mod script;
+
+use std::collections::{HashSet, VecDeque};
+use std::path::PathBuf;
+use std::time::Instant;
+
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{DeviceEvent, DeviceId, ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use crate::backend::{vk, Gpu, Overlay, OverlayFrame, PassTiming, Swapchain};
+use crate::commands::capture::{load_scene, CaptureOptions};
+use crate::commands::views::{Composed, ErrorMap, View, ViewSettings};
+use crate::error::{Error, Result};
+use crate::lighting::registry;
+use crate::renderer::{FrameOutput, Renderer};
+use crate::util::image_io::HdrImage;
+
+pub use camera::{bookmarks_path, Bookmarks, FlyCamera};
+pub use live::{LiveError, LiveReference};
+pub use script::{Event, Script};
+
+const FRAMES_IN_FLIGHT: usize = 2;
+/// Frame intervals kept for the panel's graph.
+const HISTORY: usize = 240;
+/// Error metrics are refreshed at most this often while the reference grows (a switch of
+/// method refreshes them at once), and no more often than every four times what they cost, so
+/// that the CPU's FLIP leaves most of the reference's budget to tracing.
+const METRICS_INTERVAL_S: f64 = 0.25;
+
+/// One frame as the report (`--report-json`) records it.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FrameRecord {
+    pub frame: u64,
+    pub configuration: String,
+    pub view: View,
+    pub spp: u32,
+    pub restarts: u32,
+    pub error: Option<LiveError>,
+    /// Wall time since the previous frame.
+    pub frame_ms: f64,
+    /// The live reference's share of it (tracing, read-back, metrics).
+    pub reference_ms: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+struct Running {
+    window: Window,
+    renderer: Renderer,
+    swapchain: Swapchain,
+    overlay: Overlay,
+    egui: egui::Context,
+    egui_input: egui_winit::State,
+    show_panel: bool,
+    camera: FlyCamera,
+    keys: HashSet<KeyCode>,
+    looking: bool,
+    dragging_divider: bool,
+    cursor_x: f64,
+    last: Instant,
+    frames: u64,
+    screenshots: u32,
+    /// Copy the next presented frame back (with --screenshot, the last frame).
+    grab_next: bool,
+    grabbed: Option<image::RgbaImage>,
+    /// Save the view on screen (PNG + EXR) after the next frame.
+    save_view: Option<PathBuf>,
+    /// The scene's methods and combinations (M cycles through them) and the one shown.
+    configurations: Vec<crate::lighting::Configuration>,
+    current: usize,
+    /// Set by a switch: the next frame measures its error whatever the interval.
+    switched: bool,
+    params: Vec<panel::ParamEdit>,
+    live: LiveReference,
+    live_on: bool,
+    reference_s: f64,
+    metrics_at: Option<Instant>,
+    /// What the last refresh of the metrics cost.
+    metrics_s: f64,
+    view: ViewSettings,
+    view_texture: Option<egui::TextureHandle>,
+    composed: Option<Composed>,
+    method_image: Option<HdrImage>,
+    timings: Vec<PassTiming>,
+    frame_ms: VecDeque<f32>,
+    /// The GPU time of recent frames (ms, the sum of the timestamped passes), oldest first.
+    gpu_ms: VecDeque<f32>,
+    messages: Vec<String>,
+    bookmarks: Bookmarks,
+    bookmarks_file: PathBuf,
+    /// The bookmark N goes to.
+    next_bookmark: usize,
+    report: Vec<FrameRecord>,
+    scripted: bool,
+}
+
+/// Scripted runs (tests, benchmarks): stop after a number of frames, save the last one, resize.
+#[derive(Clone, Debug, Default)]
+pub struct DemoScript {
+    pub frames: Option<u64>,
+    pub screenshot: Option<PathBuf>,
+    /// After this many frames, ask the window system for this inner size.
+    pub resize_at: Option<(u64, u32, u32)>,
+    /// Switch to the next configuration every this many frames (as the M key does).
+    pub cycle_every: Option<u64>,
+    /// Timed input events.
+    pub script: Option<Script>,
+    /// Write every frame's record (configuration, view, reference spp, error) as JSON here.
+    pub report_json: Option<PathBuf>,
+    /// Start with the panel hidden (F1 shows it).
+    pub hide_panel: bool,
+    /// Start with the live reference on, taking this share of the frame time (0: off).
+    pub reference_budget: f32,
+    pub view: View,
+}
+
+struct App {
+    opts: CaptureOptions,
+    script: DemoScript,
+    state: Option<Running>,
+    error: Option<Error>,
+}
+
+fn param_edits(config: &crate::lighting::Configuration) -> Vec<panel::ParamEdit> {
+    let schemas = registry::schemas();
+    let mut out = Vec::new();
+    for (part, p) in config.parts.iter().enumerate() {
+        let Some(schema) = schemas.iter().find(|s| s.name == p.decl.name) else {
+            continue;
+        };
+        for s in schema.params {
+            out.push(panel::ParamEdit {
+                part,
+                name: s.name,
+                kind: s.kind,
+                text: p.decl.param(s.name).map(|v| v.to_string()).unwrap_or_default(),
+            });
+        }
+    }
+    out
+}
+
+impl App {
+    fn start(&mut self, el: &ActiveEventLoop) -> Result<Running> {
+        let scene = load_scene(self.opts.scene.as_deref())?;
+        let (w, h) = self.opts.size;
+        let attrs = Window::default_attributes()
+            .with_title("penumbra")
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = el
+            .create_window(attrs)
+            .map_err(|e| Error::Usage(format!("cannot open a window: {e}")))?;
+        let desc = self.opts.gpu.clone().with_display(el)?;
+        let mut gpu = Gpu::new(&desc)?;
+        let size = window.inner_size();
+        let swapchain = gpu.create_swapchain(&window, (size.width.max(1), size.height.max(1)), FRAMES_IN_FLIGHT)?;
+        let overlay = Overlay::new(&gpu, swapchain.format, FRAMES_IN_FLIGHT)?;
+        let extent = swapchain.extent;
+        let configurations = registry::configurations(&scene)?;
+        let renderer = Renderer::new(
+            gpu,
+            scene,
+            self.opts.method.as_deref(),
+            (extent.width, extent.height),
+            FRAMES_IN_FLIGHT,
+        )?;
+        let current = configurations
+            .iter()
+            .position(|c| *c == renderer.configuration)
+            .unwrap_or(0);
+        let camera = FlyCamera::new(renderer.scene.camera.clone());
+        let egui = egui::Context::default();
+        let egui_input = egui_winit::State::new(
+            egui.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu_max_texture_side()),
+        );
+        let bookmarks_file = bookmarks_path(self.opts.scene.as_deref());
+        let bookmarks = Bookmarks::load(&bookmarks_file)?;
+        let budget = self.script.reference_budget;
+        Ok(Running {
+            window,
+            params: param_edits(&renderer.configuration),
+            renderer,
+            swapchain,
+            overlay,
+            egui,
+            egui_input,
+            show_panel: !self.script.hide_panel,
+            camera,
+            keys: HashSet::new(),
+            looking: false,
+            dragging_divider: false,
+            cursor_x: 0.0,
+            last: Instant::now(),
+            frames: 0,
+            screenshots: 0,
+            grab_next: false,
+            grabbed: None,
+            save_view: None,
+            configurations,
+            current,
+            switched: false,
+            live: LiveReference::new(self.opts.gpu.clone(), if budget > 0.0 { budget } else { 0.5 }),
+            live_on: budget > 0.0,
+            reference_s: 0.0,
+            metrics_at: None,
+            metrics_s: 0.0,
+            view: ViewSettings {
+                view: self.script.view,
+                exposure: self.opts.exposure,
+                ..ViewSettings::default()
+            },
+            view_texture: None,
+            composed: None,
+            method_image: None,
+            timings: Vec::new(),
+            frame_ms: VecDeque::new(),
+            gpu_ms: VecDeque::new(),
+            messages: Vec::new(),
+            bookmarks,
+            bookmarks_file,
+            next_bookmark: 0,
+            report: Vec::new(),
+            scripted: self.script.frames.is_some(),
+        })
+    }
+
+    fn fail(&mut self, el: &ActiveEventLoop, e: Error) {
+        self.error.get_or_insert(e);
+        el.exit();
+    }
+}
+
+/// Textures egui may make (its font atlas); every Vulkan 1.3 device allows this size.
+fn gpu_max_texture_side() -> usize {
+    4096
+}
+
+impl Running {
+    /// A message for the panel (and the terminal): failures that leave the old state running.
+    fn report_problem(&mut self, m: String) {
+        crate::errln!("{m}");
+        self.messages.push(m);
+        if self.messages.len() > 4 {
+            self.messages.remove(0);
+        }
+    }
+
+    /// Switches to configuration `next`; a failure is reported and the current one keeps running.
+    fn set_configuration(&mut self, next: usize) {
+        let Some(config) = self.configurations.get(next).cloned() else {
+            return;
+        };
+        match self.renderer.set_configuration(config.clone()) {
+            Ok(()) => {
+                self.current = next;
+                self.params = param_edits(&config);
+                self.switched = true;
+                crate::outln!("configuration: {}", config.name);
+            }
+            Err(e) => self.report_problem(format!("cannot switch to {}: {e}", config.name)),
+        }
+    }
+
+    /// Switches to the next of the scene's configurations.
+    fn next_configuration(&mut self) {
+        if self.configurations.len() < 2 {
+            return;
+        }
+        self.set_configuration((self.current + 1) % self.configurations.len());
+    }
+
+    /// The current configuration with the panel's parameters, rebuilt (its bakes through the
+    /// bake cache); an error keeps the old one running.
+    fn apply_params(&mut self) {
+        let mut config = self.renderer.configuration.clone();
+        for p in &self.params {
+            if p.text.trim().is_empty() {
+                continue;
+            }
+            let value = match toml::from_str::<toml::Table>(&format!("v = {}", p.text)) {
+                Ok(mut t) => t.remove("v").expect("parsed above"),
+                Err(e) => {
+                    self.report_problem(format!("{}: `{}` is not a TOML value: {}", p.name, p.text, e.message()));
+                    return;
+                }
+            };
+            if let Some(part) = config.parts.get_mut(p.part) {
+                part.decl = part.decl.with(p.name, value);
+            }
+        }
+        let started = Instant::now();
+        match self.renderer.set_configuration(config.clone()) {
+            Ok(()) => {
+                let bakes: Vec<String> = self
+                    .renderer
+                    .bakes
+                    .iter()
+                    .map(|b| format!("{} {}", b.name, if b.cached { "from the cache" } else { "built" }))
+                    .collect();
+                crate::outln!(
+                    "applied parameters of {} in {:.2} s ({})",
+                    config.name,
+                    started.elapsed().as_secs_f64(),
+                    bakes.join(", ")
+                );
+                self.configurations[self.current] = config;
+                self.switched = true;
+            }
+            Err(e) => self.report_problem(format!("parameters not applied, keeping the old ones: {e}")),
+        }
+    }
+
+    fn reload_shaders(&mut self) {
+        match self.renderer.reload_shaders() {
+            Ok(n) => crate::outln!("reloaded {n} pipelines from glsl/"),
+            // A broken shader is reported; the old pipelines keep running.
+            Err(e) => self.report_problem(format!("shader reload failed, keeping the old pipelines: {e}")),
+        }
+    }
+
+    fn set_view(&mut self, view: View) {
+        self.view.view = view;
+        crate::outln!("view: {}", view.name());
+    }
+
+    fn next_screenshot_path(&mut self) -> PathBuf {
+        self.screenshots += 1;
+        PathBuf::from(format!("penumbra-{}-{}.png", self.view.view.name(), self.screenshots))
+    }
+
+    /// A key press, from the keyboard or a script.
+    fn key(&mut self, el: &ActiveEventLoop, code: KeyCode) {
+        match code {
+            KeyCode::Escape => el.exit(),
+            KeyCode::F1 => self.show_panel = !self.show_panel,
+            KeyCode::F12 => self.save_view = Some(self.next_screenshot_path()),
+            KeyCode::KeyM => self.next_configuration(),
+            KeyCode::KeyR => self.reload_shaders(),
+            KeyCode::KeyG => self.live_on = !self.live_on,
+            KeyCode::KeyX => {
+                self.view.error_map = match self.view.error_map {
+                    ErrorMap::Relative => ErrorMap::Flip,
+                    ErrorMap::Flip => ErrorMap::Relative,
+                }
+            }
+            KeyCode::KeyV => {
+                let i = View::ALL.iter().position(|v| *v == self.view.view).unwrap_or(0);
+                self.set_view(View::ALL[(i + 1) % View::ALL.len()]);
+            }
+            KeyCode::Digit1 | KeyCode::Digit2 | KeyCode::Digit3 | KeyCode::Digit4 | KeyCode::Digit5 => {
+                let i = [
+                    KeyCode::Digit1,
+                    KeyCode::Digit2,
+                    KeyCode::Digit3,
+                    KeyCode::Digit4,
+                    KeyCode::Digit5,
+                ]
+                .iter()
+                .position(|k| *k == code)
+                .unwrap_or(0);
+                self.set_view(View::ALL[i]);
+            }
+            KeyCode::Equal | KeyCode::NumpadAdd => self.view.exposure = (self.view.exposure * 1.25).min(64.0),
+            KeyCode::Minus | KeyCode::NumpadSubtract => self.view.exposure = (self.view.exposure / 1.25).max(1e-3),
+            KeyCode::BracketLeft => self.view.split = (self.view.split - 0.05).max(0.0),
+            KeyCode::BracketRight => self.view.split = (self.view.split + 0.05).min(1.0),
+            KeyCode::KeyB => self.add_bookmark(),
+            KeyCode::KeyN => {
+                let n = self.bookmarks.bookmark.len();
+                if n > 0 {
+                    self.bookmarks.apply(self.next_bookmark % n, &mut self.camera);
+                    self.next_bookmark = (self.next_bookmark + 1) % n;
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn add_bookmark(&mut self) {
+        self.bookmarks.add(&self.camera);
+        match self.bookmarks.save(&self.bookmarks_file) {
+            Ok(()) => crate::outln!("bookmark saved in {}", self.bookmarks_file.display()),
+            Err(e) => self.report_problem(format!("bookmark not saved: {e}")),
+        }
+    }
+
+    fn run_action(&mut self, a: panel::Action) {
+        match a {
+            panel::Action::Configuration(i) => self.set_configuration(i),
+            panel::Action::ApplyParams => self.apply_params(),
+            panel::Action::ReloadShaders => self.reload_shaders(),
+            panel::Action::Screenshot => self.save_view = Some(self.next_screenshot_path()),
+            panel::Action::AddBookmark => self.add_bookmark(),
+            panel::Action::GoToBookmark(i) => {
+                self.bookmarks.apply(i, &mut self.camera);
+            }
+        }
+    }
+
+    fn scripted_event(&mut self, el: &ActiveEventLoop, e: &Event) -> Result<()> {
+        match e {
+            Event::Key(name) => {
+                let code = key_code(name).ok_or_else(|| Error::Usage(format!("script: unknown key `{name}`")))?;
+                self.key(el, code);
+            }
+            Event::Move(d) => self.camera.translate(glam::Vec3::from(*d)),
+            Event::Turn([y, p]) => self.camera.turn(*y, *p),
+            Event::Budget(b) => {
+                self.live_on = *b > 0.0;
+                if *b > 0.0 {
+                    self.live.budget = b.clamp(0.0, 0.95);
+                }
+            }
+            Event::Split(s) => self.view.split = s.clamp(0.0, 1.0),
+            Event::Screenshot(p) => self.save_view = Some(p.clone()),
+        }
+        Ok(())
+    }
+
+    fn recreate(&mut self) -> Result<()> {
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(());
+        }
+        self.renderer
+            .gpu
+            .recreate_swapchain(&mut self.swapchain, (size.width, size.height))?;
+        let e = self.swapchain.extent;
+        self.renderer.resize((e.width, e.height))?;
+        self.method_image = None;
+        self.composed = None;
+        Ok(())
+    }
+
+    /// The live reference's work for this frame: follow the view, add what the budget pays for.
+    fn reference_step(&mut self) -> Result<bool> {
+        if !self.live_on {
+            return Ok(false);
+        }
+        let kind = registry::reference_kind(&self.renderer.configuration)?;
+        let t = self.renderer.targets;
+        let camera = self.camera.camera();
+        let frame = self.renderer.clock_frame();
+        self.live
+            .follow(&self.renderer.scene, &camera, kind, (t.width, t.height), frame)?;
+        self.live.step()
+    }
+
+    /// Builds the panel (and the view's image behind it) for this frame.
+    fn ui(&mut self) -> Result<OverlayFrame> {
+        let raw = self.egui_input.take_egui_input(&self.window);
+        if let Some(c) = self.composed.as_ref().filter(|_| self.view.view != View::Method) {
+            let img = egui::ColorImage::from_rgba_unmultiplied(
+                [c.display.width() as usize, c.display.height() as usize],
+                c.display.as_raw(),
+            );
+            match &mut self.view_texture {
+                Some(t) => t.set(img, egui::TextureOptions::NEAREST),
+                None => {
+                    self.view_texture = Some(self.egui.load_texture("view", img, egui::TextureOptions::NEAREST));
+                }
+            }
+        }
+        let info = panel::PanelInfo {
+            configurations: &self.configurations,
+            current: self.current,
+            timings: &self.timings,
+            frame_ms: &self.frame_ms,
+            gpu_ms: &self.gpu_ms,
+            live: &self.live,
+            position: self.camera.base.position,
+            bookmarks: self.bookmarks.bookmark.len(),
+            messages: &self.messages,
+        };
+        let mut actions = Vec::new();
+        let show_view = self.view.view != View::Method && self.composed.is_some();
+        let texture = self.view_texture.as_ref().map(|t| t.id());
+        let show_panel = self.show_panel;
+        let mut budget = self.live.budget;
+        let out = self.egui.run_ui(raw, |ui| {
+            let ctx = ui.ctx().clone();
+            if let (true, Some(id)) = (show_view, texture) {
+                let rect = ctx.content_rect();
+                let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+                ctx.layer_painter(egui::LayerId::background())
+                    .image(id, rect, uv, egui::Color32::WHITE);
+            }
+            if show_panel {
+                actions = panel::draw(
+                    &ctx,
+                    &info,
+                    panel::PanelSettings {
+                        view: &mut self.view,
+                        speed: &mut self.camera.speed,
+                        budget: &mut budget,
+                        live_on: &mut self.live_on,
+                        params: &mut self.params,
+                    },
+                );
+            }
+        });
+        self.live.budget = budget;
+        self.egui_input
+            .handle_platform_output(&self.window, out.platform_output);
+        let primitives = self.egui.tessellate(out.shapes, out.pixels_per_point);
+        for a in actions {
+            self.run_action(a);
+        }
+        Ok(OverlayFrame {
+            primitives,
+            textures: out.textures_delta,
+            pixels_per_point: out.pixels_per_point,
+        })
+    }
+
+    /// Renders and presents one frame; returns false when the window is minimised.
+    fn frame(&mut self) -> Result<bool> {
+        let size = self.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(false);
+        }
+        let now = Instant::now();
+        let interval = (now - self.last).as_secs_f64();
+        let dt = interval.min(0.1) as f32;
+        self.last = now;
+        if self.frames > 0 {
+            self.frame_ms.push_back((interval * 1000.0) as f32);
+            if self.frame_ms.len() > HISTORY {
+                self.frame_ms.pop_front();
+            }
+            self.live.frame_time(interval - self.reference_s);
+        }
+        self.camera.fly(&self.keys, dt);
+
+        let slot = self.renderer.current_frame();
+        // Waiting for the slot's previous frame also makes its acquire semaphore reusable.
+        self.renderer.gpu.wait_frame(slot)?;
+        if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
+            self.gpu_ms.push_back(t.iter().map(|p| p.ms as f32).sum());
+            if self.gpu_ms.len() > HISTORY {
+                self.gpu_ms.pop_front();
+            }
+            self.timings = t;
+        }
+        let reference_start = Instant::now();
+        let grew = match self.reference_step() {
+            Ok(g) => g,
+            Err(e) => {
+                self.live_on = false;
+                self.report_problem(format!("live reference stopped: {e}"));
+                false
+            }
+        };
+        let mut reference_s = reference_start.elapsed().as_secs_f64();
+        let overlay = self.ui()?;
+        // Textures are uploaded now even if this frame is not presented.
+        self.overlay.prepare(&self.renderer.gpu, overlay)?;
+        let Some(acquired) = self.renderer.gpu.acquire(&self.swapchain, self.frames as usize)? else {
+            self.recreate()?;
+            return Ok(true);
+        };
+        let wait_stage = vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+        self.renderer.states.acquired_image(acquired.image, wait_stage);
+        let camera = self.camera.camera();
+        let readback = self.grab_next;
+        let interval_s = METRICS_INTERVAL_S.max(4.0 * self.metrics_s);
+        let due = self.metrics_at.is_none_or(|t| t.elapsed().as_secs_f64() >= interval_s);
+        let measure = self.live_on && self.live.image.is_some() && (self.switched || (grew && (due || self.scripted)));
+        let radiance = measure || self.save_view.is_some() || (self.view.view != View::Method && self.live_on);
+        self.renderer.render(
+            &camera,
+            FrameOutput::Present {
+                image: acquired.image,
+                exposure: self.view.exposure,
+                readback,
+                radiance,
+                overlay: Some(&mut self.overlay),
+            },
+        )?;
+        let gpu = &self.renderer.gpu;
+        gpu.submit_frame(
+            self.renderer.last_frame(),
+            Some((acquired.acquired, wait_stage)),
+            Some(acquired.rendered),
+        )?;
+        let presented = gpu.present(&self.swapchain, &acquired)?;
+        if readback || radiance {
+            let t0 = Instant::now();
+            gpu.wait_frame(self.renderer.last_frame())?;
+            // Waiting for the frame is what the radiance read-back costs the window (the next
+            // frame's work cannot overlap this one's): the live reference's when it asked.
+            if radiance && self.live_on {
+                let waited = t0.elapsed().as_secs_f64();
+                self.live.spend(waited);
+                reference_s += waited;
+            }
+        }
+        if readback {
+            self.grabbed = Some(self.renderer.presented_pixels(acquired.image)?);
+            self.grab_next = false;
+        }
+        if radiance {
+            let t0 = Instant::now();
+            self.after_radiance(measure)?;
+            let spent = t0.elapsed().as_secs_f64();
+            self.live.spend(spent);
+            reference_s += spent;
+        }
+        self.reference_s = reference_s;
+        if !presented {
+            self.recreate()?;
+        }
+        self.record(interval, reference_s);
+        self.frames += 1;
+        Ok(true)
+    }
+
+    /// With this frame's radiance read back: the error, the composed view, a saved view.
+    fn after_radiance(&mut self, measure: bool) -> Result<()> {
+        let method = self.renderer.radiance_pixels()?;
+        if measure {
+            let t0 = Instant::now();
+            self.live.measure(&method, self.view.exposure)?;
+            self.metrics_s = t0.elapsed().as_secs_f64();
+            self.metrics_at = Some(Instant::now());
+            self.switched = false;
+        }
+        let reference = self.live.image.as_ref().map(|i| &i.mean);
+        let settings = if reference.is_none() && self.view.view != View::Method {
+            // No reference yet: the method is what there is to show.
+            ViewSettings {
+                view: View::Method,
+                ..self.view
+            }
+        } else {
+            self.view
+        };
+        let composed = crate::commands::views::compose(&method, reference, &settings)?;
+        if let Some(p) = self.save_view.take() {
+            let exr = crate::commands::views::save(&composed, &p)?;
+            crate::outln!(
+                "saved {} and {} ({} view)",
+                p.display(),
+                exr.display(),
+                settings.view.name()
+            );
+        }
+        self.composed = Some(composed);
+        self.method_image = Some(method);
+        Ok(())
+    }
+
+    fn record(&mut self, interval: f64, reference_s: f64) {
+        let t = self.renderer.targets;
+        self.report.push(FrameRecord {
+            frame: self.frames,
+            configuration: self.renderer.configuration.name.clone(),
+            view: self.view.view,
+            spp: self.live.spp(),
+            restarts: self.live.restarts,
+            error: if self.live_on { self.live.error.clone() } else { None },
+            frame_ms: interval * 1000.0,
+            reference_ms: reference_s * 1000.0,
+            width: t.width,
+            height: t.height,
+        });
+    }
+
+    /// Saves the last grabbed presented frame.
+    fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
+        let image = self
+            .grabbed
+            .take()
+            .ok_or_else(|| Error::Internal("no frame was grabbed".into()))?;
+        Ok(crate::util::image_io::save_image(
+            path,
+            image.into(),
+            image::ImageFormat::Png,
+        )?)
+    }
+}
+
+/// The key a script names: a letter, a digit, `F1`…`F12`, or `Escape`, `Plus`, `Minus`, `[`, `]`.
+fn key_code(name: &str) -> Option<KeyCode> {
+    let letters = [
+        KeyCode::KeyA,
+        KeyCode::KeyB,
+        KeyCode::KeyC,
+        KeyCode::KeyD,
+        KeyCode::KeyE,
+        KeyCode::KeyF,
+        KeyCode::KeyG,
+        KeyCode::KeyH,
+        KeyCode::KeyI,
+        KeyCode::KeyJ,
+        KeyCode::KeyK,
+        KeyCode::KeyL,
+        KeyCode::KeyM,
+        KeyCode::KeyN,
+        KeyCode::KeyO,
+        KeyCode::KeyP,
+        KeyCode::KeyQ,
+        KeyCode::KeyR,
+        KeyCode::KeyS,
+        KeyCode::KeyT,
+        KeyCode::KeyU,
+        KeyCode::KeyV,
+        KeyCode::KeyW,
+        KeyCode::KeyX,
+        KeyCode::KeyY,
+        KeyCode::KeyZ,
+    ];
+    let digits = [
+        KeyCode::Digit0,
+        KeyCode::Digit1,
+        KeyCode::Digit2,
+        KeyCode::Digit3,
+        KeyCode::Digit4,
+        KeyCode::Digit5,
+        KeyCode::Digit6,
+        KeyCode::Digit7,
+        KeyCode::Digit8,
+        KeyCode::Digit9,
+    ];
+    let c: Vec<char> = name.chars().collect();
+    match (c.as_slice(), name) {
+        ([l], _) if l.is_ascii_alphabetic() => letters.get((l.to_ascii_uppercase() as u8 - b'A') as usize).copied(),
+        ([d], _) if d.is_ascii_digit() => digits.get((*d as u8 - b'0') as usize).copied(),
+        (_, "F1") => Some(KeyCode::F1),
+        (_, "F12") => Some(KeyCode::F12),
+        (_, "Escape") => Some(KeyCode::Escape),
+        (_, "Plus") => Some(KeyCode::Equal),
+        (_, "Minus") => Some(KeyCode::Minus),
+        (_, "[") => Some(KeyCode::BracketLeft),
+        (_, "]") => Some(KeyCode::BracketRight),
+        _ => None,
+    }
+}
+
+impl App {
+    /// Before frame N: the script's events and the old scripted options.
+    fn before_frame(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let Some(s) = self.state.as_mut() else { return Ok(()) };
+        if let Some(script) = &self.script.script {
+            let due: Vec<Event> = script.due(s.frames).cloned().collect();
+            for e in &due {
+                s.scripted_event(el, e)?;
+            }
+        }
+        // With --frames N --screenshot, the last frame is the one grabbed.
+        if self.script.screenshot.is_some() && self.script.frames.is_some_and(|n| s.frames + 1 >= n) {
+            s.grab_next = true;
+        }
+        Ok(())
+    }
+
+    fn after_frame(&mut self, el: &ActiveEventLoop) -> Result<()> {
+        let Some(s) = self.state.as_mut() else { return Ok(()) };
+        if s.grabbed.is_some() {
+            let path = match (
+                &self.script.screenshot,
+                self.script.frames.is_some_and(|n| s.frames >= n),
+            ) {
+                (Some(p), true) => p.clone(),
+                _ => {
+                    s.screenshots += 1;
+                    PathBuf::from(format!("penumbra-screenshot-{}.png", s.screenshots))
+                }
+            };
+            s.save_grab(&path)?;
+            crate::outln!("saved {} after {} frames", path.display(), s.frames);
+        }
+        if let Some((at, w, h)) = self.script.resize_at {
+            if s.frames == at {
+                // Applied at once (Some) or announced later by a Resized event.
+                if s.window.request_inner_size(PhysicalSize::new(w, h)).is_some() {
+                    s.recreate()?;
+                }
+            }
+        }
+        if self.script.cycle_every.is_some_and(|n| n > 0 && s.frames % n == 0) {
+            s.next_configuration();
+        }
+        if self.script.frames.is_some_and(|n| s.frames >= n) {
+            el.exit();
+        } else {
+            s.window.request_redraw();
+        }
+        Ok(())
+    }
+
+    fn input(s: &mut Running, el: &ActiveEventLoop, event: &WindowEvent) {
+        match event {
+            WindowEvent::MouseInput { state, button, .. } => {
+                let pressed = *state == ElementState::Pressed;
+                let split = s.view.view == View::Split;
+                match button {
+                    MouseButton::Left if split => s.dragging_divider = pressed,
+                    MouseButton::Left | MouseButton::Right => s.looking = pressed,
+                    _ => {}
+                }
+                if pressed && s.dragging_divider {
+                    s.view.split = (s.cursor_x / s.window.inner_size().width.max(1) as f64) as f32;
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                s.cursor_x = position.x;
+                if s.dragging_divider {
+                    s.view.split = (position.x / s.window.inner_size().width.max(1) as f64).clamp(0.0, 1.0) as f32;
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    if event.state == ElementState::Pressed {
+                        s.keys.insert(code);
+                        if !event.repeat {
+                            s.key(el, code);
+                        }
+                    } else {
+                        s.keys.remove(&code);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.state.is_none() {
+            match self.start(el) {
+                Ok(s) => {
+                    s.window.request_redraw();
+                    self.state = Some(s);
+                }
+                Err(e) => self.fail(el, e),
+            }
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let result: Result<()> = (|| {
+            let Some(s) = self.state.as_mut() else { return Ok(()) };
+            let consumed = s.egui_input.on_window_event(&s.window, &event).consumed;
+            match event {
+                WindowEvent::CloseRequested => el.exit(),
+                // A DPI change arrives as a resize too: the swapchain follows the window.
+                WindowEvent::Resized(_) => s.recreate()?,
+                WindowEvent::RedrawRequested => {
+                    self.before_frame(el)?;
+                    if let Some(s) = self.state.as_mut() {
+                        s.frame()?;
+                    }
+                    self.after_frame(el)?;
+                }
+                ref e if !consumed => App::input(s, el, e),
+                _ => {}
+            }
+            Ok(())
+        })();
+        if let Err(e) = result {
+            self.fail(el, e);
+        }
+    }
+
+    fn device_event(&mut self, _el: &ActiveEventLoop, _id: DeviceId, event: DeviceEvent) {
+        if let (Some(s), DeviceEvent::MouseMotion { delta }) = (self.state.as_mut(), event) {
+            if s.looking && !s.egui.egui_wants_pointer_input() {
+                s.camera.look(delta.0 as f32, delta.1 as f32);
+            }
+        }
+    }
+}
+
+/// Runs the window until Esc, the close button, or `max_frames`.
+pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
+    let event_loop = EventLoop::new().map_err(|e| Error::Usage(format!("cannot connect to a display: {e}")))?;
+    let report_json = script.report_json.clone();
+    let mut app = App {
+        opts: opts.clone(),
+        script,
+        state: None,
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::Usage(format!("event loop: {e}")))?;
+    if let Some(e) = app.error.take() {
+        return Err(e);
+    }
+    if let Some(s) = app.state.take() {
+        s.renderer.gpu.wait_idle()?;
+        let n = s.renderer.gpu.validation_log().count() + s.live.validation_messages();
+        if let Some(p) = &report_json {
+            let text = serde_json::to_string_pretty(&s.report).map_err(|e| Error::Usage(e.to_string()))?;
+            crate::util::image_io::write_file(p, text.as_bytes())
+                .map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
+        }
+        let Running {
+            renderer,
+            swapchain,
+            overlay,
+            view_texture,
+            ..
+        } = s;
+        // egui's objects go before the device they were made on.
+        drop(view_texture);
+        drop(overlay);
+        let mut renderer = renderer;
+        renderer.gpu.destroy_swapchain(swapchain);
+        if n > 0 {
+            return Err(Error::Validation(n));
+        }
+    }
+    Ok(())
+}
