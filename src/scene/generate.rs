@@ -1,6 +1,6 @@
 //! Seeded scenes that no method was tuned for: rooms of random size joined by doors and
 //! openings, thin and thick walls, furniture boxes and random albedos, lit in every way the
-//! methods take (lamps, ceiling panels, a sun through a window under a sky, many small lights),
+//! methods take (spot lamps, ceiling panels, a sun through a window under a sky, many small lights),
 //! an open courtyard under sun and sky, and height-field terrain.
 //!
 //! Every scene is ordinary scene TOML text, so it can be saved and read back as any scene is;
@@ -10,10 +10,13 @@
 
 use std::fmt::Write as _;
 
+/// The combinations generated scenes declare, besides each method alone.
+pub const COMBINATIONS: [&str; 1] = ["lpv_over_shadow_volumes"];
+
 /// What lights a generated scene and what it is built of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Theme {
-    /// Rooms lit by point and spot lights.
+    /// Rooms lit by spot lights.
     Lamps,
     /// Rooms lit by quad area lights under the ceiling.
     Panels,
@@ -23,7 +26,7 @@ pub enum Theme {
     Crowd,
     /// An open courtyard of walls and blocks under a sun and a sky.
     Courtyard,
-    /// A height field under a sphere light or a sun, and a sky.
+    /// A height field under a sphere light and a sky.
     Terrain,
 }
 
@@ -134,7 +137,7 @@ pub fn generate(seed: u64, index: u64) -> Generated {
         "# Generated scene {index} of the suite seeded {seed} ({}): `penumbra suite` wrote it.\n",
         theme.name()
     );
-    let list: Vec<String> = methods.iter().map(|m| format!("\"{m}\"")).collect();
+    let list: Vec<String> = methods.iter().map(|m| declaration(m)).collect();
     let _ = writeln!(w.0, "methods = [{}]\n", list.join(", "));
     w.0.push_str(combinations);
     match theme {
@@ -156,6 +159,16 @@ pub fn generate(seed: u64, index: u64) -> Generated {
         theme,
         index,
         text: w.0,
+    }
+}
+
+/// A method at its defaults, but for shadow volumes' lighting model: its default (`faithful`,
+/// the document's attenuated Phong with an ambient term) is not radiance, so only its
+/// `physical` mode can be judged against the path tracer.
+fn declaration(method: &str) -> String {
+    match method {
+        "shadow_volumes" => "{ name = \"shadow_volumes\", mode = \"physical\" }".into(),
+        m => format!("\"{m}\""),
     }
 }
 
@@ -381,23 +394,18 @@ impl RoomPlan {
     }
 }
 
-/// A point light in some rooms and a spot light aimed at the floor in others (at least one).
+/// One to three spot lights under the ceiling, each aimed at a point of its room's floor (the
+/// lights the light propagation volume takes; points come with the many-light theme).
 fn lamps(w: &mut Writer, rng: &mut Rng, plan: &RoomPlan) {
     let h = plan.height;
-    let lit = 1 + rng.below(plan.rooms.len() as u64) as usize;
-    for r in 0..lit {
-        let room = (r + rng.below(plan.rooms.len() as u64) as usize) % plan.rooms.len();
-        if rng.chance(0.5) {
-            let y = h - rng.range(0.3, 0.8);
-            let p = plan.inside(rng, room, 0.4, y);
-            w.point(&format!("bulb {r}"), p, tint(rng, 1.0, 5.0));
-        } else {
-            let p = plan.inside(rng, room, 0.4, h - 0.15);
-            let target = plan.inside(rng, room, 0.6, 0.0);
-            let inner = rng.range(15.0, 35.0);
-            let cone = (inner, inner + rng.range(5.0, 20.0));
-            w.spot(&format!("spot {r}"), p, target, tint(rng, 3.0, 12.0), cone);
-        }
+    for k in 0..1 + rng.below(3) {
+        let room = rng.below(plan.rooms.len() as u64) as usize;
+        let p = plan.inside(rng, room, 0.4, h - 0.15);
+        let target = plan.inside(rng, room, 0.6, 0.0);
+        let inner = rng.range(15.0, 35.0);
+        let cone = (inner, inner + rng.range(5.0, 20.0));
+        let intensity = tint(rng, 3.0, 12.0);
+        w.spot(&format!("spot {k}"), p, target, intensity, cone);
     }
 }
 
@@ -483,7 +491,7 @@ fn courtyard(w: &mut Writer, rng: &mut Rng) {
     w.sun_and_sky(direction, irradiance, sky);
 }
 
-/// A height field of a random shape under a sphere light or a sun, and a sky.
+/// A height field of a random shape under a sphere light and a sky.
 fn terrain(w: &mut Writer, rng: &mut Rng) {
     let size = rng.range(6.0, 10.0);
     w.material("ground", albedo(rng, 0.4, 0.8));
@@ -512,22 +520,17 @@ fn terrain(w: &mut Writer, rng: &mut Rng) {
         [0.0, 0.0, 0.0],
         rng.range(45.0, 60.0),
     );
-    if rng.chance(0.5) {
-        let a = rng.range(0.0, std::f32::consts::TAU);
-        let r = size * 0.55;
-        let _ = writeln!(
-            w.0,
-            "[[lights]]\ntype = \"sphere\"\nname = \"lamp\"\ncenter = {}\nradius = {:.2}\nradiance = {:.1}\n",
-            v3([r * a.cos(), rng.range(1.0, 2.5), r * a.sin()]),
-            rng.range(0.2, 0.4),
-            rng.range(30.0, 80.0)
-        );
-        let _ = writeln!(w.0, "[environment]\ntype = \"constant\"\nradiance = {}\n", v3(sky(rng)));
-    } else {
-        let direction = [rng.range(-1.0, 1.0), -rng.range(0.3, 1.2), rng.range(-1.0, 1.0)];
-        let (irradiance, sky) = (tint(rng, 2.0, 5.0), sky(rng));
-        w.sun_and_sky(direction, irradiance, sky);
-    }
+    // A sphere light and a sky: the lights the height-field methods take.
+    let a = rng.range(0.0, std::f32::consts::TAU);
+    let r = size * 0.55;
+    let _ = writeln!(
+        w.0,
+        "[[lights]]\ntype = \"sphere\"\nname = \"lamp\"\ncenter = {}\nradius = {:.2}\nradiance = {:.1}\n",
+        v3([r * a.cos(), rng.range(1.0, 2.5), r * a.sin()]),
+        rng.range(0.2, 0.4),
+        rng.range(30.0, 80.0)
+    );
+    let _ = writeln!(w.0, "[environment]\ntype = \"constant\"\nradiance = {}\n", v3(sky(rng)));
 }
 
 #[cfg(test)]

@@ -62,6 +62,17 @@ impl SuiteOptions {
             return Err(Error::Usage(format!("--shard {k}/{n}: expected K/N with 1 <= K <= N")));
         }
         crate::supersample::supersampled_size(self.size, self.supersample)?;
+        let known: Vec<&str> = registry::schemas()
+            .iter()
+            .map(|s| s.name)
+            .chain(generate::COMBINATIONS)
+            .collect();
+        if let Some(m) = self.methods.iter().find(|m| !known.contains(&m.as_str())) {
+            return Err(Error::Usage(format!(
+                "--method {m}: no generated scene declares it; known: {}",
+                known.join(", ")
+            )));
+        }
         Ok(())
     }
 
@@ -194,7 +205,15 @@ pub fn run_scene(generated: &Generated, path: &Path, opts: &SuiteOptions, proven
         .filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name))
         .map(|config| {
             let kind = registry::reference_kind(&config).unwrap_or(ReferenceKind::Direct);
+            let start = std::time::Instant::now();
             let outcome = attempt(&scene, &config, &chart_opts);
+            let status = outcome.as_ref().map_or_else(|s| s.name(), |_| "rendered");
+            crate::errln!(
+                "suite: {} {}: {status} in {:.1} s",
+                generated.name,
+                config.name,
+                start.elapsed().as_secs_f64()
+            );
             Attempt { config, kind, outcome }
         })
         .collect();
@@ -286,7 +305,7 @@ fn judge(
             }
         };
         row.frame_ms = m.frame_ms;
-        row.bake_ms = m.bakes.iter().map(|b| b.ms).sum();
+        row.bake_ms = m.bakes.iter().fold(0.0, |total, b| total + b.ms);
         row.warnings = m.warnings.clone();
         if let Some(why) = non_finite(m) {
             row.status = Status::NonFinite(why);
