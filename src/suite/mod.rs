@@ -115,13 +115,23 @@ pub struct Provenance {
 impl Provenance {
     fn probe(gpu: &GpuDesc) -> Result<Provenance> {
         let caps = Gpu::new(gpu)?.caps().clone();
-        let commit = std::process::Command::new("git")
-            .args(["rev-parse", "--short=12", "HEAD"])
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            .unwrap_or_else(|| "unknown".into());
+        let git = |args: &[&str]| {
+            std::process::Command::new("git")
+                .args(args)
+                .output()
+                .ok()
+                .filter(|o| o.status.success())
+                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        };
+        // The commit of the working tree it runs in, marked when the tree has changes.
+        let commit = match (
+            git(&["rev-parse", "--short=12", "HEAD"]),
+            git(&["status", "--porcelain", "--untracked-files=no"]),
+        ) {
+            (Some(c), Some(changes)) if !changes.is_empty() => format!("{c}+changes"),
+            (Some(c), _) => c,
+            (None, _) => "unknown".into(),
+        };
         Ok(Provenance {
             device: caps.name,
             driver: format!("{} {}", caps.driver_name, caps.driver_info),
