@@ -28,7 +28,6 @@ pub mod renderer;
 pub mod scene;
 pub mod sh;
 pub mod shaders;
-pub mod suite;
 pub mod util;
 pub mod world;
 

@@ -532,7 +532,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             cache_dir,
             device,
         } => {
-            let opts = penumbra::suite::SuiteOptions {
+            let opts = penumbra::commands::suite::SuiteOptions {
                 scenes,
                 seed,
                 shard,
@@ -548,7 +548,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 methods,
                 worst,
             };
-            let summary = penumbra::suite::run(&opts)?;
+            let summary = penumbra::commands::suite::run(&opts)?;
             penumbra::out!("{}", summary.markdown());
             penumbra::outln!("wrote {}", output.join("summary.md").display());
         }

@@ -5,7 +5,7 @@
 //! scenes, printing the table; docs/results/ holds its committed run.
 
 use penumbra::scene::generate::Theme;
-use penumbra::suite::{self, Status, SuiteOptions};
+use penumbra::commands::suite::{self, Status, SuiteOptions};
 
 mod common;
 

@@ -15,9 +15,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use crate::backend::{Gpu, GpuDesc};
-use crate::chart::{self, ChartOptions, Measured};
+use crate::commands::chart::{self, ChartOptions, Measured};
 use crate::error::{Error, Result};
-use crate::image_io::HdrImage;
+use crate::util::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, ReferenceKind, Terms};
 use crate::metrics::{self, CompareOptions, Metrics};
 use crate::reference::Sampler;
@@ -61,7 +61,7 @@ impl SuiteOptions {
         if n == 0 || k == 0 || k > n {
             return Err(Error::Usage(format!("--shard {k}/{n}: expected K/N with 1 <= K <= N")));
         }
-        crate::supersample::supersampled_size(self.size, self.supersample)?;
+        crate::commands::supersample::supersampled_size(self.size, self.supersample)?;
         let known: Vec<&str> = registry::schemas()
             .iter()
             .map(|s| s.name)
@@ -176,17 +176,17 @@ pub fn run(opts: &SuiteOptions) -> Result<Summary> {
             generated.name
         );
         let path = scenes_dir.join(format!("{}.toml", generated.name));
-        crate::image_io::write_file(&path, generated.text.as_bytes())
+        crate::util::image_io::write_file(&path, generated.text.as_bytes())
             .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
         rows.extend(run_scene(&generated, &path, opts, &provenance));
         let csv = opts.out.join(opts.csv_name());
-        crate::image_io::write_file(&csv, table::csv(&rows).as_bytes())
+        crate::util::image_io::write_file(&csv, table::csv(&rows).as_bytes())
             .map_err(|e| Error::Usage(format!("{}: {e}", csv.display())))?;
     }
     let summary = table::summarise_dir(&opts.out)?;
     table::save_worst(&summary, &opts.out, opts.worst)?;
     let md = opts.out.join("summary.md");
-    crate::image_io::write_file(&md, summary.markdown().as_bytes())
+    crate::util::image_io::write_file(&md, summary.markdown().as_bytes())
         .map_err(|e| Error::Usage(format!("{}: {e}", md.display())))?;
     Ok(summary)
 }
