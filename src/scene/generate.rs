@@ -128,7 +128,7 @@ impl Rng {
 /// The scene `index` of the suite seeded `seed`.
 pub fn generate(seed: u64, index: u64) -> Generated {
     let theme = Theme::ALL[(index % Theme::ALL.len() as u64) as usize];
-    let mut rng = Rng::new(seed ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03) ^ 0x5eed_0f_5ce7e5);
+    let mut rng = Rng::new(seed ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03) ^ 0x5eed_0f5c_e7e5);
     let name = format!("gen-{seed}-{index:03}-{}", theme.name());
     let mut w = Writer::default();
     let (methods, combinations) = theme.methods();
