@@ -1,11 +1,12 @@
 //! The generated-scene suite at a small N: scenes nobody tuned a method for, each method at its
 //! defaults against the path-traced reference, supersampled.
 //!
-//! `suite_targets_at_a_modest_n` (ignored) is the measurement: the issue's targets over 20
-//! scenes, printing the table; docs/results/ holds its committed run.
+//! `issue_targets_on_generated_scenes` (ignored) is the measurement: the issue's targets over
+//! 12 scenes, printing the table; docs/results/lavapipe/suite_seed1_n12_32x24.* hold a run of
+//! `penumbra suite` with the same settings.
 
-use penumbra::scene::generate::Theme;
 use penumbra::commands::suite::{self, Status, SuiteOptions};
+use penumbra::scene::generate::Theme;
 
 mod common;
 
@@ -130,7 +131,7 @@ fn small_suite_runs_every_method_on_every_theme() {
 /// The issue's targets over generated scenes (PENUMBRA_SUITE_SCENES, default 12) at 32x24,
 /// supersampled 2x2, every configuration at its defaults; prints the table and writes it to
 /// PENUMBRA_SUITE_OUT (default a temporary folder). Not met at the defaults when last run
-/// (12 scenes, lavapipe): see docs/results/suite.md.
+/// (12 scenes, lavapipe): see docs/results/lavapipe/suite_seed1_n12_32x24.md.
 #[test]
 #[ignore]
 fn issue_targets_on_generated_scenes() {

@@ -17,12 +17,12 @@ use std::path::{Path, PathBuf};
 use crate::backend::{Gpu, GpuDesc};
 use crate::commands::chart::{self, ChartOptions, Measured};
 use crate::error::{Error, Result};
-use crate::util::image_io::HdrImage;
 use crate::lighting::{registry, Configuration, ReferenceKind, Terms};
 use crate::metrics::{self, CompareOptions, Metrics};
 use crate::reference::Sampler;
 use crate::scene::generate::{self, Generated, Theme};
 use crate::scene::Scene;
+use crate::util::image_io::HdrImage;
 
 pub use table::{summarise, Row, Status, Summary, Target};
 
