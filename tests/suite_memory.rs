@@ -34,7 +34,11 @@ fn scene_of(theme: Theme) -> Scene {
 /// layer's slack, as in tests/memory.rs), and device memory must not change. Radiosity is left
 /// out: its default bake of these rooms takes many minutes on lavapipe, and its frame (a
 /// light-map lookup) is soaked by tests/memory.rs.
+///
+/// Ignored: 300 frames of the light propagation volume (its volume does not shrink with the
+/// image) take several minutes per configuration on lavapipe; run it with `--ignored`.
 #[test]
+#[ignore]
 fn every_method_renders_300_frames_of_a_generated_scene_in_flat_memory() {
     const LIMIT_MIB: f64 = 6.0;
     let mut failures = Vec::new();
