@@ -8,7 +8,8 @@
 use penumbra::commands::suite::{self, Status, SuiteOptions};
 use penumbra::scene::generate::Theme;
 
-mod common;
+mod support;
+use support as common;
 
 fn options(out: &str, scenes: u64, size: (u32, u32), methods: &[&str]) -> SuiteOptions {
     let dir = common::temp_path(out);

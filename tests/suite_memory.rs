@@ -6,7 +6,8 @@ use penumbra::renderer::Renderer;
 use penumbra::scene::generate::{generate, Theme};
 use penumbra::scene::Scene;
 
-mod common;
+mod support;
+use support as common;
 
 fn rss_anon_mib() -> f64 {
     let status = std::fs::read_to_string("/proc/self/status").expect("read /proc/self/status");
