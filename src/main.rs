@@ -165,6 +165,55 @@ enum Command {
         #[command(flatten)]
         device: DeviceArgs,
     },
+    /// Every method at its defaults over seeded generated scenes (rooms joined by doors, a
+    /// courtyard, terrain; lamps, panels, a sun through a window, many lights, a sky), each
+    /// against its path-traced reference: a CSV row per scene and method, a Markdown summary
+    /// of every CSV in DIR (so shards are summarised together), and the worst scenes as TOML.
+    Suite {
+        /// Scenes in the whole suite (all shards together).
+        #[arg(long, default_value_t = 12)]
+        scenes: u64,
+        /// Seed of the generator: the same seed gives the same scenes.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Image size as WIDTHxHEIGHT.
+        #[arg(long, default_value = "64x48", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Render each method at N times the size in each axis and box-filter it down, so that
+        /// its error is lighting and not aliasing.
+        #[arg(long, value_name = "N", default_value_t = 4)]
+        supersample: u32,
+        /// Run the K-th of N interleaved parts of the scenes (1-based), e.g. 2/8.
+        #[arg(long, value_name = "K/N", default_value = "1/1", value_parser = parse_shard)]
+        shard: (u64, u64),
+        /// Frames timed per configuration at most (the median is reported).
+        #[arg(long, default_value_t = 5, value_parser = parse_frames)]
+        frames: usize,
+        /// Seconds of timed frames per configuration after which timing stops (once 3 are timed).
+        #[arg(long, value_name = "S", default_value_t = 1.0)]
+        timing_budget: f64,
+        /// The most samples per pixel a reference may take.
+        #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
+        reference_spp: u32,
+        /// The reference renders until its noise adds at most this fraction of the smallest
+        /// relative MSE it judges (see `chart`); 0: exactly --reference-spp.
+        #[arg(long, value_name = "F", default_value_t = 0.1)]
+        reference_noise: f64,
+        /// Only this method or combination (repeat for more; default: every one a scene declares).
+        #[arg(long = "method", value_name = "M")]
+        methods: Vec<String>,
+        /// Scenes saved per method in DIR/worst, by relative MSE (every failure is saved too).
+        #[arg(long, default_value_t = 3)]
+        worst: usize,
+        /// Output folder.
+        #[arg(short = 'o', long = "output", value_name = "DIR", default_value = "suite")]
+        output: PathBuf,
+        /// Where references and bakes are cached.
+        #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
+        cache_dir: PathBuf,
+        #[command(flatten)]
+        device: DeviceArgs,
+    },
     /// Per-pass GPU time from timestamp queries: median, min and max over the frames.
     Profile {
         #[command(flatten)]
@@ -331,6 +380,16 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// A frame count: a whole number of at least 1.
+fn parse_shard(s: &str) -> Result<(u64, u64), String> {
+    let parsed = s
+        .split_once('/')
+        .and_then(|(k, n)| Some((k.trim().parse::<u64>().ok()?, n.trim().parse::<u64>().ok()?)));
+    match parsed {
+        Some((k, n)) if k >= 1 && k <= n => Ok((k, n)),
+        _ => Err(format!("expected K/N with 1 <= K <= N (e.g. 2/8), got {s:?}")),
+    }
+}
+
 fn parse_frames(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),
@@ -534,6 +593,42 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 penumbra::util::image_io::save_image(&p, colorize(&map).into(), image::ImageFormat::Png)?;
                 penumbra::outln!("wrote {}", p.display());
             }
+        }
+        Command::Suite {
+            scenes,
+            seed,
+            size,
+            supersample,
+            shard,
+            frames,
+            timing_budget,
+            reference_spp,
+            reference_noise,
+            methods,
+            worst,
+            output,
+            cache_dir,
+            device,
+        } => {
+            let opts = penumbra::commands::suite::SuiteOptions {
+                scenes,
+                seed,
+                shard,
+                size,
+                supersample,
+                frames,
+                timing_budget_s: timing_budget,
+                reference_spp,
+                reference_noise,
+                out: output.clone(),
+                cache_dir,
+                gpu: gpu_desc(&device),
+                methods,
+                worst,
+            };
+            let summary = penumbra::commands::suite::run(&opts)?;
+            penumbra::out!("{}", summary.markdown());
+            penumbra::outln!("wrote {}", output.join("summary.md").display());
         }
         Command::Chart {
             scene,

@@ -1,6 +1,6 @@
 //! The commands of the `penumbra` binary that assemble the layers below: headless capture,
-//! profiling, baking, the speed/accuracy chart and the interactive demo, and the supersampling
-//! that capture and chart share. No technique is named here; methods are reached through the
+//! profiling, baking, the speed/accuracy chart, the generated-scene suite and the interactive
+//! demo, and the supersampling that capture and chart share. No technique is named here; methods are reached through the
 //! lighting layer's registry.
 
 pub mod bake;
@@ -8,5 +8,6 @@ pub mod capture;
 pub mod chart;
 pub mod demo;
 pub mod profile;
+pub mod suite;
 pub mod supersample;
 pub mod views;

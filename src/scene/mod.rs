@@ -18,6 +18,7 @@ mod cornell;
 mod doc;
 mod error;
 mod format;
+pub mod generate;
 pub mod generators;
 pub mod heightfield;
 mod mesh;

@@ -359,17 +359,19 @@ pub fn noisy_copy(mean: &HdrImage, se: &HdrImage, seed: u64) -> HdrImage {
 }
 
 /// One configuration rendered and timed.
-struct Measured {
+pub struct Measured {
     /// At the pixel centres, at the chart's size.
-    image: HdrImage,
+    pub image: HdrImage,
     /// Supersampled and box-filtered to the chart's size (with `supersample` > 1).
-    supersampled: Option<HdrImage>,
-    frame_ms: f64,
-    frames_timed: usize,
-    passes: Vec<(String, f64)>,
-    device: String,
-    bakes: Vec<BakeReport>,
-    warnings: Vec<String>,
+    pub supersampled: Option<HdrImage>,
+    pub frame_ms: f64,
+    pub frames_timed: usize,
+    pub passes: Vec<(String, f64)>,
+    pub device: String,
+    pub bakes: Vec<BakeReport>,
+    pub warnings: Vec<String>,
+    /// What the validation layer reported while it ran (empty without validation).
+    pub validation: Vec<String>,
 }
 
 /// Frames a configuration is timed over at least (fewer only when `--frames` asks for fewer).
@@ -389,7 +391,7 @@ fn advance(renderer: &mut Renderer, camera: &crate::scene::Camera, frames: u64) 
 }
 
 /// Renders and times one configuration (timed at the chart's size only).
-fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
+pub fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
     let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
     let mut renderer =
         Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
@@ -429,6 +431,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
         .map(|s| (s.name, s.median_ms))
         .collect();
     let bakes = renderer.bakes.clone();
+    let mut validation = renderer.gpu.validation_log().take();
     drop(renderer);
     let supersampled = if opts.supersample > 1 {
         let size = crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
@@ -446,6 +449,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
             .render(&camera, FrameOutput::Readback)?
             .image
             .ok_or_else(|| Error::Internal("readback returned no image".into()))?;
+        validation.extend(big.gpu.validation_log().take());
         Some(crate::commands::supersample::box_filter(&image, opts.supersample)?)
     } else {
         None
@@ -459,6 +463,7 @@ fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result
         device,
         bakes,
         warnings,
+        validation,
     })
 }
 
