@@ -37,6 +37,20 @@ fn shipped(name: &str) -> Scene {
         .unwrap()
 }
 
+/// theatre_50's stage and 50 spots with the lighting desk dimming every light every frame, so
+/// the many-light methods upload new intensities (and VLS and bsp_lights re-weight their baked
+/// tables) each frame.
+fn dimmed_theatre() -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("theatre_50.toml")).unwrap();
+    assert!(
+        !text.contains("[light_board]"),
+        "theatre_50 already declares a light board"
+    );
+    let toml = format!("{text}\n[light_board]\ndepth = 0.8\nrate_hz = 0.4\nseed = 7\n");
+    Scene::from_str(&toml, "<memory test: theatre_50 dimmed>", &dir).unwrap()
+}
+
 /// A 16² sine field that moves every frame (so the generator block is uploaded and bound every
 /// frame), one sphere light, a constant sky: the per-frame work of the height-field methods at a
 /// size that renders in milliseconds.
@@ -156,6 +170,13 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         ("sh_lightmap", shipped("sh_courtyard_sky.toml"), 240),
         // Per-vertex PRT: SH keys blended and the light turned by SH rotation every frame.
         ("prt", small_prt(), 240),
+        // The light propagation volume: injection, propagation and the gather every
+        // frame, under a spot light in the Cornell box.
+        ("lpv", shipped("lpv_cornell.toml"), 240),
+        // The many-light methods under a lighting desk that changes every intensity every frame.
+        ("clustered", dimmed_theatre(), 240),
+        ("vls", dimmed_theatre(), 240),
+        ("bsp_lights", dimmed_theatre(), 240),
     ];
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {
