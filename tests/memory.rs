@@ -37,18 +37,27 @@ fn shipped(name: &str) -> Scene {
         .unwrap()
 }
 
-/// theatre_50's stage and 50 spots with the lighting desk dimming every light every frame, so
-/// the many-light methods upload new intensities (and VLS and bsp_lights re-weight their baked
-/// tables) each frame.
-fn dimmed_theatre() -> Scene {
+/// theatre_50.toml with segments of up to 0.5 m² for VLS and bsp_lights (the per-frame work
+/// at a set-up that bakes in seconds).
+fn theatre() -> Scene {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let text = std::fs::read_to_string(dir.join("theatre_50.toml")).unwrap();
-    assert!(
-        !text.contains("[light_board]"),
-        "theatre_50 already declares a light board"
-    );
-    let toml = format!("{text}\n[light_board]\ndepth = 0.8\nrate_hz = 0.4\nseed = 7\n");
-    Scene::from_str(&toml, "<memory test: theatre_50 dimmed>", &dir).unwrap()
+    let mut text = std::fs::read_to_string(dir.join("theatre_50.toml")).unwrap();
+    for name in ["vls", "bsp_lights"] {
+        let decl = format!("{{ name = \"{name}\" }}");
+        assert!(text.contains(&decl), "theatre_50.toml declares {decl}");
+        text = text.replacen(&decl, &format!("{{ name = \"{name}\", max_segment_area = 0.5 }}"), 1);
+    }
+    Scene::from_str(&text, "<memory test: theatre_50>", &dir).unwrap()
+}
+
+/// lpv_cornell.toml with a 16³ volume, 8 propagations and a 128² RSM.
+fn small_lpv() -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("lpv_cornell.toml")).unwrap();
+    let decl = r#"{ name = "lpv" }"#;
+    assert!(text.contains(decl), "lpv_cornell.toml declares {decl}");
+    let text = text.replacen(decl, r#"{ name = "lpv", grid = 16, iterations = 8, rsm = 128 }"#, 1);
+    Scene::from_str(&text, "<memory test: lpv_cornell, 16³>", &dir).unwrap()
 }
 
 /// A 16² sine field that moves every frame (so the generator block is uploaded and bound every
@@ -170,13 +179,14 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         ("sh_lightmap", shipped("sh_courtyard_sky.toml"), 240),
         // Per-vertex PRT: SH keys blended and the light turned by SH rotation every frame.
         ("prt", small_prt(), 240),
-        // The light propagation volume: injection, propagation and the gather every
-        // frame, under a spot light in the Cornell box.
-        ("lpv", shipped("lpv_cornell.toml"), 240),
-        // The many-light methods under a lighting desk that changes every intensity every frame.
-        ("clustered", dimmed_theatre(), 240),
-        ("vls", dimmed_theatre(), 240),
-        ("bsp_lights", dimmed_theatre(), 240),
+        // The light propagation volume: RSM, injection, propagation and the lookup every frame,
+        // under a spot light in the Cornell box (a 16³ volume: the per-frame work, not its size).
+        ("lpv", small_lpv(), 240),
+        // The many-light methods on theatre_50, whose lighting desk changes every light's
+        // intensity every frame (new uploads, and VLS and bsp_lights re-weight their tables).
+        ("clustered", theatre(), 240),
+        ("vls", theatre(), 240),
+        ("bsp_lights", theatre(), 240),
     ];
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {
