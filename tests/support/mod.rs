@@ -196,10 +196,7 @@ pub fn measure_gpu() -> Gpu {
 }
 
 /// A comma-separated list of numbers from the environment variable `var`, else `default`.
-pub fn env_list<T: std::str::FromStr>(var: &str, default: &[T]) -> Vec<T>
-where
-    T: Clone,
-{
+pub fn env_list<T: std::str::FromStr + Clone>(var: &str, default: &[T]) -> Vec<T> {
     match std::env::var(var) {
         Ok(v) => v
             .split(',')
