@@ -1,8 +1,9 @@
 //! Light propagation volumes on the GPU (seed 004, digest §7): the propagation against the CPU
 //! reference (which reproduces the digest's tables, src/lighting/lpv/tests.rs) for both schemes,
 //! both storages and the geometry volume; the injection's flux ρ·E⊥·A and τ·E⊥·A at any RSM
-//! resolution (T8); the thin-wall leak with and without the geometry volume (T10c); and the
-//! Cornell box's indirect light against the path tracer with one bounce.
+//! resolution (T8); the document's reflected lobe's sign (T10b); the thin-wall leak with and
+//! without the geometry volume (T10c); and the Cornell box's indirect light against the path
+//! tracer with one bounce.
 
 use crate::support as common;
 
@@ -259,6 +260,26 @@ fn injected_flux_is_rho_e_a_at_any_rsm_resolution() {
         assert!((area - 1.0).abs() < quantisation, "rasterised area {area}");
         assert!(up > 0.0 && down < 0.0, "lobes: reflected y {up}, transmitted y {down}");
     }
+}
+
+/// T10b: the document's gather lobes, `reflect(-L, N)` with L the light's direction of travel
+/// (digest §2.5): under an overhead sun, for a surface facing up, the reflected delta lobe
+/// points down into the reflector, the same way as the transmitted lobe (0.75 × the albedo
+/// along L). Every cell then holds albedo · (Y(b) + 0.75 Y(L)) scaled, so its y coefficient
+/// over its constant one is Y1·(b_y + 0.75·L_y)/(1.75·Y00): −√3 with the lobe pointing down
+/// (b_y = −1), +√3/7 had it pointed up.
+#[test]
+fn t10b_the_documents_reflected_lobe_points_into_the_reflector() {
+    let (g, _, _) = volume_of(&leaf(r#"{ name = "lpv", mode = "faithful", iterations = 0 }"#));
+    let (mut cells, mut worst) = (0, 0.0f64);
+    for c in g.iter().flat_map(|ch| ch.cells.iter()).filter(|c| c[0] > 1e-9) {
+        let ratio = c[2] / c[0];
+        worst = worst.max((ratio + 3f64.sqrt()).abs());
+        cells += 1;
+    }
+    println!("{cells} lit cells; y over constant coefficient within {worst:.2e} of -sqrt(3)");
+    assert!(cells > 0, "the gather injected nothing");
+    assert!(worst < 1e-3, "a cell's lobe is not the document's downward pair: {worst}");
 }
 
 /// Irradiance at world point `p` on a surface facing `n`, from the volume (the composite's
