@@ -279,7 +279,10 @@ fn t10b_the_documents_reflected_lobe_points_into_the_reflector() {
     }
     println!("{cells} lit cells; y over constant coefficient within {worst:.2e} of -sqrt(3)");
     assert!(cells > 0, "the gather injected nothing");
-    assert!(worst < 1e-3, "a cell's lobe is not the document's downward pair: {worst}");
+    assert!(
+        worst < 1e-3,
+        "a cell's lobe is not the document's downward pair: {worst}"
+    );
 }
 
 /// Irradiance at world point `p` on a surface facing `n`, from the volume (the composite's
@@ -711,6 +714,39 @@ fn pearson(a: &[f64], b: &[f64]) -> f64 {
     cov / (va * vb).sqrt()
 }
 
+/// T11's second half: the light a lit ground of albedo 0.5 sends to the underside of a black leaf
+/// 1 m up that shades it, E/(ρ_g·E_sun) at 0, 0.25 and 0.5 m from under its centre, and its
+/// ratios to Lambert's polygon formula (0.76054, 0.77703, 0.81963).
+fn reflected_under_a_leaf() -> (Vec<f64>, Vec<f64>) {
+    let (rho, e_sun) = (0.5, 2.0);
+    let (g, placement, _) = volume_of(&leaf_over_ground((0.0, 0.0), rho));
+    let xs = [0.0, 0.25, 0.5];
+    let closed = [0.76054, 0.77703, 0.81963];
+    let under: Vec<f64> = xs
+        .iter()
+        .map(|&x| irradiance(&g[0], &placement, DVec3::new(x, 1.0, 0.0), DVec3::NEG_Y) / (rho * e_sun))
+        .collect();
+    let ratio: Vec<f64> = under.iter().zip(closed).map(|(l, c)| l / c).collect();
+    println!("reflected to the underside: LPV {under:.5?}, closed form {closed:?}: ratios {ratio:.3?}");
+    (under, ratio)
+}
+
+/// T11 under the leaf at the digest's gate, ratio in [0.5, 2]: a known failure, kept ignored.
+/// Measured 0.349, 0.380 and 0.468 at 0, 0.25 and 0.5 m (32³ LPV of 0.25 m cells, 32
+/// iterations, lavapipe), with the transmitted half of T11 inside the gate. The underside is 4
+/// cells above the lit ground and the volume carries light diffusively (T5–T7), not along
+/// straight lines; which part of that loses the light is not established: the shortfall is
+/// recorded here, not fixed.
+#[test]
+#[ignore]
+fn t11_reflected_under_the_leaf_at_the_digests_gate() {
+    let (_, ratio) = reflected_under_a_leaf();
+    assert!(
+        ratio.iter().all(|q| (0.5..=2.0).contains(q)),
+        "reflected ratios {ratio:?}"
+    );
+}
+
 /// T11: one bounce through and under a leaf against Lambert's polygon formula (digest §7): the
 /// light a leaf of transmittance τ passes to the ground below, E/(τ·E_sun) = 0.23946, 0.18037,
 /// 0.08435, 0.01392, 0.00114 at 0, 0.5, 1, 2, 4 m from under its centre; and the light a lit
@@ -733,16 +769,7 @@ fn one_bounce_through_and_under_a_leaf_against_the_closed_forms() {
     let through_ratio: Vec<f64> = through.iter().zip(closed).map(|(l, c)| l / c).collect();
     println!("transmitted to the ground: LPV {through:.5?}, closed form {closed:?}: ratios {through_ratio:.3?}, correlation {r:.3}");
 
-    let rho = 0.5;
-    let (g, placement, _) = volume_of(&leaf_over_ground((0.0, 0.0), rho));
-    let xs = [0.0, 0.25, 0.5];
-    let closed = [0.76054, 0.77703, 0.81963];
-    let under: Vec<f64> = xs
-        .iter()
-        .map(|&x| irradiance(&g[0], &placement, DVec3::new(x, 1.0, 0.0), DVec3::NEG_Y) / (rho * e_sun))
-        .collect();
-    let under_ratio: Vec<f64> = under.iter().zip(closed).map(|(l, c)| l / c).collect();
-    println!("reflected to the underside: LPV {under:.5?}, closed form {closed:?}: ratios {under_ratio:.3?}");
+    let (under, under_ratio) = reflected_under_a_leaf();
 
     // The digest's gates (within [0.5, 2], correlation > 0.9) where the LPV meets them.
     assert!(
