@@ -306,7 +306,7 @@ fn chart_and_speedup_at_equal_error() {
 #[test]
 #[ignore]
 fn speedup_at_equal_horizon_error() {
-    let mut resolutions = common::env_list("HF_MEASURE_RESOLUTIONS", &[256u32]);
+    let mut resolutions = crate::support::env_list("HF_MEASURE_RESOLUTIONS", &[256u32]);
     if std::env::var("HF_MEASURE_512").is_ok() && !resolutions.contains(&512) {
         resolutions.push(512);
     }
