@@ -37,6 +37,29 @@ fn shipped(name: &str) -> Scene {
         .unwrap()
 }
 
+/// theatre_50.toml with segments of up to 0.5 m² for VLS and bsp_lights (the per-frame work
+/// at a set-up that bakes in seconds).
+fn theatre() -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut text = std::fs::read_to_string(dir.join("theatre_50.toml")).unwrap();
+    for name in ["vls", "bsp_lights"] {
+        let decl = format!("{{ name = \"{name}\" }}");
+        assert!(text.contains(&decl), "theatre_50.toml declares {decl}");
+        text = text.replacen(&decl, &format!("{{ name = \"{name}\", max_segment_area = 0.5 }}"), 1);
+    }
+    Scene::from_str(&text, "<memory test: theatre_50>", &dir).unwrap()
+}
+
+/// lpv_cornell.toml with a 16³ volume, 8 propagations and a 128² RSM.
+fn small_lpv() -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(dir.join("lpv_cornell.toml")).unwrap();
+    let decl = r#"{ name = "lpv" }"#;
+    assert!(text.contains(decl), "lpv_cornell.toml declares {decl}");
+    let text = text.replacen(decl, r#"{ name = "lpv", grid = 16, iterations = 8, rsm = 128 }"#, 1);
+    Scene::from_str(&text, "<memory test: lpv_cornell, 16³>", &dir).unwrap()
+}
+
 /// A 16² sine field that moves every frame (so the generator block is uploaded and bound every
 /// frame), one sphere light, a constant sky: the per-frame work of the height-field methods at a
 /// size that renders in milliseconds.
@@ -156,6 +179,14 @@ fn every_method_renders_hundreds_of_frames_in_flat_memory() {
         ("sh_lightmap", shipped("sh_courtyard_sky.toml"), 240),
         // Per-vertex PRT: SH keys blended and the light turned by SH rotation every frame.
         ("prt", small_prt(), 240),
+        // The light propagation volume: RSM, injection, propagation and the lookup every frame,
+        // under a spot light in the Cornell box (a 16³ volume: the per-frame work, not its size).
+        ("lpv", small_lpv(), 240),
+        // The many-light methods on theatre_50, whose lighting desk changes every light's
+        // intensity every frame (new uploads, and VLS and bsp_lights re-weight their tables).
+        ("clustered", theatre(), 240),
+        ("vls", theatre(), 240),
+        ("bsp_lights", theatre(), 240),
     ];
     let mut failures = Vec::new();
     for (method, scene, frames) in cases {

@@ -12,6 +12,7 @@ layout(location = 2) flat in vec3 in_albedo;
 layout(location = 3) flat in vec3 in_emission;
 layout(location = 4) flat in uint in_set;
 layout(location = 5) in vec3 in_direct;
+layout(location = 6) flat in vec4 in_specular;
 
 layout(location = 0) out vec4 out_radiance;
 
@@ -22,7 +23,7 @@ void main() {
         radiance = in_emission + in_albedo / PI * environment_irradiance(n);
     }
     if ((TERMS & 2u) != 0u) {
-        radiance += PER_VERTEX != 0u ? in_direct : vls_direct(in_set, in_world, n, in_albedo);
+        radiance += PER_VERTEX != 0u ? in_direct : vls_direct(in_set, in_world, n, in_albedo, in_specular);
     }
     out_radiance = vec4(radiance, 1.0);
 }

@@ -18,6 +18,7 @@ layout(set = 0, binding = 2) readonly buffer Sets { uint items[]; } sets;
 layout(set = 0, binding = 3) uniform VlsParams {
     uvec4 info;      // x: light model (common/many_lights.glsl), y: K
     vec4 constants;  // (k, kc, kl, kq)
+    vec4 ambient;    // x: global ambient (times the albedo), y: each light's ambient; opengl only
 } params;
 
 // Thin surfaces are lit from the viewer's side, as forward shades them.
@@ -26,16 +27,24 @@ vec3 facing_normal(vec3 n, vec3 p) {
     return dot(n, frame.camera_pos.xyz - p) < 0.0 ? -n : n;
 }
 
-// The light of set `set`'s <= K lights at their current intensities.
-vec3 vls_direct(uint set, vec3 p, vec3 n, vec3 albedo) {
-    vec3 sum = vec3(0.0);
+// The light of set `set`'s <= K lights at their current intensities; the fixed-function model
+// adds the global ambient and each light's ambient and specular terms. `specular` is the
+// material's (ks, shininess).
+vec3 vls_direct(uint set, vec3 p, vec3 n, vec3 albedo, vec4 specular) {
+    bool opengl = params.info.x == MODEL_OPENGL;
+    vec3 sum = opengl ? params.ambient.x * albedo : vec3(0.0);
     uint k = params.info.y;
     for (uint i = 0u; i < k; ++i) {
         uint index = sets.items[set * k + i];
         if (index >= frame.counts.x) {
             break;
         }
-        sum += many_light_shade(params.info.x, params.constants, lights.items[index], p, n, albedo);
+        Light light = lights.items[index];
+        sum += many_light_shade(params.info.x, params.constants, light, p, n, albedo);
+        if (opengl) {
+            sum += opengl_ambient_specular(params.constants, params.ambient.y, light, p, n, frame.camera_pos.xyz,
+                                           albedo, specular);
+        }
     }
     return sum;
 }

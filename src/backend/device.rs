@@ -79,6 +79,10 @@ pub struct DeviceCaps {
     pub max_compute_work_group_invocations: u32,
     pub max_compute_work_group_size: [u32; 3],
     pub max_bound_descriptor_sets: u32,
+    /// The most bytes one storage-buffer binding may cover (`maxStorageBufferRange`).
+    pub max_storage_buffer_range: u32,
+    /// The largest single memory allocation the driver promises (`maxMemoryAllocationSize`).
+    pub max_memory_allocation_size: u64,
     pub depth_stencil_format: vk::Format,
     pub validation: bool,
     /// Uniform blocks are handed to the driver as read-only storage blocks (lavapipe; see
@@ -116,6 +120,14 @@ impl DeviceCaps {
                 },
             ),
             ("max 2D image".into(), self.max_image_dimension_2d.to_string()),
+            (
+                "max storage buffer".into(),
+                format!(
+                    "{} MiB a binding, {} MiB an allocation",
+                    self.max_storage_buffer_range >> 20,
+                    self.max_memory_allocation_size >> 20
+                ),
+            ),
             ("max 3D image".into(), self.max_image_dimension_3d.to_string()),
             (
                 "max push constants".into(),
@@ -522,7 +534,10 @@ impl Gpu {
         }
 
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        let mut v11 = vk::PhysicalDeviceVulkan11Properties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut driver)
+            .push_next(&mut v11);
         unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
         let driver_name = driver
             .driver_name_as_c_str()
@@ -576,6 +591,8 @@ impl Gpu {
             max_compute_work_group_invocations: limits.max_compute_work_group_invocations,
             max_compute_work_group_size: limits.max_compute_work_group_size,
             max_bound_descriptor_sets: limits.max_bound_descriptor_sets,
+            max_storage_buffer_range: limits.max_storage_buffer_range,
+            max_memory_allocation_size: v11.max_memory_allocation_size,
             depth_stencil_format,
             validation: false,
             uniform_blocks_as_storage: match std::env::var("PENUMBRA_UNIFORM_BLOCKS_AS_STORAGE").as_deref() {

@@ -575,3 +575,67 @@ fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
     // Frame 2 against frame 0 would be (0.5 − 1)² / 1 = 0.25 relative MSE.
     assert!(at_0 < 1e-3 && at_2 < 1e-3, "frame 0 {at_0}, frame 2 {at_2}");
 }
+
+/// The CSV's bake columns: every point of a baking method's sweep reports the time and bytes of
+/// its set-up (built, or read back from the cache), a method that bakes nothing reports zero.
+#[test]
+fn chart_csv_reports_bake_time_and_size_where_a_method_bakes() {
+    let scene = common::temp_path("bake-chart.toml");
+    std::fs::write(
+        &scene,
+        r#"methods = [{ name = "bsp_lights", max_segment_area = 0.5 }, "forward"]
+[camera]
+position = [0, 3, 4]
+target = [0, 0, 0]
+[[materials]]
+name = "grey"
+albedo = 0.6
+[[objects]]
+name = "floor"
+mesh = "quad"
+corner = [-2, 0, 2]
+edge_u = [4, 0, 0]
+edge_v = [0, 0, -4]
+material = "grey"
+[[objects]]
+name = "block"
+mesh = "box"
+size = [0.6, 0.6, 0.6]
+translate = [0, 0.35, 0]
+material = "grey"
+[[lights]]
+type = "spot"
+position = [0.5, 2.5, 0.5]
+direction = [0, -1, 0]
+intensity = 4
+inner_deg = 25
+outer_deg = 40
+"#,
+    )
+    .unwrap();
+    let (cache, csv, png) = (
+        common::temp_path("bake-chart-cache"),
+        common::temp_path("bake-chart.csv"),
+        common::temp_path("bake-chart.png"),
+    );
+    let options = ["--size", "24x24", "--reference-spp", "4", "--frames", "3"];
+    ok(&chart(scene.to_str().unwrap(), &options, &cache, &png, &csv));
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let (methods, ms, bytes) = (
+        column(&table, "method"),
+        column(&table, "bake_ms"),
+        column(&table, "bake_bytes"),
+    );
+    assert!(
+        methods.iter().any(|m| m == "bsp_lights") && methods.iter().any(|m| m == "forward"),
+        "{table}"
+    );
+    for ((method, ms), bytes) in methods.iter().zip(&ms).zip(&bytes) {
+        let (ms, bytes): (f64, u64) = (ms.parse().unwrap(), bytes.parse().unwrap());
+        if method == "forward" {
+            assert!(ms == 0.0 && bytes == 0, "forward bakes nothing: {ms} ms, {bytes} bytes");
+        } else {
+            assert!(ms > 0.0 && bytes > 0, "{method}: {ms} ms, {bytes} bytes\n{table}");
+        }
+    }
+}

@@ -538,3 +538,83 @@ fn a_closed_standard_output_is_reported() {
     let null = run(">/dev/null");
     assert!(null.status.success(), "{}", stderr(&null));
 }
+
+/// The progress line (rate, elapsed, remaining, redrawn with `\r`) belongs on a terminal: with
+/// stderr piped, a reference render that runs past the line's one-second start leaves only its
+/// summary. The samples double until the render takes long enough for the line to have shown.
+#[test]
+fn the_progress_line_is_silent_when_stderr_is_not_a_terminal() {
+    let exr = common::temp_path("progress-silent.exr");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml");
+    let mut spp = 64u32;
+    loop {
+        let t = std::time::Instant::now();
+        let o = penumbra(&[
+            "reference",
+            scene,
+            "--size",
+            "32x32",
+            "--spp",
+            &spp.to_string(),
+            "-o",
+            path_str(&exr),
+        ]);
+        let secs = t.elapsed().as_secs_f64();
+        let err = stderr(&o);
+        assert!(o.status.success(), "{err}");
+        // Past 10 s a piped run logs a plain line every few seconds (util::progress); below
+        // that, nothing but the summary.
+        assert!(
+            !err.contains('\r') && !err.contains("\x1b[K") && (secs >= 10.0 || !err.contains("% (")),
+            "a progress line on a pipe after {secs:.1} s at {spp} spp:\n{err:?}"
+        );
+        // The line starts after one second: a shorter render proves nothing.
+        if secs > 2.0 {
+            break;
+        }
+        assert!(spp < 1 << 16, "{spp} spp took only {secs:.1} s");
+        spp *= 2;
+    }
+}
+
+/// `profile --json` lists the bakes the methods ran when they were created, with their time and
+/// size: radiosity's light-map on the Cornell box.
+#[test]
+fn profile_json_lists_a_bake() {
+    let json = common::temp_path("profile-bake.json");
+    let cache = common::temp_path("profile-bake-cache");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell_radiosity.toml");
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+    cmd.args([
+        "profile",
+        scene,
+        "--method",
+        "radiosity",
+        "--size",
+        "32x32",
+        "--frames",
+        "2",
+    ])
+    .args(["--json", path_str(&json)])
+    .args([
+        "--device",
+        &std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()),
+    ])
+    .env("PENUMBRA_VALIDATION", "1")
+    .env("PENUMBRA_CACHE", &cache);
+    let o = cmd.output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let bakes = v["bakes"].as_array().unwrap();
+    assert!(!bakes.is_empty(), "no bake listed: {v}");
+    for b in bakes {
+        assert!(!b["name"].as_str().unwrap().is_empty(), "{b}");
+        assert!(
+            b["ms"].as_f64().unwrap() > 0.0 && b["bytes"].as_u64().unwrap() > 0,
+            "{b}"
+        );
+        assert_eq!(b["cached"], false, "a fresh cache: {b}");
+    }
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("bakes (at creation, not frame time)"), "{table}");
+}

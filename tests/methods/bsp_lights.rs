@@ -534,6 +534,7 @@ fn measure_setup_and_gemv() {
             &sc,
             &geometry,
             &config,
+            penumbra::lighting::bsp_lights::MAX_MATRIX_BYTES,
             &mut penumbra::util::progress::Progress::new("measure"),
         )
         .unwrap();

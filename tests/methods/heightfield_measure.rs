@@ -70,7 +70,9 @@ fn teddy_asset_is_reproducible() {
 }
 
 fn out_dir() -> std::path::PathBuf {
-    let d = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/heightfield-measure");
+    let d = std::env::var_os("PENUMBRA_MEASURE_OUT")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/heightfield-measure"));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -294,7 +296,8 @@ fn chart_and_speedup_at_equal_error() {
     }
 }
 
-/// Speed-up at equal horizon error, at 256² (and 512² with HF_MEASURE_512=1): every texel's
+/// Speed-up at equal horizon error, at 256² (`HF_MEASURE_RESOLUTIONS=256,512,1024` for more;
+/// `HF_MEASURE_512=1` adds 512²): every texel's
 /// horizon in every direction of the mountains and city fields; the truth is the brute force at
 /// 0.125-texel steps; the error is the mean |Δ| in degrees; the cost is the GPU time of the
 /// horizons alone (the horizon kernel plus the pyramid or bounds it reads), since the
@@ -303,8 +306,8 @@ fn chart_and_speedup_at_equal_error() {
 #[test]
 #[ignore]
 fn speedup_at_equal_horizon_error() {
-    let mut resolutions = vec![256u32];
-    if std::env::var("HF_MEASURE_512").is_ok() {
+    let mut resolutions = crate::support::env_list("HF_MEASURE_RESOLUTIONS", &[256u32]);
+    if std::env::var("HF_MEASURE_512").is_ok() && !resolutions.contains(&512) {
         resolutions.push(512);
     }
     let mut text = String::from("| field | resolution | configuration | horizon MAE (°) | bias (°) | horizon ms (kernel + pyramid/bounds) |\n|---|---|---|---|---|---|\n");

@@ -125,7 +125,7 @@ fn without_a_board_frames_do_not_change() {
 }
 
 /// The scenes of issue 15 with their light and triangle counts.
-const MANY_LIGHT_SCENES: [(&str, usize, usize); 7] = [
+const MANY_LIGHT_SCENES: [(&str, usize, usize); 8] = [
     ("many_box.toml", 1, 14),
     ("many_polygon3.toml", 3, 4),
     ("many_intersecting.toml", 10, 6),
@@ -133,6 +133,7 @@ const MANY_LIGHT_SCENES: [(&str, usize, usize); 7] = [
     ("theatre_50.toml", 50, 70),
     ("theatre_100.toml", 100, 70),
     ("many_stress.toml", 1024, 70),
+    ("many_bounded.toml", 1024, 70),
 ];
 
 #[test]

@@ -291,16 +291,20 @@ fn gpu_visibility_matches_the_cpu_through_a_deep_bvh() {
 
 /// CPU against GPU visibility rays per second on the open box at patch 0.05 (10,000 samples),
 /// median of 3: `cargo test --release --test methods -- --ignored --nocapture sh_lightmap_gpu::`.
+/// `PENUMBRA_MEASURE_DEVICE` picks the device (no validation layer); `SH_MEASURE_PATCH` and
+/// `SH_MEASURE_SAMPLES` shrink the case.
 /// Measured on 2 shared cores: 4,961 patches, 24.8 M rays, 1.4e-6 of the bits differ; CPU
 /// 6.5e6 rays/s, llvmpipe (LLVM 15.0.6, 256 bits) 1.3e6 rays/s.
 #[test]
 #[ignore]
 fn measure_visibility_rays_per_second() {
-    let mut gpu = common::test_gpu();
+    let mut gpu = common::measure_gpu();
     let name = gpu.caps().name.clone();
     let tris = open_box(0.5);
-    let samples = SampleSet::new(10_000, 4).unwrap_or_else(|e| panic!("{e}"));
-    let p = Patches::build(&tris, 0.05);
+    let patch = common::env_list("SH_MEASURE_PATCH", &[0.05])[0];
+    let count = common::env_list("SH_MEASURE_SAMPLES", &[10_000usize])[0];
+    let samples = SampleSet::new(count, 4).unwrap_or_else(|e| panic!("{e}"));
+    let p = Patches::build(&tris, patch);
     let occ = Occluders::new(&tris);
     let inside: Vec<_> = p.patches.iter().filter(|q| q.inside()).collect();
     // The rays traced: the (patch, sample) pairs in front of both normals.
@@ -337,11 +341,12 @@ fn measure_visibility_rays_per_second() {
     let (share, _, _) = differing(&p, &samples, &cpu, &on_gpu);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
-        "open box, patch 0.05: {} inside patches, {} samples, {rays:.0} rays; {share:.2e} of the bits differ",
+        "open box, patch {patch}: {} inside patches, {} samples, {rays:.0} rays; {share:.2e} of the bits differ",
         inside.len(),
         samples.len()
     );
     println!("cpu ({threads} threads): {cpu_s:.2} s, {:.3e} rays/s", rays / cpu_s);
     println!("gpu ({name}): {gpu_s:.2} s, {:.3e} rays/s", rays / gpu_s);
+    println!("gpu/cpu rays per second: {:.2}x", cpu_s / gpu_s);
     assert!(share <= 1e-3);
 }

@@ -139,7 +139,7 @@ fn the_shader_models_equal_the_cpu_models() {
             LightModel::Seed { k: 0.5 },
         ),
         (
-            r#"{ name = "vls", model = "opengl", kc = 1.0, kl = 0.3, kq = 0.2, selection = "closest", can_illuminate = false }"#,
+            r#"{ name = "vls", model = "opengl", kc = 1.0, kl = 0.3, kq = 0.2, ambient = 0, selection = "closest", can_illuminate = false }"#,
             LightModel::OpenGl {
                 kc: 1.0,
                 kl: 0.3,
@@ -171,6 +171,76 @@ fn the_shader_models_equal_the_cpu_models() {
             "too few lit pixels for the test to mean anything: {lit}"
         );
     }
+}
+
+/// The thesis's fixed-function light model in full (§4.3.1): global ambient × albedo, plus per
+/// light attenuation × spot × (light ambient + diffuse + specular), the specular term
+/// Blinn-Phong from the eye with the material's colour and exponent, only where N·L > 0. Each
+/// pixel of the faithful frame against that formula written out here, on a glossy floor.
+#[test]
+fn the_faithful_light_model_has_the_theses_ambient_and_specular_terms() {
+    let (ambient, light_ambient, ks, shininess) = (0.15, 0.3, 0.4, 24.0);
+    let decl = format!(
+        r#"{{ name = "vls", mode = "faithful", kl = 0.3, kq = 0.2, ambient = {ambient}, light_ambient = {light_ambient}, selection = "closest", can_illuminate = false }}"#
+    );
+    let glossy = "albedo = 0.5\n";
+    let s = scene(&decl, &three_lights());
+    let text = FLOOR
+        .replace("METHOD", &decl)
+        .replace(glossy, &format!("{glossy}specular = {ks}\nexponent = {shininess}\n"))
+        + &three_lights();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let glossy_scene = Scene::from_str(&text, "vls test", &dir).unwrap_or_else(|e| panic!("{e}"));
+    assert_ne!(glossy_scene.materials[0].specular, Vec3::ZERO);
+    let eye = s.camera.position.as_dvec3();
+    let lights = ManyLight::from_scene(&s, "vls").unwrap();
+    let pixels = floor_pixels(&s);
+    let img = render(glossy_scene, "vls");
+    let albedo = 0.5;
+    let (mut worst, mut specular_share) = (0.0f64, 0.0f64);
+    for &(i, p) in &pixels {
+        let n = DVec3::Y;
+        let mut want = DVec3::splat(ambient * albedo);
+        let mut highlight = DVec3::ZERO;
+        for l in &lights {
+            let to = l.position - p;
+            let d = to.length();
+            let dir = to / d;
+            let spot = match l.cone {
+                None => 1.0,
+                Some((full, null)) => {
+                    let c = (-dir).dot(l.direction);
+                    let e = (0.5f64.ln() / full.cos().ln()).clamp(0.0, 128.0);
+                    if c < null.cos() {
+                        0.0
+                    } else {
+                        c.max(0.0).powf(e)
+                    }
+                }
+            };
+            let reach = spot / (1.0 + 0.3 * d + 0.2 * d * d);
+            let cos = n.dot(dir);
+            let mut terms = light_ambient * albedo + albedo * cos.max(0.0);
+            if cos > 0.0 {
+                let h = (dir + (eye - p).normalize()).normalize();
+                let s = ks * n.dot(h).max(0.0).powf(shininess);
+                terms += s;
+                highlight += l.intensity * reach * s;
+            }
+            want += l.intensity * reach * terms;
+        }
+        let got = img.pixels[i];
+        worst = worst.max((got[0] as f64 - want.x).abs() / want.x);
+        specular_share = specular_share.max(highlight.x / want.x);
+        assert!(close(got, want, 2e-3), "pixel {i} at {p}: {got:?}, closed form {want}");
+    }
+    println!(
+        "{} floor pixels: worst relative difference {worst:.2e}; the specular term up to {:.0} % of a pixel",
+        pixels.len(),
+        100.0 * specular_share
+    );
+    // The terms are there to be seen: the highlight is a sizeable part of the brightest pixels.
+    assert!(specular_share > 0.2, "specular share {specular_share}");
 }
 
 /// Where every light is kept and none is blocked, the physical model is `forward`'s diffuse
@@ -233,7 +303,7 @@ fn as_a_direct_term_it_adds_over_another_base() {
 /// differ (the seams are drawn).
 #[test]
 fn a_segment_shades_with_exactly_its_light_set() {
-    let decl = r#"{ name = "vls", mode = "faithful", k = 3, feeler = "bvh", max_segment_area = 0.1 }"#;
+    let decl = r#"{ name = "vls", mode = "faithful", k = 3, feeler = "bvh", max_segment_area = 0.1, ambient = 0 }"#;
     let s = scene(decl, &twelve_lights());
     let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
     let geometry = scene_geometry(&s, "vls").unwrap();

@@ -180,3 +180,32 @@ material = "grey"
             .replace("WALL_CELLS", &wall_cells.to_string())
     }
 }
+
+/// The device for timings: `PENUMBRA_MEASURE_DEVICE` (else the test device), without the
+/// validation layer, whose checks would be timed too.
+pub fn measure_gpu() -> Gpu {
+    let name = std::env::var("PENUMBRA_MEASURE_DEVICE")
+        .or_else(|_| std::env::var("PENUMBRA_TEST_DEVICE"))
+        .unwrap_or_else(|_| "llvmpipe".into());
+    Gpu::new(&GpuDesc {
+        validation: false,
+        device_name: Some(name),
+        display: None,
+    })
+    .expect("create the measurement device")
+}
+
+/// A comma-separated list of numbers from the environment variable `var`, else `default`.
+pub fn env_list<T: std::str::FromStr + Clone>(var: &str, default: &[T]) -> Vec<T> {
+    match std::env::var(var) {
+        Ok(v) => v
+            .split(',')
+            .map(|s| {
+                s.trim()
+                    .parse()
+                    .unwrap_or_else(|_| panic!("{var}: {s:?} is not a number"))
+            })
+            .collect(),
+        Err(_) => default.to_vec(),
+    }
+}

@@ -83,9 +83,14 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 /// Bumped whenever the set-up's output for the same inputs changes.
 const SETUP_VERSION: u32 = 4;
 
-/// The matrix is bound whole as one storage buffer by the GEMV: Vulkan guarantees a storage
-/// buffer range of 2²⁷ bytes (`maxStorageBufferRange`'s required minimum) and no more.
+/// The matrix is bound whole as one storage buffer by the GEMV: every Vulkan device binds 2²⁷
+/// bytes (`maxStorageBufferRange`'s required minimum); [`matrix_limit`] is the device's own.
 pub const MAX_MATRIX_BYTES: u64 = 1 << 27;
+
+/// The most bytes of matrix `caps`' device binds as one storage buffer, in one allocation.
+pub fn matrix_limit(caps: &crate::backend::DeviceCaps) -> u64 {
+    (caps.max_storage_buffer_range as u64).min(caps.max_memory_allocation_size)
+}
 
 /// Lights one GEMV invocation loops over at most: llvmpipe ends any invocation after 65,535 loop
 /// iterations, and the stress scene has 4,096 lights.
@@ -446,16 +451,13 @@ pub fn plan(
     Ok(vec![Derived::new("max_segment_area", chosen, why)])
 }
 
-/// `V·L·bytes` against [`MAX_MATRIX_BYTES`], as the set-up checks it.
-fn check_matrix(vertices: usize, lights: usize, storage: Storage) -> std::result::Result<(), String> {
-    setup::check_matrix(vertices, lights, storage.bytes_per_entry(), MAX_MATRIX_BYTES)
-}
-
-/// The full set-up of `scene`'s polygons and lights on the CPU, as the bake runs it.
+/// The full set-up of `scene`'s polygons and lights on the CPU, as the bake runs it, refused
+/// when its matrix would take more than `max_matrix_bytes`.
 pub fn bake_scene(
     scene: &Scene,
     geometry: &crate::lighting::lightmap::geometry::StaticGeometry,
     config: &Config,
+    max_matrix_bytes: u64,
     progress: &mut crate::util::progress::Progress,
 ) -> Result<(setup::Setup, Vec<crate::lighting::many_lights::ScenePolygon>)> {
     let lights = ManyLight::from_scene(scene, NAME)?;
@@ -467,7 +469,7 @@ pub fn bake_scene(
         max_segment_area: config.max_segment_area,
         two_sided: config.two_sided(),
         threads: 0,
-        max_matrix_bytes: MAX_MATRIX_BYTES,
+        max_matrix_bytes,
         bytes_per_entry: config.storage.bytes_per_entry(),
     };
     let s =
@@ -657,8 +659,9 @@ impl BspLights {
         )
         .to_lowercase();
         let geo = &geometry;
+        let limit = matrix_limit(cx.gpu.caps());
         let baked: Baked = cx.bakes.bake(&name, &key, |progress| {
-            let (s, polygons) = bake_scene(scene, geo, &config, progress)?;
+            let (s, polygons) = bake_scene(scene, geo, &config, limit, progress)?;
             let p = s.phases;
             let per_light = s.vertices() as u64 * config.storage.bytes_per_entry();
             crate::errln!(
@@ -677,8 +680,13 @@ impl BspLights {
             Ok(Baked::from_setup(&s, &polygons))
         })?;
         // A cached bake may have been made for the other storage: check the limit again.
-        check_matrix(baked.vertices.len(), baked.lights, config.storage)
-            .map_err(|m| field_error(scene, "max_segment_area", m))?;
+        setup::check_matrix(
+            baked.vertices.len(),
+            baked.lights,
+            config.storage.bytes_per_entry(),
+            limit,
+        )
+        .map_err(|m| field_error(scene, "max_segment_area", m))?;
         if baked.lights != lights.len()
             || baked.colours.len() != 3 * baked.vertices.len() * baked.lights
             || baked.vertices.is_empty()
@@ -713,8 +721,8 @@ impl BspLights {
             Layout::Sparse => {
                 let (rows, words) = sparse_words(&baked, config.storage);
                 let (_, bytes) = layout_bytes(baked.vertices.len(), baked.lights, non_zero, config.storage);
-                if bytes > MAX_MATRIX_BYTES {
-                    return Err(field_error(scene, "layout", format!("the sparse matrix takes {bytes} bytes, over the {MAX_MATRIX_BYTES} a storage buffer is sure to hold")));
+                if bytes > limit {
+                    return Err(field_error(scene, "layout", format!("the sparse matrix takes {bytes} bytes, over the {limit} this device binds as one storage buffer")));
                 }
                 (
                     words,

@@ -148,6 +148,14 @@ pub fn run(
     settings: &Settings,
     progress: &mut Progress,
 ) -> Result<Setup, String> {
+    // Refused before any work when even the fewest vertices the segmentation can make are over.
+    check_matrix(
+        min_vertices(polygons, settings.max_segment_area),
+        lights.len(),
+        settings.bytes_per_entry,
+        settings.max_matrix_bytes,
+    )
+    .map_err(|m| format!("at least {m}"))?;
     let start = Instant::now();
     let tolerance = settings.tolerance;
     let tree = build_tree_in(polygons, &tolerance);
@@ -298,12 +306,32 @@ fn add_back_rows(
     (back_row, ranges)
 }
 
+/// The fewest vertices [`Segments::build`] can make over `polygons` (their BSP fragments cover
+/// the same area): each fan triangle is cut into triangles of at most `max_area`, so a polygon
+/// gets at least area / `max_area` triangles, and a triangulated polygon has at least half as
+/// many vertices as triangles. Polygons without area count nothing.
+pub fn min_vertices(polygons: &[ScenePolygon], max_area: f64) -> usize {
+    if !(max_area.is_finite() && max_area > 0.0) {
+        return 0;
+    }
+    polygons
+        .iter()
+        .map(|p| {
+            let v = &p.polygon.vertices;
+            let area: f64 = (1..v.len().saturating_sub(1))
+                .map(|k| 0.5 * (v[k] - v[0]).cross(v[k + 1] - v[0]).length())
+                .sum();
+            (area / max_area / 2.0).floor() as usize
+        })
+        .sum()
+}
+
 /// `V·L·bytes` of vertex colours against the limit, as one sentence when over it.
 pub fn check_matrix(vertices: usize, lights: usize, bytes_per_entry: u64, max_bytes: u64) -> Result<(), String> {
     let bytes = vertices as u64 * lights as u64 * bytes_per_entry;
     if bytes > max_bytes {
         return Err(format!(
-            "{vertices} vertices × {lights} lights × {bytes_per_entry} bytes = {} MiB of vertex colours, over the {} MiB limit: raise max_segment_area, use storage = \"f16\" or fewer lights",
+            "{vertices} vertices × {lights} lights × {bytes_per_entry} bytes = {} MiB of vertex colours, over the device's {} MiB storage-buffer limit: raise max_segment_area, use storage = \"f16\" or fewer lights",
             bytes.div_ceil(1 << 20),
             max_bytes >> 20
         ));

@@ -757,7 +757,14 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.05 }", 3);
     let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
     let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
-    let (s, polygons) = super::bake_scene(&sc, &geometry, &config, &mut Progress::new("test")).unwrap();
+    let (s, polygons) = super::bake_scene(
+        &sc,
+        &geometry,
+        &config,
+        super::MAX_MATRIX_BYTES,
+        &mut Progress::new("test"),
+    )
+    .unwrap();
     let baked = Baked::from_setup(&s, &polygons);
     assert_eq!(Baked::decode(&baked.encode()), Some(baked.clone()));
     // A second set-up of the same inputs stores the same bytes: no timings in them.
@@ -806,7 +813,13 @@ fn too_large_a_matrix_is_one_error_naming_the_file_and_the_parameter() {
     let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.002 }", 2000);
     let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
     let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
-    let err = match super::bake_scene(&sc, &geometry, &config, &mut Progress::new("test")) {
+    let err = match super::bake_scene(
+        &sc,
+        &geometry,
+        &config,
+        super::MAX_MATRIX_BYTES,
+        &mut Progress::new("test"),
+    ) {
         Ok(_) => panic!("accepted"),
         Err(e) => e.to_string(),
     };
@@ -815,7 +828,46 @@ fn too_large_a_matrix_is_one_error_naming_the_file_and_the_parameter() {
         !err.contains('\n')
             && err.contains("bsp test.toml")
             && err.contains("methods[0].max_segment_area")
-            && err.contains("MiB limit"),
+            && err.contains("MiB storage-buffer limit"),
+        "{err}"
+    );
+}
+
+/// The fewest vertices the segmentation can make bounds what it makes, closely enough to refuse
+/// a hopeless matrix before the BSP tree is built.
+#[test]
+fn the_matrix_is_refused_up_front_from_the_fewest_vertices_the_segments_can_make() {
+    let sc = scene("{ name = \"bsp_lights\" }", 4);
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
+    let polygons = super::scene_polygons(&sc.source, &geometry, super::NAME).unwrap();
+    for area in [0.5, 0.05, 0.005] {
+        let made = crate::lighting::many_lights::Segments::build(polygons.iter().map(|p| &p.polygon), area)
+            .unwrap()
+            .positions
+            .len();
+        let least = setup::min_vertices(&polygons, area);
+        println!("max area {area}: at least {least} vertices, {made} made");
+        assert!(least <= made && 8 * least >= made, "{least} vs {made}");
+    }
+    // 8,000 lights at 0.0005 m²: the bound alone is over 128 MiB; the refusal says so and names
+    // the size, before any BSP or segment is made.
+    let sc = scene("{ name = \"bsp_lights\", max_segment_area = 0.0005 }", 8000);
+    let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
+    let config = Config::from_decl(&sc.methods[0], Some(&sc)).unwrap();
+    let t = std::time::Instant::now();
+    let err = match super::bake_scene(
+        &sc,
+        &geometry,
+        &config,
+        super::MAX_MATRIX_BYTES,
+        &mut Progress::new("test"),
+    ) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.to_string(),
+    };
+    println!("{err} ({:.1} ms)", t.elapsed().as_secs_f64() * 1e3);
+    assert!(
+        err.contains("at least") && err.contains(" MiB of vertex colours, over the device's 128 MiB"),
         "{err}"
     );
 }

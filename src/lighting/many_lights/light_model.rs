@@ -10,6 +10,8 @@
 //! - [`LightModel::OpenGl`] (faithful VLS, §1.4): fixed-function diffuse `ρ·max(0, N·L)·I`
 //!   with attenuation `1/(kc + kl·d + kq·d²)` and `max(0, cos)^e` inside the null cone. The
 //!   thesis does not give its exponent mapping; `e` makes the fall-off ½ at the full cone's edge.
+//!   VLS adds the model's global and per-light ambient and its Blinn-Phong specular term in its
+//!   shader (`opengl_ambient_specular`), held to their closed form by tests/vls.rs.
 //!
 //! `glsl/common/many_lights.glsl` is the shader twin; the tests hold them to each other and to
 //! closed forms.

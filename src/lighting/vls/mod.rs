@@ -88,6 +88,14 @@ pub const SCHEMA: MethodSchema = MethodSchema {
             name: "kq",
             kind: ParamKind::Float,
         },
+        ParamSchema {
+            name: "ambient",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "light_ambient",
+            kind: ParamKind::Float,
+        },
     ],
 };
 
@@ -147,6 +155,11 @@ pub struct Config {
     pub setup: SetupParams,
     /// World units²: segments are no larger.
     pub max_segment_area: f64,
+    /// The fixed-function model's global ambient (`GL_LIGHT_MODEL_AMBIENT`, default 0.2) and
+    /// each light's ambient as a fraction of its intensity (`GL_AMBIENT`, default 0), both times
+    /// the albedo; the other models have no ambient term.
+    pub ambient: f64,
+    pub light_ambient: f64,
 }
 
 impl Config {
@@ -176,6 +189,8 @@ impl Config {
                     point: Point::Centroid,
                 },
                 max_segment_area: 0.05,
+                ambient: 0.2,
+                light_ambient: 0.0,
             },
             Mode::Corrected => Config {
                 mode,
@@ -188,6 +203,8 @@ impl Config {
                     point: Point::Centroid,
                 },
                 max_segment_area: 0.05,
+                ambient: 0.2,
+                light_ambient: 0.0,
             },
         };
         if let Some(v) = decl.param("k") {
@@ -233,6 +250,8 @@ impl Config {
                     .ok_or_else(|| params.error(p, "a number ≥ 0", v)),
             }
         };
+        c.ambient = number("ambient", c.ambient)?;
+        c.light_ambient = number("light_ambient", c.light_ambient)?;
         if let Some(m) = params.get_choice("model", &[("physical", 0u8), ("seed", 1), ("opengl", 2)])? {
             c.setup.model = match m {
                 0 => LightModel::Physical,
@@ -392,6 +411,8 @@ struct SegmentVertex {
     albedo: [f32; 3],
     emission: [f32; 3],
     segment: u32,
+    /// The material's specular colour and exponent (the fixed-function model's specular term).
+    specular: [f32; 4],
 }
 
 /// `VlsParams` of glsl/vls/vls.frag.
@@ -400,6 +421,7 @@ struct SegmentVertex {
 struct ShaderParams {
     info: [u32; 4],
     constants: [f32; 4],
+    ambient: [f32; 4],
 }
 
 pub struct Vls {
@@ -428,7 +450,7 @@ impl Vls {
                 sets.k
             )));
         }
-        let vertices = segment_vertices(&layout, config.setup.point);
+        let vertices = segment_vertices(&layout, config.setup.point, &draw_specular(cx.scene, &geometry));
         let vertex_count = vertices.len() as u32;
         let vertex_bytes: &[u8] = if vertices.is_empty() {
             &[0u8; std::mem::size_of::<SegmentVertex>()]
@@ -472,6 +494,7 @@ impl Vls {
                     attr(2, f3, 24),
                     attr(3, f3, 36),
                     attr(4, vk::Format::R32_UINT, 48),
+                    attr(5, vk::Format::R32G32B32A32_SFLOAT, 52),
                 ],
             };
             desc.specialization.push(SpecConstant {
@@ -493,6 +516,7 @@ impl Vls {
         let params = ShaderParams {
             info: [config.setup.model.code(), config.setup.k as u32, 0, 0],
             constants: config.setup.model.constants(),
+            ambient: [config.ambient as f32, config.light_ambient as f32, 0.0, 0.0],
         };
         Ok(Vls {
             pipelines,
@@ -506,7 +530,19 @@ impl Vls {
 
 /// Three vertices per segment, never shared, each with the index of its light set: the
 /// segment's, or (per vertex) the segment vertex's.
-fn segment_vertices(layout: &Layout, point: Point) -> Vec<SegmentVertex> {
+/// Per scene draw: its material's specular colour and exponent (zero for an emitter's draw).
+fn draw_specular(scene: &Scene, geometry: &crate::lighting::lightmap::geometry::StaticGeometry) -> Vec<[f32; 4]> {
+    let draws = geometry.draw.iter().max().map_or(0, |&d| d + 1);
+    let mut out = vec![[0.0; 4]; draws];
+    for (&d, m) in geometry.draw.iter().zip(&geometry.material) {
+        if let Some(m) = m.and_then(|m| scene.materials.get(m)) {
+            out[d] = [m.specular.x, m.specular.y, m.specular.z, m.exponent];
+        }
+    }
+    out
+}
+
+fn segment_vertices(layout: &Layout, point: Point, specular: &[[f32; 4]]) -> Vec<SegmentVertex> {
     let s = &layout.segments;
     let f = |v: DVec3| v.as_vec3().to_array();
     let mut out = Vec::with_capacity(3 * s.triangles.len());
@@ -520,6 +556,7 @@ fn segment_vertices(layout: &Layout, point: Point) -> Vec<SegmentVertex> {
                 albedo: f(p.albedo),
                 emission: f(p.emission),
                 segment: set,
+                specular: specular.get(p.draw).copied().unwrap_or_default(),
             });
         }
     }
