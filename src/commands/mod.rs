@@ -1,5 +1,5 @@
 //! The commands of the `penumbra` binary that assemble the layers below: headless capture,
-//! profiling, baking, the speed/accuracy chart and the interactive demo, and the supersampling
+//! profiling, baking, the speed/accuracy chart, the HTML report and the interactive demo, and the supersampling
 //! that capture and chart share. No technique is named here; methods are reached through the
 //! lighting layer's registry.
 
@@ -8,4 +8,5 @@ pub mod capture;
 pub mod chart;
 pub mod demo;
 pub mod profile;
+pub mod report;
 pub mod supersample;
