@@ -138,7 +138,11 @@ impl Browser {
             "Runtime.evaluate",
             json!({ "expression": expression, "returnByValue": true, "awaitPromise": true }),
         );
-        assert!(r.get("exceptionDetails").is_none(), "{expression}: {}", r["exceptionDetails"]);
+        assert!(
+            r.get("exceptionDetails").is_none(),
+            "{expression}: {}",
+            r["exceptionDetails"]
+        );
         r["result"]["value"].clone()
     }
 
@@ -196,10 +200,17 @@ fn base64_decode(text: &str) -> Vec<u8> {
         b'/' => 63,
         _ => panic!("not base64: {c}"),
     };
-    let digits: Vec<u8> = text.bytes().filter(|&c| c != b'=' && !c.is_ascii_whitespace()).map(value).collect();
+    let digits: Vec<u8> = text
+        .bytes()
+        .filter(|&c| c != b'=' && !c.is_ascii_whitespace())
+        .map(value)
+        .collect();
     let mut out = Vec::with_capacity(digits.len() * 3 / 4);
     for chunk in digits.chunks(4) {
-        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &d)| n | (d as u32) << (18 - 6 * i));
+        let n = chunk
+            .iter()
+            .enumerate()
+            .fold(0u32, |n, (i, &d)| n | (d as u32) << (18 - 6 * i));
         out.extend_from_slice(&n.to_be_bytes()[1..chunk.len()]);
     }
     out
@@ -244,7 +255,10 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
     common::ok(&out);
     eprintln!("report written in {:.1} s", start.elapsed().as_secs_f64());
     let rows = chart_rows(&dir.join("cornell_radiosity/chart.csv"));
-    assert!(rows.len() >= 3, "the scene's sweep has several configurations: {rows:?}");
+    assert!(
+        rows.len() >= 3,
+        "the scene's sweep has several configurations: {rows:?}"
+    );
 
     let mut browser = Browser::launch(&common::temp_path("chromium-profile"));
     let target = browser.call("Target.createTarget", json!({ "url": "about:blank" }));
@@ -269,23 +283,41 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
     browser.mouse("mousePressed", x, y);
     browser.mouse("mouseReleased", x, y);
     browser.wait_for_event("Page.loadEventFired");
-    assert_eq!(browser.eval("location.pathname.split('/').pop()"), json!("cornell_radiosity.html"));
+    assert_eq!(
+        browser.eval("location.pathname.split('/').pop()"),
+        json!("cornell_radiosity.html")
+    );
 
     // Every image loaded; one figure of three pictures and one chart marker per configuration.
     let broken = browser.eval("[...document.images].filter(i => !i.complete || i.naturalWidth === 0).map(i => i.src)");
     assert_eq!(broken, json!([]), "images that did not load");
     let n = rows.len() as u64;
     assert_eq!(browser.eval("document.querySelectorAll('.config').length"), json!(n));
-    assert_eq!(browser.eval("document.querySelectorAll('.config img').length"), json!(3 * n));
-    assert_eq!(browser.eval("document.querySelectorAll('#chart .point').length"), json!(n));
-    assert_eq!(browser.eval("document.querySelectorAll('#configs tbody tr').length"), json!(n));
+    assert_eq!(
+        browser.eval("document.querySelectorAll('.config img').length"),
+        json!(3 * n)
+    );
+    assert_eq!(
+        browser.eval("document.querySelectorAll('#chart .point').length"),
+        json!(n)
+    );
+    assert_eq!(
+        browser.eval("document.querySelectorAll('#configs tbody tr').length"),
+        json!(n)
+    );
 
     // A real hover over the last marker shows its configuration's name.
     let last = rows.len() - 1;
-    let (x, y) = browser.centre(&format!("#chart .point[data-row='{last}'] :is(circle:not(.ring), polygon)"));
+    let (x, y) = browser.centre(&format!(
+        "#chart .point[data-row='{last}'] :is(circle:not(.ring), polygon)"
+    ));
     browser.mouse("mouseMoved", x, y);
     let tip = browser.eval("document.querySelector('#chart-tip').getAttribute('visibility') + '|' + document.querySelector('#chart-tip text').textContent");
     let tip = tip.as_str().unwrap();
+    let hover = browser.call("Page.captureScreenshot", json!({ "format": "png" }));
+    let hover_path = common::temp_path("report-hover.png");
+    std::fs::write(&hover_path, base64_decode(hover["data"].as_str().unwrap())).unwrap();
+    eprintln!("hover screenshot: {}", hover_path.display());
     assert!(tip.starts_with("visible|"), "{tip}");
     assert!(
         tip.contains(&rows[last].0.replace(';', ",")),
@@ -306,7 +338,10 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
     let result = result.as_str().unwrap();
     match best {
         Some((i, r)) => {
-            assert!(result.contains(&format!("#{} {}", i + 1, r.0.replace(';', ","))), "{result}");
+            assert!(
+                result.contains(&format!("#{} {}", i + 1, r.0.replace(';', ","))),
+                "{result}"
+            );
             assert_eq!(
                 browser.eval("[...document.querySelectorAll('#chart .point.selected')].map(p => p.dataset.row)"),
                 json!([i.to_string()])
@@ -315,9 +350,14 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
         None => assert!(result.starts_with("No configuration"), "{result}"),
     }
 
-    let shot = browser.call("Page.captureScreenshot", json!({ "format": "png", "captureBeyondViewport": true }));
+    let shot = browser.call(
+        "Page.captureScreenshot",
+        json!({ "format": "png", "captureBeyondViewport": true }),
+    );
     let png = base64_decode(shot["data"].as_str().unwrap());
-    let image = image::load_from_memory(&png).expect("the screenshot is a PNG").to_rgb8();
+    let image = image::load_from_memory(&png)
+        .expect("the screenshot is a PNG")
+        .to_rgb8();
     let path = common::temp_path("report-screenshot.png");
     image.save(&path).unwrap();
     let colours: std::collections::HashSet<[u8; 3]> = image.pixels().map(|p| p.0).collect();
@@ -331,5 +371,21 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
     );
     eprintln!("screenshot: {}", path.display());
     let problems = browser.problems();
-    assert!(problems.is_empty(), "console errors or failed loads:\n{}", problems.join("\n"));
+    assert!(
+        problems.is_empty(),
+        "console errors or failed loads:\n{}",
+        problems.join("\n")
+    );
+
+    // The checks above see a missing resource: with one map gone, the reload reports it.
+    std::fs::remove_file(dir.join("cornell_radiosity/config01-flip.png")).unwrap();
+    browser.events.clear();
+    browser.call("Page.reload", json!({}));
+    browser.wait_for_event("Page.loadEventFired");
+    let broken = browser.eval("[...document.images].filter(i => !i.complete || i.naturalWidth === 0).length");
+    assert_eq!(broken, json!(1), "the removed map is seen as not loaded");
+    assert!(
+        !browser.problems().is_empty(),
+        "the removed map is reported as a failed load"
+    );
 }

@@ -90,7 +90,11 @@ impl LogAxis {
 
     /// Tick values: every decade, with 2 and 5 in between when the axis spans few decades.
     pub fn ticks(&self) -> Vec<f64> {
-        let steps: &[f64] = if self.hi - self.lo <= 2.5 { &[1.0, 2.0, 5.0] } else { &[1.0] };
+        let steps: &[f64] = if self.hi - self.lo <= 2.5 {
+            &[1.0, 2.0, 5.0]
+        } else {
+            &[1.0]
+        };
         let mut out = Vec::new();
         for decade in self.lo.floor() as i32..=self.hi.ceil() as i32 {
             for s in steps {
@@ -321,7 +325,10 @@ mod tests {
         assert!(boxes.len() >= 20, "most labels find a place: {}", boxes.len());
         for (i, a) in boxes.iter().enumerate() {
             assert!(plot.contains(a));
-            assert!(boxes[i + 1..].iter().all(|b| !a.overlaps(b)), "{a:?} overlaps another label");
+            assert!(
+                boxes[i + 1..].iter().all(|b| !a.overlaps(b)),
+                "{a:?} overlaps another label"
+            );
             assert!(
                 markers.iter().all(|m| !a.overlaps(&Rect {
                     x: m.x - 4.0,

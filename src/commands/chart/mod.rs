@@ -483,7 +483,10 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
 /// The first pixel of `image` with a non-finite channel, as (x, y).
 fn non_finite_pixel(image: &HdrImage) -> Option<(u32, u32)> {
     let w = image.width.max(1) as usize;
-    let i = image.pixels.iter().position(|p| !p[..3].iter().all(|c| c.is_finite()))?;
+    let i = image
+        .pixels
+        .iter()
+        .position(|p| !p[..3].iter().all(|c| c.is_finite()))?;
     Some(((i % w) as u32, (i / w) as u32))
 }
 
@@ -580,9 +583,12 @@ pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
     let (mut rows, mut images, mut reference_of, mut non_finite) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (method, config, kind, m) in measured {
         device = m.device.clone();
-        if let Some((x, y)) = non_finite_pixel(&m.image).or_else(|| m.supersampled.as_ref().and_then(non_finite_pixel)) {
+        if let Some((x, y)) = non_finite_pixel(&m.image).or_else(|| m.supersampled.as_ref().and_then(non_finite_pixel))
+        {
             eprintln!("chart: {config} left out: a non-finite value at pixel ({x}, {y})");
-            non_finite.push(format!("{config}: a non-finite value (NaN or infinity) at pixel ({x}, {y})"));
+            non_finite.push(format!(
+                "{config}: a non-finite value (NaN or infinity) at pixel ({x}, {y})"
+            ));
             continue;
         }
         let r = keys[&format!("{kind:?}")];

@@ -129,31 +129,51 @@ fn draw_axes(root: &Area, chart: &Chart, lay: &Layout) -> Result<()> {
         root.draw(&PathElement::new(vec![px(*x, p.y), px(*x, p.y + p.h)], grid))
             .map_err(plot_err)?;
         let tw = (t.len() as f64 * 7.0 / 2.0) as i32;
-        root.draw(&Text::new(t.clone(), (x.round() as i32 - tw, (p.y + p.h) as i32 + 6), small.clone()))
-            .map_err(plot_err)?;
+        root.draw(&Text::new(
+            t.clone(),
+            (x.round() as i32 - tw, (p.y + p.h) as i32 + 6),
+            small.clone(),
+        ))
+        .map_err(plot_err)?;
     }
     for (y, t) in &lay.y_ticks {
         root.draw(&PathElement::new(vec![px(p.x, *y), px(p.x + p.w, *y)], grid))
             .map_err(plot_err)?;
         let tw = (t.len() as f64 * 7.0) as i32;
-        root.draw(&Text::new(t.clone(), (p.x as i32 - 8 - tw, y.round() as i32 - 7), small.clone()))
-            .map_err(plot_err)?;
+        root.draw(&Text::new(
+            t.clone(),
+            (p.x as i32 - 8 - tw, y.round() as i32 - 7),
+            small.clone(),
+        ))
+        .map_err(plot_err)?;
     }
     root.draw(&Rectangle::new([px(p.x, p.y), px(p.x + p.w, p.y + p.h)], BLACK))
         .map_err(plot_err)?;
     let x_title = "GPU time per frame, ms (median of timestamp queries; log)";
-    root.draw(&Text::new(x_title, (p.x as i32 + 200, (p.y + p.h) as i32 + 30), ("sans-serif", 14).into_font()))
-        .map_err(plot_err)?;
-    let y_title = format!("relative MSE against the reference (log) \u{2014} {}", chart.short_comparison());
+    root.draw(&Text::new(
+        x_title,
+        (p.x as i32 + 200, (p.y + p.h) as i32 + 30),
+        ("sans-serif", 14).into_font(),
+    ))
+    .map_err(plot_err)?;
+    let y_title = format!(
+        "relative MSE against the reference (log) \u{2014} {}",
+        chart.short_comparison()
+    );
     let rotated = ("sans-serif", 14).into_font().transform(FontTransform::Rotate270);
     root.draw(&Text::new(y_title, (22, (p.y + p.h) as i32 - 60), rotated))
         .map_err(plot_err)
 }
 
 fn draw_marks(root: &Area, chart: &Chart, lay: &Layout) -> Result<()> {
-    let front: Vec<(i32, i32)> = lay.front.iter().map(|&i| px(lay.markers[i].x, lay.markers[i].y)).collect();
+    let front: Vec<(i32, i32)> = lay
+        .front
+        .iter()
+        .map(|&i| px(lay.markers[i].x, lay.markers[i].y))
+        .collect();
     if front.len() > 1 {
-        root.draw(&PathElement::new(front, BLACK.stroke_width(2))).map_err(plot_err)?;
+        root.draw(&PathElement::new(front, BLACK.stroke_width(2)))
+            .map_err(plot_err)?;
     }
     let methods = methods(chart);
     for m in &lay.markers {
@@ -171,23 +191,35 @@ fn draw_marks(root: &Area, chart: &Chart, lay: &Layout) -> Result<()> {
                 _ => (-1, 0),
             };
             let tip = (x + dx * r, y + dy * r);
-            let base = [(x - dy * r - dx * r, y - dx * r - dy * r), (x + dy * r - dx * r, y + dx * r - dy * r)];
+            let base = [
+                (x - dy * r - dx * r, y - dx * r - dy * r),
+                (x + dy * r - dx * r, y + dx * r - dy * r),
+            ];
             root.draw(&Polygon::new(vec![tip, base[0], base[1]], colour.filled()))
                 .map_err(plot_err)?;
         }
         if m.on_front {
-            root.draw(&Circle::new((x, y), r + 3, BLACK.stroke_width(1))).map_err(plot_err)?;
+            root.draw(&Circle::new((x, y), r + 3, BLACK.stroke_width(1)))
+                .map_err(plot_err)?;
         }
         if let Some(b) = m.label_box {
             if m.leader {
                 let (cx, cy) = (b.x + b.w / 2.0, b.y + b.h / 2.0);
                 let grey = RGBColor(0x88, 0x88, 0x88);
-                root.draw(&PathElement::new(vec![(x, y), px(cx, cy)], grey)).map_err(plot_err)?;
-                root.draw(&Rectangle::new([px(b.x, b.y), px(b.x + b.w, b.y + b.h)], WHITE.filled()))
+                root.draw(&PathElement::new(vec![(x, y), px(cx, cy)], grey))
                     .map_err(plot_err)?;
-            }
-            root.draw(&Text::new(m.label.clone(), px(b.x + 1.0, b.y), ("sans-serif", 13).into_font()))
+                root.draw(&Rectangle::new(
+                    [px(b.x, b.y), px(b.x + b.w, b.y + b.h)],
+                    WHITE.filled(),
+                ))
                 .map_err(plot_err)?;
+            }
+            root.draw(&Text::new(
+                m.label.clone(),
+                px(b.x + 1.0, b.y),
+                ("sans-serif", 13).into_font(),
+            ))
+            .map_err(plot_err)?;
         }
     }
     Ok(())
@@ -199,23 +231,31 @@ fn draw_table(root: &Area, chart: &Chart, lay: &Layout) -> Result<()> {
     let mut y = PLOT.y as i32;
     for (i, m) in methods(chart).iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
-        root.draw(&Circle::new((TABLE_X + 6, y + 7), 5, colour.filled())).map_err(plot_err)?;
-        root.draw(&Text::new(m.to_string(), (TABLE_X + 18, y), font.clone())).map_err(plot_err)?;
+        root.draw(&Circle::new((TABLE_X + 6, y + 7), 5, colour.filled()))
+            .map_err(plot_err)?;
+        root.draw(&Text::new(m.to_string(), (TABLE_X + 18, y), font.clone()))
+            .map_err(plot_err)?;
         y += LINE;
     }
-    root.draw(&PathElement::new(vec![(TABLE_X, y + 7), (TABLE_X + 14, y + 7)], BLACK.stroke_width(2)))
-        .map_err(plot_err)?;
+    root.draw(&PathElement::new(
+        vec![(TABLE_X, y + 7), (TABLE_X + 14, y + 7)],
+        BLACK.stroke_width(2),
+    ))
+    .map_err(plot_err)?;
     let front_text = "Pareto front (ringed): nothing both faster and more accurate";
-    root.draw(&Text::new(front_text, (TABLE_X + 18, y), font.clone())).map_err(plot_err)?;
+    root.draw(&Text::new(front_text, (TABLE_X + 18, y), font.clone()))
+        .map_err(plot_err)?;
     y += LINE + 6;
     let header = "  #     ms      rel MSE   configuration";
-    root.draw(&Text::new(header, (TABLE_X, y), font.clone())).map_err(plot_err)?;
+    root.draw(&Text::new(header, (TABLE_X, y), font.clone()))
+        .map_err(plot_err)?;
     y += LINE;
     let last_line = SIZE.1 as i32 - 2 * LINE;
     for (i, r) in chart.rows.iter().enumerate() {
         if y > last_line {
             let more = format!("\u{2026} {} more in the CSV", chart.rows.len() - i);
-            root.draw(&Text::new(more, (TABLE_X, y), font.clone())).map_err(plot_err)?;
+            root.draw(&Text::new(more, (TABLE_X, y), font.clone()))
+                .map_err(plot_err)?;
             break;
         }
         let star = if lay.front.contains(&i) { "*" } else { " " };
@@ -226,7 +266,8 @@ fn draw_table(root: &Area, chart: &Chart, lay: &Layout) -> Result<()> {
             truncated(&r.config, 64),
         ];
         for (text, dx) in cells.into_iter().zip([0, 30, 90, 160]) {
-            root.draw(&Text::new(text, (TABLE_X + dx, y), font.clone())).map_err(plot_err)?;
+            root.draw(&Text::new(text, (TABLE_X + dx, y), font.clone()))
+                .map_err(plot_err)?;
         }
         y += LINE;
     }

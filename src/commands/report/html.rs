@@ -221,7 +221,12 @@ fn pairs_section(s: &mut String, chart: &Chart, files: &Files) {
     for (a, b) in pairs {
         s.push_str("<div class=\"pair\">");
         for i in [a, b] {
-            let caption = format!("#{} {}<br>{}", i + 1, escape(&chart.rows[i].config), metrics_line(chart, i));
+            let caption = format!(
+                "#{} {}<br>{}",
+                i + 1,
+                escape(&chart.rows[i].config),
+                metrics_line(chart, i)
+            );
             s.push_str(&figure(&files.rows[i].image.png, &caption, "side"));
         }
         s.push_str("</div>\n");
@@ -304,7 +309,12 @@ fn passes_section(s: &mut String, chart: &Chart) {
     }
     s.push_str("</p><div class=\"bars\">\n");
     for (i, r) in chart.rows.iter().enumerate() {
-        let _ = write!(s, "<div class=\"barrow\"><span class=\"barname\">#{} {}</span><span class=\"bar\">", i + 1, escape(&r.config));
+        let _ = write!(
+            s,
+            "<div class=\"barrow\"><span class=\"barname\">#{} {}</span><span class=\"bar\">",
+            i + 1,
+            escape(&r.config)
+        );
         for (p, ms) in &r.passes {
             let _ = write!(
                 s,
@@ -315,7 +325,11 @@ fn passes_section(s: &mut String, chart: &Chart) {
                 short_value(*ms)
             );
         }
-        let _ = writeln!(s, "</span><span class=\"barval\">{} ms</span></div>", short_value(total(r)));
+        let _ = writeln!(
+            s,
+            "</span><span class=\"barval\">{} ms</span></div>",
+            short_value(total(r))
+        );
     }
     s.push_str("</div></section>\n");
 }
@@ -384,5 +398,8 @@ fn data_script(s: &mut String, run: &ChartRun, files: &Files) {
         })
         .collect();
     let json = serde_json::json!({ "rows": rows }).to_string().replace("</", "<\\/");
-    let _ = writeln!(s, "<script type=\"application/json\" id=\"report-data\">{json}</script>");
+    let _ = writeln!(
+        s,
+        "<script type=\"application/json\" id=\"report-data\">{json}</script>"
+    );
 }

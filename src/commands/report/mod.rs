@@ -56,7 +56,13 @@ fn page_stem(scene: &Path, taken: &[ScenePage]) -> String {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into())
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     let stem = if stem.is_empty() || stem == "index" {
         format!("scene_{stem}")
@@ -127,10 +133,16 @@ pub fn suite_page(csv: &Path, out_dir: &Path) -> Result<ScenePage> {
     let text = std::fs::read_to_string(csv).map_err(|e| Error::Usage(format!("{}: {e}", csv.display())))?;
     let rows = text.lines().filter(|l| !l.trim().is_empty()).count();
     if rows == 0 {
-        return Err(Error::Usage(format!("{}: the suite's results table is empty", csv.display())));
+        return Err(Error::Usage(format!(
+            "{}: the suite's results table is empty",
+            csv.display()
+        )));
     }
     let page = "generated_suite.html".to_string();
-    write(&out_dir.join(&page), html::csv_page(&csv.display().to_string(), &text).as_bytes())?;
+    write(
+        &out_dir.join(&page),
+        html::csv_page(&csv.display().to_string(), &text).as_bytes(),
+    )?;
     Ok(ScenePage {
         scene: csv.display().to_string(),
         page,
