@@ -4,8 +4,8 @@ use std::path::Path;
 
 use crate::commands::chart::ChartRun;
 use crate::error::{Error, Result};
-use crate::util::image_io::HdrImage;
 use crate::metrics::{self, magma, stats::REL_MSE_EPSILON, CompareOptions};
+use crate::util::image_io::HdrImage;
 
 /// The relative-error map's colour scale: log10 of the error from [`REL_LOG_LO`] (black) to
 /// [`REL_LOG_HI`] (pale yellow), i.e. 1 % to 1,000 %.
