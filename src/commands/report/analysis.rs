@@ -50,12 +50,13 @@ pub fn failures(chart: &Chart) -> Vec<Failure> {
             config: r.config.clone(),
             detail,
         };
-        if !(m.rel_mse < FAR_OFF_REL_MSE) {
+        // NaN counts as far off.
+        if m.rel_mse.is_nan() || m.rel_mse >= FAR_OFF_REL_MSE {
             out.push(failure(
                 "far off",
                 format!("relative MSE {:.3} against the reference", m.rel_mse),
             ));
-        } else if !(m.mean_ratio <= FAR_OFF_MEAN_RATIO && m.mean_ratio >= 1.0 / FAR_OFF_MEAN_RATIO) {
+        } else if !(1.0 / FAR_OFF_MEAN_RATIO..=FAR_OFF_MEAN_RATIO).contains(&m.mean_ratio) {
             out.push(failure(
                 "far off",
                 format!("mean radiance {:.3}\u{d7} the reference's", m.mean_ratio),
