@@ -183,6 +183,29 @@ impl Browser {
     }
 }
 
+impl Browser {
+    /// A browser showing `page` (a file), loaded, with its events recorded.
+    fn open(page: &Path) -> Browser {
+        let mut browser = Browser::launch(&common::temp_path("chromium-profile"));
+        let target = browser.call("Target.createTarget", json!({ "url": "about:blank" }));
+        let session = browser.call(
+            "Target.attachToTarget",
+            json!({ "targetId": target["targetId"], "flatten": true }),
+        );
+        browser.session = Some(session["sessionId"].as_str().unwrap().to_string());
+        for domain in ["Runtime", "Log", "Page", "Network"] {
+            browser.call(&format!("{domain}.enable"), json!({}));
+        }
+        browser.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({ "width": 1200, "height": 900, "deviceScaleFactor": 1, "mobile": false }),
+        );
+        browser.call("Page.navigate", json!({ "url": format!("file://{}", page.display()) }));
+        browser.wait_for_event("Page.loadEventFired");
+        browser
+    }
+}
+
 impl Drop for Browser {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -260,23 +283,7 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
         "the scene's sweep has several configurations: {rows:?}"
     );
 
-    let mut browser = Browser::launch(&common::temp_path("chromium-profile"));
-    let target = browser.call("Target.createTarget", json!({ "url": "about:blank" }));
-    let session = browser.call(
-        "Target.attachToTarget",
-        json!({ "targetId": target["targetId"], "flatten": true }),
-    );
-    browser.session = Some(session["sessionId"].as_str().unwrap().to_string());
-    for domain in ["Runtime", "Log", "Page", "Network"] {
-        browser.call(&format!("{domain}.enable"), json!({}));
-    }
-    browser.call(
-        "Emulation.setDeviceMetricsOverride",
-        json!({ "width": 1200, "height": 900, "deviceScaleFactor": 1, "mobile": false }),
-    );
-    let index = format!("file://{}", dir.join("index.html").display());
-    browser.call("Page.navigate", json!({ "url": index }));
-    browser.wait_for_event("Page.loadEventFired");
+    let mut browser = Browser::open(&dir.join("index.html"));
     // The index links the scene's page; follow the link as a reader would.
     let (x, y) = browser.centre("a[href='cornell_radiosity.html']");
     browser.events.clear();
@@ -387,5 +394,34 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
     assert!(
         !browser.problems().is_empty(),
         "the removed map is reported as a failed load"
+    );
+}
+
+/// A report made beforehand (`PENUMBRA_REPORT_PAGE`: a scene's page) opens clean: every image
+/// loads, no console error or failed load, one marker per row of its chart.csv.
+#[test]
+#[ignore = "needs PENUMBRA_REPORT_PAGE, a report made with penumbra report"]
+fn a_given_report_page_opens_clean() {
+    let page = PathBuf::from(std::env::var("PENUMBRA_REPORT_PAGE").expect("set PENUMBRA_REPORT_PAGE"));
+    let page = page.canonicalize().expect("the page exists");
+    let stem = page.file_stem().unwrap().to_string_lossy().to_string();
+    let rows = chart_rows(&page.with_file_name(&stem).join("chart.csv"));
+    let mut browser = Browser::open(&page);
+    let broken = browser.eval("[...document.images].filter(i => !i.complete || i.naturalWidth === 0).map(i => i.src)");
+    assert_eq!(broken, json!([]), "images that did not load");
+    assert_eq!(
+        browser.eval("document.querySelectorAll('#chart .point').length"),
+        json!(rows.len())
+    );
+    let problems = browser.problems();
+    assert!(
+        problems.is_empty(),
+        "console errors or failed loads:\n{}",
+        problems.join("\n")
+    );
+    eprintln!(
+        "{}: {} configurations, every image loaded, no console error",
+        page.display(),
+        rows.len()
     );
 }
