@@ -4,7 +4,7 @@
 //! error, one figure and one chart marker per configuration measured, a hover naming its
 //! configuration, the one-click time budget picking the right one, and a screenshot.
 
-mod common;
+use crate::support as common;
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
