@@ -46,6 +46,38 @@ struct RenderArgs {
     device: DeviceArgs,
 }
 
+/// How `report` measures each scene: `chart`'s settings.
+#[derive(Args, Clone)]
+struct SweepArgs {
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "320x180", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Frames timed per configuration at most (the median is reported).
+    #[arg(long, default_value_t = 20, value_parser = parse_frames)]
+    frames: usize,
+    /// Seconds of timed frames per configuration after which timing stops, once 3 are timed.
+    #[arg(long, value_name = "S", default_value_t = 2.0)]
+    timing_budget: f64,
+    /// Samples per pixel of the reference at most.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
+    reference_spp: u32,
+    /// The reference renders until its noise adds at most this fraction of the smallest
+    /// relative MSE it judges (0: exactly --reference-spp).
+    #[arg(long, value_name = "F", default_value_t = 0.1)]
+    reference_noise: f64,
+    /// Render each configuration at N times the size in each axis, box-filtered down (1: no).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    supersample: u32,
+    /// Where references, tables and bakes are cached.
+    #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
+    cache_dir: PathBuf,
+    /// Only this method or combination (repeat for more; default: all of each scene's).
+    #[arg(long = "method", value_name = "M")]
+    methods: Vec<String>,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene headless; write the tone-mapped PNG and/or the linear-radiance EXR.
@@ -213,6 +245,23 @@ enum Command {
         cache_dir: PathBuf,
         #[command(flatten)]
         device: DeviceArgs,
+    },
+    /// A static HTML report (opens from disk, no network): per scene the reference, every
+    /// configuration `chart` measures with its FLIP and relative-error maps, a slider against the
+    /// reference, faithful beside corrected, the chart as interactive SVG, per-pass times, bake
+    /// costs and the failure cases; an index page links the scenes.
+    Report {
+        /// Scene files (TOML), one page each.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Directory the report is written to (index.html and one page per scene).
+        #[arg(short = 'o', long = "output", value_name = "DIR", default_value = "report")]
+        output: PathBuf,
+        /// A results table (CSV) of the generated-scene suite, shown as one more page.
+        #[arg(long, value_name = "CSV")]
+        suite: Option<PathBuf>,
+        #[command(flatten)]
+        sweep: SweepArgs,
     },
     /// Per-pass GPU time from timestamp queries: median, min and max over the frames.
     Profile {
@@ -708,6 +757,51 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             if let Some(p) = csv {
                 penumbra::outln!("wrote {}", p.display());
             }
+        }
+        Command::Report {
+            scenes,
+            output,
+            suite,
+            sweep,
+        } => {
+            let chart = penumbra::commands::chart::ChartOptions {
+                scene: PathBuf::new(),
+                size: sweep.size,
+                frames: sweep.frames,
+                timing_budget_s: sweep.timing_budget,
+                reference_spp: sweep.reference_spp,
+                reference_noise: sweep.reference_noise,
+                reference_sampler: penumbra::reference::Sampler::Sobol,
+                supersample: sweep.supersample,
+                png: None,
+                csv: None,
+                cache_dir: sweep.cache_dir,
+                gpu: gpu_desc(&sweep.device),
+                methods: sweep.methods,
+                frame: 0,
+            };
+            let opts = penumbra::commands::report::ReportOptions {
+                scenes,
+                out_dir: output.clone(),
+                suite,
+                chart,
+            };
+            let start = std::time::Instant::now();
+            let pages = penumbra::commands::report::run(&opts)?;
+            for p in &pages {
+                penumbra::outln!(
+                    "{}: {} configurations, {} failure cases, most accurate within 10 ms: {}",
+                    p.page,
+                    p.configurations,
+                    p.failures,
+                    p.best_within_10ms.as_deref().unwrap_or("none")
+                );
+            }
+            penumbra::outln!(
+                "wrote {} in {:.1} s wall",
+                output.join("index.html").display(),
+                start.elapsed().as_secs_f64()
+            );
         }
         Command::Info { device } => {
             let gpu = Gpu::new(&gpu_desc(&device))?;

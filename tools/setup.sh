@@ -5,11 +5,12 @@
 #    (see .cargo/config.toml) instead of being built from source, which takes ~6 minutes
 #  - Xvfb and xauth for the windowed demo test; a TrueType font for the chart's text
 #  - python3 for the measurement tools and the check that the docs' tables match their data
+#  - Chromium, in which the test suite opens a report (tests/commands/report.rs) headless
 # Needs root (or sudo) only when something is missing. The Rust toolchain itself must be present.
 set -euo pipefail
 
 packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers
-          libshaderc-dev glslang-dev xvfb xauth fonts-dejavu-core python3)
+          libshaderc-dev glslang-dev xvfb xauth fonts-dejavu-core python3 chromium)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,5 +1,6 @@
 //! Tests of the command line: the commands, charts, the bake stage, fault handling, the input
-//! fuzzer and the generated documentation tables. One binary so the library is linked once.
+//! fuzzer, the generated documentation tables and the HTML report in a browser. One binary so the
+//! library is linked once.
 
 #[path = "../support/mod.rs"]
 mod support;
@@ -10,3 +11,4 @@ mod cli;
 mod docs_tables;
 mod faults;
 mod fuzz;
+mod report;

@@ -17,7 +17,8 @@
 //! table keeps both the pixel-centre metrics (`rmse`, …) and the supersampled ones (`ss_rmse`,
 //! …), so aliasing stays visible, and the plot shows the supersampled ones.
 
-mod plot;
+pub mod layout;
+pub(crate) mod plot;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -103,6 +104,9 @@ pub struct Chart {
     pub rows: Vec<ChartRow>,
     /// Swept points left out, with why (a limit of the method on this scene).
     pub skipped: Vec<String>,
+    /// Configurations whose image held NaN or infinity, with the first such pixel: no metric
+    /// can judge them, so they are not rows.
+    pub non_finite: Vec<String>,
     /// The frame compared ([`ChartOptions::frame`]).
     pub frame: u64,
 }
@@ -467,7 +471,33 @@ pub fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Re
     })
 }
 
+/// A chart with what it measured: each row's image (the one its plotted metrics judge) and
+/// the references.
+pub struct ChartRun {
+    pub chart: Chart,
+    /// One per row of `chart.rows`.
+    pub images: Vec<HdrImage>,
+    pub references: Vec<ChartReference>,
+    /// For each row, its reference's index in `references`.
+    pub reference_of: Vec<usize>,
+}
+
 pub fn run(opts: &ChartOptions) -> Result<Chart> {
+    run_keeping_images(opts).map(|r| r.chart)
+}
+
+/// The first pixel of `image` with a non-finite channel, as (x, y).
+fn non_finite_pixel(image: &HdrImage) -> Option<(u32, u32)> {
+    let w = image.width.max(1) as usize;
+    let i = image
+        .pixels
+        .iter()
+        .position(|p| !p[..3].iter().all(|c| c.is_finite()))?;
+    Some(((i % w) as u32, (i / w) as u32))
+}
+
+/// [`run`], keeping the images the rows were measured on.
+pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
     let scene = Scene::from_file(&opts.scene)?;
     if !(opts.timing_budget_s.is_finite() && opts.timing_budget_s >= 0.0) {
         return Err(Error::Usage(format!(
@@ -536,31 +566,45 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     progress.finish();
     // One reference per kind, asked for the error the images it judges need (the supersampled
     // ones when there are: those are the lighting errors the chart shows).
-    let mut references: BTreeMap<String, (ChartReference, Metrics)> = BTreeMap::new();
+    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
+    let mut references: Vec<(ChartReference, Metrics)> = Vec::new();
     for (_, _, kind, _) in &measured {
         let key = format!("{kind:?}");
-        if references.contains_key(&key) {
+        if keys.contains_key(&key) {
             continue;
         }
         let judged: Vec<&HdrImage> = measured
             .iter()
-            .filter(|(_, _, k, _)| k == kind)
-            .map(|(_, _, _, m)| m.supersampled.as_ref().unwrap_or(&m.image))
+            .filter(|(_, _, k, m)| k == kind && non_finite_pixel(judged_image(m)).is_none())
+            .map(|(_, _, _, m)| judged_image(m))
             .collect();
+        if judged.is_empty() {
+            continue;
+        }
         let reference = reference_image(&scene, opts.size, *kind, &judged, opts)?;
         let noise = reference_noise(&reference.image)?;
-        references.insert(key, (reference, noise));
+        keys.insert(key, references.len());
+        references.push((reference, noise));
     }
-    let mut rows = Vec::new();
+    let (mut rows, mut images, mut reference_of, mut non_finite) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (method, config, kind, m) in measured {
-        let (reference, noise) = &references[&format!("{kind:?}")];
+        device = m.device.clone();
+        if let Some((x, y)) = non_finite_pixel(&m.image).or_else(|| m.supersampled.as_ref().and_then(non_finite_pixel))
+        {
+            eprintln!("chart: {config} left out: a non-finite value at pixel ({x}, {y})");
+            non_finite.push(format!(
+                "{config}: a non-finite value (NaN or infinity) at pixel ({x}, {y})"
+            ));
+            continue;
+        }
+        let r = keys[&format!("{kind:?}")];
+        let (reference, noise) = &references[r];
         let metrics = metrics::compare(&m.image, &reference.image.mean, &CompareOptions::default())?;
         let supersampled = m
             .supersampled
             .as_ref()
             .map(|img| metrics::compare(img, &reference.image.mean, &CompareOptions::default()))
             .transpose()?;
-        device = m.device;
         rows.push(ChartRow {
             method,
             config,
@@ -575,6 +619,8 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
             bake_ms: m.bakes.iter().map(|b| b.ms).sum(),
             bake_bytes: m.bakes.iter().map(|b| b.bytes).sum(),
         });
+        images.push(m.supersampled.unwrap_or(m.image));
+        reference_of.push(r);
     }
     let chart = Chart {
         scene: opts.scene.display().to_string(),
@@ -583,6 +629,7 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
         supersample: opts.supersample.max(1),
         rows,
         skipped,
+        non_finite,
         frame: opts.frame,
     };
     let csv = chart.csv();
@@ -599,7 +646,17 @@ pub fn run(opts: &ChartOptions) -> Result<Chart> {
     if let Some(p) = &opts.png {
         plot::draw(&chart, p)?;
     }
-    Ok(chart)
+    Ok(ChartRun {
+        chart,
+        images,
+        references: references.into_iter().map(|(r, _)| r).collect(),
+        reference_of,
+    })
+}
+
+/// The image a row's plotted metrics judge: the supersampled one when there is.
+fn judged_image(m: &Measured) -> &HdrImage {
+    m.supersampled.as_ref().unwrap_or(&m.image)
 }
 
 const METRIC_COLUMNS: [&str; 8] = [
@@ -951,6 +1008,7 @@ mod tests {
             supersample: 1,
             rows: vec![row("a", 1.0, 0.5), row("b", 2.0, 0.6), row("c", 3.0, 0.1)],
             skipped: Vec::new(),
+            non_finite: Vec::new(),
             frame: 0,
         };
         assert_eq!(chart.pareto_front(), vec![0, 2]);

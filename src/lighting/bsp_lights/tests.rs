@@ -768,7 +768,14 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     let baked = Baked::from_setup(&s, &polygons);
     assert_eq!(Baked::decode(&baked.encode()), Some(baked.clone()));
     // A second set-up of the same inputs stores the same bytes: no timings in them.
-    let (again, _) = super::bake_scene(&sc, &geometry, &config, &mut Progress::new("test")).unwrap();
+    let (again, _) = super::bake_scene(
+        &sc,
+        &geometry,
+        &config,
+        super::MAX_MATRIX_BYTES,
+        &mut Progress::new("test"),
+    )
+    .unwrap();
     assert_ne!(again.phases, s.phases, "two set-ups ran in exactly the same time");
     assert!(Baked::from_setup(&again, &polygons).encode() == baked.encode());
     assert!(Baked::decode(&baked.encode()[..100]).is_none());
