@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job: install what is missing, then capture seed 000's composed frame headless: the
+# The main job: install what is missing, then capture the Ca3D-Engine thesis's composed frame headless: the
 # BSP level scenes/bsp_rooms.toml as the `seed000` combination (a radiosity light-map, baked on
 # the first run into .penumbra-cache, under per-pixel Phong with stencil shadow volumes).
 # Arguments replace that choice and go to `penumbra capture` (e.g. a scene file, --size 1280x720;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The demo left running (issue 10): `penumbra demo` under Xvfb on one scene, switching to the
+# The demo left running: `penumbra demo` under Xvfb on one scene, switching to the
 # next method or combination every CYCLE frames, for MINUTES minutes, with the process's resident
 # memory (VmRSS, and RssAnon: on lavapipe the device's memory is the process's) sampled every 30 s.
 #   tools/demo_soak.sh [SCENE] [MINUTES] [OUT.csv]

@@ -14,7 +14,7 @@
 #   - the SH light-map's GPU visibility ray caster against the CPU's, rays per second;
 #   - the height-field horizon pyramid against the brute-force march at equal horizon error, at
 #     256^2, 512^2 and 1024^2 (the seed's case for the pyramid);
-#   - seed 000's frame (bsp_rooms, `seed000`) and seed 004's (lpv_bush, `lpv_over_forward` at the
+#   - the Ca3D-Engine thesis's frame (bsp_rooms, `seed000`) and Dickson et al. 2011's (lpv_bush, `lpv_over_forward` at the
 #     document's 16^3 and 32^3 volumes, 256^2 RSM) at the documents' window sizes, against their
 #     published frame rates;
 #   - the generated-scene suite, when this build has a `penumbra suite` command.
@@ -202,7 +202,7 @@ prt_bake() {
 prt_bake cpu_rays '{ name = "prt", baker = "rays_cpu", samples = 1024 }' 60
 prt_bake gpu_rays '{ name = "prt", baker = "rays", samples = 1024 }' 60
 # The CPU and compute ray bakers alternating, three runs each after one compute bake that fills
-# the driver's pipeline cache: the ratio issue 14's target names. Lease machines differ (the
+# the driver's pipeline cache: the ratio the compute baker's target names. Machines differ (the
 # CPU rays of one bake took 377-691 ms on three of them), so only ratios within one run count.
 prt_alternate() {
     local scene=$1

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Frame time against the number of lights for the many-light methods (issue 15, seed 003),
+"""Frame time against the number of lights for the many-light methods (Ridderhof 2002),
 from one run: one stage scene per light count, every method profiled on it with
 `penumbra profile`, the medians written as CSV and drawn as one SVG plot (log-log).
 

@@ -1,5 +1,5 @@
 #version 460
-// The BSP shadow system's relighting (seed 003): colour(v) = sum over the active lights of
+// The BSP shadow system's relighting (Ridderhof 2002): colour(v) = sum over the active lights of
 // s_l * C_l(v), one invocation per segment vertex. The matrix is light-major, so neighbouring
 // invocations read neighbouring words. The loop runs once per active light: the method refuses
 // more lights than llvmpipe's 65,535 loop iterations per invocation allow.

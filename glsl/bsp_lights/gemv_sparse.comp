@@ -1,5 +1,5 @@
 #version 460
-// The BSP shadow system's relighting (seed 003) over the sparse layout: colour(v) = sum over
+// The BSP shadow system's relighting (Ridderhof 2002) over the sparse layout: colour(v) = sum over
 // v's non-zero entries of s_l * C_l(v), one invocation per segment vertex. A light that does
 // not reach a vertex (outside its cone, facing away, in shadow) has no entry there, so the
 // work is the matrix's non-zero count, not vertices x lights. Lights below the threshold have

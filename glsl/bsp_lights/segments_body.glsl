@@ -1,4 +1,4 @@
-// The BSP shadow system's segments (seed 003): world-space vertices with their material, and
+// The BSP shadow system's segments (Ridderhof 2002): world-space vertices with their material, and
 // with BSP_DIRECT the relit colours of the vertex from the GEMV, interpolated (Gouraud): its
 // front's, and its back's from the row `in_back` names (none: no light is behind it).
 #include "common/frame.glsl"

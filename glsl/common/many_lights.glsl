@@ -1,4 +1,4 @@
-// Seed 003's light models for one light at its current intensity: the shader twin of
+// Ridderhof 2002's light models for one light at its current intensity: the shader twin of
 // src/many_lights/light_model.rs (ManyLight::shade), held to it by tests/vls.rs.
 //   0 physical: rho/pi * I * smoothstep cone / d^2 * cos (as common/lights.glsl)
 //   1 seed:     k * rho * I * ramp / d * cos, the ramp linear in angle between the full and null cones
@@ -50,7 +50,7 @@ float opengl_reach(vec4 constants, Light light, vec3 p, out vec3 l) {
     return factor / max(constants.y + constants.z * dist + constants.w * dist * dist, 1e-12);
 }
 
-// The fixed-function terms beside the diffuse one (seed 003 section 4.3.1: attenuation * spot *
+// The fixed-function terms beside the diffuse one (Ridderhof 2002 section 4.3.1: attenuation * spot *
 // (ambient + diffuse + specular)): the light's ambient, `light_ambient` times its intensity
 // times the albedo (the material's ambient is its diffuse colour, as with GL_COLOR_MATERIAL),
 // and Blinn-Phong specular ks * I * max(0, N.H)^shininess seen from `eye` (a local viewer),

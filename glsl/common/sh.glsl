@@ -144,7 +144,7 @@ float sh_dot16(float a[16], float b[16]) {
 }
 
 // z-rotation by `angle` (phi -> phi + angle): c'_m = c_m cos ma - c_-m sin ma,
-// c'_-m = c_m sin ma + c_-m cos ma (seed 001 section 1.6). cos/sin of m*angle by angle addition.
+// c'_-m = c_m sin ma + c_-m cos ma (the height-field thesis section 1.6). cos/sin of m*angle by angle addition.
 void sh_rotate_z(inout float c[SH_MAX_COEFFS], int bands, float angle) {
     int nb = clamp(bands, 1, SH_MAX_BANDS);
     vec2 e1 = vec2(cos(angle), sin(angle));
@@ -160,7 +160,7 @@ void sh_rotate_z(inout float c[SH_MAX_COEFFS], int bands, float angle) {
     }
 }
 
-// 4-band z-rotation with precomputed (cos m a, sin m a) for m = 1, 2, 3 (seed 001 precomputes
+// 4-band z-rotation with precomputed (cos m a, sin m a) for m = 1, 2, 3 (the height-field thesis precomputes
 // them per azimuth direction).
 void sh_rotate_z16_cs(inout float c[16], vec2 e1, vec2 e2, vec2 e3) {
     float a, b;
@@ -208,7 +208,7 @@ void sh_clamped_cosine16(vec3 normal, out float c[16]) {
 }
 
 // ZH of a spherical cap (unit radiance) with cos(half-angle) = cos_alpha, 4 bands
-// (seed 001 Appendix A.1): sqrt(pi)(1-c), sqrt(3pi)/2 s^2, sqrt(5pi)/2 c s^2,
+// (the height-field thesis Appendix A.1): sqrt(pi)(1-c), sqrt(3pi)/2 s^2, sqrt(5pi)/2 c s^2,
 // sqrt(7pi)/8 s^2 (5c^2 - 1). cos_alpha is clamped to [-1, 1].
 vec4 sh_cap_zh4(float cos_alpha) {
     float c = clamp(cos_alpha, -1.0, 1.0);

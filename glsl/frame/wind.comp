@@ -1,5 +1,5 @@
 #version 460
-// Seed 004's vertex wind (digest 6.1), applied to one object's vertices in the scene's vertex
+// Dickson et al. 2011's vertex wind (digest 6.1), applied to one object's vertices in the scene's vertex
 // buffer before any method draws the frame: src/scene/motion.rs is its CPU twin (the reference
 // path tracer's geometry), with the formula.
 // c = cos(rate*t + (x + z)/20 - y*y/70 + z*z/300), (x, y, z) = rest position / unit;

@@ -1,5 +1,5 @@
 #version 460
-// Accumulation (seed 001 section 5.3): environment plus every light, clamped at zero (the SH
+// Accumulation (the height-field thesis section 5.3): environment plus every light, clamped at zero (the SH
 // product can go negative; the thesis's 8-bit targets clamped implicitly).
 layout(local_size_x = 8, local_size_y = 8) in;
 

@@ -1,4 +1,4 @@
-// Shared by the height-field lighting passes (seed 001): parameters, bilinear height fetches,
+// Shared by the height-field lighting passes (the height-field thesis): parameters, bilinear height fetches,
 // normals, wedge-table lookup, z-rotation with per-direction tables, the truncated SH product
 // (the SH core's sh_product over this file's term list).
 // The CPU mirror is src/heightfield/cpu.rs; conventions are those of common/sh.glsl (SH frame
@@ -112,7 +112,7 @@ void hf_wedge(float wl, float wr, float lo, float hi) {
 }
 
 // hf_vis += hf_v rotated about z by phi_j (phi -> phi + phi_j), with the precomputed
-// cos/sin m phi_j (seed 001 section 1.6).
+// cos/sin m phi_j (the height-field thesis section 1.6).
 void hf_accumulate_rotated(int j) {
     int bands = params.dims.w;
     hf_vis[0] += hf_v[0];
@@ -147,7 +147,7 @@ void hf_zh_rotate_into_c(float zh[SH_MAX_BANDS], vec3 axis) {
 }
 
 // hf_c = the clamped cosine about the normal divided by pi (the Lambert BRDF's 1/pi; the albedo
-// is applied when the mesh is drawn): seed 001 section 5.2's (1/pi)[0.886227, 1.02333, 0.495416, 0].
+// is applied when the mesh is drawn): the height-field thesis section 5.2's (1/pi)[0.886227, 1.02333, 0.495416, 0].
 void hf_transfer_cosine(vec3 n_sh) {
     float zh[SH_MAX_BANDS];
     for (int l = 0; l < SH_MAX_BANDS; ++l) zh[l] = SH_CLAMPED_COS_ZH[l] / SH_PI;

@@ -1,5 +1,5 @@
 #version 460
-// One decimation step of the smoothing pyramid (seed 001 section 5.1, digest section 1.3): level
+// One decimation step of the smoothing pyramid (the height-field thesis section 5.1, digest section 1.3): level
 // k (dst_size^2 texels in the corner of its layer) from level k-1 (src_size^2), reduced by
 // q = src_size / dst_size ~ 2^(1/ls). filter 0: tent ("bilinear") of radius q source texels;
 // 1: cubic B-spline ("bicubic") scaled by q; 2: plain copy (level 0 from the height image).

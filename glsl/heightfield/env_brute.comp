@@ -1,4 +1,4 @@
 #version 460
-// Seed 001 lighting kernel variant: see heightfield/shade.glsl.
+// The height-field thesis lighting kernel variant: see heightfield/shade.glsl.
 #define HF_BRUTE
 #include "heightfield/shade.glsl"

@@ -1,5 +1,5 @@
 #version 460
-// Environment light in SH for a constant sky (seed 001 section 1.7, "computed once each frame"):
+// Environment light in SH for a constant sky (the height-field thesis section 1.7, "computed once each frame"):
 // c_00 = 2 sqrt(pi) L, the rest 0, exactly. An image environment is projected by the SH core's
 // pass instead (glsl/sh/project_*.comp, src/sh/gpu.rs). Output: rgb per coefficient, bands^2
 // entries.

@@ -1,5 +1,5 @@
 #version 460
-// Height update (seed 001 section 1.10): evaluates the scene's generator (or resamples its
+// Height update (the height-field thesis section 1.10): evaluates the scene's generator (or resamples its
 // height image) at this frame's time into the level-0 height image, metres.
 #include "heightfield/generate.glsl"
 

@@ -1,4 +1,4 @@
-// Horizon angles per azimuth direction: from the smoothing pyramid (HF_PYRAMID; seed 001 section
+// Horizon angles per azimuth direction: from the smoothing pyramid (HF_PYRAMID; the height-field thesis section
 // 4.2.1 with the digest's nearest-first reading, section 5.1) or ray-marched on the bilinear
 // level-0 field (HF_BRUTE). The CPU mirror is src/heightfield/cpu.rs.
 #ifndef PENUMBRA_HF_HORIZON_GLSL
@@ -93,7 +93,7 @@ float hf_horizon_env(ivec2 p, int j) {
 
 // Local-light horizon (Eq. 4.24-4.25): samples up to the first beyond the light's planar
 // distance d_li, the maximum of the spline for d <= d_li (and, corrected, at d_li), signed. A
-// light within one texel keeps the first sample (seed 001 section 3.2.4c), continuous with the
+// light within one texel keeps the first sample (the height-field thesis section 3.2.4c), continuous with the
 // receivers around it.
 float hf_horizon_light(ivec2 p, int j, float d_li) {
     int n = params.dims.y;

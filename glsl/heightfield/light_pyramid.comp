@@ -1,5 +1,5 @@
 #version 460
-// Seed 001 lighting kernel variant: see heightfield/shade.glsl.
+// The height-field thesis lighting kernel variant: see heightfield/shade.glsl.
 #define HF_PYRAMID
 #define HF_LIGHT
 #include "heightfield/shade.glsl"

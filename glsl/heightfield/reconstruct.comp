@@ -1,6 +1,6 @@
 #version 460
 // Reconstruction of every decimated level back to full resolution with the uniform cubic
-// B-spline (seed 001 section 5.1): layer k of `levels` holds sizes[k]^2 texels in its corner;
+// B-spline (the height-field thesis section 5.1): layer k of `levels` holds sizes[k]^2 texels in its corner;
 // full-resolution texel x maps to u = (x + 0.5) sizes[k] / res - 0.5, and 4x4 taps with the
 // B-spline weights of frac(u) give layer k of `pyramid_out`. Source indices clamp to the level.
 // With `exact_level0` (the corrected mode) level 0, already at full resolution, is copied: the

@@ -1,4 +1,4 @@
-// The per-texel lighting pass of seed 001 (sections 4.2-4.3, 5.2-5.3): horizons in nphi
+// The per-texel lighting pass of the height-field thesis (sections 4.2-4.3, 5.2-5.3): horizons in nphi
 // directions -> SH visibility from the wedge tables -> transfer V * C with the clamped cosine
 // about the normal -> dot with the light. Included by env_*.comp (HF_LIGHT undefined: the
 // environment, hemisphere table, horizons clamped at 0) and light_*.comp (HF_LIGHT: one sphere
@@ -68,7 +68,7 @@ void main() {
     vec3 rgb = vec3(0.0);
 #ifdef HF_LIGHT
     // The sphere seen from the receiver: a cap of half-angle asin(r / d), d the 3D distance to
-    // the centre (corrected) or the planar one (faithful, seed 001 section 5.9); a receiver
+    // the centre (corrected) or the planar one (faithful, the height-field thesis section 5.9); a receiver
     // inside the sphere sees a hemisphere toward the centre.
     vec3 pw = hf_world_pos(p);
     vec3 to = params.light_pos.xyz - pw;

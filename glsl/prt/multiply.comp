@@ -1,5 +1,5 @@
 #version 460
-// Phase 2 of seed 002's baker (src/lighting/prt/raster.rs), Listing 2.5: per atlas pixel,
+// Phase 2 of Staniszewski 2005's baker (src/lighting/prt/raster.rs), Listing 2.5: per atlas pixel,
 // visibility x weight x four SH basis functions of the pixel's world direction (coefficients
 // 4 GROUP .. 4 GROUP + 3). The weight is cos * solid angle of the pixel for the mapping (exact),
 // or the document's 8-bit cosine texture times 2 pi / T^2 (legacy). The direction comes from the

@@ -1,5 +1,5 @@
 #version 460
-// Phase 3 of seed 002's baker as the document runs it (src/lighting/prt/raster.rs, Listing
+// Phase 3 of Staniszewski 2005's baker as the document runs it (src/lighting/prt/raster.rs, Listing
 // 2.6): one of the four passes that each sum TAPS neighbours along one axis (8, 4 along x, then
 // 8, 4 along y for 32x32 tiles), read with integer fetches (the document's offsets land on
 // texel edges, digest 1.6). The fourth pass is reduce_last.comp.

@@ -1,5 +1,5 @@
 #version 460
-// Phase 3 of seed 002's baker as one compute dispatch (src/lighting/prt/raster.rs): one
+// Phase 3 of Staniszewski 2005's baker as one compute dispatch (src/lighting/prt/raster.rs): one
 // workgroup per tile sums its T x T pixels (each invocation a strided share, then a tree in
 // shared memory) and writes the 4 coefficients to the receiver's slot; padding is skipped.
 

@@ -1,5 +1,5 @@
 #version 460
-// Phase 1 of seed 002's baker (src/lighting/prt/raster.rs): the occluders seen from every
+// Phase 1 of Staniszewski 2005's baker (src/lighting/prt/raster.rs): the occluders seen from every
 // vertex of a batch, one instance per vertex, each into its tile of the visibility atlas through
 // the nonlinear hemisphere projection, applied per vertex (Listing 2.4; straight edges between
 // projected corners, the document's known distortion). w = 1, so depth is linear in the chosen

@@ -1,5 +1,5 @@
 #version 460
-// Seed 000's light-mapped surface: emission + albedo x albedo map x light-map, where the
+// The Ca3D-Engine thesis's light-mapped surface: emission + albedo x albedo map x light-map, where the
 // light-map holds the baked irradiance / pi (linear, bilinear, clamped, no mips). Entities get
 // their emission only: the seed's dynamic objects receive no light-map light.
 #include "common/frame.glsl"
@@ -10,7 +10,7 @@ layout(set = 0, binding = 2) uniform sampler2D albedo_map;
 layout(set = 0, binding = 3) uniform sampler2D lightmap;
 layout(set = 0, binding = 4) uniform sampler2D normal_map;
 
-// Seed 000's ambient term: the light-map times N_z, the z of the tangent-space normal-map normal,
+// The Ca3D-Engine thesis's ambient term: the light-map times N_z, the z of the tangent-space normal-map normal,
 // as if the ambient light came from straight above the surface (digest 1.3; a material without
 // a normal map reads the flat default, N_z = 1).
 layout(constant_id = 0) const bool AMBIENT_NZ = false;

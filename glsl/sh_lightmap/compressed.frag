@@ -1,5 +1,5 @@
 #version 460
-// Compressed SH light-maps (seed 000 listings 3-5): the index map and the representative table
+// Compressed SH light-maps (the Ca3D-Engine thesis listings 3-5): the index map and the representative table
 // (sh_lightmap/vq.glsl), optionally with the 4-tap filter of section 5.8.
 #include "sh_lightmap/shl.glsl"
 

@@ -1,5 +1,5 @@
 #version 460
-// Native SH light-maps (seed 000 listing 2): GROUPS layers of 4 coefficients, filtered by the
+// Native SH light-maps (the Ca3D-Engine thesis listing 2): GROUPS layers of 4 coefficients, filtered by the
 // sampler (bilinear: the decoding is linear, so filtering the stored values is exact).
 #include "sh_lightmap/shl.glsl"
 

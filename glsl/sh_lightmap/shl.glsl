@@ -1,4 +1,4 @@
-// Shared by the native and compressed SH light-map shaders (seed 000 listings 2-5): the light's
+// Shared by the native and compressed SH light-map shaders (the Ca3D-Engine thesis listings 2-5): the light's
 // coefficients, the specialisation constants, and shading a texel's transfer.
 #include "common/frame.glsl"
 #include "common/scene.glsl"
@@ -16,7 +16,7 @@ layout(set = 0, binding = 7) readonly buffer EnvSh { vec4 items[]; } env_sh;
 layout(constant_id = 0) const int BANDS = 4;
 // The coefficients are the seed's 8-bit range encoding, decoded as 4 (t - 1/2).
 layout(constant_id = 1) const bool ENCODED = true;
-// Seed 000's monochrome shading, clamp(sum, 0, 1) x diffuse; else RGB light, max(sum, 0).
+// The Ca3D-Engine thesis's monochrome shading, clamp(sum, 0, 1) x diffuse; else RGB light, max(sum, 0).
 layout(constant_id = 2) const bool FAITHFUL = true;
 // 0 final, 1 the first layer as RGB, 2 the index map, 3 bare SHL without the diffuse colour.
 layout(constant_id = 3) const int VIEW = 0;

@@ -1,4 +1,4 @@
-// The compressed SH light-map's look-ups (seed 000 listings 3-5, section 5.8), shared by
+// The compressed SH light-map's look-ups (the Ca3D-Engine thesis listings 3-5, section 5.8), shared by
 // compressed.frag and the check kernel glsl/tests/shl_vq_check.comp. Needs GROUPS, ENCODED and
 // shade_rep(uint) defined before it is included.
 //

@@ -1,5 +1,5 @@
 #version 460
-// Virtualised light sources (seed 003, digest section 1.4): a segment shades with only the <= K
+// Virtualised light sources (Ridderhof 2002, digest section 1.4): a segment shades with only the <= K
 // lights its set-up chose, at their current intensities; lights outside the set contribute
 // nothing and shadows are only the set-up's feeler (a blocked light is not in the set).
 #include "vls/vls.glsl"

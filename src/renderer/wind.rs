@@ -1,4 +1,4 @@
-//! The wind pass (seed 004, digest §6.1): before any method draws a frame, each windy object's
+//! The wind pass (Dickson et al. 2011, digest §6.1): before any method draws a frame, each windy object's
 //! vertices in the scene's vertex buffer are recomputed from its rest pose at the frame's time
 //! (`glsl/frame/wind.comp`; the formula and its CPU twin, which the reference path tracer uses, in
 //! `src/scene/motion.rs`). Every pass that draws the scene's vertex buffer — every method's

@@ -931,7 +931,7 @@ fn read_light_board(f: &Field) -> Result<super::types::LightBoard, SceneError> {
     })
 }
 
-/// `[objects.wind]`: seed 004's vertex wind (src/scene/motion.rs), the document's constants by
+/// `[objects.wind]`: Dickson et al. 2011's vertex wind (src/scene/motion.rs), the document's constants by
 /// default.
 fn read_wind(f: &Field) -> Result<Wind, SceneError> {
     let t = f.table()?;

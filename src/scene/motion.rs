@@ -1,6 +1,6 @@
 //! Scene-level motion that the renderer applies per frame for every method and the reference
 //! path tracer at a frame's time, so a chart compares like with like: **wind** on an object's
-//! vertices (seed 004's vertex animation, digest §6.1) and a **light motion** turning a
+//! vertices (Dickson et al. 2011's vertex animation, digest §6.1) and a **light motion** turning a
 //! directional light about an axis.
 //!
 //! Wind, per vertex of object-space position p (in the document's length unit `unit` metres)

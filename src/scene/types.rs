@@ -102,7 +102,7 @@ pub struct Material {
     /// `α·surface + (1 − α)·behind` (a pane of glass without refraction).
     pub opacity: f32,
     /// A sky surface: `radiosity` neither lights nor patches it, and its sun counts only
-    /// where a ray toward the sun reaches one (seed 000 §3). Other methods draw it as usual.
+    /// where a ray toward the sun reaches one (the Ca3D-Engine thesis §3). Other methods draw it as usual.
     pub sky: bool,
 }
 
@@ -217,7 +217,7 @@ pub struct Object {
     pub transform: Mat4,
     /// Motion over time, for methods that animate entities (`transform` is the pose at t = 0).
     pub animation: Option<Animation>,
-    /// Vertex wind (seed 004), applied by the renderer every frame for every method.
+    /// Vertex wind (Dickson et al. 2011), applied by the renderer every frame for every method.
     pub wind: Option<super::motion::Wind>,
 }
 

@@ -1,7 +1,7 @@
 //! Basis evaluation by the stable normalised associated-Legendre recurrences, reconstruction and
 //! the SH dot product.
 //!
-//! Why this recurrence: the textbook route (seed 001 Eq. 3.10–3.12 and a factorial table for
+//! Why this recurrence: the textbook route (the height-field thesis Eq. 3.10–3.12 and a factorial table for
 //! K_l^m) overflows and loses digits at high bands because it multiplies huge (2m−1)!! by tiny
 //! normalisations. Carrying the *normalised* P̄_l^m = K_l^m P_l^m through the recurrence keeps
 //! every intermediate of order one. The azimuthal factors come from the complex power

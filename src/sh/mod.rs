@@ -1,5 +1,5 @@
-//! Spherical harmonics: the core every SH lighting method shares (seed 001's height-field
-//! shadows, seed 000's SH light-maps, seed 002's GPU transfer). CPU side here; the GPU side
+//! Spherical harmonics: the core every SH lighting method shares (the height-field thesis's height-field
+//! shadows, the Ca3D-Engine thesis's SH light-maps, Staniszewski 2005's GPU transfer). CPU side here; the GPU side
 //! (basis evaluation, z/ZH/general rotation, kernels, windows, the triple product over
 //! [`product_terms`], texel solid angles) is `glsl/common/sh.glsl`, which follows exactly the
 //! same conventions and algorithms, and the projection of environment images
@@ -10,13 +10,13 @@
 //! * **Real SH, orthonormal over the sphere**: ∫ y_i y_j dω = δ_ij.
 //!   `y_l^m = √2·K_l^m·cos(mφ)·P_l^m(cos θ)` for m > 0, `K_l^0·P_l^0(cos θ)` for m = 0 and
 //!   `√2·K_l^|m|·sin(|m|φ)·P_l^|m|(cos θ)` for m < 0, with
-//!   `K_l^m = √((2l+1)/(4π)·(l−m)!/(l+m)!)`. This is the definition of seed 001 (Eq. 3.19–3.20),
-//!   of seed 000 §5.1.1 and of Green's "Gritty Details", which seed 002 cites.
-//! * **Condon–Shortley phase included**: `P_m^m = (−1)^m (2m−1)!! (1−x²)^{m/2}` (seed 001
+//!   `K_l^m = √((2l+1)/(4π)·(l−m)!/(l+m)!)`. This is the definition of the height-field thesis (Eq. 3.19–3.20),
+//!   of the Ca3D-Engine thesis §5.1.1 and of Green's "Gritty Details", which Staniszewski 2005 cites.
+//! * **Condon–Shortley phase included**: `P_m^m = (−1)^m (2m−1)!! (1−x²)^{m/2}` (the height-field thesis
 //!   Eq. 3.10). Hence `y_1^{−1} = −0.488603·y`, `y_1^0 = +0.488603·z`, `y_1^1 = −0.488603·x`
-//!   (seed 000 §5.1 test 1). Seed 002's appendix prints the constants without signs; only
+//!   (the Ca3D-Engine thesis §5.1 test 1). Staniszewski 2005's appendix prints the constants without signs; only
 //!   consistency matters, and every piece of penumbra uses this one.
-//! * **Flat index** `i = l(l+1) + m`; "n bands" means l = 0..n−1, i.e. n² coefficients (seed 001's
+//! * **Flat index** `i = l(l+1) + m`; "n bands" means l = 0..n−1, i.e. n² coefficients (the height-field thesis's
 //!   "order 3" and "4 bands" are both 16 coefficients). [`MAX_BANDS`] = 16 bands are supported
 //!   everywhere on the CPU; the GLSL evaluates up to 8 bands.
 //! * **SH frame: z up.** θ is the polar angle from +z, φ the azimuth from +x toward +y:
@@ -26,12 +26,12 @@
 //!   `sh = (x_w, −z_w, y_w)` ([`world_to_sh`]; inverse [`sh_to_world`]; as matrices
 //!   [`WORLD_TO_SH`] / [`SH_TO_WORLD`]): world up (+y) is the SH pole +z, world +x stays +x, and
 //!   world −z (where the default camera looks) is SH +y. A height field lying in the world xz
-//!   plane therefore has its horizon in the SH equator, and seed 001's azimuth φ is measured from
+//!   plane therefore has its horizon in the SH equator, and the height-field thesis's azimuth φ is measured from
 //!   world +x toward world −z: a horizontal world direction (dx, 0, dz) has SH azimuth
 //!   atan2(−dz, dx).
 //! * **Rotations** act on functions: rotating `f` by a rotation matrix `R` (in the SH frame) gives
 //!   `g(ω) = f(Rᵀω)`, so a lobe around axis `a` ends up around `R·a`. z-rotation by α is the
-//!   special case `R = R_z(α)` (seed 001 §1.6 formulas).
+//!   special case `R = R_z(α)` (the height-field thesis §1.6 formulas).
 //! * **Coefficients are projections**: `c_i = ∫ f(ω) y_i(ω) dω` (no 1/π or 4π folded in). The
 //!   dot product of two coefficient vectors is `∫ f g dω`. Irradiance from radiance is
 //!   `E(n) = Σ A_l L_lm y_lm(n)` with `A_l = π, 2π/3, π/4, 0, −π/24, …` ([`lambert_kernel`]);
@@ -39,7 +39,7 @@
 //! * Errors: public functions never panic on bad input; they return [`ShError`] or clamp a
 //!   documented range (directions are normalised, a zero or non-finite direction is +z).
 //!
-//! Values and tests come from the digests in `shared/notes/`: seed-001 §7 A (SH core), §1.6
+//! Values and tests come from the digests in the notes on the source documents: seed-001 §7 A (SH core), §1.6
 //! (z-rotation), §1.8 (cap ZH), seed-000 §5.1–5.2, seed-002 §5 and its appendix A.
 
 mod basis;
@@ -75,7 +75,7 @@ pub const MAX_BANDS: usize = 16;
 pub const GLSL_MAX_BANDS: usize = 8;
 /// `y_0^0 = 1/(2√π)`.
 pub const Y00: f64 = 0.282_094_791_773_878_14;
-/// The coefficient of the constant function 1: `∫ y_0^0 dω = 2√π` (seed 000 §5.1 test 3).
+/// The coefficient of the constant function 1: `∫ y_0^0 dω = 2√π` (the Ca3D-Engine thesis §5.1 test 3).
 pub const CONSTANT_ONE_C00: f64 = 3.544_907_701_811_032;
 
 /// Everything the SH functions can reject.

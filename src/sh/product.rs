@@ -1,5 +1,5 @@
 //! The SH triple product: the product of two SH functions projected back onto n bands,
-//! `(a • b)_k = Σ_ij a_i b_j Γ_ijk` with `Γ_ijk = ∫ y_i y_j y_k dω` (seed 001 Eq. 3.25–3.30).
+//! `(a • b)_k = Σ_ij a_i b_j Γ_ijk` with `Γ_ijk = ∫ y_i y_j y_k dω` (the height-field thesis Eq. 3.25–3.30).
 //!
 //! Γ is computed numerically but exactly (to rounding): every y_lm separates into
 //! `P̄_l^|m|(z)·Φ_m(φ)`, so `Γ = ∫ P̄P̄P̄ dz · ∫ ΦΦΦ dφ`. The φ factor is a trigonometric
@@ -216,7 +216,7 @@ impl TripleProductTensor {
     }
 }
 
-/// The product of two SH functions projected onto `bands` bands (seed 001 Eq. 3.25), using the
+/// The product of two SH functions projected onto `bands` bands (the height-field thesis Eq. 3.25), using the
 /// shared tensor of the largest band count involved. `a` may be RGB and `b` scalar (light •
 /// visibility). Truncated products are what the seeds use; they are not associative.
 pub fn product<C: Coeff, S: Copy + Into<f64>>(a: &[C], b: &[S], bands: usize) -> ShResult<Vec<C>> {
@@ -256,7 +256,7 @@ pub fn product_terms(bands: usize) -> ShResult<Vec<[u32; 2]>> {
     Ok(out)
 }
 
-/// `M` with `(a • b) = M b` for every `b` of `bands` bands (seed 001 Eq. 3.29–3.30,
+/// `M` with `(a • b) = M b` for every `b` of `bands` bands (the height-field thesis Eq. 3.29–3.30,
 /// `M_kj = Σ_i a_i Γ_ijk = ∫ a y_j y_k`), row-major `bands² × bands²`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProductMatrix<C> {

@@ -1,7 +1,7 @@
 //! Projection `c_i = ∫ f(ω) y_i(ω) dω` of closures (deterministic Gauss–Legendre × uniform-φ
 //! quadrature), equirectangular images and cube maps (exact per-texel solid angles).
 //!
-//! Why not Monte Carlo as the seeds do (seed 001 Eq. 3.23, seed 000 §5.1.3): a product rule with
+//! Why not Monte Carlo as the seeds do (the height-field thesis Eq. 3.23, the Ca3D-Engine thesis §5.1.3): a product rule with
 //! n Gauss–Legendre nodes in z = cos θ and N uniform azimuths integrates every polynomial in
 //! (x, y, z) of degree ≤ min(2n−1, N−1) exactly, so projecting a band-limited function is exact
 //! to rounding and the results are reproducible bit for bit.

@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 
 /// Rotates `coeffs` (a whole number of bands) in place about the SH z axis by `angle` radians
 /// (counter-clockwise seen from +z, i.e. φ → φ + angle). Per band, for m > 0 (cos mφ) and −m
-/// (sin mφ) — seed 001 §1.6, which derives it for the wedge tables:
+/// (sin mφ) — the height-field thesis §1.6, which derives it for the wedge tables:
 /// `c'_m = c_m cos mα − c_−m sin mα`, `c'_−m = c_m sin mα + c_−m cos mα`; m = 0 is unchanged.
 /// The Condon–Shortley sign is the same for ±m, so it does not enter.
 pub fn rotate_z<C: Coeff>(coeffs: &mut [C], angle: f64) -> ShResult<()> {
@@ -32,7 +32,7 @@ pub fn rotate_z<C: Coeff>(coeffs: &mut [C], angle: f64) -> ShResult<()> {
 
 /// Rotates a zonal function, given by its ZH coefficients `zh[l]` (the m = 0 coefficients of a
 /// function symmetric about +z), so that its axis points along `axis` (SH frame; normalised,
-/// zero → +z): `c_lm = √(4π/(2l+1))·z_l·y_lm(axis)` (Sloan; seed 001 Eq. 3.36 as corrected in
+/// zero → +z): `c_lm = √(4π/(2l+1))·z_l·y_lm(axis)` (Sloan; the height-field thesis Eq. 3.36 as corrected in
 /// the digest §1.1). Returns `zh.len()²` coefficients.
 pub fn zh_rotate<C: Coeff>(zh: &[C], axis: Vec3) -> ShResult<Vec<C>> {
     let bands = zh.len();

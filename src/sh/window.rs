@@ -24,7 +24,7 @@
 //! and at most 0.57× the unwindowed lobe, at the cost of the peak (0.833 Hanning / 0.899
 //! Lanczos at 4 bands instead of 1.0625). No Hanning width above 2 removes the lobe entirely:
 //! a non-negative reconstruction needs w ≤ 2, which leaves only (1 + cos θ)/4. The unwindowed
-//! minima −0.25 (2 bands), −0.0396 (4), −0.0155 (8) are seed 000 §5.2 D's. Note that at 3
+//! minima −0.25 (2 bands), −0.0396 (4), −0.0155 (8) are the Ca3D-Engine thesis §5.2 D's. Note that at 3
 //! bands Hanning makes the lobe *worse*: windowing is not a cure-all, measure it.
 
 use super::{bands_of, check_bands, Coeff, ShError, ShResult};

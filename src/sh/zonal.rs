@@ -49,8 +49,8 @@ fn legendre_tail_integrals(n: usize, c: f64) -> Vec<f64> {
 
 /// ZH coefficients of the clamped cosine `max(cos θ, 0)` about +z:
 /// `z_l = 2π N_l ∫_0^1 x P_l(x) dx` = √π/2, √(π/3), √(5π)/8, 0, −√π/16, 0, √(13π)/128, 0, …
-/// (0.886227, 1.023327, 0.495416, 0, −0.110778, 0, 0.049927, 0: seed 000 §5.1 test 4;
-/// seed 001 §1.7 lists the first four times 1/π). Odd l > 1 vanish.
+/// (0.886227, 1.023327, 0.495416, 0, −0.110778, 0, 0.049927, 0: the Ca3D-Engine thesis §5.1 test 4;
+/// the height-field thesis §1.7 lists the first four times 1/π). Odd l > 1 vanish.
 pub fn clamped_cosine_zh(bands: usize) -> ShResult<Vec<f64>> {
     check_bands(bands)?;
     let tail = legendre_tail_integrals(bands, 0.0);
@@ -65,7 +65,7 @@ pub fn clamped_cosine_zh(bands: usize) -> ShResult<Vec<f64>> {
 }
 
 /// The Lambert convolution kernel `A_l = √(4π/(2l+1))·z_l` of the clamped cosine:
-/// π, 2π/3, π/4, 0, −π/24, 0, π/64, … (Ramamoorthi–Hanrahan; seed 002 §5 test 1 `Â_l`).
+/// π, 2π/3, π/4, 0, −π/24, 0, π/64, … (Ramamoorthi–Hanrahan; Staniszewski 2005 §5 test 1 `Â_l`).
 /// Irradiance is `E_lm = A_l L_lm`.
 pub fn lambert_kernel(bands: usize) -> ShResult<Vec<f64>> {
     Ok(clamped_cosine_zh(bands)?
@@ -78,7 +78,7 @@ pub fn lambert_kernel(bands: usize) -> ShResult<Vec<f64>> {
 /// ZH coefficients of the indicator of a spherical cap of half-angle `half_angle` (radians,
 /// clamped to [0, π]) about +z, i.e. a unit-radiance spherical light seen under that angle:
 /// `z_0 = √π (1 − cos α)`, `z_l = √(π/(2l+1))·(P_{l−1}(cos α) − P_{l+1}(cos α))`.
-/// For l ≤ 3 this equals seed 001's Appendix A.1 (digest §1.8): `(√(3π)/2) s²`,
+/// For l ≤ 3 this equals the height-field thesis's Appendix A.1 (digest §1.8): `(√(3π)/2) s²`,
 /// `(√(5π)/2) c s²`, `(√(7π)/8) s² (5c² − 1)`. The cap's integral, its solid angle
 /// `2π(1 − cos α)`, is `z_0·∫y_00 dω = z_0·4π·Y00 = z_0·2√π`.
 pub fn cap_zh(half_angle: f64, bands: usize) -> ShResult<Vec<f64>> {
@@ -92,7 +92,7 @@ pub fn cap_zh(half_angle: f64, bands: usize) -> ShResult<Vec<f64>> {
 }
 
 /// The upper hemisphere's indicator: [`cap_zh`] with α = π/2 — √π, 1.534990, 0, −0.586184, 0,
-/// 0.367410, 0, −0.268152 (seed 000 §5.1 test 5).
+/// 0.367410, 0, −0.268152 (the Ca3D-Engine thesis §5.1 test 5).
 pub fn hemisphere_zh(bands: usize) -> ShResult<Vec<f64>> {
     cap_zh(PI / 2.0, bands)
 }
@@ -138,7 +138,7 @@ pub fn project_zonal(
 }
 
 /// Convolves `coeffs` in place with the zonal kernel `kernel_zh` (ZH coefficients about +z,
-/// at least as many bands as `coeffs`): `(k∗c)_lm = √(4π/(2l+1))·k_l·c_lm` (seed 001 Eq. 3.24).
+/// at least as many bands as `coeffs`): `(k∗c)_lm = √(4π/(2l+1))·k_l·c_lm` (the height-field thesis Eq. 3.24).
 pub fn convolve<C: Coeff>(coeffs: &mut [C], kernel_zh: &[f64]) -> ShResult<()> {
     let bands = bands_of("convolution coefficients", coeffs)?;
     if kernel_zh.len() < bands {

@@ -1,5 +1,5 @@
 //! Per-pass GPU timings summarised over frames: shared by `profile`, `chart` and the methods'
-//! report hooks (e.g. seed 001's Table 6.6).
+//! report hooks (e.g. the height-field thesis's Table 6.6).
 
 use serde::Serialize;
 

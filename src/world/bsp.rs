@@ -3,7 +3,7 @@
 //! painter's-order traversal.
 //!
 //! Every face fragment ends up stored in the node whose plane it lies in (a "coincident list",
-//! as seed 003's BSP shadow system also wants); leaves appear where no fragments remain.
+//! as Ridderhof 2002's BSP shadow system also wants); leaves appear where no fragments remain.
 
 use glam::DVec3;
 
@@ -20,7 +20,7 @@ pub enum SplitHeuristic {
     /// costs more than imbalance because every split adds a face, a polygon to draw and light
     /// forever, while imbalance only adds depth to point and ray queries.
     Balanced { split_weight: u32 },
-    /// The first remaining face's plane, as seed 003's BSP system (no heuristic).
+    /// The first remaining face's plane, as Ridderhof 2002's BSP system (no heuristic).
     FirstFace,
 }
 
@@ -273,7 +273,7 @@ impl Tree {
         }
     }
 
-    /// Faces in back-to-front order as seen from `eye` (painter's order, seed 003 §5.2.2): at
+    /// Faces in back-to-front order as seen from `eye` (painter's order, Ridderhof 2002 §5.2.2): at
     /// each node, the far side, then the node's faces, then the near side.
     pub fn faces_back_to_front(&self, eye: DVec3) -> Vec<FaceId> {
         let mut out = Vec::new();

@@ -1,4 +1,4 @@
-//! Which world faces the stencil shadow-volume path must extrude for a point light (seed 000
+//! Which world faces the stencil shadow-volume path must extrude for a point light (the Ca3D-Engine thesis
 //! §4.3.1, Fig. 8). Pure CPU set queries returning face ids:
 //!
 //! * (a) [`casters_naive`](CompiledWorld::casters_naive): every face;

@@ -1,5 +1,5 @@
 //! The static world: convex brushes compiled into a BSP tree with leaves, portals, a leaf-to-leaf
-//! PVS, ray casting, and the shadow-caster sets of the stencil-volume path (seed 000 §6.1.1 and
+//! PVS, ray casting, and the shadow-caster sets of the stencil-volume path (the Ca3D-Engine thesis §6.1.1 and
 //! §4.3.1). Pure CPU, no GPU types: the radiosity and SH bakers and the BSP shadow system reuse
 //! it as it is.
 //!

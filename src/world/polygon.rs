@@ -30,7 +30,7 @@ pub enum Side {
 
 /// How thick a plane is for side tests, and whether coordinates are rounded: the numeric policy
 /// of a BSP build. [`Tolerance::EXACT`] is the world compiler's (f64 throughout, planes
-/// [`PLANE_EPSILON`] thick); [`Tolerance::THESIS`] is seed 003's (§5.6.1: every double rounded to
+/// [`PLANE_EPSILON`] thick); [`Tolerance::THESIS`] is Ridderhof 2002's (§5.6.1: every double rounded to
 /// four decimal places, points that close to a plane on it), kept so its faithful mode can be
 /// compared with the exact one.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -39,7 +39,7 @@ fn basis_closed_form(d: Vec3) -> [f64; 9] {
     ]
 }
 
-/// The ZH of a cap of half-angle `a` (seed 001 Appendix A.1 as the digest writes it, unit
+/// The ZH of a cap of half-angle `a` (the height-field thesis Appendix A.1 as the digest writes it, unit
 /// radiance): √π(1 − c), (√(3π)/2)s², (√(5π)/2)c s², (√(7π)/8)s²(5c² − 1).
 fn cap_closed_form(a: f64) -> [f64; 4] {
     use std::f64::consts::PI;

@@ -173,7 +173,7 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     );
 }
 
-/// `penumbra chart` on the textured seed 000 level: every point of the shadow-volume sweep is
+/// `penumbra chart` on the textured the Ca3D-Engine thesis level: every point of the shadow-volume sweep is
 /// measured against the direct-lighting reference, which now applies the level's albedo, normal
 /// and specular maps as the method does; the physical mode is the accurate one.
 #[test]

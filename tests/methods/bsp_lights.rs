@@ -1,4 +1,4 @@
-//! Seed 003's BSP shadow system on the GPU (digest §5): the GEMV against the CPU sum under random
+//! Ridderhof 2002's BSP shadow system on the GPU (digest §5): the GEMV against the CPU sum under random
 //! intensities (19), the threshold's error bound and its speed-up (20), bit-identical frames
 //! with static intensities (23), the physical mode against the path tracer, the direct term
 //! over another method's base, and bad parameters. Measurements are `#[ignore]`d tests.

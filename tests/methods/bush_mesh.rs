@@ -1,4 +1,4 @@
-//! The generated `bush` mesh (seed 004's leafy bush) and its scene, `scenes/lpv_bush.toml`:
+//! The generated `bush` mesh (Dickson et al. 2011's leafy bush) and its scene, `scenes/lpv_bush.toml`:
 //! triangle counts, determinism in the seed, finite unit attributes in the README's tangent-frame
 //! convention, the crown's bounds, the leaf maps' channel packing, and a capture of the scene.
 

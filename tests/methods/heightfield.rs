@@ -1,4 +1,4 @@
-//! Height-field soft shadows (seed 001) on the device, under validation: known answers from the
+//! Height-field soft shadows (the height-field thesis) on the device, under validation: known answers from the
 //! digest's §7 (flat plane, wall, tilted plane, invariances, sphere lights, truncation, leak,
 //! guards), the GPU generators against the CPU, the pyramid horizon against the brute-force one,
 //! and a frame through the renderer. Fields are 64² (the horizon comparison 128²).

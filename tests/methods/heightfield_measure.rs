@@ -1,4 +1,4 @@
-//! Measurements of the height-field methods (seed 001) and the generator of the committed teddy
+//! Measurements of the height-field methods (the height-field thesis) and the generator of the committed teddy
 //! relief. The measurements are long and `#[ignore]`d; run them one at a time with
 //! `cargo test --release --test methods -- --ignored --nocapture heightfield_measure::<name>`; each prints
 //! its table and writes it under `target/heightfield-measure/`.
@@ -101,7 +101,7 @@ fn decl(name: &str, params: &[(&str, toml::Value)]) -> MethodDecl {
 
 const TERRAIN: [&str; 7] = ["cones", "sine", "mountains", "eggtray", "city", "teddy", "sky"];
 
-/// Cost of every pass (seed 001 Table 6.6 layout) at 256², 512² and 1024² on the cones scene
+/// Cost of every pass (the height-field thesis Table 6.6 layout) at 256², 512² and 1024² on the cones scene
 /// (environment + one sphere light), pyramid at the thesis's settings (ls = 4, lo = 4, nφ = 32,
 /// 4 bands) and brute force (1-texel steps; 0.5 at 256²).
 #[test]

@@ -2,7 +2,7 @@
 //! is frame 0's times that light's factor `Scene::light_factors(t)`, under the forward method and
 //! under shadow_volumes (which reads each light's intensity per frame); frame 0 is the static
 //! scene; and without a board frames do not change. Also: every shipped scene loads with methods
-//! the registry knows, and issue 15's scenes have the lights and triangles they promise.
+//! the registry knows, and the many-light scenes have the lights and triangles they promise.
 
 use crate::support as common;
 
@@ -124,7 +124,7 @@ fn without_a_board_frames_do_not_change() {
     }
 }
 
-/// The scenes of issue 15 with their light and triangle counts.
+/// The many-light scenes with their light and triangle counts.
 const MANY_LIGHT_SCENES: [(&str, usize, usize); 8] = [
     ("many_box.toml", 1, 14),
     ("many_polygon3.toml", 3, 4),

@@ -1,4 +1,4 @@
-//! Light propagation volumes on the GPU (seed 004, digest §7): the propagation against the CPU
+//! Light propagation volumes on the GPU (Dickson et al. 2011, digest §7): the propagation against the CPU
 //! reference (which reproduces the digest's tables, src/lighting/lpv/tests.rs) for both schemes,
 //! both storages and the geometry volume; the injection's flux ρ·E⊥·A and τ·E⊥·A at any RSM
 //! resolution (T8); the document's reflected lobe's sign (T10b); the thin-wall leak with and

@@ -1,4 +1,4 @@
-//! Seed 003 digest §5 item 12, across the two systems: on the shading scene (a box floating above
+//! Ridderhof 2002 digest §5 item 12, across the two systems: on the shading scene (a box floating above
 //! a plane under an overhead light, here with three more lights, so ≤ K = 8 and VLS drops
 //! none), virtualised light sources and the BSP shadow system draw the same frame within 1e-3
 //! when they use the same light model, wherever neither has a reason to differ. The two share

@@ -1,4 +1,4 @@
-//! Per-vertex PRT drawn (seed 002 §2.4, Listing 2.8 with ρ/π): frames against closed forms — the
+//! Per-vertex PRT drawn (Staniszewski 2005 §2.4, Listing 2.8 with ρ/π): frames against closed forms — the
 //! open box's floor under a constant sky shows ρ·L₀·F (F the opening's view factor), for the
 //! raster and the ray-cast bakers, and the document's path is visibly off; a spinning light
 //! relights a wall frame by frame by SH rotation with no re-bake, at the band-limited clamped
@@ -37,7 +37,7 @@ fn centre(img: &HdrImage) -> [f32; 4] {
 }
 
 /// The floor's centre vertex sees the sky through the opening: ρ·L₀·F with F = 4·F_corner(1, 1)
-/// = 0.554126 (seed 000 digest §5.2 E), for the corrected raster baker under each mapping and
+/// = 0.554126 (the Ca3D-Engine thesis digest §5.2 E), for the corrected raster baker under each mapping and
 /// both reductions, and the ray-cast bakers (measured: −0.37 % orthographic, +2.34 % equal-area
 /// at 32², −0.53 % stereographic at 64², −0.25 % rays); the document's path (planar, 8-bit
 /// cosines, 2π/1024, straight edges) is +29.8 %.

@@ -1,4 +1,4 @@
-//! Seed 002's raster baker on the device (src/lighting/prt/raster.rs) against closed forms
+//! Staniszewski 2005's raster baker on the device (src/lighting/prt/raster.rs) against closed forms
 //! (digest §5): the unoccluded vertex, the disk occluder, full occlusion, occluder sets, near
 //! and far, tangent-frame invariance, the reduction's exactness (both paths), batch padding.
 

@@ -1,4 +1,4 @@
-//! Seed 002's PRT on whole scenes (digest §5): the raster baker against the ray-cast truth on a
+//! Staniszewski 2005's PRT on whole scenes (digest §5): the raster baker against the ray-cast truth on a
 //! floor, a box and a sphere (test 8), the shared-exponent storage on the bunny (test 15), SH keys
 //! against the transfer baked at the exact time (test 14), and near/far on the teapot in its box
 //! (test 7). Every test prints what it measured; the numbers are in the tests' doc comments.

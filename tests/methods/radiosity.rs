@@ -1,4 +1,4 @@
-//! The radiosity light-map as a base term on the GPU (seed 000 §3): a closed box whose inside
+//! The radiosity light-map as a base term on the GPU (the Ca3D-Engine thesis §3): a closed box whose inside
 //! emits L_e and reflects ρ shows L_e/(1 − ρ) in every pixel (the furnace's geometric series,
 //! independent of the baker), and a bad parameter is one line naming file and field.
 
@@ -99,7 +99,7 @@ fn bad_parameters_name_the_field() {
     );
 }
 
-/// Seed 000's composition on `scenes/room_gi.toml`: the light-map's bounced light under shadow
+/// The Ca3D-Engine thesis's composition on `scenes/room_gi.toml`: the light-map's bounced light under shadow
 /// volumes' direct light is much closer to the multi-bounce path tracer than the direct light
 /// alone, and the light-map alone is close to the tracer's indirect-only image.
 #[test]

@@ -1,4 +1,4 @@
-//! Seed 000's frame on `scenes/bsp_rooms.toml` (the `seed000` combination): the radiosity
+//! The Ca3D-Engine thesis's frame on `scenes/bsp_rooms.toml` (the `seed000` combination): the radiosity
 //! light-map as the ambient base, per-pixel Phong with stencil shadow volumes as the direct term.
 //! The composed image is the sum of its parts, the light-map puts bounced light where the direct
 //! lights leave shadow, and the entities get none of it.
@@ -175,7 +175,7 @@ fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     );
 }
 
-/// Seed 000's ambient is light-map × N_z (the normal map's tangent-space z): with `ambient_nz`
+/// The Ca3D-Engine thesis's ambient is light-map × N_z (the normal map's tangent-space z): with `ambient_nz`
 /// the light-map base is darker where the level's bricks and tiles are normal-mapped, never
 /// brighter, and the light-map itself is the same bake.
 #[test]

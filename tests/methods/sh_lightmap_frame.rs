@@ -1,4 +1,4 @@
-//! SH light-maps drawn (seed 000 §5.5–5.8): the frame against closed forms — the open box's floor
+//! SH light-maps drawn (the Ca3D-Engine thesis §5.5–5.8): the frame against closed forms — the open box's floor
 //! under a constant sky shows ρ·L₀·F with F the opening's view factor (digest §5.2 E), in every
 //! storage (range-encoded RGBA8, f16, f32, VQ-compressed, filtered); a turning sun relights a
 //! wall frame by frame with no re-bake, at the band-limited values of digest §5.2 D.

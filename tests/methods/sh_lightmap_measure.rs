@@ -1,4 +1,4 @@
-//! What VQ compression of SH light-maps costs (issue 16, seed 000 §5.6.3): PSNR of bare-SHL
+//! What VQ compression of SH light-maps costs (the Ca3D-Engine thesis §5.6.3): PSNR of bare-SHL
 //! shading over 64 random directional lights, compressed against native, and the seed storage
 //! model's compression ratio. The target (≥ 10× at ≥ 40 dB, 4 bands) is asserted on the
 //! courtyard; `psnr_table` (ignored, long) prints docs/results/lavapipe/sh_lightmap_vq_psnr.csv.

@@ -1,6 +1,6 @@
 //! The compressed SH light-map's look-ups on the device (glsl/sh_lightmap/vq.glsl through the check
 //! kernel glsl/tests/shl_vq_check.comp), against the storage layout written on the CPU
-//! (src/lighting/sh_lightmap/storage.rs) — seed 000 §5.6.2 and §5.8, digest §5.3: every one of
+//! (src/lighting/sh_lightmap/storage.rs) — the Ca3D-Engine thesis §5.6.2 and §5.8, digest §5.3: every one of
 //! the 65,536 indices read back bit-exact (and a LINEAR sampler shown to break them), the
 //! 256-row table fetched for every representative, and the 4-tap filter's profile.
 

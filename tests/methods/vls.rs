@@ -1,4 +1,4 @@
-//! Virtualised light sources drawn (seed 003, digest §1.4): the shader's light models equal the
+//! Virtualised light sources drawn (Ridderhof 2002, digest §1.4): the shader's light models equal the
 //! CPU's (`ManyLight::shade`) pixel by pixel, the physical one equals `forward` where every light
 //! is kept, a segment with more than K lights shades with exactly its baked set, and static
 //! intensities give bit-identical frames (item 23).

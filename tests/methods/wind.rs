@@ -1,4 +1,4 @@
-//! Scene-level motion on the GPU, shared by every method: seed 004's wind (digest §6.1) moves the
+//! Scene-level motion on the GPU, shared by every method: Dickson et al. 2011's wind (digest §6.1) moves the
 //! scene's vertex buffer before any method draws, as the formula says at known points and as the
 //! CPU twin the reference traces; the LPV's RSM and its surfaces see the same moved leaf; frames
 //! are deterministic; a turning sun is seen by `forward` and the LPV at the closed-form angle; and

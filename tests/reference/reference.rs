@@ -375,7 +375,7 @@ fn one_punctual_light_drawn_per_vertex_is_unbiased_and_follows_the_contribution(
     );
 }
 
-/// Under shadows and with indirect light (seed 003's slanted polygon under 25 white lights, and
+/// Under shadows and with indirect light (Ridderhof 2002's slanted polygon under 25 white lights, and
 /// its polygon over a plane under three coloured ones, where each channel draws its own light),
 /// the light drawn per vertex renders the mean of visiting every light, pixel by pixel and over
 /// the image, within the renders' own standard errors; weighting the drawn light by anything

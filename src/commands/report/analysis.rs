@@ -29,8 +29,8 @@ pub struct Failure {
 }
 
 /// Every failure case of the chart: swept points the method refused, images with NaN or
-/// infinity, images far off the reference (relative MSE at least [`FAR_OFF_REL_MSE`], or a mean
-/// off by more than [`FAR_OFF_MEAN_RATIO`]×), frames without GPU time, and frames where the
+/// infinity, images far off the reference (relative MSE at least `FAR_OFF_REL_MSE` (1), or a mean
+/// off by more than `FAR_OFF_MEAN_RATIO` (2)×), frames without GPU time, and frames where the
 /// method says it left something out.
 pub fn failures(chart: &Chart) -> Vec<Failure> {
     let split = |kind: &'static str, text: &String| {

@@ -1,4 +1,4 @@
-//! Seed 003's BSP shadow system (digest §1.5, §4 "BSP"): per-light vertex colours with exact
+//! Ridderhof 2002's BSP shadow system (digest §1.5, §4 "BSP"): per-light vertex colours with exact
 //! hard shadows baked once, relit every frame by the lights' current intensities.
 //!
 //! - **Set-up** ([`setup`], through the bake stage): the BSP of the scene polygons with the

@@ -1,4 +1,4 @@
-//! The BSP shadow system's set-up (seed 003 §1.5), pure CPU: the BSP of the scene polygons with
+//! The BSP shadow system's set-up (Ridderhof 2002 §1.5), pure CPU: the BSP of the scene polygons with
 //! the first polygon as splitter, the fragments segmented after the build (the thesis's order),
 //! and per light the full-intensity vertex colours `C_l(v)` with the painter's shadow pass from
 //! the light: polygons back to front, each projected centrally from the light onto the plane of

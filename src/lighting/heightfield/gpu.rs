@@ -1,4 +1,4 @@
-//! The height-field lighting passes on the GPU (seed 001 §5): height update, pyramid (or the
+//! The height-field lighting passes on the GPU (the height-field thesis §5): height update, pyramid (or the
 //! brute-force bounds), environment projection, environment pass, one pass per sphere light and
 //! the accumulation, each a compute dispatch with its own timestamp scope. [`HeightfieldGpu`]
 //! owns the images, tables and pipelines; [`HeightfieldGpu::add_compute_passes`] adds one frame's

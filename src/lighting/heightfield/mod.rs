@@ -1,5 +1,5 @@
 //! Soft shadows on dynamic height fields from an environment and spherical local lights (seed
-//! 001, extending Snyder & Nowrouzezahrai 2008; digest `shared/notes/seed-001-heightfield-shadows.md`).
+//! 001, extending Snyder & Nowrouzezahrai 2008; digest the notes on the source document).
 //!
 //! Per height-field texel and per frame, all as compute passes (each with its own timestamp):
 //! 1. **height update** — the scene's generator (or height image) at this frame's time;
@@ -184,7 +184,7 @@ impl HeightfieldMethod {
 
 /// What to say before a frame that will be slow: the passes' work grows as resolution² (and
 /// their loops as the resolution), so on a CPU implementation of Vulkan a large field takes
-/// minutes per frame (issue 10: 1024 took 167 s for one 64×36 frame on llvmpipe).
+/// minutes per frame (1024 took 167 s for one 64×36 frame on llvmpipe).
 pub fn slow_warning(resolution: u32, device_type: vk::PhysicalDeviceType, device: &str) -> Option<String> {
     (device_type == vk::PhysicalDeviceType::CPU && resolution >= 512).then(|| {
         format!("resolution {resolution} on {device}, a CPU implementation, is slow: 1024 measured 167 s for one 64×36 frame, and each halving divides the work by about 4 (e.g. resolution = 256)")

@@ -1,4 +1,4 @@
-//! The smoothing pyramid of seed 001 (§4.2.1, §5.1; digest §1.3–1.4, §5.1–5.2): its layout and a
+//! The smoothing pyramid of the height-field thesis (§4.2.1, §5.1; digest §1.3–1.4, §5.1–5.2): its layout and a
 //! CPU mirror of `glsl/heightfield/decimate.comp` and `reconstruct.comp`.
 //!
 //! - n = ls·log2(res) + 1 levels (Eq. 4.4); level k has about res·2^(−k/ls) texels per side,

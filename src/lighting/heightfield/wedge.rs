@@ -1,4 +1,4 @@
-//! Visibility wedges (seed 001 §4.2.1 Eq. 4.17–4.19, §4.3.1 Eq. 4.26; digest §1.6): the SH
+//! Visibility wedges (the height-field thesis §4.2.1 Eq. 4.17–4.19, §4.3.1 Eq. 4.26; digest §1.6): the SH
 //! projection of the visibility of one azimuthal wedge [0, Δφ] above a horizon that runs
 //! linearly from ω_l (at φ = 0) to ω_r (at φ = Δφ), tabulated for node pairs, and the total
 //! visibility V = Σ_j R_{φ_j} v(ω_j, ω_{j+1}).

@@ -14,7 +14,7 @@ pub struct Atlas {
 }
 
 /// Shelf packing, tallest first, one empty texel between charts (bilinear filtering must not
-/// reach a neighbour: seed 000 §3.3.6).
+/// reach a neighbour: the Ca3D-Engine thesis §3.3.6).
 pub fn pack(p: &Patches) -> Atlas {
     let area: usize = p.charts.iter().map(|c| (c.width + 1) * (c.height + 1)).sum();
     let widest = p.charts.iter().map(|c| c.width + 1).max().unwrap_or(1);

@@ -1,4 +1,4 @@
-//! Border post-processing (seed 000 §3.3.6, digest §1.2 step G). The renderer filters light-maps
+//! Border post-processing (the Ca3D-Engine thesis §3.3.6, digest §1.2 step G). The renderer filters light-maps
 //! bilinearly, so the texels around a polygon's edge are read too: those that no shot gave a
 //! value must not read black (pass 1), and where two coplanar charts meet, both must hold the
 //! same values near the seam or a shadow crossing it steps (pass 2). Pass 2 must not carry light
@@ -24,7 +24,7 @@ pub fn apply(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize 
 }
 
 /// Each pass as a linear map: the patches it replaces, each with its sources and weights (an
-/// empty list is 0). RGB light-maps and CaSHL's coefficient vectors (seed 000 §5.4.4) go through
+/// empty list is 0). RGB light-maps and CaSHL's coefficient vectors (the Ca3D-Engine thesis §5.4.4) go through
 /// the same plan.
 /// One pass: each patch it replaces, with its sources and their weights.
 pub type Pass = Vec<(usize, Vec<(usize, f64)>)>;

@@ -1,4 +1,4 @@
-//! Form factors from a differential receiver to a patch (seed 000 §3, digest §1.2 step E).
+//! Form factors from a differential receiver to a patch (the Ca3D-Engine thesis §3, digest §1.2 step E).
 //!
 //! *Faithful*: CaLight's point-sampled `A·cos θ_i·cos θ_j / (π r²)` with its near-field clamp
 //! (r² replaced by the patch size² when r is shorter than a patch), which does not converge to

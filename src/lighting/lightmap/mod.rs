@@ -1,4 +1,4 @@
-//! The light-map substrate that seed 000's two light-mapped methods share (radiosity light-maps
+//! The light-map substrate that the Ca3D-Engine thesis's two light-mapped methods share (radiosity light-maps
 //! and SH light-maps, `lighting::radiosity` and `lighting::sh_lightmap`): static geometry as
 //! planar charts of patches on a world-aligned grid ([`patches`], [`geometry`]), the atlas
 //! ([`atlas`]), the surface-visibility matrix ([`visibility`]), form factors ([`form_factor`]),

@@ -1,4 +1,4 @@
-//! Patches (seed 000 §3, digest §1.2 step B): static triangles grouped into planar charts, each
+//! Patches (the Ca3D-Engine thesis §3, digest §1.2 step B): static triangles grouped into planar charts, each
 //! chart covered by a regular square grid of patches — one patch per light-map texel — with a
 //! one-patch border frame for bilinear filtering. Grids are aligned to the world origin (as
 //! CaLight's are), so the grids of coplanar charts overlap cell for cell, or not at all: border

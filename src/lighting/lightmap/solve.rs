@@ -1,4 +1,4 @@
-//! Progressive-refinement radiosity (seed 000 §3, digest §1.2 step E): Southwell shooting of
+//! Progressive-refinement radiosity (the Ca3D-Engine thesis §3, digest §1.2 step E): Southwell shooting of
 //! n×n blocks of patches, visibility by rays through a BVH of the static triangles.
 //!
 //! *Faithful* (CaLight): the shooter is the best of 10 random blocks per chart, a full search
@@ -123,7 +123,7 @@ impl Occluders {
 }
 
 /// One shooting block: patches of one chart, its square, and the normal it shoots along (the
-/// chart's, or with normal-mapped patches their renormalised mean: seed 000 §5.7).
+/// chart's, or with normal-mapped patches their renormalised mean: the Ca3D-Engine thesis §5.7).
 pub(crate) struct Block {
     pub chart: usize,
     pub members: Vec<usize>,
@@ -210,7 +210,7 @@ impl Rng {
     }
 }
 
-/// What the shooting loop shoots: radiosity (RGB, [`solve`]) or SH transfer vectors (seed 000
+/// What the shooting loop shoots: radiosity (RGB, [`solve`]) or SH transfer vectors (the Ca3D-Engine thesis
 /// §5.4.3, `sh_lightmap`), kept outside [`Patches`] so that one loop serves both.
 pub trait Unshot {
     /// The magnitude the seed selects shooters by (the L1 norm of patch `k`'s unshot value).

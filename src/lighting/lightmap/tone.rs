@@ -1,4 +1,4 @@
-//! CaLight's tone reproduction (seed 000 §3.3.5, digest §1.2 step F): Ward Larson, Rushmeier and
+//! CaLight's tone reproduction (the Ca3D-Engine thesis §3.3.5, digest §1.2 step F): Ward Larson, Rushmeier and
 //! Piatko's histogram adjustment \[LRP97\] applied to the light-map's world luminances instead of
 //! screen pixels, then a linear rescale to 8 bits. The faithful mode's light-maps are these display
 //! values, not radiometric ones.
@@ -30,7 +30,7 @@ pub fn reproduce(values: &[DVec3]) -> Vec<[u8; 3]> {
 }
 
 /// Per world luminance, the factor that takes it to its display value in [0, 1] (0 for black):
-/// what [`reproduce`] scales RGB by, and CaSHL scales a transfer vector by (seed 000 §5.4.4).
+/// what [`reproduce`] scales RGB by, and CaSHL scales a transfer vector by (the Ca3D-Engine thesis §5.4.4).
 pub fn display_scale(lum: &[f64]) -> Vec<f64> {
     let max = lum.iter().copied().fold(0.0f64, f64::max);
     if max <= MIN_LUMINANCE {

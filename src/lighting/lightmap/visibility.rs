@@ -1,4 +1,4 @@
-//! CaLight's surface-to-surface visibility matrix (seed 000 §3.3.1, digest §1.2 step A): for
+//! CaLight's surface-to-surface visibility matrix (the Ca3D-Engine thesis §3.3.1, digest §1.2 step A): for
 //! every pair of charts NONE (they cannot exchange light: one lies wholly behind the other's
 //! plane, or one is sky), FULL (nothing intrudes into the convex hull of the two, so no ray
 //! between them can be blocked: the shooting skips its rays) or PARTIAL (ray-test each patch

@@ -1,4 +1,4 @@
-//! Light propagation volumes (seed 004, digest `seed-004-lpv-leaves.md`): one bounce of light
+//! Light propagation volumes (Dickson et al. 2011, digest `seed-004-lpv-leaves.md`): one bounce of light
 //! from a reflective shadow map, injected into a grid of 2-band SH, propagated cell to cell and
 //! looked up per pixel — the indirect term over any direct method.
 //!

@@ -1,4 +1,4 @@
-//! The light models of seed 003's systems, evaluated per vertex at a light's full intensity.
+//! The light models of Ridderhof 2002's systems, evaluated per vertex at a light's full intensity.
 //!
 //! - [`LightModel::Physical`] (corrected): the scene's radiometric point and spot lights, as
 //!   every other penumbra method and the path tracer evaluate them — inverse-square falloff,

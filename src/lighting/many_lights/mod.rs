@@ -1,9 +1,9 @@
-//! The shared core of seed 003's two many-light systems (virtualised light sources and the BSP
+//! The shared core of Ridderhof 2002's two many-light systems (virtualised light sources and the BSP
 //! shadow system): the scene as convex polygons, their segmentation into small triangles, the
 //! light models, the thesis's geometric primitives and a ray-cast truth. Pure CPU and `f64`, no
 //! GPU types: both methods' set-up (a bake) and their tests use it as it is.
 //!
-//! The digest is `../shared/notes/seed-003-multiple-lights.md`; section numbers below are its.
+//! The digest is the notes on the source document; section numbers below are its.
 
 pub mod geometry;
 pub mod light_model;

@@ -1,4 +1,4 @@
-//! The static scene as convex polygons with their diffuse reflectance: what both of seed 003's
+//! The static scene as convex polygons with their diffuse reflectance: what both of Ridderhof 2002's
 //! systems light. Mesh triangles are the polygons (every triangle is convex); the thesis's own
 //! scenes were quads, which penumbra's meshes store as two triangles.
 

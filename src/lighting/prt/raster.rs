@@ -1,4 +1,4 @@
-//! Seed 002's baker (digest §1.2–1.6): per batch of vertices, the occluders rendered from every
+//! Staniszewski 2005's baker (digest §1.2–1.6): per batch of vertices, the occluders rendered from every
 //! vertex into its tile of a visibility atlas (`glsl/prt/visibility.*`), then per group of four
 //! coefficients the multiplicative stage (`multiply.comp`: V · weight · y_i) and the integration
 //! — the document's four ping-pong passes (`reduce_axis.comp`, `reduce_last.comp`) or one

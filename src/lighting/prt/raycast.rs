@@ -1,4 +1,4 @@
-//! The ray-cast truth the raster baker is measured against (seed 002 §4, "Bake: reference and
+//! The ray-cast truth the raster baker is measured against (Staniszewski 2005 §4, "Bake: reference and
 //! modern paths"): per receiver, the transfer `T_i = ∫ V(ω) max(0, n·ω) y_i(ω) dω` estimated
 //! with `N` stratified cosine-weighted directions, `T_i ≈ (π/N) Σ_k V(ω_k) y_i(ω_k)`, on the CPU
 //! ([`bake_cpu`]) and in a compute pass (`glsl/prt/rays.comp`, [`bake_gpu`]).
@@ -615,7 +615,7 @@ mod tests {
     use super::*;
 
     const PI: f64 = std::f64::consts::PI;
-    /// The clamped cosine's ZH about +z per band: √π/2, √(π/3), √(5π)/8, 0 (seed 002 §5 test 1).
+    /// The clamped cosine's ZH about +z per band: √π/2, √(π/3), √(5π)/8, 0 (Staniszewski 2005 §5 test 1).
     const T00: f64 = 0.886227;
     const T10: f64 = 1.023327;
     const T20: f64 = 0.495416;

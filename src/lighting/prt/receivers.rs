@@ -1,6 +1,6 @@
 //! What the transfer bakers see: every vertex of the scene's objects as a receiver (world
 //! position and normal, the occluder set it is shadowed by), and each occluder set's triangles in
-//! world space (seed 002 §3.1, the occluded/occluding object system).
+//! world space (Staniszewski 2005 §3.1, the occluded/occluding object system).
 
 use glam::{DVec3, Mat4, Vec3};
 

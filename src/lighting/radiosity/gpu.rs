@@ -112,7 +112,7 @@ pub fn solve(
     solve_in(gpu, shaders, p, triangles, None, settings, progress)
 }
 
-/// [`solve`] with the visibility matrix started from a leaf PVS, as the CPU solve starts it
+/// [`solve()`] with the visibility matrix started from a leaf PVS, as the CPU solve starts it
 /// from [`solve::Occluders::pvs`].
 pub fn solve_in(
     gpu: &mut Gpu,

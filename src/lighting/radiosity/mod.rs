@@ -1,4 +1,4 @@
-//! Radiosity light-maps (seed 000 §3, CaLight; digest §1.2) on the light-map substrate
+//! Radiosity light-maps (the Ca3D-Engine thesis §3, CaLight; digest §1.2) on the light-map substrate
 //! ([`crate::lighting::lightmap`]: patches, the surface-visibility matrix, form factors, the shooting loop,
 //! border passes, tone reproduction): direct light and the sun ([`bake`], [`sun`]), and the
 //! shooting on the CPU or the GPU ([`gpu`]); faithful to CaLight or corrected (exact form factors,
@@ -84,7 +84,7 @@ pub struct Config {
     /// Patch (light-map texel) size, metres.
     pub patch_size: f64,
     pub content: Content,
-    /// Multiply the light-map by the normal map's N_z when drawing (seed 000's ambient term).
+    /// Multiply the light-map by the normal map's N_z when drawing (the Ca3D-Engine thesis's ambient term).
     pub ambient_nz: bool,
     /// Where to shoot: `None` (auto) picks the GPU unless the device is a CPU implementation
     /// (lavapipe), which runs the compute passes slower than the native solve on the same cores.

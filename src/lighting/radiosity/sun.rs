@@ -1,4 +1,4 @@
-//! The sun (seed 000 §3.3.2, digest §1.2 step C): a directional light reaches a patch where a
+//! The sun (the Ca3D-Engine thesis §3.3.2, digest §1.2 step C): a directional light reaches a patch where a
 //! ray toward it, from each of the patch's sub-samples inside its polygon, reaches the sky; the
 //! lit fraction scales its energy, and CaLight smooths the result to hide the staircase that
 //! patch-sized shadows leave.

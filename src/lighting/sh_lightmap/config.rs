@@ -14,7 +14,7 @@ pub enum Storage {
     Single,
 }
 
-/// Where the run-time light comes from (seed 000 §5.5: distant lights only).
+/// Where the run-time light comes from (the Ca3D-Engine thesis §5.5: distant lights only).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sky {
     /// The scene's environment (constant, equirect or cube), projected once.
@@ -24,7 +24,7 @@ pub enum Sky {
     Cie,
 }
 
-/// Debug views (seed 000 Figs. 16/17 and 20).
+/// Debug views (the Ca3D-Engine thesis Figs. 16/17 and 20).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum View {
     Final = 0,

@@ -1,4 +1,4 @@
-//! The run-time light (seed 000 §5.5): distant sources projected to SH radiance coefficients, RGB,
+//! The run-time light (the Ca3D-Engine thesis §5.5): distant sources projected to SH radiance coefficients, RGB,
 //! every frame — the scene's environment (projected once), its directional lights (deltas, turning
 //! about the vertical at the method's `sun_speed`), or the CIE clear sky around the sun.
 
@@ -90,7 +90,7 @@ impl Lights {
     }
 
     /// The uniform block of the shaders: per channel, `GROUPS` vec4 of coefficients (faithful
-    /// mode: the luminance in channel 0, seed 000's monochrome light).
+    /// mode: the luminance in channel 0, the Ca3D-Engine thesis's monochrome light).
     pub fn uniform(&self, time_s: f64, monochrome: bool) -> Vec<f32> {
         let c = self.coefficients(time_s);
         let mut out = vec![0.0f32; 3 * 4 * GROUPS];

@@ -1,4 +1,4 @@
-//! What compression costs (issue 16's table): PSNR of bare-SHL shading, compressed against
+//! What compression costs: PSNR of bare-SHL shading, compressed against
 //! native, over random directional lights, and the seed's storage model beside it.
 
 use glam::DVec3;

@@ -1,4 +1,4 @@
-//! Normal-mapped transfer (seed 000 §5.7, digest §1.7): each patch takes the mean of K random
+//! Normal-mapped transfer (the Ca3D-Engine thesis §5.7, digest §1.7): each patch takes the mean of K random
 //! normal-map samples inside its square, rotated from tangent to world space; CaSHL then uses it
 //! for every cosine (with the plane normal as a second cut-off) and blocks shoot along their
 //! patches' renormalised mean. Nothing changes in the renderer: it is baked into the transfer.

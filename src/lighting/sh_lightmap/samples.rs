@@ -1,4 +1,4 @@
-//! CaSHL's shared sample set (seed 000 §5.1.3, digest §1.5): one set of directions for every
+//! CaSHL's shared sample set (the Ca3D-Engine thesis §5.1.3, digest §1.5): one set of directions for every
 //! patch, so that bounces can work on coefficient vectors (Eq. 11/12). A √N × √N grid of cell
 //! centres, not jittered: `x = (i + ½)/√N`, `θ = 2·acos(√(1 − x))` (uniform in cos θ),
 //! `φ = 2π·(j + ½)/√N`; each sample weighs 4π/N.

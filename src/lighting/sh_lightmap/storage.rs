@@ -1,5 +1,5 @@
 //! Storage of SH light-maps: range-encoded RGBA8 layers, float layers, VQ tables and index maps
-//! (seed 000 §5.6, digest §1.6, §2.4, §5.3).
+//! (the Ca3D-Engine thesis §5.6, digest §1.6, §2.4, §5.3).
 //!
 //! Conventions: "n bands" means n² coefficients per texel; coefficient vectors are texel-major
 //! `&[f32]` (texel t's coefficients at `t·n² .. (t+1)·n²`, texels row-major). Every texture packs

@@ -1,4 +1,4 @@
-//! The digest's end-to-end cases with analytic answers (seed 000 §5.2 A–G), on the CPU baker.
+//! The digest's end-to-end cases with analytic answers (the Ca3D-Engine thesis §5.2 A–G), on the CPU baker.
 //! Every expected value is a closed form or a quadrature written here, not the baker's tables.
 
 use glam::{DVec3, Vec3};

@@ -1,4 +1,4 @@
-//! CaSHL, the "radiosity of transfer functions" (seed 000 §5.2–5.4, digest §1.5): per patch, the
+//! CaSHL, the "radiosity of transfer functions" (the Ca3D-Engine thesis §5.2–5.4, digest §1.5): per patch, the
 //! SH coefficients of its transfer function, direct (visibility rays to the sky over the shared
 //! sample set) and bounced (the radiosity shooting loop, [`solve::shoot`], on coefficient vectors).
 //!
@@ -7,7 +7,7 @@
 //!   coefficients, E the irradiance it receives directly and after bounces; the renderer
 //!   multiplies by the texel's albedo, so a constant sky L₀ over open ground shows ρ·L₀ (test A).
 //!   Bounces reflect the mean of the albedo's RGB (the transfer is one scalar function: an RGB
-//!   light is three dot products, seed 000's cheapest colour extension, digest §6 item 9).
+//!   light is three dot products, the Ca3D-Engine thesis's cheapest colour extension, digest §6 item 9).
 //! * *faithful* ([CAFU-SRC]): the direct transfer is Σ cos·y·4π/N without ρ/π, bounces reflect
 //!   ρ = 0.3 everywhere, then the \[LRP97\] tone mapping of transfer vectors (per patch, the vector
 //!   scaled by display/world of its max |c|; then globally to max |c| = 1).
@@ -29,7 +29,7 @@ pub struct Settings {
     /// Form factors, shooter choice and stop as the radiosity baker's, and the units above.
     pub solve: solve::Settings,
     pub bands: usize,
-    /// Bounce the direct transfer (seed 000 §5.4.3); false stops at shadowed diffuse transfer.
+    /// Bounce the direct transfer (the Ca3D-Engine thesis §5.4.3); false stops at shadowed diffuse transfer.
     pub bounces: bool,
     /// The seed's transfer tone mapping (faithful default); false keeps transfers linear.
     pub tone: bool,
@@ -53,7 +53,7 @@ pub fn reaches_sky(occluders: &Occluders, from: DVec3, dir: DVec3, mode: Mode) -
 }
 
 /// The directions of `samples` that count for patch `k`: in front of both its plane and its
-/// (possibly normal-mapped) normal (seed 000 §5.7, both-normals test).
+/// (possibly normal-mapped) normal (the Ca3D-Engine thesis §5.7, both-normals test).
 fn counts(p: &Patches, k: usize, dir: DVec3) -> bool {
     let q = &p.patches[k];
     dir.dot(p.charts[q.chart].normal) > 0.0 && dir.dot(q.normal) > 0.0
@@ -112,7 +112,7 @@ pub fn visibility_cpu(
 }
 
 /// The direct transfer from the visibility bits: Σ over visible samples of cos·y (cos against
-/// the patch's normal), × 4π/N (seed 000 Eq. 10 without ρ/π).
+/// the patch's normal), × 4π/N (the Ca3D-Engine thesis Eq. 10 without ρ/π).
 pub fn project(p: &Patches, samples: &SampleSet, bits: &[u32]) -> Vec<f64> {
     let dim = samples.dim();
     let words = samples.len().div_ceil(32);
@@ -138,7 +138,7 @@ pub fn project(p: &Patches, samples: &SampleSet, bits: &[u32]) -> Vec<f64> {
     out
 }
 
-/// Transfer vectors as the shooting loop's payload (seed 000 §5.4.3): L1 magnitude, a scalar
+/// Transfer vectors as the shooting loop's payload (the Ca3D-Engine thesis §5.4.3): L1 magnitude, a scalar
 /// reflectance per patch.
 struct Vectors {
     dim: usize,

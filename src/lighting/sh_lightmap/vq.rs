@@ -1,4 +1,4 @@
-//! Vector quantisation of SH transfer vectors (seed 000 §5.6.1, digest §1.6): Lloyd's algorithm
+//! Vector quantisation of SH transfer vectors (the Ca3D-Engine thesis §5.6.1, digest §1.6): Lloyd's algorithm
 //! ("Iterated Closest Points") with the seed's termination on the largest nearest-neighbour
 //! distance, so that every texel can store a 16-bit index into a table of representatives.
 

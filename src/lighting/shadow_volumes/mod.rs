@@ -1,5 +1,5 @@
 //! Dynamic per-pixel Phong lighting with robust stenciled shadow volumes over a BSP/PVS world:
-//! seed 000 §4 and §6.3 (digest §1.3, §1.4, §4.4, §4.5).
+//! the Ca3D-Engine thesis §4 and §6.3 (digest §1.3, §1.4, §4.4, §4.5).
 //!
 //! A frame is
 //! 1. **silhouettes** (compute): for every light of the frame and every entity, the silhouette

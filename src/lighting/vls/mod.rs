@@ -1,4 +1,4 @@
-//! Virtualised light sources (seed 003, digest §1.4): the scene's polygons cut into small
+//! Virtualised light sources (Ridderhof 2002, digest §1.4): the scene's polygons cut into small
 //! triangles ("segments"); at set-up each segment keeps the ≤ K lights it will ever shade with —
 //! the closest (the thesis) or the most contributing that pass a shadow feeler from the segment's
 //! centroid; at run time each segment sums only those lights, at their current intensities.

@@ -605,7 +605,7 @@ fn bad_parameters_name_the_file_and_the_parameter() {
         e.contains("scenes/vls_test.toml") && e.contains("methods[0].max_segment_area") && !e.contains('\n'),
         "{e}"
     );
-    // A directional light is not one of seed 003's lights.
+    // A directional light is not one of Ridderhof 2002's lights.
     let text = SCENE.replace("METHOD", r#""vls""#)
         + "\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1.0\n";
     let s = Scene::from_str(&text, "scenes/vls_test.toml", std::path::Path::new("scenes")).unwrap();

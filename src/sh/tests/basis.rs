@@ -4,7 +4,7 @@ use super::*;
 use crate::sh::*;
 use glam::Vec3;
 
-/// The textbook definition (seed 001 Eq. 3.9–3.12 and 3.19–3.20, seed 000 §5.1.1): unnormalised
+/// The textbook definition (the height-field thesis Eq. 3.9–3.12 and 3.19–3.20, the Ca3D-Engine thesis §5.1.1): unnormalised
 /// P_l^m with the Condon–Shortley phase by the classic recurrence, factorial K_l^m, trig in φ.
 /// An implementation independent of the normalised recurrence in `basis.rs`.
 fn textbook(l: usize, m: i32, theta: f64, phi: f64) -> f64 {
@@ -44,7 +44,7 @@ fn seed000_5_1_y00_and_band1_constants_with_condon_shortley_signs() {
     let y = eval_all(d, 2);
     close(y[0], 0.282095, 1e-6);
     close(Y00, 1.0 / (2.0 * std::f64::consts::PI.sqrt()), 1e-15);
-    // y_1^{-1} = −0.488603·y, y_1^0 = +0.488603·z, y_1^1 = −0.488603·x (seed 000 §5.1 test 1).
+    // y_1^{-1} = −0.488603·y, y_1^0 = +0.488603·z, y_1^1 = −0.488603·x (the Ca3D-Engine thesis §5.1 test 1).
     close(y[1], -0.488603 * d.y, 1e-6);
     close(y[2], 0.488603 * d.z, 1e-6);
     close(y[3], -0.488603 * d.x, 1e-6);
@@ -52,7 +52,7 @@ fn seed000_5_1_y00_and_band1_constants_with_condon_shortley_signs() {
 
 #[test]
 fn seed000_5_1_scale_factors_and_recurrence_match_textbook_definition() {
-    // seed 000 §5.1 test 1: K_l^0 and √2·K_l^m for l ≤ 3, as the factor in front of P_l^m·trig.
+    // the Ca3D-Engine thesis §5.1 test 1: K_l^0 and √2·K_l^m for l ≤ 3, as the factor in front of P_l^m·trig.
     let table: [&[f64]; 4] = [
         &[0.282095],
         &[0.488603, 0.488603],
@@ -83,7 +83,7 @@ fn seed000_5_1_scale_factors_and_recurrence_match_textbook_definition() {
 
 #[test]
 fn seed002_appendix_a_cartesian_polynomials_l_le_3() {
-    // seed 002 appendix A (unsigned) with the Condon–Shortley signs of seed 000 §5.1 test 1:
+    // Staniszewski 2005 appendix A (unsigned) with the Condon–Shortley signs of the Ca3D-Engine thesis §5.1 test 1:
     // odd-m functions carry −1.
     let mut rng = Rng::new(3);
     for _ in 0..50 {
@@ -114,7 +114,7 @@ fn seed002_appendix_a_cartesian_polynomials_l_le_3() {
 
 #[test]
 fn seed001_a1_orthonormality_gram_matrix() {
-    // f64, 16 bands, exact rule for degree 30: |G − I| < 1e−12 (seed 001 §7 A1).
+    // f64, 16 bands, exact rule for degree 30: |G − I| < 1e−12 (the height-field thesis §7 A1).
     let q = exact_rule(30);
     let n = MAX_BANDS * MAX_BANDS;
     let mut g = vec![0.0; n * n];

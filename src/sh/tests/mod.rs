@@ -1,5 +1,5 @@
 //! Unit tests of the SH core. Test names cite the digest section whose value they reproduce
-//! (`shared/notes/seed-00N-*.md`); every test asserts a number that a wrong implementation
+//! (the notes on the source documents); every test asserts a number that a wrong implementation
 //! would get wrong.
 
 mod basis;

@@ -146,7 +146,7 @@ fn seed001_d1_overhead_sphere_light_sh_over_exact() {
         close(dot(&l, &t).unwrap() / (PI * th.sin().powi(2)), ratio, 6e-4);
     }
     // Without the product the cap·cosine dot is exact up to truncation: at θ → 0 it tends to the
-    // truncated clamped cosine at the normal, 1.0625 (seed 001 §7 A5).
+    // truncated clamped cosine at the normal, 1.0625 (the height-field thesis §7 A5).
     let l = zh_rotate(&cap_zh(1e-3, 4).unwrap(), Vec3::Z).unwrap();
     close(dot(&l, &c).unwrap() / (PI * 1e-3f64.sin().powi(2)), 1.0625, 1e-6);
 }

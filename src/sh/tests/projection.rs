@@ -57,7 +57,7 @@ fn closure_projection_recovers_a_band_limited_function() {
     .unwrap();
     let r: Vec<f64> = rgb.iter().map(|v| v.y as f64 / -2.0).collect();
     assert!(max_diff(&r, &f) < 2e-5);
-    // Linearity (seed 000 §5.1 test 6): proj(2f + 1) = 2 proj(f) + proj(1).
+    // Linearity (the Ca3D-Engine thesis §5.1 test 6): proj(2f + 1) = 2 proj(f) + proj(1).
     let lin = exact_rule(14)
         .project_scalar(|d| 2.0 * eval_f64(&f, d).unwrap() + 1.0, 8)
         .unwrap();

@@ -40,7 +40,7 @@ fn seed001_a4_z_rotations_compose_and_a_full_turn_is_identity() {
     let mut full = f.clone();
     rotate_z(&mut full, 2.0 * PI).unwrap();
     assert!(max_diff(&full, &f) < 1e-13);
-    // seed 001 §1.6 formula on one pair: c'_{1,1} = c_11 cos α − c_{1,−1} sin α.
+    // the height-field thesis §1.6 formula on one pair: c'_{1,1} = c_11 cos α − c_{1,−1} sin α.
     let mut c = vec![0.0, 0.25, 0.0, 1.0];
     rotate_z(&mut c, 0.3).unwrap();
     close(c[3], 0.3f64.cos() - 0.25 * 0.3f64.sin(), 1e-15);
@@ -128,7 +128,7 @@ fn seed001_a3_zh_rotation_equals_general_rotation_of_the_zonal_function() {
     for _ in 0..3 {
         let axis = rng.dir().as_vec3();
         let fast = zh_rotate(&zh, axis).unwrap();
-        // Band norms: ‖c_l‖ = |z_l| (seed 001 §7 A3).
+        // Band norms: ‖c_l‖ = |z_l| (the height-field thesis §7 A3).
         for (l, z) in zh.iter().enumerate() {
             close(band_energy(&fast, l).sqrt(), z.abs(), 1e-6);
         }

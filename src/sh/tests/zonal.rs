@@ -45,7 +45,7 @@ fn seed001_a5_truncated_clamped_cosine_is_1_0625_at_the_normal_and_0_09375_at_90
     let z = clamped_cosine_zh(4).unwrap();
     close(eval_zonal(&z, 1.0), 1.0625, 1e-14);
     close(eval_zonal(&z, 0.0), 0.09375, 1e-14);
-    // seed 001 §3.2 item 2: −0.039 at 120°, 0.0625 at 180°.
+    // the height-field thesis §3.2 item 2: −0.039 at 120°, 0.0625 at 180°.
     close(eval_zonal(&z, -0.5), -0.0390625, 1e-14);
     close(eval_zonal(&z, -1.0), 0.0625, 1e-14);
 }
@@ -84,7 +84,7 @@ fn seed001_a6_cap_zh_table() {
     ];
     for (theta, row) in table {
         assert!(max_diff(&cap_zh(theta, 4).unwrap(), &row) < 1e-6, "θ = {theta}");
-        // Seed 001 Appendix A.1 forms (digest §1.8).
+        // The height-field thesis Appendix A.1 forms (digest §1.8).
         let (c, s) = (theta.cos(), theta.sin());
         let appendix = [
             PI.sqrt() * (1.0 - c),
@@ -127,7 +127,7 @@ fn cap_closed_form_matches_numerical_integration_to_16_bands() {
 fn cap_of_90_degrees_is_the_hemisphere_and_c00_gives_the_solid_angle() {
     let hemi = hemisphere_zh(8).unwrap();
     assert_eq!(cap_zh(PI / 2.0, 8).unwrap(), hemi);
-    // seed 000 §5.1 test 5.
+    // the Ca3D-Engine thesis §5.1 test 5.
     let expected = [1.772454, 1.534990, 0.0, -0.586184, 0.0, 0.367410, 0.0, -0.268152];
     assert!(max_diff(&hemi, &expected) < 1e-6, "{hemi:?}");
     for alpha in [0.0, 0.3, 1.0, PI / 2.0, 2.5, PI] {
@@ -138,7 +138,7 @@ fn cap_of_90_degrees_is_the_hemisphere_and_c00_gives_the_solid_angle() {
             1e-13,
         );
     }
-    // Whole sphere: only band 0, 2√π (seed 001 §7 A6 limit); beyond π clamps.
+    // Whole sphere: only band 0, 2√π (the height-field thesis §7 A6 limit); beyond π clamps.
     let all = cap_zh(PI, 6).unwrap();
     close(all[0], CONSTANT_ONE_C00, 1e-14);
     assert!(all[1..].iter().all(|v| v.abs() < 1e-14));

@@ -298,7 +298,7 @@ fn queries_on_degenerate_input_answer_without_panicking() {
     assert!(w.casters_light_pvs(inside, f64::NAN).is_empty());
 }
 
-/// Seed 003's numeric policy (§5.6.1): a point within 1e-4 of a plane is on it, and the cuts a
+/// Ridderhof 2002's numeric policy (§5.6.1): a point within 1e-4 of a plane is on it, and the cuts a
 /// split makes land on the 1e-4 grid; the exact policy keeps both as they are.
 #[test]
 fn the_thesis_tolerance_thickens_planes_and_rounds_cuts_to_four_decimals() {
