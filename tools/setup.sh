@@ -23,7 +23,7 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 if ! command -v cargo >/dev/null; then
-  echo "setup: cargo not found; install a Rust toolchain (1.88 or newer) first" >&2
+  echo "setup: cargo not found; install a Rust toolchain (1.95 or newer) first" >&2
   exit 1
 fi
 # The test script checks formatting and lints; rustup toolchains may lack the components.
@@ -32,9 +32,9 @@ for c in rustfmt clippy; do
     rustup component add "$c" >&2
   fi
 done
-# The image crate needs Rust 1.88 (Cargo.toml's rust-version); say so before a long build fails.
+# egui 0.36 (the demo panel) needs Rust 1.95 (Cargo.toml's rust-version); say so before a long build fails.
 rust_minor=$(rustc --version | sed -n 's/^rustc 1\.\([0-9]*\).*/\1/p')
-if [ -n "$rust_minor" ] && [ "$rust_minor" -lt 88 ]; then
-  echo "setup: $(rustc --version) is too old; penumbra needs Rust 1.88 or newer (rustup update)" >&2
+if [ -n "$rust_minor" ] && [ "$rust_minor" -lt 95 ]; then
+  echo "setup: $(rustc --version) is too old; penumbra needs Rust 1.95 or newer (rustup update)" >&2
   exit 1
 fi
