@@ -110,7 +110,7 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
         assert!(header.split(',').any(|h| h == col), "missing column {col}: {header}");
     }
     let img = image::open(&png).unwrap();
-    assert_eq!((img.width(), img.height()), (1000, 700));
+    assert_eq!((img.width(), img.height()), (1600, 820));
 
     // Second run: the reference comes from the cache, and the error is the same.
     let second = chart(scene, &options, &cache, &png, &csv);
