@@ -2,7 +2,7 @@
 //! the GPU tests of one binary. The validation layer of Debian 12 (1.3.239) looks every call's
 //! device or instance up in a process-wide map that creating and destroying them change, with no
 //! lock (its lookup is where this test crashed), and the Vulkan loader frees entries of its
-//! process-wide device list without the lock its readers take (Vulkan-Loader issue 2018). So a
+//! process-wide device list without the lock its readers take (KhronosGroup/Vulkan-Loader#2018 upstream). So a
 //! call on one thread could read an entry another thread was changing: the suite's occasional
 //! SIGSEGV, at address 0 or inside the layer. The backend now orders those calls
 //! (`vulkan_calls` and `device_set_change` in `src/backend/device.rs`); this test makes them meet

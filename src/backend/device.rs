@@ -249,7 +249,7 @@ fn vulkan_loader() -> BackendResult<ash::Entry> {
 
 // Vulkan calls on one thread against devices made or dropped on another. The Vulkan loader adds
 // and frees entries of its process-wide device list without the lock its readers take
-// (Vulkan-Loader issue 2018, still so in 1.4.341), and the validation layer of Debian 12
+// (KhronosGroup/Vulkan-Loader#2018 upstream, still so in 1.4.341), and the validation layer of Debian 12
 // (1.3.239) looks every call's device or instance up in a process-wide map that creating and
 // destroying them change, with no lock at all. So a call on one thread could read an entry that
 // another thread was adding or freeing: `cargo test`, which runs a binary's GPU tests on threads

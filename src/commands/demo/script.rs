@@ -1,4 +1,4 @@
-//! Scripted input (`demo --script FILE`): timed events for tests and reproducible sessions,
+//! Scripted input (`demo --script FILE`): timed events for tests and reproducible runs,
 //! since synthetic window-system input is not always available. One event a line,
 //! `FRAME EVENT ARGS…`, applied before frame FRAME (counted from 0) is drawn; `#` starts a comment.
 //!
