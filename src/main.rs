@@ -43,7 +43,31 @@ struct RenderArgs {
     #[arg(long, value_name = "M")]
     method: Option<String>,
     #[command(flatten)]
+    overrides: OverrideArgs,
+    #[command(flatten)]
     device: DeviceArgs,
+}
+
+/// Settings put over the scene file's.
+#[derive(Args, Clone)]
+struct OverrideArgs {
+    /// View through camera N of those the scene's assets carry (glTF cameras, counted over the
+    /// assets in object order) instead of the scene's own.
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
+    /// What a method may allocate for its bake and volumes, in MB, over the scene's
+    /// `memory_budget_mb` (default 2048): settings that would need more are refused up front.
+    #[arg(long, value_name = "MB", value_parser = parse_memory_budget)]
+    memory_budget_mb: Option<f64>,
+}
+
+impl OverrideArgs {
+    fn get(&self) -> penumbra::scene::SceneOverrides {
+        penumbra::scene::SceneOverrides {
+            camera: self.camera,
+            memory_budget_mb: self.memory_budget_mb,
+        }
+    }
 }
 
 /// How `report` measures each scene: `chart`'s settings.
@@ -379,6 +403,9 @@ enum Command {
         /// Output EXR of the mean radiance, W/(m²·sr).
         #[arg(short = 'o', long = "output", value_name = "EXR", default_value = "reference.exr")]
         output: PathBuf,
+        /// View through camera N of those the scene's assets carry, as `capture --camera N`.
+        #[arg(long, value_name = "N")]
+        camera: Option<usize>,
         #[command(flatten)]
         device: DeviceArgs,
     },
@@ -496,6 +523,13 @@ fn parse_budget(s: &str) -> Result<f32, String> {
     }
 }
 
+fn parse_memory_budget(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        _ => Err(format!("{s:?}: expected a memory budget in MB, at least 1")),
+    }
+}
+
 fn parse_exposure(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(e) if e.is_finite() && e > 0.0 => Ok(e),
@@ -538,6 +572,7 @@ fn options(r: &RenderArgs) -> CaptureOptions {
         gpu: gpu_desc(&r.device),
         config: None,
         supersample: 1,
+        overrides: r.overrides.get(),
     }
 }
 
@@ -854,6 +889,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
             seed,
             frame,
             output,
+            camera,
             device,
         } => {
             if let Some(dir) = export_scene {
@@ -895,6 +931,7 @@ fn run(cli: Cli) -> penumbra::Result<()> {
                 settings,
                 target,
                 frame,
+                camera,
                 gpu: gpu_desc(&device),
             })?;
             for p in &report.written {

@@ -33,8 +33,11 @@ fn rss_anon_mib() -> f64 {
 }
 
 fn shipped(name: &str) -> Scene {
-    penumbra::commands::capture::load_scene(Some(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)))
-        .unwrap()
+    penumbra::commands::capture::load_scene(
+        Some(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)),
+        &Default::default(),
+    )
+    .unwrap()
 }
 
 /// theatre_50.toml with segments of up to 0.5 m² for VLS and bsp_lights (the per-frame work
@@ -250,7 +253,7 @@ fn soak_every_shipped_scene_and_method() {
     }
     println!("scene,method,frame,rss_anon_mib,device_mib");
     for name in names {
-        let scene = penumbra::commands::capture::load_scene(Some(&dir.join(&name))).unwrap();
+        let scene = penumbra::commands::capture::load_scene(Some(&dir.join(&name)), &Default::default()).unwrap();
         // Every configuration: each method alone, then each declared combination.
         let mut methods: Vec<String> = penumbra::lighting::registry::configurations(&scene)
             .unwrap()

@@ -10,7 +10,7 @@ use crate::renderer::Renderer;
 
 /// The bakes of every configuration (or only `opts.method`'s), as (configuration, reports).
 pub fn run(opts: &CaptureOptions) -> Result<Vec<(String, Vec<BakeReport>)>> {
-    let scene = load_scene(opts.scene.as_deref())?;
+    let scene = load_scene(opts.scene.as_deref(), &opts.overrides)?;
     let configurations = match opts.method.as_deref() {
         Some(name) => vec![registry::configuration(&scene, Some(name))?],
         None => registry::configurations(&scene)?,

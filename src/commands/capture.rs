@@ -7,7 +7,7 @@ use crate::bake::Baker;
 use crate::error::Result;
 use crate::lighting::{registry, Configuration};
 use crate::renderer::{FrameOutput, Renderer};
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneOverrides};
 use crate::util::image_io::HdrImage;
 
 #[derive(Clone, Debug)]
@@ -24,21 +24,26 @@ pub struct CaptureOptions {
     pub config: Option<Configuration>,
     /// Render at this many times the size in each axis and box-filter down (1: pixel centres).
     pub supersample: u32,
+    /// What the command line sets over the scene file (`--camera`, `--memory-budget-mb`).
+    pub overrides: SceneOverrides,
 }
 
-/// Loads the scene (or the built-in default) as the CLI does.
-pub fn load_scene(path: Option<&std::path::Path>) -> Result<Scene> {
-    Ok(match path {
+/// Loads the scene (or the built-in default) as the CLI does, with the command line's
+/// overrides applied.
+pub fn load_scene(path: Option<&std::path::Path>, overrides: &SceneOverrides) -> Result<Scene> {
+    let mut scene = match path {
         Some(p) => Scene::from_file(p)?,
         None => Scene::default_scene(),
-    })
+    };
+    overrides.apply(&mut scene)?;
+    Ok(scene)
 }
 
 /// Renders `frames` frames and returns the last one's radiance (at `size × supersample`,
 /// box-filtered down to `size`).
 pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
     let render_size = crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
-    let scene = load_scene(opts.scene.as_deref())?;
+    let scene = load_scene(opts.scene.as_deref(), &opts.overrides)?;
     let config = match &opts.config {
         Some(c) => c.clone(),
         None => registry::configuration(&scene, opts.method.as_deref())?,
@@ -147,7 +152,7 @@ pub fn choose_configuration(
         .scene
         .as_deref()
         .ok_or_else(|| Error::Usage("--max-error needs a scene file (the chart is measured per scene)".into()))?;
-    let scene = load_scene(Some(path))?;
+    let scene = load_scene(Some(path), &opts.overrides)?;
     let table = cached_table(&scene, opts.size, cache_dir);
     let text = std::fs::read_to_string(&table).map_err(|_| {
         Error::Usage(format!(

@@ -34,7 +34,7 @@ pub struct ProfileReport {
 }
 
 pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
-    let scene = load_scene(opts.scene.as_deref())?;
+    let scene = load_scene(opts.scene.as_deref(), &opts.overrides)?;
     let gpu = Gpu::new(&opts.gpu)?;
     if gpu.caps().timestamp_valid_bits == 0 {
         return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!(

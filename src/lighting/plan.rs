@@ -87,7 +87,7 @@ impl<'a> Facts<'a> {
     /// The memory budget in bytes, and where it comes from.
     pub fn budget(&self) -> (u64, &'static str) {
         match self.scene.memory_budget_mb {
-            Some(mb) => ((mb * MB) as u64, "the scene's memory_budget_mb"),
+            Some(mb) => ((mb * MB) as u64, "the scene's memory_budget_mb or --memory-budget-mb"),
             None => ((DEFAULT_BUDGET_MB * MB) as u64, "the default memory_budget_mb"),
         }
     }
@@ -100,7 +100,7 @@ impl<'a> Facts<'a> {
             return Ok(());
         }
         Err(Error::Usage(format!(
-            "{}: {method}: {what} would need {}, over the memory budget of {} ({from}): {smaller}, or raise `memory_budget_mb` at the scene's top level",
+            "{}: {method}: {what} would need {}, over the memory budget of {} ({from}): {smaller}, or raise `memory_budget_mb` at the scene's top level (or --memory-budget-mb)",
             self.scene.source,
             bytes(need),
             bytes(budget)

@@ -958,6 +958,8 @@ pub struct ReferenceOptions {
     pub frame: u64,
     /// `--max-stderr`: stop once this holds (`settings.spp` is then the cap).
     pub target: Option<ErrorTarget>,
+    /// Trace through this camera of those the scene's assets carry ([`Scene::choose_camera`]).
+    pub camera: Option<usize>,
     pub gpu: GpuDesc,
 }
 
@@ -983,7 +985,10 @@ pub fn run(opts: &ReferenceOptions) -> Result<ReferenceReport> {
         )));
     }
     opts.settings.check()?;
-    let scene = Scene::from_file(&opts.scene)?;
+    let mut scene = Scene::from_file(&opts.scene)?;
+    if let Some(i) = opts.camera {
+        scene.choose_camera(i)?;
+    }
     let gpu = Gpu::new(&opts.gpu)?;
     let mut renderer = ReferenceRenderer::at_frame(gpu, &scene, opts.size, opts.frame)?;
     // Progress (rate, elapsed, remaining) on a terminal only: a log or a pipe gets the summary.

@@ -53,12 +53,14 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     let mut objects = Vec::new();
     let mut extra_lights = Vec::new();
     let mut asset_camera = None;
+    let mut cameras = Vec::new();
     for item in array(top.get("objects"))? {
         let mut out = Expanded {
             materials: &mut materials,
             objects: &mut objects,
             lights: &mut extra_lights,
             camera: &mut asset_camera,
+            cameras: &mut cameras,
         };
         read_object(&item, &mut out)?;
     }
@@ -105,6 +107,7 @@ pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, 
     Ok(Scene {
         source: source.to_owned(),
         camera,
+        cameras,
         materials,
         objects,
         lights,
@@ -283,6 +286,8 @@ struct Expanded<'a> {
     lights: &'a mut Vec<Light>,
     /// The camera of an asset object that names one (`camera = N`).
     camera: &'a mut Option<Camera>,
+    /// Every camera the assets carry, placed: what `--camera N` chooses from.
+    cameras: &'a mut Vec<Camera>,
 }
 
 fn read_object(f: &Field, out: &mut Expanded) -> Result<(), SceneError> {
@@ -440,6 +445,8 @@ fn read_asset(
     for o in &mut out.objects[first..] {
         o.animation = animation;
     }
+    out.cameras
+        .extend(loaded.cameras.iter().map(|c| asset::transform_camera(c, &transform)));
     if let Some(cf) = t.get("camera") {
         let n = loaded.cameras.len();
         let i = cf.int_in(0, u32::MAX)? as usize;

@@ -52,12 +52,37 @@ pub const DEFAULT_SOURCE: &str = "<built-in default>";
 /// The built-in default scene's TOML text (also shipped as `scenes/default.toml`).
 pub const DEFAULT_SCENE_TOML: &str = include_str!("default.toml");
 
+/// Settings the command line puts over a scene file's.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SceneOverrides {
+    /// One of the cameras the scene's assets carry ([`Scene::choose_camera`]).
+    pub camera: Option<usize>,
+    /// The memory budget in MB, over the scene's `memory_budget_mb`.
+    pub memory_budget_mb: Option<f64>,
+}
+
+impl SceneOverrides {
+    /// Puts the overrides over `scene`'s own settings.
+    pub fn apply(&self, scene: &mut Scene) -> Result<(), SceneError> {
+        if let Some(i) = self.camera {
+            scene.choose_camera(i)?;
+        }
+        if let Some(mb) = self.memory_budget_mb {
+            scene.memory_budget_mb = Some(mb);
+        }
+        Ok(())
+    }
+}
+
 /// A checked scene. File paths inside it (OBJ meshes, textures, environment maps) are absolute
 /// and were verified to exist when it was parsed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
     pub source: SourceName,
     pub camera: Camera,
+    /// The cameras the scene's assets carry, placed as their objects are: what `--camera N`
+    /// chooses from ([`Scene::choose_camera`]). Empty when no asset carries one.
+    pub cameras: Vec<Camera>,
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,
     pub lights: Vec<Light>,
@@ -101,6 +126,26 @@ impl Scene {
             // A parameter missing where another needs it: the method's own line.
             .or((decl.line > 0).then_some(decl.line));
         SceneError::new(&self.source, line, format!("methods[{index}].{name}"), message)
+    }
+
+    /// Makes the scene's camera its assets' camera `index` (counted over the assets in object
+    /// order, each file's cameras in file order): the command line's `--camera N`.
+    pub fn choose_camera(&mut self, index: usize) -> Result<(), SceneError> {
+        let Some(camera) = self.cameras.get(index) else {
+            let has = match self.cameras.len() {
+                0 => "no asset of the scene carries a camera".to_owned(),
+                1 => "the scene's assets carry 1 (--camera 0)".to_owned(),
+                n => format!("the scene's assets carry {n} (--camera 0 to {})", n - 1),
+            };
+            return Err(SceneError::new(
+                &self.source,
+                None,
+                "cameras",
+                format!("--camera {index} asked for, {has}"),
+            ));
+        };
+        self.camera = camera.clone();
+        Ok(())
     }
 
     /// Reads and checks a scene file. Relative paths inside it are relative to its directory.

@@ -618,3 +618,40 @@ fn profile_json_lists_a_bake() {
     let table = String::from_utf8_lossy(&o.stdout);
     assert!(table.contains("bakes (at creation, not frame time)"), "{table}");
 }
+
+/// `--memory-budget-mb` and `--camera` reach the scene: a budget below what the bake needs is
+/// refused up front naming the flag, a raised one lets the same plan through, and a camera the
+/// scene does not carry is one error line.
+#[test]
+fn the_command_line_sets_the_memory_budget_and_the_camera() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bsp_rooms.toml");
+    let run = |extra: &[&str]| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args(["bake", path_str(&scene), "--method", "radiosity", "--size", "8x8"]);
+        cmd.args([
+            "--device",
+            &std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()),
+        ]);
+        cmd.args(extra);
+        let o = cmd.output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let started = std::time::Instant::now();
+    let (ok, err) = run(&["--memory-budget-mb", "1"]);
+    assert!(!ok, "a 1 MB budget refuses the radiosity bake: {err}");
+    assert!(
+        err.contains("budget of 1.0 MB (the scene's memory_budget_mb or --memory-budget-mb)"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(started.elapsed().as_secs_f64() < 20.0, "refused before baking");
+    let (ok, err) = run(&["--memory-budget-mb", "0"]);
+    assert!(!ok && err.contains("at least 1"), "{err}");
+    let (ok, err) = run(&["--camera", "3"]);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("bsp_rooms.toml: cameras: --camera 3 asked for, no asset of the scene carries a camera"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+}

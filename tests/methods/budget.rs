@@ -144,7 +144,11 @@ fn the_scene_sets_the_budget() {
         Some(1),
     );
     let (message, took) = refusal(&lowered, "radiosity");
-    assert_refusal(&message, took, &["the scene's memory_budget_mb", "budget of 1.0 MB"]);
+    assert_refusal(
+        &message,
+        took,
+        &["the scene's memory_budget_mb or --memory-budget-mb", "budget of 1.0 MB"],
+    );
     let bad = Scene::from_str(
         "memory_budget_mb = 0\n[camera]\nposition = [0, 1, 3]\ntarget = [0, 0, 0]\n",
         "b.toml",

@@ -959,6 +959,7 @@ fn the_memory_readout_matches_the_formula() {
             gpu: common::test_gpu_desc(),
             config: None,
             supersample: 1,
+            overrides: Default::default(),
         };
         let report = penumbra::commands::profile::run(&opts, 1).unwrap_or_else(|e| panic!("{e}"));
         let table = report.table();

@@ -357,6 +357,7 @@ fn profile_breaks_out_every_pass() {
         gpu: common::test_gpu_desc(),
         config: None,
         supersample: 1,
+        overrides: Default::default(),
     };
     let report = penumbra::commands::profile::run(&opts, 2).unwrap();
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
@@ -435,6 +436,7 @@ intensity = 0.01
         gpu: common::test_gpu_desc(),
         config: None,
         supersample: 1,
+        overrides: Default::default(),
     };
     let report = penumbra::commands::profile::run(&opts, 1).unwrap();
     let _ = std::fs::remove_dir_all(&dir);

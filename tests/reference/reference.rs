@@ -1281,6 +1281,7 @@ fn cli_options(scene: &str, output: &Path, seed: u32) -> ReferenceOptions {
         settings: settings(4, 2, LightPaths::All, seed),
         frame: 0,
         target: None,
+        camera: None,
         gpu: common::test_gpu_desc(),
     }
 }

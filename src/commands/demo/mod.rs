@@ -154,7 +154,7 @@ fn param_edits(config: &crate::lighting::Configuration) -> Vec<panel::ParamEdit>
 
 impl App {
     fn start(&mut self, el: &ActiveEventLoop) -> Result<Running> {
-        let scene = load_scene(self.opts.scene.as_deref())?;
+        let scene = load_scene(self.opts.scene.as_deref(), &self.opts.overrides)?;
         let (w, h) = self.opts.size;
         let attrs = Window::default_attributes()
             .with_title("penumbra")

@@ -219,6 +219,7 @@ pub fn asset_scene(path: &Path, camera: Option<usize>) -> Result<super::Scene, S
     Ok(super::Scene {
         source: file,
         camera,
+        cameras: asset.cameras.clone(),
         materials,
         objects,
         lights,

@@ -548,3 +548,66 @@ fn gltf_spot_and_directional_lights_in_photometric_units() {
     assert!((*direction - Vec3::NEG_Y).length() < 1e-5, "{direction}");
     assert!((*irradiance - Vec3::new(5.0, 10.0, 10.0)).length() < 1e-4);
 }
+
+#[test]
+fn the_command_line_chooses_among_the_cameras_the_assets_carry() {
+    let dir = temp_dir("choose-camera");
+    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    // A second camera node, 2 m to the right of the first.
+    doc["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"camera": 0, "translation": [2.0, 0.5, 5.0]}));
+    let second = doc["nodes"].as_array().unwrap().len() - 1;
+    doc["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(second));
+    let path = write_json(&dir, "two.gltf", &doc);
+    let toml = r#"
+[camera]
+position = [0, 9, 9]
+target = [0, 0, 0]
+
+[[objects]]
+name = "q"
+mesh = "asset"
+path = "two.gltf"
+translate = [0, 0, -3]
+"#;
+    let mut scene = crate::scene::Scene::from_str(toml, "s.toml", &dir).unwrap();
+    assert_eq!(
+        scene.camera.position,
+        Vec3::new(0.0, 9.0, 9.0),
+        "the scene's own camera by default"
+    );
+    assert_eq!(scene.cameras.len(), 2);
+    let overrides = crate::scene::SceneOverrides {
+        camera: Some(1),
+        memory_budget_mb: Some(64.0),
+    };
+    overrides.apply(&mut scene).unwrap();
+    // Placed as the object is: the asset's (2, 0.5, 5) moved by (0, 0, -3).
+    assert!(
+        (scene.camera.position - Vec3::new(2.0, 0.5, 2.0)).length() < 1e-6,
+        "{}",
+        scene.camera.position
+    );
+    assert_eq!(scene.memory_budget_mb, Some(64.0));
+    let e = scene.choose_camera(2).unwrap_err().to_string();
+    assert!(
+        e.contains("s.toml: cameras: --camera 2 asked for, the scene's assets carry 2 (--camera 0 to 1)"),
+        "{e}"
+    );
+    assert!(!e.contains('\n'));
+
+    let mut alone = crate::scene::Scene::from_file(&path).unwrap();
+    assert!((alone.camera.position - Vec3::new(0.0, 0.5, 5.0)).length() < 1e-6);
+    alone.choose_camera(1).unwrap();
+    assert!((alone.camera.position - Vec3::new(2.0, 0.5, 5.0)).length() < 1e-6);
+
+    let mut plain = crate::scene::Scene::default_scene();
+    let e = plain.choose_camera(0).unwrap_err().to_string();
+    assert!(
+        e.contains("--camera 0 asked for, no asset of the scene carries a camera"),
+        "{e}"
+    );
+}
