@@ -272,6 +272,8 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
         "3",
         "--cache-dir",
         cache.to_str().unwrap(),
+        "--suite",
+        SUITE_TABLE,
         "-o",
         dir.to_str().unwrap(),
     ]);
@@ -395,6 +397,75 @@ fn a_small_report_opens_in_chromium_clean_and_its_chart_names_what_is_hovered() 
         !browser.problems().is_empty(),
         "the removed map is reported as a failed load"
     );
+    suite_page_opens_with_its_summary(&mut browser, &dir);
+}
+
+/// A committed table of the generated-scene suite (12 scenes, leading `#` provenance lines).
+const SUITE_TABLE: &str = "docs/results/lavapipe/suite_seed1_n12_32x24.csv";
+
+/// The suite's page, reached from the index: its provenance, one summary row per configuration,
+/// the targets, one row per table row, sortable, with no console error.
+fn suite_page_opens_with_its_summary(browser: &mut Browser, dir: &Path) {
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(SUITE_TABLE)).unwrap();
+    let data: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let configs: std::collections::BTreeSet<&str> = data.iter().map(|f| f[4]).collect();
+    browser.events.clear();
+    browser.call(
+        "Page.navigate",
+        json!({ "url": format!("file://{}", dir.join("index.html").display()) }),
+    );
+    browser.wait_for_event("Page.loadEventFired");
+    let (x, y) = browser.centre("a[href='generated_suite.html']");
+    browser.events.clear();
+    browser.mouse("mousePressed", x, y);
+    browser.mouse("mouseReleased", x, y);
+    browser.wait_for_event("Page.loadEventFired");
+    assert_eq!(
+        browser.eval("document.querySelectorAll('#suite-methods tbody tr').length"),
+        json!(configs.len())
+    );
+    assert_eq!(
+        browser.eval("document.querySelectorAll('#suite-rows tbody tr').length"),
+        json!(data.len())
+    );
+    let meta = browser.eval("document.querySelector('p.meta + p.meta').textContent");
+    assert!(meta.as_str().unwrap().contains("device: llvmpipe"), "{meta}");
+    let targets = browser.eval("[...document.querySelectorAll('#suite-targets > li > b')].map(b => b.textContent)");
+    assert!(
+        targets.as_array().unwrap().iter().any(|t| t == "NOT met"),
+        "the table's unmet targets are shown: {targets}"
+    );
+    // The summary's first column holds each configuration once, as the table names them.
+    let names = browser
+        .eval("[...document.querySelectorAll('#suite-methods tbody tr td:first-child')].map(t => t.textContent)");
+    let names: std::collections::BTreeSet<String> = names
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(names, configs.iter().map(|c| c.to_string()).collect());
+    // Sorting by relative MSE (a header click) puts the smallest first.
+    let (x, y) = browser.centre("#suite-rows thead th:nth-child(5)");
+    browser.mouse("mousePressed", x, y);
+    browser.mouse("mouseReleased", x, y);
+    let first =
+        browser.eval("parseFloat(document.querySelector('#suite-rows tbody tr td:nth-child(5)').dataset.value)");
+    let smallest = data
+        .iter()
+        .filter_map(|f| f[9].parse::<f64>().ok())
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        (first.as_f64().unwrap() - smallest).abs() <= 1e-12 * smallest.abs().max(1.0),
+        "{first} vs {smallest}"
+    );
+    let problems = browser.problems();
+    assert!(problems.is_empty(), "suite page:\n{}", problems.join("\n"));
 }
 
 /// A report made beforehand (`PENUMBRA_REPORT_PAGE`: a scene's page) opens clean: every image

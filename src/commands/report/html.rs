@@ -24,7 +24,7 @@ pub fn escape(s: &str) -> String {
     out
 }
 
-fn head(title: &str) -> String {
+pub(super) fn head(title: &str) -> String {
     format!(
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
@@ -33,7 +33,7 @@ fn head(title: &str) -> String {
     )
 }
 
-const TAIL: &str = "<script src=\"report.js\"></script>\n</body></html>\n";
+pub(super) const TAIL: &str = "<script src=\"report.js\"></script>\n</body></html>\n";
 
 /// The index: one line per page, with what it holds.
 pub fn index(pages: &[ScenePage]) -> String {
@@ -50,27 +50,6 @@ pub fn index(pages: &[ScenePage]) -> String {
             p.failures,
             escape(p.best_within_10ms.as_deref().unwrap_or("none"))
         );
-    }
-    s.push_str("</tbody></table>\n");
-    s + TAIL
-}
-
-/// A CSV file as a sortable table.
-pub fn csv_page(title: &str, csv: &str) -> String {
-    let mut s = head(title);
-    let _ = writeln!(
-        s,
-        "<nav><a href=\"index.html\">&larr; all scenes</a></nav><h1>{}</h1>",
-        escape(title)
-    );
-    s.push_str("<table class=\"sortable\">\n");
-    for (i, line) in csv.lines().filter(|l| !l.trim().is_empty()).enumerate() {
-        let cell = if i == 0 { "th" } else { "td" };
-        s.push_str(if i == 0 { "<thead><tr>" } else { "<tr>" });
-        for v in line.split(',') {
-            let _ = write!(s, "<{cell}>{}</{cell}>", escape(v));
-        }
-        s.push_str(if i == 0 { "</tr></thead><tbody>\n" } else { "</tr>\n" });
     }
     s.push_str("</tbody></table>\n");
     s + TAIL

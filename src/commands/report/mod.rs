@@ -11,6 +11,7 @@
 mod analysis;
 mod html;
 mod images;
+mod suite_page;
 mod svg;
 
 use std::path::{Path, PathBuf};
@@ -139,14 +140,12 @@ pub fn suite_page(csv: &Path, out_dir: &Path) -> Result<ScenePage> {
         )));
     }
     let page = "generated_suite.html".to_string();
-    write(
-        &out_dir.join(&page),
-        html::csv_page(&csv.display().to_string(), &text).as_bytes(),
-    )?;
+    let (html, configurations) = suite_page::page(&csv.display().to_string(), &text)?;
+    write(&out_dir.join(&page), html.as_bytes())?;
     Ok(ScenePage {
         scene: csv.display().to_string(),
         page,
-        configurations: rows - 1,
+        configurations,
         failures: 0,
         best_within_10ms: None,
     })

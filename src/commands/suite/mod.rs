@@ -9,7 +9,7 @@
 //! (`summary.md`) of every CSV in the folder, so shards run apart are summarised together; the
 //! worst scenes of each method, and every scene a method failed on, are copied into `worst/`.
 
-mod table;
+pub(crate) mod table;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

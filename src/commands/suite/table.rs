@@ -38,7 +38,7 @@ impl Status {
         }
     }
 
-    fn detail(&self) -> &str {
+    pub fn detail(&self) -> &str {
         match self {
             Status::Ok => "",
             Status::Refused(s) | Status::Error(s) | Status::Crash(s) | Status::NonFinite(s) | Status::Validation(s) => {
@@ -451,7 +451,7 @@ fn targets(rows: &[Row]) -> Vec<Target> {
     out
 }
 
-fn sci(v: f64) -> String {
+pub(crate) fn sci(v: f64) -> String {
     if v.is_nan() {
         "-".into()
     } else {
@@ -459,7 +459,7 @@ fn sci(v: f64) -> String {
     }
 }
 
-fn fixed(v: f64, digits: usize) -> String {
+pub(crate) fn fixed(v: f64, digits: usize) -> String {
     if v.is_nan() {
         "-".into()
     } else {
