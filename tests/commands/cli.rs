@@ -655,3 +655,23 @@ fn the_command_line_sets_the_memory_budget_and_the_camera() {
     );
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
 }
+
+/// `penumbra bake` whose result cannot be stored (the cache directory is a file) says so in its
+/// table and fails, rather than reporting "built" and exiting 0.
+#[test]
+fn a_bake_that_cannot_be_stored_fails() {
+    let blocker = common::temp_path("cache-is-a-file");
+    std::fs::write(&blocker, b"not a directory").unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/many_box.toml");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["bake", path_str(&scene), "--method", "bsp_lights", "--size", "8x8", "--device"])
+        .arg(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()))
+        .env("PENUMBRA_CACHE", &blocker)
+        .output()
+        .unwrap();
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(!o.status.success(), "exit 0 although nothing was stored:\n{out}\n{err}");
+    assert!(out.contains("built, NOT stored"), "{out}");
+    assert!(err.contains("a bake could not be stored in the cache"), "{err}");
+    assert!(std::fs::read(&blocker).unwrap() == b"not a directory", "the file in the way is kept");
+}
