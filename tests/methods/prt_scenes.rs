@@ -10,7 +10,9 @@ use penumbra::backend::Gpu;
 use penumbra::environment::EnvironmentMap;
 use penumbra::lighting::prt::config::{Config, Coverage, Depth, Mode};
 use penumbra::lighting::prt::receivers::{Clip, OccluderRules, Receivers};
-use penumbra::lighting::prt::storage::{round_trip, Grouping};
+use penumbra::lighting::prt::storage::{
+    block_words, decode, encode, pack_for_device, round_trip, Grouping, DEVICE_DIM,
+};
 use penumbra::lighting::prt::{key_blend, key_times, light, raster, raycast, receivers_at, SceneMesh};
 use penumbra::scene::{Mesh, Scene};
 use penumbra::shaders::ShaderLibrary;
@@ -340,6 +342,54 @@ fn shared_exponent_storage_on_the_bunny() {
             vertex.rms
         );
     }
+}
+
+/// Coefficient `i` of vertex `v` in key `k` read from the device words as glsl/prt/shade.vert
+/// addresses them.
+fn device_value(words: &[u32], per_key: usize, grouping: Grouping, k: usize, v: usize, i: usize) -> f32 {
+    let byte = |w: u32, b: usize| (w >> (8 * b)) as u8;
+    let key = &words[k * per_key..(k + 1) * per_key];
+    let (m, e) = match grouping {
+        Grouping::ByVertex => {
+            let block = &key[v * 5..v * 5 + 5];
+            (byte(block[i / 4], i % 4), byte(block[4], i / 4))
+        }
+        Grouping::ByBand => {
+            let block = &key[(v / 4) * 20..(v / 4) * 20 + 20];
+            (byte(block[i], v % 4), byte(block[16 + i / 4], i % 4))
+        }
+    };
+    (m as i8) as f32 * 2f32.powi(e as i32 - 135)
+}
+
+/// The device layout holds every group `encode` forms: two keys of seven vertices (a
+/// partial by-band block) read back to `decode`'s values, in 5 bytes per 4 coefficients.
+#[test]
+fn device_layout_holds_the_encoded_groups() {
+    let (keys, vertices) = (2, 7);
+    let values: Vec<f32> = (0..keys * vertices * DEVICE_DIM)
+        .map(|k| ((k * 7919) % 211) as f32 / 100.0 - 1.0)
+        .collect();
+    for grouping in [Grouping::ByBand, Grouping::ByVertex] {
+        let (words, per_key) = pack_for_device(&values, keys, vertices, Some(grouping));
+        let blocks = if grouping == Grouping::ByBand { 2 } else { vertices };
+        let block = block_words(grouping);
+        assert_eq!(block * 4 * 4, if grouping == Grouping::ByBand { 4 } else { 1 } * DEVICE_DIM * 5);
+        assert_eq!((words.len(), per_key), (keys * blocks * block, blocks * block));
+        for k in 0..keys {
+            let key = &values[k * vertices * DEVICE_DIM..(k + 1) * vertices * DEVICE_DIM];
+            let want = decode(&encode(key, DEVICE_DIM, grouping), vertices, DEVICE_DIM, grouping).unwrap();
+            for v in 0..vertices {
+                for i in 0..DEVICE_DIM {
+                    let got = device_value(&words, per_key, grouping, k, v, i);
+                    assert_eq!(got, want[v * DEVICE_DIM + i], "{grouping:?} key {k} vertex {v} coefficient {i}");
+                    assert!((got - key[v * DEVICE_DIM + i]).abs() <= 1.1 / 127.5);
+                }
+            }
+        }
+    }
+    let (fp32, per_key) = pack_for_device(&values, keys, vertices, None);
+    assert_eq!((fp32.len(), per_key), (values.len(), vertices * DEVICE_DIM));
 }
 
 /// Test 14: a sphere bobbing across a floor (0.5 m each way, 2 s) under a bar spinning about
