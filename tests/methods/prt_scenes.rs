@@ -172,15 +172,16 @@ fn report(label: &str, e: &Errors) {
 ///   the colour-coded sphere's directions): RMS 0.126 (14.2 % of T00), irradiance 3.9 %, 15.8 %,
 ///   20.1 % (with exact directions instead of the sphere: 0.111, 12.6 %; 3.9 %, 17.4 %, 16.6 %).
 ///   Asserted: RMS ≥ 10 × the corrected path's, and worse irradiance under every light.
-/// * Corrected with projected coverage (the pure-raster baker): RMS 0.0095 (1.07 % of T00), the
-///   worst coefficient's RMS 0.0157 (T00: 1.77 % of T00), max 0.157; irradiance 2.1 %, 1.9 %,
-///   2.7 %; RMS by object: box 0.0151, floor 0.0109, the floating sphere 0.0033. Where surfaces
+/// * Corrected with projected coverage (the pure-raster baker): RMS 0.0083 (0.94 % of T00), the
+///   worst coefficient's RMS 0.0142 (T00: 1.60 % of T00), max 0.151; irradiance 1.9 %, 1.9 %,
+///   2.7 %; RMS by object: floor 0.0109, box 0.0073, the floating sphere 0.0026. Where surfaces
 ///   meet, the adjoining surface's triangles near a vertex span wide angles, and their edges
 ///   project to arcs (the rim itself for an edge in the tangent plane) that the straight lines
-///   between projected corners cut short. Asserted: every coefficient's
-///   RMS ≤ 2 % of T00, the same target. (Before radial depth discarded the triangles in a
-///   vertex's tangent plane, whose corner at the vertex projects to the tile's centre and drew a
-///   wedge to the horizon, it was 0.237.)
+///   between projected corners cut short. Asserted: every coefficient's RMS ≤ 2 % of T00, the
+///   same target. (Before visibility.vert clipped each triangle to the hemisphere in 3D: worst
+///   coefficient 0.0157, box 0.0151. Before radial depth discarded the triangles in a vertex's
+///   tangent plane, whose corner at the vertex projects to the tile's centre and drew a wedge to
+///   the horizon: RMS 0.237.)
 #[test]
 fn raster_matches_the_ray_cast_truth() {
     let objects = "[[materials]]\nname = \"m\"\nalbedo = [0.5, 0.5, 0.5]\n\
@@ -265,7 +266,7 @@ fn raster_matches_the_ray_cast_truth() {
     let projected = p.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max);
     assert!(
         projected <= 0.02 * T00,
-        "corrected with projected coverage: a coefficient's RMS error is {projected} > 2 % of T00 (measured 0.0157)"
+        "corrected with projected coverage: a coefficient's RMS error is {projected} > 2 % of T00 (measured 0.0142)"
     );
     assert!(
         f.rms >= 10.0 * c.rms,
@@ -279,6 +280,72 @@ fn raster_matches_the_ray_cast_truth() {
         f.irradiance,
         c.irradiance
     );
+}
+
+/// The bunny of scenes/prt_bunny_cow.toml standing on its floor (the cow left out; 9,205
+/// occluder triangles): 256 of its vertices, evenly picked, against the ray-cast truth with
+/// 16,384 rays a vertex, with corrected weights at 32².
+fn curved_mesh_errors(coverage: &[Coverage]) -> Vec<f64> {
+    let s = load("prt_bunny_cow.toml");
+    let m = meshes(&s);
+    let object = |name: &str| s.objects.iter().position(|o| o.name == name).unwrap();
+    let (floor, bunny) = (object("floor"), object("bunny"));
+    let (all, first) = receivers(&s, &m, &[floor, bunny], 0.0);
+    let count = all.len() - first[1];
+    let keep: Vec<usize> = (0..256).map(|k| first[1] + k * count / 256).collect();
+    let r = subset(&all, &keep);
+    let truth = rays(&r, 4, 16384, Clip::default());
+    let lights = [
+        "[environment]\ntype = \"constant\"\nradiance = [1, 1, 1]\n",
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.5, -0.6, 0.35]\nirradiance = [3, 3, 3]\n",
+        "[environment]\ntype = \"image\"\npath = \"terrain/sky.hdr\"\n",
+    ]
+    .map(|l| light_of(&scene(l)));
+    println!("{} bunny receivers, {} occluder triangles", r.len(), r.sets[0].triangles.len());
+    let mut gpu = common::test_gpu();
+    coverage
+        .iter()
+        .map(|&coverage| {
+            let config = Config {
+                tile: 32,
+                batch: 1024,
+                coverage,
+                ..Config::defaults(Mode::Corrected)
+            };
+            let e = errors(&raster_bake(&mut gpu, &r, &config), &truth, 16, &lights);
+            report(&format!("{coverage:?} coverage"), &e);
+            e.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+/// The raster baker on a curved mesh (`curved_mesh_errors`). Exact coverage: worst
+/// coefficient's RMS 0.0036 (0.41 % of T00), all together 0.0026; asserted within the 2 %
+/// target. Projected coverage: worst 0.0714 (T10, 8.1 % of T00), all together 0.0395 (4.45 %),
+/// irradiance 11.5 %, 11.2 %, 8.5 %: it misses the target (`projected_coverage_on_a_curved_mesh_meets_the_target`,
+/// ignored). Asserted at 0.08 as a regression bound: without the clipping to the hemisphere
+/// in visibility.vert (a triangle crossing the tangent plane drawn from its mirrored corner)
+/// it was 0.123 (RMS 0.059).
+#[test]
+fn raster_on_a_curved_mesh() {
+    let worst = curved_mesh_errors(&[Coverage::Exact, Coverage::Projected]);
+    assert!(worst[0] <= 0.02 * T00, "exact coverage: a coefficient's RMS error is {} > 2 % of T00", worst[0]);
+    assert!(
+        worst[1] <= 0.08,
+        "projected coverage: a coefficient's RMS error is {} > 0.08 (measured 0.0714)",
+        worst[1]
+    );
+}
+
+/// Known failure: projected coverage misses the 2 % target on the bunny (measured 0.0714 =
+/// 8.1 % of T00 on its worst coefficient). Close to a vertex of a bumpy mesh, triangles span
+/// wide angles, and their edges, arcs in the tile, are drawn as straight lines between the
+/// projected corners; exact coverage, which tests each pixel's ray, meets it.
+#[test]
+#[ignore]
+fn projected_coverage_on_a_curved_mesh_meets_the_target() {
+    let worst = curved_mesh_errors(&[Coverage::Projected])[0];
+    assert!(worst <= 0.02 * T00, "projected coverage: a coefficient's RMS error is {worst} > 2 % of T00");
 }
 
 /// Test 15: the transfer of the low-poly bunny (3,009 vertices) on the floor of
