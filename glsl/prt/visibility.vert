@@ -5,13 +5,13 @@
 // projected corners, the document's known distortion). w = 1, so depth is linear in the chosen
 // metric: planar (along the normal) or radial (distance from the vertex).
 //
-// Six vertices per triangle, which each invocation reads whole from the corner buffer. Planar
-// depth (the document's path) draws the triangle as it is (the last three vertices degenerate):
-// what lies behind the vertex is cut where the depth interpolated between projected corners
-// crosses zero. Radial depth first clips the triangle to the hemisphere in 3D (a polygon of
-// up to four corners, drawn as a fan of two triangles): a corner behind the vertex would
-// otherwise project into the disk as its mirror image, and a triangle crossing the tangent
-// plane would cover a wedge from there instead of ending at the rim.
+// Planar depth (the document's path): three vertices per triangle, each its corner; what lies
+// behind the vertex is cut where the depth interpolated between projected corners crosses
+// zero. Radial depth: six vertices per triangle, each reading the triangle whole and clipping
+// it to the hemisphere in 3D (a polygon of up to four corners, drawn as a fan of two
+// triangles): a corner behind the vertex would otherwise project into the disk as its mirror
+// image, and a triangle crossing the tangent plane would cover a wedge from there instead of
+// ending at the rim. Clipping costs the vertex stage about six times the work.
 
 #include "prt/mapping.glsl"
 
@@ -34,39 +34,48 @@ layout(location = 1) flat out ivec2 out_tile;  // the tile's first pixel
 // The fan's corner of each of the six vertices: (0, 1, 2) and (0, 2, 3).
 const int FAN[6] = int[6](0, 1, 2, 0, 2, 3);
 
+// A world point in the vertex camera's frame.
+vec3 to_frame(PrtReceiver r, vec3 world) {
+    vec3 e = world - r.position.xyz;
+    return vec3(dot(e, r.tangent.xyz), dot(e, r.bitangent.xyz), dot(e, r.normal.xyz));
+}
+
+// Corner `corner` (0 .. 5) of the fan of triangle `tri` clipped to z >= eps (Sutherland-Hodgman:
+// 0, 3 or 4 corners). Vertices past the polygon's fan sit on its first corner: nothing drawn.
+vec3 clipped_corner(PrtReceiver r, int tri, int corner) {
+    vec3 l[3];
+    for (int k = 0; k < 3; ++k) {
+        l[k] = to_frame(r, triangles.items[3 * tri + k].xyz);
+    }
+    float eps = max(NEAR * 0.01, 1e-7);
+    vec3 poly[4] = vec3[4](l[0], l[0], l[0], l[0]);
+    int n = 0;
+    for (int k = 0; k < 3; ++k) {
+        vec3 a = l[k];
+        vec3 b = l[(k + 1) % 3];
+        bool a_in = a.z >= eps;
+        bool b_in = b.z >= eps;
+        if (a_in) {
+            poly[n++] = a;
+        }
+        if (a_in != b_in) {
+            poly[n++] = mix(a, b, (eps - a.z) / (b.z - a.z));
+        }
+    }
+    return (corner < 3 || n == 4) && n >= 3 ? poly[FAN[corner]] : poly[0];
+}
+
 void main() {
     // Batches start at multiples of BATCH, so the tile is the instance's place in its batch.
     int slot = gl_InstanceIndex % BATCH;
     ivec2 tile = ivec2(slot % TILES_PER_ROW, slot / TILES_PER_ROW) * TILE;
     PrtReceiver r = receivers.items[gl_InstanceIndex];
-    int tri = gl_VertexIndex / 6;
-    vec3 l[3];
-    for (int k = 0; k < 3; ++k) {
-        vec3 e = triangles.items[3 * tri + k].xyz - r.position.xyz;
-        l[k] = vec3(dot(e, r.tangent.xyz), dot(e, r.bitangent.xyz), dot(e, r.normal.xyz));
-    }
-    // The polygon: the triangle, or its part in front of the tangent plane (Sutherland-Hodgman
-    // against z >= eps). Fewer than three corners leave every vertex at the first: nothing drawn.
-    vec3 poly[4] = vec3[4](l[0], l[1], l[2], l[2]);
-    int n = 3;
+    vec3 p;
     if (RADIAL == 1) {
-        float eps = max(NEAR * 0.01, 1e-7);
-        n = 0;
-        for (int k = 0; k < 3; ++k) {
-            vec3 a = l[k];
-            vec3 b = l[(k + 1) % 3];
-            bool a_in = a.z >= eps;
-            bool b_in = b.z >= eps;
-            if (a_in) {
-                poly[n++] = a;
-            }
-            if (a_in != b_in) {
-                poly[n++] = mix(a, b, (eps - a.z) / (b.z - a.z));
-            }
-        }
+        p = clipped_corner(r, gl_VertexIndex / 6, gl_VertexIndex % 6);
+    } else {
+        p = to_frame(r, triangles.items[gl_VertexIndex].xyz);
     }
-    int corner = gl_VertexIndex % 6;
-    vec3 p = (corner < 3 || n == 4) && n >= 3 ? poly[FAN[corner]] : poly[0];
     float len = length(p);
     // A corner at the vertex itself has no direction: put it just behind, where it clips.
     vec3 d = len > 1e-12 ? p / len : vec3(0.0, 0.0, -1.0);

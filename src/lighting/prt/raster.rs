@@ -575,8 +575,10 @@ fn record_batch<'a>(
                                 ("receivers", Bind::StorageBuffer(b.receivers)),
                                 ("triangles", Bind::StorageBuffer(b.triangles)),
                             ])?;
-                            // Six vertices a triangle (visibility.vert: the clipped polygon's fan).
-                            ctx.rec.draw_instanced(2 * vertex_count, 2 * first_vertex, count, first)?;
+                            // Radial depth: six vertices a triangle (visibility.vert: the fan of
+                            // the triangle clipped to the hemisphere).
+                            let k = if config.depth == Depth::Radial { 2 } else { 1 };
+                            ctx.rec.draw_instanced(k * vertex_count, k * first_vertex, count, first)?;
                         }
                         ctx.rec.end_rendering();
                         Ok(())
