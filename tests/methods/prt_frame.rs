@@ -219,10 +219,11 @@ const T_MAX_BANDS_01: f64 = 1.023327;
 fn shared_exponent_transfer_stays_packed_on_the_device() {
     use penumbra::environment::EnvironmentMap;
     use penumbra::lighting::prt::light;
-    let text = |storage: &str| {
-        scene_text(OPEN_BOX, &format!(r#"{{ name = "prt", storage = "{storage}" }}"#), 16, 4)
+    let text =
+        |storage: &str| {
+            scene_text(OPEN_BOX, &format!(r#"{{ name = "prt", storage = "{storage}" }}"#), 16, 4)
             + "\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [-0.5, -0.6, -0.3]\nirradiance = 2.0\n"
-    };
+        };
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let render = |storage: &str| {
         let s = Scene::from_str(&text(storage), "prt test", &dir).unwrap_or_else(|e| panic!("{storage}: {e}"));
@@ -241,7 +242,15 @@ fn shared_exponent_transfer_stays_packed_on_the_device() {
     let bound: f64 = l
         .iter()
         .enumerate()
-        .map(|(i, c)| c.abs().max_element() as f64 * if i < 4 { T_MAX_BANDS_01 } else { std::f64::consts::PI.sqrt() } / 127.5)
+        .map(|(i, c)| {
+            c.abs().max_element() as f64
+                * if i < 4 {
+                    T_MAX_BANDS_01
+                } else {
+                    std::f64::consts::PI.sqrt()
+                }
+                / 127.5
+        })
         .sum::<f64>()
         * rho_pi;
     let (reference, f32_bytes) = render("f32");
@@ -263,8 +272,14 @@ fn shared_exponent_transfer_stays_packed_on_the_device() {
              (bound {bound:.2e}, mean radiance {mean:.3})"
         );
         assert_eq!(size, bytes, "{storage}: the transfer buffer is {size} bytes");
-        assert!(size * 3 < f32_bytes, "{storage}: {size} bytes against fp32's {f32_bytes}");
-        assert!(diff <= bound + 1e-5, "{storage}: {diff} over the format's bound {bound}");
+        assert!(
+            size * 3 < f32_bytes,
+            "{storage}: {size} bytes against fp32's {f32_bytes}"
+        );
+        assert!(
+            diff <= bound + 1e-5,
+            "{storage}: {diff} over the format's bound {bound}"
+        );
         assert!(diff > 0.0, "{storage}: the image is fp32's: nothing was quantised");
     }
 }

@@ -301,7 +301,11 @@ fn curved_mesh_errors(coverage: &[Coverage]) -> Vec<f64> {
         "[environment]\ntype = \"image\"\npath = \"terrain/sky.hdr\"\n",
     ]
     .map(|l| light_of(&scene(l)));
-    println!("{} bunny receivers, {} occluder triangles", r.len(), r.sets[0].triangles.len());
+    println!(
+        "{} bunny receivers, {} occluder triangles",
+        r.len(),
+        r.sets[0].triangles.len()
+    );
     let mut gpu = common::test_gpu();
     coverage
         .iter()
@@ -329,7 +333,11 @@ fn curved_mesh_errors(coverage: &[Coverage]) -> Vec<f64> {
 #[test]
 fn raster_on_a_curved_mesh() {
     let worst = curved_mesh_errors(&[Coverage::Exact, Coverage::Projected]);
-    assert!(worst[0] <= 0.02 * T00, "exact coverage: a coefficient's RMS error is {} > 2 % of T00", worst[0]);
+    assert!(
+        worst[0] <= 0.02 * T00,
+        "exact coverage: a coefficient's RMS error is {} > 2 % of T00",
+        worst[0]
+    );
     assert!(
         worst[1] <= 0.08,
         "projected coverage: a coefficient's RMS error is {} > 0.08 (measured 0.0714)",
@@ -345,7 +353,10 @@ fn raster_on_a_curved_mesh() {
 #[ignore]
 fn projected_coverage_on_a_curved_mesh_meets_the_target() {
     let worst = curved_mesh_errors(&[Coverage::Projected])[0];
-    assert!(worst <= 0.02 * T00, "projected coverage: a coefficient's RMS error is {worst} > 2 % of T00");
+    assert!(
+        worst <= 0.02 * T00,
+        "projected coverage: a coefficient's RMS error is {worst} > 2 % of T00"
+    );
 }
 
 /// Test 15: the transfer of the low-poly bunny (3,009 vertices) on the floor of
@@ -441,7 +452,10 @@ fn device_layout_holds_the_encoded_groups() {
         let (words, per_key) = pack_for_device(&values, keys, vertices, Some(grouping));
         let blocks = if grouping == Grouping::ByBand { 2 } else { vertices };
         let block = block_words(grouping);
-        assert_eq!(block * 4 * 4, if grouping == Grouping::ByBand { 4 } else { 1 } * DEVICE_DIM * 5);
+        assert_eq!(
+            block * 4 * 4,
+            if grouping == Grouping::ByBand { 4 } else { 1 } * DEVICE_DIM * 5
+        );
         assert_eq!((words.len(), per_key), (keys * blocks * block, blocks * block));
         for k in 0..keys {
             let key = &values[k * vertices * DEVICE_DIM..(k + 1) * vertices * DEVICE_DIM];
@@ -449,7 +463,11 @@ fn device_layout_holds_the_encoded_groups() {
             for v in 0..vertices {
                 for i in 0..DEVICE_DIM {
                     let got = device_value(&words, per_key, grouping, k, v, i);
-                    assert_eq!(got, want[v * DEVICE_DIM + i], "{grouping:?} key {k} vertex {v} coefficient {i}");
+                    assert_eq!(
+                        got,
+                        want[v * DEVICE_DIM + i],
+                        "{grouping:?} key {k} vertex {v} coefficient {i}"
+                    );
                     assert!((got - key[v * DEVICE_DIM + i]).abs() <= 1.1 / 127.5);
                 }
             }

@@ -82,7 +82,12 @@ pub fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::C
 /// The charts' leaves in `world` (every empty leaf a chart's bounds reach, a hair enlarged so a
 /// face on a leaf's boundary is in the leaf in front of it) and the world's leaf PVS over them:
 /// the document's start of the surface-visibility matrix.
-pub fn chart_pvs(p: &Patches, triangles: &[Triangle], world: &crate::world::CompiledWorld, translate: Vec3) -> ChartPvs {
+pub fn chart_pvs(
+    p: &Patches,
+    triangles: &[Triangle],
+    world: &crate::world::CompiledWorld,
+    translate: Vec3,
+) -> ChartPvs {
     let to_world = |x: DVec3| crate::scene::world_mesh::scene_to_world(x.as_vec3() - translate);
     let leaves: Vec<Vec<u32>> = p
         .charts

@@ -64,13 +64,7 @@ pub fn rotate(coeffs: &[Vec3], angle: f64) -> Result<Vec<Vec3>> {
 /// which drops the document's incomplete 8 or 12), then the SH keys (first key, second key,
 /// receivers per key, coefficient count), the blend, and the transfer's storage (its format, as
 /// `Storage::device_format`, and words per key).
-pub fn uniform(
-    coeffs: &[Vec3],
-    count: usize,
-    keys: (u32, u32, f32),
-    per_key: u32,
-    storage: (u32, u32),
-) -> Vec<f32> {
+pub fn uniform(coeffs: &[Vec3], count: usize, keys: (u32, u32, f32), per_key: u32, storage: (u32, u32)) -> Vec<f32> {
     let mut out = Vec::with_capacity(16 * 4 + 12);
     for i in 0..16 {
         let c = if i < count {

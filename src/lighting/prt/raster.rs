@@ -578,7 +578,8 @@ fn record_batch<'a>(
                             // Radial depth: six vertices a triangle (visibility.vert: the fan of
                             // the triangle clipped to the hemisphere).
                             let k = if config.depth == Depth::Radial { 2 } else { 1 };
-                            ctx.rec.draw_instanced(k * vertex_count, k * first_vertex, count, first)?;
+                            ctx.rec
+                                .draw_instanced(k * vertex_count, k * first_vertex, count, first)?;
                         }
                         ctx.rec.end_rendering();
                         Ok(())

@@ -467,7 +467,9 @@ impl ShLightmap {
                     .on_gpu
                     .unwrap_or(device.caps().device_type != vk::PhysicalDeviceType::CPU);
                 let rays = if on_gpu { Rays::Gpu(device, shaders) } else { Rays::Cpu };
-                Ok(bake(geo, Some(surf), &bake_config, rays, Some(scene), progress)?.0.to_floats())
+                Ok(bake(geo, Some(surf), &bake_config, rays, Some(scene), progress)?
+                    .0
+                    .to_floats())
             },
         )?;
         let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| {
