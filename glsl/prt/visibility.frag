@@ -19,9 +19,9 @@ void main() {
     if (any(lessThan(p, in_tile)) || any(greaterThanEqual(p, in_tile + TILE))) {
         discard;
     }
-    // Radial depth does not clip what lies behind the vertex (planar depth does), nor the
-    // triangles around it in its tangent plane, whose corner at the vertex projects to the
-    // tile's centre and would cover a wedge out to the horizon.
+    // Radial depth clipped each triangle to the hemisphere in visibility.vert; what is left in
+    // the tangent plane itself (a triangle around the vertex, whose corner at the vertex
+    // projects to the tile's centre) would cover a wedge out to the horizon.
     if (RADIAL == 1 && in_front <= max(NEAR * 0.01, 1e-7)) {
         discard;
     }

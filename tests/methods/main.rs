@@ -29,6 +29,7 @@ mod seed000_frame;
 mod sh_lightmap_frame;
 mod sh_lightmap_gpu;
 mod sh_lightmap_measure;
+mod sh_lightmap_pvs;
 mod sh_lightmap_vq;
 mod shadow_volumes;
 mod shadow_volumes_shading;

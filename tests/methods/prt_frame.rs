@@ -202,3 +202,84 @@ fn eight_and_twelve_coefficients_render_their_truncation_and_warn() {
         let _ = std::fs::remove_file(&out);
     }
 }
+
+/// The largest magnitude a clamped-cosine transfer coefficient of bands 0 and 1 can take:
+/// |T_1m| ≤ √(3/4π)·∫max(0, n·ω)|a·ω| dω ≤ √(3/4π)·2π/3 (a = n), and T00 ≤ √π/2 below it. A
+/// group's largest magnitude, by band or by vertex, is at most this for the first four
+/// coefficients; any coefficient's is at most √π (Cauchy–Schwarz: ∫max(0, n·ω)|y_i| dω ≤
+/// √(π·∫y_i² dω)).
+const T_MAX_BANDS_01: f64 = 1.023327;
+
+/// The shared-exponent storage kept packed on the device and decoded in the vertex shader: the
+/// open box under its sky and a low sun renders within the format's bound of the fp32 image —
+/// each coefficient within 1/127.5 of its group's largest magnitude (src/lighting/prt/storage.rs),
+/// so a pixel within ρ/π·Σ_i |L_i|·M_i/127.5, M_i ≤ 1.0233 for bands 0 and 1 and ≤ √π beyond — and the transfer buffer is 20 bytes a vertex by vertex and 80 per four vertices by
+/// band, against 64 a vertex in fp32.
+#[test]
+fn shared_exponent_transfer_stays_packed_on_the_device() {
+    use penumbra::environment::EnvironmentMap;
+    use penumbra::lighting::prt::light;
+    let text =
+        |storage: &str| {
+            scene_text(OPEN_BOX, &format!(r#"{{ name = "prt", storage = "{storage}" }}"#), 16, 4)
+            + "\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [-0.5, -0.6, -0.3]\nirradiance = 2.0\n"
+        };
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let render = |storage: &str| {
+        let s = Scene::from_str(&text(storage), "prt test", &dir).unwrap_or_else(|e| panic!("{storage}: {e}"));
+        let mut r = renderer(s);
+        let cam = r.scene.camera.clone();
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        common::assert_clean(&r.gpu);
+        let memory = r.method_memory().unwrap();
+        assert_eq!(memory.len(), 1, "{storage}: {memory:?}");
+        (img, memory[0].requested)
+    };
+    let scene = Scene::from_str(&text("f32"), "prt test", &dir).unwrap();
+    let env = EnvironmentMap::of_scene(&scene).unwrap();
+    let l = light::project(&scene, &env, 4).unwrap();
+    let rho_pi = 0.5 / std::f64::consts::PI;
+    let bound: f64 = l
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            c.abs().max_element() as f64
+                * if i < 4 {
+                    T_MAX_BANDS_01
+                } else {
+                    std::f64::consts::PI.sqrt()
+                }
+                / 127.5
+        })
+        .sum::<f64>()
+        * rho_pi;
+    let (reference, f32_bytes) = render("f32");
+    let vertices = f32_bytes / 64;
+    for (storage, bytes) in [
+        ("shared_by_vertex", vertices * 20),
+        ("shared_by_band", vertices.div_ceil(4) * 80),
+    ] {
+        let (img, size) = render(storage);
+        let diff = img
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs() as f64))
+            .fold(0.0, f64::max);
+        let mean = reference.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / reference.pixels.len() as f64;
+        println!(
+            "{storage}: {size} bytes (fp32 {f32_bytes}, {vertices} vertices); largest difference {diff:.2e} \
+             (bound {bound:.2e}, mean radiance {mean:.3})"
+        );
+        assert_eq!(size, bytes, "{storage}: the transfer buffer is {size} bytes");
+        assert!(
+            size * 3 < f32_bytes,
+            "{storage}: {size} bytes against fp32's {f32_bytes}"
+        );
+        assert!(
+            diff <= bound + 1e-5,
+            "{storage}: {diff} over the format's bound {bound}"
+        );
+        assert!(diff > 0.0, "{storage}: the image is fp32's: nothing was quantised");
+    }
+}

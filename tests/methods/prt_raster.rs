@@ -469,9 +469,12 @@ fn chunked_rectangle_lists_change_nothing() {
 }
 
 /// Bake throughput (digest test 16), one run: the first 1,024 vertices of
-/// scenes/prt_bunny_cow.toml (floor, bunny, cow: 14,053 occluder triangles) at 32² tiles — the
-/// raster baker with projected and exact coverage, the document's passes and the compute
-/// reduction — against the ray-cast bakers at 1,024 rays per vertex on the device and the CPU.
+/// scenes/prt_bunny_cow.toml (floor, bunny, cow: 15,061 occluder triangles; every vertex's
+/// occluders are the whole scene) — the ray-cast bakers at 1,024 rays per vertex on the CPU and
+/// the device, and the raster baker at 32² tiles (1,024 directions per vertex) with projected and
+/// exact coverage, the document's passes and the compute reduction, on `PENUMBRA_MEASURE_DEVICE`
+/// without validation. Three rounds, the bakers alternating within each; the medians in
+/// vertices × directions per second, as CSV rows.
 /// `cargo test --release --test methods -- --ignored --nocapture prt_raster::measure`.
 #[test]
 #[ignore]
@@ -508,52 +511,77 @@ fn measure_bake_throughput() {
         set: vec![0; n],
         sets: all.sets.clone(),
     };
+    // Without the validation layer, whose checks would be timed too.
+    let mut gpu = common::measure_gpu();
     println!(
         "{} receivers, {} occluder triangles, device {}",
         n,
         r.sets[0].triangles.len(),
-        common::test_gpu().caps().name
+        gpu.caps().name
     );
-    let mut gpu = common::test_gpu();
-    let mut row = |label: &str, f: &mut dyn FnMut(&mut Gpu) -> Vec<f32>| {
-        let t = std::time::Instant::now();
-        let out = f(&mut gpu);
-        let s = t.elapsed().as_secs_f64();
-        println!("{label:40} {:8.1} s {:10.1} vertices/s", s, n as f64 / s);
-        out
+    let raster = |coverage, reduction| Config {
+        coverage,
+        reduction,
+        ..Config::defaults(Mode::Corrected)
     };
-    let truth = row("rays, CPU, 1024", &mut |_| {
-        raycast::bake_cpu(&r, 4, 1024, Clip::default(), &mut Progress::new("m")).unwrap()
-    });
+    let bakers: Vec<(&str, Option<Config>)> = vec![
+        ("rays, CPU, 1024", None),
+        ("rays, device, 1024", None),
+        (
+            "raster, projected coverage, passes, 32²",
+            Some(raster(Coverage::Projected, Reduction::Passes)),
+        ),
+        (
+            "raster, exact coverage, passes, 32²",
+            Some(raster(Coverage::Exact, Reduction::Passes)),
+        ),
+        (
+            "raster, exact coverage, compute, 32²",
+            Some(raster(Coverage::Exact, Reduction::Compute)),
+        ),
+    ];
+    let rays = |gpu: &mut Gpu, device: bool| {
+        let p = &mut Progress::new("m");
+        if device {
+            raycast::bake_gpu(gpu, &ShaderLibrary::Embedded, &r, 4, 1024, Clip::default(), p).unwrap()
+        } else {
+            raycast::bake_cpu(&r, 4, 1024, Clip::default(), p).unwrap()
+        }
+    };
+    let mut seconds = vec![Vec::new(); bakers.len()];
+    let mut outputs = vec![Vec::new(); bakers.len()];
+    for round in 0..3 {
+        for (k, (label, config)) in bakers.iter().enumerate() {
+            let t = std::time::Instant::now();
+            outputs[k] = match config {
+                Some(c) => raster::bake(&mut gpu, &ShaderLibrary::Embedded, &r, c, &mut Progress::new("m")).unwrap(),
+                None => rays(&mut gpu, k == 1),
+            };
+            seconds[k].push(t.elapsed().as_secs_f64());
+            println!("round {round}: {label:40} {:8.2} s", seconds[k][round]);
+        }
+    }
+    let truth = &outputs[0];
     let rms =
-        |t: &[f32]| (t.iter().zip(&truth).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / t.len() as f64).sqrt();
-    let g = row("rays, device, 1024", &mut |gpu| {
-        raycast::bake_gpu(
-            gpu,
-            &ShaderLibrary::Embedded,
-            &r,
-            4,
-            1024,
-            Clip::default(),
-            &mut Progress::new("m"),
-        )
-        .unwrap()
-    });
-    println!("{:40} RMS against the CPU rays {:.2e}", "", rms(&g));
-    for (coverage, reduction) in [
-        (Coverage::Projected, Reduction::Passes),
-        (Coverage::Exact, Reduction::Passes),
-        (Coverage::Exact, Reduction::Compute),
-    ] {
-        let c = Config {
-            coverage,
-            reduction,
-            ..Config::defaults(Mode::Corrected)
-        };
-        let t = row(&format!("raster {coverage:?} {reduction:?} 32²"), &mut |gpu| {
-            bake(gpu, &r, &c)
-        });
-        println!("{:40} RMS against the rays {:.4} (T00 0.886)", "", rms(&t));
+        |t: &[f32]| (t.iter().zip(truth).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / t.len() as f64).sqrt();
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let cpu = median(&seconds[0]);
+    println!("baker,vertices,directions,seconds (3 runs),median s,vertices/s,vertex-directions/s,CPU rays time ÷ this,RMS against the CPU rays");
+    for (k, (label, _)) in bakers.iter().enumerate() {
+        let m = median(&seconds[k]);
+        let runs: Vec<String> = seconds[k].iter().map(|s| format!("{s:.2}")).collect();
+        println!(
+            "\"{label}\",{n},1024,{},{m:.2},{:.1},{:.3e},{:.3},{:.2e}",
+            runs.join(" "),
+            n as f64 / m,
+            n as f64 * 1024.0 / m,
+            cpu / m,
+            rms(&outputs[k])
+        );
     }
 }
 

@@ -10,7 +10,9 @@ use penumbra::backend::Gpu;
 use penumbra::environment::EnvironmentMap;
 use penumbra::lighting::prt::config::{Config, Coverage, Depth, Mode};
 use penumbra::lighting::prt::receivers::{Clip, OccluderRules, Receivers};
-use penumbra::lighting::prt::storage::{round_trip, Grouping};
+use penumbra::lighting::prt::storage::{
+    block_words, decode, encode, pack_for_device, round_trip, Grouping, DEVICE_DIM,
+};
 use penumbra::lighting::prt::{key_blend, key_times, light, raster, raycast, receivers_at, SceneMesh};
 use penumbra::scene::{Mesh, Scene};
 use penumbra::shaders::ShaderLibrary;
@@ -170,10 +172,16 @@ fn report(label: &str, e: &Errors) {
 ///   the colour-coded sphere's directions): RMS 0.126 (14.2 % of T00), irradiance 3.9 %, 15.8 %,
 ///   20.1 % (with exact directions instead of the sphere: 0.111, 12.6 %; 3.9 %, 17.4 %, 16.6 %).
 ///   Asserted: RMS ≥ 10 × the corrected path's, and worse irradiance under every light.
-/// * Corrected with projected coverage (reported): RMS 0.0095 (1.07 % of T00), irradiance
-///   2.1 %, 1.9 %, 2.7 %: the straight edges between projected corners. (Before radial depth
-///   discarded the triangles in a vertex's tangent plane, whose corner at the vertex projects to
-///   the tile's centre and drew a wedge to the horizon, it was 0.237.)
+/// * Corrected with projected coverage (the pure-raster baker): RMS 0.0083 (0.94 % of T00), the
+///   worst coefficient's RMS 0.0142 (T00: 1.60 % of T00), max 0.151; irradiance 1.9 %, 1.9 %,
+///   2.7 %; RMS by object: floor 0.0109, box 0.0073, the floating sphere 0.0026. Where surfaces
+///   meet, the adjoining surface's triangles near a vertex span wide angles, and their edges
+///   project to arcs (the rim itself for an edge in the tangent plane) that the straight lines
+///   between projected corners cut short. Asserted: every coefficient's RMS ≤ 2 % of T00, the
+///   same target. (Before visibility.vert clipped each triangle to the hemisphere in 3D: worst
+///   coefficient 0.0157, box 0.0151. Before radial depth discarded the triangles in a vertex's
+///   tangent plane, whose corner at the vertex projects to the tile's centre and drew a wedge to
+///   the horizon: RMS 0.237.)
 #[test]
 fn raster_matches_the_ray_cast_truth() {
     let objects = "[[materials]]\nname = \"m\"\nalbedo = [0.5, 0.5, 0.5]\n\
@@ -242,7 +250,7 @@ fn raster_matches_the_ray_cast_truth() {
         println!("  RMS by object: {}", per_object.join(", "));
         measured.push(e);
     }
-    let (c, f) = (&measured[0], &measured[2]);
+    let (c, p, f) = (&measured[0], &measured[1], &measured[2]);
 
     let worst = c.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max);
     assert!(
@@ -255,6 +263,11 @@ fn raster_matches_the_ray_cast_truth() {
         worst <= 0.006 * T00,
         "corrected: a coefficient's RMS error is {worst} > 0.6 % of T00 (measured 0.0032)"
     );
+    let projected = p.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max);
+    assert!(
+        projected <= 0.02 * T00,
+        "corrected with projected coverage: a coefficient's RMS error is {projected} > 2 % of T00 (measured 0.0142)"
+    );
     assert!(
         f.rms >= 10.0 * c.rms,
         "the faithful path should be clearly worse: RMS {} against {}",
@@ -266,6 +279,83 @@ fn raster_matches_the_ray_cast_truth() {
         "the faithful path's irradiance should be worse: {:?} against {:?}",
         f.irradiance,
         c.irradiance
+    );
+}
+
+/// The bunny of scenes/prt_bunny_cow.toml standing on its floor (the cow left out; 9,205
+/// occluder triangles): 256 of its vertices, evenly picked, against the ray-cast truth with
+/// 16,384 rays a vertex, with corrected weights at 32².
+fn curved_mesh_errors(coverage: &[Coverage]) -> Vec<f64> {
+    let s = load("prt_bunny_cow.toml");
+    let m = meshes(&s);
+    let object = |name: &str| s.objects.iter().position(|o| o.name == name).unwrap();
+    let (floor, bunny) = (object("floor"), object("bunny"));
+    let (all, first) = receivers(&s, &m, &[floor, bunny], 0.0);
+    let count = all.len() - first[1];
+    let keep: Vec<usize> = (0..256).map(|k| first[1] + k * count / 256).collect();
+    let r = subset(&all, &keep);
+    let truth = rays(&r, 4, 16384, Clip::default());
+    let lights = [
+        "[environment]\ntype = \"constant\"\nradiance = [1, 1, 1]\n",
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.5, -0.6, 0.35]\nirradiance = [3, 3, 3]\n",
+        "[environment]\ntype = \"image\"\npath = \"terrain/sky.hdr\"\n",
+    ]
+    .map(|l| light_of(&scene(l)));
+    println!(
+        "{} bunny receivers, {} occluder triangles",
+        r.len(),
+        r.sets[0].triangles.len()
+    );
+    let mut gpu = common::test_gpu();
+    coverage
+        .iter()
+        .map(|&coverage| {
+            let config = Config {
+                tile: 32,
+                batch: 1024,
+                coverage,
+                ..Config::defaults(Mode::Corrected)
+            };
+            let e = errors(&raster_bake(&mut gpu, &r, &config), &truth, 16, &lights);
+            report(&format!("{coverage:?} coverage"), &e);
+            e.per_coefficient.iter().map(|e| e.0).fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+/// The raster baker on a curved mesh (`curved_mesh_errors`). Exact coverage: worst
+/// coefficient's RMS 0.0036 (0.41 % of T00), all together 0.0026; asserted within the 2 %
+/// target. Projected coverage: worst 0.0714 (T10, 8.1 % of T00), all together 0.0395 (4.45 %),
+/// irradiance 11.5 %, 11.2 %, 8.5 %: it misses the target (`projected_coverage_on_a_curved_mesh_meets_the_target`,
+/// ignored). Asserted at 0.08 as a regression bound: without the clipping to the hemisphere
+/// in visibility.vert (a triangle crossing the tangent plane drawn from its mirrored corner)
+/// it was 0.123 (RMS 0.059).
+#[test]
+fn raster_on_a_curved_mesh() {
+    let worst = curved_mesh_errors(&[Coverage::Exact, Coverage::Projected]);
+    assert!(
+        worst[0] <= 0.02 * T00,
+        "exact coverage: a coefficient's RMS error is {} > 2 % of T00",
+        worst[0]
+    );
+    assert!(
+        worst[1] <= 0.08,
+        "projected coverage: a coefficient's RMS error is {} > 0.08 (measured 0.0714)",
+        worst[1]
+    );
+}
+
+/// Known failure: projected coverage misses the 2 % target on the bunny (measured 0.0714 =
+/// 8.1 % of T00 on its worst coefficient). Close to a vertex of a bumpy mesh, triangles span
+/// wide angles, and their edges, arcs in the tile, are drawn as straight lines between the
+/// projected corners; exact coverage, which tests each pixel's ray, meets it.
+#[test]
+#[ignore]
+fn projected_coverage_on_a_curved_mesh_meets_the_target() {
+    let worst = curved_mesh_errors(&[Coverage::Projected])[0];
+    assert!(
+        worst <= 0.02 * T00,
+        "projected coverage: a coefficient's RMS error is {worst} > 2 % of T00"
     );
 }
 
@@ -330,6 +420,61 @@ fn shared_exponent_storage_on_the_bunny() {
             vertex.rms
         );
     }
+}
+
+/// Coefficient `i` of vertex `v` in key `k` read from the device words as glsl/prt/shade.vert
+/// addresses them.
+fn device_value(words: &[u32], per_key: usize, grouping: Grouping, k: usize, v: usize, i: usize) -> f32 {
+    let byte = |w: u32, b: usize| (w >> (8 * b)) as u8;
+    let key = &words[k * per_key..(k + 1) * per_key];
+    let (m, e) = match grouping {
+        Grouping::ByVertex => {
+            let block = &key[v * 5..v * 5 + 5];
+            (byte(block[i / 4], i % 4), byte(block[4], i / 4))
+        }
+        Grouping::ByBand => {
+            let block = &key[(v / 4) * 20..(v / 4) * 20 + 20];
+            (byte(block[i], v % 4), byte(block[16 + i / 4], i % 4))
+        }
+    };
+    (m as i8) as f32 * 2f32.powi(e as i32 - 135)
+}
+
+/// The device layout holds every group `encode` forms: two keys of seven vertices (a
+/// partial by-band block) read back to `decode`'s values, in 5 bytes per 4 coefficients.
+#[test]
+fn device_layout_holds_the_encoded_groups() {
+    let (keys, vertices) = (2, 7);
+    let values: Vec<f32> = (0..keys * vertices * DEVICE_DIM)
+        .map(|k| ((k * 7919) % 211) as f32 / 100.0 - 1.0)
+        .collect();
+    for grouping in [Grouping::ByBand, Grouping::ByVertex] {
+        let (words, per_key) = pack_for_device(&values, keys, vertices, Some(grouping));
+        let blocks = if grouping == Grouping::ByBand { 2 } else { vertices };
+        let block = block_words(grouping);
+        assert_eq!(
+            block * 4 * 4,
+            if grouping == Grouping::ByBand { 4 } else { 1 } * DEVICE_DIM * 5
+        );
+        assert_eq!((words.len(), per_key), (keys * blocks * block, blocks * block));
+        for k in 0..keys {
+            let key = &values[k * vertices * DEVICE_DIM..(k + 1) * vertices * DEVICE_DIM];
+            let want = decode(&encode(key, DEVICE_DIM, grouping), vertices, DEVICE_DIM, grouping).unwrap();
+            for v in 0..vertices {
+                for i in 0..DEVICE_DIM {
+                    let got = device_value(&words, per_key, grouping, k, v, i);
+                    assert_eq!(
+                        got,
+                        want[v * DEVICE_DIM + i],
+                        "{grouping:?} key {k} vertex {v} coefficient {i}"
+                    );
+                    assert!((got - key[v * DEVICE_DIM + i]).abs() <= 1.1 / 127.5);
+                }
+            }
+        }
+    }
+    let (fp32, per_key) = pack_for_device(&values, keys, vertices, None);
+    assert_eq!((fp32.len(), per_key), (values.len(), vertices * DEVICE_DIM));
 }
 
 /// Test 14: a sphere bobbing across a floor (0.5 m each way, 2 s) under a bar spinning about

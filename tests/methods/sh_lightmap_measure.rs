@@ -18,7 +18,9 @@ fn bake(patch: f64, bands: usize, samples: usize) -> sh_lightmap::Baked {
     config.samples = samples;
     config.transfer.bands = bands;
     config.transfer.bounces = false;
-    sh_lightmap::bake(&geometry, None, &config, Rays::Cpu, &mut Progress::new("bake")).unwrap()
+    sh_lightmap::bake(&geometry, None, &config, Rays::Cpu, None, &mut Progress::new("bake"))
+        .unwrap()
+        .0
 }
 
 fn quantized_row(baked: &sh_lightmap::Baked, reps: usize) -> measure::Row {

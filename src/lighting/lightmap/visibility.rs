@@ -8,9 +8,11 @@
 //! has a BSP world with a PVS ([`ChartPvs`]), pairs of charts no leaf of which sees a leaf of the
 //! other start NONE; arbitrary static geometry has no PVS, and there every pair starts PARTIAL.
 
-use glam::{DVec2, DVec3};
+use glam::{DVec2, DVec3, Vec3};
 
 use super::patches::{Chart, Patches, Triangle};
+use crate::error::{Error, Result};
+use crate::scene::Scene;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Vis {
@@ -57,6 +59,61 @@ impl ChartPvs {
     pub fn sees(&self, i: usize, j: usize) -> bool {
         self.visible[i * self.n + j]
     }
+}
+
+/// The scene's BSP world, if it has one, and where it sits (world point `w` is scene point
+/// `world_to_scene(w) + translate`).
+pub fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::CompiledWorld>, Vec3)>> {
+    for obj in &scene.objects {
+        if let crate::scene::MeshSource::World { level, .. } = &obj.mesh {
+            let compiled = crate::scene::world_mesh::compiled(level).map_err(|e| {
+                Error::Usage(format!(
+                    "{}: {}: the world does not compile: {e}",
+                    scene.source,
+                    level.mesh_name()
+                ))
+            })?;
+            return Ok(Some((compiled, obj.transform.w_axis.truncate())));
+        }
+    }
+    Ok(None)
+}
+
+/// The charts' leaves in `world` (every empty leaf a chart's bounds reach, a hair enlarged so a
+/// face on a leaf's boundary is in the leaf in front of it) and the world's leaf PVS over them:
+/// the document's start of the surface-visibility matrix.
+pub fn chart_pvs(
+    p: &Patches,
+    triangles: &[Triangle],
+    world: &crate::world::CompiledWorld,
+    translate: Vec3,
+) -> ChartPvs {
+    let to_world = |x: DVec3| crate::scene::world_mesh::scene_to_world(x.as_vec3() - translate);
+    let leaves: Vec<Vec<u32>> = p
+        .charts
+        .iter()
+        .map(|c| {
+            let mut b = crate::world::Aabb::EMPTY;
+            for q in c.triangles.iter().flat_map(|&t| triangles[t].p) {
+                let w = to_world(q);
+                b.min = b.min.min(w);
+                b.max = b.max.max(w);
+            }
+            if c.triangles.is_empty() {
+                return Vec::new();
+            }
+            let margin = 1e-3 * (b.max - b.min).max_element().max(1.0);
+            b.min -= DVec3::splat(margin);
+            b.max += DVec3::splat(margin);
+            world.box_leaves(&b)
+        })
+        .collect();
+    ChartPvs::new(&leaves, |a, b| world.is_visible(a, b))
+}
+
+/// The charts' leaf PVS where the scene is a BSP world with one; `None` for other geometry.
+pub fn scene_chart_pvs(scene: &Scene, p: &Patches, triangles: &[Triangle]) -> Result<Option<ChartPvs>> {
+    Ok(bsp_world(scene)?.map(|(world, translate)| chart_pvs(p, triangles, &world, translate)))
 }
 
 /// A chart's polygon as the test sees it: the convex hull of its vertices (in its plane), its

@@ -92,6 +92,26 @@ pub enum Storage {
     SharedByVertex,
 }
 
+impl Storage {
+    /// The grouping of a shared-exponent storage (`None`: fp32).
+    pub fn grouping(self) -> Option<super::storage::Grouping> {
+        match self {
+            Storage::F32 => None,
+            Storage::SharedByBand => Some(super::storage::Grouping::ByBand),
+            Storage::SharedByVertex => Some(super::storage::Grouping::ByVertex),
+        }
+    }
+
+    /// The format code glsl/prt/shade.vert reads.
+    pub fn device_format(self) -> u32 {
+        match self {
+            Storage::F32 => 0,
+            Storage::SharedByBand => 1,
+            Storage::SharedByVertex => 2,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {
     pub mode: Mode,

@@ -62,9 +62,10 @@ pub fn rotate(coeffs: &[Vec3], angle: f64) -> Result<Vec<Vec3>> {
 
 /// The light uniform block of glsl/prt/shade.vert: 16 RGB coefficients (zero past `count`,
 /// which drops the document's incomplete 8 or 12), then the SH keys (first key, second key,
-/// receivers per key, coefficient count) and the blend.
-pub fn uniform(coeffs: &[Vec3], count: usize, keys: (u32, u32, f32), per_key: u32) -> Vec<f32> {
-    let mut out = Vec::with_capacity(16 * 4 + 8);
+/// receivers per key, coefficient count), the blend, and the transfer's storage (its format, as
+/// `Storage::device_format`, and words per key).
+pub fn uniform(coeffs: &[Vec3], count: usize, keys: (u32, u32, f32), per_key: u32, storage: (u32, u32)) -> Vec<f32> {
+    let mut out = Vec::with_capacity(16 * 4 + 12);
     for i in 0..16 {
         let c = if i < count {
             coeffs.get(i).copied().unwrap_or(Vec3::ZERO)
@@ -80,5 +81,6 @@ pub fn uniform(coeffs: &[Vec3], count: usize, keys: (u32, u32, f32), per_key: u3
         f32::from_bits(count as u32),
     ]);
     out.extend([keys.2, 0.0, 0.0, 0.0]);
+    out.extend([f32::from_bits(storage.0), f32::from_bits(storage.1), 0.0, 0.0]);
     out
 }

@@ -231,18 +231,6 @@ pub fn key_times(scene: &crate::scene::Scene, config: &Config) -> Vec<f32> {
     }
 }
 
-/// The stored transfer as the run time reads it: fp32, or through the shared-exponent storage.
-pub fn stored(values: Vec<f32>, dim: usize, storage: config::Storage) -> Result<Vec<f32>> {
-    let grouping = match storage {
-        config::Storage::F32 => return Ok(values),
-        config::Storage::SharedByBand => storage::Grouping::ByBand,
-        config::Storage::SharedByVertex => storage::Grouping::ByVertex,
-    };
-    let n = values.len() / dim.max(1);
-    storage::decode(&storage::encode(&values, dim, grouping), n, dim, grouping)
-        .ok_or_else(|| Error::Internal(format!("{NAME}: the shared-exponent storage does not round-trip")))
-}
-
 /// Bakes one key with the configured baker.
 pub fn bake_transfer(
     gpu: &mut crate::backend::Gpu,
@@ -288,8 +276,10 @@ fn sampling_objects(cx: &CreateContext<'_>) -> Vec<sampling::Object> {
 pub struct Prt {
     config: Config,
     pipeline: PipelineId,
-    /// keys × scene vertices × 16 coefficients.
+    /// keys × scene vertices × 16 coefficients, fp32 or packed (`storage::pack_for_device`).
     transfer: BufferId,
+    /// The transfer's format code and words per key.
+    storage: (u32, u32),
     light: Vec<Vec3>,
     keys: u32,
     vertices: u32,
@@ -399,7 +389,6 @@ impl Prt {
                 cx.scene.source
             )));
         }
-        let baked = stored(baked, dim, config.storage)?;
         let mut transfer = vec![0.0f32; keys as usize * vertices as usize * 16];
         for (k, (_, global)) in all_keys.iter().enumerate() {
             for (i, &g) in global.iter().enumerate() {
@@ -408,11 +397,15 @@ impl Prt {
                 transfer[dst..dst + dim].copy_from_slice(src);
             }
         }
+        // Packed over the scene's vertices, so a by-band group is four neighbouring vertices.
+        let (words, words_per_key) =
+            storage::pack_for_device(&transfer, keys as usize, vertices as usize, config.storage.grouping());
         let transfer = cx.gpu.create_buffer_init(
             "prt transfer",
             vk::BufferUsageFlags::STORAGE_BUFFER,
-            bytemuck::cast_slice(&transfer),
+            bytemuck::cast_slice(&words),
         )?;
+        let storage = (config.storage.device_format(), words_per_key as u32);
         cx.states.forget_buffer(transfer);
         let light = light::project(cx.scene, cx.environment, 4)?;
 
@@ -430,11 +423,12 @@ impl Prt {
             .collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
         let calls = cx.scene_gpu.draws.iter().map(DrawCall::whole).collect();
-        let uniform = light::uniform(&light, config.coefficients, (0, 0, 0.0), vertices);
+        let uniform = light::uniform(&light, config.coefficients, (0, 0, 0.0), vertices, storage);
         Ok(Prt {
             config,
             pipeline,
             transfer,
+            storage,
             light,
             keys,
             vertices,
@@ -473,12 +467,31 @@ impl LightingMethod for Prt {
         } else {
             self.light.clone()
         };
-        self.uniform = light::uniform(&light, self.config.coefficients, self.keys_at(t as f64), self.vertices);
+        self.uniform = light::uniform(
+            &light,
+            self.config.coefficients,
+            self.keys_at(t as f64),
+            self.vertices,
+            self.storage,
+        );
         for (call, (d, item)) in self.calls.iter_mut().zip(self.draws.iter().zip(&frame.scene.draws)) {
             let anim = d.object.and_then(|o| self.animation.get(o).copied().flatten());
             call.model = anim.map_or(item.model, |a| a.transform_at(item.model, t));
         }
         Ok(())
+    }
+
+    /// The transfer buffer: 64 bytes a vertex a key in fp32, 20 with a shared exponent.
+    fn memory(&self, gpu: &crate::backend::Gpu) -> Result<Vec<crate::lighting::MemoryItem>> {
+        Ok(vec![crate::lighting::MemoryItem {
+            method: NAME,
+            resource: format!(
+                "{NAME} transfer ({} keys x {} vertices, {:?})",
+                self.keys, self.vertices, self.config.storage
+            ),
+            requested: gpu.buffer_desc(self.transfer)?.size,
+            allocated: gpu.buffer_memory(self.transfer)?,
+        }])
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {

@@ -90,13 +90,12 @@ struct Bake {
     weights: BufferId,
     batch: BufferId,
     coefficients: BufferId,
-    occluders: BufferId,
-    /// The same triangles as corners (vec4 × 3), for exact coverage.
+    /// The occluder triangles as corners (vec4 × 3).
     triangles: BufferId,
     /// Exact coverage: the listing pass (`cull.comp`), its rectangles and the indirect draw
     /// command it counts into, and the triangles per chunk.
     cull: Option<Cull>,
-    /// Per occluder set: (first vertex, vertex count) in `occluders`.
+    /// Per occluder set: (first corner, corner count) in `triangles`.
     set_vertices: Vec<(u32, u32)>,
     atlas: ImageId,
     depth: ImageId,
@@ -245,15 +244,6 @@ fn run(
         weights: gpu.create_storage_buffer("prt weights", bytemuck::cast_slice(&weights))?,
         batch: gpu.create_storage_output("prt batch", 4, MemoryKind::GpuOnly)?,
         coefficients: gpu.create_storage_output("prt coefficients", slots.total as u64 * 64, MemoryKind::GpuToCpu)?,
-        occluders: gpu.create_buffer_init(
-            "prt occluders",
-            vk::BufferUsageFlags::VERTEX_BUFFER,
-            bytemuck::cast_slice(if vertices.is_empty() {
-                &[[0.0f32; 3]][..]
-            } else {
-                &vertices
-            }),
-        )?,
         triangles: gpu.create_storage_buffer("prt occluder triangles", bytemuck::cast_slice(&corners))?,
         cull: match config.coverage {
             Coverage::Projected => None,
@@ -490,17 +480,7 @@ fn visibility_pipeline(
 ) -> Result<PipelineId> {
     let mut desc = match config.coverage {
         Coverage::Projected => {
-            let mut d = GraphicsPipelineDesc::new("prt visibility", "prt/visibility.vert", Some("prt/visibility.frag"));
-            d.vertex_layout = VertexLayout {
-                buffers: vec![(0, 12)],
-                attributes: vec![VertexAttribute {
-                    location: 0,
-                    binding: 0,
-                    format: vk::Format::R32G32B32_SFLOAT,
-                    offset: 0,
-                }],
-            };
-            d
+            GraphicsPipelineDesc::new("prt visibility", "prt/visibility.vert", Some("prt/visibility.frag"))
         }
         Coverage::Exact => GraphicsPipelineDesc::new(
             "prt visibility exact",
@@ -585,14 +565,21 @@ fn record_batch<'a>(
                     .color_attachment(b.atlas, full, true)
                     .depth_stencil_write(b.depth, true)
                     .buffer(b.receivers, vertex, None)
+                    .buffer(b.triangles, vertex, None)
                     .record(move |ctx| {
                         begin(ctx.rec, true)?;
                         draw_sphere(ctx, b, first, count)?;
                         if vertex_count > 0 {
                             ctx.rec.bind_pipeline(b.visibility)?;
-                            ctx.bind(&[("receivers", Bind::StorageBuffer(b.receivers))])?;
-                            ctx.rec.bind_vertex_buffers(&[(b.occluders, 0)])?;
-                            ctx.rec.draw_instanced(vertex_count, first_vertex, count, first)?;
+                            ctx.bind(&[
+                                ("receivers", Bind::StorageBuffer(b.receivers)),
+                                ("triangles", Bind::StorageBuffer(b.triangles)),
+                            ])?;
+                            // Radial depth: six vertices a triangle (visibility.vert: the fan of
+                            // the triangle clipped to the hemisphere).
+                            let k = if config.depth == Depth::Radial { 2 } else { 1 };
+                            ctx.rec
+                                .draw_instanced(k * vertex_count, k * first_vertex, count, first)?;
                         }
                         ctx.rec.end_rendering();
                         Ok(())

@@ -9,8 +9,8 @@
 //! it rounds inside the range): every value comes back within half a step, 2^(e−8) < M/127.5
 //! (a group whose M lies just below a power of two takes the next exponent; measured on the
 //! bunny: 0.0078157·M, just over 1/128, tests/methods/prt_scenes.rs).
-//! The transfer is decoded when loaded; the GPU keeps fp32 (what is measured is the storage's
-//! error, which the chart shows in the image).
+//! The device keeps the packed bytes ([`pack_for_device`]) and glsl/prt/shade.vert decodes them:
+//! the transfer buffer is 5/16 of fp32's.
 
 /// Coefficients per shared exponent.
 pub const GROUP: usize = 4;
@@ -104,6 +104,81 @@ pub fn decode(bytes: &[u8], n: usize, dim: usize, grouping: Grouping) -> Option<
         }
     }
     Some(out)
+}
+
+/// Coefficients per vertex in the device buffer (16: four bands; fewer are zero-padded, which
+/// neither grouping's exponents notice).
+pub const DEVICE_DIM: usize = 16;
+/// 32-bit words per block of the device layout (see [`pack_for_device`]): one vertex by
+/// vertex, four by band (5 bytes per 4 coefficients either way).
+pub fn block_words(grouping: Grouping) -> usize {
+    match grouping {
+        Grouping::ByVertex => DEVICE_DIM * GROUP_BYTES / 4 / GROUP,
+        Grouping::ByBand => DEVICE_DIM * GROUP_BYTES / 4,
+    }
+}
+
+/// The device layout of `values` (`keys` × `vertices` × [`DEVICE_DIM`] coefficients), read by
+/// glsl/prt/shade.vert, and the words each key takes.
+///
+/// * `None`: fp32, 16 words a vertex.
+/// * By vertex: a block of 5 words a vertex: word g holds the mantissas of coefficients
+///   4g … 4g + 3 (byte c for coefficient 4g + c), word 4 the four groups' exponents (byte g).
+/// * By band: a block of 20 words per 4 vertices of a key (the last block zero-padded): word i
+///   holds coefficient i's mantissas of the four vertices (byte = vertex mod 4), words 16 … 19
+///   the 16 groups' exponents (group i in byte i mod 4 of word 16 + i / 4).
+///
+/// Both packed layouts are 5 bytes per 4 coefficients; a group is the one [`encode`] forms, so
+/// the device decodes exactly the values [`decode`] returns.
+pub fn pack_for_device(values: &[f32], keys: usize, vertices: usize, grouping: Option<Grouping>) -> (Vec<u32>, usize) {
+    let Some(grouping) = grouping else {
+        return (values.iter().map(|v| v.to_bits()).collect(), vertices * DEVICE_DIM);
+    };
+    let blocks = match grouping {
+        Grouping::ByVertex => vertices,
+        Grouping::ByBand => vertices.div_ceil(GROUP),
+    };
+    let per_key = blocks * block_words(grouping);
+    let mut words = vec![0u32; keys * per_key];
+    let mut padded = vec![0.0f32; blocks * GROUP * DEVICE_DIM];
+    for k in 0..keys {
+        let key = &values[k * vertices * DEVICE_DIM..(k + 1) * vertices * DEVICE_DIM];
+        let bytes = match grouping {
+            Grouping::ByVertex => encode(key, DEVICE_DIM, grouping),
+            Grouping::ByBand => {
+                padded[..key.len()].copy_from_slice(key);
+                encode(&padded, DEVICE_DIM, grouping)
+            }
+        };
+        let out = &mut words[k * per_key..(k + 1) * per_key];
+        match grouping {
+            Grouping::ByVertex => pack_by_vertex(&bytes, out),
+            Grouping::ByBand => pack_by_band(&bytes, blocks, out),
+        }
+    }
+    (words, per_key)
+}
+
+/// [`encode`]'s by-vertex groups (vertex-major, 4 per vertex) into 5-word blocks.
+fn pack_by_vertex(bytes: &[u8], out: &mut [u32]) {
+    for (k, group) in bytes.chunks_exact(GROUP_BYTES).enumerate() {
+        let (v, g) = (k / 4, k % 4);
+        let words = block_words(Grouping::ByVertex);
+        let block = &mut out[v * words..(v + 1) * words];
+        block[g] = u32::from_le_bytes([group[0], group[1], group[2], group[3]]);
+        block[4] |= (group[GROUP] as u32) << (8 * g);
+    }
+}
+
+/// [`encode`]'s by-band groups (coefficient-major, `blocks` per coefficient) into 20-word blocks.
+fn pack_by_band(bytes: &[u8], blocks: usize, out: &mut [u32]) {
+    for (k, group) in bytes.chunks_exact(GROUP_BYTES).enumerate() {
+        let (i, b) = (k / blocks, k % blocks);
+        let words = block_words(Grouping::ByBand);
+        let block = &mut out[b * words..(b + 1) * words];
+        block[i] = u32::from_le_bytes([group[0], group[1], group[2], group[3]]);
+        block[DEVICE_DIM + i / 4] |= (group[GROUP] as u32) << (8 * (i % 4));
+    }
 }
 
 /// Errors of a round trip: the largest and the RMS absolute error, and the largest error

@@ -3,10 +3,10 @@
 //! one-texel gaps, border patches filled by the seed's passes 1 and 2, [`crate::lighting::lightmap::border`], so
 //! bilinear filtering never reads black at a polygon's edge nor steps at a seam).
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 use crate::backend::Gpu;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::lighting::lightmap::atlas::{pack, texels, Atlas};
 use crate::lighting::lightmap::geometry::StaticGeometry;
 use crate::lighting::lightmap::patches::Patches;
@@ -32,24 +32,6 @@ pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -
     add_direct_light_in(p, occluders, scene, solve::Mode::Corrected)
 }
 
-/// The scene's BSP world, if it has one, and where it sits (world point `w` is scene point
-/// `world_to_scene(w) + translate`).
-pub(crate) fn bsp_world(scene: &Scene) -> Result<Option<(std::sync::Arc<crate::world::CompiledWorld>, Vec3)>> {
-    for obj in &scene.objects {
-        if let crate::scene::MeshSource::World { level, .. } = &obj.mesh {
-            let compiled = crate::scene::world_mesh::compiled(level).map_err(|e| {
-                Error::Usage(format!(
-                    "{}: {}: the world does not compile: {e}",
-                    scene.source,
-                    level.mesh_name()
-                ))
-            })?;
-            return Ok(Some((compiled, obj.transform.w_axis.truncate())));
-        }
-    }
-    Ok(None)
-}
-
 /// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing) and
 /// point lights (faithful, in a BSP world: CaLight lights every patch in the light's PVS, with no
 /// ray, so a pillar casts no shadow in the light-map; elsewhere, and corrected, a shadow ray).
@@ -62,7 +44,7 @@ pub fn add_direct_light_in(
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
     let eps = 1e-4 * p.size;
     let pvs = if mode == solve::Mode::Faithful {
-        bsp_world(scene)?
+        crate::lighting::lightmap::visibility::bsp_world(scene)?
     } else {
         None
     };
@@ -142,38 +124,6 @@ pub fn add_direct_light_in(
     Ok(direct)
 }
 
-/// The charts' leaves in `world` (every empty leaf a chart's bounds reach, a hair enlarged so a
-/// face on a leaf's boundary is in the leaf in front of it) and the world's leaf PVS over them:
-/// the document's start of the surface-visibility matrix.
-pub fn chart_pvs(
-    p: &Patches,
-    triangles: &[crate::lighting::lightmap::patches::Triangle],
-    world: &crate::world::CompiledWorld,
-    translate: Vec3,
-) -> crate::lighting::lightmap::visibility::ChartPvs {
-    let to_world = |x: DVec3| crate::scene::world_mesh::scene_to_world(x.as_vec3() - translate);
-    let leaves: Vec<Vec<u32>> = p
-        .charts
-        .iter()
-        .map(|c| {
-            let mut b = crate::world::Aabb::EMPTY;
-            for q in c.triangles.iter().flat_map(|&t| triangles[t].p) {
-                let w = to_world(q);
-                b.min = b.min.min(w);
-                b.max = b.max.max(w);
-            }
-            if c.triangles.is_empty() {
-                return Vec::new();
-            }
-            let margin = 1e-3 * (b.max - b.min).max_element().max(1.0);
-            b.min -= DVec3::splat(margin);
-            b.max += DVec3::splat(margin);
-            world.box_leaves(&b)
-        })
-        .collect();
-    crate::lighting::lightmap::visibility::ChartPvs::new(&leaves, |a, b| world.is_visible(a, b))
-}
-
 /// Where the shooting runs.
 pub enum Shooter<'a> {
     Cpu,
@@ -199,7 +149,7 @@ pub fn bake(
         }
     }
     let mut occluders = Occluders::new(&geometry.triangles);
-    occluders.pvs = bsp_world(scene)?.map(|(world, translate)| chart_pvs(&p, &geometry.triangles, &world, translate));
+    occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
     let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode)?;
     let mut report = match shooter {
         Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),

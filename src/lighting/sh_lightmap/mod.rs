@@ -115,7 +115,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes.
-const BAKER_VERSION: u32 = 1;
+const BAKER_VERSION: u32 = 2;
 
 /// The reference: every bounce when the transfer bounces, direct light otherwise.
 pub fn reference(decl: &MethodDecl) -> ReferenceKind {
@@ -249,20 +249,27 @@ pub enum Rays<'a> {
     Gpu(&'a mut crate::backend::Gpu, &'a crate::shaders::ShaderLibrary),
 }
 
-/// Bakes `geometry`'s SH light-map: patches, normal-mapped normals, visibility, transfer, atlas.
+/// Bakes `geometry`'s SH light-map: patches, normal-mapped normals, visibility, transfer, atlas;
+/// and the bounces' report. Where `world` is a BSP world with a PVS, the bounces' visibility
+/// matrix starts from its leaf PVS, as radiosity's does: patch pairs whose leaves cannot see each
+/// other cast no rays.
 pub fn bake(
     geometry: &StaticGeometry,
     surfaces: Option<&Surfaces<'_>>,
     config: &Config,
     rays: Rays<'_>,
+    world: Option<&Scene>,
     progress: &mut Progress,
-) -> Result<Baked> {
+) -> Result<(Baked, crate::lighting::lightmap::solve::Report)> {
     let mut p = Patches::build(&geometry.triangles, config.patch_size);
     if let (Some(s), true) = (surfaces, config.normal_samples > 0) {
         normals::perturb(&mut p, &geometry.triangles, s, config.normal_samples);
     }
     let samples = SampleSet::new(config.samples, config.transfer.bands)?;
-    let occluders = Occluders::new(&geometry.triangles);
+    let mut occluders = Occluders::new(&geometry.triangles);
+    if let Some(scene) = world {
+        occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
+    }
     let mode = config.transfer.solve.mode;
     let bits = match rays {
         Rays::Cpu => transfer::visibility_cpu(&p, &occluders, &samples, mode, progress),
@@ -290,13 +297,14 @@ pub fn bake(
         .into_iter()
         .flatten()
         .collect();
-    Ok(Baked {
+    let baked = Baked {
         width: atlas.width,
         height: atlas.height,
         bands: samples.bands,
         coeffs,
         uvs,
-    })
+    };
+    Ok((baked, t.report))
 }
 
 /// The scene's normal maps, decoded, per material.
@@ -447,7 +455,7 @@ impl ShLightmap {
         // The GPU's rays give the CPU's bits but for a few seam rays (tests/methods/sh_lightmap_gpu.rs):
         // one cache entry serves both.
         key = key.with_shaders("sh_lightmap/visibility");
-        let (geo, surf) = (&geometry, &surfaces);
+        let (geo, surf, scene) = (&geometry, &surfaces, cx.scene);
         let (device, shaders) = (&mut *cx.gpu, cx.shaders);
         let floats: Vec<f32> = cx.bakes.bake(
             &format!("{NAME} bands={} patch={}", config.transfer.bands, config.patch_size),
@@ -459,7 +467,9 @@ impl ShLightmap {
                     .on_gpu
                     .unwrap_or(device.caps().device_type != vk::PhysicalDeviceType::CPU);
                 let rays = if on_gpu { Rays::Gpu(device, shaders) } else { Rays::Cpu };
-                Ok(bake(geo, Some(surf), &bake_config, rays, progress)?.to_floats())
+                Ok(bake(geo, Some(surf), &bake_config, rays, Some(scene), progress)?
+                    .0
+                    .to_floats())
             },
         )?;
         let baked = Baked::from_floats(&floats, geometry.triangles.len()).ok_or_else(|| {

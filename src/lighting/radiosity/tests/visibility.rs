@@ -213,7 +213,7 @@ fn full_pairs_only_save_rays() {
 /// changes by less than its stop, and the time saved is printed.
 #[test]
 fn the_leaf_pvs_starts_the_matrix_in_a_bsp_world() {
-    use crate::lighting::radiosity::bake::{bsp_world, chart_pvs};
+    use crate::lighting::lightmap::visibility::{bsp_world, chart_pvs};
     let (scene, tris) = triangles("bsp_rooms.toml");
     let p = Patches::build(&tris, 1.0);
     let (world, translate) = bsp_world(&scene).unwrap().expect("a BSP world");
