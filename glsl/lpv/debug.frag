@@ -1,10 +1,13 @@
 #version 460
 // Full-screen debug views of the LPV: an RSM layer (reflected or transmitted flux per unit
-// area, normal, position in the volume), or the volume's slices tiled across the image, each
-// cell showing its flux per unit area (2 sqrt(pi) c0 / cell^2).
+// area, normal, position in the volume), the volume's slices tiled across the image, each
+// cell showing its flux per unit area (2 sqrt(pi) c0 / cell^2), or a layer of the camera's
+// G-buffer (normal; depth: the distance from the camera, volume.light_pos, over the volume's
+// side).
 #include "lpv/volume.glsl"
 
-layout(constant_id = 0) const uint VIEW = 1u;  // 1 flux, 2 transmitted, 3 normal, 4 position, 5 slices
+// 1 flux, 2 transmitted, 3 normal, 4 position, 5 slices, 9 G-buffer normal, 10 G-buffer depth
+layout(constant_id = 0) const uint VIEW = 1u;
 
 layout(set = 0, binding = 1) uniform sampler2D rsm_flux;
 layout(set = 0, binding = 2) uniform sampler2D rsm_layer;
@@ -15,7 +18,14 @@ layout(location = 0) out vec4 out_radiance;
 
 void main() {
     vec3 c = vec3(0.0);
-    if (VIEW <= 4u) {
+    if (VIEW == 9u) {
+        vec4 v = texture(rsm_layer, in_uv);
+        c = dot(v.xyz, v.xyz) > 0.0 ? v.xyz * 0.5 + 0.5 : vec3(0.0);
+    } else if (VIEW == 10u) {
+        vec4 v = texture(rsm_layer, in_uv);
+        float side = volume.origin.w * float(volume.size.x);
+        c = v.w > 0.5 ? vec3(distance(v.xyz, volume.light_pos.xyz) / side) : vec3(0.0);
+    } else if (VIEW <= 4u) {
         vec4 flux = texture(rsm_flux, in_uv);
         vec4 v = texture(rsm_layer, in_uv);
         if (VIEW == 1u || VIEW == 2u) {

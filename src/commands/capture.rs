@@ -62,6 +62,9 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
         1,
         Baker::new(Some(Baker::default_dir())),
     )?;
+    for w in renderer.cost_warnings(opts.frames.max(1) as usize) {
+        crate::errln!("{w}");
+    }
     let camera = renderer.scene.camera.clone();
     let mut image = None;
     for _ in 0..opts.frames.max(1) {

@@ -43,6 +43,10 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
         ))));
     }
     let mut renderer = Renderer::new(gpu, scene, opts.method.as_deref(), opts.size, 1)?;
+    // The frames profiled and the one that warms the caches.
+    for w in renderer.cost_warnings(frames.max(1) + 1) {
+        crate::errln!("{w}");
+    }
     let camera = renderer.scene.camera.clone();
     // One frame to warm caches and learn which passes were culled.
     let culled = renderer

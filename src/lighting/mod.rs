@@ -166,6 +166,60 @@ pub trait LightingMethod {
     fn warnings(&self, _gpu: &mut Gpu) -> Result<Vec<String>> {
         Ok(Vec::new())
     }
+    /// What one frame will take on this device, estimated before the first from its work and a
+    /// measured throughput (none: not estimated).
+    fn frame_cost(&self) -> Option<FrameCost> {
+        None
+    }
+}
+
+/// A run estimated past this many seconds draws a warning before its first frame.
+pub const SLOW_RUN_S: f64 = 60.0;
+
+/// A method's estimate of one frame: each stage and its seconds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameCost {
+    /// What each stage is, and its seconds a frame.
+    pub parts: Vec<(String, f64)>,
+    /// The settings that make it cheaper.
+    pub remedy: String,
+}
+
+impl FrameCost {
+    pub fn seconds(&self) -> f64 {
+        self.parts.iter().map(|p| p.1).sum()
+    }
+
+    /// One line when `frames` frames are estimated past [`SLOW_RUN_S`]: the total, a frame's
+    /// share and the stage that dominates it.
+    pub fn warning(&self, method: &str, frames: usize) -> Option<String> {
+        let each = self.seconds();
+        let total = each * frames.max(1) as f64;
+        if total.is_nan() || total <= SLOW_RUN_S {
+            return None;
+        }
+        let (what, part) = self.parts.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+        Some(format!(
+            "{method}: {frames} frame(s) estimated at {}, {} a frame (from the work and this device's measured throughput); {what} dominates at {} a frame: {} cut it",
+            duration(total),
+            duration(each),
+            duration(*part),
+            self.remedy
+        ))
+    }
+}
+
+/// Seconds for a person.
+fn duration(s: f64) -> String {
+    if s >= 3600.0 {
+        format!("{:.1} h", s / 3600.0)
+    } else if s >= 60.0 {
+        format!("{:.1} min", s / 60.0)
+    } else if s >= 1.0 {
+        format!("{s:.1} s")
+    } else {
+        format!("{:.1} ms", s * 1e3)
+    }
 }
 
 /// One group of a method's resources and the device memory bound to it.

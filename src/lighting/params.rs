@@ -98,10 +98,7 @@ mod tests {
             (r#"{ name = "sh_lightmap", filter = true }"#, "filter"),
             (r#"{ name = "sh_lightmap", cie_zenith = 2 }"#, "cie_zenith"),
             (r#"{ name = "prt", baker = "raster", samples = 256 }"#, "samples"),
-            (
-                r#"{ name = "lpv", geometry_volume = false, camera_surfels = 64 }"#,
-                "camera_surfels",
-            ),
+            (r#"{ name = "lpv", geometry_volume = false, gbuffer = 64 }"#, "gbuffer"),
             (r#"{ name = "bsp_lights", mode = "corrected", k = 2 }"#, "k"),
         ] {
             let w = warnings(method);
@@ -116,7 +113,7 @@ mod tests {
             r#"{ name = "sh_lightmap", filter = true, reps = 64 }"#,
             r#"{ name = "sh_lightmap", sky = "cie", cie_zenith = 2 }"#,
             r#"{ name = "prt", baker = "rays_cpu", samples = 256 }"#,
-            r#"{ name = "lpv", geometry_volume = true, camera_surfels = 64 }"#,
+            r#"{ name = "lpv", geometry_volume = true, gbuffer = 64 }"#,
             r#"{ name = "bsp_lights", mode = "faithful", k = 2 }"#,
         ] {
             assert_eq!(warnings(method), Vec::<String>::new(), "{method}");

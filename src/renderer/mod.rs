@@ -242,6 +242,15 @@ impl Renderer {
         Ok(out)
     }
 
+    /// One line per method whose `frames` frames are estimated past a minute (see
+    /// [`LightingMethod::frame_cost`]), naming the scene: said before the first frame.
+    pub fn cost_warnings(&self, frames: usize) -> Vec<String> {
+        (self.methods.iter())
+            .filter_map(|m| m.frame_cost()?.warning(m.name(), frames))
+            .map(|w| format!("warning: {}: {w}", self.scene.source))
+            .collect()
+    }
+
     /// The names of the configuration's methods, in frame order.
     pub fn method_names(&self) -> Vec<&'static str> {
         self.methods.iter().map(|m| m.name()).collect()

@@ -43,6 +43,10 @@ pub enum View {
     Albedo,
     Normal,
     Position,
+    /// Full screen: the G-buffer's normals, or its depth (the distance from the camera over the
+    /// volume's side).
+    GbufferNormal,
+    GbufferDepth,
 }
 
 impl View {
@@ -58,11 +62,18 @@ impl View {
             View::Albedo => 6,
             View::Normal => 7,
             View::Position => 8,
+            View::GbufferNormal => 9,
+            View::GbufferDepth => 10,
         }
     }
 
     pub fn full_screen(self) -> bool {
-        (1..=5).contains(&self.id())
+        !matches!(self, View::Indirect | View::Albedo | View::Normal | View::Position)
+    }
+
+    /// Whether it shows the camera's G-buffer rather than the RSM or the volume.
+    pub fn gbuffer(self) -> bool {
+        matches!(self, View::GbufferNormal | View::GbufferDepth)
     }
 }
 
@@ -105,9 +116,9 @@ pub struct Config {
     /// Nested volumes around the camera, each twice the previous one's side (1: one volume over
     /// the scene or the region).
     pub cascades: u32,
-    /// Texels per side of the camera's surfel map that adds to the geometry volume (0: the
-    /// RSM's surfels only).
-    pub camera_surfels: u32,
+    /// Texels per side of the camera's G-buffer, whose surfels add to the geometry volume (0:
+    /// no G-buffer pass, the RSM's surfels only).
+    pub gbuffer: u32,
 }
 
 fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
@@ -127,10 +138,7 @@ impl Config {
         if self.occlusion {
             Vec::new()
         } else {
-            vec![(
-                "camera_surfels",
-                "without the geometry volume (`geometry_volume = false`)",
-            )]
+            vec![("gbuffer", "without the geometry volume (`geometry_volume = false`)")]
         }
     }
 
@@ -161,7 +169,7 @@ impl Config {
             region: None,
             view: View::Indirect,
             cascades: 1,
-            camera_surfels: 0,
+            gbuffer: 0,
         }
     }
 
@@ -208,8 +216,13 @@ impl Config {
                 "snap" => c.snap = flag(p, v)?,
                 "blend" => c.blend = flag(p, v)?,
                 "cascades" => c.cascades = int(p, v, 1..=4, "a cascade count from 1 to 4")?,
+                "gbuffer" => c.gbuffer = int(p, v, 0..=4096, "texels per side from 16 to 4096, or 0 for none")?,
                 "camera_surfels" => {
-                    c.camera_surfels = int(p, v, 0..=4096, "texels per side from 16 to 4096, or 0 for none")?
+                    return Err(bad(
+                        p,
+                        "nothing: the camera's surfels are now the G-buffer pass, `gbuffer = N` (N texels per side)",
+                        v,
+                    ))
                 }
                 "view" => {
                     let views = [
@@ -222,6 +235,8 @@ impl Config {
                         ("albedo", View::Albedo),
                         ("normal", View::Normal),
                         ("position", View::Position),
+                        ("gbuffer_normal", View::GbufferNormal),
+                        ("gbuffer_depth", View::GbufferDepth),
                     ];
                     c.view = params.choice(p, v, &views)?
                 }
@@ -249,17 +264,24 @@ impl Config {
             ));
         }
         c.blend &= c.lookup == Lookup::Point;
-        if (1..16).contains(&c.camera_surfels) {
+        if (1..16).contains(&c.gbuffer) {
             return Err(bad(
-                "camera_surfels",
+                "gbuffer",
                 "texels per side from 16 to 4096, or 0 for none",
-                decl.param("camera_surfels").unwrap_or(&toml::Value::from(0)),
+                decl.param("gbuffer").unwrap_or(&toml::Value::from(0)),
             ));
         }
-        // The camera's surfels feed the geometry volume only: without it they would cost a pass
-        // and change nothing.
+        // The G-buffer's surfels feed the geometry volume only: without it the pass would cost
+        // its time and change nothing.
         if !c.occlusion {
-            c.camera_surfels = 0;
+            c.gbuffer = 0;
+        }
+        if c.view.gbuffer() && c.gbuffer == 0 {
+            return Err(bad(
+                "view",
+                "a view of the RSM or the volume: the G-buffer's views need `gbuffer` > 0 and the geometry volume",
+                decl.param("view").unwrap_or(&toml::Value::from("")),
+            ));
         }
         c.region = match (centre, size, c.cascades) {
             (Some(_), _, 2..) => {

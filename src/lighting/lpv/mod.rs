@@ -13,6 +13,7 @@
 //! 18-neighbour propagation that accumulates in place, and the point look-up of SH(−n).
 
 pub mod config;
+pub mod cost;
 pub mod grid;
 pub mod rsm;
 pub mod sh;
@@ -122,6 +123,11 @@ pub const SCHEMA: MethodSchema = MethodSchema {
             kind: ParamKind::Int,
         },
         ParamSchema {
+            name: "gbuffer",
+            kind: ParamKind::Int,
+        },
+        // Refused with its new name.
+        ParamSchema {
             name: "camera_surfels",
             kind: ParamKind::Int,
         },
@@ -151,8 +157,8 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
             if c.mode == Mode::Faithful && !c.transform_bug {
                 label += " transform fixed";
             }
-            if c.camera_surfels > 0 {
-                label += &format!(" camera surfels {}²", c.camera_surfels);
+            if c.gbuffer > 0 {
+                label += &format!(" gbuffer {}²", c.gbuffer);
             }
             if !out.iter().any(|(l, _)| *l == label) {
                 out.push((label, d));
@@ -171,9 +177,9 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         push(corrected.with("rsm", r.into()));
     }
     push(corrected.with("geometry_volume", false.into()));
-    // The geometry volume from the RSM's surfels alone, and with the camera's added.
-    let surfels = Config::from_decl(&corrected, None).map_or(0, |c| c.camera_surfels);
-    push(corrected.with("camera_surfels", (if surfels > 0 { 0i64 } else { 128 }).into()));
+    // The geometry volume from the RSM's surfels alone, and with the G-buffer's added.
+    let gbuffer = Config::from_decl(&corrected, None).map_or(0, |c| c.gbuffer);
+    push(corrected.with("gbuffer", (if gbuffer > 0 { 0i64 } else { 128 }).into()));
     // Cascades follow the camera: only a region's side carries over.
     let mut cascaded = corrected.with("cascades", 3i64.into());
     cascaded.params.retain(|(n, _, _)| n != "centre");
@@ -236,7 +242,7 @@ pub fn plan(
         }
     }
     let texels = |side: u32| (side as u64).pow(2) * (4 * 16 + 4);
-    let need = u64::from(config.cascades) * volume_bytes(&config) + texels(config.rsm) + texels(config.camera_surfels);
+    let need = u64::from(config.cascades) * volume_bytes(&config) + texels(config.rsm) + texels(config.gbuffer);
     facts.check(
         NAME,
         &format!(
@@ -311,9 +317,9 @@ pub struct Lpv {
     /// Over the largest volume.
     camera: LightCamera,
     blocks: Vec<VolumeBlock>,
-    /// The camera's surfels: drawing them, and injecting them into each volume.
-    camera_raster: VolumeBlock,
-    camera_blocks: Vec<VolumeBlock>,
+    /// The camera's G-buffer: drawing it, and injecting its surfels into each volume.
+    gbuffer_raster: VolumeBlock,
+    gbuffer_blocks: Vec<VolumeBlock>,
     cascade_block: CascadeBlock,
     pub volumes: Vec<VolumeGpu>,
     rsm: Rsm,
@@ -326,6 +332,8 @@ pub struct Lpv {
     calls: Vec<DrawCall>,
     objects: Vec<Option<usize>>,
     animation: Vec<Option<crate::scene::Animation>>,
+    /// Seconds per unit of each stage's work on this device, measured when it was set up.
+    rates: Option<cost::Rates>,
 }
 
 impl Lpv {
@@ -391,10 +399,10 @@ impl Lpv {
         // The scene's camera until the first frame says where the camera is.
         let eye = cx.scene.camera.position.extend(1.0).into();
         let view_proj = cx.scene.camera.view_projection(1.0).to_cols_array();
-        let camera_raster = rsm::camera_block(&blocks[0], view_proj, eye, config.camera_surfels);
-        let camera_blocks = blocks
+        let gbuffer_raster = rsm::gbuffer_block(&blocks[0], view_proj, eye, config.gbuffer);
+        let gbuffer_blocks = blocks
             .iter()
-            .map(|b| rsm::camera_block(b, view_proj, eye, config.camera_surfels))
+            .map(|b| rsm::gbuffer_block(b, view_proj, eye, config.gbuffer))
             .collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
         let mut tau: Vec<[f32; 4]> = cx
@@ -470,7 +478,7 @@ impl Lpv {
             .map(DrawCall::whole)
             .collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        Ok(Lpv {
+        let mut lpv = Lpv {
             config,
             placements,
             finest,
@@ -478,8 +486,8 @@ impl Lpv {
             light_index,
             camera,
             blocks,
-            camera_raster,
-            camera_blocks,
+            gbuffer_raster,
+            gbuffer_blocks,
             cascade_block,
             volumes,
             rsm,
@@ -489,7 +497,16 @@ impl Lpv {
             calls,
             objects,
             animation,
-        })
+            rates: None,
+        };
+        lpv.rates = lpv.calibrate(cx.gpu, cx.states, cx.scene_gpu)?;
+        Ok(lpv)
+    }
+
+    /// Seconds per unit of each stage's work, measured when it was set up (`None`: the device
+    /// has no timestamps).
+    pub fn rates(&self) -> Option<cost::Rates> {
+        self.rates
     }
 
     pub fn config(&self) -> &Config {
@@ -507,9 +524,9 @@ impl Lpv {
         self.rsm
             .add_raster(graph, scene, &self.calls, self.transmittance, &self.blocks[largest]);
         self.rsm
-            .add_camera_raster(graph, scene, &self.calls, self.transmittance, &self.camera_raster);
-        for ((volume, block), camera) in self.volumes.iter().zip(&self.blocks).zip(&self.camera_blocks) {
-            self.rsm.add_injection(graph, volume, block, camera);
+            .add_gbuffer(graph, scene, &self.calls, self.transmittance, &self.gbuffer_raster);
+        for ((volume, block), gbuffer) in self.volumes.iter().zip(&self.blocks).zip(&self.gbuffer_blocks) {
+            self.rsm.add_injection(graph, volume, block, gbuffer);
             volume.add_propagation(graph, block);
         }
     }
@@ -520,19 +537,25 @@ impl Lpv {
     fn add_debug_view<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>, pipeline: PipelineId) {
         let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
         let mip = SubresourceRange::mip(0);
+        // The G-buffer's views read its layers and its block (the camera's eye); the others the
+        // RSM's and the finest volume's.
+        let (map, block) = match (&self.rsm.gbuffer, self.config.view.gbuffer()) {
+            (Some(g), true) => (g, &self.gbuffer_raster),
+            _ => (&self.rsm.map, &self.blocks[0]),
+        };
         let layer = match self.config.view {
-            config::View::RsmTransmitted => self.rsm.map.layers[1],
-            config::View::RsmNormal => self.rsm.map.layers[3],
-            config::View::RsmPosition => self.rsm.map.layers[2],
-            _ => self.rsm.map.layers[0],
+            config::View::RsmTransmitted => map.layers[1],
+            config::View::RsmNormal | config::View::GbufferNormal => map.layers[3],
+            config::View::RsmPosition | config::View::GbufferDepth => map.layers[2],
+            _ => map.layers[0],
         };
         let (t, s) = (frame.targets, frame.scene.sampler);
         let mut pass = graph
             .pass("lpv debug view")
             .color_attachment(t.radiance, mip, false)
-            .sample("rsm_flux", self.rsm.map.layers[0], mip, s, frag);
+            .sample("rsm_flux", map.layers[0], mip, s, frag);
         // The flux layer is declared once; another layer is declared by its own name.
-        let same = layer == self.rsm.map.layers[0];
+        let same = layer == map.layers[0];
         if !same {
             pass = pass.sample("rsm_layer", layer, mip, s, frag);
         }
@@ -547,7 +570,7 @@ impl Lpv {
                 depth_stencil: None,
             })?;
             ctx.rec.bind_pipeline(pipeline)?;
-            let volume = ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0])));
+            let volume = ("volume", Bind::UniformData(bytemuck::bytes_of(block)));
             if same {
                 ctx.bind(&[
                     volume,
@@ -614,17 +637,13 @@ impl LightingMethod for Lpv {
                 .collect();
             self.cascade_block = cascade_block(&self.placements);
         }
-        if self.config.camera_surfels > 0 {
-            let (view_proj, eye, size) = (
-                frame.uniforms.view_proj,
-                frame.uniforms.camera_pos,
-                self.config.camera_surfels,
-            );
-            self.camera_raster = rsm::camera_block(&self.blocks[0], view_proj, eye, size);
-            self.camera_blocks = self
+        if self.config.gbuffer > 0 {
+            let (view_proj, eye, size) = (frame.uniforms.view_proj, frame.uniforms.camera_pos, self.config.gbuffer);
+            self.gbuffer_raster = rsm::gbuffer_block(&self.blocks[0], view_proj, eye, size);
+            self.gbuffer_blocks = self
                 .blocks
                 .iter()
-                .map(|b| rsm::camera_block(b, view_proj, eye, size))
+                .map(|b| rsm::gbuffer_block(b, view_proj, eye, size))
                 .collect();
         }
         Ok(())
@@ -632,7 +651,7 @@ impl LightingMethod for Lpv {
 
     /// Per volume (each cascade): its three sets of 3 × 4 SH coefficients per cell (the
     /// document's 3 × 8 B × N³ per set in fp16), the fixed-point injection sums and the geometry
-    /// volume; then the RSM and the camera's surfels.
+    /// volume; then the RSM and the camera's G-buffer.
     fn memory(&self, gpu: &crate::backend::Gpu) -> Result<Vec<crate::lighting::MemoryItem>> {
         let item = |resource: String, requested: u64, allocated: u64| crate::lighting::MemoryItem {
             method: NAME,
@@ -652,15 +671,19 @@ impl LightingMethod for Lpv {
             requested,
             allocated,
         ));
-        if let Some(c) = &self.rsm.camera {
+        if let Some(c) = &self.rsm.gbuffer {
             let (requested, allocated) = c.memory(gpu)?;
             out.push(item(
-                format!("{NAME} camera surfels ({0}x{0})", c.size),
+                format!("{NAME} gbuffer ({0}x{0}, 4 x RGBA32F + depth)", c.size),
                 requested,
                 allocated,
             ));
         }
         Ok(out)
+    }
+
+    fn frame_cost(&self) -> Option<crate::lighting::FrameCost> {
+        Some(cost::estimate(&self.config, &self.rates?))
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {

@@ -18,6 +18,9 @@ use crate::shaders::ShaderLibrary;
 const LIGHT_SPOT: f32 = 1.0;
 const LIGHT_DIRECTIONAL: f32 = 2.0;
 
+/// The G-buffer pass's name (its timestamp in `profile`).
+pub const GBUFFER_PASS: &str = "lpv gbuffer";
+
 /// The light's camera over the volume and what the RSM's texels mean.
 #[derive(Clone, Copy, Debug)]
 pub struct LightCamera {
@@ -169,8 +172,8 @@ impl SurfelMap {
 pub struct Rsm {
     /// The RSM itself.
     pub map: SurfelMap,
-    /// The camera's surfels for the geometry volume (`camera_surfels`).
-    pub camera: Option<SurfelMap>,
+    /// The camera's G-buffer, whose surfels add to the geometry volume (`gbuffer`).
+    pub gbuffer: Option<SurfelMap>,
     raster: PipelineId,
     inject: PipelineId,
     gather: PipelineId,
@@ -183,8 +186,8 @@ pub struct Rsm {
 impl Rsm {
     pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config) -> Result<Rsm> {
         let map = SurfelMap::new(gpu, "lpv rsm", config.rsm)?;
-        let camera = if config.camera_surfels > 0 {
-            Some(SurfelMap::new(gpu, "lpv camera surfels", config.camera_surfels)?)
+        let gbuffer = if config.gbuffer > 0 {
+            Some(SurfelMap::new(gpu, "lpv gbuffer", config.gbuffer)?)
         } else {
             None
         };
@@ -221,7 +224,7 @@ impl Rsm {
         states.forget_buffer(offsets);
         Ok(Rsm {
             map,
-            camera,
+            gbuffer,
             raster,
             inject,
             gather,
@@ -243,8 +246,9 @@ impl Rsm {
         self.add_surfels(graph, "lpv rsm", &self.map, scene, calls, transmittance, block);
     }
 
-    /// Draws the camera's surfels (`block`: the camera as the viewpoint, no light).
-    pub fn add_camera_raster<'a>(
+    /// The G-buffer pass: the scene from the camera (`block`: the camera as the viewpoint, no
+    /// light), each texel a surfel's position, normal, area and opacity over a depth buffer.
+    pub fn add_gbuffer<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
         scene: &'a SceneGpu,
@@ -252,8 +256,8 @@ impl Rsm {
         transmittance: BufferId,
         block: &'a VolumeBlock,
     ) {
-        if let Some(map) = &self.camera {
-            self.add_surfels(graph, "lpv camera surfels", map, scene, calls, transmittance, block);
+        if let Some(map) = &self.gbuffer {
+            self.add_surfels(graph, GBUFFER_PASS, map, scene, calls, transmittance, block);
         }
     }
 
@@ -338,15 +342,15 @@ impl Rsm {
             });
     }
 
-    /// Injects the RSM into `volume`: scatter into the fixed-point sums (and the camera's
-    /// surfels' blocking, with `camera_block`), then resolve; or the document's gather straight
+    /// Injects the RSM into `volume`: scatter into the fixed-point sums (and the G-buffer's
+    /// surfels' blocking, with `gbuffer_block`), then resolve; or the document's gather straight
     /// into the first wavefront.
     pub fn add_injection<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
         volume: &'a VolumeGpu,
         block: &'a VolumeBlock,
-        camera_block: &'a VolumeBlock,
+        gbuffer_block: &'a VolumeBlock,
     ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let mip = SubresourceRange::mip(0);
@@ -356,14 +360,14 @@ impl Rsm {
         match self.injection {
             Injection::Scatter => {
                 self.add_scatter(graph, &format!("{} inject", volume.label), &self.map, volume, block);
-                if let Some(map) = &self.camera {
-                    // Only blocking: the camera's surfels carry no flux.
+                if let Some(map) = &self.gbuffer {
+                    // Only blocking: the G-buffer's surfels carry no flux.
                     self.add_scatter(
                         graph,
-                        &format!("{} inject camera surfels", volume.label),
+                        &format!("{} inject gbuffer", volume.label),
                         map,
                         volume,
-                        camera_block,
+                        gbuffer_block,
                     );
                 }
                 volume.add_resolve(graph, block);
@@ -387,9 +391,9 @@ impl Rsm {
     }
 }
 
-/// The block that draws the camera's surfels (`light.w` = 2: the area from the pixel's
-/// footprint, no flux) and injects them into the volume `block` places.
-pub fn camera_block(block: &VolumeBlock, view_proj: [f32; 16], eye: [f32; 4], size: u32) -> VolumeBlock {
+/// The block that draws the G-buffer (`light.w` = 2: the area from the pixel's footprint, no
+/// flux) and injects its surfels into the volume `block` places.
+pub fn gbuffer_block(block: &VolumeBlock, view_proj: [f32; 16], eye: [f32; 4], size: u32) -> VolumeBlock {
     VolumeBlock {
         rsm: [size as i32, 0, 0, 0],
         light_view_proj: view_proj,

@@ -318,19 +318,30 @@ impl VolumeGpu {
                 });
         }
         for k in 0..self.iterations {
-            let (src, dst) = (self.sets[(k % 2) as usize], self.sets[((k + 1) % 2) as usize]);
-            graph
-                .pass(&format!("{} propagate {}", self.label, k + 1))
-                .buffer(src, read, Some("source"))
-                .buffer(dst, write, Some("destination"))
-                .buffer(self.accumulation, write, Some("accumulation"))
-                .buffer(self.blocking_faces, read, Some("faces"))
-                .record(move |ctx| {
-                    ctx.rec.bind_pipeline(self.propagate)?;
-                    ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
-                    ctx.rec.dispatch([n, n, n])
-                });
+            self.add_step(graph, block, k, &format!("{} propagate {}", self.label, k + 1));
         }
+    }
+
+    /// Propagation step `k` (from `sets[k % 2]`) over the cells `block` spans.
+    pub fn add_step<'a>(&'a self, graph: &mut RenderGraph<'a>, block: &'a VolumeBlock, k: u32, name: &str) {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let (read, write) = (
+            Access::StorageRead { stages: compute },
+            Access::StorageWrite { stages: compute },
+        );
+        let n = block.size[0] as u32;
+        let (src, dst) = (self.sets[(k % 2) as usize], self.sets[((k + 1) % 2) as usize]);
+        graph
+            .pass(name)
+            .buffer(src, read, Some("source"))
+            .buffer(dst, write, Some("destination"))
+            .buffer(self.accumulation, write, Some("accumulation"))
+            .buffer(self.blocking_faces, read, Some("faces"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(self.propagate)?;
+                ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
+                ctx.rec.dispatch([n, n, n])
+            });
     }
 
     /// Sets `buffer` (a set, or the geometry volume when `blocking`) to `words` before anything
