@@ -950,10 +950,11 @@ fn the_gbuffer_pass_is_timed_in_profile_and_its_memory_itemised() {
             gpu: common::test_gpu_desc(),
             config: None,
             supersample: 1,
+            overrides: Default::default(),
         };
         let report = penumbra::commands::profile::run(&opts, 2).unwrap_or_else(|e| panic!("{e}"));
         let pass = report.passes.iter().find(|p| p.name == "lpv gbuffer");
-        let memory = report.memory.iter().find(|m| m.resource.starts_with("lpv gbuffer"));
+        let memory = report.memory.iter().find(|m| m.resource.starts_with("lpv gbuffer ("));
         if g == 0 {
             assert!(
                 pass.is_none() && memory.is_none(),
