@@ -158,7 +158,7 @@ step 45 "seed 000's light-map bake (before its frame; not frame time)" "$bin" ba
 step 30 "seed 000's frame (bsp_rooms, seed000)" frame_rate "seed 000 frame" scenes/bsp_rooms.toml seed000 "$seed000_size" "$frames" \
     "20+ FPS 'interactive' (section 4.5.1); 27-37 FPS on NV2X with the PVS (Table 2; the document gives no window size, 1024x768 is assumed)"
 lpv_bush() {
-    variant scenes/lpv_bush.toml "scenes/_gpu_lpv_$1.toml" "\"forward\", { name = \"lpv\", centre = [0.0, 1.2, 0.0], size = 3.2, camera_surfels = 128, $2 }"
+    variant scenes/lpv_bush.toml "scenes/_gpu_lpv_$1.toml" "\"forward\", { name = \"lpv\", centre = [0.0, 1.2, 0.0], size = 3.2, gbuffer = 128, $2 }"
 }
 lpv_bush small "$lpv_small"
 lpv_bush large "$lpv_large"
