@@ -1198,3 +1198,68 @@ fn a_frame_is_estimated_before_the_first_and_slow_runs_warn() {
         "{many:?}"
     );
 }
+
+/// `penumbra capture` says the estimate before it renders: asked for 10⁸ frames of a small LPV,
+/// it warns on stderr in one line naming the scene and the method before the first frame ends
+/// (the run is then stopped; it would take days).
+#[test]
+fn capture_warns_of_a_long_run_before_its_first_frame() {
+    use std::io::BufRead;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let path = common::temp_path("lpv-long-run.toml");
+    let text = std::fs::read_to_string(dir.join("lpv_cornell.toml"))
+        .unwrap()
+        .replace("{ name = \"lpv\" }", "{ name = \"lpv\", grid = 8, rsm = 32 }");
+    assert!(text.contains("grid = 8"));
+    std::fs::write(
+        &path,
+        text.replace("\"textures/", &format!("\"{}/textures/", dir.display())),
+    )
+    .unwrap();
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let png = common::temp_path("lpv-long-run.png");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["capture", path.to_str().unwrap(), "--method", "lpv", "--size", "8x8"])
+        .args([
+            "--frames",
+            "100000000",
+            "-o",
+            png.to_str().unwrap(),
+            "--device",
+            &device,
+        ])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("run penumbra");
+    let stderr = child.stderr.take().unwrap();
+    let (send, receive) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+            let found = line.contains("frame(s) estimated at");
+            let _ = send.send(line);
+            if found {
+                return;
+            }
+        }
+    });
+    let mut seen = Vec::new();
+    while let Ok(line) = receive.recv_timeout(std::time::Duration::from_secs(120)) {
+        let found = line.contains("frame(s) estimated at");
+        seen.push(line);
+        if found {
+            break;
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let warning = seen.last().cloned().unwrap_or_default();
+    println!("{warning}");
+    assert!(
+        warning.starts_with(&format!(
+            "warning: {}: lpv: 100000000 frame(s) estimated at",
+            path.display()
+        )) && warning.contains("dominates"),
+        "{seen:?}"
+    );
+}
