@@ -3,7 +3,7 @@
 // rho * I * texel solid angle for a spot light: the N.L is in the surfel's footprint, so the
 // sum over texels does not depend on the RSM's resolution), the flux it transmits, its area,
 // position and normal (turned toward the light: surfaces are two-sided). Drawn from the camera
-// (light.w = 2) it is the camera's surfels: no flux, the area of the pixel's footprint.
+// (light.w = 2) it is the camera's G-buffer: no flux, the area of the pixel's footprint.
 #include "lpv/volume.glsl"
 #include "common/scene.glsl"
 #include "common/lights.glsl"
@@ -31,7 +31,7 @@ void main() {
     float area;  // the surfel's area
     float size = float(volume.rsm.x);
     if (volume.light.w > 1.5) {
-        // The camera's surfels (for the geometry volume): no flux; the area the pixel covers.
+        // The G-buffer's surfels (for the geometry volume): no flux; the area the pixel covers.
         l = normalize(in_world - volume.light_pos.xyz);
         power = vec3(0.0);
         area = length(cross(dFdx(in_world), dFdy(in_world)));

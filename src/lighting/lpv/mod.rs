@@ -140,8 +140,8 @@ pub fn reference(_decl: &MethodDecl) -> ReferenceKind {
 }
 
 /// The chart's sweep: as declared; corrected at 16³, 32³ and 64³, with 4, 8 and 16
-/// iterations, at RSM 128² and 512², without the geometry volume, with the camera's surfels
-/// added to it (or without them where declared), with 3 cascades around the camera; the
+/// iterations, at RSM 128² and 512², without the geometry volume, with the camera's G-buffer
+/// added to it (or without it where declared), with 3 cascades around the camera; the
 /// document's mode, and with its transform bug fixed.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut out: Vec<(String, MethodDecl)> = Vec::new();
