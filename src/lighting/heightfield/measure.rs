@@ -33,8 +33,9 @@ pub fn table_6_6(passes: &[PassStats]) -> Option<String> {
     let height = sum(&|n| n == "hf height update");
     let rest = sum(&|n| n == "hf accumulate" || n == "hf raster" || n == "hf emitters");
     let pyramid_label = if has("hf bounds") { "Bounds" } else { "Pyramid" };
-    let mut s =
-        String::from("seed 001 Table 6.6 layout (ms, medians; pyramid = level 0 + decimations + reconstruction):\n");
+    let mut s = String::from(
+        "the height-field thesis's Table 6.6 layout (ms, medians; pyramid = level 0 + decimations + reconstruction):\n",
+    );
     s += &format!("| Height update | {pyramid_label} | Env. Light |");
     for (i, _) in lights.iter().enumerate() {
         s += &format!(" L-Light {} |", i + 1);

@@ -120,7 +120,7 @@ impl ManyLight {
                 }),
                 _ => {
                     return Err(Error::Usage(format!(
-                        "{}: lights[{i}] ({:?}): {method} lights with point and spot lights only (seed 003)",
+                        "{}: lights[{i}] ({:?}): {method} lights with point and spot lights only, as Ridderhof's Modelling Multiple Light Sources does",
                         scene.source,
                         l.name()
                     )))

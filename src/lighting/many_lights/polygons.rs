@@ -26,7 +26,7 @@ pub struct ScenePolygon {
 /// systems precompute per-light lighting for a static scene (the thesis's first requirement).
 pub fn scene_polygons(scene_source: &str, geometry: &StaticGeometry, method: &str) -> Result<Vec<ScenePolygon>> {
     if let Some(&d) = geometry.entities.first() {
-        return Err(Error::Usage(format!("{scene_source}: draw {d} is animated: {method} precomputes lighting for a static scene (seed 003's requirement)")));
+        return Err(Error::Usage(format!("{scene_source}: draw {d} is animated: {method} precomputes lighting for a static scene (Ridderhof's Modelling Multiple Light Sources assumes a static scene)")));
     }
     let mut out = Vec::with_capacity(geometry.triangles.len());
     for (t, tri) in geometry.triangles.iter().enumerate() {
