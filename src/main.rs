@@ -1012,6 +1012,17 @@ fn reference(args: ReferenceArgs) -> penumbra::Result<()> {
         camera,
         gpu: gpu_desc(&device),
     })?;
+    print_reference_report(&report, target, sampler);
+    Ok(())
+}
+
+/// What `reference` prints: the files written, the rate, the average with its standard error,
+/// the efficiency, and whether the error target was reached.
+fn print_reference_report(
+    report: &penumbra::reference::ReferenceReport,
+    target: Option<penumbra::reference::ErrorTarget>,
+    sampler: penumbra::reference::Sampler,
+) {
     for p in &report.written {
         penumbra::outln!("wrote {}", p.display());
     }
@@ -1057,7 +1068,6 @@ fn reference(args: ReferenceArgs) -> penumbra::Result<()> {
             t.max
         );
     }
-    Ok(())
 }
 
 fn main() -> ExitCode {
