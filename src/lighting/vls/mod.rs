@@ -168,6 +168,7 @@ impl Config {
     }
 
     /// The parameters of `decl`; a bad value is one line naming the scene file and parameter.
+    // long: one parameter after another, each read and range-checked.
     pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let mode = params
