@@ -233,7 +233,7 @@ impl ShadowVolumes {
         // where a layer's depth is the stored one, i.e. the nearest translucent layer;
         // light.frag scales the light by the material's opacity.
         let calls = if translucent {
-            self.draws_in_order(scene, &plan, receiver_faces, receiver_entities)
+            self.draws_in_order(scene, plan, receiver_faces, receiver_entities)
         } else {
             self.draw_list(scene, plan, receiver_faces, receiver_entities)
         };
