@@ -15,14 +15,14 @@
 pub mod brdf;
 pub mod lightmap;
 pub mod many_lights;
-pub mod params;
+pub(crate) mod params;
 pub mod plan;
 pub mod registry;
 mod terms;
 
 pub mod bsp_lights;
 pub mod clustered;
-pub mod forward;
+pub(crate) mod forward;
 pub mod heightfield;
 pub mod lpv;
 pub mod prt;

@@ -22,7 +22,7 @@
 //! `k·ρ·cos/d` model with its linear spot ramp, projects every occluder vertex as written and
 //! rounds every coordinate to four decimals with planes as thick (the thesis's §5.6.1).
 
-pub mod painter;
+pub(crate) mod painter;
 pub mod setup;
 
 #[cfg(test)]
@@ -166,7 +166,7 @@ pub fn choose_layout(layout: Layout, vertices: usize, lights: usize, non_zero: u
     }
 }
 
-/// How hidden surfaces are removed when this method draws the base ([`painter`]).
+/// How hidden surfaces are removed when this method draws the base (`painter`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Hidden {
     /// The depth buffer.

@@ -1,6 +1,6 @@
 //! Radiosity light-maps (the Ca3D-Engine thesis §3, CaLight; digest §1.2) on the light-map substrate
 //! ([`crate::lighting::lightmap`]: patches, the surface-visibility matrix, form factors, the shooting loop,
-//! border passes, tone reproduction): direct light and the sun ([`bake`], [`sun`]), and the
+//! border passes, tone reproduction): direct light and the sun ([`bake`], `sun`), and the
 //! shooting on the CPU or the GPU ([`gpu`]); faithful to CaLight or corrected (exact form factors,
 //! energy that closes, radiometric light-maps).
 //!
@@ -10,7 +10,7 @@
 //! texel.
 
 pub mod gpu;
-pub mod sun;
+pub(crate) mod sun;
 
 #[cfg(test)]
 mod tests;

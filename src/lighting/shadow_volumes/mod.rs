@@ -22,16 +22,16 @@
 //! ([`config::Casters`]: every face, the light's PVS, or the PVS with the Potential
 //! Shadow-Casters Set), each with its own closed volume ([`volumes::polygon_volume_template`],
 //! extruded in the vertex shader). Receivers and casters are culled by the light's radius and
-//! the camera's PVS ([`plan`]). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
+//! the camera's PVS (`plan`). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
 //! (*physical*), in both of the seed's material paths: special-case pipelines per map
 //! combination, or one pipeline with 1×1 default maps. Spot lights (not in the seed) are point
 //! lights times the forward method's cone falloff, with a point light's volumes.
 
-pub mod config;
+pub(crate) mod config;
 pub mod cpu;
 mod frame_passes;
 pub mod maps;
-pub mod plan;
+pub(crate) mod plan;
 pub mod volumes;
 
 use std::rc::Rc;
@@ -54,7 +54,7 @@ use crate::world::FaceId;
 pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
 pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, Spot, WorldFrame};
 
-/// The chart's sweep (see [`config::sweep`]).
+/// The chart's sweep (see `config::sweep`).
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     config::sweep(decl)
 }

@@ -3,7 +3,7 @@
 //! the closest (the thesis) or the most contributing that pass a shadow feeler from the segment's
 //! centroid; at run time each segment sums only those lights, at their current intensities.
 //!
-//! The set-up is a bake ([`setup`], cached through the bake stage). The run time is one graphics
+//! The set-up is a bake (`setup`, cached through the bake stage). The run time is one graphics
 //! pass: the segments drawn with unshared vertices carrying the segment's id (so a boundary
 //! between different light sets shows, the thesis's Fig. 6-3), the fragment shader looping over
 //! the segment's light indices with `glsl/common/many_lights.glsl`. Shadows are the feeler's
@@ -15,7 +15,7 @@
 //! shades with the physical model, so its frames are radiance and compare with the reference.
 //! Every choice is a parameter of its own as well.
 
-pub mod setup;
+pub(crate) mod setup;
 
 #[cfg(test)]
 mod tests;
