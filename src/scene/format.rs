@@ -17,6 +17,7 @@ use super::world_mesh::{self, WorldLevel};
 use super::Scene;
 use crate::world::level_gen::RoomsParams;
 
+// long: one top-level key after another, in the order their errors are reported.
 pub(crate) fn parse(text: &str, source: &str, base_dir: &Path) -> Result<Scene, SceneError> {
     let ctx = Ctx::new(source, text, base_dir);
     let root = ctx.parse()?;
