@@ -7,7 +7,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::backend::{
-    vk, BackendError, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, VertexAttribute, VertexLayout,
+    vk, BackendError, Bind, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, SubresourceRange,
+    VertexAttribute, VertexLayout,
 };
 use crate::environment::raster::EnvironmentLighting;
 use crate::environment::EnvironmentMap;
@@ -164,6 +165,23 @@ pub struct MaterialMaps {
     pub albedo: ImageId,
     pub normal: ImageId,
     pub specular: ImageId,
+}
+
+impl MaterialMaps {
+    /// The three maps as the surface shaders declare them (`albedo_map`, `normal_map`,
+    /// `specular_map`), each whole, through `sampler`.
+    pub fn binds(&self, sampler: SamplerId) -> [(&'static str, Bind<'static>); 3] {
+        let sampled = |image| Bind::Sampled {
+            image,
+            range: SubresourceRange::mip(0),
+            sampler,
+        };
+        [
+            ("albedo_map", sampled(self.albedo)),
+            ("normal_map", sampled(self.normal)),
+            ("specular_map", sampled(self.specular)),
+        ]
+    }
 }
 
 pub struct SceneGpu {
@@ -352,6 +370,16 @@ fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
 }
 
 impl SceneGpu {
+    /// The lights as the shaders' `lights` storage block reads them (zeros for a scene without
+    /// lights: a storage binding cannot be empty).
+    pub fn light_bytes(&self) -> &[u8] {
+        if self.lights.is_empty() {
+            &[0u8; 64]
+        } else {
+            bytemuck::cast_slice(&self.lights)
+        }
+    }
+
     /// Uploads the scene; `environment` is its environment as [`EnvironmentMap::of_scene`]
     /// loaded it.
     pub fn upload(

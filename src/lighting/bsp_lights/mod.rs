@@ -31,15 +31,18 @@ mod tests;
 use bytemuck::{Pod, Zeroable};
 
 use crate::backend::{
-    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
-    SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, SpecConstant, VertexAttribute,
+    VertexLayout,
 };
 use crate::bake::{BakeData, BakeKey};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lighting::many_lights::{scene_polygons, LightModel, ManyLight};
 use crate::lighting::params::Params;
-use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms};
+use crate::lighting::{
+    begin_term_rendering, term_pass, term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind,
+    Term, Terms,
+};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use crate::shaders::ShaderLibrary;
 use crate::world::Tolerance;
@@ -1063,15 +1066,7 @@ impl LightingMethod for BspLights {
         let t = frame.targets;
         let uniforms = frame.uniforms;
         let count = self.baked.indices.len() as u32;
-        let mut pass =
-            graph
-                .pass(&format!("{NAME} segments"))
-                .color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base {
-            pass.depth_stencil_write(t.depth_stencil, false)
-        } else {
-            pass.depth_stencil_read(t.depth_stencil)
-        };
+        let mut pass = term_pass(graph, &format!("{NAME} segments"), t, base);
         pass = pass
             .buffer(self.vertices, Access::VertexRead, None)
             .buffer(self.indices, Access::IndexRead, None);
@@ -1085,14 +1080,7 @@ impl LightingMethod for BspLights {
             );
         }
         pass.record(move |ctx| {
-            let depth = RenderTarget {
-                read_only: !base,
-                ..RenderTarget::load(t.depth_stencil)
-            };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                colors: vec![RenderTarget::load(t.radiance)],
-                depth_stencil: Some(depth),
-            })?;
+            let _ = begin_term_rendering(ctx.rec, t, base)?;
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
             ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;

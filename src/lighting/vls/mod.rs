@@ -22,16 +22,15 @@ mod tests;
 
 use glam::DVec3;
 
-use crate::backend::{
-    vk, Bind, BufferId, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute,
-    VertexLayout,
-};
+use crate::backend::{vk, Bind, BufferId, PipelineId, SpecConstant, VertexAttribute, VertexLayout};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::lighting::params::Params;
-use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
+use crate::lighting::{
+    begin_term_rendering, term_pass, term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms,
+};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use setup::{Feeler, LightSets, Point, Selection, SetupParams};
 
@@ -579,35 +578,15 @@ impl LightingMethod for Vls {
             (false, true) => self.pipelines[2],
             (false, false) => return Ok(()),
         };
-        let mut pass = graph.pass(if base { "vls" } else { "vls direct" }).color_attachment(
-            t.radiance,
-            SubresourceRange::mip(0),
-            false,
-        );
-        pass = if base {
-            pass.depth_stencil_write(t.depth_stencil, false)
-        } else {
-            pass.depth_stencil_read(t.depth_stencil)
-        };
+        let pass = term_pass(graph, if base { "vls" } else { "vls direct" }, t, base);
         let vertex_count = self.vertex_count;
         let params = self.params;
         pass.buffer(self.vertices, Access::VertexRead, None)
             .buffer(self.sets, Access::StorageRead { stages }, Some("sets"))
             .record(move |ctx| {
-                let depth = RenderTarget {
-                    read_only: !base,
-                    ..RenderTarget::load(t.depth_stencil)
-                };
-                let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                    colors: vec![RenderTarget::load(t.radiance)],
-                    depth_stencil: Some(depth),
-                })?;
+                let _ = begin_term_rendering(ctx.rec, t, base)?;
                 ctx.rec.bind_pipeline(pipeline)?;
-                let lights: &[u8] = if scene.lights.is_empty() {
-                    &[0u8; 64]
-                } else {
-                    bytemuck::cast_slice(&scene.lights)
-                };
+                let lights = scene.light_bytes();
                 ctx.bind(&[
                     ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
                     ("lights", Bind::StorageData(lights)),
