@@ -49,6 +49,7 @@ use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::world_mesh::{self, WorldLevel};
 use crate::scene::{Light, MeshSource, MethodDecl, Scene};
+use crate::shaders::ShaderLibrary;
 use crate::world::FaceId;
 
 pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
@@ -293,6 +294,137 @@ pub struct ShadowVolumes {
 fn spec(id: u32, bits: u32) -> SpecConstant {
     SpecConstant { id, bits }
 }
+/// The surface pipelines as [`ShadowVolumes`] holds them: ambient (plain, normal-mapped),
+/// translucent ambient (the same, blended), and light (by normal map, then specular), the last
+/// lighting only where the stencil is clear.
+#[allow(clippy::type_complexity)]
+fn surface_pipelines(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    c: &Config,
+) -> Result<([PipelineId; 2], [PipelineId; 2], [[PipelineId; 2]; 2])> {
+    let ds_format = gpu.caps().depth_stencil_format;
+    let mode = match c.mode {
+        Mode::Faithful => 0,
+        Mode::Physical => 1,
+    };
+    let surface = |name: &str, frag: &str, specs: Vec<SpecConstant>| {
+        let mut d = GraphicsPipelineDesc::new(name, "shadow_volumes/surface.vert", Some(frag));
+        d.vertex_layout = vertex_layout();
+        d.raster.cull = vk::CullModeFlags::NONE;
+        d.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        d.depth_format = Some(ds_format);
+        d.specialization = specs;
+        d
+    };
+    let mut ambient = Vec::with_capacity(2);
+    for nm in [false, true] {
+        let d = surface(
+            &format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }),
+            "shadow_volumes/ambient.frag",
+            vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
+        );
+        ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
+    }
+    let mut light = Vec::with_capacity(4);
+    for nm in [false, true] {
+        for sp in [false, true] {
+            let mut d = surface(
+                &format!(
+                    "{NAME} light{}{}",
+                    if nm { " normal-mapped" } else { "" },
+                    if sp { " specular" } else { "" }
+                ),
+                "shadow_volumes/light.frag",
+                vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)],
+            );
+            d.depth = DepthState {
+                test: true,
+                write: false,
+                compare: vk::CompareOp::LESS_OR_EQUAL,
+            };
+            d.color_targets[0].blend = BlendMode::Additive;
+            let outside = StencilFace {
+                compare_mask: 0xff,
+                write_mask: 0,
+                ..StencilFace::test(vk::CompareOp::EQUAL, 0)
+            };
+            d.stencil = Some(StencilFaces {
+                front: outside,
+                back: outside,
+            });
+            light.push(gpu.create_graphics_pipeline(&d, shaders)?);
+        }
+    }
+    // The translucent path's ambient pass: `α·surface + (1 − α)·behind` over the opaque
+    // image, with depth writes so the light passes after it find the nearest layer only.
+    let mut translucent_ambient = Vec::with_capacity(2);
+    for nm in [false, true] {
+        let mut d = surface(
+            &format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }),
+            "shadow_volumes/ambient.frag",
+            vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
+        );
+        d.color_targets[0].blend = BlendMode::Alpha;
+        translucent_ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
+    }
+    Ok((
+        [ambient[0], ambient[1]],
+        [translucent_ambient[0], translucent_ambient[1]],
+        [[light[0], light[1]], [light[2], light[3]]],
+    ))
+}
+
+/// The stencil-volume pipeline for the configured counting (z-fail or z-pass, wrapping or
+/// clamping), and whether it clamps depth (the device allowing) instead of nudging the far caps.
+fn volume_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, c: &Config) -> Result<(PipelineId, bool)> {
+    let ds_format = gpu.caps().depth_stencil_format;
+    let (inc, dec) = if c.stencil_wrap {
+        (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
+    } else {
+        (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
+    };
+    let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace {
+        pass,
+        depth_fail,
+        ..StencilFace::test(vk::CompareOp::ALWAYS, 0)
+    };
+    let keep = vk::StencilOp::KEEP;
+    // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
+    // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
+    let faces = match c.stencil {
+        Stencil::ZFail => StencilFaces {
+            front: count(keep, dec),
+            back: count(keep, inc),
+        },
+        Stencil::ZPass => StencilFaces {
+            front: count(inc, keep),
+            back: count(dec, keep),
+        },
+    };
+    let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
+    let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
+    vd.vertex_layout = VertexLayout {
+        buffers: vec![(0, 16)],
+        attributes: vec![VertexAttribute {
+            location: 0,
+            binding: 0,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+            offset: 0,
+        }],
+    };
+    vd.raster.cull = vk::CullModeFlags::NONE;
+    vd.raster.depth_clamp = depth_clamp;
+    vd.depth = DepthState {
+        test: true,
+        write: false,
+        compare: vk::CompareOp::LESS,
+    };
+    vd.stencil = Some(faces);
+    vd.depth_format = Some(ds_format);
+    let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
+    Ok((volume, depth_clamp))
+}
 
 impl ShadowVolumes {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShadowVolumes> {
@@ -307,118 +439,8 @@ impl ShadowVolumes {
             }
         }
         let c = &setup.config;
-        let ds_format = gpu.caps().depth_stencil_format;
-        let mode = match c.mode {
-            Mode::Faithful => 0,
-            Mode::Physical => 1,
-        };
-        let surface = |name: &str, frag: &str, specs: Vec<SpecConstant>| {
-            let mut d = GraphicsPipelineDesc::new(name, "shadow_volumes/surface.vert", Some(frag));
-            d.vertex_layout = vertex_layout();
-            d.raster.cull = vk::CullModeFlags::NONE;
-            d.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            d.depth_format = Some(ds_format);
-            d.specialization = specs;
-            d
-        };
-        let mut ambient = Vec::with_capacity(2);
-        for nm in [false, true] {
-            let d = surface(
-                &format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }),
-                "shadow_volumes/ambient.frag",
-                vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
-            );
-            ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
-        }
-        let mut light = Vec::with_capacity(4);
-        for nm in [false, true] {
-            for sp in [false, true] {
-                let mut d = surface(
-                    &format!(
-                        "{NAME} light{}{}",
-                        if nm { " normal-mapped" } else { "" },
-                        if sp { " specular" } else { "" }
-                    ),
-                    "shadow_volumes/light.frag",
-                    vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)],
-                );
-                d.depth = DepthState {
-                    test: true,
-                    write: false,
-                    compare: vk::CompareOp::LESS_OR_EQUAL,
-                };
-                d.color_targets[0].blend = BlendMode::Additive;
-                let outside = StencilFace {
-                    compare_mask: 0xff,
-                    write_mask: 0,
-                    ..StencilFace::test(vk::CompareOp::EQUAL, 0)
-                };
-                d.stencil = Some(StencilFaces {
-                    front: outside,
-                    back: outside,
-                });
-                light.push(gpu.create_graphics_pipeline(&d, shaders)?);
-            }
-        }
-        // The translucent path's ambient pass: `α·surface + (1 − α)·behind` over the opaque
-        // image, with depth writes so the light passes after it find the nearest layer only.
-        let mut translucent_ambient = Vec::with_capacity(2);
-        for nm in [false, true] {
-            let mut d = surface(
-                &format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }),
-                "shadow_volumes/ambient.frag",
-                vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
-            );
-            d.color_targets[0].blend = BlendMode::Alpha;
-            translucent_ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
-        }
-        let translucent_ambient = [translucent_ambient[0], translucent_ambient[1]];
-        let ambient = [ambient[0], ambient[1]];
-        let light = [[light[0], light[1]], [light[2], light[3]]];
-        let (inc, dec) = if c.stencil_wrap {
-            (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
-        } else {
-            (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
-        };
-        let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace {
-            pass,
-            depth_fail,
-            ..StencilFace::test(vk::CompareOp::ALWAYS, 0)
-        };
-        let keep = vk::StencilOp::KEEP;
-        // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
-        // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
-        let faces = match c.stencil {
-            Stencil::ZFail => StencilFaces {
-                front: count(keep, dec),
-                back: count(keep, inc),
-            },
-            Stencil::ZPass => StencilFaces {
-                front: count(inc, keep),
-                back: count(dec, keep),
-            },
-        };
-        let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
-        let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
-        vd.vertex_layout = VertexLayout {
-            buffers: vec![(0, 16)],
-            attributes: vec![VertexAttribute {
-                location: 0,
-                binding: 0,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                offset: 0,
-            }],
-        };
-        vd.raster.cull = vk::CullModeFlags::NONE;
-        vd.raster.depth_clamp = depth_clamp;
-        vd.depth = DepthState {
-            test: true,
-            write: false,
-            compare: vk::CompareOp::LESS,
-        };
-        vd.stencil = Some(faces);
-        vd.depth_format = Some(ds_format);
-        let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
+        let (ambient, translucent_ambient, light) = surface_pipelines(gpu, shaders, c)?;
+        let (volume, depth_clamp) = volume_pipeline(gpu, shaders, c)?;
         let silhouette = gpu.create_compute_pipeline(
             &ComputePipelineDesc {
                 name: format!("{NAME} silhouettes"),
