@@ -664,7 +664,15 @@ fn a_bake_that_cannot_be_stored_fails() {
     std::fs::write(&blocker, b"not a directory").unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/many_box.toml");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .args(["bake", path_str(&scene), "--method", "bsp_lights", "--size", "8x8", "--device"])
+        .args([
+            "bake",
+            path_str(&scene),
+            "--method",
+            "bsp_lights",
+            "--size",
+            "8x8",
+            "--device",
+        ])
         .arg(std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into()))
         .env("PENUMBRA_CACHE", &blocker)
         .output()
@@ -673,5 +681,8 @@ fn a_bake_that_cannot_be_stored_fails() {
     assert!(!o.status.success(), "exit 0 although nothing was stored:\n{out}\n{err}");
     assert!(out.contains("built, NOT stored"), "{out}");
     assert!(err.contains("a bake could not be stored in the cache"), "{err}");
-    assert!(std::fs::read(&blocker).unwrap() == b"not a directory", "the file in the way is kept");
+    assert!(
+        std::fs::read(&blocker).unwrap() == b"not a directory",
+        "the file in the way is kept"
+    );
 }
