@@ -261,3 +261,211 @@ fn only_the_lighting_layer_names_techniques() {
         }
     }
 }
+
+/// The longest a function may run, in lines from `fn` to its closing brace, without a reason.
+const LONG_FUNCTION_LINES: usize = 100;
+
+/// Long functions not yet split by their jobs (each does several: set-up, upload, pipelines, or
+/// a solver's phases), allowed through until they are. The list may only shrink: an entry whose
+/// function is no longer an unexplained long one fails.
+const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
+    ("src/backend/descriptors.rs", "bind"),
+    ("src/lighting/bsp_lights/setup.rs", "run"),
+    ("src/lighting/lightmap/solve.rs", "shoot"),
+    ("src/lighting/lpv/config.rs", "from_decl"),
+    ("src/lighting/lpv/mod.rs", "new"),
+    ("src/lighting/prt/config.rs", "from_decl"),
+    ("src/lighting/prt/mod.rs", "new"),
+    ("src/lighting/prt/raster.rs", "run"),
+    ("src/lighting/prt/raster.rs", "record_batch"),
+    ("src/lighting/prt/raycast.rs", "run"),
+    ("src/lighting/sh_lightmap/config.rs", "from_decl"),
+    ("src/lighting/sh_lightmap/gpu.rs", "run"),
+    ("src/lighting/sh_lightmap/mod.rs", "new"),
+    ("src/lighting/shadow_volumes/plan.rs", "plan_all"),
+    ("src/reference/scene_data.rs", "build_at"),
+    ("src/sh/product.rs", "new"),
+    ("src/world/compile.rs", "compile_with"),
+    ("src/world/level_gen.rs", "generate_rooms"),
+];
+
+/// `text` with comments, string and character literals blanked (newlines kept), so that braces
+/// and the word `fn` are counted only in code.
+fn blank_literals(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = b.to_vec();
+    let blank = |out: &mut Vec<u8>, from: usize, to: usize| {
+        for c in &mut out[from..to.min(b.len())] {
+            if *c != b'\n' {
+                *c = b' ';
+            }
+        }
+    };
+    let mut i = 0;
+    while i < b.len() {
+        let ident_before = i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_');
+        let end = if b[i..].starts_with(b"//") {
+            b[i..].iter().position(|&c| c == b'\n').map_or(b.len(), |n| i + n)
+        } else if b[i..].starts_with(b"/*") {
+            text[i + 2..].find("*/").map_or(b.len(), |n| i + 2 + n + 2)
+        } else if !ident_before && (b[i..].starts_with(b"r\"") || b[i..].starts_with(b"r#")) {
+            let hashes = b[i + 1..].iter().take_while(|&&c| c == b'#').count();
+            let close = format!("\"{}", "#".repeat(hashes));
+            let open = i + 2 + hashes;
+            text[open..].find(&close).map_or(b.len(), |n| open + n + close.len())
+        } else if b[i] == b'"' {
+            let mut j = i + 1;
+            while j < b.len() && b[j] != b'"' {
+                j += if b[j] == b'\\' { 2 } else { 1 };
+            }
+            j + 1
+        } else if b[i] == b'\'' {
+            // A character literal ('x', '\n', '\u{..}'), not a lifetime ('a).
+            let rest = &b[i + 1..];
+            let len = if rest.first() == Some(&b'\\') {
+                rest.iter().position(|&c| c == b'\'').map_or(0, |n| n + 2)
+            } else if rest.get(1) == Some(&b'\'') {
+                3
+            } else {
+                0
+            };
+            i + len.max(1)
+        } else {
+            i + 1
+        };
+        if end > i + 1 || b[i] == b'"' {
+            blank(&mut out, i, end);
+        }
+        i = end.max(i + 1);
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Every function with a body in `path`: (name, first line (1-based), length in lines).
+fn functions(path: &Path) -> Vec<(String, usize, usize)> {
+    let code = blank_literals(&std::fs::read_to_string(path).unwrap());
+    let b = code.as_bytes();
+    let line_of = |at: usize| code[..at].matches('\n').count() + 1;
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(n) = code[from..].find("fn ") {
+        let at = from + n;
+        from = at + 3;
+        if at > 0 && (b[at - 1].is_ascii_alphanumeric() || b[at - 1] == b'_') {
+            continue;
+        }
+        let name: String = code[at + 3..]
+            .trim_start()
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if name.is_empty() {
+            continue; // `fn(` types
+        }
+        // The body opens at the first `{` outside the signature's brackets; a `;` first means
+        // a declaration without a body.
+        let mut depth = 0i32;
+        let mut open = None;
+        for (k, &c) in b.iter().enumerate().skip(at) {
+            match c {
+                b'(' | b'[' | b'<' => depth += 1,
+                b')' | b']' => depth -= 1,
+                b'>' if b[k - 1] != b'-' && b[k - 1] != b'=' => depth -= 1,
+                b';' if depth <= 0 => break,
+                b'{' if depth <= 0 => {
+                    open = Some(k);
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let Some(open) = open else { continue };
+        let mut braces = 0;
+        let close = (open..b.len())
+            .find(|&k| {
+                match b[k] {
+                    b'{' => braces += 1,
+                    b'}' => braces -= 1,
+                    _ => {}
+                }
+                braces == 0
+            })
+            .unwrap_or(b.len() - 1);
+        out.push((name, line_of(at), line_of(close) - line_of(at) + 1));
+    }
+    out
+}
+
+/// Whether the comments and attributes right above line `line` (1-based) hold a `// long:` reason.
+fn has_long_reason(lines: &[&str], line: usize) -> bool {
+    lines[..line - 1]
+        .iter()
+        .rev()
+        .map(|l| l.trim())
+        .take_while(|l| l.starts_with("//") || l.starts_with("#["))
+        .any(|l| {
+            l.strip_prefix("// long:")
+                .is_some_and(|reason| !reason.trim().is_empty())
+        })
+}
+
+/// A function longer than a screen does several jobs (then it is split into functions named for
+/// them) or is one linear recipe, such as a pipeline description (then a `// long: <why>` line
+/// in the comments above it says so).
+#[test]
+fn long_functions_say_why() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    files.sort();
+    let mut unexplained = Vec::new();
+    let mut pending_seen = BTreeSet::new();
+    for f in &files {
+        let rel = f.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/");
+        let text = std::fs::read_to_string(f).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (name, line, len) in functions(f) {
+            if len <= LONG_FUNCTION_LINES || has_long_reason(&lines, line) {
+                continue;
+            }
+            if LONG_FUNCTIONS_PENDING.contains(&(rel.as_str(), name.as_str())) {
+                pending_seen.insert((rel.clone(), name));
+                continue;
+            }
+            unexplained.push(format!("{rel}:{line} fn {name}: {len} lines"));
+        }
+    }
+    assert!(
+        unexplained.is_empty(),
+        "functions over {LONG_FUNCTION_LINES} lines without a `// long: <why>` comment above them; split \
+         them by their jobs or say why they are one piece:\n{}",
+        unexplained.join("\n")
+    );
+    for (file, name) in LONG_FUNCTIONS_PENDING {
+        assert!(
+            pending_seen.contains(&(file.to_string(), name.to_string())),
+            "{file} fn {name} is no longer an unexplained long function: remove it from LONG_FUNCTIONS_PENDING"
+        );
+    }
+}
+
+/// The counter itself: a known function's length, and braces in literals and comments ignored.
+#[test]
+fn long_function_counter_counts_code_lines() {
+    let dir = std::env::temp_dir().join(format!("penumbra-long-fn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("sample.rs");
+    let body: String = (0..120).map(|i| format!("    let x{i} = '{{'; // }}\n")).collect();
+    let text = format!(
+        "fn short<'a>(s: &'a str) -> Vec<&'a str> {{\n    vec![s, \"}}\", r#\"{{\"#]\n}}\n\n\
+         // long: a test recipe.\nfn long() {{\n{body}}}\n/* fn hidden() {{ */\nfn after() {{}}\n"
+    );
+    std::fs::write(&path, &text).unwrap();
+    let found = functions(&path);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let names: Vec<(&str, usize, usize)> = found.iter().map(|(n, l, len)| (n.as_str(), *l, *len)).collect();
+    assert_eq!(names, [("short", 1, 3), ("long", 6, 122), ("after", 129, 1)]);
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(has_long_reason(&lines, 6));
+    assert!(!has_long_reason(&lines, 1));
+}

@@ -302,6 +302,7 @@ pub(crate) fn device_set_change() -> DeviceSetLock {
 }
 
 impl Gpu {
+    // long: one set-up recipe, instance to last object, under one exclusive hold and one tear-down path.
     pub fn new(desc: &GpuDesc) -> BackendResult<Gpu> {
         let entry = vulkan_loader()?;
         // From the instance to the last object of the new device, made under one exclusive hold.
@@ -466,6 +467,7 @@ impl Gpu {
         })
     }
 
+    // long: one recipe: pick the device, query its features and limits, enable what is used.
     fn create_device(
         _entry: &ash::Entry,
         instance: &ash::Instance,

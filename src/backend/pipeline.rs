@@ -510,6 +510,7 @@ impl Gpu {
         Ok(p[0])
     }
 
+    // long: one Vulkan graphics pipeline description, state by state.
     fn create_graphics_raw(
         &self,
         d: &GraphicsPipelineDesc,

@@ -19,7 +19,7 @@ use serde::Serialize;
 use crate::error::Result;
 pub use crate::util::progress::Progress;
 
-pub mod gpu_loop;
+pub(crate) mod gpu_loop;
 
 /// FNV-1a: a stable content hash (std's hasher may change between releases).
 pub fn fnv1a(bytes: &[u8]) -> u64 {

@@ -10,5 +10,5 @@ pub mod demo;
 pub mod profile;
 pub mod report;
 pub mod suite;
-pub mod supersample;
+pub(crate) mod supersample;
 pub mod views;

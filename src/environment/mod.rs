@@ -1,5 +1,5 @@
 //! The scene's environment, loaded once and checked, for every consumer: the raster methods'
-//! sky and irradiance ([`raster`]), the height-field methods' SH projection ([`EnvironmentMap::reduced`])
+//! sky and irradiance (`raster`), the height-field methods' SH projection ([`EnvironmentMap::reduced`])
 //! and the path tracer. Every texel is checked on the way in: a NaN, an infinity or a negative
 //! radiance is one error line naming the file and the pixel, never a silently wrong image.
 //!
@@ -25,7 +25,7 @@ use crate::backend::BackendError;
 use crate::error::{Error, Result};
 use crate::scene::{CubeFaces, Environment, Scene, CUBE_FACE_KEYS};
 
-pub mod raster;
+pub(crate) mod raster;
 
 /// Texel data must fit a storage buffer of the range every Vulkan device supports (2^27 bytes).
 const MAX_TEXELS: usize = (1 << 27) / 16;

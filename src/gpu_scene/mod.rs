@@ -7,7 +7,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::backend::{
-    vk, BackendError, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, VertexAttribute, VertexLayout,
+    vk, BackendError, Bind, BufferId, Gpu, ImageDesc, ImageId, SamplerDesc, SamplerId, SubresourceRange,
+    VertexAttribute, VertexLayout,
 };
 use crate::environment::raster::EnvironmentLighting;
 use crate::environment::EnvironmentMap;
@@ -164,6 +165,23 @@ pub struct MaterialMaps {
     pub albedo: ImageId,
     pub normal: ImageId,
     pub specular: ImageId,
+}
+
+impl MaterialMaps {
+    /// The three maps as the surface shaders declare them (`albedo_map`, `normal_map`,
+    /// `specular_map`), each whole, through `sampler`.
+    pub fn binds(&self, sampler: SamplerId) -> [(&'static str, Bind<'static>); 3] {
+        let sampled = |image| Bind::Sampled {
+            image,
+            range: SubresourceRange::mip(0),
+            sampler,
+        };
+        [
+            ("albedo_map", sampled(self.albedo)),
+            ("normal_map", sampled(self.normal)),
+            ("specular_map", sampled(self.specular)),
+        ]
+    }
 }
 
 pub struct SceneGpu {
@@ -352,6 +370,16 @@ fn push_vertices(vertices: &mut Vec<Vertex>, mesh: &Mesh) {
 }
 
 impl SceneGpu {
+    /// The lights as the shaders' `lights` storage block reads them (zeros for a scene without
+    /// lights: a storage binding cannot be empty).
+    pub fn light_bytes(&self) -> &[u8] {
+        if self.lights.is_empty() {
+            &[0u8; 64]
+        } else {
+            bytemuck::cast_slice(&self.lights)
+        }
+    }
+
     /// Uploads the scene; `environment` is its environment as [`EnvironmentMap::of_scene`]
     /// loaded it.
     pub fn upload(
@@ -360,64 +388,13 @@ impl SceneGpu {
         scene: &Scene,
         environment: &EnvironmentMap,
     ) -> Result<SceneGpu> {
-        let mut vertices: Vec<Vertex> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut draws = Vec::new();
-        let mut meshes = Vec::new();
+        let mut geometry = Geometry::default();
         for obj in &scene.objects {
             let mesh = obj.load_mesh(std::path::Path::new("."))?;
-            let first_index = indices.len() as u32;
-            let vertex_offset = vertices.len() as i32;
-            push_vertices(&mut vertices, &mesh);
-            indices.extend_from_slice(&mesh.indices);
-            draws.push(DrawItem {
-                name: obj.name.clone(),
-                object: Some(draws.len()),
-                first_index,
-                index_count: mesh.indices.len() as u32,
-                vertex_offset,
-                model: obj.transform,
-                material: obj.material as u32,
-            });
-            meshes.push(mesh);
+            let object = Some(geometry.draws.len());
+            geometry.push(obj.name.clone(), object, mesh, obj.transform, obj.material as u32);
         }
-        let mut gpu_materials = Vec::new();
-        let mut material_maps = Vec::new();
-        for (i, m) in scene.materials.iter().enumerate() {
-            let field = |key: &str| format!("{}: materials[{i}] ({:?}).{key}", scene.source, m.name);
-            gpu_materials.push(GpuMaterial {
-                albedo: m.albedo.extend(m.opacity).into(),
-                specular: m.specular.extend(m.exponent).into(),
-                emission: m.emission.extend(0.0).into(),
-                maps: [m.normal_map.is_some() as u32, 0, 0, 0],
-            });
-            material_maps.push(MaterialMaps {
-                albedo: load_texture(
-                    gpu,
-                    states,
-                    m.albedo_map.as_deref(),
-                    [255; 4],
-                    true,
-                    &field("albedo_map"),
-                )?,
-                normal: load_texture(
-                    gpu,
-                    states,
-                    m.normal_map.as_deref(),
-                    [128, 128, 255, 255],
-                    false,
-                    &field("normal_map"),
-                )?,
-                specular: load_texture(
-                    gpu,
-                    states,
-                    m.specular_map.as_deref(),
-                    [255; 4],
-                    false,
-                    &field("specular_map"),
-                )?,
-            });
-        }
+        let (mut gpu_materials, mut material_maps) = scene_materials(gpu, states, scene)?;
         let emitters = emitter_meshes(scene);
         if !emitters.is_empty() {
             let defaults = MaterialMaps {
@@ -434,62 +411,134 @@ impl SceneGpu {
                     maps: [0, 1, 0, 0],
                 });
                 material_maps.push(defaults);
-                draws.push(DrawItem {
-                    name: format!("{name} (emitter)"),
-                    object: None,
-                    first_index: indices.len() as u32,
-                    index_count: mesh.indices.len() as u32,
-                    vertex_offset: vertices.len() as i32,
-                    model: Mat4::IDENTITY,
-                    material,
-                });
-                push_vertices(&mut vertices, &mesh);
-                indices.extend_from_slice(&mesh.indices);
-                meshes.push(mesh);
+                geometry.push(format!("{name} (emitter)"), None, mesh, Mat4::IDENTITY, material);
             }
         }
-        if vertices.is_empty() {
-            vertices.push(Vertex::zeroed());
-            indices.extend([0, 0, 0]);
-        }
-        let vb = gpu.create_buffer_init(
-            "scene vertices",
-            vk::BufferUsageFlags::VERTEX_BUFFER
-                | vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_SRC,
-            bytemuck::cast_slice(&vertices),
-        )?;
-        let ib = gpu.create_buffer_init(
-            "scene indices",
-            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-            bytemuck::cast_slice(&indices),
-        )?;
-        if gpu_materials.is_empty() {
-            gpu_materials.push(GpuMaterial::zeroed());
-        }
-        let materials = gpu.create_buffer_init(
-            "materials",
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            bytemuck::cast_slice(&gpu_materials),
-        )?;
-        for id in [vb, ib, materials] {
-            // Uploads were waited for: nothing is pending on these buffers.
-            states.forget_buffer(id);
-        }
+        let (vb, ib, materials) = upload_buffers(gpu, states, &mut geometry, gpu_materials)?;
         let sampler = gpu.sampler(SamplerDesc::LINEAR_REPEAT)?;
         let environment = EnvironmentLighting::upload(gpu, states, scene, environment)?;
         Ok(SceneGpu {
             vertices: vb,
             indices: ib,
-            draws,
+            draws: geometry.draws,
             materials,
             material_maps,
             lights: raster_lights(scene),
             sampler,
-            meshes,
+            meshes: geometry.meshes,
             environment,
         })
     }
+}
+
+/// The scene's meshes in one vertex and one index list, with a draw per mesh.
+#[derive(Default)]
+struct Geometry {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    draws: Vec<DrawItem>,
+    meshes: Vec<Mesh>,
+}
+
+impl Geometry {
+    fn push(&mut self, name: String, object: Option<usize>, mesh: Mesh, model: Mat4, material: u32) {
+        self.draws.push(DrawItem {
+            name,
+            object,
+            first_index: self.indices.len() as u32,
+            index_count: mesh.indices.len() as u32,
+            vertex_offset: self.vertices.len() as i32,
+            model,
+            material,
+        });
+        push_vertices(&mut self.vertices, &mesh);
+        self.indices.extend_from_slice(&mesh.indices);
+        self.meshes.push(mesh);
+    }
+}
+
+/// The scene's materials as the shaders read them, and their texture maps (white, flat or
+/// full where a map is not given).
+fn scene_materials(
+    gpu: &mut Gpu,
+    states: &mut ResourceStates,
+    scene: &Scene,
+) -> Result<(Vec<GpuMaterial>, Vec<MaterialMaps>)> {
+    let mut gpu_materials = Vec::new();
+    let mut material_maps = Vec::new();
+    for (i, m) in scene.materials.iter().enumerate() {
+        let field = |key: &str| format!("{}: materials[{i}] ({:?}).{key}", scene.source, m.name);
+        gpu_materials.push(GpuMaterial {
+            albedo: m.albedo.extend(m.opacity).into(),
+            specular: m.specular.extend(m.exponent).into(),
+            emission: m.emission.extend(0.0).into(),
+            maps: [m.normal_map.is_some() as u32, 0, 0, 0],
+        });
+        material_maps.push(MaterialMaps {
+            albedo: load_texture(
+                gpu,
+                states,
+                m.albedo_map.as_deref(),
+                [255; 4],
+                true,
+                &field("albedo_map"),
+            )?,
+            normal: load_texture(
+                gpu,
+                states,
+                m.normal_map.as_deref(),
+                [128, 128, 255, 255],
+                false,
+                &field("normal_map"),
+            )?,
+            specular: load_texture(
+                gpu,
+                states,
+                m.specular_map.as_deref(),
+                [255; 4],
+                false,
+                &field("specular_map"),
+            )?,
+        });
+    }
+    Ok((gpu_materials, material_maps))
+}
+
+/// The vertex, index and material buffers (a degenerate triangle and a zero material stand in
+/// for none, as a buffer cannot be empty).
+fn upload_buffers(
+    gpu: &mut Gpu,
+    states: &mut ResourceStates,
+    geometry: &mut Geometry,
+    mut gpu_materials: Vec<GpuMaterial>,
+) -> Result<(BufferId, BufferId, BufferId)> {
+    if geometry.vertices.is_empty() {
+        geometry.vertices.push(Vertex::zeroed());
+        geometry.indices.extend([0, 0, 0]);
+    }
+    let vb = gpu.create_buffer_init(
+        "scene vertices",
+        vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+        bytemuck::cast_slice(&geometry.vertices),
+    )?;
+    let ib = gpu.create_buffer_init(
+        "scene indices",
+        vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+        bytemuck::cast_slice(&geometry.indices),
+    )?;
+    if gpu_materials.is_empty() {
+        gpu_materials.push(GpuMaterial::zeroed());
+    }
+    let materials = gpu.create_buffer_init(
+        "materials",
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        bytemuck::cast_slice(&gpu_materials),
+    )?;
+    for id in [vb, ib, materials] {
+        // Uploads were waited for: nothing is pending on these buffers.
+        states.forget_buffer(id);
+    }
+    Ok((vb, ib, materials))
 }
 
 #[cfg(test)]

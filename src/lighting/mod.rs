@@ -15,14 +15,14 @@
 pub mod brdf;
 pub mod lightmap;
 pub mod many_lights;
-pub mod params;
+pub(crate) mod params;
 pub mod plan;
 pub mod registry;
 mod terms;
 
 pub mod bsp_lights;
 pub mod clustered;
-pub mod forward;
+pub(crate) mod forward;
 pub mod heightfield;
 pub mod lpv;
 pub mod prt;
@@ -33,12 +33,15 @@ pub mod vls;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::backend::{vk, BlendMode, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, ImageId, SpecConstant};
+use crate::backend::{
+    vk, BackendResult, BlendMode, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, ImageId, Recorder, RenderTarget,
+    RenderingDesc, SpecConstant, SubresourceRange,
+};
 use crate::bake::Baker;
 use crate::environment::EnvironmentMap;
 use crate::error::Result;
 use crate::gpu_scene::SceneGpu;
-use crate::graph::{RenderGraph, ResourceStates};
+use crate::graph::{PassBuilder, RenderGraph, ResourceStates};
 use crate::scene::Scene;
 use crate::shaders::ShaderLibrary;
 
@@ -114,6 +117,37 @@ pub struct CreateContext<'a> {
     pub bakes: &'a mut Baker,
     /// The terms this method will draw in the configuration being created.
     pub terms: Terms,
+}
+
+/// A pass that draws surfaces into the frame's radiance with a [`term_pipeline_desc`] pipeline:
+/// drawing the base it writes the depth, otherwise it tests the base's.
+pub fn term_pass<'g, 'a>(
+    graph: &'g mut RenderGraph<'a>,
+    name: &str,
+    targets: FrameTargets,
+    base: bool,
+) -> PassBuilder<'g, 'a> {
+    let pass = graph
+        .pass(name)
+        .color_attachment(targets.radiance, SubresourceRange::mip(0), false);
+    if base {
+        pass.depth_stencil_write(targets.depth_stencil, false)
+    } else {
+        pass.depth_stencil_read(targets.depth_stencil)
+    }
+}
+
+/// Begins a [`term_pass`]'s rendering: onto the radiance as it is, the depth read-only unless
+/// the pass draws the base.
+pub fn begin_term_rendering(rec: &mut Recorder<'_>, targets: FrameTargets, base: bool) -> BackendResult<vk::Extent2D> {
+    let depth = RenderTarget {
+        read_only: !base,
+        ..RenderTarget::load(targets.depth_stencil)
+    };
+    rec.begin_rendering(&RenderingDesc {
+        colors: vec![RenderTarget::load(targets.radiance)],
+        depth_stencil: Some(depth),
+    })
 }
 
 /// The pipeline of a pass that draws the scene's surfaces and writes `terms` into the frame's

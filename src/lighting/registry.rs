@@ -50,6 +50,7 @@ pub struct MethodInfo {
 }
 
 /// Every method penumbra implements.
+// long: a table, one entry per method.
 pub fn registry() -> Vec<MethodInfo> {
     vec![
         MethodInfo {

@@ -5,15 +5,15 @@
 //! * radiance statistics ([`stats`]) on the linear RGB values as rendered, which say how far the
 //!   estimate is from the path-traced reference in physical terms (RMSE, relative MSE, bias,
 //!   p99 and max of the per-pixel error);
-//! * LDR-ꟻLIP ([`flip`]), which says how visible the difference is on a display after the same
+//! * LDR-ꟻLIP (`flip`), which says how visible the difference is on a display after the same
 //!   exposure and ACES fit that `penumbra` uses for its PNGs.
 //!
 //! Only the RGB channels are compared; alpha is ignored everywhere (including the finiteness
 //! check), since penumbra's captures carry no meaningful coverage.
 
-pub mod color;
-pub mod diff;
-pub mod flip;
+pub(crate) mod color;
+pub(crate) mod diff;
+pub(crate) mod flip;
 pub mod stats;
 
 #[cfg(test)]

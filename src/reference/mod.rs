@@ -25,7 +25,7 @@
 //!   unchanged, so a pixel sees `α·surface + (1 − α)·behind` and a pane lets `1 − α` of a
 //!   light's power through — the physical counterpart of the `shadow_volumes` method's
 //!   compromise (light through glass unattenuated);
-//! - albedo, normal and specular maps as the raster methods apply them (see [`scene_data`]);
+//! - albedo, normal and specular maps as the raster methods apply them (see `scene_data`);
 //!   the raster methods sample each map at a pixel's centre, the reference averages it over the
 //!   pixel, so fine texture detail differs between them by aliasing alone (the maps have one
 //!   mip level, so there is no mipmapping to differ);
@@ -68,7 +68,7 @@ pub mod export;
 
 pub mod features;
 
-pub mod scene_data;
+pub(crate) mod scene_data;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};

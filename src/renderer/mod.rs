@@ -5,19 +5,20 @@
 //! tone mapping for the window). One clock ([`FrameClock`]) drives every method's animation.
 
 mod frame_passes;
+mod output_passes;
 pub mod wind;
 
 use glam::Mat4;
 
 use crate::backend::{
-    vk, BufferDesc, BufferId, ColorTarget, Frame, Gpu, GraphicsPipelineDesc, ImageDesc, ImageId, MemoryKind, Overlay,
-    PassTiming, PipelineId, RenderTarget, RenderingDesc, ResourceScope, SamplerDesc, SubresourceRange,
+    vk, BufferDesc, BufferId, Frame, Gpu, ImageDesc, ImageId, MemoryKind, Overlay, PassTiming, PipelineId,
+    ResourceScope, SamplerDesc,
 };
 use crate::bake::{BakeReport, Baker};
 use crate::environment::EnvironmentMap;
 use crate::error::{Error, Result};
 use crate::gpu_scene::{GpuLight, SceneGpu};
-use crate::graph::{Access, ExecutionReport, RenderGraph, ResourceStates};
+use crate::graph::{ExecutionReport, RenderGraph, ResourceStates};
 use crate::lighting::{
     registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod,
     Term, Terms, RADIANCE_FORMAT,
@@ -292,9 +293,51 @@ impl Renderer {
     }
 
     /// Renders one frame and waits for it when the output is a readback.
-    pub fn render(&mut self, camera: &Camera, output: FrameOutput<'_>) -> Result<FrameResult> {
+    pub fn render(&mut self, camera: &Camera, mut output: FrameOutput<'_>) -> Result<FrameResult> {
         let uniforms = self.uniforms(camera);
-        let radiance_readback = match &output {
+        self.prepare_output(&output)?;
+        let display_sampler = self.gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
+        let frame = self.frames[self.frame_index % self.frames.len()];
+        self.frame_index += 1;
+        let clock = FrameClock::at(self.clock_frame);
+        self.clock_frame += 1;
+        self.animate_lights(clock.time_s);
+        let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
+        self.prepare_methods(uniforms, clock, &terms)?;
+
+        // The graph borrows the renderer's parts field by field, so that executing it can update
+        // `states` while they are borrowed.
+        let mut graph = RenderGraph::new();
+        let scene = ScenePasses {
+            gpu: &self.gpu,
+            scene_gpu: &self.scene_gpu,
+            wind: self.wind.as_ref(),
+            passes: &self.passes,
+            methods: &self.methods,
+            targets: self.targets,
+            uniforms,
+            clock,
+        };
+        scene.add(&mut graph, &terms)?;
+        let outputs = output_passes::OutputResources {
+            readback: self.readback,
+            present_readback: self.present_readback,
+            tonemap: self.tonemap.map(|(pipeline, _)| pipeline),
+            display_sampler,
+        };
+        outputs.add(&mut graph, self.targets, &mut output)?;
+        let report = execute_frame(&self.gpu, frame, graph, &mut self.states)?;
+        let image = match output {
+            FrameOutput::Readback => self.wait_for_radiance(frame)?,
+            _ => None,
+        };
+        Ok(FrameResult { report, image })
+    }
+
+    /// Creates what `output` copies or draws into, on its first use or when its size or format
+    /// changed: the radiance read-back buffer, the presented-pixels buffer, the tone-map pipeline.
+    fn prepare_output(&mut self, output: &FrameOutput<'_>) -> Result<()> {
+        let radiance_readback = match output {
             FrameOutput::Readback => true,
             FrameOutput::Present { radiance, .. } => *radiance,
             FrameOutput::None => false,
@@ -308,49 +351,48 @@ impl Renderer {
                 memory: MemoryKind::GpuToCpu,
             })?);
         }
-        if let FrameOutput::Present { image, readback, .. } = &output {
+        if let FrameOutput::Present { image, readback, .. } = output {
             let d = self.gpu.image_desc(*image)?;
-            let format = d.format;
-            let bytes = d.extent.width as u64 * d.extent.height as u64 * 4;
-            if *readback
-                && self
-                    .present_readback
-                    .map(|b| self.gpu.buffer_desc(b).map(|d| d.size).unwrap_or(0))
-                    != Some(bytes)
-            {
-                if let Some(old) = self.present_readback.take() {
-                    self.gpu.destroy_buffer(old);
-                    self.states.forget_buffer(old);
-                }
-                self.present_readback = Some(self.gpu.create_buffer(&BufferDesc {
-                    name: "presented pixels".into(),
-                    size: bytes,
-                    usage: vk::BufferUsageFlags::TRANSFER_DST,
-                    memory: MemoryKind::GpuToCpu,
-                })?);
+            let (format, bytes) = (d.format, d.extent.width as u64 * d.extent.height as u64 * 4);
+            if *readback {
+                self.prepare_present_readback(bytes)?;
             }
             if self.tonemap.map(|t| t.1) != Some(format) {
-                let mut desc = GraphicsPipelineDesc::new("tonemap", "post/fullscreen.vert", Some("post/tonemap.frag"));
-                desc.raster.cull = vk::CullModeFlags::NONE;
-                desc.depth = crate::backend::DepthState {
-                    test: false,
-                    write: false,
-                    compare: vk::CompareOp::ALWAYS,
-                };
-                desc.color_targets = vec![ColorTarget::new(format)];
-                self.tonemap = Some((self.gpu.create_graphics_pipeline(&desc, &self.shaders)?, format));
+                let pipeline = output_passes::create_tonemap(&mut self.gpu, &self.shaders, format)?;
+                self.tonemap = Some((pipeline, format));
             }
         }
-        let display_sampler = self.gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
-        let frame = self.frames[self.frame_index % self.frames.len()];
-        self.frame_index += 1;
+        Ok(())
+    }
 
-        let clock = FrameClock::at(self.clock_frame);
-        self.clock_frame += 1;
+    /// (Re)creates the presented-pixels buffer unless it already holds `bytes`.
+    fn prepare_present_readback(&mut self, bytes: u64) -> Result<()> {
+        let current = self
+            .present_readback
+            .map(|b| self.gpu.buffer_desc(b).map(|d| d.size).unwrap_or(0));
+        if current == Some(bytes) {
+            return Ok(());
+        }
+        if let Some(old) = self.present_readback.take() {
+            self.gpu.destroy_buffer(old);
+            self.states.forget_buffer(old);
+        }
+        self.present_readback = Some(self.gpu.create_buffer(&BufferDesc {
+            name: "presented pixels".into(),
+            size: bytes,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuToCpu,
+        })?);
+        Ok(())
+    }
+
+    /// Sets the uploaded lights to their state at `time_s`: the light board's intensities and the
+    /// light motion's direction. Runs before the methods' `prepare`, so every method that reads
+    /// the lights per frame sees this frame's lights.
+    fn animate_lights(&mut self, time_s: f32) {
         if self.scene.light_board.is_some() {
-            // Before `prepare`, so every method that reads the lights per frame sees this
-            // frame's intensities; `raster_lights` keeps one entry per scene light, in order.
-            let factors = self.scene.light_factors(clock.time_s);
+            // `raster_lights` keeps one entry per scene light, in order.
+            let factors = self.scene.light_factors(time_s);
             for ((light, base), f) in self.scene_gpu.lights.iter_mut().zip(&self.static_lights).zip(factors) {
                 light.intensity = [
                     base.intensity[0] * f,
@@ -361,16 +403,17 @@ impl Renderer {
             }
         }
         if let Some(m) = &self.scene.light_motion {
-            // The same for the light motion: every method reads the turned direction.
             if let (Some(light), Some(base)) = (self.scene_gpu.lights.get_mut(m.light), self.static_lights.get(m.light))
             {
-                let d = m.direction_at(glam::Vec3::from_slice(&base.direction[..3]), clock.time_s);
+                let d = m.direction_at(glam::Vec3::from_slice(&base.direction[..3]), time_s);
                 light.direction = d.extend(0.0).into();
             }
         }
-        let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
-        let has_base = terms.iter().any(|t| t.has(Term::Base));
-        for (method, &terms) in self.methods.iter_mut().zip(&terms) {
+    }
+
+    /// Lets every method update its per-frame state before the frame's passes are recorded.
+    fn prepare_methods(&mut self, uniforms: FrameUniforms, clock: FrameClock, terms: &[Terms]) -> Result<()> {
+        for (method, &terms) in self.methods.iter_mut().zip(terms) {
             let ctx = FrameContext {
                 gpu: &self.gpu,
                 scene: &self.scene_gpu,
@@ -381,133 +424,22 @@ impl Renderer {
             };
             method.prepare(&ctx)?;
         }
-        let gpu = &self.gpu;
-        let mut graph = RenderGraph::new();
-        if let Some(w) = &self.wind {
-            w.add(&mut graph, &self.scene_gpu, clock.time_s);
-        }
-        // The background: targets cleared and, under a base term, the sky everywhere (the base
-        // then draws over it, so the sky stays where no geometry is).
-        self.passes
-            .add_background(&mut graph, &self.scene_gpu, self.targets, &uniforms, has_base);
-        if !has_base {
-            self.passes
-                .add_depth(&mut graph, &self.scene_gpu, self.targets, &uniforms);
-        }
-        for (method, &terms) in self.methods.iter().zip(&terms) {
-            let ctx = FrameContext {
-                gpu,
-                scene: &self.scene_gpu,
-                targets: self.targets,
-                uniforms,
-                clock,
-                terms,
-            };
-            method.add_passes(&mut graph, &ctx)?;
-        }
-        let t = self.targets;
-        let mut output = output;
-        match &mut output {
-            FrameOutput::None => graph.output_image(t.radiance),
-            FrameOutput::Readback => {
-                let rb = self
-                    .readback
-                    .ok_or_else(|| Error::Internal("readback buffer missing".into()))?;
-                graph
-                    .pass("readback")
-                    .transfer_read(t.radiance, SubresourceRange::mip(0))
-                    .buffer(rb, Access::TransferWrite, None)
-                    .record(move |ctx| ctx.rec.copy_image_to_buffer(t.radiance, 0, 0, rb));
-                // Makes the copy visible to the host once the frame's fence has signalled.
-                graph
-                    .pass("host visibility")
-                    .buffer(rb, Access::HostRead, None)
-                    .record(|_| Ok(()));
-            }
-            FrameOutput::Present {
-                image,
-                exposure,
-                readback,
-                radiance,
-                overlay,
-            } => {
-                if *radiance {
-                    let rb = self
-                        .readback
-                        .ok_or_else(|| Error::Usage("readback buffer missing".into()))?;
-                    graph
-                        .pass("radiance readback")
-                        .transfer_read(t.radiance, SubresourceRange::mip(0))
-                        .buffer(rb, Access::TransferWrite, None)
-                        .record(move |ctx| ctx.rec.copy_image_to_buffer(t.radiance, 0, 0, rb));
-                    graph
-                        .pass("radiance host visibility")
-                        .buffer(rb, Access::HostRead, None)
-                        .record(|_| Ok(()));
-                }
-                let (pipeline, _) = self
-                    .tonemap
-                    .ok_or_else(|| Error::Internal("tonemap pipeline missing".into()))?;
-                let (image, exposure) = (*image, *exposure);
-                let present_readback = if *readback { self.present_readback } else { None };
-                graph
-                    .pass("tonemap")
-                    .sample(
-                        "hdr",
-                        t.radiance,
-                        SubresourceRange::mip(0),
-                        display_sampler,
-                        vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                    )
-                    .color_attachment(image, SubresourceRange::mip(0), true)
-                    .record(move |ctx| {
-                        let _extent = ctx.rec.begin_rendering(&RenderingDesc {
-                            colors: vec![RenderTarget::clear_color(image, [0.0; 4])],
-                            depth_stencil: None,
-                        })?;
-                        ctx.rec.bind_pipeline(pipeline)?;
-                        ctx.bind(&[])?;
-                        ctx.rec.push_constants(&exposure.to_le_bytes())?;
-                        ctx.rec.draw(3, 1)?;
-                        ctx.rec.end_rendering();
-                        Ok(())
-                    });
-                if let Some(overlay) = overlay.take() {
-                    graph
-                        .pass("overlay")
-                        .color_attachment(image, SubresourceRange::mip(0), false)
-                        .record(move |ctx| overlay.record(ctx.rec, image));
-                }
-                if let Some(rb) = present_readback {
-                    graph
-                        .pass("screenshot readback")
-                        .transfer_read(image, SubresourceRange::mip(0))
-                        .buffer(rb, Access::TransferWrite, None)
-                        .record(move |ctx| ctx.rec.copy_image_to_buffer(image, 0, 0, rb));
-                    graph
-                        .pass("screenshot host visibility")
-                        .buffer(rb, Access::HostRead, None)
-                        .record(|_| Ok(()));
-                }
-                graph.pass("present").present(image).record(|_| Ok(()));
-            }
-        }
-        let mut rec = gpu.begin_frame(frame)?;
-        rec.begin_scope("frame");
-        let report = graph.execute(&mut rec, &mut self.states)?;
-        rec.end_scope();
-        rec.finish()?;
-        Ok(FrameResult { report, image: None }).and_then(|mut r| {
-            if matches!(output, FrameOutput::Readback) {
-                gpu.submit_and_wait(frame)?;
-                let rb = self
-                    .readback
-                    .ok_or_else(|| Error::Internal("readback buffer missing".into()))?;
-                let bytes = gpu.read_buffer(rb)?;
-                r.image = HdrImage::from_rgba32f_bytes(t.width, t.height, &bytes);
-            }
-            Ok(r)
-        })
+        Ok(())
+    }
+
+    /// Submits `frame`, waits for it and reads the radiance it copied to the host (`None` when the
+    /// bytes do not make an image of the target's size).
+    fn wait_for_radiance(&self, frame: Frame) -> Result<Option<HdrImage>> {
+        self.gpu.submit_and_wait(frame)?;
+        let rb = self
+            .readback
+            .ok_or_else(|| Error::Internal("readback buffer missing".into()))?;
+        let bytes = self.gpu.read_buffer(rb)?;
+        Ok(HdrImage::from_rgba32f_bytes(
+            self.targets.width,
+            self.targets.height,
+            &bytes,
+        ))
     }
 
     /// The pixels of the last frame rendered with `Present { readback: true }`, as 8-bit RGBA
@@ -587,6 +519,64 @@ impl Renderer {
         }
         Ok(ids.len())
     }
+}
+
+/// What the scene part of a frame draws with: the renderer's passes around the methods, and the
+/// methods' own.
+struct ScenePasses<'a> {
+    gpu: &'a Gpu,
+    scene_gpu: &'a SceneGpu,
+    wind: Option<&'a wind::WindPass>,
+    passes: &'a frame_passes::FramePasses,
+    methods: &'a [Box<dyn LightingMethod>],
+    targets: FrameTargets,
+    uniforms: FrameUniforms,
+    clock: FrameClock,
+}
+
+impl<'a> ScenePasses<'a> {
+    /// The wind, the background (targets cleared and, under a base term, the sky everywhere: the
+    /// base then draws over it, so the sky stays where no geometry is), the scene's depth when no
+    /// method draws a base term, then each method's passes for its `terms`.
+    fn add(&self, graph: &mut RenderGraph<'a>, terms: &[Terms]) -> Result<()> {
+        if let Some(w) = self.wind {
+            w.add(graph, self.scene_gpu, self.clock.time_s);
+        }
+        let has_base = terms.iter().any(|t| t.has(Term::Base));
+        self.passes
+            .add_background(graph, self.scene_gpu, self.targets, &self.uniforms, has_base);
+        if !has_base {
+            self.passes
+                .add_depth(graph, self.scene_gpu, self.targets, &self.uniforms);
+        }
+        for (method, &terms) in self.methods.iter().zip(terms) {
+            let ctx = FrameContext {
+                gpu: self.gpu,
+                scene: self.scene_gpu,
+                targets: self.targets,
+                uniforms: self.uniforms,
+                clock: self.clock,
+                terms,
+            };
+            method.add_passes(graph, &ctx)?;
+        }
+        Ok(())
+    }
+}
+
+/// Records `graph` into `frame`'s command buffer (not yet submitted).
+fn execute_frame(
+    gpu: &Gpu,
+    frame: Frame,
+    graph: RenderGraph<'_>,
+    states: &mut ResourceStates,
+) -> Result<ExecutionReport> {
+    let mut rec = gpu.begin_frame(frame)?;
+    rec.begin_scope("frame");
+    let report = graph.execute(&mut rec, states)?;
+    rec.end_scope();
+    rec.finish()?;
+    Ok(report)
 }
 
 fn create_targets(gpu: &mut Gpu, (width, height): (u32, u32)) -> Result<FrameTargets> {

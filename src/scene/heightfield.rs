@@ -397,6 +397,7 @@ pub(crate) const HEIGHTFIELD_KEYS: &[&str] = &[
 const GENERATORS: [&str; 8] = ["flat", "slope", "step", "sine", "cones", "fbm", "eggtray", "city"];
 
 /// Reads the keys of a `mesh = "heightfield"` object.
+// long: one key of the height field after another, each read and checked.
 pub(crate) fn read(t: &Table) -> Result<HeightfieldSource, SceneError> {
     let opt_num = |k: &str, what: &str, ok: &dyn Fn(f32) -> bool| -> Result<Option<f32>, SceneError> {
         t.get(k).map(|f| f.number_where(what, ok)).transpose()

@@ -13,17 +13,17 @@
 //! Conventions: right-handed world, y up, metres, linear RGB, radiometric units (W/sr, W/m²,
 //! W/(m²·sr)). Every error is a [`SceneError`] naming file, line and field on one line.
 
-pub mod asset;
+pub(crate) mod asset;
 mod cornell;
 mod doc;
 mod error;
 mod format;
 pub mod generate;
 pub mod generators;
-pub mod heightfield;
+pub(crate) mod heightfield;
 mod mesh;
 mod methods;
-pub mod motion;
+pub(crate) mod motion;
 mod obj;
 #[cfg(test)]
 mod tests;
@@ -150,7 +150,7 @@ impl Scene {
 
     /// Reads and checks a scene file. Relative paths inside it are relative to its directory.
     /// Errors name the file as `path` was given. An asset file (`.obj`, `.gltf`, `.glb`) is a
-    /// scene of its own ([`asset::asset_scene`]).
+    /// scene of its own (`asset::asset_scene`).
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         if asset::is_asset_path(path) {

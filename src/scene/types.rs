@@ -136,7 +136,7 @@ pub enum MeshSource {
     /// A Wavefront OBJ file (absolute path once parsed).
     Obj(PathBuf),
     /// Part `part` (the triangles of one material) of an asset file (OBJ + MTL or glTF, see
-    /// [`crate::scene::asset`]), as read when the scene was parsed, in the asset's space.
+    /// `crate::scene::asset`), as read when the scene was parsed, in the asset's space.
     Asset {
         path: PathBuf,
         part: usize,
@@ -170,7 +170,7 @@ pub enum MeshSource {
         height: f32,
         leaf_size: f32,
     },
-    /// A height field over a square in the xz-plane (see [`crate::scene::heightfield`]):
+    /// A height field over a square in the xz-plane (see `crate::scene::heightfield`):
     /// generated or loaded from an image, traced and drawn at its time-0 shape.
     Heightfield(super::heightfield::HeightfieldSource),
     /// The faces of one material class (`class`, a [`crate::world::MaterialId`]) of a compiled

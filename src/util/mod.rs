@@ -4,6 +4,6 @@
 
 pub mod console;
 pub mod image_io;
-pub mod parallel;
+pub(crate) mod parallel;
 pub mod progress;
 pub mod timing;

@@ -15,15 +15,15 @@
 //! the ~1e-12 rounding of f64 coordinates of ~100 after dozens of splits, far below any modelled
 //! detail). Polygons under [`MIN_POLYGON_AREA`] (1 mm²) are dropped as degenerate and counted.
 
-pub mod brush;
-pub mod bsp;
-pub mod casters;
-pub mod compile;
+pub(crate) mod brush;
+pub(crate) mod bsp;
+pub(crate) mod casters;
+pub(crate) mod compile;
 pub mod level_gen;
 pub mod polygon;
-pub mod portals;
-pub mod pvs;
-pub mod raycast;
+pub(crate) mod portals;
+pub(crate) mod pvs;
+pub(crate) mod raycast;
 
 #[cfg(test)]
 mod tests;
@@ -137,7 +137,7 @@ impl CompiledWorld {
     }
 
     /// The empty leaves a box reaches, ascending: a conservative descent of the tree (see
-    /// [`bsp::Tree::box_leaves`]).
+    /// `bsp::Tree::box_leaves`).
     pub fn box_leaves(&self, b: &Aabb) -> Vec<LeafId> {
         let mut out = self.tree.box_leaves(b);
         out.retain(|&l| !self.is_solid(l));

@@ -499,93 +499,12 @@ fn non_finite_pixel(image: &HdrImage) -> Option<(u32, u32)> {
 /// [`run`], keeping the images the rows were measured on.
 pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
     let scene = Scene::from_file(&opts.scene)?;
-    if !(opts.timing_budget_s.is_finite() && opts.timing_budget_s >= 0.0) {
-        return Err(Error::Usage(format!(
-            "--timing-budget {}: expected seconds, at least 0 (0: every --frames frame)",
-            opts.timing_budget_s
-        )));
-    }
-    if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
-        return Err(Error::Usage(format!(
-            "--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)",
-            opts.reference_noise
-        )));
-    }
-    crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
+    check_options(opts)?;
     let mut device = String::new();
-    let mut skipped: Vec<String> = Vec::new();
-    let all = registry::configurations(&scene)?;
-    for name in &opts.methods {
-        if !all.iter().any(|c| c.name == *name) {
-            let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
-            return Err(Error::Usage(format!(
-                "{}: --method {name}: the scene has no such method or combination (it has {})",
-                opts.scene.display(),
-                known.join(", ")
-            )));
-        }
-    }
-    // Every configuration first, so that each reference knows the errors it must resolve.
-    let mut swept = Vec::new();
-    for configuration in all
-        .into_iter()
-        .filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name))
-    {
-        // Defaults derived from the scene are part of what is measured: said once, swept around.
-        let (configuration, notes) = registry::plan(&configuration, &scene)?;
-        for line in notes {
-            crate::errln!("{line}");
-        }
-        let kind = registry::reference_kind(&configuration)?;
-        swept.push((configuration.name.clone(), kind, registry::sweep(&configuration)?));
-    }
-    let total = swept.iter().map(|(_, _, p)| p.len() as u64).sum();
-    let mut progress = crate::util::progress::Progress::new("chart (configurations)");
-    let mut measured: Vec<(String, String, ReferenceKind, Measured)> = Vec::new();
-    let mut done = 0;
-    for (method, kind, points) in swept {
-        for (i, (config, point)) in points.into_iter().enumerate() {
-            progress.update(done, total);
-            done += 1;
-            match measure(&scene, &point, opts) {
-                Ok(m) => measured.push((method.clone(), config, kind, m)),
-                // A swept point beyond one of the method's limits for this scene (a finer
-                // segmentation over its memory limit) is left out with its reason; the scene's
-                // own configuration must run.
-                Err(e @ (Error::Usage(_) | Error::Scene(_))) if i > 0 => {
-                    let why = e.to_string();
-                    progress.finish();
-                    eprintln!("chart: {config} left out: {why}");
-                    skipped.push(format!("{config}: {why}"));
-                }
-                Err(e) => return Err(e),
-            }
-        }
-    }
-    progress.update(done, total);
-    progress.finish();
-    // One reference per kind, asked for the error the images it judges need (the supersampled
-    // ones when there are: those are the lighting errors the chart shows).
-    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
-    let mut references: Vec<(ChartReference, Metrics)> = Vec::new();
-    for (_, _, kind, _) in &measured {
-        let key = format!("{kind:?}");
-        if keys.contains_key(&key) {
-            continue;
-        }
-        let judged: Vec<&HdrImage> = measured
-            .iter()
-            .filter(|(_, _, k, m)| k == kind && non_finite_pixel(judged_image(m)).is_none())
-            .map(|(_, _, _, m)| judged_image(m))
-            .collect();
-        if judged.is_empty() {
-            continue;
-        }
-        let reference = reference_image(&scene, opts.size, *kind, &judged, opts)?;
-        let noise = reference_noise(&reference.image)?;
-        keys.insert(key, references.len());
-        references.push((reference, noise));
-    }
+    let all = chosen_configurations(&scene, opts)?;
+    let swept = sweep_each(all, &scene)?;
+    let (measured, skipped) = measure_all(&scene, swept, opts)?;
+    let (keys, references) = references_for(&scene, &measured, opts)?;
     let (mut rows, mut images, mut reference_of, mut non_finite) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (method, config, kind, m) in measured {
         device = m.device.clone();
@@ -632,11 +551,144 @@ pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
         non_finite,
         frame: opts.frame,
     };
+    write_outputs(&chart, &scene, opts)?;
+    Ok(ChartRun {
+        chart,
+        images,
+        references: references.into_iter().map(|(r, _)| r).collect(),
+        reference_of,
+    })
+}
+
+/// Refuses a timing budget or reference noise that is not a number of at least 0, and a
+/// supersampled size over the limit.
+fn check_options(opts: &ChartOptions) -> Result<()> {
+    if !(opts.timing_budget_s.is_finite() && opts.timing_budget_s >= 0.0) {
+        return Err(Error::Usage(format!(
+            "--timing-budget {}: expected seconds, at least 0 (0: every --frames frame)",
+            opts.timing_budget_s
+        )));
+    }
+    if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
+        return Err(Error::Usage(format!(
+            "--reference-noise {}: expected a fraction of at least 0 (0: exactly --reference-spp)",
+            opts.reference_noise
+        )));
+    }
+    crate::commands::supersample::supersampled_size(opts.size, opts.supersample)?;
+    Ok(())
+}
+
+/// The scene's configurations that `--method` chose (all without it); an unknown name is an
+/// error listing the known ones.
+fn chosen_configurations(scene: &Scene, opts: &ChartOptions) -> Result<Vec<Configuration>> {
+    let all = registry::configurations(scene)?;
+    for name in &opts.methods {
+        if !all.iter().any(|c| c.name == *name) {
+            let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+            return Err(Error::Usage(format!(
+                "{}: --method {name}: the scene has no such method or combination (it has {})",
+                opts.scene.display(),
+                known.join(", ")
+            )));
+        }
+    }
+    Ok(all
+        .into_iter()
+        .filter(|c| opts.methods.is_empty() || opts.methods.contains(&c.name))
+        .collect())
+}
+
+/// Each configuration's name, reference kind and swept points (name, configuration), with the
+/// defaults derived from the scene said once.
+type Swept = Vec<(String, ReferenceKind, Vec<(String, Configuration)>)>;
+
+fn sweep_each(all: Vec<Configuration>, scene: &Scene) -> Result<Swept> {
+    // Every configuration first, so that each reference knows the errors it must resolve.
+    let mut swept = Vec::new();
+    for configuration in all {
+        // Defaults derived from the scene are part of what is measured: said once, swept around.
+        let (configuration, notes) = registry::plan(&configuration, scene)?;
+        for line in notes {
+            crate::errln!("{line}");
+        }
+        let kind = registry::reference_kind(&configuration)?;
+        swept.push((configuration.name.clone(), kind, registry::sweep(&configuration)?));
+    }
+    Ok(swept)
+}
+
+/// A measured point: method, configuration name, reference kind, measurement.
+type MeasuredPoint = (String, String, ReferenceKind, Measured);
+
+/// Renders and times every swept point; a point past the method's limits for this scene (not
+/// the scene's own configuration) is left out with its reason, in the second list.
+fn measure_all(scene: &Scene, swept: Swept, opts: &ChartOptions) -> Result<(Vec<MeasuredPoint>, Vec<String>)> {
+    let mut skipped: Vec<String> = Vec::new();
+    let total = swept.iter().map(|(_, _, p)| p.len() as u64).sum();
+    let mut progress = crate::util::progress::Progress::new("chart (configurations)");
+    let mut measured: Vec<MeasuredPoint> = Vec::new();
+    let mut done = 0;
+    for (method, kind, points) in swept {
+        for (i, (config, point)) in points.into_iter().enumerate() {
+            progress.update(done, total);
+            done += 1;
+            match measure(scene, &point, opts) {
+                Ok(m) => measured.push((method.clone(), config, kind, m)),
+                // A swept point beyond one of the method's limits for this scene (a finer
+                // segmentation over its memory limit) is left out with its reason; the scene's
+                // own configuration must run.
+                Err(e @ (Error::Usage(_) | Error::Scene(_))) if i > 0 => {
+                    let why = e.to_string();
+                    progress.finish();
+                    eprintln!("chart: {config} left out: {why}");
+                    skipped.push(format!("{config}: {why}"));
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    progress.update(done, total);
+    progress.finish();
+    Ok((measured, skipped))
+}
+
+/// One reference per kind, and where each kind's is in the list.
+type References = (BTreeMap<String, usize>, Vec<(ChartReference, Metrics)>);
+
+fn references_for(scene: &Scene, measured: &[MeasuredPoint], opts: &ChartOptions) -> Result<References> {
+    // One reference per kind, asked for the error the images it judges need (the supersampled
+    // ones when there are: those are the lighting errors the chart shows).
+    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
+    let mut references: Vec<(ChartReference, Metrics)> = Vec::new();
+    for (_, _, kind, _) in measured {
+        let key = format!("{kind:?}");
+        if keys.contains_key(&key) {
+            continue;
+        }
+        let judged: Vec<&HdrImage> = measured
+            .iter()
+            .filter(|(_, _, k, m)| k == kind && non_finite_pixel(judged_image(m)).is_none())
+            .map(|(_, _, _, m)| judged_image(m))
+            .collect();
+        if judged.is_empty() {
+            continue;
+        }
+        let reference = reference_image(scene, opts.size, *kind, &judged, opts)?;
+        let noise = reference_noise(&reference.image)?;
+        keys.insert(key, references.len());
+        references.push((reference, noise));
+    }
+    Ok((keys, references))
+}
+
+/// The chart's CSV into the cache (for `capture --max-error`) and, as asked, beside the PNG.
+fn write_outputs(chart: &Chart, scene: &Scene, opts: &ChartOptions) -> Result<()> {
     let csv = chart.csv();
     std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
     let cached = opts
         .cache_dir
-        .join(format!("chart-{}.csv", cache_key(&scene, opts.size, "chart")));
+        .join(format!("chart-{}.csv", cache_key(scene, opts.size, "chart")));
     crate::util::image_io::write_file(&cached, csv.as_bytes())
         .map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
     if let Some(p) = &opts.csv {
@@ -644,14 +696,9 @@ pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
             .map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
     }
     if let Some(p) = &opts.png {
-        plot::draw(&chart, p)?;
+        plot::draw(chart, p)?;
     }
-    Ok(ChartRun {
-        chart,
-        images,
-        references: references.into_iter().map(|(r, _)| r).collect(),
-        reference_of,
-    })
+    Ok(())
 }
 
 /// The image a row's plotted metrics judge: the supersampled one when there is.

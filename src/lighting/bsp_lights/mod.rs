@@ -22,7 +22,7 @@
 //! `k·ρ·cos/d` model with its linear spot ramp, projects every occluder vertex as written and
 //! rounds every coordinate to four decimals with planes as thick (the thesis's §5.6.1).
 
-pub mod painter;
+pub(crate) mod painter;
 pub mod setup;
 
 #[cfg(test)]
@@ -31,16 +31,20 @@ mod tests;
 use bytemuck::{Pod, Zeroable};
 
 use crate::backend::{
-    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
-    SpecConstant, SubresourceRange, VertexAttribute, VertexLayout,
+    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, SpecConstant, VertexAttribute,
+    VertexLayout,
 };
 use crate::bake::{BakeData, BakeKey};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::lighting::many_lights::{scene_polygons, LightModel, ManyLight};
 use crate::lighting::params::Params;
-use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, Terms};
+use crate::lighting::{
+    begin_term_rendering, term_pass, term_pipeline_desc, CreateContext, FrameContext, LightingMethod, ReferenceKind,
+    Term, Terms,
+};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
+use crate::shaders::ShaderLibrary;
 use crate::world::Tolerance;
 use setup::Projection;
 
@@ -165,7 +169,7 @@ pub fn choose_layout(layout: Layout, vertices: usize, lights: usize, non_zero: u
     }
 }
 
-/// How hidden surfaces are removed when this method draws the base ([`painter`]).
+/// How hidden surfaces are removed when this method draws the base (`painter`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Hidden {
     /// The depth buffer.
@@ -476,6 +480,258 @@ pub fn bake_scene(
         setup::run(&polygons, &lights, &settings, progress).map_err(|m| field_error(scene, "max_segment_area", m))?;
     Ok((s, polygons))
 }
+/// The set-up (segments, their colours, the light matrix), baked or read from the cache, checked
+/// against the scene and the device's limit.
+fn bake_setup(cx: &mut CreateContext<'_>, config: &Config, lights: &[ManyLight], limit: u64) -> Result<Baked> {
+    let scene = cx.scene;
+    let geometry = crate::lighting::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
+    let polygons = scene_polygons(&scene.source, &geometry, NAME)?;
+    if polygons.is_empty() {
+        return Err(Error::Usage(format!(
+            "{}: {NAME}: the scene has no static polygons to light",
+            scene.source
+        )));
+    }
+    let geometry_floats: Vec<f64> = polygons
+        .iter()
+        .flat_map(|p| {
+            p.polygon
+                .vertices
+                .iter()
+                .flat_map(|v| v.to_array())
+                .chain(p.albedo.to_array())
+                .chain(p.emission.to_array())
+        })
+        .collect();
+    let key = BakeKey::new("bsp_lights set-up")
+        .with("version", SETUP_VERSION)
+        .with("model", config.model())
+        .with("projection", config.projection())
+        .with("tolerance", config.tolerance())
+        .with("two_sided", config.two_sided())
+        .with("max_segment_area", config.max_segment_area)
+        .with("lights", lights)
+        .with_bytes("geometry", bytemuck::cast_slice(&geometry_floats));
+    let name = format!(
+        "{NAME} set-up {:?} area={} lights={}",
+        config.mode,
+        config.max_segment_area,
+        lights.len()
+    )
+    .to_lowercase();
+    let geo = &geometry;
+    let baked: Baked = cx.bakes.bake(&name, &key, |progress| {
+        let (s, polygons) = bake_scene(scene, geo, config, limit, progress)?;
+        let p = s.phases;
+        let per_light = s.vertices() as u64 * config.storage.bytes_per_entry();
+        crate::errln!(
+            "{NAME} set-up: {} polygons -> {} BSP fragments -> {} vertices; {} lights at {per_light} bytes each ({:.2} MiB); BSP {:.1} ms, segmentation {:.1} ms, colouring {:.1} ms CPU, shadows {:.1} ms CPU ({:.1} ms wall for the lights)",
+            polygons.len(),
+            s.tree.fragments.len(),
+            s.vertices(),
+            s.lights,
+            (per_light * s.lights as u64) as f64 / (1u64 << 20) as f64,
+            p.bsp_ms,
+            p.segment_ms,
+            p.colour_cpu_ms,
+            p.shadow_cpu_ms,
+            p.lights_wall_ms
+        );
+        Ok(Baked::from_setup(&s, &polygons))
+    })?;
+    // A cached bake may have been made for the other storage: check the limit again.
+    setup::check_matrix(
+        baked.vertices.len(),
+        baked.lights,
+        config.storage.bytes_per_entry(),
+        limit,
+    )
+    .map_err(|m| field_error(scene, "max_segment_area", m))?;
+    if baked.lights != lights.len()
+        || baked.colours.len() != 3 * baked.vertices.len() * baked.lights
+        || baked.vertices.is_empty()
+    {
+        return Err(Error::Internal(format!(
+            "{}: {NAME}: the baked set-up does not match the scene",
+            scene.source
+        )));
+    }
+    Ok(baked)
+}
+
+/// The segments' mesh, the light matrix in its layout and the vertex colours on the device.
+struct MatrixBuffers {
+    layout: Layout,
+    vertices: BufferId,
+    indices: BufferId,
+    matrix: BufferId,
+    rows: Option<BufferId>,
+    colours: BufferId,
+}
+
+impl MatrixBuffers {
+    fn upload(
+        gpu: &mut Gpu,
+        states: &mut ResourceStates,
+        scene: &Scene,
+        config: &Config,
+        baked: &Baked,
+        limit: u64,
+    ) -> Result<MatrixBuffers> {
+        let vertices = gpu.create_buffer_init(
+            &format!("{NAME} vertices"),
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            bytemuck::cast_slice(&baked.vertices),
+        )?;
+        let indices = gpu.create_buffer_init(
+            &format!("{NAME} indices"),
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            bytemuck::cast_slice(&baked.indices),
+        )?;
+        let non_zero = baked.colours.chunks(3).filter(|c| c.iter().any(|&x| x != 0.0)).count();
+        let layout = choose_layout(
+            config.layout,
+            baked.vertices.len(),
+            baked.lights,
+            non_zero,
+            config.storage,
+        );
+        let (matrix_words, rows) = match layout {
+            Layout::Sparse => {
+                let (rows, words) = sparse_words(baked, config.storage);
+                let (_, bytes) = layout_bytes(baked.vertices.len(), baked.lights, non_zero, config.storage);
+                if bytes > limit {
+                    return Err(field_error(scene, "layout", format!("the sparse matrix takes {bytes} bytes, over the {limit} this device binds as one storage buffer")));
+                }
+                (
+                    words,
+                    Some(gpu.create_storage_buffer(&format!("{NAME} matrix rows"), bytemuck::cast_slice(&rows))?),
+                )
+            }
+            _ => (dense_words(baked, config.storage), None),
+        };
+        crate::errln!(
+            "{NAME}: {} of {} matrix entries non-zero ({:.1} %); {} layout, {:.2} MiB on the GPU",
+            non_zero,
+            baked.vertices.len() * baked.lights,
+            100.0 * non_zero as f64 / (baked.vertices.len() * baked.lights).max(1) as f64,
+            if layout == Layout::Sparse { "sparse" } else { "dense" },
+            (4 * matrix_words.len() + rows.map_or(0, |_| 4 * (baked.vertices.len() + 1))) as f64 / (1u64 << 20) as f64
+        );
+        let matrix = gpu.create_storage_buffer(&format!("{NAME} matrix"), bytemuck::cast_slice(&matrix_words))?;
+        let colours = gpu.create_buffer(&BufferDesc {
+            name: format!("{NAME} vertex colours"),
+            size: 16 * baked.vertices.len() as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuOnly,
+        })?;
+        for b in [vertices, indices, matrix, colours].into_iter().chain(rows) {
+            states.forget_buffer(b);
+        }
+        Ok(MatrixBuffers {
+            layout,
+            vertices,
+            indices,
+            matrix,
+            rows,
+            colours,
+        })
+    }
+}
+
+/// The GEMV that relights the vertices and the pipelines that draw the segments.
+struct SegmentPipelines {
+    gemv: PipelineId,
+    both: PipelineId,
+    base: PipelineId,
+    direct: PipelineId,
+    painter: Option<(PipelineId, PipelineId)>,
+}
+
+impl SegmentPipelines {
+    fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config, layout: Layout) -> Result<SegmentPipelines> {
+        let half = SpecConstant {
+            id: 0,
+            bits: u32::from(config.storage == Storage::F16),
+        };
+        let shader = if layout == Layout::Sparse {
+            "bsp_lights/gemv_sparse.comp"
+        } else {
+            "bsp_lights/gemv.comp"
+        };
+        let gemv = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: format!("{NAME} gemv"),
+                shader: shader.into(),
+                specialization: vec![half],
+            },
+            shaders,
+        )?;
+        let ds_format = gpu.caps().depth_stencil_format;
+        let mut pipeline = |terms: Terms, painter: bool| {
+            let vert = if terms.has(Term::Direct) {
+                "bsp_lights/segments.vert"
+            } else {
+                "bsp_lights/segments_base.vert"
+            };
+            let name = if painter {
+                format!("{NAME} {terms} painter")
+            } else {
+                format!("{NAME} {terms}")
+            };
+            let mut desc = term_pipeline_desc(&name, vert, "bsp_lights/segments.frag", terms, ds_format);
+            if painter {
+                // The draw order decides what is seen; the depth is still written for the
+                // passes after this one (a disabled test would write nothing).
+                desc.depth = crate::backend::DepthState {
+                    test: true,
+                    write: true,
+                    compare: vk::CompareOp::ALWAYS,
+                };
+            }
+            let attr = |location: u32| VertexAttribute {
+                location,
+                binding: 0,
+                format: if location < 4 {
+                    vk::Format::R32G32B32_SFLOAT
+                } else {
+                    vk::Format::R32_UINT
+                },
+                offset: 12 * location,
+            };
+            desc.vertex_layout = VertexLayout {
+                buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)],
+                attributes: (0..5).map(attr).collect(),
+            };
+            if !terms.has(Term::Base) {
+                // Over another method's base: the segments' interior vertices are not the
+                // base's, so their depths differ by rounding; a small bias toward the eye keeps
+                // the base's depth deciding what is seen without the surfaces fighting.
+                desc.raster.depth_bias = Some((-16.0, -1.0));
+            }
+            gpu.create_graphics_pipeline(&desc, shaders)
+        };
+        let (both, base, direct) = (
+            pipeline(Terms::BASE_DIRECT, false)?,
+            pipeline(Terms::BASE, false)?,
+            pipeline(Terms::DIRECT, false)?,
+        );
+        let painter = if config.hidden == Hidden::Depth {
+            None
+        } else {
+            Some((pipeline(Terms::BASE_DIRECT, true)?, pipeline(Terms::BASE, true)?))
+        };
+        Ok(SegmentPipelines {
+            gemv,
+            both,
+            base,
+            direct,
+            painter,
+        })
+    }
+}
 
 /// One line naming the scene file and the method's field.
 fn field_error(scene: &Scene, field: &str, message: String) -> Error {
@@ -623,223 +879,29 @@ impl BspLights {
                 lights.len()
             )));
         }
-        let geometry = crate::lighting::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
-        let polygons = scene_polygons(&scene.source, &geometry, NAME)?;
-        if polygons.is_empty() {
-            return Err(Error::Usage(format!(
-                "{}: {NAME}: the scene has no static polygons to light",
-                scene.source
-            )));
-        }
-        let geometry_floats: Vec<f64> = polygons
-            .iter()
-            .flat_map(|p| {
-                p.polygon
-                    .vertices
-                    .iter()
-                    .flat_map(|v| v.to_array())
-                    .chain(p.albedo.to_array())
-                    .chain(p.emission.to_array())
-            })
-            .collect();
-        let key = BakeKey::new("bsp_lights set-up")
-            .with("version", SETUP_VERSION)
-            .with("model", config.model())
-            .with("projection", config.projection())
-            .with("tolerance", config.tolerance())
-            .with("two_sided", config.two_sided())
-            .with("max_segment_area", config.max_segment_area)
-            .with("lights", &lights)
-            .with_bytes("geometry", bytemuck::cast_slice(&geometry_floats));
-        let name = format!(
-            "{NAME} set-up {:?} area={} lights={}",
-            config.mode,
-            config.max_segment_area,
-            lights.len()
-        )
-        .to_lowercase();
-        let geo = &geometry;
         let limit = matrix_limit(cx.gpu.caps());
-        let baked: Baked = cx.bakes.bake(&name, &key, |progress| {
-            let (s, polygons) = bake_scene(scene, geo, &config, limit, progress)?;
-            let p = s.phases;
-            let per_light = s.vertices() as u64 * config.storage.bytes_per_entry();
-            crate::errln!(
-                "{NAME} set-up: {} polygons -> {} BSP fragments -> {} vertices; {} lights at {per_light} bytes each ({:.2} MiB); BSP {:.1} ms, segmentation {:.1} ms, colouring {:.1} ms CPU, shadows {:.1} ms CPU ({:.1} ms wall for the lights)",
-                polygons.len(),
-                s.tree.fragments.len(),
-                s.vertices(),
-                s.lights,
-                (per_light * s.lights as u64) as f64 / (1u64 << 20) as f64,
-                p.bsp_ms,
-                p.segment_ms,
-                p.colour_cpu_ms,
-                p.shadow_cpu_ms,
-                p.lights_wall_ms
-            );
-            Ok(Baked::from_setup(&s, &polygons))
-        })?;
-        // A cached bake may have been made for the other storage: check the limit again.
-        setup::check_matrix(
-            baked.vertices.len(),
-            baked.lights,
-            config.storage.bytes_per_entry(),
-            limit,
-        )
-        .map_err(|m| field_error(scene, "max_segment_area", m))?;
-        if baked.lights != lights.len()
-            || baked.colours.len() != 3 * baked.vertices.len() * baked.lights
-            || baked.vertices.is_empty()
-        {
-            return Err(Error::Internal(format!(
-                "{}: {NAME}: the baked set-up does not match the scene",
-                scene.source
-            )));
-        }
+        let baked = bake_setup(cx, &config, &lights, limit)?;
         let full = lights.iter().map(|l| l.intensity.max_element() as f32).collect();
-
-        let gpu = &mut *cx.gpu;
-        let vertices = gpu.create_buffer_init(
-            &format!("{NAME} vertices"),
-            vk::BufferUsageFlags::VERTEX_BUFFER,
-            bytemuck::cast_slice(&baked.vertices),
-        )?;
-        let indices = gpu.create_buffer_init(
-            &format!("{NAME} indices"),
-            vk::BufferUsageFlags::INDEX_BUFFER,
-            bytemuck::cast_slice(&baked.indices),
-        )?;
-        let non_zero = baked.colours.chunks(3).filter(|c| c.iter().any(|&x| x != 0.0)).count();
-        let layout = choose_layout(
-            config.layout,
-            baked.vertices.len(),
-            baked.lights,
-            non_zero,
-            config.storage,
-        );
-        let (matrix_words, rows) = match layout {
-            Layout::Sparse => {
-                let (rows, words) = sparse_words(&baked, config.storage);
-                let (_, bytes) = layout_bytes(baked.vertices.len(), baked.lights, non_zero, config.storage);
-                if bytes > limit {
-                    return Err(field_error(scene, "layout", format!("the sparse matrix takes {bytes} bytes, over the {limit} this device binds as one storage buffer")));
-                }
-                (
-                    words,
-                    Some(gpu.create_storage_buffer(&format!("{NAME} matrix rows"), bytemuck::cast_slice(&rows))?),
-                )
-            }
-            _ => (dense_words(&baked, config.storage), None),
-        };
-        crate::errln!(
-            "{NAME}: {} of {} matrix entries non-zero ({:.1} %); {} layout, {:.2} MiB on the GPU",
-            non_zero,
-            baked.vertices.len() * baked.lights,
-            100.0 * non_zero as f64 / (baked.vertices.len() * baked.lights).max(1) as f64,
-            if layout == Layout::Sparse { "sparse" } else { "dense" },
-            (4 * matrix_words.len() + rows.map_or(0, |_| 4 * (baked.vertices.len() + 1))) as f64 / (1u64 << 20) as f64
-        );
-        let matrix = gpu.create_storage_buffer(&format!("{NAME} matrix"), bytemuck::cast_slice(&matrix_words))?;
-        let colours = gpu.create_buffer(&BufferDesc {
-            name: format!("{NAME} vertex colours"),
-            size: 16 * baked.vertices.len() as u64,
-            usage: vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_SRC
-                | vk::BufferUsageFlags::TRANSFER_DST,
-            memory: MemoryKind::GpuOnly,
-        })?;
-        for b in [vertices, indices, matrix, colours].into_iter().chain(rows) {
-            cx.states.forget_buffer(b);
-        }
-        let half = SpecConstant {
-            id: 0,
-            bits: u32::from(config.storage == Storage::F16),
-        };
-        let shader = if layout == Layout::Sparse {
-            "bsp_lights/gemv_sparse.comp"
-        } else {
-            "bsp_lights/gemv.comp"
-        };
-        let gemv = gpu.create_compute_pipeline(
-            &ComputePipelineDesc {
-                name: format!("{NAME} gemv"),
-                shader: shader.into(),
-                specialization: vec![half],
-            },
-            cx.shaders,
-        )?;
-        let ds_format = gpu.caps().depth_stencil_format;
-        let mut pipeline = |terms: Terms, painter: bool| {
-            let vert = if terms.has(Term::Direct) {
-                "bsp_lights/segments.vert"
-            } else {
-                "bsp_lights/segments_base.vert"
-            };
-            let name = if painter {
-                format!("{NAME} {terms} painter")
-            } else {
-                format!("{NAME} {terms}")
-            };
-            let mut desc = term_pipeline_desc(&name, vert, "bsp_lights/segments.frag", terms, ds_format);
-            if painter {
-                // The draw order decides what is seen; the depth is still written for the
-                // passes after this one (a disabled test would write nothing).
-                desc.depth = crate::backend::DepthState {
-                    test: true,
-                    write: true,
-                    compare: vk::CompareOp::ALWAYS,
-                };
-            }
-            let attr = |location: u32| VertexAttribute {
-                location,
-                binding: 0,
-                format: if location < 4 {
-                    vk::Format::R32G32B32_SFLOAT
-                } else {
-                    vk::Format::R32_UINT
-                },
-                offset: 12 * location,
-            };
-            desc.vertex_layout = VertexLayout {
-                buffers: vec![(0, std::mem::size_of::<SegmentVertex>() as u32)],
-                attributes: (0..5).map(attr).collect(),
-            };
-            if !terms.has(Term::Base) {
-                // Over another method's base: the segments' interior vertices are not the
-                // base's, so their depths differ by rounding; a small bias toward the eye keeps
-                // the base's depth deciding what is seen without the surfaces fighting.
-                desc.raster.depth_bias = Some((-16.0, -1.0));
-            }
-            gpu.create_graphics_pipeline(&desc, cx.shaders)
-        };
-        let (both, base, direct) = (
-            pipeline(Terms::BASE_DIRECT, false)?,
-            pipeline(Terms::BASE, false)?,
-            pipeline(Terms::DIRECT, false)?,
-        );
-        let painter_pipelines = if config.hidden == Hidden::Depth {
-            None
-        } else {
-            Some((pipeline(Terms::BASE_DIRECT, true)?, pipeline(Terms::BASE, true)?))
-        };
+        let buffers = MatrixBuffers::upload(cx.gpu, cx.states, scene, &config, &baked, limit)?;
+        let pipelines = SegmentPipelines::new(cx.gpu, cx.shaders, &config, buffers.layout)?;
         let all: Vec<(u32, f32)> = (0..baked.lights as u32).map(|l| (l, 1.0)).collect();
         let active = active_words(&all, baked.vertices.len());
         let scales = scale_words(&vec![1.0; baked.lights], 0.0, baked.vertices.len());
         Ok(BspLights {
             config,
-            layout,
+            layout: buffers.layout,
             baked,
             full,
-            vertices,
-            indices,
-            matrix,
-            rows,
-            colours,
-            gemv,
-            both,
-            base,
-            direct,
-            painter_pipelines,
+            vertices: buffers.vertices,
+            indices: buffers.indices,
+            matrix: buffers.matrix,
+            rows: buffers.rows,
+            colours: buffers.colours,
+            gemv: pipelines.gemv,
+            both: pipelines.both,
+            base: pipelines.base,
+            direct: pipelines.direct,
+            painter_pipelines: pipelines.painter,
             draws: Vec::new(),
             active,
             scales,
@@ -1004,15 +1066,7 @@ impl LightingMethod for BspLights {
         let t = frame.targets;
         let uniforms = frame.uniforms;
         let count = self.baked.indices.len() as u32;
-        let mut pass =
-            graph
-                .pass(&format!("{NAME} segments"))
-                .color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base {
-            pass.depth_stencil_write(t.depth_stencil, false)
-        } else {
-            pass.depth_stencil_read(t.depth_stencil)
-        };
+        let mut pass = term_pass(graph, &format!("{NAME} segments"), t, base);
         pass = pass
             .buffer(self.vertices, Access::VertexRead, None)
             .buffer(self.indices, Access::IndexRead, None);
@@ -1026,14 +1080,7 @@ impl LightingMethod for BspLights {
             );
         }
         pass.record(move |ctx| {
-            let depth = RenderTarget {
-                read_only: !base,
-                ..RenderTarget::load(t.depth_stencil)
-            };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                colors: vec![RenderTarget::load(t.radiance)],
-                depth_stencil: Some(depth),
-            })?;
+            let _ = begin_term_rendering(ctx.rec, t, base)?;
             ctx.rec.bind_pipeline(pipeline)?;
             ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
             ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;

@@ -19,14 +19,13 @@ mod tests;
 
 use glam::Vec3;
 
-use crate::backend::{
-    vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, RenderTarget, RenderingDesc,
-    SubresourceRange,
-};
+use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
+use crate::lighting::{
+    begin_term_rendering, term_pass, term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms,
+};
 use crate::scene::{Light, MethodDecl, MethodSchema, ParamKind, ParamSchema};
 use assign::{Assignment, ClusterBlock, LightVolume};
 use config::Config;
@@ -411,14 +410,7 @@ impl LightingMethod for Clustered {
         if direct {
             self.add_assignment_passes(graph);
         }
-        let mut pass = graph
-            .pass(if base { NAME } else { "clustered direct" })
-            .color_attachment(t.radiance, SubresourceRange::mip(0), false);
-        pass = if base {
-            pass.depth_stencil_write(t.depth_stencil, false)
-        } else {
-            pass.depth_stencil_read(t.depth_stencil)
-        };
+        let mut pass = term_pass(graph, if base { NAME } else { "clustered direct" }, t, base);
         pass = pass
             .buffer(scene.vertices, Access::VertexRead, None)
             .buffer(scene.indices, Access::IndexRead, None)
@@ -431,52 +423,20 @@ impl LightingMethod for Clustered {
         let volumes = self.volume_bytes();
         let block = bytemuck::bytes_of(&self.block);
         pass.record(move |ctx| {
-            let depth = RenderTarget {
-                read_only: !base,
-                ..RenderTarget::load(t.depth_stencil)
-            };
-            let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                colors: vec![RenderTarget::load(t.radiance)],
-                depth_stencil: Some(depth),
-            })?;
+            let _ = begin_term_rendering(ctx.rec, t, base)?;
             ctx.rec.bind_pipeline(pipeline)?;
-            let lights: &[u8] = if scene.lights.is_empty() {
-                &[0u8; 64]
-            } else {
-                bytemuck::cast_slice(&scene.lights)
-            };
+            let lights = scene.light_bytes();
             let uniform_bytes = bytemuck::bytes_of(&uniforms);
             let calls: Vec<DrawCall> = scene.draws.iter().map(DrawCall::whole).collect();
             record_draws(ctx, scene, &calls, |ctx, material| {
                 let maps = scene.material_maps[material as usize];
-                let (s, whole) = (scene.sampler, SubresourceRange::mip(0));
+                let [albedo, normal, specular] = maps.binds(scene.sampler);
                 let mut binds = vec![
                     ("frame", Bind::UniformData(uniform_bytes)),
                     ("lights", Bind::StorageData(lights)),
-                    (
-                        "albedo_map",
-                        Bind::Sampled {
-                            image: maps.albedo,
-                            range: whole,
-                            sampler: s,
-                        },
-                    ),
-                    (
-                        "normal_map",
-                        Bind::Sampled {
-                            image: maps.normal,
-                            range: whole,
-                            sampler: s,
-                        },
-                    ),
-                    (
-                        "specular_map",
-                        Bind::Sampled {
-                            image: maps.specular,
-                            range: whole,
-                            sampler: s,
-                        },
-                    ),
+                    albedo,
+                    normal,
+                    specular,
                     ("clusters", Bind::UniformData(block)),
                     ("volumes", Bind::StorageData(volumes)),
                 ];

@@ -415,56 +415,64 @@ fn texture(
     Ok(id)
 }
 
-impl HeightfieldGpu {
-    /// The wedge tables come through `bakes` (cached on disk when it has a directory).
-    pub fn new(
+/// Refuses settings the shaders cannot run: too many pyramid levels, bands or directions, and on
+/// llvmpipe a brute-force march longer than its loop budget.
+fn check_settings(gpu: &Gpu, settings: &Settings, res: u32, levels: u32) -> Result<()> {
+    if levels > MAX_LEVELS {
+        return Err(Error::Usage(format!(
+            "ls = {} at {res}² gives {levels} pyramid levels; at most {MAX_LEVELS} are supported",
+            settings.ls
+        )));
+    }
+    if settings.bands > MAX_BANDS || settings.nphi > MAX_NPHI {
+        return Err(Error::Usage(format!(
+            "bands ≤ {MAX_BANDS} and nphi ≤ {MAX_NPHI} are supported"
+        )));
+    }
+    if settings.horizon == Horizon::BruteForce && gpu.caps().name.contains("llvmpipe") {
+        // llvmpipe ends a shader invocation's loops after 65535 iterations in all (shared by
+        // every loop), silently; the march takes 8 positions per iteration, over res texels
+        // (environment) or up to 2·res (lights), in every direction.
+        let reach = if settings.max_distance > 0.0 {
+            settings.max_distance
+        } else {
+            2.0 * res as f32
+        };
+        // The march, then the visibility, product and basis loops (≤ 2907 product terms).
+        let trips = settings.nphi as f32 * ((reach / settings.march_step / 8.0).ceil() + 66.0) + 3000.0;
+        if trips > LLVMPIPE_LOOP_BUDGET {
+            return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!(
+                "heightfield_bruteforce at {res}² with nphi = {} and march_step = {} needs about {trips:.0} loop iterations per texel; llvmpipe stops a shader's loops after {LLVMPIPE_LOOP_BUDGET:.0} (use a larger march_step or max_distance)",
+                settings.nphi, settings.march_step
+            ))));
+        }
+    }
+    Ok(())
+}
+
+/// The height images: the field, its source image (a 1x1 stand-in without one), and the
+/// horizon search's pyramid levels or, brute force, its bounds.
+struct HeightImages {
+    heights: ImageId,
+    source_image: ImageId,
+    image_size: Option<(u32, u32)>,
+    decimated: Option<ImageId>,
+    pyramid: Option<ImageId>,
+    bounds: Option<BufferId>,
+}
+
+impl HeightImages {
+    fn new(
         gpu: &mut Gpu,
-        shaders: &ShaderLibrary,
         states: &mut ResourceStates,
-        bakes: &mut Baker,
-        settings: Settings,
-        inputs: FieldInputs,
-    ) -> Result<HeightfieldGpu> {
-        let res = settings.resolution.unwrap_or(inputs.source.resolution);
-        let levels = pyramid::level_count(res, settings.ls);
-        if levels > MAX_LEVELS {
-            return Err(Error::Usage(format!(
-                "ls = {} at {res}² gives {levels} pyramid levels; at most {MAX_LEVELS} are supported",
-                settings.ls
-            )));
-        }
-        if settings.bands > MAX_BANDS || settings.nphi > MAX_NPHI {
-            return Err(Error::Usage(format!(
-                "bands ≤ {MAX_BANDS} and nphi ≤ {MAX_NPHI} are supported"
-            )));
-        }
-        if settings.horizon == Horizon::BruteForce && gpu.caps().name.contains("llvmpipe") {
-            // llvmpipe ends a shader invocation's loops after 65535 iterations in all (shared by
-            // every loop), silently; the march takes 8 positions per iteration, over res texels
-            // (environment) or up to 2·res (lights), in every direction.
-            let reach = if settings.max_distance > 0.0 {
-                settings.max_distance
-            } else {
-                2.0 * res as f32
-            };
-            // The march, then the visibility, product and basis loops (≤ 2907 product terms).
-            let trips = settings.nphi as f32 * ((reach / settings.march_step / 8.0).ceil() + 66.0) + 3000.0;
-            if trips > LLVMPIPE_LOOP_BUDGET {
-                return Err(Error::Backend(crate::backend::BackendError::Unsupported(format!(
-                    "heightfield_bruteforce at {res}² with nphi = {} and march_step = {} needs about {trips:.0} loop iterations per texel; llvmpipe stops a shader's loops after {LLVMPIPE_LOOP_BUDGET:.0} (use a larger march_step or max_distance)",
-                    settings.nphi, settings.march_step
-                ))));
-            }
-        }
-        let level_sizes: Vec<u32> = (0..levels).map(|k| pyramid::level_size(res, settings.ls, k)).collect();
-        let spacing = inputs.source.size / res as f32;
-        let origin = Vec2::new(
-            inputs.translation.x - 0.5 * inputs.source.size + 0.5 * spacing,
-            inputs.translation.z - 0.5 * inputs.source.size + 0.5 * spacing,
-        );
+        settings: &Settings,
+        source: &HeightfieldSource,
+        res: u32,
+        levels: u32,
+    ) -> Result<HeightImages> {
         let rw = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
         let heights = gpu.create_image(&ImageDesc::new_2d("hf heights", R32F, res, res).usage(rw))?;
-        let (source_image, image_size) = match inputs.source.load_image()? {
+        let (source_image, image_size) = match source.load_image()? {
             Some(HeightImage { width, height, values }) => (
                 texture(
                     gpu,
@@ -512,41 +520,115 @@ impl HeightfieldGpu {
                 (None, None, Some(b))
             }
         };
-        let env_map = match &inputs.environment {
-            EnvInput::Map { width, height, texels } => texture(
+        Ok(HeightImages {
+            heights,
+            source_image,
+            image_size,
+            decimated,
+            pyramid: pyramid_img,
+            bounds,
+        })
+    }
+}
+
+/// The environment as the lighting passes sample it: its map, its cube, or black.
+fn environment_image(gpu: &mut Gpu, states: &mut ResourceStates, environment: &EnvInput) -> Result<ImageId> {
+    Ok(match environment {
+        EnvInput::Map { width, height, texels } => texture(
+            gpu,
+            states,
+            "hf environment map",
+            RGBA32F,
+            *width,
+            *height,
+            bytemuck::cast_slice(texels),
+        )?,
+        EnvInput::Cube { size, texels } => {
+            let id = gpu.create_image(
+                &ImageDesc::new_cube("hf environment cube", RGBA32F, *size)
+                    .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+            )?;
+            gpu.upload_image(id, 0, bytemuck::cast_slice(texels))?;
+            states.set_image(
                 gpu,
-                states,
-                "hf environment map",
-                RGBA32F,
-                *width,
-                *height,
-                bytemuck::cast_slice(texels),
-            )?,
-            EnvInput::Cube { size, texels } => {
-                let id = gpu.create_image(
-                    &ImageDesc::new_cube("hf environment cube", RGBA32F, *size)
-                        .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
-                )?;
-                gpu.upload_image(id, 0, bytemuck::cast_slice(texels))?;
-                states.set_image(
-                    gpu,
-                    id,
-                    Access::SampledRead {
-                        stages: vk::PipelineStageFlags2::ALL_COMMANDS,
-                    },
-                )?;
-                id
-            }
-            _ => texture(
-                gpu,
-                states,
-                "hf environment map (none)",
-                RGBA32F,
-                1,
-                1,
-                bytemuck::cast_slice(&[0.0f32; 4]),
-            )?,
-        };
+                id,
+                Access::SampledRead {
+                    stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+                },
+            )?;
+            id
+        }
+        _ => texture(
+            gpu,
+            states,
+            "hf environment map (none)",
+            RGBA32F,
+            1,
+            1,
+            bytemuck::cast_slice(&[0.0f32; 4]),
+        )?,
+    })
+}
+
+/// The compute pipelines, and whether the height fetches use the device's bilinear filter.
+fn create_pipelines(gpu: &mut Gpu, shaders: &ShaderLibrary, settings: &Settings) -> Result<(Pipelines, bool)> {
+    let (env_shader, light_shader, horizon_shader) = match settings.horizon {
+        Horizon::Pyramid => (
+            "heightfield/env_pyramid.comp",
+            "heightfield/light_pyramid.comp",
+            "heightfield/horizon_pyramid.comp",
+        ),
+        Horizon::BruteForce => (
+            "heightfield/env_brute.comp",
+            "heightfield/light_brute.comp",
+            "heightfield/horizon_brute.comp",
+        ),
+    };
+    // One filtered fetch per height sample where the device filters R32_SFLOAT.
+    let hardware_bilinear = settings.hardware_bilinear
+        && gpu
+            .format_features(R32F)
+            .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+    let spec = vec![SpecConstant {
+        id: 0,
+        bits: hardware_bilinear as u32,
+    }];
+    let pipelines = Pipelines {
+        height: compute(gpu, shaders, "hf height update", "heightfield/height_update.comp")?,
+        decimate: compute(gpu, shaders, "hf decimate", "heightfield/decimate.comp")?,
+        reconstruct: compute(gpu, shaders, "hf reconstruct", "heightfield/reconstruct.comp")?,
+        bounds: compute(gpu, shaders, "hf bounds", "heightfield/bounds.comp")?,
+        env_sh: compute(gpu, shaders, "hf environment SH", "heightfield/env_sh.comp")?,
+        env_project: crate::sh::ShProjector::new(gpu, shaders, "hf environment SH")?,
+        env: compute_spec(gpu, shaders, "hf environment", env_shader, spec.clone())?,
+        light: compute_spec(gpu, shaders, "hf light", light_shader, spec.clone())?,
+        accumulate: compute(gpu, shaders, "hf accumulate", "heightfield/accumulate.comp")?,
+        horizon: compute_spec(gpu, shaders, "hf horizons", horizon_shader, spec)?,
+    };
+    Ok((pipelines, hardware_bilinear))
+}
+
+impl HeightfieldGpu {
+    /// The wedge tables come through `bakes` (cached on disk when it has a directory).
+    pub fn new(
+        gpu: &mut Gpu,
+        shaders: &ShaderLibrary,
+        states: &mut ResourceStates,
+        bakes: &mut Baker,
+        settings: Settings,
+        inputs: FieldInputs,
+    ) -> Result<HeightfieldGpu> {
+        let res = settings.resolution.unwrap_or(inputs.source.resolution);
+        let levels = pyramid::level_count(res, settings.ls);
+        check_settings(gpu, &settings, res, levels)?;
+        let level_sizes: Vec<u32> = (0..levels).map(|k| pyramid::level_size(res, settings.ls, k)).collect();
+        let spacing = inputs.source.size / res as f32;
+        let origin = Vec2::new(
+            inputs.translation.x - 0.5 * inputs.source.size + 0.5 * spacing,
+            inputs.translation.z - 0.5 * inputs.source.size + 0.5 * spacing,
+        );
+        let h = HeightImages::new(gpu, states, &settings, &inputs.source, res, levels)?;
+        let env_map = environment_image(gpu, states, &inputs.environment)?;
         let env_image = crate::sh::EnvImage::of(gpu, env_map)?;
         let env_sh = gpu.create_buffer(&BufferDesc {
             name: "hf environment SH".into(),
@@ -585,39 +667,7 @@ impl HeightfieldGpu {
                 .usage(out),
         )?;
         let shading = gpu.create_image(&ImageDesc::new_2d("hf shading", RGBA32F, res, res).usage(out))?;
-        let (env_shader, light_shader, horizon_shader) = match settings.horizon {
-            Horizon::Pyramid => (
-                "heightfield/env_pyramid.comp",
-                "heightfield/light_pyramid.comp",
-                "heightfield/horizon_pyramid.comp",
-            ),
-            Horizon::BruteForce => (
-                "heightfield/env_brute.comp",
-                "heightfield/light_brute.comp",
-                "heightfield/horizon_brute.comp",
-            ),
-        };
-        // One filtered fetch per height sample where the device filters R32_SFLOAT.
-        let hardware_bilinear = settings.hardware_bilinear
-            && gpu
-                .format_features(R32F)
-                .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
-        let spec = vec![SpecConstant {
-            id: 0,
-            bits: hardware_bilinear as u32,
-        }];
-        let pipelines = Pipelines {
-            height: compute(gpu, shaders, "hf height update", "heightfield/height_update.comp")?,
-            decimate: compute(gpu, shaders, "hf decimate", "heightfield/decimate.comp")?,
-            reconstruct: compute(gpu, shaders, "hf reconstruct", "heightfield/reconstruct.comp")?,
-            bounds: compute(gpu, shaders, "hf bounds", "heightfield/bounds.comp")?,
-            env_sh: compute(gpu, shaders, "hf environment SH", "heightfield/env_sh.comp")?,
-            env_project: crate::sh::ShProjector::new(gpu, shaders, "hf environment SH")?,
-            env: compute_spec(gpu, shaders, "hf environment", env_shader, spec.clone())?,
-            light: compute_spec(gpu, shaders, "hf light", light_shader, spec.clone())?,
-            accumulate: compute(gpu, shaders, "hf accumulate", "heightfield/accumulate.comp")?,
-            horizon: compute_spec(gpu, shaders, "hf horizons", horizon_shader, spec)?,
-        };
+        let (pipelines, hardware_bilinear) = create_pipelines(gpu, shaders, &settings)?;
         let nearest = gpu.sampler(SamplerDesc::NEAREST_CLAMP)?;
         let linear = gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
         Ok(HeightfieldGpu {
@@ -628,18 +678,18 @@ impl HeightfieldGpu {
             level_sizes,
             origin,
             spacing,
-            heights,
-            source_image,
-            image_size,
-            decimated,
-            pyramid: pyramid_img,
+            heights: h.heights,
+            source_image: h.source_image,
+            image_size: h.image_size,
+            decimated: h.decimated,
+            pyramid: h.pyramid,
             env_image,
             env_sh,
             env_table,
             local_table,
             product,
             product_count: entries.len() as u32,
-            bounds,
+            bounds: h.bounds,
             env_radiance,
             light_radiance,
             shading,
@@ -712,6 +762,7 @@ impl HeightfieldGpu {
     }
 
     /// The passes that turn time `t` into [`HeightfieldGpu::shading`].
+    // long: the frame's compute passes in their order, one graph recipe.
     pub fn add_compute_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, t: f32) -> Result<()> {
         let res = self.res;
         let p = &self.pipelines;

@@ -29,7 +29,7 @@
 //! field's own normals).
 
 pub mod cpu;
-pub mod gpu;
+pub(crate) mod gpu;
 pub mod measure;
 pub mod pyramid;
 pub mod settings;

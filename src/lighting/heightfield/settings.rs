@@ -155,6 +155,7 @@ impl Settings {
         Self::read(decl, horizon, Some(scene))
     }
 
+    // long: one parameter after another, each read and range-checked.
     fn read(decl: &MethodDecl, horizon: Horizon, scene: Option<&Scene>) -> Result<Settings> {
         let mut s = Settings {
             horizon,

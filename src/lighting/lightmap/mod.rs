@@ -1,17 +1,17 @@
 //! The light-map substrate that the Ca3D-Engine thesis's two light-mapped methods share (radiosity light-maps
 //! and SH light-maps, `lighting::radiosity` and `lighting::sh_lightmap`): static geometry as
 //! planar charts of patches on a world-aligned grid ([`patches`], [`geometry`]), the atlas
-//! ([`atlas`]), the surface-visibility matrix ([`visibility`]), form factors ([`form_factor`]),
+//! (`atlas`), the surface-visibility matrix ([`visibility`]), form factors (`form_factor`),
 //! the progressive-refinement shooting loop over any payload ([`solve`]), the border passes
-//! ([`border`]) and CaLight's tone reproduction ([`tone`]). It knows nothing of the lighting
+//! ([`border`]) and CaLight's tone reproduction (`tone`). It knows nothing of the lighting
 //! layer: the techniques build on it.
 
-pub mod atlas;
+pub(crate) mod atlas;
 pub mod border;
-pub mod form_factor;
+pub(crate) mod form_factor;
 pub mod geometry;
-pub mod mesh;
+pub(crate) mod mesh;
 pub mod patches;
 pub mod solve;
-pub mod tone;
+pub(crate) mod tone;
 pub mod visibility;

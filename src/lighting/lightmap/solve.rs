@@ -3,8 +3,8 @@
 //!
 //! *Faithful* (CaLight): the shooter is the best of 10 random blocks per chart, a full search
 //! only when that falls below the threshold; the form factor is point-sampled with the near-field
-//! clamp ([`form_factor::point_sampled`]). *Corrected*: the largest unshot block every time and
-//! the exact differential-to-polygon form factor ([`form_factor::point_to_polygon`]) to the
+//! clamp (`form_factor::point_sampled`). *Corrected*: the largest unshot block every time and
+//! the exact differential-to-polygon form factor (`form_factor::point_to_polygon`) to the
 //! block's square, so that in a closed enclosure the energy closes.
 
 use glam::{DVec3, Vec3};

@@ -6,10 +6,10 @@
 //! The digest is the notes on the source document; section numbers below are its.
 
 pub mod geometry;
-pub mod light_model;
-pub mod occluders;
-pub mod polygons;
-pub mod segments;
+pub(crate) mod light_model;
+pub(crate) mod occluders;
+pub(crate) mod polygons;
+pub(crate) mod segments;
 
 #[cfg(test)]
 mod tests;

@@ -27,7 +27,7 @@ pub enum Content {
 
 /// Adds the reflected direct light of the scene's point, spot and directional lights (shadowed)
 /// to every patch's total and unshot radiosity; returns each patch's share. Directional lights
-/// are suns ([`super::sun`]) as the corrected mode treats them.
+/// are suns (`super::sun`) as the corrected mode treats them.
 pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Result<Vec<DVec3>> {
     add_direct_light_in(p, occluders, scene, solve::Mode::Corrected)
 }

@@ -1,6 +1,6 @@
 //! Radiosity light-maps (the Ca3D-Engine thesis §3, CaLight; digest §1.2) on the light-map substrate
 //! ([`crate::lighting::lightmap`]: patches, the surface-visibility matrix, form factors, the shooting loop,
-//! border passes, tone reproduction): direct light and the sun ([`bake`], [`sun`]), and the
+//! border passes, tone reproduction): direct light and the sun ([`bake`], `sun`), and the
 //! shooting on the CPU or the GPU ([`gpu`]); faithful to CaLight or corrected (exact form factors,
 //! energy that closes, radiometric light-maps).
 //!
@@ -10,7 +10,7 @@
 //! texel.
 
 pub mod gpu;
-pub mod sun;
+pub(crate) mod sun;
 
 #[cfg(test)]
 mod tests;
@@ -23,6 +23,7 @@ use crate::backend::{
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
+use crate::lighting::lightmap::geometry::StaticGeometry;
 use crate::lighting::lightmap::solve::{Mode, Settings};
 use crate::lighting::plan::{patch_size_for, Derived, Facts};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
@@ -272,61 +273,7 @@ impl Radiosity {
                 cx.scene.source
             )));
         }
-        let mut key = BakeKey::new("radiosity light-map")
-            .with("version", BAKER_VERSION)
-            .with(
-                "config",
-                Config {
-                    ambient_nz: false,
-                    ..config
-                },
-            )
-            .with("lights", &cx.scene.lights)
-            .with_shaders("radiosity/");
-        let geometry_bytes: Vec<f64> = geometry
-            .triangles
-            .iter()
-            .flat_map(|t| {
-                t.p.iter()
-                    .flat_map(|p| p.to_array())
-                    .chain(t.albedo.to_array())
-                    .chain(t.emission.to_array())
-                    .chain([t.object as f64, f64::from(u8::from(t.sky))])
-            })
-            .collect();
-        key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
-        let scene = cx.scene;
-        let geo = &geometry;
-        let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
-        // Baked: the atlas size, its texels, and each triangle corner's light-map coordinate.
-        let baked: Vec<f32> = cx.bakes.bake(
-            &format!("{NAME} light-map patch={}", config.patch_size),
-            &key,
-            |progress| {
-                let on_gpu = config
-                    .on_gpu
-                    .unwrap_or(gpu.caps().device_type != vk::PhysicalDeviceType::CPU);
-                let shooter = if on_gpu {
-                    bake::Shooter::Gpu(gpu, shaders)
-                } else {
-                    bake::Shooter::Cpu
-                };
-                let (patches, atlas, texels, _report) = bake::bake(
-                    geo,
-                    scene,
-                    config.patch_size,
-                    &config.settings,
-                    config.content,
-                    shooter,
-                    progress,
-                )?;
-                let mut out = vec![atlas.width as f32, atlas.height as f32];
-                out.extend(texels.iter().flatten());
-                let uv = crate::lighting::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
-                out.extend(uv.iter().flatten());
-                Ok(out)
-            },
-        )?;
+        let baked = bake_lightmap(cx, &config, &geometry)?;
         let (w, h) = (
             baked.first().copied().unwrap_or(0.0) as u32,
             baked.get(1).copied().unwrap_or(0.0) as u32,
@@ -342,36 +289,8 @@ impl Radiosity {
         let texels = &baked[2..2 + texel_floats];
         let mesh = crate::lighting::lightmap::mesh::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
         let format = lightmap_format(config.settings.mode);
-        let lightmap = cx.gpu.create_image(
-            &ImageDesc::new_2d("radiosity light-map", format, w, h)
-                .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
-        )?;
-        match format {
-            vk::Format::R8G8B8A8_UNORM => {
-                cx.gpu
-                    .upload_image(lightmap, 0, &crate::lighting::lightmap::atlas::to_rgb8(texels))?
-            }
-            _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
-        }
-        cx.states.set_image(
-            cx.gpu,
-            lightmap,
-            Access::SampledRead {
-                stages: vk::PipelineStageFlags2::ALL_COMMANDS,
-            },
-        )?;
-        let mut desc = crate::lighting::lightmap::mesh::Mesh::pipeline_desc(
-            &format!("{NAME} light-map"),
-            "radiosity/lightmap.frag",
-        );
-        desc.raster.cull = vk::CullModeFlags::NONE;
-        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
-        desc.specialization = vec![SpecConstant {
-            id: 0,
-            bits: u32::from(config.ambient_nz),
-        }];
-        let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+        let lightmap = upload_lightmap(cx, format, (w, h), texels)?;
+        let pipeline = create_pipeline(cx, &config)?;
         let sampler = cx.gpu.sampler(SamplerDesc::LINEAR_CLAMP)?;
         Ok(Radiosity {
             pipeline,
@@ -380,6 +299,110 @@ impl Radiosity {
             sampler,
         })
     }
+}
+
+/// The light-map baked (or read from the cache): the atlas size, its texels, and each triangle
+/// corner's light-map coordinate, in one list.
+fn bake_lightmap(cx: &mut CreateContext<'_>, config: &Config, geometry: &StaticGeometry) -> Result<Vec<f32>> {
+    let mut key = BakeKey::new("radiosity light-map")
+        .with("version", BAKER_VERSION)
+        .with(
+            "config",
+            Config {
+                ambient_nz: false,
+                ..*config
+            },
+        )
+        .with("lights", &cx.scene.lights)
+        .with_shaders("radiosity/");
+    let geometry_bytes: Vec<f64> = geometry
+        .triangles
+        .iter()
+        .flat_map(|t| {
+            t.p.iter()
+                .flat_map(|p| p.to_array())
+                .chain(t.albedo.to_array())
+                .chain(t.emission.to_array())
+                .chain([t.object as f64, f64::from(u8::from(t.sky))])
+        })
+        .collect();
+    key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
+    let scene = cx.scene;
+    let geo = geometry;
+    let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
+    // Baked: the atlas size, its texels, and each triangle corner's light-map coordinate.
+    let baked: Vec<f32> = cx.bakes.bake(
+        &format!("{NAME} light-map patch={}", config.patch_size),
+        &key,
+        |progress| {
+            let on_gpu = config
+                .on_gpu
+                .unwrap_or(gpu.caps().device_type != vk::PhysicalDeviceType::CPU);
+            let shooter = if on_gpu {
+                bake::Shooter::Gpu(gpu, shaders)
+            } else {
+                bake::Shooter::Cpu
+            };
+            let (patches, atlas, texels, _report) = bake::bake(
+                geo,
+                scene,
+                config.patch_size,
+                &config.settings,
+                config.content,
+                shooter,
+                progress,
+            )?;
+            let mut out = vec![atlas.width as f32, atlas.height as f32];
+            out.extend(texels.iter().flatten());
+            let uv = crate::lighting::lightmap::atlas::triangle_uvs(&geo.triangles, &patches, &atlas);
+            out.extend(uv.iter().flatten());
+            Ok(out)
+        },
+    )?;
+    Ok(baked)
+}
+
+/// The light-map's texels as a sampled image of `format`.
+fn upload_lightmap(
+    cx: &mut CreateContext<'_>,
+    format: vk::Format,
+    (w, h): (u32, u32),
+    texels: &[f32],
+) -> Result<ImageId> {
+    let lightmap = cx.gpu.create_image(
+        &ImageDesc::new_2d("radiosity light-map", format, w, h)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
+    match format {
+        vk::Format::R8G8B8A8_UNORM => {
+            cx.gpu
+                .upload_image(lightmap, 0, &crate::lighting::lightmap::atlas::to_rgb8(texels))?
+        }
+        _ => cx.gpu.upload_image(lightmap, 0, bytemuck::cast_slice(texels))?,
+    }
+    cx.states.set_image(
+        cx.gpu,
+        lightmap,
+        Access::SampledRead {
+            stages: vk::PipelineStageFlags2::ALL_COMMANDS,
+        },
+    )?;
+    Ok(lightmap)
+}
+
+/// The light-mapped surfaces' pipeline.
+fn create_pipeline(cx: &mut CreateContext<'_>, config: &Config) -> Result<PipelineId> {
+    let mut desc =
+        crate::lighting::lightmap::mesh::Mesh::pipeline_desc(&format!("{NAME} light-map"), "radiosity/lightmap.frag");
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+    desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+    desc.specialization = vec![SpecConstant {
+        id: 0,
+        bits: u32::from(config.ambient_nz),
+    }];
+    let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
+    Ok(pipeline)
 }
 
 impl LightingMethod for Radiosity {

@@ -44,7 +44,7 @@ pub struct Transfer {
 }
 
 /// A ray from a patch reaches the sky: it escapes, or (in faithful mode, when the scene has sky
-/// surfaces) its first hit is a sky surface — the radiosity sun's rule ([`crate::lighting::radiosity::sun`]).
+/// surfaces) its first hit is a sky surface — the radiosity sun's rule (`crate::lighting::radiosity::sun`).
 pub fn reaches_sky(occluders: &Occluders, from: DVec3, dir: DVec3, mode: Mode) -> bool {
     match occluders.first_hit(from, dir) {
         Some((_, t)) => occluders.triangles[t].sky,

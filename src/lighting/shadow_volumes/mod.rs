@@ -22,15 +22,16 @@
 //! ([`config::Casters`]: every face, the light's PVS, or the PVS with the Potential
 //! Shadow-Casters Set), each with its own closed volume ([`volumes::polygon_volume_template`],
 //! extruded in the vertex shader). Receivers and casters are culled by the light's radius and
-//! the camera's PVS ([`plan`]). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
+//! the camera's PVS (`plan`). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
 //! (*physical*), in both of the seed's material paths: special-case pipelines per map
 //! combination, or one pipeline with 1×1 default maps. Spot lights (not in the seed) are point
 //! lights times the forward method's cone falloff, with a point light's volumes.
 
-pub mod config;
+pub(crate) mod config;
 pub mod cpu;
+mod frame_passes;
 pub mod maps;
-pub mod plan;
+pub(crate) mod plan;
 pub mod volumes;
 
 use std::rc::Rc;
@@ -40,8 +41,7 @@ use glam::{Vec3, Vec4};
 
 use crate::backend::{
     vk, Bind, BlendMode, BufferDesc, BufferId, ColorTarget, ComputePipelineDesc, DepthState, Gpu, GraphicsPipelineDesc,
-    ImageDesc, ImageId, MemoryKind, PipelineId, RenderTarget, RenderingDesc, SpecConstant, StencilFace, StencilFaces,
-    SubresourceRange, VertexAttribute, VertexLayout,
+    ImageDesc, ImageId, MemoryKind, PipelineId, SpecConstant, StencilFace, StencilFaces, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, SceneGpu};
@@ -49,12 +49,13 @@ use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::world_mesh::{self, WorldLevel};
 use crate::scene::{Light, MeshSource, MethodDecl, Scene};
+use crate::shaders::ShaderLibrary;
 use crate::world::FaceId;
 
 pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
 pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, Spot, WorldFrame};
 
-/// The chart's sweep (see [`config::sweep`]).
+/// The chart's sweep (see `config::sweep`).
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     config::sweep(decl)
 }
@@ -293,6 +294,137 @@ pub struct ShadowVolumes {
 fn spec(id: u32, bits: u32) -> SpecConstant {
     SpecConstant { id, bits }
 }
+/// The surface pipelines as [`ShadowVolumes`] holds them: ambient (plain, normal-mapped),
+/// translucent ambient (the same, blended), and light (by normal map, then specular), the last
+/// lighting only where the stencil is clear.
+#[allow(clippy::type_complexity)]
+fn surface_pipelines(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    c: &Config,
+) -> Result<([PipelineId; 2], [PipelineId; 2], [[PipelineId; 2]; 2])> {
+    let ds_format = gpu.caps().depth_stencil_format;
+    let mode = match c.mode {
+        Mode::Faithful => 0,
+        Mode::Physical => 1,
+    };
+    let surface = |name: &str, frag: &str, specs: Vec<SpecConstant>| {
+        let mut d = GraphicsPipelineDesc::new(name, "shadow_volumes/surface.vert", Some(frag));
+        d.vertex_layout = vertex_layout();
+        d.raster.cull = vk::CullModeFlags::NONE;
+        d.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+        d.depth_format = Some(ds_format);
+        d.specialization = specs;
+        d
+    };
+    let mut ambient = Vec::with_capacity(2);
+    for nm in [false, true] {
+        let d = surface(
+            &format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }),
+            "shadow_volumes/ambient.frag",
+            vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
+        );
+        ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
+    }
+    let mut light = Vec::with_capacity(4);
+    for nm in [false, true] {
+        for sp in [false, true] {
+            let mut d = surface(
+                &format!(
+                    "{NAME} light{}{}",
+                    if nm { " normal-mapped" } else { "" },
+                    if sp { " specular" } else { "" }
+                ),
+                "shadow_volumes/light.frag",
+                vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)],
+            );
+            d.depth = DepthState {
+                test: true,
+                write: false,
+                compare: vk::CompareOp::LESS_OR_EQUAL,
+            };
+            d.color_targets[0].blend = BlendMode::Additive;
+            let outside = StencilFace {
+                compare_mask: 0xff,
+                write_mask: 0,
+                ..StencilFace::test(vk::CompareOp::EQUAL, 0)
+            };
+            d.stencil = Some(StencilFaces {
+                front: outside,
+                back: outside,
+            });
+            light.push(gpu.create_graphics_pipeline(&d, shaders)?);
+        }
+    }
+    // The translucent path's ambient pass: `α·surface + (1 − α)·behind` over the opaque
+    // image, with depth writes so the light passes after it find the nearest layer only.
+    let mut translucent_ambient = Vec::with_capacity(2);
+    for nm in [false, true] {
+        let mut d = surface(
+            &format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }),
+            "shadow_volumes/ambient.frag",
+            vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
+        );
+        d.color_targets[0].blend = BlendMode::Alpha;
+        translucent_ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
+    }
+    Ok((
+        [ambient[0], ambient[1]],
+        [translucent_ambient[0], translucent_ambient[1]],
+        [[light[0], light[1]], [light[2], light[3]]],
+    ))
+}
+
+/// The stencil-volume pipeline for the configured counting (z-fail or z-pass, wrapping or
+/// clamping), and whether it clamps depth (the device allowing) instead of nudging the far caps.
+fn volume_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, c: &Config) -> Result<(PipelineId, bool)> {
+    let ds_format = gpu.caps().depth_stencil_format;
+    let (inc, dec) = if c.stencil_wrap {
+        (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
+    } else {
+        (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
+    };
+    let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace {
+        pass,
+        depth_fail,
+        ..StencilFace::test(vk::CompareOp::ALWAYS, 0)
+    };
+    let keep = vk::StencilOp::KEEP;
+    // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
+    // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
+    let faces = match c.stencil {
+        Stencil::ZFail => StencilFaces {
+            front: count(keep, dec),
+            back: count(keep, inc),
+        },
+        Stencil::ZPass => StencilFaces {
+            front: count(inc, keep),
+            back: count(dec, keep),
+        },
+    };
+    let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
+    let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
+    vd.vertex_layout = VertexLayout {
+        buffers: vec![(0, 16)],
+        attributes: vec![VertexAttribute {
+            location: 0,
+            binding: 0,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+            offset: 0,
+        }],
+    };
+    vd.raster.cull = vk::CullModeFlags::NONE;
+    vd.raster.depth_clamp = depth_clamp;
+    vd.depth = DepthState {
+        test: true,
+        write: false,
+        compare: vk::CompareOp::LESS,
+    };
+    vd.stencil = Some(faces);
+    vd.depth_format = Some(ds_format);
+    let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
+    Ok((volume, depth_clamp))
+}
 
 impl ShadowVolumes {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShadowVolumes> {
@@ -307,118 +439,8 @@ impl ShadowVolumes {
             }
         }
         let c = &setup.config;
-        let ds_format = gpu.caps().depth_stencil_format;
-        let mode = match c.mode {
-            Mode::Faithful => 0,
-            Mode::Physical => 1,
-        };
-        let surface = |name: &str, frag: &str, specs: Vec<SpecConstant>| {
-            let mut d = GraphicsPipelineDesc::new(name, "shadow_volumes/surface.vert", Some(frag));
-            d.vertex_layout = vertex_layout();
-            d.raster.cull = vk::CullModeFlags::NONE;
-            d.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            d.depth_format = Some(ds_format);
-            d.specialization = specs;
-            d
-        };
-        let mut ambient = Vec::with_capacity(2);
-        for nm in [false, true] {
-            let d = surface(
-                &format!("{NAME} ambient{}", if nm { " normal-mapped" } else { "" }),
-                "shadow_volumes/ambient.frag",
-                vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
-            );
-            ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
-        }
-        let mut light = Vec::with_capacity(4);
-        for nm in [false, true] {
-            for sp in [false, true] {
-                let mut d = surface(
-                    &format!(
-                        "{NAME} light{}{}",
-                        if nm { " normal-mapped" } else { "" },
-                        if sp { " specular" } else { "" }
-                    ),
-                    "shadow_volumes/light.frag",
-                    vec![spec(0, mode), spec(1, nm as u32), spec(2, sp as u32), spec(4, c.atten)],
-                );
-                d.depth = DepthState {
-                    test: true,
-                    write: false,
-                    compare: vk::CompareOp::LESS_OR_EQUAL,
-                };
-                d.color_targets[0].blend = BlendMode::Additive;
-                let outside = StencilFace {
-                    compare_mask: 0xff,
-                    write_mask: 0,
-                    ..StencilFace::test(vk::CompareOp::EQUAL, 0)
-                };
-                d.stencil = Some(StencilFaces {
-                    front: outside,
-                    back: outside,
-                });
-                light.push(gpu.create_graphics_pipeline(&d, shaders)?);
-            }
-        }
-        // The translucent path's ambient pass: `α·surface + (1 − α)·behind` over the opaque
-        // image, with depth writes so the light passes after it find the nearest layer only.
-        let mut translucent_ambient = Vec::with_capacity(2);
-        for nm in [false, true] {
-            let mut d = surface(
-                &format!("{NAME} translucent ambient{}", if nm { " normal-mapped" } else { "" }),
-                "shadow_volumes/ambient.frag",
-                vec![spec(0, mode), spec(1, nm as u32), spec(3, c.ambient_nz as u32)],
-            );
-            d.color_targets[0].blend = BlendMode::Alpha;
-            translucent_ambient.push(gpu.create_graphics_pipeline(&d, shaders)?);
-        }
-        let translucent_ambient = [translucent_ambient[0], translucent_ambient[1]];
-        let ambient = [ambient[0], ambient[1]];
-        let light = [[light[0], light[1]], [light[2], light[3]]];
-        let (inc, dec) = if c.stencil_wrap {
-            (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
-        } else {
-            (vk::StencilOp::INCREMENT_AND_CLAMP, vk::StencilOp::DECREMENT_AND_CLAMP)
-        };
-        let count = |pass: vk::StencilOp, depth_fail: vk::StencilOp| StencilFace {
-            pass,
-            depth_fail,
-            ..StencilFace::test(vk::CompareOp::ALWAYS, 0)
-        };
-        let keep = vk::StencilOp::KEEP;
-        // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
-        // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
-        let faces = match c.stencil {
-            Stencil::ZFail => StencilFaces {
-                front: count(keep, dec),
-                back: count(keep, inc),
-            },
-            Stencil::ZPass => StencilFaces {
-                front: count(inc, keep),
-                back: count(dec, keep),
-            },
-        };
-        let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
-        let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
-        vd.vertex_layout = VertexLayout {
-            buffers: vec![(0, 16)],
-            attributes: vec![VertexAttribute {
-                location: 0,
-                binding: 0,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                offset: 0,
-            }],
-        };
-        vd.raster.cull = vk::CullModeFlags::NONE;
-        vd.raster.depth_clamp = depth_clamp;
-        vd.depth = DepthState {
-            test: true,
-            write: false,
-            compare: vk::CompareOp::LESS,
-        };
-        vd.stencil = Some(faces);
-        vd.depth_format = Some(ds_format);
-        let volume = gpu.create_graphics_pipeline(&vd, shaders)?;
+        let (ambient, translucent_ambient, light) = surface_pipelines(gpu, shaders, c)?;
+        let (volume, depth_clamp) = volume_pipeline(gpu, shaders, c)?;
         let silhouette = gpu.create_compute_pipeline(
             &ComputePipelineDesc {
                 name: format!("{NAME} silhouettes"),
@@ -727,61 +749,17 @@ impl LightingMethod for ShadowVolumes {
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
-        let scene = frame.scene;
-        let t = frame.targets;
-        let uniforms = frame.uniforms;
         let (base, direct) = (frame.terms.has(Term::Base), frame.terms.has(Term::Direct));
         let plan = self
             .plan
             .clone()
             .ok_or_else(|| Error::Internal(format!("{NAME}: a frame was recorded before it was prepared")))?;
-        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
-        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let sampler = scene.sampler;
-        let whole = SubresourceRange::mip(0);
-
-        // Silhouettes of every entity for every light of the frame.
         let silhouettes = self
             .silhouettes
             .as_ref()
             .filter(|_| direct && plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
         if let Some(s) = silhouettes {
-            let p = plan.clone();
-            graph
-                .pass("silhouettes")
-                .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
-                .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
-                .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
-                .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
-                .record(move |ctx| {
-                    let lights: Vec<Vec4> = p
-                        .lights
-                        .iter()
-                        .map(|l| self.setup.lights[l.light].position.extend(1.0))
-                        .collect();
-                    ctx.rec.bind_pipeline(self.silhouette)?;
-                    ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&lights)))])?;
-                    for (e, slot) in s.slots.iter().enumerate() {
-                        let topo = &self.setup.entities[e].topology;
-                        if topo.items() == 0 {
-                            continue;
-                        }
-                        let push = SilhouettePush {
-                            model: p.entity_transforms[e].to_cols_array(),
-                            vertex_offset: slot.vertex_offset,
-                            triangle_offset: slot.triangle_offset,
-                            triangle_count: topo.triangles.len() as u32,
-                            edge_offset: slot.edge_offset,
-                            edge_count: topo.edges.len() as u32,
-                            out_offset: slot.out_offset,
-                            light_stride: s.stride,
-                            closed: topo.closed as u32,
-                        };
-                        ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-                        ctx.rec.dispatch([topo.items() as u32, lights.len() as u32, 1])?;
-                    }
-                    Ok(())
-                });
+            self.add_silhouettes(graph, s, &plan);
         }
 
         // The seed's path twice: opaque surfaces (translucent ones omitted from receivers and
@@ -794,209 +772,19 @@ impl LightingMethod for ShadowVolumes {
             if translucent && (plan.translucent_entities.is_empty() || !direct) {
                 break;
             }
-            let prefix = if translucent { "translucent " } else { "" };
-            let ambient_calls = if translucent {
-                self.draws_in_order(scene, &plan, &[], &plan.translucent_entities)
-            } else {
-                self.draw_list(scene, &plan, &plan.visible_faces, &plan.visible_entities)
-            };
-            let ambient_pipelines = if translucent {
-                self.translucent_ambient
-            } else {
-                self.ambient
-            };
-            let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
             if translucent || base {
-                graph
-                    .pass(&format!("{prefix}ambient"))
-                    .color_attachment(t.radiance, whole, false)
-                    .depth_stencil_write(t.depth_stencil, false)
-                    .buffer(scene.vertices, Access::VertexRead, None)
-                    .buffer(scene.indices, Access::IndexRead, None)
-                    .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-                    .record(move |ctx| {
-                        let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                            colors: vec![RenderTarget::load(t.radiance)],
-                            depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
-                        })?;
-                        let zero_light = LightBlock::zeroed();
-                        let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
-                        let extra = |albedo, normal, _specular| {
-                            vec![
-                                (
-                                    "albedo_map",
-                                    Bind::Sampled {
-                                        image: albedo,
-                                        range: whole,
-                                        sampler,
-                                    },
-                                ),
-                                (
-                                    "normal_map",
-                                    Bind::Sampled {
-                                        image: normal,
-                                        range: whole,
-                                        sampler,
-                                    },
-                                ),
-                                ("ambient", Bind::UniformData(ambient_bytes)),
-                            ]
-                        };
-                        record_surface(
-                            ctx,
-                            self,
-                            scene,
-                            &ambient_calls,
-                            |f| ambient_pipelines[f.normal_map as usize],
-                            extra,
-                            bytemuck::bytes_of(&uniforms),
-                            bytemuck::bytes_of(&zero_light),
-                        )?;
-                        ctx.rec.end_rendering();
-                        Ok(())
-                    });
+                self.add_ambient(graph, frame, &plan, translucent);
             }
             if !direct {
                 continue;
             }
-
             for (li, lp) in plan.lights.iter().enumerate() {
-                let (receiver_faces, receiver_entities): (&[FaceId], &[usize]) = if translucent {
-                    (&[], &lp.translucent_receivers)
-                } else {
-                    (&lp.receiver_faces, &lp.receiver_entities)
-                };
-                if translucent && receiver_entities.is_empty() {
+                if translucent && lp.translucent_receivers.is_empty() {
                     continue;
                 }
                 // The silhouette pass wrote this light's entity volumes at slot `li`.
-                let li = li as u32;
-                let light_index = lp.light;
-                let light = &self.setup.lights[light_index];
-                let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| {
-                    (
-                        self.faces[f as usize].template_first,
-                        self.faces[f as usize].template_count,
-                    )
-                }));
-                let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
-                    Some(s) => lp
-                        .caster_entities
-                        .iter()
-                        .map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices))
-                        .collect(),
-                    None => Vec::new(),
-                };
-                let light_pos = light.position;
-                let nudge = self.nudge_far as u32;
-                let mut pass = graph
-                    .pass(&format!("light {light_index} {prefix}volumes"))
-                    .depth_stencil_write(t.depth_stencil, false);
-                if let Some(b) = self.templates {
-                    pass = pass.buffer(b, Access::VertexRead, None);
-                }
-                if let Some(s) = &self.silhouettes {
-                    pass = pass.buffer(s.volumes, Access::VertexRead, None);
-                }
-                let templates = self.templates;
-                let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
-                pass.record(move |ctx| {
-                    let extent = ctx.rec.begin_rendering(&RenderingDesc {
-                        colors: Vec::new(),
-                        depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
-                    })?;
-                    ctx.rec.clear_stencil(extent, 0)?;
-                    ctx.rec.bind_pipeline(self.volume)?;
-                    ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
-                    if let (Some(b), false) = (templates, world_ranges.is_empty()) {
-                        ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
-                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
-                            light: light_pos.extend(1.0).into(),
-                            nudge_far: nudge,
-                        }))?;
-                        for &(first, count) in &world_ranges {
-                            ctx.rec.draw_from(count, first)?;
-                        }
-                    }
-                    if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
-                        ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
-                        ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
-                            light: light_pos.extend(0.0).into(),
-                            nudge_far: nudge,
-                        }))?;
-                        for &(first, count) in &entity_ranges {
-                            ctx.rec.draw_from(count, first)?;
-                        }
-                    }
-                    ctx.rec.end_rendering();
-                    Ok(())
-                });
-
-                // Translucent receivers: the depth test (LESS_OR_EQUAL, no writes) passes only
-                // where a layer's depth is the stored one, i.e. the nearest translucent layer;
-                // light.frag scales the light by the material's opacity.
-                let calls = if translucent {
-                    self.draws_in_order(scene, &plan, receiver_faces, receiver_entities)
-                } else {
-                    self.draw_list(scene, &plan, receiver_faces, receiver_entities)
-                };
-                let block = self.light_block(light_index, scene);
-                graph
-                    .pass(&format!("light {light_index} {prefix}lighting"))
-                    .color_attachment(t.radiance, whole, false)
-                    .depth_stencil_read(t.depth_stencil)
-                    .buffer(scene.vertices, Access::VertexRead, None)
-                    .buffer(scene.indices, Access::IndexRead, None)
-                    .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
-                    .record(move |ctx| {
-                        let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                            colors: vec![RenderTarget::load(t.radiance)],
-                            depth_stencil: Some(RenderTarget {
-                                read_only: true,
-                                ..RenderTarget::load(t.depth_stencil)
-                            }),
-                        })?;
-                        let extra = |albedo, normal, specular| {
-                            vec![
-                                (
-                                    "albedo_map",
-                                    Bind::Sampled {
-                                        image: albedo,
-                                        range: whole,
-                                        sampler,
-                                    },
-                                ),
-                                (
-                                    "normal_map",
-                                    Bind::Sampled {
-                                        image: normal,
-                                        range: whole,
-                                        sampler,
-                                    },
-                                ),
-                                (
-                                    "specular_map",
-                                    Bind::Sampled {
-                                        image: specular,
-                                        range: whole,
-                                        sampler,
-                                    },
-                                ),
-                            ]
-                        };
-                        record_surface(
-                            ctx,
-                            self,
-                            scene,
-                            &calls,
-                            |f| self.light[f.normal_map as usize][f.specular as usize],
-                            extra,
-                            bytemuck::bytes_of(&uniforms),
-                            bytemuck::bytes_of(&block),
-                        )?;
-                        ctx.rec.end_rendering();
-                        Ok(())
-                    });
+                self.add_volumes(graph, frame, lp, li as u32, translucent);
+                self.add_lighting(graph, frame, &plan, lp, translucent);
             }
         }
         Ok(())

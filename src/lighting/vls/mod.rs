@@ -3,7 +3,7 @@
 //! the closest (the thesis) or the most contributing that pass a shadow feeler from the segment's
 //! centroid; at run time each segment sums only those lights, at their current intensities.
 //!
-//! The set-up is a bake ([`setup`], cached through the bake stage). The run time is one graphics
+//! The set-up is a bake (`setup`, cached through the bake stage). The run time is one graphics
 //! pass: the segments drawn with unshared vertices carrying the segment's id (so a boundary
 //! between different light sets shows, the thesis's Fig. 6-3), the fragment shader looping over
 //! the segment's light indices with `glsl/common/many_lights.glsl`. Shadows are the feeler's
@@ -15,23 +15,22 @@
 //! shades with the physical model, so its frames are radiance and compare with the reference.
 //! Every choice is a parameter of its own as well.
 
-pub mod setup;
+pub(crate) mod setup;
 
 #[cfg(test)]
 mod tests;
 
 use glam::DVec3;
 
-use crate::backend::{
-    vk, Bind, BufferId, PipelineId, RenderTarget, RenderingDesc, SpecConstant, SubresourceRange, VertexAttribute,
-    VertexLayout,
-};
+use crate::backend::{vk, Bind, BufferId, PipelineId, SpecConstant, VertexAttribute, VertexLayout};
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::many_lights::{scene_polygons, LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 use crate::lighting::params::Params;
-use crate::lighting::{term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms};
+use crate::lighting::{
+    begin_term_rendering, term_pass, term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms,
+};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use setup::{Feeler, LightSets, Point, Selection, SetupParams};
 
@@ -168,6 +167,7 @@ impl Config {
     }
 
     /// The parameters of `decl`; a bad value is one line naming the scene file and parameter.
+    // long: one parameter after another, each read and range-checked.
     pub fn from_decl_in(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let mode = params
@@ -578,35 +578,15 @@ impl LightingMethod for Vls {
             (false, true) => self.pipelines[2],
             (false, false) => return Ok(()),
         };
-        let mut pass = graph.pass(if base { "vls" } else { "vls direct" }).color_attachment(
-            t.radiance,
-            SubresourceRange::mip(0),
-            false,
-        );
-        pass = if base {
-            pass.depth_stencil_write(t.depth_stencil, false)
-        } else {
-            pass.depth_stencil_read(t.depth_stencil)
-        };
+        let pass = term_pass(graph, if base { "vls" } else { "vls direct" }, t, base);
         let vertex_count = self.vertex_count;
         let params = self.params;
         pass.buffer(self.vertices, Access::VertexRead, None)
             .buffer(self.sets, Access::StorageRead { stages }, Some("sets"))
             .record(move |ctx| {
-                let depth = RenderTarget {
-                    read_only: !base,
-                    ..RenderTarget::load(t.depth_stencil)
-                };
-                let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                    colors: vec![RenderTarget::load(t.radiance)],
-                    depth_stencil: Some(depth),
-                })?;
+                let _ = begin_term_rendering(ctx.rec, t, base)?;
                 ctx.rec.bind_pipeline(pipeline)?;
-                let lights: &[u8] = if scene.lights.is_empty() {
-                    &[0u8; 64]
-                } else {
-                    bytemuck::cast_slice(&scene.lights)
-                };
+                let lights = scene.light_bytes();
                 ctx.bind(&[
                     ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
                     ("lights", Bind::StorageData(lights)),

@@ -101,6 +101,7 @@ fn check_usemtl(path: &Path, file: &str, materials: &[tobj::Material]) -> Result
 
 /// Maps one MTL material: Kd/map_Kd, Ks/Ns/map_Ks, bump/map_Bump/norm (tangent-space normal
 /// map), d (or Tr = 1 - d), Ke. Statements penumbra cannot honour are errors.
+// long: one MTL statement after another, each mapped or refused.
 fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<Material, SceneError> {
     let field = |what: &str| format!("materials[{index}] {:?}.{what}", m.name);
     let colour = |v: Option<[f32; 3]>, what: &str, default: Vec3| match v {

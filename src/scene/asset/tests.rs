@@ -223,6 +223,7 @@ fn gltf_error(name: &str, edit: impl FnOnce(&mut serde_json::Value, &Path), byte
 }
 
 #[test]
+// long: a table of bad inputs, a few lines each.
 fn gltf_bad_input_is_one_line_naming_file_and_element() {
     let (bytes, _, _) = quad_buffer(UNIT_QUAD);
     let mut nan = bytes.clone();

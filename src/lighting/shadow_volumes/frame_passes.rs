@@ -1,0 +1,298 @@
+//! The frame's passes: entity silhouettes, then per round (opaque, then translucent) the ambient
+//! pass and, per light, its stencil volumes and its lighting.
+
+use std::rc::Rc;
+
+use bytemuck::Zeroable;
+use glam::Vec4;
+
+use super::plan::{self, FramePlan, LightPlan};
+use super::{record_surface, LightBlock, ShadowVolumes, SilhouetteBuffers, SilhouettePush, VolumePush};
+use crate::backend::{vk, Bind, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::graph::{Access, RenderGraph};
+use crate::lighting::FrameContext;
+use crate::world::FaceId;
+
+impl ShadowVolumes {
+    /// Silhouettes of every entity for every light of the frame.
+    pub(super) fn add_silhouettes<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        s: &'a SilhouetteBuffers,
+        plan: &Rc<FramePlan>,
+    ) {
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let p = plan.clone();
+        graph
+            .pass("silhouettes")
+            .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
+            .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
+            .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
+            .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
+            .record(move |ctx| {
+                let lights: Vec<Vec4> = p
+                    .lights
+                    .iter()
+                    .map(|l| self.setup.lights[l.light].position.extend(1.0))
+                    .collect();
+                ctx.rec.bind_pipeline(self.silhouette)?;
+                ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&lights)))])?;
+                for (e, slot) in s.slots.iter().enumerate() {
+                    let topo = &self.setup.entities[e].topology;
+                    if topo.items() == 0 {
+                        continue;
+                    }
+                    let push = SilhouettePush {
+                        model: p.entity_transforms[e].to_cols_array(),
+                        vertex_offset: slot.vertex_offset,
+                        triangle_offset: slot.triangle_offset,
+                        triangle_count: topo.triangles.len() as u32,
+                        edge_offset: slot.edge_offset,
+                        edge_count: topo.edges.len() as u32,
+                        out_offset: slot.out_offset,
+                        light_stride: s.stride,
+                        closed: topo.closed as u32,
+                    };
+                    ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                    ctx.rec.dispatch([topo.items() as u32, lights.len() as u32, 1])?;
+                }
+                Ok(())
+            });
+    }
+
+    /// The ambient pass of a round: the opaque surfaces the camera sees, or the translucent
+    /// entities back to front.
+    pub(super) fn add_ambient<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        frame: &FrameContext<'a>,
+        plan: &FramePlan,
+        translucent: bool,
+    ) {
+        let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let sampler = scene.sampler;
+        let whole = SubresourceRange::mip(0);
+        let prefix = if translucent { "translucent " } else { "" };
+        let ambient_calls = if translucent {
+            self.draws_in_order(scene, plan, &[], &plan.translucent_entities)
+        } else {
+            self.draw_list(scene, plan, &plan.visible_faces, &plan.visible_entities)
+        };
+        let ambient_pipelines = if translucent {
+            self.translucent_ambient
+        } else {
+            self.ambient
+        };
+        let ambient_block: [f32; 4] = self.setup.config.lightmap.extend(0.0).into();
+        graph
+            .pass(&format!("{prefix}ambient"))
+            .color_attachment(t.radiance, whole, false)
+            .depth_stencil_write(t.depth_stencil, false)
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(t.radiance)],
+                    depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+                })?;
+                let zero_light = LightBlock::zeroed();
+                let ambient_bytes: &[u8] = bytemuck::cast_slice(&ambient_block);
+                let extra = |albedo, normal, _specular| {
+                    vec![
+                        (
+                            "albedo_map",
+                            Bind::Sampled {
+                                image: albedo,
+                                range: whole,
+                                sampler,
+                            },
+                        ),
+                        (
+                            "normal_map",
+                            Bind::Sampled {
+                                image: normal,
+                                range: whole,
+                                sampler,
+                            },
+                        ),
+                        ("ambient", Bind::UniformData(ambient_bytes)),
+                    ]
+                };
+                record_surface(
+                    ctx,
+                    self,
+                    scene,
+                    &ambient_calls,
+                    |f| ambient_pipelines[f.normal_map as usize],
+                    extra,
+                    bytemuck::bytes_of(&uniforms),
+                    bytemuck::bytes_of(&zero_light),
+                )?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+    }
+
+    /// Light `li`'s shadow volumes into the stencil: the world's caster faces from the templates,
+    /// the entities' from the silhouette pass's slot `li`.
+    pub(super) fn add_volumes<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        frame: &FrameContext<'a>,
+        lp: &LightPlan,
+        li: u32,
+        translucent: bool,
+    ) {
+        let (t, uniforms) = (frame.targets, frame.uniforms);
+        let prefix = if translucent { "translucent " } else { "" };
+        let light_index = lp.light;
+        let light = &self.setup.lights[light_index];
+        let world_ranges = plan::merge_ranges(lp.caster_faces.iter().map(|&f| {
+            (
+                self.faces[f as usize].template_first,
+                self.faces[f as usize].template_count,
+            )
+        }));
+        let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
+            Some(s) => lp
+                .caster_entities
+                .iter()
+                .map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices))
+                .collect(),
+            None => Vec::new(),
+        };
+        let light_pos = light.position;
+        let nudge = self.nudge_far as u32;
+        let mut pass = graph
+            .pass(&format!("light {light_index} {prefix}volumes"))
+            .depth_stencil_write(t.depth_stencil, false);
+        if let Some(b) = self.templates {
+            pass = pass.buffer(b, Access::VertexRead, None);
+        }
+        if let Some(s) = &self.silhouettes {
+            pass = pass.buffer(s.volumes, Access::VertexRead, None);
+        }
+        let templates = self.templates;
+        let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
+        pass.record(move |ctx| {
+            let extent = ctx.rec.begin_rendering(&RenderingDesc {
+                colors: Vec::new(),
+                depth_stencil: Some(RenderTarget::load(t.depth_stencil)),
+            })?;
+            ctx.rec.clear_stencil(extent, 0)?;
+            ctx.rec.bind_pipeline(self.volume)?;
+            ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
+            if let (Some(b), false) = (templates, world_ranges.is_empty()) {
+                ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+                ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
+                    light: light_pos.extend(1.0).into(),
+                    nudge_far: nudge,
+                }))?;
+                for &(first, count) in &world_ranges {
+                    ctx.rec.draw_from(count, first)?;
+                }
+            }
+            if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
+                ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+                ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
+                    light: light_pos.extend(0.0).into(),
+                    nudge_far: nudge,
+                }))?;
+                for &(first, count) in &entity_ranges {
+                    ctx.rec.draw_from(count, first)?;
+                }
+            }
+            ctx.rec.end_rendering();
+            Ok(())
+        });
+    }
+
+    /// Light `lp`'s lighting of its receivers where the stencil is clear.
+    pub(super) fn add_lighting<'a>(
+        &'a self,
+        graph: &mut RenderGraph<'a>,
+        frame: &FrameContext<'a>,
+        plan: &FramePlan,
+        lp: &LightPlan,
+        translucent: bool,
+    ) {
+        let (scene, t, uniforms) = (frame.scene, frame.targets, frame.uniforms);
+        let frag = vk::PipelineStageFlags2::FRAGMENT_SHADER;
+        let sampler = scene.sampler;
+        let whole = SubresourceRange::mip(0);
+        let prefix = if translucent { "translucent " } else { "" };
+        let light_index = lp.light;
+        let (receiver_faces, receiver_entities): (&[FaceId], &[usize]) = if translucent {
+            (&[], &lp.translucent_receivers)
+        } else {
+            (&lp.receiver_faces, &lp.receiver_entities)
+        };
+        // Translucent receivers: the depth test (LESS_OR_EQUAL, no writes) passes only
+        // where a layer's depth is the stored one, i.e. the nearest translucent layer;
+        // light.frag scales the light by the material's opacity.
+        let calls = if translucent {
+            self.draws_in_order(scene, plan, receiver_faces, receiver_entities)
+        } else {
+            self.draw_list(scene, plan, receiver_faces, receiver_entities)
+        };
+        let block = self.light_block(light_index, scene);
+        graph
+            .pass(&format!("light {light_index} {prefix}lighting"))
+            .color_attachment(t.radiance, whole, false)
+            .depth_stencil_read(t.depth_stencil)
+            .buffer(scene.vertices, Access::VertexRead, None)
+            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
+            .record(move |ctx| {
+                let _ = ctx.rec.begin_rendering(&RenderingDesc {
+                    colors: vec![RenderTarget::load(t.radiance)],
+                    depth_stencil: Some(RenderTarget {
+                        read_only: true,
+                        ..RenderTarget::load(t.depth_stencil)
+                    }),
+                })?;
+                let extra = |albedo, normal, specular| {
+                    vec![
+                        (
+                            "albedo_map",
+                            Bind::Sampled {
+                                image: albedo,
+                                range: whole,
+                                sampler,
+                            },
+                        ),
+                        (
+                            "normal_map",
+                            Bind::Sampled {
+                                image: normal,
+                                range: whole,
+                                sampler,
+                            },
+                        ),
+                        (
+                            "specular_map",
+                            Bind::Sampled {
+                                image: specular,
+                                range: whole,
+                                sampler,
+                            },
+                        ),
+                    ]
+                };
+                record_surface(
+                    ctx,
+                    self,
+                    scene,
+                    &calls,
+                    |f| self.light[f.normal_map as usize][f.specular as usize],
+                    extra,
+                    bytemuck::bytes_of(&uniforms),
+                    bytemuck::bytes_of(&block),
+                )?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+    }
+}
