@@ -394,6 +394,87 @@ fn still_frames_converge_to_compare_against_a_converged_reference() {
     assert!(spp >= 8, "only {spp} spp after 40 still frames");
 }
 
+/// A floor and a box lit by a point light, drawn with a radiosity light-map of coarse patches.
+const RADIOSITY_SCENE: &str = "methods = [{ name = \"radiosity\", patch_size = 0.2 }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";
+
+#[test]
+fn a_rebake_runs_while_frames_go_on_and_a_second_change_waits_for_it() {
+    // Finer patches asked for at frame 3 (a bake of a second or so here), and others at frame
+    // 6 while it runs: the window keeps presenting the coarse light-map meanwhile, the report
+    // (what the panel shows) follows the bake's progress, the first request is superseded and
+    // the second is drawn once its bake is done, read from the cache.
+    let scene = common::temp_path("demo-rebake.toml");
+    std::fs::write(&scene, RADIOSITY_SCENE).unwrap();
+    let script = common::temp_path("demo-rebake-script.txt");
+    std::fs::write(&script, "3 param patch_size 0.05\n6 param radiosity.patch_size 0.06\n").unwrap();
+    let json = common::temp_path("demo-rebake.json");
+    let cache = common::temp_path("demo-rebake-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("demo")
+        .arg(&scene)
+        .args([
+            "--size",
+            "64x48",
+            "--frames",
+            "8",
+            "--hide-panel",
+            "--validation",
+            "--device",
+            &device,
+        ])
+        .arg("--script")
+        .arg(&script)
+        .arg("--report-json")
+        .arg(&json)
+        .env("PENUMBRA_CACHE", &cache)
+        .output()
+        .unwrap();
+    let out = common::ok(&o);
+    let r = report(&json);
+    let params: Vec<&str> = r.iter().map(|f| f["parameters"].as_str().unwrap()).collect();
+    let baking: Vec<&serde_json::Value> = r.iter().filter(|f| !f["baking"].is_null()).collect();
+    // Frames went on while the bakes ran, with the old light-map, none as long as the bakes.
+    assert!(baking.len() >= 10, "{} frames during the bakes:\n{out}", baking.len());
+    assert!(
+        baking.iter().all(|f| f["parameters"] == "radiosity(patch_size = 0.2)"),
+        "{params:?}"
+    );
+    let bake_s = baking
+        .iter()
+        .map(|f| f["baking"]["elapsed_s"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    let longest_s = baking
+        .iter()
+        .map(|f| f["frame_ms"].as_f64().unwrap() / 1e3)
+        .fold(0.0, f64::max);
+    assert!(
+        longest_s < 0.5 * bake_s,
+        "a frame took {longest_s:.3} s during bakes of {bake_s:.3} s"
+    );
+    // The panel's progress: the bake's stage, its fraction growing within (0, 1).
+    let stage = |f: &serde_json::Value| f["baking"]["stage"].as_str().unwrap().to_string();
+    let fractions: Vec<f64> = baking
+        .iter()
+        .filter(|f| stage(f).contains("0.05"))
+        .map(|f| f["baking"]["fraction"].as_f64().unwrap())
+        .collect();
+    assert!(
+        fractions.iter().any(|&x| x > 0.0 && x < 1.0) && fractions.windows(2).all(|w| w[1] >= w[0]),
+        "progress of the first bake: {fractions:?}"
+    );
+    assert!(
+        baking.iter().any(|f| stage(f).contains("0.06")),
+        "the queued bake ran after it"
+    );
+    // The superseded request was never drawn; the last one is, its bake read from the cache.
+    assert!(!params.iter().any(|p| p.contains("0.05")), "{params:?}");
+    assert_eq!(params.last().copied(), Some("radiosity(patch_size = 0.06)"), "{out}");
+    assert!(out.contains("patch=0.06 from the cache"), "{out}");
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
 /// Measurement (timing, so not in the default run): the frame rate with the live reference at
 /// half the frame time against without it, same window, same scene, medians over the frames
 /// after the first 10 (the tracer's compile). Run with `--ignored --nocapture` to see the numbers.

@@ -196,8 +196,13 @@ impl Renderer {
     /// Switches to another of the scene's configurations (the demo's method key): the new
     /// methods are created and the clock restarts.
     pub fn set_configuration(&mut self, configuration: Configuration) -> Result<()> {
+        self.set_configuration_with(configuration, &mut Baker::new(Some(Baker::default_dir())))
+    }
+
+    /// [`Renderer::set_configuration`] baking through `bakes` (a cache-only baker: a switch
+    /// that fails rather than bake).
+    pub fn set_configuration_with(&mut self, configuration: Configuration, bakes: &mut Baker) -> Result<()> {
         self.gpu.wait_idle()?;
-        let mut bakes = Baker::new(Some(Baker::default_dir()));
         let (methods, resources) = {
             let mut ctx = CreateContext {
                 gpu: &mut self.gpu,
@@ -206,7 +211,7 @@ impl Renderer {
                 scene: &self.scene,
                 scene_gpu: &self.scene_gpu,
                 environment: &self.environment,
-                bakes: &mut bakes,
+                bakes,
                 terms: Terms::NONE,
             };
             create_methods(&configuration, &mut ctx)?

@@ -6,6 +6,7 @@
 mod camera;
 mod live;
 mod panel;
+mod rebake;
 mod script;
 
 use std::collections::{HashSet, VecDeque};
@@ -19,7 +20,8 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use crate::backend::{vk, Gpu, Overlay, OverlayFrame, PassTiming, Swapchain};
+use crate::backend::{vk, Gpu, GpuDesc, Overlay, OverlayFrame, PassTiming, Swapchain};
+use crate::bake::Baker;
 use crate::commands::capture::{load_scene, CaptureOptions};
 use crate::commands::views::{Composed, ErrorMap, View, ViewSettings};
 use crate::error::{Error, Result};
@@ -29,6 +31,7 @@ use crate::util::image_io::HdrImage;
 
 pub use camera::{bookmarks_path, Bookmarks, FlyCamera};
 pub use live::{LiveError, LiveReference};
+pub use rebake::BakeStatus;
 pub use script::{Event, Script};
 
 const FRAMES_IN_FLIGHT: usize = 2;
@@ -44,6 +47,10 @@ const METRICS_INTERVAL_S: f64 = 0.25;
 pub struct FrameRecord {
     pub frame: u64,
     pub configuration: String,
+    /// The drawn configuration's parameters as declared, `method(name = value, ...)` a part.
+    pub parameters: String,
+    /// The bake running in the background, as the panel shows it.
+    pub baking: Option<BakeStatus>,
     pub view: View,
     pub spp: u32,
     pub restarts: u32,
@@ -82,6 +89,14 @@ struct Running {
     current: usize,
     /// Set by a switch: the next frame measures its error whatever the interval.
     switched: bool,
+    /// The bakes of a configuration being switched to, running beside the frames.
+    rebake: Option<rebake::Rebake>,
+    /// A change asked for while they run: made when they end (the latest request wins).
+    queued: Option<(usize, crate::lighting::Configuration)>,
+    /// The device the bakes run on (without the window's display).
+    bake_desc: GpuDesc,
+    /// Validation messages of the finished bakes' devices.
+    bake_validation: usize,
     params: Vec<panel::ParamEdit>,
     live: LiveReference,
     live_on: bool,
@@ -131,6 +146,19 @@ struct App {
     script: DemoScript,
     state: Option<Running>,
     error: Option<Error>,
+}
+
+/// A configuration's parameters as declared: `method(name = value, ...)` a part.
+fn parameters(config: &crate::lighting::Configuration) -> String {
+    let parts: Vec<String> = config
+        .parts
+        .iter()
+        .map(|p| {
+            let values: Vec<String> = p.decl.params.iter().map(|(k, v, _)| format!("{k} = {v}")).collect();
+            format!("{}({})", p.decl.name, values.join(", "))
+        })
+        .collect();
+    parts.join(" + ")
 }
 
 fn param_edits(config: &crate::lighting::Configuration) -> Vec<panel::ParamEdit> {
@@ -216,6 +244,10 @@ impl App {
             configurations,
             current,
             switched: false,
+            rebake: None,
+            queued: None,
+            bake_desc: self.opts.gpu.clone(),
+            bake_validation: 0,
             live: LiveReference::new(self.opts.gpu.clone(), if budget > 0.0 { budget } else { 0.5 }),
             live_on: budget > 0.0,
             reference_s: 0.0,
@@ -264,17 +296,103 @@ impl Running {
 
     /// Switches to configuration `next`; a failure is reported and the current one keeps running.
     fn set_configuration(&mut self, next: usize) {
-        let Some(config) = self.configurations.get(next).cloned() else {
+        if let Some(config) = self.configurations.get(next).cloned() {
+            self.change_configuration(next, config);
+        }
+    }
+
+    /// Switches to `config` (the configuration at `index`, or it with edited parameters): at
+    /// once when its bakes are in the cache (or it has none); otherwise they run on another
+    /// thread while the old configuration keeps drawing, and the switch follows when they end
+    /// ([`Running::poll_rebake`]). A change asked for meanwhile waits for them.
+    fn change_configuration(&mut self, index: usize, config: crate::lighting::Configuration) {
+        if let Some(r) = &self.rebake {
+            crate::outln!("queued {} after the bake of {}", config.name, r.configuration.name);
+            self.queued = Some((index, config));
+            return;
+        }
+        let started = Instant::now();
+        let mut cache = Baker::cached_only(Baker::default_dir());
+        match self.renderer.set_configuration_with(config.clone(), &mut cache) {
+            Ok(()) => self.switched_to(index, config, started),
+            Err(_) if cache.missing().is_some() => {
+                crate::outln!(
+                    "baking {} in the background ({} is not in the bake cache)",
+                    config.name,
+                    cache.missing().unwrap_or_default()
+                );
+                let scene = self.renderer.scene.clone();
+                self.rebake = Some(rebake::Rebake::start(&self.bake_desc, scene, index, config));
+            }
+            Err(e) => self.report_problem(format!(
+                "cannot switch to {}, keeping {}: {e}",
+                config.name, self.renderer.configuration.name
+            )),
+        }
+    }
+
+    fn switched_to(&mut self, index: usize, config: crate::lighting::Configuration, started: Instant) {
+        self.current = index;
+        self.params = param_edits(&config);
+        self.switched = true;
+        crate::outln!("configuration: {}", config.name);
+        if !self.renderer.bakes.is_empty() {
+            let bakes: Vec<String> = self
+                .renderer
+                .bakes
+                .iter()
+                .map(|b| format!("{} {}", b.name, if b.cached { "from the cache" } else { "built" }))
+                .collect();
+            crate::outln!(
+                "  {} in {:.2} s ({})",
+                parameters(&config),
+                started.elapsed().as_secs_f64(),
+                bakes.join(", ")
+            );
+        }
+        self.configurations[index] = config;
+    }
+
+    /// Takes the background bake's progress; when it has ended, switches to its configuration
+    /// (its bakes now read from the cache) or reports its failure, then makes a queued change.
+    fn poll_rebake(&mut self) {
+        let Some(outcome) = self.rebake.as_mut().and_then(|r| r.poll()) else {
             return;
         };
-        match self.renderer.set_configuration(config.clone()) {
-            Ok(()) => {
-                self.current = next;
-                self.params = param_edits(&config);
-                self.switched = true;
-                crate::outln!("configuration: {}", config.name);
+        let r = self.rebake.take().expect("polled above");
+        match outcome {
+            rebake::Outcome::Baked {
+                bakes,
+                validation_messages,
+            } => {
+                self.bake_validation += validation_messages;
+                let names: Vec<String> = bakes
+                    .iter()
+                    .map(|(n, cached)| format!("{n}{}", if *cached { " (cached)" } else { "" }))
+                    .collect();
+                crate::outln!(
+                    "baked {} in {:.2} s: {}",
+                    r.configuration.name,
+                    r.status.elapsed_s,
+                    names.join(", ")
+                );
+                // A newer request replaces this one (its bakes stay in the cache).
+                if self.queued.is_none() {
+                    let started = Instant::now();
+                    // Where the cache could not be written, this bakes again, in the frame.
+                    match self.renderer.set_configuration(r.configuration.clone()) {
+                        Ok(()) => self.switched_to(r.index, r.configuration.clone(), started),
+                        Err(e) => self.report_problem(format!("cannot switch to {}: {e}", r.configuration.name)),
+                    }
+                }
             }
-            Err(e) => self.report_problem(format!("cannot switch to {}: {e}", config.name)),
+            rebake::Outcome::Failed(e) => self.report_problem(format!(
+                "bake of {} failed, keeping {}: {e}",
+                r.configuration.name, self.renderer.configuration.name
+            )),
+        }
+        if let Some((index, config)) = self.queued.take() {
+            self.change_configuration(index, config);
         }
     }
 
@@ -287,7 +405,7 @@ impl Running {
     }
 
     /// The current configuration with the panel's parameters, rebuilt (its bakes through the
-    /// bake cache); an error keeps the old one running.
+    /// bake cache, in the background where they are not cached); an error keeps the old one.
     fn apply_params(&mut self) {
         let mut config = self.renderer.configuration.clone();
         for p in &self.params {
@@ -305,26 +423,32 @@ impl Running {
                 part.decl = part.decl.with(p.name, value);
             }
         }
-        let started = Instant::now();
-        match self.renderer.set_configuration(config.clone()) {
-            Ok(()) => {
-                let bakes: Vec<String> = self
-                    .renderer
-                    .bakes
-                    .iter()
-                    .map(|b| format!("{} {}", b.name, if b.cached { "from the cache" } else { "built" }))
-                    .collect();
-                crate::outln!(
-                    "applied parameters of {} in {:.2} s ({})",
-                    config.name,
-                    started.elapsed().as_secs_f64(),
-                    bakes.join(", ")
-                );
-                self.configurations[self.current] = config;
-                self.switched = true;
-            }
-            Err(e) => self.report_problem(format!("parameters not applied, keeping the old ones: {e}")),
-        }
+        self.change_configuration(self.current, config);
+    }
+
+    /// Sets the parameter `name` (`method.name` where the configuration has several methods)
+    /// in the panel and applies the parameters, as typing it and pressing Apply does.
+    fn set_param(&mut self, name: &str, value: &str) -> Result<()> {
+        let parts: Vec<String> = self
+            .renderer
+            .configuration
+            .parts
+            .iter()
+            .map(|p| p.decl.name.clone())
+            .collect();
+        let found = self
+            .params
+            .iter_mut()
+            .find(|p| p.name == name || parts.get(p.part).is_some_and(|m| format!("{m}.{}", p.name) == name));
+        let Some(p) = found else {
+            return Err(Error::Usage(format!(
+                "script: `{name}` is not a parameter of {}",
+                self.renderer.configuration.name
+            )));
+        };
+        p.text = value.to_string();
+        self.apply_params();
+        Ok(())
     }
 
     fn reload_shaders(&mut self) {
@@ -430,6 +554,7 @@ impl Running {
             }
             Event::Split(s) => self.view.split = s.clamp(0.0, 1.0),
             Event::Screenshot(p) => self.save_view = Some(p.clone()),
+            Event::Param(name, value) => self.set_param(name, value)?,
         }
         Ok(())
     }
@@ -488,6 +613,8 @@ impl Running {
             position: self.camera.base.position,
             bookmarks: self.bookmarks.bookmark.len(),
             messages: &self.messages,
+            baking: self.rebake.as_ref().map(|r| &r.status),
+            queued: self.queued.as_ref().map(|(_, c)| c.name.as_str()),
         };
         let mut actions = Vec::new();
         let show_view = self.view.view != View::Method && self.composed.is_some();
@@ -548,6 +675,7 @@ impl Running {
             self.live.frame_time(interval - self.reference_s);
         }
         self.camera.fly(&self.keys, dt);
+        self.poll_rebake();
 
         let slot = self.renderer.current_frame();
         // Waiting for the slot's previous frame also makes its acquire semaphore reusable.
@@ -672,6 +800,8 @@ impl Running {
         self.report.push(FrameRecord {
             frame: self.frames,
             configuration: self.renderer.configuration.name.clone(),
+            parameters: parameters(&self.renderer.configuration),
+            baking: self.rebake.as_ref().map(|r| r.status.clone()),
             view: self.view.view,
             spp: self.live.spp(),
             restarts: self.live.restarts,
@@ -798,7 +928,9 @@ impl App {
         if self.script.cycle_every.is_some_and(|n| n > 0 && s.frames % n == 0) {
             s.next_configuration();
         }
-        if self.script.frames.is_some_and(|n| s.frames >= n) {
+        // A scripted run ends with the configuration it asked for: not while a bake runs.
+        let settled = s.rebake.is_none() && s.queued.is_none();
+        if settled && self.script.frames.is_some_and(|n| s.frames >= n) {
             el.exit();
         } else {
             s.window.request_redraw();
@@ -906,9 +1038,15 @@ pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
     if let Some(e) = app.error.take() {
         return Err(e);
     }
-    if let Some(s) = app.state.take() {
+    if let Some(mut s) = app.state.take() {
         s.renderer.gpu.wait_idle()?;
-        let n = s.renderer.gpu.validation_log().count() + s.live.validation_messages();
+        if let Some(rebake::Outcome::Baked {
+            validation_messages, ..
+        }) = s.rebake.take().map(|r| r.wait())
+        {
+            s.bake_validation += validation_messages;
+        }
+        let n = s.renderer.gpu.validation_log().count() + s.live.validation_messages() + s.bake_validation;
         if let Some(p) = &report_json {
             let text = serde_json::to_string_pretty(&s.report).map_err(|e| Error::Usage(e.to_string()))?;
             crate::util::image_io::write_file(p, text.as_bytes())

@@ -10,6 +10,7 @@ use crate::lighting::Configuration;
 use crate::scene::ParamKind;
 
 use super::live::LiveReference;
+use super::rebake::BakeStatus;
 
 /// A method parameter as edited: TOML text, applied with the Apply button.
 #[derive(Clone, Debug)]
@@ -44,6 +45,10 @@ pub struct PanelInfo<'a> {
     pub position: glam::Vec3,
     pub bookmarks: usize,
     pub messages: &'a [String],
+    /// The bake of the configuration being switched to, running beside the frames.
+    pub baking: Option<&'a BakeStatus>,
+    /// The configuration asked for while it runs.
+    pub queued: Option<&'a str>,
 }
 
 /// What the panel changes.
@@ -64,6 +69,9 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
         .resizable(true)
         .show(ctx, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
+                if let Some(b) = info.baking {
+                    baking(ui, b, info.queued);
+                }
                 configuration(ui, info, settings.params, &mut actions);
                 timings(ui, info);
                 reference(ui, info, settings.budget, settings.live_on);
@@ -75,6 +83,17 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
             });
         });
     actions
+}
+
+/// The background bake: its stage's progress bar, the time so far and the stage's estimate.
+fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>) {
+    ui.label(format!("baking {} ({:.1} s)", b.configuration, b.elapsed_s));
+    let left = b.left_s.map_or(String::new(), |s| format!(", about {s:.0} s left"));
+    ui.add(egui::ProgressBar::new(b.fraction as f32).text(format!("{} {:.0}%{left}", b.stage, 100.0 * b.fraction)));
+    match queued {
+        Some(q) => ui.label(format!("then {q}; the current configuration draws meanwhile")),
+        None => ui.label("the current configuration draws meanwhile"),
+    };
 }
 
 fn configuration(ui: &mut egui::Ui, info: &PanelInfo<'_>, params: &mut [ParamEdit], actions: &mut Vec<Action>) {
