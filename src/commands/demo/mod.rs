@@ -39,8 +39,17 @@ const FRAMES_IN_FLIGHT: usize = 2;
 const HISTORY: usize = 240;
 /// Error metrics are refreshed at most this often while the reference grows (a switch of
 /// method refreshes them at once), and no more often than every four times what they cost, so
-/// that the CPU's FLIP leaves most of the reference's budget to tracing.
+/// that the worker computing them leaves most of the CPU to the frames and the tracer.
 const METRICS_INTERVAL_S: f64 = 0.25;
+
+/// How this frame's error is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Measurement {
+    /// In the frame: a switch of method, whose numbers change at once.
+    Now,
+    /// On the metrics worker, the frame going on.
+    Background,
+}
 
 /// One frame as the report (`--report-json`) records it.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -687,15 +696,20 @@ impl Running {
             }
             self.timings = t;
         }
-        let reference_start = Instant::now();
-        let grew = match self.reference_step() {
-            Ok(g) => g,
-            Err(e) => {
-                self.live_on = false;
-                self.report_problem(format!("live reference stopped: {e}"));
-                false
+        match self.live.take_measurement() {
+            // Off the frame, but the reference's work all the same: charged to its share.
+            Ok(Some(cost)) => {
+                self.metrics_s = cost;
+                self.live.spend(cost);
             }
-        };
+            Ok(None) => {}
+            Err(e) => self.report_problem(format!("error metrics failed: {e}")),
+        }
+        let reference_start = Instant::now();
+        if let Err(e) = self.reference_step() {
+            self.live_on = false;
+            self.report_problem(format!("live reference stopped: {e}"));
+        }
         let mut reference_s = reference_start.elapsed().as_secs_f64();
         let overlay = self.ui()?;
         // Textures are uploaded now even if this frame is not presented.
@@ -708,10 +722,9 @@ impl Running {
         self.renderer.states.acquired_image(acquired.image, wait_stage);
         let camera = self.camera.camera();
         let readback = self.grab_next;
-        let interval_s = METRICS_INTERVAL_S.max(4.0 * self.metrics_s);
-        let due = self.metrics_at.is_none_or(|t| t.elapsed().as_secs_f64() >= interval_s);
-        let measure = self.live_on && self.live.image.is_some() && (self.switched || (grew && (due || self.scripted)));
-        let radiance = measure || self.save_view.is_some() || (self.view.view != View::Method && self.live_on);
+        let measure = self.measurement();
+        let radiance =
+            measure.is_some() || self.save_view.is_some() || (self.view.view != View::Method && self.live_on);
         self.renderer.render(
             &camera,
             FrameOutput::Present {
@@ -760,15 +773,35 @@ impl Running {
         Ok(true)
     }
 
+    /// Whether this frame measures the error: at once after a switch of method; otherwise on
+    /// the worker, when the reference has grown since the last measurement, the worker is free
+    /// and the interval has passed (in scripted runs, at every growth).
+    fn measurement(&self) -> Option<Measurement> {
+        let image = self.live.image.as_ref().filter(|_| self.live_on)?;
+        if self.switched {
+            return Some(Measurement::Now);
+        }
+        let interval_s = METRICS_INTERVAL_S.max(4.0 * self.metrics_s);
+        let due = self.metrics_at.is_none_or(|t| t.elapsed().as_secs_f64() >= interval_s);
+        let stale = self.live.error.as_ref().is_none_or(|e| e.spp != image.spp);
+        (stale && !self.live.measuring() && (due || self.scripted)).then_some(Measurement::Background)
+    }
+
     /// With this frame's radiance read back: the error, the composed view, a saved view.
-    fn after_radiance(&mut self, measure: bool) -> Result<()> {
+    fn after_radiance(&mut self, measure: Option<Measurement>) -> Result<()> {
         let method = self.renderer.radiance_pixels()?;
-        if measure {
-            let t0 = Instant::now();
-            self.live.measure(&method, self.view.exposure)?;
-            self.metrics_s = t0.elapsed().as_secs_f64();
-            self.metrics_at = Some(Instant::now());
-            self.switched = false;
+        match measure {
+            Some(Measurement::Now) => {
+                let t0 = Instant::now();
+                self.live.measure(&method, self.view.exposure)?;
+                self.metrics_s = t0.elapsed().as_secs_f64();
+                self.metrics_at = Some(Instant::now());
+                self.switched = false;
+            }
+            Some(Measurement::Background) if self.live.measure_in_background(&method, self.view.exposure) => {
+                self.metrics_at = Some(Instant::now());
+            }
+            _ => {}
         }
         let reference = self.live.image.as_ref().map(|i| &i.mean);
         let settings = if reference.is_none() && self.view.view != View::Method {

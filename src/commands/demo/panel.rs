@@ -205,6 +205,9 @@ fn reference(ui: &mut egui::Ui, info: &PanelInfo<'_>, budget: &mut f32, live_on:
         ui.label(format!("{}: {} spp", live.label, live.spp()));
         match &live.error {
             Some(e) => {
+                if e.spp != live.spp() {
+                    ui.label(format!("error at {} spp (being refreshed)", e.spp));
+                }
                 egui::Grid::new("error").num_columns(3).show(ui, |ui| {
                     ui.label("");
                     ui.label("method");
