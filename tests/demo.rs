@@ -477,6 +477,53 @@ fn a_rebake_runs_while_frames_go_on_and_a_second_change_waits_for_it() {
     let _ = std::fs::remove_dir_all(&cache);
 }
 
+#[test]
+fn pausing_the_animation_lets_the_reference_accumulate() {
+    // A sun turning 30 degrees a second: the reference restarts every frame until P at frame 5
+    // freezes the animation, accumulates until P at 12 resumes it, then restarts again.
+    let scene = common::temp_path("demo-pause.toml");
+    std::fs::write(
+        &scene,
+        "methods = [\"forward\"]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\nname = \"sun\"\ntype = \"directional\"\ndirection = [-0.5, -1, -0.3]\nirradiance = 2\n[light_motion]\nlight = \"sun\"\ndeg_per_s = 30\n",
+    )
+    .unwrap();
+    let script = common::temp_path("demo-pause-script.txt");
+    std::fs::write(&script, "5 key P\n12 key P\n").unwrap();
+    let json = common::temp_path("demo-pause.json");
+    let o = common::penumbra(&[
+        "demo",
+        scene.to_str().unwrap(),
+        "--size",
+        "48x32",
+        "--frames",
+        "15",
+        "--hide-panel",
+        "--reference-budget",
+        "0.9",
+        "--script",
+        script.to_str().unwrap(),
+        "--report-json",
+        json.to_str().unwrap(),
+        "--validation",
+    ]);
+    let out = common::ok(&o);
+    let r = report(&json);
+    let column = |k: &str| -> Vec<u64> { r.iter().map(|f| f[k].as_u64().unwrap()).collect() };
+    let (clock, restarts, spp) = (column("animation_frame"), column("restarts"), column("spp"));
+    let paused: Vec<bool> = r.iter().map(|f| f["paused"].as_bool().unwrap()).collect();
+    assert_eq!(paused.iter().filter(|&&p| p).count(), 7, "{paused:?}\n{out}");
+    assert!(clock[1..5].windows(2).all(|w| w[1] == w[0] + 1), "running: {clock:?}");
+    assert!(clock[5..12].iter().all(|&c| c == clock[5]), "paused: {clock:?}");
+    assert!(clock[13] > clock[12] && clock[12] > clock[11], "resumed: {clock:?}");
+    assert!(restarts[4] >= restarts[1] + 3, "restarts while it moves: {restarts:?}");
+    assert!(
+        restarts[6..12].iter().all(|&n| n == restarts[6]),
+        "restarts while paused: {restarts:?}"
+    );
+    assert!(spp[11] > spp[6] && spp[6] > 0, "spp while paused: {spp:?}");
+    assert!(restarts[14] >= restarts[11] + 2, "restarts once resumed: {restarts:?}");
+}
+
 /// Measurement (timing, so not in the default run): the frame rate with the live reference at
 /// half the frame time against without it, same window, same scene, medians over the frames
 /// after the first 10 (the tracer's compile), and the longest frame and the 95th percentile with

@@ -79,6 +79,8 @@ pub struct Renderer {
     frame_index: usize,
     /// Frames rendered with the current configuration (the clock).
     clock_frame: u64,
+    /// The clock stands still: every frame is drawn at the same animation time.
+    pub clock_paused: bool,
     passes: frame_passes::FramePasses,
     readback: Option<BufferId>,
     present_readback: Option<BufferId>,
@@ -186,6 +188,7 @@ impl Renderer {
             frames,
             frame_index: 0,
             clock_frame: 0,
+            clock_paused: false,
             passes,
             readback: None,
             present_readback: None,
@@ -351,7 +354,9 @@ impl Renderer {
         self.frame_index += 1;
 
         let clock = FrameClock::at(self.clock_frame);
-        self.clock_frame += 1;
+        if !self.clock_paused {
+            self.clock_frame += 1;
+        }
         if self.scene.light_board.is_some() {
             // Before `prepare`, so every method that reads the lights per frame sees this
             // frame's intensities; `raster_lights` keeps one entry per scene light, in order.

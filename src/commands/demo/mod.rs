@@ -60,6 +60,9 @@ pub struct FrameRecord {
     pub parameters: String,
     /// The bake running in the background, as the panel shows it.
     pub baking: Option<BakeStatus>,
+    /// The animation frame the next frame is drawn at, and whether the animation is paused.
+    pub animation_frame: u64,
+    pub paused: bool,
     pub view: View,
     pub spp: u32,
     pub restarts: u32,
@@ -487,6 +490,7 @@ impl Running {
             KeyCode::KeyM => self.next_configuration(),
             KeyCode::KeyR => self.reload_shaders(),
             KeyCode::KeyG => self.live_on = !self.live_on,
+            KeyCode::KeyP => self.renderer.clock_paused = !self.renderer.clock_paused,
             KeyCode::KeyX => {
                 self.view.error_map = match self.view.error_map {
                     ErrorMap::Relative => ErrorMap::Flip,
@@ -630,6 +634,7 @@ impl Running {
         let texture = self.view_texture.as_ref().map(|t| t.id());
         let show_panel = self.show_panel;
         let mut budget = self.live.budget;
+        let mut paused = self.renderer.clock_paused;
         let out = self.egui.run_ui(raw, |ui| {
             let ctx = ui.ctx().clone();
             if let (true, Some(id)) = (show_view, texture) {
@@ -647,12 +652,14 @@ impl Running {
                         speed: &mut self.camera.speed,
                         budget: &mut budget,
                         live_on: &mut self.live_on,
+                        paused: &mut paused,
                         params: &mut self.params,
                     },
                 );
             }
         });
         self.live.budget = budget;
+        self.renderer.clock_paused = paused;
         self.egui_input
             .handle_platform_output(&self.window, out.platform_output);
         let primitives = self.egui.tessellate(out.shapes, out.pixels_per_point);
@@ -835,6 +842,8 @@ impl Running {
             configuration: self.renderer.configuration.name.clone(),
             parameters: parameters(&self.renderer.configuration),
             baking: self.rebake.as_ref().map(|r| r.status.clone()),
+            animation_frame: self.renderer.clock_frame(),
+            paused: self.renderer.clock_paused,
             view: self.view.view,
             spp: self.live.spp(),
             restarts: self.live.restarts,

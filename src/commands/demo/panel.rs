@@ -57,6 +57,8 @@ pub struct PanelSettings<'a> {
     pub speed: &'a mut f32,
     pub budget: &'a mut f32,
     pub live_on: &'a mut bool,
+    /// The scene's animation stands still (the reference accumulates).
+    pub paused: &'a mut bool,
     pub params: &'a mut Vec<ParamEdit>,
 }
 
@@ -74,7 +76,7 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
                 }
                 configuration(ui, info, settings.params, &mut actions);
                 timings(ui, info);
-                reference(ui, info, settings.budget, settings.live_on);
+                reference(ui, info, settings.budget, settings.live_on, settings.paused);
                 view(ui, settings.view, &mut actions);
                 camera(ui, info, settings.speed, &mut actions);
                 for m in info.messages {
@@ -197,9 +199,11 @@ fn frame_graph(ui: &mut egui::Ui, gpu: &VecDeque<f32>, frame: &VecDeque<f32>) {
     );
 }
 
-fn reference(ui: &mut egui::Ui, info: &PanelInfo<'_>, budget: &mut f32, live_on: &mut bool) {
+fn reference(ui: &mut egui::Ui, info: &PanelInfo<'_>, budget: &mut f32, live_on: &mut bool, paused: &mut bool) {
     ui.collapsing("Reference and error", |ui| {
         ui.checkbox(live_on, "live reference (G)");
+        ui.checkbox(paused, "pause animation (P)")
+            .on_hover_text("in a scene that moves the reference restarts every frame; paused, it accumulates");
         ui.add(egui::Slider::new(budget, 0.05..=0.9).text("share of frame"));
         let live = info.live;
         ui.label(format!("{}: {} spp", live.label, live.spp()));
