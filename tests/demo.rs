@@ -524,6 +524,107 @@ fn pausing_the_animation_lets_the_reference_accumulate() {
     assert!(restarts[14] >= restarts[11] + 2, "restarts once resumed: {restarts:?}");
 }
 
+#[test]
+fn a_minimised_window_skips_frames_and_draws_again_when_restored() {
+    // The resize to no area that Wayland and Windows send on minimising, and the one back,
+    // through the demo's window-event handler: no frame is drawn in between, none fails
+    // validation, and the window presents the scene again at its size.
+    let script = common::temp_path("demo-minimise.txt");
+    std::fs::write(&script, "3 minimise\n6 restore\n").unwrap();
+    let (json, shot) = (
+        common::temp_path("demo-minimise.json"),
+        common::temp_path("demo-minimise.png"),
+    );
+    let o = common::penumbra(&[
+        "demo",
+        "--size",
+        "96x64",
+        "--frames",
+        "9",
+        "--hide-panel",
+        "--reference-budget",
+        "0.5",
+        "--script",
+        script.to_str().unwrap(),
+        "--report-json",
+        json.to_str().unwrap(),
+        "--screenshot",
+        shot.to_str().unwrap(),
+        "--validation",
+    ]);
+    common::ok(&o);
+    let presented: Vec<bool> = report(&json)
+        .iter()
+        .map(|f| f["presented"].as_bool().unwrap())
+        .collect();
+    assert_eq!(
+        presented,
+        [true, true, true, false, false, false, true, true, true],
+        "frames presented"
+    );
+    let window = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(window.dimensions(), (96, 64));
+    let distinct: std::collections::HashSet<[u8; 4]> = window.pixels().map(|p| p.0).collect();
+    assert!(
+        distinct.len() > 100,
+        "only {} distinct colours after restoring",
+        distinct.len()
+    );
+}
+
+#[test]
+fn the_panel_follows_the_displays_scale_factor() {
+    // X11 gives winit the scale factor WINIT_X11_SCALE_FACTOR names: at 2 the panel, laid out in
+    // points, spans twice the pixels across and down it spans at 1 (the window's pixels are the
+    // same). A change of scale factor while running is not driven here: winit's event for it
+    // carries a size writer that only winit can make.
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let shoot = |scale: Option<&str>| {
+        let shot = common::temp_path(&format!("scale-{}.png", scale.unwrap_or("off")));
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args([
+            "demo",
+            "--size",
+            "640x480",
+            "--frames",
+            "3",
+            "--validation",
+            "--device",
+            &device,
+        ]);
+        match scale {
+            Some(s) => cmd.env("WINIT_X11_SCALE_FACTOR", s),
+            None => cmd.arg("--hide-panel"),
+        };
+        let o = cmd.arg("--screenshot").arg(&shot).output().unwrap();
+        assert!(
+            o.status.success(),
+            "demo failed:\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        image::open(&shot).unwrap().to_rgba8()
+    };
+    let (off, one, two) = (shoot(None), shoot(Some("1")), shoot(Some("2")));
+    // The panel's extent: the last column and row where the frame with it differs.
+    let extent = |on: &image::RgbaImage| {
+        let (mut x1, mut y1) = (0, 0);
+        for (x, y, a) in on.enumerate_pixels() {
+            let b = off.get_pixel(x, y);
+            if (0..3).any(|c| (a[c] as i32 - b[c] as i32).abs() > 8) {
+                (x1, y1) = (x1.max(x), y1.max(y));
+            }
+        }
+        (x1 as f64, y1 as f64)
+    };
+    let ((w1, h1), (w2, h2)) = (extent(&one), extent(&two));
+    println!("the panel spans {w1}x{h1} pixels at scale 1, {w2}x{h2} at scale 2");
+    assert!(w1 > 100.0 && h1 > 60.0, "the panel spans {w1}x{h1} pixels at scale 1");
+    assert!(
+        (1.8..2.2).contains(&(w2 / w1)) && (1.8..2.2).contains(&(h2 / h1)),
+        "the panel spans {w1}x{h1} pixels at scale 1 and {w2}x{h2} at scale 2"
+    );
+}
+
 /// Measurement (timing, so not in the default run): the frame rate with the live reference at
 /// half the frame time against without it, same window, same scene, medians over the frames
 /// after the first 10 (the tracer's compile), and the longest frame and the 95th percentile with

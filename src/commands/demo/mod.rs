@@ -67,6 +67,8 @@ pub struct FrameRecord {
     pub spp: u32,
     pub restarts: u32,
     pub error: Option<LiveError>,
+    /// Drawn and presented; false while the window is minimised.
+    pub presented: bool,
     /// Wall time since the previous frame.
     pub frame_ms: f64,
     /// The live reference's share of it (tracing, read-back, metrics).
@@ -86,6 +88,8 @@ struct Running {
     camera: FlyCamera,
     keys: HashSet<KeyCode>,
     looking: bool,
+    /// The last resize gave the window no area (minimised): frames are skipped until one does.
+    minimised: bool,
     dragging_divider: bool,
     cursor_x: f64,
     last: Instant,
@@ -245,6 +249,7 @@ impl App {
             camera,
             keys: HashSet::new(),
             looking: false,
+            minimised: false,
             dragging_divider: false,
             cursor_x: 0.0,
             last: Instant::now(),
@@ -568,13 +573,15 @@ impl Running {
             Event::Split(s) => self.view.split = s.clamp(0.0, 1.0),
             Event::Screenshot(p) => self.save_view = Some(p.clone()),
             Event::Param(name, value) => self.set_param(name, value)?,
+            // Sent through the window's event handler by the caller.
+            Event::Minimise | Event::Restore => {}
         }
         Ok(())
     }
 
     fn recreate(&mut self) -> Result<()> {
         let size = self.window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        if self.minimised || size.width == 0 || size.height == 0 {
             return Ok(());
         }
         self.renderer
@@ -676,7 +683,9 @@ impl Running {
     /// Renders and presents one frame; returns false when the window is minimised.
     fn frame(&mut self) -> Result<bool> {
         let size = self.window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        if self.minimised || size.width == 0 || size.height == 0 {
+            self.record(self.last.elapsed().as_secs_f64(), 0.0, false);
+            self.frames += 1;
             return Ok(false);
         }
         let now = Instant::now();
@@ -775,7 +784,7 @@ impl Running {
         if !presented {
             self.recreate()?;
         }
-        self.record(interval, reference_s);
+        self.record(interval, reference_s, true);
         self.frames += 1;
         Ok(true)
     }
@@ -835,7 +844,7 @@ impl Running {
         Ok(())
     }
 
-    fn record(&mut self, interval: f64, reference_s: f64) {
+    fn record(&mut self, interval: f64, reference_s: f64, presented: bool) {
         let t = self.renderer.targets;
         self.report.push(FrameRecord {
             frame: self.frames,
@@ -848,6 +857,7 @@ impl Running {
             spp: self.live.spp(),
             restarts: self.live.restarts,
             error: if self.live_on { self.live.error.clone() } else { None },
+            presented,
             frame_ms: interval * 1000.0,
             reference_ms: reference_s * 1000.0,
             width: t.width,
@@ -930,12 +940,24 @@ impl App {
     /// Before frame N: the script's events and the old scripted options.
     fn before_frame(&mut self, el: &ActiveEventLoop) -> Result<()> {
         let Some(s) = self.state.as_mut() else { return Ok(()) };
+        let window = s.window.id();
         if let Some(script) = &self.script.script {
             let due: Vec<Event> = script.due(s.frames).cloned().collect();
             for e in &due {
-                s.scripted_event(el, e)?;
+                let Some(s) = self.state.as_mut() else { return Ok(()) };
+                match e {
+                    // What the window system sends when the window is minimised and restored
+                    // (Wayland, Windows), through the handler it reaches.
+                    Event::Minimise => self.window_event(el, window, WindowEvent::Resized(PhysicalSize::new(0, 0))),
+                    Event::Restore => {
+                        let size = s.window.inner_size();
+                        self.window_event(el, window, WindowEvent::Resized(size));
+                    }
+                    _ => s.scripted_event(el, e)?,
+                }
             }
         }
+        let Some(s) = self.state.as_mut() else { return Ok(()) };
         // With --frames N --screenshot, the last frame is the one grabbed.
         if self.script.screenshot.is_some() && self.script.frames.is_some_and(|n| s.frames + 1 >= n) {
             s.grab_next = true;
@@ -974,7 +996,8 @@ impl App {
         let settled = s.rebake.is_none() && s.queued.is_none();
         if settled && self.script.frames.is_some_and(|n| s.frames >= n) {
             el.exit();
-        } else {
+        } else if !s.minimised || s.scripted {
+            // A minimised window waits for the resize that restores it (scripts go on).
             s.window.request_redraw();
         }
         Ok(())
@@ -1036,8 +1059,13 @@ impl ApplicationHandler for App {
             let consumed = s.egui_input.on_window_event(&s.window, &event).consumed;
             match event {
                 WindowEvent::CloseRequested => el.exit(),
-                // A DPI change arrives as a resize too: the swapchain follows the window.
-                WindowEvent::Resized(_) => s.recreate()?,
+                // A DPI change arrives as a resize too: the swapchain follows the window. A
+                // minimised window is resized to nothing (on Wayland and Windows).
+                WindowEvent::Resized(size) => {
+                    s.minimised = size.width == 0 || size.height == 0;
+                    s.recreate()?;
+                    s.window.request_redraw();
+                }
                 WindowEvent::RedrawRequested => {
                     self.before_frame(el)?;
                     if let Some(s) = self.state.as_mut() {

@@ -9,7 +9,9 @@
 //! - `split FRACTION`: the split view's divider;
 //! - `screenshot PATH`: saves the view on screen as PATH (PNG) and its values beside it (EXR);
 //! - `param NAME VALUE`: sets a parameter of the configuration in the panel (`NAME` or
-//!   `METHOD.NAME`, the value as TOML) and applies it, as the Apply button does.
+//!   `METHOD.NAME`, the value as TOML) and applies it, as the Apply button does;
+//! - `minimise`, `restore`: the resize events a window system sends when the window is
+//!   minimised (to no area) and restored.
 
 use std::path::{Path, PathBuf};
 
@@ -25,6 +27,8 @@ pub enum Event {
     Screenshot(PathBuf),
     /// A parameter's name and its value (TOML text).
     Param(String, String),
+    Minimise,
+    Restore,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -75,9 +79,11 @@ impl Script {
                 ["split", ..] => nums(1).map(|v| Event::Split(v[0]))?,
                 ["screenshot", path] => Event::Screenshot(PathBuf::from(path)),
                 ["param", name, value @ ..] if !value.is_empty() => Event::Param(name.to_string(), value.join(" ")),
+                ["minimise"] => Event::Minimise,
+                ["restore"] => Event::Restore,
                 _ => {
                     return Err(err(format!(
-                        "unknown event `{}`: expected key, move, turn, budget, split, screenshot or param",
+                        "unknown event `{}`: expected key, move, turn, budget, split, screenshot, param, minimise or restore",
                         args.join(" ")
                     )))
                 }
@@ -117,5 +123,8 @@ mod tests {
         assert_eq!(Script::parse("x key M").unwrap_err().0, 1);
         assert_eq!(Script::parse("1 jump").unwrap_err().0, 1);
         assert_eq!(Script::parse("1 param patch_size").unwrap_err().0, 1);
+        let s = Script::parse("2 minimise\n4 restore").unwrap();
+        assert_eq!(s.events, [(2, Event::Minimise), (4, Event::Restore)]);
+        assert_eq!(Script::parse("2 minimise now").unwrap_err().0, 1);
     }
 }
