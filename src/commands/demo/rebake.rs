@@ -180,3 +180,32 @@ fn bake(desc: &GpuDesc, scene: Scene, configuration: Configuration) -> Result<(V
     let validation = renderer.gpu.validation_log().count();
     Ok((bakes, validation))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bake that cannot run (here: no device of that name) ends as a failure with its reason,
+    /// which the demo shows in the panel while the old configuration keeps drawing.
+    #[test]
+    fn a_bake_that_cannot_run_reports_why() {
+        let text = "methods = [\"forward\"]\n[camera]\nposition = [0, 1, 2]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [1, 1]\n";
+        let scene = Scene::from_str(text, "test.toml", std::path::Path::new(".")).unwrap();
+        let config = crate::lighting::registry::configuration(&scene, None).unwrap();
+        let desc = GpuDesc {
+            device_name: Some("no device is called this".into()),
+            ..GpuDesc::default()
+        };
+        let mut rebake = Rebake::start(&desc, scene, 0, config);
+        let outcome = loop {
+            if let Some(o) = rebake.poll() {
+                break o;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        };
+        match outcome {
+            Outcome::Failed(why) => assert!(why.contains("no device is called this"), "{why}"),
+            Outcome::Baked { .. } => panic!("baked without a device"),
+        }
+    }
+}
