@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 pub use crate::util::progress::Progress;
 
 pub(crate) mod gpu_loop;
@@ -127,6 +127,10 @@ pub struct Baker {
     reports: Vec<BakeReport>,
     /// The cache directory was swept of temporaries that killed runs left behind.
     swept: bool,
+    /// Only results already in the cache are used: a bake that would run fails instead.
+    cached_only: bool,
+    /// The first bake refused for that reason.
+    missing: Option<String>,
 }
 
 const MAGIC: &[u8; 8] = b"PNBAKE01";
@@ -139,7 +143,23 @@ impl Baker {
             dir,
             reports: Vec::new(),
             swept: false,
+            cached_only: false,
+            missing: None,
         }
+    }
+
+    /// A baker that only reads `dir`: a bake not cached there fails, and [`Baker::missing`]
+    /// names it (the demo then runs it on another thread while its frames go on).
+    pub fn cached_only(dir: PathBuf) -> Baker {
+        Baker {
+            cached_only: true,
+            ..Baker::new(Some(dir))
+        }
+    }
+
+    /// The bake a cache-only baker refused to run.
+    pub fn missing(&self) -> Option<&str> {
+        self.missing.as_deref()
     }
 
     /// `$PENUMBRA_CACHE/bake`, or `.penumbra-cache/bake` in the working directory.
@@ -208,6 +228,10 @@ impl Baker {
                     rebuilt = Some(why);
                 }
             }
+        }
+        if self.cached_only {
+            self.missing = Some(name.to_string());
+            return Err(Error::Usage(format!("{name}: not in the bake cache")));
         }
         let mut progress = Progress::new(name);
         let value = build(&mut progress)?;

@@ -159,3 +159,20 @@ fn a_result_that_cannot_be_stored_is_reported_so() {
     assert!(table(baker.reports()).contains("NOT stored"));
     let _ = std::fs::remove_file(&dir);
 }
+
+#[test]
+fn a_cache_only_baker_reads_the_cache_and_refuses_to_build() {
+    let dir = temp_dir("cached-only");
+    let key = BakeKey::new("t").with("n", 4);
+    let mut calls = 0;
+    let mut reader = Baker::cached_only(dir.clone());
+    assert!(reader.bake("t", &key, build_counting(&mut calls, vec![1.0])).is_err());
+    assert_eq!((reader.missing(), calls), (Some("t"), 0));
+    Baker::new(Some(dir.clone()))
+        .bake("t", &key, build_counting(&mut calls, vec![2.0]))
+        .unwrap();
+    let mut reader = Baker::cached_only(dir.clone());
+    let v = reader.bake("t", &key, build_counting(&mut calls, vec![3.0])).unwrap();
+    assert_eq!((v, calls, reader.missing()), (vec![2.0], 1, None));
+    let _ = std::fs::remove_dir_all(&dir);
+}

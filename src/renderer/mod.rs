@@ -80,6 +80,8 @@ pub struct Renderer {
     frame_index: usize,
     /// Frames rendered with the current configuration (the clock).
     clock_frame: u64,
+    /// The clock stands still: every frame is drawn at the same animation time.
+    pub clock_paused: bool,
     passes: frame_passes::FramePasses,
     readback: Option<BufferId>,
     present_readback: Option<BufferId>,
@@ -187,6 +189,7 @@ impl Renderer {
             frames,
             frame_index: 0,
             clock_frame: 0,
+            clock_paused: false,
             passes,
             readback: None,
             present_readback: None,
@@ -197,8 +200,13 @@ impl Renderer {
     /// Switches to another of the scene's configurations (the demo's method key): the new
     /// methods are created and the clock restarts.
     pub fn set_configuration(&mut self, configuration: Configuration) -> Result<()> {
+        self.set_configuration_with(configuration, &mut Baker::new(Some(Baker::default_dir())))
+    }
+
+    /// [`Renderer::set_configuration`] baking through `bakes` (a cache-only baker: a switch
+    /// that fails rather than bake).
+    pub fn set_configuration_with(&mut self, configuration: Configuration, bakes: &mut Baker) -> Result<()> {
         self.gpu.wait_idle()?;
-        let mut bakes = Baker::new(Some(Baker::default_dir()));
         let (methods, resources) = {
             let mut ctx = CreateContext {
                 gpu: &mut self.gpu,
@@ -207,7 +215,7 @@ impl Renderer {
                 scene: &self.scene,
                 scene_gpu: &self.scene_gpu,
                 environment: &self.environment,
-                bakes: &mut bakes,
+                bakes,
                 terms: Terms::NONE,
             };
             create_methods(&configuration, &mut ctx)?
@@ -300,7 +308,9 @@ impl Renderer {
         let frame = self.frames[self.frame_index % self.frames.len()];
         self.frame_index += 1;
         let clock = FrameClock::at(self.clock_frame);
-        self.clock_frame += 1;
+        if !self.clock_paused {
+            self.clock_frame += 1;
+        }
         self.animate_lights(clock.time_s);
         let terms: Vec<Terms> = self.configuration.parts.iter().map(|p| p.terms).collect();
         self.prepare_methods(uniforms, clock, &terms)?;

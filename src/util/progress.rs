@@ -4,8 +4,34 @@
 //! so a long bake is never silent. Either way, once two seconds of work give a rate, work that
 //! will take over a minute in all says so once, with the estimate.
 
+use std::cell::RefCell;
 use std::io::{IsTerminal, Write};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+/// One update of a progress line, as an observer sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Update {
+    pub name: String,
+    pub done: u64,
+    /// 0 when the work has just started and its size is not known yet.
+    pub total: u64,
+    /// Since this piece of work started.
+    pub elapsed: Duration,
+}
+
+/// Receives the updates of every progress line made on a thread (the demo's panel follows a
+/// bake running on another thread this way), besides what they write to stderr.
+pub type Observer = Arc<dyn Fn(&Update) + Send + Sync>;
+
+thread_local! {
+    static OBSERVER: RefCell<Option<Observer>> = const { RefCell::new(None) };
+}
+
+/// Sets (or clears) the observer of the progress lines made on this thread from now on.
+pub fn observe_this_thread(observer: Option<Observer>) {
+    OBSERVER.with(|o| *o.borrow_mut() = observer);
+}
 
 pub struct Progress {
     name: String,
@@ -17,6 +43,8 @@ pub struct Progress {
     warned: bool,
     /// Shown after the counts (e.g. a solve's remaining energy).
     detail: String,
+    /// The observer of the thread this line was made on (updates may come from others).
+    observer: Option<Observer>,
 }
 
 /// A terminal's line appears after this much work, and is redrawn at most this often.
@@ -36,7 +64,7 @@ impl Progress {
 
     /// A progress line written as to a terminal (`terminal`) or to a log.
     pub fn to(name: &str, terminal: bool) -> Progress {
-        Progress {
+        let p = Progress {
             name: name.to_string(),
             start: Instant::now(),
             last: None,
@@ -44,6 +72,20 @@ impl Progress {
             terminal,
             warned: false,
             detail: String::new(),
+            observer: OBSERVER.with(|o| o.borrow().clone()),
+        };
+        p.notify(0, 0);
+        p
+    }
+
+    fn notify(&self, done: u64, total: u64) {
+        if let Some(o) = &self.observer {
+            o(&Update {
+                name: self.name.clone(),
+                done,
+                total,
+                elapsed: self.start.elapsed(),
+            });
         }
     }
 
@@ -54,6 +96,7 @@ impl Progress {
 
     /// `done` of `total` units finished.
     pub fn update(&mut self, done: u64, total: u64) {
+        self.notify(done, total);
         let text = self.text_at(self.start.elapsed(), done, total);
         if !text.is_empty() {
             crate::err!("{text}");
@@ -188,5 +231,27 @@ mod tests {
         let mut quick = Progress::to("radiosity", false);
         assert!(quick.text_at(S(2.0), 50, 100).is_empty(), "4 s in all");
         assert!(quick.text_at(S(2.5), 51, 100).is_empty());
+    }
+
+    /// A thread's observer sees the lines made on that thread (their start and every update),
+    /// and no other thread's.
+    #[test]
+    fn an_observer_follows_the_lines_made_on_its_thread() {
+        let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let sink = seen.clone();
+        observe_this_thread(Some(Arc::new(move |u: &Update| {
+            sink.lock().unwrap().push((u.name.clone(), u.done, u.total))
+        })));
+        let mut p = Progress::to("bake", false);
+        std::thread::spawn(|| Progress::to("elsewhere", false).update(1, 2))
+            .join()
+            .unwrap();
+        p.update(3, 4);
+        observe_this_thread(None);
+        Progress::to("after", false).update(1, 1);
+        assert_eq!(
+            *seen.lock().unwrap(),
+            [("bake".to_string(), 0, 0), ("bake".to_string(), 3, 4)]
+        );
     }
 }

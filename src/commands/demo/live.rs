@@ -1,14 +1,17 @@
 //! The live reference: the path tracer accumulating the current view at the window's size, a
 //! few samples per frame under a share of the frame time, restarted when the view, the scene's
-//! animation or the kind of reference changes; and the method's error against it.
+//! animation or the kind of reference changes; and the method's error against it, computed on
+//! a worker thread so that the frame that completes a sample does not wait for the metrics.
 
+use std::sync::mpsc::{channel, Receiver, Sender, TryRecvError};
+use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::backend::{Gpu, GpuDesc};
 use crate::commands::chart::{reference_noise, reference_settings};
 use crate::error::Result;
 use crate::lighting::ReferenceKind;
-use crate::metrics::{compare, CompareOptions, Metrics};
+use crate::metrics::{compare, CompareOptions};
 use crate::reference::{ReferenceImage, ReferenceRenderer, Sampler, Settings};
 use crate::scene::{Camera, Scene};
 use crate::util::image_io::HdrImage;
@@ -45,7 +48,6 @@ pub struct LiveReference {
     settings: Settings,
     pub label: String,
     pub image: Option<ReferenceImage>,
-    noise: Option<Metrics>,
     /// The share of the frame time the reference (tracing, read-back and metrics) may take.
     pub budget: f32,
     /// Seconds of reference work earned and not yet spent.
@@ -60,8 +62,91 @@ pub struct LiveReference {
     pub restarts: u32,
     /// The tracer was just made: its first batch also compiles its pipeline.
     compiling: bool,
-    /// The error of the configuration last measured, refreshed by [`LiveReference::measure`].
+    /// The error of the configuration last measured, refreshed by [`LiveReference::measure`]
+    /// or, off the frame, by [`LiveReference::measure_in_background`].
     pub error: Option<LiveError>,
+    /// Changes with what an error refers to (a restart, another method): results of the worker
+    /// for an earlier epoch are dropped.
+    epoch: u64,
+    worker: MetricsWorker,
+}
+
+/// A measurement for the worker: the method's image against the reference's, both as they were.
+struct Job {
+    epoch: u64,
+    method: HdrImage,
+    reference: ReferenceImage,
+    exposure: f32,
+}
+
+struct Done {
+    epoch: u64,
+    result: std::result::Result<LiveError, String>,
+    seconds: f64,
+}
+
+/// A thread computing the error metrics, one measurement at a time.
+struct MetricsWorker {
+    jobs: Option<Sender<Job>>,
+    results: Receiver<Done>,
+    thread: Option<JoinHandle<()>>,
+    busy: bool,
+}
+
+impl MetricsWorker {
+    fn new() -> MetricsWorker {
+        let (jobs, inbox) = channel::<Job>();
+        let (outbox, results) = channel();
+        let thread = std::thread::spawn(move || {
+            for job in inbox {
+                let start = Instant::now();
+                let result = evaluate(&job.method, &job.reference, job.exposure).map_err(|e| e.to_string());
+                let done = Done {
+                    epoch: job.epoch,
+                    result,
+                    seconds: start.elapsed().as_secs_f64(),
+                };
+                if outbox.send(done).is_err() {
+                    break;
+                }
+            }
+        });
+        MetricsWorker {
+            jobs: Some(jobs),
+            results,
+            thread: Some(thread),
+            busy: false,
+        }
+    }
+}
+
+impl Drop for MetricsWorker {
+    fn drop(&mut self) {
+        // Closing the queue ends the thread after the measurement in hand.
+        self.jobs = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The method's error against a reference image and the reference's own noise level: what
+/// `penumbra compare` and `penumbra chart` compute.
+fn evaluate(method: &HdrImage, reference: &ReferenceImage, exposure: f32) -> Result<LiveError> {
+    let opts = CompareOptions {
+        exposure,
+        ..CompareOptions::default()
+    };
+    let m = compare(method, &reference.mean, &opts).map_err(|e| crate::Error::Usage(e.to_string()))?;
+    let noise = reference_noise(reference)?;
+    Ok(LiveError {
+        rel_mse: m.rel_mse,
+        flip: m.flip_mean,
+        mean_ratio: m.mean_ratio,
+        noise_rel_mse: noise.rel_mse,
+        noise_flip: noise.flip_mean,
+        spp: reference.spp,
+    })
 }
 
 impl LiveReference {
@@ -74,7 +159,6 @@ impl LiveReference {
             settings,
             label,
             image: None,
-            noise: None,
             budget,
             credit: 0.0,
             per_pixel_sample: None,
@@ -83,6 +167,8 @@ impl LiveReference {
             restarts: 0,
             compiling: false,
             error: None,
+            epoch: 0,
+            worker: MetricsWorker::new(),
         }
     }
 
@@ -129,8 +215,8 @@ impl LiveReference {
         self.label = label;
         self.traced = Some(want);
         self.image = None;
-        self.noise = None;
         self.error = None;
+        self.epoch += 1;
         self.credit = 0.0;
         self.band = 0;
         self.restarts += 1;
@@ -200,7 +286,6 @@ impl LiveReference {
         match image {
             Some(image) => {
                 self.image = Some(image);
-                self.noise = None;
                 Ok(true)
             }
             None => Ok(false),
@@ -212,36 +297,66 @@ impl LiveReference {
         self.credit -= seconds;
     }
 
-    /// The method's error against the reference so far (and the reference's own noise level).
+    /// The method's error against the reference so far (and the reference's own noise level),
+    /// now: for a switch of method, whose numbers change within the frame. A measurement of the
+    /// previous method still on the worker is dropped.
     pub fn measure(&mut self, method: &HdrImage, exposure: f32) -> Result<Option<&LiveError>> {
-        let Some(image) = self.image.as_ref() else {
+        self.epoch += 1;
+        let Some(image) = self.image.as_ref().filter(|i| same_size(method, i)) else {
             return Ok(None);
         };
-        if (method.width, method.height) != (image.mean.width, image.mean.height) {
-            return Ok(None);
-        }
-        let opts = CompareOptions {
-            exposure,
-            ..CompareOptions::default()
-        };
-        let m = compare(method, &image.mean, &opts).map_err(|e| crate::Error::Usage(e.to_string()))?;
-        if self.noise.is_none() {
-            self.noise = Some(reference_noise(image)?);
-        }
-        let noise = self.noise.as_ref().expect("set above");
-        self.error = Some(LiveError {
-            rel_mse: m.rel_mse,
-            flip: m.flip_mean,
-            mean_ratio: m.mean_ratio,
-            noise_rel_mse: noise.rel_mse,
-            noise_flip: noise.flip_mean,
-            spp: image.spp,
-        });
+        self.error = Some(evaluate(method, image, exposure)?);
         Ok(self.error.as_ref())
+    }
+
+    /// Hands the measurement of `method` against the reference so far to the worker (its result
+    /// comes through [`LiveReference::take_measurement`]); false when the worker is busy.
+    pub fn measure_in_background(&mut self, method: &HdrImage, exposure: f32) -> bool {
+        let (Some(image), Some(jobs)) = (self.image.as_ref(), self.worker.jobs.as_ref()) else {
+            return false;
+        };
+        if self.worker.busy || !same_size(method, image) {
+            return false;
+        }
+        let job = Job {
+            epoch: self.epoch,
+            method: method.clone(),
+            reference: image.clone(),
+            exposure,
+        };
+        self.worker.busy = jobs.send(job).is_ok();
+        self.worker.busy
+    }
+
+    /// A measurement is on the worker.
+    pub fn measuring(&self) -> bool {
+        self.worker.busy
+    }
+
+    /// The worker's result, once it has one: what the measurement cost it (seconds). A result
+    /// for an image since replaced by a restart or a switch of method is dropped.
+    pub fn take_measurement(&mut self) -> Result<Option<f64>> {
+        let done = match self.worker.results.try_recv() {
+            Ok(done) => done,
+            Err(TryRecvError::Empty) => return Ok(None),
+            Err(TryRecvError::Disconnected) => {
+                self.worker.busy = false;
+                return Err(crate::Error::Internal("the metrics thread has stopped".into()));
+            }
+        };
+        self.worker.busy = false;
+        if done.epoch == self.epoch {
+            self.error = Some(done.result.map_err(crate::Error::Usage)?);
+        }
+        Ok(Some(done.seconds))
     }
 
     /// The device's validation messages, for the demo's final check.
     pub fn validation_messages(&self) -> usize {
         self.tracer.as_ref().map_or(0, |t| t.gpu.validation_log().count())
     }
+}
+
+fn same_size(method: &HdrImage, reference: &ReferenceImage) -> bool {
+    (method.width, method.height) == (reference.mean.width, reference.mean.height)
 }

@@ -6,6 +6,7 @@
 mod camera;
 mod live;
 mod panel;
+mod rebake;
 mod script;
 
 use std::collections::{HashSet, VecDeque};
@@ -19,7 +20,8 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use crate::backend::{vk, Gpu, Overlay, OverlayFrame, PassTiming, Swapchain};
+use crate::backend::{vk, Gpu, GpuDesc, Overlay, OverlayFrame, PassTiming, Swapchain};
+use crate::bake::Baker;
 use crate::commands::capture::{load_scene, CaptureOptions};
 use crate::commands::views::{Composed, ErrorMap, View, ViewSettings};
 use crate::error::{Error, Result};
@@ -29,6 +31,7 @@ use crate::util::image_io::HdrImage;
 
 pub use camera::{bookmarks_path, Bookmarks, FlyCamera};
 pub use live::{LiveError, LiveReference};
+pub use rebake::BakeStatus;
 pub use script::{Event, Script};
 
 const FRAMES_IN_FLIGHT: usize = 2;
@@ -36,18 +39,36 @@ const FRAMES_IN_FLIGHT: usize = 2;
 const HISTORY: usize = 240;
 /// Error metrics are refreshed at most this often while the reference grows (a switch of
 /// method refreshes them at once), and no more often than every four times what they cost, so
-/// that the CPU's FLIP leaves most of the reference's budget to tracing.
+/// that the worker computing them leaves most of the CPU to the frames and the tracer.
 const METRICS_INTERVAL_S: f64 = 0.25;
+
+/// How this frame's error is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Measurement {
+    /// In the frame: a switch of method, whose numbers change at once.
+    Now,
+    /// On the metrics worker, the frame going on.
+    Background,
+}
 
 /// One frame as the report (`--report-json`) records it.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FrameRecord {
     pub frame: u64,
     pub configuration: String,
+    /// The drawn configuration's parameters as declared, `method(name = value, ...)` a part.
+    pub parameters: String,
+    /// The bake running in the background, as the panel shows it.
+    pub baking: Option<BakeStatus>,
+    /// The animation frame the next frame is drawn at, and whether the animation is paused.
+    pub animation_frame: u64,
+    pub paused: bool,
     pub view: View,
     pub spp: u32,
     pub restarts: u32,
     pub error: Option<LiveError>,
+    /// Drawn and presented; false while the window is minimised.
+    pub presented: bool,
     /// Wall time since the previous frame.
     pub frame_ms: f64,
     /// The live reference's share of it (tracing, read-back, metrics).
@@ -67,6 +88,8 @@ struct Running {
     camera: FlyCamera,
     keys: HashSet<KeyCode>,
     looking: bool,
+    /// The last resize gave the window no area (minimised): frames are skipped until one does.
+    minimised: bool,
     dragging_divider: bool,
     cursor_x: f64,
     last: Instant,
@@ -82,6 +105,14 @@ struct Running {
     current: usize,
     /// Set by a switch: the next frame measures its error whatever the interval.
     switched: bool,
+    /// The bakes of a configuration being switched to, running beside the frames.
+    rebake: Option<rebake::Rebake>,
+    /// A change asked for while they run: made when they end (the latest request wins).
+    queued: Option<(usize, crate::lighting::Configuration)>,
+    /// The device the bakes run on (without the window's display).
+    bake_desc: GpuDesc,
+    /// Validation messages of the finished bakes' devices.
+    bake_validation: usize,
     params: Vec<panel::ParamEdit>,
     live: LiveReference,
     live_on: bool,
@@ -131,6 +162,19 @@ struct App {
     script: DemoScript,
     state: Option<Running>,
     error: Option<Error>,
+}
+
+/// A configuration's parameters as declared: `method(name = value, ...)` a part.
+fn parameters(config: &crate::lighting::Configuration) -> String {
+    let parts: Vec<String> = config
+        .parts
+        .iter()
+        .map(|p| {
+            let values: Vec<String> = p.decl.params.iter().map(|(k, v, _)| format!("{k} = {v}")).collect();
+            format!("{}({})", p.decl.name, values.join(", "))
+        })
+        .collect();
+    parts.join(" + ")
 }
 
 fn param_edits(config: &crate::lighting::Configuration) -> Vec<panel::ParamEdit> {
@@ -205,6 +249,7 @@ impl App {
             camera,
             keys: HashSet::new(),
             looking: false,
+            minimised: false,
             dragging_divider: false,
             cursor_x: 0.0,
             last: Instant::now(),
@@ -216,6 +261,10 @@ impl App {
             configurations,
             current,
             switched: false,
+            rebake: None,
+            queued: None,
+            bake_desc: self.opts.gpu.clone(),
+            bake_validation: 0,
             live: LiveReference::new(self.opts.gpu.clone(), if budget > 0.0 { budget } else { 0.5 }),
             live_on: budget > 0.0,
             reference_s: 0.0,
@@ -264,17 +313,103 @@ impl Running {
 
     /// Switches to configuration `next`; a failure is reported and the current one keeps running.
     fn set_configuration(&mut self, next: usize) {
-        let Some(config) = self.configurations.get(next).cloned() else {
+        if let Some(config) = self.configurations.get(next).cloned() {
+            self.change_configuration(next, config);
+        }
+    }
+
+    /// Switches to `config` (the configuration at `index`, or it with edited parameters): at
+    /// once when its bakes are in the cache (or it has none); otherwise they run on another
+    /// thread while the old configuration keeps drawing, and the switch follows when they end
+    /// ([`Running::poll_rebake`]). A change asked for meanwhile waits for them.
+    fn change_configuration(&mut self, index: usize, config: crate::lighting::Configuration) {
+        if let Some(r) = &self.rebake {
+            crate::outln!("queued {} after the bake of {}", config.name, r.configuration.name);
+            self.queued = Some((index, config));
+            return;
+        }
+        let started = Instant::now();
+        let mut cache = Baker::cached_only(Baker::default_dir());
+        match self.renderer.set_configuration_with(config.clone(), &mut cache) {
+            Ok(()) => self.switched_to(index, config, started),
+            Err(_) if cache.missing().is_some() => {
+                crate::outln!(
+                    "baking {} in the background ({} is not in the bake cache)",
+                    config.name,
+                    cache.missing().unwrap_or_default()
+                );
+                let scene = self.renderer.scene.clone();
+                self.rebake = Some(rebake::Rebake::start(&self.bake_desc, scene, index, config));
+            }
+            Err(e) => self.report_problem(format!(
+                "cannot switch to {}, keeping {}: {e}",
+                config.name, self.renderer.configuration.name
+            )),
+        }
+    }
+
+    fn switched_to(&mut self, index: usize, config: crate::lighting::Configuration, started: Instant) {
+        self.current = index;
+        self.params = param_edits(&config);
+        self.switched = true;
+        crate::outln!("configuration: {}", config.name);
+        if !self.renderer.bakes.is_empty() {
+            let bakes: Vec<String> = self
+                .renderer
+                .bakes
+                .iter()
+                .map(|b| format!("{} {}", b.name, if b.cached { "from the cache" } else { "built" }))
+                .collect();
+            crate::outln!(
+                "  {} in {:.2} s ({})",
+                parameters(&config),
+                started.elapsed().as_secs_f64(),
+                bakes.join(", ")
+            );
+        }
+        self.configurations[index] = config;
+    }
+
+    /// Takes the background bake's progress; when it has ended, switches to its configuration
+    /// (its bakes now read from the cache) or reports its failure, then makes a queued change.
+    fn poll_rebake(&mut self) {
+        let Some(outcome) = self.rebake.as_mut().and_then(|r| r.poll()) else {
             return;
         };
-        match self.renderer.set_configuration(config.clone()) {
-            Ok(()) => {
-                self.current = next;
-                self.params = param_edits(&config);
-                self.switched = true;
-                crate::outln!("configuration: {}", config.name);
+        let r = self.rebake.take().expect("polled above");
+        match outcome {
+            rebake::Outcome::Baked {
+                bakes,
+                validation_messages,
+            } => {
+                self.bake_validation += validation_messages;
+                let names: Vec<String> = bakes
+                    .iter()
+                    .map(|(n, cached)| format!("{n}{}", if *cached { " (cached)" } else { "" }))
+                    .collect();
+                crate::outln!(
+                    "baked {} in {:.2} s: {}",
+                    r.configuration.name,
+                    r.status.elapsed_s,
+                    names.join(", ")
+                );
+                // A newer request replaces this one (its bakes stay in the cache).
+                if self.queued.is_none() {
+                    let started = Instant::now();
+                    // Where the cache could not be written, this bakes again, in the frame.
+                    match self.renderer.set_configuration(r.configuration.clone()) {
+                        Ok(()) => self.switched_to(r.index, r.configuration.clone(), started),
+                        Err(e) => self.report_problem(format!("cannot switch to {}: {e}", r.configuration.name)),
+                    }
+                }
             }
-            Err(e) => self.report_problem(format!("cannot switch to {}: {e}", config.name)),
+            rebake::Outcome::Failed(e) => self.report_problem(format!(
+                "bake of {} failed, keeping {}: {e}",
+                r.configuration.name, self.renderer.configuration.name
+            )),
+        }
+        if let Some((index, config)) = self.queued.take() {
+            self.change_configuration(index, config);
         }
     }
 
@@ -287,7 +422,7 @@ impl Running {
     }
 
     /// The current configuration with the panel's parameters, rebuilt (its bakes through the
-    /// bake cache); an error keeps the old one running.
+    /// bake cache, in the background where they are not cached); an error keeps the old one.
     fn apply_params(&mut self) {
         let mut config = self.renderer.configuration.clone();
         for p in &self.params {
@@ -305,26 +440,32 @@ impl Running {
                 part.decl = part.decl.with(p.name, value);
             }
         }
-        let started = Instant::now();
-        match self.renderer.set_configuration(config.clone()) {
-            Ok(()) => {
-                let bakes: Vec<String> = self
-                    .renderer
-                    .bakes
-                    .iter()
-                    .map(|b| format!("{} {}", b.name, if b.cached { "from the cache" } else { "built" }))
-                    .collect();
-                crate::outln!(
-                    "applied parameters of {} in {:.2} s ({})",
-                    config.name,
-                    started.elapsed().as_secs_f64(),
-                    bakes.join(", ")
-                );
-                self.configurations[self.current] = config;
-                self.switched = true;
-            }
-            Err(e) => self.report_problem(format!("parameters not applied, keeping the old ones: {e}")),
-        }
+        self.change_configuration(self.current, config);
+    }
+
+    /// Sets the parameter `name` (`method.name` where the configuration has several methods)
+    /// in the panel and applies the parameters, as typing it and pressing Apply does.
+    fn set_param(&mut self, name: &str, value: &str) -> Result<()> {
+        let parts: Vec<String> = self
+            .renderer
+            .configuration
+            .parts
+            .iter()
+            .map(|p| p.decl.name.clone())
+            .collect();
+        let found = self
+            .params
+            .iter_mut()
+            .find(|p| p.name == name || parts.get(p.part).is_some_and(|m| format!("{m}.{}", p.name) == name));
+        let Some(p) = found else {
+            return Err(Error::Usage(format!(
+                "script: `{name}` is not a parameter of {}",
+                self.renderer.configuration.name
+            )));
+        };
+        p.text = value.to_string();
+        self.apply_params();
+        Ok(())
     }
 
     fn reload_shaders(&mut self) {
@@ -354,6 +495,7 @@ impl Running {
             KeyCode::KeyM => self.next_configuration(),
             KeyCode::KeyR => self.reload_shaders(),
             KeyCode::KeyG => self.live_on = !self.live_on,
+            KeyCode::KeyP => self.renderer.clock_paused = !self.renderer.clock_paused,
             KeyCode::KeyX => {
                 self.view.error_map = match self.view.error_map {
                     ErrorMap::Relative => ErrorMap::Flip,
@@ -430,13 +572,16 @@ impl Running {
             }
             Event::Split(s) => self.view.split = s.clamp(0.0, 1.0),
             Event::Screenshot(p) => self.save_view = Some(p.clone()),
+            Event::Param(name, value) => self.set_param(name, value)?,
+            // Sent through the window's event handler by the caller.
+            Event::Minimise | Event::Restore => {}
         }
         Ok(())
     }
 
     fn recreate(&mut self) -> Result<()> {
         let size = self.window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        if self.minimised || size.width == 0 || size.height == 0 {
             return Ok(());
         }
         self.renderer
@@ -488,12 +633,15 @@ impl Running {
             position: self.camera.base.position,
             bookmarks: self.bookmarks.bookmark.len(),
             messages: &self.messages,
+            baking: self.rebake.as_ref().map(|r| &r.status),
+            queued: self.queued.as_ref().map(|(_, c)| c.name.as_str()),
         };
         let mut actions = Vec::new();
         let show_view = self.view.view != View::Method && self.composed.is_some();
         let texture = self.view_texture.as_ref().map(|t| t.id());
         let show_panel = self.show_panel;
         let mut budget = self.live.budget;
+        let mut paused = self.renderer.clock_paused;
         let out = self.egui.run_ui(raw, |ui| {
             let ctx = ui.ctx().clone();
             if let (true, Some(id)) = (show_view, texture) {
@@ -511,12 +659,14 @@ impl Running {
                         speed: &mut self.camera.speed,
                         budget: &mut budget,
                         live_on: &mut self.live_on,
+                        paused: &mut paused,
                         params: &mut self.params,
                     },
                 );
             }
         });
         self.live.budget = budget;
+        self.renderer.clock_paused = paused;
         self.egui_input
             .handle_platform_output(&self.window, out.platform_output);
         let primitives = self.egui.tessellate(out.shapes, out.pixels_per_point);
@@ -533,41 +683,20 @@ impl Running {
     /// Renders and presents one frame; returns false when the window is minimised.
     fn frame(&mut self) -> Result<bool> {
         let size = self.window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        if self.minimised || size.width == 0 || size.height == 0 {
+            self.record(self.last.elapsed().as_secs_f64(), 0.0, false);
+            self.frames += 1;
             return Ok(false);
         }
-        let now = Instant::now();
-        let interval = (now - self.last).as_secs_f64();
-        let dt = interval.min(0.1) as f32;
-        self.last = now;
-        if self.frames > 0 {
-            self.frame_ms.push_back((interval * 1000.0) as f32);
-            if self.frame_ms.len() > HISTORY {
-                self.frame_ms.pop_front();
-            }
-            self.live.frame_time(interval - self.reference_s);
-        }
-        self.camera.fly(&self.keys, dt);
-
-        let slot = self.renderer.current_frame();
-        // Waiting for the slot's previous frame also makes its acquire semaphore reusable.
-        self.renderer.gpu.wait_frame(slot)?;
-        if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
-            self.gpu_ms.push_back(t.iter().map(|p| p.ms as f32).sum());
-            if self.gpu_ms.len() > HISTORY {
-                self.gpu_ms.pop_front();
-            }
-            self.timings = t;
-        }
+        let interval = self.note_interval();
+        self.camera.fly(&self.keys, interval.min(0.1) as f32);
+        self.poll_rebake();
+        self.collect_previous_frame()?;
         let reference_start = Instant::now();
-        let grew = match self.reference_step() {
-            Ok(g) => g,
-            Err(e) => {
-                self.live_on = false;
-                self.report_problem(format!("live reference stopped: {e}"));
-                false
-            }
-        };
+        if let Err(e) = self.reference_step() {
+            self.live_on = false;
+            self.report_problem(format!("live reference stopped: {e}"));
+        }
         let mut reference_s = reference_start.elapsed().as_secs_f64();
         let overlay = self.ui()?;
         // Textures are uploaded now even if this frame is not presented.
@@ -580,10 +709,9 @@ impl Running {
         self.renderer.states.acquired_image(acquired.image, wait_stage);
         let camera = self.camera.camera();
         let readback = self.grab_next;
-        let interval_s = METRICS_INTERVAL_S.max(4.0 * self.metrics_s);
-        let due = self.metrics_at.is_none_or(|t| t.elapsed().as_secs_f64() >= interval_s);
-        let measure = self.live_on && self.live.image.is_some() && (self.switched || (grew && (due || self.scripted)));
-        let radiance = measure || self.save_view.is_some() || (self.view.view != View::Method && self.live_on);
+        let measure = self.measurement();
+        let radiance =
+            measure.is_some() || self.save_view.is_some() || (self.view.view != View::Method && self.live_on);
         self.renderer.render(
             &camera,
             FrameOutput::Present {
@@ -627,20 +755,79 @@ impl Running {
         if !presented {
             self.recreate()?;
         }
-        self.record(interval, reference_s);
+        self.record(interval, reference_s, true);
         self.frames += 1;
         Ok(true)
     }
 
+    /// The time since the last frame, kept for the frame-time graph and the reference's share.
+    fn note_interval(&mut self) -> f64 {
+        let now = Instant::now();
+        let interval = (now - self.last).as_secs_f64();
+        self.last = now;
+        if self.frames > 0 {
+            self.frame_ms.push_back((interval * 1000.0) as f32);
+            if self.frame_ms.len() > HISTORY {
+                self.frame_ms.pop_front();
+            }
+            self.live.frame_time(interval - self.reference_s);
+        }
+        interval
+    }
+
+    /// Waits for the slot's previous frame (which also makes its acquire semaphore reusable),
+    /// takes its GPU timings, and takes the metrics worker's result if it has one.
+    fn collect_previous_frame(&mut self) -> Result<()> {
+        let slot = self.renderer.current_frame();
+        self.renderer.gpu.wait_frame(slot)?;
+        if let Some(t) = self.renderer.gpu.frame_timings(slot)? {
+            self.gpu_ms.push_back(t.iter().map(|p| p.ms as f32).sum());
+            if self.gpu_ms.len() > HISTORY {
+                self.gpu_ms.pop_front();
+            }
+            self.timings = t;
+        }
+        match self.live.take_measurement() {
+            // Off the frame, but the reference's work all the same: charged to its share.
+            Ok(Some(cost)) => {
+                self.metrics_s = cost;
+                self.live.spend(cost);
+            }
+            Ok(None) => {}
+            Err(e) => self.report_problem(format!("error metrics failed: {e}")),
+        }
+        Ok(())
+    }
+
+    /// Whether this frame measures the error: at once after a switch of method; otherwise on
+    /// the worker, when the reference has grown since the last measurement, the worker is free
+    /// and the interval has passed (in scripted runs, at every growth).
+    fn measurement(&self) -> Option<Measurement> {
+        let image = self.live.image.as_ref().filter(|_| self.live_on)?;
+        if self.switched {
+            return Some(Measurement::Now);
+        }
+        let interval_s = METRICS_INTERVAL_S.max(4.0 * self.metrics_s);
+        let due = self.metrics_at.is_none_or(|t| t.elapsed().as_secs_f64() >= interval_s);
+        let stale = self.live.error.as_ref().is_none_or(|e| e.spp != image.spp);
+        (stale && !self.live.measuring() && (due || self.scripted)).then_some(Measurement::Background)
+    }
+
     /// With this frame's radiance read back: the error, the composed view, a saved view.
-    fn after_radiance(&mut self, measure: bool) -> Result<()> {
+    fn after_radiance(&mut self, measure: Option<Measurement>) -> Result<()> {
         let method = self.renderer.radiance_pixels()?;
-        if measure {
-            let t0 = Instant::now();
-            self.live.measure(&method, self.view.exposure)?;
-            self.metrics_s = t0.elapsed().as_secs_f64();
-            self.metrics_at = Some(Instant::now());
-            self.switched = false;
+        match measure {
+            Some(Measurement::Now) => {
+                let t0 = Instant::now();
+                self.live.measure(&method, self.view.exposure)?;
+                self.metrics_s = t0.elapsed().as_secs_f64();
+                self.metrics_at = Some(Instant::now());
+                self.switched = false;
+            }
+            Some(Measurement::Background) if self.live.measure_in_background(&method, self.view.exposure) => {
+                self.metrics_at = Some(Instant::now());
+            }
+            _ => {}
         }
         let reference = self.live.image.as_ref().map(|i| &i.mean);
         let settings = if reference.is_none() && self.view.view != View::Method {
@@ -667,15 +854,20 @@ impl Running {
         Ok(())
     }
 
-    fn record(&mut self, interval: f64, reference_s: f64) {
+    fn record(&mut self, interval: f64, reference_s: f64, presented: bool) {
         let t = self.renderer.targets;
         self.report.push(FrameRecord {
             frame: self.frames,
             configuration: self.renderer.configuration.name.clone(),
+            parameters: parameters(&self.renderer.configuration),
+            baking: self.rebake.as_ref().map(|r| r.status.clone()),
+            animation_frame: self.renderer.clock_frame(),
+            paused: self.renderer.clock_paused,
             view: self.view.view,
             spp: self.live.spp(),
             restarts: self.live.restarts,
             error: if self.live_on { self.live.error.clone() } else { None },
+            presented,
             frame_ms: interval * 1000.0,
             reference_ms: reference_s * 1000.0,
             width: t.width,
@@ -758,12 +950,24 @@ impl App {
     /// Before frame N: the script's events and the old scripted options.
     fn before_frame(&mut self, el: &ActiveEventLoop) -> Result<()> {
         let Some(s) = self.state.as_mut() else { return Ok(()) };
+        let window = s.window.id();
         if let Some(script) = &self.script.script {
             let due: Vec<Event> = script.due(s.frames).cloned().collect();
             for e in &due {
-                s.scripted_event(el, e)?;
+                let Some(s) = self.state.as_mut() else { return Ok(()) };
+                match e {
+                    // What the window system sends when the window is minimised and restored
+                    // (Wayland, Windows), through the handler it reaches.
+                    Event::Minimise => self.window_event(el, window, WindowEvent::Resized(PhysicalSize::new(0, 0))),
+                    Event::Restore => {
+                        let size = s.window.inner_size();
+                        self.window_event(el, window, WindowEvent::Resized(size));
+                    }
+                    _ => s.scripted_event(el, e)?,
+                }
             }
         }
+        let Some(s) = self.state.as_mut() else { return Ok(()) };
         // With --frames N --screenshot, the last frame is the one grabbed.
         if self.script.screenshot.is_some() && self.script.frames.is_some_and(|n| s.frames + 1 >= n) {
             s.grab_next = true;
@@ -798,9 +1002,12 @@ impl App {
         if self.script.cycle_every.is_some_and(|n| n > 0 && s.frames % n == 0) {
             s.next_configuration();
         }
-        if self.script.frames.is_some_and(|n| s.frames >= n) {
+        // A scripted run ends with the configuration it asked for: not while a bake runs.
+        let settled = s.rebake.is_none() && s.queued.is_none();
+        if settled && self.script.frames.is_some_and(|n| s.frames >= n) {
             el.exit();
-        } else {
+        } else if !s.minimised || s.scripted {
+            // A minimised window waits for the resize that restores it (scripts go on).
             s.window.request_redraw();
         }
         Ok(())
@@ -862,8 +1069,13 @@ impl ApplicationHandler for App {
             let consumed = s.egui_input.on_window_event(&s.window, &event).consumed;
             match event {
                 WindowEvent::CloseRequested => el.exit(),
-                // A DPI change arrives as a resize too: the swapchain follows the window.
-                WindowEvent::Resized(_) => s.recreate()?,
+                // A DPI change arrives as a resize too: the swapchain follows the window. A
+                // minimised window is resized to nothing (on Wayland and Windows).
+                WindowEvent::Resized(size) => {
+                    s.minimised = size.width == 0 || size.height == 0;
+                    s.recreate()?;
+                    s.window.request_redraw();
+                }
                 WindowEvent::RedrawRequested => {
                     self.before_frame(el)?;
                     if let Some(s) = self.state.as_mut() {
@@ -906,9 +1118,15 @@ pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
     if let Some(e) = app.error.take() {
         return Err(e);
     }
-    if let Some(s) = app.state.take() {
+    if let Some(mut s) = app.state.take() {
         s.renderer.gpu.wait_idle()?;
-        let n = s.renderer.gpu.validation_log().count() + s.live.validation_messages();
+        if let Some(rebake::Outcome::Baked {
+            validation_messages, ..
+        }) = s.rebake.take().map(|r| r.wait())
+        {
+            s.bake_validation += validation_messages;
+        }
+        let n = s.renderer.gpu.validation_log().count() + s.live.validation_messages() + s.bake_validation;
         if let Some(p) = &report_json {
             let text = serde_json::to_string_pretty(&s.report).map_err(|e| Error::Usage(e.to_string()))?;
             crate::util::image_io::write_file(p, text.as_bytes())

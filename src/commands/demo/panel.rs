@@ -10,6 +10,7 @@ use crate::lighting::Configuration;
 use crate::scene::ParamKind;
 
 use super::live::LiveReference;
+use super::rebake::BakeStatus;
 
 /// A method parameter as edited: TOML text, applied with the Apply button.
 #[derive(Clone, Debug)]
@@ -44,6 +45,10 @@ pub struct PanelInfo<'a> {
     pub position: glam::Vec3,
     pub bookmarks: usize,
     pub messages: &'a [String],
+    /// The bake of the configuration being switched to, running beside the frames.
+    pub baking: Option<&'a BakeStatus>,
+    /// The configuration asked for while it runs.
+    pub queued: Option<&'a str>,
 }
 
 /// What the panel changes.
@@ -52,6 +57,8 @@ pub struct PanelSettings<'a> {
     pub speed: &'a mut f32,
     pub budget: &'a mut f32,
     pub live_on: &'a mut bool,
+    /// The scene's animation stands still (the reference accumulates).
+    pub paused: &'a mut bool,
     pub params: &'a mut Vec<ParamEdit>,
 }
 
@@ -64,9 +71,12 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
         .resizable(true)
         .show(ctx, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
+                if let Some(b) = info.baking {
+                    baking(ui, b, info.queued);
+                }
                 configuration(ui, info, settings.params, &mut actions);
                 timings(ui, info);
-                reference(ui, info, settings.budget, settings.live_on);
+                reference(ui, info, settings.budget, settings.live_on, settings.paused);
                 view(ui, settings.view, &mut actions);
                 camera(ui, info, settings.speed, &mut actions);
                 for m in info.messages {
@@ -75,6 +85,17 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
             });
         });
     actions
+}
+
+/// The background bake: its stage's progress bar, the time so far and the stage's estimate.
+fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>) {
+    ui.label(format!("baking {} ({:.1} s)", b.configuration, b.elapsed_s));
+    let left = b.left_s.map_or(String::new(), |s| format!(", about {s:.0} s left"));
+    ui.add(egui::ProgressBar::new(b.fraction as f32).text(format!("{} {:.0}%{left}", b.stage, 100.0 * b.fraction)));
+    match queued {
+        Some(q) => ui.label(format!("then {q}; the current configuration draws meanwhile")),
+        None => ui.label("the current configuration draws meanwhile"),
+    };
 }
 
 fn configuration(ui: &mut egui::Ui, info: &PanelInfo<'_>, params: &mut [ParamEdit], actions: &mut Vec<Action>) {
@@ -178,14 +199,19 @@ fn frame_graph(ui: &mut egui::Ui, gpu: &VecDeque<f32>, frame: &VecDeque<f32>) {
     );
 }
 
-fn reference(ui: &mut egui::Ui, info: &PanelInfo<'_>, budget: &mut f32, live_on: &mut bool) {
+fn reference(ui: &mut egui::Ui, info: &PanelInfo<'_>, budget: &mut f32, live_on: &mut bool, paused: &mut bool) {
     ui.collapsing("Reference and error", |ui| {
         ui.checkbox(live_on, "live reference (G)");
+        ui.checkbox(paused, "pause animation (P)")
+            .on_hover_text("in a scene that moves the reference restarts every frame; paused, it accumulates");
         ui.add(egui::Slider::new(budget, 0.05..=0.9).text("share of frame"));
         let live = info.live;
         ui.label(format!("{}: {} spp", live.label, live.spp()));
         match &live.error {
             Some(e) => {
+                if e.spp != live.spp() {
+                    ui.label(format!("error at {} spp (being refreshed)", e.spp));
+                }
                 egui::Grid::new("error").num_columns(3).show(ui, |ui| {
                     ui.label("");
                     ui.label("method");

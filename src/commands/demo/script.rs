@@ -7,7 +7,11 @@
 //! - `turn YAW PITCH`: the camera turns by these many radians;
 //! - `budget SHARE`: the live reference's share of the frame time (0 switches it off);
 //! - `split FRACTION`: the split view's divider;
-//! - `screenshot PATH`: saves the view on screen as PATH (PNG) and its values beside it (EXR).
+//! - `screenshot PATH`: saves the view on screen as PATH (PNG) and its values beside it (EXR);
+//! - `param NAME VALUE`: sets a parameter of the configuration in the panel (`NAME` or
+//!   `METHOD.NAME`, the value as TOML) and applies it, as the Apply button does;
+//! - `minimise`, `restore`: the resize events a window system sends when the window is
+//!   minimised (to no area) and restored.
 
 use std::path::{Path, PathBuf};
 
@@ -21,6 +25,10 @@ pub enum Event {
     Budget(f32),
     Split(f32),
     Screenshot(PathBuf),
+    /// A parameter's name and its value (TOML text).
+    Param(String, String),
+    Minimise,
+    Restore,
 }
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -70,9 +78,12 @@ impl Script {
                 ["budget", ..] => nums(1).map(|v| Event::Budget(v[0]))?,
                 ["split", ..] => nums(1).map(|v| Event::Split(v[0]))?,
                 ["screenshot", path] => Event::Screenshot(PathBuf::from(path)),
+                ["param", name, value @ ..] if !value.is_empty() => Event::Param(name.to_string(), value.join(" ")),
+                ["minimise"] => Event::Minimise,
+                ["restore"] => Event::Restore,
                 _ => {
                     return Err(err(format!(
-                        "unknown event `{}`: expected key, move, turn, budget, split or screenshot",
+                        "unknown event `{}`: expected key, move, turn, budget, split, screenshot, param, minimise or restore",
                         args.join(" ")
                     )))
                 }
@@ -94,18 +105,26 @@ mod tests {
 
     #[test]
     fn events_parse_and_errors_name_the_line() {
-        let s = Script::parse("# still\n3 key M\n5 move 0 0 0.5\n6 budget 0.5 # half\n").unwrap();
+        let s = Script::parse(
+            "# still\n3 key M\n5 move 0 0 0.5\n6 budget 0.5 # half\n7 param radiosity.mode \"faithful\"\n",
+        )
+        .unwrap();
         assert_eq!(
             s.events,
             [
                 (3, Event::Key("M".into())),
                 (5, Event::Move([0.0, 0.0, 0.5])),
-                (6, Event::Budget(0.5))
+                (6, Event::Budget(0.5)),
+                (7, Event::Param("radiosity.mode".into(), "\"faithful\"".into()))
             ]
         );
         assert_eq!(s.due(5).count(), 1);
         assert_eq!(Script::parse("1 key M\n2 move 1 x 2").unwrap_err().0, 2);
         assert_eq!(Script::parse("x key M").unwrap_err().0, 1);
         assert_eq!(Script::parse("1 jump").unwrap_err().0, 1);
+        assert_eq!(Script::parse("1 param patch_size").unwrap_err().0, 1);
+        let s = Script::parse("2 minimise\n4 restore").unwrap();
+        assert_eq!(s.events, [(2, Event::Minimise), (4, Event::Restore)]);
+        assert_eq!(Script::parse("2 minimise now").unwrap_err().0, 1);
     }
 }
