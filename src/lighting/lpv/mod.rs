@@ -176,7 +176,10 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     for r in [128i64, 512] {
         push(corrected.with("rsm", r.into()));
     }
-    push(corrected.with("geometry_volume", false.into()));
+    // Without a geometry volume the G-buffer has nothing to feed: left out, not warned about.
+    let mut no_volume = corrected.with("geometry_volume", false.into());
+    no_volume.params.retain(|(n, _, _)| n != "gbuffer");
+    push(no_volume);
     // The geometry volume from the RSM's surfels alone, and with the G-buffer's added.
     let gbuffer = Config::from_decl(&corrected, None).map_or(0, |c| c.gbuffer);
     push(corrected.with("gbuffer", (if gbuffer > 0 { 0i64 } else { 128 }).into()));
@@ -184,8 +187,11 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let mut cascaded = corrected.with("cascades", 3i64.into());
     cascaded.params.retain(|(n, _, _)| n != "centre");
     push(cascaded);
-    push(decl.with("mode", "faithful".into()));
-    push(decl.with("mode", "faithful".into()).with("transform_bug", false.into()));
+    // The document's mode has no geometry volume: the G-buffer is left out of it likewise.
+    let mut faithful = decl.with("mode", "faithful".into());
+    faithful.params.retain(|(n, _, _)| n != "gbuffer");
+    push(faithful.clone());
+    push(faithful.with("transform_bug", false.into()));
     out
 }
 
