@@ -183,7 +183,7 @@ if command -v vulkaninfo >/dev/null; then
     step 30 "ray query" bash -c 'vulkaninfo 2>/dev/null | grep -E "deviceName|driverInfo|VK_KHR_ray_query|VK_KHR_acceleration_structure|VK_KHR_ray_tracing_pipeline" | sort -u'
 fi
 
-# Issue 11: the reference's rate, beside Mitsuba's on the same machine.
+# The reference's rate, beside Mitsuba's on the same machine.
 if "$py" -c 'import mitsuba, numpy' 2>/dev/null; then
     step 240 "reference against Mitsuba 3, 256x256" "$py" tools/reference_vs_mitsuba.py --penumbra "$bin" --size 256x256 --spp-scale 4 --variants scalar_rgb,cuda_ad_rgb
 else
@@ -192,7 +192,7 @@ fi
 step 60 "reference, Cornell box, 32 bounces, 1024x1024" "$bin" reference scenes/cornell.toml --size 1024x1024 --spp 64 --bounces 32 -o "$out/cornell_1024.exr"
 step 60 "reference, furnace, 1024x1024" "$bin" reference scenes/furnace.toml --size 1024x1024 --spp 16 -o "$out/furnace_1024.exr"
 
-# Issue 14: bake throughput of each PRT baker on the same 7,915 vertices, and run-time shading.
+# Bake throughput of each PRT baker on the same 7,915 vertices, and run-time shading.
 prt_bake() {
     local name=$1 decl=$2 limit=$3 scene=${4:-prt_bunny_cow}
     variant "scenes/$scene.toml" "scenes/_gpu_$name.toml" "$decl"
@@ -241,7 +241,7 @@ step 120 "PRT run-time shading, 1,004,004 vertices, 1280x720" "$bin" profile sce
 step 60 "forward on the same mesh, 1280x720" "$bin" profile scenes/_gpu_prt_million.toml --method forward --size 1280x720 --frames 30
 rm -f scenes/_gpu_prt_million.toml
 
-# Issue 15: frame time against the number of lights, one run.
+# Frame time against the number of lights, one run.
 step 300 "many lights, 1 ... 4,096, 1280x720" "$py" tools/many_lights_scaling.py --binary "$bin" --counts 1,4,16,64,256,1024,2048,4096 --frames 10 --size 1280x720 --timeout 60 --out "$out/many_lights_scaling_gpu"
 
 # Zero validation messages on a real driver: every method family once.
@@ -261,7 +261,7 @@ step 240 "chart theatre_100, 640x360" "$bin" chart scenes/theatre_100.toml --siz
 step 240 "chart prt_bunny_cow, 640x360" "$bin" chart scenes/prt_bunny_cow.toml --size 640x360 --cache-dir "$out/cache" -o "$out/chart_prt_bunny_cow.png" --csv "$out/chart_prt_bunny_cow.csv"
 step 240 "chart terrain_sky at its defaults" "$bin" chart scenes/terrain_sky.toml --cache-dir "$out/cache" -o "$out/chart_terrain_sky.png" --csv "$out/chart_terrain_sky.csv"
 
-# Issue 14 at scale: 114,127 vertices, 226k triangles.
+# PRT at scale: 114,127 vertices, 226k triangles.
 prt_bake big_cpu_rays '{ name = "prt", baker = "rays_cpu", samples = 1024 }' 120 prt_throughput
 prt_bake big_gpu_rays '{ name = "prt", baker = "rays", samples = 1024 }' 120 prt_throughput
 prt_bake big_raster '{ name = "prt", baker = "raster", coverage = "exact", reduction = "compute" }' 300 prt_throughput

@@ -31,13 +31,14 @@ fn chromium() -> PathBuf {
     panic!("no Chromium found (looked for chromium, chromium-browser, google-chrome on the PATH, and $PENUMBRA_CHROMIUM); tools/setup.sh installs Debian's chromium package");
 }
 
-/// A headless browser and its DevTools session on one page.
+/// A headless browser driven over the DevTools protocol, attached to one page.
 struct Browser {
     child: Child,
     input: ChildStdin,
     messages: Receiver<Value>,
     next_id: u64,
-    session: Option<String>,
+    /// The protocol's id of the attached page (its `sessionId`), once attached.
+    page: Option<String>,
     /// Every event seen so far, in order.
     events: Vec<Value>,
 }
@@ -86,7 +87,7 @@ impl Browser {
             input,
             messages,
             next_id: 1,
-            session: None,
+            page: None,
             events: Vec::new(),
         }
     }
@@ -97,12 +98,12 @@ impl Browser {
             .unwrap_or_else(|_| panic!("Chromium sent nothing for 60 s while waiting for {what}"))
     }
 
-    /// Sends a command (to the page's session once attached) and returns its result.
+    /// Sends a command (to the attached page once there is one) and returns its result.
     fn call(&mut self, method: &str, params: Value) -> Value {
         let id = self.next_id;
         self.next_id += 1;
         let mut msg = json!({ "id": id, "method": method, "params": params });
-        if let Some(s) = &self.session {
+        if let Some(s) = &self.page {
             msg["sessionId"] = json!(s);
         }
         self.input.write_all(msg.to_string().as_bytes()).unwrap();
@@ -188,11 +189,11 @@ impl Browser {
     fn open(page: &Path) -> Browser {
         let mut browser = Browser::launch(&common::temp_path("chromium-profile"));
         let target = browser.call("Target.createTarget", json!({ "url": "about:blank" }));
-        let session = browser.call(
+        let attached = browser.call(
             "Target.attachToTarget",
             json!({ "targetId": target["targetId"], "flatten": true }),
         );
-        browser.session = Some(session["sessionId"].as_str().unwrap().to_string());
+        browser.page = Some(attached["sessionId"].as_str().unwrap().to_string());
         for domain in ["Runtime", "Log", "Page", "Network"] {
             browser.call(&format!("{domain}.enable"), json!({}));
         }

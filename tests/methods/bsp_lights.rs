@@ -102,7 +102,7 @@ fn cpu_sum(bsp: &penumbra::lighting::bsp_lights::BspLights, scales: &[f32], thre
     out
 }
 
-/// Item 19: random intensities every "frame"; the GEMV equals the CPU sum to f32 rounding (f16
+/// Random intensities every "frame"; the GEMV equals the CPU sum to f32 rounding (f16
 /// storage: to half-precision rounding of each entry), in both layouts.
 #[test]
 fn item_19_relighting_is_linear_in_random_intensities() {
@@ -165,7 +165,7 @@ fn gemv_median_ms(r: &mut Renderer, cam: &penumbra::scene::Camera) -> f64 {
         .median_ms
 }
 
-/// Item 20: with 90 % of the lights under the threshold the result is within
+/// With 90 % of the lights under the threshold the result is within
 /// `Σ_{s_l < 0.05} s_l·C_l(v)` of the full sum at every vertex, and the GEMV is faster.
 #[test]
 fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
@@ -240,7 +240,7 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
     common::assert_clean(&r.gpu);
 }
 
-/// Item 23: with static intensities, 100 frames are bit-identical (the thesis's unexplained
+/// With static intensities, 100 frames are bit-identical (the thesis's unexplained
 /// flashing segments must not appear).
 #[test]
 fn item_23_frames_are_bit_identical_with_static_intensities() {

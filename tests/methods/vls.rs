@@ -337,7 +337,7 @@ fn a_segment_shades_with_exactly_its_light_set() {
     let mut r = Renderer::new(common::test_gpu(), s, Some("vls"), SIZE, 1).unwrap_or_else(|e| panic!("{e}"));
     let cam = r.scene.camera.clone();
     let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
-    // Item 19 on the GPU: new intensities every frame (as a light board sets them), the same
+    // On the GPU: new intensities every frame (as a light board sets them), the same
     // sets, and every pixel the sum over its set at this frame's intensities.
     let mut rng = crate::support::rng::Lcg(12345);
     for frame in 0..3 {
@@ -438,7 +438,7 @@ fn per_vertex_sets_shade_at_the_vertices() {
     );
 }
 
-/// Item 23: static intensities give the same bytes every frame, for 100 frames.
+/// Static intensities give the same bytes every frame, for 100 frames.
 #[test]
 fn frames_are_bit_identical_with_static_intensities() {
     let s = scene(r#"{ name = "vls", k = 3 }"#, &twelve_lights());

@@ -123,7 +123,7 @@ fn small_scene() -> (Vec<ScenePolygon>, Vec<ManyLight>) {
     (polygons, lights)
 }
 
-/// Item 17 with ≤ K lights: every segment's VLS sum is the full sum with the same feeler's
+/// With ≤ K lights: every segment's VLS sum is the full sum with the same feeler's
 /// shadows, bit for bit, for every selection, feeler and model, per segment and per vertex.
 #[test]
 fn with_at_most_k_lights_vls_is_the_full_sum() {
@@ -243,7 +243,7 @@ fn error_stats(
     }
 }
 
-/// Item 17 on many lights: the thesis's 8 closest lose about a third of the light under 100
+/// On many lights: the thesis's 8 closest lose about a third of the light under 100
 /// overlapping spots (the digest's simulation: mean 0.354 with 1/d, 20°/30°, 4 m), much less
 /// under 25 sparse ones (0.029); ranking by potential contribution loses less in both.
 #[test]
@@ -318,7 +318,7 @@ fn clipped_area(poly: &[DVec3], (x0, x1, y0, y1): (f64, f64, f64, f64)) -> f64 {
         .sum()
 }
 
-/// Item 16: a 1 m square at z = 1 over a floor, a light at (0.3, 0.2, 3) (and five more near it,
+/// A 1 m square at z = 1 over a floor, a light at (0.3, 0.2, 3) (and five more near it,
 /// so that no one alignment of the shadow's edges with the segment grid decides the result): the
 /// exact shadow is the square scaled 1.5× about the light's footprint. The feeler judges a
 /// segment by its centroid, so the misclassified area is a band along the shadow's edge about
@@ -397,7 +397,7 @@ fn thesis_feeler_equals_the_bvh_feeler() {
     assert!(blocked > total / 50 && blocked < total, "{blocked} of {total}");
 }
 
-/// Item 18: at every vertex shared by segments with different light sets, the largest colour
+/// At every vertex shared by segments with different light sets, the largest colour
 /// difference between the segments' sums — zero for the full sum, clearly not for VLS.
 #[test]
 fn seams_show_where_neighbouring_light_sets_differ() {
@@ -449,7 +449,7 @@ fn seams_show_where_neighbouring_light_sets_differ() {
     assert_eq!((full, full_seams), (0.0, 0));
 }
 
-/// Item 19: the run-time intensities never reach the set-up — `closest` picks the same sets
+/// The run-time intensities never reach the set-up — `closest` picks the same sets
 /// whatever the lights' intensities (and the method's bake key holds the scene's full
 /// intensities only).
 #[test]
