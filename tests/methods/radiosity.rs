@@ -276,3 +276,70 @@ fn a_quad_lights_bounces_leave_out_its_direct_light() {
         "bounces {got:.4} against indirect only {want:.4} (direct only {first:.4})"
     );
 }
+
+/// A room of solid boxes lit only by the sky through a slot in its ceiling: walls stand on a
+/// floor that runs on under them, as modelled rooms are built. The corrected light-map gathers
+/// the environment through the opening (and its bounces), and leaves the floor under the walls
+/// out of the patches along the junctions, so its frame's mean is the path tracer's; the
+/// document's light-map, which has no environment, is black.
+#[test]
+fn a_room_lit_by_the_sky_through_its_roof_matches_the_path_tracer() {
+    use penumbra::reference::{Batching, LightPaths, ReferenceRenderer, Settings};
+    let boxes = [
+        ("floor", [4.4, 0.1, 4.4], [0.0, -0.05, 0.0]),
+        ("wall -x", [0.27, 2.5, 4.4], [-2.065, 1.25, 0.0]),
+        ("wall +x", [0.27, 2.5, 4.4], [2.065, 1.25, 0.0]),
+        ("wall -z", [4.4, 2.5, 0.27], [0.0, 1.25, -2.065]),
+        ("wall +z", [4.4, 2.5, 0.27], [0.0, 1.25, 2.065]),
+        ("roof -x", [1.9, 0.1, 4.4], [-1.25, 2.55, 0.0]),
+        ("roof +x", [1.9, 0.1, 4.4], [1.25, 2.55, 0.0]),
+        ("table", [0.8, 0.6, 0.8], [0.7, 0.3, -0.6]),
+    ];
+    let frame = |mode: &str| {
+        let mut text = format!(
+            "methods = [{{ name = \"radiosity\", mode = \"{mode}\", patch_size = 0.25 }}]\n\
+             [camera]\nposition = [-1.2, 1.6, 1.5]\ntarget = [0.8, 0.4, -1.0]\nfov_y_deg = 60\n\
+             [environment]\ntype = \"constant\"\nradiance = [1.0, 1.0, 1.0]\n\
+             [[materials]]\nname = \"grey\"\nalbedo = 0.5\n"
+        );
+        for (name, size, at) in boxes {
+            text += &format!(
+                "[[objects]]\nname = \"{name}\"\nmesh = \"box\"\nsize = {size:?}\ntranslate = {at:?}\nmaterial = \"grey\"\n"
+            );
+        }
+        Scene::from_str(&text, "sky_room.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let size = (32, 24);
+    let scene = frame("corrected");
+    let mut tracer = ReferenceRenderer::new(common::test_gpu(), &scene, size).unwrap();
+    let s = Settings {
+        spp: 128,
+        bounces: 12,
+        paths: LightPaths::All,
+        seed: 7,
+        batching: Batching::Adaptive,
+        ..Settings::default()
+    };
+    let truth = tracer.render(&s, &mut |_, _| {}).unwrap().mean;
+    common::assert_clean(&tracer.gpu);
+    let mean = |i: &penumbra::util::image_io::HdrImage| {
+        i.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>() / i.pixels.len() as f64
+    };
+    let draw = |scene: Scene| {
+        let mut r = Renderer::new(common::test_gpu(), scene, None, size, 1).unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+        common::assert_clean(&r.gpu);
+        mean(&img)
+    };
+    let (corrected, faithful, want) = (draw(scene), draw(frame("faithful")), mean(&truth));
+    eprintln!("frame means: corrected light-map {corrected:.4}, faithful {faithful:.4}, path tracer {want:.4}");
+    assert!(
+        (corrected / want - 1.0).abs() < 0.03,
+        "corrected {corrected:.4} against the path tracer's {want:.4}"
+    );
+    assert!(
+        faithful < 0.01 * want,
+        "the document's light-map has no sky: {faithful:.4}"
+    );
+}

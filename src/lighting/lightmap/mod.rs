@@ -8,6 +8,7 @@
 
 pub(crate) mod atlas;
 pub mod border;
+pub mod buried;
 pub(crate) mod form_factor;
 pub mod geometry;
 pub(crate) mod mesh;

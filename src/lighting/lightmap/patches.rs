@@ -52,6 +52,38 @@ pub struct Chart {
     pub sky: bool,
 }
 
+impl Chart {
+    /// The chart's triangles in its grid's frame: metres from `origin` along `u` and `v`.
+    pub(crate) fn flat_triangles(&self, triangles: &[Triangle]) -> Vec<[DVec2; 3]> {
+        self.triangles
+            .iter()
+            .map(|&t| {
+                triangles[t]
+                    .p
+                    .map(|q| DVec2::new((q - self.origin).dot(self.u), (q - self.origin).dot(self.v)))
+            })
+            .collect()
+    }
+
+    /// Patch (i, j)'s sub-samples on an `n`×`n` grid that fall inside the polygon (`flat`, from
+    /// [`Chart::flat_triangles`]), as points on the chart's plane.
+    pub(crate) fn inside_samples(&self, flat: &[[DVec2; 3]], size: f64, i: usize, j: usize, n: usize) -> Vec<DVec3> {
+        let mut out = Vec::new();
+        for sj in 0..n {
+            for si in 0..n {
+                let q = DVec2::new(
+                    i as f64 + (si as f64 + 0.5) / n as f64,
+                    j as f64 + (sj as f64 + 0.5) / n as f64,
+                ) * size;
+                if flat.iter().any(|t| inside_triangle(q, t)) {
+                    out.push(self.origin + self.u * q.x + self.v * q.y);
+                }
+            }
+        }
+        out
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Patch {
     pub chart: usize,

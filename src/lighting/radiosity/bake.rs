@@ -52,58 +52,73 @@ pub fn add_direct_light_in(
         pvs.as_ref()
             .map(|(w, translate)| w.leaf_of(crate::scene::world_mesh::scene_to_world(x.as_vec3() - *translate)))
     };
-    for (k, q) in p.patches.iter().enumerate() {
-        if !q.inside() {
-            continue;
-        }
-        let x = q.centre + q.normal * eps;
-        let mut e = DVec3::ZERO;
-        for l in &scene.lights {
-            let (to_light, irradiance, far) = match l {
-                Light::Point {
-                    position, intensity, ..
-                } => {
-                    let d = position.as_dvec3() - x;
-                    (
-                        d.normalize_or_zero(),
-                        intensity.as_dvec3() / d.length_squared().max(1e-12),
-                        position.as_dvec3(),
-                    )
+    // Corrected: the patch's mean irradiance over its visible sub-samples, as the sun's lit
+    // fraction is: the light falls off as 1/d² and at a spot's cone, so the centre alone
+    // misjudges patches near a light or across a cone's edge. Faithful: CaLight's one sample
+    // per lumel.
+    let points: Vec<Vec<DVec3>> = match mode {
+        solve::Mode::Faithful => p.patches.iter().map(|q| vec![q.centre]).collect(),
+        solve::Mode::Corrected => {
+            let mut visible = crate::lighting::lightmap::buried::visible_samples(p, occluders);
+            for (points, q) in visible.iter_mut().zip(&p.patches) {
+                if points.is_empty() {
+                    // A sliver no sub-sample falls in: its centre.
+                    points.push(q.centre + q.normal * eps);
                 }
-                Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    inner_deg,
-                    outer_deg,
-                    ..
-                } => {
-                    let d = position.as_dvec3() - x;
-                    let l = d.normalize_or_zero();
-                    let falloff = crate::lighting::brdf::spot_falloff(
-                        outer_deg.to_radians().cos(),
-                        inner_deg.to_radians().cos(),
-                        (-l).as_vec3().dot(direction.normalize()),
-                    );
-                    (
-                        l,
-                        intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12),
-                        position.as_dvec3(),
-                    )
-                }
-                _ => continue,
-            };
-            let cos = q.normal.dot(to_light);
-            let seen = match (&pvs, leaf(x), leaf(far)) {
-                (Some((w, _)), Some(a), Some(b)) => w.is_visible(a, b),
-                _ => occluders.visible(x, far),
-            };
-            if cos <= 0.0 || !seen {
-                continue;
             }
-            e += irradiance * cos;
+            visible
         }
-        direct[k] = q.albedo * e;
+    };
+    let lights: Vec<&Light> = scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l, Light::Point { .. } | Light::Spot { .. }))
+        .collect();
+    let indices: Vec<usize> = if lights.is_empty() {
+        Vec::new()
+    } else {
+        (0..p.patches.len()).collect()
+    };
+    let irradiance = crate::util::parallel::map(&indices, 64, |&k| {
+        let q = &p.patches[k];
+        if !q.inside() {
+            return [0.0; 3];
+        }
+        let mut e = DVec3::ZERO;
+        for &x in &points[k] {
+            let x = if mode == solve::Mode::Faithful {
+                x + q.normal * eps
+            } else {
+                x
+            };
+            for l in &lights {
+                let Some((to_light, irradiance, far)) = punctual(l, x) else {
+                    continue;
+                };
+                let cos = q.normal.dot(to_light);
+                if cos <= 0.0 {
+                    continue;
+                }
+                let seen = match (&pvs, leaf(x), leaf(far)) {
+                    (Some((w, _)), Some(a), Some(b)) => w.is_visible(a, b),
+                    _ => occluders.visible(x, far),
+                };
+                if seen {
+                    e += irradiance * cos;
+                }
+            }
+        }
+        (e / points[k].len().max(1) as f64).to_array()
+    });
+    for (k, e) in irradiance.iter().enumerate() {
+        direct[k] = p.patches[k].albedo * DVec3::from_array(*e);
+    }
+    if mode == solve::Mode::Corrected && scene.environment.is_some() {
+        let env = crate::environment::EnvironmentMap::of_scene(scene)?;
+        let sky = super::environment_light::irradiance(p, occluders, &env, &points);
+        for (k, e) in sky.iter().enumerate() {
+            direct[k] += p.patches[k].albedo * *e;
+        }
     }
     for l in &scene.lights {
         if let Light::Directional {
@@ -122,6 +137,45 @@ pub fn add_direct_light_in(
         q.unshot += *b;
     }
     Ok(direct)
+}
+
+/// A point or spot light seen from `x`: (unit direction to it, irradiance on a surface facing
+/// it, its position); `None` for other lights.
+fn punctual(l: &Light, x: DVec3) -> Option<(DVec3, DVec3, DVec3)> {
+    match l {
+        Light::Point {
+            position, intensity, ..
+        } => {
+            let d = position.as_dvec3() - x;
+            Some((
+                d.normalize_or_zero(),
+                intensity.as_dvec3() / d.length_squared().max(1e-12),
+                position.as_dvec3(),
+            ))
+        }
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            inner_deg,
+            outer_deg,
+            ..
+        } => {
+            let d = position.as_dvec3() - x;
+            let l = d.normalize_or_zero();
+            let falloff = crate::lighting::brdf::spot_falloff(
+                outer_deg.to_radians().cos(),
+                inner_deg.to_radians().cos(),
+                (-l).as_vec3().dot(direction.normalize()),
+            );
+            Some((
+                l,
+                intensity.as_dvec3() * falloff as f64 / d.length_squared().max(1e-12),
+                position.as_dvec3(),
+            ))
+        }
+        _ => None,
+    }
 }
 
 /// Where the shooting runs.
@@ -149,6 +203,9 @@ pub fn bake(
         }
     }
     let mut occluders = Occluders::new(&geometry.triangles);
+    if settings.mode == solve::Mode::Corrected {
+        crate::lighting::lightmap::buried::exclude(&mut p, &occluders);
+    }
     occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
     let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode)?;
     let mut report = match shooter {

@@ -9,6 +9,7 @@
 //! only. Bounces reflect each material's albedo times its albedo map's mean, not the map texel by
 //! texel.
 
+pub(crate) mod environment_light;
 pub mod gpu;
 pub(crate) mod sun;
 
@@ -76,7 +77,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 
 /// Bumped whenever the CPU baker's output for the same inputs changes (the GPU shooter's SPIR-V is
 /// hashed into the key).
-const BAKER_VERSION: u32 = 9;
+const BAKER_VERSION: u32 = 11;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -11,8 +11,9 @@
 //!   or escapes; no smoothing (it would blur the true shadow), the sub-samples' mean is already
 //!   the patch's mean irradiance.
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 
+use crate::lighting::lightmap::buried;
 use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::{Mode, Occluders};
 
@@ -29,42 +30,29 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
         if c.sky || c.normal.dot(to_sun) <= 0.0 {
             continue;
         }
-        let tris: Vec<[DVec2; 3]> = c
-            .triangles
-            .iter()
-            .map(|&t| {
-                occluders.triangles[t]
-                    .p
-                    .map(|q| DVec2::new((q - c.origin).dot(c.u), (q - c.origin).dot(c.v)))
-            })
-            .collect();
+        let flat = c.flat_triangles(&occluders.triangles);
         for j in 0..c.height {
             for i in 0..c.width {
                 let k = c.first + j * c.width + i;
                 if !p.patches[k].inside() {
                     continue;
                 }
-                let (mut inside, mut lit) = (0usize, 0usize);
-                for sj in 0..SAMPLES {
-                    for si in 0..SAMPLES {
-                        let q = DVec2::new(
-                            i as f64 + (si as f64 + 0.5) / SAMPLES as f64,
-                            j as f64 + (sj as f64 + 0.5) / SAMPLES as f64,
-                        ) * p.size;
-                        if !tris
-                            .iter()
-                            .any(|t| crate::lighting::lightmap::patches::inside_triangle(q, t))
-                        {
-                            continue;
-                        }
-                        inside += 1;
-                        let x = c.origin + c.u * q.x + c.v * q.y + c.normal * eps;
-                        lit += usize::from(match occluders.first_hit(x, to_sun) {
-                            Some((_, t)) => occluders.triangles[t].sky,
-                            None => escape_counts,
-                        });
-                    }
-                }
+                // Corrected: only the part of the patch that is not buried under other
+                // geometry, as its area and centre are (`lightmap::buried`).
+                let samples: Vec<DVec3> = c
+                    .inside_samples(&flat, p.size, i, j, SAMPLES)
+                    .into_iter()
+                    .map(|y| y + c.normal * eps)
+                    .filter(|&x| mode == Mode::Faithful || !buried::is_buried(occluders, x, c.normal, c.u, c.v))
+                    .collect();
+                let inside = samples.len();
+                let lit = samples
+                    .iter()
+                    .filter(|&&x| match occluders.first_hit(x, to_sun) {
+                        Some((_, t)) => occluders.triangles[t].sky,
+                        None => escape_counts,
+                    })
+                    .count();
                 out[k] = if inside > 0 { lit as f64 / inside as f64 } else { 0.0 };
             }
         }

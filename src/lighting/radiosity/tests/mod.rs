@@ -1,6 +1,7 @@
 use glam::DVec3;
 
 mod border;
+mod buried;
 mod sun;
 mod visibility;
 

@@ -1,0 +1,133 @@
+//! Parts of a patch buried inside other geometry: a floor runs on under the walls that stand on
+//! it, a table top under the box on it. A patch half under a wall would otherwise take its light
+//! at a centre the wall hides, and its texel would darken the visible half's strip along every
+//! junction: with quarter-metre patches, a generated room lit by a spot showed 0.920 of the path
+//! tracer's mean with them and 0.953 without. Buried sub-samples are left out of the patch: its
+//! area, centre and direct light are those of the part that can be seen.
+
+use glam::DVec3;
+
+use super::patches::Patches;
+use super::solve::Occluders;
+
+/// Sub-samples per patch side for the buried test and the direct light.
+pub const SAMPLES: usize = 4;
+
+/// Rays a sub-sample casts; it is buried when at least [`BURIED_VOTES`] of them first meet the
+/// back of a surface, as from inside a closed solid. Several tilted rays, not the normal alone,
+/// because faces that coincide (a wall's top against the ceiling) give either answer.
+const RAYS: usize = 4;
+const BURIED_VOTES: usize = 3;
+
+/// Whether `x`, a point a hair in front of a surface with unit normal `n` and tangents `u`, `v`,
+/// lies inside closed geometry.
+pub fn is_buried(occluders: &Occluders, x: DVec3, n: DVec3, u: DVec3, v: DVec3) -> bool {
+    let mut votes = 0;
+    for r in 0..RAYS {
+        let (su, sv) = (if r & 1 == 0 { 0.5 } else { -0.5 }, if r & 2 == 0 { 0.5 } else { -0.5 });
+        let dir = (n + u * su + v * sv).normalize();
+        if let Some((_, t)) = occluders.first_hit(x, dir) {
+            if occluders.triangles[t].normal().dot(dir) > 0.0 {
+                votes += 1;
+            }
+        }
+        // The rest cannot change the answer.
+        if votes >= BURIED_VOTES || votes + (RAYS - 1 - r) < BURIED_VOTES {
+            break;
+        }
+    }
+    votes >= BURIED_VOTES
+}
+
+/// Every inside patch's sub-samples that are inside its polygon and not buried, as points a hair
+/// in front of the surface; empty for patches outside their polygon or wholly buried.
+pub fn visible_samples(p: &Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
+    let eps = 1e-4 * p.size;
+    let cells: Vec<(usize, usize, usize)> = p
+        .charts
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| !c.sky)
+        .flat_map(|(ci, c)| (0..c.height).flat_map(move |j| (0..c.width).map(move |i| (ci, i, j))))
+        .filter(|&(ci, i, j)| {
+            let c = &p.charts[ci];
+            p.patches[c.first + j * c.width + i].inside()
+        })
+        .collect();
+    let flat: Vec<_> = p
+        .charts
+        .iter()
+        .map(|c| c.flat_triangles(&occluders.triangles))
+        .collect();
+    let found = crate::util::parallel::fold_ranges(
+        cells.len(),
+        crate::util::parallel::cores(),
+        64,
+        |range| {
+            cells[range]
+                .iter()
+                .map(|&(ci, i, j)| {
+                    let c = &p.charts[ci];
+                    c.inside_samples(&flat[ci], p.size, i, j, SAMPLES)
+                        .into_iter()
+                        .map(|y| y + c.normal * eps)
+                        .filter(|&x| !is_buried(occluders, x, c.normal, c.u, c.v))
+                        .collect::<Vec<DVec3>>()
+                })
+                .collect::<Vec<_>>()
+        },
+        |mut a, b| {
+            a.extend(b);
+            a
+        },
+    );
+    let mut out = vec![Vec::new(); p.patches.len()];
+    for (&(ci, i, j), s) in cells.iter().zip(found) {
+        let c = &p.charts[ci];
+        out[c.first + j * c.width + i] = s;
+    }
+    out
+}
+
+/// Leaves buried sub-samples out of every patch: its area scales by the share of its inside
+/// sub-samples that can be seen, its centre moves to their centroid, and a wholly buried patch
+/// becomes a border patch (no area, no emission), filled by the border passes. Returns the
+/// visible sub-samples (as [`visible_samples`]).
+pub fn exclude(p: &mut Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
+    let visible = visible_samples(p, occluders);
+    let eps = 1e-4 * p.size;
+    for ci in 0..p.charts.len() {
+        let c = &p.charts[ci];
+        if c.sky {
+            continue;
+        }
+        let flat = c.flat_triangles(&occluders.triangles);
+        for j in 0..c.height {
+            for i in 0..c.width {
+                let k = c.first + j * c.width + i;
+                if !p.patches[k].inside() {
+                    continue;
+                }
+                let inside = c.inside_samples(&flat, p.size, i, j, SAMPLES).len();
+                let seen = &visible[k];
+                if inside == 0 || seen.len() == inside {
+                    continue;
+                }
+                let q = &mut p.patches[k];
+                let share = seen.len() as f64 / inside as f64;
+                q.area *= share;
+                q.coverage *= share;
+                if seen.is_empty() {
+                    q.area = 0.0;
+                    q.coverage = 0.0;
+                    q.emission = DVec3::ZERO;
+                    q.total = DVec3::ZERO;
+                    q.unshot = DVec3::ZERO;
+                } else {
+                    q.centre = seen.iter().sum::<DVec3>() / seen.len() as f64 - c.normal * eps;
+                }
+            }
+        }
+    }
+    visible
+}

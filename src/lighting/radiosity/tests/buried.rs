@@ -1,0 +1,104 @@
+//! Patches partly buried under a solid standing on their surface keep only their visible part
+//! (`lightmap::buried`), judged against the solid's footprint computed from its box; a surface
+//! hovering over them buries nothing.
+
+use glam::DVec3;
+
+use crate::lighting::lightmap::buried::{self, SAMPLES};
+use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::solve::Occluders;
+use crate::scene::Scene;
+
+/// A 4 m floor quad, a 1 × 0.5 × 1 m box standing on it over x ∈ [0.13, 1.13], z ∈ [-0.47, 0.53]
+/// (off the patch grid, so patches straddle its sides), and a single quad hovering 0.8 m up.
+const SCENE: &str = r#"
+methods = ["radiosity"]
+[camera]
+position = [0, 3, 4]
+target = [0, 0, 0]
+[[materials]]
+name = "grey"
+albedo = 0.5
+[[objects]]
+name = "floor"
+mesh = "quad"
+corner = [-2, 0, -2]
+edge_u = [0, 0, 4]
+edge_v = [4, 0, 0]
+material = "grey"
+[[objects]]
+name = "block"
+mesh = "box"
+size = [1, 0.5, 1]
+translate = [0.63, 0.25, 0.03]
+material = "grey"
+[[objects]]
+name = "shelf"
+mesh = "quad"
+corner = [-1.37, 0.8, -1.41]
+edge_u = [1, 0, 0]
+edge_v = [0, 0, 1]
+material = "grey"
+"#;
+
+fn under_block(x: DVec3) -> bool {
+    (0.13..=1.13).contains(&x.x) && (-0.47..=0.53).contains(&x.z)
+}
+
+#[test]
+fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing() {
+    let sc = Scene::from_str(SCENE, "buried.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
+    let size = 0.2;
+    let mut p = Patches::build(&geo.triangles, size);
+    let before = p.patches.clone();
+    let occ = Occluders::new(&geo.triangles);
+    buried::exclude(&mut p, &occ);
+    let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
+    let c = p.charts[floor].clone();
+    let flat = c.flat_triangles(&occ.triangles);
+    let (mut whole, mut partial, mut open) = (0, 0, 0);
+    for j in 0..c.height {
+        for i in 0..c.width {
+            let k = c.first + j * c.width + i;
+            if !before[k].inside() {
+                continue;
+            }
+            let samples = c.inside_samples(&flat, size, i, j, SAMPLES);
+            let seen = samples.iter().filter(|&&x| !under_block(x)).count();
+            let share = seen as f64 / samples.len() as f64;
+            let (q, was) = (&p.patches[k], &before[k]);
+            assert!(
+                (q.area - was.area * share).abs() < 1e-12,
+                "patch ({i}, {j}): area {} against {} of {}",
+                q.area,
+                share,
+                was.area
+            );
+            if seen == 0 {
+                whole += 1;
+                assert!(!q.inside(), "a patch wholly under the block is a border patch");
+            } else if seen < samples.len() {
+                partial += 1;
+                assert!(
+                    !under_block(q.centre),
+                    "patch ({i}, {j}): its centre moved out from under the block"
+                );
+            } else {
+                open += 1;
+                assert_eq!(q.centre, was.centre);
+            }
+        }
+    }
+    eprintln!("floor patches: {whole} under the block, {partial} straddling its sides, {open} open");
+    // 1 m² at 0.2 m: 16 whole cells inside the footprint, 20 straddling its four sides.
+    assert_eq!((whole, partial), (16, 20));
+    // The shelf's underside and top, and the block's own faces, lose nothing.
+    for (k, q) in p.patches.iter().enumerate().filter(|(_, q)| q.chart != floor) {
+        let below = p.charts[q.chart].object;
+        assert!(
+            (q.area - before[k].area).abs() < 1e-12 || below == 1,
+            "object {below}: patch {k} lost area"
+        );
+    }
+}
