@@ -279,7 +279,6 @@ const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
     ("src/lighting/sh_lightmap/config.rs", "from_decl"),
     ("src/lighting/sh_lightmap/gpu.rs", "run"),
     ("src/lighting/sh_lightmap/mod.rs", "new"),
-    ("src/world/level_gen.rs", "generate_rooms"),
 ];
 
 /// `text` with comments, string and character literals blanked (newlines kept), so that braces
