@@ -274,7 +274,6 @@ const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
     ("src/lighting/prt/config.rs", "from_decl"),
     ("src/lighting/prt/mod.rs", "new"),
     ("src/lighting/sh_lightmap/config.rs", "from_decl"),
-    ("src/lighting/sh_lightmap/gpu.rs", "run"),
     ("src/lighting/sh_lightmap/mod.rs", "new"),
 ];
 
