@@ -272,7 +272,6 @@ const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
     ("src/lighting/lpv/config.rs", "from_decl"),
     ("src/lighting/lpv/mod.rs", "new"),
     ("src/lighting/prt/config.rs", "from_decl"),
-    ("src/lighting/prt/mod.rs", "new"),
     ("src/lighting/sh_lightmap/config.rs", "from_decl"),
     ("src/lighting/sh_lightmap/mod.rs", "new"),
 ];
