@@ -273,7 +273,6 @@ const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
     ("src/lighting/lpv/mod.rs", "new"),
     ("src/lighting/prt/config.rs", "from_decl"),
     ("src/lighting/sh_lightmap/config.rs", "from_decl"),
-    ("src/lighting/sh_lightmap/mod.rs", "new"),
 ];
 
 /// `text` with comments, string and character literals blanked (newlines kept), so that braces
