@@ -271,7 +271,6 @@ const LONG_FUNCTION_LINES: usize = 100;
 const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
     ("src/lighting/lpv/config.rs", "from_decl"),
     ("src/lighting/lpv/mod.rs", "new"),
-    ("src/lighting/sh_lightmap/config.rs", "from_decl"),
 ];
 
 /// `text` with comments, string and character literals blanked (newlines kept), so that braces
