@@ -4,6 +4,7 @@ use ash::vk;
 
 use super::error::{BackendError, BackendResult};
 use super::frame::{MAX_UPLOAD_BYTES, POOL_SETS, POOL_SIZES, UPLOAD_ALIGN};
+use super::pipeline::PipelineObject;
 use super::recorder::Recorder;
 use super::reflect::ReflectedBinding;
 use super::resources::{BufferId, ImageId, SamplerId, SubresourceRange};
@@ -61,6 +62,63 @@ enum Info {
     Buffer(vk::DescriptorBufferInfo),
 }
 
+/// A binding error of pipeline `pipeline`, naming the binding.
+fn binding_error(pipeline: &str, binding: &str, message: String) -> BackendError {
+    BackendError::Binding {
+        pipeline: pipeline.into(),
+        binding: binding.into(),
+        message,
+    }
+}
+
+/// Every name in `resources` must be declared by the pipeline's shaders, and given once.
+fn check_names(p: &PipelineObject, resources: &[(&str, Bind<'_>)]) -> BackendResult<()> {
+    for (i, (name, _)) in resources.iter().enumerate() {
+        if p.reflection.binding(name).is_none() {
+            let declared: Vec<&str> = p.reflection.bindings.iter().map(|b| b.name.as_str()).collect();
+            return Err(binding_error(
+                &p.name,
+                name,
+                format!("not declared by the shaders (they declare: {})", declared.join(", ")),
+            ));
+        }
+        if resources[..i].iter().any(|(n, _)| n == name) {
+            return Err(binding_error(&p.name, name, "bound twice".into()));
+        }
+    }
+    Ok(())
+}
+
+/// The resource given for reflected binding `b`, which must be of the declared type and count.
+fn resource_for<'r, 'a>(
+    p: &PipelineObject,
+    b: &ReflectedBinding,
+    resources: &'r [(&str, Bind<'a>)],
+) -> BackendResult<&'r Bind<'a>> {
+    let Some((_, res)) = resources.iter().find(|(n, _)| *n == b.name) else {
+        return Err(binding_error(
+            &p.name,
+            &b.name,
+            format!("declared as {:?} but not bound", b.ty),
+        ));
+    };
+    if !res.matches(b.ty) {
+        return Err(binding_error(
+            &p.name,
+            &b.name,
+            format!("shader declares {:?}, given {}", b.ty, res.kind()),
+        ));
+    }
+    if b.count != 1 {
+        return Err(binding_error(
+            &p.name,
+            &b.name,
+            format!("arrays of {} descriptors are not bindable yet", b.count),
+        ));
+    }
+    Ok(res)
+}
+
 impl Recorder<'_> {
     /// Binds every descriptor of the bound pipeline. Each reflected binding must be given exactly
     /// once, with a resource of the declared type; names the shaders don't declare are errors too,
@@ -69,134 +127,139 @@ impl Recorder<'_> {
         let pipeline_id = self.bound_pipeline()?;
         let gpu = self.gpu;
         let p = gpu.pipeline(pipeline_id)?;
-        let err = |binding: &str, message: String| BackendError::Binding {
-            pipeline: p.name.clone(),
-            binding: binding.into(),
-            message,
-        };
-        for (i, (name, _)) in resources.iter().enumerate() {
-            if p.reflection.binding(name).is_none() {
-                let declared: Vec<&str> = p.reflection.bindings.iter().map(|b| b.name.as_str()).collect();
-                return Err(err(
-                    name,
-                    format!("not declared by the shaders (they declare: {})", declared.join(", ")),
-                ));
-            }
-            if resources[..i].iter().any(|(n, _)| n == name) {
-                return Err(err(name, "bound twice".into()));
-            }
-        }
+        check_names(p, resources)?;
         let mut infos: Vec<(&ReflectedBinding, Info)> = Vec::new();
         for b in &p.reflection.bindings {
-            let Some((_, res)) = resources.iter().find(|(n, _)| *n == b.name) else {
-                return Err(err(&b.name, format!("declared as {:?} but not bound", b.ty)));
-            };
-            if !res.matches(b.ty) {
-                return Err(err(
-                    &b.name,
-                    format!("shader declares {:?}, given {}", b.ty, res.kind()),
-                ));
-            }
-            if b.count != 1 {
-                return Err(err(
-                    &b.name,
-                    format!("arrays of {} descriptors are not bindable yet", b.count),
-                ));
-            }
-            let info = match res {
-                Bind::Sampled { image, range, sampler } => {
-                    let img = gpu.image(*image)?;
-                    if !img.desc.usage.contains(vk::ImageUsageFlags::SAMPLED) {
-                        return Err(err(
-                            &b.name,
-                            format!("image `{}` was not created with SAMPLED usage", img.desc.name),
-                        ));
-                    }
-                    let view = gpu.image_view(
-                        *image,
-                        range.base_mip,
-                        range.mip_count,
-                        range.base_layer,
-                        range.layer_count,
-                        None,
-                    )?;
-                    Info::Image(vk::DescriptorImageInfo {
-                        sampler: gpu.raw_sampler(*sampler)?,
-                        image_view: view,
-                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    })
-                }
-                Bind::StorageImage { image, range } => {
-                    let img = gpu.image(*image)?;
-                    if !img.desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
-                        return Err(err(
-                            &b.name,
-                            format!("image `{}` was not created with STORAGE usage", img.desc.name),
-                        ));
-                    }
-                    let view = gpu.image_view(
-                        *image,
-                        range.base_mip,
-                        range.mip_count,
-                        range.base_layer,
-                        range.layer_count,
-                        None,
-                    )?;
-                    Info::Image(vk::DescriptorImageInfo {
-                        sampler: vk::Sampler::null(),
-                        image_view: view,
-                        image_layout: vk::ImageLayout::GENERAL,
-                    })
-                }
-                Bind::UniformBuffer(id) | Bind::StorageBuffer(id) => {
-                    let buf = gpu.buffer(*id)?;
-                    let needed = if matches!(res, Bind::UniformBuffer(_)) {
-                        vk::BufferUsageFlags::UNIFORM_BUFFER
-                    } else {
-                        vk::BufferUsageFlags::STORAGE_BUFFER
-                    };
-                    if !buf.desc.usage.contains(needed) {
-                        return Err(err(
-                            &b.name,
-                            format!("buffer `{}` lacks {needed:?} usage", buf.desc.name),
-                        ));
-                    }
-                    Info::Buffer(vk::DescriptorBufferInfo {
-                        buffer: buf.raw,
-                        offset: 0,
-                        range: vk::WHOLE_SIZE,
-                    })
-                }
-                Bind::UniformData(bytes) | Bind::StorageData(bytes) => {
-                    let (buffer, offset) = self.upload(bytes)?;
-                    Info::Buffer(vk::DescriptorBufferInfo {
-                        buffer,
-                        offset,
-                        range: bytes.len().max(4) as u64,
-                    })
-                }
-            };
-            infos.push((b, info));
+            let res = resource_for(p, b, resources)?;
+            infos.push((b, self.descriptor_info(&p.name, b, res)?));
         }
-        let sets = if p.set_layouts.is_empty() {
-            Vec::new()
-        } else {
-            let pool = self.descriptor_pool_for(
-                p.set_layouts.len() as u32,
-                infos.iter().map(|(b, _)| gpu.driver_descriptor_type(b.ty)),
-            )?;
-            unsafe {
-                gpu.device.allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(pool)
-                        .set_layouts(&p.set_layouts),
-                )
+        let sets = self.allocate_sets(p, &infos)?;
+        self.write_and_bind_sets(p, &sets, &infos);
+        Ok(())
+    }
+
+    /// What binding `b` of pipeline `pipeline` points at: a view of an image, a whole buffer, or
+    /// the bytes of `res` copied into this frame's upload buffer.
+    fn descriptor_info(&mut self, pipeline: &str, b: &ReflectedBinding, res: &Bind<'_>) -> BackendResult<Info> {
+        let gpu = self.gpu;
+        Ok(match res {
+            Bind::Sampled { image, range, sampler } => Info::Image(self.image_info(
+                pipeline,
+                b,
+                (*image, range),
+                ("SAMPLED", vk::ImageUsageFlags::SAMPLED),
+                Some(*sampler),
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            )?),
+            Bind::StorageImage { image, range } => Info::Image(self.image_info(
+                pipeline,
+                b,
+                (*image, range),
+                ("STORAGE", vk::ImageUsageFlags::STORAGE),
+                None,
+                vk::ImageLayout::GENERAL,
+            )?),
+            Bind::UniformBuffer(id) | Bind::StorageBuffer(id) => {
+                let buf = gpu.buffer(*id)?;
+                let needed = if matches!(res, Bind::UniformBuffer(_)) {
+                    vk::BufferUsageFlags::UNIFORM_BUFFER
+                } else {
+                    vk::BufferUsageFlags::STORAGE_BUFFER
+                };
+                if !buf.desc.usage.contains(needed) {
+                    return Err(binding_error(
+                        pipeline,
+                        &b.name,
+                        format!("buffer `{}` lacks {needed:?} usage", buf.desc.name),
+                    ));
+                }
+                Info::Buffer(vk::DescriptorBufferInfo {
+                    buffer: buf.raw,
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                })
             }
-            .map_err(|e| BackendError::Vulkan {
-                call: "vkAllocateDescriptorSets",
-                result: e,
-            })?
+            Bind::UniformData(bytes) | Bind::StorageData(bytes) => {
+                let (buffer, offset) = self.upload(bytes)?;
+                Info::Buffer(vk::DescriptorBufferInfo {
+                    buffer,
+                    offset,
+                    range: bytes.len().max(4) as u64,
+                })
+            }
+        })
+    }
+
+    /// An image descriptor for binding `b`: the image must have been created with `usage` (named
+    /// for the error), and is seen through a view of `range` in `layout`.
+    fn image_info(
+        &self,
+        pipeline: &str,
+        b: &ReflectedBinding,
+        (image, range): (ImageId, &SubresourceRange),
+        (usage_name, usage): (&str, vk::ImageUsageFlags),
+        sampler: Option<SamplerId>,
+        layout: vk::ImageLayout,
+    ) -> BackendResult<vk::DescriptorImageInfo> {
+        let gpu = self.gpu;
+        let img = gpu.image(image)?;
+        if !img.desc.usage.contains(usage) {
+            return Err(binding_error(
+                pipeline,
+                &b.name,
+                format!("image `{}` was not created with {usage_name} usage", img.desc.name),
+            ));
+        }
+        let view = gpu.image_view(
+            image,
+            range.base_mip,
+            range.mip_count,
+            range.base_layer,
+            range.layer_count,
+            None,
+        )?;
+        let sampler = match sampler {
+            Some(id) => gpu.raw_sampler(id)?,
+            None => vk::Sampler::null(),
         };
+        Ok(vk::DescriptorImageInfo {
+            sampler,
+            image_view: view,
+            image_layout: layout,
+        })
+    }
+
+    /// The descriptor sets of pipeline `p`, allocated from this frame's pools (none when the
+    /// pipeline has no set layouts).
+    fn allocate_sets(
+        &mut self,
+        p: &PipelineObject,
+        infos: &[(&ReflectedBinding, Info)],
+    ) -> BackendResult<Vec<vk::DescriptorSet>> {
+        if p.set_layouts.is_empty() {
+            return Ok(Vec::new());
+        }
+        let gpu = self.gpu;
+        let pool = self.descriptor_pool_for(
+            p.set_layouts.len() as u32,
+            infos.iter().map(|(b, _)| gpu.driver_descriptor_type(b.ty)),
+        )?;
+        unsafe {
+            gpu.device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(pool)
+                    .set_layouts(&p.set_layouts),
+            )
+        }
+        .map_err(|e| BackendError::Vulkan {
+            call: "vkAllocateDescriptorSets",
+            result: e,
+        })
+    }
+
+    /// Writes `infos` into `sets` and binds the sets for pipeline `p`'s following commands.
+    fn write_and_bind_sets(&self, p: &PipelineObject, sets: &[vk::DescriptorSet], infos: &[(&ReflectedBinding, Info)]) {
+        let gpu = self.gpu;
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .map(|(b, info)| {
@@ -214,10 +277,9 @@ impl Recorder<'_> {
             gpu.device.update_descriptor_sets(&writes, &[]);
             if !sets.is_empty() {
                 gpu.device
-                    .cmd_bind_descriptor_sets(self.cb, p.bind_point, p.layout, 0, &sets, &[]);
+                    .cmd_bind_descriptor_sets(self.cb, p.bind_point, p.layout, 0, sets, &[]);
             }
         }
-        Ok(())
     }
 
     /// The pool to allocate `sets` sets holding `types` from: the one being filled if it has

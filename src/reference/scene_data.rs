@@ -125,74 +125,105 @@ fn load_texture(path: &std::path::Path, srgb: bool) -> std::result::Result<Trace
     })
 }
 
-impl TracedScene {
-    /// Gathers every object's triangles in world space. Features the tracer does not model are
-    /// errors naming the scene and the field, never silently different results.
-    pub fn build(scene: &Scene) -> Result<TracedScene> {
-        TracedScene::build_at(scene, 0.0)
-    }
+/// The scene's environment: a constant radiance, or a map (then the constant is zero).
+fn load_environment(scene: &Scene) -> Result<(Vec3, Option<EnvironmentMap>)> {
+    let src = &scene.source;
+    Ok(match &scene.environment {
+        None => (Vec3::ZERO, None),
+        Some(Environment::Constant { radiance }) => (*radiance, None),
+        Some(Environment::Image { path, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load(path, *scale, src)?)),
+        Some(Environment::Cube { faces, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load_cube(faces, *scale, src)?)),
+    })
+}
 
-    /// The scene at `time_s` on the renderer's clock: each object's wind applied to its mesh,
-    /// the lights as [`Scene::lights_at`] has them.
-    pub fn build_at(scene: &Scene, time_s: f32) -> Result<TracedScene> {
-        let moved;
-        let scene = if scene.has_motion() || scene.light_board.is_some() {
-            moved = Scene {
-                lights: scene.lights_at(time_s),
-                light_board: None,
-                light_motion: None,
-                ..scene.clone()
+/// Every distinct (file, encoding) map the materials use, loaded once, and per material its
+/// albedo, normal and specular maps' slots (index + 1; 0: none).
+fn load_material_maps(scene: &Scene) -> Result<(Vec<TracedTexture>, Vec<[u32; 4]>)> {
+    let src = &scene.source;
+    let mut textures = Vec::new();
+    let mut loaded: Vec<(std::path::PathBuf, bool)> = Vec::new();
+    let mut material_maps = Vec::with_capacity(scene.materials.len());
+    for m in &scene.materials {
+        let mut slots = [0u32; 4];
+        for (k, (field, map, srgb)) in [
+            ("albedo_map", &m.albedo_map, true),
+            ("normal_map", &m.normal_map, false),
+            ("specular_map", &m.specular_map, false),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let Some(path) = map else { continue };
+            let key = (path.clone(), srgb);
+            let index = match loaded.iter().position(|l| *l == key) {
+                Some(i) => i,
+                None => {
+                    textures.push(load_texture(path, srgb).map_err(|e| {
+                        Error::Usage(format!(
+                            "{src}: material \"{}\": {field}: cannot load {}: {e}",
+                            m.name,
+                            path.display()
+                        ))
+                    })?);
+                    loaded.push(key);
+                    textures.len() - 1
+                }
             };
-            &moved
-        } else {
-            scene
-        };
-        let src = &scene.source;
-        let (environment, environment_map) = match &scene.environment {
-            None => (Vec3::ZERO, None),
-            Some(Environment::Constant { radiance }) => (*radiance, None),
-            Some(Environment::Image { path, scale }) => (Vec3::ZERO, Some(EnvironmentMap::load(path, *scale, src)?)),
-            Some(Environment::Cube { faces, scale }) => {
-                (Vec3::ZERO, Some(EnvironmentMap::load_cube(faces, *scale, src)?))
-            }
-        };
-        let mut textures = Vec::new();
-        let mut loaded: Vec<(std::path::PathBuf, bool)> = Vec::new();
-        let mut material_maps = Vec::with_capacity(scene.materials.len());
-        for m in &scene.materials {
-            let mut slots = [0u32; 4];
-            for (k, (field, map, srgb)) in [
-                ("albedo_map", &m.albedo_map, true),
-                ("normal_map", &m.normal_map, false),
-                ("specular_map", &m.specular_map, false),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                let Some(path) = map else { continue };
-                let key = (path.clone(), srgb);
-                let index = match loaded.iter().position(|l| *l == key) {
-                    Some(i) => i,
-                    None => {
-                        textures.push(load_texture(path, srgb).map_err(|e| {
-                            Error::Usage(format!(
-                                "{src}: material \"{}\": {field}: cannot load {}: {e}",
-                                m.name,
-                                path.display()
-                            ))
-                        })?);
-                        loaded.push(key);
-                        textures.len() - 1
-                    }
-                };
-                slots[k] = index as u32 + 1;
-            }
-            material_maps.push(slots);
+            slots[k] = index as u32 + 1;
         }
-        let mut corners = Vec::new();
-        let mut normals = Vec::new();
-        let mut frames = Vec::new();
-        let mut material_of = Vec::new();
+        material_maps.push(slots);
+    }
+    Ok((textures, material_maps))
+}
+
+/// A sphere or quad light as the tracer reads it; `None` for punctual lights (listed first by
+/// `punctual_lights`).
+fn area_light(l: &Light) -> Option<GpuLight> {
+    match l {
+        Light::Sphere {
+            center,
+            radius,
+            radiance,
+            ..
+        } => Some(GpuLight {
+            position: center.extend(LIGHT_SPHERE).into(),
+            direction: [*radius, 0.0, 0.0, 0.0],
+            intensity: radiance.extend(0.0).into(),
+            cone: [0.0; 4],
+        }),
+        Light::Quad {
+            corner,
+            edge_u,
+            edge_v,
+            radiance,
+            ..
+        } => Some(GpuLight {
+            position: corner.extend(LIGHT_QUAD).into(),
+            direction: edge_u.extend(0.0).into(),
+            intensity: radiance.extend(0.0).into(),
+            cone: edge_v.extend(0.0).into(),
+        }),
+        Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => None,
+    }
+}
+
+/// Every object's triangles with positive area in world space, in scene order, with their
+/// vertex normals, tangent frames and uvs, and materials.
+struct Gathered {
+    corners: Vec<[Vec3; 3]>,
+    normals: Vec<[Vec3; 3]>,
+    frames: Vec<[(Vec4, Vec2); 3]>,
+    material_of: Vec<u32>,
+}
+
+impl Gathered {
+    fn from_objects(scene: &Scene, time_s: f32) -> Result<Gathered> {
+        let mut out = Gathered {
+            corners: Vec::new(),
+            normals: Vec::new(),
+            frames: Vec::new(),
+            material_of: Vec::new(),
+        };
         for obj in &scene.objects {
             let mut mesh = scene.wind_mesh(obj, obj.load_mesh(std::path::Path::new("."))?, time_s)?;
             // What the raster vertex buffer substitutes for missing attributes (`push_vertices`
@@ -223,19 +254,23 @@ impl TracedScene {
                         mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO),
                     )
                 };
-                corners.push(p);
-                normals.push([n(a), n(b), n(c)]);
-                frames.push([tangent_uv(a), tangent_uv(b), tangent_uv(c)]);
-                material_of.push(obj.material as u32);
+                out.corners.push(p);
+                out.normals.push([n(a), n(b), n(c)]);
+                out.frames.push([tangent_uv(a), tangent_uv(b), tangent_uv(c)]);
+                out.material_of.push(obj.material as u32);
             }
         }
-        let bvh = Bvh::build(&corners);
-        let mut triangles = Vec::with_capacity(corners.len());
-        let mut shading = Vec::with_capacity(corners.len());
+        Ok(out)
+    }
+
+    /// The triangles' GPU records in the BVH's leaf order: positions and edges, and shading.
+    fn in_bvh_order(&self, bvh: &Bvh) -> (Vec<TracedTriangle>, Vec<TriangleShading>) {
+        let mut triangles = Vec::with_capacity(self.corners.len());
+        let mut shading = Vec::with_capacity(self.corners.len());
         for &t in &bvh.order {
-            let [p0, p1, p2] = corners[t as usize];
-            let [n0, n1, n2] = normals[t as usize];
-            let [(t0, uv0), (t1, uv1), (t2, uv2)] = frames[t as usize];
+            let [p0, p1, p2] = self.corners[t as usize];
+            let [n0, n1, n2] = self.normals[t as usize];
+            let [(t0, uv0), (t1, uv1), (t2, uv2)] = self.frames[t as usize];
             triangles.push(TracedTriangle {
                 p0: p0.extend(0.0).into(),
                 e1: (p1 - p0).extend(0.0).into(),
@@ -243,7 +278,7 @@ impl TracedScene {
             });
             shading.push(TriangleShading {
                 n0: n0.into(),
-                material: material_of[t as usize],
+                material: self.material_of[t as usize],
                 n1: n1.into(),
                 _pad0: 0,
                 n2: n2.into(),
@@ -257,6 +292,37 @@ impl TracedScene {
                 _pad2: [0.0; 2],
             });
         }
+        (triangles, shading)
+    }
+}
+
+impl TracedScene {
+    /// Gathers every object's triangles in world space. Features the tracer does not model are
+    /// errors naming the scene and the field, never silently different results.
+    pub fn build(scene: &Scene) -> Result<TracedScene> {
+        TracedScene::build_at(scene, 0.0)
+    }
+
+    /// The scene at `time_s` on the renderer's clock: each object's wind applied to its mesh,
+    /// the lights as [`Scene::lights_at`] has them.
+    pub fn build_at(scene: &Scene, time_s: f32) -> Result<TracedScene> {
+        let moved;
+        let scene = if scene.has_motion() || scene.light_board.is_some() {
+            moved = Scene {
+                lights: scene.lights_at(time_s),
+                light_board: None,
+                light_motion: None,
+                ..scene.clone()
+            };
+            &moved
+        } else {
+            scene
+        };
+        let (environment, environment_map) = load_environment(scene)?;
+        let (textures, material_maps) = load_material_maps(scene)?;
+        let gathered = Gathered::from_objects(scene, time_s)?;
+        let bvh = Bvh::build(&gathered.corners);
+        let (triangles, shading) = gathered.in_bvh_order(&bvh);
         let materials = scene
             .materials
             .iter()
@@ -271,36 +337,9 @@ impl TracedScene {
             .collect();
         let mut lights = punctual_lights(scene);
         let punctual_lights = lights.len() as u32;
-        for l in &scene.lights {
-            match l {
-                Light::Sphere {
-                    center,
-                    radius,
-                    radiance,
-                    ..
-                } => lights.push(GpuLight {
-                    position: center.extend(LIGHT_SPHERE).into(),
-                    direction: [*radius, 0.0, 0.0, 0.0],
-                    intensity: radiance.extend(0.0).into(),
-                    cone: [0.0; 4],
-                }),
-                Light::Quad {
-                    corner,
-                    edge_u,
-                    edge_v,
-                    radiance,
-                    ..
-                } => lights.push(GpuLight {
-                    position: corner.extend(LIGHT_QUAD).into(),
-                    direction: edge_u.extend(0.0).into(),
-                    intensity: radiance.extend(0.0).into(),
-                    cone: edge_v.extend(0.0).into(),
-                }),
-                Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => {}
-            }
-        }
+        lights.extend(scene.lights.iter().filter_map(area_light));
         Ok(TracedScene {
-            corners,
+            corners: gathered.corners,
             bvh,
             triangles,
             shading,

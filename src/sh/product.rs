@@ -34,27 +34,53 @@ pub struct TripleProductTensor {
 
 static SHARED: [OnceLock<TripleProductTensor>; MAX_BANDS + 1] = [const { OnceLock::new() }; MAX_BANDS + 1];
 
-impl TripleProductTensor {
-    /// Computes Γ for `bands` bands (1..=16). 4 bands: ~1 ms; 16 bands: well under a second.
-    pub fn new(bands: usize) -> ShResult<Self> {
-        check_bands(bands)?;
-        let n = bands * bands;
-        let lm: Vec<(usize, i32)> = (0..n).map(band_of).collect();
-        let tri = |l: usize, m: i32| l * (l + 1) / 2 + m.unsigned_abs() as usize;
+/// The z factor: P̄_l^|m|(z_q) (with sin^|m| θ) at the Gauss–Legendre nodes, and the weights.
+struct ThetaFactors {
+    weights: Vec<f64>,
+    /// Per node q and (l, |m|) in triangular order t: `values[q · per_node + t]`.
+    values: Vec<f64>,
+    per_node: usize,
+}
 
-        // z factor: P̄_l^|m|(z_q) (with sin^|m| θ) at the Gauss–Legendre nodes.
+impl ThetaFactors {
+    fn new(bands: usize) -> ShResult<Self> {
         let nz = 3 * bands / 2 + 1;
-        let (zs, zw) = gauss_legendre(nz)?;
-        let ntri = bands * (bands + 1) / 2;
-        let mut theta = vec![0.0; nz * ntri];
+        let (zs, weights) = gauss_legendre(nz)?;
+        let per_node = bands * (bands + 1) / 2;
+        let mut values = vec![0.0; nz * per_node];
         for (q, z) in zs.iter().enumerate() {
             let s = (1.0 - z * z).max(0.0).sqrt();
             legendre_normalized(*z, bands, |l, m, p| {
-                theta[q * ntri + l * (l + 1) / 2 + m] = p * s.powi(m as i32)
+                values[q * per_node + l * (l + 1) / 2 + m] = p * s.powi(m as i32)
             });
         }
+        Ok(ThetaFactors {
+            weights,
+            values,
+            per_node,
+        })
+    }
 
-        // φ factor: ∫ Φ_a Φ_b Φ_c dφ for a, b, c in −(B−1)..=B−1.
+    /// ∫ P̄ P̄ P̄ dz of the three triangular indices.
+    fn integral(&self, ti: usize, tj: usize, tk: usize) -> f64 {
+        let (w, v, n) = (&self.weights, &self.values, self.per_node);
+        (0..w.len())
+            .map(|q| w[q] * v[q * n + ti] * v[q * n + tj] * v[q * n + tk])
+            .sum()
+    }
+}
+
+/// The φ factor: ∫ Φ_a Φ_b Φ_c dφ for a, b, c in −(B−1)..=B−1.
+struct PhiIntegrals {
+    /// Orders per axis, 2B − 1.
+    orders: usize,
+    /// B − 1: the index of order m is m + offset.
+    offset: i32,
+    values: Vec<f64>,
+}
+
+impl PhiIntegrals {
+    fn new(bands: usize) -> Self {
         let mr = 2 * bands - 1;
         let off = bands as i32 - 1;
         let nphi = 3 * bands;
@@ -70,7 +96,7 @@ impl TripleProductTensor {
                     .collect()
             })
             .collect();
-        let mut phi_int = vec![0.0; mr * mr * mr];
+        let mut values = vec![0.0; mr * mr * mr];
         for a in 0..mr {
             for b in a..mr {
                 for c in b..mr {
@@ -81,63 +107,91 @@ impl TripleProductTensor {
                         / nphi as f64;
                     let s = if s.abs() < 1e-12 { 0.0 } else { s };
                     for (x, y, z) in [(a, b, c), (a, c, b), (b, a, c), (b, c, a), (c, a, b), (c, b, a)] {
-                        phi_int[(x * mr + y) * mr + z] = s;
+                        values[(x * mr + y) * mr + z] = s;
                     }
                 }
             }
         }
+        PhiIntegrals {
+            orders: mr,
+            offset: off,
+            values,
+        }
+    }
 
-        let mut unique = Vec::new();
-        for i in 0..n {
-            let (li, mi) = lm[i];
-            for j in i..n {
-                let (lj, mj) = lm[j];
-                // l_k ≥ l_j ≥ l_i, so only l_k ≤ l_i + l_j constrains k.
-                let k_end = ((li + lj + 1) * (li + lj + 1)).min(n);
-                for (k, &(lk, mk)) in lm.iter().enumerate().take(k_end).skip(j) {
-                    if (li + lj + lk) % 2 == 1 {
-                        continue;
-                    }
-                    let f = phi_int[(((mi + off) as usize) * mr + (mj + off) as usize) * mr + (mk + off) as usize];
-                    if f == 0.0 {
-                        continue;
-                    }
-                    let (ti, tj, tk) = (tri(li, mi), tri(lj, mj), tri(lk, mk));
-                    let zi: f64 = (0..nz)
-                        .map(|q| zw[q] * theta[q * ntri + ti] * theta[q * ntri + tj] * theta[q * ntri + tk])
-                        .sum();
-                    let v = f * zi;
-                    if v.abs() > KEEP_ABOVE {
-                        unique.push(([i as u16, j as u16, k as u16], v));
-                    }
-                }
-            }
-        }
+    fn get(&self, mi: i32, mj: i32, mk: i32) -> f64 {
+        let (mr, off) = (self.orders, self.offset);
+        self.values[(((mi + off) as usize) * mr + (mj + off) as usize) * mr + (mk + off) as usize]
+    }
+}
 
-        // Expand every distinct permutation into per-output rows.
-        let mut rows: Vec<Vec<(u16, u16, f64)>> = vec![Vec::new(); n];
-        for &([i, j, k], v) in &unique {
-            let mut perms = [[i, j, k], [i, k, j], [j, i, k], [j, k, i], [k, i, j], [k, j, i]];
-            perms.sort_unstable();
-            let mut last = None;
-            for p in perms {
-                if last != Some(p) {
-                    rows[p[2] as usize].push((p[0], p[1], v));
-                    last = Some(p);
+/// The kept entries Γ_ijk with i ≤ j ≤ k, sorted.
+fn unique_entries(bands: usize, theta: &ThetaFactors, phi: &PhiIntegrals) -> Vec<([u16; 3], f64)> {
+    let n = bands * bands;
+    let lm: Vec<(usize, i32)> = (0..n).map(band_of).collect();
+    let tri = |l: usize, m: i32| l * (l + 1) / 2 + m.unsigned_abs() as usize;
+    let mut unique = Vec::new();
+    for i in 0..n {
+        let (li, mi) = lm[i];
+        for j in i..n {
+            let (lj, mj) = lm[j];
+            // l_k ≥ l_j ≥ l_i, so only l_k ≤ l_i + l_j constrains k.
+            let k_end = ((li + lj + 1) * (li + lj + 1)).min(n);
+            for (k, &(lk, mk)) in lm.iter().enumerate().take(k_end).skip(j) {
+                if (li + lj + lk) % 2 == 1 {
+                    continue;
+                }
+                let f = phi.get(mi, mj, mk);
+                if f == 0.0 {
+                    continue;
+                }
+                let v = f * theta.integral(tri(li, mi), tri(lj, mj), tri(lk, mk));
+                if v.abs() > KEEP_ABOVE {
+                    unique.push(([i as u16, j as u16, k as u16], v));
                 }
             }
         }
-        let mut row_start = Vec::with_capacity(n + 1);
-        let mut pairs = Vec::new();
-        let mut values = Vec::new();
-        for row in rows {
-            row_start.push(pairs.len());
-            for (i, j, v) in row {
-                pairs.push((i, j));
-                values.push(v);
+    }
+    unique
+}
+
+/// Every distinct permutation of the unique entries expanded into per-output rows of `n`
+/// outputs: (row starts, (i, j) pairs, values).
+fn output_rows(n: usize, unique: &[([u16; 3], f64)]) -> (Vec<usize>, Vec<(u16, u16)>, Vec<f64>) {
+    let mut rows: Vec<Vec<(u16, u16, f64)>> = vec![Vec::new(); n];
+    for &([i, j, k], v) in unique {
+        let mut perms = [[i, j, k], [i, k, j], [j, i, k], [j, k, i], [k, i, j], [k, j, i]];
+        perms.sort_unstable();
+        let mut last = None;
+        for p in perms {
+            if last != Some(p) {
+                rows[p[2] as usize].push((p[0], p[1], v));
+                last = Some(p);
             }
         }
+    }
+    let mut row_start = Vec::with_capacity(n + 1);
+    let mut pairs = Vec::new();
+    let mut values = Vec::new();
+    for row in rows {
         row_start.push(pairs.len());
+        for (i, j, v) in row {
+            pairs.push((i, j));
+            values.push(v);
+        }
+    }
+    row_start.push(pairs.len());
+    (row_start, pairs, values)
+}
+
+impl TripleProductTensor {
+    /// Computes Γ for `bands` bands (1..=16). 4 bands: ~1 ms; 16 bands: well under a second.
+    pub fn new(bands: usize) -> ShResult<Self> {
+        check_bands(bands)?;
+        let theta = ThetaFactors::new(bands)?;
+        let phi = PhiIntegrals::new(bands);
+        let unique = unique_entries(bands, &theta, &phi);
+        let (row_start, pairs, values) = output_rows(bands * bands, &unique);
         Ok(Self {
             bands,
             unique,

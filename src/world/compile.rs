@@ -103,6 +103,83 @@ fn run_pass(faces: &[BrushFace], start: DVec3, heuristic: SplitHeuristic) -> Res
     })
 }
 
+/// The CSG faces the first pass's flood fill touches (it bounds some reached leaf).
+fn reached_faces(csg: &[BrushFace], first: &Pass) -> Vec<BrushFace> {
+    let mut keep = vec![false; csg.len()];
+    for (i, (frag, _)) in first.tree.fragments.iter().enumerate() {
+        keep[frag.source] |= !first.fragment_leaves[i].is_empty();
+    }
+    csg.iter()
+        .zip(&keep)
+        .filter(|(_, &k)| k)
+        .map(|(f, _)| f.clone())
+        .collect()
+}
+
+/// The world's faces: the tree fragments that bound a reached leaf, with their source face's
+/// material and brush; and per fragment its face id (`None`: dropped).
+fn faces_of_fragments(
+    tree: &Tree,
+    fragment_leaves: Vec<Vec<LeafId>>,
+    sources: &[BrushFace],
+) -> (Vec<Face>, Vec<Option<FaceId>>) {
+    let mut faces = Vec::new();
+    let mut face_id_of_fragment: Vec<Option<FaceId>> = vec![None; tree.fragments.len()];
+    for (i, ((frag, node), leaves)) in tree.fragments.iter().zip(fragment_leaves).enumerate() {
+        if leaves.is_empty() {
+            continue;
+        }
+        let source = &sources[frag.source];
+        face_id_of_fragment[i] = Some(faces.len() as FaceId);
+        faces.push(Face {
+            bounds: frag.polygon.bounds(),
+            polygon: frag.polygon.clone(),
+            material: source.material,
+            brush: source.brush,
+            node: *node,
+            leaves,
+        });
+    }
+    (faces, face_id_of_fragment)
+}
+
+/// Rewrites the tree to refer to `faces` instead of its fragments (which it drops), marks the
+/// leaves the flood fill did not reach solid, and links the leaves to their faces and to the
+/// portals between reached leaves, which it returns.
+fn link_tree(
+    tree: &mut Tree,
+    faces: &[Face],
+    face_id_of_fragment: &[Option<FaceId>],
+    reached: &[bool],
+    portals: Vec<Portal>,
+) -> Vec<Portal> {
+    tree.fragments.clear();
+    for node in &mut tree.nodes {
+        node.faces = node
+            .faces
+            .iter()
+            .filter_map(|&f| face_id_of_fragment[f as usize])
+            .collect();
+    }
+    for (leaf, &r) in tree.leaves.iter_mut().zip(reached) {
+        leaf.solid = !r;
+    }
+    for (id, face) in faces.iter().enumerate() {
+        for &l in &face.leaves {
+            tree.leaves[l as usize].faces.push(id as FaceId);
+        }
+    }
+    let portals: Vec<Portal> = portals
+        .into_iter()
+        .filter(|p| reached[p.front as usize] && reached[p.back as usize])
+        .collect();
+    for (id, p) in portals.iter().enumerate() {
+        tree.leaves[p.front as usize].portals.push(id as u32);
+        tree.leaves[p.back as usize].portals.push(id as u32);
+    }
+    portals
+}
+
 impl World {
     /// Compiles with the default options (balanced BSP, PVS).
     pub fn compile(&self) -> Result<CompiledWorld, CompileError> {
@@ -124,16 +201,7 @@ impl World {
 
         // Pass 1: find what the flood fill reaches, and keep the CSG faces it touches.
         let first = run_pass(&csg, self.start, options.heuristic)?;
-        let mut keep = vec![false; csg.len()];
-        for (i, (frag, _)) in first.tree.fragments.iter().enumerate() {
-            keep[frag.source] |= !first.fragment_leaves[i].is_empty();
-        }
-        let kept: Vec<BrushFace> = csg
-            .iter()
-            .zip(&keep)
-            .filter(|(_, &k)| k)
-            .map(|(f, _)| f.clone())
-            .collect();
+        let kept = reached_faces(&csg, &first);
         let unreachable_faces_dropped = csg.len() - kept.len();
         if kept.is_empty() {
             return Err(CompileError::NoFaces);
@@ -148,48 +216,9 @@ impl World {
             fragment_leaves,
             bounds,
         } = second;
-        let mut faces = Vec::new();
-        let mut face_id_of_fragment: Vec<Option<FaceId>> = vec![None; tree.fragments.len()];
-        for (i, ((frag, node), leaves)) in tree.fragments.iter().zip(fragment_leaves).enumerate() {
-            if leaves.is_empty() {
-                continue;
-            }
-            let source = &kept[frag.source];
-            face_id_of_fragment[i] = Some(faces.len() as FaceId);
-            faces.push(Face {
-                bounds: frag.polygon.bounds(),
-                polygon: frag.polygon.clone(),
-                material: source.material,
-                brush: source.brush,
-                node: *node,
-                leaves,
-            });
-        }
+        let (faces, face_id_of_fragment) = faces_of_fragments(&tree, fragment_leaves, &kept);
         let second_pass_faces_dropped = tree.fragments.len() - faces.len();
-        tree.fragments.clear();
-        for node in &mut tree.nodes {
-            node.faces = node
-                .faces
-                .iter()
-                .filter_map(|&f| face_id_of_fragment[f as usize])
-                .collect();
-        }
-        for (leaf, &r) in tree.leaves.iter_mut().zip(&reached) {
-            leaf.solid = !r;
-        }
-        for (id, face) in faces.iter().enumerate() {
-            for &l in &face.leaves {
-                tree.leaves[l as usize].faces.push(id as FaceId);
-            }
-        }
-        let portals: Vec<Portal> = portals
-            .into_iter()
-            .filter(|p| reached[p.front as usize] && reached[p.back as usize])
-            .collect();
-        for (id, p) in portals.iter().enumerate() {
-            tree.leaves[p.front as usize].portals.push(id as u32);
-            tree.leaves[p.back as usize].portals.push(id as u32);
-        }
+        let portals = link_tree(&mut tree, &faces, &face_id_of_fragment, &reached, portals);
         let compile_time = t0.elapsed();
 
         let t1 = Instant::now();

@@ -201,12 +201,26 @@ impl Default for RoomsParams {
 /// pillars kept clear of the doors and of the room centre. The start point is the centre of
 /// room 0 at eye height. Deterministic in `seed`.
 pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
+    // One generator through every step, in this order: the same seed gives the same world.
     let mut rng = Rng::new(seed);
     let (cols, rows) = (params.columns.max(1), params.rows.max(1));
-    let cell = |i: usize| (i % cols, i / cols);
-    let rooms: Vec<Aabb> = (0..cols * rows)
+    let rooms = place_rooms(&mut rng, params, cols, rows);
+    let corridors = link_rooms(&mut rng, cols, rows, params.extra_corridor_chance);
+    let mut builder = LevelBuilder::new(params.wall_thickness);
+    let openings = build_corridors(&mut builder, &mut rng, &rooms, &corridors, params);
+    for (room, openings) in rooms.iter().zip(&openings) {
+        builder.hollow_box(*room, openings, [false; 6], materials::WALL);
+        place_pillars(&mut builder, &mut rng, room, openings, params.pillars);
+    }
+    builder.into_world(rooms[0].center() + DVec3::Z * 1.0)
+}
+
+/// One room per grid cell, row by row: a box of random half-size and height around the cell's
+/// centre, standing on z = 0.
+fn place_rooms(rng: &mut Rng, params: &RoomsParams, cols: usize, rows: usize) -> Vec<Aabb> {
+    (0..cols * rows)
         .map(|i| {
-            let (cx, cy) = cell(i);
+            let (cx, cy) = (i % cols, i / cols);
             let center = DVec3::new(
                 (cx as f64 + 0.5) * params.cell_size,
                 (cy as f64 + 0.5) * params.cell_size,
@@ -223,12 +237,15 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
                 max: center + half + DVec3::Z * height,
             }
         })
-        .collect();
+        .collect()
+}
 
-    // Grid links: a randomised spanning tree (union–find over shuffled edges), plus extras.
+/// The corridors between grid neighbours (a, b), b the +x or +y neighbour: a randomised
+/// spanning tree (union–find over shuffled edges), plus each other link at `extra_chance`.
+fn link_rooms(rng: &mut Rng, cols: usize, rows: usize, extra_chance: f64) -> Vec<(usize, usize)> {
     let mut links: Vec<(usize, usize)> = Vec::new();
     for i in 0..cols * rows {
-        let (cx, cy) = cell(i);
+        let (cx, cy) = (i % cols, i / cols);
         if cx + 1 < cols {
             links.push((i, i + 1));
         }
@@ -253,15 +270,25 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
         if ra != rb {
             parent[ra] = rb;
             corridors.push((a, b));
-        } else if rng.unit() < params.extra_corridor_chance {
+        } else if rng.unit() < extra_chance {
             corridors.push((a, b));
         }
     }
+    corridors
+}
 
-    let mut builder = LevelBuilder::new(params.wall_thickness);
+/// Builds each corridor, a door-sized tube between its rooms' facing walls at a random offset,
+/// and returns per room the openings its walls need.
+fn build_corridors(
+    builder: &mut LevelBuilder,
+    rng: &mut Rng,
+    rooms: &[Aabb],
+    corridors: &[(usize, usize)],
+    params: &RoomsParams,
+) -> Vec<Vec<Opening>> {
     let mut openings: Vec<Vec<Opening>> = vec![Vec::new(); rooms.len()];
     let half_door = params.door_width * 0.5;
-    for &(a, b) in &corridors {
+    for &(a, b) in corridors {
         // b is the +x or +y neighbour of a.
         let axis = if b == a + 1 { 0 } else { 1 };
         let across = 1 - axis;
@@ -287,50 +314,57 @@ pub fn generate_rooms(seed: u64, params: &RoomsParams) -> World {
             rect: interior,
         });
     }
+    openings
+}
 
-    for (i, room) in rooms.iter().enumerate() {
-        builder.hollow_box(*room, &openings[i], [false; 6], materials::WALL);
-        // Keep-clear zones: the room centre (the start point) and 2 m in front of each door.
-        let mut clear: Vec<Aabb> = vec![Aabb {
-            min: room.center() - DVec3::splat(1.2),
-            max: room.center() + DVec3::splat(1.2),
-        }];
-        for o in &openings[i] {
-            let mut zone = o.rect.expanded(0.6);
-            let axis = o.face / 2;
-            if o.face % 2 == 0 {
-                zone.min[axis] = room.max[axis] - 2.0;
-            } else {
-                zone.max[axis] = room.min[axis] + 2.0;
-            }
-            clear.push(zone);
+/// Floor-to-ceiling pillars in `room`, between `pillars.0` and `pillars.1` of them, each at
+/// the first of 20 random spots clear of the room centre (the start point), of the 2 m in
+/// front of each door and of the pillars before it.
+fn place_pillars(
+    builder: &mut LevelBuilder,
+    rng: &mut Rng,
+    room: &Aabb,
+    openings: &[Opening],
+    pillars: (usize, usize),
+) {
+    let mut clear: Vec<Aabb> = vec![Aabb {
+        min: room.center() - DVec3::splat(1.2),
+        max: room.center() + DVec3::splat(1.2),
+    }];
+    for o in openings {
+        let mut zone = o.rect.expanded(0.6);
+        let axis = o.face / 2;
+        if o.face % 2 == 0 {
+            zone.min[axis] = room.max[axis] - 2.0;
+        } else {
+            zone.max[axis] = room.min[axis] + 2.0;
         }
-        let count = params.pillars.0 + rng.below(params.pillars.1.saturating_sub(params.pillars.0) + 1);
-        for _ in 0..count {
-            for _attempt in 0..20 {
-                let half = rng.range(0.2, 0.4);
-                let x = rng.range(room.min.x + 1.0 + half, room.max.x - 1.0 - half);
-                let y = rng.range(room.min.y + 1.0 + half, room.max.y - 1.0 - half);
-                let foot = Aabb {
-                    min: DVec3::new(x - half, y - half, room.min.z),
-                    max: DVec3::new(x + half, y + half, room.max.z),
-                };
-                let blocked = |z: &Aabb| {
-                    foot.expanded(0.3).overlaps(&Aabb {
-                        min: z.min.with_z(room.min.z),
-                        max: z.max.with_z(room.max.z),
-                    })
-                };
-                if clear.iter().any(blocked) {
-                    continue;
-                }
-                builder.solid_box(foot.min, foot.max, materials::PILLAR);
-                clear.push(foot.expanded(0.5));
-                break;
+        clear.push(zone);
+    }
+    let count = pillars.0 + rng.below(pillars.1.saturating_sub(pillars.0) + 1);
+    for _ in 0..count {
+        for _attempt in 0..20 {
+            let half = rng.range(0.2, 0.4);
+            let x = rng.range(room.min.x + 1.0 + half, room.max.x - 1.0 - half);
+            let y = rng.range(room.min.y + 1.0 + half, room.max.y - 1.0 - half);
+            let foot = Aabb {
+                min: DVec3::new(x - half, y - half, room.min.z),
+                max: DVec3::new(x + half, y + half, room.max.z),
+            };
+            let blocked = |z: &Aabb| {
+                foot.expanded(0.3).overlaps(&Aabb {
+                    min: z.min.with_z(room.min.z),
+                    max: z.max.with_z(room.max.z),
+                })
+            };
+            if clear.iter().any(blocked) {
+                continue;
             }
+            builder.solid_box(foot.min, foot.max, materials::PILLAR);
+            clear.push(foot.expanded(0.5));
+            break;
         }
     }
-    builder.into_world(rooms[0].center() + DVec3::Z * 1.0)
 }
 
 /// The seed's Fig. 8(c) situation, built so that this compiler's BSP produces it: a room with

@@ -162,21 +162,10 @@ pub fn run(
     let bsp_ms = ms(start);
 
     let start = Instant::now();
-    let mut segments = Segments::build(
-        tree.fragments.iter().map(|(f, _)| &f.polygon),
-        settings.max_segment_area,
-    )?;
-    segments.positions.iter_mut().for_each(|p| *p = tolerance.round(*p));
-    let fragment_vertices = owner_ranges(&segments.vertex_polygon, tree.fragments.len());
-    let front_vertices = segments.positions.len();
-    let planes: Vec<Plane> = tree.fragments.iter().map(|(f, _)| f.polygon.plane).collect();
-    let (back_row, fragment_back_vertices) = if settings.two_sided {
-        add_back_rows(&mut segments, &planes, &fragment_vertices, lights, &tolerance)
-    } else {
-        (vec![u32::MAX; front_vertices], vec![0..0; planes.len()])
-    };
+    let segmented = segment_fragments(&tree, lights, settings)?;
     let segment_ms = ms(start);
 
+    let segments = &segmented.segments;
     check_matrix(
         segments.positions.len(),
         lights.len(),
@@ -191,29 +180,95 @@ pub fn run(
         .collect();
 
     let start = Instant::now();
-    let threads = if settings.threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    } else {
-        settings.threads
-    }
-    .clamp(1, lights.len().max(1));
-    let done = AtomicUsize::new(0);
     let fragments: Vec<&Polygon> = tree.fragments.iter().map(|(f, _)| &f.polygon).collect();
     let shared = Shared {
         fragments: &fragments,
         tree: &tree,
-        segments: &segments,
-        fragment_vertices: &fragment_vertices,
-        fragment_back_vertices: &fragment_back_vertices,
+        segments,
+        fragment_vertices: &segmented.fragment_vertices,
+        fragment_back_vertices: &segmented.fragment_back_vertices,
         albedo: &albedo,
         model: settings.model,
         projection: settings.projection,
         tolerance,
     };
-    let per_thread: Vec<ThreadResult> = std::thread::scope(|s| {
+    let per_thread = shade_lights(&shared, lights, settings.threads, progress);
+    let lights_wall_ms = ms(start);
+    let phases = Phases {
+        bsp_ms,
+        segment_ms,
+        lights_wall_ms,
+        ..Phases::default()
+    };
+    let (colours, phases) = gather_columns(per_thread, segments.positions.len(), lights.len(), phases)?;
+    Ok(Setup {
+        tree,
+        segments: segmented.segments,
+        fragment_source,
+        fragment_vertices: segmented.fragment_vertices,
+        front_vertices: segmented.front_vertices,
+        back_row: segmented.back_row,
+        fragment_back_vertices: segmented.fragment_back_vertices,
+        lights: lights.len(),
+        colours,
+        phases,
+    })
+}
+
+/// The tree's fragments segmented, with the rows each fragment owns (see [`Setup`]).
+struct Segmented {
+    segments: Segments,
+    fragment_vertices: Vec<Range<u32>>,
+    front_vertices: usize,
+    back_row: Vec<u32>,
+    fragment_back_vertices: Vec<Range<u32>>,
+}
+
+/// Segments the tree's fragments (vertices on the tolerance's grid) and, when two-sided, adds
+/// the back rows of fragments with a light behind them.
+fn segment_fragments(tree: &Tree, lights: &[ManyLight], settings: &Settings) -> Result<Segmented, String> {
+    let tolerance = settings.tolerance;
+    let mut segments = Segments::build(
+        tree.fragments.iter().map(|(f, _)| &f.polygon),
+        settings.max_segment_area,
+    )?;
+    segments.positions.iter_mut().for_each(|p| *p = tolerance.round(*p));
+    let fragment_vertices = owner_ranges(&segments.vertex_polygon, tree.fragments.len());
+    let front_vertices = segments.positions.len();
+    let planes: Vec<Plane> = tree.fragments.iter().map(|(f, _)| f.polygon.plane).collect();
+    let (back_row, fragment_back_vertices) = if settings.two_sided {
+        add_back_rows(&mut segments, &planes, &fragment_vertices, lights, &tolerance)
+    } else {
+        (vec![u32::MAX; front_vertices], vec![0..0; planes.len()])
+    };
+    Ok(Segmented {
+        segments,
+        fragment_vertices,
+        front_vertices,
+        back_row,
+        fragment_back_vertices,
+    })
+}
+
+/// Colours and shadows every light's column on `threads` threads (0: every core), lights dealt
+/// round-robin, reporting progress while they run.
+fn shade_lights(
+    shared: &Shared<'_>,
+    lights: &[ManyLight],
+    threads: usize,
+    progress: &mut Progress,
+) -> Vec<ThreadResult> {
+    let threads = if threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        threads
+    }
+    .clamp(1, lights.len().max(1));
+    let done = AtomicUsize::new(0);
+    std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
-                let (shared, done) = (&shared, &done);
+                let done = &done;
                 s.spawn(move || {
                     let (mut out, mut colour_ms, mut shadow_ms) = (Vec::new(), 0.0, 0.0);
                     for (l, light) in lights.iter().enumerate().skip(t).step_by(threads) {
@@ -236,15 +291,18 @@ pub fn run(
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
         handles.into_iter().map(|h| h.join().unwrap_or_default()).collect()
-    });
-    let lights_wall_ms = ms(start);
-    let mut colours = vec![[0.0f32; 3]; segments.positions.len() * lights.len()];
-    let mut phases = Phases {
-        bsp_ms,
-        segment_ms,
-        lights_wall_ms,
-        ..Phases::default()
-    };
+    })
+}
+
+/// The threads' columns placed light-major into one matrix of `vertices` rows, and their CPU
+/// times added to `phases`; an error when a thread failed and left lights unshaded.
+fn gather_columns(
+    per_thread: Vec<ThreadResult>,
+    vertices: usize,
+    lights: usize,
+    mut phases: Phases,
+) -> Result<(Vec<[f32; 3]>, Phases), String> {
+    let mut colours = vec![[0.0f32; 3]; vertices * lights];
     let mut filled = 0;
     for (columns, colour_ms, shadow_ms) in per_thread {
         phases.colour_cpu_ms += colour_ms;
@@ -254,24 +312,10 @@ pub fn run(
             filled += 1;
         }
     }
-    if filled != lights.len() {
-        return Err(format!(
-            "a set-up thread failed ({filled} of {} lights shaded)",
-            lights.len()
-        ));
+    if filled != lights {
+        return Err(format!("a set-up thread failed ({filled} of {lights} lights shaded)"));
     }
-    Ok(Setup {
-        tree,
-        segments,
-        fragment_source,
-        fragment_vertices,
-        front_vertices,
-        back_row,
-        fragment_back_vertices,
-        lights: lights.len(),
-        colours,
-        phases,
-    })
+    Ok((colours, phases))
 }
 
 /// Appends a back-side row (same position, normal turned) for every vertex of each fragment

@@ -341,58 +341,17 @@ pub fn shoot(
     progress: &mut Progress,
     energy: &mut dyn Unshot,
 ) -> Report {
-    let blocks = blocks_of(&g, settings.block.max(1));
-    let area: Vec<f64> = g.patches.iter().map(|q| q.area).collect();
-    let power = |e: &dyn Unshot, b: &Block| b.members.iter().map(|&k| e.magnitude(k) * area[k]).sum::<f64>();
-    let initial: f64 = blocks.iter().map(|b| power(energy, b)).sum();
+    let solve = Solve::new(g, occluders, settings);
+    let initial: f64 = solve.blocks.iter().map(|b| solve.power(energy, b)).sum();
     let stop = settings.threshold * initial;
-    let mut report = Report::default();
-    // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and in
-    // corrected mode only a block square's overhang beyond its polygon could reach them);
-    // FULL pairs need no rays. The same matrix in both modes.
-    let matrix = Matrix::build_in(
-        &occluders.triangles,
-        g.charts,
-        settings.full_visibility,
-        occluders.pvs.as_ref(),
-    );
-    report.visibility = matrix.counts();
+    let mut report = Report {
+        visibility: solve.matrix.counts(),
+        ..Report::default()
+    };
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let by_chart: Vec<Vec<usize>> = (0..g.charts.len())
-        .map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect())
-        .collect();
-    let receivers: Vec<usize> = (0..g.patches.len()).filter(|&k| g.patches[k].inside()).collect();
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    // Receivers start a hair in front of their surface, so that their own plane never occludes.
-    let eps = 1e-4 * g.size;
     while report.shots < settings.max_shots {
-        let full = |e: &dyn Unshot| {
-            (0..blocks.len())
-                .map(|b| (b, power(e, &blocks[b])))
-                .fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a })
-        };
-        let (best, best_power) = match settings.mode {
-            Mode::Corrected => full(energy),
-            Mode::Faithful => {
-                let mut cand = (0, -1.0);
-                for list in by_chart.iter().filter(|l| !l.is_empty()) {
-                    for _ in 0..settings.samples_per_chart {
-                        let b = list[rng.below(list.len())];
-                        let w = power(energy, &blocks[b]);
-                        if w > cand.1 {
-                            cand = (b, w);
-                        }
-                    }
-                }
-                if cand.1 > stop {
-                    cand
-                } else {
-                    report.full_searches += 1;
-                    full(energy)
-                }
-            }
-        };
-        let unshot: f64 = blocks.iter().map(|b| power(energy, b)).sum();
+        let (best, best_power) = solve.pick_shooter(energy, stop, &mut rng, &mut report);
+        let unshot: f64 = solve.blocks.iter().map(|b| solve.power(energy, b)).sum();
         report.unshot_power.push(unshot);
         // CaLight stops when no shooter is above its threshold, which leaves up to (blocks ×
         // threshold) of the light unshot; the corrected solve stops on the total instead.
@@ -403,65 +362,8 @@ pub fn shoot(
         if done || best_power <= 0.0 {
             break;
         }
-        let b = &blocks[best];
-        let block_area: f64 = b.members.iter().map(|&k| area[k]).sum();
-        // The block shoots as one patch: its unshot power spread over its square.
-        let square = (b.corners[1] - b.corners[0]).length() * (b.corners[3] - b.corners[0]).length();
-        let centre = b.members.iter().map(|&k| g.patches[k].centre * area[k]).sum::<DVec3>() / block_area;
-        let normal = b.normal;
-        // Every receiver's share is independent of the others': the shot is split over the
-        // machine's cores (each thread casts its receivers' rays), then applied in order, so the
-        // result does not depend on the thread count.
-        let found = {
-            let (patches, matrix, e) = (g.patches, &matrix, &*energy);
-            let reflects: Vec<bool> = receivers.iter().map(|&r| e.reflects(r)).collect();
-            let shooter = |(i, &r): (usize, &usize)| -> Option<(usize, f64, bool, bool)> {
-                let rp = patches[r];
-                let plane = g.charts[rp.chart].normal;
-                let vis = matrix.get(b.chart, rp.chart);
-                if vis == Vis::None {
-                    return None;
-                }
-                // Shooters emit toward their normal only: a receiver behind the shooter's plane
-                // gets nothing (the exact form factor looks from the receiver and cannot see it).
-                if rp.chart == b.chart || normal.dot(rp.centre - b.corners[0]) <= 0.0 {
-                    return None;
-                }
-                let f = match settings.mode {
-                    // F from the receiver to the square times the square's mean unshot radiosity.
-                    Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / square,
-                    // CaLight: the block as one patch of its area at its centre.
-                    Mode::Faithful => {
-                        form_factor::point_sampled(rp.centre, rp.normal, centre, normal, block_area, g.size)
-                            / block_area
-                    }
-                };
-                // With normal-mapped patches, both ends must also face each other's planes (the
-                // seed's four cosines); for plain patches these equal the tests above.
-                if f <= 0.0
-                    || !reflects[i]
-                    || plane.dot(centre - rp.centre) <= 0.0
-                    || g.charts[b.chart].normal.dot(rp.centre - centre) <= 0.0
-                {
-                    return None;
-                }
-                let full = vis == Vis::Full;
-                let seen = full || occluders.visible(rp.centre + plane * eps, centre + g.charts[b.chart].normal * eps);
-                Some((r, f, seen, full))
-            };
-            let chunk = receivers.len().div_ceil(threads).max(1);
-            let indexed: Vec<(usize, &usize)> = receivers.iter().enumerate().collect();
-            std::thread::scope(|scope| {
-                let handles: Vec<_> = indexed
-                    .chunks(chunk)
-                    .map(|part| scope.spawn(move || part.iter().filter_map(|&x| shooter(x)).collect::<Vec<_>>()))
-                    .collect();
-                handles
-                    .into_iter()
-                    .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                    .collect::<Vec<_>>()
-            })
-        };
+        let b = &solve.blocks[best];
+        let found = solve.receivers_of(&Shot::new(g, b, &solve.area), &*energy);
         let mut shares = Vec::with_capacity(found.len());
         for (r, f, seen, full) in found {
             if full {
@@ -473,11 +375,190 @@ pub fn shoot(
                 shares.push((r, f));
             }
         }
-        energy.shoot(&b.members, &area, &shares);
+        energy.shoot(&b.members, &solve.area, &shares);
         report.shots += 1;
         let left = report.unshot_power.last().copied().unwrap_or(0.0);
         show_progress(progress, report.shots, left, initial, settings.threshold);
     }
     progress.finish();
     report
+}
+
+/// What every shot of one solve reads: the blocks, the patches' areas, the chart-to-chart
+/// visibility and the receiving patches.
+struct Solve<'a> {
+    g: Geometry<'a>,
+    occluders: &'a Occluders,
+    settings: &'a Settings,
+    blocks: Vec<Block>,
+    area: Vec<f64>,
+    matrix: Matrix,
+    /// Per chart: its blocks.
+    by_chart: Vec<Vec<usize>>,
+    receivers: Vec<usize>,
+    threads: usize,
+    /// Receivers start a hair in front of their surface, so that their own plane never occludes.
+    eps: f64,
+}
+
+/// One shooting block seen as a patch: its unshot power spread over its square, or (faithful)
+/// concentrated at its centre.
+struct Shot<'b> {
+    block: &'b Block,
+    area: f64,
+    square: f64,
+    centre: DVec3,
+}
+
+impl<'b> Shot<'b> {
+    fn new(g: Geometry<'_>, block: &'b Block, area: &[f64]) -> Shot<'b> {
+        let b = block;
+        let block_area: f64 = b.members.iter().map(|&k| area[k]).sum();
+        let square = (b.corners[1] - b.corners[0]).length() * (b.corners[3] - b.corners[0]).length();
+        let centre = b.members.iter().map(|&k| g.patches[k].centre * area[k]).sum::<DVec3>() / block_area;
+        Shot {
+            block,
+            area: block_area,
+            square,
+            centre,
+        }
+    }
+}
+
+impl<'a> Solve<'a> {
+    fn new(g: Geometry<'a>, occluders: &'a Occluders, settings: &'a Settings) -> Solve<'a> {
+        let blocks = blocks_of(&g, settings.block.max(1));
+        // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and
+        // in corrected mode only a block square's overhang beyond its polygon could reach them);
+        // FULL pairs need no rays. The same matrix in both modes.
+        let matrix = Matrix::build_in(
+            &occluders.triangles,
+            g.charts,
+            settings.full_visibility,
+            occluders.pvs.as_ref(),
+        );
+        let by_chart: Vec<Vec<usize>> = (0..g.charts.len())
+            .map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect())
+            .collect();
+        Solve {
+            g,
+            occluders,
+            settings,
+            area: g.patches.iter().map(|q| q.area).collect(),
+            matrix,
+            by_chart,
+            receivers: (0..g.patches.len()).filter(|&k| g.patches[k].inside()).collect(),
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            eps: 1e-4 * g.size,
+            blocks,
+        }
+    }
+
+    /// The unshot power of block `b`.
+    fn power(&self, e: &dyn Unshot, b: &Block) -> f64 {
+        b.members.iter().map(|&k| e.magnitude(k) * self.area[k]).sum::<f64>()
+    }
+
+    /// The block with the most unshot power (the first of equals) and that power.
+    fn strongest(&self, e: &dyn Unshot) -> (usize, f64) {
+        (0..self.blocks.len())
+            .map(|b| (b, self.power(e, &self.blocks[b])))
+            .fold((0, -1.0), |a, x| if x.1 > a.1 { x } else { a })
+    }
+
+    /// The next shooter and its power: the strongest block (corrected), or the best of the
+    /// seed's random samples per chart, searching every block only when that best is below
+    /// `stop` (faithful).
+    fn pick_shooter(&self, e: &dyn Unshot, stop: f64, rng: &mut Rng, report: &mut Report) -> (usize, f64) {
+        match self.settings.mode {
+            Mode::Corrected => self.strongest(e),
+            Mode::Faithful => {
+                let mut cand = (0, -1.0);
+                for list in self.by_chart.iter().filter(|l| !l.is_empty()) {
+                    for _ in 0..self.settings.samples_per_chart {
+                        let b = list[rng.below(list.len())];
+                        let w = self.power(e, &self.blocks[b]);
+                        if w > cand.1 {
+                            cand = (b, w);
+                        }
+                    }
+                }
+                if cand.1 > stop {
+                    cand
+                } else {
+                    report.full_searches += 1;
+                    self.strongest(e)
+                }
+            }
+        }
+    }
+
+    /// Every receiver the shot reaches: (patch, form factor, seen, FULL pair). Each receiver's
+    /// share is independent of the others': the receivers are split over the machine's cores
+    /// (each thread casts its receivers' rays) and the results kept in receiver order, so the
+    /// result does not depend on the thread count.
+    fn receivers_of(&self, shot: &Shot<'_>, e: &dyn Unshot) -> Vec<(usize, f64, bool, bool)> {
+        let reflects: Vec<bool> = self.receivers.iter().map(|&r| e.reflects(r)).collect();
+        let chunk = self.receivers.len().div_ceil(self.threads).max(1);
+        let indexed: Vec<(usize, &usize)> = self.receivers.iter().enumerate().collect();
+        let reflects = &reflects;
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = indexed
+                .chunks(chunk)
+                .map(|part| {
+                    scope.spawn(move || {
+                        part.iter()
+                            .filter_map(|&(i, &r)| self.receiver_share(shot, reflects[i], r))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect::<Vec<_>>()
+        })
+    }
+
+    /// Receiver `r`'s form factor to the shot, whether it sees the shooter and whether the pair
+    /// is FULL (no ray cast); `None` when it gets nothing.
+    fn receiver_share(&self, shot: &Shot<'_>, reflects: bool, r: usize) -> Option<(usize, f64, bool, bool)> {
+        let (g, b, centre) = (self.g, shot.block, shot.centre);
+        let normal = b.normal;
+        let rp = g.patches[r];
+        let plane = g.charts[rp.chart].normal;
+        let vis = self.matrix.get(b.chart, rp.chart);
+        if vis == Vis::None {
+            return None;
+        }
+        // Shooters emit toward their normal only: a receiver behind the shooter's plane gets
+        // nothing (the exact form factor looks from the receiver and cannot see it).
+        if rp.chart == b.chart || normal.dot(rp.centre - b.corners[0]) <= 0.0 {
+            return None;
+        }
+        let f = match self.settings.mode {
+            // F from the receiver to the square times the square's mean unshot radiosity.
+            Mode::Corrected => form_factor::point_to_polygon(rp.centre, rp.normal, &b.corners) / shot.square,
+            // CaLight: the block as one patch of its area at its centre.
+            Mode::Faithful => {
+                form_factor::point_sampled(rp.centre, rp.normal, centre, normal, shot.area, g.size) / shot.area
+            }
+        };
+        // With normal-mapped patches, both ends must also face each other's planes (the seed's
+        // four cosines); for plain patches these equal the tests above.
+        if f <= 0.0
+            || !reflects
+            || plane.dot(centre - rp.centre) <= 0.0
+            || g.charts[b.chart].normal.dot(rp.centre - centre) <= 0.0
+        {
+            return None;
+        }
+        let full = vis == Vis::Full;
+        let eps = self.eps;
+        let seen = full
+            || self
+                .occluders
+                .visible(rp.centre + plane * eps, centre + g.charts[b.chart].normal * eps);
+        Some((r, f, seen, full))
+    }
 }

@@ -244,12 +244,19 @@ impl Config {
 
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
-        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
-        let float = Params::float;
         let mode = params
             .get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
             .unwrap_or(Mode::Corrected);
-        let mut c = Config::defaults(mode);
+        let c = Config::parse_keys(decl, &params, Config::defaults(mode))?;
+        c.check_together(decl, scene, &params)?;
+        Ok(c)
+    }
+
+    /// Each parameter of `decl` over `c` (the mode's defaults), checked on its own.
+    // long: one key-by-key parser, a match arm per parameter.
+    fn parse_keys(decl: &MethodDecl, params: &Params<'_>, mut c: Config) -> Result<Config> {
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
+        let float = Params::float;
         for (p, v, _) in &decl.params {
             let p = p.as_str();
             match p {
@@ -369,6 +376,14 @@ impl Config {
                 _ => {}
             }
         }
+        Ok(c)
+    }
+
+    /// What no single parameter decides: the occluder rules against the scene's objects, near
+    /// below far, and the atlas within the largest image.
+    fn check_together(&self, decl: &MethodDecl, scene: Option<&Scene>, params: &Params<'_>) -> Result<()> {
+        let c = self;
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         if let Some(scene) = scene {
             // The rules name objects: checked here, where an error can point at the line.
             super::receivers::OccluderRules::parse(&c.occluders, scene)
@@ -392,7 +407,7 @@ impl Config {
                 decl.param("batch").unwrap_or(&toml::Value::from(c.batch as i64)),
             ));
         }
-        Ok(c)
+        Ok(())
     }
 
     /// Tiles per atlas row.

@@ -290,64 +290,120 @@ pub struct Prt {
     uniform: Vec<f32>,
 }
 
+/// The warnings a configuration and scene earn before the bake: inert parameters, a coefficient
+/// count that is not whole bands, distant lights only, undersampled objects, surfaces behind
+/// their normals.
+fn warn_about_config(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config) {
+    for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
+        crate::errln!("{w}");
+    }
+    if config.legacy_coefficients() {
+        crate::errln!(
+            "warning: {}: {NAME}: {} coefficients is not a whole number of bands: shading changes as the light turns about a normal (digest §3.2 item 7)",
+            cx.scene.source,
+            config.coefficients
+        );
+    }
+    if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
+        crate::errln!("{w}");
+    }
+    for line in sampling::undersampled(&sampling_objects(cx)) {
+        crate::errln!("warning: {}: {NAME}: {line}", cx.scene.source);
+    }
+    // The transfer is baked per vertex on the normal's side (a scene the light-map geometry
+    // cannot take, with a sphere light, goes without the check).
+    if let Ok(g) = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME) {
+        if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &g.triangles, NAME) {
+            crate::errln!("{w}");
+        }
+    }
+}
+
+/// What the baked transfer depends on: the baker and its configuration, the occluder rules,
+/// the keys, the meshes, their placements and animation, and the shaders.
+fn bake_key(cx: &CreateContext<'_>, config: &Config, rules: &OccluderRules, keys: u32) -> BakeKey {
+    let key = BakeKey::new("PRT transfer")
+        .with("version", BAKER_VERSION)
+        .with("config", config.bake_key())
+        .with("occluders", rules)
+        .with("keys", (keys, config.key_rate));
+    let geometry: Vec<f32> = cx
+        .scene_gpu
+        .meshes
+        .iter()
+        .flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array()))
+        .collect();
+    let placements: Vec<f32> = cx
+        .scene_gpu
+        .draws
+        .iter()
+        .flat_map(|d| d.model.to_cols_array())
+        .collect();
+    key.with_bytes("geometry", bytemuck::cast_slice(&geometry))
+        .with_bytes("placements", bytemuck::cast_slice(&placements))
+        .with(
+            "animation",
+            cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>(),
+        )
+        .with_shaders("prt/")
+}
+
+/// The label that names the cache entry: only what the bake depends on (not the run-time
+/// coefficient count, which every count's configuration shares).
+fn bake_label(config: &Config, receivers: usize, keys: u32) -> String {
+    let baker = match config.baker {
+        Baker::Raster => format!("raster {:?} {:?} {}²", config.mode, config.mapping, config.tile),
+        _ => format!("{:?} {} rays", config.baker, config.samples),
+    };
+    format!(
+        "{NAME} {baker} ({receivers} vertices{})",
+        if keys > 1 {
+            format!(" × {keys} keys")
+        } else {
+            String::new()
+        }
+    )
+}
+
+/// The baked transfer (per key, per receiver) placed at each receiver's scene vertex, 16 floats
+/// a vertex; an error when the bake does not match the scene (a stale cache entry).
+fn transfer_by_vertex(
+    cx: &CreateContext<'_>,
+    config: &Config,
+    baked: &[f32],
+    all_keys: &[(Receivers, Vec<u32>)],
+    vertices: u32,
+) -> Result<Vec<f32>> {
+    let dim = config.bands() * config.bands();
+    let keys = all_keys.len();
+    let per_key = all_keys[0].0.len() * dim;
+    if baked.len() != per_key * keys {
+        return Err(Error::Internal(format!(
+            "{}: {NAME}: the baked transfer does not match the scene (delete the cache entry)",
+            cx.scene.source
+        )));
+    }
+    let mut transfer = vec![0.0f32; keys * vertices as usize * 16];
+    for (k, (_, global)) in all_keys.iter().enumerate() {
+        for (i, &g) in global.iter().enumerate() {
+            let src = &baked[k * per_key + i * dim..k * per_key + (i + 1) * dim];
+            let dst = (k * vertices as usize + g as usize) * 16;
+            transfer[dst..dst + dim].copy_from_slice(src);
+        }
+    }
+    Ok(transfer)
+}
+
 impl Prt {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Prt> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
-        for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
-            crate::errln!("{w}");
-        }
-        if config.legacy_coefficients() {
-            crate::errln!(
-                "warning: {}: {NAME}: {} coefficients is not a whole number of bands: shading changes as the light turns about a normal (digest §3.2 item 7)",
-                cx.scene.source,
-                config.coefficients
-            );
-        }
-        if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
-            crate::errln!("{w}");
-        }
-        for line in sampling::undersampled(&sampling_objects(cx)) {
-            crate::errln!("warning: {}: {NAME}: {line}", cx.scene.source);
-        }
-        // The transfer is baked per vertex on the normal's side (a scene the light-map geometry
-        // cannot take, with a sphere light, goes without the check).
-        if let Ok(g) = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME) {
-            if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &g.triangles, NAME) {
-                crate::errln!("{w}");
-            }
-        }
+        warn_about_config(cx, decl, &config);
         let rules = OccluderRules::parse(&config.occluders, cx.scene)
             .map_err(|m| Error::from(cx.scene.method_param_error(decl, "occluders", m)))?;
         let times = key_times(cx.scene, &config);
         let keys = times.len() as u32;
         let vertices = cx.scene_gpu.meshes.iter().map(|m| m.vertex_count()).sum::<usize>() as u32;
-        let dim = config.bands() * config.bands();
-
-        let mut key = BakeKey::new("PRT transfer")
-            .with("version", BAKER_VERSION)
-            .with("config", config.bake_key())
-            .with("occluders", &rules)
-            .with("keys", (keys, config.key_rate));
-        let geometry: Vec<f32> = cx
-            .scene_gpu
-            .meshes
-            .iter()
-            .flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array()))
-            .collect();
-        let placements: Vec<f32> = cx
-            .scene_gpu
-            .draws
-            .iter()
-            .flat_map(|d| d.model.to_cols_array())
-            .collect();
-        key = key
-            .with_bytes("geometry", bytemuck::cast_slice(&geometry))
-            .with_bytes("placements", bytemuck::cast_slice(&placements))
-            .with(
-                "animation",
-                cx.scene.objects.iter().map(|o| o.animation).collect::<Vec<_>>(),
-            );
-        key = key.with_shaders("prt/");
+        let key = bake_key(cx, &config, &rules, keys);
         let meshes = scene_meshes(cx);
         let all_keys: Vec<(Receivers, Vec<u32>)> = times
             .iter()
@@ -360,20 +416,7 @@ impl Prt {
                 cx.scene.source
             )));
         }
-        // The label names the cache entry: only what the bake depends on (not the run-time
-        // coefficient count, which every count's configuration shares).
-        let baker = match config.baker {
-            Baker::Raster => format!("raster {:?} {:?} {}²", config.mode, config.mapping, config.tile),
-            _ => format!("{:?} {} rays", config.baker, config.samples),
-        };
-        let label = format!(
-            "{NAME} {baker} ({receivers} vertices{})",
-            if keys > 1 {
-                format!(" × {keys} keys")
-            } else {
-                String::new()
-            }
-        );
+        let label = bake_label(&config, receivers, keys);
         let (gpu, shaders) = (&mut *cx.gpu, cx.shaders);
         let baked: Vec<f32> = cx.bakes.bake(&label, &key, |progress| {
             let mut out = Vec::new();
@@ -382,21 +425,7 @@ impl Prt {
             }
             Ok(out)
         })?;
-        let per_key = receivers * dim;
-        if baked.len() != per_key * keys as usize {
-            return Err(Error::Internal(format!(
-                "{}: {NAME}: the baked transfer does not match the scene (delete the cache entry)",
-                cx.scene.source
-            )));
-        }
-        let mut transfer = vec![0.0f32; keys as usize * vertices as usize * 16];
-        for (k, (_, global)) in all_keys.iter().enumerate() {
-            for (i, &g) in global.iter().enumerate() {
-                let src = &baked[k * per_key + i * dim..k * per_key + (i + 1) * dim];
-                let dst = (k * vertices as usize + g as usize) * 16;
-                transfer[dst..dst + dim].copy_from_slice(src);
-            }
-        }
+        let transfer = transfer_by_vertex(cx, &config, &baked, &all_keys, vertices)?;
         // Packed over the scene's vertices, so a by-band group is four neighbouring vertices.
         let (words, words_per_key) =
             storage::pack_for_device(&transfer, keys as usize, vertices as usize, config.storage.grouping());

@@ -180,8 +180,7 @@ fn run(
     product_override: Option<&[f32]>,
     progress: &mut Progress,
 ) -> Result<Vec<f32>> {
-    let bands = config.bands();
-    let dim = bands * bands;
+    let dim = config.bands() * config.bands();
     if r.is_empty() {
         progress.finish();
         return Ok(Vec::new());
@@ -196,174 +195,18 @@ fn run(
             gpu.caps().max_image_dimension_2d
         )));
     }
-    let mut receivers = vec![GpuReceiver::default(); slots.total as usize];
-    for i in 0..r.len() {
-        let (t, b) = tangent_frame(r.normals[i], config.twist);
-        receivers[slots.slot[i] as usize] = GpuReceiver {
-            position: v4(r.positions[i], 1.0),
-            tangent: v4(t, 0.0),
-            bitangent: v4(b, 0.0),
-            normal: v4(r.normals[i], 0.0),
-        };
-    }
-    let mut vertices: Vec<[f32; 3]> = Vec::new();
-    let mut set_vertices = Vec::new();
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for p in &r.positions {
-        lo = lo.min(*p);
-        hi = hi.max(*p);
-    }
-    for s in &r.sets {
-        set_vertices.push((vertices.len() as u32, 3 * s.triangles.len() as u32));
-        for t in &s.triangles {
-            for p in t {
-                lo = lo.min(p.as_dvec3());
-                hi = hi.max(p.as_dvec3());
-                vertices.push(p.to_array());
-            }
-        }
-    }
-    let mut corners: Vec<[f32; 4]> = vertices.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
-    if corners.is_empty() {
-        corners.push([0.0; 4]);
-    }
+    let receivers = gpu_receivers(r, &slots, config);
+    let occluders = OccluderCorners::new(r);
     // An unbounded far plane becomes one past everything (depth only orders occluders).
     let far = if config.far.is_finite() {
         config.far
     } else {
-        config.near + 2.0 * (hi - lo).length().max(1.0)
+        config.near + 2.0 * (occluders.hi - occluders.lo).length().max(1.0)
     };
-    let weights = mapping::weights(config.mapping, config.weights, config.tile);
-
-    let usage_storage = vk::ImageUsageFlags::STORAGE;
-    let rgba = vk::Format::R32G32B32A32_SFLOAT;
-    let (ta, tb) = taps(config.tile);
-    let groups = dim.div_ceil(4);
-    let bake = Bake {
-        receivers: gpu.create_storage_buffer("prt receivers", bytemuck::cast_slice(&receivers))?,
-        weights: gpu.create_storage_buffer("prt weights", bytemuck::cast_slice(&weights))?,
-        batch: gpu.create_storage_output("prt batch", 4, MemoryKind::GpuOnly)?,
-        coefficients: gpu.create_storage_output("prt coefficients", slots.total as u64 * 64, MemoryKind::GpuToCpu)?,
-        triangles: gpu.create_storage_buffer("prt occluder triangles", bytemuck::cast_slice(&corners))?,
-        cull: match config.coverage {
-            Coverage::Projected => None,
-            Coverage::Exact => Some(cull(gpu, shaders, config)?),
-        },
-        set_vertices,
-        atlas: image(
-            gpu,
-            "prt visibility atlas",
-            rgba,
-            w,
-            h,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage,
-        )?,
-        depth: image(
-            gpu,
-            "prt visibility depth",
-            vk::Format::D32_SFLOAT,
-            w,
-            h,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-        )?,
-        product: image(
-            gpu,
-            "prt product",
-            rgba,
-            w,
-            h,
-            usage_storage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
-        )?,
-        stages: [
-            image(gpu, "prt reduction 1", rgba, w / ta, h, usage_storage)?,
-            image(gpu, "prt reduction 2", rgba, w / config.tile, h, usage_storage)?,
-            image(gpu, "prt reduction 3", rgba, w / config.tile, h / ta, usage_storage)?,
-        ],
-        visibility: visibility_pipeline(gpu, shaders, config, w, h, far)?,
-        sphere: match config.directions {
-            Directions::Analytic => None,
-            Directions::Sphere => {
-                let vertices = mapping::colour_sphere();
-                let buffer = gpu.create_buffer_init(
-                    "prt colour sphere",
-                    vk::BufferUsageFlags::VERTEX_BUFFER,
-                    bytemuck::cast_slice(&vertices),
-                )?;
-                Some((
-                    sphere_pipeline(gpu, shaders, config, w, h)?,
-                    buffer,
-                    vertices.len() as u32,
-                ))
-            }
-        },
-        basis: {
-            let basis = gpu.create_image(
-                &ImageDesc::new_2d("prt SH basis textures", rgba, 64, 32)
-                    .layers(4)
-                    .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
-            )?;
-            gpu.upload_image(basis, 0, bytemuck::cast_slice(&mapping::basis_textures()))?;
-            basis
-        },
-        sampler: gpu.sampler(SamplerDesc::LINEAR_CLAMP)?,
-        multiply: Vec::new(),
-        reduce: Vec::new(),
-    };
-    let mut bake = bake;
-    let common = |id: u32, bits: u32| SpecConstant { id, bits };
-    for g in 0..groups as u32 {
-        let base = vec![
-            common(0, config.mapping as u32),
-            common(2, config.tile),
-            common(3, config.tiles_per_row()),
-            common(4, config.batch),
-            common(10, g),
-        ];
-        let mut multiply = base.clone();
-        multiply.push(common(14, u32::from(config.directions == Directions::Sphere)));
-        bake.multiply.push(gpu.create_compute_pipeline(
-            &ComputePipelineDesc {
-                name: format!("prt multiply {g}"),
-                shader: "prt/multiply.comp".into(),
-                specialization: multiply,
-            },
-            shaders,
-        )?);
-        let mut reduce = Vec::new();
-        match config.reduction {
-            Reduction::Passes => {
-                for (i, (taps, axis)) in [(ta, 0), (tb, 0), (ta, 1)].into_iter().enumerate() {
-                    reduce.push(gpu.create_compute_pipeline(
-                        &ComputePipelineDesc {
-                            name: format!("prt reduce pass {} group {g}", i + 1),
-                            shader: "prt/reduce_axis.comp".into(),
-                            specialization: vec![common(11, taps), common(12, axis)],
-                        },
-                        shaders,
-                    )?);
-                }
-                let mut last = base.clone();
-                last.push(common(11, tb));
-                reduce.push(gpu.create_compute_pipeline(
-                    &ComputePipelineDesc {
-                        name: format!("prt reduce pass 4 group {g}"),
-                        shader: "prt/reduce_last.comp".into(),
-                        specialization: last,
-                    },
-                    shaders,
-                )?);
-            }
-            Reduction::Compute => {
-                reduce.push(gpu.create_compute_pipeline(
-                    &ComputePipelineDesc {
-                        name: format!("prt reduce tiles {g}"),
-                        shader: "prt/reduce_tile.comp".into(),
-                        specialization: base,
-                    },
-                    shaders,
-                )?);
-            }
-        }
+    let mut bake = Bake::create(gpu, shaders, config, &slots, &receivers, occluders, (w, h, far))?;
+    for g in 0..dim.div_ceil(4) as u32 {
+        let (multiply, reduce) = group_pipelines(gpu, shaders, config, g)?;
+        bake.multiply.push(multiply);
         bake.reduce.push(reduce);
     }
     if let Some(product) = product_override {
@@ -376,7 +219,258 @@ fn run(
         }
         gpu.upload_image(bake.product, 0, bytemuck::cast_slice(product))?;
     }
+    run_batches(gpu, &bake, config, &slots, (w, h), product_override.is_none(), progress)?;
+    let bytes = gpu.read_buffer(bake.coefficients)?;
+    let all: &[f32] = bytemuck::try_cast_slice(&bytes[..slots.total as usize * 64])
+        .map_err(|e| Error::Internal(format!("prt: coefficient readback: {e}")))?;
+    let mut out = vec![0.0f32; r.len() * dim];
+    for i in 0..r.len() {
+        let s = slots.slot[i] as usize;
+        out[i * dim..(i + 1) * dim].copy_from_slice(&all[s * 16..s * 16 + dim]);
+    }
+    Ok(out)
+}
 
+/// Every receiver's frame in its slot (the empty slots zero).
+fn gpu_receivers(r: &Receivers, slots: &Slots, config: &Config) -> Vec<GpuReceiver> {
+    let mut receivers = vec![GpuReceiver::default(); slots.total as usize];
+    for i in 0..r.len() {
+        let (t, b) = tangent_frame(r.normals[i], config.twist);
+        receivers[slots.slot[i] as usize] = GpuReceiver {
+            position: v4(r.positions[i], 1.0),
+            tangent: v4(t, 0.0),
+            bitangent: v4(b, 0.0),
+            normal: v4(r.normals[i], 0.0),
+        };
+    }
+    receivers
+}
+
+/// The occluder sets' triangles as one list of corners, each set's range in it, and the
+/// bounds of the receivers and occluders together.
+struct OccluderCorners {
+    /// vec4 corners, three a triangle (one zero corner when there are none, as a buffer is never
+    /// empty).
+    corners: Vec<[f32; 4]>,
+    /// Per occluder set: (first corner, corner count).
+    set_vertices: Vec<(u32, u32)>,
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl OccluderCorners {
+    fn new(r: &Receivers) -> Self {
+        let mut vertices: Vec<[f32; 3]> = Vec::new();
+        let mut set_vertices = Vec::new();
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in &r.positions {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        for s in &r.sets {
+            set_vertices.push((vertices.len() as u32, 3 * s.triangles.len() as u32));
+            for t in &s.triangles {
+                for p in t {
+                    lo = lo.min(p.as_dvec3());
+                    hi = hi.max(p.as_dvec3());
+                    vertices.push(p.to_array());
+                }
+            }
+        }
+        let mut corners: Vec<[f32; 4]> = vertices.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        if corners.is_empty() {
+            corners.push([0.0; 4]);
+        }
+        OccluderCorners {
+            corners,
+            set_vertices,
+            lo,
+            hi,
+        }
+    }
+}
+
+impl Bake {
+    /// The bake's buffers, images and rendering pipelines for a `w` × `h` atlas with depth out
+    /// to `far`; the per-group compute pipelines are added after.
+    fn create(
+        gpu: &mut Gpu,
+        shaders: &ShaderLibrary,
+        config: &Config,
+        slots: &Slots,
+        receivers: &[GpuReceiver],
+        occluders: OccluderCorners,
+        (w, h, far): (u32, u32, f64),
+    ) -> Result<Bake> {
+        let weights = mapping::weights(config.mapping, config.weights, config.tile);
+        let usage_storage = vk::ImageUsageFlags::STORAGE;
+        let rgba = vk::Format::R32G32B32A32_SFLOAT;
+        let (ta, _) = taps(config.tile);
+        Ok(Bake {
+            receivers: gpu.create_storage_buffer("prt receivers", bytemuck::cast_slice(receivers))?,
+            weights: gpu.create_storage_buffer("prt weights", bytemuck::cast_slice(&weights))?,
+            batch: gpu.create_storage_output("prt batch", 4, MemoryKind::GpuOnly)?,
+            coefficients: gpu.create_storage_output(
+                "prt coefficients",
+                slots.total as u64 * 64,
+                MemoryKind::GpuToCpu,
+            )?,
+            triangles: gpu.create_storage_buffer("prt occluder triangles", bytemuck::cast_slice(&occluders.corners))?,
+            cull: match config.coverage {
+                Coverage::Projected => None,
+                Coverage::Exact => Some(cull(gpu, shaders, config)?),
+            },
+            set_vertices: occluders.set_vertices,
+            atlas: image(
+                gpu,
+                "prt visibility atlas",
+                rgba,
+                w,
+                h,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | usage_storage,
+            )?,
+            depth: image(
+                gpu,
+                "prt visibility depth",
+                vk::Format::D32_SFLOAT,
+                w,
+                h,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            )?,
+            product: image(
+                gpu,
+                "prt product",
+                rgba,
+                w,
+                h,
+                usage_storage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
+            )?,
+            stages: [
+                image(gpu, "prt reduction 1", rgba, w / ta, h, usage_storage)?,
+                image(gpu, "prt reduction 2", rgba, w / config.tile, h, usage_storage)?,
+                image(gpu, "prt reduction 3", rgba, w / config.tile, h / ta, usage_storage)?,
+            ],
+            visibility: visibility_pipeline(gpu, shaders, config, w, h, far)?,
+            sphere: match config.directions {
+                Directions::Analytic => None,
+                Directions::Sphere => Some(colour_sphere(gpu, shaders, config, w, h)?),
+            },
+            basis: basis_textures(gpu)?,
+            sampler: gpu.sampler(SamplerDesc::LINEAR_CLAMP)?,
+            multiply: Vec::new(),
+            reduce: Vec::new(),
+        })
+    }
+}
+
+/// The colour-coded sphere's pipeline, vertex buffer and vertex count.
+fn colour_sphere(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    config: &Config,
+    w: u32,
+    h: u32,
+) -> Result<(PipelineId, BufferId, u32)> {
+    let vertices = mapping::colour_sphere();
+    let buffer = gpu.create_buffer_init(
+        "prt colour sphere",
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+        bytemuck::cast_slice(&vertices),
+    )?;
+    Ok((
+        sphere_pipeline(gpu, shaders, config, w, h)?,
+        buffer,
+        vertices.len() as u32,
+    ))
+}
+
+/// Listing 2.2's basis textures, uploaded.
+fn basis_textures(gpu: &mut Gpu) -> Result<ImageId> {
+    let basis = gpu.create_image(
+        &ImageDesc::new_2d("prt SH basis textures", vk::Format::R32G32B32A32_SFLOAT, 64, 32)
+            .layers(4)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST),
+    )?;
+    gpu.upload_image(basis, 0, bytemuck::cast_slice(&mapping::basis_textures()))?;
+    Ok(basis)
+}
+
+/// Coefficient group `g`'s pipelines: the multiplicative stage, and the reduction's (four
+/// passes, or one per tile).
+fn group_pipelines(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    config: &Config,
+    g: u32,
+) -> Result<(PipelineId, Vec<PipelineId>)> {
+    let common = |id: u32, bits: u32| SpecConstant { id, bits };
+    let (ta, tb) = taps(config.tile);
+    let base = vec![
+        common(0, config.mapping as u32),
+        common(2, config.tile),
+        common(3, config.tiles_per_row()),
+        common(4, config.batch),
+        common(10, g),
+    ];
+    let mut multiply = base.clone();
+    multiply.push(common(14, u32::from(config.directions == Directions::Sphere)));
+    let multiply = gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: format!("prt multiply {g}"),
+            shader: "prt/multiply.comp".into(),
+            specialization: multiply,
+        },
+        shaders,
+    )?;
+    let mut reduce = Vec::new();
+    match config.reduction {
+        Reduction::Passes => {
+            for (i, (taps, axis)) in [(ta, 0), (tb, 0), (ta, 1)].into_iter().enumerate() {
+                reduce.push(gpu.create_compute_pipeline(
+                    &ComputePipelineDesc {
+                        name: format!("prt reduce pass {} group {g}", i + 1),
+                        shader: "prt/reduce_axis.comp".into(),
+                        specialization: vec![common(11, taps), common(12, axis)],
+                    },
+                    shaders,
+                )?);
+            }
+            let mut last = base.clone();
+            last.push(common(11, tb));
+            reduce.push(gpu.create_compute_pipeline(
+                &ComputePipelineDesc {
+                    name: format!("prt reduce pass 4 group {g}"),
+                    shader: "prt/reduce_last.comp".into(),
+                    specialization: last,
+                },
+                shaders,
+            )?);
+        }
+        Reduction::Compute => {
+            reduce.push(gpu.create_compute_pipeline(
+                &ComputePipelineDesc {
+                    name: format!("prt reduce tiles {g}"),
+                    shader: "prt/reduce_tile.comp".into(),
+                    specialization: base,
+                },
+                shaders,
+            )?);
+        }
+    }
+    Ok((multiply, reduce))
+}
+
+/// Records and runs every batch, one graph each, reporting the rate; `render` false when the
+/// product atlas was uploaded (only the integration runs).
+fn run_batches(
+    gpu: &mut Gpu,
+    bake: &Bake,
+    config: &Config,
+    slots: &Slots,
+    (w, h): (u32, u32),
+    render: bool,
+    progress: &mut Progress,
+) -> Result<()> {
     let frame = gpu.create_frame()?;
     let mut states = ResourceStates::default();
     states.set_image(
@@ -386,7 +480,7 @@ fn run(
             stages: vk::PipelineStageFlags2::ALL_COMMANDS,
         },
     )?;
-    if product_override.is_some() {
+    if !render {
         states.set_image(
             gpu,
             bake.product,
@@ -398,14 +492,7 @@ fn run(
     let t_start = std::time::Instant::now();
     for (k, &(set, first, count)) in slots.batches.iter().enumerate() {
         let mut graph = RenderGraph::new();
-        record_batch(
-            &mut graph,
-            &bake,
-            config,
-            (set, first, count),
-            (w, h),
-            product_override.is_none(),
-        );
+        record_batch(&mut graph, bake, config, (set, first, count), (w, h), render);
         graph
             .pass("prt readback")
             .buffer(bake.coefficients, Access::HostRead, None)
@@ -420,15 +507,7 @@ fn run(
         progress.update(k as u64 + 1, slots.batches.len() as u64);
     }
     progress.finish();
-    let bytes = gpu.read_buffer(bake.coefficients)?;
-    let all: &[f32] = bytemuck::try_cast_slice(&bytes[..slots.total as usize * 64])
-        .map_err(|e| Error::Internal(format!("prt: coefficient readback: {e}")))?;
-    let mut out = vec![0.0f32; r.len() * dim];
-    for i in 0..r.len() {
-        let s = slots.slot[i] as usize;
-        out[i * dim..(i + 1) * dim].copy_from_slice(&all[s * 16..s * 16 + dim]);
-    }
-    Ok(out)
+    Ok(())
 }
 
 fn cull(gpu: &mut Gpu, shaders: &ShaderLibrary, config: &Config) -> Result<Cull> {
@@ -527,120 +606,169 @@ fn record_batch<'a>(
     (w, h): (u32, u32),
     render: bool,
 ) {
-    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-    let read = Access::StorageRead { stages: compute };
-    let write = Access::StorageWrite { stages: compute };
-    let full = SubresourceRange::full();
     let batch = b.batch;
     graph
         .pass("prt batch")
         .buffer(batch, Access::TransferWrite, None)
         .record(move |ctx| ctx.rec.fill_buffer(batch, first));
     if render {
-        let (first_vertex, vertex_count) = b.set_vertices[set];
-        // Buffers are bound by name per pipeline: the sphere's and the occluders' pipelines
-        // share the pass and read different ones.
-        let vertex = Access::StorageRead {
-            stages: vk::PipelineStageFlags2::VERTEX_SHADER,
-        };
-        // B (visibility) starts at 1; R and G (the sphere's angles) at 0, where the document
-        // leaves pixels the sphere does not reach.
-        let clear = [
-            RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0]),
-            RenderTarget::clear_depth(b.depth, 1.0, 0),
-        ];
-        let load = [RenderTarget::load(b.atlas), RenderTarget::load(b.depth)];
-        let begin = move |rec: &mut crate::backend::Recorder<'_>, first: bool| {
-            let [colour, depth] = if first { clear } else { load };
-            rec.begin_rendering(&RenderingDesc {
-                colors: vec![colour],
-                depth_stencil: Some(depth),
-            })
-            .map(|_| ())
-        };
         match &b.cull {
-            None => {
-                graph
-                    .pass("prt visibility")
-                    .color_attachment(b.atlas, full, true)
-                    .depth_stencil_write(b.depth, true)
-                    .buffer(b.receivers, vertex, None)
-                    .buffer(b.triangles, vertex, None)
-                    .record(move |ctx| {
-                        begin(ctx.rec, true)?;
-                        draw_sphere(ctx, b, first, count)?;
-                        if vertex_count > 0 {
-                            ctx.rec.bind_pipeline(b.visibility)?;
-                            ctx.bind(&[
-                                ("receivers", Bind::StorageBuffer(b.receivers)),
-                                ("triangles", Bind::StorageBuffer(b.triangles)),
-                            ])?;
-                            // Radial depth: six vertices a triangle (visibility.vert: the fan of
-                            // the triangle clipped to the hemisphere).
-                            let k = if config.depth == Depth::Radial { 2 } else { 1 };
-                            ctx.rec
-                                .draw_instanced(k * vertex_count, k * first_vertex, count, first)?;
-                        }
-                        ctx.rec.end_rendering();
-                        Ok(())
-                    });
-            }
-            Some(cull) => {
-                // Per chunk of triangles: list the rectangles with something to draw, then draw
-                // them. The first chunk clears the atlas, the rest draw over it.
-                let (first_triangle, triangles) = (first_vertex / 3, vertex_count / 3);
-                let chunks = triangles.div_ceil(cull.chunk_triangles).max(1);
-                for k in 0..chunks {
-                    let start = k * cull.chunk_triangles;
-                    let n = cull.chunk_triangles.min(triangles - start);
-                    let command = cull.command;
-                    graph
-                        .pass("prt cull reset")
-                        .buffer(command, Access::TransferWrite, None)
-                        .record(move |ctx| ctx.rec.update_buffer(command, &[0, 1, 0, 0, 0]));
-                    let push = ChunkPush {
-                        first_slot: first,
-                        receivers: count,
-                        first_triangle: first_triangle + start,
-                        triangle_count: n,
-                    };
-                    let (pipeline, rects, indices) = (cull.pipeline, cull.rects, cull.indices);
-                    graph
-                        .pass("prt cull")
-                        .buffer(b.receivers, read, Some("receivers"))
-                        .buffer(b.triangles, read, Some("triangles"))
-                        .buffer(rects, write, Some("rects"))
-                        .buffer(command, Access::StorageWrite { stages: compute }, Some("command"))
-                        .record(move |ctx| {
-                            ctx.rec.bind_pipeline(pipeline)?;
-                            ctx.bind(&[])?;
-                            ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-                            ctx.rec.dispatch([count * n, 1, 1])
-                        });
-                    graph
-                        .pass("prt visibility")
-                        .color_attachment(b.atlas, full, k == 0)
-                        .depth_stencil_write(b.depth, k == 0)
-                        .buffer(b.receivers, vertex, None)
-                        .buffer(rects, vertex, None)
-                        .buffer(indices, Access::IndexRead, None)
-                        .buffer(command, Access::IndirectRead, None)
-                        .record(move |ctx| {
-                            begin(ctx.rec, k == 0)?;
-                            if k == 0 {
-                                draw_sphere(ctx, b, first, count)?;
-                            }
-                            ctx.rec.bind_pipeline(b.visibility)?;
-                            ctx.bind(&[("rects", Bind::StorageBuffer(rects))])?;
-                            ctx.rec.bind_index_buffer(indices, 0)?;
-                            ctx.rec.draw_indexed_indirect(command, 0)?;
-                            ctx.rec.end_rendering();
-                            Ok(())
-                        });
-                }
-            }
+            None => record_visibility(graph, b, config, set, (first, count)),
+            Some(cull) => record_exact_visibility(graph, b, cull, set, (first, count)),
         }
     }
+    for g in 0..b.multiply.len() {
+        record_group(graph, b, config, g, (w, h), render);
+    }
+}
+
+/// Begins rendering into the visibility atlas, cleared (`clear`) or loaded. B (visibility)
+/// starts at 1; R and G (the sphere's angles) at 0, where the document leaves pixels the sphere
+/// does not reach.
+fn begin_atlas(
+    rec: &mut crate::backend::Recorder<'_>,
+    b: &Bake,
+    clear: bool,
+) -> std::result::Result<(), crate::backend::BackendError> {
+    let [colour, depth] = if clear {
+        [
+            RenderTarget::clear_color(b.atlas, [0.0, 0.0, 1.0, 0.0]),
+            RenderTarget::clear_depth(b.depth, 1.0, 0),
+        ]
+    } else {
+        [RenderTarget::load(b.atlas), RenderTarget::load(b.depth)]
+    };
+    rec.begin_rendering(&RenderingDesc {
+        colors: vec![colour],
+        depth_stencil: Some(depth),
+    })
+    .map(|_| ())
+}
+
+/// Projected coverage: the sphere, then every occluder triangle of set `set` drawn into each
+/// of the batch's tiles (one instance per receiver).
+fn record_visibility<'a>(
+    graph: &mut RenderGraph<'a>,
+    b: &'a Bake,
+    config: &'a Config,
+    set: usize,
+    (first, count): (u32, u32),
+) {
+    let (first_vertex, vertex_count) = b.set_vertices[set];
+    // Buffers are bound by name per pipeline: the sphere's and the occluders' pipelines share
+    // the pass and read different ones.
+    let vertex = Access::StorageRead {
+        stages: vk::PipelineStageFlags2::VERTEX_SHADER,
+    };
+    graph
+        .pass("prt visibility")
+        .color_attachment(b.atlas, SubresourceRange::full(), true)
+        .depth_stencil_write(b.depth, true)
+        .buffer(b.receivers, vertex, None)
+        .buffer(b.triangles, vertex, None)
+        .record(move |ctx| {
+            begin_atlas(ctx.rec, b, true)?;
+            draw_sphere(ctx, b, first, count)?;
+            if vertex_count > 0 {
+                ctx.rec.bind_pipeline(b.visibility)?;
+                ctx.bind(&[
+                    ("receivers", Bind::StorageBuffer(b.receivers)),
+                    ("triangles", Bind::StorageBuffer(b.triangles)),
+                ])?;
+                // Radial depth: six vertices a triangle (visibility.vert: the fan of the
+                // triangle clipped to the hemisphere).
+                let k = if config.depth == Depth::Radial { 2 } else { 1 };
+                ctx.rec
+                    .draw_instanced(k * vertex_count, k * first_vertex, count, first)?;
+            }
+            ctx.rec.end_rendering();
+            Ok(())
+        });
+}
+
+/// Exact coverage: per chunk of set `set`'s triangles, list the rectangles with something to
+/// draw, then draw them. The first chunk clears the atlas (and draws the sphere), the rest draw
+/// over it.
+fn record_exact_visibility<'a>(
+    graph: &mut RenderGraph<'a>,
+    b: &'a Bake,
+    cull: &'a Cull,
+    set: usize,
+    (first, count): (u32, u32),
+) {
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let vertex = Access::StorageRead {
+        stages: vk::PipelineStageFlags2::VERTEX_SHADER,
+    };
+    let full = SubresourceRange::full();
+    let (first_vertex, vertex_count) = b.set_vertices[set];
+    let (first_triangle, triangles) = (first_vertex / 3, vertex_count / 3);
+    let chunks = triangles.div_ceil(cull.chunk_triangles).max(1);
+    for k in 0..chunks {
+        let start = k * cull.chunk_triangles;
+        let n = cull.chunk_triangles.min(triangles - start);
+        let command = cull.command;
+        graph
+            .pass("prt cull reset")
+            .buffer(command, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.update_buffer(command, &[0, 1, 0, 0, 0]));
+        let push = ChunkPush {
+            first_slot: first,
+            receivers: count,
+            first_triangle: first_triangle + start,
+            triangle_count: n,
+        };
+        let (pipeline, rects, indices) = (cull.pipeline, cull.rects, cull.indices);
+        graph
+            .pass("prt cull")
+            .buffer(b.receivers, Access::StorageRead { stages: compute }, Some("receivers"))
+            .buffer(b.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
+            .buffer(rects, Access::StorageWrite { stages: compute }, Some("rects"))
+            .buffer(command, Access::StorageWrite { stages: compute }, Some("command"))
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(pipeline)?;
+                ctx.bind(&[])?;
+                ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                ctx.rec.dispatch([count * n, 1, 1])
+            });
+        graph
+            .pass("prt visibility")
+            .color_attachment(b.atlas, full, k == 0)
+            .depth_stencil_write(b.depth, k == 0)
+            .buffer(b.receivers, vertex, None)
+            .buffer(rects, vertex, None)
+            .buffer(indices, Access::IndexRead, None)
+            .buffer(command, Access::IndirectRead, None)
+            .record(move |ctx| {
+                begin_atlas(ctx.rec, b, k == 0)?;
+                if k == 0 {
+                    draw_sphere(ctx, b, first, count)?;
+                }
+                ctx.rec.bind_pipeline(b.visibility)?;
+                ctx.bind(&[("rects", Bind::StorageBuffer(rects))])?;
+                ctx.rec.bind_index_buffer(indices, 0)?;
+                ctx.rec.draw_indexed_indirect(command, 0)?;
+                ctx.rec.end_rendering();
+                Ok(())
+            });
+    }
+}
+
+/// Coefficient group `g`: the multiplicative stage (when rendering) and the integration into
+/// the batch's receiver slots.
+fn record_group<'a>(
+    graph: &mut RenderGraph<'a>,
+    b: &'a Bake,
+    config: &'a Config,
+    g: usize,
+    (w, h): (u32, u32),
+    render: bool,
+) {
+    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    let read = Access::StorageRead { stages: compute };
+    let write = Access::StorageWrite { stages: compute };
+    let full = SubresourceRange::full();
+    let batch = b.batch;
     // The reduction's last step: `src` summed per tile into the batch's receiver slots.
     let to_slots = |graph: &mut RenderGraph<'a>, name: &str, src: ImageId, p: PipelineId, threads: [u32; 3]| {
         graph
@@ -655,50 +783,49 @@ fn record_batch<'a>(
                 ctx.rec.dispatch(threads)
             });
     };
-    for (g, &multiply) in b.multiply.iter().enumerate() {
-        if render {
-            graph
-                .pass("prt multiply")
-                .buffer(b.receivers, read, Some("receivers"))
-                .storage_read("visibility", b.atlas, full, compute)
-                .buffer(b.weights, read, Some("weights"))
-                .storage_write("product", b.product, full, compute)
-                .buffer(batch, read, Some("batch"))
-                .sample("sh_basis", b.basis, full, b.sampler, compute)
-                .record(move |ctx| {
-                    ctx.rec.bind_pipeline(multiply)?;
-                    ctx.bind(&[])?;
-                    ctx.rec.dispatch([w, h, 1])
-                });
+    if render {
+        let multiply = b.multiply[g];
+        graph
+            .pass("prt multiply")
+            .buffer(b.receivers, read, Some("receivers"))
+            .storage_read("visibility", b.atlas, full, compute)
+            .buffer(b.weights, read, Some("weights"))
+            .storage_write("product", b.product, full, compute)
+            .buffer(batch, read, Some("batch"))
+            .sample("sh_basis", b.basis, full, b.sampler, compute)
+            .record(move |ctx| {
+                ctx.rec.bind_pipeline(multiply)?;
+                ctx.bind(&[])?;
+                ctx.rec.dispatch([w, h, 1])
+            });
+    }
+    let reduce = &b.reduce[g];
+    match config.reduction {
+        Reduction::Passes => {
+            let chain = [b.product, b.stages[0], b.stages[1], b.stages[2]];
+            for i in 0..3 {
+                let (src, dst, p) = (chain[i], chain[i + 1], reduce[i]);
+                graph
+                    .pass(&format!("prt reduce pass {}", i + 1))
+                    .storage_read("src", src, full, compute)
+                    .storage_write("dst", dst, full, compute)
+                    .record(move |ctx| {
+                        ctx.rec.bind_pipeline(p)?;
+                        ctx.bind(&[])?;
+                        ctx.rec.dispatch([w, h, 1])
+                    });
+            }
+            to_slots(
+                graph,
+                "prt reduce pass 4",
+                b.stages[2],
+                reduce[3],
+                [w / config.tile, h / config.tile, 1],
+            );
         }
-        let reduce = &b.reduce[g];
-        match config.reduction {
-            Reduction::Passes => {
-                let chain = [b.product, b.stages[0], b.stages[1], b.stages[2]];
-                for i in 0..3 {
-                    let (src, dst, p) = (chain[i], chain[i + 1], reduce[i]);
-                    graph
-                        .pass(&format!("prt reduce pass {}", i + 1))
-                        .storage_read("src", src, full, compute)
-                        .storage_write("dst", dst, full, compute)
-                        .record(move |ctx| {
-                            ctx.rec.bind_pipeline(p)?;
-                            ctx.bind(&[])?;
-                            ctx.rec.dispatch([w, h, 1])
-                        });
-                }
-                to_slots(
-                    graph,
-                    "prt reduce pass 4",
-                    b.stages[2],
-                    reduce[3],
-                    [w / config.tile, h / config.tile, 1],
-                );
-            }
-            Reduction::Compute => {
-                let tiles = (w / config.tile) * (h / config.tile);
-                to_slots(graph, "prt reduce tiles", b.product, reduce[0], [64 * tiles, 1, 1]);
-            }
+        Reduction::Compute => {
+            let tiles = (w / config.tile) * (h / config.tile);
+            to_slots(graph, "prt reduce tiles", b.product, reduce[0], [64 * tiles, 1, 1]);
         }
     }
 }

@@ -23,7 +23,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
 use super::receivers::{tangent_frame, Clip, Receivers};
-use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind, SpecConstant};
+use crate::backend::{vk, BufferId, ComputePipelineDesc, Frame, Gpu, MemoryKind, PipelineId, SpecConstant};
 use crate::bake::gpu_loop::{cut_invocations, loop_limit_error, status_buffer, vec4, BatchSizer};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -340,7 +340,60 @@ fn run(
     let mut phases = BakePhases::default();
     let dim = bands * bands;
     let total = r.len();
-    // The sets' BVHs one after the other, their node and slot indices offset.
+    let (nodes, traced, roots) = concatenated_bvhs(r)?;
+    let receivers = gpu_receivers(r, &roots);
+    let local: Vec<[f32; 4]> = cosine_directions(samples)
+        .iter()
+        .map(|d| vec4(d.as_vec3(), 0.0))
+        .collect();
+    phases.trees = start.elapsed();
+    let buffers = RayBuffers::create(gpu, &receivers, &local, (total, samples, dim), start, &mut phases)?;
+    let t = std::time::Instant::now();
+    let (pipeline, reduce) = ray_pipelines(gpu, shaders, bands)?;
+    phases.pipeline = t.elapsed();
+    let t = std::time::Instant::now();
+    let frame = gpu.create_frame()?;
+    phases.set_up[2] = t.elapsed();
+
+    let push = Push {
+        receiver_count: total as u32,
+        sample_count: samples as u32,
+        bands: bands as u32,
+        triangle_count: traced.len() as u32,
+        near: clip.near as f32,
+        t_max: ray_length(clip),
+    };
+    let reduce_push = ReducePush {
+        sample_count: samples as u32,
+        dim: dim as u32,
+        weight: (std::f64::consts::PI / samples as f64) as f32,
+    };
+    let mut states = ResourceStates::default();
+    let t = std::time::Instant::now();
+    let bvh = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, None)?;
+    phases.set_up[3] = t.elapsed();
+    phases.buffers = start.elapsed().saturating_sub(phases.trees + phases.pipeline);
+    let bake = RayBake {
+        buffers,
+        bvh,
+        pipeline,
+        reduce,
+        push,
+        reduce_push,
+        samples,
+        dim,
+        total,
+    };
+    let out = bake.trace_chunks(gpu, frame, &mut states, &mut phases, progress)?;
+    progress.finish();
+    phases.total = start.elapsed();
+    crate::errln!("{}", phases.report(total, samples));
+    Ok(out)
+}
+
+/// The occluder sets' BVHs one after the other, their node and slot indices offset: the nodes,
+/// the triangles in leaf order, and per set its root node (or [`NO_BVH`]: no occluders).
+fn concatenated_bvhs(r: &Receivers) -> Result<(Vec<BvhNode>, Vec<TracedTriangle>, Vec<u32>)> {
     let (mut nodes, mut traced) = (Vec::<BvhNode>::new(), Vec::<TracedTriangle>::new());
     let roots: Vec<u32> = r
         .sets
@@ -376,8 +429,13 @@ fn run(
             "PRT ray cast: the occluder sets are too large for one GPU bake".into(),
         ));
     }
-    let indices: Vec<usize> = (0..total).collect();
-    let receivers: Vec<GpuReceiver> = parallel::map(&indices, MAP_PIECE, |&k| {
+    Ok((nodes, traced, roots))
+}
+
+/// Every receiver's position, frame and its set's BVH root.
+fn gpu_receivers(r: &Receivers, roots: &[u32]) -> Vec<GpuReceiver> {
+    let indices: Vec<usize> = (0..r.len()).collect();
+    parallel::map(&indices, MAP_PIECE, |&k| {
         let f = frame(r.normals[k]);
         GpuReceiver {
             position: vec4(r.positions[k].as_vec3(), 0.0),
@@ -386,37 +444,16 @@ fn run(
             normal: vec4(f[2], 0.0),
             bvh: [roots[r.set[k] as usize], 0, 0, 0],
         }
-    });
-    let local: Vec<[f32; 4]> = cosine_directions(samples)
-        .iter()
-        .map(|d| vec4(d.as_vec3(), 0.0))
-        .collect();
+    })
+}
 
-    phases.trees = start.elapsed();
-    let receivers_buf = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(&receivers))?;
-    let directions_buf = gpu.create_storage_buffer("prt rays directions", bytemuck::cast_slice(&local))?;
-    phases.set_up[0] = start.elapsed() - phases.trees;
-    // Room for at least one receiver at one ray per invocation. The partial sums stay on the
-    // device; the host reads the reduced transfer, at most one chunk of it at a time.
-    let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
-    let sums_buf = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuOnly)?;
-    let most_receivers = total.min(sums_bytes / (4 * dim));
-    let transfer_buf = gpu.create_storage_output(
-        "prt rays transfer",
-        (most_receivers * dim * 4) as u64,
-        MemoryKind::GpuToCpu,
-    )?;
-    let status_buf = status_buffer(gpu, "prt rays")?;
-    let base_buf = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
-    let count_buf = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
-    let per_buf = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
-    phases.set_up[1] = start.elapsed() - phases.trees - phases.set_up[0];
-    // The bands as a constant: the shader then keeps only the SH evaluation it needs.
+/// The ray pass's pipeline, with the bands as a constant (the shader then keeps only the SH
+/// evaluation it needs), and the reduction's.
+fn ray_pipelines(gpu: &mut Gpu, shaders: &ShaderLibrary, bands: usize) -> Result<(PipelineId, PipelineId)> {
     let specialization = vec![SpecConstant {
         id: 0,
         bits: bands as u32,
     }];
-    let t = std::time::Instant::now();
     let pipeline = gpu.create_compute_pipeline(
         &ComputePipelineDesc {
             name: "prt rays".into(),
@@ -433,47 +470,141 @@ fn run(
         },
         shaders,
     )?;
-    phases.pipeline = t.elapsed();
-    let t = std::time::Instant::now();
-    let frame = gpu.create_frame()?;
-    phases.set_up[2] = t.elapsed();
+    Ok((pipeline, reduce))
+}
 
-    let push = Push {
-        receiver_count: total as u32,
-        sample_count: samples as u32,
-        bands: bands as u32,
-        triangle_count: traced.len() as u32,
-        near: clip.near as f32,
-        t_max: ray_length(clip),
-    };
-    let reduce_push = ReducePush {
-        sample_count: samples as u32,
-        dim: dim as u32,
-        weight: (std::f64::consts::PI / samples as f64) as f32,
-    };
-    let mut out = vec![0.0f32; total * dim];
-    let mut per = FIRST_RAYS_PER_LANE.min(samples as u32);
-    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-    let read = Access::StorageRead { stages: compute };
-    let write = Access::StorageWrite { stages: compute };
-    let mut states = ResourceStates::default();
-    let t = std::time::Instant::now();
-    let bvh_tables = GpuBvh::upload(gpu, &mut states, "prt rays", &nodes, &traced, None)?;
-    phases.set_up[3] = t.elapsed();
-    phases.buffers = start.elapsed().saturating_sub(phases.trees + phases.pipeline);
-    let mut sizer = BatchSizer::new(FIRST_CHUNK, 16, usize::MAX, MAX_CHUNK_GROWTH);
-    let mut base = 0usize;
-    while base < total {
-        let lanes = samples.div_ceil(per as usize);
-        // Both dispatches within the guaranteed workgroup count: the trace's lanes, the
-        // reduction's coefficients.
-        let fits = (MAX_INVOCATIONS / lanes.max(dim))
-            .min(sums_bytes / (4 * lanes * dim))
-            .max(1);
-        let n = sizer.size().min(total - base).min(fits);
-        let t0 = std::time::Instant::now();
-        let mut graph = RenderGraph::new();
-        let (first, count) = (base as u32, n as u32);
+/// The ray bake's buffers.
+struct RayBuffers {
+    receivers: BufferId,
+    directions: BufferId,
+    /// Every invocation's partial sums, `sums_bytes` of them.
+    sums: BufferId,
+    sums_bytes: usize,
+    /// The reduced transfer of one chunk, read by the host.
+    transfer: BufferId,
+    status: BufferId,
+    chunk_base: BufferId,
+    chunk_count: BufferId,
+    per_lane: BufferId,
+}
+
+impl RayBuffers {
+    /// Uploads the receivers and directions and creates the outputs, timing both into
+    /// `phases.set_up` (from `start`, after the trees).
+    fn create(
+        gpu: &mut Gpu,
+        receivers: &[GpuReceiver],
+        directions: &[[f32; 4]],
+        (total, samples, dim): (usize, usize, usize),
+        start: std::time::Instant,
+        phases: &mut BakePhases,
+    ) -> Result<RayBuffers> {
+        let receivers = gpu.create_storage_buffer("prt rays receivers", bytemuck::cast_slice(receivers))?;
+        let directions = gpu.create_storage_buffer("prt rays directions", bytemuck::cast_slice(directions))?;
+        phases.set_up[0] = start.elapsed() - phases.trees;
+        // Room for at least one receiver at one ray per invocation. The partial sums stay on
+        // the device; the host reads the reduced transfer, at most one chunk of it at a time.
+        let sums_bytes = (total * samples * dim * 4).min(MAX_SUMS_BYTES.max(samples * dim * 4));
+        let sums = gpu.create_storage_output("prt rays partial sums", sums_bytes as u64, MemoryKind::GpuOnly)?;
+        let most_receivers = total.min(sums_bytes / (4 * dim));
+        let transfer = gpu.create_storage_output(
+            "prt rays transfer",
+            (most_receivers * dim * 4) as u64,
+            MemoryKind::GpuToCpu,
+        )?;
+        let status = status_buffer(gpu, "prt rays")?;
+        let chunk_base = gpu.create_storage_output("prt rays chunk base", 4, MemoryKind::GpuOnly)?;
+        let chunk_count = gpu.create_storage_output("prt rays chunk count", 4, MemoryKind::GpuOnly)?;
+        let per_lane = gpu.create_storage_output("prt rays per lane", 4, MemoryKind::GpuOnly)?;
+        phases.set_up[1] = start.elapsed() - phases.trees - phases.set_up[0];
+        Ok(RayBuffers {
+            receivers,
+            directions,
+            sums,
+            sums_bytes,
+            transfer,
+            status,
+            chunk_base,
+            chunk_count,
+            per_lane,
+        })
+    }
+}
+
+/// Everything a chunk of the ray bake records.
+struct RayBake {
+    buffers: RayBuffers,
+    bvh: GpuBvh,
+    pipeline: PipelineId,
+    reduce: PipelineId,
+    push: Push,
+    reduce_push: ReducePush,
+    samples: usize,
+    dim: usize,
+    total: usize,
+}
+
+impl RayBake {
+    /// Traces every receiver, chunk by chunk, each chunk sized by the time the last ones took;
+    /// a chunk whose invocations the device cut short is traced again with fewer rays per
+    /// invocation. Returns the transfer, receiver-major.
+    fn trace_chunks(
+        &self,
+        gpu: &mut Gpu,
+        frame: Frame,
+        states: &mut ResourceStates,
+        phases: &mut BakePhases,
+        progress: &mut Progress,
+    ) -> Result<Vec<f32>> {
+        let (samples, dim, total) = (self.samples, self.dim, self.total);
+        let mut out = vec![0.0f32; total * dim];
+        let mut per = FIRST_RAYS_PER_LANE.min(samples as u32);
+        let mut sizer = BatchSizer::new(FIRST_CHUNK, 16, usize::MAX, MAX_CHUNK_GROWTH);
+        let mut base = 0usize;
+        while base < total {
+            let lanes = samples.div_ceil(per as usize);
+            // Both dispatches within the guaranteed workgroup count: the trace's lanes, the
+            // reduction's coefficients.
+            let fits = (MAX_INVOCATIONS / lanes.max(dim))
+                .min(self.buffers.sums_bytes / (4 * lanes * dim))
+                .max(1);
+            let n = sizer.size().min(total - base).min(fits);
+            let t0 = std::time::Instant::now();
+            let mut graph = RenderGraph::new();
+            self.record_chunk(&mut graph, (base as u32, n as u32), per, lanes);
+            graph.run_and_wait(gpu, frame, states, "PRT ray cast")?;
+            phases.record_submission(n, t0.elapsed());
+            let t_sum = std::time::Instant::now();
+            let status = self.buffers.status;
+            let cut = cut_invocations(gpu, status, "PRT ray cast")?;
+            if cut > 0 {
+                if per == 1 {
+                    return Err(loop_limit_error(gpu, cut, "PRT ray(s)", "use the CPU baker"));
+                }
+                // Fewer rays per invocation, and the same chunk again.
+                per = per.div_ceil(2);
+                sizer.shrink();
+                continue;
+            }
+            let transfer = gpu.read_buffer_prefix(self.buffers.transfer, 4 * n * dim)?;
+            out[base * dim..(base + n) * dim].copy_from_slice(bytemuck::cast_slice(&transfer));
+            phases.read_back += t_sum.elapsed();
+            base += n;
+            progress.update(base as u64, total as u64);
+            sizer.record(n, t0.elapsed());
+        }
+        Ok(out)
+    }
+
+    /// One chunk of `count` receivers from `first`, `per` rays an invocation over `lanes`
+    /// invocations a receiver: the chunk's parameters, the trace, the reduction, the read-back.
+    fn record_chunk<'a>(&'a self, graph: &mut RenderGraph<'a>, (first, count): (u32, u32), per: u32, lanes: usize) {
+        let b = &self.buffers;
+        let (n, dim) = (count as usize, self.dim);
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let read = Access::StorageRead { stages: compute };
+        let write = Access::StorageWrite { stages: compute };
+        let (base_buf, count_buf, per_buf, status_buf) = (b.chunk_base, b.chunk_count, b.per_lane, b.status);
         graph
             .pass("prt rays chunk base")
             .buffer(base_buf, Access::TransferWrite, None)
@@ -490,11 +621,12 @@ fn run(
             .pass("prt rays clear status")
             .buffer(status_buf, Access::TransferWrite, None)
             .record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
-        bvh_tables
+        let (pipeline, push) = (self.pipeline, self.push);
+        self.bvh
             .read(graph.pass("prt rays"), vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .buffer(receivers_buf, read, Some("receivers"))
-            .buffer(directions_buf, read, Some("directions"))
-            .buffer(sums_buf, write, Some("sums"))
+            .buffer(b.receivers, read, Some("receivers"))
+            .buffer(b.directions, read, Some("directions"))
+            .buffer(b.sums, write, Some("sums"))
             .buffer(status_buf, write, Some("status"))
             .buffer(base_buf, read, Some("chunk_base"))
             .buffer(count_buf, read, Some("chunk_count"))
@@ -505,10 +637,11 @@ fn run(
                 ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                 ctx.rec.dispatch([(n * lanes) as u32, 1, 1])
             });
+        let (reduce, reduce_push) = (self.reduce, self.reduce_push);
         graph
             .pass("prt rays reduce")
-            .buffer(sums_buf, read, Some("sums"))
-            .buffer(transfer_buf, write, Some("transfer"))
+            .buffer(b.sums, read, Some("sums"))
+            .buffer(b.transfer, write, Some("transfer"))
             .buffer(status_buf, write, Some("status"))
             .buffer(count_buf, read, Some("chunk_count"))
             .buffer(per_buf, read, Some("per_lane"))
@@ -520,33 +653,10 @@ fn run(
             });
         graph
             .pass("prt rays host")
-            .buffer(transfer_buf, Access::HostRead, None)
+            .buffer(b.transfer, Access::HostRead, None)
             .buffer(status_buf, Access::HostRead, None)
             .record(|_| Ok(()));
-        graph.run_and_wait(gpu, frame, &mut states, "PRT ray cast")?;
-        phases.record_submission(n, t0.elapsed());
-        let t_sum = std::time::Instant::now();
-        let cut = cut_invocations(gpu, status_buf, "PRT ray cast")?;
-        if cut > 0 {
-            if per == 1 {
-                return Err(loop_limit_error(gpu, cut, "PRT ray(s)", "use the CPU baker"));
-            }
-            // Fewer rays per invocation, and the same chunk again.
-            per = per.div_ceil(2);
-            sizer.shrink();
-            continue;
-        }
-        let transfer = gpu.read_buffer_prefix(transfer_buf, 4 * n * dim)?;
-        out[base * dim..(base + n) * dim].copy_from_slice(bytemuck::cast_slice(&transfer));
-        phases.read_back += t_sum.elapsed();
-        base += n;
-        progress.update(base as u64, total as u64);
-        sizer.record(n, t0.elapsed());
     }
-    progress.finish();
-    phases.total = start.elapsed();
-    crate::errln!("{}", phases.report(total, samples));
-    Ok(out)
 }
 
 /// The compute ray baker's wall time by phase.

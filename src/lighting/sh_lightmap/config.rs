@@ -98,6 +98,7 @@ impl Config {
         out
     }
 
+    // long: one key-by-key parser, a match arm per parameter.
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
         let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);

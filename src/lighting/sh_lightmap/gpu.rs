@@ -17,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::samples::SampleSet;
-use crate::backend::{vk, ComputePipelineDesc, Gpu, MemoryKind};
+use crate::backend::{vk, BufferId, ComputePipelineDesc, Frame, Gpu, MemoryKind, PipelineId};
 use crate::bake::gpu_loop::{cut_invocations, dvec4, loop_limit_error, status_buffer, BatchSizer};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
@@ -101,8 +101,60 @@ fn run(
             inside.len()
         )));
     }
+    let occluders = SkyOccluders::new(triangles);
+    let buffers = VisibilityBuffers::create(gpu, &gpu_patches(p, &inside), samples, &occluders.sky, total)?;
+    let pipeline = gpu.create_compute_pipeline(
+        &ComputePipelineDesc {
+            name: "sh visibility".into(),
+            shader: "sh_lightmap/visibility.comp".into(),
+            specialization: vec![],
+        },
+        shaders,
+    )?;
+    let frame = gpu.create_frame()?;
+    let has_sky = triangles.iter().any(|t| t.sky);
+    let push = Push {
+        patch_count: inside.len() as u32,
+        word_items: total as u32,
+        sample_count: samples.len() as u32,
+        triangle_count: occluders.traced.len() as u32,
+        // Without sky surfaces any hit blocks; with them the first hit decides (in both modes: a
+        // sky surface passes the ray, corrected mode's escaping rays pass too).
+        closest: u32::from(has_sky),
+        escape: u32::from(mode == Mode::Corrected || !has_sky),
+    };
+    let mut states = ResourceStates::default();
+    let bvh = GpuBvh::upload(
+        gpu,
+        &mut states,
+        "sh visibility",
+        &occluders.bvh.nodes,
+        &occluders.traced,
+        Some(&occluders.bvh.skip_links()),
+    )?;
+    let bake = VisibilityBake {
+        buffers,
+        bvh,
+        pipeline,
+        push,
+    };
+    bake.trace_chunks(gpu, frame, &mut states, progress, |base, out| {
+        for (i, b) in out.chunks_exact(4).enumerate() {
+            let word_bits = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            let item = base + i;
+            let (w, j) = (item / inside.len(), item % inside.len());
+            bits[inside[j] * words + w] = word_bits;
+        }
+    })?;
+    progress.finish();
+    Ok(bits)
+}
+
+/// The inside patches as the shader reads them: the ray origin a hair in front of the chart's
+/// plane, so that its own plane never occludes.
+fn gpu_patches(p: &Patches, inside: &[usize]) -> Vec<GpuPatch> {
     let eps = 1e-4 * p.size;
-    let patches: Vec<GpuPatch> = inside
+    inside
         .iter()
         .map(|&k| {
             let q = &p.patches[k];
@@ -113,69 +165,134 @@ fn run(
                 normal: dvec4(q.normal, 0.0),
             }
         })
-        .collect();
-    let dirs: Vec<[f32; 4]> = samples.dirs.iter().map(|&d| dvec4(d, 0.0)).collect();
-    let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
-    let bvh = Bvh::build(&tris);
-    let traced = TracedTriangle::in_leaf_order(&bvh, &tris);
-    let mut sky = vec![0u32; traced.len().div_ceil(32)];
-    for (slot, &t) in bvh.order.iter().enumerate() {
-        if triangles[t as usize].sky {
-            sky[slot / 32] |= 1 << (slot % 32);
+        .collect()
+}
+
+/// The occluders' BVH, its triangles in leaf order, and one bit per leaf slot: a sky surface.
+struct SkyOccluders {
+    bvh: Bvh,
+    traced: Vec<TracedTriangle>,
+    sky: Vec<u32>,
+}
+
+impl SkyOccluders {
+    fn new(triangles: &[Triangle]) -> Self {
+        let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
+        let bvh = Bvh::build(&tris);
+        let traced = TracedTriangle::in_leaf_order(&bvh, &tris);
+        let mut sky = vec![0u32; traced.len().div_ceil(32)];
+        for (slot, &t) in bvh.order.iter().enumerate() {
+            if triangles[t as usize].sky {
+                sky[slot / 32] |= 1 << (slot % 32);
+            }
         }
+        SkyOccluders { bvh, traced, sky }
     }
-    let has_sky = triangles.iter().any(|t| t.sky);
+}
 
-    let patches_buf = gpu.create_storage_buffer("sh visibility patches", bytemuck::cast_slice(&patches))?;
-    let samples_buf = gpu.create_storage_buffer("sh visibility samples", bytemuck::cast_slice(&dirs))?;
-    let sky_buf = gpu.create_storage_buffer("sh visibility sky flags", bytemuck::cast_slice(&sky))?;
-    let max_chunk = MAX_CHUNK.min(total);
-    let out_buf = gpu.create_storage_output("sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?;
-    let status_buf = status_buffer(gpu, "sh visibility")?;
-    let chunk_buf = gpu.create_storage_output("sh visibility chunk", 4, MemoryKind::GpuOnly)?;
-    let lanes_buf = gpu.create_storage_output("sh visibility lanes", 4, MemoryKind::GpuOnly)?;
-    let pipeline = gpu.create_compute_pipeline(
-        &ComputePipelineDesc {
-            name: "sh visibility".into(),
-            shader: "sh_lightmap/visibility.comp".into(),
-            specialization: vec![],
-        },
-        shaders,
-    )?;
-    let frame = gpu.create_frame()?;
+/// The visibility bake's buffers.
+struct VisibilityBuffers {
+    patches: BufferId,
+    samples: BufferId,
+    sky: BufferId,
+    /// One chunk's words, read by the host; `max_chunk` of them at most.
+    out: BufferId,
+    max_chunk: usize,
+    status: BufferId,
+    chunk: BufferId,
+    lanes: BufferId,
+}
 
-    let push = Push {
-        patch_count: inside.len() as u32,
-        word_items: total as u32,
-        sample_count: samples.len() as u32,
-        triangle_count: traced.len() as u32,
-        // Without sky surfaces any hit blocks; with them the first hit decides (in both modes: a
-        // sky surface passes the ray, corrected mode's escaping rays pass too).
-        closest: u32::from(has_sky),
-        escape: u32::from(mode == Mode::Corrected || !has_sky),
-    };
-    let mut lanes = 1u32;
-    let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-    let read = Access::StorageRead { stages: compute };
-    let write = Access::StorageWrite { stages: compute };
-    let mut states = ResourceStates::default();
-    let bvh_tables = GpuBvh::upload(
-        gpu,
-        &mut states,
-        "sh visibility",
-        &bvh.nodes,
-        &traced,
-        Some(&bvh.skip_links()),
-    )?;
-    // A last, short chunk (or a bake of fewer than 32 words) must not bring the ceiling under the
-    // floor of 64.
-    let mut sizer = BatchSizer::new(FIRST_CHUNK, 64, max_chunk, 2);
-    let mut base = 0usize;
-    while base < total {
-        let n = sizer.size().min(total - base).min(MAX_INVOCATIONS / lanes as usize);
-        let t0 = std::time::Instant::now();
-        let mut graph = RenderGraph::new();
-        let first = base as u32;
+impl VisibilityBuffers {
+    fn create(
+        gpu: &mut Gpu,
+        patches: &[GpuPatch],
+        samples: &SampleSet,
+        sky: &[u32],
+        total: usize,
+    ) -> Result<VisibilityBuffers> {
+        let dirs: Vec<[f32; 4]> = samples.dirs.iter().map(|&d| dvec4(d, 0.0)).collect();
+        let patches = gpu.create_storage_buffer("sh visibility patches", bytemuck::cast_slice(patches))?;
+        let samples = gpu.create_storage_buffer("sh visibility samples", bytemuck::cast_slice(&dirs))?;
+        let sky = gpu.create_storage_buffer("sh visibility sky flags", bytemuck::cast_slice(sky))?;
+        let max_chunk = MAX_CHUNK.min(total);
+        Ok(VisibilityBuffers {
+            patches,
+            samples,
+            sky,
+            out: gpu.create_storage_output("sh visibility bits", 4 * max_chunk as u64, MemoryKind::GpuToCpu)?,
+            max_chunk,
+            status: status_buffer(gpu, "sh visibility")?,
+            chunk: gpu.create_storage_output("sh visibility chunk", 4, MemoryKind::GpuOnly)?,
+            lanes: gpu.create_storage_output("sh visibility lanes", 4, MemoryKind::GpuOnly)?,
+        })
+    }
+}
+
+/// Everything a chunk of the visibility bake records.
+struct VisibilityBake {
+    buffers: VisibilityBuffers,
+    bvh: GpuBvh,
+    pipeline: PipelineId,
+    push: Push,
+}
+
+impl VisibilityBake {
+    /// Traces every word item, chunk by chunk, each chunk sized by the time the last ones took;
+    /// a chunk whose invocations the device cut short is traced again with more invocations per
+    /// word. Each chunk's words go to `scatter` with the chunk's first item.
+    fn trace_chunks(
+        &self,
+        gpu: &mut Gpu,
+        frame: Frame,
+        states: &mut ResourceStates,
+        progress: &mut Progress,
+        mut scatter: impl FnMut(usize, &[u8]),
+    ) -> Result<()> {
+        let total = self.push.word_items as usize;
+        let mut lanes = 1u32;
+        // A last, short chunk (or a bake of fewer than 32 words) must not bring the ceiling under
+        // the floor of 64.
+        let mut sizer = BatchSizer::new(FIRST_CHUNK, 64, self.buffers.max_chunk, 2);
+        let mut base = 0usize;
+        while base < total {
+            let n = sizer.size().min(total - base).min(MAX_INVOCATIONS / lanes as usize);
+            let t0 = std::time::Instant::now();
+            let mut graph = RenderGraph::new();
+            self.record_chunk(&mut graph, base as u32, n as u32, lanes);
+            graph.run_and_wait(gpu, frame, states, "sh light-map visibility")?;
+            let cut = cut_invocations(gpu, self.buffers.status, "sh light-map visibility")?;
+            if cut > 0 {
+                if lanes >= MAX_LANES {
+                    return Err(loop_limit_error(
+                        gpu,
+                        cut,
+                        "SH light-map visibility ray(s)",
+                        "use baker = \"cpu\"",
+                    ));
+                }
+                // Fewer rays per invocation, and the same chunk again.
+                lanes *= 2;
+                sizer.shrink();
+                continue;
+            }
+            let out = gpu.read_buffer_prefix(self.buffers.out, 4 * n)?;
+            scatter(base, &out);
+            base += n;
+            progress.update(base as u64, total as u64);
+            sizer.record(n, t0.elapsed());
+        }
+        Ok(())
+    }
+
+    /// One chunk of `n` word items from `first`, `lanes` invocations a word: the chunk's
+    /// parameters, the cleared outputs, the trace and the read-back.
+    fn record_chunk<'a>(&'a self, graph: &mut RenderGraph<'a>, first: u32, n: u32, lanes: u32) {
+        let b = &self.buffers;
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let read = Access::StorageRead { stages: compute };
+        let write = Access::StorageWrite { stages: compute };
+        let (chunk_buf, lanes_buf, out_buf, status_buf) = (b.chunk, b.lanes, b.out, b.status);
         graph
             .pass("sh visibility chunk")
             .buffer(chunk_buf, Access::TransferWrite, None)
@@ -192,11 +309,12 @@ fn run(
             .pass("sh visibility clear status")
             .buffer(status_buf, Access::TransferWrite, None)
             .record(move |ctx| ctx.rec.fill_buffer(status_buf, 0));
-        bvh_tables
+        let (pipeline, push) = (self.pipeline, self.push);
+        self.bvh
             .read(graph.pass("sh visibility"), vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .buffer(patches_buf, read, Some("patches"))
-            .buffer(samples_buf, read, Some("samples"))
-            .buffer(sky_buf, read, Some("sky"))
+            .buffer(b.patches, read, Some("patches"))
+            .buffer(b.samples, read, Some("samples"))
+            .buffer(b.sky, read, Some("sky"))
             .buffer(out_buf, write, Some("bits"))
             .buffer(status_buf, write, Some("status"))
             .buffer(chunk_buf, read, Some("chunk"))
@@ -205,40 +323,12 @@ fn run(
                 ctx.rec.bind_pipeline(pipeline)?;
                 ctx.bind(&[])?;
                 ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-                ctx.rec.dispatch([n as u32 * lanes, 1, 1])
+                ctx.rec.dispatch([n * lanes, 1, 1])
             });
         graph
             .pass("sh visibility host")
             .buffer(out_buf, Access::HostRead, None)
             .buffer(status_buf, Access::HostRead, None)
             .record(|_| Ok(()));
-        graph.run_and_wait(gpu, frame, &mut states, "sh light-map visibility")?;
-        let cut = cut_invocations(gpu, status_buf, "sh light-map visibility")?;
-        if cut > 0 {
-            if lanes >= MAX_LANES {
-                return Err(loop_limit_error(
-                    gpu,
-                    cut,
-                    "SH light-map visibility ray(s)",
-                    "use baker = \"cpu\"",
-                ));
-            }
-            // Fewer rays per invocation, and the same chunk again.
-            lanes *= 2;
-            sizer.shrink();
-            continue;
-        }
-        let out = gpu.read_buffer_prefix(out_buf, 4 * n)?;
-        for (i, b) in out.chunks_exact(4).enumerate() {
-            let word_bits = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            let item = base + i;
-            let (w, j) = (item / inside.len(), item % inside.len());
-            bits[inside[j] * words + w] = word_bits;
-        }
-        base += n;
-        progress.update(base as u64, total as u64);
-        sizer.record(n, t0.elapsed());
     }
-    progress.finish();
-    Ok(bits)
 }

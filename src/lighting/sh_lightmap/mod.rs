@@ -391,6 +391,89 @@ pub struct ShLightmap {
     env_coeffs: BufferId,
 }
 
+/// The configuration the bake depends on: `config` with every run-time-only setting at its
+/// default, so that those settings share one cache entry.
+fn bake_config(config: &Config) -> Config {
+    Config {
+        view: View::Final,
+        filter: false,
+        storage: Storage::Single,
+        reps: 0,
+        sun_speed: 0.0,
+        sky: config::Sky::Scene,
+        cie_zenith: 0.0,
+        on_gpu: None,
+        ..*config
+    }
+}
+
+/// What the bake depends on: its configuration, the static triangles, their light-map uvs, the
+/// normal maps and the visibility shader.
+fn bake_key(bake_config: &Config, geometry: &StaticGeometry, maps: &[Option<NormalImage>]) -> BakeKey {
+    let mut key = BakeKey::new("SH light-map")
+        .with("version", BAKER_VERSION)
+        .with("config", bake_config);
+    let geometry_bytes: Vec<f64> = geometry
+        .triangles
+        .iter()
+        .flat_map(|t| {
+            t.p.iter()
+                .flat_map(|p| p.to_array())
+                .chain(t.albedo.to_array())
+                .chain([t.object as f64, f64::from(u8::from(t.sky))])
+        })
+        .collect();
+    key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
+    let uv_bytes: Vec<f32> = geometry.uvs.iter().flatten().flatten().copied().collect();
+    key = key.with_bytes("uvs", bytemuck::cast_slice(&uv_bytes));
+    for (i, m) in maps.iter().enumerate() {
+        if let Some(m) = m {
+            let texels: Vec<f64> = m.texels.iter().flat_map(|t| t.to_array()).collect();
+            key = key.with_bytes(&format!("normal map {i}"), bytemuck::cast_slice(&texels));
+        }
+    }
+    // The GPU's rays give the CPU's bits but for a few seam rays (tests/methods/sh_lightmap_gpu.rs):
+    // one cache entry serves both.
+    key.with_shaders("sh_lightmap/visibility")
+}
+
+/// The shading pipeline for `bands` baked bands: the native or compressed fragment shader,
+/// specialised for the storage, the solve's mode, the view and the filter.
+fn shade_pipeline(cx: &mut CreateContext<'_>, config: &Config, bands: usize) -> Result<PipelineId> {
+    let (fragment, encoded) = match config.reps {
+        0 => ("sh_lightmap/native.frag", config.storage == Storage::Rgba8),
+        _ => ("sh_lightmap/compressed.frag", config.storage == Storage::Rgba8),
+    };
+    let mut desc = crate::lighting::lightmap::mesh::Mesh::pipeline_desc(&format!("{NAME} bands={bands}"), fragment);
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+    desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+    let faithful = config.transfer.solve.mode == Mode::Faithful;
+    desc.specialization = vec![
+        SpecConstant {
+            id: 0,
+            bits: bands as u32,
+        },
+        SpecConstant {
+            id: 1,
+            bits: u32::from(encoded),
+        },
+        SpecConstant {
+            id: 2,
+            bits: u32::from(faithful),
+        },
+        SpecConstant {
+            id: 3,
+            bits: config.view as u32,
+        },
+        SpecConstant {
+            id: 4,
+            bits: u32::from(config.filter),
+        },
+    ];
+    Ok(cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?)
+}
+
 impl ShLightmap {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<ShLightmap> {
         let config = Config::from_decl(decl, Some(cx.scene))?;
@@ -419,42 +502,8 @@ impl ShLightmap {
                 .map(|m| m.and_then(|m| maps.get(m).and_then(|x| x.as_ref())))
                 .collect(),
         };
-        let bake_config = Config {
-            view: View::Final,
-            filter: false,
-            storage: Storage::Single,
-            reps: 0,
-            sun_speed: 0.0,
-            sky: config::Sky::Scene,
-            cie_zenith: 0.0,
-            on_gpu: None,
-            ..config
-        };
-        let mut key = BakeKey::new("SH light-map")
-            .with("version", BAKER_VERSION)
-            .with("config", bake_config);
-        let geometry_bytes: Vec<f64> = geometry
-            .triangles
-            .iter()
-            .flat_map(|t| {
-                t.p.iter()
-                    .flat_map(|p| p.to_array())
-                    .chain(t.albedo.to_array())
-                    .chain([t.object as f64, f64::from(u8::from(t.sky))])
-            })
-            .collect();
-        key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
-        let uv_bytes: Vec<f32> = geometry.uvs.iter().flatten().flatten().copied().collect();
-        key = key.with_bytes("uvs", bytemuck::cast_slice(&uv_bytes));
-        for (i, m) in maps.iter().enumerate() {
-            if let Some(m) = m {
-                let texels: Vec<f64> = m.texels.iter().flat_map(|t| t.to_array()).collect();
-                key = key.with_bytes(&format!("normal map {i}"), bytemuck::cast_slice(&texels));
-            }
-        }
-        // The GPU's rays give the CPU's bits but for a few seam rays (tests/methods/sh_lightmap_gpu.rs):
-        // one cache entry serves both.
-        key = key.with_shaders("sh_lightmap/visibility");
+        let bake_config = bake_config(&config);
+        let key = bake_key(&bake_config, &geometry, &maps);
         let (geo, surf, scene) = (&geometry, &surfaces, cx.scene);
         let (device, shaders) = (&mut *cx.gpu, cx.shaders);
         let floats: Vec<f32> = cx.bakes.bake(
@@ -484,39 +533,8 @@ impl ShLightmap {
         } else {
             upload_compressed(cx, &baked, &config, &key)?
         };
-        let (fragment, encoded) = match config.reps {
-            0 => ("sh_lightmap/native.frag", config.storage == Storage::Rgba8),
-            _ => ("sh_lightmap/compressed.frag", config.storage == Storage::Rgba8),
-        };
-        let mut desc =
-            crate::lighting::lightmap::mesh::Mesh::pipeline_desc(&format!("{NAME} bands={}", baked.bands), fragment);
-        desc.raster.cull = vk::CullModeFlags::NONE;
-        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+        let pipeline = shade_pipeline(cx, &config, baked.bands)?;
         let faithful = config.transfer.solve.mode == Mode::Faithful;
-        desc.specialization = vec![
-            SpecConstant {
-                id: 0,
-                bits: baked.bands as u32,
-            },
-            SpecConstant {
-                id: 1,
-                bits: u32::from(encoded),
-            },
-            SpecConstant {
-                id: 2,
-                bits: u32::from(faithful),
-            },
-            SpecConstant {
-                id: 3,
-                bits: config.view as u32,
-            },
-            SpecConstant {
-                id: 4,
-                bits: u32::from(config.filter),
-            },
-        ];
-        let pipeline = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
         let sampler = cx.gpu.sampler(if config.reps == 0 {
             SamplerDesc::LINEAR_CLAMP
         } else {

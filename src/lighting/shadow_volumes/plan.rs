@@ -370,6 +370,8 @@ pub fn plan_frame(
     plan
 }
 
+/// The frame's plan before translucent entities are set apart: what the eye sees and, per
+/// light, its receivers and casters.
 fn plan_all(
     config: &Config,
     world: Option<&WorldFrame>,
@@ -385,106 +387,143 @@ fn plan_all(
         .zip(&entity_transforms)
         .map(|(e, m)| e.world_bounds(m))
         .collect();
-    let touches = |(lo, hi): (Vec3, Vec3), p: Vec3, r: f64| {
-        let nearest = p.clamp(lo, hi);
-        f64::from(nearest.distance_squared(p)) <= r * r
-    };
-    let in_cone =
-        |l: &PointLight, b: (Vec3, Vec3)| cone_culling(config, l).is_none_or(|s| s.may_reach_box(l.position, b));
     let Some(frame) = world else {
-        // No world: every entity is drawn, lit within the radius and casts within it.
-        let visible_entities: Vec<usize> = (0..entities.len()).collect();
-        let plans = lights
-            .iter()
-            .enumerate()
-            .filter_map(|(i, l)| {
-                let r = culling_radius(config, l);
-                let near: Vec<usize> = (0..entities.len())
-                    .filter(|&e| touches(entity_bounds[e], l.position, r) && in_cone(l, entity_bounds[e]))
-                    .collect();
-                (!near.is_empty()).then(|| LightPlan {
-                    light: i,
-                    receiver_entities: near.clone(),
-                    caster_entities: near,
-                    ..Default::default()
-                })
-            })
-            .collect();
-        return FramePlan {
-            visible_faces: Vec::new(),
-            visible_entities,
-            lights: plans,
-            entity_transforms,
-            ..Default::default()
-        };
+        return plan_without_world(config, lights, &entity_bounds, entity_transforms);
     };
-    let w = &frame.world;
-    let cam_leaf = w.leaf_of(frame.to_world(camera));
-    // Without a PVS, or with the eye outside the world, everything is potentially visible.
-    let cull = config.pvs && !w.is_solid(cam_leaf);
-    let mut face_visible = vec![!cull; w.faces.len()];
-    let mut leaf_visible = vec![!cull; w.leaves().len()];
-    if cull {
-        for l in w.visible_leaves(cam_leaf) {
-            leaf_visible[l as usize] = true;
-            for &f in &w.leaves()[l as usize].faces {
-                face_visible[f as usize] = true;
+    let view = WorldView::new(config, frame, &entity_bounds, camera);
+    let plans = lights
+        .iter()
+        .enumerate()
+        .filter_map(|(i, light)| view.light_plan(sets.get(i)?, i, light))
+        .collect();
+    let visible_faces: Vec<FaceId> = (0..frame.world.faces.len() as FaceId)
+        .filter(|&f| view.face_visible[f as usize])
+        .collect();
+    FramePlan {
+        visible_faces,
+        visible_entities: view.visible_entities,
+        lights: plans,
+        entity_transforms,
+        ..Default::default()
+    }
+}
+
+/// Whether an entity with world bounds `b` is within `r` of the light and inside its cone.
+fn in_reach(config: &Config, light: &PointLight, r: f64, b: (Vec3, Vec3)) -> bool {
+    let (lo, hi) = b;
+    let nearest = light.position.clamp(lo, hi);
+    f64::from(nearest.distance_squared(light.position)) <= r * r
+        && cone_culling(config, light).is_none_or(|s| s.may_reach_box(light.position, b))
+}
+
+/// The plan with no world: every entity is drawn, lit within the radius and casts within it.
+fn plan_without_world(
+    config: &Config,
+    lights: &[PointLight],
+    entity_bounds: &[(Vec3, Vec3)],
+    entity_transforms: Vec<Mat4>,
+) -> FramePlan {
+    let visible_entities: Vec<usize> = (0..entity_bounds.len()).collect();
+    let plans = lights
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let r = culling_radius(config, l);
+            let near: Vec<usize> = (0..entity_bounds.len())
+                .filter(|&e| in_reach(config, l, r, entity_bounds[e]))
+                .collect();
+            (!near.is_empty()).then(|| LightPlan {
+                light: i,
+                receiver_entities: near.clone(),
+                caster_entities: near,
+                ..Default::default()
+            })
+        })
+        .collect();
+    FramePlan {
+        visible_faces: Vec::new(),
+        visible_entities,
+        lights: plans,
+        entity_transforms,
+        ..Default::default()
+    }
+}
+
+/// What the eye sees of a world frame, and where the entities are in it.
+struct WorldView<'a> {
+    config: &'a Config,
+    frame: &'a WorldFrame,
+    entity_bounds: &'a [(Vec3, Vec3)],
+    /// Per entity: the leaves its bounds overlap.
+    entity_leaves: Vec<Vec<LeafId>>,
+    face_visible: Vec<bool>,
+    visible_entities: Vec<usize>,
+}
+
+impl<'a> WorldView<'a> {
+    fn new(config: &'a Config, frame: &'a WorldFrame, entity_bounds: &'a [(Vec3, Vec3)], camera: Vec3) -> Self {
+        let w = &frame.world;
+        let cam_leaf = w.leaf_of(frame.to_world(camera));
+        // Without a PVS, or with the eye outside the world, everything is potentially visible.
+        let cull = config.pvs && !w.is_solid(cam_leaf);
+        let mut face_visible = vec![!cull; w.faces.len()];
+        let mut leaf_visible = vec![!cull; w.leaves().len()];
+        if cull {
+            for l in w.visible_leaves(cam_leaf) {
+                leaf_visible[l as usize] = true;
+                for &f in &w.leaves()[l as usize].faces {
+                    face_visible[f as usize] = true;
+                }
             }
         }
+        let entity_leaves: Vec<Vec<LeafId>> = entity_bounds
+            .iter()
+            .map(|&b| occupied_leaves(w, &world_aabb(frame, b)))
+            .collect();
+        let visible_entities: Vec<usize> = (0..entity_bounds.len())
+            .filter(|&e| !cull || entity_leaves[e].iter().any(|&l| leaf_visible[l as usize]))
+            .collect();
+        WorldView {
+            config,
+            frame,
+            entity_bounds,
+            entity_leaves,
+            face_visible,
+            visible_entities,
+        }
     }
-    let entity_leaves: Vec<Vec<LeafId>> = entity_bounds
-        .iter()
-        .map(|&b| occupied_leaves(w, &world_aabb(frame, b)))
-        .collect();
-    let visible_entities: Vec<usize> = (0..entities.len())
-        .filter(|&e| !cull || entity_leaves[e].iter().any(|&l| leaf_visible[l as usize]))
-        .collect();
-    let visible_faces: Vec<FaceId> = (0..w.faces.len() as FaceId)
-        .filter(|&f| face_visible[f as usize])
-        .collect();
-    let mut plans = Vec::new();
-    for (i, light) in lights.iter().enumerate() {
-        let Some(s) = sets.get(i) else { continue };
-        let Some(light_leaf) = s.leaf else { continue };
+
+    /// Light `i`'s plan from its world sets `s`: its visible receivers and its casters; `None`
+    /// when it lights nothing visible or is outside the world.
+    fn light_plan(&self, s: &LightWorldSets, i: usize, light: &PointLight) -> Option<LightPlan> {
+        let (config, w) = (self.config, &self.frame.world);
+        let light_leaf = s.leaf?;
         let r = culling_radius(config, light);
-        let p = frame.to_world(light.position);
         let receiver_faces: Vec<FaceId> = s
             .receivers
             .iter()
             .copied()
-            .filter(|&f| face_visible[f as usize])
+            .filter(|&f| self.face_visible[f as usize])
             .collect();
-        let receiver_entities: Vec<usize> = visible_entities
+        let receiver_entities: Vec<usize> = self
+            .visible_entities
             .iter()
             .copied()
-            .filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e]))
-            .filter(|&e| !config.pvs || entity_leaves[e].iter().any(|&l| w.is_visible(light_leaf, l)))
+            .filter(|&e| in_reach(config, light, r, self.entity_bounds[e]))
+            .filter(|&e| !config.pvs || self.entity_leaves[e].iter().any(|&l| w.is_visible(light_leaf, l)))
             .collect();
         if receiver_faces.is_empty() && receiver_entities.is_empty() {
-            continue;
+            return None;
         }
         let mut caster_faces = s.casters.clone();
         let mut added = 0;
         if config.casters == Casters::Pscs && config.pvs {
-            let mut taken = vec![false; w.faces.len()];
-            for &f in &caster_faces {
-                taken[f as usize] = true;
-            }
-            for &e in &receiver_entities {
-                for f in entity_pyramid_casters(w, p, r, &world_aabb(frame, entity_bounds[e])) {
-                    if !taken[f as usize] && face_in_cone(config, frame, light, f) {
-                        taken[f as usize] = true;
-                        caster_faces.push(f);
-                        added += 1;
-                    }
-                }
-            }
-            caster_faces.sort_unstable();
+            added = self.add_entity_pyramid_casters(light, r, &receiver_entities, &mut caster_faces);
         }
-        let caster_entities: Vec<usize> = (0..entities.len())
-            .filter(|&e| touches(entity_bounds[e], light.position, r) && in_cone(light, entity_bounds[e]))
+        let caster_entities: Vec<usize> = (0..self.entity_bounds.len())
+            .filter(|&e| in_reach(config, light, r, self.entity_bounds[e]))
             .collect();
-        plans.push(LightPlan {
+        Some(LightPlan {
             light: i,
             receiver_faces,
             receiver_entities,
@@ -492,14 +531,36 @@ fn plan_all(
             caster_entities,
             added_by_entity_pyramids: added,
             ..Default::default()
-        });
+        })
     }
-    FramePlan {
-        visible_faces,
-        visible_entities,
-        lights: plans,
-        entity_transforms,
-        ..Default::default()
+
+    /// Adds to `caster_faces` (kept sorted) the faces in the pyramids from the light to each
+    /// receiving entity's box, within the cone; returns how many were added.
+    fn add_entity_pyramid_casters(
+        &self,
+        light: &PointLight,
+        r: f64,
+        receiver_entities: &[usize],
+        caster_faces: &mut Vec<FaceId>,
+    ) -> usize {
+        let (frame, w) = (self.frame, &self.frame.world);
+        let p = frame.to_world(light.position);
+        let mut added = 0;
+        let mut taken = vec![false; w.faces.len()];
+        for &f in caster_faces.iter() {
+            taken[f as usize] = true;
+        }
+        for &e in receiver_entities {
+            for f in entity_pyramid_casters(w, p, r, &world_aabb(frame, self.entity_bounds[e])) {
+                if !taken[f as usize] && face_in_cone(self.config, frame, light, f) {
+                    taken[f as usize] = true;
+                    caster_faces.push(f);
+                    added += 1;
+                }
+            }
+        }
+        caster_faces.sort_unstable();
+        added
     }
 }
 
