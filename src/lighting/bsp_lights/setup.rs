@@ -210,13 +210,18 @@ pub fn run(
         projection: settings.projection,
         tolerance,
     };
+    let cancel = progress.cancellation();
     let per_thread: Vec<ThreadResult> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
-                let (shared, done) = (&shared, &done);
+                let (shared, done, cancel) = (&shared, &done, &cancel);
                 s.spawn(move || {
                     let (mut out, mut colour_ms, mut shadow_ms) = (Vec::new(), 0.0, 0.0);
                     for (l, light) in lights.iter().enumerate().skip(t).step_by(threads) {
+                        // Cancelled: the bake stops after the loop and caches nothing.
+                        if cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+                            break;
+                        }
                         let start = Instant::now();
                         let mut column = shared.colour(light);
                         colour_ms += ms(start);

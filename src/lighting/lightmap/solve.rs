@@ -365,7 +365,8 @@ pub fn shoot(
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     // Receivers start a hair in front of their surface, so that their own plane never occludes.
     let eps = 1e-4 * g.size;
-    while report.shots < settings.max_shots {
+    // A cancelled solve stops between shots; the bake it is part of then caches nothing.
+    while report.shots < settings.max_shots && !progress.cancelled() {
         let full = |e: &dyn Unshot| {
             (0..blocks.len())
                 .map(|b| (b, power(e, &blocks[b])))
