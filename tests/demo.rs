@@ -532,15 +532,23 @@ const LONG_BAKE_SCENE: &str = "methods = [\"forward\", { name = \"radiosity\", p
 
 #[test]
 fn cancelling_a_bake_stops_it_promptly_caches_nothing_and_keeps_drawing() {
-    // M at frame 2 starts the radiosity bake in the background; C at frame 150 cancels it. The
-    // bake stops within a bounded time, far sooner than it would have finished, frames are
-    // presented throughout with `forward`, the report says it was cancelled, and the cache
-    // holds nothing of it.
-    let cache = common::temp_path("demo-cancel-cache");
+    // The CPU solve stops between shots, the GPU shooting between submissions.
+    for baker in ["cpu", "gpu"] {
+        cancel_radiosity_bake(baker);
+    }
+}
+
+/// M at frame 2 starts the radiosity bake (on `baker`) in the background; C at frame 150
+/// cancels it. The bake stops within a bounded time, far sooner than it would have finished,
+/// frames are presented throughout with `forward`, the report says it was cancelled, and the
+/// cache holds nothing of it.
+fn cancel_radiosity_bake(baker: &str) {
+    let cache = common::temp_path(&format!("demo-cancel-{baker}-cache"));
     let _ = std::fs::remove_dir_all(&cache);
+    let scene = LONG_BAKE_SCENE.replace("patch_size = 0.02", &format!("patch_size = 0.02, baker = \"{baker}\""));
     let (out, r) = demo_run(
-        "demo-cancel",
-        LONG_BAKE_SCENE,
+        &format!("demo-cancel-{baker}"),
+        &scene,
         "2 key M\n150 key C\n",
         &cache,
         170,
@@ -562,7 +570,7 @@ fn cancelling_a_bake_stops_it_promptly_caches_nothing_and_keeps_drawing() {
         .expect("a frame after the bake");
     let stopped_s = at(last) - at(first) + after["frame_ms"].as_f64().unwrap() / 1e3;
     println!(
-        "cancelled at {fraction:.3} of the bake, {:.2} s in; it stopped within {stopped_s:.3} s",
+        "{baker}: cancelled at {fraction:.3} of the bake, {:.2} s in; it stopped within {stopped_s:.3} s",
         at(first)
     );
     assert!(
@@ -583,6 +591,14 @@ fn cancelling_a_bake_stops_it_promptly_caches_nothing_and_keeps_drawing() {
     assert!(after["baking"].is_null() && r.last().unwrap()["baking"].is_null());
     let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
     assert!(note.contains("bake of radiosity cancelled"), "{note:?}\n{out}");
+    // Where it stopped: the GPU between submissions, the CPU solve between shots (the bake
+    // then refusing its partial result).
+    let at = if baker == "gpu" {
+        "radiosity shooting"
+    } else {
+        "radiosity light-map"
+    };
+    assert!(note.contains(&format!("(at {at}")), "{note:?}");
     assert!(r
         .iter()
         .all(|f| f["presented"] == true && f["configuration"] == "forward"));

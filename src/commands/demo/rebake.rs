@@ -172,7 +172,8 @@ impl Rebake {
 }
 
 impl Drop for Rebake {
-    /// The window closing waits for the bake: its device must go before the process ends.
+    /// The window closing waits for the bake's thread (cancelled first, so it ends soon): its
+    /// device must go before the process ends.
     fn drop(&mut self) {
         self.join();
     }
