@@ -619,6 +619,11 @@ fn the_first_frames_are_drawn_while_the_starting_configuration_bakes() {
         !r[0]["baking"].is_null() && r[0]["presented"] == true,
         "the first frame waited for the bake:\n{out}"
     );
+    let bake_s = during.last().unwrap()["baking"]["elapsed_s"].as_f64().unwrap();
+    println!(
+        "{} frames presented during the first bake ({bake_s:.2} s)",
+        during.len()
+    );
     assert!(during.len() >= 3, "{} frames presented during the bake", during.len());
     assert!(during
         .iter()
@@ -679,11 +684,16 @@ fn a_bake_that_fails_in_the_background_shows_in_red_and_the_old_configuration_st
             .count()
     };
     let (with, without) = (red(&shots[0]), red(&shots[1]));
+    println!("red pixels: {with} with the failure, {without} without");
     assert!(
         with > 20 && without == 0,
         "red pixels: {with} with the failure, {without} without"
     );
     let _ = std::fs::remove_file(&cache);
+    let _ = std::fs::remove_dir_all(common::temp_path("demo-fail-none-cache"));
+    for shot in &shots {
+        let _ = std::fs::remove_file(shot);
+    }
 }
 
 #[test]
