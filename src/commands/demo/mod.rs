@@ -457,10 +457,20 @@ impl Running {
                 );
                 // A newer request replaces this one, and a cancel that came too late keeps what
                 // is drawn (either way its bakes stay in the cache).
-                if self.queued.is_none() && !r.status.cancelling {
+                if r.status.cancelling && self.queued.is_none() {
+                    self.bake_note = Some(format!(
+                        "bake of {} finished as it was cancelled (kept in the cache), keeping {}",
+                        r.configuration.name, self.renderer.configuration.name
+                    ));
+                } else if self.queued.is_none() {
                     let started = Instant::now();
-                    // Where the cache could not be written, this bakes again, in the frame.
-                    match self.renderer.set_configuration(r.configuration.clone()) {
+                    // Read from the cache only: the frame never bakes (a bake that could not be
+                    // stored failed on its thread).
+                    let mut cache = Baker::cached_only(Baker::default_dir());
+                    match self
+                        .renderer
+                        .set_configuration_with(r.configuration.clone(), &mut cache)
+                    {
                         Ok(()) => self.switched_to(r.index, r.configuration.clone(), started),
                         Err(e) => self.report_problem(format!("cannot switch to {}: {e}", r.configuration.name)),
                     }
