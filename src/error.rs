@@ -17,6 +17,9 @@ pub enum Error {
     /// A request that cannot be honoured as asked (a method the scene doesn't enable, a size of 0…).
     #[error("{0}")]
     Usage(String),
+    /// Long work stopped because it was asked to (the demo's Cancel): the work named.
+    #[error("{0}: cancelled")]
+    Cancelled(String),
     /// The validation layer reported messages, printed as they came.
     #[error("{0} validation message(s) (see above)")]
     Validation(usize),

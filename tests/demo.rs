@@ -399,43 +399,94 @@ fn still_frames_converge_to_compare_against_a_converged_reference() {
 /// A floor and a box lit by a point light, drawn with a radiosity light-map of coarse patches.
 const RADIOSITY_SCENE: &str = "methods = [{ name = \"radiosity\", patch_size = 0.2 }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";
 
-#[test]
-fn a_rebake_runs_while_frames_go_on_and_a_second_change_waits_for_it() {
-    // Finer patches asked for at frame 3 (a bake of a second or so here), and others at frame
-    // 6 while it runs: the window keeps presenting the coarse light-map meanwhile, the report
-    // (what the panel shows) follows the bake's progress, the first request is superseded and
-    // the second is drawn once its bake is done, read from the cache.
-    let scene = common::temp_path("demo-rebake.toml");
-    std::fs::write(&scene, RADIOSITY_SCENE).unwrap();
-    let script = common::temp_path("demo-rebake-script.txt");
-    std::fs::write(&script, "3 param patch_size 0.05\n6 param radiosity.patch_size 0.06\n").unwrap();
-    let json = common::temp_path("demo-rebake.json");
-    let cache = common::temp_path("demo-rebake-cache");
-    let _ = std::fs::remove_dir_all(&cache);
+/// Runs the demo on `scene_text` with `script`, its bake cache in `cache`, the panel shown or
+/// not and a screenshot of the last frame when asked; returns the output and the report's frames.
+fn demo_run(
+    name: &str,
+    scene_text: &str,
+    script: &str,
+    cache: &std::path::Path,
+    frames: u32,
+    (size, panel, screenshot): (&str, bool, Option<&std::path::Path>),
+) -> (String, Vec<serde_json::Value>) {
+    let scene = common::temp_path(&format!("{name}.toml"));
+    std::fs::write(&scene, scene_text).unwrap();
+    let script_path = common::temp_path(&format!("{name}-script.txt"));
+    std::fs::write(&script_path, script).unwrap();
+    let json = common::temp_path(&format!("{name}.json"));
     let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .arg("demo")
-        .arg(&scene)
-        .args([
-            "--size",
-            "64x48",
-            "--frames",
-            "8",
-            "--hide-panel",
-            "--validation",
-            "--device",
-            &device,
-        ])
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+    cmd.arg("demo").arg(&scene).args([
+        "--size",
+        size,
+        "--frames",
+        &frames.to_string(),
+        "--validation",
+        "--device",
+        &device,
+    ]);
+    if !panel {
+        cmd.arg("--hide-panel");
+    }
+    if let Some(p) = screenshot {
+        cmd.arg("--screenshot").arg(p);
+    }
+    let o = cmd
         .arg("--script")
-        .arg(&script)
+        .arg(&script_path)
         .arg("--report-json")
         .arg(&json)
+        .env("PENUMBRA_CACHE", cache)
+        .output()
+        .unwrap();
+    (common::ok(&o), report(&json))
+}
+
+/// The bake files in `cache` whose names contain `part`.
+fn cached(cache: &std::path::Path, part: &str) -> Vec<String> {
+    std::fs::read_dir(cache.join("bake"))
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.contains(part))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+#[test]
+fn a_rebake_runs_while_frames_go_on_and_a_second_change_supersedes_it() {
+    // The coarse light-map baked beforehand; finer patches asked for at frame 3 (a bake of a
+    // second or so here), and others at frame 6 while it runs: the window keeps presenting the
+    // coarse light-map meanwhile, the first bake is cancelled (nothing of it cached), the report
+    // (what the panel shows) follows the second bake's progress, and its configuration is drawn
+    // once it is done, read from the cache.
+    let cache = common::temp_path("demo-rebake-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let scene = common::temp_path("demo-rebake-prebake.toml");
+    std::fs::write(&scene, RADIOSITY_SCENE).unwrap();
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("bake")
+        .arg(&scene)
+        .args(["--device", &device])
         .env("PENUMBRA_CACHE", &cache)
         .output()
         .unwrap();
-    let out = common::ok(&o);
-    let r = report(&json);
+    common::ok(&o);
+    let (out, r) = demo_run(
+        "demo-rebake",
+        RADIOSITY_SCENE,
+        "3 param patch_size 0.05\n6 param radiosity.patch_size 0.06\n",
+        &cache,
+        8,
+        ("64x48", false, None),
+    );
     let params: Vec<&str> = r.iter().map(|f| f["parameters"].as_str().unwrap()).collect();
+    assert_eq!(
+        params[0], "radiosity(patch_size = 0.2)",
+        "drawn at once, from the cache"
+    );
     let baking: Vec<&serde_json::Value> = r.iter().filter(|f| !f["baking"].is_null()).collect();
     // Frames went on while the bakes ran, with the old light-map, none as long as the bakes.
     assert!(baking.len() >= 10, "{} frames during the bakes:\n{out}", baking.len());
@@ -455,26 +506,197 @@ fn a_rebake_runs_while_frames_go_on_and_a_second_change_waits_for_it() {
         longest_s < 0.5 * bake_s,
         "a frame took {longest_s:.3} s during bakes of {bake_s:.3} s"
     );
-    // The panel's progress: the bake's stage, its fraction growing within (0, 1).
+    // The panel's progress: the second bake's stage, its fraction growing within (0, 1).
     let stage = |f: &serde_json::Value| f["baking"]["stage"].as_str().unwrap().to_string();
     let fractions: Vec<f64> = baking
         .iter()
-        .filter(|f| stage(f).contains("0.05"))
+        .filter(|f| stage(f).contains("0.06"))
         .map(|f| f["baking"]["fraction"].as_f64().unwrap())
         .collect();
     assert!(
         fractions.iter().any(|&x| x > 0.0 && x < 1.0) && fractions.windows(2).all(|w| w[1] >= w[0]),
-        "progress of the first bake: {fractions:?}"
+        "progress of the second bake: {fractions:?}"
     );
-    assert!(
-        baking.iter().any(|f| stage(f).contains("0.06")),
-        "the queued bake ran after it"
-    );
-    // The superseded request was never drawn; the last one is, its bake read from the cache.
+    // The superseded request was cancelled, never drawn nor cached; the last one is drawn, its
+    // bake read from the cache.
+    assert!(out.contains("bake of radiosity cancelled"), "{out}");
     assert!(!params.iter().any(|p| p.contains("0.05")), "{params:?}");
+    assert_eq!(cached(&cache, "0_05"), Vec::<String>::new());
     assert_eq!(params.last().copied(), Some("radiosity(patch_size = 0.06)"), "{out}");
     assert!(out.contains("patch=0.06 from the cache"), "{out}");
     let _ = std::fs::remove_dir_all(&cache);
+}
+
+/// `forward` and a radiosity light-map of fine patches (a bake of many seconds on lavapipe).
+const LONG_BAKE_SCENE: &str = "methods = [\"forward\", { name = \"radiosity\", patch_size = 0.02 }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";
+
+#[test]
+fn cancelling_a_bake_stops_it_promptly_caches_nothing_and_keeps_drawing() {
+    // The CPU solve stops between shots, the GPU shooting between submissions.
+    for baker in ["cpu", "gpu"] {
+        cancel_radiosity_bake(baker);
+    }
+}
+
+/// M at frame 2 starts the radiosity bake (on `baker`) in the background; C at frame 150
+/// cancels it. The bake stops within a bounded time, far sooner than it would have finished,
+/// frames are presented throughout with `forward`, the report says it was cancelled, and the
+/// cache holds nothing of it.
+fn cancel_radiosity_bake(baker: &str) {
+    let cache = common::temp_path(&format!("demo-cancel-{baker}-cache"));
+    let _ = std::fs::remove_dir_all(&cache);
+    let scene = LONG_BAKE_SCENE.replace("patch_size = 0.02", &format!("patch_size = 0.02, baker = \"{baker}\""));
+    let (out, r) = demo_run(
+        &format!("demo-cancel-{baker}"),
+        &scene,
+        "2 key M\n150 key C\n",
+        &cache,
+        170,
+        ("64x48", false, None),
+    );
+    let baking: Vec<&serde_json::Value> = r.iter().filter(|f| !f["baking"].is_null()).collect();
+    let cancelling: Vec<&&serde_json::Value> = baking.iter().filter(|f| f["baking"]["cancelling"] == true).collect();
+    let (first, last) = (
+        cancelling.first().expect("cancelled mid-bake"),
+        cancelling.last().unwrap(),
+    );
+    let at = |f: &serde_json::Value| f["baking"]["elapsed_s"].as_f64().unwrap();
+    let fraction = first["baking"]["fraction"].as_f64().unwrap();
+    // The last frame that saw the bake running, and the frame after it.
+    let frame_after = last["frame"].as_u64().unwrap() + 1;
+    let after = r
+        .iter()
+        .find(|f| f["frame"] == frame_after)
+        .expect("a frame after the bake");
+    let stopped_s = at(last) - at(first) + after["frame_ms"].as_f64().unwrap() / 1e3;
+    println!(
+        "{baker}: cancelled at {fraction:.3} of the bake, {:.2} s in; it stopped within {stopped_s:.3} s",
+        at(first)
+    );
+    assert!(
+        first["baking"]["stage"]
+            .as_str()
+            .unwrap()
+            .starts_with("radiosity light-map")
+            && fraction < 0.5,
+        "cancelled at {}: not mid-way through the bake",
+        first["baking"]
+    );
+    assert_eq!(
+        cached(&cache, "radiosity"),
+        Vec::<String>::new(),
+        "nothing partial is cached"
+    );
+    // A GPU submission is sized to a quarter of a second; the whole bake takes over a minute.
+    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
+    assert!(after["baking"].is_null() && r.last().unwrap()["baking"].is_null());
+    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
+    assert!(note.contains("bake of radiosity cancelled"), "{note:?}\n{out}");
+    // Where it stopped: the GPU between submissions, the CPU solve between shots (the bake
+    // then refusing its partial result).
+    let at = if baker == "gpu" {
+        "radiosity shooting"
+    } else {
+        "radiosity light-map"
+    };
+    assert!(note.contains(&format!("(at {at}")), "{note:?}");
+    assert!(r
+        .iter()
+        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+    // Every frame the script asked for came (more where the bake took a while to stop).
+    let frames: Vec<u64> = r.iter().map(|f| f["frame"].as_u64().unwrap()).collect();
+    assert!(frames.len() >= 170 && frames.iter().enumerate().all(|(i, &f)| f == i as u64));
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn the_first_frames_are_drawn_while_the_starting_configuration_bakes() {
+    // Radiosity first and nothing cached: the window presents `forward` from its first frame
+    // while the light-map bakes, then switches to it.
+    let cache = common::temp_path("demo-first-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let scene = RADIOSITY_SCENE.replace("patch_size = 0.2", "patch_size = 0.05");
+    let (out, r) = demo_run("demo-first", &scene, "", &cache, 3, ("64x48", false, None));
+    let during: Vec<&serde_json::Value> = r.iter().filter(|f| !f["baking"].is_null()).collect();
+    assert!(
+        !r[0]["baking"].is_null() && r[0]["presented"] == true,
+        "the first frame waited for the bake:\n{out}"
+    );
+    let bake_s = during.last().unwrap()["baking"]["elapsed_s"].as_f64().unwrap();
+    println!(
+        "{} frames presented during the first bake ({bake_s:.2} s)",
+        during.len()
+    );
+    assert!(during.len() >= 3, "{} frames presented during the bake", during.len());
+    assert!(during
+        .iter()
+        .all(|f| f["presented"] == true && f["configuration"] == "forward (stand-in)"));
+    let last = r.last().unwrap();
+    assert_eq!(last["parameters"], "radiosity(patch_size = 0.05)", "{out}");
+    assert_eq!(cached(&cache, "0_05").len(), 1);
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn a_bake_that_fails_in_the_background_shows_in_red_and_the_old_configuration_stays() {
+    // The bake cache is a file, so the radiosity bake M starts can run but not be stored: it
+    // fails on its thread, the panel lists why in red, and `forward` keeps drawing.
+    let cache = common::temp_path("demo-fail-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    std::fs::write(&cache, "not a directory").unwrap();
+    let scene = RADIOSITY_SCENE.replace("methods = [", "methods = [\"forward\", ");
+    let shots = [
+        common::temp_path("demo-fail.png"),
+        common::temp_path("demo-fail-none.png"),
+    ];
+    let (out, r) = demo_run(
+        "demo-fail",
+        &scene,
+        "2 key M\n",
+        &cache,
+        6,
+        ("320x240", true, Some(&shots[0])),
+    );
+    let last = r.last().unwrap();
+    let messages = last["messages"].as_array().unwrap();
+    assert!(
+        messages.len() == 1
+            && messages[0]
+                .as_str()
+                .unwrap()
+                .contains("bake of radiosity failed, keeping forward"),
+        "{messages:?}\n{out}"
+    );
+    assert!(r.iter().any(|f| !f["baking"].is_null()), "it ran in the background");
+    assert!(r
+        .iter()
+        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+    // The same frames without the bake: the message's red is all that differs.
+    let (_, _) = demo_run(
+        "demo-fail-none",
+        &scene,
+        "",
+        &common::temp_path("demo-fail-none-cache"),
+        6,
+        ("320x240", true, Some(&shots[1])),
+    );
+    let red = |p: &std::path::Path| {
+        let img = image::open(p).unwrap().to_rgba8();
+        img.pixels()
+            .filter(|q| q[0] > 180 && (q[1] as i32) < q[0] as i32 - 60 && (q[2] as i32) < q[0] as i32 - 60)
+            .count()
+    };
+    let (with, without) = (red(&shots[0]), red(&shots[1]));
+    println!("red pixels: {with} with the failure, {without} without");
+    assert!(
+        with > 20 && without == 0,
+        "red pixels: {with} with the failure, {without} without"
+    );
+    let _ = std::fs::remove_file(&cache);
+    let _ = std::fs::remove_dir_all(common::temp_path("demo-fail-none-cache"));
+    for shot in &shots {
+        let _ = std::fs::remove_file(shot);
+    }
 }
 
 #[test]

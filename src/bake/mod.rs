@@ -233,9 +233,14 @@ impl Baker {
             self.missing = Some(name.to_string());
             return Err(Error::Usage(format!("{name}: not in the bake cache")));
         }
+        if crate::util::progress::this_thread_cancelled() {
+            return Err(Error::Cancelled(name.to_string()));
+        }
         let mut progress = Progress::new(name);
         let value = build(&mut progress)?;
         progress.finish();
+        // A build that stopped early when asked to returns what it had: never cached.
+        check_cancelled(&progress, name)?;
         let payload = value.encode();
         let mut not_stored = None;
         if let Some(p) = &path {
@@ -263,6 +268,15 @@ impl Baker {
         });
         Ok(value)
     }
+}
+
+/// `Err(Cancelled)` once the work `progress` follows was asked to stop: long bakes call this
+/// between batches (GPU submissions, chunks of a parallel loop) and return the error.
+pub fn check_cancelled(progress: &Progress, what: &str) -> Result<()> {
+    if progress.cancelled() {
+        return Err(Error::Cancelled(what.to_string()));
+    }
+    Ok(())
 }
 
 fn ms_since(start: Instant) -> f64 {

@@ -176,3 +176,39 @@ fn a_cache_only_baker_reads_the_cache_and_refuses_to_build() {
     assert_eq!((v, calls, reader.missing()), (vec![2.0], 1, None));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A build that stops early because its thread was cancelled returns what it had: the baker
+/// reports the bake cancelled and stores nothing; a bake asked for after that does not start.
+#[test]
+fn a_cancelled_bake_is_not_cached_and_the_next_does_not_start() {
+    use crate::util::progress::{cancel_this_thread, Cancel};
+    let dir = temp_dir("cancelled");
+    let cancel = Cancel::new();
+    cancel_this_thread(Some(cancel.clone()));
+    let mut baker = Baker::new(Some(dir.clone()));
+    let key = BakeKey::new("t").with("n", 1);
+    let stopped = baker.bake("t", &key, |progress| {
+        let mut done = Vec::new();
+        for i in 0..1000 {
+            if i == 10 {
+                cancel.cancel();
+            }
+            if progress.cancelled() {
+                break;
+            }
+            done.push(i as f64);
+        }
+        Ok(done)
+    });
+    let mut calls = 0;
+    let next = baker.bake("u", &BakeKey::new("u"), build_counting(&mut calls, vec![1.0]));
+    cancel_this_thread(None);
+    assert!(
+        matches!(stopped, Err(Error::Cancelled(ref n)) if n == "t"),
+        "{stopped:?}"
+    );
+    assert!(matches!(next, Err(Error::Cancelled(_))) && calls == 0, "{next:?}");
+    let files = std::fs::read_dir(&dir).map(|d| d.count()).unwrap_or(0);
+    assert_eq!(files, 0, "nothing written in {}", dir.display());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,6 +6,7 @@
 
 use std::cell::RefCell;
 use std::io::{IsTerminal, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -24,13 +25,45 @@ pub struct Update {
 /// bake running on another thread this way), besides what they write to stderr.
 pub type Observer = Arc<dyn Fn(&Update) + Send + Sync>;
 
+/// A request to stop long work, shared between the thread that asks and the thread (and its
+/// workers) that does the work, which looks at it between batches.
+#[derive(Clone, Debug, Default)]
+pub struct Cancel(Arc<AtomicBool>);
+
+impl Cancel {
+    pub fn new() -> Cancel {
+        Cancel::default()
+    }
+
+    /// Asks the work to stop; it does so at its next check.
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
 thread_local! {
     static OBSERVER: RefCell<Option<Observer>> = const { RefCell::new(None) };
+    static CANCEL: RefCell<Option<Cancel>> = const { RefCell::new(None) };
 }
 
 /// Sets (or clears) the observer of the progress lines made on this thread from now on.
 pub fn observe_this_thread(observer: Option<Observer>) {
     OBSERVER.with(|o| *o.borrow_mut() = observer);
+}
+
+/// Sets (or clears) the cancellation that the progress lines made on this thread from now on
+/// report ([`Progress::cancelled`]): the demo's background bakes stop through it.
+pub fn cancel_this_thread(cancel: Option<Cancel>) {
+    CANCEL.with(|c| *c.borrow_mut() = cancel);
+}
+
+/// Whether the work on this thread was asked to stop.
+pub fn this_thread_cancelled() -> bool {
+    CANCEL.with(|c| c.borrow().as_ref().is_some_and(Cancel::is_cancelled))
 }
 
 pub struct Progress {
@@ -45,6 +78,8 @@ pub struct Progress {
     detail: String,
     /// The observer of the thread this line was made on (updates may come from others).
     observer: Option<Observer>,
+    /// The cancellation of the thread this line was made on.
+    cancel: Option<Cancel>,
 }
 
 /// A terminal's line appears after this much work, and is redrawn at most this often.
@@ -73,6 +108,7 @@ impl Progress {
             warned: false,
             detail: String::new(),
             observer: OBSERVER.with(|o| o.borrow().clone()),
+            cancel: CANCEL.with(|c| c.borrow().clone()),
         };
         p.notify(0, 0);
         p
@@ -87,6 +123,18 @@ impl Progress {
                 elapsed: self.start.elapsed(),
             });
         }
+    }
+
+    /// Whether the work this line follows was asked to stop: long work looks between batches
+    /// and ends early, and the bake it is part of fails as cancelled (nothing is cached).
+    pub fn cancelled(&self) -> bool {
+        self.cancel.as_ref().is_some_and(Cancel::is_cancelled)
+    }
+
+    /// The cancellation, for worker threads of the work to look at (`None`: it cannot be
+    /// cancelled).
+    pub fn cancellation(&self) -> Option<Cancel> {
+        self.cancel.clone()
     }
 
     /// Text shown at the end of the line from the next update on.
@@ -253,5 +301,22 @@ mod tests {
             *seen.lock().unwrap(),
             [("bake".to_string(), 0, 0), ("bake".to_string(), 3, 4)]
         );
+    }
+
+    /// A line made on a thread with a cancellation reports it once cancelled; lines made
+    /// elsewhere, or after it is cleared, never do.
+    #[test]
+    fn a_line_reports_its_threads_cancellation() {
+        let cancel = Cancel::new();
+        cancel_this_thread(Some(cancel.clone()));
+        let p = Progress::to("bake", false);
+        let worker = p.cancellation().expect("made under a cancellation");
+        let elsewhere = std::thread::spawn(|| Progress::to("elsewhere", false)).join().unwrap();
+        assert!(!p.cancelled() && !this_thread_cancelled());
+        cancel.cancel();
+        assert!(p.cancelled() && worker.is_cancelled() && this_thread_cancelled());
+        assert!(!elsewhere.cancelled());
+        cancel_this_thread(None);
+        assert!(!Progress::to("after", false).cancelled() && !this_thread_cancelled());
     }
 }

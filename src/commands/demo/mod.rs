@@ -25,7 +25,7 @@ use crate::bake::Baker;
 use crate::commands::capture::{load_scene, CaptureOptions};
 use crate::commands::views::{Composed, ErrorMap, View, ViewSettings};
 use crate::error::{Error, Result};
-use crate::lighting::registry;
+use crate::lighting::{registry, Configuration};
 use crate::renderer::{FrameOutput, Renderer};
 use crate::util::image_io::HdrImage;
 
@@ -60,6 +60,10 @@ pub struct FrameRecord {
     pub parameters: String,
     /// The bake running in the background, as the panel shows it.
     pub baking: Option<BakeStatus>,
+    /// How the last background bake that did not switch ended (cancelled), as the panel says.
+    pub bake_note: Option<String>,
+    /// The failures the panel lists in red (the latest four).
+    pub messages: Vec<String>,
     /// The animation frame the next frame is drawn at, and whether the animation is paused.
     pub animation_frame: u64,
     pub paused: bool,
@@ -107,8 +111,11 @@ struct Running {
     switched: bool,
     /// The bakes of a configuration being switched to, running beside the frames.
     rebake: Option<rebake::Rebake>,
-    /// A change asked for while they run: made when they end (the latest request wins).
+    /// A change asked for while they run: made once they have stopped (the latest request wins,
+    /// and cancels them).
     queued: Option<(usize, crate::lighting::Configuration)>,
+    /// How the last background bake that did not switch ended (cancelled), for the panel.
+    bake_note: Option<String>,
     /// The device the bakes run on (without the window's display).
     bake_desc: GpuDesc,
     /// Validation messages of the finished bakes' devices.
@@ -213,17 +220,15 @@ impl App {
         let overlay = Overlay::new(&gpu, swapchain.format, FRAMES_IN_FLIGHT)?;
         let extent = swapchain.extent;
         let configurations = registry::configurations(&scene)?;
-        let renderer = Renderer::new(
+        let chosen = registry::configuration(&scene, self.opts.method.as_deref())?;
+        let current = configurations.iter().position(|c| *c == chosen).unwrap_or(0);
+        let (renderer, rebake) = first_renderer(
             gpu,
             scene,
-            self.opts.method.as_deref(),
+            (current, chosen.clone()),
             (extent.width, extent.height),
-            FRAMES_IN_FLIGHT,
+            &self.opts.gpu,
         )?;
-        let current = configurations
-            .iter()
-            .position(|c| *c == renderer.configuration)
-            .unwrap_or(0);
         let camera = FlyCamera::new(renderer.scene.camera.clone());
         let egui = egui::Context::default();
         let egui_input = egui_winit::State::new(
@@ -239,7 +244,7 @@ impl App {
         let budget = self.script.reference_budget;
         Ok(Running {
             window,
-            params: param_edits(&renderer.configuration),
+            params: param_edits(&chosen),
             renderer,
             swapchain,
             overlay,
@@ -261,8 +266,9 @@ impl App {
             configurations,
             current,
             switched: false,
-            rebake: None,
+            rebake,
             queued: None,
+            bake_note: None,
             bake_desc: self.opts.gpu.clone(),
             bake_validation: 0,
             live: LiveReference::new(self.opts.gpu.clone(), if budget > 0.0 { budget } else { 0.5 }),
@@ -296,6 +302,55 @@ impl App {
     }
 }
 
+/// The renderer the window starts with: drawing `chosen` (at its index in the scene's list) where
+/// its bakes are cached or it has none; otherwise drawing a stand-in that needs no bake (the scene
+/// under `forward`, or its background alone) while `chosen`'s bakes run on a thread of their own,
+/// which is returned: the window opens at once and switches when they are done.
+fn first_renderer(
+    gpu: Gpu,
+    scene: crate::scene::Scene,
+    (index, chosen): (usize, Configuration),
+    size: (u32, u32),
+    bake_desc: &GpuDesc,
+) -> Result<(Renderer, Option<rebake::Rebake>)> {
+    let cache = || Baker::cached_only(Baker::default_dir());
+    let background = Configuration {
+        name: "background only (stand-in)".into(),
+        parts: Vec::new(),
+    };
+    let mut renderer = Renderer::with_configuration(gpu, scene, background, size, FRAMES_IN_FLIGHT, cache())?;
+    let mut baker = cache();
+    match renderer.set_configuration_with(chosen.clone(), &mut baker) {
+        Ok(()) => return Ok((renderer, None)),
+        // Nothing drawn yet to keep: a configuration that cannot be made ends the demo.
+        Err(e) if baker.missing().is_none() => return Err(e),
+        Err(_) => {}
+    }
+    if let Some(forward) = forward_stand_in(&renderer.scene) {
+        // A scene `forward` refuses (translucency) keeps the background.
+        let _ = renderer.set_configuration_with(forward, &mut cache());
+    }
+    crate::outln!(
+        "baking {} in the background ({} is not in the bake cache); {} draws meanwhile",
+        chosen.name,
+        baker.missing().unwrap_or_default(),
+        renderer.configuration.name
+    );
+    let rebake = rebake::Rebake::start(bake_desc, renderer.scene.clone(), index, chosen);
+    Ok((renderer, Some(rebake)))
+}
+
+/// `forward` on the scene, whatever methods it enables: what the window draws while the
+/// configuration asked for bakes.
+fn forward_stand_in(scene: &crate::scene::Scene) -> Option<Configuration> {
+    let mut only_forward = scene.clone();
+    only_forward.methods = vec![crate::scene::MethodDecl::implicit_forward()];
+    only_forward.combinations.clear();
+    let mut config = registry::configuration(&only_forward, Some("forward")).ok()?;
+    config.name = "forward (stand-in)".into();
+    Some(config)
+}
+
 /// Textures egui may make (its font atlas); every Vulkan 1.3 device allows this size.
 fn gpu_max_texture_side() -> usize {
     4096
@@ -321,10 +376,16 @@ impl Running {
     /// Switches to `config` (the configuration at `index`, or it with edited parameters): at
     /// once when its bakes are in the cache (or it has none); otherwise they run on another
     /// thread while the old configuration keeps drawing, and the switch follows when they end
-    /// ([`Running::poll_rebake`]). A change asked for meanwhile waits for them.
+    /// ([`Running::poll_rebake`]). A change asked for meanwhile cancels them and is made once
+    /// they have stopped; the same configuration asked for again lets them run.
     fn change_configuration(&mut self, index: usize, config: crate::lighting::Configuration) {
-        if let Some(r) = &self.rebake {
-            crate::outln!("queued {} after the bake of {}", config.name, r.configuration.name);
+        if let Some(r) = &mut self.rebake {
+            if r.configuration == config && !r.status.cancelling {
+                self.queued = None;
+                return;
+            }
+            crate::outln!("{} supersedes the bake of {}", config.name, r.configuration.name);
+            r.cancel();
             self.queued = Some((index, config));
             return;
         }
@@ -339,6 +400,7 @@ impl Running {
                     cache.missing().unwrap_or_default()
                 );
                 let scene = self.renderer.scene.clone();
+                self.bake_note = None;
                 self.rebake = Some(rebake::Rebake::start(&self.bake_desc, scene, index, config));
             }
             Err(e) => self.report_problem(format!(
@@ -393,15 +455,34 @@ impl Running {
                     r.status.elapsed_s,
                     names.join(", ")
                 );
-                // A newer request replaces this one (its bakes stay in the cache).
-                if self.queued.is_none() {
+                // A newer request replaces this one, and a cancel that came too late keeps what
+                // is drawn (either way its bakes stay in the cache).
+                if r.status.cancelling && self.queued.is_none() {
+                    self.bake_note = Some(format!(
+                        "bake of {} finished as it was cancelled (kept in the cache), keeping {}",
+                        r.configuration.name, self.renderer.configuration.name
+                    ));
+                } else if self.queued.is_none() {
                     let started = Instant::now();
-                    // Where the cache could not be written, this bakes again, in the frame.
-                    match self.renderer.set_configuration(r.configuration.clone()) {
+                    // Read from the cache only: the frame never bakes (a bake that could not be
+                    // stored failed on its thread).
+                    let mut cache = Baker::cached_only(Baker::default_dir());
+                    match self
+                        .renderer
+                        .set_configuration_with(r.configuration.clone(), &mut cache)
+                    {
                         Ok(()) => self.switched_to(r.index, r.configuration.clone(), started),
                         Err(e) => self.report_problem(format!("cannot switch to {}: {e}", r.configuration.name)),
                     }
                 }
+            }
+            rebake::Outcome::Cancelled(at) => {
+                let note = format!(
+                    "bake of {} cancelled after {:.1} s (at {at}), keeping {}",
+                    r.configuration.name, r.status.elapsed_s, self.renderer.configuration.name
+                );
+                crate::outln!("{note}");
+                self.bake_note = Some(note);
             }
             rebake::Outcome::Failed(e) => self.report_problem(format!(
                 "bake of {} failed, keeping {}: {e}",
@@ -410,6 +491,16 @@ impl Running {
         }
         if let Some((index, config)) = self.queued.take() {
             self.change_configuration(index, config);
+        }
+    }
+
+    /// Stops the background bake (and forgets a change queued after it); the configuration
+    /// drawn now stays.
+    fn cancel_bake(&mut self) {
+        if let Some(r) = &mut self.rebake {
+            crate::outln!("cancelling the bake of {}", r.configuration.name);
+            r.cancel();
+            self.queued = None;
         }
     }
 
@@ -424,7 +515,8 @@ impl Running {
     /// The current configuration with the panel's parameters, rebuilt (its bakes through the
     /// bake cache, in the background where they are not cached); an error keeps the old one.
     fn apply_params(&mut self) {
-        let mut config = self.renderer.configuration.clone();
+        // The configuration chosen: the one drawn, or the one a stand-in draws for.
+        let mut config = self.configurations[self.current].clone();
         for p in &self.params {
             if p.text.trim().is_empty() {
                 continue;
@@ -446,13 +538,8 @@ impl Running {
     /// Sets the parameter `name` (`method.name` where the configuration has several methods)
     /// in the panel and applies the parameters, as typing it and pressing Apply does.
     fn set_param(&mut self, name: &str, value: &str) -> Result<()> {
-        let parts: Vec<String> = self
-            .renderer
-            .configuration
-            .parts
-            .iter()
-            .map(|p| p.decl.name.clone())
-            .collect();
+        let chosen = &self.configurations[self.current];
+        let parts: Vec<String> = chosen.parts.iter().map(|p| p.decl.name.clone()).collect();
         let found = self
             .params
             .iter_mut()
@@ -460,7 +547,7 @@ impl Running {
         let Some(p) = found else {
             return Err(Error::Usage(format!(
                 "script: `{name}` is not a parameter of {}",
-                self.renderer.configuration.name
+                chosen.name
             )));
         };
         p.text = value.to_string();
@@ -493,6 +580,7 @@ impl Running {
             KeyCode::F1 => self.show_panel = !self.show_panel,
             KeyCode::F12 => self.save_view = Some(self.next_screenshot_path()),
             KeyCode::KeyM => self.next_configuration(),
+            KeyCode::KeyC => self.cancel_bake(),
             KeyCode::KeyR => self.reload_shaders(),
             KeyCode::KeyG => self.live_on = !self.live_on,
             KeyCode::KeyP => self.renderer.clock_paused = !self.renderer.clock_paused,
@@ -547,6 +635,7 @@ impl Running {
         match a {
             panel::Action::Configuration(i) => self.set_configuration(i),
             panel::Action::ApplyParams => self.apply_params(),
+            panel::Action::CancelBake => self.cancel_bake(),
             panel::Action::ReloadShaders => self.reload_shaders(),
             panel::Action::Screenshot => self.save_view = Some(self.next_screenshot_path()),
             panel::Action::AddBookmark => self.add_bookmark(),
@@ -635,6 +724,7 @@ impl Running {
             messages: &self.messages,
             baking: self.rebake.as_ref().map(|r| &r.status),
             queued: self.queued.as_ref().map(|(_, c)| c.name.as_str()),
+            bake_note: self.bake_note.as_deref(),
         };
         let mut actions = Vec::new();
         let show_view = self.view.view != View::Method && self.composed.is_some();
@@ -861,6 +951,8 @@ impl Running {
             configuration: self.renderer.configuration.name.clone(),
             parameters: parameters(&self.renderer.configuration),
             baking: self.rebake.as_ref().map(|r| r.status.clone()),
+            bake_note: self.bake_note.clone(),
+            messages: self.messages.clone(),
             animation_frame: self.renderer.clock_frame(),
             paused: self.renderer.clock_paused,
             view: self.view.view,
@@ -1120,10 +1212,13 @@ pub fn run(opts: &CaptureOptions, script: DemoScript) -> Result<()> {
     }
     if let Some(mut s) = app.state.take() {
         s.renderer.gpu.wait_idle()?;
+        // Quitting stops a bake still running (scripted runs end only once it has).
         if let Some(rebake::Outcome::Baked {
             validation_messages, ..
-        }) = s.rebake.take().map(|r| r.wait())
-        {
+        }) = s.rebake.take().map(|mut r| {
+            r.cancel();
+            r.wait()
+        }) {
             s.bake_validation += validation_messages;
         }
         let n = s.renderer.gpu.validation_log().count() + s.live.validation_messages() + s.bake_validation;

@@ -26,6 +26,8 @@ pub struct ParamEdit {
 pub enum Action {
     Configuration(usize),
     ApplyParams,
+    /// Stop the background bake.
+    CancelBake,
     ReloadShaders,
     Screenshot,
     AddBookmark,
@@ -49,6 +51,8 @@ pub struct PanelInfo<'a> {
     pub baking: Option<&'a BakeStatus>,
     /// The configuration asked for while it runs.
     pub queued: Option<&'a str>,
+    /// How the last bake that did not switch ended (cancelled).
+    pub bake_note: Option<&'a str>,
 }
 
 /// What the panel changes.
@@ -72,7 +76,9 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
         .show(ctx, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
                 if let Some(b) = info.baking {
-                    baking(ui, b, info.queued);
+                    baking(ui, b, info.queued, &mut actions);
+                } else if let Some(note) = info.bake_note {
+                    ui.colored_label(egui::Color32::from_rgb(230, 200, 90), note);
                 }
                 configuration(ui, info, settings.params, &mut actions);
                 timings(ui, info);
@@ -87,8 +93,9 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
     actions
 }
 
-/// The background bake: its stage's progress bar, the time so far and the stage's estimate.
-fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>) {
+/// The background bake: its stage's progress bar, the time so far and the stage's estimate, and
+/// the button that cancels it.
+fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>, actions: &mut Vec<Action>) {
     ui.label(format!("baking {} ({:.1} s)", b.configuration, b.elapsed_s));
     let left = b.left_s.map_or(String::new(), |s| format!(", about {s:.0} s left"));
     ui.add(egui::ProgressBar::new(b.fraction as f32).text(format!("{} {:.0}%{left}", b.stage, 100.0 * b.fraction)));
@@ -96,6 +103,11 @@ fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>) {
         Some(q) => ui.label(format!("then {q}; the current configuration draws meanwhile")),
         None => ui.label("the current configuration draws meanwhile"),
     };
+    if b.cancelling {
+        ui.label("cancelling...");
+    } else if ui.button("Cancel bake (C)").clicked() {
+        actions.push(Action::CancelBake);
+    }
 }
 
 fn configuration(ui: &mut egui::Ui, info: &PanelInfo<'_>, params: &mut [ParamEdit], actions: &mut Vec<Action>) {

@@ -2,7 +2,8 @@
 //! old configuration: the thread creates the configuration's methods on a device of its own (a
 //! token-sized renderer, as `penumbra bake` does), which fills the bake cache, and reports each
 //! bake's progress through a channel. Once it is done the demo switches, reading the bakes back
-//! from the cache.
+//! from the cache. It can be cancelled: the bakes look at the cancellation between batches, stop,
+//! and cache nothing.
 
 use std::sync::mpsc::{channel, Receiver, TryRecvError};
 use std::sync::Arc;
@@ -11,11 +12,11 @@ use std::time::Instant;
 
 use crate::backend::{Gpu, GpuDesc};
 use crate::bake::Baker;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lighting::Configuration;
 use crate::renderer::Renderer;
 use crate::scene::Scene;
-use crate::util::progress::{observe_this_thread, Update};
+use crate::util::progress::{cancel_this_thread, observe_this_thread, Cancel, Update};
 
 /// What the panel shows of a bake in progress (and the report records).
 #[derive(Clone, Debug, serde::Serialize)]
@@ -29,21 +30,24 @@ pub struct BakeStatus {
     pub elapsed_s: f64,
     /// What the stage has left at its rate so far; `None` until it has a rate.
     pub left_s: Option<f64>,
+    /// Cancelled, and not yet stopped.
+    pub cancelling: bool,
 }
 
 enum Message {
     Progress(Update),
-    /// The bakes' names, whether each came from the cache, and the device's validation messages;
-    /// or why it failed.
-    Done(std::result::Result<(Vec<(String, bool)>, usize), String>),
+    Done(Outcome),
 }
 
 /// How a finished rebake went.
 pub enum Outcome {
+    /// The bakes' names, whether each came from the cache, and the device's validation messages.
     Baked {
         bakes: Vec<(String, bool)>,
         validation_messages: usize,
     },
+    /// Stopped when asked to, at the bake named; nothing of it was cached.
+    Cancelled(String),
     Failed(String),
 }
 
@@ -55,6 +59,7 @@ pub struct Rebake {
     started: Instant,
     messages: Receiver<Message>,
     thread: Option<JoinHandle<()>>,
+    cancel: Cancel,
 }
 
 impl Rebake {
@@ -65,6 +70,8 @@ impl Rebake {
         // A description without the window's display (which may not cross threads): the bake
         // presents nothing.
         let (validation, device_name) = (desc.validation, desc.device_name.clone());
+        let cancel = Cancel::new();
+        let cancel_here = cancel.clone();
         let thread = std::thread::spawn(move || {
             let desc = GpuDesc {
                 validation,
@@ -76,9 +83,18 @@ impl Rebake {
                 // The demo may have gone (the window closed): nobody left to tell.
                 let _ = progress.send(Message::Progress(u.clone()));
             })));
-            let result = bake(&desc, scene, config).map_err(|e| e.to_string());
+            cancel_this_thread(Some(cancel_here));
+            let outcome = match bake(&desc, scene, config) {
+                Ok((bakes, validation_messages)) => Outcome::Baked {
+                    bakes,
+                    validation_messages,
+                },
+                Err(Error::Cancelled(at)) => Outcome::Cancelled(at),
+                Err(e) => Outcome::Failed(e.to_string()),
+            };
+            cancel_this_thread(None);
             observe_this_thread(None);
-            let _ = tx.send(Message::Done(result));
+            let _ = tx.send(Message::Done(outcome));
         });
         Rebake {
             index,
@@ -88,12 +104,20 @@ impl Rebake {
                 fraction: 0.0,
                 elapsed_s: 0.0,
                 left_s: None,
+                cancelling: false,
             },
             configuration,
             started: Instant::now(),
             messages: rx,
             thread: Some(thread),
+            cancel,
         }
+    }
+
+    /// Asks the bakes to stop; [`Rebake::poll`] reports [`Outcome::Cancelled`] once they have.
+    pub fn cancel(&mut self) {
+        self.cancel.cancel();
+        self.status.cancelling = true;
     }
 
     /// Takes the thread's messages into the status; returns the outcome once it has finished.
@@ -112,15 +136,9 @@ impl Rebake {
                     self.status.fraction = fraction;
                     self.status.left_s = (fraction > 0.0).then(|| secs * (1.0 - fraction) / fraction);
                 }
-                Ok(Message::Done(result)) => {
+                Ok(Message::Done(outcome)) => {
                     self.join();
-                    return Some(match result {
-                        Ok((bakes, validation_messages)) => Outcome::Baked {
-                            bakes,
-                            validation_messages,
-                        },
-                        Err(e) => Outcome::Failed(e),
-                    });
+                    return Some(outcome);
                 }
                 Err(TryRecvError::Empty) => return None,
                 Err(TryRecvError::Disconnected) => {
@@ -139,13 +157,7 @@ impl Rebake {
         loop {
             match self.messages.recv() {
                 Ok(Message::Progress(_)) => continue,
-                Ok(Message::Done(Ok((bakes, validation_messages)))) => {
-                    return Outcome::Baked {
-                        bakes,
-                        validation_messages,
-                    }
-                }
-                Ok(Message::Done(Err(e))) => return Outcome::Failed(e),
+                Ok(Message::Done(outcome)) => return outcome,
                 Err(_) => return Outcome::Failed("the bake thread ended without a result".into()),
             }
         }
@@ -160,13 +172,16 @@ impl Rebake {
 }
 
 impl Drop for Rebake {
-    /// The window closing waits for the bake: its device must go before the process ends.
+    /// The window closing waits for the bake's thread (cancelled first, so it ends soon): its
+    /// device must go before the process ends.
     fn drop(&mut self) {
         self.join();
     }
 }
 
-/// Creates the configuration's methods at a token size, which runs their bakes into the cache.
+/// Creates the configuration's methods at a token size, which runs their bakes into the cache. A
+/// bake that could not be stored there fails the rebake: the switch would otherwise bake it again,
+/// in the frame.
 fn bake(desc: &GpuDesc, scene: Scene, configuration: Configuration) -> Result<(Vec<(String, bool)>, usize)> {
     let renderer = Renderer::with_configuration(
         Gpu::new(desc)?,
@@ -176,6 +191,13 @@ fn bake(desc: &GpuDesc, scene: Scene, configuration: Configuration) -> Result<(V
         1,
         Baker::new(Some(Baker::default_dir())),
     )?;
+    if let Some((name, why)) = renderer
+        .bakes
+        .iter()
+        .find_map(|b| b.not_stored.as_ref().map(|why| (&b.name, why)))
+    {
+        return Err(Error::Usage(format!("{name} was baked but cannot be cached: {why}")));
+    }
     let bakes = renderer.bakes.iter().map(|b| (b.name.clone(), b.cached)).collect();
     let validation = renderer.gpu.validation_log().count();
     Ok((bakes, validation))
@@ -205,7 +227,7 @@ mod tests {
         };
         match outcome {
             Outcome::Failed(why) => assert!(why.contains("no device is called this"), "{why}"),
-            Outcome::Baked { .. } => panic!("baked without a device"),
+            Outcome::Baked { .. } | Outcome::Cancelled(_) => panic!("baked without a device"),
         }
     }
 }

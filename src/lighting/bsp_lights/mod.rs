@@ -476,9 +476,10 @@ pub fn bake_scene(
         max_matrix_bytes,
         bytes_per_entry: config.storage.bytes_per_entry(),
     };
-    let s =
-        setup::run(&polygons, &lights, &settings, progress).map_err(|m| field_error(scene, "max_segment_area", m))?;
-    Ok((s, polygons))
+    let s = setup::run(&polygons, &lights, &settings, progress);
+    // A cancelled set-up stopped its threads early: that, not a failed thread, is what happened.
+    crate::bake::check_cancelled(progress, "bsp light set-up")?;
+    Ok((s.map_err(|m| field_error(scene, "max_segment_area", m))?, polygons))
 }
 /// The set-up (segments, their colours, the light matrix), baked or read from the cache, checked
 /// against the scene and the device's limit.

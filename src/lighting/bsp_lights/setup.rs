@@ -265,13 +265,18 @@ fn shade_lights(
     }
     .clamp(1, lights.len().max(1));
     let done = AtomicUsize::new(0);
+    let cancel = progress.cancellation();
     std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
-                let done = &done;
+                let (done, cancel) = (&done, &cancel);
                 s.spawn(move || {
                     let (mut out, mut colour_ms, mut shadow_ms) = (Vec::new(), 0.0, 0.0);
                     for (l, light) in lights.iter().enumerate().skip(t).step_by(threads) {
+                        // Cancelled: the bake stops after the loop and caches nothing.
+                        if cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+                            break;
+                        }
                         let start = Instant::now();
                         let mut column = shared.colour(light);
                         colour_ms += ms(start);

@@ -349,7 +349,8 @@ pub fn shoot(
         ..Report::default()
     };
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    while report.shots < settings.max_shots {
+    // A cancelled solve stops between shots; the bake it is part of then caches nothing.
+    while report.shots < settings.max_shots && !progress.cancelled() {
         let (best, best_power) = solve.pick_shooter(energy, stop, &mut rng, &mut report);
         let unshot: f64 = solve.blocks.iter().map(|b| solve.power(energy, b)).sum();
         report.unshot_power.push(unshot);

@@ -241,6 +241,7 @@ pub fn bake_cpu(r: &Receivers, bands: usize, samples: usize, clip: Clip, progres
         });
         done += part.len() / dim;
         progress.update(done as u64, r.len() as u64);
+        crate::bake::check_cancelled(progress, "prt rays")?;
     }
     progress.finish();
     Ok(out)
@@ -591,6 +592,7 @@ impl RayBake {
             phases.read_back += t_sum.elapsed();
             base += n;
             progress.update(base as u64, total as u64);
+            crate::bake::check_cancelled(progress, "prt rays")?;
             sizer.record(n, t0.elapsed());
         }
         Ok(out)

@@ -186,7 +186,8 @@ fn run(
         Some(&bvh.skip_links()),
     )?;
     let (shot, unshot_power) = shooter.shoot(gpu, &mut states, &bvh_tables, push, |shots, left| {
-        show_progress(progress, shots, left.unwrap_or(initial), initial, settings.threshold)
+        show_progress(progress, shots, left.unwrap_or(initial), initial, settings.threshold);
+        crate::bake::check_cancelled(progress, "radiosity shooting")
     })?;
     report.unshot_power = unshot_power;
     report.shots = shot.shots[0] as usize;
@@ -358,7 +359,8 @@ impl Shooter {
     }
 
     /// Shoots in submissions sized by their time until the shaders report the stop, calling
-    /// `progress` with the shots so far and the last unshot power logged (none yet: `None`).
+    /// `progress` with the shots so far and the last unshot power logged (none yet: `None`)
+    /// after each; an error it returns (the bake was cancelled) ends the shooting.
     /// Returns the last shot record and the unshot power logged after each shot.
     fn shoot(
         &self,
@@ -366,7 +368,7 @@ impl Shooter {
         states: &mut ResourceStates,
         bvh: &GpuBvh,
         push: ShootPush,
-        mut progress: impl FnMut(usize, Option<f64>),
+        mut progress: impl FnMut(usize, Option<f64>) -> Result<()>,
     ) -> Result<(GpuShot, Vec<f64>)> {
         let mut recorded = 0usize;
         let mut sizer = BatchSizer::new(4, 1, MAX_SHOTS_PER_SUBMISSION, 2);
@@ -399,7 +401,7 @@ impl Shooter {
                 ));
             }
             let (shot, log) = self.read_shot(gpu)?;
-            progress(shot.shots[0] as usize, log.last().copied());
+            progress(shot.shots[0] as usize, log.last().copied())?;
             if shot.state[1] != 0 {
                 return Ok((shot, log));
             }

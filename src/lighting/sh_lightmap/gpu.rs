@@ -280,6 +280,7 @@ impl VisibilityBake {
             scatter(base, &out);
             base += n;
             progress.update(base as u64, total as u64);
+            crate::bake::check_cancelled(progress, "sh light-map visibility")?;
             sizer.record(n, t0.elapsed());
         }
         Ok(())

@@ -277,6 +277,7 @@ pub fn bake(
             gpu::visibility_gpu(gpu, shaders, &p, &geometry.triangles, &samples, mode, progress)?
         }
     };
+    crate::bake::check_cancelled(progress, "sh light-map visibility")?;
     let t = transfer::bake(&p, &occluders, &samples, &bits, &config.transfer, progress);
     let atlas = crate::lighting::lightmap::atlas::pack(&p);
     let dim = samples.dim();

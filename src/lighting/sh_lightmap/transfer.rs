@@ -107,6 +107,10 @@ pub fn visibility_cpu(
             ((done + 1) * chunk * threads).min(inside.len()) as u64,
             inside.len() as u64,
         );
+        // Cancelled: the bake this is part of stops after it and caches nothing.
+        if progress.cancelled() {
+            break;
+        }
     }
     bits
 }

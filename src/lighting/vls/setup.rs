@@ -214,12 +214,17 @@ pub fn select(
         .map_or(1, |n| n.get())
         .min(count.max(1));
     let chunk = count.div_ceil(threads).max(1);
+    let cancel = progress.cancellation();
     std::thread::scope(|scope| {
         let mut handles = Vec::new();
         for (c, out) in indices.chunks_mut(chunk * k).enumerate() {
-            let (thesis, done, points) = (&thesis, &done, &points);
+            let (thesis, done, points, cancel) = (&thesis, &done, &points, &cancel);
             handles.push(scope.spawn(move || {
                 for (j, slots) in out.chunks_mut(k).enumerate() {
+                    // Cancelled: the bake stops after the loop and caches nothing.
+                    if cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+                        break;
+                    }
                     let s = c * chunk + j;
                     let (p, n, own) = points[s];
                     let blocked = |l: &ManyLight| match params.feeler {
