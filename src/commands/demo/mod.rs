@@ -220,6 +220,10 @@ impl App {
             (extent.width, extent.height),
             FRAMES_IN_FLIGHT,
         )?;
+        // Said at start: a minute of frames at one a second, so a method slower than that warns.
+        for w in renderer.cost_warnings(60) {
+            crate::errln!("{w}");
+        }
         let current = configurations
             .iter()
             .position(|c| *c == renderer.configuration)
