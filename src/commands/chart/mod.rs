@@ -408,7 +408,14 @@ fn frames_at_least(opts: &ChartOptions) -> usize {
 pub fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
     let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
     let gpu = Gpu::new(&opts.gpu)?;
-    let mut renderer = Renderer::for_run(gpu, scene.clone(), config.clone(), opts.size, bakes, frames_at_least(opts))?;
+    let mut renderer = Renderer::for_run(
+        gpu,
+        scene.clone(),
+        config.clone(),
+        opts.size,
+        bakes,
+        frames_at_least(opts),
+    )?;
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
     advance(&mut renderer, &camera, opts.frame)?;
