@@ -54,17 +54,15 @@ pub fn render_image(opts: &CaptureOptions) -> Result<(HdrImage, Renderer)> {
         crate::errln!("{line}");
     }
     let gpu = Gpu::new(&opts.gpu)?;
-    let mut renderer = Renderer::with_configuration(
+    // A run estimated past a minute is said before the methods' large allocations.
+    let mut renderer = Renderer::for_run(
         gpu,
         scene,
         config,
         render_size,
-        1,
         Baker::new(Some(Baker::default_dir())),
+        opts.frames.max(1) as usize,
     )?;
-    for w in renderer.cost_warnings(opts.frames.max(1) as usize) {
-        crate::errln!("{w}");
-    }
     let camera = renderer.scene.camera.clone();
     let mut image = None;
     for _ in 0..opts.frames.max(1) {

@@ -42,11 +42,11 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
             gpu.caps().name
         ))));
     }
-    let mut renderer = Renderer::new(gpu, scene, opts.method.as_deref(), opts.size, 1)?;
-    // The frames profiled and the one that warms the caches.
-    for w in renderer.cost_warnings(frames.max(1) + 1) {
-        crate::errln!("{w}");
-    }
+    let config = registry::configuration(&scene, opts.method.as_deref())?;
+    let bakes = crate::bake::Baker::new(Some(crate::bake::Baker::default_dir()));
+    // The frames profiled and the one that warms the caches, estimated before the methods'
+    // large allocations.
+    let mut renderer = Renderer::for_run(gpu, scene, config, opts.size, bakes, frames.max(1) + 1)?;
     let camera = renderer.scene.camera.clone();
     // One frame to warm caches and learn which passes were culled.
     let culled = renderer

@@ -117,6 +117,29 @@ pub struct CreateContext<'a> {
     pub bakes: &'a mut Baker,
     /// The terms this method will draw in the configuration being created.
     pub terms: Terms,
+    /// The frames the command will draw with this configuration (0: not said). A method that
+    /// estimates its frames says so through [`CreateContext::warn_cost`] before its large
+    /// allocations when they pass [`SLOW_RUN_S`].
+    pub frames: usize,
+}
+
+impl CreateContext<'_> {
+    /// Says on stderr, in one line, that [`CreateContext::frames`] frames at `cost` each pass
+    /// [`SLOW_RUN_S`]; nothing when they do not or no frame count was given.
+    pub fn warn_cost(&self, method: &str, cost: &FrameCost) {
+        if self.frames > 0 {
+            if let Some(line) = cost_warning(self.scene, method, cost, self.frames) {
+                crate::errln!("{line}");
+            }
+        }
+    }
+}
+
+/// The line that warns that `frames` frames of `method` at `cost` pass [`SLOW_RUN_S`], naming
+/// the scene.
+pub fn cost_warning(scene: &Scene, method: &str, cost: &FrameCost, frames: usize) -> Option<String> {
+    let w = cost.warning(method, frames)?;
+    Some(format!("warning: {}: {w}", scene.source))
 }
 
 /// A pass that draws surfaces into the frame's radiance with a [`term_pipeline_desc`] pipeline:

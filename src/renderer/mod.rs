@@ -140,12 +140,38 @@ impl Renderer {
 
     /// Uploads the scene and creates `configuration`'s methods, baking through `bakes`.
     pub fn with_configuration(
+        gpu: Gpu,
+        scene: Scene,
+        configuration: Configuration,
+        size: (u32, u32),
+        frames_in_flight: usize,
+        bakes: Baker,
+    ) -> Result<Renderer> {
+        Renderer::build(gpu, scene, configuration, size, frames_in_flight, bakes, 0)
+    }
+
+    /// [`Renderer::with_configuration`] with one frame in flight, for a run of `frames` frames: a
+    /// method that estimates its frames warns on stderr before its large allocations when the
+    /// run would pass a minute ([`crate::lighting::CreateContext::warn_cost`]).
+    pub fn for_run(
+        gpu: Gpu,
+        scene: Scene,
+        configuration: Configuration,
+        size: (u32, u32),
+        bakes: Baker,
+        frames: usize,
+    ) -> Result<Renderer> {
+        Renderer::build(gpu, scene, configuration, size, 1, bakes, frames.max(1))
+    }
+
+    fn build(
         mut gpu: Gpu,
         scene: Scene,
         configuration: Configuration,
         size: (u32, u32),
         frames_in_flight: usize,
         mut bakes: Baker,
+        frames: usize,
     ) -> Result<Renderer> {
         scene.check_methods(&registry::schemas())?;
         let shaders = ShaderLibrary::Embedded;
@@ -163,6 +189,7 @@ impl Renderer {
                 environment: &environment,
                 bakes: &mut bakes,
                 terms: Terms::NONE,
+                frames,
             };
             create_methods(&configuration, &mut ctx)?
         };
@@ -217,6 +244,7 @@ impl Renderer {
                 environment: &self.environment,
                 bakes,
                 terms: Terms::NONE,
+                frames: 0,
             };
             create_methods(&configuration, &mut ctx)?
         };
@@ -255,8 +283,7 @@ impl Renderer {
     /// [`LightingMethod::frame_cost`]), naming the scene: said before the first frame.
     pub fn cost_warnings(&self, frames: usize) -> Vec<String> {
         (self.methods.iter())
-            .filter_map(|m| m.frame_cost()?.warning(m.name(), frames))
-            .map(|w| format!("warning: {}: {w}", self.scene.source))
+            .filter_map(|m| crate::lighting::cost_warning(&self.scene, m.name(), &m.frame_cost()?, frames))
             .collect()
     }
 

@@ -64,6 +64,7 @@ fn create(scene: &Scene) -> (Setup, penumbra::lighting::bsp_lights::BspLights) {
         environment: &environment,
         bakes: &mut bakes,
         terms: Terms::BASE_DIRECT,
+        frames: 0,
     };
     let bsp = penumbra::lighting::bsp_lights::BspLights::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(bsp.name(), "bsp_lights");

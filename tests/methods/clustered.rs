@@ -128,6 +128,7 @@ fn assignment(scene: &Scene) -> (Assignment, Clustered) {
             environment: &environment,
             bakes: &mut bakes,
             terms: Terms::BASE_DIRECT,
+            frames: 0,
         };
         Clustered::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"))
     };

@@ -394,11 +394,28 @@ fn advance(renderer: &mut Renderer, camera: &crate::scene::Camera, frames: u64) 
     Ok(())
 }
 
+/// The frames a configuration renders at least: those before the judged frame, the judged one,
+/// the fewest timed, and the supersampled ones. A configuration whose estimate passes a minute
+/// over these warns before its large allocations.
+fn frames_at_least(opts: &ChartOptions) -> usize {
+    let judged = usize::try_from(opts.frame).unwrap_or(usize::MAX).saturating_add(1);
+    let timed = MIN_TIMED_FRAMES.min(opts.frames.max(1));
+    let supersampled = if opts.supersample > 1 { judged } else { 0 };
+    judged.saturating_add(timed).saturating_add(supersampled)
+}
+
 /// Renders and times one configuration (timed at the chart's size only).
 pub fn measure(scene: &Scene, config: &Configuration, opts: &ChartOptions) -> Result<Measured> {
     let bakes = Baker::new(Some(opts.cache_dir.join("bake")));
-    let mut renderer =
-        Renderer::with_configuration(Gpu::new(&opts.gpu)?, scene.clone(), config.clone(), opts.size, 1, bakes)?;
+    let gpu = Gpu::new(&opts.gpu)?;
+    let mut renderer = Renderer::for_run(
+        gpu,
+        scene.clone(),
+        config.clone(),
+        opts.size,
+        bakes,
+        frames_at_least(opts),
+    )?;
     let device = renderer.gpu.caps().name.clone();
     let camera = renderer.scene.camera.clone();
     advance(&mut renderer, &camera, opts.frame)?;

@@ -229,6 +229,10 @@ impl App {
             (extent.width, extent.height),
             &self.opts.gpu,
         )?;
+        // Said at start: a minute of frames at one a second, so a method slower than that warns.
+        for w in renderer.cost_warnings(60) {
+            crate::errln!("{w}");
+        }
         let camera = FlyCamera::new(renderer.scene.camera.clone());
         let egui = egui::Context::default();
         let egui_input = egui_winit::State::new(

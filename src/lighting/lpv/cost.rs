@@ -1,16 +1,34 @@
-//! What a frame of the LPV will cost, before the first: the work of each stage from the
-//! configuration (texels drawn, surfels injected, cell-steps propagated) times a time per unit
-//! measured on this device when the method is set up (one RSM, G-buffer and injection at their
-//! configured sizes, and two propagation steps over a sub-volume, timed with timestamp queries).
+//! What a frame of the LPV will cost, said before anything the configuration sizes is allocated:
+//! the work of each stage from the configuration (texels drawn, surfels injected, cells resolved,
+//! cell-steps propagated) times a time per unit measured on this device when the method is set
+//! up. The measurement runs one frame's stages on small stand-ins (an RSM and G-buffer of at most
+//! [`CALIBRATION_TEXELS`]², one volume of at most [`CALIBRATION_SIDE`]³ cells,
+//! [`CALIBRATION_STEPS`] propagation steps), timed with timestamp queries and freed before the
+//! full-size volumes and maps are made: at the documented maxima the estimate comes in seconds,
+//! where the full-size resources alone would take longer to make than that.
 
 use super::config::{Config, Injection};
-use crate::lighting::FrameCost;
+use super::rsm::{self, LightCamera, Rsm};
+use super::volume::{Placement, VolumeBlock, VolumeGpu};
+use crate::backend::BufferId;
+use crate::error::{Error, Result};
+use crate::gpu_scene::{DrawCall, GpuLight};
+use crate::graph::RenderGraph;
+use crate::lighting::{CreateContext, FrameCost};
 
-/// The propagation's calibration volume: cells per side at most (a dispatch of 32³ cells lasts
-/// long enough for a dispatch's fixed cost to vanish in it, and costs milliseconds).
-pub const CALIBRATION_SIDE: u32 = 32;
+/// The calibration volume's cells per side at most. Its sets (about 70 MB in all at 64³) outgrow
+/// the processor's caches as larger grids' do, so a cell-step's time carries over to them; a
+/// volume that fits the caches runs faster per cell than a large one (measured on lavapipe: a
+/// propagation step took 0.49 µs a cell at 32³, 0.76 at 64³ and 0.93 at 128³).
+pub const CALIBRATION_SIDE: u32 = 64;
+/// The calibration RSM's and G-buffer's texels per side at most: large enough that a draw's
+/// fixed cost is small beside its texels', small enough to draw and inject in milliseconds.
+pub const CALIBRATION_TEXELS: u32 = 512;
 /// Propagation steps timed; the fastest counts (the first may warm caches).
 pub const CALIBRATION_STEPS: u32 = 2;
+
+/// The calibration's pass label: its passes are named "lpv calibration inject", ….
+const LABEL: &str = "lpv calibration";
 
 /// A frame's work per stage, in the units its time scales with.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +38,9 @@ pub struct Work {
     /// Surfels scattered (the RSM's and the G-buffer's texels) into each cascade, or the
     /// document's samples gathered by each cell.
     pub injection: f64,
+    /// Cells × the passes that visit each cell once a frame (the resolve of the scattered sums,
+    /// the geometry volume's faces) × cascades.
+    pub cells: f64,
     /// Cells × propagation steps × cascades.
     pub propagation: f64,
 }
@@ -30,6 +51,8 @@ impl Work {
         let drawn = texels(config.rsm) + texels(config.gbuffer);
         let cells = f64::from(config.grid).powi(3);
         let cascades = f64::from(config.cascades);
+        let scatter = config.injection == Injection::Scatter;
+        let faces = config.occlusion && !config.faithful_propagation() && config.iterations > 0;
         Work {
             raster: drawn,
             injection: cascades
@@ -37,6 +60,7 @@ impl Work {
                     Injection::Scatter => drawn,
                     Injection::Gather => cells * f64::from(config.samples),
                 },
+            cells: cells * cascades * f64::from(u8::from(scatter) + u8::from(faces)),
             propagation: cells * f64::from(config.iterations) * cascades,
         }
     }
@@ -47,31 +71,36 @@ impl Work {
 pub struct Rates {
     pub raster: f64,
     pub injection: f64,
+    pub cells: f64,
     pub propagation: f64,
 }
 
 impl Rates {
-    /// From one calibration's pass times (milliseconds, by pass name): `config`'s RSM and
-    /// G-buffer, the injection (and resolve) into its finest volume, and `steps` propagation
-    /// dispatches over `side`³ cells named by `is_step`.
-    pub fn measured(config: &Config, times: &[(String, f64)], side: u32, is_step: impl Fn(&str) -> bool) -> Rates {
-        let work = Work::of(config);
-        let sum = |pick: &dyn Fn(&str) -> bool| times.iter().filter(|(n, _)| pick(n)).map(|(_, ms)| ms / 1e3).sum();
-        let raster: f64 = sum(&|n: &str| n == "lpv rsm" || n == super::rsm::GBUFFER_PASS);
-        let injection: f64 =
-            sum(&|n: &str| !is_step(n) && (n.contains(" inject") || n.ends_with(" resolve") || n.ends_with(" gather")));
+    /// From one calibration's pass times (milliseconds, by pass name) of the stages of `small`
+    /// (one volume, its propagation steps named "… propagate k").
+    pub fn measured(small: &Config, times: &[(String, f64)]) -> Rates {
+        let work = Work::of(small);
+        let seconds = |pick: &dyn Fn(&str) -> bool| -> f64 {
+            times.iter().filter(|(n, _)| pick(n)).map(|(_, ms)| ms / 1e3).sum()
+        };
+        let raster = seconds(&|n| n == "lpv rsm" || n == rsm::GBUFFER_PASS);
+        let injection = seconds(&|n| n.contains(" inject") || n.ends_with(" gather"));
+        let cells = seconds(&|n| n.ends_with(" resolve") || n.ends_with(" blocking faces"));
         let step = times
             .iter()
-            .filter(|(n, _)| is_step(n))
+            .filter(|(n, _)| n.contains(" propagate "))
             .map(|(_, ms)| ms / 1e3)
             .fold(f64::INFINITY, f64::min);
-        let cells = f64::from(side).powi(3);
-        let cascades = f64::from(config.cascades);
+        let per = |s: f64, units: f64| if units > 0.0 { s / units } else { 0.0 };
         Rates {
-            raster: raster / work.raster.max(1.0),
-            // The finest volume's injection is each cascade's.
-            injection: injection * cascades / work.injection.max(1.0),
-            propagation: if step.is_finite() { step / cells } else { 0.0 },
+            raster: per(raster, work.raster),
+            injection: per(injection, work.injection),
+            cells: per(cells, work.cells),
+            propagation: if step.is_finite() {
+                step / f64::from(small.grid).powi(3)
+            } else {
+                0.0
+            },
         }
     }
 }
@@ -96,6 +125,13 @@ pub fn estimate(config: &Config, rates: &Rates) -> FrameCost {
                 work.injection * rates.injection,
             ),
             (
+                format!(
+                    "resolve and geometry volume ({}³ cells × {} cascade(s))",
+                    config.grid, config.cascades
+                ),
+                work.cells * rates.cells,
+            ),
+            (
                 format!("RSM and G-buffer ({:.0} texels drawn)", work.raster),
                 work.raster * rates.raster,
             ),
@@ -104,51 +140,76 @@ pub fn estimate(config: &Config, rates: &Rates) -> FrameCost {
     }
 }
 
-impl super::Lpv {
-    /// Times one RSM, G-buffer and injection into the finest volume at the configured sizes, and
-    /// [`CALIBRATION_STEPS`] propagation steps over at most [`CALIBRATION_SIDE`]³ of its cells;
-    /// `None` where the device has no timestamps. The frames that follow overwrite all it wrote.
-    pub(super) fn calibrate(
-        &self,
-        gpu: &mut crate::backend::Gpu,
-        states: &mut crate::graph::ResourceStates,
-        scene: &crate::gpu_scene::SceneGpu,
-    ) -> crate::error::Result<Option<Rates>> {
-        if gpu.caps().timestamp_valid_bits == 0 {
-            return Ok(None);
-        }
-        let volume = &self.volumes[0];
-        let side = volume.n.min(CALIBRATION_SIDE);
-        let n = side as i32;
-        let block = super::volume::VolumeBlock {
-            size: [n, n, n, n * n * n],
-            ..self.blocks[0]
-        };
-        let frame = gpu.create_frame()?;
-        let mut graph = crate::graph::RenderGraph::new();
-        self.rsm
-            .add_raster(&mut graph, scene, &self.calls, self.transmittance, &self.blocks[0]);
-        self.rsm
-            .add_gbuffer(&mut graph, scene, &self.calls, self.transmittance, &self.gbuffer_raster);
-        self.rsm
-            .add_injection(&mut graph, volume, &self.blocks[0], &self.gbuffer_blocks[0]);
-        let step = |k: u32| format!("lpv calibration step {k}");
-        for k in 0..CALIBRATION_STEPS {
-            volume.add_step(&mut graph, &block, k, &step(k));
-        }
-        graph.output_buffer(volume.accumulation);
-        let ran = graph.run_and_wait(gpu, frame, states, "lpv calibration");
-        let timings = ran
-            .map_err(crate::error::Error::from)
-            .and_then(|_| Ok(gpu.frame_timings(frame)?));
-        gpu.destroy_frame(frame)?;
-        let Some(timings) = timings? else {
-            return Ok(None);
-        };
-        let times: Vec<(String, f64)> = timings.into_iter().map(|t| (t.name, t.ms)).collect();
-        let steps: Vec<String> = (0..CALIBRATION_STEPS).map(step).collect();
-        Ok(Some(Rates::measured(&self.config, &times, side, |name| {
-            steps.iter().any(|s| s == name)
-        })))
+/// The configuration the calibration runs: `config`'s settings on one volume of at most
+/// [`CALIBRATION_SIDE`]³ cells, maps of at most [`CALIBRATION_TEXELS`]² and
+/// [`CALIBRATION_STEPS`] steps.
+pub fn calibration_config(config: &Config) -> Config {
+    Config {
+        grid: config.grid.min(CALIBRATION_SIDE),
+        rsm: config.rsm.min(CALIBRATION_TEXELS),
+        gbuffer: config.gbuffer.min(CALIBRATION_TEXELS),
+        iterations: CALIBRATION_STEPS,
+        cascades: 1,
+        ..*config
     }
+}
+
+/// Times one frame's stages of [`calibration_config`] over the cube `placement` covers, lit by
+/// `light`, and frees all it made; `None` where the device has no timestamps.
+pub(super) fn calibrate(
+    cx: &mut CreateContext<'_>,
+    config: &Config,
+    light: &GpuLight,
+    placement: &Placement,
+    calls: &[DrawCall],
+    transmittance: BufferId,
+) -> Result<Option<Rates>> {
+    if cx.gpu.caps().timestamp_valid_bits == 0 {
+        return Ok(None);
+    }
+    let small = calibration_config(config);
+    let cover = Placement::around(placement.centre(), placement.n as f32 * placement.cell, small.grid);
+    let camera = LightCamera::new(light, &cover, small.rsm, small.snap)?;
+    let block = camera.block(&cover, &small);
+    let eye = cx.scene.camera.position.extend(1.0).into();
+    let view_proj = cx.scene.camera.view_projection(1.0).to_cols_array();
+    let gbuffer = rsm::gbuffer_block(&block, view_proj, eye, small.gbuffer);
+    cx.gpu.begin_resource_scope();
+    let timed = time_stages(cx, &small, [&block, &gbuffer], calls, transmittance);
+    let scope = cx.gpu.end_resource_scope();
+    let freed = cx.gpu.destroy_scope(&scope);
+    for &b in &scope.buffers {
+        cx.states.forget_buffer(b);
+    }
+    for &i in &scope.images {
+        cx.states.forget_image(i);
+    }
+    let times = timed?;
+    freed?;
+    Ok(times.map(|t| Rates::measured(&small, &t)))
+}
+
+/// One frame's stages of `small` (its RSM at `blocks[0]`, its G-buffer at `blocks[1]`): pass
+/// names and milliseconds.
+fn time_stages(
+    cx: &mut CreateContext<'_>,
+    small: &Config,
+    blocks: [&VolumeBlock; 2],
+    calls: &[DrawCall],
+    transmittance: BufferId,
+) -> Result<Option<Vec<(String, f64)>>> {
+    let scene = cx.scene_gpu;
+    let volume = VolumeGpu::new(cx.gpu, cx.shaders, cx.states, small, LABEL)?;
+    let maps = Rsm::new(cx.gpu, cx.shaders, cx.states, small)?;
+    let mut graph = RenderGraph::new();
+    maps.add_raster(&mut graph, scene, calls, transmittance, blocks[0]);
+    maps.add_gbuffer(&mut graph, scene, calls, transmittance, blocks[1]);
+    maps.add_injection(&mut graph, &volume, blocks[0], blocks[1]);
+    volume.add_propagation(&mut graph, blocks[0]);
+    graph.output_buffer(volume.accumulation);
+    let frame = cx.gpu.create_frame()?;
+    let ran = graph.run_and_wait(cx.gpu, frame, cx.states, LABEL);
+    let timings = ran.map_err(Error::from).and_then(|_| Ok(cx.gpu.frame_timings(frame)?));
+    cx.gpu.destroy_frame(frame)?;
+    Ok(timings?.map(|t| t.into_iter().map(|t| (t.name, t.ms)).collect()))
 }

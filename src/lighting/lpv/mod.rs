@@ -309,6 +309,23 @@ fn cascade_block(placements: &[Placement]) -> CascadeBlock {
     b
 }
 
+/// Per material: the diffuse transmittance (rgb); emitters' materials, after the scene's,
+/// transmit nothing.
+fn transmittance_buffer(cx: &mut CreateContext<'_>) -> Result<BufferId> {
+    let mut tau: Vec<[f32; 4]> = cx
+        .scene
+        .materials
+        .iter()
+        .map(|m| m.transmittance.extend(0.0).into())
+        .collect();
+    tau.resize(tau.len().max(cx.scene_gpu.material_maps.len()).max(1), [0.0; 4]);
+    let transmittance = cx
+        .gpu
+        .create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
+    cx.states.forget_buffer(transmittance);
+    Ok(transmittance)
+}
+
 /// The LPV as the indirect term.
 pub struct Lpv {
     config: Config,
@@ -392,6 +409,20 @@ impl Lpv {
         let camera = LightCamera::new(&light, &largest, config.rsm, config.snap)
             .map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
         let blocks: Vec<VolumeBlock> = placements.iter().map(|p| camera.block(p, &config)).collect();
+        let transmittance = transmittance_buffer(cx)?;
+        let calls: Vec<DrawCall> = cx
+            .scene_gpu
+            .draws
+            .iter()
+            .filter(|d| d.object.is_some())
+            .map(DrawCall::whole)
+            .collect();
+        // Measured on small stand-ins and said before the volumes and maps the configuration
+        // sizes are made: at the maxima those alone take longer than the measurement.
+        let rates = cost::calibrate(cx, &config, &light, &largest, &calls, transmittance)?;
+        if let Some(rates) = &rates {
+            cx.warn_cost(NAME, &cost::estimate(&config, rates));
+        }
         let mut volumes = Vec::new();
         for k in 0..placements.len() {
             let label = if k == 0 {
@@ -411,18 +442,6 @@ impl Lpv {
             .map(|b| rsm::gbuffer_block(b, view_proj, eye, config.gbuffer))
             .collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
-        let mut tau: Vec<[f32; 4]> = cx
-            .scene
-            .materials
-            .iter()
-            .map(|m| m.transmittance.extend(0.0).into())
-            .collect();
-        // Emitters' materials come after the scene's: they transmit nothing.
-        tau.resize(tau.len().max(cx.scene_gpu.material_maps.len()).max(1), [0.0; 4]);
-        let transmittance = cx
-            .gpu
-            .create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
-        cx.states.forget_buffer(transmittance);
 
         let mut desc = GraphicsPipelineDesc::new("lpv composite", "frame/surface.vert", Some("lpv/composite.frag"));
         desc.vertex_layout = vertex_layout();
@@ -476,15 +495,8 @@ impl Lpv {
             None
         };
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
-        let calls = cx
-            .scene_gpu
-            .draws
-            .iter()
-            .filter(|d| d.object.is_some())
-            .map(DrawCall::whole)
-            .collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        let mut lpv = Lpv {
+        let lpv = Lpv {
             config,
             placements,
             finest,
@@ -503,9 +515,8 @@ impl Lpv {
             calls,
             objects,
             animation,
-            rates: None,
+            rates,
         };
-        lpv.rates = lpv.calibrate(cx.gpu, cx.states, cx.scene_gpu)?;
         Ok(lpv)
     }
 
