@@ -408,7 +408,7 @@ impl Lpv {
         let gbuffer_raster = rsm::gbuffer_block(&blocks[0], view_proj, eye, config.gbuffer);
         let gbuffer_blocks = blocks
             .iter()
-            .map(|b| rsm::gbuffer_block(b, view_proj, eye, config.gbuffer))
+            .map(|b| rsm::gbuffer_injection_block(b, config.gbuffer))
             .collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
         let mut tau: Vec<[f32; 4]> = cx
@@ -649,7 +649,7 @@ impl LightingMethod for Lpv {
             self.gbuffer_blocks = self
                 .blocks
                 .iter()
-                .map(|b| rsm::gbuffer_block(b, view_proj, eye, size))
+                .map(|b| rsm::gbuffer_injection_block(b, size))
                 .collect();
         }
         Ok(())
