@@ -296,16 +296,25 @@ fn irradiance(g: &Grid, placement: &Placement, p: DVec3, n: DVec3) -> f64 {
 /// A wall at x = 0 between two halves of a floor; a low sun from +x lights the wall and the
 /// floor in front of it and shades the floor behind it.
 fn thin_wall(gv: bool) -> Scene {
-    thin_wall_with(gv, 0)
+    thin_wall_with(gv, 0, SUN_FROM_X)
 }
 
-/// The thin wall with a `gbuffer`² G-buffer pass (0: none).
-fn thin_wall_with(gv: bool, gbuffer: u32) -> Scene {
+/// The thin wall's low sun from +x.
+const SUN_FROM_X: &str = "type = \"directional\"\ndirection = [-1, -0.6, 0]\nirradiance = 3";
+
+/// The thin wall with a `gbuffer`² G-buffer pass (0: none), lit by `light` (a `[[lights]]`
+/// table's body).
+fn thin_wall_with(gv: bool, gbuffer: u32, light: &str) -> Scene {
+    let gbuffer = if gbuffer > 0 {
+        format!(", gbuffer = {gbuffer}")
+    } else {
+        String::new()
+    };
     scene(&format!(
-        "methods = [{{ name = \"lpv\", grid = 24, iterations = 24, geometry_volume = {gv}, gbuffer = {gbuffer} }}]\n[camera]\nposition = [3, 2, 0]\ntarget = [0, 0.5, 0]\n\
+        "methods = [{{ name = \"lpv\", grid = 24, iterations = 24, geometry_volume = {gv}{gbuffer} }}]\n[camera]\nposition = [3, 2, 0]\ntarget = [0, 0.5, 0]\n\
          [[objects]]\nmesh = \"plane\"\nsize = 3\n\
          [[objects]]\nmesh = \"quad\"\ncorner = [0, 0, 1.5]\nedge_u = [0, 0, -3]\nedge_v = [0, 1.5, 0]\n\
-         [[lights]]\ntype = \"directional\"\ndirection = [-1, -0.6, 0]\nirradiance = 3\n"
+         [[lights]]\n{light}\n"
     ))
 }
 
@@ -332,10 +341,18 @@ fn the_geometry_volume_stops_light_leaking_through_a_thin_wall() {
 /// A surface both the light and the camera see blocks once: in the thin-wall scene the camera
 /// sees only the wall's lit face and the lit floor, all of which the RSM holds, so the G-buffer's
 /// surfels of them are skipped and the light on both sides of the wall and over the floor is
-/// what it is without the pass (measured: identical). Adding them as well, blocking twice, took
-/// 9-16 % of it in the open and all of it behind the wall (measured).
+/// what it is without the pass (measured: identical), under the sun and under a spot light (whose
+/// RSM texels grow with the distance). Adding them as well, blocking twice, took 9-16 % of the
+/// light in the open and all of it behind the wall, under either light (measured).
 #[test]
 fn a_surface_both_the_light_and_the_camera_see_blocks_once() {
+    let spot = "type = \"spot\"\nposition = [4, 2.6, 0]\ntarget = [0, 0.2, 0]\nintensity = 20\nouter_deg = 45";
+    for light in [SUN_FROM_X, spot] {
+        surfaces_both_views_see_block_once(light);
+    }
+}
+
+fn surfaces_both_views_see_block_once(light_decl: &str) {
     let points = [
         (DVec3::new(0.2, 0.6, 0.0), DVec3::NEG_X),
         (DVec3::new(-0.2, 0.6, 0.0), DVec3::X),
@@ -343,7 +360,7 @@ fn a_surface_both_the_light_and_the_camera_see_blocks_once() {
         (DVec3::new(0.4, 1.2, 0.5), DVec3::NEG_X),
     ];
     let light = |gbuffer: u32| -> Vec<f64> {
-        let (g, placement, _) = volume_of(&thin_wall_with(true, gbuffer));
+        let (g, placement, _) = volume_of(&thin_wall_with(true, gbuffer, light_decl));
         points
             .iter()
             .map(|&(p, n)| irradiance(&g[0], &placement, p, n))
