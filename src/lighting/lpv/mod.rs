@@ -439,7 +439,7 @@ impl Lpv {
         let gbuffer_raster = rsm::gbuffer_block(&blocks[0], view_proj, eye, config.gbuffer);
         let gbuffer_blocks = blocks
             .iter()
-            .map(|b| rsm::gbuffer_block(b, view_proj, eye, config.gbuffer))
+            .map(|b| rsm::gbuffer_injection_block(b, config.gbuffer))
             .collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
 
@@ -660,7 +660,7 @@ impl LightingMethod for Lpv {
             self.gbuffer_blocks = self
                 .blocks
                 .iter()
-                .map(|b| rsm::gbuffer_block(b, view_proj, eye, size))
+                .map(|b| rsm::gbuffer_injection_block(b, size))
                 .collect();
         }
         Ok(())

@@ -176,6 +176,8 @@ pub struct Rsm {
     pub gbuffer: Option<SurfelMap>,
     raster: PipelineId,
     inject: PipelineId,
+    /// The G-buffer's injection: skips the surfels the RSM holds.
+    inject_gbuffer: PipelineId,
     gather: PipelineId,
     nearest: SamplerId,
     /// The document's 64 sample offsets in [0, 1]³.
@@ -210,6 +212,14 @@ impl Rsm {
             },
             shaders,
         )?;
+        let inject_gbuffer = gpu.create_compute_pipeline(
+            &ComputePipelineDesc {
+                name: "lpv inject gbuffer".into(),
+                shader: "lpv/inject_gbuffer.comp".into(),
+                specialization: vec![half],
+            },
+            shaders,
+        )?;
         let gather = gpu.create_compute_pipeline(
             &ComputePipelineDesc {
                 name: "lpv gather".into(),
@@ -227,6 +237,7 @@ impl Rsm {
             gbuffer,
             raster,
             inject,
+            inject_gbuffer,
             gather,
             nearest,
             offsets,
@@ -314,12 +325,14 @@ impl Rsm {
             });
     }
 
-    /// Scatters the surfels of `map` into `volume`'s fixed-point sums.
+    /// Scatters the surfels of `map` into `volume`'s fixed-point sums; with `held` (the RSM), only
+    /// those the RSM does not hold.
     fn add_scatter<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
         name: &str,
         map: &SurfelMap,
+        held: Option<&SurfelMap>,
         volume: &'a VolumeGpu,
         block: &'a VolumeBlock,
     ) {
@@ -327,16 +340,30 @@ impl Rsm {
         let (mip, s) = (SubresourceRange::mip(0), self.nearest);
         let write = Access::StorageWrite { stages: compute };
         let (layers, size) = (map.layers, map.size);
-        graph
+        let mut pass = graph
             .pass(name)
             .sample("rsm_flux", layers[0], mip, s, compute)
             .sample("rsm_transmitted", layers[1], mip, s, compute)
             .sample("rsm_position", layers[2], mip, s, compute)
-            .sample("rsm_normal", layers[3], mip, s, compute)
-            .buffer(volume.fixed_light, write, Some("fixed_light"))
+            .sample("rsm_normal", layers[3], mip, s, compute);
+        if let Some(held) = held {
+            pass = pass.sample("held_position", held.layers[2], mip, s, compute).sample(
+                "held_normal",
+                held.layers[3],
+                mip,
+                s,
+                compute,
+            );
+        }
+        let pipeline = if held.is_some() {
+            self.inject_gbuffer
+        } else {
+            self.inject
+        };
+        pass.buffer(volume.fixed_light, write, Some("fixed_light"))
             .buffer(volume.fixed_blocking, write, Some("fixed_blocking"))
             .record(move |ctx| {
-                ctx.rec.bind_pipeline(self.inject)?;
+                ctx.rec.bind_pipeline(pipeline)?;
                 ctx.bind(&[("volume", Bind::UniformData(bytemuck::bytes_of(block)))])?;
                 ctx.rec.dispatch([size, size, 1])
             });
@@ -359,13 +386,21 @@ impl Rsm {
         let s = self.nearest;
         match self.injection {
             Injection::Scatter => {
-                self.add_scatter(graph, &format!("{} inject", volume.label), &self.map, volume, block);
+                self.add_scatter(
+                    graph,
+                    &format!("{} inject", volume.label),
+                    &self.map,
+                    None,
+                    volume,
+                    block,
+                );
                 if let Some(map) = &self.gbuffer {
                     // Only blocking: the G-buffer's surfels carry no flux.
                     self.add_scatter(
                         graph,
                         &format!("{} inject gbuffer", volume.label),
                         map,
+                        Some(&self.map),
                         volume,
                         gbuffer_block,
                     );
@@ -391,8 +426,17 @@ impl Rsm {
     }
 }
 
+/// The block that injects the G-buffer's `size`² surfels into the volume the light's `block`
+/// places: the light's camera stays, to find the surfels the RSM (`block.rsm[0]`² texels) holds.
+pub fn gbuffer_injection_block(block: &VolumeBlock, size: u32) -> VolumeBlock {
+    VolumeBlock {
+        rsm: [size as i32, block.rsm[0], 0, 0],
+        ..*block
+    }
+}
+
 /// The block that draws the G-buffer (`light.w` = 2: the area from the pixel's footprint, no
-/// flux) and injects its surfels into the volume `block` places.
+/// flux).
 pub fn gbuffer_block(block: &VolumeBlock, view_proj: [f32; 16], eye: [f32; 4], size: u32) -> VolumeBlock {
     VolumeBlock {
         rsm: [size as i32, 0, 0, 0],
