@@ -52,23 +52,7 @@ pub fn add_direct_light_in(
         pvs.as_ref()
             .map(|(w, translate)| w.leaf_of(crate::scene::world_mesh::scene_to_world(x.as_vec3() - *translate)))
     };
-    // Corrected: the patch's mean irradiance over its visible sub-samples, as the sun's lit
-    // fraction is: the light falls off as 1/d² and at a spot's cone, so the centre alone
-    // misjudges patches near a light or across a cone's edge. Faithful: CaLight's one sample
-    // per lumel.
-    let points: Vec<Vec<DVec3>> = match mode {
-        solve::Mode::Faithful => p.patches.iter().map(|q| vec![q.centre]).collect(),
-        solve::Mode::Corrected => {
-            let mut visible = crate::lighting::lightmap::buried::visible_samples(p, occluders);
-            for (points, q) in visible.iter_mut().zip(&p.patches) {
-                if points.is_empty() {
-                    // A sliver no sub-sample falls in: its centre.
-                    points.push(q.centre + q.normal * eps);
-                }
-            }
-            visible
-        }
-    };
+    let points = light_points(p, occluders, mode);
     let lights: Vec<&Light> = scene
         .lights
         .iter()
@@ -137,6 +121,26 @@ pub fn add_direct_light_in(
         q.unshot += *b;
     }
     Ok(direct)
+}
+
+/// Where each patch takes its direct light. Corrected: the patch's visible sub-samples, whose
+/// mean irradiance is the patch's, as the sun's lit fraction is: the light falls off as 1/d² and
+/// at a spot's cone, so the centre alone misjudges patches near a light or across a cone's edge.
+/// Faithful: CaLight's one sample per lumel, at its centre.
+fn light_points(p: &Patches, occluders: &Occluders, mode: solve::Mode) -> Vec<Vec<DVec3>> {
+    match mode {
+        solve::Mode::Faithful => p.patches.iter().map(|q| vec![q.centre]).collect(),
+        solve::Mode::Corrected => {
+            let mut visible = crate::lighting::lightmap::buried::visible_samples(p, occluders);
+            for (points, q) in visible.iter_mut().zip(&p.patches) {
+                if points.is_empty() {
+                    // A sliver no sub-sample falls in: its centre.
+                    points.push(q.centre + q.normal * (1e-4 * p.size));
+                }
+            }
+            visible
+        }
+    }
 }
 
 /// A point or spot light seen from `x`: (unit direction to it, irradiance on a surface facing
