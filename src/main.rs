@@ -98,6 +98,9 @@ struct SweepArgs {
     /// Only this method or combination (repeat for more; default: all of each scene's).
     #[arg(long = "method", value_name = "M")]
     methods: Vec<String>,
+    /// View every scene through camera N of those its assets carry, as `chart --camera N`.
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -257,6 +260,10 @@ struct ChartArgs {
     /// configuration renders frames 0 to N and the reference traces frame N.
     #[arg(long, value_name = "N", default_value_t = 0)]
     frame: u64,
+    /// View through camera N of those the scene's assets carry, as `capture --camera N`; the
+    /// cached references and tables are the chosen camera's own.
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -796,6 +803,7 @@ fn chart(args: ChartArgs) -> penumbra::Result<()> {
         cache_dir,
         methods,
         frame,
+        camera,
         device,
     } = args;
     let opts = penumbra::commands::chart::ChartOptions {
@@ -813,6 +821,7 @@ fn chart(args: ChartArgs) -> penumbra::Result<()> {
         gpu: gpu_desc(&device),
         methods,
         frame,
+        camera,
     };
     let start = std::time::Instant::now();
     let chart = penumbra::commands::chart::run(&opts)?;
@@ -885,6 +894,7 @@ fn report(args: ReportArgs) -> penumbra::Result<()> {
         gpu: gpu_desc(&sweep.device),
         methods: sweep.methods,
         frame: 0,
+        camera: sweep.camera,
     };
     let opts = penumbra::commands::report::ReportOptions {
         scenes,

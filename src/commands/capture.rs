@@ -155,10 +155,19 @@ pub fn choose_configuration(
         .ok_or_else(|| Error::Usage("--max-error needs a scene file (the chart is measured per scene)".into()))?;
     let scene = load_scene(Some(path), &opts.overrides)?;
     let table = cached_table(&scene, opts.size, cache_dir);
+    // The table is keyed by the scene as seen through the chosen camera: a chart of another
+    // camera's view is not this one's.
+    let camera = opts
+        .overrides
+        .camera
+        .map_or_else(String::new, |n| format!(" --camera {n}"));
     let text = std::fs::read_to_string(&table).map_err(|_| {
         Error::Usage(format!(
-            "{}: no chart data for this scene at {}x{} in {}; run `penumbra chart {} --size {}x{}` first",
+            "{}: no chart data for this scene{} at {}x{} in {}; run `penumbra chart {}{camera} --size {}x{}` first",
             path.display(),
+            opts.overrides
+                .camera
+                .map_or_else(String::new, |n| format!(" through camera {n}")),
             opts.size.0,
             opts.size.1,
             cache_dir.display(),

@@ -243,6 +243,7 @@ fn chart_and_speedup_at_equal_error() {
             gpu: measure_gpu(),
             methods: Vec::new(),
             frame: 0,
+            camera: None,
         };
         let chart = penumbra::commands::chart::run(&opts).unwrap();
         let points = |m: &str| -> Vec<Point> {

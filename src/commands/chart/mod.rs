@@ -3,7 +3,9 @@
 //! error against time with the Pareto front, and a CSV with every per-pass time and metric.
 //!
 //! The reference is rendered once per (scene content, size, reference settings) and cached in
-//! `.penumbra-cache/`, as is the chart's table, which `capture --max-error` reads.
+//! `.penumbra-cache/`, as is the chart's table, which `capture --max-error` reads. The content is
+//! the scene as seen: with `--camera N` the asset camera it is seen through, so each camera has
+//! its own entries.
 //!
 //! Every configuration is rendered first; then each reference renders until its own noise is
 //! well below the errors it judges: its expected contribution to the relative MSE (see
@@ -65,6 +67,9 @@ pub struct ChartOptions {
     /// each configuration renders frames 0 … N and is judged on frame N, against the reference
     /// traced at frame N.
     pub frame: u64,
+    /// View through camera N of those the scene's assets carry instead of the scene's own
+    /// (`--camera N`, [`Scene::choose_camera`]).
+    pub camera: Option<usize>,
 }
 
 /// One configuration of one method, measured.
@@ -109,6 +114,9 @@ pub struct Chart {
     pub non_finite: Vec<String>,
     /// The frame compared ([`ChartOptions::frame`]).
     pub frame: u64,
+    /// The assets' camera it was measured through ([`ChartOptions::camera`]); none: the
+    /// scene's own.
+    pub camera: Option<usize>,
 }
 
 /// FNV-1a: a stable content hash for cache keys (std's hasher may change between releases).
@@ -120,6 +128,11 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 
 /// A key naming everything a cached result depends on: the parsed scene (so comments and
 /// formatting don't matter, but every value does), the size, and the extra settings.
+///
+/// The scene is hashed with `--camera N` applied, so the key holds the camera the images are
+/// seen through, by value: two cameras never share an entry, and the scene's own camera keeps
+/// the key it had before cameras could be chosen. A chosen camera equal to the scene's own
+/// shares its entries, rightly: the pictures are the same.
 pub fn cache_key(scene: &Scene, size: (u32, u32), extra: &str) -> String {
     let mut text = format!("{:?}|{}x{}|{extra}", scene_without_source(scene), size.0, size.1);
     // The reference shader is part of the truth: a changed tracer invalidates old references.
@@ -515,7 +528,11 @@ fn non_finite_pixel(image: &HdrImage) -> Option<(u32, u32)> {
 
 /// [`run`], keeping the images the rows were measured on.
 pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
-    let scene = Scene::from_file(&opts.scene)?;
+    let overrides = crate::scene::SceneOverrides {
+        camera: opts.camera,
+        ..Default::default()
+    };
+    let scene = crate::commands::capture::load_scene(Some(&opts.scene), &overrides)?;
     check_options(opts)?;
     let mut device = String::new();
     let all = chosen_configurations(&scene, opts)?;
@@ -567,6 +584,7 @@ pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
         skipped,
         non_finite,
         frame: opts.frame,
+        camera: opts.camera,
     };
     write_outputs(&chart, &scene, opts)?;
     Ok(ChartRun {
@@ -765,15 +783,33 @@ impl Chart {
         } else {
             "method at pixel centres, reference averaged over each pixel (aliasing included)".to_string()
         };
-        how + &self.frame_note()
+        how + &self.view_note()
     }
 
-    /// ", frame N" when the chart compares a frame other than the first.
-    fn frame_note(&self) -> String {
-        if self.frame == 0 {
-            String::new()
-        } else {
-            format!(", frame {}", self.frame)
+    /// ", camera N" when seen through an asset's camera, ", frame N" when the chart compares a
+    /// frame other than the first.
+    fn view_note(&self) -> String {
+        let mut note = String::new();
+        if let Some(n) = self.camera {
+            let _ = write!(note, ", camera {n}");
+        }
+        if self.frame != 0 {
+            let _ = write!(note, ", frame {}", self.frame);
+        }
+        note
+    }
+
+    /// The camera the chart was measured through, as the CSV's `camera` column has it: `scene`
+    /// (the scene's own) or N (`--camera N`).
+    pub fn camera_column(&self) -> String {
+        self.camera.map_or_else(|| "scene".to_owned(), |n| n.to_string())
+    }
+
+    /// The camera in words, for pages: the scene's own, or the assets' camera N.
+    pub fn camera_name(&self) -> String {
+        match self.camera {
+            None => "the scene's own".to_owned(),
+            Some(n) => format!("camera {n} of the scene's assets (--camera {n})"),
         }
     }
 
@@ -784,7 +820,7 @@ impl Chart {
         } else {
             "method at pixel centres".to_string()
         };
-        how + &self.frame_note()
+        how + &self.view_note()
     }
 
     /// Configurations on the Pareto front: no other is both faster and more accurate.
@@ -814,7 +850,7 @@ impl Chart {
             }
         }
         let mut s = String::from(
-            "method,config,device,width,height,reference,supersample,frame_ms,frames_timed,bake_ms,bake_bytes",
+            "method,config,device,width,height,camera,reference,supersample,frame_ms,frames_timed,bake_ms,bake_bytes",
         );
         for p in &pass_names {
             let _ = write!(s, ",pass:{}_ms", p.replace(',', ";"));
@@ -828,12 +864,13 @@ impl Chart {
         for r in &self.rows {
             let _ = write!(
                 s,
-                "{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{}",
                 r.method,
                 r.config.replace(',', ";"),
                 self.device.replace(',', ";"),
                 self.size.0,
                 self.size.1,
+                self.camera_column(),
                 r.reference.replace(',', ";"),
                 self.supersample,
                 r.frame_ms,
@@ -1074,6 +1111,7 @@ mod tests {
             skipped: Vec::new(),
             non_finite: Vec::new(),
             frame: 0,
+            camera: None,
         };
         assert_eq!(chart.pareto_front(), vec![0, 2]);
         let parsed = parse_csv(&chart.csv()).unwrap();

@@ -139,6 +139,7 @@ mod tests {
             skipped: vec!["lpv grid=64: over the memory limit".into()],
             non_finite: vec!["vls n=9: a non-finite value (NaN or infinity) at pixel (1, 0)".into()],
             frame: 0,
+            camera: None,
         }
     }
 

@@ -67,9 +67,10 @@ pub fn scene(run: &ChartRun, files: &Files, stem: &str) -> String {
     let references: Vec<String> = run.references.iter().map(|r| escape(&r.label)).collect();
     let _ = writeln!(
         s,
-        "<p class=\"meta\">{}&times;{} pixels &middot; {} &middot; reference: {} &middot; {} &middot; {} configurations &middot; data: <a href=\"{stem}/chart.csv\">chart.csv</a> &middot; <a href=\"{stem}/chart.png\">chart.png</a></p>",
+        "<p class=\"meta\">{}&times;{} pixels &middot; camera: {} &middot; {} &middot; reference: {} &middot; {} &middot; {} configurations &middot; data: <a href=\"{stem}/chart.csv\">chart.csv</a> &middot; <a href=\"{stem}/chart.png\">chart.png</a></p>",
         chart.size.0,
         chart.size.1,
+        escape(&chart.camera_name()),
         escape(&chart.device),
         references.join("; "),
         escape(&chart.comparison()),

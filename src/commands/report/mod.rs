@@ -119,8 +119,13 @@ fn scene_page(run: &ChartRun, out: &Path, stem: &str) -> Result<ScenePage> {
     let page = html::scene(run, &files, stem);
     write(&out.join(format!("{stem}.html")), page.as_bytes())?;
     let chart = &run.chart;
+    // The index tells a chosen camera's page from the scene's own view.
+    let scene = match chart.camera {
+        Some(n) => format!("{}, camera {n}", chart.scene),
+        None => chart.scene.clone(),
+    };
     Ok(ScenePage {
-        scene: chart.scene.clone(),
+        scene,
         page: format!("{stem}.html"),
         configurations: chart.rows.len(),
         failures: failures(chart).len(),

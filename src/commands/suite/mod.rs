@@ -99,6 +99,8 @@ impl SuiteOptions {
             gpu: self.gpu.clone(),
             methods: Vec::new(),
             frame: 0,
+            // Generated scenes carry no asset cameras.
+            camera: None,
         }
     }
 }
