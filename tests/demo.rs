@@ -631,8 +631,24 @@ fn the_first_frames_are_drawn_while_the_starting_configuration_bakes() {
     assert!(during
         .iter()
         .all(|f| f["presented"] == true && f["configuration"] == "forward (stand-in)"));
+    // The panel's method box says the stand-in is drawn and how far the bake has come (its
+    // progress as the report records it), not the configuration that is still baking.
+    for f in &during {
+        let percent = format!("{:.0}", 100.0 * f["baking"]["fraction"].as_f64().unwrap());
+        assert_eq!(
+            f["method_box"],
+            format!("forward (stand-in) — baking radiosity {percent} %"),
+            "{f}"
+        );
+    }
     let last = r.last().unwrap();
     assert_eq!(last["parameters"], "radiosity(patch_size = 0.05)", "{out}");
+    // Once the bake lands, the box shows the configuration drawn.
+    assert!(r
+        .iter()
+        .filter(|f| f["configuration"] == "radiosity")
+        .all(|f| f["method_box"] == "radiosity"));
+    assert_eq!(last["method_box"], "radiosity");
     assert_eq!(cached(&cache, "0_05").len(), 1);
     let _ = std::fs::remove_dir_all(&cache);
 }
