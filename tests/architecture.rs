@@ -265,14 +265,6 @@ fn only_the_lighting_layer_names_techniques() {
 /// The longest a function may run, in lines from `fn` to its closing brace, without a reason.
 const LONG_FUNCTION_LINES: usize = 100;
 
-/// Long functions not yet split by their jobs (each does several: set-up, upload, pipelines, or
-/// a solver's phases), allowed through until they are. The list may only shrink: an entry whose
-/// function is no longer an unexplained long one fails.
-const LONG_FUNCTIONS_PENDING: &[(&str, &str)] = &[
-    ("src/lighting/lpv/config.rs", "from_decl"),
-    ("src/lighting/lpv/mod.rs", "new"),
-];
-
 /// `text` with comments, string and character literals blanked (newlines kept), so that braces
 /// and the word `fn` are counted only in code.
 fn blank_literals(text: &str) -> String {
@@ -403,17 +395,12 @@ fn long_functions_say_why() {
     rust_files(&root.join("src"), &mut files);
     files.sort();
     let mut unexplained = Vec::new();
-    let mut pending_seen = BTreeSet::new();
     for f in &files {
         let rel = f.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/");
         let text = std::fs::read_to_string(f).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         for (name, line, len) in functions(f) {
             if len <= LONG_FUNCTION_LINES || has_long_reason(&lines, line) {
-                continue;
-            }
-            if LONG_FUNCTIONS_PENDING.contains(&(rel.as_str(), name.as_str())) {
-                pending_seen.insert((rel.clone(), name));
                 continue;
             }
             unexplained.push(format!("{rel}:{line} fn {name}: {len} lines"));
@@ -425,12 +412,6 @@ fn long_functions_say_why() {
          them by their jobs or say why they are one piece:\n{}",
         unexplained.join("\n")
     );
-    for (file, name) in LONG_FUNCTIONS_PENDING {
-        assert!(
-            pending_seen.contains(&(file.to_string(), name.to_string())),
-            "{file} fn {name} is no longer an unexplained long function: remove it from LONG_FUNCTIONS_PENDING"
-        );
-    }
 }
 
 /// The counter itself: a known function's length, and braces in literals and comments ignored.

@@ -610,6 +610,56 @@ fn cancel_radiosity_bake(baker: &str) {
 }
 
 #[test]
+fn a_cancel_during_the_radiosity_set_up_stops_it_there() {
+    // Fine patches (seconds of set-up before the first shot: patches, buried parts, direct
+    // light, the shooter's tables) baked from the start, cancelled at frame 20, a fraction of a
+    // second into the set-up: it stops there, within a bound, on either shooter. Before the
+    // set-up looked at the cancellation, the CPU bake ran on for 4.2 s.
+    for baker in ["cpu", "gpu"] {
+        let cache = common::temp_path(&format!("demo-setup-cancel-{baker}-cache"));
+        let _ = std::fs::remove_dir_all(&cache);
+        let scene = RADIOSITY_SCENE.replace("patch_size = 0.2", &format!("patch_size = 0.01, baker = \"{baker}\""));
+        let (out, r) = demo_run(
+            &format!("demo-setup-cancel-{baker}"),
+            &scene,
+            "20 key C\n",
+            &cache,
+            24,
+            ("64x48", false, None),
+        );
+        let cancelling: Vec<&serde_json::Value> = r.iter().filter(|f| f["baking"]["cancelling"] == true).collect();
+        let (first, last) = (
+            cancelling.first().expect("cancelled mid-bake"),
+            cancelling.last().unwrap(),
+        );
+        let at = |f: &serde_json::Value| f["baking"]["elapsed_s"].as_f64().unwrap();
+        let after = r
+            .iter()
+            .find(|f| f["frame"] == last["frame"].as_u64().unwrap() + 1)
+            .expect("a frame after the bake");
+        let stopped_s = at(last) - at(first) + after["frame_ms"].as_f64().unwrap() / 1e3;
+        println!(
+            "{baker}: cancelled {:.2} s into the set-up; it stopped within {stopped_s:.3} s",
+            at(first)
+        );
+        let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
+        assert!(note.contains("(at radiosity set-up)"), "{note:?}\n{out}");
+        assert!(after["baking"].is_null());
+        assert_eq!(cached(&cache, "radiosity"), Vec::<String>::new());
+        // Measured 0.05-0.19 s (the checks come every patch of the ray-cast loops, between the
+        // other steps, and a frame is counted in); the whole set-up takes seconds.
+        assert!(
+            stopped_s < 1.0,
+            "the set-up ran {stopped_s:.2} s after it was cancelled"
+        );
+        assert!(r
+            .iter()
+            .all(|f| f["presented"] == true && f["method_box"].as_str().unwrap().starts_with("forward (stand-in)")));
+        let _ = std::fs::remove_dir_all(&cache);
+    }
+}
+
+#[test]
 fn the_first_frames_are_drawn_while_the_starting_configuration_bakes() {
     // Radiosity first and nothing cached: the window presents `forward` from its first frame
     // while the light-map bakes, then switches to it.
@@ -631,8 +681,24 @@ fn the_first_frames_are_drawn_while_the_starting_configuration_bakes() {
     assert!(during
         .iter()
         .all(|f| f["presented"] == true && f["configuration"] == "forward (stand-in)"));
+    // The panel's method box says the stand-in is drawn and how far the bake has come (its
+    // progress as the report records it), not the configuration that is still baking.
+    for f in &during {
+        let percent = format!("{:.0}", 100.0 * f["baking"]["fraction"].as_f64().unwrap());
+        assert_eq!(
+            f["method_box"],
+            format!("forward (stand-in) — baking radiosity {percent} %"),
+            "{f}"
+        );
+    }
     let last = r.last().unwrap();
     assert_eq!(last["parameters"], "radiosity(patch_size = 0.05)", "{out}");
+    // Once the bake lands, the box shows the configuration drawn.
+    assert!(r
+        .iter()
+        .filter(|f| f["configuration"] == "radiosity")
+        .all(|f| f["method_box"] == "radiosity"));
+    assert_eq!(last["method_box"], "radiosity");
     assert_eq!(cached(&cache, "0_05").len(), 1);
     let _ = std::fs::remove_dir_all(&cache);
 }

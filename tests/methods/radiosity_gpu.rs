@@ -168,7 +168,7 @@ fn the_gpu_shooter_keeps_the_dark_room_dark() {
     for mode in [Mode::Corrected, Mode::Faithful] {
         let (scene, geometry, mut p, names) = patched("scenes/two_rooms.toml", 0.2);
         let occluders = Occluders::new(&geometry.triangles);
-        bake::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
+        bake::add_direct_light_in(&mut p, &occluders, &scene, mode, None).unwrap();
         let settings = Settings {
             mode,
             threshold: 1e-3,

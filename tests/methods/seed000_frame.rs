@@ -136,7 +136,7 @@ fn faithful_point_lights_reach_every_patch_in_their_pvs() {
     let light_leaf = leaf(position.as_dvec3());
     let lit = |mode| {
         let mut p = Patches::build(&geometry.triangles, 1.0);
-        let direct = bake::add_direct_light_in(&mut p, &occluders, &scene, mode).unwrap();
+        let direct = bake::add_direct_light_in(&mut p, &occluders, &scene, mode, None).unwrap();
         (p, direct)
     };
     let (p, faithful) = lit(Mode::Faithful);

@@ -56,6 +56,8 @@ enum Measurement {
 pub struct FrameRecord {
     pub frame: u64,
     pub configuration: String,
+    /// What the panel's method box says is drawn ([`panel::method_label`]).
+    pub method_box: String,
     /// The drawn configuration's parameters as declared, `method(name = value, ...)` a part.
     pub parameters: String,
     /// The bake running in the background, as the panel shows it.
@@ -719,6 +721,7 @@ impl Running {
         let info = panel::PanelInfo {
             configurations: &self.configurations,
             current: self.current,
+            drawn: &self.renderer.configuration.name,
             timings: &self.timings,
             frame_ms: &self.frame_ms,
             gpu_ms: &self.gpu_ms,
@@ -953,6 +956,7 @@ impl Running {
         self.report.push(FrameRecord {
             frame: self.frames,
             configuration: self.renderer.configuration.name.clone(),
+            method_box: self.method_label(),
             parameters: parameters(&self.renderer.configuration),
             baking: self.rebake.as_ref().map(|r| r.status.clone()),
             bake_note: self.bake_note.clone(),
@@ -972,6 +976,15 @@ impl Running {
     }
 
     /// Saves the last grabbed presented frame.
+    /// What the panel's method box shows.
+    fn method_label(&self) -> String {
+        panel::method_label(
+            self.configurations.get(self.current).map(|c| c.name.as_str()),
+            &self.renderer.configuration.name,
+            self.rebake.as_ref().map(|r| &r.status),
+        )
+    }
+
     fn save_grab(&mut self, path: &std::path::Path) -> Result<()> {
         let image = self
             .grabbed

@@ -38,6 +38,9 @@ pub enum Action {
 pub struct PanelInfo<'a> {
     pub configurations: &'a [Configuration],
     pub current: usize,
+    /// The configuration the frame is drawn with: the current one, or a stand-in drawing while
+    /// the current one bakes at start-up.
+    pub drawn: &'a str,
     pub timings: &'a [PassTiming],
     /// Recent frame intervals (ms), oldest first.
     pub frame_ms: &'a VecDeque<f32>,
@@ -76,7 +79,7 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
         .show(ctx, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
                 if let Some(b) = info.baking {
-                    baking(ui, b, info.queued, &mut actions);
+                    baking(ui, b, info.drawn, info.queued, &mut actions);
                 } else if let Some(note) = info.bake_note {
                     ui.colored_label(egui::Color32::from_rgb(230, 200, 90), note);
                 }
@@ -95,13 +98,13 @@ pub fn draw(ctx: &egui::Context, info: &PanelInfo<'_>, settings: PanelSettings<'
 
 /// The background bake: its stage's progress bar, the time so far and the stage's estimate, and
 /// the button that cancels it.
-fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>, actions: &mut Vec<Action>) {
+fn baking(ui: &mut egui::Ui, b: &BakeStatus, drawn: &str, queued: Option<&str>, actions: &mut Vec<Action>) {
     ui.label(format!("baking {} ({:.1} s)", b.configuration, b.elapsed_s));
     let left = b.left_s.map_or(String::new(), |s| format!(", about {s:.0} s left"));
     ui.add(egui::ProgressBar::new(b.fraction as f32).text(format!("{} {:.0}%{left}", b.stage, 100.0 * b.fraction)));
     match queued {
-        Some(q) => ui.label(format!("then {q}; the current configuration draws meanwhile")),
-        None => ui.label("the current configuration draws meanwhile"),
+        Some(q) => ui.label(format!("then {q}; {drawn} draws meanwhile")),
+        None => ui.label(format!("{drawn} draws meanwhile")),
     };
     if b.cancelling {
         ui.label("cancelling...");
@@ -110,12 +113,23 @@ fn baking(ui: &mut egui::Ui, b: &BakeStatus, queued: Option<&str>, actions: &mut
     }
 }
 
+/// What the method box says is drawn: the current configuration, or the stand-in drawing while
+/// the current one bakes (at start-up, before anything of it is in the bake cache) and how far
+/// that bake has come.
+pub fn method_label(current: Option<&str>, drawn: &str, baking: Option<&BakeStatus>) -> String {
+    match baking {
+        _ if current == Some(drawn) => drawn.to_string(),
+        Some(b) => format!("{drawn} — baking {} {:.0} %", b.configuration, 100.0 * b.fraction),
+        None => drawn.to_string(),
+    }
+}
+
 fn configuration(ui: &mut egui::Ui, info: &PanelInfo<'_>, params: &mut [ParamEdit], actions: &mut Vec<Action>) {
     ui.collapsing("Configuration", |ui| {
         let names: Vec<&str> = info.configurations.iter().map(|c| c.name.as_str()).collect();
         let mut chosen = info.current;
         egui::ComboBox::from_label("method (M)")
-            .selected_text(names.get(info.current).copied().unwrap_or("?"))
+            .selected_text(method_label(names.get(info.current).copied(), info.drawn, info.baking))
             .show_ui(ui, |ui| {
                 for (i, n) in names.iter().enumerate() {
                     ui.selectable_value(&mut chosen, i, *n);

@@ -9,6 +9,7 @@ use glam::DVec3;
 
 use super::patches::Patches;
 use super::solve::Occluders;
+use crate::util::progress::Cancel;
 
 /// Sub-samples per patch side for the buried test and the direct light.
 pub const SAMPLES: usize = 4;
@@ -40,8 +41,10 @@ pub fn is_buried(occluders: &Occluders, x: DVec3, n: DVec3, u: DVec3, v: DVec3) 
 }
 
 /// Every inside patch's sub-samples that are inside its polygon and not buried, as points a hair
-/// in front of the surface; empty for patches outside their polygon or wholly buried.
-pub fn visible_samples(p: &Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
+/// in front of the surface; empty for patches outside their polygon or wholly buried. `None` when
+/// `cancel` asks it to stop (looked at every patch: this is seconds of rays with fine patches).
+pub fn visible_samples(p: &Patches, occluders: &Occluders, cancel: Option<&Cancel>) -> Option<Vec<Vec<DVec3>>> {
+    let stop = || cancel.is_some_and(Cancel::is_cancelled);
     let eps = 1e-4 * p.size;
     let cells: Vec<(usize, usize, usize)> = p
         .charts
@@ -66,6 +69,7 @@ pub fn visible_samples(p: &Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
         |range| {
             cells[range]
                 .iter()
+                .take_while(|_| !stop())
                 .map(|&(ci, i, j)| {
                     let c = &p.charts[ci];
                     c.inside_samples(&flat[ci], p.size, i, j, SAMPLES)
@@ -81,20 +85,25 @@ pub fn visible_samples(p: &Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
             a
         },
     );
+    // A piece cut short by the cancellation sees it here too.
+    if stop() {
+        return None;
+    }
     let mut out = vec![Vec::new(); p.patches.len()];
     for (&(ci, i, j), s) in cells.iter().zip(found) {
         let c = &p.charts[ci];
         out[c.first + j * c.width + i] = s;
     }
-    out
+    Some(out)
 }
 
 /// Leaves buried sub-samples out of every patch: its area scales by the share of its inside
 /// sub-samples that can be seen, its centre moves to their centroid, and a wholly buried patch
 /// becomes a border patch (no area, no emission), filled by the border passes. Returns the
-/// visible sub-samples (as [`visible_samples`]).
-pub fn exclude(p: &mut Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
-    let visible = visible_samples(p, occluders);
+/// visible sub-samples (as [`visible_samples`]); `None` when `cancel` asks it to stop (some
+/// patches then changed, the others not).
+pub fn exclude(p: &mut Patches, occluders: &Occluders, cancel: Option<&Cancel>) -> Option<Vec<Vec<DVec3>>> {
+    let visible = visible_samples(p, occluders, cancel)?;
     let eps = 1e-4 * p.size;
     for ci in 0..p.charts.len() {
         let c = &p.charts[ci];
@@ -103,6 +112,9 @@ pub fn exclude(p: &mut Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
         }
         let flat = c.flat_triangles(&occluders.triangles);
         for j in 0..c.height {
+            if cancel.is_some_and(Cancel::is_cancelled) {
+                return None;
+            }
             for i in 0..c.width {
                 let k = c.first + j * c.width + i;
                 if !p.patches[k].inside() {
@@ -129,5 +141,5 @@ pub fn exclude(p: &mut Patches, occluders: &Occluders) -> Vec<Vec<DVec3>> {
             }
         }
     }
-    visible
+    Some(visible)
 }

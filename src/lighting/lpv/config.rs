@@ -132,6 +132,39 @@ fn centre_of(v: &toml::Value) -> Option<[f32; 3]> {
     (x.len() == 3).then(|| [x[0], x[1], x[2]])
 }
 
+/// `view`'s names.
+const VIEWS: [(&str, View); 11] = [
+    ("indirect", View::Indirect),
+    ("rsm_flux", View::RsmFlux),
+    ("rsm_transmitted", View::RsmTransmitted),
+    ("rsm_normal", View::RsmNormal),
+    ("rsm_position", View::RsmPosition),
+    ("slices", View::Slices),
+    ("albedo", View::Albedo),
+    ("normal", View::Normal),
+    ("position", View::Position),
+    ("gbuffer_normal", View::GbufferNormal),
+    ("gbuffer_depth", View::GbufferDepth),
+];
+
+/// `centre` and `size`, each checked on its own (how they combine is [`Config::region`]'s).
+fn region_keys(decl: &MethodDecl, params: &Params<'_>) -> Result<(Option<[f32; 3]>, Option<f64>)> {
+    let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
+    let centre = decl
+        .param("centre")
+        .map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v)))
+        .transpose()?;
+    let size = decl
+        .param("size")
+        .map(|v| {
+            Params::float(v)
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .ok_or_else(|| bad("size", "a side > 0 (metres)", v))
+        })
+        .transpose()?;
+    Ok((centre, size))
+}
+
 impl Config {
     /// The parameters that do nothing with this configuration, and why.
     pub fn inert(&self) -> Vec<(&'static str, &'static str)> {
@@ -175,11 +208,20 @@ impl Config {
 
     pub fn from_decl(decl: &MethodDecl, scene: Option<&Scene>) -> Result<Config> {
         let params = Params::new(decl, scene);
-        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         let mode = params
             .get_choice("mode", &[("faithful", Mode::Faithful), ("corrected", Mode::Corrected)])?
             .unwrap_or(Mode::Corrected);
-        let mut c = Config::defaults(mode);
+        let mut c = Config::parse_keys(decl, &params, Config::defaults(mode))?;
+        let (centre, size) = region_keys(decl, &params)?;
+        c.check_together(decl, &params)?;
+        c.region = c.region(decl, &params, centre, size)?;
+        Ok(c)
+    }
+
+    /// Each parameter of `decl` over `c` (the mode's defaults), checked on its own; the region's
+    /// keys are read apart ([`region_keys`]).
+    fn parse_keys(decl: &MethodDecl, params: &Params<'_>, mut c: Config) -> Result<Config> {
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         let int = |p: &str, v: &toml::Value, range: std::ops::RangeInclusive<i64>, want: &str| {
             v.as_integer()
                 .filter(|n| range.contains(n))
@@ -224,38 +266,20 @@ impl Config {
                         v,
                     ))
                 }
-                "view" => {
-                    let views = [
-                        ("indirect", View::Indirect),
-                        ("rsm_flux", View::RsmFlux),
-                        ("rsm_transmitted", View::RsmTransmitted),
-                        ("rsm_normal", View::RsmNormal),
-                        ("rsm_position", View::RsmPosition),
-                        ("slices", View::Slices),
-                        ("albedo", View::Albedo),
-                        ("normal", View::Normal),
-                        ("position", View::Position),
-                        ("gbuffer_normal", View::GbufferNormal),
-                        ("gbuffer_depth", View::GbufferDepth),
-                    ];
-                    c.view = params.choice(p, v, &views)?
-                }
+                "view" => c.view = params.choice(p, v, &VIEWS)?,
                 "centre" | "size" => {}
                 _ => {}
             }
         }
-        let centre = decl
-            .param("centre")
-            .map(|v| centre_of(v).ok_or_else(|| bad("centre", "3 finite numbers (metres)", v)))
-            .transpose()?;
-        let size = decl
-            .param("size")
-            .map(|v| {
-                Params::float(v)
-                    .filter(|x| x.is_finite() && *x > 0.0)
-                    .ok_or_else(|| bad("size", "a side > 0 (metres)", v))
-            })
-            .transpose()?;
+        Ok(c)
+    }
+
+    /// What no single parameter decides: the blend belongs to the point look-up, a G-buffer
+    /// large enough to sample, dropped without the geometry volume it feeds, and present for
+    /// its own views.
+    fn check_together(&mut self, decl: &MethodDecl, params: &Params<'_>) -> Result<()> {
+        let c = self;
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
         if c.lookup != Lookup::Point && decl.param("blend").and_then(toml::Value::as_bool) == Some(true) {
             return Err(bad(
                 "blend",
@@ -283,7 +307,20 @@ impl Config {
                 decl.param("view").unwrap_or(&toml::Value::from("")),
             ));
         }
-        c.region = match (centre, size, c.cascades) {
+        Ok(())
+    }
+
+    /// The volume's region from `centre` and `size`: both or neither for one volume; cascades
+    /// follow the camera and take the finest one's side alone.
+    fn region(
+        &self,
+        decl: &MethodDecl,
+        params: &Params<'_>,
+        centre: Option<[f32; 3]>,
+        size: Option<f64>,
+    ) -> Result<Option<([f32; 3], f32)>> {
+        let bad = |p: &str, want: &str, got: &toml::Value| params.error(p, want, got);
+        Ok(match (centre, size, self.cascades) {
             (Some(_), _, 2..) => {
                 return Err(bad(
                     "centre",
@@ -296,8 +333,7 @@ impl Config {
             (None, None, _) => None,
             (Some(_), None, _) => return Err(bad("size", "a side with `centre`", &toml::Value::from("nothing"))),
             (None, Some(s), _) => return Err(bad("centre", "a centre with `size`", &toml::Value::from(s))),
-        };
-        Ok(c)
+        })
     }
 
     /// The propagation scheme: the document's accumulates in place without a wavefront.

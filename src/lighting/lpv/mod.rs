@@ -326,6 +326,121 @@ fn transmittance_buffer(cx: &mut CreateContext<'_>) -> Result<BufferId> {
     Ok(transmittance)
 }
 
+/// The scene's punctual light (point, spot or directional, in order) the configuration lights
+/// the RSM with.
+fn light_of(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config) -> Result<GpuLight> {
+    let lights = punctual_lights(cx.scene);
+    let light = lights.get(config.light).ok_or_else(|| {
+        let msg = format!(
+            "light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one",
+            config.light,
+            lights.len()
+        );
+        Error::from(cx.scene.method_param_error(decl, "light", msg))
+    })?;
+    Ok(*light)
+}
+
+/// Where the volumes lie: the cascades around the camera at `eye` (and the finest one's side),
+/// or one volume over the region or over the objects' `bounds`.
+fn place_volumes(eye: Vec3, bounds: (Vec3, Vec3), config: &Config) -> (Option<f32>, Vec<Placement>) {
+    let finest = (config.cascades > 1).then(|| {
+        // Without a size, the largest cascade reaches every object from the camera it is
+        // centred on: twice the farthest bound along any axis (a camera outside the scene,
+        // as in a Cornell box seen through its open side, would otherwise light nothing).
+        let reach = (bounds.0 - eye).abs().max((bounds.1 - eye).abs()).max_element();
+        config
+            .region
+            .map_or(2.0 * reach / (1 << (config.cascades - 1)) as f32, |r| r.1)
+            .max(1e-3)
+    });
+    let placements = match (config.region, finest) {
+        (_, Some(side)) => cascade_placements(eye, side, config),
+        (Some((centre, size)), None) => {
+            let half = glam::Vec3::splat(0.5 * size);
+            vec![Placement::fit(
+                glam::Vec3::from(centre) - half,
+                glam::Vec3::from(centre) + half,
+                config.grid,
+            )]
+        }
+        (None, None) => vec![Placement::fit(bounds.0, bounds.1, config.grid)],
+    };
+    (finest, placements)
+}
+
+/// `count` volumes' sets and sums, the finest first.
+fn create_volumes(cx: &mut CreateContext<'_>, config: &Config, count: usize) -> Result<Vec<VolumeGpu>> {
+    let mut volumes = Vec::new();
+    for k in 0..count {
+        let label = if k == 0 {
+            NAME.to_string()
+        } else {
+            format!("{NAME} cascade {k}")
+        };
+        volumes.push(VolumeGpu::new(cx.gpu, cx.shaders, cx.states, config, &label)?);
+    }
+    Ok(volumes)
+}
+
+/// The scene's surfaces drawn again, the volume looked up and added into the radiance.
+fn composite_pipeline(cx: &mut CreateContext<'_>, config: &Config) -> Result<PipelineId> {
+    let mut desc = GraphicsPipelineDesc::new("lpv composite", "frame/surface.vert", Some("lpv/composite.frag"));
+    desc.vertex_layout = vertex_layout();
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+    desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
+    desc.depth = DepthState {
+        test: true,
+        write: false,
+        compare: vk::CompareOp::LESS_OR_EQUAL,
+    };
+    desc.color_targets[0].blend = BlendMode::Additive;
+    let view = if config.view.full_screen() { 0 } else { config.view.id() };
+    desc.specialization = vec![
+        SpecConstant {
+            id: 0,
+            bits: (config.lookup == Lookup::Point) as u32,
+        },
+        SpecConstant { id: 1, bits: view },
+        SpecConstant {
+            id: 2,
+            bits: config.blend as u32,
+        },
+        SpecConstant {
+            id: 10,
+            bits: config.half as u32,
+        },
+    ];
+    Ok(cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?)
+}
+
+/// The full-screen debug view's pipeline, when the configuration's view is one.
+fn debug_pipeline(cx: &mut CreateContext<'_>, config: &Config) -> Result<Option<PipelineId>> {
+    if !config.view.full_screen() {
+        return Ok(None);
+    }
+    let mut desc = GraphicsPipelineDesc::new("lpv debug view", "post/fullscreen.vert", Some("lpv/debug.frag"));
+    desc.raster.cull = vk::CullModeFlags::NONE;
+    desc.depth = DepthState {
+        test: false,
+        write: false,
+        compare: vk::CompareOp::ALWAYS,
+    };
+    desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
+    desc.specialization = vec![
+        SpecConstant {
+            id: 0,
+            bits: config.view.id(),
+        },
+        SpecConstant {
+            id: 10,
+            bits: config.half as u32,
+        },
+    ];
+    Ok(Some(cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?))
+}
+
 /// The LPV as the indirect term.
 pub struct Lpv {
     config: Config,
@@ -365,41 +480,10 @@ impl Lpv {
         for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
             crate::errln!("{w}");
         }
-        let lights = punctual_lights(cx.scene);
-        let light = lights.get(config.light).ok_or_else(|| {
-            let msg = format!(
-                "light {} does not exist: the scene has {} point, spot or directional light(s), and the RSM needs one",
-                config.light,
-                lights.len()
-            );
-            Error::from(cx.scene.method_param_error(decl, "light", msg))
-        })?;
+        let light = light_of(cx, decl, &config)?;
         let bounds = scene_bounds(cx)
             .ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
-        let finest = (config.cascades > 1).then(|| {
-            // Without a size, the largest cascade reaches every object from the camera it is
-            // centred on: twice the farthest bound along any axis (a camera outside the scene,
-            // as in a Cornell box seen through its open side, would otherwise light nothing).
-            let eye = cx.scene.camera.position;
-            let reach = (bounds.0 - eye).abs().max((bounds.1 - eye).abs()).max_element();
-            config
-                .region
-                .map_or(2.0 * reach / (1 << (config.cascades - 1)) as f32, |r| r.1)
-                .max(1e-3)
-        });
-        let placements = match (config.region, finest) {
-            (_, Some(side)) => cascade_placements(cx.scene.camera.position, side, &config),
-            (Some((centre, size)), None) => {
-                let half = glam::Vec3::splat(0.5 * size);
-                vec![Placement::fit(
-                    glam::Vec3::from(centre) - half,
-                    glam::Vec3::from(centre) + half,
-                    config.grid,
-                )]
-            }
-            (None, None) => vec![Placement::fit(bounds.0, bounds.1, config.grid)],
-        };
-        let light = *light;
+        let (finest, placements) = place_volumes(cx.scene.camera.position, bounds, &config);
         // The frame's lights are `raster_lights`, one per scene light: the punctual light's slot.
         let light_index = crate::gpu_scene::raster_lights(cx.scene)
             .iter()
@@ -423,15 +507,7 @@ impl Lpv {
         if let Some(rates) = &rates {
             cx.warn_cost(NAME, &cost::estimate(&config, rates));
         }
-        let mut volumes = Vec::new();
-        for k in 0..placements.len() {
-            let label = if k == 0 {
-                NAME.to_string()
-            } else {
-                format!("{NAME} cascade {k}")
-            };
-            volumes.push(VolumeGpu::new(cx.gpu, cx.shaders, cx.states, &config, &label)?);
-        }
+        let volumes = create_volumes(cx, &config, placements.len())?;
         let cascade_block = cascade_block(&placements);
         // The scene's camera until the first frame says where the camera is.
         let eye = cx.scene.camera.position.extend(1.0).into();
@@ -442,58 +518,8 @@ impl Lpv {
             .map(|b| rsm::gbuffer_injection_block(b, config.gbuffer))
             .collect();
         let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
-
-        let mut desc = GraphicsPipelineDesc::new("lpv composite", "frame/surface.vert", Some("lpv/composite.frag"));
-        desc.vertex_layout = vertex_layout();
-        desc.raster.cull = vk::CullModeFlags::NONE;
-        desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-        desc.depth_format = Some(cx.gpu.caps().depth_stencil_format);
-        desc.depth = DepthState {
-            test: true,
-            write: false,
-            compare: vk::CompareOp::LESS_OR_EQUAL,
-        };
-        desc.color_targets[0].blend = BlendMode::Additive;
-        let view = if config.view.full_screen() { 0 } else { config.view.id() };
-        desc.specialization = vec![
-            SpecConstant {
-                id: 0,
-                bits: (config.lookup == Lookup::Point) as u32,
-            },
-            SpecConstant { id: 1, bits: view },
-            SpecConstant {
-                id: 2,
-                bits: config.blend as u32,
-            },
-            SpecConstant {
-                id: 10,
-                bits: config.half as u32,
-            },
-        ];
-        let composite = cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?;
-        let debug = if config.view.full_screen() {
-            let mut desc = GraphicsPipelineDesc::new("lpv debug view", "post/fullscreen.vert", Some("lpv/debug.frag"));
-            desc.raster.cull = vk::CullModeFlags::NONE;
-            desc.depth = DepthState {
-                test: false,
-                write: false,
-                compare: vk::CompareOp::ALWAYS,
-            };
-            desc.color_targets = vec![ColorTarget::new(RADIANCE_FORMAT)];
-            desc.specialization = vec![
-                SpecConstant {
-                    id: 0,
-                    bits: config.view.id(),
-                },
-                SpecConstant {
-                    id: 10,
-                    bits: config.half as u32,
-                },
-            ];
-            Some(cx.gpu.create_graphics_pipeline(&desc, cx.shaders)?)
-        } else {
-            None
-        };
+        let composite = composite_pipeline(cx, &config)?;
+        let debug = debug_pipeline(cx, &config)?;
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
         let lpv = Lpv {

@@ -6,14 +6,22 @@
 use glam::DVec3;
 
 use crate::backend::Gpu;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lighting::lightmap::atlas::{pack, texels, Atlas};
 use crate::lighting::lightmap::geometry::StaticGeometry;
 use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::{self, Occluders, Settings};
 use crate::scene::{Light, Scene};
 use crate::shaders::ShaderLibrary;
-use crate::util::progress::Progress;
+use crate::util::progress::{Cancel, Progress};
+
+/// Where a bake cancelled before its first shot stopped: the patches, their buried parts, the
+/// direct light and the shooter's tables.
+pub const SET_UP: &str = "radiosity set-up";
+
+fn set_up_cancelled() -> Error {
+    Error::Cancelled(SET_UP.to_string())
+}
 
 /// What the light-map holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,19 +37,88 @@ pub enum Content {
 /// to every patch's total and unshot radiosity; returns each patch's share. Directional lights
 /// are suns (`super::sun`) as the corrected mode treats them.
 pub fn add_direct_light(p: &mut Patches, occluders: &Occluders, scene: &Scene) -> Result<Vec<DVec3>> {
-    add_direct_light_in(p, occluders, scene, solve::Mode::Corrected)
+    add_direct_light_in(p, occluders, scene, solve::Mode::Corrected, None)
 }
 
 /// [`add_direct_light`] with `mode`'s sun (faithful: rays must reach sky, then smoothing) and
 /// point lights (faithful, in a BSP world: CaLight lights every patch in the light's PVS, with no
 /// ray, so a pillar casts no shadow in the light-map; elsewhere, and corrected, a shadow ray).
+/// Stops with [`SET_UP`] cancelled when `cancel` asks it to (the patches then unchanged).
 pub fn add_direct_light_in(
     p: &mut Patches,
     occluders: &Occluders,
     scene: &Scene,
     mode: solve::Mode,
+    cancel: Option<&Cancel>,
 ) -> Result<Vec<DVec3>> {
+    let stop = || cancel.is_some_and(Cancel::is_cancelled);
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
+    let eps = 1e-4 * p.size;
+    // Corrected: the patch's mean irradiance over its visible sub-samples, as the sun's lit
+    // fraction is: the light falls off as 1/d² and at a spot's cone, so the centre alone
+    // misjudges patches near a light or across a cone's edge. Faithful: CaLight's one sample
+    // per lumel.
+    let points: Vec<Vec<DVec3>> = match mode {
+        solve::Mode::Faithful => p.patches.iter().map(|q| vec![q.centre]).collect(),
+        solve::Mode::Corrected => {
+            let mut visible = crate::lighting::lightmap::buried::visible_samples(p, occluders, cancel)
+                .ok_or_else(set_up_cancelled)?;
+            for (points, q) in visible.iter_mut().zip(&p.patches) {
+                if points.is_empty() {
+                    // A sliver no sub-sample falls in: its centre.
+                    points.push(q.centre + q.normal * eps);
+                }
+            }
+            visible
+        }
+    };
+    let irradiance = punctual_irradiance(p, occluders, scene, mode, &points, cancel)?;
+    for (k, e) in irradiance.iter().enumerate() {
+        direct[k] = p.patches[k].albedo * DVec3::from_array(*e);
+    }
+    if mode == solve::Mode::Corrected && scene.environment.is_some() {
+        let env = crate::environment::EnvironmentMap::of_scene(scene)?;
+        let sky = super::environment_light::irradiance(p, occluders, &env, &points);
+        for (k, e) in sky.iter().enumerate() {
+            direct[k] += p.patches[k].albedo * *e;
+        }
+    }
+    // The sky's and the suns' ray loops do not look at the cancellation: it is looked at
+    // before each.
+    if stop() {
+        return Err(set_up_cancelled());
+    }
+    for l in &scene.lights {
+        if let Light::Directional {
+            direction, irradiance, ..
+        } = l
+        {
+            let to_sun = -direction.as_dvec3().normalize_or_zero();
+            let lit = super::sun::lit_fraction(p, occluders, to_sun, mode);
+            for (k, q) in p.patches.iter().enumerate() {
+                direct[k] += q.albedo * irradiance.as_dvec3() * (q.normal.dot(to_sun).max(0.0) * lit[k]);
+            }
+        }
+    }
+    for (q, b) in p.patches.iter_mut().zip(&direct) {
+        q.total += *b;
+        q.unshot += *b;
+    }
+    Ok(direct)
+}
+
+/// Each patch's mean irradiance from the scene's point and spot lights over its `points`
+/// (shadowed: by rays, or by the BSP world's PVS in faithful mode). Stops with [`SET_UP`]
+/// cancelled when `cancel` asks it to (looked at every patch).
+fn punctual_irradiance(
+    p: &Patches,
+    occluders: &Occluders,
+    scene: &Scene,
+    mode: solve::Mode,
+    points: &[Vec<DVec3>],
+    cancel: Option<&Cancel>,
+) -> Result<Vec<[f64; 3]>> {
+    let stop = || cancel.is_some_and(Cancel::is_cancelled);
     let eps = 1e-4 * p.size;
     let pvs = if mode == solve::Mode::Faithful {
         crate::lighting::lightmap::visibility::bsp_world(scene)?
@@ -52,7 +129,6 @@ pub fn add_direct_light_in(
         pvs.as_ref()
             .map(|(w, translate)| w.leaf_of(crate::scene::world_mesh::scene_to_world(x.as_vec3() - *translate)))
     };
-    let points = light_points(p, occluders, mode);
     let lights: Vec<&Light> = scene
         .lights
         .iter()
@@ -65,7 +141,7 @@ pub fn add_direct_light_in(
     };
     let irradiance = crate::util::parallel::map(&indices, 64, |&k| {
         let q = &p.patches[k];
-        if !q.inside() {
+        if !q.inside() || stop() {
             return [0.0; 3];
         }
         let mut e = DVec3::ZERO;
@@ -94,53 +170,11 @@ pub fn add_direct_light_in(
         }
         (e / points[k].len().max(1) as f64).to_array()
     });
-    for (k, e) in irradiance.iter().enumerate() {
-        direct[k] = p.patches[k].albedo * DVec3::from_array(*e);
+    // Patches skipped once it was cancelled hold nothing: never used.
+    if stop() {
+        return Err(set_up_cancelled());
     }
-    if mode == solve::Mode::Corrected && scene.environment.is_some() {
-        let env = crate::environment::EnvironmentMap::of_scene(scene)?;
-        let sky = super::environment_light::irradiance(p, occluders, &env, &points);
-        for (k, e) in sky.iter().enumerate() {
-            direct[k] += p.patches[k].albedo * *e;
-        }
-    }
-    for l in &scene.lights {
-        if let Light::Directional {
-            direction, irradiance, ..
-        } = l
-        {
-            let to_sun = -direction.as_dvec3().normalize_or_zero();
-            let lit = super::sun::lit_fraction(p, occluders, to_sun, mode);
-            for (k, q) in p.patches.iter().enumerate() {
-                direct[k] += q.albedo * irradiance.as_dvec3() * (q.normal.dot(to_sun).max(0.0) * lit[k]);
-            }
-        }
-    }
-    for (q, b) in p.patches.iter_mut().zip(&direct) {
-        q.total += *b;
-        q.unshot += *b;
-    }
-    Ok(direct)
-}
-
-/// Where each patch takes its direct light. Corrected: the patch's visible sub-samples, whose
-/// mean irradiance is the patch's, as the sun's lit fraction is: the light falls off as 1/d² and
-/// at a spot's cone, so the centre alone misjudges patches near a light or across a cone's edge.
-/// Faithful: CaLight's one sample per lumel, at its centre.
-fn light_points(p: &Patches, occluders: &Occluders, mode: solve::Mode) -> Vec<Vec<DVec3>> {
-    match mode {
-        solve::Mode::Faithful => p.patches.iter().map(|q| vec![q.centre]).collect(),
-        solve::Mode::Corrected => {
-            let mut visible = crate::lighting::lightmap::buried::visible_samples(p, occluders);
-            for (points, q) in visible.iter_mut().zip(&p.patches) {
-                if points.is_empty() {
-                    // A sliver no sub-sample falls in: its centre.
-                    points.push(q.centre + q.normal * (1e-4 * p.size));
-                }
-            }
-            visible
-        }
-    }
+    Ok(irradiance)
 }
 
 /// A point or spot light seen from `x`: (unit direction to it, irradiance on a surface facing
@@ -198,7 +232,10 @@ pub fn bake(
     shooter: Shooter<'_>,
     progress: &mut Progress,
 ) -> Result<(Patches, Atlas, Vec<[f32; 4]>, solve::Report)> {
+    let cancel = progress.cancellation();
+    let cancel = cancel.as_ref();
     let mut p = Patches::build(&geometry.triangles, patch_size);
+    crate::bake::check_cancelled(progress, SET_UP)?;
     if let Some(r) = settings.reflectivity {
         // Every reflecting patch reflects `r`; the light-map then holds irradiance/π, drawn
         // times the material's albedo as ever.
@@ -208,10 +245,11 @@ pub fn bake(
     }
     let mut occluders = Occluders::new(&geometry.triangles);
     if settings.mode == solve::Mode::Corrected {
-        crate::lighting::lightmap::buried::exclude(&mut p, &occluders);
+        crate::lighting::lightmap::buried::exclude(&mut p, &occluders, cancel).ok_or_else(set_up_cancelled)?;
     }
     occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
-    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode)?;
+    crate::bake::check_cancelled(progress, SET_UP)?;
+    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode, cancel)?;
     let mut report = match shooter {
         Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),
         Shooter::Gpu(gpu, shaders) => super::gpu::solve_in(

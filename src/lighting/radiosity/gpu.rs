@@ -151,6 +151,7 @@ fn run(
     let bvh = Bvh::build(&tris);
     let traced = TracedTriangle::in_leaf_order(&bvh, &tris);
     let log_capacity = settings.max_shots.saturating_add(1).min(1 << 22);
+    crate::bake::check_cancelled(progress, super::bake::SET_UP)?;
     let shooter = Shooter::new(gpu, shaders, &tables, &visibility, log_capacity)?;
 
     // The initial unshot power, as the CPU solve measures it (its stop is a fraction of it).
@@ -185,6 +186,7 @@ fn run(
         &traced,
         Some(&bvh.skip_links()),
     )?;
+    crate::bake::check_cancelled(progress, super::bake::SET_UP)?;
     let (shot, unshot_power) = shooter.shoot(gpu, &mut states, &bvh_tables, push, |shots, left| {
         show_progress(progress, shots, left.unwrap_or(initial), initial, settings.threshold);
         crate::bake::check_cancelled(progress, "radiosity shooting")

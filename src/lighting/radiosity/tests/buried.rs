@@ -53,7 +53,7 @@ fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing
     let mut p = Patches::build(&geo.triangles, size);
     let before = p.patches.clone();
     let occ = Occluders::new(&geo.triangles);
-    buried::exclude(&mut p, &occ);
+    buried::exclude(&mut p, &occ, None);
     let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
     let c = p.charts[floor].clone();
     let flat = c.flat_triangles(&occ.triangles);
