@@ -2,7 +2,9 @@
 //! time on stderr. On a terminal one line redrawn in place once the work has taken more than a
 //! second; otherwise (a log, a pipe) nothing for the first ten seconds, then one line every five,
 //! so a long bake is never silent. Either way, once two seconds of work give a rate, work that
-//! will take over a minute in all says so once, with the estimate.
+//! will take over a minute in all says so once, with the estimate. Work that can time a small
+//! sample of itself before it starts says so earlier ([`Progress::warn_before`]), and the rate's
+//! warning then stays quiet.
 
 use std::cell::RefCell;
 use std::io::{IsTerminal, Write};
@@ -80,6 +82,8 @@ pub struct Progress {
     observer: Option<Observer>,
     /// The cancellation of the thread this line was made on.
     cancel: Option<Cancel>,
+    /// Writes nothing and tells no observer (a calibration's run of the real work).
+    quiet: bool,
 }
 
 /// A terminal's line appears after this much work, and is redrawn at most this often.
@@ -92,6 +96,19 @@ const LOG_EVERY: Duration = Duration::from_secs(5);
 const ESTIMATE_AFTER: Duration = Duration::from_secs(2);
 const ESTIMATE_LIMIT: Duration = Duration::from_secs(60);
 
+/// A long piece of work's time, estimated before it starts from the work itself: its units
+/// counted, a few of them timed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub seconds: f64,
+    /// How it was made (what was timed, the time per unit).
+    pub method: String,
+    /// The stage that dominates it, with its work.
+    pub dominant: String,
+    /// The settings that make it cheaper.
+    pub remedy: String,
+}
+
 impl Progress {
     pub fn new(name: &str) -> Progress {
         Progress::to(name, std::io::stderr().is_terminal())
@@ -99,7 +116,13 @@ impl Progress {
 
     /// A progress line written as to a terminal (`terminal`) or to a log.
     pub fn to(name: &str, terminal: bool) -> Progress {
-        let p = Progress {
+        let p = Progress::made(name, terminal, false);
+        p.notify(0, 0);
+        p
+    }
+
+    fn made(name: &str, terminal: bool, quiet: bool) -> Progress {
+        Progress {
             name: name.to_string(),
             start: Instant::now(),
             last: None,
@@ -107,11 +130,20 @@ impl Progress {
             terminal,
             warned: false,
             detail: String::new(),
-            observer: OBSERVER.with(|o| o.borrow().clone()),
+            observer: if quiet {
+                None
+            } else {
+                OBSERVER.with(|o| o.borrow().clone())
+            },
             cancel: CANCEL.with(|c| c.borrow().clone()),
-        };
-        p.notify(0, 0);
-        p
+            quiet,
+        }
+    }
+
+    /// A line that shows nothing, for work timed to estimate other work; it still reports the
+    /// thread's cancellation.
+    pub fn quiet(name: &str) -> Progress {
+        Progress::made(name, false, true)
     }
 
     fn notify(&self, done: u64, total: u64) {
@@ -144,6 +176,9 @@ impl Progress {
 
     /// `done` of `total` units finished.
     pub fn update(&mut self, done: u64, total: u64) {
+        if self.quiet {
+            return;
+        }
         self.notify(done, total);
         let text = self.text_at(self.start.elapsed(), done, total);
         if !text.is_empty() {
@@ -191,6 +226,66 @@ impl Progress {
             text += &format!("{body}{detail}\n");
         }
         text
+    }
+
+    /// Warns once, in one line, when `estimate` passes a minute: before the work starts, so the
+    /// warning comes before the work would end. The rate's own warning then says nothing more.
+    pub fn warn_before(&mut self, estimate: &Estimate) {
+        if self.quiet {
+            return;
+        }
+        let text = self.estimate_text(estimate);
+        if !text.is_empty() {
+            crate::err!("{text}");
+            let _ = std::io::stderr().flush();
+        }
+    }
+
+    /// What [`Progress::warn_before`] writes (empty: nothing).
+    pub fn estimate_text(&mut self, e: &Estimate) -> String {
+        if self.warned || e.seconds.is_nan() || e.seconds <= ESTIMATE_LIMIT.as_secs_f64() {
+            return String::new();
+        }
+        self.warned = true;
+        let clear = if self.shown { "\r\x1b[K" } else { "" };
+        format!(
+            "{clear}warning: {}: about {} in all, estimated before it starts ({}); {} dominates: {} cut it\n",
+            self.name,
+            duration_words(Duration::from_secs_f64(e.seconds.min(1e9))),
+            e.method,
+            e.dominant,
+            e.remedy
+        )
+    }
+
+    /// Runs `what`, a stage of this work that reports no progress of its own: once the work has
+    /// passed ten seconds, a line every five names the stage and the time so far (terminal or
+    /// not), so a long stage is never silent.
+    pub fn stage<T>(&mut self, what: &str, work: impl FnOnce() -> T) -> T {
+        if self.quiet {
+            return work();
+        }
+        let (stop, stopped) = std::sync::mpsc::channel::<()>();
+        let (name, start) = (self.name.as_str(), self.start);
+        std::thread::scope(|scope| {
+            scope.spawn(move || {
+                let mut next = LOG_AFTER;
+                loop {
+                    let wait = next.saturating_sub(start.elapsed());
+                    if stopped.recv_timeout(wait) != Err(std::sync::mpsc::RecvTimeoutError::Timeout) {
+                        return;
+                    }
+                    let elapsed = start.elapsed();
+                    if elapsed >= next {
+                        crate::errln!("{name}: {what}, {:.1} s elapsed", elapsed.as_secs_f64());
+                        next = elapsed + LOG_EVERY;
+                    }
+                }
+            });
+            let out = work();
+            drop(stop);
+            out
+        })
     }
 
     /// Ends the line if one was shown.
@@ -279,6 +374,30 @@ mod tests {
         let mut quick = Progress::to("radiosity", false);
         assert!(quick.text_at(S(2.0), 50, 100).is_empty(), "4 s in all");
         assert!(quick.text_at(S(2.5), 51, 100).is_empty());
+    }
+
+    /// An estimate made before the work says so once over a minute, and the rate's warning
+    /// then stays quiet; one under a minute leaves the rate's warning to speak.
+    #[test]
+    fn an_estimate_before_the_work_warns_once_over_a_minute() {
+        let e = |seconds: f64| Estimate {
+            seconds,
+            method: "4 units timed: 1 s each".into(),
+            dominant: "shooting (100 units)".into(),
+            remedy: "fewer units".into(),
+        };
+        let mut p = Progress::to("radiosity", false);
+        assert_eq!(
+            p.estimate_text(&e(100.0)),
+            "warning: radiosity: about 100 s in all, estimated before it starts (4 units timed: 1 s each); shooting (100 units) dominates: fewer units cut it\n"
+        );
+        assert!(p.estimate_text(&e(100.0)).is_empty(), "warned once");
+        assert!(p.text_at(S(2.0), 2, 100).is_empty(), "the rate's warning stays quiet");
+        let mut quick = Progress::to("radiosity", false);
+        assert!(quick.estimate_text(&e(59.0)).is_empty());
+        assert!(quick
+            .text_at(S(2.0), 2, 100)
+            .starts_with("warning: radiosity: about 100 s"));
     }
 
     /// A thread's observer sees the lines made on that thread (their start and every update),

@@ -13,3 +13,4 @@ mod docs_tables;
 mod faults;
 mod fuzz;
 mod report;
+mod slow_bakes;

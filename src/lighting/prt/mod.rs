@@ -231,12 +231,13 @@ pub fn key_times(scene: &crate::scene::Scene, config: &Config) -> Vec<f32> {
     }
 }
 
-/// Bakes one key with the configured baker.
+/// Bakes one of `keys` keys with the configured baker.
 pub fn bake_transfer(
     gpu: &mut crate::backend::Gpu,
     shaders: &crate::shaders::ShaderLibrary,
     r: &Receivers,
     config: &Config,
+    keys: usize,
     progress: &mut Progress,
 ) -> Result<Vec<f32>> {
     let clip = receivers::Clip {
@@ -246,7 +247,7 @@ pub fn bake_transfer(
     match config.baker {
         Baker::Raster => raster::bake(gpu, shaders, r, config, progress),
         Baker::Rays => raycast::bake_gpu(gpu, shaders, r, config.bands(), config.samples, clip, progress),
-        Baker::RaysCpu => raycast::bake_cpu(r, config.bands(), config.samples, clip, progress),
+        Baker::RaysCpu => raycast::bake_cpu_of_keys(r, config.bands(), config.samples, clip, keys, progress),
     }
 }
 
@@ -421,7 +422,7 @@ impl Prt {
         let baked: Vec<f32> = cx.bakes.bake(&label, &key, |progress| {
             let mut out = Vec::new();
             for (r, _) in &all_keys {
-                out.extend(bake_transfer(gpu, shaders, r, &config, progress)?);
+                out.extend(bake_transfer(gpu, shaders, r, &config, all_keys.len(), progress)?);
             }
             Ok(out)
         })?;

@@ -13,7 +13,7 @@ use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::{self, Occluders, Settings};
 use crate::scene::{Light, Scene};
 use crate::shaders::ShaderLibrary;
-use crate::util::progress::{Cancel, Progress};
+use crate::util::progress::{Cancel, Estimate, Progress};
 
 /// Where a bake cancelled before its first shot stopped: the patches, their buried parts, the
 /// direct light and the shooter's tables.
@@ -222,8 +222,111 @@ pub enum Shooter<'a> {
     Gpu(&'a mut Gpu, &'a ShaderLibrary),
 }
 
-/// Bakes the light-map of `geometry`: patches, direct light, the solve, the texels.
+impl Shooter<'_> {
+    fn reborrow(&mut self) -> Shooter<'_> {
+        match self {
+            Shooter::Cpu => Shooter::Cpu,
+            Shooter::Gpu(gpu, shaders) => Shooter::Gpu(gpu, shaders),
+        }
+    }
+}
+
+/// The calibration's first bake has about this many patches; each next one four times as many,
+/// while the last one's time × [`CALIBRATION_GROWTH`] stays under [`CALIBRATION_BUDGET_S`]
+/// (on lavapipe a release build calibrates at about 1,000 patches in under a second).
+const CALIBRATION_PATCHES: f64 = 256.0;
+const CALIBRATION_BUDGET_S: f64 = 2.0;
+/// A calibration bake's time as its patches quadruple: the shooting's (16×) dominates.
+const CALIBRATION_GROWTH: f64 = 16.0;
+/// Bakes with fewer patches than this many times the calibration's first are not estimated:
+/// they take about as long as a calibration.
+const ESTIMATE_OVER: f64 = 16.0;
+
+/// Where a bake's time went, by how it grows with the patches.
+#[derive(Clone, Copy, Debug, Default)]
+struct StageSeconds {
+    /// Patches, occluders, direct light, atlas and borders: each patch once.
+    set_up: f64,
+    /// The shooting (and the emitters' first shot): every shot visits every receiver.
+    shooting: f64,
+}
+
+/// The bake's time at `patch_size`, estimated before it starts: the same bake (same scene,
+/// settings and shooter) run at coarser patches and timed, then extrapolated by the patches
+/// inside: the set-up as the patches, the shooting as the patches × the shots, the shots as the
+/// patches (the shooter count grows with the blocks; measured on the Cornell box, 706 → 2,700 →
+/// 10,558 patches took 571 → 1,612 → 5,944 shots) but at most `max_shots`. `None`: a small bake
+/// (or a cancelled calibration).
+pub fn estimate(
+    geometry: &StaticGeometry,
+    scene: &Scene,
+    patch_size: f64,
+    settings: &Settings,
+    content: Content,
+    shooter: &mut Shooter<'_>,
+) -> Result<Option<Estimate>> {
+    let area: f64 = geometry.triangles.iter().filter(|t| !t.sky).map(|t| t.area()).sum();
+    let patches = area / (patch_size * patch_size);
+    if patches.is_nan() || patches <= ESTIMATE_OVER * CALIBRATION_PATCHES {
+        return Ok(None);
+    }
+    let mut quiet = Progress::quiet("radiosity calibration");
+    let mut target = CALIBRATION_PATCHES;
+    let (size, inside, shots, times) = loop {
+        let size = (area / target).sqrt();
+        let ((p, _, _, report), times) =
+            bake_timed(geometry, scene, size, settings, content, shooter.reborrow(), &mut quiet)?;
+        if quiet.cancelled() {
+            return Ok(None);
+        }
+        let inside = p.patches.iter().filter(|q| q.inside()).count().max(1) as f64;
+        let seconds = times.set_up + times.shooting;
+        if seconds * CALIBRATION_GROWTH > CALIBRATION_BUDGET_S || target * 4.0 * 4.0 > patches {
+            break (size, inside, report.shots.max(1), times);
+        }
+        target *= 4.0;
+    };
+    let ratio = (patches / inside).max(1.0);
+    let full_shots = (shots as f64 * ratio).min(settings.max_shots as f64);
+    let shooting = times.shooting * ratio * full_shots / shots as f64;
+    let set_up = times.set_up * ratio;
+    Ok(Some(Estimate {
+        seconds: shooting + set_up,
+        method: format!(
+            "the same bake at patch_size {size:.3} timed: {inside:.0} patches, {shots} shots in {:.2} s; the set-up grows as the patches, the shooting as patches × shots",
+            times.set_up + times.shooting
+        ),
+        dominant: if shooting >= set_up {
+            format!("shooting (about {full_shots:.0} shots to {patches:.0} patches)")
+        } else {
+            format!("patching and direct light ({patches:.0} patches)")
+        },
+        remedy: "a larger patch_size, a larger block or a higher threshold".into(),
+    }))
+}
+
+/// What [`bake`] makes: the patches, the atlas, its texels and the solve's report.
+pub type Baked = (Patches, Atlas, Vec<[f32; 4]>, solve::Report);
+
+/// Bakes the light-map of `geometry`: patches, direct light, the solve, the texels. A bake
+/// [`estimate`]d past a minute says so first.
 pub fn bake(
+    geometry: &StaticGeometry,
+    scene: &Scene,
+    patch_size: f64,
+    settings: &Settings,
+    content: Content,
+    mut shooter: Shooter<'_>,
+    progress: &mut Progress,
+) -> Result<Baked> {
+    if let Some(e) = estimate(geometry, scene, patch_size, settings, content, &mut shooter)? {
+        progress.warn_before(&e);
+    }
+    Ok(bake_timed(geometry, scene, patch_size, settings, content, shooter, progress)?.0)
+}
+
+/// [`bake`] without the estimate, and where its time went.
+fn bake_timed(
     geometry: &StaticGeometry,
     scene: &Scene,
     patch_size: f64,
@@ -231,10 +334,11 @@ pub fn bake(
     content: Content,
     shooter: Shooter<'_>,
     progress: &mut Progress,
-) -> Result<(Patches, Atlas, Vec<[f32; 4]>, solve::Report)> {
+) -> Result<(Baked, StageSeconds)> {
+    let start = std::time::Instant::now();
     let cancel = progress.cancellation();
     let cancel = cancel.as_ref();
-    let mut p = Patches::build(&geometry.triangles, patch_size);
+    let mut p = progress.stage("patches", || Patches::build(&geometry.triangles, patch_size));
     crate::bake::check_cancelled(progress, SET_UP)?;
     if let Some(r) = settings.reflectivity {
         // Every reflecting patch reflects `r`; the light-map then holds irradiance/π, drawn
@@ -243,13 +347,22 @@ pub fn bake(
             q.albedo = DVec3::splat(r);
         }
     }
-    let mut occluders = Occluders::new(&geometry.triangles);
+    let mut occluders = progress.stage("occluders", || Occluders::new(&geometry.triangles));
     if settings.mode == solve::Mode::Corrected {
-        crate::lighting::lightmap::buried::exclude(&mut p, &occluders, cancel).ok_or_else(set_up_cancelled)?;
+        progress
+            .stage("buried patch parts", || {
+                crate::lighting::lightmap::buried::exclude(&mut p, &occluders, cancel)
+            })
+            .ok_or_else(set_up_cancelled)?;
     }
-    occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
+    occluders.pvs = progress.stage("chart visibility", || {
+        crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)
+    })?;
     crate::bake::check_cancelled(progress, SET_UP)?;
-    let direct = add_direct_light_in(&mut p, &occluders, scene, settings.mode, cancel)?;
+    let direct = progress.stage("direct light", || {
+        add_direct_light_in(&mut p, &occluders, scene, settings.mode, cancel)
+    })?;
+    let shooting = std::time::Instant::now();
     let mut report = match shooter {
         Shooter::Cpu => solve::solve(&mut p, &occluders, settings, progress),
         Shooter::Gpu(gpu, shaders) => super::gpu::solve_in(
@@ -271,6 +384,7 @@ pub fn bake(
             direct.iter().zip(emitted).map(|(a, b)| *a + b).collect()
         }
     };
+    let shooting = shooting.elapsed().as_secs_f64();
     let atlas = pack(&p);
     let mut values: Vec<DVec3> = p
         .patches
@@ -293,7 +407,9 @@ pub fn bake(
             values[k] = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0;
         }
     }
-    report.border_refused = crate::lighting::lightmap::border::apply(&p, &occluders, &mut values);
+    report.border_refused = progress.stage("borders", || {
+        crate::lighting::lightmap::border::apply(&p, &occluders, &mut values)
+    });
     if settings.mode == solve::Mode::Faithful {
         // CaLight stores light-maps as RGB8: the border passes averaged display values, which
         // are quantized again here, so the texels are exactly the bytes the texture holds.
@@ -302,5 +418,9 @@ pub fn bake(
         }
     }
     let texels = texels(&p, &atlas, |k| values[k]);
-    Ok((p, atlas, texels, report))
+    let times = StageSeconds {
+        set_up: start.elapsed().as_secs_f64() - shooting,
+        shooting,
+    };
+    Ok(((p, atlas, texels, report), times))
 }

@@ -278,7 +278,16 @@ pub fn bake(
         }
     };
     crate::bake::check_cancelled(progress, "sh light-map visibility")?;
-    let t = transfer::bake(&p, &occluders, &samples, &bits, &config.transfer, progress);
+    // The bounces' own line: the visibility's rate says nothing of the shooting's time, which
+    // grows as patches × shots, so the shooting makes its own estimate two seconds in.
+    let t = transfer::bake(
+        &p,
+        &occluders,
+        &samples,
+        &bits,
+        &config.transfer,
+        &mut Progress::new(&format!("{NAME} bounces ({} patches)", p.patches.len())),
+    );
     let atlas = crate::lighting::lightmap::atlas::pack(&p);
     let dim = samples.dim();
     let mut coeffs = vec![0.0f32; (atlas.width * atlas.height) as usize * dim];
