@@ -56,7 +56,7 @@ enum Measurement {
 pub struct FrameRecord {
     pub frame: u64,
     pub configuration: String,
-    /// What the panel's method box says is drawn ([`panel::method_label`]).
+    /// What the panel's method box says is drawn (made by `panel::method_label`).
     pub method_box: String,
     /// The drawn configuration's parameters as declared, `method(name = value, ...)` a part.
     pub parameters: String,
