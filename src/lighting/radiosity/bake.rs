@@ -274,8 +274,12 @@ pub fn estimate(
     let mut target = CALIBRATION_PATCHES;
     let (size, inside, shots, times) = loop {
         let size = (area / target).sqrt();
+        // A cancel during the calibration stops the bake before its own first shot: set-up.
         let ((p, _, _, report), times) =
-            bake_timed(geometry, scene, size, settings, content, shooter.reborrow(), &mut quiet)?;
+            match bake_timed(geometry, scene, size, settings, content, shooter.reborrow(), &mut quiet) {
+                Err(Error::Cancelled(_)) => return Err(set_up_cancelled()),
+                r => r?,
+            };
         if quiet.cancelled() {
             return Ok(None);
         }
