@@ -530,6 +530,7 @@ fn capture_supersamples_to_the_asked_size_and_refuses_huge_factors() {
 /// N: under a sun that `[light_motion]` turns 60° by frame 2 (1800°/s), `forward` on an open
 /// plane (exact there) scores the reference's own noise at frame 2, where judging its frame 2
 /// against the scene as written (frame 0: irradiance twice as high) would be off by a factor 2.
+/// The table `capture --max-error` reads stays frame 0's.
 #[test]
 fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
     let dir = common::temp_path("chart-frame");
@@ -570,10 +571,32 @@ fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
         let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
         rows[0].rel_mse
     };
-    let (at_0, at_2) = (rel_mse("0"), rel_mse("2"));
+    let cached_tables = || -> Vec<String> {
+        let mut found: Vec<String> = std::fs::read_dir(dir.join("cache"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| {
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                name.starts_with("chart-") && name.ends_with(".csv")
+            })
+            .map(|p| std::fs::read_to_string(p).unwrap())
+            .collect();
+        found.sort();
+        found
+    };
+    let at_0 = rel_mse("0");
+    let frame_0_table = std::fs::read_to_string(dir.join("chart0.csv")).unwrap();
+    assert_eq!(cached_tables(), [frame_0_table.clone()], "frame 0's table is cached");
+    let at_2 = rel_mse("2");
     println!("forward against the reference: frame 0 {at_0:.2e}, frame 2 {at_2:.2e}");
     // Frame 2 against frame 0 would be (0.5 − 1)² / 1 = 0.25 relative MSE.
     assert!(at_0 < 1e-3 && at_2 < 1e-3, "frame 0 {at_0}, frame 2 {at_2}");
+    // `capture --max-error` renders the scene as written: frame 2's chart leaves its table alone.
+    assert_eq!(
+        cached_tables(),
+        [frame_0_table],
+        "the cached table for capture --max-error is still frame 0's"
+    );
 }
 
 /// The CSV's bake columns: every point of a baking method's sweep reports the time and bytes of

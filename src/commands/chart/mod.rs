@@ -717,15 +717,19 @@ fn references_for(scene: &Scene, measured: &[MeasuredPoint], opts: &ChartOptions
     Ok((keys, references))
 }
 
-/// The chart's CSV into the cache (for `capture --max-error`) and, as asked, beside the PNG.
+/// The chart's CSV into the cache (for `capture --max-error`, frame 0 only) and, as asked, beside
+/// the PNG.
 fn write_outputs(chart: &Chart, scene: &Scene, opts: &ChartOptions) -> Result<()> {
     let csv = chart.csv();
-    std::fs::create_dir_all(&opts.cache_dir).map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
-    let cached = opts
-        .cache_dir
-        .join(format!("chart-{}.csv", cache_key(scene, opts.size, "chart")));
-    crate::util::image_io::write_file(&cached, csv.as_bytes())
-        .map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
+    // `capture --max-error` renders the scene as written, so it reads the frame-0 table only; a
+    // chart of a later frame must not replace it.
+    if opts.frame == 0 {
+        std::fs::create_dir_all(&opts.cache_dir)
+            .map_err(|e| Error::Usage(format!("{}: {e}", opts.cache_dir.display())))?;
+        let cached = cached_table(scene, opts.size, &opts.cache_dir);
+        crate::util::image_io::write_file(&cached, csv.as_bytes())
+            .map_err(|e| Error::Usage(format!("{}: {e}", cached.display())))?;
+    }
     if let Some(p) = &opts.csv {
         crate::util::image_io::write_file(p, csv.as_bytes())
             .map_err(|e| Error::Usage(format!("{}: {e}", p.display())))?;
