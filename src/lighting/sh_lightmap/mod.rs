@@ -115,7 +115,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes.
-const BAKER_VERSION: u32 = 2;
+const BAKER_VERSION: u32 = 3;
 
 /// The reference: every bounce when the transfer bounces, direct light otherwise.
 pub fn reference(decl: &MethodDecl) -> ReferenceKind {
@@ -262,15 +262,26 @@ pub fn bake(
     progress: &mut Progress,
 ) -> Result<(Baked, crate::lighting::lightmap::solve::Report)> {
     let mut p = Patches::build(&geometry.triangles, config.patch_size);
+    let mut occluders = Occluders::new(&geometry.triangles);
+    let mode = config.transfer.solve.mode;
+    if mode == Mode::Corrected {
+        // As radiosity's corrected bake does: a patch half under a wall standing on its floor
+        // takes its transfer from the part that can be seen, not from a centre inside the wall.
+        let cancel = progress.cancellation();
+        let buried = progress.stage("buried patch parts", || {
+            crate::lighting::lightmap::buried::exclude(&mut p, &occluders, cancel.as_ref())
+        });
+        if buried.is_none() {
+            return Err(Error::Cancelled("sh light-map buried patch parts".into()));
+        }
+    }
     if let (Some(s), true) = (surfaces, config.normal_samples > 0) {
         normals::perturb(&mut p, &geometry.triangles, s, config.normal_samples);
     }
     let samples = SampleSet::new(config.samples, config.transfer.bands)?;
-    let mut occluders = Occluders::new(&geometry.triangles);
     if let Some(scene) = world {
         occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
     }
-    let mode = config.transfer.solve.mode;
     let bits = match rays {
         Rays::Cpu => transfer::visibility_cpu(&p, &occluders, &samples, mode, progress),
         Rays::Gpu(gpu, shaders) => {
