@@ -586,7 +586,11 @@ fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
     };
     let at_0 = rel_mse("0");
     let frame_0_table = std::fs::read_to_string(dir.join("chart0.csv")).unwrap();
-    assert_eq!(cached_tables(), [frame_0_table.clone()], "frame 0's table is cached");
+    assert_eq!(
+        cached_tables(),
+        std::slice::from_ref(&frame_0_table),
+        "frame 0's table is cached"
+    );
     let at_2 = rel_mse("2");
     println!("forward against the reference: frame 0 {at_0:.2e}, frame 2 {at_2:.2e}");
     // Frame 2 against frame 0 would be (0.5 − 1)² / 1 = 0.25 relative MSE.
