@@ -37,14 +37,17 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
                 if !p.patches[k].inside() {
                     continue;
                 }
-                // Corrected: only the part of the patch that is not buried under other
-                // geometry, as its area and centre are (`lightmap::buried`).
-                let samples: Vec<DVec3> = c
-                    .inside_samples(&flat, p.size, i, j, SAMPLES)
-                    .into_iter()
-                    .map(|y| y + c.normal * eps)
-                    .filter(|&x| mode == Mode::Faithful || !buried::is_buried(occluders, x, c.normal, c.u, c.v))
-                    .collect();
+                // Corrected: only the part of the patch it keeps, not buried under other
+                // geometry and on one side of a thin wall, as its area and centre are
+                // (`lightmap::buried`).
+                let samples: Vec<DVec3> = match mode {
+                    Mode::Faithful => c
+                        .inside_samples(&flat, p.size, i, j, SAMPLES)
+                        .into_iter()
+                        .map(|y| y + c.normal * eps)
+                        .collect(),
+                    Mode::Corrected => buried::seen_samples(occluders, c, &flat, p.size, (i, j)),
+                };
                 let inside = samples.len();
                 let lit = samples
                     .iter()

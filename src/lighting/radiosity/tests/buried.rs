@@ -102,3 +102,67 @@ fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing
         );
     }
 }
+
+/// A 3 cm wall standing across a column of 0.2 m floor patches at x ∈ [0.255, 0.285]: it buries
+/// the sub-sample column at x = 0.275 and parts the rest into one column on its −x side and two
+/// on its +x side. Each such patch keeps the two columns (half its area, its centre on the +x
+/// side), not all three visible ones (three quarters, light from both rooms in one texel).
+#[test]
+fn a_thin_wall_across_a_patch_keeps_the_larger_side() {
+    let text = r#"
+methods = ["radiosity"]
+[camera]
+position = [0, 3, 4]
+target = [0, 0, 0]
+[[materials]]
+name = "grey"
+albedo = 0.5
+[[objects]]
+name = "floor"
+mesh = "quad"
+corner = [-2, 0, -2]
+edge_u = [0, 0, 4]
+edge_v = [4, 0, 0]
+material = "grey"
+[[objects]]
+name = "wall"
+mesh = "box"
+size = [0.03, 1, 2]
+translate = [0.27, 0.5, 0.1]
+material = "grey"
+"#;
+    let sc = Scene::from_str(text, "thin_wall.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
+    let size = 0.2;
+    let mut p = Patches::build(&geo.triangles, size);
+    let before = p.patches.clone();
+    let occ = Occluders::new(&geo.triangles);
+    buried::exclude(&mut p, &occ, None);
+    let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
+    let c = p.charts[floor].clone();
+    let mut crossed = 0;
+    for j in 0..c.height {
+        for i in 0..c.width {
+            let k = c.first + j * c.width + i;
+            let was = &before[k];
+            // The patches of the column the wall crosses, along its length (z ∈ [-0.9, 1.1]).
+            if !was.inside() || !(0.2..0.4).contains(&was.centre.x) || !(-0.8..1.0).contains(&was.centre.z) {
+                continue;
+            }
+            crossed += 1;
+            let q = &p.patches[k];
+            assert!(
+                (q.area - 0.5 * was.area).abs() < 1e-12,
+                "patch ({i}, {j}): area {} of {}: both sides kept?",
+                q.area,
+                was.area
+            );
+            assert!(
+                q.centre.x > 0.285,
+                "patch ({i}, {j}): centre {} not on the +x side",
+                q.centre
+            );
+        }
+    }
+    assert_eq!(crossed, 9, "floor patches along the wall");
+}
