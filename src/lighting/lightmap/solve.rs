@@ -131,13 +131,14 @@ pub(crate) struct Block {
     pub normal: DVec3,
 }
 
-pub(crate) fn blocks(p: &Patches, n: usize) -> Vec<Block> {
-    blocks_of(&Geometry::from(p), n)
+/// The n×n shooting blocks of every chart. With `walls` (the corrected mode), a block's patches
+/// that a wall standing on the chart parts are shot as separate blocks ([`parted_by_walls`]).
+pub(crate) fn blocks(p: &Patches, n: usize, walls: Option<&Occluders>) -> Vec<Block> {
+    blocks_of(&Geometry::from(p), n, walls)
 }
 
-fn blocks_of(p: &Geometry<'_>, n: usize) -> Vec<Block> {
+fn blocks_of(p: &Geometry<'_>, n: usize, walls: Option<&Occluders>) -> Vec<Block> {
     let mut out = Vec::new();
-    let s = p.size;
     for (ci, c) in p.charts.iter().enumerate() {
         for j0 in (0..c.height).step_by(n) {
             for i0 in (0..c.width).step_by(n) {
@@ -149,34 +150,72 @@ fn blocks_of(p: &Geometry<'_>, n: usize) -> Vec<Block> {
                 if members.is_empty() {
                     continue;
                 }
-                // The block's rectangle is that of its patches inside the polygon: the border
-                // frame lies outside the surface and must not shoot.
-                let ij = |k: usize| ((k - c.first) % c.width, (k - c.first) / c.width);
-                let (lo_i, hi_i) = members
-                    .iter()
-                    .map(|&k| ij(k).0)
-                    .fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i + 1)));
-                let (lo_j, hi_j) = members
-                    .iter()
-                    .map(|&k| ij(k).1)
-                    .fold((usize::MAX, 0), |(a, b), j| (a.min(j), b.max(j + 1)));
-                let at = |i: usize, j: usize| c.origin + c.u * (i as f64 * s) + c.v * (j as f64 * s);
-                let normal = members
-                    .iter()
-                    .map(|&k| p.patches[k].normal)
-                    .sum::<DVec3>()
-                    .try_normalize()
-                    .unwrap_or(c.normal);
-                out.push(Block {
-                    chart: ci,
-                    members,
-                    corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)],
-                    normal,
-                });
+                match walls {
+                    Some(occluders) => {
+                        for group in parted_by_walls(p, c.normal, members, occluders) {
+                            out.push(block_of(p, ci, group));
+                        }
+                    }
+                    None => out.push(block_of(p, ci, members)),
+                }
             }
         }
     }
     out
+}
+
+/// `members` (patches of one block) in groups whose centres are joined by clear segments,
+/// directly or through other members. A block shoots its summed power from its centre: a 3×3
+/// block of 0.36 m floor patches that a 3.4 cm wall crosses shot the light of the lit room from
+/// a centre in the dark one (a generated room showed 2.13 of the path tracer's mean).
+fn parted_by_walls(p: &Geometry<'_>, normal: DVec3, members: Vec<usize>, occluders: &Occluders) -> Vec<Vec<usize>> {
+    let eps = 1e-4 * p.size;
+    let at = |k: usize| p.patches[k].centre + normal * eps;
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut left = members;
+    while !left.is_empty() {
+        let mut group = vec![left.remove(0)];
+        let mut next = 0;
+        while next < group.len() {
+            let a = at(group[next]);
+            next += 1;
+            let (joined, apart): (Vec<usize>, Vec<usize>) =
+                left.into_iter().partition(|&b| occluders.visible(a, at(b)));
+            group.extend(joined);
+            left = apart;
+        }
+        group.sort_unstable();
+        groups.push(group);
+    }
+    groups
+}
+
+/// A block of `members` of chart `ci`: its rectangle is that of its patches inside the polygon
+/// (the border frame lies outside the surface and must not shoot).
+fn block_of(p: &Geometry<'_>, ci: usize, members: Vec<usize>) -> Block {
+    let (c, s) = (&p.charts[ci], p.size);
+    let ij = |k: usize| ((k - c.first) % c.width, (k - c.first) / c.width);
+    let (lo_i, hi_i) = members
+        .iter()
+        .map(|&k| ij(k).0)
+        .fold((usize::MAX, 0), |(a, b), i| (a.min(i), b.max(i + 1)));
+    let (lo_j, hi_j) = members
+        .iter()
+        .map(|&k| ij(k).1)
+        .fold((usize::MAX, 0), |(a, b), j| (a.min(j), b.max(j + 1)));
+    let at = |i: usize, j: usize| c.origin + c.u * (i as f64 * s) + c.v * (j as f64 * s);
+    let normal = members
+        .iter()
+        .map(|&k| p.patches[k].normal)
+        .sum::<DVec3>()
+        .try_normalize()
+        .unwrap_or(c.normal);
+    Block {
+        chart: ci,
+        members,
+        corners: [at(lo_i, lo_j), at(hi_i, lo_j), at(hi_i, hi_j), at(lo_i, hi_j)],
+        normal,
+    }
 }
 
 fn magnitude(v: DVec3) -> f64 {
@@ -428,7 +467,10 @@ impl<'b> Shot<'b> {
 
 impl<'a> Solve<'a> {
     fn new(g: Geometry<'a>, occluders: &'a Occluders, settings: &'a Settings) -> Solve<'a> {
-        let blocks = blocks_of(&g, settings.block.max(1));
+        // Corrected: a block a wall parts shoots each side from its own centre. Faithful:
+        // CaLight's blocks.
+        let walls = (settings.mode == Mode::Corrected).then_some(occluders);
+        let blocks = blocks_of(&g, settings.block.max(1), walls);
         // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and
         // in corrected mode only a block square's overhang beyond its polygon could reach them);
         // FULL pairs need no rays. The same matrix in both modes.

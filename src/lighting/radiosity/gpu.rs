@@ -136,7 +136,9 @@ fn run(
     settings: &Settings,
     progress: &mut Progress,
 ) -> Result<Report> {
-    let blocks = solve::blocks(p, settings.block.max(1));
+    // The CPU solve's blocks: parted by walls in the corrected mode.
+    let walls = (settings.mode == solve::Mode::Corrected).then(|| solve::Occluders::new(triangles));
+    let blocks = solve::blocks(p, settings.block.max(1), walls.as_ref());
     let mut report = Report::default();
     if blocks.is_empty() {
         progress.finish();
