@@ -527,6 +527,34 @@ fn a_rebake_runs_while_frames_go_on_and_a_second_change_supersedes_it() {
     let _ = std::fs::remove_dir_all(&cache);
 }
 
+/// Where a scripted cancel landed: the first frame that saw the bake cancelling, the frame
+/// after the last that saw it running, and the seconds the bake ran on after the cancel (its
+/// elapsed time between the two, and the frame after's own time).
+struct CancelSeen<'r> {
+    first: &'r serde_json::Value,
+    after: &'r serde_json::Value,
+    stopped_s: f64,
+}
+
+fn cancel_seen(r: &[serde_json::Value]) -> CancelSeen<'_> {
+    let cancelling: Vec<&serde_json::Value> = r.iter().filter(|f| f["baking"]["cancelling"] == true).collect();
+    let (first, last) = (
+        *cancelling.first().expect("cancelled mid-bake"),
+        *cancelling.last().unwrap(),
+    );
+    let at = |f: &serde_json::Value| f["baking"]["elapsed_s"].as_f64().unwrap();
+    let after = r
+        .iter()
+        .find(|f| f["frame"] == last["frame"].as_u64().unwrap() + 1)
+        .expect("a frame after the bake");
+    let stopped_s = at(last) - at(first) + after["frame_ms"].as_f64().unwrap() / 1e3;
+    CancelSeen {
+        first,
+        after,
+        stopped_s,
+    }
+}
+
 /// `forward` and a radiosity light-map of fine patches (a bake of many seconds on lavapipe).
 const LONG_BAKE_SCENE: &str = "methods = [\"forward\", { name = \"radiosity\", patch_size = 0.02 }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";
 
@@ -557,24 +585,15 @@ fn cancel_radiosity_bake(baker: &str) {
         420,
         ("64x48", false, None),
     );
-    let baking: Vec<&serde_json::Value> = r.iter().filter(|f| !f["baking"].is_null()).collect();
-    let cancelling: Vec<&&serde_json::Value> = baking.iter().filter(|f| f["baking"]["cancelling"] == true).collect();
-    let (first, last) = (
-        cancelling.first().expect("cancelled mid-bake"),
-        cancelling.last().unwrap(),
-    );
-    let at = |f: &serde_json::Value| f["baking"]["elapsed_s"].as_f64().unwrap();
+    let CancelSeen {
+        first,
+        after,
+        stopped_s,
+    } = cancel_seen(&r);
     let fraction = first["baking"]["fraction"].as_f64().unwrap();
-    // The last frame that saw the bake running, and the frame after it.
-    let frame_after = last["frame"].as_u64().unwrap() + 1;
-    let after = r
-        .iter()
-        .find(|f| f["frame"] == frame_after)
-        .expect("a frame after the bake");
-    let stopped_s = at(last) - at(first) + after["frame_ms"].as_f64().unwrap() / 1e3;
     println!(
         "{baker}: cancelled at {fraction:.3} of the bake, {:.2} s in; it stopped within {stopped_s:.3} s",
-        at(first)
+        first["baking"]["elapsed_s"].as_f64().unwrap()
     );
     assert!(
         first["baking"]["stage"]
@@ -612,6 +631,54 @@ fn cancel_radiosity_bake(baker: &str) {
     let _ = std::fs::remove_dir_all(&cache);
 }
 
+/// The SH light-map's GPU visibility bake (2 cm patches: about 10^8 rays, over a minute on
+/// lavapipe) started by M at frame 2 and cancelled by C at frame 300: it stops between two
+/// submissions, within a bound, caches nothing, and `forward` is presented throughout.
+#[test]
+fn cancelling_the_sh_light_map_gpu_bake_stops_it_between_submissions() {
+    let cache = common::temp_path("demo-cancel-sh-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let scene = LONG_BAKE_SCENE.replace(
+        "{ name = \"radiosity\", patch_size = 0.02 }",
+        "{ name = \"sh_lightmap\", patch_size = 0.02, baker = \"gpu\" }",
+    );
+    assert!(scene.contains("sh_lightmap"));
+    let (out, r) = demo_run(
+        "demo-cancel-sh",
+        &scene,
+        "2 key M\n300 key C\n",
+        &cache,
+        320,
+        ("64x48", false, None),
+    );
+    let CancelSeen {
+        first,
+        after,
+        stopped_s,
+    } = cancel_seen(&r);
+    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
+    println!(
+        "sh_lightmap: cancelled at {}; it stopped within {stopped_s:.3} s: {note}",
+        first["baking"]
+    );
+    assert!(
+        note.contains("bake of sh_lightmap cancelled") && note.contains("(at sh light-map visibility)"),
+        "{note:?}\n{out}"
+    );
+    assert!(after["baking"].is_null());
+    assert_eq!(
+        cached(&cache, "sh_lightmap"),
+        Vec::<String>::new(),
+        "nothing partial is cached"
+    );
+    // A submission is sized to a quarter of a second.
+    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
+    assert!(r
+        .iter()
+        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
 #[test]
 fn a_cancel_during_the_radiosity_set_up_stops_it_there() {
     // Fine patches (seconds of set-up before the first shot: patches, buried parts, direct
@@ -630,20 +697,14 @@ fn a_cancel_during_the_radiosity_set_up_stops_it_there() {
             24,
             ("64x48", false, None),
         );
-        let cancelling: Vec<&serde_json::Value> = r.iter().filter(|f| f["baking"]["cancelling"] == true).collect();
-        let (first, last) = (
-            cancelling.first().expect("cancelled mid-bake"),
-            cancelling.last().unwrap(),
-        );
-        let at = |f: &serde_json::Value| f["baking"]["elapsed_s"].as_f64().unwrap();
-        let after = r
-            .iter()
-            .find(|f| f["frame"] == last["frame"].as_u64().unwrap() + 1)
-            .expect("a frame after the bake");
-        let stopped_s = at(last) - at(first) + after["frame_ms"].as_f64().unwrap() / 1e3;
+        let CancelSeen {
+            first,
+            after,
+            stopped_s,
+        } = cancel_seen(&r);
         println!(
             "{baker}: cancelled {:.2} s into the set-up; it stopped within {stopped_s:.3} s",
-            at(first)
+            first["baking"]["elapsed_s"].as_f64().unwrap()
         );
         let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
         assert!(note.contains("(at radiosity set-up)"), "{note:?}\n{out}");
