@@ -6,12 +6,19 @@
 # display, so the suite runs under Xvfb.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash tools/setup.sh
+# Each step's wall time goes to stderr, so a slow suite shows where its time went.
+step() {
+  local name=$1 start=$SECONDS
+  shift
+  "$@"
+  echo "test.sh: $name took $((SECONDS - start)) s" >&2
+}
+step setup bash tools/setup.sh
 # Formatting, lints and the API docs first: they are part of the suite, so CI keeps them.
-cargo fmt --check
-cargo clippy --quiet --all-targets -- -D warnings
-RUSTDOCFLAGS="-D warnings" cargo doc --quiet --no-deps
-bash tools/msrv_check.sh
+step fmt cargo fmt --check
+step clippy cargo clippy --quiet --all-targets -- -D warnings
+RUSTDOCFLAGS="-D warnings" step doc cargo doc --quiet --no-deps
+step msrv bash tools/msrv_check.sh
 # Force lavapipe so results do not depend on whatever GPU the machine has.
 export PENUMBRA_TEST_DEVICE="${PENUMBRA_TEST_DEVICE:-llvmpipe}"
 # Every target runs even after one fails (--no-fail-fast), so one run shows every failure. A
@@ -25,8 +32,10 @@ export PENUMBRA_TEST_DEVICE="${PENUMBRA_TEST_DEVICE:-llvmpipe}"
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 set +e
+start=$SECONDS
 xvfb-run -a -s "-screen 0 1024x768x24" cargo test --no-fail-fast "$@" 2>&1 | tee "$log"
 status=${PIPESTATUS[0]}
+echo "test.sh: build and tests took $((SECONDS - start)) s" >&2
 set -e
 [ "$status" -eq 0 ] && exit 0
 # Cargo names each failed target ("to rerun pass `--test NAME`") and then how it ended; a target
