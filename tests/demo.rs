@@ -679,6 +679,57 @@ fn cancelling_the_sh_light_map_gpu_bake_stops_it_between_submissions() {
     let _ = std::fs::remove_dir_all(&cache);
 }
 
+/// PRT's GPU ray baker (4,225 floor vertices and a box's, 262,144 rays each: about a minute on
+/// lavapipe) started by M at frame 2 and cancelled by C at frame 300: it stops between two
+/// submissions, within a bound, caches nothing, and `forward` is presented throughout.
+#[test]
+fn cancelling_the_prt_gpu_bake_stops_it_between_submissions() {
+    let cache = common::temp_path("demo-cancel-prt-cache");
+    let _ = std::fs::remove_dir_all(&cache);
+    let scene = LONG_BAKE_SCENE
+        .replace(
+            "{ name = \"radiosity\", patch_size = 0.02 }",
+            "{ name = \"prt\", baker = \"rays\", samples = 262144 }",
+        )
+        .replace("size = [4, 4]\n", "size = [4, 4]\nsubdivisions = 64\n")
+        .replacen(
+            "[[objects]]",
+            "[environment]\ntype = \"constant\"\nradiance = 1.0\n[[objects]]",
+            1,
+        );
+    assert!(scene.contains("prt") && scene.contains("subdivisions"));
+    let (out, r) = demo_run(
+        "demo-cancel-prt",
+        &scene,
+        "2 key M\n300 key C\n",
+        &cache,
+        320,
+        ("64x48", false, None),
+    );
+    let CancelSeen {
+        first,
+        after,
+        stopped_s,
+    } = cancel_seen(&r);
+    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
+    println!(
+        "prt: cancelled at {}; it stopped within {stopped_s:.3} s: {note}",
+        first["baking"]
+    );
+    assert!(
+        note.contains("bake of prt cancelled") && note.contains("(at prt rays)"),
+        "{note:?}\n{out}"
+    );
+    assert!(after["baking"].is_null());
+    assert_eq!(cached(&cache, "prt"), Vec::<String>::new(), "nothing partial is cached");
+    // A submission is sized to a quarter of a second.
+    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
+    assert!(r
+        .iter()
+        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+    let _ = std::fs::remove_dir_all(&cache);
+}
+
 #[test]
 fn a_cancel_during_the_radiosity_set_up_stops_it_there() {
     // Fine patches (seconds of set-up before the first shot: patches, buried parts, direct
