@@ -51,7 +51,6 @@ pub fn add_direct_light_in(
     mode: solve::Mode,
     cancel: Option<&Cancel>,
 ) -> Result<Vec<DVec3>> {
-    let stop = || cancel.is_some_and(Cancel::is_cancelled);
     let mut direct = vec![DVec3::ZERO; p.patches.len()];
     let eps = 1e-4 * p.size;
     // Corrected: the patch's mean irradiance over its visible sub-samples, as the sun's lit
@@ -78,15 +77,11 @@ pub fn add_direct_light_in(
     }
     if mode == solve::Mode::Corrected && scene.environment.is_some() {
         let env = crate::environment::EnvironmentMap::of_scene(scene)?;
-        let sky = super::environment_light::irradiance(p, occluders, &env, &points);
+        let sky =
+            super::environment_light::irradiance(p, occluders, &env, &points, cancel).ok_or_else(set_up_cancelled)?;
         for (k, e) in sky.iter().enumerate() {
             direct[k] += p.patches[k].albedo * *e;
         }
-    }
-    // The sky's and the suns' ray loops do not look at the cancellation: it is looked at
-    // before each.
-    if stop() {
-        return Err(set_up_cancelled());
     }
     for l in &scene.lights {
         if let Light::Directional {
@@ -94,7 +89,7 @@ pub fn add_direct_light_in(
         } = l
         {
             let to_sun = -direction.as_dvec3().normalize_or_zero();
-            let lit = super::sun::lit_fraction(p, occluders, to_sun, mode);
+            let lit = super::sun::lit_fraction(p, occluders, to_sun, mode, cancel).ok_or_else(set_up_cancelled)?;
             for (k, q) in p.patches.iter().enumerate() {
                 direct[k] += q.albedo * irradiance.as_dvec3() * (q.normal.dot(to_sun).max(0.0) * lit[k]);
             }

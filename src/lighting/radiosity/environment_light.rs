@@ -10,6 +10,7 @@ use glam::DVec3;
 use crate::environment::EnvironmentMap;
 use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::Occluders;
+use crate::util::progress::Cancel;
 
 /// Directions per visible sub-sample, stratified on a square grid of this side (a patch of 16
 /// sub-samples casts 256 rays).
@@ -18,14 +19,23 @@ const SIDE: usize = 4;
 /// Each patch's irradiance (W/m²) from `env`, seen from `points` (a patch's sub-samples a hair in
 /// front of its surface; empty for patches that see nothing). A ray that escapes, or first meets
 /// a sky surface (an opening, as the corrected sun treats it), brings the environment's radiance
-/// from its direction.
-pub fn irradiance(p: &Patches, occluders: &Occluders, env: &EnvironmentMap, points: &[Vec<DVec3>]) -> Vec<DVec3> {
-    crate::util::parallel::fold_ranges(
+/// from its direction. `None` when `cancel` asks it to stop (looked at every patch: 256 rays a
+/// sub-sample are seconds with fine patches).
+pub fn irradiance(
+    p: &Patches,
+    occluders: &Occluders,
+    env: &EnvironmentMap,
+    points: &[Vec<DVec3>],
+    cancel: Option<&Cancel>,
+) -> Option<Vec<DVec3>> {
+    let stop = || cancel.is_some_and(Cancel::is_cancelled);
+    let sky = crate::util::parallel::fold_ranges(
         p.patches.len(),
         crate::util::parallel::cores(),
         64,
         |range| {
             range
+                .take_while(|_| !stop())
                 .map(|k| {
                     let (q, xs) = (&p.patches[k], &points[k]);
                     if xs.is_empty() || q.albedo == DVec3::ZERO {
@@ -57,7 +67,9 @@ pub fn irradiance(p: &Patches, occluders: &Occluders, env: &EnvironmentMap, poin
             a.extend(b);
             a
         },
-    )
+    );
+    // A piece cut short by the cancellation sees it here too.
+    (!stop()).then_some(sky)
 }
 
 /// A direction about `n` (tangents `u`, `v`) with density cos θ / π, from `(u1, u2)` in [0, 1)².

@@ -16,13 +16,21 @@ use glam::DVec3;
 use crate::lighting::lightmap::buried;
 use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::{Mode, Occluders};
+use crate::util::progress::Cancel;
 
 /// Sub-samples per patch side (as the coverage estimate's).
 const SAMPLES: usize = 4;
 
 /// Each patch's lit fraction under a sun toward `to_sun` (unit, from the scene toward the sun);
-/// 0 for patches outside their polygon, sky, or facing away.
-pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mode) -> Vec<f64> {
+/// 0 for patches outside their polygon, sky, or facing away. `None` when `cancel` asks it to stop
+/// (looked at every row of patches).
+pub fn lit_fraction(
+    p: &Patches,
+    occluders: &Occluders,
+    to_sun: DVec3,
+    mode: Mode,
+    cancel: Option<&Cancel>,
+) -> Option<Vec<f64>> {
     let escape_counts = mode == Mode::Corrected || !occluders.has_sky();
     let eps = 1e-4 * p.size;
     let mut out = vec![0.0; p.patches.len()];
@@ -32,6 +40,9 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
         }
         let flat = c.flat_triangles(&occluders.triangles);
         for j in 0..c.height {
+            if cancel.is_some_and(Cancel::is_cancelled) {
+                return None;
+            }
             for i in 0..c.width {
                 let k = c.first + j * c.width + i;
                 if !p.patches[k].inside() {
@@ -63,7 +74,7 @@ pub fn lit_fraction(p: &Patches, occluders: &Occluders, to_sun: DVec3, mode: Mod
     if mode == Mode::Faithful {
         smooth(p, &mut out);
     }
-    out
+    Some(out)
 }
 
 /// The seed's smoothing filter (its kernel is not given): a 3×3 binomial kernel

@@ -80,7 +80,7 @@ fn a_square_occluder_casts_the_analytic_shadow() {
         let p = Patches::build(&geo.triangles, size);
         let occ = Occluders::new(&geo.triangles);
         let to_sun = -DVec3::from_array(SUN).normalize();
-        let lit = sun::lit_fraction(&p, &occ, to_sun, mode);
+        let lit = sun::lit_fraction(&p, &occ, to_sun, mode, None).unwrap();
         let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
         let c = &p.charts[floor];
         let (mut inter, mut union, mut shadowed, mut coverage_error) = (0usize, 0usize, 0usize, 0.0f64);
@@ -154,4 +154,30 @@ fn sky_is_neither_lit_nor_patched_and_rays_must_reach_it() {
         e.contains("sun.toml") && e.contains("materials[1].sky") && !e.contains('\n'),
         "{e}"
     );
+}
+
+/// The sun's and the sky's ray loops stop when the bake is cancelled, returning nothing, and run
+/// to the end otherwise.
+#[test]
+fn the_sun_and_sky_ray_loops_stop_when_cancelled() {
+    let text = scene(false) + "[environment]\ntype = \"constant\"\nradiance = 1.0\n";
+    let sc = Scene::from_str(&text, "sun.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
+    let p = Patches::build(&geo.triangles, 0.25);
+    let occ = Occluders::new(&geo.triangles);
+    let env = crate::environment::EnvironmentMap::of_scene(&sc).unwrap();
+    let points: Vec<Vec<DVec3>> = p.patches.iter().map(|q| vec![q.centre + q.normal * 1e-4]).collect();
+    let to_sun = -DVec3::from_array(SUN).normalize();
+    let cancelled = crate::util::progress::Cancel::new();
+    cancelled.cancel();
+    let running = crate::util::progress::Cancel::new();
+    for mode in [Mode::Corrected, Mode::Faithful] {
+        assert!(sun::lit_fraction(&p, &occ, to_sun, mode, Some(&cancelled)).is_none());
+        let lit = sun::lit_fraction(&p, &occ, to_sun, mode, Some(&running)).unwrap();
+        assert!(lit.iter().any(|&f| f > 0.0));
+    }
+    let sky = crate::lighting::radiosity::environment_light::irradiance;
+    assert!(sky(&p, &occ, &env, &points, Some(&cancelled)).is_none());
+    let e = sky(&p, &occ, &env, &points, Some(&running)).unwrap();
+    assert!(e.iter().any(|e| e.x > 0.0));
 }
