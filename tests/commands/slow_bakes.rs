@@ -133,3 +133,18 @@ fn fine_radiosity_patches_warn_before_the_bake() {
     let _ = std::fs::remove_file(&scene);
     assert_warned(&seen, "radiosity light-map patch=0.01", "shooting");
 }
+
+/// The SH light-map's CPU visibility at 2 cm patches on the courtyard (about 280,000 patches ×
+/// 20,000 samples): estimated from a few patches' rays before the buried parts and the rays.
+#[test]
+fn fine_sh_light_map_patches_warn_before_the_bake() {
+    let scene = scene_with(
+        "scenes/sh_courtyard.toml",
+        "{ name = \"sh_lightmap\", bands = 4, patch_size = 0.25, sun_speed = 20 }",
+        "{ name = \"sh_lightmap\", bands = 4, patch_size = 0.02, samples = 20000, baker = \"cpu\" }",
+        "sh-fine",
+    );
+    let seen = until_estimate(&scene, "sh_lightmap", Duration::from_secs(60));
+    let _ = std::fs::remove_file(&scene);
+    assert_warned(&seen, "sh_lightmap bands=4 patch=0.02", "visibility");
+}

@@ -264,6 +264,14 @@ pub fn bake(
     let mut p = Patches::build(&geometry.triangles, config.patch_size);
     let mut occluders = Occluders::new(&geometry.triangles);
     let mode = config.transfer.solve.mode;
+    let samples = SampleSet::new(config.samples, config.transfer.bands)?;
+    if let Rays::Cpu = rays {
+        // Before any long work: the CPU visibility dominates a bake of fine patches or many
+        // samples (hours at 2 cm on a courtyard), and says so once over a minute.
+        if let Some(e) = transfer::visibility_estimate(&p, &occluders, &samples, mode) {
+            progress.warn_before(&e);
+        }
+    }
     if mode == Mode::Corrected {
         // As radiosity's corrected bake does: a patch half under a wall standing on its floor
         // takes its transfer from the part that can be seen, not from a centre inside the wall.
@@ -278,7 +286,6 @@ pub fn bake(
     if let (Some(s), true) = (surfaces, config.normal_samples > 0) {
         normals::perturb(&mut p, &geometry.triangles, s, config.normal_samples);
     }
-    let samples = SampleSet::new(config.samples, config.transfer.bands)?;
     if let Some(scene) = world {
         occluders.pvs = crate::lighting::lightmap::visibility::scene_chart_pvs(scene, &p, &geometry.triangles)?;
     }

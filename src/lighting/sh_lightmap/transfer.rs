@@ -19,7 +19,7 @@ use crate::lighting::lightmap::border;
 use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::{self, Geometry, Mode, Occluders, Unshot};
 use crate::lighting::lightmap::tone;
-use crate::util::progress::Progress;
+use crate::util::progress::{Estimate, Progress};
 
 /// The seed's bounce reflectance ([CAFU-SRC]: ρ = 0.3 for every surface).
 pub const FAITHFUL_REFLECTANCE: f64 = 0.3;
@@ -59,6 +59,59 @@ fn counts(p: &Patches, k: usize, dir: DVec3) -> bool {
     dir.dot(p.charts[q.chart].normal) > 0.0 && dir.dot(q.normal) > 0.0
 }
 
+/// Patch `k`'s visibility bits: one a sample, set where the ray toward it reaches the sky.
+fn visibility_row(p: &Patches, occluders: &Occluders, samples: &SampleSet, mode: Mode, k: usize) -> Vec<u32> {
+    let mut row = vec![0u32; samples.len().div_ceil(32)];
+    let from = p.patches[k].centre + p.charts[p.patches[k].chart].normal * (1e-4 * p.size);
+    for (s, &dir) in samples.dirs.iter().enumerate() {
+        if counts(p, k, dir) && reaches_sky(occluders, from, dir, mode) {
+            row[s / 32] |= 1 << (s % 32);
+        }
+    }
+    row
+}
+
+/// Patches per core the estimate of [`visibility_cpu`]'s time traces.
+const CALIBRATION_PATCHES: usize = 4;
+
+/// [`visibility_cpu`]'s time, estimated before it starts: a few patches spread over the scene,
+/// four a core, trace every sample (twice: the first run warms the caches), and the time scales
+/// by the inside patches. The bounces that follow make their own estimate.
+pub fn visibility_estimate(p: &Patches, occluders: &Occluders, samples: &SampleSet, mode: Mode) -> Option<Estimate> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
+    let n = inside.len().min(CALIBRATION_PATCHES * threads);
+    if n == 0 || samples.is_empty() {
+        return None;
+    }
+    let picked: Vec<usize> = (0..n).map(|i| inside[i * inside.len() / n]).collect();
+    let run = || {
+        let start = std::time::Instant::now();
+        std::thread::scope(|scope| {
+            for mine in picked.chunks(n.div_ceil(threads)) {
+                scope.spawn(move || {
+                    for &k in mine {
+                        std::hint::black_box(visibility_row(p, occluders, samples, mode, k));
+                    }
+                });
+            }
+        });
+        start.elapsed().as_secs_f64()
+    };
+    run();
+    let seconds = run();
+    Some(Estimate {
+        seconds: seconds * inside.len() as f64 / n as f64,
+        method: format!(
+            "{n} patches × {} samples timed: {:.2} µs a ray on {threads} core(s)",
+            samples.len(),
+            seconds * threads as f64 / (n * samples.len()) as f64 * 1e6
+        ),
+        dominant: format!("visibility of {} patches × {} samples", inside.len(), samples.len()),
+        remedy: "fewer samples or a coarser patch_size (or baker = \"gpu\" on a GPU)".into(),
+    })
+}
+
 /// Per inside patch, one bit per sample: the ray toward it reaches the sky (CPU path; the GPU
 /// path is [`super::gpu`]). Words are `⌈N/32⌉` per patch.
 pub fn visibility_cpu(
@@ -70,7 +123,6 @@ pub fn visibility_cpu(
 ) -> Vec<u32> {
     let words = samples.len().div_ceil(32);
     let mut bits = vec![0u32; p.patches.len() * words];
-    let eps = 1e-4 * p.size;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
     let chunk = 64;
@@ -81,16 +133,7 @@ pub fn visibility_cpu(
                 .map(|mine| {
                     scope.spawn(move || {
                         mine.iter()
-                            .map(|&k| {
-                                let mut row = vec![0u32; words];
-                                let from = p.patches[k].centre + p.charts[p.patches[k].chart].normal * eps;
-                                for (s, &dir) in samples.dirs.iter().enumerate() {
-                                    if counts(p, k, dir) && reaches_sky(occluders, from, dir, mode) {
-                                        row[s / 32] |= 1 << (s % 32);
-                                    }
-                                }
-                                (k, row)
-                            })
+                            .map(|&k| (k, visibility_row(p, occluders, samples, mode, k)))
                             .collect::<Vec<_>>()
                     })
                 })
