@@ -632,60 +632,20 @@ fn cancel_radiosity_bake(baker: &str) {
 }
 
 /// The SH light-map's GPU visibility bake (2 cm patches: about 10^8 rays, over a minute on
-/// lavapipe) started by M at frame 2 and cancelled by C at frame 300: it stops between two
-/// submissions, within a bound, caches nothing, and `forward` is presented throughout.
+/// lavapipe), cancelled between two submissions.
 #[test]
 fn cancelling_the_sh_light_map_gpu_bake_stops_it_between_submissions() {
-    let cache = common::temp_path("demo-cancel-sh-cache");
-    let _ = std::fs::remove_dir_all(&cache);
     let scene = LONG_BAKE_SCENE.replace(
         "{ name = \"radiosity\", patch_size = 0.02 }",
         "{ name = \"sh_lightmap\", patch_size = 0.02, baker = \"gpu\" }",
     );
-    assert!(scene.contains("sh_lightmap"));
-    let (out, r) = demo_run(
-        "demo-cancel-sh",
-        &scene,
-        "2 key M\n300 key C\n",
-        &cache,
-        320,
-        ("64x48", false, None),
-    );
-    let CancelSeen {
-        first,
-        after,
-        stopped_s,
-    } = cancel_seen(&r);
-    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
-    println!(
-        "sh_lightmap: cancelled at {}; it stopped within {stopped_s:.3} s: {note}",
-        first["baking"]
-    );
-    assert!(
-        note.contains("bake of sh_lightmap cancelled") && note.contains("(at sh light-map visibility)"),
-        "{note:?}\n{out}"
-    );
-    assert!(after["baking"].is_null());
-    assert_eq!(
-        cached(&cache, "sh_lightmap"),
-        Vec::<String>::new(),
-        "nothing partial is cached"
-    );
-    // A submission is sized to a quarter of a second.
-    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
-    assert!(r
-        .iter()
-        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
-    let _ = std::fs::remove_dir_all(&cache);
+    cancel_gpu_bake("sh_lightmap", &scene, "sh light-map visibility");
 }
 
 /// PRT's GPU ray baker (4,225 floor vertices and a box's, 262,144 rays each: about a minute on
-/// lavapipe) started by M at frame 2 and cancelled by C at frame 300: it stops between two
-/// submissions, within a bound, caches nothing, and `forward` is presented throughout.
+/// lavapipe), cancelled between two submissions.
 #[test]
 fn cancelling_the_prt_gpu_bake_stops_it_between_submissions() {
-    let cache = common::temp_path("demo-cancel-prt-cache");
-    let _ = std::fs::remove_dir_all(&cache);
     let scene = LONG_BAKE_SCENE
         .replace(
             "{ name = \"radiosity\", patch_size = 0.02 }",
@@ -697,10 +657,20 @@ fn cancelling_the_prt_gpu_bake_stops_it_between_submissions() {
             "[environment]\ntype = \"constant\"\nradiance = 1.0\n[[objects]]",
             1,
         );
-    assert!(scene.contains("prt") && scene.contains("subdivisions"));
+    assert!(scene.contains("subdivisions"));
+    cancel_gpu_bake("prt", &scene, "prt rays");
+}
+
+/// `method`'s bake in `scene` (after `forward`), started by M at frame 2 and cancelled by C at
+/// frame 300: it stops at `stage` within a bound (a submission is sized to a quarter of a
+/// second), caches nothing, and `forward` is presented throughout.
+fn cancel_gpu_bake(method: &str, scene: &str, stage: &str) {
+    assert!(scene.contains(&format!("name = \"{method}\"")), "{scene}");
+    let cache = common::temp_path(&format!("demo-cancel-{method}-cache"));
+    let _ = std::fs::remove_dir_all(&cache);
     let (out, r) = demo_run(
-        "demo-cancel-prt",
-        &scene,
+        &format!("demo-cancel-{method}"),
+        scene,
         "2 key M\n300 key C\n",
         &cache,
         320,
@@ -713,16 +683,19 @@ fn cancelling_the_prt_gpu_bake_stops_it_between_submissions() {
     } = cancel_seen(&r);
     let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
     println!(
-        "prt: cancelled at {}; it stopped within {stopped_s:.3} s: {note}",
+        "{method}: cancelled at {}; it stopped within {stopped_s:.3} s: {note}",
         first["baking"]
     );
     assert!(
-        note.contains("bake of prt cancelled") && note.contains("(at prt rays)"),
+        note.contains(&format!("bake of {method} cancelled")) && note.contains(&format!("(at {stage})")),
         "{note:?}\n{out}"
     );
     assert!(after["baking"].is_null());
-    assert_eq!(cached(&cache, "prt"), Vec::<String>::new(), "nothing partial is cached");
-    // A submission is sized to a quarter of a second.
+    assert_eq!(
+        cached(&cache, method),
+        Vec::<String>::new(),
+        "nothing partial is cached"
+    );
     assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
     assert!(r
         .iter()

@@ -9,9 +9,13 @@ use crate::lighting::lightmap::patches::Patches;
 use crate::lighting::lightmap::solve::Occluders;
 use crate::scene::Scene;
 
-/// A 4 m floor quad, a 1 × 0.5 × 1 m box standing on it over x ∈ [0.13, 1.13], z ∈ [-0.47, 0.53]
-/// (off the patch grid, so patches straddle its sides), and a single quad hovering 0.8 m up.
-const SCENE: &str = r#"
+/// A 4 m floor quad (object 0) with `objects` (TOML) on it, all grey, under radiosity.
+fn floor_with(objects: &str) -> Scene {
+    let text = format!("{FLOOR}{objects}");
+    Scene::from_str(&text, "buried.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const FLOOR: &str = r#"
 methods = ["radiosity"]
 [camera]
 position = [0, 3, 4]
@@ -26,6 +30,11 @@ corner = [-2, 0, -2]
 edge_u = [0, 0, 4]
 edge_v = [4, 0, 0]
 material = "grey"
+"#;
+
+/// A 1 × 0.5 × 1 m box standing on the floor over x ∈ [0.13, 1.13], z ∈ [-0.47, 0.53] (off the
+/// patch grid, so patches straddle its sides), and a single quad hovering 0.8 m up.
+const BLOCK_AND_SHELF: &str = r#"
 [[objects]]
 name = "block"
 mesh = "box"
@@ -47,7 +56,7 @@ fn under_block(x: DVec3) -> bool {
 
 #[test]
 fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing() {
-    let sc = Scene::from_str(SCENE, "buried.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let sc = floor_with(BLOCK_AND_SHELF);
     let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
     let size = 0.2;
     let mut p = Patches::build(&geo.triangles, size);
@@ -109,29 +118,16 @@ fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing
 /// side), not all three visible ones (three quarters, light from both rooms in one texel).
 #[test]
 fn a_thin_wall_across_a_patch_keeps_the_larger_side() {
-    let text = r#"
-methods = ["radiosity"]
-[camera]
-position = [0, 3, 4]
-target = [0, 0, 0]
-[[materials]]
-name = "grey"
-albedo = 0.5
-[[objects]]
-name = "floor"
-mesh = "quad"
-corner = [-2, 0, -2]
-edge_u = [0, 0, 4]
-edge_v = [4, 0, 0]
-material = "grey"
+    let sc = floor_with(
+        r#"
 [[objects]]
 name = "wall"
 mesh = "box"
 size = [0.03, 1, 2]
 translate = [0.27, 0.5, 0.1]
 material = "grey"
-"#;
-    let sc = Scene::from_str(text, "thin_wall.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+"#,
+    );
     let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
     let size = 0.2;
     let mut p = Patches::build(&geo.triangles, size);
