@@ -267,6 +267,36 @@ fn physical_vls_equals_forward_without_dropped_lights() {
     );
 }
 
+/// Twelve lights over the floor and K = 4: the light sets keep the four strongest at every
+/// point and the renderer's warnings say how many points lost light; with K = 16 every light is
+/// kept and nothing is said.
+#[test]
+fn light_dropped_past_k_is_warned_about() {
+    let warnings = |k: u32| {
+        let methods = format!(r#"{{ name = "vls", k = {k} }}"#);
+        let mut r = Renderer::new(
+            common::test_gpu(),
+            scene(&methods, &twelve_lights()),
+            Some("vls"),
+            SIZE,
+            1,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let cam = r.scene.camera.clone();
+        r.render(&cam, FrameOutput::None).unwrap();
+        let w = r.method_warnings().unwrap();
+        common::assert_clean(&r.gpu);
+        w
+    };
+    let few = warnings(4);
+    println!("{few:?}");
+    assert!(
+        few.len() == 1 && few[0].starts_with("vls: at ") && few[0].contains("more than k = 4 lights reach"),
+        "{few:?}"
+    );
+    assert!(warnings(16).is_empty(), "16 slots hold all 12 lights");
+}
+
 /// As a direct term over another method's base (`forward`'s, under a constant sky), VLS adds
 /// its light to every floor pixel despite drawing other triangles than the base (its depth bias
 /// lets it pass the base's depth): the frame equals VLS drawing both terms itself, and without

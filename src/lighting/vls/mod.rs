@@ -102,7 +102,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 pub const MAX_K: i64 = 32;
 
 /// Bumped whenever the set-up's output for the same inputs changes.
-const SETUP_VERSION: u32 = 2;
+const SETUP_VERSION: u32 = 3;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
@@ -430,6 +430,8 @@ pub struct Vls {
     vertex_count: u32,
     sets: BufferId,
     params: ShaderParams,
+    /// What the light sets dropped, for [`LightingMethod::warnings`] (none: nothing).
+    dropped: Option<String>,
 }
 
 impl Vls {
@@ -518,12 +520,21 @@ impl Vls {
             constants: config.setup.model.constants(),
             ambient: [config.ambient as f32, config.light_ambient as f32, 0.0, 0.0],
         };
+        // Points a crowd of lights reaches lose the lights past k, and the frame shows no sign.
+        let dropped = (sets.crowded > 0).then(|| {
+            format!(
+                "{NAME}: at {} of {count} points more than k = {} lights reach; the light past the k \
+                 strongest is dropped (raise k, up to {MAX_K})",
+                sets.crowded, sets.k
+            )
+        });
         Ok(Vls {
             pipelines,
             vertices,
             vertex_count,
             sets: sets_buffer,
             params,
+            dropped,
         })
     }
 }
@@ -566,6 +577,10 @@ fn segment_vertices(layout: &Layout, point: Point, specular: &[[f32; 4]]) -> Vec
 impl LightingMethod for Vls {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn warnings(&self, _gpu: &mut crate::lighting::Gpu) -> Result<Vec<String>> {
+        Ok(self.dropped.iter().cloned().collect())
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {

@@ -64,6 +64,9 @@ pub struct SetupParams {
 pub struct LightSets {
     pub k: usize,
     pub indices: Vec<u32>,
+    /// Points where a light beyond the k kept would also have lit them (found among the next k
+    /// candidates in order of preference): light the frame drops.
+    pub crowded: u32,
 }
 
 impl LightSets {
@@ -82,22 +85,23 @@ impl LightSets {
 
 impl BakeData for LightSets {
     fn encode(&self) -> Vec<u8> {
-        std::iter::once(self.k as u32)
+        [self.k as u32, self.crowded]
+            .into_iter()
             .chain(self.indices.iter().copied())
             .flat_map(u32::to_le_bytes)
             .collect()
     }
     fn decode(bytes: &[u8]) -> Option<Self> {
-        if !bytes.len().is_multiple_of(4) || bytes.len() < 4 {
+        if !bytes.len().is_multiple_of(4) || bytes.len() < 8 {
             return None;
         }
         let words: Vec<u32> = bytes
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect();
-        let k = words[0] as usize;
-        let indices = words[1..].to_vec();
-        (k > 0 && indices.len().is_multiple_of(k)).then_some(LightSets { k, indices })
+        let (k, crowded) = (words[0] as usize, words[1]);
+        let indices = words[2..].to_vec();
+        (k > 0 && indices.len().is_multiple_of(k)).then_some(LightSets { k, indices, crowded })
     }
 }
 
@@ -210,6 +214,7 @@ pub fn select(
     let mut indices = vec![EMPTY; count * k];
     let thesis = ThesisFeeler::new(polygons);
     let done = AtomicU64::new(0);
+    let crowded = AtomicU64::new(0);
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(count.max(1));
@@ -218,7 +223,7 @@ pub fn select(
     std::thread::scope(|scope| {
         let mut handles = Vec::new();
         for (c, out) in indices.chunks_mut(chunk * k).enumerate() {
-            let (thesis, done, points, cancel) = (&thesis, &done, &points, &cancel);
+            let (thesis, done, crowded, points, cancel) = (&thesis, &done, &crowded, &points, &cancel);
             handles.push(scope.spawn(move || {
                 for (j, slots) in out.chunks_mut(k).enumerate() {
                     // Cancelled: the bake stops after the loop and caches nothing.
@@ -232,7 +237,10 @@ pub fn select(
                         Feeler::Bvh => occluders.is_some_and(|o| o.blocked(p, l.position)),
                         Feeler::None => false,
                     };
-                    let chosen = choose(lights, params, p, n, k, blocked);
+                    let (chosen, more) = choose(lights, params, p, n, k, blocked);
+                    if more {
+                        crowded.fetch_add(1, Ordering::Relaxed);
+                    }
                     for (slot, l) in slots.iter_mut().zip(chosen) {
                         *slot = l as u32;
                     }
@@ -247,10 +255,17 @@ pub fn select(
         }
     });
     progress.update(count as u64, count as u64);
-    LightSets { k, indices }
+    LightSets {
+        k,
+        indices,
+        crowded: crowded.into_inner().min(u64::from(u32::MAX)) as u32,
+    }
 }
 
-/// The ≤ k lights one point keeps, in the order of preference, feelers cast only until k pass.
+/// The ≤ k lights one point keeps, in the order of preference, feelers cast only until k pass;
+/// and whether one more light would have passed: the next k candidates are tried after the k
+/// kept (at most twice the feelers), so a point a crowd of lights reaches is told from one whose
+/// other lights are all shadowed.
 pub fn choose(
     lights: &[ManyLight],
     params: &SetupParams,
@@ -258,7 +273,7 @@ pub fn choose(
     n: DVec3,
     k: usize,
     blocked: impl Fn(&ManyLight) -> bool,
-) -> Vec<usize> {
+) -> (Vec<usize>, bool) {
     let mut order: Vec<(f64, usize)> = match params.selection {
         Selection::Closest => lights
             .iter()
@@ -276,13 +291,19 @@ pub fn choose(
     // Ties by index: the same scene always gives the same sets.
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let mut out = Vec::with_capacity(k);
+    let mut past = 0;
     for (_, i) in order {
         if out.len() == k {
-            break;
-        }
-        if !blocked(&lights[i]) {
+            if past == k {
+                break;
+            }
+            past += 1;
+            if !blocked(&lights[i]) {
+                return (out, true);
+            }
+        } else if !blocked(&lights[i]) {
             out.push(i);
         }
     }
-    out
+    (out, false)
 }

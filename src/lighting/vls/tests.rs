@@ -502,11 +502,19 @@ fn can_illuminate_skips_lights_that_cannot_reach() {
     };
     let lights = [below, away, good];
     let mut sp = params(1, Selection::Closest, Feeler::None, LightModel::Physical);
-    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false), vec![0]);
+    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false).0, vec![0]);
     sp.can_illuminate = true;
-    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false), vec![2]);
+    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false).0, vec![2]);
     sp = params(3, Selection::Contribution, Feeler::None, LightModel::Physical);
-    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 3, |_| false), vec![0, 2]);
+    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 3, |_| false).0, vec![0, 2]);
+    // Past k: one more light that passes is light dropped; one that is shadowed is not.
+    sp = params(1, Selection::Contribution, Feeler::None, LightModel::Physical);
+    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 1, |_| false), (vec![0], true));
+    assert_eq!(
+        choose(&lights, &sp, p, DVec3::Z, 1, |l| l.position.z > 1.0),
+        (vec![0], false)
+    );
+    assert_eq!(choose(&lights, &sp, p, DVec3::Z, 2, |_| false), (vec![0, 2], false));
 }
 
 /// A spot light inside a closed box (faces outward, as a box mesh's are) pointed at one face:
@@ -527,7 +535,7 @@ fn contribution_keeps_a_spot_light_inside_a_closed_box() {
         ..inside
     };
     let sp = params(2, Selection::Contribution, Feeler::None, LightModel::Physical);
-    assert_eq!(choose(&[inside, turned], &sp, wall, outward, 2, |_| false), vec![0]);
+    assert_eq!(choose(&[inside, turned], &sp, wall, outward, 2, |_| false).0, vec![0]);
     // The potential seen from inside equals that of the same wall facing the light.
     let lit = setup::potential(&LightModel::Physical, &inside, wall, -outward);
     assert!(lit > 0.0);
