@@ -268,6 +268,9 @@ pub struct Target {
     pub needed: f64,
     /// Scenes where it does not hold, with the measured values.
     pub misses: Vec<String>,
+    /// Rows of the method it does not judge, and why (a direct method that warned it dropped
+    /// light: the target is stated where the scene's lights are all drawn).
+    pub set_aside: Vec<String>,
 }
 
 impl Target {
@@ -360,6 +363,7 @@ fn target(
         holds: 0,
         needed,
         misses: Vec::new(),
+        set_aside: Vec::new(),
     };
     for r in rows.iter().filter(|r| applies(r)) {
         t.applies += 1;
@@ -415,7 +419,7 @@ fn targets(rows: &[Row]) -> Vec<Target> {
         },
     ));
     for method in DIRECT_METHODS {
-        out.push(target(
+        let mut t = target(
             rows,
             format!(
                 "{method}: relative MSE <= 1e-3 against the direct reference where the scene's lights are supported"
@@ -433,7 +437,13 @@ fn targets(rows: &[Row]) -> Vec<Target> {
                     ))
                 }
             },
-        ));
+        );
+        t.set_aside = rows
+            .iter()
+            .filter(|r| r.config == method && r.status == Status::Ok && !r.warnings.is_empty())
+            .map(|r| format!("{} {}: {}", r.scene, r.config, r.warnings.join("; ")))
+            .collect();
+        out.push(t);
     }
     out.push(target(
         rows,
@@ -519,6 +529,9 @@ impl Summary {
             }
             if t.misses.len() > 10 {
                 let _ = writeln!(s, "  - and {} more", t.misses.len() - 10);
+            }
+            for aside in &t.set_aside {
+                let _ = writeln!(s, "  - not judged, the method warned: {aside}");
             }
         }
         let refusals: Vec<&Row> = self
@@ -642,6 +655,24 @@ mod tests {
         assert_eq!((every.applies, every.holds), (5, 4));
         assert!(
             s.markdown().contains("| radiosity | 4 | 3 | 1 | 0 | 2.00e-2 |"),
+            "{}",
+            s.markdown()
+        );
+    }
+
+    /// A direct method's row that warned it dropped light is set aside by its target, named in
+    /// the summary, and not counted; one without warnings is judged.
+    #[test]
+    fn direct_targets_set_aside_rows_that_dropped_light() {
+        let mut clean = row(0, "vls", "lamps", Status::Ok, Some(5e-4), 1.0);
+        clean.warnings.clear();
+        let crowded = row(1, "vls", "crowd", Status::Ok, Some(2e-2), 0.83);
+        let s = summarise(vec![clean, crowded]);
+        let t = s.targets.iter().find(|t| t.name.starts_with("vls:")).unwrap();
+        assert_eq!((t.applies, t.holds), (1, 1));
+        assert_eq!(t.set_aside, vec!["s1 vls: a, b".to_string()]);
+        assert!(
+            s.markdown().contains("  - not judged, the method warned: s1 vls: a, b"),
             "{}",
             s.markdown()
         );
