@@ -520,14 +520,7 @@ impl Vls {
             constants: config.setup.model.constants(),
             ambient: [config.ambient as f32, config.light_ambient as f32, 0.0, 0.0],
         };
-        // Points a crowd of lights reaches lose the lights past k, and the frame shows no sign.
-        let dropped = (sets.crowded > 0).then(|| {
-            format!(
-                "{NAME}: at {} of {count} points more than k = {} lights reach; the light past the k \
-                 strongest is dropped (raise k, up to {MAX_K})",
-                sets.crowded, sets.k
-            )
-        });
+        let dropped = dropped_light(&sets, count);
         Ok(Vls {
             pipelines,
             vertices,
@@ -537,6 +530,18 @@ impl Vls {
             dropped,
         })
     }
+}
+
+/// What the light sets dropped, as a warning: points a crowd of lights reaches lose the lights
+/// past k, and the frame shows no sign of it.
+fn dropped_light(sets: &LightSets, points: usize) -> Option<String> {
+    (sets.crowded > 0).then(|| {
+        format!(
+            "{NAME}: at {} of {points} points more than k = {} lights reach; the light past the k \
+             strongest is dropped (raise k, up to {MAX_K})",
+            sets.crowded, sets.k
+        )
+    })
 }
 
 /// Three vertices per segment, never shared, each with the index of its light set: the
