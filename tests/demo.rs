@@ -555,6 +555,25 @@ fn cancel_seen(r: &[serde_json::Value]) -> CancelSeen<'_> {
     }
 }
 
+/// What every cancelled background bake must show: the report names `method` cancelled at
+/// `stage`, the frame after the bake sees none running, it stopped within 2 s of the cancel (a
+/// GPU submission is sized to a quarter of a second, the bakes take a minute or more), nothing
+/// of it is cached, and `forward` was presented throughout.
+fn assert_stopped_cleanly(r: &[serde_json::Value], cache: &std::path::Path, method: &str, stage: &str, out: &str) {
+    let CancelSeen { after, stopped_s, .. } = cancel_seen(r);
+    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
+    assert!(
+        note.contains(&format!("bake of {method} cancelled")) && note.contains(&format!("(at {stage}")),
+        "{note:?}\n{out}"
+    );
+    assert!(after["baking"].is_null());
+    assert_eq!(cached(cache, method), Vec::<String>::new(), "nothing partial is cached");
+    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
+    assert!(r
+        .iter()
+        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+}
+
 /// `forward` and a radiosity light-map of fine patches (a bake of many seconds on lavapipe).
 const LONG_BAKE_SCENE: &str = "methods = [\"forward\", { name = \"radiosity\", patch_size = 0.02 }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";
 
@@ -585,11 +604,7 @@ fn cancel_radiosity_bake(baker: &str) {
         420,
         ("64x48", false, None),
     );
-    let CancelSeen {
-        first,
-        after,
-        stopped_s,
-    } = cancel_seen(&r);
+    let CancelSeen { first, stopped_s, .. } = cancel_seen(&r);
     let fraction = first["baking"]["fraction"].as_f64().unwrap();
     println!(
         "{baker}: cancelled at {fraction:.3} of the bake, {:.2} s in; it stopped within {stopped_s:.3} s",
@@ -604,16 +619,6 @@ fn cancel_radiosity_bake(baker: &str) {
         "cancelled at {}: not mid-way through the bake",
         first["baking"]
     );
-    assert_eq!(
-        cached(&cache, "radiosity"),
-        Vec::<String>::new(),
-        "nothing partial is cached"
-    );
-    // A GPU submission is sized to a quarter of a second; the whole bake takes over a minute.
-    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
-    assert!(after["baking"].is_null() && r.last().unwrap()["baking"].is_null());
-    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
-    assert!(note.contains("bake of radiosity cancelled"), "{note:?}\n{out}");
     // Where it stopped: the GPU between submissions, the CPU solve between shots (the bake
     // then refusing its partial result).
     let at = if baker == "gpu" {
@@ -621,10 +626,8 @@ fn cancel_radiosity_bake(baker: &str) {
     } else {
         "radiosity light-map"
     };
-    assert!(note.contains(&format!("(at {at}")), "{note:?}");
-    assert!(r
-        .iter()
-        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+    assert_stopped_cleanly(&r, &cache, "radiosity", at, &out);
+    assert!(r.last().unwrap()["baking"].is_null());
     // Every frame the script asked for came (more where the bake took a while to stop).
     let frames: Vec<u64> = r.iter().map(|f| f["frame"].as_u64().unwrap()).collect();
     assert!(frames.len() >= 420 && frames.iter().enumerate().all(|(i, &f)| f == i as u64));
@@ -676,30 +679,12 @@ fn cancel_gpu_bake(method: &str, scene: &str, stage: &str) {
         320,
         ("64x48", false, None),
     );
-    let CancelSeen {
-        first,
-        after,
-        stopped_s,
-    } = cancel_seen(&r);
-    let note = r.last().unwrap()["bake_note"].as_str().unwrap_or_default().to_string();
+    let CancelSeen { first, stopped_s, .. } = cancel_seen(&r);
     println!(
-        "{method}: cancelled at {}; it stopped within {stopped_s:.3} s: {note}",
+        "{method}: cancelled at {}; it stopped within {stopped_s:.3} s",
         first["baking"]
     );
-    assert!(
-        note.contains(&format!("bake of {method} cancelled")) && note.contains(&format!("(at {stage})")),
-        "{note:?}\n{out}"
-    );
-    assert!(after["baking"].is_null());
-    assert_eq!(
-        cached(&cache, method),
-        Vec::<String>::new(),
-        "nothing partial is cached"
-    );
-    assert!(stopped_s < 2.0, "the bake ran {stopped_s:.2} s after it was cancelled");
-    assert!(r
-        .iter()
-        .all(|f| f["presented"] == true && f["configuration"] == "forward"));
+    assert_stopped_cleanly(&r, &cache, method, stage, &out);
     let _ = std::fs::remove_dir_all(&cache);
 }
 
