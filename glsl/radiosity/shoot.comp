@@ -93,6 +93,55 @@ float point_to_polygon(vec3 x, vec3 n, vec3 corners[4]) {
     return abs(sum / (2.0 * PI));
 }
 
+// Whether the receiver at x is near enough to the shooting square that its centre's form
+// factor misjudges the patch (solve.rs near_field).
+bool near_field(vec3 x, vec3 corners[4]) {
+    vec3 centre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
+    float radius = 0.5 * max(length(corners[2] - corners[0]), length(corners[3] - corners[1]));
+    return length(x - centre) < push.near_field * (radius + push.patch_size * 0.70710678);
+}
+
+// The receiver's form factor averaged over the sub-samples it keeps (solve.rs
+// near_form_factor): once per quarter of the patch, at the centroid of its kept sub-samples in
+// front of the shooter's plane, weighted by their count. `at` becomes the centroid of all of
+// those, where the visibility ray starts. 0 when none is in front.
+float near_form_factor(Patch p, vec3 shooter_normal, vec3 corners[4], out vec3 at) {
+    vec3 sums[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    uint counts[4] = uint[4](0u, 0u, 0u, 0u);
+    uint count = 0u;
+    for (uint b = 0u; b < 16u; ++b) {
+        if ((p.ids.z & (1u << b)) == 0u) {
+            continue;
+        }
+        uint si = b & 3u;
+        uint sj = b >> 2u;
+        vec3 y = p.first_sample.xyz + p.step_u.xyz * float(si) + p.step_v.xyz * float(sj);
+        ++count;
+        if (dot(shooter_normal, y - corners[0]) > 0.0) {
+            uint q = 2u * (sj >> 1u) + (si >> 1u);
+            sums[q] += y;
+            counts[q] += 1u;
+        }
+    }
+    if (count == 0u) {
+        at = p.centre.xyz;
+        return dot(shooter_normal, at - corners[0]) > 0.0 ? point_to_polygon(at, p.normal.xyz, corners) : 0.0;
+    }
+    float sum = 0.0;
+    uint front = 0u;
+    vec3 total = vec3(0.0);
+    for (uint q = 0u; q < 4u; ++q) {
+        if (counts[q] == 0u) {
+            continue;
+        }
+        sum += float(counts[q]) * point_to_polygon(sums[q] / float(counts[q]), p.normal.xyz, corners);
+        front += counts[q];
+        total += sums[q];
+    }
+    at = front > 0u ? total / float(front) : p.centre.xyz;
+    return front > 0u ? sum / float(count) : 0.0;
+}
+
 void main() {
     uint r = gl_GlobalInvocationID.x;
     if (r >= push.patch_count || shots.shot.state.y != 0u) {
@@ -113,13 +162,18 @@ void main() {
     }
     vec3 normal = shot.normal.xyz;
     vec3 x = receiver.centre.xyz;
+    vec3 corners[4] = vec3[4](shot.corners[0].xyz, shot.corners[1].xyz, shot.corners[2].xyz, shot.corners[3].xyz);
+    // A receiver near the shooter is judged by its sub-samples, which may straddle the
+    // shooter's plane.
+    bool near = push.mode == MODE_CORRECTED && near_field(x, corners);
     // Shooters emit toward their normal only; a chart never lights itself (it is planar).
-    if (receiver.ids.x == shot.shots.y || dot(normal, x - shot.corners[0].xyz) <= 0.0 || all(equal(receiver.albedo.rgb, vec3(0.0)))) {
+    if (receiver.ids.x == shot.shots.y || (!near && dot(normal, x - corners[0]) <= 0.0) || all(equal(receiver.albedo.rgb, vec3(0.0)))) {
         return;
     }
     float f;
-    if (push.mode == MODE_CORRECTED) {
-        vec3 corners[4] = vec3[4](shot.corners[0].xyz, shot.corners[1].xyz, shot.corners[2].xyz, shot.corners[3].xyz);
+    if (near) {
+        f = near_form_factor(receiver, normal, corners, x) / shot.size.y;
+    } else if (push.mode == MODE_CORRECTED) {
         f = point_to_polygon(x, receiver.normal.xyz, corners) / shot.size.y;
     } else {
         f = point_sampled(x, receiver.normal.xyz, shot.centre.xyz, normal, shot.size.x) / shot.size.x;

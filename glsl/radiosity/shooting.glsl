@@ -9,7 +9,11 @@ struct Patch {
     vec4 centre;  // xyz; w: the area of the surface inside the patch (0 for border patches)
     vec4 normal;  // xyz
     vec4 albedo;  // rgb
-    uvec4 ids;    // x: chart, y: shooting block (NO_BLOCK for border patches)
+    uvec4 ids;    // x: chart, y: shooting block (NO_BLOCK for border patches), z: the sub-samples
+                  // it keeps, bit 4*sj + si of its 4x4 grid (Patch::samples)
+    vec4 first_sample;  // xyz: sub-sample (0, 0)
+    vec4 step_u;        // xyz: from sub-sample (si, sj) to (si + 1, sj)
+    vec4 step_v;        // xyz: from sub-sample (si, sj) to (si, sj + 1)
 };
 
 // Radiosity (W/m^2) of one patch, rgb: everything it emits and reflects, and what it has
@@ -46,7 +50,7 @@ layout(push_constant) uniform Push {
     uint triangle_count;
     uint mode;
     uint samples_per_chart;
-    uint unused;
+    float near_field;  // solve.rs NEAR_FIELD
     uint log_capacity;
     float stop;      // unshot power below which the solve stops (W)
     float epsilon;   // receivers and shooters start this far in front of their surface

@@ -11,8 +11,9 @@ use super::patches::{Chart, Patches};
 use super::solve::Occluders;
 use crate::util::progress::Cancel;
 
-/// Sub-samples per patch side for the buried test and the direct light.
-pub const SAMPLES: usize = 4;
+/// Sub-samples per patch side for the buried test and the direct light: the grid of
+/// [`super::patches::Patch::samples`].
+pub const SAMPLES: usize = super::patches::COVERAGE_SAMPLES;
 
 /// Rays a sub-sample casts; it is buried when at least [`BURIED_VOTES`] of them first meet the
 /// back of a surface, as from inside a closed solid. Several tilted rays, not the normal alone,
@@ -179,7 +180,9 @@ pub fn exclude(p: &mut Patches, occluders: &Occluders, cancel: Option<&Cancel>) 
                 if inside == 0 || seen.len() == inside {
                     continue;
                 }
+                let samples = seen.iter().fold(0, |m, &x| m | c.sub_sample_bit(p.size, (i, j), x));
                 let q = &mut p.patches[k];
+                q.samples = samples;
                 let share = seen.len() as f64 / inside as f64;
                 q.area *= share;
                 q.coverage *= share;

@@ -48,6 +48,9 @@ pub struct Chart {
     /// The world grid's index of patch (0, 0): `origin = n·d + cell.0·size·u + cell.1·size·v`,
     /// so coplanar charts' patches (i, j) and (i', j') coincide when their cell indices do.
     pub cell: (i64, i64),
+    /// The polygon's bounds in the grid's frame (metres from `origin` along `u` and `v`): a
+    /// block of edge patches shoots from its cells clipped to them (never narrower than a patch).
+    pub extent: (DVec2, DVec2),
     /// A sky chart: a single black texel, no patch inside.
     pub sky: bool,
 }
@@ -63,6 +66,26 @@ impl Chart {
                     .map(|q| DVec2::new((q - self.origin).dot(self.u), (q - self.origin).dot(self.v)))
             })
             .collect()
+    }
+
+    /// Sub-sample (`si`, `sj`) of patch (`i`, `j`) on the [`COVERAGE_SAMPLES`]² grid, on the
+    /// chart's plane.
+    pub(crate) fn sub_sample(&self, size: f64, (i, j): (usize, usize), (si, sj): (usize, usize)) -> DVec3 {
+        let n = COVERAGE_SAMPLES as f64;
+        self.origin
+            + self.u * ((i as f64 + (si as f64 + 0.5) / n) * size)
+            + self.v * ((j as f64 + (sj as f64 + 0.5) / n) * size)
+    }
+
+    /// The sub-grid index (bit of [`Patch::samples`]) of `x`, a point of patch (`i`, `j`).
+    pub(crate) fn sub_sample_bit(&self, size: f64, (i, j): (usize, usize), x: DVec3) -> u16 {
+        let n = COVERAGE_SAMPLES;
+        let at = |d: DVec3, cell: usize| {
+            (((x - self.origin).dot(d) / size - cell as f64) * n as f64)
+                .floor()
+                .clamp(0.0, (n - 1) as f64) as usize
+        };
+        1 << (at(self.v, j) * n + at(self.u, i))
     }
 
     /// Patch (i, j)'s sub-samples on an `n`×`n` grid that fall inside the polygon (`flat`, from
@@ -93,6 +116,11 @@ pub struct Patch {
     pub area: f64,
     /// The fraction of the patch's sub-samples inside the polygon: 1 INNER, 0 OUTER, else PARTIAL.
     pub coverage: f64,
+    /// The sub-samples the patch keeps, one bit each (bit `sj·4 + si` of the 4×4 grid
+    /// [`Chart::sub_sample`] places): inside the polygon, and once the corrected bake has left
+    /// buried parts out ([`super::buried::exclude`]), seen. A receiver near a shooter gathers over
+    /// them.
+    pub samples: u16,
     pub albedo: DVec3,
     /// Emitted radiosity π·L_e.
     pub emission: DVec3,
@@ -115,8 +143,9 @@ pub struct Patches {
     pub patches: Vec<Patch>,
 }
 
-/// Coverage of a patch by its chart's triangles is estimated on this many sub-samples per side.
-const COVERAGE_SAMPLES: usize = 4;
+/// Coverage of a patch by its chart's triangles is estimated on this many sub-samples per side
+/// (the bits of [`Patch::samples`]).
+pub const COVERAGE_SAMPLES: usize = 4;
 
 impl Patches {
     /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
@@ -147,17 +176,19 @@ impl Patches {
                 continue;
             }
             let (lo_cell, cells) = grid_cells(lo, hi, size);
+            let polygon = (lo, hi);
             let lo = lo_cell * size;
             c.width = cells.x as usize + 2;
             c.height = cells.y as usize + 2;
             // One border patch on every side.
             c.cell = (lo_cell.x as i64 - 1, lo_cell.y as i64 - 1);
             c.origin = plane + c.u * (lo.x - size) + c.v * (lo.y - size);
+            c.extent = (polygon.0 - lo + size, polygon.1 - lo + size);
             let tris2d: Vec<[DVec2; 3]> = c.triangles.iter().map(|&ti| triangles[ti].p.map(flat)).collect();
             for j in 0..c.height {
                 for i in 0..c.width {
                     let corner = DVec2::new(lo.x + (i as f64 - 1.0) * size, lo.y + (j as f64 - 1.0) * size);
-                    let (mut covered, mut sum) = (0usize, DVec2::ZERO);
+                    let (mut covered, mut sum, mut samples) = (0usize, DVec2::ZERO, 0u16);
                     for sj in 0..COVERAGE_SAMPLES {
                         for si in 0..COVERAGE_SAMPLES {
                             let q = corner
@@ -168,6 +199,7 @@ impl Patches {
                             if tris2d.iter().any(|t| inside_triangle(q, t)) {
                                 covered += 1;
                                 sum += q;
+                                samples |= 1 << (sj * COVERAGE_SAMPLES + si);
                             }
                         }
                     }
@@ -190,6 +222,7 @@ impl Patches {
                         normal: c.normal,
                         area,
                         coverage,
+                        samples,
                         albedo: t0.albedo,
                         emission: e,
                         total: e,
@@ -273,6 +306,7 @@ fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
                     first: 0,
                     triangles: vec![ti],
                     cell: (0, 0),
+                    extent: (DVec2::ZERO, DVec2::ZERO),
                     sky: t.sky,
                 });
             }

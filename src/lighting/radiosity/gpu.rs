@@ -16,7 +16,7 @@ use crate::backend::{vk, BufferDesc, BufferId, ComputePipelineDesc, Frame, Gpu, 
 use crate::bake::gpu_loop::{cut_invocations, dvec4, loop_limit_error, storage_buffer, BatchSizer};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
-use crate::lighting::lightmap::patches::{Patches, Triangle};
+use crate::lighting::lightmap::patches::{Patches, Triangle, COVERAGE_SAMPLES};
 use crate::lighting::lightmap::solve::{self, show_progress, Mode, Report, Settings};
 use crate::lighting::lightmap::visibility::Matrix;
 use crate::raytrace::bvh::Bvh;
@@ -33,6 +33,9 @@ struct GpuPatch {
     normal: [f32; 4],
     albedo: [f32; 4],
     ids: [u32; 4],
+    first_sample: [f32; 4],
+    step_u: [f32; 4],
+    step_v: [f32; 4],
 }
 
 /// `Radiosity`.
@@ -77,7 +80,7 @@ struct ShootPush {
     /// Every dispatch of a solve pushes the same constants: lavapipe compiles a shader anew for
     /// each set of push-constant values it has not seen (it inlines them), so the shot's number
     /// lives in the shot record instead.
-    unused: u32,
+    near_field: f32,
     log_capacity: u32,
     stop: f32,
     epsilon: f32,
@@ -172,7 +175,7 @@ fn run(
             Mode::Corrected => 1,
         },
         samples_per_chart: settings.samples_per_chart as u32,
-        unused: 0,
+        near_field: solve::NEAR_FIELD as f32,
         log_capacity: log_capacity as u32,
         stop: (settings.threshold * initial) as f32,
         epsilon: (1e-4 * p.size) as f32,
@@ -244,11 +247,19 @@ impl Tables {
             .patches
             .iter()
             .enumerate()
-            .map(|(k, q)| GpuPatch {
-                centre: dvec4(q.centre, q.area as f32),
-                normal: dvec4(q.normal, 0.0),
-                albedo: dvec4(q.albedo, 0.0),
-                ids: [q.chart as u32, block_of[k], 0, 0],
+            .map(|(k, q)| {
+                let c = &p.charts[q.chart];
+                let cell = ((k - c.first) % c.width, (k - c.first) / c.width);
+                let step = p.size / COVERAGE_SAMPLES as f64;
+                GpuPatch {
+                    centre: dvec4(q.centre, q.area as f32),
+                    normal: dvec4(q.normal, 0.0),
+                    albedo: dvec4(q.albedo, 0.0),
+                    ids: [q.chart as u32, block_of[k], q.samples as u32, 0],
+                    first_sample: dvec4(c.sub_sample(p.size, cell, (0, 0)), 0.0),
+                    step_u: dvec4(c.u * step, 0.0),
+                    step_v: dvec4(c.v * step, 0.0),
+                }
             })
             .collect();
         let state = p

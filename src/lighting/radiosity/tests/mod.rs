@@ -2,6 +2,7 @@ use glam::DVec3;
 
 mod border;
 mod buried;
+mod edge_blocks;
 mod sun;
 mod visibility;
 
