@@ -117,7 +117,7 @@ pub struct Patch {
     /// The fraction of the patch's sub-samples inside the polygon: 1 INNER, 0 OUTER, else PARTIAL.
     pub coverage: f64,
     /// The sub-samples the patch keeps, one bit each (bit `sj·4 + si` of the 4×4 grid
-    /// [`Chart::sub_sample`] places): inside the polygon, and once the corrected bake has left
+    /// `Chart::sub_sample` places): inside the polygon, and once the corrected bake has left
     /// buried parts out ([`super::buried::exclude`]), seen. A receiver near a shooter gathers over
     /// them.
     pub samples: u16,
