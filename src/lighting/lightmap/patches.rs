@@ -68,6 +68,11 @@ impl Chart {
             .collect()
     }
 
+    /// The grid cell (i, j) of patch `k`, one of this chart's.
+    pub(crate) fn cell_of(&self, k: usize) -> (usize, usize) {
+        ((k - self.first) % self.width, (k - self.first) / self.width)
+    }
+
     /// Sub-sample (`si`, `sj`) of patch (`i`, `j`) on the [`COVERAGE_SAMPLES`]² grid, on the
     /// chart's plane.
     pub(crate) fn sub_sample(&self, size: f64, (i, j): (usize, usize), (si, sj): (usize, usize)) -> DVec3 {

@@ -194,7 +194,7 @@ fn parted_by_walls(p: &Geometry<'_>, normal: DVec3, members: Vec<usize>, occlude
 /// (the border frame lies outside the surface and must not shoot).
 fn block_of(p: &Geometry<'_>, ci: usize, members: Vec<usize>) -> Block {
     let (c, s) = (&p.charts[ci], p.size);
-    let ij = |k: usize| ((k - c.first) % c.width, (k - c.first) / c.width);
+    let ij = |k: usize| c.cell_of(k);
     let (lo_i, hi_i) = members
         .iter()
         .map(|&k| ij(k).0)
@@ -272,7 +272,7 @@ fn near_form_factor(g: Geometry<'_>, r: usize, normal: DVec3, corners: &[DVec3; 
     let rp = &g.patches[r];
     let c = &g.charts[rp.chart];
     let n = super::patches::COVERAGE_SAMPLES;
-    let cell = ((r - c.first) % c.width, (r - c.first) / c.width);
+    let cell = c.cell_of(r);
     // Per quarter: the sum and count of its kept sub-samples in front of the shooter's plane.
     let mut quarters = [(DVec3::ZERO, 0u32); 4];
     let mut count = 0u32;

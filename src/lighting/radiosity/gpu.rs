@@ -249,7 +249,7 @@ impl Tables {
             .enumerate()
             .map(|(k, q)| {
                 let c = &p.charts[q.chart];
-                let cell = ((k - c.first) % c.width, (k - c.first) / c.width);
+                let cell = c.cell_of(k);
                 let step = p.size / COVERAGE_SAMPLES as f64;
                 GpuPatch {
                     centre: dvec4(q.centre, q.area as f32),
