@@ -2,7 +2,8 @@
 //! presents frames with validation on, and its screenshot — the presented swapchain pixels — shows
 //! the same image as a headless capture of the same scene; the panel is drawn over it; the live
 //! reference grows while the camera is still and restarts when it moves; the error view shows
-//! the shadows a method leaves out; the panel's relative MSE converges to `compare`'s.
+//! the shadows a method leaves out; the panel's relative MSE converges to `compare`'s; the
+//! window and the panel follow a change of the desktop's DPI while running.
 //!
 //! Its own test binary: it opens a window and owns the process's display connection.
 
@@ -933,42 +934,216 @@ fn a_minimised_window_skips_frames_and_draws_again_when_restored() {
     );
 }
 
-#[test]
-fn the_panel_follows_the_displays_scale_factor() {
-    // X11 gives winit the scale factor WINIT_X11_SCALE_FACTOR names: at 2 the panel, laid out in
-    // points, spans twice the pixels across it spans at 1 (the window's pixels are the same). A change of scale factor while running is not driven here: winit's event for it
-    // carries a size writer that only winit can make.
-    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-    let shoot = |scale: Option<&str>| {
-        let shot = common::temp_path(&format!("scale-{}.png", scale.unwrap_or("off")));
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
-        cmd.args([
-            "demo",
-            "--size",
-            "640x480",
-            "--frames",
-            "3",
-            "--validation",
-            "--device",
-            &device,
-        ]);
-        match scale {
-            Some(s) => cmd.env("WINIT_X11_SCALE_FACTOR", s),
-            None => cmd.arg("--hide-panel"),
+/// An X server of the test's own (Xvfb), so that a change of its settings reaches no window of
+/// the tests running beside it on the suite's display.
+struct OwnDisplay {
+    server: std::process::Child,
+    name: String,
+}
+
+impl OwnDisplay {
+    fn start() -> Self {
+        use std::io::BufRead;
+        // -displayfd: the server picks a free display and writes its number once it accepts.
+        let mut server = Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("Xvfb (package xvfb) starts");
+        let mut number = String::new();
+        std::io::BufReader::new(server.stdout.take().unwrap())
+            .read_line(&mut number)
+            .unwrap();
+        assert!(!number.trim().is_empty(), "Xvfb named no display");
+        Self {
+            server,
+            name: format!(":{}", number.trim()),
+        }
+    }
+}
+
+impl Drop for OwnDisplay {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
+}
+
+/// What a desktop's settings daemon does when the user picks another scale, or the window moves
+/// to a monitor of another DPI: it owns the screen's XSETTINGS selection and rewrites the
+/// `Xft/DPI` setting on its window, which every toolkit (winit among them) watches.
+struct SettingsDaemon {
+    conn: x11rb::rust_connection::RustConnection,
+    window: u32,
+    settings: u32,
+    serial: u32,
+}
+
+impl SettingsDaemon {
+    fn start(display: &str, dpi: u32) -> Self {
+        use x11rb::connection::Connection;
+        use x11rb::protocol::xproto::{ConnectionExt, CreateWindowAux, WindowClass};
+        let (conn, screen) = x11rb::connect(Some(display)).unwrap();
+        let root = conn.setup().roots[screen].root;
+        let window = conn.generate_id().unwrap();
+        conn.create_window(
+            0,
+            window,
+            root,
+            0,
+            0,
+            1,
+            1,
+            0,
+            WindowClass::INPUT_OUTPUT,
+            0,
+            &CreateWindowAux::new(),
+        )
+        .unwrap()
+        .check()
+        .unwrap();
+        let atom = |name: &str| conn.intern_atom(false, name.as_bytes()).unwrap().reply().unwrap().atom;
+        let (selection, settings) = (atom(&format!("_XSETTINGS_S{screen}")), atom("_XSETTINGS_SETTINGS"));
+        let mut daemon = Self {
+            window,
+            settings,
+            serial: 0,
+            conn,
         };
-        let o = cmd.arg("--screenshot").arg(&shot).output().unwrap();
-        assert!(
-            o.status.success(),
-            "demo failed:\n{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        image::open(&shot).unwrap().to_rgba8()
+        daemon.set_dpi(dpi);
+        daemon
+            .conn
+            .set_selection_owner(window, selection, x11rb::CURRENT_TIME)
+            .unwrap()
+            .check()
+            .unwrap();
+        daemon
+    }
+
+    /// The settings block of the XSETTINGS specification, one integer setting, little-endian.
+    fn set_dpi(&mut self, dpi: u32) {
+        use x11rb::protocol::xproto::PropMode;
+        use x11rb::wrapper::ConnectionExt as _;
+        self.serial += 1;
+        let mut block = vec![b'l', 0, 0, 0];
+        block.extend(self.serial.to_le_bytes());
+        block.extend(1u32.to_le_bytes());
+        let name = b"Xft/DPI";
+        block.extend([0, 0]); // an integer, padding
+        block.extend((name.len() as u16).to_le_bytes());
+        block.extend(name);
+        block.resize(block.len().next_multiple_of(4), 0);
+        block.extend(self.serial.to_le_bytes());
+        block.extend((dpi as i32 * 1024).to_le_bytes());
+        self.conn
+            .change_property8(PropMode::REPLACE, self.window, self.settings, self.settings, &block)
+            .unwrap()
+            .check()
+            .unwrap();
+    }
+}
+
+#[test]
+fn the_panel_and_the_window_follow_a_change_of_scale_factor_while_running() {
+    // On an X server of its own, a settings daemon says 192 DPI (scale factor 2) at start and 96
+    // (scale 1) once the demo has drawn a few frames, as on moving the window to another monitor.
+    // The window keeps its size in points (640x480 pixels become 320x240), the swapchain follows
+    // with validation on, and the panel, laid out in points, spans half the pixels it did.
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let display = OwnDisplay::start();
+    let mut daemon = SettingsDaemon::start(&display.name, 192);
+    let dir = common::temp_path("scale-change");
+    std::fs::create_dir_all(&dir).unwrap();
+    let demo = |size: &str, frames: u32, panel: bool, script: Option<&str>| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.current_dir(&dir)
+            .env("DISPLAY", &display.name)
+            .env_remove("WINIT_X11_SCALE_FACTOR")
+            .args(["demo", "--size", size, "--frames", &frames.to_string(), "--validation"])
+            .args([
+                "--device",
+                &device,
+                "--screenshot",
+                "last.png",
+                "--report-json",
+                "report.json",
+            ]);
+        if !panel {
+            cmd.arg("--hide-panel");
+        }
+        if let Some(s) = script {
+            std::fs::write(dir.join("script.txt"), s).unwrap();
+            cmd.args(["--script", "script.txt"]);
+        }
+        cmd
     };
-    let (off, one, two) = (shoot(None), shoot(Some("1")), shoot(Some("2")));
-    // The panel's width: the last column where the frame with it differs along the top rows
-    // (its title bar; a tooltip the display's pointer may raise over the window's middle is
-    // lower). Its height is not compared: egui keeps a window within the screen's points.
-    let width = |on: &image::RgbaImage| {
+    // The scene alone at both sizes, for finding the panel's edge.
+    let shoot = |size: &str| {
+        let o = demo(size, 3, false, None).output().unwrap();
+        common::ok(&o);
+        image::open(dir.join("last.png")).unwrap().to_rgba8()
+    };
+    let (off_large, off_small) = (shoot("640x480"), shoot("320x240"));
+    // Started at scale 2: the panel's last frame with it.
+    common::ok(&demo("640x480", 3, true, None).output().unwrap());
+    let before = image::open(dir.join("last.png")).unwrap().to_rgba8();
+
+    use std::io::BufRead;
+    let mut child = demo("640x480", 60, true, Some("3 key F12\n"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut said = String::new();
+    // The settings change once frame 3 has saved its view (F12), which the demo says on stdout.
+    while out.read_line(&mut said).unwrap() > 0 && !said.contains("penumbra-method-1.png") {}
+    assert!(
+        said.contains("penumbra-method-1.png"),
+        "no view saved at frame 3:\n{said}"
+    );
+    daemon.set_dpi(96);
+    let o = child.wait_with_output().unwrap();
+    common::ok(&o);
+
+    let frames = report(&dir.join("report.json"));
+    let at = |f: &serde_json::Value| {
+        (
+            f["scale_factor"].as_f64().unwrap(),
+            f["width"].as_u64().unwrap(),
+            f["height"].as_u64().unwrap(),
+        )
+    };
+    let states: Vec<(f64, u64, u64)> = frames.iter().map(at).collect();
+    println!("scale factor and size per frame: {states:?}");
+    assert_eq!(states[0], (2.0, 640, 480), "at start");
+    assert_eq!(*states.last().unwrap(), (1.0, 320, 240), "at the end");
+    let changed = states.iter().position(|s| s.0 == 1.0).unwrap();
+    assert!(
+        changed > 3 && states.len() - changed >= 5,
+        "changed at frame {changed} of {}",
+        states.len()
+    );
+    // The resize winit asks for on the change reaches the swapchain by the next frame.
+    let resized = states.iter().position(|s| *s == (1.0, 320, 240)).unwrap();
+    assert!(
+        resized <= changed + 1,
+        "changed at frame {changed}, resized at {resized}"
+    );
+    assert!(
+        states[resized..].iter().all(|s| *s == (1.0, 320, 240)),
+        "after the change: {states:?}"
+    );
+    assert!(
+        frames.iter().all(|f| f["presented"].as_bool().unwrap()),
+        "every frame presented"
+    );
+
+    // The panel's width: the last column where the frame with it differs from the scene alone
+    // along the top rows (its title bar; a tooltip the pointer may raise is lower).
+    let width = |on: &image::RgbaImage, off: &image::RgbaImage| {
+        assert_eq!(on.dimensions(), off.dimensions());
         let mut x1 = 0;
         for (x, y, a) in on.enumerate_pixels() {
             let b = off.get_pixel(x, y);
@@ -978,12 +1153,13 @@ fn the_panel_follows_the_displays_scale_factor() {
         }
         x1 as f64
     };
-    let (w1, w2) = (width(&one), width(&two));
-    println!("the panel spans {w1} pixels across at scale 1, {w2} at scale 2");
+    let after = image::open(dir.join("last.png")).unwrap().to_rgba8();
+    let (w2, w1) = (width(&before, &off_large), width(&after, &off_small));
+    println!("the panel spans {w2} pixels across at scale 2, {w1} after the change to 1");
     assert!(w1 > 100.0, "the panel spans {w1} pixels across at scale 1");
     assert!(
         (1.9..2.1).contains(&(w2 / w1)),
-        "the panel spans {w1} pixels across at scale 1 and {w2} at scale 2"
+        "the panel spans {w2} pixels across at scale 2 and {w1} at scale 1"
     );
 }
 

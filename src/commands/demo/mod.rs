@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use winit::application::ApplicationHandler;
-use winit::dpi::PhysicalSize;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{DeviceEvent, DeviceId, ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
@@ -81,6 +81,8 @@ pub struct FrameRecord {
     pub reference_ms: f64,
     pub width: u32,
     pub height: u32,
+    /// The window's scale factor (physical pixels per point) as the window system gives it.
+    pub scale_factor: f64,
 }
 
 struct Running {
@@ -90,6 +92,9 @@ struct Running {
     overlay: Overlay,
     egui: egui::Context,
     egui_input: egui_winit::State,
+    /// Physical pixels per point, from the window at start and from the last scale-factor event:
+    /// winit's X11 window reports its old factor after a settings change until the window moves.
+    scale_factor: f64,
     show_panel: bool,
     camera: FlyCamera,
     keys: HashSet<KeyCode>,
@@ -245,6 +250,7 @@ impl App {
             None,
             Some(gpu_max_texture_side()),
         );
+        let scale_factor = window.scale_factor();
         let bookmarks_file = bookmarks_path(self.opts.scene.as_deref());
         let bookmarks = Bookmarks::load(&bookmarks_file)?;
         let budget = self.script.reference_budget;
@@ -256,6 +262,7 @@ impl App {
             overlay,
             egui,
             egui_input,
+            scale_factor,
             show_panel: !self.script.hide_panel,
             camera,
             keys: HashSet::new(),
@@ -705,7 +712,20 @@ impl Running {
 
     /// Builds the panel (and the view's image behind it) for this frame.
     fn ui(&mut self) -> Result<OverlayFrame> {
-        let raw = self.egui_input.take_egui_input(&self.window);
+        let mut raw = self.egui_input.take_egui_input(&self.window);
+        // The panel is laid out at the factor the last scale-factor event gave, not the window's.
+        let points_per_pixel = 1.0 / (self.scale_factor as f32 * self.egui.zoom_factor());
+        let size = self.window.inner_size();
+        raw.screen_rect = (size.width > 0 && size.height > 0).then(|| {
+            egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(size.width as f32, size.height as f32) * points_per_pixel,
+            )
+        });
+        raw.viewports
+            .entry(raw.viewport_id)
+            .or_default()
+            .native_pixels_per_point = Some(self.scale_factor as f32);
         if let Some(c) = self.composed.as_ref().filter(|_| self.view.view != View::Method) {
             let img = egui::ColorImage::from_rgba_unmultiplied(
                 [c.display.width() as usize, c.display.height() as usize],
@@ -972,6 +992,7 @@ impl Running {
             reference_ms: reference_s * 1000.0,
             width: t.width,
             height: t.height,
+            scale_factor: self.scale_factor,
         });
     }
 
@@ -1175,9 +1196,20 @@ impl ApplicationHandler for App {
     fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let result: Result<()> = (|| {
             let Some(s) = self.state.as_mut() else { return Ok(()) };
-            let consumed = s.egui_input.on_window_event(&s.window, &event).consumed;
+            let consumed = match event {
+                // egui takes the pointer to points by the window's factor: given it rescaled so
+                // that the current factor applies.
+                WindowEvent::CursorMoved { device_id, position } => {
+                    let stale = s.window.scale_factor() / s.scale_factor;
+                    let position = PhysicalPosition::new(position.x * stale, position.y * stale);
+                    let moved = WindowEvent::CursorMoved { device_id, position };
+                    s.egui_input.on_window_event(&s.window, &moved).consumed
+                }
+                _ => s.egui_input.on_window_event(&s.window, &event).consumed,
+            };
             match event {
                 WindowEvent::CloseRequested => el.exit(),
+                WindowEvent::ScaleFactorChanged { scale_factor, .. } => s.scale_factor = scale_factor,
                 // A DPI change arrives as a resize too: the swapchain follows the window. A
                 // minimised window is resized to nothing (on Wayland and Windows).
                 WindowEvent::Resized(size) => {
