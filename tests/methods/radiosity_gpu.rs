@@ -51,6 +51,7 @@ fn closed_box(le: f64, rho: f64) -> Vec<Triangle> {
                 albedo: DVec3::splat(rho),
                 emission: DVec3::splat(le),
                 sky: false,
+                part: 0,
             });
         }
     }

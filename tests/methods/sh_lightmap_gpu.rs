@@ -25,6 +25,7 @@ fn quad(o: DVec3, u: DVec3, v: DVec3, object: usize, albedo: f64) -> [Triangle; 
         albedo: DVec3::splat(albedo),
         emission: DVec3::ZERO,
         sky: false,
+        part: 0,
     };
     [t([o, o + u, o + u + v]), t([o, o + u + v, o + v])]
 }
@@ -272,6 +273,7 @@ fn gpu_visibility_matches_the_cpu_through_a_deep_bvh() {
             albedo: DVec3::splat(0.5),
             emission: DVec3::ZERO,
             sky: false,
+            part: 0,
         });
     }
     let samples = SampleSet::new(2500, 2).unwrap_or_else(|e| panic!("{e}"));

@@ -11,6 +11,7 @@ use crate::scene::{Light, Scene};
 use crate::util::image_io::srgb_decode;
 
 /// One scene draw's triangles as the baker sees them, and what the renderer draws them with.
+#[derive(Clone)]
 pub struct StaticGeometry {
     pub triangles: Vec<Triangle>,
     /// Per triangle: the scene draw it came from, its corners in object space (the renderer
@@ -127,6 +128,7 @@ fn from_draws<'a>(
                 albedo: albedo.as_dvec3(),
                 emission: emission.as_dvec3(),
                 sky,
+                part: 0,
             });
             out.draw.push(d);
             out.object_space

@@ -9,6 +9,7 @@
 pub(crate) mod atlas;
 pub mod border;
 pub mod buried;
+pub mod cut;
 pub(crate) mod form_factor;
 pub mod geometry;
 pub(crate) mod mesh;

@@ -19,6 +19,9 @@ pub struct Triangle {
     /// A sky surface (the material's `sky` flag): it occludes, is never lit and never shoots,
     /// and the sun reaches what sees it (digest §1.2 steps A and C).
     pub sky: bool,
+    /// Which side of the thin walls standing on its surface it lies on (a bit per wall, set by
+    /// the cut along them): pieces of one surface on different sides never share a chart.
+    pub part: u64,
 }
 
 impl Triangle {
@@ -272,8 +275,9 @@ pub fn count(triangles: &[Triangle], size: f64) -> u64 {
 }
 
 /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
-/// of the scene's size, same material); their grids are not laid yet.
-fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
+/// of the scene's size, same material, same side of any thin wall); their grids are not laid
+/// yet.
+pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
     let scale = triangles
         .iter()
         .flat_map(|t| t.p)
@@ -293,6 +297,7 @@ fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
                 && (tc.albedo - t.albedo).abs().max_element() < 1e-9
                 && (tc.emission - t.emission).abs().max_element() < 1e-9
                 && tc.sky == t.sky
+                && tc.part == t.part
         });
         match same {
             Some(c) => c.triangles.push(ti),

@@ -264,10 +264,14 @@ pub struct Radiosity {
 impl Radiosity {
     pub fn new(cx: &mut CreateContext<'_>, decl: &MethodDecl) -> Result<Radiosity> {
         let config = Config::from_decl_in(decl, Some(cx.scene))?;
-        let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let mut geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &geometry.triangles, NAME) {
             crate::errln!("{w}");
         }
+        // The document's light-maps let texels straddle thin walls; the corrected mode cuts there.
+        let uncut = (config.settings.mode == Mode::Corrected)
+            .then(|| crate::lighting::lightmap::cut::cut_copy(&mut geometry, config.patch_size))
+            .flatten();
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!(
                 "{}: {NAME}: the scene has no static geometry to light-map",
@@ -288,7 +292,13 @@ impl Radiosity {
             )));
         }
         let texels = &baked[2..2 + texel_floats];
-        let mesh = crate::lighting::lightmap::mesh::Mesh::new(cx, &geometry, &baked[2 + texel_floats..], NAME)?;
+        let mesh = crate::lighting::lightmap::mesh::Mesh::new(
+            cx,
+            &geometry,
+            &baked[2 + texel_floats..],
+            NAME,
+            uncut.as_ref(),
+        )?;
         let format = lightmap_format(config.settings.mode);
         let lightmap = upload_lightmap(cx, format, (w, h), texels)?;
         let pipeline = create_pipeline(cx, &config)?;
@@ -324,7 +334,7 @@ fn bake_lightmap(cx: &mut CreateContext<'_>, config: &Config, geometry: &StaticG
                 .flat_map(|p| p.to_array())
                 .chain(t.albedo.to_array())
                 .chain(t.emission.to_array())
-                .chain([t.object as f64, f64::from(u8::from(t.sky))])
+                .chain([t.object as f64, f64::from(u8::from(t.sky)), t.part as f64])
         })
         .collect();
     key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
@@ -421,6 +431,7 @@ impl LightingMethod for Radiosity {
                 .pass("light-map")
                 .sample("lightmap", self.lightmap, SubresourceRange::mip(0), self.sampler, frag);
         self.mesh.draw(pass, frame, self.pipeline, Vec::new());
+        self.mesh.add_depth_pass(graph, frame);
         Ok(())
     }
 }

@@ -445,10 +445,11 @@ fn bake_key(bake_config: &Config, geometry: &StaticGeometry, maps: &[Option<Norm
         .triangles
         .iter()
         .flat_map(|t| {
-            t.p.iter()
-                .flat_map(|p| p.to_array())
-                .chain(t.albedo.to_array())
-                .chain([t.object as f64, f64::from(u8::from(t.sky))])
+            t.p.iter().flat_map(|p| p.to_array()).chain(t.albedo.to_array()).chain([
+                t.object as f64,
+                f64::from(u8::from(t.sky)),
+                t.part as f64,
+            ])
         })
         .collect();
     key = key.with_bytes("geometry", bytemuck::cast_slice(&geometry_bytes));
@@ -511,10 +512,14 @@ impl ShLightmap {
         if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
             crate::errln!("{w}");
         }
-        let geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
+        let mut geometry = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME)?;
         if let Some(w) = crate::lighting::lightmap::geometry::behind_warning(cx.scene, &geometry.triangles, NAME) {
             crate::errln!("{w}");
         }
+        // The document's light-maps let texels straddle thin walls; the corrected mode cuts there.
+        let uncut = (config.transfer.solve.mode == Mode::Corrected)
+            .then(|| crate::lighting::lightmap::cut::cut_copy(&mut geometry, config.patch_size))
+            .flatten();
         if geometry.triangles.is_empty() {
             return Err(Error::Usage(format!(
                 "{}: {NAME}: the scene has no static geometry to light-map",
@@ -555,7 +560,7 @@ impl ShLightmap {
                 cx.scene.source
             ))
         })?;
-        let mesh = crate::lighting::lightmap::mesh::Mesh::new(cx, &geometry, &baked.uvs, NAME)?;
+        let mesh = crate::lighting::lightmap::mesh::Mesh::new(cx, &geometry, &baked.uvs, NAME, uncut.as_ref())?;
         let images = if config.reps == 0 {
             upload_native(cx, &baked, config.storage)?
         } else {
@@ -784,6 +789,7 @@ impl LightingMethod for ShLightmap {
             self.pipeline,
             vec![("light", bytemuck::cast_slice(&self.light).to_vec())],
         );
+        self.mesh.add_depth_pass(graph, frame);
         Ok(())
     }
 }

@@ -21,6 +21,7 @@ fn quad(o: DVec3, u: DVec3, v: DVec3, object: usize, albedo: f64) -> [Triangle; 
         albedo: DVec3::splat(albedo),
         emission: DVec3::ZERO,
         sky: false,
+        part: 0,
     };
     [t([o, o + u, o + u + v]), t([o, o + u + v, o + v])]
 }

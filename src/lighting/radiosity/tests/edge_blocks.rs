@@ -15,6 +15,7 @@ fn quad(c: [DVec3; 4], object: usize, albedo: f64, radiance: f64) -> [Triangle; 
         albedo: DVec3::splat(albedo),
         emission: DVec3::splat(radiance),
         sky: false,
+        part: 0,
     })
 }
 

@@ -4,6 +4,7 @@ mod border;
 mod buried;
 mod edge_blocks;
 mod sun;
+mod thin_walls;
 mod visibility;
 
 use crate::lighting::lightmap::patches::{Patches, Triangle};
@@ -32,6 +33,7 @@ fn closed_box(s: f64, albedo: f64, emit: impl Fn(usize) -> f64) -> Vec<Triangle>
                 albedo: DVec3::splat(albedo),
                 emission: e,
                 sky: false,
+                part: 0,
             });
         }
     }
@@ -193,6 +195,7 @@ fn a_one_sided_emitter_lights_only_what_it_faces() {
             albedo: DVec3::splat(albedo),
             emission: DVec3::splat(emission),
             sky: false,
+            part: 0,
         })
     };
     let mut tris = Vec::new();
@@ -329,6 +332,7 @@ fn a_shooting_block_a_thin_wall_crosses_keeps_each_room_s_light() {
                 albedo: DVec3::splat(0.5),
                 emission: DVec3::splat(emission),
                 sky: false,
+                part: 0,
             };
             if t.normal().dot(inward) < 0.0 {
                 t.p.swap(1, 2);
