@@ -49,7 +49,10 @@ pub fn along_thin_walls(g: &mut StaticGeometry, size: f64) -> usize {
     let charts = group_charts(&g.triangles);
     let mut lines_of = vec![Vec::new(); g.triangles.len()];
     let mut count = 0;
-    for c in charts.iter().filter(|c| !c.sky) {
+    // A chart smaller than a patch's area (a curved mesh's triangles) holds little light across
+    // any wall, and skipping it keeps the scan over every triangle to the few large charts.
+    let large = |c: &&Chart| c.triangles.iter().map(|&t| g.triangles[t].area()).sum::<f64>() >= size * size;
+    for c in charts.iter().filter(|c| !c.sky).filter(large) {
         let lines = wall_lines(c, &g.triangles, size);
         count += lines.len();
         for &t in &c.triangles {
