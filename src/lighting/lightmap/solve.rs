@@ -458,7 +458,9 @@ pub fn shoot(
     progress: &mut Progress,
     energy: &mut dyn Unshot,
 ) -> Report {
-    let solve = Solve::new(g, occluders, settings);
+    // Chart pairs grow as the square of the charts (a curved mesh is one chart a triangle):
+    // seconds to minutes that must not pass in silence.
+    let solve = progress.stage("chart visibility", || Solve::new(g, occluders, settings));
     let initial: f64 = solve.blocks.iter().map(|b| solve.power(energy, b)).sum();
     let stop = settings.threshold * initial;
     let mut report = Report {

@@ -149,7 +149,9 @@ fn run(
     }
     let tables = Tables::new(p, &blocks);
     // The CPU solve's visibility matrix.
-    let matrix = Matrix::build_in(triangles, &p.charts, settings.full_visibility, pvs);
+    let matrix = progress.stage("chart visibility", || {
+        Matrix::build_in(triangles, &p.charts, settings.full_visibility, pvs)
+    });
     report.visibility = matrix.counts();
     let visibility = packed_visibility(&matrix, p.charts.len());
     let tris: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
