@@ -1021,6 +1021,30 @@ impl SettingsDaemon {
         daemon
     }
 
+    /// Waits until a window of `size` stands on the screen, then moves the pointer to `at`
+    /// within it (as a user's mouse would).
+    fn point_at_when_sized(&self, size: (u16, u16), at: (i16, i16)) {
+        use x11rb::connection::Connection;
+        use x11rb::protocol::xproto::ConnectionExt;
+        let root = self.conn.setup().roots[0].root;
+        for _ in 0..500 {
+            let children = self.conn.query_tree(root).unwrap().reply().unwrap().children;
+            for w in children {
+                let g = self.conn.get_geometry(w).unwrap().reply().unwrap();
+                if (g.width, g.height) == size {
+                    self.conn
+                        .warp_pointer(x11rb::NONE, w, 0, 0, 0, 0, at.0, at.1)
+                        .unwrap()
+                        .check()
+                        .unwrap();
+                    return;
+                }
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        panic!("no window of {size:?} appeared");
+    }
+
     /// The settings block of the XSETTINGS specification, one integer setting, little-endian.
     fn set_dpi(&mut self, dpi: u32) {
         use x11rb::protocol::xproto::PropMode;
@@ -1104,6 +1128,8 @@ fn the_panel_and_the_window_follow_a_change_of_scale_factor_while_running() {
         "no view saved at frame 3:\n{said}"
     );
     daemon.set_dpi(96);
+    // Then the pointer to (100, 50) pixels in the window, once the window has its new size.
+    daemon.point_at_when_sized((320, 240), (100, 50));
     let o = child.wait_with_output().unwrap();
     common::ok(&o);
 
@@ -1138,6 +1164,18 @@ fn the_panel_and_the_window_follow_a_change_of_scale_factor_while_running() {
     assert!(
         frames.iter().all(|f| f["presented"].as_bool().unwrap()),
         "every frame presented"
+    );
+    // The panel sees the pointer at its pixels over the new factor (at the old one: half).
+    let pointer = frames.last().unwrap()["pointer"].clone();
+    let at: Vec<f64> = pointer
+        .as_array()
+        .expect("the pointer seen")
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(
+        (at[0] - 100.0).abs() < 1.0 && (at[1] - 50.0).abs() < 1.0,
+        "the panel's pointer at {at:?}"
     );
 
     // The panel's width: the last column where the frame with it differs from the scene alone

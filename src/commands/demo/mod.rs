@@ -81,8 +81,10 @@ pub struct FrameRecord {
     pub reference_ms: f64,
     pub width: u32,
     pub height: u32,
-    /// The window's scale factor (physical pixels per point) as the window system gives it.
+    /// The window's scale factor (physical pixels per point) the panel is laid out at.
     pub scale_factor: f64,
+    /// Where the panel last saw the pointer, in points (none before it entered the window).
+    pub pointer: Option<[f32; 2]>,
 }
 
 struct Running {
@@ -993,6 +995,7 @@ impl Running {
             width: t.width,
             height: t.height,
             scale_factor: self.scale_factor,
+            pointer: self.egui.input(|i| i.pointer.latest_pos()).map(|p| [p.x, p.y]),
         });
     }
 
