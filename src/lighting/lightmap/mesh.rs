@@ -130,9 +130,7 @@ impl Mesh {
                 ctx.rec.bind_vertex_buffers(&[(d.vertices, 0)])?;
                 for (&(draw, first, count), animation) in d.draws.iter().zip(&d.animations) {
                     let item = &scene.draws[draw];
-                    let model = animation
-                        .as_ref()
-                        .map_or(item.model, |a| a.transform_at(item.model, time));
+                    let model = placed(item.model, animation.as_ref(), time);
                     ctx.bind(&[("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms)))])?;
                     ctx.rec.push_constants(DrawPush::new(model, item.material).bytes())?;
                     ctx.rec.draw_from(count, first)?;
@@ -167,9 +165,7 @@ impl Mesh {
             ctx.rec.bind_vertex_buffers(&[(self.vertices, 0)])?;
             for (&(d, first, count), animation) in self.draws.iter().zip(&self.animations) {
                 let item = &scene.draws[d];
-                let model = animation
-                    .as_ref()
-                    .map_or(item.model, |a| a.transform_at(item.model, time));
+                let model = placed(item.model, animation.as_ref(), time);
                 let maps = scene.material_maps[item.material as usize];
                 let mut binds = vec![
                     ("frame", Bind::UniformData(bytemuck::bytes_of(&uniforms))),
@@ -199,6 +195,11 @@ impl Mesh {
             Ok(())
         });
     }
+}
+
+/// A draw's model matrix at time `time`: its animation's placement, if it has one.
+fn placed(model: glam::Mat4, animation: Option<&crate::scene::Animation>, time: f32) -> glam::Mat4 {
+    animation.map_or(model, |a| a.transform_at(model, time))
 }
 
 /// A vertex buffer, (scene draw, first vertex, count) per draw, and each draw's animation.

@@ -44,57 +44,24 @@ fn rooms(a: f64, albedo: f64) -> (StaticGeometry, [DVec3; 4]) {
         v(0.4, 0.99, 0.6),
         v(0.1, 0.99, 0.6),
     ];
-    let faces = [
-        quad(
-            [v(0., 0., 0.), v(2., 0., 0.), v(2., 0., 1.), v(0., 0., 1.)],
-            0,
-            (albedo, 0.0),
-            y,
-        ),
-        quad(
-            [v(0., 1., 0.), v(2., 1., 0.), v(2., 1., 1.), v(0., 1., 1.)],
-            1,
-            (albedo, 0.0),
-            -y,
-        ),
-        quad(
-            [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
-            2,
-            (albedo, 0.0),
-            x,
-        ),
-        quad(
-            [v(2., 0., 0.), v(2., 1., 0.), v(2., 1., 1.), v(2., 0., 1.)],
-            3,
-            (albedo, 0.0),
-            -x,
-        ),
-        quad(
-            [v(0., 0., 0.), v(2., 0., 0.), v(2., 1., 0.), v(0., 1., 0.)],
-            4,
-            (albedo, 0.0),
-            z,
-        ),
-        quad(
-            [v(0., 0., 1.), v(2., 0., 1.), v(2., 1., 1.), v(0., 1., 1.)],
-            5,
-            (albedo, 0.0),
-            -z,
-        ),
-        quad(
-            [v(a, 0., 0.), v(a, 1., 0.), v(a, 1., 1.), v(a, 0., 1.)],
-            6,
-            (albedo, 0.0),
-            -x,
-        ),
-        quad(
-            [v(b, 0., 0.), v(b, 1., 0.), v(b, 1., 1.), v(b, 0., 1.)],
-            7,
-            (albedo, 0.0),
-            x,
-        ),
-        quad(panel, 8, (0.0, RADIANCE), -y),
+    // The room's six sides, then the wall's two faces (objects 0 to 7), each as its quad and
+    // the way it faces.
+    let sides = [
+        ([v(0., 0., 0.), v(2., 0., 0.), v(2., 0., 1.), v(0., 0., 1.)], y),
+        ([v(0., 1., 0.), v(2., 1., 0.), v(2., 1., 1.), v(0., 1., 1.)], -y),
+        ([v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)], x),
+        ([v(2., 0., 0.), v(2., 1., 0.), v(2., 1., 1.), v(2., 0., 1.)], -x),
+        ([v(0., 0., 0.), v(2., 0., 0.), v(2., 1., 0.), v(0., 1., 0.)], z),
+        ([v(0., 0., 1.), v(2., 0., 1.), v(2., 1., 1.), v(0., 1., 1.)], -z),
+        ([v(a, 0., 0.), v(a, 1., 0.), v(a, 1., 1.), v(a, 0., 1.)], -x),
+        ([v(b, 0., 0.), v(b, 1., 0.), v(b, 1., 1.), v(b, 0., 1.)], x),
     ];
+    let mut faces: Vec<[Triangle; 2]> = sides
+        .into_iter()
+        .enumerate()
+        .map(|(object, (q, inward))| quad(q, object, (albedo, 0.0), inward))
+        .collect();
+    faces.push(quad(panel, 8, (0.0, RADIANCE), -y));
     let triangles: Vec<Triangle> = faces.into_iter().flatten().collect();
     let n = triangles.len();
     let geometry = StaticGeometry {
