@@ -156,14 +156,25 @@ fn item_19_relighting_is_linear_in_random_intensities() {
 }
 
 /// The GEMV pass's median time over 7 profiled frames.
-fn gemv_median_ms(r: &mut Renderer, cam: &penumbra::scene::Camera) -> f64 {
-    let frames = r.profile(cam, 7).unwrap();
-    let stats = penumbra::util::timing::summarise(&frames);
-    stats
+fn gemv_fastest_ms(r: &mut Renderer, cam: &penumbra::scene::Camera) -> f64 {
+    // A renderer's first frame is left out: lavapipe times its first dispatch of a pipeline
+    // near zero.
+    let frames = r.profile(cam, 8).unwrap();
+    frames[1..]
         .iter()
-        .find(|s| s.name == "bsp_lights gemv")
+        .flatten()
+        .filter(|p| p.name == "bsp_lights gemv")
+        .map(|p| p.ms)
+        .reduce(f64::min)
         .expect("the GEMV pass is timed")
-        .median_ms
+}
+
+/// The fastest GEMV pass of each of two set-ups, measured in alternating rounds. On lavapipe a
+/// pass's timestamps count CPU time, which other tests running beside this one can only add
+/// to: the fastest frame is the pass's own cost, and alternating keeps a busy moment from
+/// landing on one side only.
+fn gemv_fastest_pair_ms(mut a: impl FnMut() -> f64, mut b: impl FnMut() -> f64) -> (f64, f64) {
+    (0..4).fold((f64::INFINITY, f64::INFINITY), |(ta, tb), _| (ta.min(a()), tb.min(b())))
 }
 
 /// With 90 % of the lights under the threshold the result is within
@@ -217,8 +228,7 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
         100,
         8,
     ));
-    let mut r =
-        Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (32, 24), 1).unwrap_or_else(|e| panic!("{e}"));
+    let r = Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (32, 24), 1).unwrap_or_else(|e| panic!("{e}"));
     let cam = r.scene.camera.clone();
     let full: Vec<[f32; 4]> = r.scene_gpu.lights.iter().map(|l| l.intensity).collect();
     let time = |r: &mut Renderer, dim: bool| -> f64 {
@@ -226,10 +236,10 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
             let s = if dim && l % 10 != 0 { 0.01 } else { 1.0 };
             light.intensity = full[l].map(|c| c * s);
         }
-        gemv_median_ms(r, &cam)
+        gemv_fastest_ms(r, &cam)
     };
-    let all = time(&mut r, false);
-    let tenth = time(&mut r, true);
+    let r = std::cell::RefCell::new(r);
+    let (all, tenth) = gemv_fastest_pair_ms(|| time(&mut r.borrow_mut(), false), || time(&mut r.borrow_mut(), true));
     println!(
         "GEMV over 100 lights: {all:.3} ms; with 90 of them below the threshold: {tenth:.3} ms ({:.1}x)",
         all / tenth
@@ -238,7 +248,7 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
         all > 2.0 * tenth,
         "skipping 90 % of the lights should at least halve the GEMV: {all} vs {tenth}"
     );
-    common::assert_clean(&r.gpu);
+    common::assert_clean(&r.borrow().gpu);
 }
 
 /// With static intensities, 100 frames are bit-identical (the thesis's unexplained
@@ -735,21 +745,24 @@ fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
     );
     common::assert_clean(&setup.gpu);
 
-    let time = |layout: &str| -> f64 {
-        let mut r = Renderer::new(
+    let renderer = |layout: &str| {
+        Renderer::new(
             common::test_gpu(),
             scene(&spot_floor(layout)),
             Some("bsp_lights"),
             (16, 12),
             1,
         )
-        .unwrap_or_else(|e| panic!("{e}"));
-        let cam = r.scene.camera.clone();
-        let ms = gemv_median_ms(&mut r, &cam);
-        common::assert_clean(&r.gpu);
-        ms
+        .unwrap_or_else(|e| panic!("{e}"))
     };
-    let (dense, sparse) = (time("dense"), time("sparse"));
+    let (mut dense_r, mut sparse_r) = (renderer("dense"), renderer("sparse"));
+    let cam = dense_r.scene.camera.clone();
+    let (dense, sparse) = gemv_fastest_pair_ms(
+        || gemv_fastest_ms(&mut dense_r, &cam),
+        || gemv_fastest_ms(&mut sparse_r, &cam),
+    );
+    common::assert_clean(&dense_r.gpu);
+    common::assert_clean(&sparse_r.gpu);
     println!(
         "{} vertices x 64 spots, {:.1} % of entries non-zero: dense GEMV {dense:.3} ms, sparse {sparse:.3} ms ({:.1}x)",
         bsp.baked.vertices.len(),
