@@ -276,20 +276,24 @@ pub fn count(triangles: &[Triangle], size: f64) -> u64 {
 
 /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
 /// of the scene's size, same material, same side of any thin wall); their grids are not laid
-/// yet.
+/// yet. A triangle joins the first chart (in creation order) it matches, so the grouping does
+/// not depend on how charts are looked up: here through a hash of quantised plane and
+/// material, so that a curved mesh's tens of thousands of one-triangle charts take linear time.
 pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
     let scale = triangles
         .iter()
         .flat_map(|t| t.p)
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
         .max(1.0);
+    let lookup = ChartLookup::new(scale);
+    let mut cells: std::collections::HashMap<ChartCell, Vec<usize>> = std::collections::HashMap::new();
     let mut charts: Vec<Chart> = Vec::new();
     for (ti, t) in triangles.iter().enumerate() {
         let n = t.normal();
         if n == DVec3::ZERO {
             continue;
         }
-        let same = charts.iter_mut().find(|c| {
+        let matches = |c: &Chart| {
             let tc = &triangles[c.triangles[0]];
             c.object == t.object
                 && c.normal.dot(n) > 1.0 - 1e-4
@@ -298,10 +302,18 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
                 && (tc.emission - t.emission).abs().max_element() < 1e-9
                 && tc.sky == t.sky
                 && tc.part == t.part
-        });
+        };
+        let same = lookup
+            .neighbours(t, n)
+            .filter_map(|cell| cells.get(&cell))
+            .flatten()
+            .copied()
+            .filter(|&c| matches(&charts[c]))
+            .min();
         match same {
-            Some(c) => c.triangles.push(ti),
+            Some(c) => charts[c].triangles.push(ti),
             None => {
+                cells.entry(lookup.quantised(t, n)).or_default().push(charts.len());
                 let helper = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
                 let u = helper.cross(n).normalize();
                 let v = n.cross(u);
@@ -323,6 +335,45 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
         }
     }
     charts
+}
+
+/// A hash cell of chart planes: the object, side of the walls, sky flag, and the normal and
+/// plane offset quantised (see [`ChartLookup`]).
+type ChartCell = (usize, u64, bool, [i64; 4]);
+
+/// Two unit normals with dot > 1 − 1e-4 differ by under 0.01415 (√(2·1e-4)) in every
+/// component: cells this wide put them in the same or adjacent cells.
+const NORMAL_CELL: f64 = 0.02;
+
+/// Chart planes hashed so that a triangle's matches lie in its cell or the adjacent ones.
+struct ChartLookup {
+    /// The offset cells' width. A chart's offset is measured along its own normal, which
+    /// differs from a matching triangle's by under 0.01415, and a vertex lies within √3 of
+    /// the scene's size of the origin: the triangle's offset along its own normal is within
+    /// 0.01415·√3·size (plus the 1e-5·size tolerance) of the chart's.
+    offset_cell: f64,
+}
+
+impl ChartLookup {
+    fn new(scale: f64) -> ChartLookup {
+        ChartLookup {
+            offset_cell: (0.01415 * 3f64.sqrt() + 1e-5) * scale,
+        }
+    }
+
+    fn quantised(&self, t: &Triangle, n: DVec3) -> ChartCell {
+        let q = [n.x / NORMAL_CELL, n.y / NORMAL_CELL, n.z / NORMAL_CELL, n.dot(t.p[0]) / self.offset_cell];
+        (t.object, t.part, t.sky, q.map(|x| x.floor() as i64))
+    }
+
+    /// The cells a chart matching triangle `t` (normal `n`) can lie in.
+    fn neighbours(&self, t: &Triangle, n: DVec3) -> impl Iterator<Item = ChartCell> {
+        let (object, part, sky, base) = self.quantised(t, n);
+        (0..81).map(move |k: i64| {
+            let step = [k % 3 - 1, k / 3 % 3 - 1, k / 9 % 3 - 1, k / 27 - 1];
+            (object, part, sky, std::array::from_fn(|a| base[a] + step[a]))
+        })
+    }
 }
 
 /// A chart's triangles' bounds in its (u, v) plane coordinates.

@@ -1,6 +1,7 @@
 use glam::DVec3;
 
 mod border;
+mod charts;
 mod buried;
 mod edge_blocks;
 mod sun;
