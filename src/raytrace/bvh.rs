@@ -525,6 +525,31 @@ pub fn safe_inverse(d: Vec3) -> Vec3 {
 }
 
 impl Bvh {
+    /// Whether `hit` holds for some input triangle in a leaf whose box overlaps [`lo`, `hi`]
+    /// (a superset of the triangles whose boxes overlap it); stops at the first that does.
+    pub fn any_in_box(&self, lo: Vec3, hi: Vec3, mut hit: impl FnMut(u32) -> bool) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let overlaps = |n: &BvhNode| !(Vec3::from(n.hi).cmplt(lo).any() || Vec3::from(n.lo).cmpgt(hi).any());
+        let mut stack = vec![0u32];
+        while let Some(node) = stack.pop() {
+            let n = &self.nodes[node as usize];
+            if !overlaps(n) {
+                continue;
+            }
+            if n.is_leaf() {
+                if (n.index..n.index + n.count).any(|slot| hit(self.order[slot as usize])) {
+                    return true;
+                }
+            } else {
+                stack.push(n.index);
+                stack.push(node + 1);
+            }
+        }
+        false
+    }
+
     /// Closest hit of the ray among `tris` (indexed like the input of [`Bvh::build`]): the
     /// distance and the input triangle. The CPU twin of `trace_closest` in the shader.
     pub fn closest_hit(&self, tris: &[[Vec3; 3]], o: Vec3, d: Vec3) -> Option<(f32, u32)> {

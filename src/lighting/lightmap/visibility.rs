@@ -212,6 +212,8 @@ impl Matrix {
 /// The pairwise classification, exposed so that tests can check it in both orders.
 pub struct Tester<'a> {
     triangles: &'a [Triangle],
+    /// Over the triangles, so that a pair's intrusion test visits only those near the pair.
+    bvh: crate::raytrace::bvh::Bvh,
     surfaces: Vec<Surface>,
     /// Distances below this (a millionth of the scene's extent) are contact, not intrusion.
     tol: f64,
@@ -251,8 +253,10 @@ impl<'a> Tester<'a> {
                 }
             })
             .collect();
+        let corners: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.p.map(|q| q.as_vec3())).collect();
         Tester {
             triangles,
+            bvh: crate::raytrace::bvh::Bvh::build(&corners),
             surfaces,
             tol: 1e-6 * scale,
         }
@@ -281,17 +285,18 @@ impl<'a> Tester<'a> {
         let (lo, hi) = (a.lo.min(b.lo) + self.tol, a.hi.max(b.hi) - self.tol);
         let own = |t: &usize| a.triangles.contains(t) || b.triangles.contains(t);
         let mut axes: Option<Axes> = None;
-        for (ti, t) in self.triangles.iter().enumerate() {
+        // The hierarchy's boxes are f32: the query is widened by more than their rounding.
+        let margin = DVec3::splat(1e-5 * (hi - lo).abs().max_element().max(self.tol * 1e6));
+        let (qlo, qhi) = ((lo - margin).as_vec3(), (hi + margin).as_vec3());
+        self.bvh.any_in_box(qlo, qhi, |ti| {
+            let (ti, t) = (ti as usize, &self.triangles[ti as usize]);
             let (tlo, thi) = (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]));
             if thi.cmplt(lo).any() || tlo.cmpgt(hi).any() || own(&ti) || t.area() <= 0.0 {
-                continue;
+                return false;
             }
             let axes = axes.get_or_insert_with(|| hull_axes(&pts));
-            if !separated(&pts, &t.p, axes, self.tol) {
-                return true;
-            }
-        }
-        false
+            !separated(&pts, &t.p, axes, self.tol)
+        })
     }
 }
 
