@@ -142,6 +142,41 @@ pub fn patch_size_for(area: f64, budget: f64) -> f64 {
     round2((area / budget).sqrt()).clamp(0.005, 10.0)
 }
 
+/// A light-map's default patch side, and why: the scene's area over `budget` patches
+/// ([`patch_size_for`]), grown while the patches that makes exceed twice the budget. Every
+/// chart (a planar group of triangles) takes at least a texel and its border frame, nine
+/// patches, whatever its area: a curved mesh's thousands of small charts count far more
+/// patches than their area says. When the charts alone need more than twice the budget, no
+/// size meets it: `Err` says so (the light-map methods suit scenes of large planar faces).
+pub fn lightmap_patch_size(triangles: &[Triangle], budget: f64) -> std::result::Result<(f64, String), String> {
+    use crate::lighting::lightmap::patches::{count_in, group_charts};
+    let area: f64 = triangles.iter().map(Triangle::area).sum();
+    let charts = group_charts(triangles);
+    let limit = (2.0 * budget) as u64;
+    let least: u64 = charts.iter().map(|c| if c.sky { 1 } else { 9 }).sum();
+    if least > limit {
+        return Err(format!(
+            "its {} charts (planar groups of triangles) need at least {least} patches, a texel and its border each, over twice the budget of {budget} patches the defaults keep to: light-maps suit scenes of large planar faces; set patch_size to bake it anyway",
+            charts.len()
+        ));
+    }
+    let mut size = patch_size_for(area, budget);
+    let mut patches = count_in(&charts, triangles, size);
+    let from_area = size;
+    while patches > limit && size < 10.0 {
+        size = round2(size * 1.25).min(10.0);
+        patches = count_in(&charts, triangles, size);
+    }
+    let mut why = format!("the scene's {area:.3} m² over a budget of {budget} patches");
+    if size != from_area {
+        why += &format!(
+            ", grown from {from_area} until its {} charts make at most twice that ({patches})",
+            charts.len()
+        );
+    }
+    Ok((size, why))
+}
+
 /// Segments the many-light methods get when the scene sets no `max_segment_area`: their set-up
 /// casts a feeler per segment and light, so the count is what is budgeted (measured on lavapipe,
 /// VLS's set-up of the 100-light theatre, 351 m², took 0.5 s at 0.05 m² and 5.0 s at 0.021 m²).

@@ -261,7 +261,12 @@ impl Patches {
 /// The patches [`Patches::build`] would make of `triangles` at `size`, border frames included,
 /// counted without making them (what a bake's memory is estimated from).
 pub fn count(triangles: &[Triangle], size: f64) -> u64 {
-    group_charts(triangles)
+    count_in(&group_charts(triangles), triangles, size)
+}
+
+/// [`count`] over charts already grouped.
+pub(crate) fn count_in(charts: &[Chart], triangles: &[Triangle], size: f64) -> u64 {
+    charts
         .iter()
         .map(|c| {
             if c.sky {
@@ -362,7 +367,12 @@ impl ChartLookup {
     }
 
     fn quantised(&self, t: &Triangle, n: DVec3) -> ChartCell {
-        let q = [n.x / NORMAL_CELL, n.y / NORMAL_CELL, n.z / NORMAL_CELL, n.dot(t.p[0]) / self.offset_cell];
+        let q = [
+            n.x / NORMAL_CELL,
+            n.y / NORMAL_CELL,
+            n.z / NORMAL_CELL,
+            n.dot(t.p[0]) / self.offset_cell,
+        ];
         (t.object, t.part, t.sky, q.map(|x| x.floor() as i64))
     }
 

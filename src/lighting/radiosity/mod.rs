@@ -26,7 +26,7 @@ use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::lightmap::geometry::StaticGeometry;
 use crate::lighting::lightmap::solve::{Mode, Settings};
-use crate::lighting::plan::{patch_size_for, Derived, Facts};
+use crate::lighting::plan::{Derived, Facts};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema, Scene};
 use bake::Content;
@@ -226,12 +226,15 @@ pub fn plan(decl: &MethodDecl, facts: &Facts<'_>) -> Result<Vec<Derived>> {
     let mut size = config.patch_size;
     let area = facts.area(NAME)?;
     if decl.param("patch_size").is_none() && area > 0.0 {
-        size = patch_size_for(area, PATCH_BUDGET);
-        derived.push(Derived::new(
-            "patch_size",
-            size,
-            format!("the scene's {area:.3} m² over a budget of {PATCH_BUDGET} patches"),
-        ));
+        let (derived_size, why) = crate::lighting::plan::lightmap_patch_size(facts.triangles(NAME)?, PATCH_BUDGET)
+            .map_err(|why| {
+                Error::Usage(format!(
+                    "{}: {NAME}: the scene has no default patch_size: {why}",
+                    facts.scene.source
+                ))
+            })?;
+        size = derived_size;
+        derived.push(Derived::new("patch_size", size, why));
     }
     let patches = crate::lighting::lightmap::patches::count(facts.triangles(NAME)?, size);
     facts.check(

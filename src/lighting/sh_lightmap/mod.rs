@@ -203,17 +203,20 @@ pub fn plan(
     decl: &MethodDecl,
     facts: &crate::lighting::plan::Facts<'_>,
 ) -> Result<Vec<crate::lighting::plan::Derived>> {
-    use crate::lighting::plan::{patch_size_for, Derived};
+    use crate::lighting::plan::Derived;
     let mut config = Config::from_decl(decl, Some(facts.scene))?;
     let mut derived = Vec::new();
     let area = facts.area(NAME)?;
     if decl.param("patch_size").is_none() && area > 0.0 {
-        config.patch_size = patch_size_for(area, PATCH_BUDGET);
-        derived.push(Derived::new(
-            "patch_size",
-            config.patch_size,
-            format!("the scene's {area:.3} m² over a budget of {PATCH_BUDGET} patches"),
-        ));
+        let (derived_size, why) = crate::lighting::plan::lightmap_patch_size(facts.triangles(NAME)?, PATCH_BUDGET)
+            .map_err(|why| {
+                Error::Usage(format!(
+                    "{}: {NAME}: the scene has no default patch_size: {why}",
+                    facts.scene.source
+                ))
+            })?;
+        config.patch_size = derived_size;
+        derived.push(Derived::new("patch_size", config.patch_size, why));
     }
     let size = config.patch_size;
     let patches = crate::lighting::lightmap::patches::count(facts.triangles(NAME)?, size);

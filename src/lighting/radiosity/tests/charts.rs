@@ -4,6 +4,7 @@
 use glam::DVec3;
 
 use crate::lighting::lightmap::patches::{group_charts, Triangle};
+use crate::world::level_gen::Rng;
 
 /// The grouping by the definition: each triangle joins the first chart (in creation order)
 /// that matches it, found by scanning them all.
@@ -37,15 +38,6 @@ fn grouped_by_scan(triangles: &[Triangle]) -> Vec<Vec<usize>> {
     charts.into_iter().map(|(_, m)| m).collect()
 }
 
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn triangle(p: [DVec3; 3], object: usize, part: u64) -> Triangle {
     Triangle {
         p,
@@ -61,22 +53,22 @@ fn triangle(p: [DVec3; 3], object: usize, part: u64) -> Triangle {
 /// tilted and shifted by amounts around the grouping's tolerances (some just inside, some just
 /// outside), over two objects and two wall sides.
 fn near_coplanar(planes: usize, per_plane: usize, seed: u64) -> Vec<Triangle> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut out = Vec::new();
     for _ in 0..planes {
-        let n = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5).normalize();
-        let centre = DVec3::new(rng.next(), rng.next(), rng.next()) * 40.0 - 20.0;
+        let n = DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize();
+        let centre = DVec3::new(rng.unit(), rng.unit(), rng.unit()) * 40.0 - 20.0;
         let u = n.any_orthonormal_vector();
         let v = n.cross(u);
         for _ in 0..per_plane {
             // Tilts of up to twice the normal tolerance, shifts up to twice the offset's.
-            let tilt = (u * (rng.next() - 0.5) + v * (rng.next() - 0.5)) * 0.04 * rng.next().powi(4);
-            let shift = (rng.next() - 0.5) * 4e-4 * rng.next().powi(2);
+            let tilt = (u * (rng.unit() - 0.5) + v * (rng.unit() - 0.5)) * 0.04 * rng.unit().powi(4);
+            let shift = (rng.unit() - 0.5) * 4e-4 * rng.unit().powi(2);
             let m = (n + tilt).normalize();
             let (a, b) = (m.any_orthonormal_vector(), m.cross(m.any_orthonormal_vector()));
-            let at = centre + (u * (rng.next() - 0.5) + v * (rng.next() - 0.5)) * 6.0 + n * shift;
+            let at = centre + (u * (rng.unit() - 0.5) + v * (rng.unit() - 0.5)) * 6.0 + n * shift;
             let p = [at, at + a * 0.3, at + b * 0.3];
-            out.push(triangle(p, (rng.next() * 2.0) as usize, (rng.next() * 2.0) as u64));
+            out.push(triangle(p, (rng.unit() * 2.0) as usize, (rng.unit() * 2.0) as u64));
         }
     }
     out
@@ -134,6 +126,53 @@ fn grouping_time_grows_with_the_triangle_count_not_its_square() {
             .fold(f64::INFINITY, f64::min)
     };
     let (a, b) = (fastest(&small), fastest(&large));
-    println!("{} triangles grouped in {a:.4} s, {} in {b:.4} s ({:.1}x)", small.len(), large.len(), b / a);
+    println!(
+        "{} triangles grouped in {a:.4} s, {} in {b:.4} s ({:.1}x)",
+        small.len(),
+        large.len(),
+        b / a
+    );
     assert!(b < 8.0 * a, "4x the triangles took {:.1}x the time", b / a);
+}
+
+/// A floor of `n`×`n` unit quads (one chart) with a sphere of `rings` on it (a chart per quad).
+fn floor_and_sphere(n: usize, rings: usize) -> Vec<Triangle> {
+    let h = n as f64 / 2.0;
+    let c = |x: f64, z: f64| DVec3::new(x - h, -3.0, z - h);
+    let mut out = vec![
+        triangle([c(0.0, 0.0), c(0.0, n as f64), c(n as f64, n as f64)], 1, 0),
+        triangle([c(0.0, 0.0), c(n as f64, n as f64), c(n as f64, 0.0)], 1, 0),
+    ];
+    if rings > 0 {
+        out.extend(sphere(rings));
+    }
+    out
+}
+
+#[test]
+fn the_default_patch_size_keeps_the_patches_near_the_budget() {
+    use crate::lighting::lightmap::patches::count;
+    use crate::lighting::plan::{lightmap_patch_size, patch_size_for};
+    let budget = 4096.0;
+    // Large planar faces: the size from the area, as before.
+    let floor = floor_and_sphere(20, 0);
+    let (size, why) = lightmap_patch_size(&floor, budget).unwrap();
+    assert_eq!(size, patch_size_for(400.0, budget), "{why}");
+    // 240 small charts beside the floor: the area's size would make over twice the budget, so
+    // the size grows until it fits.
+    let mixed = floor_and_sphere(20, 12);
+    let from_area = patch_size_for(mixed.iter().map(Triangle::area).sum(), budget);
+    assert!(count(&mixed, from_area) > 2 * budget as u64);
+    let (size, why) = lightmap_patch_size(&mixed, budget).unwrap();
+    let patches = count(&mixed, size);
+    println!("{size} m: {patches} patches ({why})");
+    assert!(
+        size > from_area && patches <= 2 * budget as u64,
+        "{size}: {patches} patches"
+    );
+    assert!(why.contains("grown from"), "{why}");
+    // A curved mesh whose charts alone need more than twice the budget is refused, saying so.
+    let curved = floor_and_sphere(20, 40);
+    let err = lightmap_patch_size(&curved, budget).unwrap_err();
+    assert!(err.contains("charts") && err.contains("set patch_size"), "{err}");
 }
