@@ -56,6 +56,7 @@ layout(push_constant) uniform Push {
     float epsilon;   // receivers and shooters start this far in front of their surface
     float patch_size;
     uint max_shots;
+    uint visibility_matrix;  // 0: not built (too many charts), every pair PARTIAL
 } push;
 
 #endif

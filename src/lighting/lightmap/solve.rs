@@ -39,6 +39,8 @@ pub struct Settings {
     /// One reflectivity for every surface and wavelength in the bounces, instead of each
     /// material's albedo (CaLight's `REFLECTIVITY = 0.3`); `None`: the materials'.
     pub reflectivity: Option<f64>,
+    /// The most charts the visibility matrix is built for ([`super::visibility::MAX_MATRIX_CHARTS`]).
+    pub matrix_charts: usize,
 }
 
 impl Default for Settings {
@@ -51,6 +53,7 @@ impl Default for Settings {
             samples_per_chart: 10,
             full_visibility: true,
             reflectivity: None,
+            matrix_charts: super::visibility::MAX_MATRIX_CHARTS,
         }
     }
 }
@@ -554,15 +557,17 @@ impl<'a> Solve<'a> {
         // NONE pairs exchange nothing (skipped: the form factor would be 0 in faithful mode, and
         // in corrected mode only a block square's overhang beyond its polygon could reach them);
         // FULL pairs need no rays. The same matrix in both modes.
-        let matrix = Matrix::build_in(
+        let matrix = Matrix::build_up_to(
             &occluders.triangles,
             g.charts,
             settings.full_visibility,
             occluders.pvs.as_ref(),
+            settings.matrix_charts,
         );
-        let by_chart: Vec<Vec<usize>> = (0..g.charts.len())
-            .map(|c| (0..blocks.len()).filter(|&b| blocks[b].chart == c).collect())
-            .collect();
+        let mut by_chart: Vec<Vec<usize>> = vec![Vec::new(); g.charts.len()];
+        for (b, block) in blocks.iter().enumerate() {
+            by_chart[block.chart].push(b);
+        }
         Solve {
             g,
             occluders,

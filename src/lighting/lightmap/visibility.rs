@@ -23,8 +23,17 @@ pub enum Vis {
 
 pub struct Matrix {
     n: usize,
-    bits: Vec<u8>,
+    /// Packed entries; `None` when the charts are too many for the matrix to pay
+    /// ([`MAX_MATRIX_CHARTS`]): every pair of distinct charts is then PARTIAL.
+    bits: Option<Vec<u8>>,
 }
+
+/// Charts over which the matrix is not built. It holds and classifies every pair, so its cost
+/// grows with the square of the chart count, while a curved mesh has a chart per triangle or
+/// two: at 55,000 charts (the Stanford bunny) it would be 1.5 billion pairs and 380 MB. Without
+/// it every pair is ray-tested (PARTIAL), which is what the matrix only saves: NONE pairs get
+/// nothing from the form factor's cosines either, bar a corrected block square's overhang.
+pub const MAX_MATRIX_CHARTS: usize = 4096;
 
 /// Which charts may see each other by a leaf PVS: chart pairs (i, j) none of whose leaves sees
 /// a leaf of the other are out. Conservative as the PVS is, and as the leaves a chart is given
@@ -113,6 +122,10 @@ pub fn chart_pvs(
 
 /// The charts' leaf PVS where the scene is a BSP world with one; `None` for other geometry.
 pub fn scene_chart_pvs(scene: &Scene, p: &Patches, triangles: &[Triangle]) -> Result<Option<ChartPvs>> {
+    // It starts the matrix, and like it holds every pair.
+    if p.charts.len() > MAX_MATRIX_CHARTS {
+        return Ok(None);
+    }
     Ok(bsp_world(scene)?.map(|(world, translate)| chart_pvs(p, triangles, &world, translate)))
 }
 
@@ -146,9 +159,17 @@ impl Matrix {
         a * (a + 1) / 2 + b
     }
 
+    /// Whether the matrix was built (see [`MAX_MATRIX_CHARTS`]).
+    pub fn is_built(&self) -> bool {
+        self.bits.is_some()
+    }
+
     pub fn get(&self, i: usize, j: usize) -> Vis {
+        let Some(bits) = &self.bits else {
+            return if i == j { Vis::None } else { Vis::Partial };
+        };
         let k = Self::index(i, j);
-        match (self.bits[k / 4] >> (2 * (k % 4))) & 3 {
+        match (bits[k / 4] >> (2 * (k % 4))) & 3 {
             0 => Vis::None,
             1 => Vis::Partial,
             _ => Vis::Full,
@@ -158,11 +179,16 @@ impl Matrix {
     fn set(&mut self, i: usize, j: usize, v: Vis) {
         let k = Self::index(i, j);
         let shift = 2 * (k % 4);
-        self.bits[k / 4] = (self.bits[k / 4] & !(3 << shift)) | ((v as u8) << shift);
+        if let Some(bits) = &mut self.bits {
+            bits[k / 4] = (bits[k / 4] & !(3 << shift)) | ((v as u8) << shift);
+        }
     }
 
     /// Pairs (i ≤ j) in each state: (none, partial, full).
     pub fn counts(&self) -> (usize, usize, usize) {
+        if self.bits.is_none() {
+            return (self.n, self.n * self.n.saturating_sub(1) / 2, 0);
+        }
         let mut c = (0, 0, 0);
         for i in 0..self.n {
             for j in 0..=i {
@@ -190,10 +216,27 @@ impl Matrix {
     /// [`Matrix::build_for`] started from a leaf PVS where there is one: pairs it rules out are
     /// NONE without the geometric tests.
     pub fn build_in(triangles: &[Triangle], charts: &[Chart], full: bool, pvs: Option<&ChartPvs>) -> Matrix {
+        Matrix::build_up_to(triangles, charts, full, pvs, MAX_MATRIX_CHARTS)
+    }
+
+    /// [`Matrix::build_in`] where there are at most `max_charts` charts; over that, not built.
+    pub fn build_up_to(
+        triangles: &[Triangle],
+        charts: &[Chart],
+        full: bool,
+        pvs: Option<&ChartPvs>,
+        max_charts: usize,
+    ) -> Matrix {
         let n = charts.len();
+        if n > max_charts {
+            crate::errln!(
+                "light-map: {n} charts (planar groups of triangles): over {max_charts} the surface-visibility matrix is not built, and every pair of patches is ray-tested"
+            );
+            return Matrix { n, bits: None };
+        }
         let mut m = Matrix {
             n,
-            bits: vec![0; (n * (n + 1) / 2).div_ceil(4)],
+            bits: Some(vec![0; (n * (n + 1) / 2).div_ceil(4)]),
         };
         let test = Tester::of_charts(triangles, charts);
         for i in 0..n {

@@ -86,6 +86,8 @@ struct ShootPush {
     epsilon: f32,
     patch_size: f32,
     max_shots: u32,
+    /// 1 when the visibility matrix was built; 0 makes every chart pair PARTIAL.
+    visibility_matrix: u32,
 }
 
 const NO_BLOCK: u32 = u32::MAX;
@@ -150,7 +152,13 @@ fn run(
     let tables = Tables::new(p, &blocks);
     // The CPU solve's visibility matrix.
     let matrix = progress.stage("chart visibility", || {
-        Matrix::build_in(triangles, &p.charts, settings.full_visibility, pvs)
+        Matrix::build_up_to(
+            triangles,
+            &p.charts,
+            settings.full_visibility,
+            pvs,
+            settings.matrix_charts,
+        )
     });
     report.visibility = matrix.counts();
     let visibility = packed_visibility(&matrix, p.charts.len());
@@ -183,6 +191,7 @@ fn run(
         epsilon: (1e-4 * p.size) as f32,
         patch_size: p.size as f32,
         max_shots: settings.max_shots.min(u32::MAX as usize) as u32,
+        visibility_matrix: u32::from(matrix.is_built()),
     };
     let mut states = ResourceStates::default();
     let bvh_tables = GpuBvh::upload(
@@ -284,6 +293,10 @@ impl Tables {
 
 /// The visibility matrix as the shader reads it: 2 bits per ordered chart pair (i·charts + j).
 fn packed_visibility(matrix: &Matrix, n: usize) -> Vec<u32> {
+    if !matrix.is_built() {
+        // The shader reads no entry then (`visibility_matrix` 0); a binding needs a word.
+        return vec![0];
+    }
     let mut visibility = vec![0u32; (n * n).div_ceil(16)];
     for i in 0..n {
         for j in 0..n {

@@ -1,8 +1,8 @@
 use glam::DVec3;
 
 mod border;
-mod charts;
 mod buried;
+mod charts;
 mod edge_blocks;
 mod sun;
 mod thin_walls;
