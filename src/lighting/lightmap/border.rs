@@ -122,11 +122,23 @@ fn pass2_plan(p: &Patches, occluders: &Occluders) -> (Pass, usize) {
     let mut out = Vec::new();
     let mut refused = 0;
     let charts = &p.charts;
+    // Coplanar candidates through a hash of the charts' planes: a scan of every chart for each
+    // is quadratic in the chart count, tens of thousands on a curved mesh.
+    let radius = charts.iter().map(|c| c.origin.length()).fold(0.0, f64::max);
+    let grid = super::patches::PlaneGrid::new(radius, COPLANAR_OFFSET * size);
+    let mut planes: std::collections::HashMap<[i64; 4], Vec<usize>> = std::collections::HashMap::new();
+    for (b, cb) in charts.iter().enumerate().filter(|(_, c)| !c.sky) {
+        planes.entry(grid.cell(cb.normal, cb.origin)).or_default().push(b);
+    }
     for (a, ca) in charts.iter().enumerate() {
         if ca.sky {
             continue;
         }
-        let partners: Vec<usize> = (0..charts.len())
+        let mut partners: Vec<usize> = grid
+            .around(ca.normal, ca.origin)
+            .filter_map(|cell| planes.get(&cell))
+            .flatten()
+            .copied()
             .filter(|&b| {
                 let cb = &charts[b];
                 b != a
@@ -139,6 +151,8 @@ fn pass2_plan(p: &Patches, occluders: &Occluders) -> (Pass, usize) {
                     && cb.cell.1 < ca.cell.1 + ca.height as i64
             })
             .collect();
+        // In chart order, as a scan finds them: the sources' sum keeps its order.
+        partners.sort_unstable();
         if partners.is_empty() {
             continue;
         }

@@ -282,15 +282,16 @@ pub(crate) fn count_in(charts: &[Chart], triangles: &[Triangle], size: f64) -> u
 /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
 /// of the scene's size, same material, same side of any thin wall); their grids are not laid
 /// yet. A triangle joins the first chart (in creation order) it matches, so the grouping does
-/// not depend on how charts are looked up: here through a hash of quantised plane and
-/// material, so that a curved mesh's tens of thousands of one-triangle charts take linear time.
+/// not depend on how charts are looked up: here through a hash of their planes
+/// ([`PlaneGrid`]), so that a curved mesh's tens of thousands of small charts take linear time.
 pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
     let scale = triangles
         .iter()
         .flat_map(|t| t.p)
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()))
         .max(1.0);
-    let lookup = ChartLookup::new(scale);
+    // Vertices lie within √3 of the scene's size of the origin.
+    let grid = PlaneGrid::new(3f64.sqrt() * scale, 1e-5 * scale);
     let mut cells: std::collections::HashMap<ChartCell, Vec<usize>> = std::collections::HashMap::new();
     let mut charts: Vec<Chart> = Vec::new();
     for (ti, t) in triangles.iter().enumerate() {
@@ -308,9 +309,9 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
                 && tc.sky == t.sky
                 && tc.part == t.part
         };
-        let same = lookup
-            .neighbours(t, n)
-            .filter_map(|cell| cells.get(&cell))
+        let same = grid
+            .around(n, t.p[0])
+            .filter_map(|cell| cells.get(&(t.object, t.part, t.sky, cell)))
             .flatten()
             .copied()
             .filter(|&c| matches(&charts[c]))
@@ -318,7 +319,10 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
         match same {
             Some(c) => charts[c].triangles.push(ti),
             None => {
-                cells.entry(lookup.quantised(t, n)).or_default().push(charts.len());
+                cells
+                    .entry((t.object, t.part, t.sky, grid.cell(n, t.p[0])))
+                    .or_default()
+                    .push(charts.len());
                 let helper = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
                 let u = helper.cross(n).normalize();
                 let v = n.cross(u);
@@ -342,46 +346,48 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
     charts
 }
 
-/// A hash cell of chart planes: the object, side of the walls, sky flag, and the normal and
-/// plane offset quantised (see [`ChartLookup`]).
+/// A hash cell of chart planes: the object, side of the walls, sky flag, and the plane's
+/// [`PlaneGrid`] cell.
 type ChartCell = (usize, u64, bool, [i64; 4]);
 
 /// Two unit normals with dot > 1 − 1e-4 differ by under 0.01415 (√(2·1e-4)) in every
 /// component: cells this wide put them in the same or adjacent cells.
 const NORMAL_CELL: f64 = 0.02;
 
-/// Chart planes hashed so that a triangle's matches lie in its cell or the adjacent ones.
-struct ChartLookup {
-    /// The offset cells' width. A chart's offset is measured along its own normal, which
-    /// differs from a matching triangle's by under 0.01415, and a vertex lies within √3 of
-    /// the scene's size of the origin: the triangle's offset along its own normal is within
-    /// 0.01415·√3·size (plus the 1e-5·size tolerance) of the chart's.
+/// Planes hashed by normal and offset, so that the planes within a tolerance of one lie in its
+/// cell or the adjacent ones (81 in all): for normals within a dot of 1 − 1e-4 of each other,
+/// and offsets within `offset_tolerance` once measured along the same normal.
+pub(crate) struct PlaneGrid {
+    /// The offset cells' width. Offsets are measured along each plane's own normal; measured
+    /// along another within the tolerance, a point `r` from the origin shifts by under
+    /// 0.01415·r, which the width covers for points within `radius`.
     offset_cell: f64,
 }
 
-impl ChartLookup {
-    fn new(scale: f64) -> ChartLookup {
-        ChartLookup {
-            offset_cell: (0.01415 * 3f64.sqrt() + 1e-5) * scale,
+impl PlaneGrid {
+    pub(crate) fn new(radius: f64, offset_tolerance: f64) -> PlaneGrid {
+        PlaneGrid {
+            offset_cell: 0.01415 * radius + offset_tolerance,
         }
     }
 
-    fn quantised(&self, t: &Triangle, n: DVec3) -> ChartCell {
+    /// The cell of the plane of normal `n` through `at`.
+    pub(crate) fn cell(&self, n: DVec3, at: DVec3) -> [i64; 4] {
         let q = [
             n.x / NORMAL_CELL,
             n.y / NORMAL_CELL,
             n.z / NORMAL_CELL,
-            n.dot(t.p[0]) / self.offset_cell,
+            n.dot(at) / self.offset_cell,
         ];
-        (t.object, t.part, t.sky, q.map(|x| x.floor() as i64))
+        q.map(|x| x.floor() as i64)
     }
 
-    /// The cells a chart matching triangle `t` (normal `n`) can lie in.
-    fn neighbours(&self, t: &Triangle, n: DVec3) -> impl Iterator<Item = ChartCell> {
-        let (object, part, sky, base) = self.quantised(t, n);
+    /// The cells a plane within the tolerance of (`n`, `at`) can lie in.
+    pub(crate) fn around(&self, n: DVec3, at: DVec3) -> impl Iterator<Item = [i64; 4]> {
+        let base = self.cell(n, at);
         (0..81).map(move |k: i64| {
             let step = [k % 3 - 1, k / 3 % 3 - 1, k / 9 % 3 - 1, k / 27 - 1];
-            (object, part, sky, std::array::from_fn(|a| base[a] + step[a]))
+            std::array::from_fn(|a| base[a] + step[a])
         })
     }
 }
