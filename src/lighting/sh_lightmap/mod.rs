@@ -208,13 +208,7 @@ pub fn plan(
     let mut derived = Vec::new();
     let area = facts.area(NAME)?;
     if decl.param("patch_size").is_none() && area > 0.0 {
-        let (derived_size, why) = crate::lighting::plan::lightmap_patch_size(facts.triangles(NAME)?, PATCH_BUDGET)
-            .map_err(|why| {
-                Error::Usage(format!(
-                    "{}: {NAME}: the scene has no default patch_size: {why}",
-                    facts.scene.source
-                ))
-            })?;
+        let (derived_size, why) = crate::lighting::plan::lightmap_patch_size(facts.triangles(NAME)?, PATCH_BUDGET);
         config.patch_size = derived_size;
         derived.push(Derived::new("patch_size", config.patch_size, why));
     }
