@@ -200,8 +200,14 @@ fn the_gpu_shooter_keeps_the_dark_room_dark() {
 /// kinds, each shooter then gives the light-map it gives with it, and room B stays dark.
 #[test]
 fn without_the_visibility_matrix_the_shooters_give_the_same_light_map() {
-    let (scene, geometry, mut lit, names) = patched("scenes/two_rooms.toml", 0.2);
+    let (scene, geometry, mut lit, names) = patched("scenes/two_rooms.toml", 0.4);
     let occluders = Occluders::new(&geometry.triangles);
+    let (none, partial, full) =
+        penumbra::lighting::lightmap::visibility::Matrix::build(&geometry.triangles, &lit, true).counts();
+    assert!(
+        none > 0 && partial > 0 && full > 0,
+        "pairs: {none} none, {partial} partial, {full} full"
+    );
     bake::add_direct_light_in(&mut lit, &occluders, &scene, Mode::Corrected, None).unwrap();
     let with = Settings {
         threshold: 1e-3,
