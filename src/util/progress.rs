@@ -84,6 +84,9 @@ pub struct Progress {
     cancel: Option<Cancel>,
     /// Writes nothing and tells no observer (a calibration's run of the real work).
     quiet: bool,
+    /// Elapsed time at the last update of 0 done: the rate is taken from there, so that stages
+    /// before the counted work (a solve's set-up) do not count as its time.
+    counting_since: Duration,
 }
 
 /// A terminal's line appears after this much work, and is redrawn at most this often.
@@ -136,6 +139,7 @@ impl Progress {
                 OBSERVER.with(|o| o.borrow().clone())
             },
             cancel: CANCEL.with(|c| c.borrow().clone()),
+            counting_since: Duration::ZERO,
             quiet,
         }
     }
@@ -190,9 +194,13 @@ impl Progress {
     /// What an update `elapsed` into the work writes to stderr (empty: nothing).
     pub fn text_at(&mut self, elapsed: Duration, done: u64, total: u64) -> String {
         let mut text = String::new();
-        if !self.warned && elapsed >= ESTIMATE_AFTER && done > 0 && done < total {
+        if done == 0 {
+            self.counting_since = elapsed;
+        }
+        let counting = elapsed.saturating_sub(self.counting_since);
+        if !self.warned && counting >= ESTIMATE_AFTER && done > 0 && done < total {
             self.warned = true;
-            let all = elapsed.mul_f64(total as f64 / done as f64);
+            let all = elapsed + counting.mul_f64((total - done) as f64 / done as f64);
             if all > ESTIMATE_LIMIT {
                 let clear = if self.shown { "\r\x1b[K" } else { "" };
                 text += &format!(
@@ -218,7 +226,7 @@ impl Progress {
         } else {
             format!(", {}", self.detail)
         };
-        let body = line(&self.name, done, total, elapsed);
+        let body = line_counting(&self.name, done, total, elapsed, counting);
         if self.terminal {
             self.shown = true;
             text += &format!("\r{body}{detail}\x1b[K");
@@ -311,8 +319,13 @@ fn duration_words(d: Duration) -> String {
 
 /// `name: 40% (400/1000) 123.4/s, 3.2 s elapsed, 4.9 s left`.
 pub fn line(name: &str, done: u64, total: u64, elapsed: Duration) -> String {
+    line_counting(name, done, total, elapsed, elapsed)
+}
+
+/// [`line`] with the rate and the time left from the last `counting` of the `elapsed` time.
+fn line_counting(name: &str, done: u64, total: u64, elapsed: Duration, counting: Duration) -> String {
     let secs = elapsed.as_secs_f64().max(1e-9);
-    let rate = done as f64 / secs;
+    let rate = done as f64 / counting.as_secs_f64().max(1e-9);
     let pct = if total > 0 {
         100.0 * done as f64 / total as f64
     } else {
@@ -374,6 +387,27 @@ mod tests {
         let mut quick = Progress::to("radiosity", false);
         assert!(quick.text_at(S(2.0), 50, 100).is_empty(), "4 s in all");
         assert!(quick.text_at(S(2.5), 51, 100).is_empty());
+    }
+
+    /// Work that starts counting after stages of its own (a solve after its set-up) is timed
+    /// from its last update of 0 done, not from the start: 4 s of set-up and then a unit a
+    /// second is not 300 s for 100 units.
+    #[test]
+    fn the_rate_counts_from_the_last_update_of_none_done() {
+        let mut p = Progress::to("radiosity", false);
+        assert!(p.text_at(S(4.0), 0, 100).is_empty());
+        assert!(
+            p.text_at(S(5.0), 1, 100).is_empty(),
+            "no estimate before two seconds of it"
+        );
+        assert_eq!(
+            p.text_at(S(6.0), 2, 100),
+            "warning: radiosity: about 104 s in all at the rate so far (2% after 6.0 s)\n"
+        );
+        assert_eq!(
+            p.text_at(S(10.0), 6, 100),
+            "radiosity:   6% (6/100) 1.0/s, 10.0 s elapsed, 94.0 s left\n"
+        );
     }
 
     /// An estimate made before the work says so once over a minute, and the rate's warning

@@ -471,6 +471,8 @@ pub fn shoot(
         ..Report::default()
     };
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    // The shooting's rate is timed from here, not from the set-up's start.
+    show_progress(progress, 0, initial, initial, settings.threshold);
     // A cancelled solve stops between shots; the bake it is part of then caches nothing.
     while report.shots < settings.max_shots && !progress.cancelled() {
         let (best, best_power) = solve.pick_shooter(energy, stop, &mut rng, &mut report);

@@ -203,6 +203,8 @@ fn run(
         Some(&bvh.skip_links()),
     )?;
     crate::bake::check_cancelled(progress, super::bake::SET_UP)?;
+    // The shooting's rate is timed from here, not from the set-up's start.
+    show_progress(progress, 0, initial, initial, settings.threshold);
     let (shot, unshot_power) = shooter.shoot(gpu, &mut states, &bvh_tables, push, |shots, left| {
         show_progress(progress, shots, left.unwrap_or(initial), initial, settings.threshold);
         crate::bake::check_cancelled(progress, "radiosity shooting")
