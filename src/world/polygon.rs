@@ -39,16 +39,30 @@ pub struct Tolerance {
     pub plane: f64,
     /// The grid new and input coordinates are rounded to, if any.
     pub grid: Option<f64>,
+    /// Polygons of less area are degenerate and dropped.
+    pub min_area: f64,
 }
 
 impl Tolerance {
     pub const EXACT: Tolerance = Tolerance {
         plane: PLANE_EPSILON,
         grid: None,
+        min_area: MIN_POLYGON_AREA,
     };
+    /// The thesis's, with polygons dropped only when the grid would collapse them (under a
+    /// cell's area): a scanned mesh's millimetre triangles stay.
     pub const THESIS: Tolerance = Tolerance {
         plane: 1e-4,
         grid: Some(1e-4),
+        min_area: 1e-8,
+    };
+    /// [`Tolerance::EXACT`] for meshes: a polygon is degenerate only under the plane's
+    /// thickness squared, not under [`MIN_POLYGON_AREA`], which is a brush world's scale (1 mm²)
+    /// and would drop most of a scanned mesh's triangles (the Stanford bunny's average 0.8 mm²).
+    pub const MESH: Tolerance = Tolerance {
+        plane: PLANE_EPSILON,
+        grid: None,
+        min_area: PLANE_EPSILON * PLANE_EPSILON,
     };
 
     /// `p` rounded to the grid (unchanged without one).
@@ -254,6 +268,11 @@ impl Polygon {
 
     /// A polygon from vertices, taking the plane from Newell's normal. `None` if degenerate.
     pub fn from_vertices(vertices: Vec<DVec3>) -> Option<Polygon> {
+        Polygon::from_vertices_in(vertices, &Tolerance::EXACT)
+    }
+
+    /// [`Polygon::from_vertices`] under `tolerance`.
+    pub fn from_vertices_in(vertices: Vec<DVec3>, tolerance: &Tolerance) -> Option<Polygon> {
         let mut normal = DVec3::ZERO;
         for (i, a) in vertices.iter().enumerate() {
             let b = vertices[(i + 1) % vertices.len()];
@@ -261,7 +280,7 @@ impl Polygon {
         }
         let centroid = vertices.iter().copied().sum::<DVec3>() / vertices.len().max(1) as f64;
         let plane = Plane::from_normal_point(normal, centroid)?;
-        Polygon { vertices, plane }.cleaned()
+        Polygon { vertices, plane }.cleaned_in(tolerance)
     }
 
     /// Area, from the vector area projected on the plane normal.
@@ -295,7 +314,8 @@ impl Polygon {
         self.cleaned_in(&Tolerance::EXACT)
     }
 
-    /// [`Polygon::cleaned`] with vertices closer than `tolerance.plane` merged.
+    /// [`Polygon::cleaned`] with vertices closer than `tolerance.plane` merged, and
+    /// `tolerance.min_area` the least area.
     pub fn cleaned_in(mut self, tolerance: &Tolerance) -> Option<Polygon> {
         let mut out: Vec<DVec3> = Vec::with_capacity(self.vertices.len());
         for &v in &self.vertices {
@@ -307,7 +327,7 @@ impl Polygon {
             out.pop();
         }
         self.vertices = out;
-        (self.vertices.len() >= 3 && self.area() >= MIN_POLYGON_AREA).then_some(self)
+        (self.vertices.len() >= 3 && self.area() >= tolerance.min_area).then_some(self)
     }
 
     pub fn classify(&self, plane: &Plane) -> Side {

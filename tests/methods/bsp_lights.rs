@@ -573,7 +573,13 @@ fn measure_setup_and_gemv() {
             8,
         ));
         let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
-        let polygons = penumbra::lighting::many_lights::scene_polygons(&sc.source, &geometry, "bsp_lights").unwrap();
+        let polygons = penumbra::lighting::many_lights::scene_polygons(
+            &sc.source,
+            &geometry,
+            "bsp_lights",
+            &penumbra::world::Tolerance::MESH,
+        )
+        .unwrap();
         let tree = penumbra::lighting::bsp_lights::setup::build_tree(&polygons);
         let vertices =
             penumbra::lighting::many_lights::Segments::build(tree.fragments.iter().map(|(f, _)| &f.polygon), 0.002)
@@ -936,5 +942,45 @@ fn the_underside_of_a_panel_shows_the_light_below_it() {
         (blue / mean(&want, 2) - 1.0).abs() < 0.02,
         "bsp_lights underside {blue} against forward {}",
         mean(&want, 2)
+    );
+}
+
+/// A small scanned figurine (the low-poly bunny at 5 cm, most of its triangles under 1 mm²)
+/// reaches the BSP whole: no triangle is dropped as degenerate (a brush world's 1 mm² threshold
+/// kept 1,833 of 6,007, a quarter of the figurine's area, and the rest vanished from the frame),
+/// and the BSP's fragments cover the figurine's area.
+#[test]
+fn a_small_scanned_mesh_keeps_every_triangle() {
+    let sc = scene(
+        "methods = [\"bsp_lights\"]\n[camera]\nposition = [0, 0.08, 0.12]\ntarget = [0, 0.02, 0]\n\
+         [[objects]]\nmesh = \"plane\"\nsize = 0.4\n\
+         [[objects]]\nmesh = \"obj\"\npath = \"meshes/bunny_lowpoly.obj\"\nscale = 0.3\n\
+         [[lights]]\ntype = \"point\"\nposition = [0.05, 0.2, 0.1]\nintensity = 0.05\n",
+    );
+    let geometry = penumbra::lighting::lightmap::geometry::scene_geometry(&sc, "bsp_lights").unwrap();
+    let triangles = geometry.triangles.iter().filter(|t| t.area() > 0.0).count();
+    let small = geometry.triangles.iter().filter(|t| t.area() < 1e-6).count();
+    assert!(
+        small > triangles / 2,
+        "most triangles under 1 mm²: {small} of {triangles}"
+    );
+    let tolerance = penumbra::lighting::bsp_lights::Config::default().tolerance();
+    let polygons =
+        penumbra::lighting::many_lights::scene_polygons(&sc.source, &geometry, "bsp_lights", &tolerance).unwrap();
+    assert_eq!(polygons.len(), triangles, "every triangle is a polygon");
+    // The figurine's area (the second draw's), as the mesh has it and as the BSP's fragments
+    // cover it.
+    let input: f64 = (0..geometry.triangles.len())
+        .filter(|&t| geometry.draw[t] == 1)
+        .map(|t| geometry.triangles[t].area())
+        .sum();
+    let tree = penumbra::lighting::bsp_lights::setup::build_tree_in(&polygons, &tolerance);
+    let fragments: f64 = (tree.fragments.iter())
+        .filter(|(f, _)| polygons[f.source as usize].draw == 1)
+        .map(|(f, _)| f.polygon.area())
+        .sum();
+    assert!(
+        (fragments - input).abs() < 1e-3 * input,
+        "the fragments cover {fragments} m² of the figurine's {input} m²"
     );
 }

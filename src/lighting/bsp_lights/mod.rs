@@ -294,7 +294,7 @@ impl Config {
     /// Faithful mode rounds every coordinate to four decimals as the thesis does (§5.6.1).
     pub fn tolerance(&self) -> Tolerance {
         match self.mode {
-            Mode::Corrected => Tolerance::EXACT,
+            Mode::Corrected => Tolerance::MESH,
             Mode::Faithful => Tolerance::THESIS,
         }
     }
@@ -465,7 +465,7 @@ pub fn bake_scene(
     progress: &mut crate::util::progress::Progress,
 ) -> Result<(setup::Setup, Vec<crate::lighting::many_lights::ScenePolygon>)> {
     let lights = ManyLight::from_scene(scene, NAME)?;
-    let polygons = scene_polygons(&scene.source, geometry, NAME)?;
+    let polygons = scene_polygons(&scene.source, geometry, NAME, &config.tolerance())?;
     let settings = setup::Settings {
         model: config.model(),
         projection: config.projection(),
@@ -473,6 +473,7 @@ pub fn bake_scene(
         max_segment_area: config.max_segment_area,
         two_sided: config.two_sided(),
         threads: 0,
+        cull_by_cones: true,
         max_matrix_bytes,
         bytes_per_entry: config.storage.bytes_per_entry(),
     };
@@ -486,7 +487,7 @@ pub fn bake_scene(
 fn bake_setup(cx: &mut CreateContext<'_>, config: &Config, lights: &[ManyLight], limit: u64) -> Result<Baked> {
     let scene = cx.scene;
     let geometry = crate::lighting::lightmap::geometry::static_geometry(scene, cx.scene_gpu, NAME)?;
-    let polygons = scene_polygons(&scene.source, &geometry, NAME)?;
+    let polygons = scene_polygons(&scene.source, &geometry, NAME, &config.tolerance())?;
     if polygons.is_empty() {
         return Err(Error::Usage(format!(
             "{}: {NAME}: the scene has no static polygons to light",

@@ -71,6 +71,10 @@ pub struct Settings {
     pub two_sided: bool,
     /// Threads for the per-light phase (0: every core).
     pub threads: usize,
+    /// Skip the shadow pass's occluder-target pairs whose cones from the light are apart (with
+    /// the valid projection only); false projects every pair, the check that the skip changes
+    /// nothing.
+    pub cull_by_cones: bool,
     /// Bytes the matrix may take at `bytes_per_entry` per vertex and light: checked after the
     /// segmentation, before any light is shaded.
     pub max_matrix_bytes: u64,
@@ -181,8 +185,10 @@ pub fn run(
 
     let start = Instant::now();
     let fragments: Vec<&Polygon> = tree.fragments.iter().map(|(f, _)| &f.polygon).collect();
+    let spheres: Vec<(DVec3, f64)> = fragments.iter().map(|f| bounding_sphere(&f.vertices)).collect();
     let shared = Shared {
         fragments: &fragments,
+        spheres: &spheres,
         tree: &tree,
         segments,
         fragment_vertices: &segmented.fragment_vertices,
@@ -191,6 +197,7 @@ pub fn run(
         model: settings.model,
         projection: settings.projection,
         tolerance,
+        cull_by_cones: settings.cull_by_cones,
     };
     let per_thread = shade_lights(&shared, lights, settings.threads, progress);
     let lights_wall_ms = ms(start);
@@ -409,6 +416,8 @@ pub fn owner_ranges(owner_of: &[u32], owners: usize) -> Vec<Range<u32>> {
 /// What every light's pass reads.
 struct Shared<'a> {
     fragments: &'a [&'a Polygon],
+    /// Each fragment's bounding sphere (centre, radius), for the shadow pass's cone test.
+    spheres: &'a [(DVec3, f64)],
     tree: &'a Tree,
     segments: &'a Segments,
     fragment_vertices: &'a [Range<u32>],
@@ -417,6 +426,7 @@ struct Shared<'a> {
     model: LightModel,
     projection: Projection,
     tolerance: Tolerance,
+    cull_by_cones: bool,
 }
 
 impl Shared<'_> {
@@ -452,10 +462,21 @@ impl Shared<'_> {
         let mut lit: Vec<usize> = (0..self.fragments.len())
             .map(|t| rows(t).filter(|&v| column[v as usize] != [0.0; 3]).count())
             .collect();
+        // The valid projection puts a shadow on rays from the light through the occluder, so
+        // only a target whose cone from the light meets the occluder's can be darkened: pairs
+        // whose cones are apart are skipped before projecting (most of them on a mesh of many
+        // small fragments). The thesis's projection can cast through infinity, so every pair
+        // is projected there.
+        let cones: Vec<Cone> = self
+            .spheres
+            .iter()
+            .map(|&(c, r)| Cone::from_light(light, c, r))
+            .collect();
+        let cull = self.cull_by_cones && self.projection == Projection::Valid;
         for (i, &o) in order.iter().enumerate() {
             let occluder = self.fragments[o];
             for &t in &order[..i] {
-                if lit[t] == 0 {
+                if lit[t] == 0 || (cull && !cones[o].meets(&cones[t])) {
                     continue;
                 }
                 let target = self.fragments[t];
@@ -483,6 +504,56 @@ impl Shared<'_> {
             }
         }
     }
+}
+
+/// A fragment seen from a light: the cone of rays from the light through its bounding sphere.
+struct Cone {
+    axis: DVec3,
+    /// Cosine and sine of the half-angle; a light inside the sphere sees it all around
+    /// (`cos` −1).
+    cos: f64,
+    sin: f64,
+}
+
+impl Cone {
+    fn from_light(light: DVec3, centre: DVec3, radius: f64) -> Cone {
+        let d = centre - light;
+        let distance = d.length();
+        // Widened a hair beyond the sphere, so rounding never culls a touching pair.
+        let radius = radius * (1.0 + 1e-9) + 1e-9 * distance;
+        if distance <= radius {
+            return Cone {
+                axis: DVec3::Z,
+                cos: -1.0,
+                sin: 0.0,
+            };
+        }
+        let sin = radius / distance;
+        Cone {
+            axis: d / distance,
+            cos: (1.0 - sin * sin).sqrt(),
+            sin,
+        }
+    }
+
+    /// Whether some ray from the light lies in both cones: the angle between the axes is at
+    /// most the sum of the half-angles.
+    fn meets(&self, other: &Cone) -> bool {
+        if self.cos <= -1.0 || other.cos <= -1.0 {
+            return true;
+        }
+        // cos(a + b); past a half turn the cones cover every direction between them.
+        let cos_sum = self.cos * other.cos - self.sin * other.sin;
+        let sum_past_half_turn = self.sin * other.cos + self.cos * other.sin < 0.0;
+        sum_past_half_turn || self.axis.dot(other.axis) >= cos_sum
+    }
+}
+
+/// A sphere holding `points`: their bounding box's centre and the farthest point from it.
+fn bounding_sphere(points: &[DVec3]) -> (DVec3, f64) {
+    let (lo, hi) = bounds(points);
+    let centre = 0.5 * (lo + hi);
+    (centre, points.iter().map(|&p| p.distance(centre)).fold(0.0, f64::max))
 }
 
 fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {

@@ -95,6 +95,7 @@ fn run_in(
         max_segment_area: area,
         two_sided: projection == Projection::Valid,
         threads: 2,
+        cull_by_cones: true,
         max_matrix_bytes: super::MAX_MATRIX_BYTES,
         bytes_per_entry: 12,
     };
@@ -846,7 +847,7 @@ fn too_large_a_matrix_is_one_error_naming_the_file_and_the_parameter() {
 fn the_matrix_is_refused_up_front_from_the_fewest_vertices_the_segments_can_make() {
     let sc = scene("{ name = \"bsp_lights\" }", 4);
     let geometry = crate::lighting::lightmap::geometry::scene_geometry(&sc, super::NAME).unwrap();
-    let polygons = super::scene_polygons(&sc.source, &geometry, super::NAME).unwrap();
+    let polygons = super::scene_polygons(&sc.source, &geometry, super::NAME, &Tolerance::MESH).unwrap();
     for area in [0.5, 0.05, 0.005] {
         let made = crate::lighting::many_lights::Segments::build(polygons.iter().map(|p| &p.polygon), area)
             .unwrap()
@@ -1092,6 +1093,58 @@ fn faithful_numerics_round_to_four_decimals_and_leave_no_sliver_where_polygons_t
     };
     assert_eq!(
         (faithful.tolerance(), Config::default().tolerance()),
-        (Tolerance::THESIS, Tolerance::EXACT)
+        (Tolerance::THESIS, Tolerance::MESH)
     );
+}
+
+/// The shadow pass's cone test only skips pairs that cannot shadow: over a floor under 150
+/// small plates at three heights (most pairs of plates far apart as seen from a light, some
+/// overlapping), lit by three lights, the matrix with the skip is the matrix without it, bit
+/// for bit.
+#[test]
+fn skipping_pairs_whose_cones_are_apart_changes_no_vertex() {
+    let mut rng = crate::world::level_gen::Rng::new(11);
+    let mut polygons = vec![floor(6.0)];
+    for _ in 0..150 {
+        let (x, z) = (rng.unit() * 5.0 - 2.5, rng.unit() * 5.0 - 2.5);
+        polygons.push(plate(
+            x,
+            0.3 + 0.4 * (rng.unit() * 3.0).floor(),
+            z,
+            0.1 + 0.3 * rng.unit(),
+        ));
+    }
+    let lights = [
+        point(v(0.5, 3.0, 0.2), DVec3::splat(4.0)),
+        point(v(-2.0, 1.6, 1.0), DVec3::new(2.0, 1.0, 1.0)),
+        point(v(1.0, 0.5, -1.5), DVec3::splat(1.0)),
+    ];
+    let settings = |cull_by_cones| Settings {
+        model: LightModel::Physical,
+        projection: Projection::Valid,
+        tolerance: crate::world::Tolerance::MESH,
+        max_segment_area: 0.02,
+        two_sided: true,
+        threads: 2,
+        cull_by_cones,
+        max_matrix_bytes: super::MAX_MATRIX_BYTES,
+        bytes_per_entry: 12,
+    };
+    let run = |cull| {
+        let start = std::time::Instant::now();
+        let s = setup::run(&polygons, &lights, &settings(cull), &mut Progress::new("test")).unwrap();
+        (s, start.elapsed().as_secs_f64())
+    };
+    let ((culled, fast), (every, slow)) = (run(true), run(false));
+    let dark = every.colours.iter().filter(|c| **c == [0.0; 3]).count();
+    println!(
+        "{} fragments, {} vertices x 3 lights, {dark} entries dark: {fast:.3} s with the skip, {slow:.3} s without",
+        every.tree.fragments.len(),
+        every.vertices()
+    );
+    assert!(
+        dark > every.colours.len() / 20,
+        "the plates shadow the floor: {dark} dark"
+    );
+    assert!(culled.colours == every.colours, "the skip changed the matrix");
 }

@@ -6,7 +6,7 @@ use glam::DVec3;
 
 use crate::error::{Error, Result};
 use crate::lighting::lightmap::geometry::StaticGeometry;
-use crate::world::Polygon;
+use crate::world::{Polygon, Tolerance};
 
 /// One convex polygon of the scene, counter-clockwise seen from the side its normal points to.
 #[derive(Clone, Debug)]
@@ -21,16 +21,21 @@ pub struct ScenePolygon {
     pub draw: usize,
 }
 
-/// The scene's static triangles as polygons. Degenerate triangles (area under 1 mm²) are left
-/// out: they can neither receive nor cast a visible shadow. Animated objects are refused: both
+/// The scene's static triangles as polygons. Degenerate triangles (under `tolerance`'s least
+/// area) are left out: they can neither receive nor cast a visible shadow. Animated objects are refused: both
 /// systems precompute per-light lighting for a static scene (the thesis's first requirement).
-pub fn scene_polygons(scene_source: &str, geometry: &StaticGeometry, method: &str) -> Result<Vec<ScenePolygon>> {
+pub fn scene_polygons(
+    scene_source: &str,
+    geometry: &StaticGeometry,
+    method: &str,
+    tolerance: &Tolerance,
+) -> Result<Vec<ScenePolygon>> {
     if let Some(&d) = geometry.entities.first() {
         return Err(Error::Usage(format!("{scene_source}: draw {d} is animated: {method} precomputes lighting for a static scene (Ridderhof's Modelling Multiple Light Sources assumes a static scene)")));
     }
     let mut out = Vec::with_capacity(geometry.triangles.len());
     for (t, tri) in geometry.triangles.iter().enumerate() {
-        if let Some(polygon) = Polygon::from_vertices(tri.p.to_vec()) {
+        if let Some(polygon) = Polygon::from_vertices_in(tri.p.to_vec(), tolerance) {
             out.push(ScenePolygon {
                 polygon,
                 albedo: tri.albedo,

@@ -347,7 +347,7 @@ impl Layout {
         config: &Config,
     ) -> Result<Layout> {
         let lights = ManyLight::from_scene(scene, NAME)?;
-        let polygons = scene_polygons(&scene.source, geometry, NAME)?;
+        let polygons = scene_polygons(&scene.source, geometry, NAME, &crate::world::Tolerance::MESH)?;
         let segments =
             Segments::build(polygons.iter().map(|p| &p.polygon), config.max_segment_area).map_err(|why| {
                 let v = decl
