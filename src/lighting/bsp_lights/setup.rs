@@ -9,7 +9,7 @@
 //! topology and copied only the colours ("fast clone", §5.5).
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use glam::DVec3;
@@ -271,7 +271,11 @@ fn shade_lights(
         threads
     }
     .clamp(1, lights.len().max(1));
-    let done = AtomicUsize::new(0);
+    // Progress in pairs of the painter's pass (fragment pairs, per light), which is where the
+    // time goes: a single light's set-up then has a rate too.
+    let done = AtomicU64::new(0);
+    let fragments = shared.fragments.len() as u64;
+    let total = (lights.len() as u64 * (fragments * fragments.saturating_sub(1) / 2)).max(1);
     let cancel = progress.cancellation();
     std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
@@ -288,17 +292,16 @@ fn shade_lights(
                         let mut column = shared.colour(light);
                         colour_ms += ms(start);
                         let start = Instant::now();
-                        shared.shadow(light.position, &mut column);
+                        shared.shadow(light.position, &mut column, done);
                         shadow_ms += ms(start);
                         out.push((l, column));
-                        done.fetch_add(1, Ordering::Relaxed);
                     }
                     (out, colour_ms, shadow_ms)
                 })
             })
             .collect();
         while handles.iter().any(|h| !h.is_finished()) {
-            progress.update(done.load(Ordering::Relaxed) as u64, lights.len() as u64);
+            progress.update(done.load(Ordering::Relaxed).min(total), total);
             // Short: a small set-up finishes within a few of these.
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
@@ -445,7 +448,7 @@ impl Shared<'_> {
 
     /// The painter's pass from the light: every fragment, in back-to-front order, projected
     /// onto each fragment before it; that target's lit vertices inside the projection go dark.
-    fn shadow(&self, light: DVec3, column: &mut [[f32; 3]]) {
+    fn shadow(&self, light: DVec3, column: &mut [[f32; 3]], pairs_done: &AtomicU64) {
         let order: Vec<usize> = self
             .tree
             .faces_back_to_front(light)
@@ -474,6 +477,7 @@ impl Shared<'_> {
             .collect();
         let cull = self.cull_by_cones && self.projection == Projection::Valid;
         for (i, &o) in order.iter().enumerate() {
+            pairs_done.fetch_add(i as u64, Ordering::Relaxed);
             let occluder = self.fragments[o];
             for &t in &order[..i] {
                 if lit[t] == 0 || (cull && !cones[o].meets(&cones[t])) {
