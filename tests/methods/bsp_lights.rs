@@ -976,7 +976,7 @@ fn a_small_scanned_mesh_keeps_every_triangle() {
         .sum();
     let tree = penumbra::lighting::bsp_lights::setup::build_tree_in(&polygons, &tolerance);
     let fragments: f64 = (tree.fragments.iter())
-        .filter(|(f, _)| polygons[f.source as usize].draw == 1)
+        .filter(|(f, _)| polygons[f.source].draw == 1)
         .map(|(f, _)| f.polygon.area())
         .sum();
     assert!(
