@@ -178,9 +178,10 @@ fn gemv_fastest_pair_ms(mut a: impl FnMut() -> f64, mut b: impl FnMut() -> f64) 
 }
 
 /// With 90 % of the lights under the threshold the result is within
-/// `Σ_{s_l < 0.05} s_l·C_l(v)` of the full sum at every vertex, and the GEMV is faster.
+/// `Σ_{s_l < 0.05} s_l·C_l(v)` of the full sum at every vertex ([`measure_threshold_halves_the_gemv`]
+/// times what it saves).
 #[test]
-fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
+fn item_20_the_threshold_errs_by_at_most_the_skipped_lights() {
     let lights = 40;
     let sc = scene(&scene_text(
         "{ name = \"bsp_lights\", max_segment_area = 0.01 }",
@@ -220,9 +221,15 @@ fn item_20_the_threshold_errs_by_at_most_the_skipped_lights_and_saves_time() {
     }
     println!("{skipped} of {lights} lights skipped; largest error / bound {worst_ratio:.4}");
     common::assert_clean(&setup.gpu);
+}
 
-    // The speed-up, from the GEMV pass's timestamps over a frame loop. The dense layout's: the
-    // sparse one reads every non-zero entry whatever the scales.
+/// Skipping 90 % of 100 lights at least halves the GEMV pass (its timestamps over a frame loop,
+/// the dense layout's: the sparse one reads every non-zero entry whatever the scales). A
+/// timing, so a measurement run by hand, not part of the suite, where other work on the machine
+/// decides it: `cargo test --test methods -- --ignored --nocapture threshold_halves`.
+#[test]
+#[ignore = "a timing: run by hand"]
+fn measure_threshold_halves_the_gemv() {
     let sc = scene(&scene_text(
         "{ name = \"bsp_lights\", max_segment_area = 0.002, layout = \"dense\" }",
         100,
@@ -720,9 +727,8 @@ fn spot_floor(layout: &str) -> String {
     text
 }
 
-/// Where most lights reach few vertices (narrow spots), `auto` takes the sparse layout, its
-/// GEMV equals the CPU sum, and it is faster than the dense one by about the fraction of
-/// entries it skips (timestamps of the GEMV pass, one run).
+/// Where most lights reach few vertices (narrow spots), `auto` takes the sparse layout and its
+/// GEMV equals the CPU sum ([`measure_sparse_gemv_is_faster_than_dense`] times it).
 #[test]
 fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
     let sc = scene(&spot_floor("auto"));
@@ -751,6 +757,24 @@ fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
     );
     common::assert_clean(&setup.gpu);
 
+    println!(
+        "{} vertices x 64 spots, {:.1} % of entries non-zero",
+        bsp.baked.vertices.len(),
+        100.0 * density
+    );
+    assert!(
+        density < 0.2,
+        "the spots should reach under a fifth of the floor each: {density}"
+    );
+}
+
+/// Under the 64 narrow spots the sparse GEMV is more than twice as fast as the dense one
+/// (timestamps of the GEMV pass: the fastest frame of each over alternating rounds). A timing,
+/// so a measurement run by hand: `cargo test --test methods -- --ignored --nocapture
+/// sparse_gemv_is_faster`.
+#[test]
+#[ignore = "a timing: run by hand"]
+fn measure_sparse_gemv_is_faster_than_dense() {
     let renderer = |layout: &str| {
         Renderer::new(
             common::test_gpu(),
@@ -770,19 +794,12 @@ fn the_sparse_layout_skips_the_lights_a_vertex_does_not_see() {
     common::assert_clean(&dense_r.gpu);
     common::assert_clean(&sparse_r.gpu);
     println!(
-        "{} vertices x 64 spots, {:.1} % of entries non-zero: dense GEMV {dense:.3} ms, sparse {sparse:.3} ms ({:.1}x)",
-        bsp.baked.vertices.len(),
-        100.0 * density,
+        "64 spots: dense GEMV {dense:.3} ms, sparse {sparse:.3} ms ({:.1}x)",
         dense / sparse
     );
     assert!(
-        density < 0.2,
-        "the spots should reach under a fifth of the floor each: {density}"
-    );
-    assert!(
         dense > 2.0 * sparse,
-        "the sparse GEMV should be well faster at {:.1} % density: dense {dense} ms, sparse {sparse} ms",
-        100.0 * density
+        "the sparse GEMV should be well faster: dense {dense} ms, sparse {sparse} ms"
     );
 }
 

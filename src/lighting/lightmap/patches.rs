@@ -285,6 +285,13 @@ pub(crate) fn count_in(charts: &[Chart], triangles: &[Triangle], size: f64) -> u
 /// not depend on how charts are looked up: here through a hash of their planes
 /// ([`PlaneGrid`]), so that a curved mesh's tens of thousands of small charts take linear time.
 pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
+    group_charts_counted(triangles).0
+}
+
+/// [`group_charts`] and how many charts it compared triangles with: the work that a scan of
+/// every chart makes quadratic.
+pub(crate) fn group_charts_counted(triangles: &[Triangle]) -> (Vec<Chart>, usize) {
+    let mut compared = 0;
     let scale = triangles
         .iter()
         .flat_map(|t| t.p)
@@ -314,6 +321,7 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
             .filter_map(|cell| cells.get(&(t.object, t.part, t.sky, cell)))
             .flatten()
             .copied()
+            .inspect(|_| compared += 1)
             .filter(|&c| matches(&charts[c]))
             .min();
         match same {
@@ -343,7 +351,7 @@ pub(crate) fn group_charts(triangles: &[Triangle]) -> Vec<Chart> {
             }
         }
     }
-    charts
+    (charts, compared)
 }
 
 /// A hash cell of chart planes: the object, side of the walls, sky flag, and the plane's
