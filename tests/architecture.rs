@@ -7,6 +7,9 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+#[path = "../src/util/test_files.rs"]
+mod test_files;
+
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap() {
         let p = e.unwrap().path();
@@ -417,8 +420,7 @@ fn long_functions_say_why() {
 /// The counter itself: a known function's length, and braces in literals and comments ignored.
 #[test]
 fn long_function_counter_counts_code_lines() {
-    let dir = std::env::temp_dir().join(format!("penumbra-long-fn-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = test_files::TestDir::new("long-fn");
     let path = dir.join("sample.rs");
     let body: String = (0..120).map(|i| format!("    let x{i} = '{{'; // }}\n")).collect();
     let text = format!(

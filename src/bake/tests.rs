@@ -1,9 +1,8 @@
 use super::*;
+use crate::util::test_files::TestDir;
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("penumbra-bake-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn temp_dir(tag: &str) -> TestDir {
+    TestDir::new(&format!("bake-{tag}"))
 }
 
 fn build_counting(calls: &mut u32, value: Vec<f64>) -> impl FnOnce(&mut Progress) -> Result<Vec<f64>> + '_ {
@@ -18,10 +17,10 @@ fn a_second_bake_with_the_same_key_comes_from_the_cache() {
     let dir = temp_dir("hit");
     let key = BakeKey::new("t").with("n", 3);
     let mut calls = 0;
-    let a = Baker::new(Some(dir.clone()))
+    let a = Baker::new(Some(dir.to_path_buf()))
         .bake("t", &key, build_counting(&mut calls, vec![1.0, 2.5, -3.0]))
         .unwrap();
-    let mut baker = Baker::new(Some(dir.clone()));
+    let mut baker = Baker::new(Some(dir.to_path_buf()));
     let b = baker.bake("t", &key, build_counting(&mut calls, vec![9.0])).unwrap();
     assert_eq!((a.clone(), b, calls), (vec![1.0, 2.5, -3.0], a, 1));
     assert!(
@@ -35,7 +34,7 @@ fn a_second_bake_with_the_same_key_comes_from_the_cache() {
 fn a_changed_input_rebuilds() {
     let dir = temp_dir("changed");
     let mut calls = 0;
-    let mut baker = Baker::new(Some(dir.clone()));
+    let mut baker = Baker::new(Some(dir.to_path_buf()));
     baker
         .bake(
             "t",
@@ -66,7 +65,7 @@ fn corrupt_or_truncated_files_are_rebuilt_not_trusted() {
     let dir = temp_dir("corrupt");
     let key = BakeKey::new("t").with("n", 1);
     let mut calls = 0;
-    let mut baker = Baker::new(Some(dir.clone()));
+    let mut baker = Baker::new(Some(dir.to_path_buf()));
     baker
         .bake("t", &key, build_counting(&mut calls, vec![1.0, 2.0]))
         .unwrap();
@@ -84,7 +83,7 @@ fn corrupt_or_truncated_files_are_rebuilt_not_trusted() {
         (other_key, "another key"),
     ] {
         std::fs::write(&path, &bad).unwrap();
-        let mut b = Baker::new(Some(dir.clone()));
+        let mut b = Baker::new(Some(dir.to_path_buf()));
         let v = b.bake("t", &key, build_counting(&mut calls, vec![1.0, 2.0])).unwrap();
         assert_eq!(v, vec![1.0, 2.0]);
         let r = &b.reports()[0];
@@ -134,7 +133,7 @@ fn a_killed_writers_temporaries_are_removed_and_a_live_ones_kept() {
         std::fs::write(f, b"partial").unwrap();
     }
     let mut calls = 0;
-    Baker::new(Some(dir.clone()))
+    Baker::new(Some(dir.to_path_buf()))
         .bake("t", &BakeKey::new("t"), build_counting(&mut calls, vec![1.0]))
         .unwrap();
     assert!(!stale.exists(), "a temporary of a gone process is left");
@@ -146,7 +145,8 @@ fn a_killed_writers_temporaries_are_removed_and_a_live_ones_kept() {
 
 #[test]
 fn a_result_that_cannot_be_stored_is_reported_so() {
-    let dir = temp_dir("unwritable");
+    let parent = temp_dir("unwritable");
+    let dir = parent.join("cache");
     // A file where the cache directory should be: nothing can be stored under it.
     std::fs::write(&dir, b"not a directory").unwrap();
     let mut calls = 0;
@@ -157,7 +157,6 @@ fn a_result_that_cannot_be_stored_is_reported_so() {
     let r = &baker.reports()[0];
     assert!(r.not_stored.is_some() && !r.cached, "{r:?}");
     assert!(table(baker.reports()).contains("NOT stored"));
-    let _ = std::fs::remove_file(&dir);
 }
 
 #[test]
@@ -165,16 +164,15 @@ fn a_cache_only_baker_reads_the_cache_and_refuses_to_build() {
     let dir = temp_dir("cached-only");
     let key = BakeKey::new("t").with("n", 4);
     let mut calls = 0;
-    let mut reader = Baker::cached_only(dir.clone());
+    let mut reader = Baker::cached_only(dir.to_path_buf());
     assert!(reader.bake("t", &key, build_counting(&mut calls, vec![1.0])).is_err());
     assert_eq!((reader.missing(), calls), (Some("t"), 0));
-    Baker::new(Some(dir.clone()))
+    Baker::new(Some(dir.to_path_buf()))
         .bake("t", &key, build_counting(&mut calls, vec![2.0]))
         .unwrap();
-    let mut reader = Baker::cached_only(dir.clone());
+    let mut reader = Baker::cached_only(dir.to_path_buf());
     let v = reader.bake("t", &key, build_counting(&mut calls, vec![3.0])).unwrap();
     assert_eq!((v, calls, reader.missing()), (vec![2.0], 1, None));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A build that stops early because its thread was cancelled returns what it had: the baker
@@ -185,7 +183,7 @@ fn a_cancelled_bake_is_not_cached_and_the_next_does_not_start() {
     let dir = temp_dir("cancelled");
     let cancel = Cancel::new();
     cancel_this_thread(Some(cancel.clone()));
-    let mut baker = Baker::new(Some(dir.clone()));
+    let mut baker = Baker::new(Some(dir.to_path_buf()));
     let key = BakeKey::new("t").with("n", 1);
     let stopped = baker.bake("t", &key, |progress| {
         let mut done = Vec::new();
@@ -210,5 +208,4 @@ fn a_cancelled_bake_is_not_cached_and_the_next_does_not_start() {
     assert!(matches!(next, Err(Error::Cancelled(_))) && calls == 0, "{next:?}");
     let files = std::fs::read_dir(&dir).map(|d| d.count()).unwrap_or(0);
     assert_eq!(files, 0, "nothing written in {}", dir.display());
-    let _ = std::fs::remove_dir_all(&dir);
 }

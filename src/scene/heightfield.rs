@@ -571,8 +571,7 @@ mod tests {
 
     #[test]
     fn a_height_image_beyond_the_limit_is_refused_before_decoding() {
-        let dir = std::env::temp_dir().join(format!("penumbra-height-limit-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::util::test_files::TestDir::new("height-limit");
         let path = dir.join("wide.png");
         image::GrayImage::new(MAX_HEIGHT_IMAGE_SIDE + 1, 2).save(&path).unwrap();
         let Err(e) = HeightImage::load(&path) else {
@@ -586,7 +585,6 @@ mod tests {
         let ok = dir.join("ok.png");
         image::GrayImage::new(MAX_HEIGHT_IMAGE_SIDE, 2).save(&ok).unwrap();
         assert!(HeightImage::load(&ok).is_ok());
-        let _ = std::fs::remove_dir_all(dir);
     }
 
     fn src(shape: HeightShape) -> HeightfieldSource {
@@ -716,8 +714,7 @@ mod tests {
     /// are one error naming the file and the field.
     #[test]
     fn height_images_load_value_by_value() {
-        let dir = std::env::temp_dir().join(format!("penumbra-height-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::util::test_files::TestDir::new("height");
         let png = dir.join("h.png");
         let raw: [u16; 6] = [0, 65535, 32768, 1000, 7, 40000];
         image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(3, 2, raw.to_vec())
@@ -757,6 +754,5 @@ mod tests {
         assert!(e.contains("tiny.png") && e.contains("at least 2×2"), "{e}");
         let e = HeightImage::load(&dir.join("missing.png")).err().unwrap().to_string();
         assert!(e.contains("missing.png") && e.contains("cannot load"), "{e}");
-        std::fs::remove_dir_all(&dir).ok();
     }
 }

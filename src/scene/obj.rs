@@ -166,14 +166,10 @@ fn precheck(text: &str, file: &str) -> Result<(), SceneError> {
 pub(crate) mod tests {
     use super::*;
     use crate::scene::mesh::tests::assert_well_formed;
-    use std::path::PathBuf;
 
-    /// A fresh directory under the system temp dir, unique per test.
-    pub(crate) fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("penumbra-scene-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A fresh directory under the system temp dir, unique per test, removed after it.
+    pub(crate) fn temp_dir(name: &str) -> crate::util::test_files::TestDir {
+        crate::util::test_files::TestDir::new(&format!("scene-{name}"))
     }
 
     const CUBE: &str = "# unit cube, quads, no normals

@@ -282,10 +282,10 @@ mod tests {
         let mut img = HdrImage::new(3, 2);
         img.pixels[0] = [1e-6, 123.5, 7.25, 1.0];
         img.pixels[5] = [65504.0, 0.1, 3.0, 1.0];
-        let p = std::env::temp_dir().join(format!("penumbra-io-{}.exr", std::process::id()));
+        let dir = crate::util::test_files::TestDir::new("io");
+        let p = dir.join("round-trip.exr");
         img.write_exr(&p).unwrap();
         let back = HdrImage::read_exr(&p).unwrap();
-        std::fs::remove_file(&p).ok();
         assert_eq!(back, img);
     }
 

@@ -6,4 +6,6 @@ pub mod console;
 pub mod image_io;
 pub(crate) mod parallel;
 pub mod progress;
+#[cfg(test)]
+pub(crate) mod test_files;
 pub mod timing;

@@ -59,8 +59,7 @@ fn committed_tables_match_their_data() {
 
 #[test]
 fn an_edited_number_fails_the_check() {
-    let dir = std::env::temp_dir().join(format!("penumbra-docs-tables-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = crate::support::test_files::TestDir::new("docs-tables");
     copy_tree(&repo().join("docs"), &dir.join("docs"));
     std::fs::copy(repo().join("README.md"), dir.join("README.md")).unwrap();
     std::fs::create_dir_all(dir.join("tools")).unwrap();

@@ -180,9 +180,7 @@ fn run(
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("penumbra-fuzz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    crate::support::temp_path(&format!("fuzz-{name}"))
 }
 
 fn scene_target(input: &[u8]) -> Result<(), String> {

@@ -47,6 +47,7 @@ impl Browser {
     /// Starts Chromium with DevTools on fds 3 (commands in) and 4 (replies out): a shell puts
     /// this process's pipes there, so no unsafe code is needed to arrange the descriptors.
     fn launch(profile: &Path) -> Browser {
+        std::fs::create_dir_all(profile).expect("make the browser's profile dir");
         let mut child = Command::new("bash")
             .arg("-c")
             .arg("exec \"$0\" \"$@\" 3<&0 4>&1 0</dev/null 1>/dev/null")
@@ -61,6 +62,8 @@ impl Browser {
                 "--hide-scrollbars",
                 &format!("--user-data-dir={}", profile.display()),
             ])
+            // Chromium's own scratch files (org.chromium.Chromium.*) go with the profile.
+            .env("TMPDIR", profile)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())

@@ -16,11 +16,8 @@ use penumbra::util::image_io::HdrImage;
 const W: u32 = 48;
 const H: u32 = 36;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("penumbra-assets-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn temp_dir(name: &str) -> common::test_files::TestDir {
+    common::test_files::TestDir::new(&format!("assets-{name}"))
 }
 
 fn write_png(path: &Path, rgba: [u8; 4]) {

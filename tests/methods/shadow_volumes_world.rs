@@ -421,8 +421,7 @@ min = [-4, 3, -4]
 max = [4, 3, 4]
 intensity = 0.01
 "#;
-    let dir = std::env::temp_dir().join(format!("penumbra-queries-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::test_files::TestDir::new("queries");
     let path = dir.join("many_passes.toml");
     std::fs::write(&path, text).unwrap();
     let opts = penumbra::commands::capture::CaptureOptions {

@@ -10,6 +10,8 @@ pub mod heightfield;
 pub mod reference;
 pub mod rng;
 pub mod shadow_volumes;
+#[path = "../../src/util/test_files.rs"]
+pub mod test_files;
 
 pub fn test_gpu_desc() -> GpuDesc {
     crash_report::install();
@@ -41,10 +43,34 @@ pub fn xorshift(seed: u64) -> impl FnMut() -> f64 {
     move || rng.next_f64()
 }
 
+/// `name` in this test process's directory under the system temp dir (the same path for the
+/// same name; nothing is made there). The directory goes when the process exits, its tests passed
+/// or failed, unless `PENUMBRA_KEEP_TEST_FILES` is set.
 pub fn temp_path(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("penumbra-tests-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
+    static DIR: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = process_temp_dir();
+        std::fs::create_dir_all(&dir).expect("make the tests' temp dir");
+        if std::env::var_os("PENUMBRA_KEEP_TEST_FILES").is_some() {
+            eprintln!("test files kept in {}", dir.display());
+        } else {
+            // The test harness ends through the C library's `exit` (returning from `main`, or
+            // `process::exit(101)` after a failure), which runs the `atexit` handlers; Rust runs
+            // no destructor for a static.
+            // SAFETY: `atexit` only records the pointer to a function that cannot unwind.
+            unsafe { libc::atexit(remove_process_temp_dir) };
+        }
+        dir
+    })
+    .join(name)
+}
+
+fn process_temp_dir() -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("penumbra-tests-{}", std::process::id()))
+}
+
+extern "C" fn remove_process_temp_dir() {
+    let _ = std::fs::remove_dir_all(process_temp_dir());
 }
 
 /// Records `graph` into `frame` with fresh resource states, submits it and waits.

@@ -172,8 +172,7 @@ mod tests {
 
     #[test]
     fn a_bookmark_round_trips_through_its_file() {
-        let dir = std::env::temp_dir().join(format!("penumbra-bookmarks-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::util::test_files::TestDir::new("bookmarks");
         let path = bookmarks_path(Some(&dir.join("scene.toml")));
         assert!(path.ends_with("scene.toml.bookmarks.toml"));
         let mut cam = FlyCamera::new(camera());

@@ -797,8 +797,8 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     assert!(Baked::decode(&[bytes.as_slice(), &[0]].concat()).is_none());
     assert_eq!(baked.bytes_per_light(Storage::F32), 12 * baked.vertices.len() as u64);
     assert_eq!(baked.bytes_per_light(Storage::F16), 6 * baked.vertices.len() as u64);
-    let dir = std::env::temp_dir().join(format!("penumbra-bsp-lights-{}", std::process::id()));
-    let mut baker = Baker::new(Some(dir.clone()));
+    let dir = crate::util::test_files::TestDir::new("bsp-lights");
+    let mut baker = Baker::new(Some(dir.to_path_buf()));
     let key = BakeKey::new("bsp test").with("config", config);
     let mut runs = 0;
     for _ in 0..2 {
@@ -812,7 +812,6 @@ fn the_bake_round_trips_through_the_cache_and_its_key() {
     }
     assert_eq!(runs, 1, "the second bake comes from the cache");
     assert!(baker.reports()[1].cached);
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]

@@ -634,8 +634,8 @@ fn the_setup_is_a_cached_bake() {
     let config = Config::from_decl(&s.methods[0]).unwrap();
     let geometry = crate::lighting::lightmap::geometry::scene_geometry(&s, "vls").unwrap();
     let layout = Layout::new(&s, &geometry, &s.methods[0], &config).unwrap();
-    let dir = std::env::temp_dir().join(format!("penumbra-vls-bake-{}", std::process::id()));
-    let mut baker = Baker::new(Some(dir.clone()));
+    let dir = crate::util::test_files::TestDir::new("vls-bake");
+    let mut baker = Baker::new(Some(dir.to_path_buf()));
     let key = layout.key(&config);
     let a = baker
         .bake("vls", &key, |p| Ok(layout.select(&config.setup, p)))
@@ -655,7 +655,6 @@ fn the_setup_is_a_cached_bake() {
         ..config
     };
     assert_ne!(layout.key(&other).hash(), key.hash());
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// The chart's sweep covers K, both selections, three segment sizes and the faithful mode.
