@@ -87,3 +87,96 @@ fn an_edited_number_fails_the_check() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Every file under `dir` whose name ends in one of `exts`.
+fn files_under(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            files_under(&path, exts, out);
+        } else if exts.iter().any(|e| path.extension().is_some_and(|x| x == *e)) {
+            out.push(path);
+        }
+    }
+}
+
+/// The names of the functions in the Rust sources under `dir`.
+fn functions_under(dir: &Path) -> Vec<String> {
+    let mut files = Vec::new();
+    files_under(dir, &["rs"], &mut files);
+    let mut names = Vec::new();
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        for rest in text.split("fn ").skip(1) {
+            names.push(rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect());
+        }
+    }
+    names
+}
+
+/// The `cargo test` commands the docs give for their measurements run a test binary that exists
+/// and name tests in it: test binaries were merged before, and the commands that made the data
+/// files named binaries no longer there.
+#[test]
+fn the_docs_test_commands_name_binaries_and_tests_that_exist() {
+    let root = repo();
+    let mut files = vec![root.join("README.md"), root.join("scenes/textures/CREDITS.md")];
+    files_under(&root.join("docs"), &["md", "csv"], &mut files);
+    let mut checked = 0;
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (at, _) in text.match_indices("cargo test") {
+            // A command ends at its closing backtick or the line's end.
+            let command: &str = text[at..].split(['`', '\n']).next().unwrap();
+            let words: Vec<&str> = command.split_whitespace().skip(2).collect();
+            let mut binary = None;
+            let mut filters = Vec::new();
+            let mut i = 0;
+            while i < words.len() {
+                match words[i] {
+                    "--test" | "--test-threads" | "--features" | "-p" => {
+                        if words[i] == "--test" {
+                            binary = words.get(i + 1).copied();
+                        }
+                        i += 1;
+                    }
+                    "|" | "&&" | ";" => break,
+                    w if !w.starts_with('-') => filters.push(w),
+                    _ => {}
+                }
+                i += 1;
+            }
+            let sources = match binary {
+                Some(name) => {
+                    let (file, dir) = (root.join(format!("tests/{name}.rs")), root.join("tests").join(name));
+                    assert!(
+                        file.exists() || dir.join("main.rs").exists(),
+                        "{}: `{command}` runs test binary `{name}`, which does not exist",
+                        f.display()
+                    );
+                    if file.exists() {
+                        let mut names = functions_under(&root.join("tests/support"));
+                        let text = std::fs::read_to_string(&file).unwrap();
+                        for rest in text.split("fn ").skip(1) {
+                            names.push(rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect());
+                        }
+                        names
+                    } else {
+                        functions_under(&dir)
+                    }
+                }
+                None => functions_under(&root.join("src")),
+            };
+            for filter in filters {
+                let last = filter.rsplit("::").next().unwrap();
+                assert!(
+                    sources.iter().any(|n| n.contains(last)),
+                    "{}: `{command}` names tests matching `{filter}`, and no test function matches",
+                    f.display()
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 15, "only {checked} test filters found in the docs");
+}
