@@ -462,3 +462,33 @@ impl<'a> RenderGraph<'a> {
         Ok(report)
     }
 }
+
+/// The bytes of `buffer`, whole, copied through a host buffer on a frame of its own once the
+/// work queued before has finished: a one-off read of GPU data (a light's vertex colours, a
+/// volume's cells, the clusters' counts). `name` names the passes and the timestamp scope.
+pub fn read_back_buffer(gpu: &mut Gpu, buffer: BufferId, name: &str) -> Result<Vec<u8>, BackendError> {
+    let size = gpu.buffer_desc(buffer)?.size;
+    let host = gpu.create_buffer(&crate::backend::BufferDesc {
+        name: format!("{name} readback"),
+        size,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        memory: crate::backend::MemoryKind::GpuToCpu,
+    })?;
+    let frame = gpu.create_frame()?;
+    let mut graph = RenderGraph::new();
+    graph
+        .pass(&format!("{name} readback"))
+        .buffer(buffer, Access::TransferRead, None)
+        .buffer(host, Access::TransferWrite, None)
+        .record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
+    graph
+        .pass(&format!("{name} readback host"))
+        .buffer(host, Access::HostRead, None)
+        .record(|_| Ok(()));
+    let mut states = ResourceStates::default();
+    let run = graph.run_and_wait(gpu, frame, &mut states, &format!("{name} readback"));
+    let bytes = run.and_then(|()| gpu.read_buffer(host));
+    gpu.destroy_buffer(host);
+    gpu.destroy_frame(frame)?;
+    bytes
+}

@@ -1002,31 +1002,9 @@ impl BspLights {
 
     /// Reads the vertex colour buffer back (after the frames that wrote it finished).
     pub fn read_colours(&self, gpu: &mut crate::backend::Gpu) -> Result<Vec<[f32; 4]>> {
-        let size = 16 * self.baked.vertices.len() as u64;
-        let host = gpu.create_buffer(&BufferDesc {
-            name: format!("{NAME} readback"),
-            size,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            memory: MemoryKind::GpuToCpu,
-        })?;
-        let frame = gpu.create_frame()?;
-        let mut graph = RenderGraph::new();
-        let colours = self.colours;
-        graph
-            .pass("bsp_lights readback")
-            .buffer(colours, Access::TransferRead, None)
-            .buffer(host, Access::TransferWrite, None)
-            .record(move |ctx| ctx.rec.copy_buffer(colours, host, size));
-        graph
-            .pass("bsp_lights readback host")
-            .buffer(host, Access::HostRead, None)
-            .record(|_| Ok(()));
-        let mut states = ResourceStates::default();
-        graph.run_and_wait(gpu, frame, &mut states, "bsp_lights readback")?;
-        let bytes = gpu.read_buffer(host)?;
-        gpu.destroy_buffer(host);
-        gpu.destroy_frame(frame)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes[..size as usize]))
+        let bytes = crate::graph::read_back_buffer(gpu, self.colours, NAME)?;
+        let size = 16 * self.baked.vertices.len();
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..size.min(bytes.len())]))
     }
 }
 

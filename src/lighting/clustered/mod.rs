@@ -22,7 +22,7 @@ use glam::Vec3;
 use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId};
 use crate::error::{Error, Result};
 use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
-use crate::graph::{Access, RenderGraph, ResourceStates};
+use crate::graph::{Access, RenderGraph};
 use crate::lighting::{
     begin_term_rendering, term_pass, term_pipeline_desc, CreateContext, FrameContext, LightingMethod, Term, Terms,
 };
@@ -348,30 +348,8 @@ pub fn overflow_warning(counts: &[u32], max_per_cluster: u32) -> Option<String> 
 }
 
 fn read_words(gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
-    let size = gpu.buffer_desc(buffer)?.size;
-    let host = gpu.create_buffer(&BufferDesc {
-        name: "clustered readback".into(),
-        size,
-        usage: vk::BufferUsageFlags::TRANSFER_DST,
-        memory: MemoryKind::GpuToCpu,
-    })?;
-    let frame = gpu.create_frame()?;
-    let mut graph = RenderGraph::new();
-    graph
-        .pass("clustered readback")
-        .buffer(buffer, Access::TransferRead, None)
-        .buffer(host, Access::TransferWrite, None)
-        .record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
-    graph
-        .pass("clustered readback host")
-        .buffer(host, Access::HostRead, None)
-        .record(|_| Ok(()));
-    let mut states = ResourceStates::default();
-    graph.run_and_wait(gpu, frame, &mut states, "clustered readback")?;
-    let bytes = gpu.read_buffer(host)?;
-    gpu.destroy_buffer(host);
-    gpu.destroy_frame(frame)?;
-    Ok(bytemuck::cast_slice(&bytes[..size as usize]).to_vec())
+    let bytes = crate::graph::read_back_buffer(gpu, buffer, NAME)?;
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
 impl LightingMethod for Clustered {

@@ -8,7 +8,7 @@ use glam::{IVec3, Vec3};
 
 use super::config::Config;
 use super::grid::{self, Grid};
-use crate::backend::{vk, Bind, BufferDesc, BufferId, ComputePipelineDesc, Gpu, MemoryKind, PipelineId, SpecConstant};
+use crate::backend::{vk, Bind, BufferId, ComputePipelineDesc, Gpu, PipelineId, SpecConstant};
 use crate::error::{Error, Result};
 use crate::graph::{Access, RenderGraph, ResourceStates};
 use crate::shaders::ShaderLibrary;
@@ -352,30 +352,8 @@ impl VolumeGpu {
 
     /// Reads a buffer of the volume back to the host (after the frames that wrote it finished).
     pub fn read_words(&self, gpu: &mut Gpu, buffer: BufferId) -> Result<Vec<u32>> {
-        let size = gpu.buffer_desc(buffer)?.size;
-        let host = gpu.create_buffer(&BufferDesc {
-            name: "lpv readback".into(),
-            size,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            memory: MemoryKind::GpuToCpu,
-        })?;
-        let frame = gpu.create_frame()?;
-        let mut graph = RenderGraph::new();
-        graph
-            .pass("lpv readback")
-            .buffer(buffer, Access::TransferRead, None)
-            .buffer(host, Access::TransferWrite, None)
-            .record(move |ctx| ctx.rec.copy_buffer(buffer, host, size));
-        graph
-            .pass("lpv readback host")
-            .buffer(host, Access::HostRead, None)
-            .record(|_| Ok(()));
-        let mut states = ResourceStates::default();
-        graph.run_and_wait(gpu, frame, &mut states, "LPV readback")?;
-        let bytes = gpu.read_buffer(host)?;
-        gpu.destroy_buffer(host);
-        gpu.destroy_frame(frame)?;
-        Ok(bytemuck::cast_slice(&bytes[..size as usize]).to_vec())
+        let bytes = crate::graph::read_back_buffer(gpu, buffer, "lpv")?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
     /// The three channels of a set.
