@@ -10,6 +10,7 @@
 //! ([`light`]) is projected every frame.
 
 pub mod config;
+mod estimate;
 pub mod gpu;
 pub mod light;
 pub mod measure;
@@ -262,12 +263,24 @@ pub fn bake(
     let mut occluders = Occluders::new(&geometry.triangles);
     let mode = config.transfer.solve.mode;
     let samples = SampleSet::new(config.samples, config.transfer.bands)?;
-    if let Rays::Cpu = rays {
-        // Before any long work: the CPU visibility dominates a bake of fine patches or many
-        // samples (hours at 2 cm on a courtyard), and says so once over a minute.
-        if let Some(e) = transfer::visibility_estimate(&p, &occluders, &samples, mode) {
-            progress.warn_before(&e);
-        }
+    // Before any long work, once over a minute: the CPU visibility dominates a bake of fine
+    // patches or many samples (hours at 2 cm on a courtyard); the bounces, shot on the CPU
+    // whichever baker casts the rays, grow as patches × shots.
+    let visibility = match rays {
+        Rays::Cpu => transfer::visibility_estimate(&p, &occluders, &samples, mode),
+        Rays::Gpu(..) => None,
+    };
+    let inside = p.patches.iter().filter(|q| q.inside()).count();
+    let bounces = estimate::bounces(
+        geometry,
+        &config.transfer,
+        config.samples,
+        config.patch_size,
+        inside,
+        progress,
+    );
+    if let Some(e) = estimate::sum(visibility, bounces) {
+        progress.warn_before(&e);
     }
     if mode == Mode::Corrected {
         // As radiosity's corrected bake does: a patch half under a wall standing on its floor
@@ -293,8 +306,7 @@ pub fn bake(
         }
     };
     crate::bake::check_cancelled(progress, "sh light-map visibility")?;
-    // The bounces' own line: the visibility's rate says nothing of the shooting's time, which
-    // grows as patches × shots, so the shooting makes its own estimate two seconds in.
+    // The bounces' own line: the visibility's rate says nothing of the shooting's time.
     let t = transfer::bake(
         &p,
         &occluders,

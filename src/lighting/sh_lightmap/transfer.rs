@@ -76,7 +76,7 @@ const CALIBRATION_PATCHES: usize = 4;
 
 /// [`visibility_cpu`]'s time, estimated before it starts: a few patches spread over the scene,
 /// four a core, trace every sample (twice: the first run warms the caches), and the time scales
-/// by the inside patches. The bounces that follow make their own estimate.
+/// by the inside patches. The bounces that follow are estimated apart (`estimate::bounces`).
 pub fn visibility_estimate(p: &Patches, occluders: &Occluders, samples: &SampleSet, mode: Mode) -> Option<Estimate> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
