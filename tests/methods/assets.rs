@@ -69,7 +69,8 @@ const KD_B: Vec3 = Vec3::new(0.5, 1.0, 0.6);
 const SUN: Vec3 = Vec3::new(-0.3, -1.0, -0.4);
 const E: Vec3 = Vec3::new(3.0, 2.5, 2.0);
 
-fn obj_scene(name: &str) -> Scene {
+/// The scene, and its directory (the textures load with the renderer, so it must outlive it).
+fn obj_scene(name: &str) -> (Scene, common::test_files::TestDir) {
     let dir = temp_dir(name);
     write_png(&dir.join("a.png"), TEXEL_A);
     write_png(&dir.join("b.png"), TEXEL_B);
@@ -89,7 +90,7 @@ fn obj_scene(name: &str) -> Scene {
         SUN.x, SUN.y, SUN.z, E.x, E.y, E.z
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
-    Scene::from_file(dir.join("scene.toml")).unwrap()
+    (Scene::from_file(dir.join("scene.toml")).unwrap(), dir)
 }
 
 /// The closed form at a ground point: which quad (object space x = (p.x − 0.5)/2) and its
@@ -141,7 +142,7 @@ fn check(img: &HdrImage, want: impl Fn(u32, u32) -> Option<Vec3>, tol: f32) -> (
 
 #[test]
 fn obj_mtl_textured_quads_under_a_directional_light() {
-    let scene = obj_scene("forward");
+    let (scene, _dir) = obj_scene("forward");
     assert_eq!(scene.objects.len(), 2, "one draw per material");
     let img = forward(&scene);
     let want = |i: u32, j: u32| obj_want(ground(&scene, i as f32 + 0.5, j as f32 + 0.5)?, 0.05);
@@ -153,7 +154,7 @@ fn obj_mtl_textured_quads_under_a_directional_light() {
 
 #[test]
 fn reference_sees_the_asset_materials() {
-    let scene = obj_scene("reference");
+    let (scene, _dir) = obj_scene("reference");
     let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (W, H)).unwrap();
     let settings = Settings {
         spp: 4,
