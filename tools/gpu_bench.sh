@@ -17,7 +17,7 @@
 #   - the Ca3D-Engine thesis's frame (bsp_rooms, `seed000`) and Dickson et al. 2011's (lpv_bush, `lpv_over_forward` at the
 #     document's 16^3 and 32^3 volumes, 256^2 RSM) at the documents' window sizes, against their
 #     published frame rates;
-#   - the generated-scene suite, when this build has a `penumbra suite` command.
+#   - the generated-scene suite, the first of four shards of the lavapipe table's scenes.
 # The seed frames are raster-bound: on a data-centre part (H100, H200, A100, ...), whose
 # rasterisation runs on few units, the script says so, and their frame-rate targets are to be
 # judged on a graphics GPU.
@@ -170,12 +170,11 @@ step 30 "seed 004's frame, 1024x1024, 256^2 RSM, 32^3 LPV (the qualitative confi
     "29.00 FPS on a GeForce 9800GT (Table 5.2, 256^2 RSM, 32^3)"
 rm -f scenes/_gpu_lpv_*.toml
 
-# The generated-scene suite, where this build has one.
-if "$bin" suite --help >/dev/null 2>&1; then
-    step 35 "generated-scene suite" "$bin" suite --help
-else
-    echo "== generated-scene suite: skipped (this build has no 'penumbra suite' command)"
-fi
+# The generated-scene suite: the first of four shards of the table in docs/results/lavapipe
+# (seed 1, 32x24, 256 spp references, every method each scene declares), so that the two
+# devices' rows compare scene by scene; its CSV and summary go to OUTDIR/suite.
+step 35 "generated-scene suite, shard 1/4 of seed 1" "$bin" suite --scenes 12 --seed 1 --size 32x24 \
+    --supersample 2 --reference-spp 256 --shard 1/4 -o "$out/suite" --cache-dir "$out/cache"
 echo "== targets done ($(date -u +%T) UTC)"
 [ "$full" = 1 ] || exit 0
 
