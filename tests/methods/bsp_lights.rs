@@ -6,14 +6,11 @@
 use crate::support as common;
 
 use penumbra::bake::Baker;
-use penumbra::environment::EnvironmentMap;
-use penumbra::gpu_scene::SceneGpu;
-use penumbra::graph::{RenderGraph, ResourceStates};
+use penumbra::graph::RenderGraph;
 use penumbra::lighting::bsp_lights::Layout;
-use penumbra::lighting::{CreateContext, LightingMethod, Terms};
+use penumbra::lighting::{LightingMethod, Terms};
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::Scene;
-use penumbra::shaders::ShaderLibrary;
 
 use crate::support::rng::Lcg as Rng;
 
@@ -42,33 +39,15 @@ fn scene(text: &str) -> Scene {
 }
 
 /// The device and resource states the method was created on.
-struct Setup {
-    gpu: penumbra::backend::Gpu,
-    states: ResourceStates,
-}
+type Setup = common::MethodFixture;
 
 fn create(scene: &Scene) -> (Setup, penumbra::lighting::bsp_lights::BspLights) {
-    let mut gpu = common::test_gpu();
-    let shaders = ShaderLibrary::Embedded;
-    let mut states = ResourceStates::default();
-    let environment = EnvironmentMap::of_scene(scene).unwrap();
-    let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
-    let mut bakes = Baker::new(None);
+    let mut f = common::MethodFixture::new(scene);
     let decl = scene.methods[0].clone();
-    let mut cx = CreateContext {
-        gpu: &mut gpu,
-        shaders: &shaders,
-        states: &mut states,
-        scene,
-        scene_gpu: &scene_gpu,
-        environment: &environment,
-        bakes: &mut bakes,
-        terms: Terms::BASE_DIRECT,
-        frames: 0,
-    };
-    let bsp = penumbra::lighting::bsp_lights::BspLights::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"));
+    let bsp = penumbra::lighting::bsp_lights::BspLights::new(&mut f.context(scene, Terms::BASE_DIRECT), &decl)
+        .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(bsp.name(), "bsp_lights");
-    (Setup { gpu, states }, bsp)
+    (f, bsp)
 }
 
 /// The GEMV for `scales`, read back.

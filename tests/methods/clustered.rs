@@ -7,7 +7,6 @@ use crate::support as common;
 
 use glam::Vec3;
 use penumbra::backend::Gpu;
-use penumbra::bake::Baker;
 use penumbra::environment::EnvironmentMap;
 use penumbra::gpu_scene::SceneGpu;
 use penumbra::graph::{RenderGraph, ResourceStates};
@@ -15,10 +14,9 @@ use penumbra::lighting::brdf::{shade, Surface};
 use penumbra::lighting::clustered::assign::{assign_cpu, Assignment, LightVolume};
 use penumbra::lighting::clustered::config::Config;
 use penumbra::lighting::clustered::Clustered;
-use penumbra::lighting::{CreateContext, Terms};
+use penumbra::lighting::Terms;
 use penumbra::renderer::{FrameOutput, Renderer};
 use penumbra::scene::{Light, Scene};
-use penumbra::shaders::ShaderLibrary;
 use penumbra::util::image_io::HdrImage;
 
 const W: u32 = 64;
@@ -106,42 +104,26 @@ fn lights_and_ranges(scene: &Scene, gpu: &mut Gpu) -> (Vec<penumbra::gpu_scene::
 /// The first `clustered` method's assignment for the scene's camera at W × H, read back, with the
 /// method (its block and light volumes) for the CPU twin.
 fn assignment(scene: &Scene) -> (Assignment, Clustered) {
-    let mut gpu = common::test_gpu();
-    let shaders = ShaderLibrary::Embedded;
-    let mut states = ResourceStates::default();
-    let environment = EnvironmentMap::of_scene(scene).unwrap();
-    let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
-    let mut bakes = Baker::new(None);
+    let mut f = common::MethodFixture::new(scene);
     let decl = scene
         .methods
         .iter()
         .find(|d| d.name == "clustered")
         .expect("a clustered method")
         .clone();
-    let mut method = {
-        let mut cx = CreateContext {
-            gpu: &mut gpu,
-            shaders: &shaders,
-            states: &mut states,
-            scene,
-            scene_gpu: &scene_gpu,
-            environment: &environment,
-            bakes: &mut bakes,
-            terms: Terms::BASE_DIRECT,
-            frames: 0,
-        };
-        Clustered::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"))
-    };
+    let mut method = Clustered::new(&mut f.context(scene, Terms::BASE_DIRECT), &decl).unwrap_or_else(|e| panic!("{e}"));
     let view_proj = scene.camera.view_projection(W as f32 / H as f32).to_cols_array();
-    method.plan(&view_proj, &scene_gpu.lights, W, H).unwrap();
-    let frame = gpu.create_frame().unwrap();
+    method.plan(&view_proj, &f.scene_gpu.lights, W, H).unwrap();
+    let frame = f.gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
     method.add_assignment_passes(&mut graph);
     graph.output_buffer(method.counts);
     graph.output_buffer(method.indices);
-    graph.run_and_wait(&gpu, frame, &mut states, "clustered test").unwrap();
-    let a = method.read_assignment(&mut gpu).unwrap();
-    common::assert_clean(&gpu);
+    graph
+        .run_and_wait(&f.gpu, frame, &mut f.states, "clustered test")
+        .unwrap();
+    let a = method.read_assignment(&mut f.gpu).unwrap();
+    common::assert_clean(&f.gpu);
     (a, method)
 }
 

@@ -8,16 +8,13 @@
 use crate::support as common;
 
 use glam::{DVec3, IVec3};
-use penumbra::bake::Baker;
-use penumbra::environment::EnvironmentMap;
-use penumbra::gpu_scene::SceneGpu;
-use penumbra::graph::{RenderGraph, ResourceStates};
+use penumbra::graph::RenderGraph;
 use penumbra::lighting::lpv::config::{Config, Mode};
 use penumbra::lighting::lpv::grid::{self, Corrected, Grid};
 use penumbra::lighting::lpv::rsm::LightCamera;
 use penumbra::lighting::lpv::volume::{propagate_standalone, Placement};
 use penumbra::lighting::lpv::{sh, Lpv};
-use penumbra::lighting::{CreateContext, Terms};
+use penumbra::lighting::Terms;
 use penumbra::scene::Scene;
 use penumbra::shaders::ShaderLibrary;
 
@@ -156,39 +153,21 @@ fn scene(text: &str) -> Scene {
 /// The volume the scene's `lpv` method computes in one frame, its placement and the light's
 /// camera.
 fn volume_of(scene: &Scene) -> ([Grid; 3], Placement, LightCamera) {
-    let mut gpu = common::test_gpu();
-    let shaders = ShaderLibrary::Embedded;
-    let mut states = ResourceStates::default();
-    let environment = EnvironmentMap::of_scene(scene).unwrap();
-    let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
-    let mut bakes = Baker::new(None);
+    let mut f = common::MethodFixture::new(scene);
     let decl = scene
         .methods
         .iter()
         .find(|d| d.name == "lpv")
         .expect("an lpv method")
         .clone();
-    let lpv = {
-        let mut cx = CreateContext {
-            gpu: &mut gpu,
-            shaders: &shaders,
-            states: &mut states,
-            scene,
-            scene_gpu: &scene_gpu,
-            environment: &environment,
-            bakes: &mut bakes,
-            terms: Terms::INDIRECT,
-            frames: 0,
-        };
-        Lpv::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"))
-    };
-    let frame = gpu.create_frame().unwrap();
+    let lpv = Lpv::new(&mut f.context(scene, Terms::INDIRECT), &decl).unwrap_or_else(|e| panic!("{e}"));
+    let frame = f.gpu.create_frame().unwrap();
     let mut graph = RenderGraph::new();
-    lpv.add_volume_passes(&mut graph, &scene_gpu);
+    lpv.add_volume_passes(&mut graph, &f.scene_gpu);
     graph.output_buffer(lpv.volumes[0].result());
-    graph.run_and_wait(&gpu, frame, &mut states, "lpv test").unwrap();
-    let result = lpv.volumes[0].read_set(&mut gpu, lpv.volumes[0].result()).unwrap();
-    common::assert_clean(&gpu);
+    graph.run_and_wait(&f.gpu, frame, &mut f.states, "lpv test").unwrap();
+    let result = lpv.volumes[0].read_set(&mut f.gpu, lpv.volumes[0].result()).unwrap();
+    common::assert_clean(&f.gpu);
     (result, lpv.placements[0], *lpv.camera())
 }
 
@@ -1281,26 +1260,10 @@ fn the_documents_compositor_blends_the_indirect_light_with_the_direct() {
 
 /// Seconds per unit of each stage's work that the scene's LPV measured when it was set up.
 fn rates_of(scene: &Scene) -> penumbra::lighting::lpv::cost::Rates {
-    let mut gpu = common::test_gpu();
-    let shaders = ShaderLibrary::Embedded;
-    let mut states = ResourceStates::default();
-    let environment = EnvironmentMap::of_scene(scene).unwrap();
-    let scene_gpu = SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
-    let mut bakes = Baker::new(None);
+    let mut f = common::MethodFixture::new(scene);
     let decl = scene.methods[0].clone();
-    let mut cx = CreateContext {
-        gpu: &mut gpu,
-        shaders: &shaders,
-        states: &mut states,
-        scene,
-        scene_gpu: &scene_gpu,
-        environment: &environment,
-        bakes: &mut bakes,
-        terms: Terms::INDIRECT,
-        frames: 0,
-    };
-    let lpv = Lpv::new(&mut cx, &decl).unwrap_or_else(|e| panic!("{e}"));
-    common::assert_clean(&gpu);
+    let lpv = Lpv::new(&mut f.context(scene, Terms::INDIRECT), &decl).unwrap_or_else(|e| panic!("{e}"));
+    common::assert_clean(&f.gpu);
     lpv.rates().expect("lavapipe has timestamps")
 }
 

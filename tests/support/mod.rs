@@ -235,3 +235,51 @@ pub fn env_list<T: std::str::FromStr + Clone>(var: &str, default: &[T]) -> Vec<T
         Err(_) => default.to_vec(),
     }
 }
+
+/// What a lighting method needs to be created outside the renderer (on a validated test device):
+/// the scene uploaded, its environment and a bake cache that stores nothing. `context` lends
+/// them to a method's constructor; the device and resource states stay for the test's passes.
+pub struct MethodFixture {
+    pub gpu: Gpu,
+    pub states: penumbra::graph::ResourceStates,
+    pub environment: penumbra::environment::EnvironmentMap,
+    pub scene_gpu: penumbra::gpu_scene::SceneGpu,
+    pub bakes: penumbra::bake::Baker,
+}
+
+static EMBEDDED_SHADERS: penumbra::shaders::ShaderLibrary = penumbra::shaders::ShaderLibrary::Embedded;
+
+impl MethodFixture {
+    pub fn new(scene: &penumbra::scene::Scene) -> MethodFixture {
+        let mut gpu = test_gpu();
+        let mut states = penumbra::graph::ResourceStates::default();
+        let environment = penumbra::environment::EnvironmentMap::of_scene(scene).unwrap();
+        let scene_gpu = penumbra::gpu_scene::SceneGpu::upload(&mut gpu, &mut states, scene, &environment).unwrap();
+        MethodFixture {
+            gpu,
+            states,
+            environment,
+            scene_gpu,
+            bakes: penumbra::bake::Baker::new(None),
+        }
+    }
+
+    /// A method's creation context for `scene` drawing `terms`.
+    pub fn context<'a>(
+        &'a mut self,
+        scene: &'a penumbra::scene::Scene,
+        terms: penumbra::lighting::Terms,
+    ) -> penumbra::lighting::CreateContext<'a> {
+        penumbra::lighting::CreateContext {
+            gpu: &mut self.gpu,
+            shaders: &EMBEDDED_SHADERS,
+            states: &mut self.states,
+            scene,
+            scene_gpu: &self.scene_gpu,
+            environment: &self.environment,
+            bakes: &mut self.bakes,
+            terms,
+            frames: 0,
+        }
+    }
+}
