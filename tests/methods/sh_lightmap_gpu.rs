@@ -76,6 +76,13 @@ fn box_with_sky() -> Vec<Triangle> {
 }
 
 fn gpu_bits(gpu: &mut Gpu, p: &Patches, tris: &[Triangle], samples: &SampleSet, mode: Mode) -> Vec<u32> {
+    // Every update the bake sends, in order: its rate must count from the rays' start, so the
+    // first says none done of them all (after the set-up, before the first chunk).
+    let updates = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let seen = updates.clone();
+    penumbra::util::progress::observe_this_thread(Some(std::sync::Arc::new(
+        move |u: &penumbra::util::progress::Update| seen.lock().unwrap().push((u.done, u.total)),
+    )));
     let bits = visibility_gpu(
         gpu,
         &ShaderLibrary::Embedded,
@@ -86,6 +93,14 @@ fn gpu_bits(gpu: &mut Gpu, p: &Patches, tris: &[Triangle], samples: &SampleSet, 
         &mut Progress::new("test"),
     )
     .unwrap_or_else(|e| panic!("{e}"));
+    penumbra::util::progress::observe_this_thread(None);
+    // (Progress says (0, 0) when it is made, before the work knows its size.)
+    let updates: Vec<(u64, u64)> = updates.lock().unwrap().iter().copied().filter(|u| u.1 > 0).collect();
+    let total = updates.last().expect("progress updates").1;
+    assert!(
+        updates.first() == Some(&(0, total)) && updates[1..].iter().all(|u| u.0 > 0),
+        "the first update is none done, and only the first: {updates:?}"
+    );
     common::assert_clean(gpu);
     bits
 }

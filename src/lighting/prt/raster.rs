@@ -490,6 +490,8 @@ fn run_batches(
         )?;
     }
     let t_start = std::time::Instant::now();
+    // The rate counts from the first batch, not from the set-up before it.
+    progress.update(0, slots.batches.len() as u64);
     for (k, &(set, first, count)) in slots.batches.iter().enumerate() {
         let mut graph = RenderGraph::new();
         record_batch(&mut graph, bake, config, (set, first, count), (w, h), render);

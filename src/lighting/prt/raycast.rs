@@ -677,6 +677,8 @@ impl RayBake {
         let mut per = FIRST_RAYS_PER_LANE.min(samples as u32);
         let mut sizer = BatchSizer::new(FIRST_CHUNK, 16, usize::MAX, MAX_CHUNK_GROWTH);
         let mut base = 0usize;
+        // The rate counts from the first batch, not from the set-up before it.
+        progress.update(0, total as u64);
         while base < total {
             let lanes = samples.div_ceil(per as usize);
             // Both dispatches within the guaranteed workgroup count: the trace's lanes, the

@@ -255,6 +255,9 @@ impl VisibilityBake {
         // the floor of 64.
         let mut sizer = BatchSizer::new(FIRST_CHUNK, 64, self.buffers.max_chunk, 2);
         let mut base = 0usize;
+        // The rate counts from here: the patches, the BVH's upload and the pipeline before it
+        // are not the rays' time (at 2 cm on the courtyard they made 2.5 s of rays read 226 h).
+        progress.update(0, total as u64);
         while base < total {
             let n = sizer.size().min(total - base).min(MAX_INVOCATIONS / lanes as usize);
             let t0 = std::time::Instant::now();
