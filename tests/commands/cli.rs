@@ -5,7 +5,7 @@ use crate::support as common;
 
 use common::penumbra;
 use std::path::{Path, PathBuf};
-use std::process::Output;
+use std::process::{Command, Output};
 
 fn path_str(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
@@ -685,4 +685,52 @@ fn a_bake_that_cannot_be_stored_fails() {
         std::fs::read(&blocker).unwrap() == b"not a directory",
         "the file in the way is kept"
     );
+}
+
+/// The three light-map bakes light a surface's front side only: from inside a closed box (whose
+/// faces look out) the camera sees every face from behind, and each method says so in one line
+/// from `capture`; from outside, none does.
+#[test]
+fn light_map_bakes_warn_when_the_camera_sees_surfaces_from_behind() {
+    let dir = common::temp_path("behind");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = |name: &str, camera: &str| {
+        let path = dir.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "methods = [\"radiosity\", \"sh_lightmap\", \"prt\"]\n[camera]\n{camera}\n\
+                 [[materials]]\nname = \"m\"\nalbedo = 0.5\n\
+                 [[objects]]\nmesh = \"box\"\nsize = 4\nmaterial = \"m\"\n\
+                 [[lights]]\ntype = \"directional\"\ndirection = [0.3, -1, 0.2]\nirradiance = [2, 2, 2]\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let inside = scene("inside.toml", "position = [0.3, 0.2, 0.5]\ntarget = [0, 0, -1]");
+    let outside = scene("outside.toml", "position = [0, 1, 8]\ntarget = [0, 0, 0]");
+    for method in ["radiosity", "sh_lightmap", "prt"] {
+        let said = |path: &Path| {
+            let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+                .args(["capture", path_str(path), "--method", method, "--size", "16x12"])
+                .args(["-o", path_str(&dir.join(format!("{method}.png")))])
+                .env("PENUMBRA_CACHE", dir.join("cache"))
+                .env("PENUMBRA_VALIDATION", "1")
+                .output()
+                .unwrap();
+            common::ok(&o);
+            stderr(&o)
+        };
+        let warning = format!("{method}: 100% of the camera's view sees surfaces from behind");
+        let (from_inside, from_outside) = (said(&inside), said(&outside));
+        assert!(
+            from_inside.lines().filter(|l| l.contains(&warning)).count() == 1,
+            "{method} from inside:\n{from_inside}"
+        );
+        assert!(
+            !from_outside.contains("from behind"),
+            "{method} from outside:\n{from_outside}"
+        );
+    }
 }
