@@ -261,22 +261,16 @@ f 1 2 3 4\nf 6 5 8 7\nf 5 1 4 8\nf 2 6 7 3\nf 4 3 7 8\nf 5 6 2 1\n";
     }
 
     #[test]
-    fn shared_assets_load_with_expected_topology() {
-        // Real meshes, when the project's shared assets are present (see SOURCES.md there).
-        let dir = Path::new("/work/shared/assets/meshes");
+    fn real_meshes_load_with_expected_topology() {
+        // The scanned and modelled meshes the repository carries (scenes/meshes/CREDITS.md).
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes");
         for (name, closed, boundary) in [
             ("spot.obj", true, 0usize),
-            ("suzanne.obj", false, 42),
-            // SOURCES.md counts 1,036 by OBJ index; many teapot vertices are duplicated along
-            // patch seams, and welded by position only 160 boundary edges remain.
+            // Its source counts 1,036 boundary edges by OBJ index; many teapot vertices are
+            // duplicated along patch seams, and welded by position only 160 boundary edges remain.
             ("teapot.obj", false, 160),
-            ("stanford-bunny.obj", false, 223),
         ] {
-            let path = dir.join(name);
-            if !path.exists() {
-                continue;
-            }
-            let m = load_obj(&path).unwrap();
+            let m = load_obj(&dir.join(name)).unwrap();
             assert_well_formed(&m);
             assert_eq!(m.is_closed_manifold(), closed, "{name}");
             assert_eq!(m.boundary_edge_count(), boundary, "{name}");
