@@ -85,7 +85,7 @@ fn cpu_sum(bsp: &penumbra::lighting::bsp_lights::BspLights, scales: &[f32], thre
 /// Random intensities every "frame"; the GEMV equals the CPU sum to f32 rounding (f16
 /// storage: to half-precision rounding of each entry), in both layouts.
 #[test]
-fn item_19_relighting_is_linear_in_random_intensities() {
+fn relighting_is_linear_in_random_intensities() {
     for (storage, tolerance, layout) in [
         ("f32", 2e-6, "dense"),
         ("f16", 1e-3, "dense"),
@@ -160,7 +160,7 @@ fn gemv_fastest_pair_ms(mut a: impl FnMut() -> f64, mut b: impl FnMut() -> f64) 
 /// `Σ_{s_l < 0.05} s_l·C_l(v)` of the full sum at every vertex ([`measure_threshold_halves_the_gemv`]
 /// times what it saves).
 #[test]
-fn item_20_the_threshold_errs_by_at_most_the_skipped_lights() {
+fn the_threshold_errs_by_at_most_the_skipped_lights() {
     let lights = 40;
     let sc = scene(&scene_text(
         "{ name = \"bsp_lights\", max_segment_area = 0.01 }",
@@ -240,7 +240,7 @@ fn measure_threshold_halves_the_gemv() {
 /// With static intensities, 100 frames are bit-identical (the thesis's unexplained
 /// flashing segments must not appear).
 #[test]
-fn item_23_frames_are_bit_identical_with_static_intensities() {
+fn frames_are_bit_identical_with_static_intensities() {
     let sc = scene(&scene_text("{ name = \"bsp_lights\", max_segment_area = 0.02 }", 6, 2));
     let mut r =
         Renderer::new(common::test_gpu(), sc, Some("bsp_lights"), (40, 30), 1).unwrap_or_else(|e| panic!("{e}"));

@@ -212,7 +212,7 @@ fn compare(vls_decl: &str, bsp_decl: &str) -> (f64, usize) {
 }
 
 #[test]
-fn item_12_vls_and_the_bsp_system_agree_within_1e_3_under_the_physical_model() {
+fn vls_and_the_bsp_system_agree_within_1e_3_under_the_physical_model() {
     let (worst, n) = compare(
         r#"{ name = "vls", mode = "corrected", selection = "closest", can_illuminate = false, feeler = "bvh", max_segment_area = 0.01 }"#,
         r#"{ name = "bsp_lights", mode = "corrected", storage = "f32", max_segment_area = 0.0025 }"#,
@@ -222,7 +222,7 @@ fn item_12_vls_and_the_bsp_system_agree_within_1e_3_under_the_physical_model() {
 }
 
 #[test]
-fn item_12_vls_and_the_bsp_system_agree_within_1e_3_under_the_seed_model() {
+fn vls_and_the_bsp_system_agree_within_1e_3_under_the_seed_model() {
     let (worst, n) = compare(
         r#"{ name = "vls", mode = "corrected", model = "seed", seed_k = 1.5, selection = "closest", can_illuminate = false, feeler = "bvh", max_segment_area = 0.01 }"#,
         r#"{ name = "bsp_lights", mode = "faithful", k = 1.5, storage = "f32", max_segment_area = 0.0025 }"#,

@@ -201,7 +201,7 @@ fn assert_convex_planar(p: &Polygon, normal: DVec3, what: &str) {
 }
 
 #[test]
-fn item_7_splitting_conserves_area_sides_and_convexity() {
+fn splitting_conserves_area_sides_and_convexity() {
     let mut rng = Lcg(3);
     let mut spanning = 0;
     for case in 0..2000 {
@@ -276,7 +276,7 @@ fn check_sides(tree: &Tree, child: Child, path: &mut Vec<(Plane, bool)>, visited
 }
 
 #[test]
-fn item_8_the_first_polygon_tree_conserves_area_and_keeps_fragments_on_their_side() {
+fn the_first_polygon_tree_conserves_area_and_keeps_fragments_on_their_side() {
     let mut rng = Lcg(11);
     for scene in 0..5 {
         let polygons: Vec<ScenePolygon> = (0..40)
@@ -338,7 +338,7 @@ fn cube(y0: f64) -> Vec<ScenePolygon> {
 }
 
 #[test]
-fn item_12_a_box_above_a_plane_under_an_overhead_light() {
+fn a_box_above_a_plane_under_an_overhead_light() {
     let mut polygons = vec![floor(6.0)];
     polygons.extend(cube(0.5));
     for (i, p) in polygons.iter().enumerate().skip(1) {
@@ -468,7 +468,7 @@ fn two_sided_rows_light_the_back_of_a_surface_with_its_shadows() {
 // §5 item 13: a square occluder against the ray cast and the analytic shadow.
 
 #[test]
-fn item_13_a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
+fn a_square_occluder_against_the_ray_cast_and_the_analytic_shadow() {
     let polygons = vec![floor(5.0), plate(0.0, 1.0, 0.0, 1.0)];
     let light = v(0.3, 3.0, 0.2);
     let lights = [point(light, DVec3::splat(5.0))];
@@ -550,7 +550,7 @@ fn dark_floor(s: &Setup, pred: impl Fn(DVec3) -> bool) -> usize {
 }
 
 #[test]
-fn item_14_a_light_between_occluder_and_receiver_casts_nothing_there() {
+fn a_light_between_occluder_and_receiver_casts_nothing_there() {
     // The plate is above the light: seen from the floor it is behind the light.
     let polygons = vec![floor(4.0), plate(0.2, 2.0, 0.0, 1.0)];
     let lights = [point(v(0.0, 1.0, 0.0), DVec3::splat(5.0))];
@@ -569,7 +569,7 @@ fn item_14_a_light_between_occluder_and_receiver_casts_nothing_there() {
 }
 
 #[test]
-fn item_14_an_occluder_straddling_the_lights_parallel_plane_is_clipped_not_inverted() {
+fn an_occluder_straddling_the_lights_parallel_plane_is_clipped_not_inverted() {
     // A steep plate from y = 1 (x = 0.5) to y = 3 (x = 1), through the plane y = 2 of the light.
     let occluder = quad(v(0.5, 1.0, 0.5), v(0.5, 2.0, 0.0), v(0.0, 0.0, -1.0));
     let polygons = vec![floor(5.0), occluder];
@@ -596,7 +596,7 @@ fn item_14_an_occluder_straddling_the_lights_parallel_plane_is_clipped_not_inver
 }
 
 #[test]
-fn item_14_a_receiver_in_front_of_the_occluder_is_not_shadowed_by_it() {
+fn a_receiver_in_front_of_the_occluder_is_not_shadowed_by_it() {
     // Seen from the light, the small plate at y = 2 is in front of the one at y = 1.
     let polygons = vec![floor(4.0), plate(0.0, 1.0, 0.0, 1.0), plate(0.0, 2.0, 0.0, 0.6)];
     let lights = [point(v(0.1, 3.0, 0.0), DVec3::splat(5.0))];
@@ -617,7 +617,7 @@ fn item_14_a_receiver_in_front_of_the_occluder_is_not_shadowed_by_it() {
 }
 
 #[test]
-fn item_14_coplanar_and_touching_polygons_cast_no_slivers_and_do_not_shadow_themselves() {
+fn coplanar_and_touching_polygons_cast_no_slivers_and_do_not_shadow_themselves() {
     // Two floor tiles sharing an edge, and a box standing on one of them (touching it).
     let tiles = vec![
         quad(v(-2.0, 0.0, 2.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -4.0)),
@@ -660,7 +660,7 @@ fn item_14_coplanar_and_touching_polygons_cast_no_slivers_and_do_not_shadow_them
 }
 
 #[test]
-fn item_14_an_occluder_partly_outside_the_receiver_shadows_only_the_receiver() {
+fn an_occluder_partly_outside_the_receiver_shadows_only_the_receiver() {
     // A 1 m floor; the plate's shadow falls half off it.
     let polygons = vec![floor(1.0), plate(0.5, 1.0, 0.0, 0.8)];
     let lights = [point(v(0.5, 3.0, 0.0), DVec3::splat(5.0))];
@@ -674,7 +674,7 @@ fn item_14_an_occluder_partly_outside_the_receiver_shadows_only_the_receiver() {
 }
 
 #[test]
-fn item_14_a_light_inside_another_lights_cone_is_unaffected() {
+fn a_light_inside_another_lights_cone_is_unaffected() {
     let polygons = vec![floor(6.0), plate(0.0, 1.0, 0.0, 1.0)];
     // The second light sits in the first's cone: lights are not occluders, so neither column
     // changes with the other present.
@@ -711,7 +711,7 @@ fn item_14_a_light_inside_another_lights_cone_is_unaffected() {
 // §5 item 15: three coloured lights.
 
 #[test]
-fn item_15_three_coloured_lights_darken_exactly_their_own_channel_where_their_ray_is_blocked() {
+fn three_coloured_lights_darken_exactly_their_own_channel_where_their_ray_is_blocked() {
     let polygons = vec![floor(6.0), plate(0.0, 1.0, 0.0, 1.0)];
     let lights = [
         point(v(-1.5, 3.0, 0.0), v(6.0, 0.0, 0.0)),
@@ -957,7 +957,7 @@ fn pixel_hits(tree: &Tree, eye: DVec3, size: usize) -> Vec<Vec<(usize, f64)>> {
 }
 
 #[test]
-fn item_9_the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_does_not() {
+fn the_bsp_painters_order_matches_a_depth_buffer_where_a_centroid_sort_does_not() {
     let mut rng = Lcg(21);
     // Random polygons crossing each other (cyclic overlaps a sort cannot resolve), and the
     // thesis's two intersecting polygons (Fig. 6-8).
