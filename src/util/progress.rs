@@ -336,7 +336,33 @@ fn line_counting(name: &str, done: u64, total: u64, elapsed: Duration, counting:
     } else {
         f64::NAN
     };
-    format!("{name}: {pct:3.0}% ({done}/{total}) {rate:.1}/s, {secs:.1} s elapsed, {left:.1} s left")
+    let left = if left >= 120.0 {
+        duration_words(Duration::from_secs_f64(left.min(1e9)))
+    } else {
+        format!("{left:.1} s")
+    };
+    format!(
+        "{name}: {pct:3.0}% ({}/{}) {}/s, {secs:.1} s elapsed, {left} left",
+        count_words(done as f64, 0),
+        count_words(total as f64, 0),
+        count_words(rate, 1)
+    )
+}
+
+/// A count as read at a glance: as it is under 100,000 (with `decimals`), else to three figures
+/// in thousands, millions or billions (a shadow pass's 85,115,968 pairs: "85.1 M").
+fn count_words(n: f64, decimals: usize) -> String {
+    let three = |x: f64, unit: &str| match x {
+        x if x < 10.0 => format!("{x:.2} {unit}"),
+        x if x < 100.0 => format!("{x:.1} {unit}"),
+        x => format!("{x:.0} {unit}"),
+    };
+    match n {
+        n if n < 1e5 => format!("{n:.decimals$}"),
+        n if n < 1e6 => three(n / 1e3, "k"),
+        n if n < 1e9 => three(n / 1e6, "M"),
+        n => three(n / 1e9, "G"),
+    }
 }
 
 #[cfg(test)]
@@ -344,6 +370,30 @@ mod tests {
     use super::*;
 
     const S: fn(f64) -> Duration = Duration::from_secs_f64;
+
+    /// Large counts and long times are written as read: a shadow pass's pairs in millions, the
+    /// time left in minutes or hours; small ones as they are.
+    #[test]
+    fn large_counts_and_long_times_read_at_a_glance() {
+        assert_eq!(
+            line_counting("bsp", 5_651_797, 85_115_968, S(10.0), S(8.0)),
+            "bsp:   7% (5.65 M/85.1 M) 706 k/s, 10.0 s elapsed, 112.5 s left"
+        );
+        assert_eq!(
+            line_counting("bsp", 1_000_000, 85_115_968, S(10.0), S(10.0)),
+            "bsp:   1% (1.00 M/85.1 M) 100 k/s, 10.0 s elapsed, 14.0 min left"
+        );
+        assert_eq!(
+            line_counting("rays", 6_000_000_000, 9_000_000_000, S(100.0), S(100.0)),
+            "rays:  67% (6.00 G/9.00 G) 60.0 M/s, 100.0 s elapsed, 50.0 s left"
+        );
+        assert_eq!(
+            line("bake", 400, 1000, S(3.2)),
+            "bake:  40% (400/1000) 125.0/s, 3.2 s elapsed, 4.8 s left"
+        );
+        assert_eq!(count_words(99_999.0, 0), "99999");
+        assert_eq!(count_words(123_456.0, 0), "123 k");
+    }
 
     /// Without a terminal: silent for ten seconds, then a whole line every five seconds.
     #[test]
