@@ -11,18 +11,18 @@ use crate::lighting::lightmap::solve::Occluders;
 use crate::util::progress::{Estimate, Progress};
 
 /// The calibration's first bake has about this many patches, each next one four times as many
-/// while the last one's shooting × [`GROWTH`] stays under [`BUDGET_S`] (twice that for the
-/// second, which the fit needs), as radiosity's estimate calibrates.
+/// while the last one's time (its rays and its bounces) × [`GROWTH`] stays under [`BUDGET_S`]
+/// (twice that for the second, which the fit needs), as radiosity's estimate calibrates.
 const FIRST_PATCHES: f64 = 256.0;
 const BUDGET_S: f64 = 2.0;
-/// A calibration's shooting time as its patches quadruple: shots × receivers, each 4×.
+/// A calibration's time as its patches quadruple: its bounces', shots × receivers, each 4×.
 const GROWTH: f64 = 16.0;
 /// Bakes with fewer inside patches than this many times the first calibration's are not
 /// estimated: they take about as long as a calibration.
 const ESTIMATE_OVER: f64 = 16.0;
 /// The calibration's rays per patch, at most: the shooting's cost does not depend on them, and
 /// the direct light they project sets how much there is to shoot closely enough.
-const CALIBRATION_SAMPLES: usize = 1024;
+const CALIBRATION_SAMPLES: usize = 256;
 
 /// The bounces' time for `inside` patches of `size`: the same scene's bounces at coarser patches
 /// (CPU rays, at most [`CALIBRATION_SAMPLES`] a patch), timed, then scaled as the patches ×
@@ -50,11 +50,14 @@ pub fn bounces(
     let mut target = FIRST_PATCHES;
     let coarse = loop {
         let coarse = (area / target).sqrt().max(size);
+        let step = std::time::Instant::now();
         let p = Patches::build(&geometry.triangles, coarse);
         let bits = transfer::visibility_cpu(&p, &occluders, &samples, settings.solve.mode, &mut quiet);
         let start = std::time::Instant::now();
         let t = transfer::bake(&p, &occluders, &samples, &bits, settings, &mut quiet);
         let seconds = start.elapsed().as_secs_f64();
+        // The budget holds the whole run (its rays too), the estimate only the bounces' time.
+        let step = step.elapsed().as_secs_f64();
         if progress.cancelled() {
             return None;
         }
@@ -63,7 +66,7 @@ pub fn bounces(
         // The next run has four times the patches, at most a quarter of the bake's. A second
         // run (the shots' growth is fitted between the last two) may take twice the budget.
         let budget = if runs.len() < 2 { 2.0 * BUDGET_S } else { BUDGET_S };
-        if seconds * GROWTH > budget || target * 16.0 > inside as f64 {
+        if step * GROWTH > budget || target * 16.0 > inside as f64 {
             break coarse;
         }
         target *= 4.0;
