@@ -16,11 +16,14 @@ struct Seen {
     seconds: f64,
 }
 
-/// `penumbra bake SCENE --method METHOD` (a fresh cache) until it prints the estimate on stderr,
-/// exits, or `limit` passes; then stops it.
+/// `penumbra bake SCENE --method METHOD` (a fresh cache of its own) until it prints the estimate
+/// on stderr, exits, or `limit` passes; then stops it.
 fn until_estimate(scene: &std::path::Path, method: &str, limit: Duration) -> Seen {
     let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
-    let cache = common::temp_path(&format!("slow-bake-cache-{method}"));
+    // The scene's folder names the run (`scene_with`'s `name`): runs beside each other keep
+    // their caches apart.
+    let name = scene.parent().and_then(|d| d.file_name()).unwrap().to_string_lossy();
+    let cache = common::temp_path(&format!("slow-bake-cache-{name}"));
     let start = Instant::now();
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_penumbra"))
         .args(["bake", scene.to_str().unwrap(), "--method", method, "--device", &device])
@@ -85,6 +88,15 @@ fn estimate_seconds(line: &str) -> f64 {
     }
 }
 
+/// What `penumbra bake` of `base` (a shipped scene) with its method entry `from` set to `to`
+/// prints up to its estimate, within a minute.
+fn estimate_of(base: &str, from: &str, to: &str, tag: &str, method: &str) -> Seen {
+    let scene = scene_with(base, from, to, tag);
+    let seen = until_estimate(&scene, method, Duration::from_secs(60));
+    let _ = std::fs::remove_file(&scene);
+    seen
+}
+
 /// Checks the warning: one line naming the bake, an estimate past a minute and past the time the
 /// run took to say it, the method and the dominant stage.
 fn assert_warned(seen: &Seen, bake: &str, dominant: &str) {
@@ -111,14 +123,13 @@ fn assert_warned(seen: &Seen, bake: &str, dominant: &str) {
 /// vertices' rays before the first ray of the bake is cast.
 #[test]
 fn a_million_rays_a_vertex_warn_before_the_bake() {
-    let scene = scene_with(
+    let seen = estimate_of(
         "scenes/prt_teapot_box.toml",
         "{ name = \"prt\" },",
         "{ name = \"prt\", baker = \"rays_cpu\", samples = 1048576 },",
         "prt-million",
+        "prt",
     );
-    let seen = until_estimate(&scene, "prt", Duration::from_secs(60));
-    let _ = std::fs::remove_file(&scene);
     assert_warned(&seen, "prt RaysCpu 1048576 rays", "tracing");
 }
 
@@ -126,14 +137,13 @@ fn a_million_rays_a_vertex_warn_before_the_bake() {
 /// bake at a few hundred patches before the patches are made.
 #[test]
 fn fine_radiosity_patches_warn_before_the_bake() {
-    let scene = scene_with(
+    let seen = estimate_of(
         "scenes/cornell_radiosity.toml",
         "{ name = \"radiosity\", patch_size = 0.1 }",
         "{ name = \"radiosity\", patch_size = 0.01, block = 1 }",
         "radiosity-fine",
+        "radiosity",
     );
-    let seen = until_estimate(&scene, "radiosity", Duration::from_secs(60));
-    let _ = std::fs::remove_file(&scene);
     assert_warned(&seen, "radiosity light-map patch=0.01", "shooting");
 }
 
@@ -142,14 +152,13 @@ fn fine_radiosity_patches_warn_before_the_bake() {
 /// beside the bounces that follow (which dominate: about 91,000 shots to 280,000 patches).
 #[test]
 fn fine_sh_light_map_patches_warn_before_the_bake() {
-    let scene = scene_with(
+    let seen = estimate_of(
         "scenes/sh_courtyard.toml",
         "{ name = \"sh_lightmap\", bands = 4, patch_size = 0.25, sun_speed = 20 }",
         "{ name = \"sh_lightmap\", bands = 4, patch_size = 0.02, samples = 20000, baker = \"cpu\" }",
         "sh-fine",
+        "sh_lightmap",
     );
-    let seen = until_estimate(&scene, "sh_lightmap", Duration::from_secs(60));
-    let _ = std::fs::remove_file(&scene);
     assert_warned(&seen, "sh_lightmap bands=4 patch=0.02", "the bounces");
     let line = seen.lines.last().unwrap();
     assert!(line.contains("20164 samples timed"), "the rays not estimated: {line}");
@@ -160,13 +169,12 @@ fn fine_sh_light_map_patches_warn_before_the_bake() {
 /// shots) are, from the same bounces at coarse patches, before the buried parts and the rays.
 #[test]
 fn fine_sh_light_map_bounces_warn_before_the_bake() {
-    let scene = scene_with(
+    let seen = estimate_of(
         "scenes/sh_courtyard.toml",
         "{ name = \"sh_lightmap\", bands = 4, patch_size = 0.25, sun_speed = 20 }",
         "{ name = \"sh_lightmap\", bands = 4, patch_size = 0.02, baker = \"gpu\" }",
         "sh-fine-bounces",
+        "sh_lightmap",
     );
-    let seen = until_estimate(&scene, "sh_lightmap", Duration::from_secs(60));
-    let _ = std::fs::remove_file(&scene);
     assert_warned(&seen, "sh_lightmap bands=4 patch=0.02", "bounces");
 }
