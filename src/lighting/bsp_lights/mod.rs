@@ -1004,7 +1004,13 @@ impl BspLights {
     pub fn read_colours(&self, gpu: &mut crate::backend::Gpu) -> Result<Vec<[f32; 4]>> {
         let bytes = crate::graph::read_back_buffer(gpu, self.colours, NAME)?;
         let size = 16 * self.baked.vertices.len();
-        Ok(bytemuck::pod_collect_to_vec(&bytes[..size.min(bytes.len())]))
+        let colours = bytes.get(..size).ok_or_else(|| {
+            Error::Internal(format!(
+                "{NAME}: the vertex colours read back {} bytes of {size}",
+                bytes.len()
+            ))
+        })?;
+        Ok(bytemuck::pod_collect_to_vec(colours))
     }
 }
 
