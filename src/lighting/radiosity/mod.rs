@@ -77,7 +77,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 
 /// Bumped whenever the CPU baker's output for the same inputs changes (the GPU shooter's SPIR-V is
 /// hashed into the key).
-const BAKER_VERSION: u32 = 14;
+const BAKER_VERSION: u32 = 15;
 
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
