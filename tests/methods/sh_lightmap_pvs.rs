@@ -67,6 +67,10 @@ fn the_leaf_pvs_starts_the_bounces_in_a_bsp_world() {
     config.patch_size = 1.0;
     config.samples = 256;
     config.transfer.bands = 2;
+    // The stop the measurements below were taken at (the corrected default is now 1e-4): the
+    // difference the PVS makes does not shrink with the stop (7.2e-5 at both), so the bound
+    // stays at 1e-3 of the largest coefficient.
+    config.transfer.solve.threshold = 1e-3;
     let (with, r_with, t_with) = bake(&scene, &config, Some(&scene));
     let (without, r_without, t_without) = bake(&scene, &config, None);
     let largest = without.coeffs.iter().fold(0.0f32, |m, c| m.max(c.abs()));

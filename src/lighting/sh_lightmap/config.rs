@@ -62,7 +62,8 @@ impl Config {
         let faithful = mode == Mode::Faithful;
         let solve = solve::Settings {
             mode,
-            threshold: if faithful { 0.1 } else { 1e-3 },
+            // The corrected stop is radiosity's (its `CORRECTED_THRESHOLD` says why).
+            threshold: if faithful { 0.1 } else { 1e-4 },
             ..solve::Settings::default()
         };
         Config {
