@@ -77,7 +77,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 
 /// Bumped whenever the CPU baker's output for the same inputs changes (the GPU shooter's SPIR-V is
 /// hashed into the key).
-const BAKER_VERSION: u32 = 15;
+const BAKER_VERSION: u32 = 16;
 
 /// The corrected solve's default stop: the unshot light at a ten-thousandth of what was emitted.
 /// A room lit only through a door from another takes its light late in the solve, from many

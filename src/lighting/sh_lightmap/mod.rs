@@ -116,7 +116,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 };
 
 /// Bumped whenever the baker's output for the same inputs changes.
-const BAKER_VERSION: u32 = 6;
+const BAKER_VERSION: u32 = 7;
 
 /// The reference: every bounce when the transfer bounces, direct light otherwise.
 pub fn reference(decl: &MethodDecl) -> ReferenceKind {

@@ -162,3 +162,68 @@ material = "grey"
     }
     assert_eq!(crossed, 9, "floor patches along the wall");
 }
+
+/// A 4 cm wall whose top stops half a millimetre short of a ceiling, as generated rooms and real
+/// assets model walls: its top face and the strip of ceiling over it lie in a slit that no room
+/// sees, so every sub-sample of either is buried (`buried::SLIT`). Counted as seen, the top face
+/// took the ceiling's light over one side and gave it, at a form factor near 1, to the ceiling
+/// over the other. The ceiling a patch away keeps every sub-sample.
+#[test]
+fn a_wall_short_of_the_ceiling_buries_its_top_and_the_ceiling_over_it() {
+    let sc = floor_with(
+        r#"
+[[objects]]
+name = "ceiling"
+mesh = "quad"
+corner = [-2, 1, -2]
+edge_u = [4, 0, 0]
+edge_v = [0, 0, 4]
+material = "grey"
+[[objects]]
+name = "wall"
+mesh = "box"
+size = [0.04, 0.9995, 2]
+translate = [0.27, 0.49975, 0.1]
+material = "grey"
+"#,
+    );
+    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
+    let size = 0.2;
+    let mut p = Patches::build(&geo.triangles, size);
+    let occ = Occluders::new(&geo.triangles);
+    buried::exclude(&mut p, &occ, None);
+    let chart = |object: usize, up: f64| {
+        p.charts
+            .iter()
+            .position(|c| c.object == object && c.normal.y * up > 0.9)
+            .unwrap()
+    };
+    let (ceiling, top) = (chart(1, -1.0), chart(2, 1.0));
+    let seen_in = |ci: usize| {
+        let c = &p.charts[ci];
+        (0..c.width * c.height)
+            .map(|n| (n % c.width, n / c.width, &p.patches[c.first + n]))
+            .filter(|(_, _, q)| q.inside())
+            .flat_map(|(i, j, q)| {
+                (0..SAMPLES * SAMPLES)
+                    .filter(move |b| q.samples & (1 << b) != 0)
+                    .map(move |b| c.sub_sample(size, (i, j), (b % SAMPLES, b / SAMPLES)))
+            })
+            .collect::<Vec<DVec3>>()
+    };
+    let top_seen = seen_in(top).len();
+    let ceiling_seen = seen_in(ceiling);
+    let over_wall = ceiling_seen
+        .iter()
+        .filter(|x| (0.25..=0.29).contains(&x.x) && (-0.9..=1.1).contains(&x.z))
+        .count();
+    let a_patch_away = ceiling_seen
+        .iter()
+        .filter(|x| (0.4..=0.6).contains(&x.x) && (-0.9..=1.1).contains(&x.z))
+        .count();
+    eprintln!("seen sub-samples: wall top {top_seen}, ceiling over the wall {over_wall}, a patch away {a_patch_away}");
+    assert_eq!(top_seen, 0, "the wall's top face in the slit counts as seen");
+    assert_eq!(over_wall, 0, "the ceiling over the wall counts as seen");
+    // 0.2 m of x (one sub-sample column every 5 cm: 4) by 2 m of z (40): 160.
+    assert_eq!(a_patch_away, 160, "the ceiling a patch from the wall lost sub-samples");
+}
