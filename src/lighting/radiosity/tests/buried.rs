@@ -5,7 +5,7 @@
 use glam::DVec3;
 
 use crate::lighting::lightmap::buried::{self, SAMPLES};
-use crate::lighting::lightmap::patches::Patches;
+use crate::lighting::lightmap::patches::{Patch, Patches};
 use crate::lighting::lightmap::solve::Occluders;
 use crate::scene::Scene;
 
@@ -13,6 +13,17 @@ use crate::scene::Scene;
 fn floor_with(objects: &str) -> Scene {
     let text = format!("{FLOOR}{objects}");
     Scene::from_str(&text, "buried.toml", std::path::Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `sc`'s patches at `size` with their buried sub-samples left out, the patches as they were
+/// before, and the occluders.
+fn excluded(sc: &Scene, size: f64) -> (Patches, Vec<Patch>, Occluders) {
+    let geo = crate::lighting::lightmap::geometry::scene_geometry(sc, "radiosity").unwrap();
+    let mut p = Patches::build(&geo.triangles, size);
+    let before = p.patches.clone();
+    let occ = Occluders::new(&geo.triangles);
+    buried::exclude(&mut p, &occ, None);
+    (p, before, occ)
 }
 
 const FLOOR: &str = r#"
@@ -57,12 +68,8 @@ fn under_block(x: DVec3) -> bool {
 #[test]
 fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing() {
     let sc = floor_with(BLOCK_AND_SHELF);
-    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
     let size = 0.2;
-    let mut p = Patches::build(&geo.triangles, size);
-    let before = p.patches.clone();
-    let occ = Occluders::new(&geo.triangles);
-    buried::exclude(&mut p, &occ, None);
+    let (p, before, occ) = excluded(&sc, size);
     let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
     let c = p.charts[floor].clone();
     let flat = c.flat_triangles(&occ.triangles);
@@ -128,12 +135,8 @@ translate = [0.27, 0.5, 0.1]
 material = "grey"
 "#,
     );
-    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
     let size = 0.2;
-    let mut p = Patches::build(&geo.triangles, size);
-    let before = p.patches.clone();
-    let occ = Occluders::new(&geo.triangles);
-    buried::exclude(&mut p, &occ, None);
+    let (p, before, _) = excluded(&sc, size);
     let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
     let c = p.charts[floor].clone();
     let mut crossed = 0;
@@ -187,11 +190,8 @@ translate = [0.27, 0.49975, 0.1]
 material = "grey"
 "#,
     );
-    let geo = crate::lighting::lightmap::geometry::scene_geometry(&sc, "radiosity").unwrap();
     let size = 0.2;
-    let mut p = Patches::build(&geo.triangles, size);
-    let occ = Occluders::new(&geo.triangles);
-    buried::exclude(&mut p, &occ, None);
+    let (p, _, _) = excluded(&sc, size);
     let chart = |object: usize, up: f64| {
         p.charts
             .iter()
