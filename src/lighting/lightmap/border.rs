@@ -121,7 +121,7 @@ pub fn pass2(p: &Patches, occluders: &Occluders, values: &mut [DVec3]) -> usize 
 /// and real scenes have them), and the dark room's texels along the wall took the lit room's
 /// light. Anything standing on the surface between two seam patches taller than this refuses the
 /// blend, which is what a seam crossed by a wall or a box should do.
-pub(crate) const SEAM_RAY_HEIGHT: f64 = 0.25;
+const SEAM_RAY_HEIGHT: f64 = 0.25;
 
 fn pass2_plan(p: &Patches, occluders: &Occluders) -> (Pass, usize) {
     let size = p.size;

@@ -27,7 +27,7 @@ const BURIED_VOTES: usize = 3;
 /// slit, but a face in it that counted as seen took light from the ceiling over one room and
 /// gave it, at a form factor near 1, to the ceiling over the other: in a generated room at
 /// 0.15 m patches the dark room's ceiling along the wall drew five times its neighbours' light.
-pub const SLIT: f64 = 0.02;
+const SLIT: f64 = 0.02;
 
 /// Whether `x`, a point a hair in front of a surface with unit normal `n` and tangents `u`, `v`,
 /// lies inside closed geometry or in a slit narrower than `slit`.

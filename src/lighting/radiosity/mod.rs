@@ -79,13 +79,6 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 /// hashed into the key).
 const BAKER_VERSION: u32 = 16;
 
-/// The corrected solve's default stop: the unshot light at a ten-thousandth of what was emitted.
-/// A room lit only through a door from another takes its light late in the solve, from many
-/// small shots; at a thousandth, a generated room seen through a sunlit one's door drew 0.90 of
-/// the path tracer's mean (128x96 supersampled 4x4, lavapipe), at a ten-thousandth 0.99, for
-/// about 1.5 times the bake. The faithful mode keeps 1e-3.
-const CORRECTED_THRESHOLD: f64 = 1e-4;
-
 /// The method's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
@@ -123,7 +116,7 @@ impl Config {
             c.settings.mode = mode;
         }
         if c.settings.mode == Mode::Corrected {
-            c.settings.threshold = CORRECTED_THRESHOLD;
+            c.settings.threshold = crate::lighting::lightmap::solve::CORRECTED_THRESHOLD;
         }
         if let Some(v) = decl.param("patch_size") {
             c.patch_size = v

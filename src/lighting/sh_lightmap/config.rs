@@ -62,8 +62,7 @@ impl Config {
         let faithful = mode == Mode::Faithful;
         let solve = solve::Settings {
             mode,
-            // The corrected stop is radiosity's (its `CORRECTED_THRESHOLD` says why).
-            threshold: if faithful { 0.1 } else { 1e-4 },
+            threshold: if faithful { 0.1 } else { solve::CORRECTED_THRESHOLD },
             ..solve::Settings::default()
         };
         Config {

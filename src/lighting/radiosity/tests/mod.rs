@@ -4,6 +4,7 @@ mod border;
 mod buried;
 mod charts;
 mod edge_blocks;
+mod stop;
 mod sun;
 mod thin_walls;
 mod visibility;
