@@ -297,6 +297,54 @@ fn light_dropped_past_k_is_warned_about() {
     assert!(warnings(16).is_empty(), "16 slots hold all 12 lights");
 }
 
+/// The corrected default keeps every light that reaches a point, up to 32, in sets no wider
+/// than the fullest: twelve lights over the floor fill each segment's set with exactly the lights
+/// whose light reaches its centroid, and nothing is dropped; twelve narrow spots, each on its own
+/// part of the floor, leave sets only as wide as the most that overlap. The plan says what it
+/// chose.
+#[test]
+fn the_default_keeps_every_light_in_reach_and_no_more_slots() {
+    let check = |lights: &str| -> (usize, usize) {
+        let s = scene(r#""vls""#, lights);
+        let config = Config::from_decl_in(&s.methods[0], Some(&s)).unwrap();
+        assert_eq!(config.setup.k, 32, "the corrected default's cap");
+        let geometry = scene_geometry(&s, "vls").unwrap();
+        let layout = Layout::new(&s, &geometry, &s.methods[0], &config).unwrap();
+        let sets = layout.select(&config.setup, &mut penumbra::util::progress::Progress::new("test"));
+        let segments = &layout.segments;
+        let mut fullest = 0;
+        for t in 0..segments.triangles.len() {
+            let p = segments.centroid(t);
+            let reach = (layout.lights.iter())
+                .filter(|l| l.shade(&LightModel::Physical, p, DVec3::Y, DVec3::ONE).max_element() > 0.0)
+                .count();
+            assert_eq!(sets.of(t).count(), reach, "segment {t} at {p}");
+            fullest = fullest.max(reach);
+        }
+        assert_eq!(sets.crowded, 0);
+        assert_eq!(sets.k, fullest, "the sets' width");
+        let config = registry::configuration(&s, Some("vls")).unwrap();
+        let (_, notes) = registry::plan(&config, &s).unwrap();
+        assert!(
+            notes.iter().any(|n| n.starts_with("vls: k = 12 (every one of the scene's 12 lights")),
+            "{notes:?}"
+        );
+        (sets.k, layout.lights.len())
+    };
+    let (wide, lights) = check(&twelve_lights());
+    println!("twelve lights: sets {wide} wide");
+    assert!(wide > 8, "more than the thesis's 8 reach some point: {wide}");
+    let mut narrow = Vec::new();
+    for i in 0..12 {
+        let a = i as f32 * std::f32::consts::TAU / 12.0;
+        let target = Vec3::new(1.5 * a.cos(), 0.0, 1.5 * a.sin());
+        narrow.push((target + Vec3::Y * 2.0, Some((target, 8.0, 12.0)), Vec3::splat(1.0)));
+    }
+    let (narrowed, _) = check(&lights_text(&narrow));
+    println!("twelve narrow spots: sets {narrowed} wide");
+    assert!(narrowed < lights / 2, "{narrowed} slots for spots that barely overlap");
+}
+
 /// As a direct term over another method's base (`forward`'s, under a constant sky), VLS adds
 /// its light to every floor pixel despite drawing other triangles than the base (its depth bias
 /// lets it pass the base's depth): the frame equals VLS drawing both terms itself, and without
@@ -508,7 +556,7 @@ fn frame_time_against_lights() {
             let p = Vec3::new(r * a.cos(), 2.5, r * a.sin());
             lights.push((p, Some((p - Vec3::new(0.0, 2.5, 0.0), 25.0, 45.0)), Vec3::splat(1.0)));
         }
-        let methods = r#"{ name = "vls", max_segment_area = 0.02 }, "forward""#;
+        let methods = r#"{ name = "vls", max_segment_area = 0.02, k = 8 }, "forward""#;
         let s = scene(methods, &lights_text(&lights));
         let mut times = Vec::new();
         for method in ["vls", "forward"] {

@@ -102,7 +102,7 @@ pub const SCHEMA: MethodSchema = MethodSchema {
 pub const MAX_K: i64 = 32;
 
 /// Bumped whenever the set-up's output for the same inputs changes.
-const SETUP_VERSION: u32 = 3;
+const SETUP_VERSION: u32 = 4;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
@@ -132,6 +132,18 @@ pub fn plan(
             "max_segment_area",
             config.max_segment_area,
             format!("the scene's {area:.3} m² over a budget of {SEGMENT_BUDGET} segments"),
+        ));
+    }
+    if decl.param("k").is_none() && config.mode == Mode::Corrected {
+        let lights = ManyLight::from_scene(facts.scene, NAME)?.len();
+        config.setup.k = lights.clamp(1, MAX_K as usize);
+        derived.push(Derived::new(
+            "k",
+            config.setup.k as i64,
+            format!(
+                "every one of the scene's {lights} lights a point can keep, at most {MAX_K}; the sets then \
+                 shrink to the most lights any point keeps"
+            ),
         ));
     }
     let segments = segments_for(facts.triangles(NAME)?, config.max_segment_area);
@@ -195,7 +207,10 @@ impl Config {
             Mode::Corrected => Config {
                 mode,
                 setup: SetupParams {
-                    k: 8,
+                    // The thesis's 8 is OpenGL's light count; a shader loop stops at the set's
+                    // first empty slot, so a set as wide as the lights in reach costs only where
+                    // they are.
+                    k: MAX_K as usize,
                     selection: Selection::Contribution,
                     can_illuminate: true,
                     feeler: Feeler::Bvh,
@@ -444,7 +459,7 @@ impl Vls {
             Ok(layout.select(&config.setup, progress))
         })?;
         let count = setup::points(&layout.segments, config.setup.point).len();
-        if sets.k != config.setup.k || sets.segments() != count {
+        if sets.k > config.setup.k || sets.segments() != count {
             return Err(Error::Internal(format!(
                 "{}: {NAME}: the baked light sets do not match the scene ({} sets of {} for {count} points)",
                 cx.scene.source,
@@ -516,7 +531,7 @@ impl Vls {
             pipeline(Terms::DIRECT)?,
         ];
         let params = ShaderParams {
-            info: [config.setup.model.code(), config.setup.k as u32, 0, 0],
+            info: [config.setup.model.code(), sets.k as u32, 0, 0],
             constants: config.setup.model.constants(),
             ambient: [config.ambient as f32, config.light_ambient as f32, 0.0, 0.0],
         };

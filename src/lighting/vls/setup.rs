@@ -74,6 +74,20 @@ impl LightSets {
         self.indices.len().checked_div(self.k).unwrap_or(0)
     }
 
+    /// The same sets `width` slots wide, `width` at least the most lights any set holds: the
+    /// shader stops at the first empty slot, so only memory changes.
+    fn narrowed(self, width: usize) -> LightSets {
+        if width >= self.k || width == 0 {
+            return self;
+        }
+        let indices = self.indices.chunks(self.k).flat_map(|set| set[..width].iter().copied()).collect();
+        LightSets {
+            k: width,
+            indices,
+            crowded: self.crowded,
+        }
+    }
+
     /// The lights of segment `s`, in the order they were chosen.
     pub fn of(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
         self.indices[s * self.k..(s + 1) * self.k]
@@ -255,11 +269,18 @@ pub fn select(
         }
     });
     progress.update(count as u64, count as u64);
+    // As wide as the fullest set: a scene whose points each see a few lights pays for those few.
+    let fullest = indices
+        .chunks(k)
+        .map(|set| set.iter().take_while(|&&i| i != EMPTY).count())
+        .max()
+        .unwrap_or(0);
     LightSets {
         k,
         indices,
         crowded: crowded.into_inner().min(u64::from(u32::MAX)) as u32,
     }
+    .narrowed(fullest.max(1))
 }
 
 /// The ≤ k lights one point keeps, in the order of preference, feelers cast only until k pass;
