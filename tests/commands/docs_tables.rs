@@ -189,7 +189,12 @@ fn kept_files(root: &Path) -> Option<Vec<String>> {
         .output()
         .ok()
         .filter(|o| o.status.success())?;
-    Some(String::from_utf8_lossy(&out.stdout).lines().map(str::to_owned).collect())
+    Some(
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .map(str::to_owned)
+            .collect(),
+    )
 }
 
 /// Every relative link and image in README.md and the Markdown under docs/ and scenes/ names a
@@ -206,7 +211,14 @@ fn every_file_the_docs_link_is_in_the_repository() {
     for page in &pages {
         let text = std::fs::read_to_string(page).unwrap();
         for rest in text.split("](").skip(1) {
-            let target = rest.split(')').next().unwrap_or("").split('#').next().unwrap_or("").trim();
+            let target = rest
+                .split(')')
+                .next()
+                .unwrap_or("")
+                .split('#')
+                .next()
+                .unwrap_or("")
+                .trim();
             if target.is_empty() || target.contains("://") || target.starts_with("mailto:") {
                 continue;
             }
@@ -234,6 +246,13 @@ fn every_file_the_docs_link_is_in_the_repository() {
         }
     }
     println!("{checked} links checked");
-    assert!(checked > 50, "only {checked} relative links found: is the parser still reading them?");
-    assert!(missing.is_empty(), "links to files the repository does not keep:\n{}", missing.join("\n"));
+    assert!(
+        checked > 50,
+        "only {checked} relative links found: is the parser still reading them?"
+    );
+    assert!(
+        missing.is_empty(),
+        "links to files the repository does not keep:\n{}",
+        missing.join("\n")
+    );
 }

@@ -326,7 +326,9 @@ fn the_default_keeps_every_light_in_reach_and_no_more_slots() {
         let config = registry::configuration(&s, Some("vls")).unwrap();
         let (_, notes) = registry::plan(&config, &s).unwrap();
         assert!(
-            notes.iter().any(|n| n.starts_with("vls: k = 12 (every one of the scene's 12 lights")),
+            notes
+                .iter()
+                .any(|n| n.starts_with("vls: k = 12 (every one of the scene's 12 lights")),
             "{notes:?}"
         );
         (sets.k, layout.lights.len())

@@ -80,7 +80,11 @@ impl LightSets {
         if width >= self.k || width == 0 {
             return self;
         }
-        let indices = self.indices.chunks(self.k).flat_map(|set| set[..width].iter().copied()).collect();
+        let indices = self
+            .indices
+            .chunks(self.k)
+            .flat_map(|set| set[..width].iter().copied())
+            .collect();
         LightSets {
             k: width,
             indices,
