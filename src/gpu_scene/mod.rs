@@ -101,10 +101,20 @@ pub fn record_draws(
     ctx: &mut PassContext<'_, '_>,
     scene: &SceneGpu,
     calls: &[DrawCall],
+    bind: impl FnMut(&mut PassContext<'_, '_>, u32) -> std::result::Result<(), BackendError>,
+) -> std::result::Result<(), BackendError> {
+    record_draws_from(ctx, (scene.vertices, scene.indices), calls, bind)
+}
+
+/// [`record_draws`] from other vertex and index buffers laid out as the scene's.
+pub fn record_draws_from(
+    ctx: &mut PassContext<'_, '_>,
+    (vertices, indices): (BufferId, BufferId),
+    calls: &[DrawCall],
     mut bind: impl FnMut(&mut PassContext<'_, '_>, u32) -> std::result::Result<(), BackendError>,
 ) -> std::result::Result<(), BackendError> {
-    ctx.rec.bind_vertex_buffers(&[(scene.vertices, 0)])?;
-    ctx.rec.bind_index_buffer(scene.indices, 0)?;
+    ctx.rec.bind_vertex_buffers(&[(vertices, 0)])?;
+    ctx.rec.bind_index_buffer(indices, 0)?;
     let mut bound = None;
     for call in calls {
         if bound != Some(call.material) {

@@ -135,7 +135,7 @@ pub fn registry() -> Vec<MethodInfo> {
             create: |c, d| Ok(Box::new(prt::Prt::new(c, d)?)),
             rest_pose: Some("its transfer is baked from the rest pose"),
             report: None,
-            plan: None,
+            plan: Some(prt::plan),
         },
         MethodInfo {
             schema: lpv::SCHEMA,

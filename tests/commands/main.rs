@@ -12,5 +12,6 @@ mod cli;
 mod docs_tables;
 mod faults;
 mod fuzz;
+mod prt_refine;
 mod report;
 mod slow_bakes;

@@ -150,6 +150,11 @@ pub struct Config {
     /// occluders are listed and drawn in chunks of `rect_budget / batch` triangles. It changes
     /// memory and the number of passes, never the result (tests).
     pub rect_budget: u32,
+    /// The longest edge a receiver keeps for the bake, metres: `None` derives it from the scene
+    /// (half the smallest object that can shadow it), `Some(0.0)` bakes the meshes as they are.
+    pub max_edge: Option<f64>,
+    /// The most vertices refinement may add to the scene.
+    pub refine_budget: usize,
 }
 
 impl Config {
@@ -189,6 +194,9 @@ impl Config {
             storage: Storage::F32,
             twist: 0.0,
             rect_budget: 1 << 20,
+            // The document bakes the vertices the artist made.
+            max_edge: if faithful { Some(0.0) } else { None },
+            refine_budget: 16384,
         }
     }
 
@@ -367,6 +375,19 @@ impl Config {
                     c.key_rate = float(v)
                         .filter(|x| (1.0..=60.0).contains(x))
                         .ok_or_else(|| bad(p, "keys per second from 1 to 60", v))?
+                }
+                "max_edge" => {
+                    c.max_edge =
+                        Some(float(v).filter(|x| x.is_finite() && *x >= 0.0).ok_or_else(|| {
+                            bad(p, "an edge length in metres, or 0 to bake the meshes as they are", v)
+                        })?)
+                }
+                "refine_budget" => {
+                    c.refine_budget = v
+                        .as_integer()
+                        .filter(|n| (0..=1 << 22).contains(n))
+                        .ok_or_else(|| bad(p, "a vertex count from 0 to 4194304", v))?
+                        as usize
                 }
                 "loop_s" => {
                     c.loop_s = float(v)

@@ -9,9 +9,12 @@ pub mod mapping;
 pub mod raster;
 pub mod raycast;
 pub mod receivers;
+pub mod refine;
 pub mod sampling;
 pub mod storage;
 
+#[cfg(test)]
+mod refine_tests;
 #[cfg(test)]
 mod tests;
 
@@ -22,7 +25,7 @@ use crate::backend::{
 };
 use crate::bake::BakeKey;
 use crate::error::{Error, Result};
-use crate::gpu_scene::{record_draws, vertex_layout, DrawCall};
+use crate::gpu_scene::{record_draws_from, vertex_layout, DrawCall};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
@@ -115,8 +118,59 @@ pub const SCHEMA: MethodSchema = MethodSchema {
             name: "loop_s",
             kind: ParamKind::Float,
         },
+        ParamSchema {
+            name: "max_edge",
+            kind: ParamKind::Float,
+        },
+        ParamSchema {
+            name: "refine_budget",
+            kind: ParamKind::Int,
+        },
     ],
 };
+
+/// `max_edge` from the scene's smallest object when unset (corrected mode); said in one line.
+pub fn plan(
+    decl: &MethodDecl,
+    facts: &crate::lighting::plan::Facts<'_>,
+) -> Result<Vec<crate::lighting::plan::Derived>> {
+    let config = Config::from_decl(decl, Some(facts.scene))?;
+    if config.max_edge.is_some() {
+        return Ok(Vec::new());
+    }
+    // A scene the light-map geometry cannot take is measured when the method is made instead.
+    let Ok(triangles) = facts.triangles(NAME) else {
+        return Ok(Vec::new());
+    };
+    let mut objects: Vec<sampling::Object> = (facts.scene.objects.iter())
+        .map(|o| sampling::Object {
+            name: o.name.clone(),
+            triangles: Vec::new(),
+        })
+        .collect();
+    for t in triangles {
+        if let Some(o) = objects.get_mut(t.object) {
+            o.triangles.push(t.p.map(|p| p.as_vec3()));
+        }
+    }
+    Ok(max_edge_note(&objects, &config).into_iter().collect())
+}
+
+/// The derived `max_edge` and why, `None` where nothing can shadow anything else.
+fn max_edge_note(objects: &[sampling::Object], config: &Config) -> Option<crate::lighting::plan::Derived> {
+    let (edge, smallest) = sampling::max_edge(objects)?;
+    let o = &objects[smallest];
+    Some(crate::lighting::plan::Derived::new(
+        "max_edge",
+        edge,
+        format!(
+            "half the {:.3} m of object {:?}, the smallest that can cast a shadow; receivers' longer edges are split for the bake, at most {} vertices added",
+            o.extent(),
+            o.name,
+            config.refine_budget
+        ),
+    ))
+}
 
 /// Bumped whenever a baker's output for the same inputs changes.
 const BAKER_VERSION: u32 = 4;
@@ -180,19 +234,122 @@ pub struct SceneMesh<'a> {
     pub vertex_offset: u32,
 }
 
-/// The scene's draws as uploaded.
-fn scene_meshes<'a>(cx: &'a CreateContext<'_>) -> Vec<SceneMesh<'a>> {
-    cx.scene_gpu
-        .draws
-        .iter()
-        .zip(&cx.scene_gpu.meshes)
-        .map(|(d, mesh)| SceneMesh {
-            object: d.object,
-            model: d.model,
+/// The meshes the transfer is baked on and drawn with, one per scene draw: the scene's own, or,
+/// where receivers' long edges were split ([`refine`]), copies in buffers of the method's own.
+struct Geometry {
+    /// Per scene draw, when refined.
+    refined: Option<Vec<crate::scene::Mesh>>,
+    /// Per scene draw: its first vertex and its first index in the buffers drawn.
+    offsets: Vec<(u32, u32)>,
+    /// The refined vertex and index buffers.
+    buffers: Option<(BufferId, BufferId)>,
+    vertices: u32,
+}
+
+impl Geometry {
+    /// The scene's draws as the bakers see them.
+    fn meshes<'a>(&'a self, cx: &'a CreateContext<'_>) -> Vec<SceneMesh<'a>> {
+        let meshes = self.refined.as_deref().unwrap_or(&cx.scene_gpu.meshes);
+        (cx.scene_gpu.draws.iter().zip(meshes).zip(&self.offsets))
+            .map(|((d, mesh), &(vertex_offset, _))| SceneMesh {
+                object: d.object,
+                model: d.model,
+                mesh,
+                vertex_offset,
+            })
+            .collect()
+    }
+
+    /// One draw call per scene draw, over the buffers drawn.
+    fn calls(&self, cx: &CreateContext<'_>) -> Vec<DrawCall> {
+        let meshes = self.refined.as_deref().unwrap_or(&cx.scene_gpu.meshes);
+        (cx.scene_gpu.draws.iter().zip(meshes).zip(&self.offsets))
+            .map(|((d, mesh), &(vertex_offset, first_index))| DrawCall {
+                material: d.material,
+                model: d.model,
+                vertex_offset: vertex_offset as i32,
+                ranges: vec![(first_index, mesh.indices.len() as u32)],
+            })
+            .collect()
+    }
+}
+
+/// The scene's meshes with every receiver's edges split to `max_edge` (derived from the scene
+/// when unset, and said in one line), within the vertex budget; the scene's own where nothing
+/// needs splitting.
+fn refined_geometry(cx: &mut CreateContext<'_>, config: &Config) -> Result<Geometry> {
+    let scene_vertices = cx.scene_gpu.meshes.iter().map(|m| m.vertex_count()).sum::<usize>() as u32;
+    let own = Geometry {
+        refined: None,
+        offsets: (cx.scene_gpu.draws.iter())
+            .map(|d| (d.vertex_offset as u32, d.first_index))
+            .collect(),
+        buffers: None,
+        vertices: scene_vertices,
+    };
+    let max_edge = match config.max_edge {
+        Some(e) => e,
+        None => {
+            let Some(note) = max_edge_note(&sampling_objects(cx, None), config) else {
+                return Ok(own);
+            };
+            for line in crate::lighting::plan::notes(NAME, std::slice::from_ref(&note)) {
+                crate::errln!("{line}");
+            }
+            note.value.as_float().unwrap_or(0.0)
+        }
+    };
+    if max_edge <= 0.0 {
+        return Ok(own);
+    }
+    let draws = &cx.scene_gpu.draws;
+    let targets: Vec<refine::Target<'_>> = (draws.iter().zip(&cx.scene_gpu.meshes))
+        .map(|(d, mesh)| refine::Target {
             mesh,
-            vertex_offset: d.vertex_offset as u32,
+            model: d.model,
+            // Emitters receive nothing: kept as they are.
+            max_edge: if d.object.is_some() {
+                max_edge as f32
+            } else {
+                f32::INFINITY
+            },
         })
-        .collect()
+        .collect();
+    let refined = refine::refine(&targets, config.refine_budget);
+    if refined.added == 0 {
+        return Ok(own);
+    }
+    if refined.budget_spent {
+        crate::errln!(
+            "warning: {}: {NAME}: splitting edges to {max_edge} m stopped at the budget of {} added vertices (raise refine_budget, or set a longer max_edge)",
+            cx.scene.source,
+            config.refine_budget
+        );
+    }
+    let (mut vertices, mut indices, mut offsets) = (Vec::new(), Vec::new(), Vec::new());
+    for mesh in &refined.meshes {
+        offsets.push((vertices.len() as u32, indices.len() as u32));
+        vertices.extend(crate::gpu_scene::vertices_of(mesh));
+        indices.extend_from_slice(&mesh.indices);
+    }
+    let vb = cx.gpu.create_buffer_init(
+        "prt refined vertices",
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+        bytemuck::cast_slice(&vertices),
+    )?;
+    let ib = cx.gpu.create_buffer_init(
+        "prt refined indices",
+        vk::BufferUsageFlags::INDEX_BUFFER,
+        bytemuck::cast_slice(&indices),
+    )?;
+    cx.states.forget_buffer(vb);
+    cx.states.forget_buffer(ib);
+    Ok(Geometry {
+        refined: Some(refined.meshes),
+        offsets,
+        buffers: Some((vb, ib)),
+        vertices: vertices.len() as u32,
+    })
 }
 
 /// The receivers of the scene at animation time `t` (every object's vertices, animated objects
@@ -251,12 +408,11 @@ pub fn bake_transfer(
     }
 }
 
-/// The scene's objects in world space, for [`sampling::undersampled`].
-fn sampling_objects(cx: &CreateContext<'_>) -> Vec<sampling::Object> {
-    cx.scene_gpu
-        .draws
-        .iter()
-        .zip(&cx.scene_gpu.meshes)
+/// The scene's objects in world space, for [`sampling`]: as uploaded, or as `meshes` (one per
+/// scene draw) when given.
+fn sampling_objects(cx: &CreateContext<'_>, meshes: Option<&[crate::scene::Mesh]>) -> Vec<sampling::Object> {
+    let meshes = meshes.unwrap_or(&cx.scene_gpu.meshes);
+    (cx.scene_gpu.draws.iter().zip(meshes))
         .filter_map(|(d, mesh)| {
             let object = cx.scene.objects.get(d.object?)?;
             let p = |k: u32| d.model.transform_point3(mesh.positions[k as usize]);
@@ -284,6 +440,8 @@ pub struct Prt {
     light: Vec<Vec3>,
     keys: u32,
     vertices: u32,
+    /// The refined vertex and index buffers, when the receivers' edges were split.
+    buffers: Option<(BufferId, BufferId)>,
     draws: Vec<DrawInfo>,
     animation: Vec<Option<crate::scene::Animation>>,
     /// This frame's draws and light block.
@@ -292,8 +450,7 @@ pub struct Prt {
 }
 
 /// The warnings a configuration and scene earn before the bake: inert parameters, a coefficient
-/// count that is not whole bands, distant lights only, undersampled objects, surfaces behind
-/// their normals.
+/// count that is not whole bands, distant lights only, surfaces behind their normals.
 fn warn_about_config(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config) {
     for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
         crate::errln!("{w}");
@@ -308,9 +465,6 @@ fn warn_about_config(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config)
     if let Some(w) = crate::lighting::distant_only_warning(cx.scene, NAME) {
         crate::errln!("{w}");
     }
-    for line in sampling::undersampled(&sampling_objects(cx)) {
-        crate::errln!("warning: {}: {NAME}: {line}", cx.scene.source);
-    }
     // The transfer is baked per vertex on the normal's side (a scene the light-map geometry
     // cannot take, with a sphere light, goes without the check).
     if let Ok(g) = crate::lighting::lightmap::geometry::static_geometry(cx.scene, cx.scene_gpu, NAME) {
@@ -322,17 +476,27 @@ fn warn_about_config(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config)
 
 /// What the baked transfer depends on: the baker and its configuration, the occluder rules,
 /// the keys, the meshes, their placements and animation, and the shaders.
-fn bake_key(cx: &CreateContext<'_>, config: &Config, rules: &OccluderRules, keys: u32) -> BakeKey {
+fn bake_key(
+    cx: &CreateContext<'_>,
+    meshes: &[SceneMesh<'_>],
+    config: &Config,
+    rules: &OccluderRules,
+    keys: u32,
+) -> BakeKey {
     let key = BakeKey::new("PRT transfer")
         .with("version", BAKER_VERSION)
         .with("config", config.bake_key())
         .with("occluders", rules)
         .with("keys", (keys, config.key_rate));
-    let geometry: Vec<f32> = cx
-        .scene_gpu
-        .meshes
-        .iter()
-        .flat_map(|m| m.positions.iter().chain(&m.normals).flat_map(|p| p.to_array()))
+    let geometry: Vec<f32> = (meshes.iter())
+        .flat_map(|m| {
+            m.mesh
+                .positions
+                .iter()
+                .chain(&m.mesh.normals)
+                .flat_map(|p| p.to_array())
+        })
+        .chain(meshes.iter().flat_map(|m| m.mesh.indices.iter().map(|&i| i as f32)))
         .collect();
     let placements: Vec<f32> = cx
         .scene_gpu
@@ -403,9 +567,13 @@ impl Prt {
             .map_err(|m| Error::from(cx.scene.method_param_error(decl, "occluders", m)))?;
         let times = key_times(cx.scene, &config);
         let keys = times.len() as u32;
-        let vertices = cx.scene_gpu.meshes.iter().map(|m| m.vertex_count()).sum::<usize>() as u32;
-        let key = bake_key(cx, &config, &rules, keys);
-        let meshes = scene_meshes(cx);
+        let geometry = refined_geometry(cx, &config)?;
+        for line in sampling::undersampled(&sampling_objects(cx, geometry.refined.as_deref())) {
+            crate::errln!("warning: {}: {NAME}: {line}", cx.scene.source);
+        }
+        let vertices = geometry.vertices;
+        let meshes = geometry.meshes(cx);
+        let key = bake_key(cx, &meshes, &config, &rules, keys);
         let all_keys: Vec<(Receivers, Vec<u32>)> = times
             .iter()
             .map(|&t| receivers_at(cx.scene, &meshes, &rules, t))
@@ -452,7 +620,7 @@ impl Prt {
             .map(|d| DrawInfo { object: d.object })
             .collect();
         let animation = cx.scene.objects.iter().map(|o| o.animation).collect();
-        let calls = cx.scene_gpu.draws.iter().map(DrawCall::whole).collect();
+        let calls = geometry.calls(cx);
         let uniform = light::uniform(&light, config.coefficients, (0, 0, 0.0), vertices, storage);
         Ok(Prt {
             config,
@@ -462,6 +630,7 @@ impl Prt {
             light,
             keys,
             vertices,
+            buffers: geometry.buffers,
             draws,
             animation,
             calls,
@@ -513,7 +682,7 @@ impl LightingMethod for Prt {
 
     /// The transfer buffer: 64 bytes a vertex a key in fp32, 20 with a shared exponent.
     fn memory(&self, gpu: &crate::backend::Gpu) -> Result<Vec<crate::lighting::MemoryItem>> {
-        Ok(vec![crate::lighting::MemoryItem {
+        let mut items = vec![crate::lighting::MemoryItem {
             method: NAME,
             resource: format!(
                 "{NAME} transfer ({} keys x {} vertices, {:?})",
@@ -521,7 +690,18 @@ impl LightingMethod for Prt {
             ),
             requested: gpu.buffer_desc(self.transfer)?.size,
             allocated: gpu.buffer_memory(self.transfer)?,
-        }])
+        }];
+        if let Some((vertices, indices)) = self.buffers {
+            for (buffer, what) in [(vertices, "vertices"), (indices, "indices")] {
+                items.push(crate::lighting::MemoryItem {
+                    method: NAME,
+                    resource: format!("{NAME} refined {what} ({} vertices)", self.vertices),
+                    requested: gpu.buffer_desc(buffer)?.size,
+                    allocated: gpu.buffer_memory(buffer)?,
+                });
+            }
+        }
+        Ok(items)
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
@@ -533,12 +713,13 @@ impl LightingMethod for Prt {
             vk::PipelineStageFlags2::VERTEX_SHADER,
             vk::PipelineStageFlags2::FRAGMENT_SHADER,
         );
+        let buffers = self.buffers.unwrap_or((scene.vertices, scene.indices));
         graph
             .pass("prt")
             .color_attachment(t.radiance, SubresourceRange::mip(0), false)
             .depth_stencil_write(t.depth_stencil, false)
-            .buffer(scene.vertices, Access::VertexRead, None)
-            .buffer(scene.indices, Access::IndexRead, None)
+            .buffer(buffers.0, Access::VertexRead, None)
+            .buffer(buffers.1, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
             .buffer(self.transfer, Access::StorageRead { stages: vert }, Some("transfer"))
             .record(move |ctx| {
@@ -549,7 +730,7 @@ impl LightingMethod for Prt {
                 ctx.rec.bind_pipeline(self.pipeline)?;
                 let uniform_bytes = bytemuck::bytes_of(&uniforms);
                 let light: &[u8] = bytemuck::cast_slice(&self.uniform);
-                record_draws(ctx, scene, &self.calls, |ctx, material| {
+                record_draws_from(ctx, buffers, &self.calls, |ctx, material| {
                     let maps = scene.material_maps[material as usize];
                     ctx.bind(&[
                         ("frame", Bind::UniformData(uniform_bytes)),

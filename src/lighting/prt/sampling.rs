@@ -23,7 +23,7 @@ impl Object {
     }
 
     /// The largest side of its bounds: about the width of its shadow's core.
-    fn extent(&self) -> f32 {
+    pub fn extent(&self) -> f32 {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for p in self.triangles.iter().flatten() {
@@ -41,21 +41,30 @@ impl Object {
 /// Vertices per shadow width below which the shadow is undersampled.
 const VERTICES_ACROSS: f32 = 2.0;
 
+/// Per object, the vertex spacing its shadows need: half the extent of the smallest other
+/// object that can shadow it (`None` where no other object has an extent), and that object.
+pub fn needed_spacing(objects: &[Object]) -> Vec<Option<(f32, usize)>> {
+    (0..objects.len())
+        .map(|i| {
+            let (j, o) = objects
+                .iter()
+                .enumerate()
+                .filter(|(j, o)| *j != i && o.extent() > 0.0)
+                .min_by(|a, b| a.1.extent().total_cmp(&b.1.extent()))?;
+            Some((o.extent() / VERTICES_ACROSS, j))
+        })
+        .collect()
+}
+
 /// The receivers whose vertices are farther apart than half the smallest other object's extent,
 /// each as one line naming both and the spacing that would hold its shadow.
 pub fn undersampled(objects: &[Object]) -> Vec<String> {
     let mut out = Vec::new();
-    for (i, r) in objects.iter().enumerate() {
+    for (r, need) in objects.iter().zip(needed_spacing(objects)) {
+        let Some((want, j)) = need else { continue };
         let spacing = r.vertex_spacing();
-        let smallest = objects
-            .iter()
-            .enumerate()
-            .filter(|(j, o)| *j != i && o.extent() > 0.0)
-            .map(|(_, o)| o)
-            .min_by(|a, b| a.extent().total_cmp(&b.extent()));
-        let Some(o) = smallest else { continue };
-        let want = o.extent() / VERTICES_ACROSS;
         if spacing > want {
+            let o = &objects[j];
             out.push(format!(
                 "object {:?}'s vertices are {spacing:.3} m apart, more than half the {:.3} m of object {:?} that can shadow it: its per-vertex transfer blurs or misses that shadow (subdivide {:?} to {want:.3} m or finer)",
                 r.name,
@@ -66,4 +75,20 @@ pub fn undersampled(objects: &[Object]) -> Vec<String> {
         }
     }
     out
+}
+
+/// The longest edge a receiver may keep so that every object's shadow is held (half the
+/// smallest object's extent, two significant digits), and that object; `None` with fewer than
+/// two objects.
+pub fn max_edge(objects: &[Object]) -> Option<(f64, usize)> {
+    if objects.iter().filter(|o| o.extent() > 0.0).count() < 2 {
+        return None;
+    }
+    let (j, o) = (objects.iter().enumerate())
+        .filter(|(_, o)| o.extent() > 0.0)
+        .min_by(|a, b| a.1.extent().total_cmp(&b.1.extent()))?;
+    Some((
+        crate::lighting::plan::round2(f64::from(o.extent() / VERTICES_ACROSS)),
+        j,
+    ))
 }
