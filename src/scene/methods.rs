@@ -45,6 +45,13 @@ impl MethodDecl {
         d.params.push((name.to_string(), value, 0));
         d
     }
+
+    /// This declaration without parameter `name` (its default applies).
+    pub fn without(&self, name: &str) -> MethodDecl {
+        let mut d = self.clone();
+        d.params.retain(|(n, _, _)| n != name);
+        d
+    }
 }
 
 /// A `[[combinations]]` entry: a named frame whose terms come from the scene's methods.

@@ -223,6 +223,33 @@ fn vls_setup_over_the_budget_is_refused() {
     );
 }
 
+/// A value derived for the corrected mode stays out of the chart's faithful point: the thesis's
+/// VLS keeps its 8 lights (not the 32 derived for the theatre's 100) and the document's PRT bakes
+/// the meshes as they are (no derived `max_edge`).
+#[test]
+fn the_faithful_sweep_point_keeps_the_documents_own_defaults() {
+    for (scene, method, param, faithful_label) in [
+        ("theatre_100.toml", "vls", "k", "vls faithful k=8 closest feeler=thesis area=0.043"),
+        ("prt_teapot_box.toml", "prt", "max_edge", "prt faithful orthographic 32² n=16"),
+    ] {
+        let scene = shipped(scene);
+        let config = registry::configuration(&scene, Some(method)).unwrap();
+        let (planned, notes) = registry::plan(&config, &scene).unwrap();
+        assert!(
+            notes.iter().any(|n| n.starts_with(&format!("{method}: {param} = "))),
+            "{notes:?}"
+        );
+        assert!(planned.parts[0].decl.param(param).is_some());
+        let sweep = registry::sweep(&planned).unwrap();
+        let labels: Vec<&str> = sweep.iter().map(|(l, _)| l.as_str()).collect();
+        let (_, faithful) = sweep
+            .iter()
+            .find(|(l, _)| l == faithful_label)
+            .unwrap_or_else(|| panic!("no {faithful_label:?} in {labels:?}"));
+        assert_eq!(faithful.parts[0].decl.param(param), None, "{method}");
+    }
+}
+
 /// Parameters the scene leaves unset are derived from it and said in one line each; set ones
 /// are kept and draw no line.
 #[test]
