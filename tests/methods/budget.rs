@@ -229,8 +229,18 @@ fn vls_setup_over_the_budget_is_refused() {
 #[test]
 fn the_faithful_sweep_point_keeps_the_documents_own_defaults() {
     for (scene, method, param, faithful_label) in [
-        ("theatre_100.toml", "vls", "k", "vls faithful k=8 closest feeler=thesis area=0.043"),
-        ("prt_teapot_box.toml", "prt", "max_edge", "prt faithful orthographic 32² n=16"),
+        (
+            "theatre_100.toml",
+            "vls",
+            "k",
+            "vls faithful k=8 closest feeler=thesis area=0.043",
+        ),
+        (
+            "prt_teapot_box.toml",
+            "prt",
+            "max_edge",
+            "prt faithful orthographic 32² n=16",
+        ),
     ] {
         let scene = shipped(scene);
         let config = registry::configuration(&scene, Some(method)).unwrap();
