@@ -184,7 +184,22 @@ impl Work {
 /// Splits the targets' edges, longest over its limit first, until every edge is within its
 /// mesh's limit or `budget` vertices have been added.
 pub fn refine(targets: &[Target<'_>], budget: usize) -> Refined {
-    let mut work: Vec<Work> = targets.iter().map(Work::new).collect();
+    // Meshes with no edge over their limit (most of a dense scene) skip the edge tables.
+    let splits = |t: &Target<'_>| {
+        t.mesh.indices.chunks_exact(3).any(|c| {
+            let p = [c[0], c[1], c[2]].map(|i| t.model.transform_point3(t.mesh.positions[i as usize]));
+            (0..3).any(|k| p[k].distance(p[(k + 1) % 3]) > t.max_edge)
+        })
+    };
+    let none = Target {
+        mesh: &Mesh::default(),
+        model: Mat4::IDENTITY,
+        max_edge: f32::INFINITY,
+    };
+    let mut work: Vec<Work> = targets
+        .iter()
+        .map(|t| if splits(t) { Work::new(t) } else { Work::new(&none) })
+        .collect();
     let mut queue = BinaryHeap::new();
     for (w, mesh) in work.iter().enumerate() {
         for key in mesh.by_edge.keys() {
@@ -214,7 +229,15 @@ pub fn refine(targets: &[Target<'_>], budget: usize) -> Refined {
         added = work.iter().map(|w| w.mesh.positions.len()).sum::<usize>() - before;
     }
     Refined {
-        meshes: work.into_iter().map(Work::finish).collect(),
+        meshes: (work.into_iter().zip(targets))
+            .map(|(w, t)| {
+                if w.triangles.is_empty() {
+                    t.mesh.clone()
+                } else {
+                    w.finish()
+                }
+            })
+            .collect(),
         added,
         budget_spent,
     }
