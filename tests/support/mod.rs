@@ -65,6 +65,21 @@ pub fn temp_path(name: &str) -> std::path::PathBuf {
     .join(name)
 }
 
+/// Bakes the tests make go to this process's temp dir, not `./.penumbra-cache` in the crate's
+/// folder (the bake stage's default): a bake left there by an earlier run would stand in for the
+/// one a test means to check, and the folder grew by megabytes a run. It runs from the binary's
+/// constructors, before `main` starts the test threads, so setting the variable races with no
+/// reader; child `penumbra` processes inherit it, and a test that sets its own cache keeps it.
+#[used]
+#[link_section = ".init_array"]
+static ISOLATE_BAKES: extern "C" fn() = isolate_bakes;
+
+extern "C" fn isolate_bakes() {
+    if std::env::var_os("PENUMBRA_CACHE").is_none() {
+        std::env::set_var("PENUMBRA_CACHE", temp_path("bake-cache"));
+    }
+}
+
 fn process_temp_dir() -> std::path::PathBuf {
     std::env::temp_dir().join(format!("penumbra-tests-{}", std::process::id()))
 }
