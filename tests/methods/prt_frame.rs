@@ -137,6 +137,9 @@ fn bad_parameters_name_the_field() {
             r#"{ name = "prt", baker = "rays_cpu", samples = 1000 }"#,
             "methods[0].samples",
         ),
+        (r#"{ name = "prt", max_edge = -0.5 }"#, "methods[0].max_edge"),
+        (r#"{ name = "prt", max_edge = "fine" }"#, "methods[0].max_edge"),
+        (r#"{ name = "prt", refine_budget = -1 }"#, "methods[0].refine_budget"),
     ] {
         let err = match Renderer::new(common::test_gpu(), wall(method), Some("prt"), (8, 8), 1) {
             Ok(_) => panic!("{method}: accepted"),

@@ -191,52 +191,39 @@ pub fn refine(targets: &[Target<'_>], budget: usize) -> Refined {
             (0..3).any(|k| p[k].distance(p[(k + 1) % 3]) > t.max_edge)
         })
     };
-    let none = Target {
-        mesh: &Mesh::default(),
-        model: Mat4::IDENTITY,
-        max_edge: f32::INFINITY,
-    };
-    let mut work: Vec<Work> = targets
-        .iter()
-        .map(|t| if splits(t) { Work::new(t) } else { Work::new(&none) })
-        .collect();
+    let mut work: Vec<Option<Work>> = targets.iter().map(|t| splits(t).then(|| Work::new(t))).collect();
     let mut queue = BinaryHeap::new();
     for (w, mesh) in work.iter().enumerate() {
-        for key in mesh.by_edge.keys() {
+        for (key, mesh) in mesh.iter().flat_map(|m| m.by_edge.keys().map(move |k| (k, m))) {
             let r = mesh.ratio(key);
             if r > 1.0 {
                 queue.push(Queued(r, w, *key));
             }
         }
     }
-    let before: usize = work.iter().map(|w| w.mesh.positions.len()).sum();
     let mut added = 0;
     let mut budget_spent = false;
     while let Some(Queued(_, w, key)) = queue.pop() {
-        if work[w].by_edge.get(&key).is_none_or(|l| l.is_empty()) {
+        let Some(mesh) = work[w].as_mut() else { continue };
+        if mesh.by_edge.get(&key).is_none_or(|l| l.is_empty()) {
             continue;
         }
         if added >= budget {
             budget_spent = true;
             break;
         }
-        for e in work[w].split(&key) {
-            let r = work[w].ratio(&e);
+        let before = mesh.mesh.positions.len();
+        for e in mesh.split(&key) {
+            let r = mesh.ratio(&e);
             if r > 1.0 {
                 queue.push(Queued(r, w, e));
             }
         }
-        added = work.iter().map(|w| w.mesh.positions.len()).sum::<usize>() - before;
+        added += mesh.mesh.positions.len() - before;
     }
     Refined {
         meshes: (work.into_iter().zip(targets))
-            .map(|(w, t)| {
-                if w.triangles.is_empty() {
-                    t.mesh.clone()
-                } else {
-                    w.finish()
-                }
-            })
+            .map(|(w, t)| w.map_or_else(|| t.mesh.clone(), Work::finish))
             .collect(),
         added,
         budget_spent,

@@ -119,22 +119,20 @@ fn a_block_standing_on_the_floor_buries_its_footprint_and_a_shelf_buries_nothing
     }
 }
 
+/// A grey box called "wall" of `size` centred at `at`, as scene TOML.
+fn wall(size: [f64; 3], at: [f64; 3]) -> String {
+    format!(
+        "\n[[objects]]\nname = \"wall\"\nmesh = \"box\"\nsize = {size:?}\ntranslate = {at:?}\nmaterial = \"grey\"\n"
+    )
+}
+
 /// A 3 cm wall standing across a column of 0.2 m floor patches at x ∈ [0.255, 0.285]: it buries
 /// the sub-sample column at x = 0.275 and parts the rest into one column on its −x side and two
 /// on its +x side. Each such patch keeps the two columns (half its area, its centre on the +x
 /// side), not all three visible ones (three quarters, light from both rooms in one texel).
 #[test]
 fn a_thin_wall_across_a_patch_keeps_the_larger_side() {
-    let sc = floor_with(
-        r#"
-[[objects]]
-name = "wall"
-mesh = "box"
-size = [0.03, 1, 2]
-translate = [0.27, 0.5, 0.1]
-material = "grey"
-"#,
-    );
+    let sc = floor_with(&wall([0.03, 1.0, 2.0], [0.27, 0.5, 0.1]));
     let size = 0.2;
     let (p, before, _) = excluded(&sc, size);
     let floor = p.charts.iter().position(|c| c.object == 0).unwrap();
@@ -174,7 +172,7 @@ material = "grey"
 #[test]
 fn a_wall_short_of_the_ceiling_buries_its_top_and_the_ceiling_over_it() {
     let sc = floor_with(
-        r#"
+        &(r#"
 [[objects]]
 name = "ceiling"
 mesh = "quad"
@@ -182,13 +180,9 @@ corner = [-2, 1, -2]
 edge_u = [4, 0, 0]
 edge_v = [0, 0, 4]
 material = "grey"
-[[objects]]
-name = "wall"
-mesh = "box"
-size = [0.04, 0.9995, 2]
-translate = [0.27, 0.49975, 0.1]
-material = "grey"
-"#,
+"#
+        .to_owned()
+            + &wall([0.04, 0.9995, 2.0], [0.27, 0.49975, 0.1])),
     );
     let size = 0.2;
     let (p, _, _) = excluded(&sc, size);
