@@ -1,6 +1,8 @@
 // Ridderhof 2002's light models for one light at its current intensity: the shader twin of
-// src/many_lights/light_model.rs (ManyLight::shade), held to it by tests/vls.rs.
-//   0 physical: rho/pi * I * smoothstep cone / d^2 * cos (as common/lights.glsl)
+// src/lighting/many_lights/light_model.rs (ManyLight::shade, a diffuse point's light, which picks
+// the light sets), held to it on a diffuse floor by tests/methods/vls.rs.
+//   0 physical: (rho/pi + normalised Blinn-Phong lobe) * I * smoothstep cone / d^2 * cos, as
+//               forward shades (common/lights.glsl)
 //   1 seed:     k * rho * I * ramp / d * cos, the ramp linear in angle between the full and null cones
 //   2 opengl:   rho * I * max(0, cos_axis)^e / (kc + kl d + kq d^2) * cos inside the null cone,
 //               with cos(full)^e = 1/2; its ambient and specular terms: opengl_ambient_specular
@@ -70,7 +72,11 @@ vec3 opengl_ambient_specular(vec4 constants, float light_ambient, Light light, v
     return light.intensity.rgb * reach * sum;
 }
 
-vec3 many_light_shade(uint model, vec4 constants, Light light, vec3 p, vec3 n, vec3 albedo) {
+// One light's direct radiance toward `eye` at p. The physical model is forward's: the material's
+// Lambert + normalised Blinn-Phong BRDF (common/lights.glsl) under the inverse-square law; the
+// seed's and OpenGL's models light the albedo only (OpenGL's ambient and specular terms are
+// opengl_ambient_specular's). `specular` is the material's (ks, exponent).
+vec3 many_light_shade(uint model, vec4 constants, Light light, vec3 p, vec3 n, vec3 eye, vec3 albedo, vec4 specular) {
     vec3 to_light = light.position.xyz - p;
     float dist = length(to_light);
     if (dist <= 1e-12) {
@@ -83,7 +89,8 @@ vec3 many_light_shade(uint model, vec4 constants, Light light, vec3 p, vec3 n, v
     float scale;
     if (model == MODEL_PHYSICAL) {
         float factor = spot ? spot_falloff(light.cone.y, light.cone.x, cos_axis) : 1.0;
-        scale = factor * cos_n / (dist * dist) / PI;
+        vec3 v = normalize(eye - p);
+        return light.intensity.rgb * (factor / (dist * dist)) * brdf_times_cos(n, v, l, albedo, specular.rgb, specular.w);
     } else if (model == MODEL_SEED) {
         float factor = spot ? seed_spot_ramp(acos(clamp(light.cone.x, -1.0, 1.0)), acos(clamp(light.cone.y, -1.0, 1.0)), acos(clamp(cos_axis, -1.0, 1.0))) : 1.0;
         scale = factor * cos_n * constants.x / dist;

@@ -40,7 +40,7 @@ vec3 vls_direct(uint set, vec3 p, vec3 n, vec3 albedo, vec4 specular) {
             break;
         }
         Light light = lights.items[index];
-        sum += many_light_shade(params.info.x, params.constants, light, p, n, albedo);
+        sum += many_light_shade(params.info.x, params.constants, light, p, n, frame.camera_pos.xyz, albedo, specular);
         if (opengl) {
             sum += opengl_ambient_specular(params.constants, params.ambient.y, light, p, n, frame.camera_pos.xyz,
                                            albedo, specular);

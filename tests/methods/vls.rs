@@ -248,7 +248,17 @@ fn the_faithful_light_model_has_the_theses_ambient_and_specular_terms() {
 #[test]
 fn physical_vls_equals_forward_without_dropped_lights() {
     let methods = r#"{ name = "vls", mode = "corrected", selection = "closest", can_illuminate = false }, "forward""#;
-    let s = scene(methods, &three_lights());
+    physical_vls_equals_forward(&scene(methods, &three_lights()));
+    // A glossy floor: the physical model has forward's Blinn-Phong lobe too (without it the
+    // floor reads darker wherever the lobe reaches the camera).
+    let glossy = FLOOR.replace("albedo = 0.5", "albedo = 0.5\nspecular = 0.3\nexponent = 20");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = glossy.replace("METHOD", methods) + &three_lights();
+    physical_vls_equals_forward(&Scene::from_str(&text, "vls test", &dir).unwrap_or_else(|e| panic!("{e}")));
+}
+
+fn physical_vls_equals_forward(s: &Scene) {
+    let s = s.clone();
     let pixels = floor_pixels(&s);
     let vls = render(s.clone(), "vls");
     let forward = render(s, "forward");
