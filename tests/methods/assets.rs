@@ -1,5 +1,6 @@
 //! Assets rendered: an OBJ + MTL and a glTF file written by the test, drawn by `forward` and traced
-//! by the reference, each pixel compared with the closed form at the point its centre ray hits.
+//! by the reference, each pixel compared with the closed form at the point its centre ray hits;
+//! and a cut-out leaf (`map_d`) traced with the light through its holes.
 
 use crate::support as common;
 
@@ -279,4 +280,125 @@ fn gltf_alone_node_transform_and_punctual_light_in_candela() {
     }
     check(&img, want, 2e-3);
     assert!(inside > 300 && outside > 50, "{inside} on the quad, {outside} off it");
+}
+
+/// A leaf: a 2 × 2 quad at y = 1 (x, z in [-1, 1], facing +y) whose `map_d` is a 4 × 4 grey
+/// checker (kept where column + row is even), over a 4 × 4 floor at y = 0; both Lambertian.
+const LEAF_OBJ: &str = "mtllib leaf.mtl
+v -1 1 -1\nv -1 1 1\nv 1 1 1\nv 1 1 -1
+v -2 0 -2\nv -2 0 2\nv 2 0 2\nv 2 0 -2
+vt 0 0\nvt 0 1\nvt 1 1\nvt 1 0
+vn 0 1 0
+usemtl leaf
+f 1/1/1 2/2/1 3/3/1 4/4/1
+usemtl floor
+f 5/1/1 6/2/1 7/3/1 8/4/1
+";
+const KD_LEAF: f32 = 0.4;
+const KD_FLOOR: f32 = 0.7;
+const E_DOWN: f32 = 2.0;
+
+/// Whether the leaf is kept over (x, z): the checker cell under it, by the OBJ's uv convention
+/// (vt v = 0 is the image's bottom row) and the face's vt (u along x, v along z); `None` within
+/// `margin` of a cell's edge or off the leaf.
+fn leaf_kept(x: f32, z: f32, margin: f32) -> Option<bool> {
+    let (u, v) = ((x + 1.0) / 2.0, (z + 1.0) / 2.0);
+    if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+        return None;
+    }
+    let (cu, cv) = (u * 4.0, (1.0 - v) * 4.0);
+    let near = |c: f32| (c - c.round()).abs() < margin * 2.0;
+    if near(cu) || near(cv) {
+        return None;
+    }
+    let (col, row) = (cu.floor() as i32, cv.floor() as i32);
+    Some((col + row) % 2 == 0)
+}
+
+/// The closed form along the ray through continuous pixel coordinates (x, y): the leaf's
+/// ρ/π E where the ray meets a kept cell, else the floor's ρ/π E where nothing kept lies above
+/// it (the light falls straight down), else 0; `None` near an edge.
+fn leaf_want(scene: &Scene, x: f32, y: f32) -> Option<f32> {
+    let (o, d) = scene.camera.ray(x, y, W, H);
+    let at = |h: f32| o + d * ((h - o.y) / d.y);
+    let (top, floor) = (at(1.0), at(0.0));
+    let on_leaf = top.x.abs() < 1.0 && top.z.abs() < 1.0;
+    if on_leaf && leaf_kept(top.x, top.z, 0.03)? {
+        return Some(KD_LEAF / std::f32::consts::PI * E_DOWN);
+    }
+    if (on_leaf || top.x.abs() < 1.03 && top.z.abs() < 1.03) && leaf_kept(top.x, top.z, 0.03).is_none() {
+        return None;
+    }
+    if floor.x.abs() > 1.97 || floor.z.abs() > 1.97 {
+        return (floor.x.abs() > 2.03 || floor.z.abs() > 2.03).then_some(0.0);
+    }
+    let shade = match leaf_kept(floor.x, floor.z, 0.03) {
+        Some(true) => return Some(0.0),
+        Some(false) => false,
+        None if floor.x.abs() < 1.03 && floor.z.abs() < 1.03 => return None,
+        None => false,
+    };
+    Some(if shade {
+        0.0
+    } else {
+        KD_FLOOR / std::f32::consts::PI * E_DOWN
+    })
+}
+
+#[test]
+fn reference_traces_a_cut_out_leaf_and_the_light_through_its_holes() {
+    let dir = temp_dir("leaf");
+    let checker = image::GrayImage::from_fn(4, 4, |c, r| image::Luma([if (c + r) % 2 == 0 { 255 } else { 0 }]));
+    checker.save(dir.join("checker.png")).unwrap();
+    std::fs::write(
+        dir.join("leaf.mtl"),
+        format!("newmtl leaf\nKd {KD_LEAF} {KD_LEAF} {KD_LEAF}\nmap_d checker.png\nnewmtl floor\nKd {KD_FLOOR} {KD_FLOOR} {KD_FLOOR}\n"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("leaf.obj"), LEAF_OBJ).unwrap();
+    let toml = format!(
+        "[camera]\nposition = [0.3, 3.5, 1.8]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = 50\n\n\
+         [[objects]]\nmesh = \"asset\"\npath = \"leaf.obj\"\n\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = [{E_DOWN}, {E_DOWN}, {E_DOWN}]\n"
+    );
+    std::fs::write(dir.join("scene.toml"), toml).unwrap();
+    let scene = Scene::from_file(dir.join("scene.toml")).unwrap();
+    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (W, H)).unwrap();
+    let settings = Settings {
+        spp: 4,
+        bounces: 0,
+        paths: LightPaths::Direct,
+        seed: 1,
+        batching: Batching::Adaptive,
+        ..Settings::default()
+    };
+    let img = r.render(&settings, &mut |_, _| {}).unwrap();
+    common::assert_clean(&r.gpu);
+    // Only pixels whose four corners agree count: the reference averages each footprint.
+    let want = |i: u32, j: u32| {
+        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+            .map(|(dx, dy)| leaf_want(&scene, i as f32 + dx, j as f32 + dy));
+        let first = corners[0]?;
+        corners.iter().all(|c| *c == Some(first)).then_some(Vec3::splat(first))
+    };
+    check(&img.mean, want, 2e-3);
+    // How many pixels each case checked: kept cells, floor lit through holes, floor in shadow.
+    let (mut on_leaf, mut lit_below, mut shadow_below) = (0, 0, 0);
+    let leaf = Vec3::splat(KD_LEAF / std::f32::consts::PI * E_DOWN);
+    for j in 0..H {
+        for i in 0..W {
+            let Some(w) = want(i, j) else { continue };
+            let (o, d) = scene.camera.ray(i as f32 + 0.5, j as f32 + 0.5, W, H);
+            let floor = o + d * (-o.y / d.y);
+            let below = floor.x.abs() < 1.0 && floor.z.abs() < 1.0;
+            match (w == leaf, below, w.x > 0.0) {
+                (true, _, _) => on_leaf += 1,
+                (false, true, true) => lit_below += 1,
+                (false, true, false) => shadow_below += 1,
+                _ => {}
+            }
+        }
+    }
+    println!("{on_leaf} pixels on kept cells, {lit_below} on the floor lit through holes, {shadow_below} in the leaf's shadow");
+    assert!(on_leaf > 20 && lit_below > 10 && shadow_below > 10);
 }

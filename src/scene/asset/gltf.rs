@@ -8,7 +8,8 @@ use std::sync::Arc;
 use base64::Engine as _;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use super::{checked_image, unit_colour, Asset, AssetPart};
+use super::cutout::Channel;
+use super::{checked_image, cut_part, unit_colour, Asset, AssetPart, CutoutSpec};
 use crate::scene::error::SceneError;
 use crate::scene::mesh::Mesh;
 use crate::scene::types::{Camera, Light, Material};
@@ -92,9 +93,16 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
                     .nth(i)
                     .ok_or_else(|| cx.err("materials", "missing"))?,
             )?,
-            None => Some(Material::default_grey("default")),
+            None => Some((Material::default_grey("default"), None)),
         };
-        let Some(material) = material else { continue };
+        let Some((material, cutout)) = material else { continue };
+        let mesh = match cutout {
+            Some(spec) => match cut_part(mesh, &spec, &cx.file)? {
+                Some(m) => m,
+                None => continue,
+            },
+            None => mesh,
+        };
         parts.push(AssetPart {
             mesh: Arc::new(mesh),
             material,
@@ -208,7 +216,10 @@ fn walk(cx: &Ctx, node: &gltf::Node, parent: Mat4, out: &mut Walk, depth: usize)
     if let Some(mesh) = node.mesh() {
         for prim in mesh.primitives() {
             let pfield = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-            let tris = primitive(cx, &prim, &pfield)?.transformed(&world);
+            let Some(tris) = primitive(cx, &prim, &pfield)? else {
+                continue;
+            };
+            let tris = tris.transformed(&world);
             let key = prim.material().index();
             match out.meshes.iter_mut().find(|(k, _)| *k == key) {
                 Some((_, m)) => append(m, &tris),
@@ -217,7 +228,9 @@ fn walk(cx: &Ctx, node: &gltf::Node, parent: Mat4, out: &mut Walk, depth: usize)
         }
     }
     if let Some(camera) = node.camera() {
-        out.cameras.push(camera_of(cx, &camera, &world)?);
+        if let Some(c) = camera_of(cx, &camera, &world)? {
+            out.cameras.push(c);
+        }
     }
     if let Some(light) = node.light() {
         out.lights.push(light_of(cx, &light, &world)?);
@@ -238,15 +251,17 @@ fn append(to: &mut Mesh, from: &Mesh) {
 }
 
 /// One triangle primitive in its mesh's space, checked: finite attributes, indices in range.
-fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, SceneError> {
-    if prim.mode() != gltf::mesh::Mode::Triangles {
-        return Err(cx.err(
-            field,
-            format!(
-                "mode {:?} is not supported (penumbra draws triangle lists)",
-                prim.mode()
-            ),
-        ));
+/// Strips and fans become lists; points and lines (no area to light) are `None`, with a line
+/// saying they were left out.
+fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Option<Mesh>, SceneError> {
+    use gltf::mesh::Mode;
+    if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        crate::errln!(
+            "{}: {field}: mode {:?} left out: points and lines have no surface to light",
+            cx.file,
+            prim.mode()
+        );
+        return Ok(None);
     }
     for (sem, acc) in prim.attributes() {
         let afield = format!("{field}: {}", semantic_name(&sem));
@@ -287,6 +302,7 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, Scen
         Some(ix) => ix.into_u32().collect(),
         None => (0..n as u32).collect(),
     };
+    let indices = triangle_list(prim.mode(), indices);
     if !indices.len().is_multiple_of(3) {
         return Err(cx.err(field, format!("{} indices do not make whole triangles", indices.len())));
     }
@@ -304,7 +320,24 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Mesh, Scen
     mesh.normalize_normals();
     mesh.compute_tangents();
     mesh.validate(&format!("{}: {field}", cx.file))?;
-    Ok(mesh)
+    Ok(Some(mesh))
+}
+
+/// A strip's or fan's indices as a triangle list, front faces kept (glTF 2.0, 3.7.2.1): strip
+/// triangle i is (i, i+1, i+2), its two first corners swapped when i is odd; fan triangle i is
+/// (i+1, i+2, 0).
+fn triangle_list(mode: gltf::mesh::Mode, ix: Vec<u32>) -> Vec<u32> {
+    let n = ix.len().saturating_sub(2);
+    match mode {
+        gltf::mesh::Mode::TriangleStrip => (0..n)
+            .flat_map(|i| match i % 2 {
+                0 => [ix[i], ix[i + 1], ix[i + 2]],
+                _ => [ix[i + 1], ix[i], ix[i + 2]],
+            })
+            .collect(),
+        gltf::mesh::Mode::TriangleFan => (0..n).flat_map(|i| [ix[i + 1], ix[i + 2], ix[0]]).collect(),
+        _ => ix,
+    }
 }
 
 fn semantic_name(s: &gltf::Semantic) -> String {
@@ -351,10 +384,12 @@ fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, field: &str) -> Result<(), Sce
     Ok(())
 }
 
-fn camera_of(cx: &Ctx, camera: &gltf::Camera, world: &Mat4) -> Result<Camera, SceneError> {
+/// A perspective camera; an orthographic one is `None`, with a line saying it was left out.
+fn camera_of(cx: &Ctx, camera: &gltf::Camera, world: &Mat4) -> Result<Option<Camera>, SceneError> {
     let field = format!("cameras[{}]", camera.index());
     let gltf::camera::Projection::Perspective(p) = camera.projection() else {
-        return Err(cx.err(field, "orthographic cameras are not supported"));
+        crate::errln!("{}: {field}: left out: orthographic cameras are not supported", cx.file);
+        return Ok(None);
     };
     let fov_y_deg = p.yfov().to_degrees();
     if !(fov_y_deg > 0.0 && fov_y_deg < 180.0 && p.znear() > 0.0 && p.znear().is_finite()) {
@@ -369,13 +404,13 @@ fn camera_of(cx: &Ctx, camera: &gltf::Camera, world: &Mat4) -> Result<Camera, Sc
     let (Some(forward), Some(up)) = (forward, up) else {
         return Err(cx.err(field, "its node's transform is degenerate"));
     };
-    Ok(Camera {
+    Ok(Some(Camera {
         position,
         target: position + forward,
         up,
         fov_y_deg,
         near: p.znear(),
-    })
+    }))
 }
 
 fn light_of(cx: &Ctx, light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Result<Light, SceneError> {
@@ -421,8 +456,9 @@ fn light_of(cx: &Ctx, light: &gltf::khr_lights_punctual::Light, world: &Mat4) ->
 }
 
 /// Maps a glTF material (see `docs/assets.md`); `None` for one that hides its primitives
-/// (MASK with a base alpha under the cutoff, or BLEND with alpha 0).
-fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError> {
+/// (MASK with a base alpha under the cutoff, or BLEND with alpha 0). A MASK material with a
+/// base colour texture comes with the cut-out its texture's alpha makes.
+fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, Option<CutoutSpec>)>, SceneError> {
     let index = m.index().unwrap_or(0);
     let field = |what: &str| format!("materials[{index}].{what}");
     let pbr = m.pbr_metallic_roughness();
@@ -459,6 +495,7 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
         return Err(cx.err(field("emissiveFactor"), "must be finite and non-negative"));
     }
     let alpha = base4.w;
+    let mut cutout = None;
     let opacity = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => 1.0,
         gltf::material::AlphaMode::Mask => {
@@ -466,7 +503,13 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
             if alpha < cutoff {
                 return Ok(None);
             }
-            refuse_texture_alpha(cx, albedo_map.as_deref(), |a| a * alpha < cutoff, &field("alphaMode"))?;
+            cutout = albedo_map.clone().map(|map| CutoutSpec {
+                map,
+                channel: Channel::Alpha,
+                factor: alpha,
+                cutoff,
+                field: field("alphaMode"),
+            });
             1.0
         }
         gltf::material::AlphaMode::Blend => {
@@ -478,7 +521,7 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
         }
     };
     let f0 = Vec3::splat(0.04).lerp(base, metallic);
-    Ok(Some(Material {
+    let material = Material {
         name: m
             .name()
             .map(str::to_owned)
@@ -493,7 +536,8 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<Material>, SceneError
         emission,
         opacity,
         sky: false,
-    }))
+    };
+    Ok(Some((material, cutout)))
 }
 
 /// Per-texel alpha cannot be honoured (penumbra's opacity is one number per material): a base

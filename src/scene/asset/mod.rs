@@ -7,6 +7,9 @@
 //! Every error is one [`SceneError`] naming the asset file and the element (`meshes[3].primitives[0]`,
 //! `materials[2] "stone".map_Kd`), never a panic and never a silent default.
 
+pub mod cutout;
+#[cfg(test)]
+mod cutout_tests;
 mod gltf;
 mod mtl;
 #[cfg(test)]
@@ -35,6 +38,40 @@ pub struct Asset {
 pub struct AssetPart {
     pub mesh: Arc<Mesh>,
     pub material: Material,
+}
+
+/// A material whose texture cuts its triangles out ([`cutout`]): the mask image, its channel,
+/// the factor its values are multiplied by, the cutoff, and the element it came from.
+struct CutoutSpec {
+    map: PathBuf,
+    channel: cutout::Channel,
+    factor: f32,
+    cutoff: f32,
+    field: String,
+}
+
+/// `mesh` cut by `spec`'s mask, with a line saying what was cut; `None` when nothing is left.
+/// A mask that hides no texel leaves the mesh as it is.
+fn cut_part(mesh: Mesh, spec: &CutoutSpec, file: &str) -> Result<Option<Mesh>, SceneError> {
+    let err = |m: String| SceneError::new(file, None, spec.field.as_str(), format!("{}: {m}", spec.map.display()));
+    let mask = cutout::mask_of_image(&spec.map, spec.channel, spec.factor).map_err(err)?;
+    if !mask.hides_any(spec.cutoff) {
+        return Ok(Some(mesh));
+    }
+    let (mut cut, report) = cutout::cut(&mesh, &mask, spec.cutoff);
+    crate::errln!(
+        "{file}: {}: alpha cut-out: {} triangles cut along the mask's {}-texel cells into {}",
+        spec.field,
+        report.triangles_before,
+        report.cell_texels,
+        report.triangles_after
+    );
+    if cut.indices.is_empty() {
+        return Ok(None);
+    }
+    cut.complete_attributes();
+    cut.validate(&format!("{file}: {}", spec.field))?;
+    Ok(Some(cut))
 }
 
 /// Whether `path` names a file [`load_asset`] reads (by its extension, any case).

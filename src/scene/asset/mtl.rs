@@ -7,7 +7,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::{checked_image, unit_colour, Asset, AssetPart};
+use super::cutout::Channel;
+use super::{checked_image, cut_part, unit_colour, Asset, AssetPart, CutoutSpec};
 use crate::scene::error::SceneError;
 use crate::scene::obj::{models_mesh, read_obj};
 use crate::scene::types::Material;
@@ -57,13 +58,19 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
     }
     let mut parts = Vec::new();
     for id in ids {
-        let material = match id.and_then(|i| materials.get(i).map(|m| (i, m))) {
+        let (material, cutout) = match id.and_then(|i| materials.get(i).map(|m| (i, m))) {
             Some((i, m)) => material(m, i, dir, &mtl_name)?,
             // Faces before any `usemtl` (or a file with no `mtllib`).
-            None => Material::default_grey("default"),
+            None => (Material::default_grey("default"), None),
         };
         let group = models.iter().filter(|m| m.mesh.material_id == id);
-        let mesh = models_mesh(group, &file)?;
+        let mut mesh = models_mesh(group, &file)?;
+        if let Some(spec) = cutout {
+            match cut_part(mesh, &spec, &mtl_name)? {
+                Some(m) => mesh = m,
+                None => continue,
+            }
+        }
         parts.push(AssetPart {
             mesh: Arc::new(mesh),
             material,
@@ -102,7 +109,12 @@ fn check_usemtl(path: &Path, file: &str, materials: &[tobj::Material]) -> Result
 /// Maps one MTL material: Kd/map_Kd, Ks/Ns/map_Ks, bump/map_Bump/norm (tangent-space normal
 /// map), d (or Tr = 1 - d), Ke. Statements penumbra cannot honour are errors.
 // long: one MTL statement after another, each mapped or refused.
-fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<Material, SceneError> {
+fn material(
+    m: &tobj::Material,
+    index: usize,
+    dir: &Path,
+    mtl: &str,
+) -> Result<(Material, Option<CutoutSpec>), SceneError> {
     let field = |what: &str| format!("materials[{index}] {:?}.{what}", m.name);
     let colour = |v: Option<[f32; 3]>, what: &str, default: Vec3| match v {
         Some(c) => unit_colour(Vec3::from(c), mtl, &field(what)),
@@ -136,14 +148,15 @@ fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<M
             ));
         }
     }
-    if m.dissolve_texture.is_some() {
-        return Err(SceneError::new(
-            mtl,
-            None,
-            field("map_d"),
-            "per-texel opacity is not supported (penumbra's opacity is one number per material)",
-        ));
-    }
+    // `map_d` is read as a cut-out (texels under one half are cut away), as exporters use it for
+    // leaves and grilles: penumbra's opacity is one number per material.
+    let cutout = texture(m.dissolve_texture.as_ref(), "map_d")?.map(|map| CutoutSpec {
+        map,
+        channel: Channel::AlphaOrGrey,
+        factor: 1.0,
+        cutoff: 0.5,
+        field: field("map_d"),
+    });
     let opacity = match (m.dissolve, m.unknown_param.get("Tr")) {
         (Some(d), _) => d,
         (None, Some(tr)) => {
@@ -189,7 +202,7 @@ fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<M
     } else {
         "bump"
     };
-    Ok(Material {
+    let material = Material {
         name: m.name.clone(),
         albedo: colour(m.diffuse, "Kd", Vec3::splat(0.8))?,
         specular: colour(m.specular, "Ks", Vec3::ZERO)?,
@@ -201,5 +214,6 @@ fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<M
         emission,
         opacity,
         sky: false,
-    })
+    };
+    Ok((material, cutout))
 }

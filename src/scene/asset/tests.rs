@@ -272,8 +272,9 @@ fn gltf_bad_input_is_one_line_naming_file_and_element() {
         |d, _| d["meshes"][0]["primitives"][0]["mode"] = json!(1),
         bytes.clone(),
     );
+    // Lines are left out (with a line saying so): a file of lines alone draws nothing.
     assert!(
-        e.contains("meshes[0].primitives[0]: mode Lines is not supported"),
+        e.contains("model.gltf: file: the asset has no visible triangles"),
         "{e}"
     );
 
@@ -304,20 +305,11 @@ fn gltf_bad_input_is_one_line_naming_file_and_element() {
     );
     assert!(e.contains("buffers[0]: byteLength is 4000"), "{e}");
 
-    let e = gltf_error(
-        "ortho",
-        |d, _| {
-            d["cameras"] =
-                json!([{"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 9}}])
-        },
-        bytes.clone(),
-    );
-    assert!(e.contains("cameras[0]: orthographic cameras are not supported"), "{e}");
-
+    // A cut-out mask that cannot be read is one line too.
     let e = gltf_error(
         "cutout",
         |d, dir| {
-            write_png(&dir.join("leaf.png"), &[[0, 255, 0, 255], [0, 255, 0, 0]]);
+            std::fs::write(dir.join("leaf.png"), b"not a png").unwrap();
             d["images"] = json!([{"uri": "leaf.png"}]);
             d["textures"] = json!([{"source": 0}]);
             d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
@@ -325,10 +317,101 @@ fn gltf_bad_input_is_one_line_naming_file_and_element() {
         },
         bytes.clone(),
     );
+    assert!(e.contains("materials[0].baseColorTexture: images[0]"), "{e}");
+}
+
+/// Every triangle faces the way its vertex normals point (its winding is a front face's).
+fn assert_front_faces(m: &Mesh) {
+    for t in m.triangles() {
+        let [a, b, c] = t.map(|i| m.positions[i]);
+        let n = m.normals[t[0]] + m.normals[t[1]] + m.normals[t[2]];
+        assert!((b - a).cross(c - a).dot(n) > 0.0, "triangle {t:?} is wound backwards");
+    }
+}
+
+#[test]
+fn gltf_strips_and_fans_become_lists_points_lines_and_orthographic_cameras_are_left_out() {
+    let dir = temp_dir("modes");
+    let (mut bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let whole = {
+        let doc = document(&bytes);
+        load_asset(&write_json(&dir, "list.gltf", &doc)).unwrap().parts[0]
+            .mesh
+            .area()
+    };
+    // A strip (0, 1, 3, 2) and a fan (0, 1, 2, 3) over the quad's corners: two triangles each.
+    for i in [0u16, 1, 3, 2, 0, 1, 2, 3] {
+        bytes.extend_from_slice(&i.to_le_bytes());
+    }
+    for (name, mode, offset) in [("strip", 5, 140), ("fan", 6, 148)] {
+        let mut doc = document(&bytes);
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"buffer": 0, "byteOffset": offset, "byteLength": 8}));
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"bufferView": 4, "componentType": 5123, "count": 4, "type": "SCALAR"}));
+        let mut prim = primitive(0);
+        prim["indices"] = json!(4);
+        prim["mode"] = json!(mode);
+        let mut line = primitive(0);
+        line["mode"] = json!(1);
+        doc["meshes"][0]["primitives"] = json!([prim, line]);
+        doc["cameras"] =
+            json!([{"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 9}}]);
+        let asset = load_asset(&write_json(&dir, &format!("{name}.gltf"), &doc)).unwrap();
+        let mesh = &asset.parts[0].mesh;
+        assert_eq!(
+            mesh.triangle_count(),
+            4,
+            "{name}: two quads of two triangles, the line left out"
+        );
+        assert!(
+            (mesh.area() - whole).abs() < 1e-5,
+            "{name}: {} against {whole}",
+            mesh.area()
+        );
+        assert_front_faces(mesh);
+        assert!(asset.cameras.is_empty(), "{name}: the orthographic camera is left out");
+    }
+}
+
+#[test]
+fn gltf_mask_texture_cuts_the_triangles_away_where_alpha_is_under_the_cutoff() {
+    let dir = temp_dir("cutout");
+    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    let whole = load_asset(&write_json(&dir, "whole.gltf", &doc)).unwrap().parts[0]
+        .mesh
+        .area();
+    // The quad's uv u runs along x: the texture's right texel (alpha 0) is the quad's right half.
+    write_png(&dir.join("leaf.png"), &[[0, 255, 0, 255], [0, 255, 0, 0]]);
+    doc["images"] = json!([{"uri": "leaf.png"}]);
+    doc["textures"] = json!([{"source": 0}]);
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    doc["materials"][0]["alphaMode"] = json!("MASK");
+    let asset = load_asset(&write_json(&dir, "leaf.gltf", &doc)).unwrap();
+    let part = &asset.parts[0];
+    assert_eq!(part.material.opacity, 1.0);
     assert!(
-        e.contains("materials[0].alphaMode: ") && e.contains("per-texel alpha"),
-        "{e}"
+        (part.mesh.area() - 0.5 * whole).abs() < 1e-4,
+        "{} of {whole}",
+        part.mesh.area()
     );
+    part.mesh.validate("cut").unwrap();
+    assert_eq!(part.mesh.tangents.len(), part.mesh.positions.len());
+    // Every kept point has u < 1/2: the opaque texel's half.
+    assert!(part.mesh.uvs.iter().all(|uv| uv.x <= 0.5 + 1e-6));
+    // The base colour factor's alpha scales the texture's: a right texel at alpha 0.6 stays
+    // alone (0.6 >= 0.5) and goes under a factor of 0.8 (0.48).
+    write_png(&dir.join("leaf.png"), &[[0, 255, 0, 255], [0, 255, 0, 153]]);
+    let kept =
+        |doc: &serde_json::Value, name: &str| load_asset(&write_json(&dir, name, doc)).unwrap().parts[0].mesh.area();
+    assert!((kept(&doc, "faint.gltf") - whole).abs() < 1e-4);
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 1.0, 1.0, 0.8]);
+    assert!((kept(&doc, "fainter.gltf") - 0.5 * whole).abs() < 1e-4);
 }
 
 #[test]
@@ -411,6 +494,16 @@ fn obj_mtl_one_part_per_material() {
     assert_eq!(glass.material.emission, Vec3::new(1.0, 2.0, 3.0));
     assert!(glass.mesh.positions.iter().all(|p| p.x >= 1.0));
 
+    // map_d cuts the faces away where it is under one half: a grey mask (no alpha channel)
+    // dark on its right texel keeps the glass quad's left half.
+    let dir = temp_dir("objmapd");
+    let path = write_obj(&dir, &MTL.replace("d 0.25", "map_d mask.png"));
+    write_png(&dir.join("mask.png"), &[[255, 255, 255, 255], [20, 20, 20, 255]]);
+    let asset = load_asset(&path).unwrap();
+    let glass = &asset.parts[1].mesh;
+    assert!((glass.area() - 0.5).abs() < 1e-4, "{}", glass.area());
+    assert!(glass.positions.iter().all(|p| p.x <= 1.5 + 1e-6), "the left half stays");
+
     // bump is read as the normal map too.
     let dir = temp_dir("objbump");
     let path = write_obj(&dir, &MTL.replace("norm brick_n.png", "bump brick_n.png"));
@@ -426,8 +519,8 @@ fn obj_mtl_bad_input_is_one_line() {
             "materials[0] \"brick\".map_Kd: texture not found",
         ),
         (
-            MTL.replace("d 0.25", "map_d brick.png"),
-            "\"glass\".map_d: per-texel opacity is not supported",
+            MTL.replace("d 0.25", "map_d gone.png"),
+            "\"glass\".map_d: texture not found",
         ),
         (
             MTL.replace("Kd 0.2 0.3 0.4", "Kd 0.2 NaN 0.4"),
