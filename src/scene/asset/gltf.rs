@@ -15,7 +15,11 @@ use crate::scene::mesh::Mesh;
 use crate::scene::types::{Camera, Light, Material};
 
 /// Extensions an asset may require: penumbra reads them.
-const SUPPORTED_REQUIRED: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+const SUPPORTED_REQUIRED: [&str; 3] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
+];
 
 /// Luminous efficacy used to turn photometric light units into radiometric ones, lm/W: the
 /// maximum, that of 555 nm light (so 1 cd = 1/683 W/sr, 1 lx = 1/683 W/m²).
@@ -35,6 +39,8 @@ struct Ctx<'a> {
     dir: &'a Path,
     doc: &'a gltf::Document,
     buffers: Vec<Vec<u8>>,
+    /// The document as JSON, for what the `gltf` crate does not expose (texture transforms).
+    json: serde_json::Value,
 }
 
 impl Ctx<'_> {
@@ -68,11 +74,14 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
+    let json =
+        raw_json(&bytes).map_err(|e| SceneError::new(&file, None, "file", format!("not a glTF 2.0 file: {e}")))?;
     let mut cx = Ctx {
         file,
         dir,
         doc: &gltf.document,
         buffers: Vec::new(),
+        json,
     };
     cx.buffers = load_buffers(&cx, gltf.blob.as_deref())?;
     let mut out = Walk::default();
@@ -96,6 +105,12 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
             None => Some((Material::default_grey("default"), None)),
         };
         let Some((material, cutout)) = material else { continue };
+        let mut mesh = mesh;
+        if let Some(i) = key {
+            if let Some(t) = uv_transform(&cx, i)? {
+                mesh.uvs.iter_mut().for_each(|uv| *uv = t.apply(*uv));
+            }
+        }
         let mesh = match cutout {
             Some(spec) => match cut_part(mesh, &spec, &cx.file)? {
                 Some(m) => m,
@@ -113,6 +128,107 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
         lights: out.lights,
         cameras: out.cameras,
     })
+}
+
+/// The JSON of a `.gltf` file, or of a `.glb`'s JSON chunk.
+fn raw_json(bytes: &[u8]) -> Result<serde_json::Value, String> {
+    let text = if bytes.starts_with(b"glTF") {
+        gltf::binary::Glb::from_slice(bytes)
+            .map_err(|e| e.to_string())?
+            .json
+            .into_owned()
+    } else {
+        bytes.to_vec()
+    };
+    serde_json::from_slice(&text).map_err(|e| e.to_string())
+}
+
+/// A `KHR_texture_transform`: uv' = T(offset) R(rotation) S(scale) uv. The rotation turns a uv
+/// toward −v: (u, v) → (u cos r + v sin r, −u sin r + v cos r), as the implementations and the
+/// extension's sample model do ("counter-clockwise" in glTF's v-down uv space); the GLSL listing in
+/// the extension's text has the transpose (KhronosGroup/glTF issue 1563).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct UvTransform {
+    offset: Vec2,
+    rotation: f32,
+    scale: Vec2,
+}
+
+impl UvTransform {
+    fn apply(&self, uv: Vec2) -> Vec2 {
+        let s = uv * self.scale;
+        let (sin, cos) = self.rotation.sin_cos();
+        Vec2::new(cos * s.x + sin * s.y, -sin * s.x + cos * s.y) + self.offset
+    }
+}
+
+/// The uv transform material `index`'s mapped textures share (the base colour's and the normal
+/// map's; the metallic-roughness texture is read as its mean, where a transform changes
+/// nothing), or `None` when they have none. penumbra has one uv set per part, so textures with
+/// different transforms, or a transform's own `texCoord` other than 0, are refused.
+fn uv_transform(cx: &Ctx, index: usize) -> Result<Option<UvTransform>, SceneError> {
+    let m = &cx.json["materials"][index];
+    let slots = [
+        (
+            "pbrMetallicRoughness.baseColorTexture",
+            &m["pbrMetallicRoughness"]["baseColorTexture"],
+        ),
+        ("normalTexture", &m["normalTexture"]),
+    ];
+    let mut found: Option<(String, Option<UvTransform>)> = None;
+    for (name, info) in slots {
+        if info.is_null() {
+            continue;
+        }
+        let field = format!("materials[{index}].{name}.extensions.KHR_texture_transform");
+        let t = &info["extensions"]["KHR_texture_transform"];
+        let this = if t.is_null() {
+            None
+        } else {
+            let num = |key: &str, default: f32| -> Result<f32, SceneError> {
+                match &t[key] {
+                    serde_json::Value::Null => Ok(default),
+                    v => v
+                        .as_f64()
+                        .map(|x| x as f32)
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| cx.err(&field, format!("{key} must be a finite number"))),
+                }
+            };
+            let pair = |key: &str, default: f32| -> Result<Vec2, SceneError> {
+                match &t[key] {
+                    serde_json::Value::Null => Ok(Vec2::splat(default)),
+                    serde_json::Value::Array(a) if a.len() == 2 => {
+                        let get = |i: usize| a[i].as_f64().map(|x| x as f32).filter(|x| x.is_finite());
+                        match (get(0), get(1)) {
+                            (Some(x), Some(y)) => Ok(Vec2::new(x, y)),
+                            _ => Err(cx.err(&field, format!("{key} must be two finite numbers"))),
+                        }
+                    }
+                    _ => Err(cx.err(&field, format!("{key} must be two finite numbers"))),
+                }
+            };
+            if num("texCoord", 0.0)? != 0.0 {
+                return Err(cx.err(&field, "texCoord: only TEXCOORD_0 is supported"));
+            }
+            Some(UvTransform {
+                offset: pair("offset", 0.0)?,
+                rotation: num("rotation", 0.0)?,
+                scale: pair("scale", 1.0)?,
+            })
+        };
+        match &found {
+            Some((first, other)) if *other != this => {
+                return Err(cx.err(
+                    field,
+                    format!("differs from {first}'s: penumbra maps a material's textures with one uv transform"),
+                ));
+            }
+            Some(_) => {}
+            None => found = Some((name.to_string(), this)),
+        }
+    }
+    Ok(found.and_then(|(_, t)| t))
 }
 
 /// Runs the `gltf` crate's validation, turning its report into (element, message).

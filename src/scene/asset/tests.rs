@@ -379,6 +379,47 @@ fn gltf_strips_and_fans_become_lists_points_lines_and_orthographic_cameras_are_l
 }
 
 #[test]
+fn gltf_texture_transform_moves_the_uvs_and_differing_ones_are_refused() {
+    let dir = temp_dir("uvxform");
+    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    write_png(&dir.join("c.png"), &[[200, 100, 50, 255]]);
+    doc["images"] = json!([{"uri": "c.png"}]);
+    doc["textures"] = json!([{"source": 0}]);
+    let xform = json!({"KHR_texture_transform": {"offset": [0.25, -1.0], "rotation": std::f32::consts::FRAC_PI_2, "scale": [2.0, 0.5]}});
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0, "extensions": xform});
+    doc["extensionsRequired"] = json!(["KHR_texture_transform"]);
+    let before = {
+        let mut plain = doc.clone();
+        plain["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+        plain["extensionsRequired"] = json!([]);
+        load_asset(&write_json(&dir, "plain.gltf", &plain)).unwrap().parts[0]
+            .mesh
+            .uvs
+            .clone()
+    };
+    let after = load_asset(&write_json(&dir, "moved.gltf", &doc)).unwrap().parts[0]
+        .mesh
+        .uvs
+        .clone();
+    // Scale (2, 0.5), then a quarter turn toward -v ((u, v) -> (v, -u)), then the offset.
+    for (b, a) in before.iter().zip(&after) {
+        let want = glam::Vec2::new(0.5 * b.y + 0.25, -2.0 * b.x - 1.0);
+        assert!((*a - want).length() < 1e-5, "{b} -> {a}, want {want}");
+    }
+    // A normal map without the base colour's transform cannot share its uvs: one line.
+    doc["materials"][0]["normalTexture"] = json!({"index": 0});
+    let e = load_asset(&write_json(&dir, "mixed.gltf", &doc))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("materials[0].normalTexture.extensions.KHR_texture_transform: differs from pbrMetallicRoughness.baseColorTexture's"),
+        "{e}"
+    );
+    assert!(!e.contains('\n'));
+}
+
+#[test]
 fn gltf_mask_texture_cuts_the_triangles_away_where_alpha_is_under_the_cutoff() {
     let dir = temp_dir("cutout");
     let (bytes, _, _) = quad_buffer(UNIT_QUAD);
