@@ -169,6 +169,9 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
             .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(lo, hi), c| {
                 (lo.min(c.p), hi.max(c.p))
             });
+        // The kept pieces, row by row; a triangle no cut cell touches stays whole (and uncut).
+        let mut pieces = Vec::new();
+        let mut whole = true;
         for j in lo.y.floor() as i64..hi.y.ceil() as i64 {
             let strip = clip(&clip(&corners, 1, j as f32, 1.0), 1, (j + 1) as f32, -1.0);
             if strip.len() < 3 {
@@ -181,6 +184,7 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
             let mut i = i0;
             while i < i1 {
                 if !kept(i, j) {
+                    whole = false;
                     i += 1;
                     continue;
                 }
@@ -189,13 +193,20 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
                     i += 1;
                 }
                 if start == i0 && i == i1 {
-                    out.polygon(tri, &strip);
+                    pieces.push(strip.clone());
                 } else {
                     let run = clip(&clip(&strip, 0, start as f32, 1.0), 0, i as f32, -1.0);
                     if run.len() >= 3 {
-                        out.polygon(tri, &run);
+                        pieces.push(run);
                     }
                 }
+            }
+        }
+        if whole {
+            out.polygon(tri, &corners);
+        } else {
+            for piece in &pieces {
+                out.polygon(tri, piece);
             }
         }
     }
@@ -286,4 +297,53 @@ pub fn mask_of_image(path: &std::path::Path, channel: Channel, factor: f32) -> R
     let pick = if channel == Channel::Alpha || has_alpha { 3 } else { 0 };
     let alpha = img.pixels().map(|p| f32::from(p.0[pick]) / 255.0 * factor).collect();
     Mask::new(w, h, alpha).ok_or_else(|| "the image is empty".to_string())
+}
+
+/// An emission map told apart into texels that glow and texels that do not.
+pub struct EmissionSplit {
+    /// 1 on glowing texels, 0 elsewhere.
+    pub lit: Mask,
+    /// Its complement.
+    pub dark: Mask,
+    /// The glowing texels' mean linear colour.
+    pub mean: Vec3,
+    /// The share of the map's summed light on the texels counted dark.
+    pub dropped: f32,
+}
+
+/// Splits an sRGB emission map at 1% of its brightest texel's luminance: the glowing texels keep
+/// their mean colour (so the light they emit in all is kept), the dim rest is dark. JPEG noise
+/// around black stays dark instead of spreading a faint glow over the whole part.
+pub fn emission_split(path: &std::path::Path) -> Result<EmissionSplit, String> {
+    let img = crate::util::image_io::open_image(path)?.to_rgba8();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let linear: Vec<Vec3> = img
+        .pixels()
+        .map(|p| Vec3::from_array([0, 1, 2].map(|c| crate::util::image_io::srgb_decode(p.0[c]))))
+        .collect();
+    let luminance = |c: &Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    let brightest = linear.iter().map(luminance).fold(0.0f32, f32::max);
+    let lit: Vec<f32> = linear
+        .iter()
+        .map(|c| {
+            if brightest > 0.0 && luminance(c) >= 0.01 * brightest {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let count = lit.iter().sum::<f32>().max(1.0);
+    let mean = linear.iter().zip(&lit).map(|(c, &l)| *c * l).sum::<Vec3>() / count;
+    let total: f32 = linear.iter().map(luminance).sum();
+    let kept: f32 = linear.iter().zip(&lit).map(|(c, &l)| luminance(c) * l).sum();
+    let dropped = if total > 0.0 { 1.0 - kept / total } else { 0.0 };
+    let dark = lit.iter().map(|l| 1.0 - l).collect();
+    let empty = || "the image is empty".to_string();
+    Ok(EmissionSplit {
+        lit: Mask::new(w, h, lit).ok_or_else(empty)?,
+        dark: Mask::new(w, h, dark).ok_or_else(empty)?,
+        mean,
+        dropped,
+    })
 }

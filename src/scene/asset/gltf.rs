@@ -3,13 +3,12 @@
 //! lights and perspective cameras. The material mapping is written in `docs/assets.md`.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use base64::Engine as _;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use super::cutout::Channel;
-use super::{checked_image, cut_part, unit_colour, Asset, AssetPart, CutoutSpec};
+use super::{checked_image, edited_parts, unit_colour, Asset, CutoutSpec, EmissionMap, PartEdits};
 use crate::scene::error::SceneError;
 use crate::scene::mesh::Mesh;
 use crate::scene::types::{Camera, Light, Material};
@@ -102,26 +101,16 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
                     .nth(i)
                     .ok_or_else(|| cx.err("materials", "missing"))?,
             )?,
-            None => Some((Material::default_grey("default"), None)),
+            None => Some((Material::default_grey("default"), PartEdits::default())),
         };
-        let Some((material, cutout)) = material else { continue };
+        let Some((material, edits)) = material else { continue };
         let mut mesh = mesh;
         if let Some(i) = key {
             if let Some(t) = uv_transform(&cx, i)? {
                 mesh.uvs.iter_mut().for_each(|uv| *uv = t.apply(*uv));
             }
         }
-        let mesh = match cutout {
-            Some(spec) => match cut_part(mesh, &spec, &cx.file)? {
-                Some(m) => m,
-                None => continue,
-            },
-            None => mesh,
-        };
-        parts.push(AssetPart {
-            mesh: Arc::new(mesh),
-            material,
-        });
+        parts.extend(edited_parts(mesh, material, edits, &cx.file)?);
     }
     Ok(Asset {
         parts,
@@ -162,8 +151,8 @@ impl UvTransform {
     }
 }
 
-/// The uv transform material `index`'s mapped textures share (the base colour's and the normal
-/// map's; the metallic-roughness texture is read as its mean, where a transform changes
+/// The uv transform material `index`'s mapped textures share (the base colour's, the normal
+/// map's and the emission map's; the metallic-roughness texture is read as its mean, where a transform changes
 /// nothing), or `None` when they have none. penumbra has one uv set per part, so textures with
 /// different transforms, or a transform's own `texCoord` other than 0, are refused.
 fn uv_transform(cx: &Ctx, index: usize) -> Result<Option<UvTransform>, SceneError> {
@@ -174,6 +163,7 @@ fn uv_transform(cx: &Ctx, index: usize) -> Result<Option<UvTransform>, SceneErro
             &m["pbrMetallicRoughness"]["baseColorTexture"],
         ),
         ("normalTexture", &m["normalTexture"]),
+        ("emissiveTexture", &m["emissiveTexture"]),
     ];
     let mut found: Option<(String, Option<UvTransform>)> = None;
     for (name, info) in slots {
@@ -573,8 +563,9 @@ fn light_of(cx: &Ctx, light: &gltf::khr_lights_punctual::Light, world: &Mat4) ->
 
 /// Maps a glTF material (see `docs/assets.md`); `None` for one that hides its primitives
 /// (MASK with a base alpha under the cutoff, or BLEND with alpha 0). A MASK material with a
-/// base colour texture comes with the cut-out its texture's alpha makes.
-fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, Option<CutoutSpec>)>, SceneError> {
+/// base colour texture comes with the cut-out its texture's alpha makes, and an emissive texture
+/// with the split of the part into glowing and dark triangles.
+fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, PartEdits)>, SceneError> {
     let index = m.index().unwrap_or(0);
     let field = |what: &str| format!("materials[{index}].{what}");
     let pbr = m.pbr_metallic_roughness();
@@ -602,16 +593,24 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, Option<Cut
         Some(t) => Some(texture(cx, &t.texture(), t.tex_coord(), &field("normalTexture"))?),
         None => None,
     };
-    if m.emissive_texture().is_some() {
-        return Err(cx.err(field("emissiveTexture"), "per-texel emission is not supported"));
-    }
     let strength = m.emissive_strength().unwrap_or(1.0);
-    let emission = Vec3::from(m.emissive_factor()) * strength;
+    let mut emission = Vec3::from(m.emissive_factor()) * strength;
     if !emission.is_finite() || emission.min_element() < 0.0 {
         return Err(cx.err(field("emissiveFactor"), "must be finite and non-negative"));
     }
+    let mut edits = PartEdits::default();
+    if let Some(t) = m.emissive_texture() {
+        let map = texture(cx, &t.texture(), t.tex_coord(), &field("emissiveTexture"))?;
+        if emission != Vec3::ZERO {
+            edits.emission = Some(EmissionMap {
+                map,
+                factor: emission,
+                field: field("emissiveTexture"),
+            });
+        }
+        emission = Vec3::ZERO;
+    }
     let alpha = base4.w;
-    let mut cutout = None;
     let opacity = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => 1.0,
         gltf::material::AlphaMode::Mask => {
@@ -619,7 +618,7 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, Option<Cut
             if alpha < cutoff {
                 return Ok(None);
             }
-            cutout = albedo_map.clone().map(|map| CutoutSpec {
+            edits.cutout = albedo_map.clone().map(|map| CutoutSpec {
                 map,
                 channel: Channel::Alpha,
                 factor: alpha,
@@ -653,7 +652,7 @@ fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, Option<Cut
         opacity,
         sky: false,
     };
-    Ok(Some((material, cutout)))
+    Ok(Some((material, edits)))
 }
 
 /// Per-texel alpha cannot be honoured (penumbra's opacity is one number per material): a base

@@ -50,6 +50,81 @@ struct CutoutSpec {
     field: String,
 }
 
+/// A texture of emitted light (glTF `emissiveTexture`, sRGB) times `factor`.
+struct EmissionMap {
+    map: PathBuf,
+    factor: Vec3,
+    field: String,
+}
+
+/// What a material needs done to its part's triangles when the asset is read.
+#[derive(Default)]
+struct PartEdits {
+    cutout: Option<CutoutSpec>,
+    emission: Option<EmissionMap>,
+}
+
+/// A part after its edits: cut out, then split by its emission map. No part when nothing is
+/// left; two when the map glows on some texels and not on others.
+fn edited_parts(mesh: Mesh, material: Material, edits: PartEdits, file: &str) -> Result<Vec<AssetPart>, SceneError> {
+    let mesh = match &edits.cutout {
+        Some(spec) => match cut_part(mesh, spec, file)? {
+            Some(m) => m,
+            None => return Ok(Vec::new()),
+        },
+        None => mesh,
+    };
+    let Some(em) = &edits.emission else {
+        return Ok(vec![AssetPart {
+            mesh: Arc::new(mesh),
+            material,
+        }]);
+    };
+    let err = |m: String| SceneError::new(file, None, em.field.as_str(), format!("{}: {m}", em.map.display()));
+    let split = cutout::emission_split(&em.map).map_err(err)?;
+    let glow = split.mean * em.factor;
+    let mut parts = Vec::new();
+    for (mask, emission, suffix) in [(&split.dark, Vec3::ZERO, ""), (&split.lit, glow, " (emissive)")] {
+        let piece = if mask.hides_any(0.5) {
+            let (mut m, _) = cutout::cut(&mesh, mask, 0.5);
+            if m.indices.is_empty() {
+                continue;
+            }
+            m.complete_attributes();
+            m.validate(&format!("{file}: {}", em.field))?;
+            m
+        } else {
+            mesh.clone()
+        };
+        let mut material = material.clone();
+        material.emission = emission;
+        material.name = format!("{}{suffix}", material.name);
+        parts.push((piece, material));
+    }
+    crate::errln!(
+        "{file}: {}: emission read from its texels: {} of {} triangles glow with the lit texels' mean, \
+         ({:.3}, {:.3}, {:.3}) W/(m²·sr); texels under 1% of the brightest ({:.1}% of the map's light) are dark",
+        em.field,
+        parts
+            .iter()
+            .filter(|(_, m)| m.emission != Vec3::ZERO)
+            .map(|(p, _)| p.triangle_count())
+            .sum::<usize>(),
+        parts.iter().map(|(p, _)| p.triangle_count()).sum::<usize>(),
+        glow.x,
+        glow.y,
+        glow.z,
+        100.0 * split.dropped
+    );
+    Ok(parts
+        .into_iter()
+        .map(|(mesh, material)| AssetPart {
+            mesh: Arc::new(mesh),
+            material,
+        })
+        .collect())
+}
+
 /// `mesh` cut by `spec`'s mask, with a line saying what was cut; `None` when nothing is left.
 /// A mask that hides no texel leaves the mesh as it is.
 fn cut_part(mesh: Mesh, spec: &CutoutSpec, file: &str) -> Result<Option<Mesh>, SceneError> {

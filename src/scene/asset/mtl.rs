@@ -3,12 +3,11 @@
 
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use glam::Vec3;
 
 use super::cutout::Channel;
-use super::{checked_image, cut_part, unit_colour, Asset, AssetPart, CutoutSpec};
+use super::{checked_image, edited_parts, unit_colour, Asset, CutoutSpec, PartEdits};
 use crate::scene::error::SceneError;
 use crate::scene::obj::{models_mesh, read_obj};
 use crate::scene::types::Material;
@@ -64,17 +63,9 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
             None => (Material::default_grey("default"), None),
         };
         let group = models.iter().filter(|m| m.mesh.material_id == id);
-        let mut mesh = models_mesh(group, &file)?;
-        if let Some(spec) = cutout {
-            match cut_part(mesh, &spec, &mtl_name)? {
-                Some(m) => mesh = m,
-                None => continue,
-            }
-        }
-        parts.push(AssetPart {
-            mesh: Arc::new(mesh),
-            material,
-        });
+        let mesh = models_mesh(group, &file)?;
+        let edits = PartEdits { cutout, emission: None };
+        parts.extend(edited_parts(mesh, material, edits, &mtl_name)?);
     }
     Ok(Asset {
         parts,

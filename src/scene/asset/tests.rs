@@ -420,6 +420,42 @@ fn gltf_texture_transform_moves_the_uvs_and_differing_ones_are_refused() {
 }
 
 #[test]
+fn gltf_emissive_texture_splits_the_part_into_glowing_and_dark_triangles() {
+    let dir = temp_dir("emissive");
+    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    let whole = load_asset(&write_json(&dir, "plain.gltf", &doc)).unwrap().parts[0]
+        .mesh
+        .area();
+    // The quad's left half (u < 1/2) glows orange; the right texel is black but for JPEG-like
+    // noise under 1% of the orange's luminance, which stays dark.
+    write_png(&dir.join("glow.png"), &[[255, 128, 0, 255], [3, 3, 3, 255]]);
+    doc["images"] = json!([{"uri": "glow.png"}]);
+    doc["textures"] = json!([{"source": 0}]);
+    doc["materials"][0]["emissiveTexture"] = json!({"index": 0});
+    doc["materials"][0]["emissiveFactor"] = json!([2.0, 1.0, 0.5]);
+    let asset = load_asset(&write_json(&dir, "glow.gltf", &doc)).unwrap();
+    assert_eq!(asset.parts.len(), 2, "a dark part and a glowing part");
+    let (dark, lit) = (&asset.parts[0], &asset.parts[1]);
+    assert_eq!(dark.material.emission, Vec3::ZERO);
+    assert!(lit.material.name.ends_with("(emissive)"), "{}", lit.material.name);
+    // sRGB 255 and 128 decode to 1 and 0.2158: times the factor (2, 1, 0.5).
+    let want = Vec3::new(2.0, 0.215_861_6, 0.0);
+    assert!(
+        (lit.material.emission - want).length() < 1e-4,
+        "{}",
+        lit.material.emission
+    );
+    assert!((lit.mesh.area() - 0.5 * whole).abs() < 1e-4 && (dark.mesh.area() - 0.5 * whole).abs() < 1e-4);
+    assert!(lit.mesh.uvs.iter().all(|uv| uv.x <= 0.5 + 1e-6));
+    // A zero factor makes the map dark everywhere: one part, no emission.
+    doc["materials"][0]["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
+    let asset = load_asset(&write_json(&dir, "off.gltf", &doc)).unwrap();
+    assert_eq!(asset.parts.len(), 1);
+    assert_eq!(asset.parts[0].material.emission, Vec3::ZERO);
+}
+
+#[test]
 fn gltf_mask_texture_cuts_the_triangles_away_where_alpha_is_under_the_cutoff() {
     let dir = temp_dir("cutout");
     let (bytes, _, _) = quad_buffer(UNIT_QUAD);
