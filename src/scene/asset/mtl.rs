@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::cutout::Channel;
-use super::{checked_image, edited_parts, unit_colour, Asset, CutoutSpec, PartEdits};
+use super::{checked_image, edited_parts, unit_colour, Asset, CutoutSpec, EmissionMap, PartEdits};
 use crate::scene::error::SceneError;
 use crate::scene::obj::{models_mesh, read_obj};
 use crate::scene::types::Material;
@@ -57,14 +57,13 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
     }
     let mut parts = Vec::new();
     for id in ids {
-        let (material, cutout) = match id.and_then(|i| materials.get(i).map(|m| (i, m))) {
+        let (material, edits) = match id.and_then(|i| materials.get(i).map(|m| (i, m))) {
             Some((i, m)) => material(m, i, dir, &mtl_name)?,
             // Faces before any `usemtl` (or a file with no `mtllib`).
-            None => (Material::default_grey("default"), None),
+            None => (Material::default_grey("default"), PartEdits::default()),
         };
         let group = models.iter().filter(|m| m.mesh.material_id == id);
         let mesh = models_mesh(group, &file)?;
-        let edits = PartEdits { cutout, emission: None };
         parts.extend(edited_parts(mesh, material, edits, &mtl_name)?);
     }
     Ok(Asset {
@@ -98,14 +97,10 @@ fn check_usemtl(path: &Path, file: &str, materials: &[tobj::Material]) -> Result
 }
 
 /// Maps one MTL material: Kd/map_Kd, Ks/Ns/map_Ks, bump/map_Bump/norm (tangent-space normal
-/// map), d (or Tr = 1 - d), Ke. Statements penumbra cannot honour are errors.
+/// map), d (or Tr = 1 - d), map_d (a cut-out), Ke/map_Ke. Statements penumbra cannot honour are
+/// errors.
 // long: one MTL statement after another, each mapped or refused.
-fn material(
-    m: &tobj::Material,
-    index: usize,
-    dir: &Path,
-    mtl: &str,
-) -> Result<(Material, Option<CutoutSpec>), SceneError> {
+fn material(m: &tobj::Material, index: usize, dir: &Path, mtl: &str) -> Result<(Material, PartEdits), SceneError> {
     let field = |what: &str| format!("materials[{index}] {:?}.{what}", m.name);
     let colour = |v: Option<[f32; 3]>, what: &str, default: Vec3| match v {
         Some(c) => unit_colour(Vec3::from(c), mtl, &field(what)),
@@ -125,11 +120,7 @@ fn material(
         let rel = raw.replace('\\', "/");
         checked_image(&dir.join(rel), mtl, &field(what)).map(Some)
     };
-    for (key, what) in [
-        ("map_Ke", "per-texel emission"),
-        ("refl", "reflection maps"),
-        ("map_Pr", "PBR maps"),
-    ] {
+    for (key, what) in [("refl", "reflection maps"), ("map_Pr", "PBR maps")] {
         if m.unknown_param.contains_key(key) {
             return Err(SceneError::new(
                 mtl,
@@ -187,6 +178,21 @@ fn material(
         Some(e) => Vec3::from(e),
         None => Vec3::ZERO,
     };
+    // `map_Ke` times `Ke` (the map alone where `Ke` is absent) splits the part into glowing and
+    // dark triangles, as a glTF emissive texture does.
+    let mut edits = PartEdits { cutout, emission: None };
+    let mut emission = emission;
+    if let Some(map) = texture(m.unknown_param.get("map_Ke"), "map_Ke")? {
+        let factor = m.emissive.map_or(Vec3::ONE, Vec3::from);
+        if factor != Vec3::ZERO {
+            edits.emission = Some(EmissionMap {
+                map,
+                factor,
+                field: field("map_Ke"),
+            });
+        }
+        emission = Vec3::ZERO;
+    }
     let normal = m.unknown_param.get("norm").or(m.normal_texture.as_ref());
     let normal_what = if m.unknown_param.contains_key("norm") {
         "norm"
@@ -206,5 +212,5 @@ fn material(
         opacity,
         sky: false,
     };
-    Ok((material, cutout))
+    Ok((material, edits))
 }

@@ -581,6 +581,19 @@ fn obj_mtl_one_part_per_material() {
     assert!((glass.area() - 0.5).abs() < 1e-4, "{}", glass.area());
     assert!(glass.positions.iter().all(|p| p.x <= 1.5 + 1e-6), "the left half stays");
 
+    // map_Ke (with Ke as its factor) glows where its texels do: the glass quad's right half.
+    let dir = temp_dir("objmapke");
+    let path = write_obj(
+        &dir,
+        &MTL.replace("Ke 1 2 3", "Ke 1 2 3\nmap_Ke glow.png")
+            .replace("d 0.25", "d 1"),
+    );
+    write_png(&dir.join("glow.png"), &[[0, 0, 0, 255], [255, 255, 255, 255]]);
+    let asset = load_asset(&path).unwrap();
+    let lit = asset.parts.iter().find(|p| p.material.emission != Vec3::ZERO).unwrap();
+    assert_eq!(lit.material.emission, Vec3::new(1.0, 2.0, 3.0));
+    assert!((lit.mesh.area() - 0.5).abs() < 1e-4 && lit.mesh.positions.iter().all(|p| p.x >= 1.5 - 1e-6));
+
     // bump is read as the normal map too.
     let dir = temp_dir("objbump");
     let path = write_obj(&dir, &MTL.replace("norm brick_n.png", "bump brick_n.png"));
