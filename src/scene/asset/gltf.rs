@@ -92,7 +92,17 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
         walk(&cx, &node, Mat4::IDENTITY, &mut out, 0)?;
     }
     let mut parts = Vec::new();
-    for (key, mesh) in out.meshes {
+    for (key, mesh, tint) in out.meshes {
+        if let Some(prim) = &tint.varies {
+            let c = tint.mean();
+            crate::errln!(
+                "{}: {prim}: COLOR_0 varies over the vertices: its area-weighted mean ({:.3}, {:.3}, {:.3}) multiplies the material's base colour (penumbra's albedo is one value per material)",
+                cx.file,
+                c.x,
+                c.y,
+                c.z
+            );
+        }
         let material = match key {
             Some(i) => material(
                 &cx,
@@ -100,8 +110,13 @@ pub(super) fn load(path: &Path) -> Result<Asset, SceneError> {
                     .materials()
                     .nth(i)
                     .ok_or_else(|| cx.err("materials", "missing"))?,
+                tint.mean(),
             )?,
-            None => Some((Material::default_grey("default"), PartEdits::default())),
+            None => {
+                let mut grey = Material::default_grey("default");
+                grey.albedo *= tint.mean();
+                Some((grey, PartEdits::default()))
+            }
         };
         let Some((material, edits)) = material else { continue };
         let mut mesh = mesh;
@@ -300,8 +315,9 @@ fn percent_decode(uri: &str) -> String {
 
 #[derive(Default)]
 struct Walk {
-    /// Triangles per material index (`None`: the default material), in first-use order.
-    meshes: Vec<(Option<usize>, Mesh)>,
+    /// Triangles per material index (`None`: the default material), in first-use order, with
+    /// their vertex colours' tint.
+    meshes: Vec<(Option<usize>, Mesh, Tint)>,
     lights: Vec<Light>,
     cameras: Vec<Camera>,
 }
@@ -322,14 +338,18 @@ fn walk(cx: &Ctx, node: &gltf::Node, parent: Mat4, out: &mut Walk, depth: usize)
     if let Some(mesh) = node.mesh() {
         for prim in mesh.primitives() {
             let pfield = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-            let Some(tris) = primitive(cx, &prim, &pfield)? else {
+            let Some((tris, colours)) = primitive(cx, &prim, &pfield)? else {
                 continue;
             };
             let tris = tris.transformed(&world);
+            let tint = Tint::of(&tris, colours.as_deref(), &pfield);
             let key = prim.material().index();
-            match out.meshes.iter_mut().find(|(k, _)| *k == key) {
-                Some((_, m)) => append(m, &tris),
-                None => out.meshes.push((key, tris)),
+            match out.meshes.iter_mut().find(|(k, _, _)| *k == key) {
+                Some((_, m, t)) => {
+                    append(m, &tris);
+                    t.add(tint);
+                }
+                None => out.meshes.push((key, tris, tint)),
             }
         }
     }
@@ -347,6 +367,63 @@ fn walk(cx: &Ctx, node: &gltf::Node, parent: Mat4, out: &mut Walk, depth: usize)
     Ok(())
 }
 
+/// What COLOR_0 does to a part's base colour: penumbra's albedo is one value per material (times
+/// its texture), so the vertex colours' area-weighted mean multiplies it. Exact where the colours
+/// are one colour; where they vary, a line says the mean stands for them.
+#[derive(Debug, Clone)]
+struct Tint {
+    /// Σ triangle area × its corners' mean colour, and Σ area.
+    weighted: Vec3,
+    area: f32,
+    /// The first primitive whose colours vary (or differ from the primitives' merged before it).
+    varies: Option<String>,
+    /// The primitive it was made for.
+    field: String,
+}
+
+impl Tint {
+    fn of(mesh: &Mesh, colours: Option<&[Vec3]>, field: &str) -> Tint {
+        let mut t = Tint {
+            weighted: Vec3::ZERO,
+            area: 0.0,
+            varies: None,
+            field: field.to_string(),
+        };
+        for [a, b, c] in mesh.triangles() {
+            let area = 0.5
+                * (mesh.positions[b] - mesh.positions[a])
+                    .cross(mesh.positions[c] - mesh.positions[a])
+                    .length();
+            let colour = colours.map_or(Vec3::ONE, |cs| (cs[a] + cs[b] + cs[c]) / 3.0);
+            t.weighted += colour * area;
+            t.area += area;
+        }
+        if let Some(cs) = colours {
+            if cs.iter().any(|c| (*c - cs[0]).abs().max_element() > 0.5 / 255.0) {
+                t.varies = Some(field.to_string());
+            }
+        }
+        t
+    }
+
+    fn add(&mut self, other: Tint) {
+        if (self.mean() - other.mean()).abs().max_element() > 0.5 / 255.0 {
+            self.varies.get_or_insert_with(|| other.field.clone());
+        }
+        self.weighted += other.weighted;
+        self.area += other.area;
+        self.varies = self.varies.take().or(other.varies);
+    }
+
+    fn mean(&self) -> Vec3 {
+        if self.area > 0.0 {
+            self.weighted / self.area
+        } else {
+            Vec3::ONE
+        }
+    }
+}
+
 fn append(to: &mut Mesh, from: &Mesh) {
     let base = to.positions.len() as u32;
     to.positions.extend_from_slice(&from.positions);
@@ -356,10 +433,13 @@ fn append(to: &mut Mesh, from: &Mesh) {
     to.indices.extend(from.indices.iter().map(|i| base + i));
 }
 
-/// One triangle primitive in its mesh's space, checked: finite attributes, indices in range.
-/// Strips and fans become lists; points and lines (no area to light) are `None`, with a line
-/// saying they were left out.
-fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Option<Mesh>, SceneError> {
+/// A primitive's triangles and its vertex colours, if it has any.
+type Triangles = (Mesh, Option<Vec<Vec3>>);
+
+/// One triangle primitive in its mesh's space, checked: finite attributes, indices in range,
+/// with its COLOR_0 (linear) if it has one. Strips and fans become lists; points and lines (no
+/// area to light) are `None`, with a line saying they were left out.
+fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Option<Triangles>, SceneError> {
     use gltf::mesh::Mode;
     if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
         crate::errln!(
@@ -404,6 +484,20 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Option<Mes
     if let Some(i) = uvs.as_ref().and_then(|t| t.iter().position(|v| !v.is_finite())) {
         return Err(cx.err(field, format!("TEXCOORD_0 has NaN or infinity (vertex {i})")));
     }
+    let colours: Option<Vec<Vec3>> = reader
+        .read_colors(0)
+        .map(|c| c.into_rgb_f32().map(Vec3::from).collect());
+    if let Some(cs) = &colours {
+        if cs.len() != n {
+            return Err(cx.err(field, format!("COLOR_0 has {} entries for {n} vertices", cs.len())));
+        }
+        if let Some(i) = cs
+            .iter()
+            .position(|c| !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1.0)
+        {
+            return Err(cx.err(field, format!("COLOR_0 is not a colour in [0, 1] (vertex {i})")));
+        }
+    }
     let indices: Vec<u32> = match reader.read_indices() {
         Some(ix) => ix.into_u32().collect(),
         None => (0..n as u32).collect(),
@@ -426,7 +520,7 @@ fn primitive(cx: &Ctx, prim: &gltf::Primitive, field: &str) -> Result<Option<Mes
     mesh.normalize_normals();
     mesh.compute_tangents();
     mesh.validate(&format!("{}: {field}", cx.file))?;
-    Ok(Some(mesh))
+    Ok(Some((mesh, colours)))
 }
 
 /// A strip's or fan's indices as a triangle list, front faces kept (glTF 2.0, 3.7.2.1): strip
@@ -565,12 +659,12 @@ fn light_of(cx: &Ctx, light: &gltf::khr_lights_punctual::Light, world: &Mat4) ->
 /// (MASK with a base alpha under the cutoff, or BLEND with alpha 0). A MASK material with a
 /// base colour texture comes with the cut-out its texture's alpha makes, and an emissive texture
 /// with the split of the part into glowing and dark triangles.
-fn material(cx: &Ctx, m: &gltf::Material) -> Result<Option<(Material, PartEdits)>, SceneError> {
+fn material(cx: &Ctx, m: &gltf::Material, tint: Vec3) -> Result<Option<(Material, PartEdits)>, SceneError> {
     let index = m.index().unwrap_or(0);
     let field = |what: &str| format!("materials[{index}].{what}");
     let pbr = m.pbr_metallic_roughness();
     let base4 = Vec4::from(pbr.base_color_factor());
-    let base = unit_colour(base4.truncate(), &cx.file, &field("baseColorFactor"))?;
+    let base = unit_colour(base4.truncate(), &cx.file, &field("baseColorFactor"))? * tint;
     let mut metallic = pbr.metallic_factor();
     let mut roughness = pbr.roughness_factor();
     if !(0.0..=1.0).contains(&metallic) || !(0.0..=1.0).contains(&roughness) {

@@ -456,6 +456,57 @@ fn gltf_emissive_texture_splits_the_part_into_glowing_and_dark_triangles() {
 }
 
 #[test]
+fn gltf_vertex_colours_multiply_the_base_colour() {
+    let dir = temp_dir("colour0");
+    let (mut bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    let plain = load_asset(&write_json(&dir, "plain.gltf", &doc)).unwrap().parts[0]
+        .material
+        .albedo;
+    // COLOR_0 as four VEC3 floats after the quad's data: one colour, then two.
+    let add_colours = |doc: &mut serde_json::Value, bytes: &mut Vec<u8>, colours: [[f32; 3]; 4]| {
+        let offset = bytes.len();
+        bytes.extend(colours.iter().flatten().flat_map(|c| c.to_le_bytes()));
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"buffer": 0, "byteOffset": offset, "byteLength": 48}));
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC3"}));
+        doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(4);
+        let b64 = base64::engine::general_purpose::STANDARD.encode(&*bytes);
+        doc["buffers"][0] =
+            json!({"byteLength": bytes.len(), "uri": format!("data:application/octet-stream;base64,{b64}")});
+    };
+    add_colours(&mut doc, &mut bytes, [[0.5, 0.25, 1.0]; 4]);
+    let one = load_asset(&write_json(&dir, "one.gltf", &doc)).unwrap().parts[0]
+        .material
+        .albedo;
+    assert!(
+        (one - plain * Vec3::new(0.5, 0.25, 1.0)).length() < 1e-6,
+        "{one} from {plain}"
+    );
+    // Two colours, each on two corners: each triangle's mean weighs its area (the quad's halves).
+    let (mut bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let mut doc = document(&bytes);
+    add_colours(
+        &mut doc,
+        &mut bytes,
+        [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+    );
+    let two = load_asset(&write_json(&dir, "two.gltf", &doc)).unwrap().parts[0]
+        .material
+        .albedo;
+    // Triangles (0, 1, 2) and (0, 2, 3): means (2/3, 1/3, 0) and (1/3, 2/3, 0), equal areas.
+    assert!(
+        (two - plain * Vec3::new(0.5, 0.5, 0.0)).length() < 1e-5,
+        "{two} from {plain}"
+    );
+}
+
+#[test]
 fn gltf_mask_texture_cuts_the_triangles_away_where_alpha_is_under_the_cutoff() {
     let dir = temp_dir("cutout");
     let (bytes, _, _) = quad_buffer(UNIT_QUAD);
