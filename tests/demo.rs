@@ -720,10 +720,12 @@ fn a_cancel_during_the_radiosity_set_up_stops_it_there() {
         assert!(note.contains("(at radiosity set-up)"), "{note:?}\n{out}");
         assert!(after["baking"].is_null());
         assert_eq!(cached(&cache, "radiosity"), Vec::<String>::new());
-        // Measured 0.05-0.19 s (the checks come every patch of the ray-cast loops, between the
-        // other steps, and a frame is counted in); the whole set-up takes seconds.
+        // Measured 0.03-0.19 s alone and 1.44 s once with the rest of the suite loading both cores
+        // (the checks come every patch of the ray-cast loops and between GPU submissions of a
+        // quarter of a second, and a frame is counted in): the 2 s the other cancel tests allow.
+        // The note above says the bake stopped in the set-up, not after it.
         assert!(
-            stopped_s < 1.0,
+            stopped_s < 2.0,
             "the set-up ran {stopped_s:.2} s after it was cancelled"
         );
         assert!(r
