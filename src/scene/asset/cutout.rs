@@ -19,6 +19,12 @@ use crate::scene::mesh::Mesh;
 /// work and the output: a cell contributes at most a polygon of a few triangles.
 pub const CELL_BUDGET: f64 = (1u32 << 18) as f64;
 
+/// Most bounding-box cells the cut walks over, summed over a part's triangles. [`CELL_BUDGET`]
+/// bounds the area cut, not the walk: a sliver across many rows, or uvs of a broken asset's wild
+/// size, would walk its whole box. Past this a triangle is kept or dropped whole by the texel
+/// under its centre, and the report counts it.
+pub const WALK_BUDGET: f64 = 64.0 * CELL_BUDGET;
+
 /// A texture's coverage: alpha in [0, 1] per texel, row 0 at the top (uv (0, 0)), as penumbra
 /// samples maps: repeat wrapping.
 pub struct Mask {
@@ -79,6 +85,9 @@ pub struct CutReport {
     pub cell_texels: usize,
     pub triangles_before: usize,
     pub triangles_after: usize,
+    /// Triangles kept or dropped whole by the texel under their centre: no extent in texture
+    /// space, or past [`WALK_BUDGET`].
+    pub whole_by_centre: usize,
 }
 
 /// One corner of a clipped polygon: its point in cell units and its barycentric weights in the
@@ -147,6 +156,7 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
         level.alpha[y * level.width + x] >= cutoff
     };
     let mut out = Builder::new(mesh);
+    let (mut walked, mut whole_by_centre) = (0.0f64, 0usize);
     for tri in mesh.triangles() {
         let corners: Vec<Corner> = tri
             .iter()
@@ -156,19 +166,23 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
                 bary,
             })
             .collect();
-        if doubled_area(&corners).abs() < 1e-9 {
-            // No extent in texture space: the whole triangle shows one texel.
-            let centre = (corners[0].p + corners[1].p + corners[2].p) / 3.0;
-            if kept(centre.x.floor() as i64, centre.y.floor() as i64) {
-                out.polygon(tri, &corners);
-            }
-            continue;
-        }
         let (lo, hi) = corners
             .iter()
             .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(lo, hi), c| {
                 (lo.min(c.p), hi.max(c.p))
             });
+        let walk = f64::from(hi.x.ceil() - lo.x.floor()) * f64::from(hi.y.ceil() - lo.y.floor());
+        if doubled_area(&corners).abs() < 1e-9 || !walk.is_finite() || walked + walk > WALK_BUDGET {
+            // No extent in texture space, or too much of it to walk: the texel under the centre
+            // decides for the whole triangle.
+            let centre = (corners[0].p + corners[1].p + corners[2].p) / 3.0;
+            if kept(centre.x.floor() as i64, centre.y.floor() as i64) {
+                out.polygon(tri, &corners);
+            }
+            whole_by_centre += 1;
+            continue;
+        }
+        walked += walk;
         // The kept pieces, row by row; a triangle no cut cell touches stays whole (and uncut).
         let mut pieces = Vec::new();
         let mut whole = true;
@@ -214,6 +228,7 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
         cell_texels: side,
         triangles_before: mesh.triangle_count(),
         triangles_after: out.mesh.triangle_count(),
+        whole_by_centre,
     };
     (out.mesh, report)
 }

@@ -131,3 +131,21 @@ fn a_triangle_without_uv_extent_is_kept_or_dropped_whole() {
     quad.uvs = vec![Vec2::new(0.9, 0.1); 4];
     assert!(cut(&quad, &left, 0.5).0.indices.is_empty());
 }
+
+#[test]
+fn wild_uvs_are_not_walked_cell_by_cell() {
+    // A sliver whose uvs run a trillion repeats along one row: its box holds far more cells than
+    // the walk allows (walking them would take hours), so the texel under its centre decides.
+    let mut sliver = square(1.0, 1.0);
+    sliver.uvs = vec![
+        Vec2::new(0.1, 0.1),
+        Vec2::new(1e12, 0.1),
+        Vec2::new(1e12, 0.1 + 1e-3),
+        Vec2::new(0.1, 0.1 + 1e-3),
+    ];
+    let m = mask(2, 2, |x, y| if (x + y) % 2 == 0 { 1.0 } else { 0.0 });
+    let (kept, report) = cut(&sliver, &m, 0.5);
+    assert_eq!(report.whole_by_centre, 2, "{report:?}");
+    assert!(kept.triangle_count() <= 2);
+    assert!(kept.area() <= 1.0 + 1e-6);
+}

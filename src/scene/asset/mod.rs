@@ -134,8 +134,12 @@ fn cut_part(mesh: Mesh, spec: &CutoutSpec, file: &str) -> Result<Option<Mesh>, S
         return Ok(Some(mesh));
     }
     let (mut cut, report) = cutout::cut(&mesh, &mask, spec.cutoff);
+    let whole = match report.whole_by_centre {
+        0 => String::new(),
+        n => format!(" ({n} kept or dropped whole by the texel under their centre: no extent in texture space, or too much to cut)"),
+    };
     crate::errln!(
-        "{file}: {}: alpha cut-out: {} triangles cut along the mask's {}-texel cells into {}",
+        "{file}: {}: alpha cut-out: {} triangles cut along the mask's {}-texel cells into {}{whole}",
         spec.field,
         report.triangles_before,
         report.cell_texels,
