@@ -183,45 +183,9 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
             continue;
         }
         walked += walk;
-        // The kept pieces, row by row; a triangle no cut cell touches stays whole (and uncut).
-        let mut pieces = Vec::new();
-        let mut whole = true;
-        for j in lo.y.floor() as i64..hi.y.ceil() as i64 {
-            let strip = clip(&clip(&corners, 1, j as f32, 1.0), 1, (j + 1) as f32, -1.0);
-            if strip.len() < 3 {
-                continue;
-            }
-            let (x0, x1) = strip.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), c| {
-                (a.min(c.p.x), b.max(c.p.x))
-            });
-            let (i0, i1) = (x0.floor() as i64, x1.ceil() as i64);
-            let mut i = i0;
-            while i < i1 {
-                if !kept(i, j) {
-                    whole = false;
-                    i += 1;
-                    continue;
-                }
-                let start = i;
-                while i < i1 && kept(i, j) {
-                    i += 1;
-                }
-                if start == i0 && i == i1 {
-                    pieces.push(strip.clone());
-                } else {
-                    let run = clip(&clip(&strip, 0, start as f32, 1.0), 0, i as f32, -1.0);
-                    if run.len() >= 3 {
-                        pieces.push(run);
-                    }
-                }
-            }
-        }
-        if whole {
-            out.polygon(tri, &corners);
-        } else {
-            for piece in &pieces {
-                out.polygon(tri, piece);
-            }
+        match kept_pieces(&corners, (lo, hi), &kept) {
+            None => out.polygon(tri, &corners),
+            Some(pieces) => pieces.iter().for_each(|piece| out.polygon(tri, piece)),
         }
     }
     let report = CutReport {
@@ -231,6 +195,48 @@ pub fn cut(mesh: &Mesh, mask: &Mask, cutoff: f32) -> (Mesh, CutReport) {
         whole_by_centre,
     };
     (out.mesh, report)
+}
+
+/// The pieces of a triangle (`corners` in cell units, bounded by `lo`..`hi`) over kept cells, row
+/// by row, runs of kept cells merged; `None` when every cell it touches is kept (it stays whole).
+fn kept_pieces(
+    corners: &[Corner],
+    (lo, hi): (Vec2, Vec2),
+    kept: &impl Fn(i64, i64) -> bool,
+) -> Option<Vec<Vec<Corner>>> {
+    let mut pieces = Vec::new();
+    let mut whole = true;
+    for j in lo.y.floor() as i64..hi.y.ceil() as i64 {
+        let strip = clip(&clip(corners, 1, j as f32, 1.0), 1, (j + 1) as f32, -1.0);
+        if strip.len() < 3 {
+            continue;
+        }
+        let (x0, x1) = strip.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), c| {
+            (a.min(c.p.x), b.max(c.p.x))
+        });
+        let (i0, i1) = (x0.floor() as i64, x1.ceil() as i64);
+        let mut i = i0;
+        while i < i1 {
+            if !kept(i, j) {
+                whole = false;
+                i += 1;
+                continue;
+            }
+            let start = i;
+            while i < i1 && kept(i, j) {
+                i += 1;
+            }
+            if start == i0 && i == i1 {
+                pieces.push(strip.clone());
+            } else {
+                let run = clip(&clip(&strip, 0, start as f32, 1.0), 0, i as f32, -1.0);
+                if run.len() >= 3 {
+                    pieces.push(run);
+                }
+            }
+        }
+    }
+    (!whole).then_some(pieces)
 }
 
 /// Collects polygons as triangle fans, sharing corners that land on the same point.
