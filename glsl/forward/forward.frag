@@ -35,5 +35,7 @@ void main() {
         light_incidence(lights.items[i], in_world, l, e);
         radiance += brdf_times_cos(s.n, s.v, l, s.albedo, s.specular, s.exponent) * e;
     }
-    out_radiance = vec4(radiance, 1.0);
+    // Alpha is the material's opacity: 1 for opaque surfaces, the blend weight for translucent
+    // ones (drawn after, over what lies behind).
+    out_radiance = vec4(radiance, materials.items[draw.material].albedo.w);
 }

@@ -59,7 +59,7 @@ pub fn registry() -> Vec<MethodInfo> {
             separable: true,
             sweep: forward::sweep,
             reference: |_| ReferenceKind::Direct,
-            translucency: false,
+            translucency: true,
             create: |c, d| Ok(Box::new(forward::Forward::new(c, d)?)),
             rest_pose: None,
             report: None,

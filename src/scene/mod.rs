@@ -203,7 +203,7 @@ impl Scene {
         match self.translucent_material() {
             None => Ok(()),
             Some((i, m)) => Err(format!(
-                "{}: materials[{i}] ({}).opacity = {}: {who} draws opaque surfaces only (translucent materials are drawn by the shadow_volumes method and the reference path tracer)",
+                "{}: materials[{i}] ({}).opacity = {}: {who} draws opaque surfaces only (translucent materials are drawn by the forward and shadow_volumes methods and the reference path tracer)",
                 self.source, m.name, m.opacity
             )),
         }

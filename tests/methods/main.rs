@@ -12,6 +12,7 @@ mod clustered;
 mod combinations;
 mod cube_environment;
 mod environment_input;
+mod forward_translucency;
 mod heightfield;
 mod heightfield_environment;
 mod heightfield_measure;

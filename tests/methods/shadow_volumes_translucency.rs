@@ -295,17 +295,17 @@ fn opaque_only_consumers_refuse_translucent_materials_with_one_line() {
             &format!("name = \"{m}\""),
         )
     };
-    let forward = Scene::from_str(&text("forward"), "glass.toml", std::path::Path::new(".")).unwrap();
-    let e = Renderer::new(common::test_gpu(), forward, None, (16, 16), 1)
+    let clustered = Scene::from_str(&text("clustered"), "glass.toml", std::path::Path::new(".")).unwrap();
+    let e = Renderer::new(common::test_gpu(), clustered, None, (16, 16), 1)
         .err()
-        .expect("forward must refuse")
+        .expect("clustered must refuse")
         .to_string();
     println!("{e}");
     assert!(
         !e.contains('\n')
             && e.contains("glass.toml")
             && e.contains("materials[1] (glass0).opacity")
-            && e.contains("forward"),
+            && e.contains("clustered"),
         "{e}"
     );
     // The height-field methods, on a terrain whose ground material is made translucent.

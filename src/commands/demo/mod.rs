@@ -342,7 +342,7 @@ fn first_renderer(
         Err(_) => {}
     }
     if let Some(forward) = forward_stand_in(&renderer.scene) {
-        // A scene `forward` refuses (translucency) keeps the background.
+        // A scene `forward` refuses keeps the background.
         let _ = renderer.set_configuration_with(forward, &mut cache());
     }
     crate::outln!(
