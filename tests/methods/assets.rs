@@ -141,6 +141,30 @@ fn check(img: &HdrImage, want: impl Fn(u32, u32) -> Option<Vec3>, tol: f32) -> (
     (lit, dark)
 }
 
+/// The direct-light reference at 4 spp (the scenes' light is a sun or a point: no noise to speak of).
+fn direct_reference(scene: &Scene) -> HdrImage {
+    let mut r = ReferenceRenderer::new(common::test_gpu(), scene, (W, H)).unwrap();
+    let settings = Settings {
+        spp: 4,
+        bounces: 0,
+        paths: LightPaths::Direct,
+        seed: 1,
+        batching: Batching::Adaptive,
+        ..Settings::default()
+    };
+    let img = r.render(&settings, &mut |_, _| {}).unwrap();
+    common::assert_clean(&r.gpu);
+    img.mean
+}
+
+/// The answer at pixel (i, j) where `at` gives the same at its four corners, else `None`: the
+/// reference averages each pixel's footprint, so only such pixels have one answer.
+fn footprint<T: PartialEq + Copy>(i: u32, j: u32, at: impl Fn(f32, f32) -> Option<T>) -> Option<T> {
+    let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(dx, dy)| at(i as f32 + dx, j as f32 + dy));
+    let first = corners[0]?;
+    corners.iter().all(|c| *c == Some(first)).then_some(first)
+}
+
 #[test]
 fn obj_mtl_textured_quads_under_a_directional_light() {
     let (scene, _dir) = obj_scene("forward");
@@ -156,25 +180,9 @@ fn obj_mtl_textured_quads_under_a_directional_light() {
 #[test]
 fn reference_sees_the_asset_materials() {
     let (scene, _dir) = obj_scene("reference");
-    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (W, H)).unwrap();
-    let settings = Settings {
-        spp: 4,
-        bounces: 0,
-        paths: LightPaths::Direct,
-        seed: 1,
-        batching: Batching::Adaptive,
-        ..Settings::default()
-    };
-    let img = r.render(&settings, &mut |_, _| {}).unwrap();
-    common::assert_clean(&r.gpu);
-    // The reference averages each pixel's footprint: only pixels whose four corners agree count.
-    let want = |i: u32, j: u32| {
-        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
-            .map(|(dx, dy)| ground(&scene, i as f32 + dx, j as f32 + dy).and_then(|p| obj_want(p, 0.02)));
-        let first = corners[0]?;
-        corners.iter().all(|c| *c == Some(first)).then_some(first)
-    };
-    let (lit, dark) = check(&img.mean, want, 2e-3);
+    let img = direct_reference(&scene);
+    let want = |i, j| footprint(i, j, |x, y| ground(&scene, x, y).and_then(|p| obj_want(p, 0.02)));
+    let (lit, dark) = check(&img, want, 2e-3);
     assert!(lit > 300 && dark > 100, "{lit} lit, {dark} dark pixels");
 }
 
@@ -363,25 +371,9 @@ fn reference_traces_a_cut_out_leaf_and_the_light_through_its_holes() {
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
     let scene = Scene::from_file(dir.join("scene.toml")).unwrap();
-    let mut r = ReferenceRenderer::new(common::test_gpu(), &scene, (W, H)).unwrap();
-    let settings = Settings {
-        spp: 4,
-        bounces: 0,
-        paths: LightPaths::Direct,
-        seed: 1,
-        batching: Batching::Adaptive,
-        ..Settings::default()
-    };
-    let img = r.render(&settings, &mut |_, _| {}).unwrap();
-    common::assert_clean(&r.gpu);
-    // Only pixels whose four corners agree count: the reference averages each footprint.
-    let want = |i: u32, j: u32| {
-        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
-            .map(|(dx, dy)| leaf_want(&scene, i as f32 + dx, j as f32 + dy));
-        let first = corners[0]?;
-        corners.iter().all(|c| *c == Some(first)).then_some(Vec3::splat(first))
-    };
-    check(&img.mean, want, 2e-3);
+    let img = direct_reference(&scene);
+    let want = |i, j| footprint(i, j, |x, y| leaf_want(&scene, x, y)).map(Vec3::splat);
+    check(&img, want, 2e-3);
     // How many pixels each case checked: kept cells, floor lit through holes, floor in shadow.
     let (mut on_leaf, mut lit_below, mut shadow_below) = (0, 0, 0);
     let leaf = Vec3::splat(KD_LEAF / std::f32::consts::PI * E_DOWN);
