@@ -378,14 +378,28 @@ fn gltf_strips_and_fans_become_lists_points_lines_and_orthographic_cameras_are_l
     }
 }
 
+/// The quad document of [`document`] and the area its part covers uncut.
+fn quad_document(dir: &Path) -> (serde_json::Value, f32) {
+    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
+    let doc = document(&bytes);
+    let area = load_asset(&write_json(dir, "whole.gltf", &doc)).unwrap().parts[0]
+        .mesh
+        .area();
+    (doc, area)
+}
+
+/// Writes `texels` as `name` (a row) and makes it the document's only image and texture 0.
+fn one_texture(doc: &mut serde_json::Value, dir: &Path, name: &str, texels: &[[u8; 4]]) {
+    write_png(&dir.join(name), texels);
+    doc["images"] = json!([{"uri": name}]);
+    doc["textures"] = json!([{"source": 0}]);
+}
+
 #[test]
 fn gltf_texture_transform_moves_the_uvs_and_differing_ones_are_refused() {
     let dir = temp_dir("uvxform");
-    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
-    let mut doc = document(&bytes);
-    write_png(&dir.join("c.png"), &[[200, 100, 50, 255]]);
-    doc["images"] = json!([{"uri": "c.png"}]);
-    doc["textures"] = json!([{"source": 0}]);
+    let (mut doc, _) = quad_document(&dir);
+    one_texture(&mut doc, &dir, "c.png", &[[200, 100, 50, 255]]);
     let xform = json!({"KHR_texture_transform": {"offset": [0.25, -1.0], "rotation": std::f32::consts::FRAC_PI_2, "scale": [2.0, 0.5]}});
     doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0, "extensions": xform});
     doc["extensionsRequired"] = json!(["KHR_texture_transform"]);
@@ -422,16 +436,10 @@ fn gltf_texture_transform_moves_the_uvs_and_differing_ones_are_refused() {
 #[test]
 fn gltf_emissive_texture_splits_the_part_into_glowing_and_dark_triangles() {
     let dir = temp_dir("emissive");
-    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
-    let mut doc = document(&bytes);
-    let whole = load_asset(&write_json(&dir, "plain.gltf", &doc)).unwrap().parts[0]
-        .mesh
-        .area();
+    let (mut doc, whole) = quad_document(&dir);
     // The quad's left half (u < 1/2) glows orange; the right texel is black but for JPEG-like
     // noise under 1% of the orange's luminance, which stays dark.
-    write_png(&dir.join("glow.png"), &[[255, 128, 0, 255], [3, 3, 3, 255]]);
-    doc["images"] = json!([{"uri": "glow.png"}]);
-    doc["textures"] = json!([{"source": 0}]);
+    one_texture(&mut doc, &dir, "glow.png", &[[255, 128, 0, 255], [3, 3, 3, 255]]);
     doc["materials"][0]["emissiveTexture"] = json!({"index": 0});
     doc["materials"][0]["emissiveFactor"] = json!([2.0, 1.0, 0.5]);
     let asset = load_asset(&write_json(&dir, "glow.gltf", &doc)).unwrap();
@@ -509,15 +517,9 @@ fn gltf_vertex_colours_multiply_the_base_colour() {
 #[test]
 fn gltf_mask_texture_cuts_the_triangles_away_where_alpha_is_under_the_cutoff() {
     let dir = temp_dir("cutout");
-    let (bytes, _, _) = quad_buffer(UNIT_QUAD);
-    let mut doc = document(&bytes);
-    let whole = load_asset(&write_json(&dir, "whole.gltf", &doc)).unwrap().parts[0]
-        .mesh
-        .area();
+    let (mut doc, whole) = quad_document(&dir);
     // The quad's uv u runs along x: the texture's right texel (alpha 0) is the quad's right half.
-    write_png(&dir.join("leaf.png"), &[[0, 255, 0, 255], [0, 255, 0, 0]]);
-    doc["images"] = json!([{"uri": "leaf.png"}]);
-    doc["textures"] = json!([{"source": 0}]);
+    one_texture(&mut doc, &dir, "leaf.png", &[[0, 255, 0, 255], [0, 255, 0, 0]]);
     doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
     doc["materials"][0]["alphaMode"] = json!("MASK");
     let asset = load_asset(&write_json(&dir, "leaf.gltf", &doc)).unwrap();

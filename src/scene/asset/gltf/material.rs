@@ -24,7 +24,8 @@ pub fn exponent_of_roughness(roughness: f32) -> f32 {
 /// A `KHR_texture_transform`: uv' = T(offset) R(rotation) S(scale) uv. The rotation turns a uv
 /// toward −v: (u, v) → (u cos r + v sin r, −u sin r + v cos r), as the implementations and the
 /// extension's sample model do ("counter-clockwise" in glTF's v-down uv space); the GLSL listing in
-/// the extension's text has the transpose (KhronosGroup/glTF issue 1563).
+/// the extension's text has the transpose, as the glTF working group's discussion "KHR_texture_transform
+/// has the wrong rotation matrix" records.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct UvTransform {
     offset: Vec2,
