@@ -1,11 +1,13 @@
 #version 460
-// One point or spot light's additive pass where the stencil is 0 (outside every shadow volume).
+// One point, spot or directional light's additive pass where the stencil is 0 (outside every
+// shadow volume).
 // A spot light is a point light times the forward method's spot_falloff (common/lights.glsl), in
 // both modes; the seed has no spot lights, so in the faithful mode this is an extension.
 // faithful: Listing 1 / Eq. 5: atten(d) * L_C * (diffuse * N.L + specular * (N.H)^32), the
 //   specular gated on N.L > 0, N from the normal map, L and E in tangent space, d from the
 //   world-space light vector (the seed's two light vectors, never collapsed).
-// physical: the renderer's BRDF (glsl/common/lights.glsl) * I / d^2 * cos, zero beyond the radius.
+// physical: the renderer's BRDF (glsl/common/lights.glsl) * I / d^2 * cos, zero beyond the radius;
+//   a directional light's BRDF * E * cos, as the forward method's.
 // A translucent surface's light is scaled by its opacity (its share of the pixel), last, so an
 // opaque one (x * 1.0) is unchanged to the bit.
 // Either way a surface whose geometric normal faces away from the light gets nothing: it is the
@@ -56,9 +58,12 @@ void main() {
     // Alpha 0: the ambient pass's alpha of 1 stays as it is under additive blending.
     out_radiance = vec4(0.0);
     Material m = materials.items[draw.material];
-    vec3 to_light = light.position.xyz - in_world;
-    float dist = length(to_light);
-    float radius = light.position.w;
+    // A directional light: position.xyz is the unit vector toward it, at distance 1, so the
+    // attenuation and 1/d^2 below are 1 and the colour is its irradiance.
+    bool sun = light.spot_direction.w > 1.5;
+    vec3 to_light = sun ? light.position.xyz : light.position.xyz - in_world;
+    float dist = sun ? 1.0 : length(to_light);
+    float radius = sun ? 0.0 : light.position.w;
     vec3 n = normalize(in_normal);
     vec3 ng = normalize(cross(dFdx(in_world), dFdy(in_world)));
     if (dot(ng, n) < 0.0) {
@@ -75,7 +80,7 @@ void main() {
     }
     // Exactly 1 inside the inner cone, so a spot light there is bit-identical to a point light.
     float spot = 1.0;
-    if (light.spot_direction.w > 0.5) {
+    if (abs(light.spot_direction.w - 1.0) < 0.5) {
         spot = spot_falloff(light.cone.y, light.cone.x, dot(-to_light / max(dist, 1e-12), light.spot_direction.xyz));
         if (spot <= 0.0) {
             return;

@@ -2,9 +2,11 @@
 // Entity shadow volumes for every light of the frame, from edge adjacency: one invocation per
 // triangle (its near and far cap if it faces away from the light) and, for closed meshes, per
 // edge (a side quad if it is a silhouette edge: one adjacent triangle lit, the other dark).
-// Open meshes get a closed volume per triangle instead. Every invocation owns fixed output
+// Open meshes get a closed volume per triangle instead. A light is homogeneous: (position, 1),
+// or for a directional light (toward it, 0), whose volumes all run to one point at infinity, so
+// their far caps are degenerate and draw nothing. Every invocation owns fixed output
 // slots; slots with nothing to draw get degenerate triangles, which rasterize to nothing.
-// CPU mirror: silhouette_volume in src/shadow_volumes/volumes.rs.
+// CPU mirror: silhouette_volume in src/lighting/shadow_volumes/volumes.rs.
 layout(local_size_x = 64) in;
 
 layout(set = 0, binding = 0) readonly buffer Positions { vec4 items[]; } positions;
@@ -32,12 +34,22 @@ vec3 world_position(uint v) {
     return (entity.model * vec4(positions.items[entity.vertex_offset + v].xyz, 1.0)).xyz;
 }
 
-bool lit(uint t, vec3 light) {
+// The direction from p toward the light (not normalised).
+vec3 toward(vec4 light, vec3 p) {
+    return light.xyz - p * light.w;
+}
+
+// The point at infinity that p's shadow runs to.
+vec4 beyond(vec4 light, vec3 p) {
+    return vec4(p * light.w - light.xyz, 0.0);
+}
+
+bool lit(uint t, vec4 light) {
     uvec4 tri = triangles.items[entity.triangle_offset + t];
     vec3 a = world_position(tri.x);
     vec3 b = world_position(tri.y);
     vec3 c = world_position(tri.z);
-    return dot(cross(b - a, c - a), light - a) > 0.0;
+    return dot(cross(b - a, c - a), toward(light, a)) > 0.0;
 }
 
 void put(uint at, vec4 a, vec4 b, vec4 c) {
@@ -55,7 +67,7 @@ void nothing(uint at, uint triangles_out) {
 void main() {
     uint item = gl_GlobalInvocationID.x;
     uint li = gl_GlobalInvocationID.y;
-    vec3 light = light_positions.items[li].xyz;
+    vec4 light = light_positions.items[li];
     uint base = entity.out_offset + li * entity.light_stride;
     if (entity.closed == 0u) {
         if (item >= entity.triangle_count) {
@@ -64,7 +76,7 @@ void main() {
         uint at = base + 24u * item;
         uvec4 tri = triangles.items[entity.triangle_offset + item];
         vec3 p[3] = vec3[3](world_position(tri.x), world_position(tri.y), world_position(tri.z));
-        float facing = dot(cross(p[1] - p[0], p[2] - p[0]), light - p[0]);
+        float facing = dot(cross(p[1] - p[0], p[2] - p[0]), toward(light, p[0]));
         if (facing == 0.0) {
             nothing(at, 8u);
             return;
@@ -78,7 +90,7 @@ void main() {
         vec4 far[3];
         for (uint i = 0u; i < 3u; ++i) {
             near[i] = vec4(p[i], 1.0);
-            far[i] = vec4(p[i] - light, 0.0);
+            far[i] = beyond(light, p[i]);
         }
         put(at, vec4(p[0], CAP), vec4(p[2], CAP), vec4(p[1], CAP));
         put(at + 3u, far[0], far[1], far[2]);
@@ -100,7 +112,7 @@ void main() {
         vec3 b = world_position(tri.y);
         vec3 c = world_position(tri.z);
         put(at, vec4(a, CAP), vec4(c, CAP), vec4(b, CAP));
-        put(at + 3u, vec4(a - light, 0.0), vec4(b - light, 0.0), vec4(c - light, 0.0));
+        put(at + 3u, beyond(light, a), beyond(light, b), beyond(light, c));
         return;
     }
     uint e = item - entity.triangle_count;
@@ -118,6 +130,6 @@ void main() {
     // Along the edge in the dark triangle's direction.
     vec3 u = world_position(la ? edge.y : edge.x);
     vec3 v = world_position(la ? edge.x : edge.y);
-    put(at, vec4(u, 1.0), vec4(v, 1.0), vec4(v - light, 0.0));
-    put(at + 3u, vec4(u, 1.0), vec4(v - light, 0.0), vec4(u - light, 0.0));
+    put(at, vec4(u, 1.0), vec4(v, 1.0), beyond(light, v));
+    put(at + 3u, vec4(u, 1.0), beyond(light, v), beyond(light, u));
 }

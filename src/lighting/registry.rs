@@ -278,11 +278,13 @@ pub fn reference_kind(config: &Configuration) -> Result<ReferenceKind> {
 /// One line per method of `config` that keeps the rest pose in a scene that moves (wind, a
 /// turning light): what it leaves out, and why.
 pub fn motion_notes(config: &Configuration, scene: &Scene) -> Vec<String> {
-    let Some(what) = scene.motion_summary() else {
-        return Vec::new();
-    };
     let mut out = Vec::new();
     for p in &config.parts {
+        // Shadow volumes are extruded every frame from the frame's lights, so only the objects'
+        // rest pose is kept there.
+        let Some(what) = scene.motion_summary_of(p.decl.name != shadow_volumes::NAME) else {
+            continue;
+        };
         if let Some(why) = info(&p.decl.name).ok().and_then(|i| i.rest_pose) {
             let line = format!("{}: note: the {} method keeps the rest pose ({why}): {what} moves in every other method and in the reference, not in it", scene.source, p.decl.name);
             if !out.contains(&line) {

@@ -231,6 +231,12 @@ impl Scene {
 
     /// What moves, for a method that keeps the rest pose to say so: "wind (objects\[1\] "bush")".
     pub fn motion_summary(&self) -> Option<String> {
+        self.motion_summary_of(true)
+    }
+
+    /// [`Scene::motion_summary`], leaving out the light motion unless `light_motion`: for a
+    /// method that keeps the rest pose of the objects but follows the turning light.
+    pub fn motion_summary_of(&self, light_motion: bool) -> Option<String> {
         let mut parts: Vec<String> = self
             .objects
             .iter()
@@ -238,7 +244,7 @@ impl Scene {
             .filter(|(_, o)| o.wind.is_some())
             .map(|(i, o)| format!("wind (objects[{i}] {:?})", o.name))
             .collect();
-        if let Some(m) = &self.light_motion {
+        if let Some(m) = self.light_motion.as_ref().filter(|_| light_motion) {
             parts.push(format!(
                 "light_motion (lights[{}] {:?})",
                 m.light,

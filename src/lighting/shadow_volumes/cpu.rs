@@ -49,6 +49,14 @@ pub fn attenuation(kind: u32, d: f32, r: f32) -> f32 {
     }
 }
 
+/// The faithful light colour `L_C` of a directional light of irradiance `E` (W/m²): the seed
+/// has no sun in its lighting equation, so, as for a point light below, `L_C` makes the
+/// faithful diffuse term `ρ·L_C·cos` equal the radiometric `ρ/π·E·cos`: `E/π`, with no
+/// attenuation (the light is at infinity).
+pub fn faithful_sun_colour(irradiance: Vec3) -> Vec3 {
+    irradiance / std::f32::consts::PI
+}
+
 /// The faithful light colour `L_C` of a point light of intensity `I` (W/sr) and radius `r`: the
 /// seed's colours are unitless, so `L_C` is chosen to make the faithful diffuse term
 /// `ρ·L_C·atten(d)·cos` equal the radiometric `ρ/π·I/d²·cos` at half the radius,

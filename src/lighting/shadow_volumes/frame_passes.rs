@@ -9,6 +9,7 @@ use glam::Vec4;
 use super::plan::{self, FramePlan, LightPlan};
 use super::{record_surface, LightBlock, ShadowVolumes, SilhouetteBuffers, SilhouettePush, VolumePush};
 use crate::backend::{vk, Bind, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::gpu_scene::SceneGpu;
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::FrameContext;
 use crate::world::FaceId;
@@ -20,9 +21,15 @@ impl ShadowVolumes {
         graph: &mut RenderGraph<'a>,
         s: &'a SilhouetteBuffers,
         plan: &Rc<FramePlan>,
+        scene: &SceneGpu,
     ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let p = plan.clone();
+        let lights: Vec<Vec4> = p
+            .lights
+            .iter()
+            .map(|l| self.homogeneous_light(l.light, scene))
+            .collect();
         graph
             .pass("silhouettes")
             .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
@@ -30,11 +37,6 @@ impl ShadowVolumes {
             .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
             .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
             .record(move |ctx| {
-                let lights: Vec<Vec4> = p
-                    .lights
-                    .iter()
-                    .map(|l| self.setup.lights[l.light].position.extend(1.0))
-                    .collect();
                 ctx.rec.bind_pipeline(self.silhouette)?;
                 ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&lights)))])?;
                 for (e, slot) in s.slots.iter().enumerate() {

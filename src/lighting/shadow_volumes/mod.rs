@@ -25,7 +25,9 @@
 //! the camera's PVS (`plan`). Lighting is the seed's Eq. 5 (*faithful*) or radiometric
 //! (*physical*), in both of the seed's material paths: special-case pipelines per map
 //! combination, or one pipeline with 1×1 default maps. Spot lights (not in the seed) are point
-//! lights times the forward method's cone falloff, with a point light's volumes.
+//! lights times the forward method's cone falloff, with a point light's volumes. Directional
+//! lights (not in the seed either) extrude entity volumes along their direction, to one point at
+//! infinity ([`PointLight::homogeneous`]); a BSP world refuses them.
 
 pub(crate) mod config;
 pub mod cpu;
@@ -90,22 +92,72 @@ impl Setup {
         let mut lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
             let why = match l {
-                Light::Point { name, position, intensity, radius } => {
-                    lights.push(PointLight { name: name.clone(), position: *position, intensity: *intensity, radius: *radius, spot: None });
+                Light::Point {
+                    name,
+                    position,
+                    intensity,
+                    radius,
+                } => {
+                    lights.push(PointLight {
+                        name: name.clone(),
+                        position: *position,
+                        intensity: *intensity,
+                        radius: *radius,
+                        spot: None,
+                        toward: None,
+                    });
                     continue;
                 }
-                Light::Spot { name, position, direction, intensity, inner_deg, outer_deg, radius } => {
+                Light::Spot {
+                    name,
+                    position,
+                    direction,
+                    intensity,
+                    inner_deg,
+                    outer_deg,
+                    radius,
+                } => {
                     // The same cosines as the forward method's lights (renderer::raster_lights).
-                    let spot = Spot { direction: direction.normalize(), cos_inner: inner_deg.to_radians().cos(), cos_outer: outer_deg.to_radians().cos() };
-                    lights.push(PointLight { name: name.clone(), position: *position, intensity: *intensity, radius: *radius, spot: Some(spot) });
+                    let spot = Spot {
+                        direction: direction.normalize(),
+                        cos_inner: inner_deg.to_radians().cos(),
+                        cos_outer: outer_deg.to_radians().cos(),
+                    };
+                    lights.push(PointLight {
+                        name: name.clone(),
+                        position: *position,
+                        intensity: *intensity,
+                        radius: *radius,
+                        spot: Some(spot),
+                        toward: None,
+                    });
                     continue;
                 }
-                Light::Directional { .. } => "a directional light has no position to extrude shadow volumes from (volumes along a direction are not implemented)",
-                Light::Sphere { .. } => "a sphere light is an area light, whose soft shadows one stencil volume cannot represent",
-                Light::Quad { .. } => "a quad light is an area light, whose soft shadows one stencil volume cannot represent",
+                Light::Directional {
+                    name,
+                    direction,
+                    irradiance,
+                } => {
+                    let toward = -direction.normalize();
+                    lights.push(PointLight {
+                        name: name.clone(),
+                        position: Vec3::ZERO,
+                        intensity: *irradiance,
+                        radius: 0.0,
+                        spot: None,
+                        toward: Some(toward),
+                    });
+                    continue;
+                }
+                Light::Sphere { .. } => {
+                    "a sphere light is an area light, whose soft shadows one stencil volume cannot represent"
+                }
+                Light::Quad { .. } => {
+                    "a quad light is an area light, whose soft shadows one stencil volume cannot represent"
+                }
             };
             return Err(Error::Usage(format!(
-                "{}: lights[{i}] ({}): the {NAME} method lights with point and spot lights only: {why}",
+                "{}: lights[{i}] ({}): the {NAME} method lights with point, spot and directional lights only: {why}",
                 scene.source,
                 l.name()
             )));
@@ -152,6 +204,14 @@ impl Setup {
                 animation: obj.animation,
                 opacity,
             });
+        }
+        if level.is_some() {
+            if let Some((i, l)) = lights.iter().enumerate().find(|(_, l)| l.toward.is_some()) {
+                return Err(Error::Usage(format!(
+                    "{}: lights[{i}] ({}): the {NAME} method lights a BSP world with point and spot lights only: its caster selection (the light's PVS and PSCS) starts from the light's position, which a directional light does not have",
+                    scene.source, l.name
+                )));
+            }
         }
         let world = match level {
             None => None,
@@ -201,9 +261,11 @@ impl Setup {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct LightBlock {
+    /// xyz: the position, w: the radius; a directional light's unit vector toward it, w 0.
     position: [f32; 4],
     colour: [f32; 4],
-    /// xyz: a spot light's unit axis; w: 1 for a spot light, 0 for a point light.
+    /// xyz: a spot light's unit axis; w: 1 for a spot light, 0 for a point light, 2 for a
+    /// directional light.
     spot_direction: [f32; 4],
     /// x: cos(inner), y: cos(outer).
     cone: [f32; 4],
@@ -680,6 +742,16 @@ impl ShadowVolumes {
         (m.albedo, normal, m.specular)
     }
 
+    /// Light `light` in homogeneous coordinates this frame ([`PointLight::homogeneous`]): a
+    /// directional light's direction is the frame's, which the light motion turns.
+    fn homogeneous_light(&self, light: usize, scene: &SceneGpu) -> Vec4 {
+        let l = &self.setup.lights[light];
+        match (l.toward, scene.lights.get(light)) {
+            (Some(_), Some(g)) => (-Vec3::from_slice(&g.direction[..3]).normalize()).extend(0.0),
+            _ => l.homogeneous(),
+        }
+    }
+
     /// `scene`: this frame's lights, whose intensities the light board changes; setup.lights[i]
     /// is scene light i (setup refuses every other kind), so the index is shared.
     fn light_block(&self, light: usize, scene: &SceneGpu) -> LightBlock {
@@ -692,6 +764,18 @@ impl ShadowVolumes {
             Mode::Faithful => cpu::faithful_light_colour(intensity, l.radius, c.atten),
             Mode::Physical => intensity,
         };
+        if l.toward.is_some() {
+            let colour = match c.mode {
+                Mode::Faithful => cpu::faithful_sun_colour(intensity),
+                Mode::Physical => intensity,
+            };
+            return LightBlock {
+                position: self.homogeneous_light(light, scene).into(),
+                colour: colour.extend(0.0).into(),
+                spot_direction: [0.0, 0.0, 0.0, 2.0],
+                cone: [0.0; 4],
+            };
+        }
         let (spot_direction, cone) = match l.spot {
             Some(s) => (s.direction.extend(1.0).into(), [s.cos_inner, s.cos_outer, 0.0, 0.0]),
             None => ([0.0; 4], [0.0; 4]),
@@ -759,7 +843,7 @@ impl LightingMethod for ShadowVolumes {
             .as_ref()
             .filter(|_| direct && plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
         if let Some(s) = silhouettes {
-            self.add_silhouettes(graph, s, &plan);
+            self.add_silhouettes(graph, s, &plan, frame.scene);
         }
 
         // The seed's path twice: opaque surfaces (translucent ones omitted from receivers and

@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use glam::{DVec3, Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use super::config::{Casters, Config};
 use super::volumes::Topology;
@@ -36,15 +36,32 @@ impl WorldFrame {
     }
 }
 
-/// A point light as the method uses it (scene coordinates); a spot light is one with a cone.
+/// A light as the method uses it (scene coordinates): a point light, a spot light (one with a
+/// cone), or a directional light (one with `toward`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointLight {
     pub name: String,
+    /// Unused for a directional light.
     pub position: Vec3,
+    /// W/sr, or a directional light's irradiance in W/m².
     pub intensity: Vec3,
     /// 0: infinite.
     pub radius: f32,
     pub spot: Option<Spot>,
+    /// A directional light (the sun): the unit vector toward it. Its volumes are extruded along
+    /// the direction it travels, to a single point at infinity, so they have no far cap.
+    pub toward: Option<Vec3>,
+}
+
+impl PointLight {
+    /// The light in homogeneous coordinates, as the silhouette pass takes it: `(position, 1)`,
+    /// or `(toward, 0)` for a directional light, the point at infinity it shines from.
+    pub fn homogeneous(&self) -> Vec4 {
+        match self.toward {
+            Some(t) => t.extend(0.0),
+            None => self.position.extend(1.0),
+        }
+    }
 }
 
 /// A spot light's cone: its contribution is scaled by `brdf::spot_falloff` (the
@@ -134,7 +151,7 @@ pub struct LightWorldSets {
 
 /// The effective culling radius (infinite without culling or without a radius).
 pub fn culling_radius(config: &Config, light: &PointLight) -> f64 {
-    if config.radius_culling && light.radius > 0.0 {
+    if config.radius_culling && light.radius > 0.0 && light.toward.is_none() {
         f64::from(light.radius)
     } else {
         f64::INFINITY
@@ -408,8 +425,12 @@ fn plan_all(
     }
 }
 
-/// Whether an entity with world bounds `b` is within `r` of the light and inside its cone.
+/// Whether an entity with world bounds `b` is within `r` of the light and inside its cone (a
+/// directional light reaches everything).
 fn in_reach(config: &Config, light: &PointLight, r: f64, b: (Vec3, Vec3)) -> bool {
+    if light.toward.is_some() {
+        return true;
+    }
     let (lo, hi) = b;
     let nearest = light.position.clamp(lo, hi);
     f64::from(nearest.distance_squared(light.position)) <= r * r

@@ -154,17 +154,19 @@ fn adjacency(triangles: &[[u32; 3]]) -> (Vec<[u32; 4]>, bool) {
 /// CPU mirror of `glsl/shadow_volumes/silhouette.comp`: the volume triangles (as homogeneous
 /// vertices, 3 per triangle, near caps with `w =` [`NEAR_CAP_W`], degenerate triangles as three
 /// `(0, 0, 0, 1)`) of a mesh with
-/// world-space `positions` for a light at `light`.
-pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec3) -> Vec<Vec4> {
+/// world-space `positions` for the homogeneous `light` ([`super::PointLight::homogeneous`]).
+pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Vec<Vec4> {
     let zero = [Vec4::W; 3];
     let mut out = Vec::with_capacity(3 * topo.volume_triangles());
+    let toward = |p: Vec3| light.truncate() - p * light.w;
+    let beyond = |p: Vec3| (p * light.w - light.truncate()).extend(0.0);
     let lit = |t: &[u32; 3]| {
         let [a, b, c] = t.map(|i| positions[i as usize]);
-        (b - a).cross(c - a).dot(light - a) > 0.0
+        (b - a).cross(c - a).dot(toward(a)) > 0.0
     };
     let at = |i: u32| positions[i as usize].extend(1.0);
     let cap = |i: u32| positions[i as usize].extend(NEAR_CAP_W);
-    let inf = |i: u32| (positions[i as usize] - light).extend(0.0);
+    let inf = |i: u32| beyond(positions[i as usize]);
     if topo.closed {
         for t in &topo.triangles {
             if lit(t) {
@@ -192,7 +194,7 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec3) -> Ve
     } else {
         for t in &topo.triangles {
             let [a, b, c] = t.map(|i| positions[i as usize]);
-            let facing = (b - a).cross(c - a).dot(light - a);
+            let facing = (b - a).cross(c - a).dot(toward(a));
             if facing == 0.0 || !facing.is_finite() {
                 out.extend(std::iter::repeat_n(Vec4::W, 24));
                 continue;
@@ -201,7 +203,7 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec3) -> Ve
             let d = if facing > 0.0 { [a, c, b] } else { [a, b, c] };
             let near = d.map(|p| p.extend(1.0));
             let caps = d.map(|p| p.extend(NEAR_CAP_W));
-            let far = d.map(|p| (p - light).extend(0.0));
+            let far = d.map(beyond);
             out.extend_from_slice(&[caps[0], caps[2], caps[1]]);
             out.extend_from_slice(&far);
             for i in 0..3 {
@@ -292,9 +294,57 @@ mod tests {
             assert!(topo.closed);
             assert_eq!(topo.edges.len() * 2, topo.triangles.len() * 3);
             for light in [Vec3::new(3.0, 4.0, 1.0), Vec3::new(-0.2, 0.1, 5.0)] {
-                let v = silhouette_volume(&topo, &topo.positions, light);
+                let v = silhouette_volume(&topo, &topo.positions, light.extend(1.0));
                 assert_eq!(v.len(), 3 * topo.volume_triangles());
                 let (vol, closed) = signed_volume_and_closed(&finite(&v, light, 50.0));
+                assert!(closed && vol > 0.0, "{vol} {closed}");
+            }
+        }
+    }
+
+    /// A directional light's volumes run to one point at infinity: with that point placed far
+    /// along the direction the light travels, each is a closed, outward solid (the far caps are
+    /// degenerate), for closed meshes and for each triangle of an open one.
+    #[test]
+    fn directional_volumes_close_at_one_point_at_infinity() {
+        let travel = Vec3::new(0.3, -0.85, 0.2).normalize();
+        let light = (-travel).extend(0.0);
+        let apex = |v: &[Vec4], light: Vec4| -> Vec<Vec3> {
+            let travel = -light.truncate();
+            v.iter()
+                .map(|p| {
+                    if p.w == 0.0 {
+                        assert!(
+                            (p.truncate() - travel).length() < 1e-6,
+                            "every point at infinity is the sun's"
+                        );
+                        travel * 50.0
+                    } else {
+                        p.truncate()
+                    }
+                })
+                .collect()
+        };
+        for mesh in [
+            generators::cuboid(Vec3::new(1.0, 2.0, 0.5), 2),
+            generators::sphere(0.7, 12, 7),
+        ] {
+            let topo = Topology::new(&mesh);
+            let v = silhouette_volume(&topo, &topo.positions, light);
+            let (vol, closed) = signed_volume_and_closed(&apex(&v, light));
+            assert!(closed && vol > 0.0, "{vol} {closed}");
+        }
+        let quad = generators::quad(
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(0.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            1,
+        );
+        let topo = Topology::new(&quad);
+        for light in [light, -light] {
+            let v = silhouette_volume(&topo, &topo.positions, light);
+            for tri_volume in v.chunks(24) {
+                let (vol, closed) = signed_volume_and_closed(&apex(tri_volume, light));
                 assert!(closed && vol > 0.0, "{vol} {closed}");
             }
         }
@@ -312,7 +362,7 @@ mod tests {
         assert!(!topo.closed && topo.edges.is_empty());
         // From either side of the quad.
         for light in [Vec3::new(0.1, 3.0, 0.2), Vec3::new(0.1, -3.0, 0.2)] {
-            let v = silhouette_volume(&topo, &topo.positions, light);
+            let v = silhouette_volume(&topo, &topo.positions, light.extend(1.0));
             for tri_volume in v.chunks(24) {
                 let (vol, closed) = signed_volume_and_closed(&finite(tri_volume, light, 20.0));
                 assert!(closed && vol > 0.0);
