@@ -443,3 +443,32 @@ fn bsp_lights_segments_fit_the_light_matrix() {
     assert!(4.0 * stage / area <= rows, "max_segment_area {area}: {rows} rows");
     assert!(notes.iter().any(|n| n.contains("matrix of 1024 lights")), "{notes:?}");
 }
+
+/// A scene whose triangles' corners alone fill the light matrix (8,192 triangles under 1,024
+/// lights: 24,576 rows where the matrix holds 10,922) is refused in one line before anything is
+/// built, naming what fills it, instead of deriving a size from a negative row count.
+#[test]
+fn bsp_lights_refuses_a_scene_whose_corners_fill_the_light_matrix() {
+    let text = "methods = [\"bsp_lights\"]\n[camera]\nposition = [0, 5, 5]\ntarget = [0, 0, 0]\n\
+                [[objects]]\nmesh = \"plane\"\nsize = 20\nsubdivisions = 64\n\
+                [[light_arrays]]\ntype = \"point\"\ngrid = [32, 1, 32]\nmin = [-9, 2, -9]\nmax = [9, 2, 9]\nintensity = 1\n";
+    let scene = Scene::from_str(text, "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let config = registry::configuration(&scene, Some("bsp_lights")).unwrap();
+    let start = Instant::now();
+    let message = match registry::plan(&config, &scene) {
+        Err(e) => e.to_string(),
+        Ok((c, notes)) => panic!("not refused: {:?} {notes:?}", c.parts[0].decl),
+    };
+    println!("{message}");
+    assert!(start.elapsed() < Duration::from_secs(1));
+    assert!(!message.contains('\n') && !message.contains(" -"), "{message}");
+    for needed in [
+        "8192 triangles",
+        "24576 corners",
+        "1024 lights",
+        "10922 vertex rows",
+        "storage = \"f16\"",
+    ] {
+        assert!(message.contains(needed), "`{needed}` missing from: {message}");
+    }
+}

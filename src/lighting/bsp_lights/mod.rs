@@ -441,7 +441,18 @@ pub fn plan(
     // Rows the matrix holds, less each triangle's corners. A fragment is split in four until no
     // piece passes the area, so pieces are a quarter of it at the least: up to 4 · area / a
     // vertex rows (the 1,024-light stage at 0.033 m² made 19,478 against 10,712 at one a piece).
-    let rows = (MAX_MATRIX_BYTES / (lights * config.storage.bytes_per_entry())) as f64 - 3.0 * triangles;
+    let capacity = MAX_MATRIX_BYTES / (lights * config.storage.bytes_per_entry());
+    let rows = capacity as f64 - 3.0 * triangles;
+    if rows < 4.0 {
+        // The triangles' own corners fill the matrix: no segment area fits.
+        return Err(Error::Usage(format!(
+            "{}: {NAME}: the scene's {triangles} triangles have {} corners, and an {} light matrix of {lights} lights holds {capacity} vertex rows in {} (the device's storage-buffer limit), whatever max_segment_area is: use storage = \"f16\", fewer lights or fewer triangles",
+            facts.scene.source,
+            3.0 * triangles,
+            if config.storage == Storage::F16 { "f16" } else { "f32" },
+            crate::lighting::plan::bytes(MAX_MATRIX_BYTES)
+        )));
+    }
     let budget = SEGMENT_BUDGET.min((rows / 4.0).max(1.0));
     let chosen = round2(area / budget).clamp(1e-6, 1e4);
     let why = if budget < SEGMENT_BUDGET {
