@@ -89,79 +89,7 @@ impl Setup {
     /// `meshes`: each scene object's object-space mesh, as uploaded (`SceneGpu::meshes`).
     pub fn with_meshes(scene: &Scene, meshes: &[crate::scene::Mesh], decl: &MethodDecl) -> Result<Setup> {
         let config = Config::from_decl(decl, scene)?;
-        let mut lights = Vec::new();
-        for (i, l) in scene.lights.iter().enumerate() {
-            let why = match l {
-                Light::Point {
-                    name,
-                    position,
-                    intensity,
-                    radius,
-                } => {
-                    lights.push(PointLight {
-                        name: name.clone(),
-                        position: *position,
-                        intensity: *intensity,
-                        radius: *radius,
-                        spot: None,
-                        toward: None,
-                    });
-                    continue;
-                }
-                Light::Spot {
-                    name,
-                    position,
-                    direction,
-                    intensity,
-                    inner_deg,
-                    outer_deg,
-                    radius,
-                } => {
-                    // The same cosines as the forward method's lights (renderer::raster_lights).
-                    let spot = Spot {
-                        direction: direction.normalize(),
-                        cos_inner: inner_deg.to_radians().cos(),
-                        cos_outer: outer_deg.to_radians().cos(),
-                    };
-                    lights.push(PointLight {
-                        name: name.clone(),
-                        position: *position,
-                        intensity: *intensity,
-                        radius: *radius,
-                        spot: Some(spot),
-                        toward: None,
-                    });
-                    continue;
-                }
-                Light::Directional {
-                    name,
-                    direction,
-                    irradiance,
-                } => {
-                    let toward = -direction.normalize();
-                    lights.push(PointLight {
-                        name: name.clone(),
-                        position: Vec3::ZERO,
-                        intensity: *irradiance,
-                        radius: 0.0,
-                        spot: None,
-                        toward: Some(toward),
-                    });
-                    continue;
-                }
-                Light::Sphere { .. } => {
-                    "a sphere light is an area light, whose soft shadows one stencil volume cannot represent"
-                }
-                Light::Quad { .. } => {
-                    "a quad light is an area light, whose soft shadows one stencil volume cannot represent"
-                }
-            };
-            return Err(Error::Usage(format!(
-                "{}: lights[{i}] ({}): the {NAME} method lights with point, spot and directional lights only: {why}",
-                scene.source,
-                l.name()
-            )));
-        }
+        let lights = method_lights(scene)?;
         let mut level: Option<(WorldLevel, Vec3)> = None;
         let mut world_objects = Vec::new();
         let mut entities = Vec::new();
@@ -255,6 +183,69 @@ impl Setup {
             t,
         )
     }
+}
+
+/// The scene's lights as the method takes them, in scene order; any other kind is refused in
+/// one line naming the light and why.
+fn method_lights(scene: &Scene) -> Result<Vec<PointLight>> {
+    let mut lights = Vec::new();
+    for (i, l) in scene.lights.iter().enumerate() {
+        let light = |position, intensity, radius, spot, toward| PointLight {
+            name: l.name().to_string(),
+            position,
+            intensity,
+            radius,
+            spot,
+            toward,
+        };
+        let why = match l {
+            Light::Point {
+                position,
+                intensity,
+                radius,
+                ..
+            } => {
+                lights.push(light(*position, *intensity, *radius, None, None));
+                continue;
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+                radius,
+                ..
+            } => {
+                // The same cosines as the forward method's lights (renderer::raster_lights).
+                let spot = Spot {
+                    direction: direction.normalize(),
+                    cos_inner: inner_deg.to_radians().cos(),
+                    cos_outer: outer_deg.to_radians().cos(),
+                };
+                lights.push(light(*position, *intensity, *radius, Some(spot), None));
+                continue;
+            }
+            Light::Directional {
+                direction, irradiance, ..
+            } => {
+                lights.push(light(Vec3::ZERO, *irradiance, 0.0, None, Some(-direction.normalize())));
+                continue;
+            }
+            Light::Sphere { .. } => {
+                "a sphere light is an area light, whose soft shadows one stencil volume cannot represent"
+            }
+            Light::Quad { .. } => {
+                "a quad light is an area light, whose soft shadows one stencil volume cannot represent"
+            }
+        };
+        return Err(Error::Usage(format!(
+            "{}: lights[{i}] ({}): the {NAME} method lights with point, spot and directional lights only: {why}",
+            scene.source,
+            l.name()
+        )));
+    }
+    Ok(lights)
 }
 
 /// `PointLightBlock` in glsl/shadow_volumes/surface.glsl.
