@@ -472,3 +472,60 @@ fn bsp_lights_refuses_a_scene_whose_corners_fill_the_light_matrix() {
         assert!(message.contains(needed), "`{needed}` missing from: {message}");
     }
 }
+
+/// A scene too large for the raster PRT baker (a plane of 131,072 triangles: each vertex would
+/// draw them all, over twice the 17,408 tree steps of its 1,024 rays) gets the compute rays,
+/// said in one line; a declaration that names a raster parameter, the faithful mode and a small
+/// scene keep the document's raster baker. The chart's sweep still holds the raster points.
+#[test]
+fn a_large_scene_gets_the_prt_ray_baker() {
+    let text = |methods: &str, subdivisions: u32| {
+        format!(
+            "methods = {methods}\n[camera]\nposition = [0, 5, 5]\ntarget = [0, 0, 0]\n\
+             [[objects]]\nmesh = \"plane\"\nsize = 20\nsubdivisions = {subdivisions}\n\
+             [[objects]]\nmesh = \"box\"\ntranslate = [0, 1, 0]\n\
+             [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1\n"
+        )
+    };
+    let planned = |methods: &str, subdivisions: u32| {
+        let scene =
+            Scene::from_str(&text(methods, subdivisions), "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+        let config = registry::configuration(&scene, Some("prt")).unwrap();
+        registry::plan(&config, &scene).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (config, notes) = planned(r#"["prt"]"#, 256);
+    println!("{notes:?}");
+    assert_eq!(
+        config.parts[0].decl.param("baker").and_then(|v| v.as_str()),
+        Some("rays")
+    );
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("baker = \"rays\"") && n.contains("131084 triangles")),
+        "{notes:?}"
+    );
+    let labels: Vec<String> = registry::sweep(&config).unwrap().into_iter().map(|(l, _)| l).collect();
+    println!("{labels:?}");
+    for want in [
+        "prt rays 1024",
+        "prt corrected stereographic 32²",
+        "prt faithful orthographic 32²",
+    ] {
+        assert!(
+            labels.iter().any(|l| l.starts_with(want)),
+            "`{want}` missing from the sweep {labels:?}"
+        );
+    }
+    for (methods, subdivisions) in [
+        (r#"[{ name = "prt", mapping = "equal_area" }]"#, 256),
+        (r#"[{ name = "prt", mode = "faithful" }]"#, 256),
+        (r#"["prt"]"#, 64),
+    ] {
+        let (config, notes) = planned(methods, subdivisions);
+        assert!(
+            config.parts[0].decl.param("baker").is_none(),
+            "{methods} at {subdivisions}: {notes:?}"
+        );
+    }
+}

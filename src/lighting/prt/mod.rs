@@ -30,7 +30,7 @@ use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
 use crate::util::progress::Progress;
-use config::{Baker, Config};
+use config::{Baker, Config, Mode};
 use receivers::{OccluderRules, Placed, Receivers};
 
 pub const NAME: &str = "prt";
@@ -129,19 +129,35 @@ pub const SCHEMA: MethodSchema = MethodSchema {
     ],
 };
 
-/// `max_edge` from the scene's smallest object when unset (corrected mode); said in one line.
+/// The raster baker's own parameters: a declaration that sets one asks for that baker.
+const RASTER_PARAMS: [&str; 9] = [
+    "mapping",
+    "depth",
+    "weights",
+    "directions",
+    "coverage",
+    "reduction",
+    "tile",
+    "batch",
+    "gradient",
+];
+
+/// Unset in corrected mode, `max_edge` from the scene's smallest object, and `baker` from the
+/// scene's size; each said in one line.
 pub fn plan(
     decl: &MethodDecl,
     facts: &crate::lighting::plan::Facts<'_>,
 ) -> Result<Vec<crate::lighting::plan::Derived>> {
     let config = Config::from_decl(decl, Some(facts.scene))?;
-    if config.max_edge.is_some() {
-        return Ok(Vec::new());
-    }
     // A scene the light-map geometry cannot take is measured when the method is made instead.
     let Ok(triangles) = facts.triangles(NAME) else {
         return Ok(Vec::new());
     };
+    let mut derived: Vec<crate::lighting::plan::Derived> =
+        baker_note(decl, &config, triangles.len()).into_iter().collect();
+    if config.max_edge.is_some() {
+        return Ok(derived);
+    }
     let mut objects: Vec<sampling::Object> = (facts.scene.objects.iter())
         .map(|o| sampling::Object {
             name: o.name.clone(),
@@ -153,7 +169,34 @@ pub fn plan(
             o.triangles.push(t.p.map(|p| p.as_vec3()));
         }
     }
-    Ok(max_edge_note(&objects, &config).into_iter().collect())
+    derived.extend(max_edge_note(&objects, &config));
+    Ok(derived)
+}
+
+/// The compute ray baker in place of the raster one, when the corrected mode's baker is unset
+/// (and none of the raster's own parameters is set) and the scene is so large that drawing every
+/// occluder triangle for every vertex outgrows walking a tree with each ray: triangles > 2 ×
+/// samples × log2(triangles). The raster's work per vertex grows as the triangles, the rays' as
+/// samples × log2(triangles); the factor 2 keeps the document's baker wherever the two are
+/// within it (the shipped scenes). A 268k-triangle scene's raster bake ran at 13 vertices/s on
+/// lavapipe, hours for its 138k vertices.
+fn baker_note(decl: &MethodDecl, config: &Config, triangles: usize) -> Option<crate::lighting::plan::Derived> {
+    let raster_asked = decl.param("baker").is_some() || RASTER_PARAMS.iter().any(|p| decl.param(p).is_some());
+    if config.mode == Mode::Faithful || raster_asked {
+        return None;
+    }
+    let t = triangles as f64;
+    let walk = config.samples as f64 * t.max(2.0).log2();
+    (t > 2.0 * walk).then(|| {
+        crate::lighting::plan::Derived::new(
+            "baker",
+            "rays",
+            format!(
+                "the raster baker would draw all {triangles} triangles for each vertex, over twice the {walk:.0} steps ({} rays × log2 of the triangles) a vertex's rays take through the tree",
+                config.samples
+            ),
+        )
+    })
 }
 
 /// The derived `max_edge` and why, `None` where nothing can shadow anything else.
@@ -206,7 +249,8 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         }
     };
     push(decl.clone());
-    let corrected = decl.with("mode", "corrected".into());
+    // The raster baker's variants name it: a large scene's declaration may carry the rays.
+    let corrected = decl.with("mode", "corrected".into()).with("baker", "raster".into());
     for m in ["orthographic", "stereographic", "equal_area"] {
         push(corrected.with("mapping", m.into()));
     }
@@ -214,8 +258,13 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     for n in [4i64, 9] {
         push(corrected.with("coefficients", n.into()));
     }
-    // The document bakes the meshes as they are: no derived max_edge.
-    push(decl.with("mode", "faithful".into()).without("max_edge"));
+    // The document bakes the meshes as they are with its raster baker: no derived max_edge or
+    // baker.
+    push(
+        decl.with("mode", "faithful".into())
+            .without("max_edge")
+            .without("baker"),
+    );
     push(corrected.with("baker", "rays_cpu".into()));
     out
 }
