@@ -1,5 +1,6 @@
 #version 460
-// Entity shadow volumes for every light of the frame, from edge adjacency: one invocation per
+// Entity shadow volumes for each light in light_positions (the frame passes one at a time, into
+// one slot), from edge adjacency: one invocation per
 // triangle (its near and far cap if it faces away from the light) and, for closed meshes, per
 // edge (a side quad if it is a silhouette edge: one adjacent triangle lit, the other dark).
 // Open meshes get a closed volume per triangle instead. A light is homogeneous: (position, 1),

@@ -15,30 +15,30 @@ use crate::lighting::FrameContext;
 use crate::world::FaceId;
 
 impl ShadowVolumes {
-    /// Silhouettes of every entity for every light of the frame.
+    /// Light `lp`'s silhouettes of every entity into the one volume slot, which its volume pass
+    /// then draws: one light at a time, so the buffer does not grow with the lights.
     pub(super) fn add_silhouettes<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
         s: &'a SilhouetteBuffers,
         plan: &Rc<FramePlan>,
+        lp: &LightPlan,
         scene: &SceneGpu,
+        translucent: bool,
     ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let p = plan.clone();
-        let lights: Vec<Vec4> = p
-            .lights
-            .iter()
-            .map(|l| self.homogeneous_light(l.light, scene))
-            .collect();
+        let light: Vec4 = self.homogeneous_light(lp.light, scene);
+        let prefix = if translucent { "translucent " } else { "" };
         graph
-            .pass("silhouettes")
+            .pass(&format!("light {} {prefix}silhouettes", lp.light))
             .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
             .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
             .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
             .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(self.silhouette)?;
-                ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&lights)))])?;
+                ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::bytes_of(&light)))])?;
                 for (e, slot) in s.slots.iter().enumerate() {
                     let topo = &self.setup.entities[e].topology;
                     if topo.items() == 0 {
@@ -56,7 +56,7 @@ impl ShadowVolumes {
                         closed: topo.closed as u32,
                     };
                     ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-                    ctx.rec.dispatch([topo.items() as u32, lights.len() as u32, 1])?;
+                    ctx.rec.dispatch([topo.items() as u32, 1, 1])?;
                 }
                 Ok(())
             });
@@ -144,7 +144,6 @@ impl ShadowVolumes {
         graph: &mut RenderGraph<'a>,
         frame: &FrameContext<'a>,
         lp: &LightPlan,
-        li: u32,
         translucent: bool,
     ) {
         let (t, uniforms) = (frame.targets, frame.uniforms);
@@ -161,7 +160,7 @@ impl ShadowVolumes {
             Some(s) => lp
                 .caster_entities
                 .iter()
-                .map(|&e| (s.slots[e].out_offset + li * s.stride, s.slots[e].out_vertices))
+                .map(|&e| (s.slots[e].out_offset, s.slots[e].out_vertices))
                 .collect(),
             None => Vec::new(),
         };

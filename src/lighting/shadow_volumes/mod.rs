@@ -291,7 +291,7 @@ struct EntitySlots {
     vertex_offset: u32,
     triangle_offset: u32,
     edge_offset: u32,
-    /// First output vertex for light 0; light k adds k × stride.
+    /// First output vertex in the volume slot.
     out_offset: u32,
     out_vertices: u32,
 }
@@ -301,7 +301,7 @@ struct SilhouetteBuffers {
     triangles: BufferId,
     edges: BufferId,
     volumes: BufferId,
-    /// Output vertices per light.
+    /// Output vertices of the slot: every entity's volumes for one light.
     stride: u32,
     slots: Vec<EntitySlots>,
 }
@@ -630,7 +630,7 @@ impl ShadowVolumes {
         let edges = storage(gpu, "entity edges", bytemuck::cast_slice(&edges))?;
         let volumes = gpu.create_buffer(&BufferDesc {
             name: "entity shadow volumes".into(),
-            size: (u64::from(out) * setup.lights.len() as u64 * 16).max(16),
+            size: (u64::from(out) * 16).max(16),
             usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER,
             memory: MemoryKind::GpuOnly,
         })?;
@@ -829,13 +829,7 @@ impl LightingMethod for ShadowVolumes {
             .plan
             .clone()
             .ok_or_else(|| Error::Internal(format!("{NAME}: a frame was recorded before it was prepared")))?;
-        let silhouettes = self
-            .silhouettes
-            .as_ref()
-            .filter(|_| direct && plan.lights.iter().any(|l| !l.caster_entities.is_empty()));
-        if let Some(s) = silhouettes {
-            self.add_silhouettes(graph, s, &plan, frame.scene);
-        }
+        let silhouettes = self.silhouettes.as_ref().filter(|_| direct);
 
         // The seed's path twice: opaque surfaces (translucent ones omitted from receivers and
         // casters, so light shines through them), then the translucent entities alone, back to
@@ -853,12 +847,14 @@ impl LightingMethod for ShadowVolumes {
             if !direct {
                 continue;
             }
-            for (li, lp) in plan.lights.iter().enumerate() {
+            for lp in plan.lights.iter() {
                 if translucent && lp.translucent_receivers.is_empty() {
                     continue;
                 }
-                // The silhouette pass wrote this light's entity volumes at slot `li`.
-                self.add_volumes(graph, frame, lp, li as u32, translucent);
+                if let Some(s) = silhouettes.filter(|_| !lp.caster_entities.is_empty()) {
+                    self.add_silhouettes(graph, s, &plan, lp, frame.scene, translucent);
+                }
+                self.add_volumes(graph, frame, lp, translucent);
                 self.add_lighting(graph, frame, &plan, lp, translucent);
             }
         }
