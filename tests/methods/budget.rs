@@ -123,9 +123,48 @@ fn sh_lightmap_over_the_budget_is_refused_before_baking() {
     assert_refusal(
         &message,
         took,
-        &["sh_lightmap", "patch_size = 0.005", "patches", "rays"],
+        &[
+            "sh_lightmap",
+            "patch_size = 0.005",
+            "patches",
+            "rays",
+            "set a larger patch_size",
+        ],
     );
     assert!(needed_mb(&message) > 2048.0, "{message}");
+}
+
+/// A curved mesh makes a chart per triangle or two, each at least a texel in its border frame,
+/// so no patch_size brings its light-map within the budget: the refusal says so, with its chart
+/// count and the samples that would fit, instead of asking for a larger patch_size.
+#[test]
+fn a_curved_meshs_light_map_is_refused_with_advice_that_can_work() {
+    let text = |methods: &str| {
+        format!(
+            "memory_budget_mb = 100\nmethods = {methods}\n[camera]\nposition = [0, 2, 4]\ntarget = [0, 0, 0]\n\
+             [[objects]]\nmesh = \"sphere\"\nsegments = 128\nrings = 64\n\
+             [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1\n"
+        )
+    };
+    let scene_of =
+        |methods: &str| Scene::from_str(&text(methods), "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let (message, took) = refusal(&scene_of(r#"["sh_lightmap"]"#), "sh_lightmap");
+    assert_refusal(&message, took, &["charts", "at any patch_size", "at most fit"]);
+    assert!(!message.contains("set a larger patch_size"), "{message}");
+    let samples: u64 = message
+        .split("samples (")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((20..10_000).contains(&samples), "{message}");
+    // The samples it names fit.
+    let fitted = scene_of(&format!(r#"[{{ name = "sh_lightmap", samples = {samples} }}]"#));
+    let config = registry::configuration(&fitted, Some("sh_lightmap")).unwrap();
+    registry::plan(&config, &fitted).unwrap_or_else(|e| panic!("{samples} samples: {e}"));
 }
 
 /// A budget the scene raises lets the same bake through; one it lowers refuses the shipped one.
@@ -178,7 +217,11 @@ fn sh_lightmap_vq_table_over_the_budget_is_refused() {
         Some(8),
     );
     let (message, took) = refusal(&vq, "sh_lightmap");
-    assert_refusal(&message, took, &["VQ table of 65536 representatives"]);
+    assert_refusal(
+        &message,
+        took,
+        &["VQ table of 65536 representatives", "fewer representatives (reps)"],
+    );
     assert!(needed_mb(&message) > 8.0, "{message}");
 }
 

@@ -362,7 +362,13 @@ fn profile_breaks_out_every_pass() {
     let report = penumbra::commands::profile::run(&opts, 2).unwrap();
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
     println!("{}", report.table());
-    for want in ["frame", "light 0 silhouettes", "ambient", "light 0 volumes", "light 0 lighting"] {
+    for want in [
+        "frame",
+        "light 0 silhouettes",
+        "ambient",
+        "light 0 volumes",
+        "light 0 lighting",
+    ] {
         assert!(names.contains(&want), "{want} missing from {names:?}");
     }
     let _ = Vec3::ZERO;

@@ -232,13 +232,46 @@ pub fn plan(
             config.samples
         )
     };
-    facts.check(
-        NAME,
-        &what,
-        patches * bytes_per_patch(&config) + table,
-        "set a larger patch_size or fewer samples",
-    )?;
+    let need = patches * bytes_per_patch(&config) + table;
+    let budget = facts.budget().0;
+    let advice = if table >= budget {
+        "set fewer representatives (reps)".to_string()
+    } else if need > budget {
+        shrink_advice(&config, facts.triangles(NAME)?, patches, budget - table)
+    } else {
+        String::new()
+    };
+    facts.check(NAME, &what, need, &advice)?;
     Ok(derived)
+}
+
+/// What would bring a light-map of `patches` patches within `room` bytes: a larger patch_size,
+/// unless the charts alone make too many patches at any size (a curved mesh has a chart per
+/// triangle or two, each at least a texel and its border), and the samples that would fit.
+fn shrink_advice(
+    config: &Config,
+    triangles: &[crate::lighting::lightmap::patches::Triangle],
+    patches: u64,
+    room: u64,
+) -> String {
+    let charts = crate::lighting::lightmap::patches::group_charts(triangles);
+    // At a patch the size of a kilometre every chart is one texel in its border frame.
+    let floor = crate::lighting::lightmap::patches::count_in(&charts, triangles, 1000.0);
+    let fixed = bytes_per_patch(&Config { samples: 0, ..*config });
+    let samples_fitting = (room / patches.max(1)).saturating_sub(fixed) / 4 * 32;
+    let samples = if samples_fitting >= 20 {
+        format!("fewer samples ({samples_fitting} at most fit at this patch_size)")
+    } else {
+        "fewer samples".to_string()
+    };
+    if floor * bytes_per_patch(config) > room {
+        format!(
+            "its {} charts (planar groups of triangles) make at least {floor} patches at any patch_size, so a larger one cannot fit it: {samples}, or a scene of fewer, flatter charts",
+            charts.len()
+        )
+    } else {
+        format!("set a larger patch_size or {samples}")
+    }
 }
 
 /// Where the visibility rays are cast.
