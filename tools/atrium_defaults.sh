@@ -30,7 +30,7 @@ run() {
   local took=$((SECONDS - start))
   local rss_mb=$(( $(awk '/^rss_kb/ {print $2}' "$log") / 1024 ))
   local note
-  note=$(grep -E "^(error|$method:)" "$log" | head -2 | tr '\n' ' ' | tr ',' ';' | tr '"' "'")
+  note=$({ grep -E "^(error|$method:)" "$log" || true; } | head -2 | tr '\n' ' ' | tr ',' ';' | tr '"' "'")
   if [ "$rc" = 124 ]; then
     status=timeout
   elif [ "$rc" != 0 ]; then
