@@ -60,7 +60,7 @@ void main() {
     Material m = materials.items[draw.material];
     // A directional light: position.xyz is the unit vector toward it, at distance 1, so the
     // attenuation and 1/d^2 below are 1 and the colour is its irradiance.
-    bool sun = light.spot_direction.w > 1.5;
+    bool sun = light_kind() == LIGHT_DIRECTIONAL;
     vec3 to_light = sun ? light.position.xyz : light.position.xyz - in_world;
     float dist = sun ? 1.0 : length(to_light);
     float radius = sun ? 0.0 : light.position.w;
@@ -80,7 +80,7 @@ void main() {
     }
     // Exactly 1 inside the inner cone, so a spot light there is bit-identical to a point light.
     float spot = 1.0;
-    if (abs(light.spot_direction.w - 1.0) < 0.5) {
+    if (light_kind() == LIGHT_SPOT) {
         spot = spot_falloff(light.cone.y, light.cone.x, dot(-to_light / max(dist, 1e-12), light.spot_direction.xyz));
         if (spot <= 0.0) {
             return;

@@ -5,13 +5,19 @@
 
 // One point, spot or directional light per lighting pass. The ambient pass binds zeros (its vertex shader is
 // the light pass's, so both write bit-identical depth).
-layout(set = 0, binding = 1) uniform PointLightBlock {
+layout(set = 0, binding = 1) uniform LightBlock {
     vec4 position;        // xyz: world position (directional: unit vector toward it); w: radius (0: infinite)
     vec4 colour;          // rgb: faithful light colour L_C, or intensity I in W/sr (physical; W/m^2 directional)
-    vec4 spot_direction;  // xyz: a spot light's unit axis; w: 1 spot, 0 point, 2 directional
+    vec4 spot_direction;  // xyz: a spot light's unit axis; w: the light's kind (light_kind)
     vec4 cone;            // x: cos(inner), y: cos(outer) (spot)
 } light;
 
+#include "common/lights.glsl"
 #include "common/scene.glsl"
+
+// LIGHT_POINT, LIGHT_SPOT or LIGHT_DIRECTIONAL (common/lights.glsl), as the block's w holds it.
+uint light_kind() {
+    return uint(light.spot_direction.w + 0.5);
+}
 
 #endif

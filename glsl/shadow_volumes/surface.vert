@@ -25,7 +25,7 @@ void main() {
     t = normalize(t - n * dot(n, t));
     vec3 b = cross(n, t) * in_tangent.w;
     // A directional light's position.xyz is the unit vector toward it (light.frag).
-    vec3 to_light = light.spot_direction.w > 1.5 ? light.position.xyz : light.position.xyz - world.xyz;
+    vec3 to_light = light_kind() == LIGHT_DIRECTIONAL ? light.position.xyz : light.position.xyz - world.xyz;
     vec3 to_eye = frame.camera_pos.xyz - world.xyz;
     out_world = world.xyz;
     out_normal = n;

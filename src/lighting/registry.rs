@@ -26,6 +26,32 @@ pub type PlanFn = fn(&MethodDecl, &Facts<'_>) -> Result<Vec<Derived>>;
 /// Extra lines for `profile`'s report, from the frame's pass timings (`None`: nothing to add).
 pub type ReportFn = fn(&[PassStats]) -> Option<String>;
 
+/// What a method keeps of a moving scene's time-0 state, and why.
+#[derive(Clone, Copy, Debug)]
+pub struct RestPose {
+    pub why: &'static str,
+    /// It keeps the scene's light direction too, not only the objects' rest pose.
+    pub keeps_light_motion: bool,
+}
+
+impl RestPose {
+    /// The objects and the lights, as the bake took them.
+    const fn all(why: &'static str) -> Option<RestPose> {
+        Some(RestPose {
+            why,
+            keeps_light_motion: true,
+        })
+    }
+
+    /// The objects only: the lights are read every frame.
+    const fn objects(why: &'static str) -> Option<RestPose> {
+        Some(RestPose {
+            why,
+            keeps_light_motion: false,
+        })
+    }
+}
+
 /// One technique as the rest of penumbra sees it.
 pub struct MethodInfo {
     pub schema: MethodSchema,
@@ -42,9 +68,9 @@ pub struct MethodInfo {
     /// Extra lines for `profile`'s report, from the frame's pass timings.
     pub report: Option<ReportFn>,
     /// `None`: it draws the scene's vertex buffer and reads the lights every frame, so it follows
-    /// the scene's wind and light motion; otherwise why it keeps the rest pose (it says so when
-    /// created for a scene that moves).
-    pub rest_pose: Option<&'static str>,
+    /// the scene's wind and light motion; otherwise what it keeps of the rest pose, and why (it
+    /// says so when created for a scene that moves).
+    pub rest_pose: Option<RestPose>,
     /// Derives unset parameters from the scene and checks the memory budget.
     pub plan: Option<PlanFn>,
 }
@@ -73,7 +99,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: true,
             create: |c, d| Ok(Box::new(shadow_volumes::ShadowVolumes::new(c, d)?)),
-            rest_pose: Some("its shadow volumes are extruded from the entities' rest-pose positions"),
+            rest_pose: RestPose::objects("its shadow volumes are extruded from the entities' rest-pose positions"),
             report: None,
             plan: None,
         },
@@ -85,7 +111,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
-            rest_pose: Some("it traces its height field's time-0 shape"),
+            rest_pose: RestPose::all("it traces its height field's time-0 shape"),
             report: Some(heightfield::measure::table_6_6),
             plan: None,
         },
@@ -97,7 +123,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: |_| ReferenceKind::Direct,
             translucency: false,
             create: |c, d| Ok(Box::new(heightfield::HeightfieldMethod::new(c, d)?)),
-            rest_pose: Some("it traces its height field's time-0 shape"),
+            rest_pose: RestPose::all("it traces its height field's time-0 shape"),
             report: Some(heightfield::measure::table_6_6),
             plan: None,
         },
@@ -109,7 +135,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: radiosity::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(radiosity::Radiosity::new(c, d)?)),
-            rest_pose: Some("its light-map is baked from the rest pose and the scene's lights"),
+            rest_pose: RestPose::all("its light-map is baked from the rest pose and the scene's lights"),
             report: None,
             plan: Some(radiosity::plan),
         },
@@ -121,7 +147,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: sh_lightmap::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(sh_lightmap::ShLightmap::new(c, d)?)),
-            rest_pose: Some("its light-map is baked from the rest pose"),
+            rest_pose: RestPose::all("its light-map is baked from the rest pose"),
             report: None,
             plan: Some(sh_lightmap::plan),
         },
@@ -133,7 +159,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: prt::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(prt::Prt::new(c, d)?)),
-            rest_pose: Some("its transfer is baked from the rest pose"),
+            rest_pose: RestPose::all("its transfer is baked from the rest pose"),
             report: None,
             plan: Some(prt::plan),
         },
@@ -170,7 +196,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: vls::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(vls::Vls::new(c, d)?)),
-            rest_pose: Some("each segment's lights and shadow feelers are chosen once, from the rest pose"),
+            rest_pose: RestPose::all("each segment's lights and shadow feelers are chosen once, from the rest pose"),
             report: None,
             plan: Some(vls::plan),
         },
@@ -182,7 +208,7 @@ pub fn registry() -> Vec<MethodInfo> {
             reference: bsp_lights::reference,
             translucency: false,
             create: |c, d| Ok(Box::new(bsp_lights::BspLights::new(c, d)?)),
-            rest_pose: Some("its per-light vertex colours are baked from the rest pose"),
+            rest_pose: RestPose::all("its per-light vertex colours are baked from the rest pose"),
             report: None,
             plan: Some(bsp_lights::plan),
         },
@@ -280,12 +306,11 @@ pub fn reference_kind(config: &Configuration) -> Result<ReferenceKind> {
 pub fn motion_notes(config: &Configuration, scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
     for p in &config.parts {
-        // Shadow volumes are extruded every frame from the frame's lights, so only the objects'
-        // rest pose is kept there.
-        let Some(what) = scene.motion_summary_of(p.decl.name != shadow_volumes::NAME) else {
+        let Some(rest) = info(&p.decl.name).ok().and_then(|i| i.rest_pose) else {
             continue;
         };
-        if let Some(why) = info(&p.decl.name).ok().and_then(|i| i.rest_pose) {
+        let why = rest.why;
+        if let Some(what) = scene.motion_summary_of(rest.keeps_light_motion) {
             let line = format!("{}: note: the {} method keeps the rest pose ({why}): {what} moves in every other method and in the reference, not in it", scene.source, p.decl.name);
             if !out.contains(&line) {
                 out.push(line);

@@ -469,3 +469,23 @@ intensity = 0.01
         frame.median_ms
     );
 }
+
+/// A sun in a BSP world is refused before anything is built, in one line naming the light: the
+/// world's caster selection (the light's PVS and PSCS) starts from a light's position.
+#[test]
+fn a_sun_in_a_bsp_world_is_refused_in_one_line() {
+    let sun = "[[lights]]\nname = \"noon\"\ntype = \"directional\"\ndirection = [0.2, -1, 0.1]\nirradiance = 2\n";
+    let s = scene(CAMERAS[0], &(rooms(&[0]) + sun), &[]);
+    let err = match Setup::new(&s, &s.methods[0]) {
+        Ok(_) => panic!("a sun in a BSP world must be refused"),
+        Err(e) => e.to_string(),
+    };
+    println!("{err}");
+    assert!(
+        err.contains("lights[1] (noon)")
+            && err.contains("BSP world")
+            && err.contains("position")
+            && !err.contains('\n'),
+        "{err}"
+    );
+}

@@ -27,7 +27,7 @@
 //! combination, or one pipeline with 1×1 default maps. Spot lights (not in the seed) are point
 //! lights times the forward method's cone falloff, with a point light's volumes. Directional
 //! lights (not in the seed either) extrude entity volumes along their direction, to one point at
-//! infinity ([`PointLight::homogeneous`]); a BSP world refuses them.
+//! infinity ([`VolumeLight::homogeneous`]); a BSP world refuses them.
 
 pub(crate) mod config;
 pub mod cpu;
@@ -46,7 +46,7 @@ use crate::backend::{
     ImageDesc, ImageId, MemoryKind, PipelineId, SpecConstant, StencilFace, StencilFaces, VertexAttribute, VertexLayout,
 };
 use crate::error::{Error, Result};
-use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, SceneGpu};
+use crate::gpu_scene::{record_draws, vertex_layout, DrawCall, SceneGpu, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT};
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, Term, RADIANCE_FORMAT};
 use crate::scene::world_mesh::{self, WorldLevel};
@@ -55,7 +55,7 @@ use crate::shaders::ShaderLibrary;
 use crate::world::FaceId;
 
 pub use config::{Casters, Config, MaterialPath, Mode, Stencil, NAME, SCHEMA};
-pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, PointLight, Spot, WorldFrame};
+pub use plan::{Entity, FramePlan, LightPlan, LightWorldSets, Spot, VolumeLight, WorldFrame};
 
 /// The chart's sweep (see `config::sweep`).
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
@@ -71,7 +71,7 @@ pub struct Setup {
     /// Scene object indices of the world's class objects.
     pub world_objects: Vec<usize>,
     pub entities: Vec<Entity>,
-    pub lights: Vec<PointLight>,
+    pub lights: Vec<VolumeLight>,
     pub sets: Vec<LightWorldSets>,
 }
 
@@ -187,10 +187,10 @@ impl Setup {
 
 /// The scene's lights as the method takes them, in scene order; any other kind is refused in
 /// one line naming the light and why.
-fn method_lights(scene: &Scene) -> Result<Vec<PointLight>> {
+fn method_lights(scene: &Scene) -> Result<Vec<VolumeLight>> {
     let mut lights = Vec::new();
     for (i, l) in scene.lights.iter().enumerate() {
-        let light = |position, intensity, radius, spot, toward| PointLight {
+        let light = |position, intensity, radius, spot, toward| VolumeLight {
             name: l.name().to_string(),
             position,
             intensity,
@@ -248,15 +248,15 @@ fn method_lights(scene: &Scene) -> Result<Vec<PointLight>> {
     Ok(lights)
 }
 
-/// `PointLightBlock` in glsl/shadow_volumes/surface.glsl.
+/// `LightBlock` in glsl/shadow_volumes/surface.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct LightBlock {
     /// xyz: the position, w: the radius; a directional light's unit vector toward it, w 0.
     position: [f32; 4],
     colour: [f32; 4],
-    /// xyz: a spot light's unit axis; w: 1 for a spot light, 0 for a point light, 2 for a
-    /// directional light.
+    /// xyz: a spot light's unit axis; w: the light's kind, numbered as the scene's lights are
+    /// (`LIGHT_POINT`, `LIGHT_SPOT`, `LIGHT_DIRECTIONAL`).
     spot_direction: [f32; 4],
     /// x: cos(inner), y: cos(outer).
     cone: [f32; 4],
@@ -733,7 +733,7 @@ impl ShadowVolumes {
         (m.albedo, normal, m.specular)
     }
 
-    /// Light `light` in homogeneous coordinates this frame ([`PointLight::homogeneous`]): a
+    /// Light `light` in homogeneous coordinates this frame ([`VolumeLight::homogeneous`]): a
     /// directional light's direction is the frame's, which the light motion turns.
     fn homogeneous_light(&self, light: usize, scene: &SceneGpu) -> Vec4 {
         let l = &self.setup.lights[light];
@@ -763,13 +763,16 @@ impl ShadowVolumes {
             return LightBlock {
                 position: self.homogeneous_light(light, scene).into(),
                 colour: colour.extend(0.0).into(),
-                spot_direction: [0.0, 0.0, 0.0, 2.0],
+                spot_direction: [0.0, 0.0, 0.0, LIGHT_DIRECTIONAL],
                 cone: [0.0; 4],
             };
         }
         let (spot_direction, cone) = match l.spot {
-            Some(s) => (s.direction.extend(1.0).into(), [s.cos_inner, s.cos_outer, 0.0, 0.0]),
-            None => ([0.0; 4], [0.0; 4]),
+            Some(s) => (
+                s.direction.extend(LIGHT_SPOT).into(),
+                [s.cos_inner, s.cos_outer, 0.0, 0.0],
+            ),
+            None => ([0.0, 0.0, 0.0, LIGHT_POINT], [0.0; 4]),
         };
         LightBlock {
             position: l.position.extend(l.radius).into(),

@@ -39,7 +39,7 @@ impl WorldFrame {
 /// A light as the method uses it (scene coordinates): a point light, a spot light (one with a
 /// cone), or a directional light (one with `toward`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct PointLight {
+pub struct VolumeLight {
     pub name: String,
     /// Unused for a directional light.
     pub position: Vec3,
@@ -53,7 +53,7 @@ pub struct PointLight {
     pub toward: Option<Vec3>,
 }
 
-impl PointLight {
+impl VolumeLight {
     /// The light in homogeneous coordinates, as the silhouette pass takes it: `(position, 1)`,
     /// or `(toward, 0)` for a directional light, the point at infinity it shines from.
     pub fn homogeneous(&self) -> Vec4 {
@@ -150,7 +150,7 @@ pub struct LightWorldSets {
 }
 
 /// The effective culling radius (infinite without culling or without a radius).
-pub fn culling_radius(config: &Config, light: &PointLight) -> f64 {
+pub fn culling_radius(config: &Config, light: &VolumeLight) -> f64 {
     if config.radius_culling && light.radius > 0.0 && light.toward.is_none() {
         f64::from(light.radius)
     } else {
@@ -159,7 +159,7 @@ pub fn culling_radius(config: &Config, light: &PointLight) -> f64 {
 }
 
 /// The world sets of one light under `config`.
-pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &PointLight) -> LightWorldSets {
+pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &VolumeLight) -> LightWorldSets {
     let w = &frame.world;
     let p = frame.to_world(light.position);
     let r = culling_radius(config, light);
@@ -195,7 +195,7 @@ pub fn light_world_sets(config: &Config, frame: &WorldFrame, light: &PointLight)
 
 /// Whether world face `f` may be within the light's cone (always for a point light, and
 /// without culling).
-fn face_in_cone(config: &Config, frame: &WorldFrame, light: &PointLight, f: FaceId) -> bool {
+fn face_in_cone(config: &Config, frame: &WorldFrame, light: &VolumeLight, f: FaceId) -> bool {
     let Some(spot) = cone_culling(config, light) else {
         return true;
     };
@@ -206,7 +206,7 @@ fn face_in_cone(config: &Config, frame: &WorldFrame, light: &PointLight, f: Face
 
 /// The light's cone when culling by it (with `radius_culling`, which it goes with: both only
 /// drop what the light cannot reach).
-pub fn cone_culling(config: &Config, light: &PointLight) -> Option<Spot> {
+pub fn cone_culling(config: &Config, light: &VolumeLight) -> Option<Spot> {
     light.spot.filter(|_| config.radius_culling)
 }
 
@@ -353,7 +353,7 @@ pub fn plan_frame(
     config: &Config,
     world: Option<&WorldFrame>,
     sets: &[LightWorldSets],
-    lights: &[PointLight],
+    lights: &[VolumeLight],
     entities: &[Entity],
     camera: Vec3,
     t: f32,
@@ -393,7 +393,7 @@ fn plan_all(
     config: &Config,
     world: Option<&WorldFrame>,
     sets: &[LightWorldSets],
-    lights: &[PointLight],
+    lights: &[VolumeLight],
     entities: &[Entity],
     camera: Vec3,
     t: f32,
@@ -427,7 +427,7 @@ fn plan_all(
 
 /// Whether an entity with world bounds `b` is within `r` of the light and inside its cone (a
 /// directional light reaches everything).
-fn in_reach(config: &Config, light: &PointLight, r: f64, b: (Vec3, Vec3)) -> bool {
+fn in_reach(config: &Config, light: &VolumeLight, r: f64, b: (Vec3, Vec3)) -> bool {
     if light.toward.is_some() {
         return true;
     }
@@ -440,7 +440,7 @@ fn in_reach(config: &Config, light: &PointLight, r: f64, b: (Vec3, Vec3)) -> boo
 /// The plan with no world: every entity is drawn, lit within the radius and casts within it.
 fn plan_without_world(
     config: &Config,
-    lights: &[PointLight],
+    lights: &[VolumeLight],
     entity_bounds: &[(Vec3, Vec3)],
     entity_transforms: Vec<Mat4>,
 ) -> FramePlan {
@@ -516,7 +516,7 @@ impl<'a> WorldView<'a> {
 
     /// Light `i`'s plan from its world sets `s`: its visible receivers and its casters; `None`
     /// when it lights nothing visible or is outside the world.
-    fn light_plan(&self, s: &LightWorldSets, i: usize, light: &PointLight) -> Option<LightPlan> {
+    fn light_plan(&self, s: &LightWorldSets, i: usize, light: &VolumeLight) -> Option<LightPlan> {
         let (config, w) = (self.config, &self.frame.world);
         let light_leaf = s.leaf?;
         let r = culling_radius(config, light);
@@ -559,7 +559,7 @@ impl<'a> WorldView<'a> {
     /// receiving entity's box, within the cone; returns how many were added.
     fn add_entity_pyramid_casters(
         &self,
-        light: &PointLight,
+        light: &VolumeLight,
         r: f64,
         receiver_entities: &[usize],
         caster_faces: &mut Vec<FaceId>,

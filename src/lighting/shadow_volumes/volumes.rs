@@ -154,7 +154,7 @@ fn adjacency(triangles: &[[u32; 3]]) -> (Vec<[u32; 4]>, bool) {
 /// CPU mirror of `glsl/shadow_volumes/silhouette.comp`: the volume triangles (as homogeneous
 /// vertices, 3 per triangle, near caps with `w =` [`NEAR_CAP_W`], degenerate triangles as three
 /// `(0, 0, 0, 1)`) of a mesh with
-/// world-space `positions` for the homogeneous `light` ([`super::PointLight::homogeneous`]).
+/// world-space `positions` for the homogeneous `light` ([`super::VolumeLight::homogeneous`]).
 pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Vec<Vec4> {
     let zero = [Vec4::W; 3];
     let mut out = Vec::with_capacity(3 * topo.volume_triangles());
