@@ -3,8 +3,9 @@
 //!
 //! A frame is
 //! 1. **silhouettes** (compute): for every light of the frame and every entity, the silhouette
-//!    edges from edge adjacency, extruded to infinity, with caps (open meshes: a volume per
-//!    triangle) — [`volumes::silhouette_volume`] is its CPU mirror;
+//!    edges from edge adjacency, extruded to infinity, with caps (open meshes cast from both
+//!    sides: every triangle capped, sides where the turned triangles' windings do not cancel)
+//!    — [`volumes::silhouette_volume`] is its CPU mirror;
 //! 2. **ambient**: depth, and the ambient/emissive term of Eq. 5 (`diffuse·lightmap·N_z +
 //!    luminance`; the physical mode writes the emission only);
 //! 3. per light: **volumes** — stencil cleared, then every caster's volume with two-sided

@@ -74,10 +74,13 @@ pub struct Topology {
     /// Triangles over `positions`, as in the mesh (counter-clockwise from outside).
     pub triangles: Vec<[u32; 3]>,
     /// Closed meshes: every undirected edge once, as `[v0, v1, t_a, t_b]` where triangle `t_a`
-    /// runs v0 → v1 and `t_b` runs v1 → v0. Empty for open meshes.
+    /// runs v0 → v1 and `t_b` runs v1 → v0. Open meshes: every edge exactly two triangles share
+    /// as `[v0, v1, t_a, t_b]` with either running either way, and every other edge (a border,
+    /// or one of three or more triangles) once per triangle, with `t_b =` [`NO_TRIANGLE`].
     pub edges: Vec<[u32; 4]>,
-    /// Whether the welded mesh is a closed, consistently oriented 2-manifold. If not, every
-    /// triangle gets its own volume (correct for any triangle soup, at 4× the fill).
+    /// Whether the welded mesh is a closed, consistently oriented 2-manifold. If not, it casts
+    /// from both sides: every triangle is a near cap, turned to face away from the light, and
+    /// an edge gets a side only where the two triangles' turned windings do not cancel.
     pub closed: bool,
 }
 
@@ -104,25 +107,54 @@ impl Topology {
         let (edges, closed) = adjacency(&triangles);
         Topology {
             positions,
+            edges: if closed { edges } else { open_edges(&triangles) },
             triangles,
-            edges: if closed { edges } else { Vec::new() },
             closed,
         }
     }
 
     /// Volume triangles the silhouette pass writes per light (degenerate ones included).
     pub fn volume_triangles(&self) -> usize {
+        2 * self.triangles.len() + self.edge_slot_triangles() * self.edges.len()
+    }
+
+    /// Output triangles per edge: one side quad, or two for an open mesh (where both triangles'
+    /// sides may be drawn: a fold seen from the light).
+    pub fn edge_slot_triangles(&self) -> usize {
         if self.closed {
-            2 * self.triangles.len() + 2 * self.edges.len()
+            2
         } else {
-            8 * self.triangles.len()
+            4
         }
     }
 
-    /// Work items of the silhouette pass: one per triangle, and one per edge when closed.
+    /// Work items of the silhouette pass: one per triangle and one per edge.
     pub fn items(&self) -> usize {
-        self.triangles.len() + if self.closed { self.edges.len() } else { 0 }
+        self.triangles.len() + self.edges.len()
     }
+}
+
+/// The second triangle of an open mesh's edge record that has only one.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// An open mesh's edge records (see [`Topology::edges`]), sorted.
+fn open_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 4]> {
+    let mut sharing: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            sharing.entry((a.min(b), a.max(b))).or_default().push(t as u32);
+        }
+    }
+    let mut edges = Vec::new();
+    for ((a, b), ts) in sharing {
+        match ts[..] {
+            [t, u] => edges.push([a, b, t, u]),
+            _ => edges.extend(ts.iter().map(|&t| [a, b, t, NO_TRIANGLE])),
+        }
+    }
+    edges.sort_unstable();
+    edges
 }
 
 /// Pairs each directed edge with its reverse. Closed iff every directed edge occurs once and
@@ -157,7 +189,9 @@ fn adjacency(triangles: &[[u32; 3]]) -> (Vec<[u32; 4]>, bool) {
 /// world-space `positions` for the homogeneous `light` ([`super::VolumeLight::homogeneous`]).
 pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Vec<Vec4> {
     let zero = [Vec4::W; 3];
+    // The sides first, then the caps, as the pass lays them out.
     let mut out = Vec::with_capacity(3 * topo.volume_triangles());
+    let mut caps = Vec::with_capacity(6 * topo.triangles.len());
     let toward = |p: Vec3| light.truncate() - p * light.w;
     let beyond = |p: Vec3| (p * light.w - light.truncate()).extend(0.0);
     let lit = |t: &[u32; 3]| {
@@ -170,11 +204,11 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Ve
     if topo.closed {
         for t in &topo.triangles {
             if lit(t) {
-                out.extend_from_slice(&zero);
-                out.extend_from_slice(&zero);
+                caps.extend_from_slice(&zero);
+                caps.extend_from_slice(&zero);
             } else {
-                out.extend_from_slice(&[cap(t[0]), cap(t[2]), cap(t[1])]);
-                out.extend_from_slice(&[inf(t[0]), inf(t[1]), inf(t[2])]);
+                caps.extend_from_slice(&[cap(t[0]), cap(t[2]), cap(t[1])]);
+                caps.extend_from_slice(&[inf(t[0]), inf(t[1]), inf(t[2])]);
             }
         }
         for e in &topo.edges {
@@ -192,26 +226,52 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Ve
             out.extend_from_slice(&[at(u), at(v), inf(v), at(u), inf(v), inf(u)]);
         }
     } else {
+        // +1 when the triangle turned to face away from the light runs the edge a → b, -1 when
+        // it runs b → a, 0 when it has no volume (edge on to the light, or no triangle).
+        let dark_direction = |t: u32, a: u32, b: u32| -> i32 {
+            let Some(tri) = topo.triangles.get(t as usize) else {
+                return 0;
+            };
+            let [p, q, r] = tri.map(|i| positions[i as usize]);
+            let facing = (q - p).cross(r - p).dot(toward(p));
+            if facing == 0.0 || !facing.is_finite() {
+                return 0;
+            }
+            let runs = (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b);
+            if runs != (facing > 0.0) {
+                1
+            } else {
+                -1
+            }
+        };
         for t in &topo.triangles {
             let [a, b, c] = t.map(|i| positions[i as usize]);
             let facing = (b - a).cross(c - a).dot(toward(a));
             if facing == 0.0 || !facing.is_finite() {
-                out.extend(std::iter::repeat_n(Vec4::W, 24));
+                caps.extend(std::iter::repeat_n(Vec4::W, 6));
                 continue;
             }
             // The dark orientation: as given if it faces away, reversed if it faces the light.
             let d = if facing > 0.0 { [a, c, b] } else { [a, b, c] };
-            let near = d.map(|p| p.extend(1.0));
-            let caps = d.map(|p| p.extend(NEAR_CAP_W));
-            let far = d.map(beyond);
-            out.extend_from_slice(&[caps[0], caps[2], caps[1]]);
-            out.extend_from_slice(&far);
-            for i in 0..3 {
-                let j = (i + 1) % 3;
-                out.extend_from_slice(&[near[i], near[j], far[j], near[i], far[j], far[i]]);
+            let near = d.map(|p| p.extend(NEAR_CAP_W));
+            caps.extend_from_slice(&[near[0], near[2], near[1]]);
+            caps.extend_from_slice(&d.map(beyond));
+        }
+        for e in &topo.edges {
+            let (da, db) = (dark_direction(e[2], e[0], e[1]), dark_direction(e[3], e[0], e[1]));
+            for d in [da, db] {
+                // Two turned triangles running the edge opposite ways share a side that cancels.
+                if d == 0 || da == -db {
+                    out.extend_from_slice(&zero);
+                    out.extend_from_slice(&zero);
+                    continue;
+                }
+                let (u, v) = if d > 0 { (e[0], e[1]) } else { (e[1], e[0]) };
+                out.extend_from_slice(&[at(u), at(v), inf(v), at(u), inf(v), inf(u)]);
             }
         }
     }
+    out.extend(caps);
     out
 }
 
@@ -304,7 +364,7 @@ mod tests {
 
     /// A directional light's volumes run to one point at infinity: with that point placed far
     /// along the direction the light travels, each is a closed, outward solid (the far caps are
-    /// degenerate), for closed meshes and for each triangle of an open one.
+    /// degenerate), for closed meshes and open ones.
     #[test]
     fn directional_volumes_close_at_one_point_at_infinity() {
         let travel = Vec3::new(0.3, -0.85, 0.2).normalize();
@@ -343,29 +403,127 @@ mod tests {
         let topo = Topology::new(&quad);
         for light in [light, -light] {
             let v = silhouette_volume(&topo, &topo.positions, light);
-            for tri_volume in v.chunks(24) {
-                let (vol, closed) = signed_volume_and_closed(&apex(tri_volume, light));
-                assert!(closed && vol > 0.0, "{vol} {closed}");
-            }
+            let (vol, closed) = signed_volume_and_closed(&apex(&v, light));
+            assert!(closed && vol > 0.0, "{vol} {closed}");
         }
     }
 
+    /// The finite signed volume of each triangle's own volume, summed: what an open mesh's
+    /// volume must enclose when its triangles do not overlap as the light sees them, and at
+    /// least as a count when they do (a fold's layers add).
+    fn per_triangle_volumes(topo: &Topology, light: Vec3, k: f32) -> f64 {
+        topo.triangles
+            .iter()
+            .map(|t| {
+                let alone = Topology {
+                    positions: topo.positions.clone(),
+                    triangles: vec![*t],
+                    edges: open_edges(&[*t]),
+                    closed: false,
+                };
+                signed_volume_and_closed(&finite(
+                    &silhouette_volume(&alone, &alone.positions, light.extend(1.0)),
+                    light,
+                    k,
+                ))
+                .0
+            })
+            .sum()
+    }
+
+    /// Non-degenerate triangles in the edge slots (the sides, which come first).
+    fn sides(topo: &Topology, volume: &[Vec4]) -> usize {
+        volume[..volume.len() - 6 * topo.triangles.len()]
+            .chunks_exact(3)
+            .filter(|t| t.iter().any(|&v| v != Vec4::W))
+            .count()
+    }
+
+    fn mesh(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Mesh {
+        Mesh {
+            positions: positions.iter().map(|&p| Vec3::from(p)).collect(),
+            indices: triangles.concat(),
+            ..Mesh::default()
+        }
+    }
+
+    /// A flat sheet casts one volume, closed and outward from either side, equal to its
+    /// triangles' volumes summed, with sides on its border only: inner edges carry no pair of
+    /// coincident faces.
     #[test]
-    fn open_meshes_get_one_closed_volume_per_triangle() {
-        let quad = generators::quad(
+    fn an_open_sheet_has_sides_on_its_border_only() {
+        let sheet = generators::quad(
             Vec3::new(-1.0, 0.0, -1.0),
             Vec3::new(0.0, 0.0, 2.0),
             Vec3::new(2.0, 0.0, 0.0),
-            1,
+            3,
         );
-        let topo = Topology::new(&quad);
-        assert!(!topo.closed && topo.edges.is_empty());
-        // From either side of the quad.
+        let topo = Topology::new(&sheet);
+        assert!(!topo.closed);
+        assert_eq!(topo.triangles.len(), 18);
+        let border = topo.edges.iter().filter(|e| e[3] == NO_TRIANGLE).count();
+        assert_eq!(border, 12);
         for light in [Vec3::new(0.1, 3.0, 0.2), Vec3::new(0.1, -3.0, 0.2)] {
             let v = silhouette_volume(&topo, &topo.positions, light.extend(1.0));
-            for tri_volume in v.chunks(24) {
-                let (vol, closed) = signed_volume_and_closed(&finite(tri_volume, light, 20.0));
-                assert!(closed && vol > 0.0);
+            assert_eq!(v.len(), 3 * topo.volume_triangles());
+            let (vol, closed) = signed_volume_and_closed(&finite(&v, light, 20.0));
+            let expected = per_triangle_volumes(&topo, light, 20.0);
+            assert!(closed && vol > 0.0, "{vol} {closed}");
+            assert!(((vol - expected) / expected).abs() < 1e-4, "{vol} vs {expected}");
+            assert_eq!(sides(&topo, &v), 2 * border, "two triangles per border edge");
+        }
+    }
+
+    /// A sheet folded over itself as the light sees it (a roof lit from the side), one with a
+    /// triangle wound the other way, and three fins on one edge: each casts a closed volume
+    /// that counts every layer (the sum of its triangles' volumes).
+    #[test]
+    fn folded_inconsistent_and_non_manifold_sheets_count_every_layer() {
+        let roof = [
+            [-1.0, 0.0, -1.0],
+            [-1.0, 0.0, 1.0],
+            [0.0, 1.0, -1.0],
+            [0.0, 1.0, 1.0],
+            [1.0, 0.0, -1.0],
+            [1.0, 0.0, 1.0],
+        ];
+        let cases = [
+            ("roof", mesh(&roof, &[[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]])),
+            (
+                "roof with a reversed triangle",
+                mesh(&roof, &[[0, 1, 3], [0, 2, 3], [2, 3, 5], [2, 5, 4]]),
+            ),
+            (
+                "fins",
+                mesh(
+                    &[
+                        [0.0, 0.0, -1.0],
+                        [0.0, 0.0, 1.0],
+                        [1.0, 0.5, 0.0],
+                        [-1.0, 0.5, 0.0],
+                        [0.0, -1.0, 0.0],
+                    ],
+                    &[[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+                ),
+            ),
+        ];
+        // From the side, low: the roof's far slope lies behind its near one.
+        for (name, m) in cases {
+            let topo = Topology::new(&m);
+            assert!(!topo.closed, "{name}");
+            for light in [
+                Vec3::new(-6.0, 0.6, 0.3),
+                Vec3::new(0.2, 5.0, 0.3),
+                Vec3::new(0.3, -4.0, -0.2),
+            ] {
+                let v = silhouette_volume(&topo, &topo.positions, light.extend(1.0));
+                let (vol, closed) = signed_volume_and_closed(&finite(&v, light, 20.0));
+                let expected = per_triangle_volumes(&topo, light, 20.0);
+                assert!(closed && vol > 0.0, "{name} from {light}: {vol} {closed}");
+                assert!(
+                    ((vol - expected) / expected).abs() < 1e-4,
+                    "{name} from {light}: {vol} vs {expected}"
+                );
             }
         }
     }
