@@ -82,6 +82,10 @@ struct SweepArgs {
     /// Seconds of timed frames per configuration after which timing stops, once 3 are timed.
     #[arg(long, value_name = "S", default_value_t = 2.0)]
     timing_budget: f64,
+    /// Seconds after which a swept point still baking is stopped and left out, with why (0: no
+    /// limit); the scene's own configuration always runs.
+    #[arg(long, value_name = "S", default_value_t = 600.0)]
+    bake_limit: f64,
     /// Samples per pixel of the reference at most.
     #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
     reference_spp: u32,
@@ -234,6 +238,10 @@ struct ChartArgs {
     /// timed (0: always --frames); the CSV's frames_timed column says how many were.
     #[arg(long, value_name = "S", default_value_t = 2.0)]
     timing_budget: f64,
+    /// Seconds after which a swept point still baking is stopped and left out, with why (0: no
+    /// limit); the scene's own configuration always runs.
+    #[arg(long, value_name = "S", default_value_t = 600.0)]
+    bake_limit: f64,
     /// Samples per pixel of the reference: the most it may take (exactly this with --reference-noise 0).
     #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
     reference_spp: u32,
@@ -796,6 +804,7 @@ fn chart(args: ChartArgs) -> penumbra::Result<()> {
         size,
         frames,
         timing_budget,
+        bake_limit,
         reference_spp,
         reference_noise,
         reference_sampler,
@@ -811,6 +820,7 @@ fn chart(args: ChartArgs) -> penumbra::Result<()> {
         size,
         frames,
         timing_budget_s: timing_budget,
+        bake_limit_s: bake_limit,
         reference_spp,
         reference_noise,
         reference_sampler,
@@ -884,6 +894,7 @@ fn report(args: ReportArgs) -> penumbra::Result<()> {
         size: sweep.size,
         frames: sweep.frames,
         timing_budget_s: sweep.timing_budget,
+        bake_limit_s: sweep.bake_limit,
         reference_spp: sweep.reference_spp,
         reference_noise: sweep.reference_noise,
         reference_sampler: penumbra::reference::Sampler::Sobol,

@@ -608,9 +608,82 @@ fn chart_judges_the_asked_frame_against_the_reference_at_that_frame() {
 #[test]
 fn chart_csv_reports_bake_time_and_size_where_a_method_bakes() {
     let scene = common::temp_path("bake-chart.toml");
-    std::fs::write(
-        &scene,
-        r#"methods = [{ name = "bsp_lights", max_segment_area = 0.5 }, "forward"]
+    std::fs::write(&scene, BAKING_SCENE).unwrap();
+    let (cache, csv, png) = (
+        common::temp_path("bake-chart-cache"),
+        common::temp_path("bake-chart.csv"),
+        common::temp_path("bake-chart.png"),
+    );
+    let options = ["--size", "24x24", "--reference-spp", "4", "--frames", "3"];
+    ok(&chart(scene.to_str().unwrap(), &options, &cache, &png, &csv));
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let (methods, ms, bytes) = (
+        column(&table, "method"),
+        column(&table, "bake_ms"),
+        column(&table, "bake_bytes"),
+    );
+    assert!(
+        methods.iter().any(|m| m == "bsp_lights") && methods.iter().any(|m| m == "forward"),
+        "{table}"
+    );
+    for ((method, ms), bytes) in methods.iter().zip(&ms).zip(&bytes) {
+        let (ms, bytes): (f64, u64) = (ms.parse().unwrap(), bytes.parse().unwrap());
+        if method == "forward" {
+            assert!(ms == 0.0 && bytes == 0, "forward bakes nothing: {ms} ms, {bytes} bytes");
+        } else {
+            assert!(ms > 0.0 && bytes > 0, "{method}: {ms} ms, {bytes} bytes\n{table}");
+        }
+    }
+    assert!(
+        methods.iter().filter(|m| *m == "bsp_lights").count() >= 3,
+        "the sweep bakes several segmentations: {table}"
+    );
+}
+
+/// `--bake-limit`: a swept point still baking after the limit is stopped and left out, saying
+/// why, while the scene's own configuration bakes as long as it takes; the chart finishes.
+#[test]
+fn chart_leaves_out_swept_points_whose_bakes_pass_the_limit() {
+    let scene = common::temp_path("bake-limit.toml");
+    std::fs::write(&scene, BAKING_SCENE).unwrap();
+    let (cache, csv, png) = (
+        common::temp_path("bake-limit-cache"),
+        common::temp_path("bake-limit.csv"),
+        common::temp_path("bake-limit.png"),
+    );
+    let options = [
+        "--size",
+        "24x24",
+        "--reference-spp",
+        "4",
+        "--frames",
+        "3",
+        "--bake-limit",
+        "0.001",
+    ];
+    let out = chart(scene.to_str().unwrap(), &options, &cache, &png, &csv);
+    ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let (methods, ms) = (column(&table, "method"), column(&table, "bake_ms"));
+    let baked: Vec<f64> = (methods.iter().zip(&ms))
+        .filter(|(m, _)| *m == "bsp_lights")
+        .map(|(_, ms)| ms.parse().unwrap())
+        .collect();
+    assert!(
+        baked.len() == 1 && baked[0] > 0.0,
+        "only the declared configuration, baked in full: {table}"
+    );
+    assert!(
+        stderr.matches("left out: its bake").count() >= 2 && stderr.contains("--bake-limit 0.001 s"),
+        "{stderr}"
+    );
+    let refused = chart(scene.to_str().unwrap(), &["--bake-limit=-1"], &cache, &png, &csv);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("--bake-limit -1"), "{err}");
+}
+
+const BAKING_SCENE: &str = r#"methods = [{ name = "bsp_lights", max_segment_area = 0.5 }, "forward"]
 [camera]
 position = [0, 3, 4]
 target = [0, 0, 0]
@@ -637,32 +710,4 @@ direction = [0, -1, 0]
 intensity = 4
 inner_deg = 25
 outer_deg = 40
-"#,
-    )
-    .unwrap();
-    let (cache, csv, png) = (
-        common::temp_path("bake-chart-cache"),
-        common::temp_path("bake-chart.csv"),
-        common::temp_path("bake-chart.png"),
-    );
-    let options = ["--size", "24x24", "--reference-spp", "4", "--frames", "3"];
-    ok(&chart(scene.to_str().unwrap(), &options, &cache, &png, &csv));
-    let table = std::fs::read_to_string(&csv).unwrap();
-    let (methods, ms, bytes) = (
-        column(&table, "method"),
-        column(&table, "bake_ms"),
-        column(&table, "bake_bytes"),
-    );
-    assert!(
-        methods.iter().any(|m| m == "bsp_lights") && methods.iter().any(|m| m == "forward"),
-        "{table}"
-    );
-    for ((method, ms), bytes) in methods.iter().zip(&ms).zip(&bytes) {
-        let (ms, bytes): (f64, u64) = (ms.parse().unwrap(), bytes.parse().unwrap());
-        if method == "forward" {
-            assert!(ms == 0.0 && bytes == 0, "forward bakes nothing: {ms} ms, {bytes} bytes");
-        } else {
-            assert!(ms > 0.0 && bytes > 0, "{method}: {ms} ms, {bytes} bytes\n{table}");
-        }
-    }
-}
+"#;

@@ -231,6 +231,7 @@ fn chart_and_speedup_at_equal_error() {
             frames,
             // Every frame, as this measurement was made.
             timing_budget_s: 0.0,
+            bake_limit_s: 0.0,
             reference_spp: spp,
             // Exactly `spp` samples, as this measurement was made.
             reference_noise: 0.0,

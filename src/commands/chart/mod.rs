@@ -47,6 +47,11 @@ pub struct ChartOptions {
     /// [`MIN_TIMED_FRAMES`] are timed (0: always `frames`). A configuration that takes a second a
     /// frame on a CPU device is timed over a few frames instead of `frames`.
     pub timing_budget_s: f64,
+    /// Seconds after which a swept point still baking (counted from its start) is stopped and
+    /// left out, with why (0: no limit). The scene's own configuration is never stopped: a
+    /// scene whose bakes a sweep would multiply (a finer light-map, a slower baker) still charts
+    /// in bounded time.
+    pub bake_limit_s: f64,
     /// Samples per pixel of the reference: the cap when `reference_noise` > 0.
     pub reference_spp: u32,
     /// The reference renders until its noise's relative MSE is at most this fraction of the
@@ -595,13 +600,19 @@ pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
     })
 }
 
-/// Refuses a timing budget or reference noise that is not a number of at least 0, and a
-/// supersampled size over the limit.
+/// Refuses a timing budget, bake limit or reference noise that is not a number of at least 0,
+/// and a supersampled size over the limit.
 fn check_options(opts: &ChartOptions) -> Result<()> {
     if !(opts.timing_budget_s.is_finite() && opts.timing_budget_s >= 0.0) {
         return Err(Error::Usage(format!(
             "--timing-budget {}: expected seconds, at least 0 (0: every --frames frame)",
             opts.timing_budget_s
+        )));
+    }
+    if !(opts.bake_limit_s.is_finite() && opts.bake_limit_s >= 0.0) {
+        return Err(Error::Usage(format!(
+            "--bake-limit {}: expected seconds, at least 0 (0: no limit)",
+            opts.bake_limit_s
         )));
     }
     if !(opts.reference_noise.is_finite() && opts.reference_noise >= 0.0) {
@@ -653,6 +664,36 @@ fn sweep_each(all: Vec<Configuration>, scene: &Scene) -> Result<Swept> {
     Ok(swept)
 }
 
+/// Runs `work` with this thread's bakes asked to stop once `limit_s` seconds have passed
+/// (0: no limit); they stop at their next check and return [`Error::Cancelled`].
+fn with_bake_limit<T>(limit_s: f64, work: impl FnOnce() -> Result<T>) -> Result<T> {
+    use crate::util::progress::{cancel_this_thread, Cancel};
+    use std::sync::mpsc::{channel, RecvTimeoutError};
+    let Some(limit) = (limit_s > 0.0)
+        .then(|| std::time::Duration::try_from_secs_f64(limit_s).ok())
+        .flatten()
+    else {
+        return work();
+    };
+    let cancel = Cancel::new();
+    let (done, finished) = channel::<()>();
+    let timer = {
+        let cancel = cancel.clone();
+        std::thread::spawn(move || {
+            if let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(limit) {
+                cancel.cancel();
+            }
+        })
+    };
+    cancel_this_thread(Some(cancel));
+    let out = work();
+    cancel_this_thread(None);
+    drop(done);
+    // The timer returns as soon as `done` is dropped.
+    let _ = timer.join();
+    out
+}
+
 /// A measured point: method, configuration name, reference kind, measurement.
 type MeasuredPoint = (String, String, ReferenceKind, Measured);
 
@@ -668,8 +709,19 @@ fn measure_all(scene: &Scene, swept: Swept, opts: &ChartOptions) -> Result<(Vec<
         for (i, (config, point)) in points.into_iter().enumerate() {
             progress.update(done, total);
             done += 1;
-            match measure(scene, &point, opts) {
+            // The scene's own configuration runs however long its bakes take.
+            let limit = if i > 0 { opts.bake_limit_s } else { 0.0 };
+            match with_bake_limit(limit, || measure(scene, &point, opts)) {
                 Ok(m) => measured.push((method.clone(), config, kind, m)),
+                Err(Error::Cancelled(what)) if i > 0 => {
+                    let why = format!(
+                        "its bake ({what}) ran past --bake-limit {} s and was stopped",
+                        opts.bake_limit_s
+                    );
+                    progress.finish();
+                    eprintln!("chart: {config} left out: {why}");
+                    skipped.push(format!("{config}: {why}"));
+                }
                 // A swept point beyond one of the method's limits for this scene (a finer
                 // segmentation over its memory limit) is left out with its reason; the scene's
                 // own configuration must run.

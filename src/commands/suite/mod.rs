@@ -89,6 +89,8 @@ impl SuiteOptions {
             size: self.size,
             frames: self.frames,
             timing_budget_s: self.timing_budget_s,
+            // The suite measures each method as declared: nothing is swept.
+            bake_limit_s: 0.0,
             reference_spp: self.reference_spp,
             reference_noise: self.reference_noise,
             reference_sampler: Sampler::Sobol,
