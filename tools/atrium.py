@@ -6,8 +6,10 @@
 An atrium 32 x 16 m with an open roof: two storeys of 48-sided columns (open cylinders), two
 galleries, wavy fabric sheets (open, one-sided), two closed spheres on plinths, stone walls with
 a checker texture; 268,956 triangles. sun.toml lights it with a sun and a constant sky,
-lamps.toml with 16 point lights and a spot light. Give a scene's methods on the command line:
-    penumbra capture DIR/sun.toml --method M   (after adding M to its `methods`)
+lamps.toml with 16 point lights and a spot light. Each scene declares every method that runs on
+it (the others are refused in one line: tools/atrium_defaults.sh), so
+    penumbra capture DIR/sun.toml --method M
+    penumbra chart DIR/sun.toml                (tools/atrium_chart.sh)
 """
 import math, os, struct, sys, zlib
 out=sys.argv[1] if len(sys.argv)>1 else '.'
@@ -87,7 +89,7 @@ with open(os.path.join(out,'atrium.obj'),'w') as f:
         f.write("usemtl %s\n"%m)
         for a,b,c in fs: f.write("f %d/%d %d/%d %d/%d\n"%(a,a,b,b,c,c))
 print(len(V),"vertices",sum(len(x) for x in F.values()),"triangles",{m:len(x) for m,x in F.items()})
-SUN = """methods = ["forward"]
+SUN = """methods = ["forward", "clustered", "shadow_volumes", "lpv", "radiosity", "sh_lightmap", "prt"]
 [camera]
 position = [-13.0, 1.7, 0.0]
 target = [0.0, 4.0, 0.0]
@@ -105,7 +107,7 @@ name = "atrium"
 mesh = "asset"
 path = "atrium.obj"
 """
-LAMPS = """methods = ["forward"]
+LAMPS = """methods = ["forward", "clustered", "shadow_volumes", "vls", "lpv", "radiosity"]
 [camera]
 position = [-13.0, 1.7, 0.0]
 target = [0.0, 2.0, 0.0]
