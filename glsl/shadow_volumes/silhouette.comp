@@ -30,6 +30,7 @@ layout(push_constant) uniform Entity {
     uint out_offset;       // first output vertex (vec4) of light 0
     uint light_stride;     // output vertices per light
     uint closed;
+    uint shared_edges;     // open meshes: the first edge records, those of two triangles
 } entity;
 
 // An open mesh's edge record with one triangle has this as its second.
@@ -62,6 +63,16 @@ void nothing(uint at, uint triangles_out) {
     for (uint i = 0u; i < 3u * triangles_out; ++i) {
         volumes.items[at + i] = vec4(0.0, 0.0, 0.0, 1.0);
     }
+}
+
+// The output vertices of the first e edge slots: a side quad per edge, but two for an open
+// mesh's edge of two triangles (the first shared_edges records).
+uint edge_vertices(uint e) {
+    if (entity.closed != 0u) {
+        return 6u * e;
+    }
+    uint two = min(e, entity.shared_edges);
+    return 12u * two + 6u * (e - two);
 }
 
 float facing(uvec4 tri, vec4 light) {
@@ -98,7 +109,7 @@ void main() {
     vec4 light = light_positions.items[li];
     uint base = entity.out_offset + li * entity.light_stride;
     if (item < entity.triangle_count) {
-        uint at = base + (entity.closed != 0u ? 6u : 12u) * entity.edge_count + 6u * item;
+        uint at = base + edge_vertices(entity.edge_count) + 6u * item;
         uvec4 tri = triangles.items[entity.triangle_offset + item];
         vec3 p[3] = vec3[3](world_position(tri.x), world_position(tri.y), world_position(tri.z));
         float f = dot(cross(p[1] - p[0], p[2] - p[0]), toward(light, p[0]));
@@ -126,7 +137,7 @@ void main() {
     vec3 a = world_position(edge.x);
     vec3 b = world_position(edge.y);
     if (entity.closed != 0u) {
-        uint at = base + 6u * e;
+        uint at = base + edge_vertices(e);
         bool la = facing(triangles.items[entity.triangle_offset + edge.z], light) > 0.0;
         bool lb = facing(triangles.items[entity.triangle_offset + edge.w], light) > 0.0;
         if (la == lb) {
@@ -141,11 +152,13 @@ void main() {
         }
         return;
     }
-    uint at = base + 12u * e;
+    uint at = base + edge_vertices(e);
     int da = dark_direction(edge.z, edge.x, edge.y, light);
     int db = dark_direction(edge.w, edge.x, edge.y, light);
     int d[2] = int[2](da, db);
-    for (uint k = 0u; k < 2u; ++k) {
+    // An edge of one triangle has one side slot.
+    uint slots = edge.w == NO_TRIANGLE ? 1u : 2u;
+    for (uint k = 0u; k < slots; ++k) {
         // Two turned triangles running the edge opposite ways share a side that cancels.
         if (d[k] == 0 || da == -db) {
             nothing(at + 6u * k, 2u);

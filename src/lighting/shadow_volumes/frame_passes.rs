@@ -54,6 +54,7 @@ impl ShadowVolumes {
                         out_offset: slot.out_offset,
                         light_stride: s.stride,
                         closed: topo.closed as u32,
+                        shared_edges: topo.shared_edges as u32,
                     };
                     ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                     ctx.rec.dispatch([topo.items() as u32, 1, 1])?;

@@ -284,6 +284,7 @@ struct SilhouettePush {
     out_offset: u32,
     light_stride: u32,
     closed: u32,
+    shared_edges: u32,
 }
 
 /// Where one entity's data lives in the silhouette buffers.

@@ -76,8 +76,11 @@ pub struct Topology {
     /// Closed meshes: every undirected edge once, as `[v0, v1, t_a, t_b]` where triangle `t_a`
     /// runs v0 → v1 and `t_b` runs v1 → v0. Open meshes: every edge exactly two triangles share
     /// as `[v0, v1, t_a, t_b]` with either running either way, and every other edge (a border,
-    /// or one of three or more triangles) once per triangle, with `t_b =` [`NO_TRIANGLE`].
+    /// or one of three or more triangles) once per triangle, with `t_b =` [`NO_TRIANGLE`]; the
+    /// records of two triangles come first.
     pub edges: Vec<[u32; 4]>,
+    /// How many of `edges` have two triangles (all of a closed mesh's).
+    pub shared_edges: usize,
     /// Whether the welded mesh is a closed, consistently oriented 2-manifold. If not, it casts
     /// from both sides: every triangle is a near cap, turned to face away from the light, and
     /// an edge gets a side only where the two triangles' turned windings do not cancel.
@@ -105,9 +108,16 @@ impl Topology {
             }
         }
         let (edges, closed) = adjacency(&triangles);
+        let (edges, shared_edges) = if closed {
+            let n = edges.len();
+            (edges, n)
+        } else {
+            open_edges(&triangles)
+        };
         Topology {
             positions,
-            edges: if closed { edges } else { open_edges(&triangles) },
+            edges,
+            shared_edges,
             triangles,
             closed,
         }
@@ -115,16 +125,19 @@ impl Topology {
 
     /// Volume triangles the silhouette pass writes per light (degenerate ones included).
     pub fn volume_triangles(&self) -> usize {
-        2 * self.triangles.len() + self.edge_slot_triangles() * self.edges.len()
+        2 * self.triangles.len() + self.edge_triangles(self.edges.len())
     }
 
-    /// Output triangles per edge: one side quad, or two for an open mesh (where both triangles'
-    /// sides may be drawn: a fold seen from the light).
-    pub fn edge_slot_triangles(&self) -> usize {
+    /// Output triangles of the first `e` edge slots: one side quad per edge, but two for an open
+    /// mesh's edge of two triangles (both sides are drawn where the sheet folds over itself as
+    /// the light sees it). A soup of separate triangles takes 8 per triangle, as a closed
+    /// volume each would.
+    pub fn edge_triangles(&self, e: usize) -> usize {
         if self.closed {
-            2
+            2 * e
         } else {
-            4
+            let shared = e.min(self.shared_edges);
+            4 * shared + 2 * (e - shared)
         }
     }
 
@@ -137,8 +150,9 @@ impl Topology {
 /// The second triangle of an open mesh's edge record that has only one.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
-/// An open mesh's edge records (see [`Topology::edges`]), sorted.
-fn open_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 4]> {
+/// An open mesh's edge records (see [`Topology::edges`]): those of two triangles, sorted, then
+/// the others, sorted; and how many have two.
+fn open_edges(triangles: &[[u32; 3]]) -> (Vec<[u32; 4]>, usize) {
     let mut sharing: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
     for (t, tri) in triangles.iter().enumerate() {
         for k in 0..3 {
@@ -146,15 +160,18 @@ fn open_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 4]> {
             sharing.entry((a.min(b), a.max(b))).or_default().push(t as u32);
         }
     }
-    let mut edges = Vec::new();
+    let (mut edges, mut single) = (Vec::new(), Vec::new());
     for ((a, b), ts) in sharing {
         match ts[..] {
             [t, u] => edges.push([a, b, t, u]),
-            _ => edges.extend(ts.iter().map(|&t| [a, b, t, NO_TRIANGLE])),
+            _ => single.extend(ts.iter().map(|&t| [a, b, t, NO_TRIANGLE])),
         }
     }
     edges.sort_unstable();
-    edges
+    single.sort_unstable();
+    let shared = edges.len();
+    edges.append(&mut single);
+    (edges, shared)
 }
 
 /// Pairs each directed edge with its reverse. Closed iff every directed edge occurs once and
@@ -259,7 +276,9 @@ pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Ve
         }
         for e in &topo.edges {
             let (da, db) = (dark_direction(e[2], e[0], e[1]), dark_direction(e[3], e[0], e[1]));
-            for d in [da, db] {
+            // An edge of one triangle has one side slot.
+            let slots = if e[3] == NO_TRIANGLE { 1 } else { 2 };
+            for d in [da, db].into_iter().take(slots) {
                 // Two turned triangles running the edge opposite ways share a side that cancels.
                 if d == 0 || da == -db {
                     out.extend_from_slice(&zero);
@@ -415,10 +434,12 @@ mod tests {
         topo.triangles
             .iter()
             .map(|t| {
+                let (edges, shared_edges) = open_edges(&[*t]);
                 let alone = Topology {
                     positions: topo.positions.clone(),
                     triangles: vec![*t],
-                    edges: open_edges(&[*t]),
+                    edges,
+                    shared_edges,
                     closed: false,
                 };
                 signed_volume_and_closed(&finite(
@@ -463,6 +484,24 @@ mod tests {
         assert_eq!(topo.triangles.len(), 18);
         let border = topo.edges.iter().filter(|e| e[3] == NO_TRIANGLE).count();
         assert_eq!(border, 12);
+        assert_eq!(topo.shared_edges, topo.edges.len() - border);
+        assert!(topo.edges[..topo.shared_edges].iter().all(|e| e[3] != NO_TRIANGLE));
+        // Caps, two slots per inner edge, one per border edge: no more than a closed volume per
+        // triangle would take, for a sheet or a soup of separate triangles.
+        assert_eq!(topo.volume_triangles(), 2 * 18 + 4 * 21 + 2 * 12);
+        assert!(topo.volume_triangles() <= 8 * 18);
+        let soup = mesh(
+            &[
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [3.0, 0.0, 0.0],
+                [4.0, 0.0, 0.0],
+                [3.0, 0.0, 1.0],
+            ],
+            &[[0, 2, 1], [3, 5, 4]],
+        );
+        assert_eq!(Topology::new(&soup).volume_triangles(), 8 * 2);
         for light in [Vec3::new(0.1, 3.0, 0.2), Vec3::new(0.1, -3.0, 0.2)] {
             let v = silhouette_volume(&topo, &topo.positions, light.extend(1.0));
             assert_eq!(v.len(), 3 * topo.volume_triangles());
