@@ -665,21 +665,36 @@ fn cancelling_the_prt_gpu_bake_stops_it_between_submissions() {
     cancel_gpu_bake("prt", &scene, "prt rays");
 }
 
+/// PRT's raster baker (the document's: every occluder triangle drawn for each of 16,641 floor
+/// vertices and a box's, 64 vertices a batch), cancelled between two batches. It had no check:
+/// a chart's bake limit could not stop it on a large scene.
+#[test]
+fn cancelling_the_prt_raster_bake_stops_it_between_batches() {
+    let scene = LONG_BAKE_SCENE
+        .replace(
+            "{ name = \"radiosity\", patch_size = 0.02 }",
+            "{ name = \"prt\", baker = \"raster\", batch = 64 }",
+        )
+        .replace("size = [4, 4]\n", "size = [4, 4]\nsubdivisions = 128\n")
+        .replacen(
+            "[[objects]]",
+            "[environment]\ntype = \"constant\"\nradiance = 1.0\n[[objects]]",
+            1,
+        );
+    assert!(scene.contains("subdivisions") && scene.contains("raster"));
+    cancel_gpu_bake("prt", &scene, "prt raster bake");
+}
+
 /// `method`'s bake in `scene` (after `forward`), started by M at frame 2 and cancelled by C at
 /// frame 300: it stops at `stage` within a bound (a submission is sized to a quarter of a
 /// second), caches nothing, and `forward` is presented throughout.
 fn cancel_gpu_bake(method: &str, scene: &str, stage: &str) {
     assert!(scene.contains(&format!("name = \"{method}\"")), "{scene}");
-    let cache = common::temp_path(&format!("demo-cancel-{method}-cache"));
+    // Named by the stage too: two of one method's bakers may run at once.
+    let tag = format!("demo-cancel-{method}-{}", stage.replace(' ', "-"));
+    let cache = common::temp_path(&format!("{tag}-cache"));
     let _ = std::fs::remove_dir_all(&cache);
-    let (out, r) = demo_run(
-        &format!("demo-cancel-{method}"),
-        scene,
-        "2 key M\n300 key C\n",
-        &cache,
-        320,
-        ("64x48", false, None),
-    );
+    let (out, r) = demo_run(&tag, scene, "2 key M\n300 key C\n", &cache, 320, ("64x48", false, None));
     let CancelSeen { first, stopped_s, .. } = cancel_seen(&r);
     println!(
         "{method}: cancelled at {}; it stopped within {stopped_s:.3} s",

@@ -493,6 +493,8 @@ fn run_batches(
     // The rate counts from the first batch, not from the set-up before it.
     progress.update(0, slots.batches.len() as u64);
     for (k, &(set, first, count)) in slots.batches.iter().enumerate() {
+        // A large scene's batch can take a minute on a CPU device: stop between them when asked.
+        crate::bake::check_cancelled(progress, "prt raster bake")?;
         let mut graph = RenderGraph::new();
         record_batch(&mut graph, bake, config, (set, first, count), (w, h), render);
         graph
