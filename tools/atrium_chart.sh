@@ -18,13 +18,15 @@ bin=${PENUMBRA_BIN:-target/debug/penumbra}
 python3 tools/atrium.py "$dir" > /dev/null
 info() { "$bin" info 2>/dev/null | awk -v k="$1" '$1 == k {$1 = ""; print substr($0, 2); exit}'; }
 cpu=$(awk -F': ' '/^model name/ {print $2; exit}' /proc/cpuinfo)
+# The header is taken before the chart runs: the commit is the one the binary was built from.
+header="# device: $(info device) on a $(nproc)-core $cpu
+# driver: $(info driver)
+# commit: $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo '+changes') (dev profile)
+# date: $(date +%F)
+# command: bash tools/atrium_chart.sh $scene $size $limit"
 start=$SECONDS
 "$bin" chart "$dir/$scene.toml" --size "$size" --bake-limit "$limit" --cache-dir "$dir/cache" \
   -o "$dir/chart.png" --csv "$dir/chart.csv" > "$dir/chart.log" 2>&1 || { cat "$dir/chart.log" >&2; exit 1; }
-echo "# device: $(info device) on a $(nproc)-core $cpu"
-echo "# driver: $(info driver)"
-echo "# commit: $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo '+changes') (dev profile)"
-echo "# date: $(date +%F)"
-echo "# command: bash tools/atrium_chart.sh $scene $size $limit"
-echo "# note: the whole chart took $((SECONDS - start)) s; left out: $(grep -c 'left out' "$dir/chart.log" || true) swept point(s) ($(grep 'left out' "$dir/chart.log" | sed 's/^chart: //; s/ left out: .*//' | tr '\n' ';' | sed 's/;$//'))"
+echo "$header"
+echo "# note: nothing cached at the start; the whole chart took $((SECONDS - start)) s; left out: $(grep -c 'left out' "$dir/chart.log" || true) swept point(s) ($(grep 'left out' "$dir/chart.log" | sed 's/^chart: //; s/ left out: .*//' | tr '\n' ';' | sed 's/;$//'))"
 cat "$dir/chart.csv"
