@@ -112,7 +112,8 @@ void main() {
         uint at = base + edge_vertices(entity.edge_count) + 6u * item;
         uvec4 tri = triangles.items[entity.triangle_offset + item];
         vec3 p[3] = vec3[3](world_position(tri.x), world_position(tri.y), world_position(tri.z));
-        float f = dot(cross(p[1] - p[0], p[2] - p[0]), toward(light, p[0]));
+        // The same function as the edges' test, so both see one facing for this triangle.
+        float f = facing(tri, light);
         // A closed mesh's lit triangles cast nothing; an open mesh's are turned to face away,
         // and only those edge on to the light cast nothing.
         bool casts = entity.closed != 0u ? !(f > 0.0) : f != 0.0;
