@@ -574,7 +574,8 @@ pub fn run_keeping_images(opts: &ChartOptions) -> Result<ChartRun> {
             reference_noise: noise.clone(),
             warnings: m.warnings,
             reference: reference.label.clone(),
-            bake_ms: m.bakes.iter().map(|b| b.ms).sum(),
+            // A fold from +0: an empty float sum is -0, which the CSV would print as "-0".
+            bake_ms: m.bakes.iter().fold(0.0, |sum, b| sum + b.ms),
             bake_bytes: m.bakes.iter().map(|b| b.bytes).sum(),
         });
         images.push(m.supersampled.unwrap_or(m.image));
