@@ -519,7 +519,8 @@ fn bsp_lights_refuses_a_scene_whose_corners_fill_the_light_matrix() {
 /// A scene too large for the raster PRT baker (a plane of 131,072 triangles: each vertex would
 /// draw them all, over twice the 17,408 tree steps of its 1,024 rays) gets the compute rays,
 /// said in one line; a declaration that names a raster parameter, the faithful mode and a small
-/// scene keep the document's raster baker. The chart's sweep still holds the raster points.
+/// scene keep the document's raster baker. The chart's sweep holds the rays at 256, 1,024 and
+/// 4,096 samples, and still the raster points.
 #[test]
 fn a_large_scene_gets_the_prt_ray_baker() {
     let text = |methods: &str, subdivisions: u32| {
@@ -551,7 +552,9 @@ fn a_large_scene_gets_the_prt_ray_baker() {
     let labels: Vec<String> = registry::sweep(&config).unwrap().into_iter().map(|(l, _)| l).collect();
     println!("{labels:?}");
     for want in [
+        "prt rays 256",
         "prt rays 1024",
+        "prt rays 4096",
         "prt corrected stereographic 32²",
         "prt faithful orthographic 32²",
     ] {
