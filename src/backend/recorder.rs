@@ -519,6 +519,23 @@ impl<'g> Recorder<'g> {
         Ok(())
     }
 
+    /// One non-indexed draw whose `VkDrawIndirectCommand` an earlier pass wrote into `buffer` at
+    /// `offset` (the buffer needs INDIRECT_BUFFER usage).
+    pub fn draw_indirect(&mut self, buffer: BufferId, offset: u64) -> BackendResult<()> {
+        self.bound_pipeline()?;
+        let raw = self.gpu.buffer(buffer)?.raw;
+        unsafe {
+            self.gpu.device.cmd_draw_indirect(
+                self.cb,
+                raw,
+                offset,
+                1,
+                std::mem::size_of::<vk::DrawIndirectCommand>() as u32,
+            )
+        };
+        Ok(())
+    }
+
     /// One indexed draw (the bound index buffer) whose `VkDrawIndexedIndirectCommand` an earlier
     /// pass wrote into `buffer` at `offset` (the buffer needs INDIRECT_BUFFER usage).
     pub fn draw_indexed_indirect(&mut self, buffer: BufferId, offset: u64) -> BackendResult<()> {

@@ -136,6 +136,31 @@ fn analytic_occluder_casts_the_square_of_side_4() {
     }
 }
 
+/// The occluder above the view, its shadow in it: casters are chosen by the light, not by what
+/// the camera sees, and with the caps out of view the sides alone count the shadow right.
+#[test]
+fn an_occluder_out_of_view_still_casts() {
+    let camera = "[camera]\nposition = [0, 3, 9]\ntarget = [0, 0, 0]\nfov_y_deg = 30";
+    for (name, occluder) in [("open quad", QUAD), ("closed slab", SLAB)] {
+        let (img, scene) = render(&analytic_scene(camera, occluder, &[]), SIZE);
+        let c = compare_masks(
+            SIZE.0,
+            SIZE.1,
+            |x, y| lit(&img, x, y, 1e-6),
+            |px, py| {
+                let (o, d) = scene.camera.ray(px, py, SIZE.0, SIZE.1);
+                assert!(
+                    hit_box(o, d, Vec3::new(-1.0, 4.75, -1.0), Vec3::new(1.0, 5.0, 1.0)).is_none(),
+                    "the occluder is out of view"
+                );
+                analytic_lit(&scene.camera, px, py, SIZE)
+            },
+        );
+        check(&c, name);
+        assert!(c.cpu_shadow > 1000, "the shadow is in view: {c:?}");
+    }
+}
+
 /// The side of the shadow, measured on the rendered image: ground pixels in shadow (not hidden
 /// by the occluder) plus the occluder's own pixels, as area on the ground, is 16 m².
 #[test]

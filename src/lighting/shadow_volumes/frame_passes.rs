@@ -15,8 +15,9 @@ use crate::lighting::FrameContext;
 use crate::world::FaceId;
 
 impl ShadowVolumes {
-    /// Light `lp`'s silhouettes of every entity into the one volume slot, which its volume pass
-    /// then draws: one light at a time, so the buffer does not grow with the lights.
+    /// Light `lp`'s silhouettes of its caster entities, compacted into the one volume buffer,
+    /// which its volume pass then draws: one light at a time, so the buffer does not grow with
+    /// the lights.
     pub(super) fn add_silhouettes<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
@@ -30,17 +31,25 @@ impl ShadowVolumes {
         let p = plan.clone();
         let light: Vec4 = self.homogeneous_light(lp.light, scene);
         let prefix = if translucent { "translucent " } else { "" };
+        let (commands, caps_base) = (s.commands, s.caps_base);
+        // Two VkDrawIndirectCommand (vertex count, instances, first vertex, first instance).
+        graph
+            .pass(&format!("light {} {prefix}silhouette counts", lp.light))
+            .buffer(commands, Access::TransferWrite, None)
+            .record(move |ctx| ctx.rec.update_buffer(commands, &[0, 1, 0, 0, 0, 1, caps_base, 0]));
+        let casters = lp.caster_entities.clone();
         graph
             .pass(&format!("light {} {prefix}silhouettes", lp.light))
             .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
             .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
             .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
             .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
+            .buffer(commands, Access::StorageWrite { stages: compute }, Some("commands"))
             .record(move |ctx| {
                 ctx.rec.bind_pipeline(self.silhouette)?;
                 ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::bytes_of(&light)))])?;
-                for (e, slot) in s.slots.iter().enumerate() {
-                    let topo = &self.setup.entities[e].topology;
+                for &e in &casters {
+                    let (topo, slot) = (&self.setup.entities[e].topology, &s.slots[e]);
                     if topo.items() == 0 {
                         continue;
                     }
@@ -51,10 +60,8 @@ impl ShadowVolumes {
                         triangle_count: topo.triangles.len() as u32,
                         edge_offset: slot.edge_offset,
                         edge_count: topo.edges.len() as u32,
-                        out_offset: slot.out_offset,
-                        light_stride: s.stride,
+                        caps_base,
                         closed: topo.closed as u32,
-                        shared_edges: topo.shared_edges as u32,
                     };
                     ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                     ctx.rec.dispatch([topo.items() as u32, 1, 1])?;
@@ -157,14 +164,12 @@ impl ShadowVolumes {
                 self.faces[f as usize].template_count,
             )
         }));
-        let entity_ranges: Vec<(u32, u32)> = match &self.silhouettes {
-            Some(s) => lp
-                .caster_entities
-                .iter()
-                .map(|&e| (s.slots[e].out_offset, s.slots[e].out_vertices))
-                .collect(),
-            None => Vec::new(),
-        };
+        // The silhouette pass wrote the caster entities' volumes for this light when it has any.
+        let entity_volumes = self
+            .silhouettes
+            .as_ref()
+            .filter(|_| !lp.caster_entities.is_empty())
+            .map(|s| (s.volumes, s.commands));
         let light_pos = light.position;
         let nudge = self.nudge_far as u32;
         let mut pass = graph
@@ -173,11 +178,12 @@ impl ShadowVolumes {
         if let Some(b) = self.templates {
             pass = pass.buffer(b, Access::VertexRead, None);
         }
-        if let Some(s) = &self.silhouettes {
-            pass = pass.buffer(s.volumes, Access::VertexRead, None);
+        if let Some((volumes, commands)) = entity_volumes {
+            pass = pass
+                .buffer(volumes, Access::VertexRead, None)
+                .buffer(commands, Access::IndirectRead, None);
         }
         let templates = self.templates;
-        let volumes = self.silhouettes.as_ref().map(|s| s.volumes);
         pass.record(move |ctx| {
             let extent = ctx.rec.begin_rendering(&RenderingDesc {
                 colors: Vec::new(),
@@ -196,15 +202,16 @@ impl ShadowVolumes {
                     ctx.rec.draw_from(count, first)?;
                 }
             }
-            if let (Some(b), false) = (volumes, entity_ranges.is_empty()) {
-                ctx.rec.bind_vertex_buffers(&[(b, 0)])?;
+            if let Some((volumes, commands)) = entity_volumes {
+                ctx.rec.bind_vertex_buffers(&[(volumes, 0)])?;
                 ctx.rec.push_constants(bytemuck::bytes_of(&VolumePush {
                     light: light_pos.extend(0.0).into(),
                     nudge_far: nudge,
                 }))?;
-                for &(first, count) in &entity_ranges {
-                    ctx.rec.draw_from(count, first)?;
-                }
+                // Sides, then caps (the order the saturating negative control relies on).
+                let command = std::mem::size_of::<vk::DrawIndirectCommand>() as u64;
+                ctx.rec.draw_indirect(commands, 0)?;
+                ctx.rec.draw_indirect(commands, command)?;
             }
             ctx.rec.end_rendering();
             Ok(())

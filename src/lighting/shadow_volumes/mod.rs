@@ -2,10 +2,10 @@
 //! the Ca3D-Engine thesis §4 and §6.3 (digest §1.3, §1.4, §4.4, §4.5).
 //!
 //! A frame is
-//! 1. **silhouettes** (compute): for every light of the frame and every entity, the silhouette
-//!    edges from edge adjacency, extruded to infinity, with caps (open meshes cast from both
-//!    sides: every triangle capped, sides where the turned triangles' windings do not cancel)
-//!    — [`volumes::silhouette_volume`] is its CPU mirror;
+//! 1. **silhouettes** (compute): per light, for each casting entity, the silhouette edges from
+//!    edge adjacency, extruded to infinity, with caps (open meshes cast from both sides: every
+//!    triangle capped, sides where the turned triangles' windings do not cancel), compacted into
+//!    two indirect draws — [`volumes::silhouette_volume`] is its CPU mirror;
 //! 2. **ambient**: depth, and the ambient/emissive term of Eq. 5 (`diffuse·lightmap·N_z +
 //!    luminance`; the physical mode writes the emission only);
 //! 3. per light: **volumes** — stencil cleared, then every caster's volume with two-sided
@@ -281,10 +281,8 @@ struct SilhouettePush {
     triangle_count: u32,
     edge_offset: u32,
     edge_count: u32,
-    out_offset: u32,
-    light_stride: u32,
+    caps_base: u32,
     closed: u32,
-    shared_edges: u32,
 }
 
 /// Where one entity's data lives in the silhouette buffers.
@@ -293,18 +291,18 @@ struct EntitySlots {
     vertex_offset: u32,
     triangle_offset: u32,
     edge_offset: u32,
-    /// First output vertex in the volume slot.
-    out_offset: u32,
-    out_vertices: u32,
 }
 
 struct SilhouetteBuffers {
     positions: BufferId,
     triangles: BufferId,
     edges: BufferId,
+    /// One light's volumes, compacted: the sides from vertex 0, the caps from `caps_base`.
     volumes: BufferId,
-    /// Output vertices of the slot: every entity's volumes for one light.
-    stride: u32,
+    /// The two indirect draws (sides, caps) whose vertex counts the silhouette pass counts up.
+    commands: BufferId,
+    /// Room for every entity's sides at most: where the caps start.
+    caps_base: u32,
     slots: Vec<EntitySlots>,
 }
 
@@ -603,22 +601,21 @@ impl ShadowVolumes {
         let (mut positions, mut triangles, mut edges) =
             (Vec::<Vec4>::new(), Vec::<[u32; 4]>::new(), Vec::<[u32; 4]>::new());
         let mut slots = Vec::new();
-        let mut out = 0u32;
+        let (mut side_vertices, mut cap_vertices) = (0u32, 0u32);
         for e in &setup.entities {
             let t = &e.topology;
-            let out_vertices = 3 * t.volume_triangles() as u32;
             slots.push(EntitySlots {
                 vertex_offset: positions.len() as u32,
                 triangle_offset: triangles.len() as u32,
                 edge_offset: edges.len() as u32,
-                out_offset: out,
-                out_vertices,
             });
             positions.extend(t.positions.iter().map(|p| p.extend(1.0)));
             triangles.extend(t.triangles.iter().map(|t| [t[0], t[1], t[2], 0]));
             edges.extend(t.edges.iter().copied());
-            out += out_vertices;
+            side_vertices += 3 * t.edge_triangles(t.edges.len()) as u32;
+            cap_vertices += 6 * t.triangles.len() as u32;
         }
+        let out = side_vertices + cap_vertices;
         let storage = |gpu: &mut Gpu, name: &str, bytes: &[u8]| -> Result<BufferId> {
             let zero = [0u8; 16];
             Ok(gpu.create_buffer_init(
@@ -636,12 +633,21 @@ impl ShadowVolumes {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::VERTEX_BUFFER,
             memory: MemoryKind::GpuOnly,
         })?;
+        let commands = gpu.create_buffer(&BufferDesc {
+            name: "entity shadow volume draws".into(),
+            size: 2 * std::mem::size_of::<vk::DrawIndirectCommand>() as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::INDIRECT_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuOnly,
+        })?;
         Ok(Some(SilhouetteBuffers {
             positions,
             triangles,
             edges,
             volumes,
-            stride: out,
+            commands,
+            caps_base: side_vertices,
             slots,
         }))
     }

@@ -123,7 +123,8 @@ impl Topology {
         }
     }
 
-    /// Volume triangles the silhouette pass writes per light (degenerate ones included).
+    /// Volume triangles the silhouette pass may write per light: the room it keeps (a slot for
+    /// every cap and side, whether drawn or not).
     pub fn volume_triangles(&self) -> usize {
         2 * self.triangles.len() + self.edge_triangles(self.edges.len())
     }
@@ -201,9 +202,11 @@ fn adjacency(triangles: &[[u32; 3]]) -> (Vec<[u32; 4]>, bool) {
 }
 
 /// CPU mirror of `glsl/shadow_volumes/silhouette.comp`: the volume triangles (as homogeneous
-/// vertices, 3 per triangle, near caps with `w =` [`NEAR_CAP_W`], degenerate triangles as three
-/// `(0, 0, 0, 1)`) of a mesh with
-/// world-space `positions` for the homogeneous `light` ([`super::VolumeLight::homogeneous`]).
+/// vertices, 3 per triangle, near caps with `w =` [`NEAR_CAP_W`]) of a mesh with world-space
+/// `positions` for the homogeneous `light` ([`super::VolumeLight::homogeneous`]). Every slot is
+/// kept in order, those with nothing to draw as degenerate triangles (three `(0, 0, 0, 1)`),
+/// where the pass leaves them out (with a directional light's degenerate far caps and side
+/// halves), and draws the rest in an order of its own.
 pub fn silhouette_volume(topo: &Topology, positions: &[Vec3], light: Vec4) -> Vec<Vec4> {
     let zero = [Vec4::W; 3];
     // The sides first, then the caps, as the pass lays them out.
