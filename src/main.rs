@@ -39,7 +39,8 @@ struct RenderArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = parse_size)]
     size: (u32, u32),
-    /// Lighting method or combination (one the scene enables or declares in [[combinations]]; default: the scene's first method).
+    /// Lighting method or combination (one the scene enables or declares in [[combinations]];
+    /// any method for a scene or asset that declares none; default: the scene's first method).
     #[arg(long, value_name = "M")]
     method: Option<String>,
     #[command(flatten)]
@@ -261,7 +262,8 @@ struct ChartArgs {
     /// Where references and tables are cached.
     #[arg(long, value_name = "DIR", default_value = ".penumbra-cache")]
     cache_dir: PathBuf,
-    /// Chart only this method or combination (repeat for more; default: all of the scene's).
+    /// Chart only this method or combination (repeat for more; default: all of the scene's;
+    /// any method for a scene or asset that declares none).
     #[arg(long = "method", value_name = "M")]
     methods: Vec<String>,
     /// Compare frame N (N/60 s: wind, light motion and light board applied): each

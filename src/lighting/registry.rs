@@ -244,6 +244,20 @@ pub fn configurations(scene: &Scene) -> Result<Vec<Configuration>> {
     Ok(terms::configurations(scene, &supply())?)
 }
 
+/// Method `name` at its defaults, where the scene declares no method of its own (an asset alone,
+/// or a scene file without `methods`, which draws with `forward`): such a scene takes any method
+/// by name, as a viewer would. `None` for a scene that declares its methods, or an unknown name.
+pub fn undeclared(scene: &Scene, name: &str) -> Option<Configuration> {
+    let declares_none = scene.methods == [MethodDecl::implicit_forward()] && scene.combinations.is_empty();
+    (declares_none && schemas().iter().any(|s| s.name == name)).then(|| {
+        alone(&MethodDecl {
+            name: name.to_owned(),
+            line: 0,
+            params: Vec::new(),
+        })
+    })
+}
+
 /// The configuration called `name` (a method or a combination), or the scene's first method.
 pub fn configuration(scene: &Scene, name: Option<&str>) -> Result<Configuration> {
     let all = configurations(scene)?;
@@ -253,35 +267,40 @@ pub fn configuration(scene: &Scene, name: Option<&str>) -> Result<Configuration>
             .next()
             .ok_or_else(|| Error::Usage(format!("{}: the scene enables no method", scene.source))),
         Some(n) => {
+            if let Some(c) = all
+                .iter()
+                .find(|c| c.name == n)
+                .cloned()
+                .or_else(|| undeclared(scene, n))
+            {
+                return Ok(c);
+            }
             let names: Vec<String> = all.iter().map(|c| c.name.clone()).collect();
-            all.into_iter().find(|c| c.name == n).ok_or_else(|| {
-                let known: Vec<&str> = schemas().iter().map(|s| s.name).collect();
-                if known.contains(&n) {
-                    Error::Usage(format!(
-                        "{}: method `{n}` is not enabled by the scene (it enables: {})",
-                        scene.source,
-                        names.join(", ")
-                    ))
-                } else {
-                    let combinations = if scene.combinations.is_empty() {
-                        String::new()
-                    } else {
-                        format!(
-                            "; the scene's combinations: {}",
-                            scene
-                                .combinations
-                                .iter()
-                                .map(|c| c.name.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        )
-                    };
-                    Error::Usage(format!(
-                        "--method {n}: unknown method; known methods: {}{combinations}",
-                        known.join(", ")
-                    ))
-                }
-            })
+            let known: Vec<&str> = schemas().iter().map(|s| s.name).collect();
+            if known.contains(&n) {
+                return Err(Error::Usage(format!(
+                    "{}: method `{n}` is not enabled by the scene (it enables: {})",
+                    scene.source,
+                    names.join(", ")
+                )));
+            }
+            let combinations = if scene.combinations.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; the scene's combinations: {}",
+                    scene
+                        .combinations
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            };
+            Err(Error::Usage(format!(
+                "--method {n}: unknown method; known methods: {}{combinations}",
+                known.join(", ")
+            )))
         }
     }
 }

@@ -290,6 +290,37 @@ fn gltf_alone_node_transform_and_punctual_light_in_candela() {
     assert!(inside > 300 && outside > 50, "{inside} on the quad, {outside} off it");
 }
 
+/// An asset alone declares no method, so any method is asked for by name at its defaults, as a
+/// viewer would: `clustered` draws the glTF quad under its point light as `forward` does. A scene
+/// file that declares its methods still refuses others.
+#[test]
+fn an_asset_alone_takes_any_method_by_name() {
+    let dir = temp_dir("any-method");
+    let scene = Scene::from_file(gltf_file(&dir)).unwrap();
+    let want = forward(&scene);
+    let mut r = Renderer::new(common::test_gpu(), scene.clone(), Some("clustered"), (W, H), 1).unwrap();
+    assert_eq!(r.configuration.parts[0].decl.name, "clustered");
+    let cam = r.scene.camera.clone();
+    let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+    common::assert_clean(&r.gpu);
+    let (mut lit, mut worst) = (0, 0.0f32);
+    for (a, b) in img.pixels.iter().zip(&want.pixels) {
+        let (a, b) = (Vec3::from_slice(&a[..3]), Vec3::from_slice(&b[..3]));
+        lit += usize::from(b.max_element() > 0.01);
+        worst = worst.max((a - b).abs().max_element() / b.max_element().max(0.01));
+    }
+    println!("{lit} lit pixels, worst relative difference {worst}");
+    assert!(lit > 300 && worst < 1e-3, "{lit} lit pixels, worst {worst}");
+    let declared = Scene::from_str(
+        "methods = [\"forward\"]\n[camera]\nposition = [0, 2, 5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"box\"\n[[lights]]\ntype = \"point\"\nposition = [0, 3, 0]\nintensity = 1\n",
+        "declared.toml",
+        Path::new("."),
+    )
+    .unwrap();
+    let e = penumbra::lighting::registry::configuration(&declared, Some("shadow_volumes")).unwrap_err();
+    assert!(e.to_string().contains("not enabled by the scene"), "{e}");
+}
+
 /// A leaf: a 2 × 2 quad at y = 1 (x, z in [-1, 1], facing +y) whose `map_d` is a 4 × 4 grey
 /// checker (kept where column + row is even), over a 4 × 4 floor at y = 0; both Lambertian.
 const LEAF_OBJ: &str = "mtllib leaf.mtl

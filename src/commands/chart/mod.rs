@@ -626,18 +626,25 @@ fn check_options(opts: &ChartOptions) -> Result<()> {
     Ok(())
 }
 
-/// The scene's configurations that `--method` chose (all without it); an unknown name is an
-/// error listing the known ones.
+/// The scene's configurations that `--method` chose (all without it; a scene that declares no
+/// method takes any by name, [`registry::undeclared`]); an unknown name is an error listing the
+/// known ones.
 fn chosen_configurations(scene: &Scene, opts: &ChartOptions) -> Result<Vec<Configuration>> {
-    let all = registry::configurations(scene)?;
+    let mut all = registry::configurations(scene)?;
     for name in &opts.methods {
-        if !all.iter().any(|c| c.name == *name) {
-            let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
-            return Err(Error::Usage(format!(
-                "{}: --method {name}: the scene has no such method or combination (it has {})",
-                opts.scene.display(),
-                known.join(", ")
-            )));
+        if all.iter().any(|c| c.name == *name) {
+            continue;
+        }
+        match registry::undeclared(scene, name) {
+            Some(c) => all.push(c),
+            None => {
+                let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+                return Err(Error::Usage(format!(
+                    "{}: --method {name}: the scene has no such method or combination (it has {})",
+                    opts.scene.display(),
+                    known.join(", ")
+                )));
+            }
         }
     }
     Ok(all
