@@ -150,6 +150,46 @@ fn demo_cycles_through_the_scenes_methods_and_combinations() {
     );
 }
 
+#[test]
+fn demo_on_an_asset_offers_every_method_and_steps_past_refusals() {
+    // An OBJ alone declares no method, so M steps through every method in the registry's order:
+    // forward, shadow_volumes, then the two height-field methods, which the asset refuses (it has
+    // no height field). Each refusal is reported once and the next M goes past it.
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let obj = common::temp_path("demo-asset.obj");
+    std::fs::write(
+        &obj,
+        "v -2 0 -2\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nv -0.3 0.6 0\nv 0.3 0.6 0\nv 0 0.6 0.3\nf 1 2 3 4\nf 5 7 6\n",
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("demo")
+        .arg(&obj)
+        .args([
+            "--size",
+            "64x48",
+            "--frames",
+            "7",
+            "--cycle-every",
+            "2",
+            "--validation",
+            "--device",
+            &device,
+        ])
+        .output()
+        .unwrap();
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "demo failed:\n{err}");
+    let switches: Vec<&str> = out.lines().filter_map(|l| l.strip_prefix("configuration: ")).collect();
+    assert_eq!(switches, ["shadow_volumes"], "{out}");
+    for refused in ["heightfield_pyramid", "heightfield_bruteforce"] {
+        let lines = err
+            .lines()
+            .filter(|l| l.starts_with(&format!("cannot switch to {refused}, keeping shadow_volumes")));
+        assert_eq!(lines.count(), 1, "{refused}:\n{err}");
+    }
+}
+
 /// A floor, a box on it and a point light beside it: `forward` draws no shadow, the shadow
 /// volumes draw it.
 const SHADOW_SCENE: &str = "methods = [\"forward\", { name = \"shadow_volumes\", mode = \"physical\" }]\n[camera]\nposition = [0, 2.5, 3.5]\ntarget = [0, 0, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.8, 0.8, 0.8]\ntranslate = [0, 0.4, 0]\n[[lights]]\ntype = \"point\"\nposition = [-1.2, 1.5, -0.6]\nintensity = 6\n";

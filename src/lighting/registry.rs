@@ -258,6 +258,18 @@ pub fn undeclared(scene: &Scene, name: &str) -> Option<Configuration> {
     })
 }
 
+/// What a viewer offers for the scene: its own configurations, then, where it declares no method,
+/// every other method at its defaults ([`undeclared`]), in the registry's order.
+pub fn offered(scene: &Scene) -> Result<Vec<Configuration>> {
+    let mut all = configurations(scene)?;
+    for s in schemas() {
+        if !all.iter().any(|c| c.name == s.name) {
+            all.extend(undeclared(scene, s.name));
+        }
+    }
+    Ok(all)
+}
+
 /// The configuration called `name` (a method or a combination), or the scene's first method.
 pub fn configuration(scene: &Scene, name: Option<&str>) -> Result<Configuration> {
     let all = configurations(scene)?;

@@ -113,9 +113,13 @@ struct Running {
     grabbed: Option<image::RgbaImage>,
     /// Save the view on screen (PNG + EXR) after the next frame.
     save_view: Option<PathBuf>,
-    /// The scene's methods and combinations (M cycles through them) and the one shown.
+    /// The scene's methods and combinations, or every method for a scene that declares none
+    /// (M cycles through them), and the one shown.
     configurations: Vec<crate::lighting::Configuration>,
     current: usize,
+    /// The configuration the last switch failed to make (the scene refused it): the next M goes
+    /// on from it, so that one refusal does not hold the cycle.
+    refused: Option<usize>,
     /// Set by a switch: the next frame measures its error whatever the interval.
     switched: bool,
     /// The bakes of a configuration being switched to, running beside the frames.
@@ -228,7 +232,7 @@ impl App {
         let swapchain = gpu.create_swapchain(&window, (size.width.max(1), size.height.max(1)), FRAMES_IN_FLIGHT)?;
         let overlay = Overlay::new(&gpu, swapchain.format, FRAMES_IN_FLIGHT)?;
         let extent = swapchain.extent;
-        let configurations = registry::configurations(&scene)?;
+        let configurations = registry::offered(&scene)?;
         let chosen = registry::configuration(&scene, self.opts.method.as_deref())?;
         let current = configurations.iter().position(|c| *c == chosen).unwrap_or(0);
         let (renderer, rebake) = first_renderer(
@@ -280,6 +284,7 @@ impl App {
             save_view: None,
             configurations,
             current,
+            refused: None,
             switched: false,
             rebake,
             queued: None,
@@ -418,15 +423,19 @@ impl Running {
                 self.bake_note = None;
                 self.rebake = Some(rebake::Rebake::start(&self.bake_desc, scene, index, config));
             }
-            Err(e) => self.report_problem(format!(
-                "cannot switch to {}, keeping {}: {e}",
-                config.name, self.renderer.configuration.name
-            )),
+            Err(e) => {
+                self.refused = Some(index);
+                self.report_problem(format!(
+                    "cannot switch to {}, keeping {}: {e}",
+                    config.name, self.renderer.configuration.name
+                ))
+            }
         }
     }
 
     fn switched_to(&mut self, index: usize, config: crate::lighting::Configuration, started: Instant) {
         self.current = index;
+        self.refused = None;
         self.params = param_edits(&config);
         self.switched = true;
         crate::outln!("configuration: {}", config.name);
@@ -519,12 +528,13 @@ impl Running {
         }
     }
 
-    /// Switches to the next of the scene's configurations.
+    /// Switches to the next of the scene's configurations (after the one last refused, if any).
     fn next_configuration(&mut self) {
         if self.configurations.len() < 2 {
             return;
         }
-        self.set_configuration((self.current + 1) % self.configurations.len());
+        let from = self.refused.take().unwrap_or(self.current);
+        self.set_configuration((from + 1) % self.configurations.len());
     }
 
     /// The current configuration with the panel's parameters, rebuilt (its bakes through the
