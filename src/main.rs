@@ -167,7 +167,7 @@ struct CaptureArgs {
     /// Exposure multiplier applied before tone mapping the PNG.
     #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
     exposure: f32,
-    /// Render with the cheapest configuration (of every method the scene enables) whose
+    /// Render with the cheapest configuration (of those the chart measured for the scene) whose
     /// relative MSE against the reference is at most E, from the data `penumbra chart` cached
     /// for this scene and size; says which it picked and why.
     #[arg(long, value_name = "E", value_parser = parse_max_error)]

@@ -184,7 +184,7 @@ pub fn choose_configuration(
                 rejected,
             }
             .to_string();
-            let configuration = registry::configurations(&scene)?
+            let configuration = registry::offered(&scene)?
                 .into_iter()
                 .find(|c| c.name == config.method)
                 .ok_or_else(|| {

@@ -173,6 +173,53 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     );
 }
 
+/// An asset alone declares no method: `chart --method` measures one it names, and `capture
+/// --max-error` then picks from that chart, as for a scene file's own methods.
+#[test]
+fn chart_and_max_error_take_a_method_an_asset_does_not_declare() {
+    let dir = common::temp_path("chart-asset");
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("tent.obj");
+    std::fs::write(
+        &obj,
+        "v -2 0 -2\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nv -0.5 0.8 0\nv 0.5 0.8 0\nv 0 0.8 0.5\nf 1 2 3 4\nf 5 7 6\n",
+    )
+    .unwrap();
+    let (cache, png, csv) = (dir.join("cache"), dir.join("chart.png"), dir.join("chart.csv"));
+    let options = [
+        "--size",
+        "24x16",
+        "--reference-spp",
+        "8",
+        "--frames",
+        "2",
+        "--method",
+        "clustered",
+    ];
+    ok(&chart(obj.to_str().unwrap(), &options, &cache, &png, &csv));
+    let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
+    assert!(
+        !rows.is_empty() && rows.iter().all(|r| r.method == "clustered"),
+        "{rows:?}"
+    );
+    let loose = format!("{}", rows.iter().map(|r| r.rel_mse).fold(0.0, f64::max) * 2.0);
+    let out = dir.join("picked.png");
+    let o = ok(&penumbra(&[
+        "capture",
+        obj.to_str().unwrap(),
+        "--size",
+        "24x16",
+        "--max-error",
+        &loose,
+        "--cache-dir",
+        cache.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    assert!(o.contains("picked `clustered"), "{o}");
+    assert!(out.exists());
+}
+
 /// `penumbra chart` on the textured the Ca3D-Engine thesis level: every point of the shadow-volume sweep is
 /// measured against the direct-lighting reference, which now applies the level's albedo, normal
 /// and specular maps as the method does; the physical mode is the accurate one.
