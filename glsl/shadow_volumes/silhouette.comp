@@ -1,7 +1,7 @@
 #version 460
 // Entity shadow volumes for one light (the frame passes one light at a time, into one buffer),
-// from edge adjacency: one invocation per triangle (its near and far cap) and one per edge (its
-// sides). A closed mesh casts from its dark triangles (facing away from the light), and an edge
+// from edge adjacency, in two dispatches: one invocation per triangle (its facing, kept for the
+// edges, and its near and far cap), then one per edge (its sides, from its triangles' facings). A closed mesh casts from its dark triangles (facing away from the light), and an edge
 // gets a side quad if it is a silhouette edge: one adjacent triangle lit, the other dark. An
 // open mesh casts from both sides: every triangle is turned to face away from the light and
 // capped, and an edge gets each triangle's side unless the two turned triangles run it opposite
@@ -27,6 +27,8 @@ layout(set = 0, binding = 4) writeonly buffer Volumes { vec4 items[]; } volumes;
 // Two VkDrawIndirectCommand: words 0-3 the sides', 4-7 the caps'; the vertex counts are reset to
 // 0 before the pass.
 layout(set = 0, binding = 5) buffer Commands { uint words[]; } commands;
+// Each triangle's facing() for the light: written by the triangles' dispatch, read by the edges'.
+layout(set = 0, binding = 6) buffer Facings { float items[]; } facings;
 
 layout(push_constant) uniform Entity {
     mat4 model;
@@ -37,6 +39,7 @@ layout(push_constant) uniform Entity {
     uint edge_count;
     uint caps_base;        // first output vertex of the caps, after room for every side
     uint closed;
+    uint edges_phase;      // 0: the triangles' dispatch; 1: the edges'
 } entity;
 
 // An open mesh's edge record with one triangle has this as its second.
@@ -80,12 +83,12 @@ float facing(uvec4 tri, vec4 light) {
 
 // +1 when triangle t, turned to face away from the light, runs the edge a -> b; -1 when it runs
 // b -> a; 0 when it has no volume (edge on to the light, or no triangle).
-int dark_direction(uint t, uint a, uint b, vec4 light) {
+int dark_direction(uint t, uint a, uint b) {
     if (t == NO_TRIANGLE) {
         return 0;
     }
     uvec4 tri = triangles.items[entity.triangle_offset + t];
-    float f = facing(tri, light);
+    float f = facings.items[entity.triangle_offset + t];
     if (f == 0.0) {
         return 0;
     }
@@ -106,11 +109,15 @@ void side(vec3 u, vec3 v, vec4 light) {
 void main() {
     uint item = gl_GlobalInvocationID.x;
     vec4 light = light_positions.items[0];
-    if (item < entity.triangle_count) {
+    if (entity.edges_phase == 0u) {
+        if (item >= entity.triangle_count) {
+            return;
+        }
         uvec4 tri = triangles.items[entity.triangle_offset + item];
         vec3 p[3] = vec3[3](world_position(tri.x), world_position(tri.y), world_position(tri.z));
-        // The same function as the edges' test, so both see one facing for this triangle.
+        // Kept, so that the edges see this very facing for the triangle.
         float f = facing(tri, light);
+        facings.items[entity.triangle_offset + item] = f;
         // A closed mesh's lit triangles cast nothing; an open mesh's are turned to face away,
         // and only those edge on to the light cast nothing.
         bool casts = entity.closed != 0u ? !(f > 0.0) : f != 0.0;
@@ -130,19 +137,19 @@ void main() {
         }
         return;
     }
-    uint e = item - entity.triangle_count;
+    uint e = item;
     if (e >= entity.edge_count) {
         return;
     }
     uvec4 edge = edges.items[entity.edge_offset + e];
-    vec3 a = world_position(edge.x);
-    vec3 b = world_position(edge.y);
     if (entity.closed != 0u) {
-        bool la = facing(triangles.items[entity.triangle_offset + edge.z], light) > 0.0;
-        bool lb = facing(triangles.items[entity.triangle_offset + edge.w], light) > 0.0;
+        bool la = facings.items[entity.triangle_offset + edge.z] > 0.0;
+        bool lb = facings.items[entity.triangle_offset + edge.w] > 0.0;
         if (la == lb) {
             return;
         }
+        vec3 a = world_position(edge.x);
+        vec3 b = world_position(edge.y);
         // Along the edge in the dark triangle's direction.
         if (la) {
             side(b, a, light);
@@ -151,12 +158,14 @@ void main() {
         }
         return;
     }
-    int da = dark_direction(edge.z, edge.x, edge.y, light);
-    int db = dark_direction(edge.w, edge.x, edge.y, light);
+    int da = dark_direction(edge.z, edge.x, edge.y);
+    int db = dark_direction(edge.w, edge.x, edge.y);
     // Two turned triangles running the edge opposite ways share a side that cancels.
     if (da == -db) {
         return;
     }
+    vec3 a = world_position(edge.x);
+    vec3 b = world_position(edge.y);
     int d[2] = int[2](da, db);
     for (uint k = 0u; k < 2u; ++k) {
         if (d[k] > 0) {

@@ -28,7 +28,6 @@ impl ShadowVolumes {
         translucent: bool,
     ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let p = plan.clone();
         let light: Vec4 = self.homogeneous_light(lp.light, scene);
         let prefix = if translucent { "translucent " } else { "" };
         let (commands, caps_base) = (s.commands, s.caps_base);
@@ -37,37 +36,54 @@ impl ShadowVolumes {
             .pass(&format!("light {} {prefix}silhouette counts", lp.light))
             .buffer(commands, Access::TransferWrite, None)
             .record(move |ctx| ctx.rec.update_buffer(commands, &[0, 1, 0, 0, 0, 1, caps_base, 0]));
-        let casters = lp.caster_entities.clone();
-        graph
-            .pass(&format!("light {} {prefix}silhouettes", lp.light))
-            .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
-            .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
-            .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
-            .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
-            .buffer(commands, Access::StorageWrite { stages: compute }, Some("commands"))
-            .record(move |ctx| {
-                ctx.rec.bind_pipeline(self.silhouette)?;
-                ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::bytes_of(&light)))])?;
-                for &e in &casters {
-                    let (topo, slot) = (&self.setup.entities[e].topology, &s.slots[e]);
-                    if topo.items() == 0 {
-                        continue;
+        // The triangles (their facings and caps), then the edges (their sides from those
+        // facings): two passes, so the edges read what the triangles wrote.
+        for edges_phase in [false, true] {
+            let (casters, p) = (lp.caster_entities.clone(), plan.clone());
+            let name = if edges_phase { "silhouette edges" } else { "silhouettes" };
+            let facings = if edges_phase {
+                Access::StorageRead { stages: compute }
+            } else {
+                Access::StorageWrite { stages: compute }
+            };
+            graph
+                .pass(&format!("light {} {prefix}{name}", lp.light))
+                .buffer(s.positions, Access::StorageRead { stages: compute }, Some("positions"))
+                .buffer(s.triangles, Access::StorageRead { stages: compute }, Some("triangles"))
+                .buffer(s.edges, Access::StorageRead { stages: compute }, Some("edges"))
+                .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
+                .buffer(commands, Access::StorageWrite { stages: compute }, Some("commands"))
+                .buffer(s.facings, facings, Some("facings"))
+                .record(move |ctx| {
+                    ctx.rec.bind_pipeline(self.silhouette)?;
+                    ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::bytes_of(&light)))])?;
+                    for &e in &casters {
+                        let (topo, slot) = (&self.setup.entities[e].topology, &s.slots[e]);
+                        let items = if edges_phase {
+                            topo.edges.len()
+                        } else {
+                            topo.triangles.len()
+                        };
+                        if items == 0 {
+                            continue;
+                        }
+                        let push = SilhouettePush {
+                            model: p.entity_transforms[e].to_cols_array(),
+                            vertex_offset: slot.vertex_offset,
+                            triangle_offset: slot.triangle_offset,
+                            triangle_count: topo.triangles.len() as u32,
+                            edge_offset: slot.edge_offset,
+                            edge_count: topo.edges.len() as u32,
+                            caps_base,
+                            closed: topo.closed as u32,
+                            edges_phase: edges_phase as u32,
+                        };
+                        ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
+                        ctx.rec.dispatch([items as u32, 1, 1])?;
                     }
-                    let push = SilhouettePush {
-                        model: p.entity_transforms[e].to_cols_array(),
-                        vertex_offset: slot.vertex_offset,
-                        triangle_offset: slot.triangle_offset,
-                        triangle_count: topo.triangles.len() as u32,
-                        edge_offset: slot.edge_offset,
-                        edge_count: topo.edges.len() as u32,
-                        caps_base,
-                        closed: topo.closed as u32,
-                    };
-                    ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
-                    ctx.rec.dispatch([topo.items() as u32, 1, 1])?;
-                }
-                Ok(())
-            });
+                    Ok(())
+                });
+        }
     }
 
     /// The ambient pass of a round: the opaque surfaces the camera sees, or the translucent

@@ -283,6 +283,7 @@ struct SilhouettePush {
     edge_count: u32,
     caps_base: u32,
     closed: u32,
+    edges_phase: u32,
 }
 
 /// Where one entity's data lives in the silhouette buffers.
@@ -301,6 +302,8 @@ struct SilhouetteBuffers {
     volumes: BufferId,
     /// The two indirect draws (sides, caps) whose vertex counts the silhouette pass counts up.
     commands: BufferId,
+    /// Each triangle's facing for the light: the triangles' dispatch writes it, the edges' read it.
+    facings: BufferId,
     /// Room for every entity's sides at most: where the caps start.
     caps_base: u32,
     slots: Vec<EntitySlots>,
@@ -625,6 +628,7 @@ impl ShadowVolumes {
             )?)
         };
         let positions = storage(gpu, "entity positions", bytemuck::cast_slice(&positions))?;
+        let triangles_total = triangles.len();
         let triangles = storage(gpu, "entity triangles", bytemuck::cast_slice(&triangles))?;
         let edges = storage(gpu, "entity edges", bytemuck::cast_slice(&edges))?;
         let volumes = gpu.create_buffer(&BufferDesc {
@@ -641,12 +645,19 @@ impl ShadowVolumes {
                 | vk::BufferUsageFlags::TRANSFER_DST,
             memory: MemoryKind::GpuOnly,
         })?;
+        let facings = gpu.create_buffer(&BufferDesc {
+            name: "entity triangle facings".into(),
+            size: (4 * triangles_total as u64).max(16),
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            memory: MemoryKind::GpuOnly,
+        })?;
         Ok(Some(SilhouetteBuffers {
             positions,
             triangles,
             edges,
             volumes,
             commands,
+            facings,
             caps_base: side_vertices,
             slots,
         }))
