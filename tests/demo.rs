@@ -109,45 +109,40 @@ fn demo_survives_a_resize_under_validation() {
     );
 }
 
+/// Runs the demo on `scene` at 64×48 under validation for `frames` frames, switching to the next
+/// configuration every 2 (the M key, scripted); fails unless it exits cleanly, and returns its
+/// standard output's switches (`configuration: NAME` lines) and its standard error.
+fn cycling_demo(scene: &std::path::Path, frames: u32) -> (Vec<String>, String) {
+    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .arg("demo")
+        .arg(scene)
+        .args(["--size", "64x48", "--frames", &frames.to_string(), "--cycle-every", "2"])
+        .args(["--validation", "--device", &device])
+        .output()
+        .unwrap();
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "demo failed:\n{err}");
+    let switches = out
+        .lines()
+        .filter_map(|l| l.strip_prefix("configuration: "))
+        .map(String::from)
+        .collect();
+    (switches, err.into_owned())
+}
+
 #[test]
 fn demo_cycles_through_the_scenes_methods_and_combinations() {
     // The M key's switch, scripted: every 2 frames the next configuration; the window keeps
     // presenting under validation through each switch, and wraps around.
-    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
     let scene = common::temp_path("demo-cycle.toml");
     std::fs::write(
         &scene,
         "methods = [\"forward\", { name = \"shadow_volumes\", mode = \"physical\" }]\n[[combinations]]\nname = \"mixed\"\nbase = \"forward\"\ndirect = \"shadow_volumes\"\n[camera]\nposition = [0, 2, 4]\ntarget = [0, 0.3, 0]\n[[objects]]\nmesh = \"plane\"\nsize = [4, 4]\n[[objects]]\nmesh = \"box\"\nsize = [0.5, 0.5, 0.5]\ntranslate = [0, 0.25, 0]\n[[lights]]\ntype = \"point\"\nposition = [1, 2, 1]\nintensity = 5\n",
     )
     .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .arg("demo")
-        .arg(&scene)
-        .args([
-            "--size",
-            "64x48",
-            "--frames",
-            "9",
-            "--cycle-every",
-            "2",
-            "--validation",
-            "--device",
-            &device,
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "demo failed:\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let out = String::from_utf8_lossy(&o.stdout);
-    let switches: Vec<&str> = out.lines().filter_map(|l| l.strip_prefix("configuration: ")).collect();
-    assert_eq!(
-        switches,
-        ["shadow_volumes", "mixed", "forward", "shadow_volumes"],
-        "{out}"
-    );
+    let (switches, _) = cycling_demo(&scene, 9);
+    assert_eq!(switches, ["shadow_volumes", "mixed", "forward", "shadow_volumes"]);
 }
 
 #[test]
@@ -155,33 +150,14 @@ fn demo_on_an_asset_offers_every_method_and_steps_past_refusals() {
     // An OBJ alone declares no method, so M steps through every method in the registry's order:
     // forward, shadow_volumes, then the two height-field methods, which the asset refuses (it has
     // no height field). Each refusal is reported once and the next M goes past it.
-    let device = std::env::var("PENUMBRA_TEST_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
     let obj = common::temp_path("demo-asset.obj");
     std::fs::write(
         &obj,
         "v -2 0 -2\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nv -0.3 0.6 0\nv 0.3 0.6 0\nv 0 0.6 0.3\nf 1 2 3 4\nf 5 7 6\n",
     )
     .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-        .arg("demo")
-        .arg(&obj)
-        .args([
-            "--size",
-            "64x48",
-            "--frames",
-            "7",
-            "--cycle-every",
-            "2",
-            "--validation",
-            "--device",
-            &device,
-        ])
-        .output()
-        .unwrap();
-    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-    assert!(o.status.success(), "demo failed:\n{err}");
-    let switches: Vec<&str> = out.lines().filter_map(|l| l.strip_prefix("configuration: ")).collect();
-    assert_eq!(switches, ["shadow_volumes"], "{out}");
+    let (switches, err) = cycling_demo(&obj, 7);
+    assert_eq!(switches, ["shadow_volumes"]);
     for refused in ["heightfield_pyramid", "heightfield_bruteforce"] {
         let lines = err
             .lines()

@@ -27,6 +27,31 @@ fn chart(
     penumbra(&args)
 }
 
+/// `penumbra capture SCENE --size SIZE --max-error BOUND` reading the chart cache `cache`,
+/// writing `out` when given.
+fn capture_max_error(
+    scene: &str,
+    size: &str,
+    bound: &str,
+    cache: &std::path::Path,
+    out: Option<&std::path::Path>,
+) -> std::process::Output {
+    let mut args = vec![
+        "capture",
+        scene,
+        "--size",
+        size,
+        "--max-error",
+        bound,
+        "--cache-dir",
+        cache.to_str().unwrap(),
+    ];
+    if let Some(out) = out {
+        args.extend(["-o", out.to_str().unwrap()]);
+    }
+    penumbra(&args)
+}
+
 #[test]
 fn compare_prints_known_metrics_and_writes_a_diff_image() {
     let (a, b, diff) = (
@@ -122,33 +147,11 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
     // --max-error picks from these measurements, or says none qualifies and names the closest.
     let out = common::temp_path("max-error.png");
     let loose = format!("{}", rows[0].rel_mse * 2.0);
-    let o = ok(&penumbra(&[
-        "capture",
-        scene,
-        "--size",
-        "32x32",
-        "--max-error",
-        &loose,
-        "--cache-dir",
-        cache.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]));
+    let o = ok(&capture_max_error(scene, "32x32", &loose, &cache, Some(&out)));
     assert!(o.contains("picked `forward`"), "{o}");
     assert!(out.exists());
     let tight = format!("{}", rows[0].rel_mse / 2.0);
-    let o = penumbra(&[
-        "capture",
-        scene,
-        "--size",
-        "32x32",
-        "--max-error",
-        &tight,
-        "--cache-dir",
-        cache.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = capture_max_error(scene, "32x32", &tight, &cache, Some(&out));
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -156,16 +159,7 @@ fn chart_measures_the_scene_caches_the_reference_and_drives_max_error() {
         "{e}"
     );
     // Without chart data for that size it says what to run.
-    let o = penumbra(&[
-        "capture",
-        scene,
-        "--size",
-        "16x16",
-        "--max-error",
-        "0.1",
-        "--cache-dir",
-        cache.to_str().unwrap(),
-    ]);
+    let o = capture_max_error(scene, "16x16", "0.1", &cache, None);
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("run `penumbra chart"),
         "{}",
@@ -204,18 +198,13 @@ fn chart_and_max_error_take_a_method_an_asset_does_not_declare() {
     );
     let loose = format!("{}", rows.iter().map(|r| r.rel_mse).fold(0.0, f64::max) * 2.0);
     let out = dir.join("picked.png");
-    let o = ok(&penumbra(&[
-        "capture",
+    let o = ok(&capture_max_error(
         obj.to_str().unwrap(),
-        "--size",
         "24x16",
-        "--max-error",
         &loose,
-        "--cache-dir",
-        cache.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]));
+        &cache,
+        Some(&out),
+    ));
     assert!(o.contains("picked `clustered"), "{o}");
     assert!(out.exists());
 }

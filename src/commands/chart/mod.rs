@@ -638,7 +638,8 @@ fn chosen_configurations(scene: &Scene, opts: &ChartOptions) -> Result<Vec<Confi
         match registry::undeclared(scene, name) {
             Some(c) => all.push(c),
             None => {
-                let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+                let offered = registry::offered(scene)?;
+                let known: Vec<&str> = offered.iter().map(|c| c.name.as_str()).collect();
                 return Err(Error::Usage(format!(
                     "{}: --method {name}: the scene has no such method or combination (it has {})",
                     opts.scene.display(),
