@@ -628,6 +628,11 @@ impl<'g> Recorder<'g> {
     }
 
     pub fn copy_buffer(&mut self, src: BufferId, dst: BufferId, size: u64) -> BackendResult<()> {
+        self.copy_buffer_to(src, dst, 0, size)
+    }
+
+    /// Copies the first `size` bytes of `src` into `dst` from `dst_offset`.
+    pub fn copy_buffer_to(&mut self, src: BufferId, dst: BufferId, dst_offset: u64, size: u64) -> BackendResult<()> {
         let (s, d) = (self.gpu.buffer(src)?.raw, self.gpu.buffer(dst)?.raw);
         unsafe {
             self.gpu.device.cmd_copy_buffer(
@@ -636,7 +641,7 @@ impl<'g> Recorder<'g> {
                 d,
                 &[vk::BufferCopy {
                     src_offset: 0,
-                    dst_offset: 0,
+                    dst_offset,
                     size,
                 }],
             )

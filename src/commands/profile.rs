@@ -31,6 +31,9 @@ pub struct ProfileReport {
     pub memory: Vec<crate::lighting::MemoryItem>,
     /// What the methods left out of the last frame ([`crate::lighting::LightingMethod::warnings`]).
     pub warnings: Vec<String>,
+    /// What the last frame did that the timings do not show
+    /// ([`crate::lighting::LightingMethod::frame_notes`]).
+    pub notes: Vec<String>,
 }
 
 pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
@@ -60,6 +63,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
     let method_report = registry::reports(&renderer.configuration, &passes);
     let memory = renderer.method_memory()?;
     let warnings = renderer.method_warnings()?;
+    let notes = renderer.method_frame_notes()?;
     let caps = renderer.gpu.caps();
     Ok(ProfileReport {
         configuration: renderer.configuration.name.clone(),
@@ -68,6 +72,7 @@ pub fn run(opts: &CaptureOptions, frames: usize) -> Result<ProfileReport> {
         method_report,
         memory,
         warnings,
+        notes,
         device: caps.name.clone(),
         driver: format!("{} {}", caps.driver_name, caps.driver_info),
         width: opts.size.0,
@@ -104,6 +109,9 @@ impl ProfileReport {
             s += &format!("culled (outputs unused): {}\n", self.culled.join(", "));
         }
         s += &self.method_report;
+        for n in &self.notes {
+            s += &format!("{n}\n");
+        }
         if !self.memory.is_empty() {
             s += &format!("{:<52} {:>12} {:>12}\n", "device memory", "requested", "allocated");
             for m in &self.memory {

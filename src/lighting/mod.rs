@@ -223,6 +223,11 @@ pub trait LightingMethod {
     fn warnings(&self, _gpu: &mut Gpu) -> Result<Vec<String>> {
         Ok(Vec::new())
     }
+    /// What the last (finished) frame did that its pass timings do not show, read back, each a
+    /// line for `profile` (how shadow volumes were counted, say). Read once after a run.
+    fn frame_notes(&self, _gpu: &mut Gpu) -> Result<Vec<String>> {
+        Ok(Vec::new())
+    }
     /// What one frame will take on this device, estimated before the first from its work and a
     /// measured throughput (none: not estimated).
     fn frame_cost(&self) -> Option<FrameCost> {

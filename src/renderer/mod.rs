@@ -279,6 +279,16 @@ impl Renderer {
         Ok(out)
     }
 
+    /// What the last frame did that its timings do not show (see
+    /// [`LightingMethod::frame_notes`]); call after that frame has finished.
+    pub fn method_frame_notes(&mut self) -> Result<Vec<String>> {
+        let mut out = Vec::new();
+        for m in &self.methods {
+            out.extend(m.frame_notes(&mut self.gpu)?);
+        }
+        Ok(out)
+    }
+
     /// One line per method whose `frames` frames are estimated past a minute (see
     /// [`LightingMethod::frame_cost`]), naming the scene: said before the first frame.
     pub fn cost_warnings(&self, frames: usize) -> Vec<String> {

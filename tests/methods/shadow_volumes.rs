@@ -9,8 +9,8 @@ use crate::support as common;
 use crate::support::shadow_volumes as sv_common;
 
 use glam::Vec3;
-use penumbra::scene::Camera;
-use sv_common::{compare_masks, hit_plane_y, lit, method, render, MaskComparison};
+use penumbra::scene::{Camera, Scene};
+use sv_common::{compare_masks, hit_plane_y, lit, method, render, render_with_notes, MaskComparison};
 
 const SIZE: (u32, u32) = (128, 128);
 
@@ -231,6 +231,44 @@ fn camera_inside_a_volume_z_fail_is_right_and_z_pass_is_wrong() {
     );
 }
 
+/// Z-pass where it is exact: with the camera outside every volume, the default counting draws
+/// the volumes by z-pass, without caps, and gives the z-fail image bit for bit; with the camera
+/// inside one (the near plane cutting it), that occluder by z-fail and the rest by z-pass,
+/// entity by entity, with or without a second occluder in view.
+#[test]
+fn z_pass_is_taken_exactly_where_the_near_plane_cuts_no_volume() {
+    let inside = "[camera]\nposition = [0.3, 2.0, 0.2]\ntarget = [2.5, 0.0, 1.8]\nfov_y_deg = 80\nnear = 0.05";
+    let outside = "[camera]\nposition = [7, 14, 9]\ntarget = [0, 0, 0]\nfov_y_deg = 35";
+    // Its shadow falls in the inside camera's view, and its volume misses that camera.
+    let post = "[[objects]]\nname = \"post\"\nmesh = \"box\"\nsize = [0.5, 2, 0.5]\ntranslate = [3, 1, 2.5]\nmaterial = \"grey\"";
+    let two = |occluder: &str| format!("{occluder}\n\n{post}");
+    for (camera, way, occluders) in [
+        (outside, "1 by z-pass alone; ", [QUAD.to_string(), SLAB.to_string()]),
+        // The ground casts too (below itself), by z-pass: the light takes both ways.
+        (
+            inside,
+            "0 by z-pass alone, 1 by both",
+            [QUAD.to_string(), SLAB.to_string()],
+        ),
+        (inside, "0 by z-pass alone, 1 by both", [two(QUAD), two(SLAB)]),
+    ] {
+        for (name, occluder) in ["open quad", "closed slab"].into_iter().zip(&occluders) {
+            let scene = |params: &[&str]| {
+                Scene::from_str(
+                    &analytic_scene(camera, occluder, params),
+                    "<test>",
+                    std::path::Path::new("."),
+                )
+                .unwrap()
+            };
+            let (chosen, notes) = render_with_notes(scene(&[]), SIZE);
+            let (zfail, _) = render_with_notes(scene(&["stencil = \"zfail\""]), SIZE);
+            assert!(notes.len() == 1 && notes[0].contains(way), "{name}: {notes:?}");
+            assert!(chosen.pixels == zfail.pixels, "{name}: the image differs from z-fail's");
+        }
+    }
+}
+
 /// A light 100 m up, a 1 m slab 1 m below it, the camera 330 m away: the volume is extruded to
 /// infinity and its far cap sits at depth 1. With depth clamp and with the infinite projection
 /// alone (the far cap nudged inside), the 100 m shadow on the ground is right.
@@ -296,8 +334,9 @@ intensity = 20000
 /// of side 4: 300 volumes (one per quad: its two triangles share their inner edge, which has no
 /// sides) overlap under the stack. With wrapping increments the count (300 ≡ 44 mod 256) stays
 /// non-zero inside and returns to 0 outside; with saturating ones (`stencil_wrap = false`) it
-/// does not: outside, the sides behind the ground (decrements, drawn first) stop at 0 and the
-/// far caps then count to 255.
+/// does not under z-fail: outside, the sides behind the ground (decrements, drawn first) stop at
+/// 0 and the far caps then count to 255. (The default counting takes z-pass here, the camera
+/// being outside every volume, so the negative control asks for z-fail.)
 #[test]
 fn more_than_255_overlapping_volumes() {
     let dir = common::temp_path("sv-stack");
@@ -317,7 +356,12 @@ fn more_than_255_overlapping_volumes() {
     let stack = "[[objects]]\nname = \"stack\"\nmesh = \"obj\"\npath = \"stack.obj\"\nmaterial = \"grey\"";
     let mut stats = Vec::new();
     for wrap in [true, false] {
-        let text = analytic_scene(TOP_DOWN, stack, &[&format!("stencil_wrap = {wrap}")]);
+        let stencil = if wrap { "auto" } else { "zfail" };
+        let text = analytic_scene(
+            TOP_DOWN,
+            stack,
+            &[&format!("stencil_wrap = {wrap}"), &format!("stencil = \"{stencil}\"")],
+        );
         let (img, scene) = sv_common::render_in(&text, &dir, SIZE);
         let c = compare_masks(
             SIZE.0,

@@ -21,11 +21,17 @@ pub fn render(toml: &str, size: (u32, u32)) -> (HdrImage, Scene) {
 }
 
 pub fn render_scene(scene: Scene, size: (u32, u32)) -> HdrImage {
+    render_with_notes(scene, size).0
+}
+
+/// One frame, and the method's notes on it (`LightingMethod::frame_notes`).
+pub fn render_with_notes(scene: Scene, size: (u32, u32)) -> (HdrImage, Vec<String>) {
     let mut r = Renderer::new(common::test_gpu(), scene, None, size, 1).unwrap_or_else(|e| panic!("renderer: {e}"));
     let cam = r.scene.camera.clone();
     let img = r.render(&cam, FrameOutput::Readback).unwrap().image.unwrap();
+    let notes = r.method_frame_notes().unwrap();
     common::assert_clean(&r.gpu);
-    img
+    (img, notes)
 }
 
 /// `[[methods]]` text for the method with these extra `key = value` lines.

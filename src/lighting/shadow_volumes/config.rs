@@ -92,6 +92,9 @@ pub enum Casters {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stencil {
+    /// Z-fail, and z-pass without the caps for a light none of whose entity volumes reaches the
+    /// near plane (Everitt & Kilgard 2002): the same counts as z-fail, at a fraction of the fill.
+    Auto,
     /// Count volume faces behind the surface (Carmack's reverse); caps needed, robust.
     ZFail,
     /// Count faces in front; wrong where the near plane cuts a volume. For comparison.
@@ -159,9 +162,10 @@ impl Config {
             "pvs" => Casters::Pvs,
             _ => Casters::Pscs,
         };
-        let stencil = match string("stencil", &["zfail", "zpass"], "zfail")?.as_str() {
+        let stencil = match string("stencil", &["auto", "zfail", "zpass"], "auto")?.as_str() {
             "zpass" => Stencil::ZPass,
-            _ => Stencil::ZFail,
+            "zfail" => Stencil::ZFail,
+            _ => Stencil::Auto,
         };
         let materials = match string("materials", &["special", "default_maps"], "special")?.as_str() {
             "default_maps" => MaterialPath::DefaultMaps,
@@ -219,18 +223,19 @@ pub fn with_params(decl: &MethodDecl, params: &[(&str, toml::Value)]) -> MethodD
         .fold(decl.clone(), |d, (name, value)| d.with(name, value.clone()))
 }
 
-/// The chart's sweep: for each mode, the three caster strategies (z-fail, special-case
-/// pipelines, PVS on), then z-pass, the default-map pipeline, and both material paths with the
+/// The chart's sweep: for each mode, the three caster strategies (the default stencil counting,
+/// special-case pipelines, PVS on), then z-fail alone and z-pass alone, the default-map pipeline, and both material paths with the
 /// PVS off (the seed's Tables 1/2 columns). The scene's other parameters are kept.
 pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
     let s = |x: &str| toml::Value::String(x.into());
     let b = toml::Value::Boolean;
     let mut out = Vec::new();
     for mode in ["faithful", "physical"] {
-        let points: [(&str, Vec<(&str, toml::Value)>); 7] = [
+        let points: [(&str, Vec<(&str, toml::Value)>); 8] = [
             ("pscs", vec![("casters", s("pscs"))]),
             ("pvs-only casters", vec![("casters", s("pvs"))]),
             ("naive casters", vec![("casters", s("naive"))]),
+            ("pscs z-fail", vec![("casters", s("pscs")), ("stencil", s("zfail"))]),
             ("pscs z-pass", vec![("casters", s("pscs")), ("stencil", s("zpass"))]),
             (
                 "pscs default maps",
@@ -249,7 +254,7 @@ pub fn sweep(decl: &MethodDecl) -> Vec<(String, MethodDecl)> {
         for (label, params) in points {
             let mut all = vec![
                 ("mode", s(mode)),
-                ("stencil", s("zfail")),
+                ("stencil", s("auto")),
                 ("materials", s("special")),
                 ("pvs", b(true)),
             ];
@@ -281,7 +286,7 @@ mod tests {
             (
                 Mode::Faithful,
                 Casters::Pscs,
-                Stencil::ZFail,
+                Stencil::Auto,
                 MaterialPath::SpecialCase,
                 4
             )
@@ -321,15 +326,17 @@ mod tests {
     fn the_sweep_covers_strategies_stencil_modes_material_paths_and_the_pvs() {
         let s = scene("\"shadow_volumes\"");
         let points = sweep(&s.methods[0]);
-        assert_eq!(points.len(), 14);
+        assert_eq!(points.len(), 16);
         let configs: Vec<Config> = points.iter().map(|(_, d)| Config::from_decl(d, &s).unwrap()).collect();
         for casters in [Casters::Naive, Casters::Pvs, Casters::Pscs] {
             assert!(configs.iter().any(|c| c.casters == casters && c.mode == Mode::Physical));
         }
-        assert!(configs.iter().any(|c| c.stencil == Stencil::ZPass));
+        for stencil in [Stencil::Auto, Stencil::ZFail, Stencil::ZPass] {
+            assert!(configs.iter().any(|c| c.stencil == stencil));
+        }
         assert!(configs
             .iter()
             .any(|c| c.materials == MaterialPath::DefaultMaps && !c.pvs));
-        assert_eq!(configs.iter().filter(|c| c.mode == Mode::Faithful).count(), 7);
+        assert_eq!(configs.iter().filter(|c| c.mode == Mode::Faithful).count(), 8);
     }
 }

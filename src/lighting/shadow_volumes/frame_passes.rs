@@ -7,9 +7,9 @@ use bytemuck::Zeroable;
 use glam::Vec4;
 
 use super::plan::{self, FramePlan, LightPlan};
-use super::{record_surface, LightBlock, ShadowVolumes, SilhouetteBuffers, SilhouettePush, VolumePush};
+use super::SILHOUETTE_COMMAND_WORDS;
+use super::{near_clip, record_surface, LightBlock, ShadowVolumes, SilhouetteBuffers, SilhouettePush, VolumePush};
 use crate::backend::{vk, Bind, RenderTarget, RenderingDesc, SubresourceRange};
-use crate::gpu_scene::SceneGpu;
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::FrameContext;
 use crate::world::FaceId;
@@ -24,27 +24,44 @@ impl ShadowVolumes {
         s: &'a SilhouetteBuffers,
         plan: &Rc<FramePlan>,
         lp: &LightPlan,
-        scene: &SceneGpu,
+        frame: &FrameContext<'a>,
         translucent: bool,
     ) {
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let light: Vec4 = self.homogeneous_light(lp.light, scene);
+        let light: Vec4 = self.homogeneous_light(lp.light, frame.scene);
+        // The light, then the hull its triangles are tested against for z-pass (none: z-fail).
+        let hull = match self.volume_zpass {
+            Some(_) => near_clip::near_clip(&frame.uniforms.view_proj, light),
+            None => None,
+        };
+        let light_data = hull.map_or([light; 10], |h| h.with_light(light));
+        let near_test = hull.is_some() as u32;
         let prefix = if translucent { "translucent " } else { "" };
-        let (commands, caps_base) = (s.commands, s.caps_base);
-        // Two VkDrawIndirectCommand (vertex count, instances, first vertex, first instance).
+        let (commands, near, caps_base) = (s.commands, s.near, s.caps_base);
+        // Three VkDrawIndirectCommand (vertex count, instances, first vertex, first instance):
+        // sides for z-fail, caps, sides for z-pass. Every entity counts by z-fail when no test
+        // is made.
+        let reset: [u32; SILHOUETTE_COMMAND_WORDS] = [0, 1, 0, 0, 0, 1, caps_base, 0, 0, 1, 0, 0];
         graph
             .pass(&format!("light {} {prefix}silhouette counts", lp.light))
             .buffer(commands, Access::TransferWrite, None)
-            .record(move |ctx| ctx.rec.update_buffer(commands, &[0, 1, 0, 0, 0, 1, caps_base, 0]));
-        // The triangles (their facings and caps), then the edges (their sides from those
-        // facings): two passes, so the edges read what the triangles wrote.
-        for edges_phase in [false, true] {
+            .buffer(near, Access::TransferWrite, None)
+            .record(move |ctx| {
+                ctx.rec.update_buffer(commands, &reset)?;
+                ctx.rec.fill_buffer(near, 1 - near_test)
+            });
+        // The triangles (their facings, and whether a volume reaches the near plane), then the
+        // caps and the edges (the sides from those facings), then, with the near-plane test,
+        // one invocation that sets where the z-pass sides start: passes, so that each reads what
+        // the one before wrote.
+        let phases = if near_test != 0 { 3 } else { 2 };
+        for phase in 0..phases {
             let (casters, p) = (lp.caster_entities.clone(), plan.clone());
-            let name = if edges_phase { "silhouette edges" } else { "silhouettes" };
-            let facings = if edges_phase {
-                Access::StorageRead { stages: compute }
-            } else {
+            let name = ["silhouettes", "silhouette edges", "silhouette draws"][phase as usize];
+            let facings = if phase == 0 {
                 Access::StorageWrite { stages: compute }
+            } else {
+                Access::StorageRead { stages: compute }
             };
             graph
                 .pass(&format!("light {} {prefix}{name}", lp.light))
@@ -54,15 +71,18 @@ impl ShadowVolumes {
                 .buffer(s.volumes, Access::StorageWrite { stages: compute }, Some("volumes"))
                 .buffer(commands, Access::StorageWrite { stages: compute }, Some("commands"))
                 .buffer(s.facings, facings, Some("facings"))
+                // Declared written throughout, so that the next light's reset waits on the
+                // writes of the first dispatch, not only on the reads since.
+                .buffer(near, Access::StorageWrite { stages: compute }, Some("near_plane"))
                 .record(move |ctx| {
                     ctx.rec.bind_pipeline(self.silhouette)?;
-                    ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::bytes_of(&light)))])?;
+                    ctx.bind(&[("light_positions", Bind::StorageData(bytemuck::cast_slice(&light_data)))])?;
                     for &e in &casters {
                         let (topo, slot) = (&self.setup.entities[e].topology, &s.slots[e]);
-                        let items = if edges_phase {
-                            topo.edges.len()
-                        } else {
-                            topo.triangles.len()
+                        let items = match phase {
+                            0 => topo.triangles.len(),
+                            1 => topo.edges.len().max(topo.triangles.len()),
+                            _ => 1,
                         };
                         if items == 0 {
                             continue;
@@ -76,10 +96,15 @@ impl ShadowVolumes {
                             edge_count: topo.edges.len() as u32,
                             caps_base,
                             closed: topo.closed as u32,
-                            edges_phase: edges_phase as u32,
+                            edges_phase: phase,
+                            near_test,
+                            index: e as u32,
                         };
                         ctx.rec.push_constants(bytemuck::bytes_of(&push))?;
                         ctx.rec.dispatch([items as u32, 1, 1])?;
+                        if phase == 2 {
+                            break;
+                        }
                     }
                     Ok(())
                 });
@@ -199,7 +224,7 @@ impl ShadowVolumes {
                 .buffer(volumes, Access::VertexRead, None)
                 .buffer(commands, Access::IndirectRead, None);
         }
-        let templates = self.templates;
+        let (templates, zpass) = (self.templates, self.volume_zpass);
         pass.record(move |ctx| {
             let extent = ctx.rec.begin_rendering(&RenderingDesc {
                 colors: Vec::new(),
@@ -224,14 +249,31 @@ impl ShadowVolumes {
                     light: light_pos.extend(0.0).into(),
                     nudge_far: nudge,
                 }))?;
-                // Sides, then caps (the order the saturating negative control relies on).
+                // Sides, then caps (the order the saturating negative control relies on); the
+                // silhouette pass left one of the two ways empty.
                 let command = std::mem::size_of::<vk::DrawIndirectCommand>() as u64;
                 ctx.rec.draw_indirect(commands, 0)?;
                 ctx.rec.draw_indirect(commands, command)?;
+                if let Some(zpass) = zpass {
+                    ctx.rec.bind_pipeline(zpass)?;
+                    ctx.rec.draw_indirect(commands, 2 * command)?;
+                }
             }
             ctx.rec.end_rendering();
             Ok(())
         });
+        if let (Some((_, commands)), Some(s)) = (entity_volumes, &self.silhouettes) {
+            let bytes = (SILHOUETTE_COMMAND_WORDS * 4) as u64;
+            let slot = (translucent as usize * self.setup.lights.len() + light_index) as u64;
+            let tally = s.tally;
+            graph
+                .pass(&format!("light {light_index} {prefix}volume tally"))
+                .buffer(commands, Access::TransferRead, None)
+                .buffer(tally, Access::TransferWrite, None)
+                .record(move |ctx| ctx.rec.copy_buffer_to(commands, tally, slot * bytes, bytes));
+            // Read back after the frame (`frame_notes`), by nothing in it.
+            graph.output_buffer(tally);
+        }
     }
 
     /// Light `lp`'s lighting of its receivers where the stencil is clear.

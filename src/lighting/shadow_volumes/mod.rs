@@ -34,7 +34,9 @@ pub(crate) mod config;
 pub mod cpu;
 mod frame_passes;
 pub mod maps;
+pub(crate) mod near_clip;
 pub(crate) mod plan;
+mod tally;
 pub mod volumes;
 
 use std::rc::Rc;
@@ -284,7 +286,12 @@ struct SilhouettePush {
     caps_base: u32,
     closed: u32,
     edges_phase: u32,
+    near_test: u32,
+    index: u32,
 }
+
+/// The silhouette pass's command words: three `VkDrawIndirectCommand`.
+const SILHOUETTE_COMMAND_WORDS: usize = 12;
 
 /// Where one entity's data lives in the silhouette buffers.
 #[derive(Clone, Copy, Debug)]
@@ -300,8 +307,14 @@ struct SilhouetteBuffers {
     edges: BufferId,
     /// One light's volumes, compacted: the sides from vertex 0, the caps from `caps_base`.
     volumes: BufferId,
-    /// The two indirect draws (sides, caps) whose vertex counts the silhouette pass counts up.
+    /// The indirect draws whose vertex counts the silhouette pass counts up (sides for z-fail,
+    /// caps, sides for z-pass).
     commands: BufferId,
+    /// Per entity, whether one of its volumes may reach the near plane (z-fail).
+    near: BufferId,
+    /// Per round (opaque, translucent) and light, a copy of its `commands` once drawn: what
+    /// `frame_notes` reports.
+    tally: BufferId,
     /// Each triangle's facing for the light: the triangles' dispatch writes it, the edges' read it.
     facings: BufferId,
     /// Room for every entity's sides at most: where the caps start.
@@ -338,6 +351,8 @@ pub struct ShadowVolumes {
     translucent_ambient: [PipelineId; 2],
     light: [[PipelineId; 2]; 2],
     volume: PipelineId,
+    /// `stencil = "auto"`: z-pass for a light whose entity volumes miss the near plane.
+    volume_zpass: Option<PipelineId>,
     silhouette: PipelineId,
     nudge_far: bool,
     /// The exact flat normal (0.5, 0.5, 1) in RGBA32F for the default-map path (8-bit 128 is
@@ -431,9 +446,24 @@ fn surface_pipelines(
     ))
 }
 
-/// The stencil-volume pipeline for the configured counting (z-fail or z-pass, wrapping or
-/// clamping), and whether it clamps depth (the device allowing) instead of nudging the far caps.
-fn volume_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, c: &Config) -> Result<(PipelineId, bool)> {
+/// The stencil-volume pipelines for the configured counting (z-fail or z-pass, wrapping or
+/// clamping; `auto` gets a z-pass one beside the z-fail one), and whether they clamp depth (the
+/// device allowing) instead of nudging the far caps.
+fn volume_pipelines(
+    gpu: &mut Gpu,
+    shaders: &ShaderLibrary,
+    c: &Config,
+) -> Result<(PipelineId, Option<PipelineId>, bool)> {
+    let (volume, depth_clamp) = volume_pipeline(gpu, shaders, c, c.stencil == Stencil::ZPass)?;
+    let zpass = match c.stencil {
+        Stencil::Auto => Some(volume_pipeline(gpu, shaders, c, true)?.0),
+        Stencil::ZFail | Stencil::ZPass => None,
+    };
+    Ok((volume, zpass, depth_clamp))
+}
+
+/// One stencil-volume pipeline, counting by z-pass or z-fail.
+fn volume_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, c: &Config, zpass: bool) -> Result<(PipelineId, bool)> {
     let ds_format = gpu.caps().depth_stencil_format;
     let (inc, dec) = if c.stencil_wrap {
         (vk::StencilOp::INCREMENT_AND_WRAP, vk::StencilOp::DECREMENT_AND_WRAP)
@@ -448,18 +478,20 @@ fn volume_pipeline(gpu: &mut Gpu, shaders: &ShaderLibrary, c: &Config) -> Result
     let keep = vk::StencilOp::KEEP;
     // Outward-facing volumes: z-fail counts +1 for back faces and −1 for front faces behind
     // the surface; z-pass +1 for front faces and −1 for back faces in front of it.
-    let faces = match c.stencil {
-        Stencil::ZFail => StencilFaces {
-            front: count(keep, dec),
-            back: count(keep, inc),
-        },
-        Stencil::ZPass => StencilFaces {
+    let faces = if zpass {
+        StencilFaces {
             front: count(inc, keep),
             back: count(dec, keep),
-        },
+        }
+    } else {
+        StencilFaces {
+            front: count(keep, dec),
+            back: count(keep, inc),
+        }
     };
     let depth_clamp = c.depth_clamp && gpu.caps().depth_clamp;
-    let mut vd = GraphicsPipelineDesc::new(&format!("{NAME} volumes"), "shadow_volumes/volume.vert", None);
+    let name = format!("{NAME} volumes{}", if zpass { " (z-pass)" } else { "" });
+    let mut vd = GraphicsPipelineDesc::new(&name, "shadow_volumes/volume.vert", None);
     vd.vertex_layout = VertexLayout {
         buffers: vec![(0, 16)],
         attributes: vec![VertexAttribute {
@@ -496,7 +528,7 @@ impl ShadowVolumes {
         }
         let c = &setup.config;
         let (ambient, translucent_ambient, light) = surface_pipelines(gpu, shaders, c)?;
-        let (volume, depth_clamp) = volume_pipeline(gpu, shaders, c)?;
+        let (volume, volume_zpass, depth_clamp) = volume_pipelines(gpu, shaders, c)?;
         let silhouette = gpu.create_compute_pipeline(
             &ComputePipelineDesc {
                 name: format!("{NAME} silhouettes"),
@@ -538,6 +570,7 @@ impl ShadowVolumes {
             translucent_ambient,
             light,
             volume,
+            volume_zpass,
             silhouette,
             nudge_far: !depth_clamp,
             default_normal,
@@ -639,10 +672,11 @@ impl ShadowVolumes {
         })?;
         let commands = gpu.create_buffer(&BufferDesc {
             name: "entity shadow volume draws".into(),
-            size: 2 * std::mem::size_of::<vk::DrawIndirectCommand>() as u64,
+            size: 4 * SILHOUETTE_COMMAND_WORDS as u64,
             usage: vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::INDIRECT_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_DST,
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
             memory: MemoryKind::GpuOnly,
         })?;
         let facings = gpu.create_buffer(&BufferDesc {
@@ -651,12 +685,26 @@ impl ShadowVolumes {
             usage: vk::BufferUsageFlags::STORAGE_BUFFER,
             memory: MemoryKind::GpuOnly,
         })?;
+        let near = gpu.create_buffer(&BufferDesc {
+            name: "entity near-plane marks".into(),
+            size: (4 * setup.entities.len() as u64).max(16),
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            memory: MemoryKind::GpuOnly,
+        })?;
+        let tally = gpu.create_buffer(&BufferDesc {
+            name: "entity shadow volume tally".into(),
+            size: (2 * setup.lights.len() * SILHOUETTE_COMMAND_WORDS * 4) as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+            memory: MemoryKind::GpuOnly,
+        })?;
         Ok(Some(SilhouetteBuffers {
             positions,
             triangles,
             edges,
             volumes,
             commands,
+            near,
+            tally,
             facings,
             caps_base: side_vertices,
             slots,
@@ -839,6 +887,15 @@ impl LightingMethod for ShadowVolumes {
         NAME
     }
 
+    fn frame_notes(&self, gpu: &mut Gpu) -> Result<Vec<String>> {
+        let Some(s) = &self.silhouettes else {
+            return Ok(Vec::new());
+        };
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&crate::graph::read_back_buffer(gpu, s.tally, NAME)?);
+        let names: Vec<&str> = self.setup.lights.iter().map(|l| l.name.as_str()).collect();
+        Ok(tally::notes(&words, &names))
+    }
+
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
         let camera = Vec3::from_slice(&frame.uniforms.camera_pos[..3]);
         self.plan = Some(Rc::new(self.setup.plan(camera, self.time(frame.clock.time_s))));
@@ -852,6 +909,13 @@ impl LightingMethod for ShadowVolumes {
             .clone()
             .ok_or_else(|| Error::Internal(format!("{NAME}: a frame was recorded before it was prepared")))?;
         let silhouettes = self.silhouettes.as_ref().filter(|_| direct);
+        if let Some(s) = silhouettes {
+            let tally = s.tally;
+            graph
+                .pass("volume tally reset")
+                .buffer(tally, Access::TransferWrite, None)
+                .record(move |ctx| ctx.rec.fill_buffer(tally, 0));
+        }
 
         // The seed's path twice: opaque surfaces (translucent ones omitted from receivers and
         // casters, so light shines through them), then the translucent entities alone, back to
@@ -874,7 +938,7 @@ impl LightingMethod for ShadowVolumes {
                     continue;
                 }
                 if let Some(s) = silhouettes.filter(|_| !lp.caster_entities.is_empty()) {
-                    self.add_silhouettes(graph, s, &plan, lp, frame.scene, translucent);
+                    self.add_silhouettes(graph, s, &plan, lp, frame, translucent);
                 }
                 self.add_volumes(graph, frame, lp, translucent);
                 self.add_lighting(graph, frame, &plan, lp, translucent);
