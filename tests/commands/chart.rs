@@ -234,11 +234,12 @@ fn chart_measures_the_textured_shadow_volume_level() {
     assert!(stdout.contains("supersampled 4x4"), "{stdout}");
     let rows = penumbra::commands::chart::parse_csv(&std::fs::read_to_string(&csv).unwrap()).unwrap();
     let configs: Vec<&str> = rows.iter().map(|r| r.config.as_str()).collect();
-    assert_eq!(rows.len(), 14, "{configs:?}");
+    assert_eq!(rows.len(), 16, "{configs:?}");
     for want in [
         "faithful pscs",
         "physical naive casters",
         "physical pvs-only casters",
+        "physical pscs z-fail",
         "physical pscs z-pass",
         "physical pscs default maps",
         "physical pscs PVS off",
@@ -259,8 +260,13 @@ fn chart_measures_the_textured_shadow_volume_level() {
     // the physical mode's error (0.024 here, 0.012 at 128²; 2.4e-4 with the method's image
     // rendered at 512² and box-filtered to 128²).
     assert!(err("physical pscs") < 0.05 && 3.0 * err("physical pscs") < err("faithful pscs"));
-    // Caster strategies and material paths draw the same image (to rounding).
-    for c in ["physical naive casters", "physical pscs default maps"] {
+    // Caster strategies, material paths and z-fail beside the default counting draw the same
+    // image (to rounding).
+    for c in [
+        "physical naive casters",
+        "physical pscs default maps",
+        "physical pscs z-fail",
+    ] {
         assert!(
             (err(c) / err("physical pscs") - 1.0).abs() < 1e-3,
             "{c}: {} vs {}",
