@@ -5,14 +5,16 @@
 //! 1. **silhouettes** (compute): per light, for each casting entity, the silhouette edges from
 //!    edge adjacency, extruded to infinity, with caps (open meshes cast from both sides: every
 //!    triangle capped, sides where the turned triangles' windings do not cancel), compacted into
-//!    two indirect draws — [`volumes::silhouette_volume`] is its CPU mirror;
+//!    three indirect draws — [`volumes::silhouette_volume`] is its CPU mirror; an entity none of
+//!    whose triangles meets the light's near-clip volume (`near_clip.rs`) gets no caps and
+//!    counts by z-pass;
 //! 2. **ambient**: depth, and the ambient/emissive term of Eq. 5 (`diffuse·lightmap·N_z +
 //!    luminance`; the physical mode writes the emission only);
 //! 3. per light: **volumes** — stencil cleared, then every caster's volume with two-sided
-//!    wrapping stencil ops, colour writes off, depth test on, no depth writes, z-fail (or z-pass
-//!    for comparison), the far caps at infinity (w = 0) kept by depth clamp where the device has
-//!    it and by the infinite projection otherwise; then **lighting** — the light's receivers
-//!    drawn again, added where the stencil is 0;
+//!    wrapping stencil ops, colour writes off, depth test on, no depth writes, z-fail (z-pass
+//!    for the entities above, or everywhere for comparison), the far caps at infinity (w = 0)
+//!    kept by depth clamp where the device has it and by the infinite projection otherwise;
+//!    then **lighting** — the light's receivers drawn again, added where the stencil is 0;
 //! 4. when translucent entities (material opacity < 1) are in view, the seed's compromise: they
 //!    were left out of 2–3 (neither lit nor casting, so light shines through them), and now are
 //!    drawn back to front over the image with depth writes (**translucent ambient**), then per
