@@ -130,6 +130,12 @@ float facing(vec3 p[3], vec4 light) {
     return dot(cross(p[1] - p[0], p[2] - p[0]), toward(light, p[0]));
 }
 
+// Whether a triangle of this facing casts a volume: a closed mesh's lit triangles cast nothing;
+// an open mesh's are turned to face away, and only those edge on to the light cast nothing.
+bool casts(float f) {
+    return entity.closed != 0u ? !(f > 0.0) : f != 0.0;
+}
+
 // +1 when triangle t, turned to face away from the light, runs the edge a -> b; -1 when it runs
 // b -> a; 0 when it has no volume (edge on to the light, or no triangle).
 int dark_direction(uint t, uint a, uint b) {
@@ -159,10 +165,7 @@ void side(vec3 u, vec3 v, vec4 light, uint draw) {
 void caps(uint t, vec4 light) {
     uvec4 tri = triangles.items[entity.triangle_offset + t];
     float f = facings.items[entity.triangle_offset + t];
-    // A closed mesh's lit triangles cast nothing; an open mesh's are turned to face away, and
-    // only those edge on to the light cast nothing.
-    bool casts = entity.closed != 0u ? !(f > 0.0) : f != 0.0;
-    if (!casts) {
+    if (!casts(f)) {
         return;
     }
     vec3 p[3] = vec3[3](world_position(tri.x), world_position(tri.y), world_position(tri.z));
@@ -228,8 +231,7 @@ void main() {
         // Kept, so that the caps and edges see this very facing for the triangle.
         float f = facing(p, light);
         facings.items[entity.triangle_offset + item] = f;
-        bool casts = entity.closed != 0u ? !(f > 0.0) : f != 0.0;
-        if (casts && entity.near_test != 0u && !misses_near_clip(p, light)) {
+        if (casts(f) && entity.near_test != 0u && !misses_near_clip(p, light)) {
             near_plane.items[entity.index] = 1u;
         }
         return;
