@@ -144,22 +144,19 @@ pub fn patch_size_for(area: f64, budget: f64) -> f64 {
 
 /// A light-map's default patch side, and why: the scene's area over `budget` patches
 /// ([`patch_size_for`]), or where that makes over four times the budget, the smallest size up
-/// to four times it (in steps of 1.25) that makes at most that many. Every chart (a planar
-/// group of triangles) takes at least a texel and its border frame, nine patches, at any size,
-/// so charts a few patches wide make more patches than their area says until the size grows.
-/// Border frames alone make a room of large faces about twice the budget (1.6 to 2.3 times
-/// over the generated suite's rooms), which the limit leaves alone. A curved mesh's thousands
-/// of small charts take about as many patches at any size: no size meets the limit, and the
-/// area's is kept rather than coarsening the large faces for nothing (measured on lavapipe:
-/// the Stanford bunny's 54,862 charts, 494k patches, bake in 1.4 s by radiosity and 1.8 s as
-/// an SH light-map).
+/// to four times it (in steps of 1.25) that makes at most that many. Every chart (a group of
+/// triangles on a plane, or on a curved surface within a quarter patch of one) takes at least a
+/// texel and its border frame, nine patches, at any size, so charts a few patches wide make
+/// more patches than their area says until the size grows. Border frames alone make a room of
+/// large faces about twice the budget (1.6 to 2.3 times over the generated suite's rooms), which
+/// the limit leaves alone. Where no size meets the limit, the area's is kept rather than
+/// coarsening the large faces for nothing.
 pub fn lightmap_patch_size(triangles: &[Triangle], budget: f64) -> (f64, String) {
-    use crate::lighting::lightmap::patches::{count_in, group_charts};
+    use crate::lighting::lightmap::patches::count;
     let area: f64 = triangles.iter().map(Triangle::area).sum();
-    let charts = group_charts(triangles);
     let limit = (4.0 * budget) as u64;
     let from_area = patch_size_for(area, budget);
-    let at_area = count_in(&charts, triangles, from_area);
+    let at_area = count(triangles, from_area);
     let mut why = format!("the scene's {area:.3} m² over a budget of {budget} patches");
     if at_area <= limit {
         return (from_area, why);
@@ -167,16 +164,14 @@ pub fn lightmap_patch_size(triangles: &[Triangle], budget: f64) -> (f64, String)
     let mut size = from_area;
     while size < (4.0 * from_area).min(10.0) {
         size = round2(size * 1.25).min(10.0);
-        let patches = count_in(&charts, triangles, size);
+        // Charts are grouped again at each size: a curved surface's charts grow with it.
+        let patches = count(triangles, size);
         if patches <= limit {
             why += &format!(", grown from {from_area} to make at most four times that ({patches})");
             return (size, why);
         }
     }
-    why += &format!(
-        "; its {} charts (planar groups of triangles) make {at_area} patches, and sizes up to four times larger not four times the budget",
-        charts.len()
-    );
+    why += &format!("; its charts make {at_area} patches, and sizes up to four times larger not four times the budget");
     (from_area, why)
 }
 

@@ -134,20 +134,36 @@ fn sh_lightmap_over_the_budget_is_refused_before_baking() {
     assert!(needed_mb(&message) > 2048.0, "{message}");
 }
 
-/// A curved mesh makes a chart per triangle or two, each at least a texel in its border frame,
-/// so no patch_size brings its light-map within the budget: the refusal says so, with its chart
-/// count and the samples that would fit, instead of asking for a larger patch_size.
+/// A triangle soup (8,192 triangles that share no edge, as scanned foliage or debris is often
+/// modelled) makes a chart per triangle, each at least a texel in its border frame, so no
+/// patch_size brings its light-map within the budget: the refusal says so, with its chart count
+/// and the samples that would fit, instead of asking for a larger patch_size. (A curved surface
+/// merges its triangles into charts instead: `src/lighting/radiosity/tests/curved.rs`.)
 #[test]
-fn a_curved_meshs_light_map_is_refused_with_advice_that_can_work() {
+fn a_triangle_soups_light_map_is_refused_with_advice_that_can_work() {
+    let dir = std::env::temp_dir().join(format!("penumbra-soup-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut obj = String::new();
+    let mut rng = crate::support::rng::Lcg(7);
+    for t in 0..8192 {
+        let centre = [0; 3].map(|_| rng.next_f64() * 4.0 - 2.0);
+        for _ in 0..3 {
+            let p: Vec<String> = (0..3)
+                .map(|a| format!("{}", centre[a] + rng.next_f64() * 0.05))
+                .collect();
+            obj += &format!("v {}\n", p.join(" "));
+        }
+        obj += &format!("f {} {} {}\n", 3 * t + 1, 3 * t + 2, 3 * t + 3);
+    }
+    std::fs::write(dir.join("soup.obj"), obj).unwrap();
     let text = |methods: &str| {
         format!(
             "memory_budget_mb = 100\nmethods = {methods}\n[camera]\nposition = [0, 2, 4]\ntarget = [0, 0, 0]\n\
-             [[objects]]\nmesh = \"sphere\"\nsegments = 128\nrings = 64\n\
+             [[objects]]\nmesh = \"obj\"\npath = \"soup.obj\"\n\
              [[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1\n"
         )
     };
-    let scene_of =
-        |methods: &str| Scene::from_str(&text(methods), "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let scene_of = |methods: &str| Scene::from_str(&text(methods), "<test>", &dir).unwrap_or_else(|e| panic!("{e}"));
     let (message, took) = refusal(&scene_of(r#"["sh_lightmap"]"#), "sh_lightmap");
     assert_refusal(&message, took, &["charts", "at any patch_size", "at most fit"]);
     assert!(!message.contains("set a larger patch_size"), "{message}");
@@ -165,6 +181,7 @@ fn a_curved_meshs_light_map_is_refused_with_advice_that_can_work() {
     let fitted = scene_of(&format!(r#"[{{ name = "sh_lightmap", samples = {samples} }}]"#));
     let config = registry::configuration(&fitted, Some("sh_lightmap")).unwrap();
     registry::plan(&config, &fitted).unwrap_or_else(|e| panic!("{samples} samples: {e}"));
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A budget the scene raises lets the same bake through; one it lowers refuses the shipped one.

@@ -56,6 +56,12 @@ pub struct Chart {
     pub extent: (DVec2, DVec2),
     /// A sky chart: a single black texel, no patch inside.
     pub sky: bool,
+    /// The plane's offset along `normal`: the patches lie on the plane `normal·x = offset`.
+    pub offset: f64,
+    /// Charts of a curved surface merged (`group_charts_within`): its triangles lie on or
+    /// below the plane, within the grouping's sag of it, and each patch takes the normal of the
+    /// triangles under it.
+    pub curved: bool,
 }
 
 impl Chart {
@@ -159,11 +165,11 @@ impl Patches {
     /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
     /// of the scene's size) and lays a grid of `size` patches on each.
     pub fn build(triangles: &[Triangle], size: f64) -> Patches {
-        let mut charts = group_charts(triangles);
+        let mut charts = group_charts_within(triangles, size * CURVED_SAG);
         let mut patches = Vec::new();
         for (ci, c) in charts.iter_mut().enumerate() {
             let t0 = &triangles[c.triangles[0]];
-            let plane = c.normal * c.normal.dot(t0.p[0]);
+            let plane = c.normal * c.offset;
             // Coordinates from the world origin's projection, so that every chart of a plane
             // shares one grid.
             let flat = |p: DVec3| DVec2::new(p.dot(c.u), p.dot(c.v));
@@ -197,6 +203,7 @@ impl Patches {
                 for i in 0..c.width {
                     let corner = DVec2::new(lo.x + (i as f64 - 1.0) * size, lo.y + (j as f64 - 1.0) * size);
                     let (mut covered, mut sum, mut samples) = (0usize, DVec2::ZERO, 0u16);
+                    let mut normals = DVec3::ZERO;
                     for sj in 0..COVERAGE_SAMPLES {
                         for si in 0..COVERAGE_SAMPLES {
                             let q = corner
@@ -204,7 +211,15 @@ impl Patches {
                                     (si as f64 + 0.5) / COVERAGE_SAMPLES as f64,
                                     (sj as f64 + 0.5) / COVERAGE_SAMPLES as f64,
                                 ) * size;
-                            if tris2d.iter().any(|t| inside_triangle(q, t)) {
+                            let under = if c.curved {
+                                tris2d.iter().position(|t| inside_triangle(q, t))
+                            } else {
+                                tris2d.iter().any(|t| inside_triangle(q, t)).then_some(0)
+                            };
+                            if let Some(slot) = under {
+                                if c.curved {
+                                    normals += triangles[c.triangles[slot]].normal();
+                                }
                                 covered += 1;
                                 sum += q;
                                 samples |= 1 << (sj * COVERAGE_SAMPLES + si);
@@ -227,7 +242,7 @@ impl Patches {
                     patches.push(Patch {
                         chart: ci,
                         centre,
-                        normal: c.normal,
+                        normal: normals.try_normalize().unwrap_or(c.normal),
                         area,
                         coverage,
                         samples,
@@ -238,16 +253,7 @@ impl Patches {
                     });
                 }
             }
-            // The sub-sampled coverage is coarse for a polygon smaller than a few patches (a
-            // light a patch wide can be off by a third): scale it so that the chart's patches add
-            // up to its exact area, and the power it emits or receives is right.
-            let exact: f64 = c.triangles.iter().map(|&t| triangles[t].area()).sum();
-            let sampled: f64 = patches[c.first..].iter().map(|q| q.area).sum();
-            if sampled > 0.0 {
-                for q in &mut patches[c.first..] {
-                    q.area *= exact / sampled;
-                }
-            }
+            fit_area(c, &mut patches[c.first..], triangles, &tris2d, lo, size);
         }
         Patches { size, charts, patches }
     }
@@ -258,10 +264,61 @@ impl Patches {
     }
 }
 
+/// The sub-sampled coverage is coarse for a polygon smaller than a few patches (a light a patch
+/// wide can be off by a third): chart `c`'s patches (`chart`) are scaled so that they add up to
+/// its exact area, and the power it emits or receives is right. A sliver or a triangle smaller
+/// than a sub-sample's spacing covers no sub-sample: the chart's largest triangle's centroid
+/// stands for it, or its texel would stay black. `tris2d` is its triangles and `lo` its lowest
+/// cell corner in its frame.
+fn fit_area(c: &Chart, chart: &mut [Patch], triangles: &[Triangle], tris2d: &[[DVec2; 3]], lo: DVec2, size: f64) {
+    let exact: f64 = c.triangles.iter().map(|&t| triangles[t].area()).sum();
+    let sampled: f64 = chart.iter().map(|q| q.area).sum();
+    if sampled > 0.0 {
+        for q in chart.iter_mut() {
+            q.area *= exact / sampled;
+        }
+    } else if exact > 0.0 {
+        cover_by_centroid(c, chart, triangles, tris2d, lo, size);
+    }
+}
+
+/// [`fit_area`] where no sub-sample is covered.
+fn cover_by_centroid(
+    c: &Chart,
+    chart: &mut [Patch],
+    triangles: &[Triangle],
+    tris2d: &[[DVec2; 3]],
+    lo: DVec2,
+    size: f64,
+) {
+    let slot = (0..tris2d.len())
+        .max_by(|&a, &b| {
+            triangles[c.triangles[a]]
+                .area()
+                .total_cmp(&triangles[c.triangles[b]].area())
+        })
+        .expect("a chart has a triangle");
+    let q = (tris2d[slot][0] + tris2d[slot][1] + tris2d[slot][2]) / 3.0;
+    let at = (q - lo) / size;
+    let (i, j) = (at.x.floor().max(0.0) as usize + 1, at.y.floor().max(0.0) as usize + 1);
+    let (i, j) = (i.min(c.width - 2), j.min(c.height - 2));
+    let n = COVERAGE_SAMPLES as f64;
+    let sub = |x: f64, cell: usize| ((x - cell as f64) * n).floor().clamp(0.0, n - 1.0) as usize;
+    let t = &triangles[c.triangles[slot]];
+    let patch = &mut chart[j * c.width + i];
+    patch.area = c.triangles.iter().map(|&t| triangles[t].area()).sum();
+    patch.coverage = 1.0 / (COVERAGE_SAMPLES * COVERAGE_SAMPLES) as f64;
+    patch.samples = 1 << (sub(at.y + 1.0, j) * COVERAGE_SAMPLES + sub(at.x + 1.0, i));
+    patch.centre = c.origin + c.u * ((at.x + 1.0) * size) + c.v * ((at.y + 1.0) * size);
+    patch.normal = if c.curved { t.normal() } else { c.normal };
+    let e = triangles[c.triangles[0]].emission * std::f64::consts::PI;
+    (patch.emission, patch.total, patch.unshot) = (e, e, e);
+}
+
 /// The patches [`Patches::build`] would make of `triangles` at `size`, border frames included,
 /// counted without making them (what a bake's memory is estimated from).
 pub fn count(triangles: &[Triangle], size: f64) -> u64 {
-    count_in(&group_charts(triangles), triangles, size)
+    count_in(&group_charts_within(triangles, size * CURVED_SAG), triangles, size)
 }
 
 /// [`count`] over charts already grouped.
@@ -347,11 +404,161 @@ pub(crate) fn group_charts_counted(triangles: &[Triangle]) -> (Vec<Chart>, usize
                     cell: (0, 0),
                     extent: (DVec2::ZERO, DVec2::ZERO),
                     sky: t.sky,
+                    offset: n.dot(t.p[0]),
+                    curved: false,
                 });
             }
         }
     }
     (charts, compared)
+}
+
+/// How far, in patches, a curved chart's triangles may lie below its plane: its patches lie on
+/// the plane, so a receiver stands at most this far above the surface it stands for.
+pub const CURVED_SAG: f64 = 0.25;
+
+/// The cosine of the widest angle between a curved chart's normal (its seed's) and any of its
+/// triangles' (30°): it bounds the stretch of a triangle's texels (1/cos 30° = 1.15) and
+/// keeps a crease's two sides apart.
+pub const CURVED_CONE_COS: f64 = 0.866_025_403_784_438_6;
+
+/// [`group_charts`], then adjacent charts of one surface merged while their triangles stay
+/// within [`CURVED_CONE_COS`] of one normal and within `max_sag` of one plane
+/// ([`merge_curved`]). A scanned or tessellated mesh makes a planar chart of every triangle or
+/// two, each at least a texel and its border frame (nine patches): the Stanford bunny's 69k
+/// triangles made 608k patches, at any patch size. With `max_sag` 0 the planar charts are kept.
+pub(crate) fn group_charts_within(triangles: &[Triangle], max_sag: f64) -> Vec<Chart> {
+    merge_curved(group_charts(triangles), triangles, max_sag)
+}
+
+/// Grows regions over charts that share an edge (the same corner positions, bit for bit), each
+/// seeded by the largest chart left: a chart joins its neighbour's region when it is of the same
+/// object, material, side of the walls and not sky, every one of its triangles is within
+/// [`CURVED_CONE_COS`] of the seed's normal, and the region's heights along that normal then
+/// span at most `max_sag`. A region of more than one chart becomes one chart in the seed's
+/// frame, its plane at the highest corner, so that every patch lies above the
+/// surface (never inside a closed mesh). The cone keeps the projection one-to-one for a surface
+/// that does not fold back over itself within the sag. Regions keep the order of their
+/// smallest chart, so with nothing merged the charts are those given.
+fn merge_curved(charts: Vec<Chart>, triangles: &[Triangle], max_sag: f64) -> Vec<Chart> {
+    if max_sag <= 0.0 || charts.len() < 2 {
+        return charts;
+    }
+    let neighbours = chart_neighbours(&charts, triangles);
+    let area: Vec<f64> = charts
+        .iter()
+        .map(|c| c.triangles.iter().map(|&t| triangles[t].area()).sum())
+        .collect();
+    let mut order: Vec<usize> = (0..charts.len()).collect();
+    order.sort_by(|&a, &b| area[b].total_cmp(&area[a]).then(a.cmp(&b)));
+    let same_kind = |a: &Chart, b: &Chart| {
+        let (ta, tb) = (&triangles[a.triangles[0]], &triangles[b.triangles[0]]);
+        a.object == b.object
+            && !a.sky
+            && !b.sky
+            && ta.part == tb.part
+            && (ta.albedo - tb.albedo).abs().max_element() < 1e-9
+            && (ta.emission - tb.emission).abs().max_element() < 1e-9
+    };
+    let mut taken = vec![false; charts.len()];
+    // (seed, members, highest corner along the seed's normal)
+    let mut regions: Vec<(usize, Vec<usize>, f64)> = Vec::new();
+    for &seed in &order {
+        if taken[seed] {
+            continue;
+        }
+        taken[seed] = true;
+        let n = charts[seed].normal;
+        let heights = |c: &Chart| {
+            c.triangles
+                .iter()
+                .flat_map(|&t| triangles[t].p)
+                .map(|p| n.dot(p))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), h| (lo.min(h), hi.max(h)))
+        };
+        let (mut lo, mut hi) = heights(&charts[seed]);
+        let mut members = vec![seed];
+        let mut next = 0;
+        while next < members.len() {
+            let c = members[next];
+            next += 1;
+            for &d in &neighbours[c] {
+                if taken[d]
+                    || !same_kind(&charts[seed], &charts[d])
+                    || charts[d]
+                        .triangles
+                        .iter()
+                        .any(|&t| triangles[t].normal().dot(n) < CURVED_CONE_COS)
+                {
+                    continue;
+                }
+                let (l, h) = heights(&charts[d]);
+                if hi.max(h) - lo.min(l) > max_sag {
+                    continue;
+                }
+                (lo, hi) = (lo.min(l), hi.max(h));
+                taken[d] = true;
+                members.push(d);
+            }
+        }
+        members.sort_unstable();
+        regions.push((seed, members, hi));
+    }
+    regions.sort_by_key(|(_, members, _)| members[0]);
+    let mut charts: Vec<Option<Chart>> = charts.into_iter().map(Some).collect();
+    regions
+        .into_iter()
+        .map(|(seed, members, top)| {
+            let mut chart = charts[seed].take().expect("each chart is in one region");
+            if members.len() == 1 {
+                return chart;
+            }
+            let mut all = Vec::new();
+            for m in members {
+                match charts[m].take() {
+                    Some(c) => all.extend(c.triangles),
+                    None => all.append(&mut chart.triangles),
+                }
+            }
+            all.sort_unstable();
+            chart.triangles = all;
+            chart.offset = top;
+            chart.curved = true;
+            chart
+        })
+        .collect()
+}
+
+/// Per chart, the charts that share an edge with it (the same corner positions, bit for bit).
+fn chart_neighbours(charts: &[Chart], triangles: &[Triangle]) -> Vec<Vec<usize>> {
+    let mut chart_of = vec![usize::MAX; triangles.len()];
+    for (c, chart) in charts.iter().enumerate() {
+        for &t in &chart.triangles {
+            chart_of[t] = c;
+        }
+    }
+    let key = |p: DVec3| p.to_array().map(f64::to_bits);
+    let mut edges: std::collections::HashMap<([u64; 3], [u64; 3]), Vec<usize>> = std::collections::HashMap::new();
+    for (t, tri) in triangles.iter().enumerate().filter(|&(t, _)| chart_of[t] != usize::MAX) {
+        for e in 0..3 {
+            let (a, b) = (key(tri.p[e]), key(tri.p[(e + 1) % 3]));
+            edges
+                .entry(if a < b { (a, b) } else { (b, a) })
+                .or_default()
+                .push(chart_of[t]);
+        }
+    }
+    let mut neighbours = vec![Vec::new(); charts.len()];
+    for sharing in edges.values() {
+        for &a in sharing {
+            neighbours[a].extend(sharing.iter().copied().filter(|&b| b != a));
+        }
+    }
+    for n in &mut neighbours {
+        n.sort_unstable();
+        n.dedup();
+    }
+    neighbours
 }
 
 /// A hash cell of chart planes: the object, side of the walls, sky flag, and the plane's

@@ -469,7 +469,7 @@ pub fn shoot(
     progress: &mut Progress,
     energy: &mut dyn Unshot,
 ) -> Report {
-    // Chart pairs grow as the square of the charts (a curved mesh is one chart a triangle):
+    // Chart pairs grow as the square of the charts (a triangle soup is one chart a triangle):
     // seconds to minutes that must not pass in silence.
     let solve = progress.stage("chart visibility", || Solve::new(g, occluders, settings));
     let initial: f64 = solve.blocks.iter().map(|b| solve.power(energy, b)).sum();

@@ -29,8 +29,8 @@ pub struct Matrix {
 }
 
 /// Charts over which the matrix is not built. It holds and classifies every pair, so its cost
-/// grows with the square of the chart count, while a curved mesh has a chart per triangle or
-/// two: at 55,000 charts (the Stanford bunny) it would be 1.5 billion pairs and 380 MB. Without
+/// grows with the square of the chart count, while a triangle soup has a chart per triangle: at
+/// 55,000 charts (the Stanford bunny's planar ones) it would be 1.5 billion pairs and 380 MB. Without
 /// it every pair is ray-tested (PARTIAL), which is what the matrix only saves: NONE pairs get
 /// nothing from the form factor's cosines either, bar a corrected block square's overhang.
 pub const MAX_MATRIX_CHARTS: usize = 4096;
@@ -236,13 +236,13 @@ impl Matrix {
         let n = charts.len();
         if n > max_charts {
             crate::errln!(
-                "light-map: {n} charts (planar groups of triangles): over {max_charts} the surface-visibility matrix is not built, and every pair of patches is ray-tested"
+                "light-map: {n} charts: over {max_charts} the surface-visibility matrix is not built, and every pair of patches is ray-tested"
             );
             return Matrix { n, bits: None };
         }
         if full && n > MAX_FULL_CHARTS {
             crate::errln!(
-                "light-map: {n} charts (planar groups of triangles): over {MAX_FULL_CHARTS} the surface-visibility matrix marks no pair FULL, and every visible pair of patches is ray-tested"
+                "light-map: {n} charts: over {MAX_FULL_CHARTS} the surface-visibility matrix marks no pair FULL, and every visible pair of patches is ray-tested"
             );
         }
         let full = full && n <= MAX_FULL_CHARTS;
@@ -290,7 +290,7 @@ impl<'a> Tester<'a> {
             .map(|c| {
                 let pts: Vec<DVec3> = c.triangles.iter().flat_map(|&t| triangles[t].p).collect();
                 let flat: Vec<DVec2> = pts.iter().map(|q| DVec2::new(q.dot(c.u), q.dot(c.v))).collect();
-                let offset = c.normal.dot(pts.first().copied().unwrap_or_default());
+                let offset = c.offset;
                 let hull = hull_2d(flat)
                     .into_iter()
                     .map(|f| c.normal * offset + c.u * f.x + c.v * f.y)

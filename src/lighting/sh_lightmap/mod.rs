@@ -254,9 +254,10 @@ fn shrink_advice(
     patches: u64,
     room: u64,
 ) -> String {
-    let charts = crate::lighting::lightmap::patches::group_charts(triangles);
+    use crate::lighting::lightmap::patches::{count_in, group_charts_within, CURVED_SAG};
     // At a patch the size of a kilometre every chart is one texel in its border frame.
-    let floor = crate::lighting::lightmap::patches::count_in(&charts, triangles, 1000.0);
+    let charts = group_charts_within(triangles, 1000.0 * CURVED_SAG);
+    let floor = count_in(&charts, triangles, 1000.0);
     let fixed = bytes_per_patch(&Config { samples: 0, ..*config });
     let samples_fitting = (room / patches.max(1)).saturating_sub(fixed) / 4 * 32;
     let samples = if samples_fitting >= 20 {
@@ -266,7 +267,7 @@ fn shrink_advice(
     };
     if floor * bytes_per_patch(config) > room {
         format!(
-            "its {} charts (planar groups of triangles) make at least {floor} patches at any patch_size, so a larger one cannot fit it: {samples}, or a scene of fewer, flatter charts",
+            "its {} charts (groups of triangles on or near one plane) make at least {floor} patches at any patch_size, so a larger one cannot fit it: {samples}, or a scene of fewer, flatter charts",
             charts.len()
         )
     } else {

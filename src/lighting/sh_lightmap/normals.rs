@@ -71,10 +71,17 @@ pub fn perturb(p: &mut Patches, triangles: &[Triangle], surfaces: &Surfaces<'_>,
                         continue;
                     };
                     let t = chart.triangles[slot];
-                    if let Some(map) = surfaces.maps[t] {
-                        sum += world_normal(&triangles[t], chart.normal, surfaces.uvs[t], &tris2d[slot], q, map);
+                    // A curved chart's triangles each have their own normal; a planar one's
+                    // all have the plane's.
+                    let n = if chart.curved {
+                        triangles[t].normal()
                     } else {
-                        sum += chart.normal;
+                        chart.normal
+                    };
+                    if let Some(map) = surfaces.maps[t] {
+                        sum += world_normal(&triangles[t], n, surfaces.uvs[t], &tris2d[slot], q, map);
+                    } else {
+                        sum += n;
                     }
                 }
                 // A mean that does not face out of the surface would shade nothing: keep the plane's.

@@ -79,7 +79,7 @@ fn sphere(rings: usize) -> Vec<Triangle> {
     sphere_of(rings, 3.0)
 }
 
-fn sphere_of(rings: usize, radius: f64) -> Vec<Triangle> {
+pub(super) fn sphere_of(rings: usize, radius: f64) -> Vec<Triangle> {
     let at = |i: usize, j: usize| {
         let (th, ph) = (
             std::f64::consts::PI * i as f64 / rings as f64,
@@ -155,6 +155,14 @@ fn floor_and_sphere(n: usize, rings: usize, radius: f64) -> Vec<Triangle> {
     out
 }
 
+/// Each quad (two triangles) of `tris` after the first two (the floor) its own object.
+fn tiled(mut tris: Vec<Triangle>) -> Vec<Triangle> {
+    for (i, t) in tris.iter_mut().enumerate().skip(2) {
+        t.object = 2 + i / 2;
+    }
+    tris
+}
+
 #[test]
 fn the_default_patch_size_keeps_the_patches_near_the_budget() {
     use crate::lighting::lightmap::patches::count;
@@ -164,9 +172,10 @@ fn the_default_patch_size_keeps_the_patches_near_the_budget() {
     let floor = floor_and_sphere(20, 0, 3.0);
     let (size, why) = lightmap_patch_size(&floor, budget);
     assert_eq!(size, patch_size_for(400.0, budget), "{why}");
-    // 791 charts a few patches wide beside the floor: the area's size makes over four times
-    // the budget, and a larger one fewer, so the size grows until they are at most four times.
-    let mixed = floor_and_sphere(20, 20, 4.0);
+    // 791 charts a few patches wide beside the floor (the sphere's quads, each its own object,
+    // as tiles are): the area's size makes over four times the budget, and a larger one fewer,
+    // so the size grows until they are at most four times.
+    let mixed = tiled(floor_and_sphere(20, 20, 4.0));
     let from_area = patch_size_for(mixed.iter().map(Triangle::area).sum(), budget);
     assert!(count(&mixed, from_area) > 4 * budget as u64);
     let (size, why) = lightmap_patch_size(&mixed, budget);
@@ -177,16 +186,27 @@ fn the_default_patch_size_keeps_the_patches_near_the_budget() {
         "{size}: {patches} patches"
     );
     assert!(why.contains("grown from"), "{why}");
-    // A curved mesh's 3,000 small charts make about as many patches at any size: the size stays
-    // the area's (a larger one would coarsen the floor for nothing), and the reason says why
-    // there are so many.
-    let curved = floor_and_sphere(20, 40, 3.0);
-    let (size, why) = lightmap_patch_size(&curved, budget);
-    let from_area = patch_size_for(curved.iter().map(Triangle::area).sum(), budget);
-    println!("{size} m: {} patches ({why})", count(&curved, size));
+    // 3,000 tiles make about as many patches at any size: the size stays the area's (a larger
+    // one would coarsen the floor for nothing), and the reason says why there are so many.
+    let tiles = tiled(floor_and_sphere(20, 40, 3.0));
+    let (size, why) = lightmap_patch_size(&tiles, budget);
+    let from_area = patch_size_for(tiles.iter().map(Triangle::area).sum(), budget);
+    println!("{size} m: {} patches ({why})", count(&tiles, size));
     assert_eq!(size, from_area, "{why}");
     assert!(
         why.contains("charts") && why.contains("not four times the budget"),
         "{why}"
+    );
+    // The same sphere as one surface: its 3,000 planar charts merge into curved ones within a
+    // quarter patch of a plane, and at the area's size they make at most four times the budget
+    // (a fifth of the tiles' patches).
+    let curved = floor_and_sphere(20, 40, 3.0);
+    let (size, why) = lightmap_patch_size(&curved, budget);
+    let patches = count(&curved, size);
+    println!("{size} m: {patches} patches ({why})");
+    assert_eq!(size, from_area, "{why}");
+    assert!(
+        patches <= 4 * budget as u64 && patches * 5 < count(&tiles, size),
+        "{patches} patches"
     );
 }

@@ -3,6 +3,7 @@ use glam::DVec3;
 mod border;
 mod buried;
 mod charts;
+mod curved;
 mod edge_blocks;
 mod stop;
 mod sun;
