@@ -395,6 +395,64 @@ fn g_normal_maps_flat_is_neutral_and_tilted_equals_a_tilted_patch() {
 }
 
 #[test]
+fn a_flat_map_on_a_curved_chart_keeps_each_patch_s_own_normal() {
+    // A UV sphere of 24 rings, facing out: its facets merge into curved charts, up to 30° wide
+    // about their normal. A flat normal map must leave each patch facing as the surface under it
+    // does, not as its chart's plane (measured: 2.1° from the sphere's normal on average, 8.8°
+    // with the plane's normal).
+    let rings = 24;
+    let at = |i: usize, j: usize| {
+        let (th, ph) = (
+            std::f64::consts::PI * i as f64 / rings as f64,
+            std::f64::consts::TAU * j as f64 / (2 * rings) as f64,
+        );
+        DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin())
+    };
+    let mut tris = Vec::new();
+    for i in 0..rings {
+        for j in 0..2 * rings {
+            let q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            for p in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                let mut t = quad(DVec3::ZERO, DVec3::X, DVec3::Y, 0, 0.5)[0];
+                t.p = p;
+                if t.normal().dot(p[0] + p[1] + p[2]) < 0.0 {
+                    t.p.swap(1, 2);
+                }
+                tris.push(t);
+            }
+        }
+    }
+    let mut p = Patches::build(&tris, 0.25);
+    assert!(p.charts.iter().any(|c| c.curved && c.triangles.len() > 8));
+    let flat = NormalImage {
+        width: 1,
+        height: 1,
+        texels: vec![DVec3::Z],
+    };
+    let uvs = vec![[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]; tris.len()];
+    let surfaces = Surfaces {
+        uvs: &uvs,
+        maps: vec![Some(&flat); tris.len()],
+    };
+    assert!(normals::perturb(&mut p, &tris, &surfaces, 16) > 0);
+    let angles: Vec<f64> = p
+        .patches
+        .iter()
+        .filter(|q| q.inside())
+        .map(|q| q.normal.dot(q.centre.normalize()).clamp(-1.0, 1.0).acos().to_degrees())
+        .collect();
+    let mean = angles.iter().sum::<f64>() / angles.len() as f64;
+    println!(
+        "mean {mean:.2} worst {:.2}",
+        angles.iter().fold(0.0f64, |a, &b| a.max(b))
+    );
+    assert!(
+        mean < 5.0,
+        "patches face {mean:.1}° away from the sphere's normal under them on average"
+    );
+}
+
+#[test]
 fn the_sample_set_is_orthonormal_to_the_digests_bound() {
     // max |G − I| ≤ 2e-3 at 10k samples, 4 bands (digest §5.1 item 2: measured 1.4e-3).
     let s = SampleSet::new(10_000, 4).unwrap_or_else(|e| panic!("{e}"));
