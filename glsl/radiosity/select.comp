@@ -120,16 +120,21 @@ void main() {
     float area = 0.0;
     vec3 flux = vec3(0.0);
     vec3 centre = vec3(0.0);
+    vec3 normals = vec3(0.0);
     for (uint i = 0u; i < block.range.y; ++i) {
         uint k = members.items[block.range.x + i];
         float a = patches.items[k].centre.w;
         area += a;
         flux += radiosity.items[k].unshot.rgb * a;
         centre += patches.items[k].centre.xyz * a;
+        normals += patches.items[k].normal.xyz;
     }
     vec3 c0 = block.corners[0].xyz;
     shots.shot.centre = vec4(centre / area, 0.0);
-    shots.shot.normal = vec4(patches.items[members.items[block.range.x]].normal.xyz, 0.0);
+    // The members' mean normal, as the CPU solve's block takes it (solve.rs): on a curved chart
+    // each patch faces as the surface under it does.
+    vec3 first = patches.items[members.items[block.range.x]].normal.xyz;
+    shots.shot.normal = vec4(length(normals) > 0.0 ? normalize(normals) : first, 0.0);
     shots.shot.flux = vec4(flux, 0.0);
     for (uint k = 0u; k < 4u; ++k) {
         shots.shot.corners[k] = block.corners[k];

@@ -184,8 +184,17 @@ void main() {
     if (f <= 0.0) {
         return;
     }
-    vec3 from = x + receiver.normal.xyz * push.epsilon;
-    vec3 to = shot.centre.xyz + normal * push.epsilon;
+    // A curved chart's patch takes the normal of the surface under it, which is not its
+    // chart's plane: both ends must then also face each other's planes, and the ray leaves
+    // along the plane, as the CPU solve does (solve.rs receiver_share). On a planar chart the
+    // two normals are one.
+    vec3 plane = receiver.ids.w == 1u ? normalize(cross(receiver.step_u.xyz, receiver.step_v.xyz)) : receiver.normal.xyz;
+    vec3 shooter_plane = normalize(cross(corners[1] - corners[0], corners[3] - corners[0]));
+    if (dot(plane, shot.centre.xyz - x) <= 0.0 || dot(shooter_plane, x - shot.centre.xyz) <= 0.0) {
+        return;
+    }
+    vec3 from = x + plane * push.epsilon;
+    vec3 to = shot.centre.xyz + shooter_plane * push.epsilon;
     vec3 d = to - from;
     float len = length(d);
     if (len > 0.0 && vis != 2u) {

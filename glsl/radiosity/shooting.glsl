@@ -10,7 +10,8 @@ struct Patch {
     vec4 normal;  // xyz
     vec4 albedo;  // rgb
     uvec4 ids;    // x: chart, y: shooting block (NO_BLOCK for border patches), z: the sub-samples
-                  // it keeps, bit 4*sj + si of its 4x4 grid (Patch::samples)
+                  // it keeps, bit 4*sj + si of its 4x4 grid (Patch::samples), w: 1 on a curved
+                  // chart (its plane, step_u x step_v, is not its normal)
     vec4 first_sample;  // xyz: sub-sample (0, 0)
     vec4 step_u;        // xyz: from sub-sample (si, sj) to (si + 1, sj)
     vec4 step_v;        // xyz: from sub-sample (si, sj) to (si, sj + 1)

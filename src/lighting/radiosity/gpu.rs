@@ -268,7 +268,7 @@ impl Tables {
                     centre: dvec4(q.centre, q.area as f32),
                     normal: dvec4(q.normal, 0.0),
                     albedo: dvec4(q.albedo, 0.0),
-                    ids: [q.chart as u32, block_of[k], q.samples as u32, 0],
+                    ids: [q.chart as u32, block_of[k], q.samples as u32, u32::from(c.curved)],
                     first_sample: dvec4(c.sub_sample(p.size, cell, (0, 0)), 0.0),
                     step_u: dvec4(c.u * step, 0.0),
                     step_v: dvec4(c.v * step, 0.0),
