@@ -120,7 +120,12 @@ fn difference(a: &Patches, b: &Patches) -> f64 {
 }
 
 fn both(mode: Mode, size: f64) -> (f64, solve::Report, solve::Report) {
-    let (geometry, mut cpu) = cornell(size);
+    let (geometry, patches) = cornell(size);
+    solved_both_ways(&geometry, patches, mode)
+}
+
+/// `cpu` solved on the CPU and on the GPU: their relative RMS difference and both reports.
+fn solved_both_ways(geometry: &StaticGeometry, mut cpu: Patches, mode: Mode) -> (f64, solve::Report, solve::Report) {
     let settings = Settings {
         mode,
         threshold: 1e-3,
@@ -328,23 +333,10 @@ fn gpu_and_cpu_shooters_agree_on_a_curved_mesh() {
     );
     let path = dir.join("teapot.toml");
     std::fs::write(&path, scene).unwrap();
-    let (_, geometry, mut cpu, _) = patched(path.to_str().unwrap(), 0.5);
+    let (_, geometry, cpu, _) = patched(path.to_str().unwrap(), 0.5);
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(cpu.charts.iter().filter(|c| c.curved).count() > 100);
-    let settings = Settings {
-        mode: Mode::Corrected,
-        threshold: 1e-3,
-        ..Settings::default()
-    };
-    let mut on_gpu = cpu.clone();
-    let c = solve::solve(
-        &mut cpu,
-        &Occluders::new(&geometry.triangles),
-        &settings,
-        &mut Progress::new("cpu"),
-    );
-    let g = gpu_solve(&mut on_gpu, &geometry.triangles, &settings);
-    let diff = difference(&cpu, &on_gpu);
+    let (diff, c, g) = solved_both_ways(&geometry, cpu, Mode::Corrected);
     eprintln!(
         "curved: relative RMS difference {diff:.2e}; shots cpu {} gpu {}",
         c.shots, g.shots
