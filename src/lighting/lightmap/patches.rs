@@ -162,8 +162,9 @@ pub struct Patches {
 pub const COVERAGE_SAMPLES: usize = 4;
 
 impl Patches {
-    /// Groups `triangles` into charts (same object, normal within 1e-4, plane offset within 1e-5
-    /// of the scene's size) and lays a grid of `size` patches on each.
+    /// Groups `triangles` into charts (planar ones, then a curved surface's merged within a
+    /// quarter of `size` of one plane: `group_charts_within`) and lays a grid of `size`
+    /// patches on each.
     pub fn build(triangles: &[Triangle], size: f64) -> Patches {
         let mut charts = group_charts_within(triangles, size * CURVED_SAG);
         let mut patches = Vec::new();
@@ -365,13 +366,9 @@ pub(crate) fn group_charts_counted(triangles: &[Triangle]) -> (Vec<Chart>, usize
         }
         let matches = |c: &Chart| {
             let tc = &triangles[c.triangles[0]];
-            c.object == t.object
+            one_surface(tc, t)
                 && c.normal.dot(n) > 1.0 - 1e-4
                 && (c.normal.dot(t.p[0]) - c.normal.dot(tc.p[0])).abs() < 1e-5 * scale
-                && (tc.albedo - t.albedo).abs().max_element() < 1e-9
-                && (tc.emission - t.emission).abs().max_element() < 1e-9
-                && tc.sky == t.sky
-                && tc.part == t.part
         };
         let same = grid
             .around(n, t.p[0])
@@ -413,6 +410,16 @@ pub(crate) fn group_charts_counted(triangles: &[Triangle]) -> (Vec<Chart>, usize
     (charts, compared)
 }
 
+/// Whether two triangles may share a chart, their planes aside: the same object, material
+/// (albedo and emission), sky flag and side of every thin wall.
+fn one_surface(a: &Triangle, b: &Triangle) -> bool {
+    a.object == b.object
+        && (a.albedo - b.albedo).abs().max_element() < 1e-9
+        && (a.emission - b.emission).abs().max_element() < 1e-9
+        && a.sky == b.sky
+        && a.part == b.part
+}
+
 /// How far, in patches, a curved chart's triangles may lie below its plane: its patches lie on
 /// the plane, so a receiver stands at most this far above the surface it stands for.
 pub const CURVED_SAG: f64 = 0.25;
@@ -451,15 +458,8 @@ fn merge_curved(charts: Vec<Chart>, triangles: &[Triangle], max_sag: f64) -> Vec
         .collect();
     let mut order: Vec<usize> = (0..charts.len()).collect();
     order.sort_by(|&a, &b| area[b].total_cmp(&area[a]).then(a.cmp(&b)));
-    let same_kind = |a: &Chart, b: &Chart| {
-        let (ta, tb) = (&triangles[a.triangles[0]], &triangles[b.triangles[0]]);
-        a.object == b.object
-            && !a.sky
-            && !b.sky
-            && ta.part == tb.part
-            && (ta.albedo - tb.albedo).abs().max_element() < 1e-9
-            && (ta.emission - tb.emission).abs().max_element() < 1e-9
-    };
+    let same_kind =
+        |a: &Chart, b: &Chart| !a.sky && one_surface(&triangles[a.triangles[0]], &triangles[b.triangles[0]]);
     let mut taken = vec![false; charts.len()];
     // (seed, members, highest corner along the seed's normal)
     let mut regions: Vec<(usize, Vec<usize>, f64)> = Vec::new();
