@@ -67,9 +67,16 @@ pub struct FrameUniforms {
 pub struct FrameTargets {
     pub radiance: ImageId,
     pub depth_stencil: ImageId,
+    /// A target-sized [`LIGHT_MASK_FORMAT`] image a method may use within its passes (which
+    /// pixels each of a group of lights reaches), there while a method of the configuration asks
+    /// for it ([`LightingMethod::uses_light_mask`]).
+    pub light_mask: Option<ImageId>,
     pub width: u32,
     pub height: u32,
 }
+
+/// The format of [`FrameTargets::light_mask`].
+pub const LIGHT_MASK_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// The renderer's clock, the one every method animates by.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -232,6 +239,10 @@ pub trait LightingMethod {
     /// measured throughput (none: not estimated).
     fn frame_cost(&self) -> Option<FrameCost> {
         None
+    }
+    /// Whether its passes use [`FrameTargets::light_mask`], which the renderer then keeps.
+    fn uses_light_mask(&self) -> bool {
+        false
     }
 }
 

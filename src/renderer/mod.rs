@@ -21,7 +21,7 @@ use crate::gpu_scene::{GpuLight, SceneGpu};
 use crate::graph::{ExecutionReport, RenderGraph, ResourceStates};
 use crate::lighting::{
     registry, Configuration, CreateContext, FrameClock, FrameContext, FrameTargets, FrameUniforms, LightingMethod,
-    Term, Terms, RADIANCE_FORMAT,
+    Term, Terms, LIGHT_MASK_FORMAT, RADIANCE_FORMAT,
 };
 use crate::scene::{Camera, Scene};
 use crate::shaders::ShaderLibrary;
@@ -194,7 +194,8 @@ impl Renderer {
             create_methods(&configuration, &mut ctx)?
         };
         let passes = frame_passes::FramePasses::new(&mut gpu, &shaders)?;
-        let targets = create_targets(&mut gpu, size)?;
+        let mask = methods.iter().any(|m| m.uses_light_mask());
+        let targets = create_targets(&mut gpu, size, mask)?;
         let frames = (0..frames_in_flight.max(1))
             .map(|_| gpu.create_frame())
             .collect::<std::result::Result<Vec<_>, _>>()?;
@@ -257,7 +258,7 @@ impl Renderer {
         self.configuration = configuration;
         self.bakes = bakes.take_reports();
         self.clock_frame = 0;
-        Ok(())
+        self.keep_light_mask_for_methods()
     }
 
     /// The device memory of the methods' resources, as each method itemises it.
@@ -308,7 +309,9 @@ impl Renderer {
             return Ok(());
         }
         self.gpu.wait_idle()?;
-        for id in [self.targets.radiance, self.targets.depth_stencil] {
+        let mask = self.targets.light_mask.is_some();
+        let images = [self.targets.radiance, self.targets.depth_stencil];
+        for id in images.into_iter().chain(self.targets.light_mask) {
             self.gpu.destroy_image(id);
             self.states.forget_image(id);
         }
@@ -316,7 +319,25 @@ impl Renderer {
             self.gpu.destroy_buffer(b);
             self.states.forget_buffer(b);
         }
-        self.targets = create_targets(&mut self.gpu, size)?;
+        self.targets = create_targets(&mut self.gpu, size, mask)?;
+        Ok(())
+    }
+
+    /// Creates or drops the light mask as the methods now ask (after a switch of configuration).
+    fn keep_light_mask_for_methods(&mut self) -> Result<()> {
+        let wanted = self.methods.iter().any(|m| m.uses_light_mask());
+        match (wanted, self.targets.light_mask) {
+            (true, None) => {
+                let size = (self.targets.width, self.targets.height);
+                self.targets.light_mask = Some(create_light_mask(&mut self.gpu, size)?);
+            }
+            (false, Some(id)) => {
+                self.gpu.destroy_image(id);
+                self.states.forget_image(id);
+                self.targets.light_mask = None;
+            }
+            _ => {}
+        }
         Ok(())
     }
 
@@ -626,7 +647,8 @@ fn execute_frame(
     Ok(report)
 }
 
-fn create_targets(gpu: &mut Gpu, (width, height): (u32, u32)) -> Result<FrameTargets> {
+/// The frame's targets; `light_mask`: with the light mask a method asks for.
+fn create_targets(gpu: &mut Gpu, (width, height): (u32, u32), light_mask: bool) -> Result<FrameTargets> {
     if width == 0 || height == 0 {
         return Err(Error::Usage(format!("image size {width}x{height} is empty")));
     }
@@ -641,10 +663,21 @@ fn create_targets(gpu: &mut Gpu, (width, height): (u32, u32)) -> Result<FrameTar
         &ImageDesc::new_2d("depth-stencil", ds_format, width, height)
             .usage(vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
     )?;
+    let light_mask = match light_mask {
+        true => Some(create_light_mask(gpu, (width, height))?),
+        false => None,
+    };
     Ok(FrameTargets {
         radiance,
         depth_stencil,
+        light_mask,
         width,
         height,
     })
+}
+
+fn create_light_mask(gpu: &mut Gpu, (width, height): (u32, u32)) -> Result<ImageId> {
+    let desc = ImageDesc::new_2d("light mask", LIGHT_MASK_FORMAT, width, height)
+        .usage(vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED);
+    Ok(gpu.create_image(&desc)?)
 }
