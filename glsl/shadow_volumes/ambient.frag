@@ -23,6 +23,8 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_tangent;
 layout(location = 4) in vec3 in_light_ts;
 layout(location = 5) in vec3 in_eye_ts;
+layout(location = 6) in vec3 in_bitangent;  // for the grouped light pass (surface.vert)
+layout(location = 7) in vec3 in_world_ts;
 
 layout(location = 0) out vec4 out_radiance;
 

@@ -11,7 +11,8 @@
 // A translucent surface's light is scaled by its opacity (its share of the pixel), last, so an
 // opaque one (x * 1.0) is unchanged to the bit.
 // Either way a surface whose geometric normal faces away from the light gets nothing: it is the
-// near cap of its own shadow volume, where the stencil count is a depth tie.
+// near cap of its own shadow volume, where the stencil count is a depth tie (shade.glsl, which
+// light_group.frag shares).
 #include "common/frame.glsl"
 #include "common/lights.glsl"
 #include "surface.glsl"
@@ -32,85 +33,17 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_tangent;
 layout(location = 4) in vec3 in_light_ts;
 layout(location = 5) in vec3 in_eye_ts;
+layout(location = 6) in vec3 in_bitangent;  // for the grouped light pass (surface.vert)
+layout(location = 7) in vec3 in_world_ts;
 
 layout(location = 0) out vec4 out_radiance;
 
-// The seed's attenuation functions (src/shadow_volumes/cpu.rs); r = 0 is an infinite radius.
-float attenuation(float d, float r) {
-    if (ATTEN == 1u) {
-        return clamp(2.0 / max(d, 1e-6) - 0.01, 0.0, 1.0);
-    }
-    if (r <= 0.0) {
-        return 1.0;
-    }
-    float x = d / r;
-    if (ATTEN == 2u) {
-        return max(1.0 - x, 0.0);
-    }
-    if (ATTEN == 3u) {
-        float a = max(1.0 - x, 0.0);
-        return a * a;
-    }
-    return max(1.0 - x * x, 0.0);
-}
+#include "shade.glsl"
 
 void main() {
     // Alpha 0: the ambient pass's alpha of 1 stays as it is under additive blending.
-    out_radiance = vec4(0.0);
     Material m = materials.items[draw.material];
-    // A directional light: position.xyz is the unit vector toward it, at distance 1, so the
-    // attenuation and 1/d^2 below are 1 and the colour is its irradiance.
-    bool sun = light_kind() == LIGHT_DIRECTIONAL;
-    vec3 to_light = sun ? light.position.xyz : light.position.xyz - in_world;
-    float dist = sun ? 1.0 : length(to_light);
-    float radius = sun ? 0.0 : light.position.w;
-    vec3 n = normalize(in_normal);
-    vec3 ng = normalize(cross(dFdx(in_world), dFdy(in_world)));
-    if (dot(ng, n) < 0.0) {
-        ng = -ng;
-    }
-    // Thin surfaces seen from behind are lit from the viewer's side, as in the forward method.
-    bool back = dot(n, frame.camera_pos.xyz - in_world) < 0.0;
-    if (back) {
-        n = -n;
-        ng = -ng;
-    }
-    if (dot(ng, to_light) <= 0.0) {
-        return;
-    }
-    // Exactly 1 inside the inner cone, so a spot light there is bit-identical to a point light.
-    float spot = 1.0;
-    if (light_kind() == LIGHT_SPOT) {
-        spot = spot_falloff(light.cone.y, light.cone.x, dot(-to_light / max(dist, 1e-12), light.spot_direction.xyz));
-        if (spot <= 0.0) {
-            return;
-        }
-    }
-    vec3 albedo = m.albedo.rgb * texture(albedo_map, in_uv).rgb;
-    vec3 specular = SPECULAR ? m.specular.rgb * texture(specular_map, in_uv).rgb : vec3(0.0);
-    vec3 tn = NORMAL_MAP ? normalize(texture(normal_map, in_uv).xyz * 2.0 - 1.0) : vec3(0.0, 0.0, 1.0);
-    if (MODE == 0u) {
-        // Seen from behind, the frame is (t, -b, -n), as the forward method flips it.
-        vec3 flip = back ? vec3(1.0, -1.0, -1.0) : vec3(1.0);
-        vec3 l = normalize(in_light_ts) * flip;
-        vec3 e = normalize(in_eye_ts) * flip;
-        float diff = clamp(dot(tn, l), 0.0, 1.0);
-        vec3 c = diff * albedo;
-        if (SPECULAR) {
-            float spec = diff > 0.0 ? clamp(dot(tn, normalize(l + e)), 0.0, 1.0) : 0.0;
-            c += pow(spec, 32.0) * specular;
-        }
-        out_radiance.rgb = spot * attenuation(dist, radius) * light.colour.rgb * c * m.albedo.w;
-        return;
-    }
-    if (radius > 0.0 && dist > radius) {
-        return;
-    }
-    if (NORMAL_MAP) {
-        vec3 t = normalize(in_tangent.xyz - n * dot(n, in_tangent.xyz));
-        vec3 b = cross(n, t) * in_tangent.w;
-        n = normalize(t * tn.x + b * tn.y + n * tn.z);
-    }
-    vec3 v = normalize(frame.camera_pos.xyz - in_world);
-    out_radiance.rgb = spot * brdf_times_cos(n, v, to_light / dist, albedo, specular, m.specular.w) * light.colour.rgb / (dist * dist) * m.albedo.w;
+    SvPoint p = sv_point(m, in_world, in_normal, in_tangent, in_uv, in_eye_ts);
+    SvLight l = SvLight(light.position, light.colour, light.spot_direction, light.cone);
+    out_radiance = vec4(sv_shade(l, p, in_light_ts), 0.0);
 }

@@ -12,6 +12,15 @@ layout(set = 0, binding = 1) uniform LightBlock {
     vec4 cone;            // x: cos(inner), y: cos(outer) (spot)
 } light;
 
+// The same four vectors as a value, as shade.glsl takes a light and the grouped light pass
+// holds its lights.
+struct SvLight {
+    vec4 position;
+    vec4 colour;
+    vec4 spot_direction;
+    vec4 cone;
+};
+
 #include "common/lights.glsl"
 #include "common/scene.glsl"
 

@@ -12,6 +12,11 @@ layout(location = 2) out vec2 out_uv;
 layout(location = 3) out vec4 out_tangent;
 layout(location = 4) out vec3 out_light_ts;
 layout(location = 5) out vec3 out_eye_ts;
+// For the grouped light pass, which takes many lights at once: the bitangent and the position in
+// the tangent frame, from which light_group.frag forms each light's tangent-space vector as the
+// interpolation of out_light_ts would (it is linear in the light's position).
+layout(location = 6) out vec3 out_bitangent;
+layout(location = 7) out vec3 out_world_ts;
 
 // The light passes test depth with LESS_OR_EQUAL against the ambient pass's depth: both run
 // this same shader on the same vertices, so the depths are identical. (`invariant` would say so
@@ -33,5 +38,7 @@ void main() {
     out_tangent = vec4(t, in_tangent.w);
     out_light_ts = vec3(dot(to_light, t), dot(to_light, b), dot(to_light, n));
     out_eye_ts = vec3(dot(to_eye, t), dot(to_eye, b), dot(to_eye, n));
+    out_bitangent = b;
+    out_world_ts = vec3(dot(world.xyz, t), dot(world.xyz, b), dot(world.xyz, n));
     gl_Position = frame.view_proj * world;
 }

@@ -63,6 +63,10 @@ pub const SCHEMA: MethodSchema = MethodSchema {
             name: "stencil_wrap",
             kind: ParamKind::Bool,
         },
+        ParamSchema {
+            name: "group_lights",
+            kind: ParamKind::Bool,
+        },
     ],
 };
 
@@ -137,6 +141,10 @@ pub struct Config {
     pub animate: bool,
     /// Wrapping stencil increments (off: saturating, a negative control for tests).
     pub stencil_wrap: bool,
+    /// Light the lights whose receivers are everything in view together: each light's volumes
+    /// leave a bit in a light mask, and one pass over the receivers adds every light where its
+    /// bit is set. Off: a pass over the receivers per light, as the seed draws them.
+    pub group_lights: bool,
 }
 
 impl Config {
@@ -212,6 +220,7 @@ impl Config {
             time_s,
             animate: boolean("animate", true),
             stencil_wrap: boolean("stencil_wrap", true),
+            group_lights: boolean("group_lights", true),
         })
     }
 }

@@ -15,6 +15,9 @@
 //!    for the entities above, or everywhere for comparison), the far caps at infinity (w = 0)
 //!    kept by depth clamp where the device has it and by the infinite projection otherwise;
 //!    then **lighting** — the light's receivers drawn again, added where the stencil is 0;
+//!    lights whose receivers are everything in view instead leave a bit in the frame's light
+//!    mask, and one pass over the receivers per group of up to 96 adds each where its bit is set
+//!    (`grouped.rs`: on a large mesh a light pass costs its vertices, not its pixels);
 //! 4. when translucent entities (material opacity < 1) are in view, the seed's compromise: they
 //!    were left out of 2–3 (neither lit nor casting, so light shines through them), and now are
 //!    drawn back to front over the image with depth writes (**translucent ambient**), then per
@@ -35,6 +38,7 @@
 pub(crate) mod config;
 pub mod cpu;
 mod frame_passes;
+mod grouped;
 pub mod maps;
 pub(crate) mod near_clip;
 pub(crate) mod plan;
@@ -356,6 +360,8 @@ pub struct ShadowVolumes {
     /// `stencil = "auto"`: z-pass for a light whose entity volumes miss the near plane.
     volume_zpass: Option<PipelineId>,
     silhouette: PipelineId,
+    /// The grouped path's pipelines (`group_lights`, and more than one light).
+    group: Option<grouped::GroupPipelines>,
     nudge_far: bool,
     /// The exact flat normal (0.5, 0.5, 1) in RGBA32F for the default-map path (8-bit 128 is
     /// not 0.5).
@@ -540,6 +546,10 @@ impl ShadowVolumes {
             shaders,
         )?;
 
+        let group = match c.group_lights && setup.lights.len() > 1 {
+            true => Some(grouped::GroupPipelines::new(gpu, shaders, c)?),
+            false => None,
+        };
         let features = scene
             .materials
             .iter()
@@ -574,6 +584,7 @@ impl ShadowVolumes {
             volume,
             volume_zpass,
             silhouette,
+            group,
             nudge_far: !depth_clamp,
             default_normal,
             plan: None,
@@ -898,6 +909,10 @@ impl LightingMethod for ShadowVolumes {
         Ok(tally::notes(&words, &names))
     }
 
+    fn uses_light_mask(&self) -> bool {
+        self.group.is_some()
+    }
+
     fn prepare(&mut self, frame: &FrameContext<'_>) -> Result<()> {
         let camera = Vec3::from_slice(&frame.uniforms.camera_pos[..3]);
         self.plan = Some(Rc::new(self.setup.plan(camera, self.time(frame.clock.time_s))));
@@ -935,6 +950,12 @@ impl LightingMethod for ShadowVolumes {
             if !direct {
                 continue;
             }
+            // Lights whose receivers are everything in view are lit together when there are
+            // two or more of them (`grouped`); the others, and the translucent round, a pass each.
+            let grouping = !translucent && self.group.is_some() && frame.targets.light_mask.is_some();
+            let grouped = |lp: &LightPlan| grouping && grouped::groupable(&plan, lp);
+            let grouping = grouping && plan.lights.iter().filter(|lp| grouped(lp)).count() > 1;
+            let mut group = Vec::new();
             for lp in plan.lights.iter() {
                 if translucent && lp.translucent_receivers.is_empty() {
                     continue;
@@ -943,7 +964,19 @@ impl LightingMethod for ShadowVolumes {
                     self.add_silhouettes(graph, s, &plan, lp, frame, translucent);
                 }
                 self.add_volumes(graph, frame, lp, translucent);
-                self.add_lighting(graph, frame, &plan, lp, translucent);
+                if !(grouping && grouped(lp)) {
+                    self.add_lighting(graph, frame, &plan, lp, translucent);
+                    continue;
+                }
+                self.add_light_mask(graph, frame, lp, group.len())?;
+                group.push(lp.light);
+                if group.len() == grouped::LIGHTS_PER_GROUP {
+                    self.add_group_lighting(graph, frame, &plan, &group)?;
+                    group.clear();
+                }
+            }
+            if !group.is_empty() {
+                self.add_group_lighting(graph, frame, &plan, &group)?;
             }
         }
         Ok(())
