@@ -809,3 +809,77 @@ material = "grey"
         assert!(worst <= tolerance, "{mode}: {worst}");
     }
 }
+
+/// The light mask is the target's size and there when the configuration needs it: after a switch
+/// from a method that needs none, and after a resize, the grouped lighting draws what a renderer
+/// made at that size with that method draws, bit for bit.
+#[test]
+fn the_light_mask_follows_switches_and_resizes() {
+    let text = r#"
+[[methods]]
+name = "forward"
+
+[[methods]]
+name = "shadow_volumes"
+mode = "physical"
+animate = false
+
+[camera]
+position = [4, 5, 5]
+target = [0, 0.5, 0]
+fov_y_deg = 50
+
+[[materials]]
+name = "grey"
+albedo = 0.6
+
+[[objects]]
+name = "ground"
+mesh = "plane"
+size = 12
+material = "grey"
+
+[[objects]]
+name = "block"
+mesh = "box"
+size = [1, 1, 1]
+translate = [0, 0.5, 0]
+material = "grey"
+
+[[lights]]
+type = "point"
+position = [2, 3, 1]
+intensity = 6
+
+[[lights]]
+type = "point"
+position = [-2, 2.5, -1]
+intensity = [2, 3, 6]
+
+[[lights]]
+type = "directional"
+direction = [0.4, -1, 0.3]
+irradiance = 0.4
+"#;
+    let scene = Scene::from_str(text, "<test>", std::path::Path::new(".")).unwrap();
+    let draw = |r: &mut penumbra::renderer::Renderer| {
+        let cam = r.scene.camera.clone();
+        let frame = r.render(&cam, penumbra::renderer::FrameOutput::Readback).unwrap();
+        common::assert_clean(&r.gpu);
+        assert!(frame.report.recorded.iter().any(|p| p.contains("grouped lighting")));
+        frame.image.unwrap().pixels
+    };
+    let fresh = |size| {
+        let mut r =
+            penumbra::renderer::Renderer::new(common::test_gpu(), scene.clone(), Some("shadow_volumes"), size, 1)
+                .unwrap();
+        draw(&mut r)
+    };
+    let mut r =
+        penumbra::renderer::Renderer::new(common::test_gpu(), scene.clone(), Some("forward"), (40, 30), 1).unwrap();
+    let sv = penumbra::lighting::registry::configuration(&scene, Some("shadow_volumes")).unwrap();
+    r.set_configuration(sv).unwrap();
+    assert!(draw(&mut r) == fresh((40, 30)), "after the switch");
+    r.resize((56, 42)).unwrap();
+    assert!(draw(&mut r) == fresh((56, 42)), "after the resize");
+}

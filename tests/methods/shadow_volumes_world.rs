@@ -405,7 +405,7 @@ fn entities_move_between_frames_without_validation_messages() {
 }
 
 /// A frame with more passes than the timestamp pool holds (for each of 600 lights, its
-/// silhouette passes, volumes and lighting: about 4,000, for 2,048 timed) still reports the
+/// silhouette passes, volumes and light mask: about 4,000, for 2,048 timed) still reports the
 /// whole frame's time: the inner passes beyond the pool go untimed, never the frame around them.
 #[test]
 fn profile_times_the_frame_when_passes_outnumber_the_queries() {
@@ -446,11 +446,11 @@ intensity = 0.01
     let report = penumbra::commands::profile::run(&opts, 1).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
     let names: Vec<&str> = report.passes.iter().map(|p| p.name.as_str()).collect();
-    let lighting = names.iter().filter(|n| n.ends_with(" lighting")).count();
-    println!("{} passes timed, {lighting} light passes", names.len());
+    let volumes = names.iter().filter(|n| n.ends_with(" volumes")).count();
+    println!("{} passes timed, {volumes} volume passes", names.len());
     assert!(
-        lighting > 100 && lighting < 600,
-        "the pool times some light passes but not all 600 ({lighting})"
+        volumes > 100 && volumes < 600,
+        "the pool times some volume passes but not all 600 ({volumes})"
     );
     let frame = report
         .passes
