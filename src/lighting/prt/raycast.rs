@@ -342,6 +342,8 @@ pub fn bake_cpu_of_keys(
     let threads = parallel::cores();
     let chunk = (CPU_CHUNK_RAYS / samples.max(1)).clamp(1, CPU_CHUNK);
     let mut done = 0;
+    // The rate is timed from here, not from the bake's start.
+    progress.update(0, r.len() as u64);
     for part in out.chunks_mut(chunk * dim * threads) {
         let first = done;
         std::thread::scope(|scope| {

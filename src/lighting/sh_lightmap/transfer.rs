@@ -126,6 +126,8 @@ pub fn visibility_cpu(
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let inside: Vec<usize> = (0..p.patches.len()).filter(|&k| p.patches[k].inside()).collect();
     let chunk = 64;
+    // The rate is timed from here, not from the bake's start.
+    progress.update(0, inside.len() as u64);
     for (done, part) in inside.chunks(chunk * threads).enumerate() {
         let rows: Vec<(usize, Vec<u32>)> = std::thread::scope(|scope| {
             let handles: Vec<_> = part
