@@ -9,9 +9,11 @@ use glam::Vec4;
 use super::plan::{self, FramePlan, LightPlan};
 use super::SILHOUETTE_COMMAND_WORDS;
 use super::{near_clip, record_surface, LightBlock, ShadowVolumes, SilhouetteBuffers, SilhouettePush, VolumePush};
-use crate::backend::{vk, Bind, RenderTarget, RenderingDesc, SubresourceRange};
+use crate::backend::{
+    vk, BackendResult, Bind, ImageId, Recorder, RenderTarget, RenderingDesc, SamplerId, SubresourceRange,
+};
 use crate::graph::{Access, RenderGraph};
-use crate::lighting::FrameContext;
+use crate::lighting::{FrameContext, FrameTargets};
 use crate::world::FaceId;
 
 impl ShadowVolumes {
@@ -313,41 +315,8 @@ impl ShadowVolumes {
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
             .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                    colors: vec![RenderTarget::load(t.radiance)],
-                    depth_stencil: Some(RenderTarget {
-                        read_only: true,
-                        ..RenderTarget::load(t.depth_stencil)
-                    }),
-                })?;
-                let extra = |albedo, normal, specular| {
-                    vec![
-                        (
-                            "albedo_map",
-                            Bind::Sampled {
-                                image: albedo,
-                                range: whole,
-                                sampler,
-                            },
-                        ),
-                        (
-                            "normal_map",
-                            Bind::Sampled {
-                                image: normal,
-                                range: whole,
-                                sampler,
-                            },
-                        ),
-                        (
-                            "specular_map",
-                            Bind::Sampled {
-                                image: specular,
-                                range: whole,
-                                sampler,
-                            },
-                        ),
-                    ]
-                };
+                begin_light_rendering(ctx.rec, t)?;
+                let extra = |albedo, normal, specular| light_maps([albedo, normal, specular], sampler);
                 record_surface(
                     ctx,
                     self,
@@ -362,4 +331,30 @@ impl ShadowVolumes {
                 Ok(())
             });
     }
+}
+
+/// Begins a pass that adds light into the radiance where the depth (and the stencil) the passes
+/// before left allow: both are tested, neither written.
+pub(super) fn begin_light_rendering(rec: &mut Recorder<'_>, t: FrameTargets) -> BackendResult<()> {
+    let _ = rec.begin_rendering(&RenderingDesc {
+        colors: vec![RenderTarget::load(t.radiance)],
+        depth_stencil: Some(RenderTarget {
+            read_only: true,
+            ..RenderTarget::load(t.depth_stencil)
+        }),
+    })?;
+    Ok(())
+}
+
+/// A light pass's material maps (albedo, normal, specular), each sampled whole.
+pub(super) fn light_maps<'b>(maps: [ImageId; 3], sampler: SamplerId) -> Vec<(&'static str, Bind<'b>)> {
+    let names = ["albedo_map", "normal_map", "specular_map"];
+    names
+        .into_iter()
+        .zip(maps)
+        .map(|(name, image)| {
+            let range = SubresourceRange::mip(0);
+            (name, Bind::Sampled { image, range, sampler })
+        })
+        .collect()
 }

@@ -9,11 +9,12 @@
 
 use bytemuck::Zeroable;
 
+use super::frame_passes::{begin_light_rendering, light_maps};
 use super::plan::{FramePlan, LightPlan};
-use super::{record_surface, spec, LightBlock, Mode, ShadowVolumes};
+use super::{outside_every_volume, record_surface, spec, LightBlock, Mode, ShadowVolumes};
 use crate::backend::{
     vk, Bind, BlendMode, ColorTarget, DepthState, Gpu, GraphicsPipelineDesc, PipelineId, RenderTarget, RenderingDesc,
-    StencilFace, StencilFaces, SubresourceRange,
+    SubresourceRange,
 };
 use crate::error::Result;
 use crate::graph::{Access, RenderGraph};
@@ -51,15 +52,7 @@ impl GroupPipelines {
             write: false,
             compare: vk::CompareOp::ALWAYS,
         };
-        let outside = StencilFace {
-            compare_mask: 0xff,
-            write_mask: 0,
-            ..StencilFace::test(vk::CompareOp::EQUAL, 0)
-        };
-        m.stencil = Some(StencilFaces {
-            front: outside,
-            back: outside,
-        });
+        m.stencil = Some(outside_every_volume());
         let mask = gpu.create_graphics_pipeline(&m, shaders)?;
         let mode = match c.mode {
             Mode::Faithful => 0,
@@ -181,27 +174,13 @@ impl ShadowVolumes {
             .buffer(scene.indices, Access::IndexRead, None)
             .buffer(scene.materials, Access::StorageRead { stages: frag }, Some("materials"))
             .record(move |ctx| {
-                let _ = ctx.rec.begin_rendering(&RenderingDesc {
-                    colors: vec![RenderTarget::load(t.radiance)],
-                    depth_stencil: Some(RenderTarget {
-                        read_only: true,
-                        ..RenderTarget::load(t.depth_stencil)
-                    }),
-                })?;
+                begin_light_rendering(ctx.rec, t)?;
                 let zero_light = LightBlock::zeroed();
                 let data: &[u8] = &data;
                 let extra = |albedo, normal, specular| {
-                    let sampled = |image| Bind::Sampled {
-                        image,
-                        range: whole,
-                        sampler,
-                    };
-                    vec![
-                        ("albedo_map", sampled(albedo)),
-                        ("normal_map", sampled(normal)),
-                        ("specular_map", sampled(specular)),
-                        ("group", Bind::StorageData(data)),
-                    ]
+                    let mut binds = light_maps([albedo, normal, specular], sampler);
+                    binds.push(("group", Bind::StorageData(data)));
+                    binds
                 };
                 record_surface(
                     ctx,

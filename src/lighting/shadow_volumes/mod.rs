@@ -423,15 +423,7 @@ fn surface_pipelines(
                 compare: vk::CompareOp::LESS_OR_EQUAL,
             };
             d.color_targets[0].blend = BlendMode::Additive;
-            let outside = StencilFace {
-                compare_mask: 0xff,
-                write_mask: 0,
-                ..StencilFace::test(vk::CompareOp::EQUAL, 0)
-            };
-            d.stencil = Some(StencilFaces {
-                front: outside,
-                back: outside,
-            });
+            d.stencil = Some(outside_every_volume());
             light.push(gpu.create_graphics_pipeline(&d, shaders)?);
         }
     }
@@ -452,6 +444,19 @@ fn surface_pipelines(
         [translucent_ambient[0], translucent_ambient[1]],
         [[light[0], light[1]], [light[2], light[3]]],
     ))
+}
+
+/// The stencil test of the light passes: a count of 0 is outside every volume of the light.
+fn outside_every_volume() -> StencilFaces {
+    let outside = StencilFace {
+        compare_mask: 0xff,
+        write_mask: 0,
+        ..StencilFace::test(vk::CompareOp::EQUAL, 0)
+    };
+    StencilFaces {
+        front: outside,
+        back: outside,
+    }
 }
 
 /// The stencil-volume pipelines for the configured counting (z-fail or z-pass, wrapping or
