@@ -704,32 +704,8 @@ fn spot_equals_the_point_light_inside_the_inner_cone_and_nothing_outside_the_out
     }
 }
 
-/// Lights whose receivers are everything in view are lit together: after each light's volumes
-/// its bit goes into a light mask, and one pass over the receivers per group of 96 adds every
-/// light where its bit is set. On 100 lights (97 points, two spots, a sun; two groups) over
-/// closed and open casters, in both modes, the image is the one a pass per light gives: to
-/// rounding in the physical mode (only the order of the additions differs), and within 2e-5 in
-/// the faithful mode, whose tangent-space light vector the grouped pass forms from interpolated
-/// terms. A mask that ignores the bits lights every shadow (0.48 here); bits shifted by one slot
-/// light each shadow with its neighbour's light (0.34); a sign slip in the faithful mode's light
-/// vector gives 0.91 (all three tried).
-#[test]
-fn lights_lit_together_are_the_lights_lit_one_pass_each() {
-    let mut lights = String::new();
-    for k in 0..97 {
-        let a = k as f32 * 2.399_963;
-        let r = 1.0 + 5.0 * ((k as f32 + 0.5) / 97.0).sqrt();
-        let (x, z, y) = (r * a.cos(), r * a.sin(), 3.0 + (k % 5) as f32);
-        let c = [0.4 + 0.3 * (k % 3) as f32, 0.5, 0.4 + 0.3 * (k % 4) as f32 / 3.0];
-        lights += &format!(
-            "[[lights]]\ntype = \"point\"\nposition = [{x}, {y}, {z}]\nintensity = [{}, {}, {}]\n",
-            c[0], c[1], c[2]
-        );
-    }
-    lights += "[[lights]]\ntype = \"spot\"\nposition = [0, 8, 0]\ndirection = [0.2, -1, 0.1]\nintensity = 30\ninner_deg = 15\nouter_deg = 30\n";
-    lights += "[[lights]]\ntype = \"spot\"\nposition = [4, 6, -3]\ndirection = [-0.5, -1, 0.4]\nintensity = 20\ninner_deg = 20\nouter_deg = 25\n";
-    lights += "[[lights]]\ntype = \"directional\"\ndirection = [0.3, -1, 0.2]\nirradiance = 0.5\n";
-    let objects = r#"
+/// A ground, a box, a sphere and an open sheet in view of the camera: closed and open casters.
+const CASTERS: &str = r#"
 [camera]
 position = [7, 9, 8]
 target = [0, 0.5, 0]
@@ -768,21 +744,51 @@ edge_u = [0, 0, 1.5]
 edge_v = [1.5, 0.4, 0]
 material = "grey"
 "#;
+
+/// One frame of `r`, validation-clean, and the names of its grouped lighting passes.
+fn draw_frame(r: &mut penumbra::renderer::Renderer) -> (HdrImage, Vec<String>) {
+    let cam = r.scene.camera.clone();
+    let frame = r.render(&cam, penumbra::renderer::FrameOutput::Readback).unwrap();
+    common::assert_clean(&r.gpu);
+    let grouped = frame
+        .report
+        .recorded
+        .into_iter()
+        .filter(|p| p.contains("grouped"))
+        .collect();
+    (frame.image.unwrap(), grouped)
+}
+
+/// Lights whose receivers are everything in view are lit together: after each light's volumes
+/// its bit goes into a light mask, and one pass over the receivers per group of 96 adds every
+/// light where its bit is set. On 100 lights (97 points, two spots, a sun; two groups) over
+/// closed and open casters, in both modes, the image is the one a pass per light gives: to
+/// rounding in the physical mode (only the order of the additions differs), and within 2e-5 in
+/// the faithful mode, whose tangent-space light vector the grouped pass forms from interpolated
+/// terms. A mask that ignores the bits lights every shadow (0.48 here); bits shifted by one slot
+/// light each shadow with its neighbour's light (0.34); a sign slip in the faithful mode's light
+/// vector gives 0.91 (all three tried).
+#[test]
+fn lights_lit_together_are_the_lights_lit_one_pass_each() {
+    let mut lights = String::new();
+    for k in 0..97 {
+        let a = k as f32 * 2.399_963;
+        let r = 1.0 + 5.0 * ((k as f32 + 0.5) / 97.0).sqrt();
+        let (x, z, y) = (r * a.cos(), r * a.sin(), 3.0 + (k % 5) as f32);
+        let c = [0.4 + 0.3 * (k % 3) as f32, 0.5, 0.4 + 0.3 * (k % 4) as f32 / 3.0];
+        lights += &format!(
+            "[[lights]]\ntype = \"point\"\nposition = [{x}, {y}, {z}]\nintensity = [{}, {}, {}]\n",
+            c[0], c[1], c[2]
+        );
+    }
+    lights += "[[lights]]\ntype = \"spot\"\nposition = [0, 8, 0]\ndirection = [0.2, -1, 0.1]\nintensity = 30\ninner_deg = 15\nouter_deg = 30\n";
+    lights += "[[lights]]\ntype = \"spot\"\nposition = [4, 6, -3]\ndirection = [-0.5, -1, 0.4]\nintensity = 20\ninner_deg = 20\nouter_deg = 25\n";
+    lights += "[[lights]]\ntype = \"directional\"\ndirection = [0.3, -1, 0.2]\nirradiance = 0.5\n";
     let render = |mode: &str, group: bool| {
         let params = [mode, "animate = false", &format!("group_lights = {group}")];
-        let text = format!("{}\n{objects}\n{lights}", method(&params));
+        let text = format!("{}\n{CASTERS}\n{lights}", method(&params));
         let scene = Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap();
-        let mut r = penumbra::renderer::Renderer::new(common::test_gpu(), scene, None, (80, 64), 1).unwrap();
-        let cam = r.scene.camera.clone();
-        let frame = r.render(&cam, penumbra::renderer::FrameOutput::Readback).unwrap();
-        common::assert_clean(&r.gpu);
-        let grouped: Vec<String> = frame
-            .report
-            .recorded
-            .into_iter()
-            .filter(|p| p.contains("grouped"))
-            .collect();
-        (frame.image.unwrap(), grouped)
+        draw_frame(&mut penumbra::renderer::Renderer::new(common::test_gpu(), scene, None, (80, 64), 1).unwrap())
     };
     for (mode, tolerance) in [("mode = \"physical\"", 1e-6f32), ("mode = \"faithful\"", 2e-5)] {
         let (together, passes) = render(mode, true);
@@ -815,37 +821,10 @@ material = "grey"
 /// made at that size with that method draws, bit for bit.
 #[test]
 fn the_light_mask_follows_switches_and_resizes() {
-    let text = r#"
-[[methods]]
-name = "forward"
-
-[[methods]]
-name = "shadow_volumes"
-mode = "physical"
-animate = false
-
-[camera]
-position = [4, 5, 5]
-target = [0, 0.5, 0]
-fov_y_deg = 50
-
-[[materials]]
-name = "grey"
-albedo = 0.6
-
-[[objects]]
-name = "ground"
-mesh = "plane"
-size = 12
-material = "grey"
-
-[[objects]]
-name = "block"
-mesh = "box"
-size = [1, 1, 1]
-translate = [0, 0.5, 0]
-material = "grey"
-
+    let text = format!(
+        "[[methods]]\nname = \"forward\"\n\n{}\n{CASTERS}\n{}",
+        method(&["mode = \"physical\"", "animate = false"]),
+        r#"
 [[lights]]
 type = "point"
 position = [2, 3, 1]
@@ -860,14 +839,13 @@ intensity = [2, 3, 6]
 type = "directional"
 direction = [0.4, -1, 0.3]
 irradiance = 0.4
-"#;
-    let scene = Scene::from_str(text, "<test>", std::path::Path::new(".")).unwrap();
+"#
+    );
+    let scene = Scene::from_str(&text, "<test>", std::path::Path::new(".")).unwrap();
     let draw = |r: &mut penumbra::renderer::Renderer| {
-        let cam = r.scene.camera.clone();
-        let frame = r.render(&cam, penumbra::renderer::FrameOutput::Readback).unwrap();
-        common::assert_clean(&r.gpu);
-        assert!(frame.report.recorded.iter().any(|p| p.contains("grouped lighting")));
-        frame.image.unwrap().pixels
+        let (image, grouped) = draw_frame(r);
+        assert_eq!(grouped, ["lights 0-2 grouped lighting"]);
+        image.pixels
     };
     let fresh = |size| {
         let mut r =

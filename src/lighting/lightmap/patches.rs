@@ -292,13 +292,14 @@ fn cover_by_centroid(
     lo: DVec2,
     size: f64,
 ) {
-    let slot = (0..tris2d.len())
-        .max_by(|&a, &b| {
-            triangles[c.triangles[a]]
-                .area()
-                .total_cmp(&triangles[c.triangles[b]].area())
-        })
-        .expect("a chart has a triangle");
+    // Every chart holds a triangle; one without would simply keep no patch.
+    let Some(slot) = (0..tris2d.len()).max_by(|&a, &b| {
+        triangles[c.triangles[a]]
+            .area()
+            .total_cmp(&triangles[c.triangles[b]].area())
+    }) else {
+        return;
+    };
     let q = (tris2d[slot][0] + tris2d[slot][1] + tris2d[slot][2]) / 3.0;
     let at = (q - lo) / size;
     let (i, j) = (at.x.floor().max(0.0) as usize + 1, at.y.floor().max(0.0) as usize + 1);
@@ -506,12 +507,13 @@ fn merge_curved(charts: Vec<Chart>, triangles: &[Triangle], max_sag: f64) -> Vec
     }
     regions.sort_by_key(|(_, members, _)| members[0]);
     let mut charts: Vec<Option<Chart>> = charts.into_iter().map(Some).collect();
+    // Each chart is in exactly one region (the seed's), so every take finds it.
     regions
         .into_iter()
-        .map(|(seed, members, top)| {
-            let mut chart = charts[seed].take().expect("each chart is in one region");
+        .filter_map(|(seed, members, top)| {
+            let mut chart = charts[seed].take()?;
             if members.len() == 1 {
-                return chart;
+                return Some(chart);
             }
             let mut all = Vec::new();
             for m in members {
@@ -524,7 +526,7 @@ fn merge_curved(charts: Vec<Chart>, triangles: &[Triangle], max_sag: f64) -> Vec
             chart.triangles = all;
             chart.offset = top;
             chart.curved = true;
-            chart
+            Some(chart)
         })
         .collect()
 }
