@@ -136,10 +136,21 @@ pub fn round2(x: f64) -> f64 {
     }
 }
 
-/// A light-map's patch side (m) for `area` m² over `budget` patches: two significant digits,
-/// within the 0.005 to 10 m the light-map methods accept.
+/// An area (m²) for a printed reason: three decimals where that reads, else three significant
+/// digits in scientific notation (a 3 cm model's 0.000 m² said nothing).
+pub fn area_text(area: f64) -> String {
+    if (0.01..1e7).contains(&area) {
+        format!("{area:.3}")
+    } else {
+        format!("{area:.3e}")
+    }
+}
+
+/// A light-map's patch side (m) for `area` m² over `budget` patches, to two significant digits.
+/// No bound in metres: a model in millimetres or a 3 cm figurine takes the same patches per
+/// face as a room in metres.
 pub fn patch_size_for(area: f64, budget: f64) -> f64 {
-    round2((area / budget).sqrt()).clamp(0.005, 10.0)
+    round2((area / budget).sqrt())
 }
 
 /// A light-map's default patch side, and why: the scene's area over `budget` patches
@@ -157,13 +168,13 @@ pub fn lightmap_patch_size(triangles: &[Triangle], budget: f64) -> (f64, String)
     let limit = (4.0 * budget) as u64;
     let from_area = patch_size_for(area, budget);
     let at_area = count(triangles, from_area);
-    let mut why = format!("the scene's {area:.3} m² over a budget of {budget} patches");
+    let mut why = format!("the scene's {} m² over a budget of {budget} patches", area_text(area));
     if at_area <= limit {
         return (from_area, why);
     }
     let mut size = from_area;
-    while size < (4.0 * from_area).min(10.0) {
-        size = round2(size * 1.25).min(10.0);
+    while size < 4.0 * from_area {
+        size = round2(size * 1.25);
         // Charts are grouped again at each size: a curved surface's charts grow with it.
         let patches = count(triangles, size);
         if patches <= limit {

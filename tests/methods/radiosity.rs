@@ -94,7 +94,7 @@ fn bad_parameters_name_the_field() {
         .expect("refused")
         .to_string();
     assert!(
-        e.contains("box.toml:") && e.contains("methods[0].patch_size: expected a size from 0.005 to 10 metres, got -1"),
+        e.contains("box.toml:") && e.contains("methods[0].patch_size: expected a size in metres above 0, got -1"),
         "{e}"
     );
 }

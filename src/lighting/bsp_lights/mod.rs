@@ -255,8 +255,8 @@ impl Config {
         }
         if let Some(v) = decl.param("max_segment_area") {
             c.max_segment_area = Params::float(v)
-                .filter(|x| *x >= 1e-6 && *x <= 1e4)
-                .ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 m²", v))?;
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .ok_or_else(|| params.error("max_segment_area", "an area in m² above 0", v))?;
         }
         if let Some(v) = decl.param("k") {
             c.k = Params::float(v)
@@ -454,14 +454,18 @@ pub fn plan(
         )));
     }
     let budget = SEGMENT_BUDGET.min((rows / 4.0).max(1.0));
-    let chosen = round2(area / budget).clamp(1e-6, 1e4);
+    let chosen = round2(area / budget);
     let why = if budget < SEGMENT_BUDGET {
         format!(
-            "the scene's {area:.3} m² over a quarter of the {rows:.0} vertex rows a {} matrix of {lights} lights holds in {MAX_MATRIX_BYTES} bytes",
+            "the scene's {} m² over a quarter of the {rows:.0} vertex rows a {} matrix of {lights} lights holds in {MAX_MATRIX_BYTES} bytes",
+            crate::lighting::plan::area_text(area),
             if config.storage == Storage::F16 { "f16" } else { "f32" }
         )
     } else {
-        format!("the scene's {area:.3} m² over a budget of {SEGMENT_BUDGET} segments")
+        format!(
+            "the scene's {} m² over a budget of {SEGMENT_BUDGET} segments",
+            crate::lighting::plan::area_text(area)
+        )
     };
     Ok(vec![Derived::new("max_segment_area", chosen, why)])
 }

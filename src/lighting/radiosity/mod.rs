@@ -122,8 +122,8 @@ impl Config {
             c.patch_size = v
                 .as_float()
                 .or(v.as_integer().map(|i| i as f64))
-                .filter(|x| (0.005..=10.0).contains(x))
-                .ok_or_else(|| bad("patch_size", "a size from 0.005 to 10 metres", v))?;
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .ok_or_else(|| bad("patch_size", "a size in metres above 0", v))?;
         }
         if let Some(v) = decl.param("block") {
             c.settings.block = v

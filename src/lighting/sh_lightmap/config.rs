@@ -127,8 +127,8 @@ impl Config {
                 }
                 "patch_size" => {
                     c.patch_size = float(v)
-                        .filter(|x| (0.005..=10.0).contains(x))
-                        .ok_or_else(|| bad(p, "a size from 0.005 to 10 metres", v))?
+                        .filter(|x| x.is_finite() && *x > 0.0)
+                        .ok_or_else(|| bad(p, "a size in metres above 0", v))?
                 }
                 "block" => {
                     c.transfer.solve.block =

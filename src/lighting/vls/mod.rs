@@ -127,11 +127,14 @@ pub fn plan(
     let mut derived = Vec::new();
     let area = facts.area(NAME)?;
     if decl.param("max_segment_area").is_none() && area > 0.0 {
-        config.max_segment_area = round2(area / SEGMENT_BUDGET).clamp(1e-6, 1e4);
+        config.max_segment_area = round2(area / SEGMENT_BUDGET);
         derived.push(Derived::new(
             "max_segment_area",
             config.max_segment_area,
-            format!("the scene's {area:.3} m² over a budget of {SEGMENT_BUDGET} segments"),
+            format!(
+                "the scene's {} m² over a budget of {SEGMENT_BUDGET} segments",
+                crate::lighting::plan::area_text(area)
+            ),
         ));
     }
     if decl.param("k").is_none() && config.mode == Mode::Corrected {
@@ -254,8 +257,8 @@ impl Config {
         }
         if let Some(v) = decl.param("max_segment_area") {
             c.max_segment_area = Params::float(v)
-                .filter(|a| a.is_finite() && (1e-6..=1e4).contains(a))
-                .ok_or_else(|| params.error("max_segment_area", "an area from 1e-6 to 1e4 (world units²)", v))?;
+                .filter(|a| a.is_finite() && *a > 0.0)
+                .ok_or_else(|| params.error("max_segment_area", "an area in m² above 0", v))?;
         }
         let number = |p: &str, default: f64| -> Result<f64> {
             match decl.param(p) {
