@@ -155,6 +155,9 @@ pub fn plan(
     };
     let mut derived: Vec<crate::lighting::plan::Derived> =
         baker_note(decl, &config, triangles.len()).into_iter().collect();
+    if decl.param("near").is_none() {
+        derived.extend(near_note(facts.bounds(NAME)?));
+    }
     if config.max_edge.is_some() {
         return Ok(derived);
     }
@@ -194,6 +197,35 @@ fn baker_note(decl: &MethodDecl, config: &Config, triangles: usize) -> Option<cr
             format!(
                 "the raster baker would draw all {triangles} triangles for each vertex, over twice the {walk:.0} steps ({} rays × log2 of the triangles) a vertex's rays take through the tree",
                 config.samples
+            ),
+        )
+    })
+}
+
+/// The visibility rays' `near` where the default 1 mm does not suit the scene's size: a
+/// thousandth of the scene under 1 m (1 mm is a third of a 3 mm model, whose every occluder
+/// it would skip), and a millionth of it past 1 km (where 1 mm is a few steps of a float's
+/// resolution, and a ray would meet the surface it leaves). Between the two, 1 mm stays.
+fn near_note(bounds: Option<(glam::DVec3, glam::DVec3)>) -> Option<crate::lighting::plan::Derived> {
+    let extent = bounds.map(|(lo, hi)| (hi - lo).max_element())?;
+    let near = if extent < 1.0 {
+        crate::lighting::plan::round2(1e-3 * extent)
+    } else if extent > 1e3 {
+        crate::lighting::plan::round2(1e-6 * extent)
+    } else {
+        return None;
+    };
+    (near > 0.0).then(|| {
+        crate::lighting::plan::Derived::new(
+            "near",
+            near,
+            format!(
+                "the scene's {extent:.3e} m extent {}",
+                if extent < 1.0 {
+                    "over 1,000: the default 1 mm would skip the occluders of a model this small"
+                } else {
+                    "over a million: 1 mm is too few steps of a float's resolution this far out"
+                }
             ),
         )
     })
