@@ -2,7 +2,7 @@
 // The indirect term: the accumulated volume looked up at each visible surface, added into the
 // radiance target over the base and direct terms.
 // Corrected: trilinear (zero beyond the border) half a cell along the normal, irradiance
-// E = max(0, c . coslobe(-n)) / cell^2, radiance rho/pi * E, plus for thin transmitting
+// E = max(0, c . coslobe(-n)) / cell^2 (the sets hold c / cell^2), radiance rho/pi * E, plus for thin transmitting
 // surfaces tau/pi times the irradiance arriving at the back.
 // Faithful (defCompositor.glsl's GI and TI terms): albedo * clamp(SH(-n), 0, 1) at p + 0.001 of
 // the volume along n, no 1/pi, and on translucent surfaces the TI term below.
@@ -134,14 +134,14 @@ vec3 shade(int k, vec3 n, vec3 albedo, vec3 tau) {
     lookup(k, p + 0.5 * n, c);
     vec4 front = cosine_lobe(-n);
     for (int ch = 0; ch < 3; ++ch) {
-        radiance[ch] = albedo[ch] * max(dot(c[ch], front), 0.0) / (cell * cell * SH_PI);
+        radiance[ch] = albedo[ch] * max(dot(c[ch], front), 0.0) / SH_PI;
     }
     if (any(greaterThan(tau, vec3(0.0)))) {
         // Light reaching the back of a thin surface, looked up half a cell behind it.
         lookup(k, p - 0.5 * n, c);
         vec4 back = cosine_lobe(n);
         for (int ch = 0; ch < 3; ++ch) {
-            radiance[ch] += tau[ch] * max(dot(c[ch], back), 0.0) / (cell * cell * SH_PI);
+            radiance[ch] += tau[ch] * max(dot(c[ch], back), 0.0) / SH_PI;
         }
     }
     return radiance;

@@ -48,7 +48,7 @@ void main() {
             uint i = cell_index(cell);
             float area = volume.origin.w * volume.origin.w;
             for (uint ch = 0u; ch < 3u; ++ch) {
-                c[ch] = max(SET_LOAD(light, slot(i, ch)).x, 0.0) * 2.0 * sqrt(SH_PI) / area;
+                c[ch] = max(SET_LOAD(light, slot(i, ch)).x, 0.0) * volume.scale.y * 2.0 * sqrt(SH_PI) / area;
             }
         }
     }

@@ -67,7 +67,7 @@ void main() {
     }
     uint cell = cell_index(x);
     for (uint ch = 0u; ch < 3u; ++ch) {
-        vec4 c = accepted > 0.0 ? 4.0 * SH_PI * sum[ch] / accepted : vec4(0.0);
+        vec4 c = accepted > 0.0 ? 4.0 * SH_PI * sum[ch] / accepted * volume.scale.x : vec4(0.0);
         SET_STORE(wavefront, slot(cell, ch), c);
     }
 }

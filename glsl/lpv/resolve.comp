@@ -20,7 +20,7 @@ void main() {
         vec4 c;
         for (uint k = 0u; k < 4u; ++k) {
             uint i = (cell * 3u + ch) * 4u + k;
-            c[k] = float(fixed_light.v[i]) * volume.units.y;
+            c[k] = float(fixed_light.v[i]) * volume.units.y * volume.scale.x;
             fixed_light.v[i] = 0;
         }
         uint s = slot(cell, ch);

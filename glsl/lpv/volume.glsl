@@ -29,6 +29,8 @@ layout(set = 0, binding = LPV_VOLUME_BINDING) uniform VolumeBlock {
     vec4 light_intensity;  // rgb: irradiance (directional) or intensity (spot); w: RSM texel area
                            // (directional, m^2) or tan of the half field of view (spot)
     vec4 light_cone;       // x: cos inner, y: cos outer (spot); z: 1 in the document's mode
+    vec4 scale;     // x: stored per W/sr (corrected: 1/cell^2, so the fp16 sets hold
+                    // irradiance-sized values at any scale of the scene), y: its inverse
 } volume;
 
 vec4 sh_basis(vec3 d) {

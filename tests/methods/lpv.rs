@@ -166,7 +166,9 @@ fn volume_of(scene: &Scene) -> ([Grid; 3], Placement, LightCamera) {
     lpv.add_volume_passes(&mut graph, &f.scene_gpu);
     graph.output_buffer(lpv.volumes[0].result());
     graph.run_and_wait(&f.gpu, frame, &mut f.states, "lpv test").unwrap();
-    let result = lpv.volumes[0].read_set(&mut f.gpu, lpv.volumes[0].result()).unwrap();
+    let result = lpv.volumes[0]
+        .read_set(&mut f.gpu, lpv.volumes[0].result(), lpv.block(0))
+        .unwrap();
     common::assert_clean(&f.gpu);
     (result, lpv.placements[0], *lpv.camera())
 }

@@ -560,6 +560,11 @@ impl Lpv {
         &self.camera
     }
 
+    /// The uniform block of cascade `k` (what its sets store per W/sr among it).
+    pub fn block(&self, k: usize) -> &VolumeBlock {
+        &self.blocks[k]
+    }
+
     /// The RSM, the injection and the propagation: the volume the composite reads
     /// ([`VolumeGpu::result`]).
     pub fn add_volume_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, scene: &'a crate::gpu_scene::SceneGpu) {

@@ -121,6 +121,12 @@ impl LightCamera {
                 if config.mode == Mode::Faithful { 1.0 } else { 0.0 },
                 0.0,
             ],
+            scale: if config.mode == Mode::Faithful {
+                [1.0, 1.0, 0.0, 0.0]
+            } else {
+                let area = placement.cell * placement.cell;
+                [1.0 / area, area, 0.0, 0.0]
+            },
         }
     }
 }

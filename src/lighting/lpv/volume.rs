@@ -26,6 +26,12 @@ pub struct VolumeBlock {
     pub light_pos: [f32; 4],
     pub light_intensity: [f32; 4],
     pub light_cone: [f32; 4],
+    /// x: what a set stores per W/sr of a cell's SH coefficient, y: its inverse. The corrected
+    /// mode stores them over the cell's area (1/cell²), so that the values are those of
+    /// irradiance at any scale of the scene: W/sr alone grows as the square of the scene's
+    /// size, and a model in millimetres or centimetres left the fp16 sets' range (its indirect
+    /// light rounded to nothing). The document's mode stores its own display-like values (1).
+    pub scale: [f32; 4],
 }
 
 /// Fixed-point units per unit of blocking potential: range ±2048 per corner.
@@ -357,8 +363,14 @@ impl VolumeGpu {
     }
 
     /// The three channels of a set.
-    pub fn read_set(&self, gpu: &mut Gpu, buffer: BufferId) -> Result<[Grid; 3]> {
-        Ok(decode(&self.read_words(gpu, buffer)?, self.n, self.half))
+    /// The set `buffer` in W/sr (what the shaders store, times `block.scale[1]`).
+    pub fn read_set(&self, gpu: &mut Gpu, buffer: BufferId, block: &VolumeBlock) -> Result<[Grid; 3]> {
+        let mut grids = decode(&self.read_words(gpu, buffer)?, self.n, self.half);
+        let per_stored = f64::from(block.scale[1]);
+        for c in grids.iter_mut().flat_map(|g| g.cells.iter_mut()) {
+            *c = c.map(|x| x * per_stored);
+        }
+        Ok(grids)
     }
 }
 
@@ -390,6 +402,7 @@ pub fn propagate_standalone(
     let block = VolumeBlock {
         size: [n, n, n, n * n * n],
         origin: [0.0, 0.0, 0.0, 1.0],
+        scale: [1.0, 1.0, 0.0, 0.0],
         ..Default::default()
     };
     let frame = gpu.create_frame()?;
@@ -398,5 +411,5 @@ pub fn propagate_standalone(
     graph.output_buffer(volume.result());
     graph.run_and_wait(gpu, frame, &mut states, "LPV propagation")?;
     gpu.destroy_frame(frame)?;
-    volume.read_set(gpu, volume.result())
+    volume.read_set(gpu, volume.result(), &block)
 }
