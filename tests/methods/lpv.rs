@@ -1503,3 +1503,57 @@ fn the_maxima_warn_before_their_volumes_and_maps_are_allocated() {
     let peak = run.peak_kb.expect("the process's peak resident memory");
     assert!(peak < 1 << 20, "{peak} kB resident when the warning came");
 }
+
+/// A scene whose first light is a point lamp: unset, `light` becomes its first spot or
+/// directional light (the RSM cannot take a point light), said in the plan's line, and the
+/// volume is that light's; with `light` set, or a spot light first, nothing is derived; with
+/// point lights alone the method is refused in one line at creation.
+#[test]
+fn a_scene_whose_first_light_is_a_lamp_is_lit_by_its_spot() {
+    use penumbra::lighting::plan::Facts;
+    let text = |decl: &str, lights: &[&str]| {
+        let lights: String = lights.iter().map(|l| format!("[[lights]]\n{l}\n")).collect();
+        format!(
+            "methods = [{decl}]\n[camera]\nposition = [3, 2, 0]\ntarget = [0, 0.5, 0]\n\
+             [[objects]]\nmesh = \"plane\"\nsize = 3\n{lights}"
+        )
+    };
+    let lamp = "type = \"point\"\nposition = [0, 1, 0]\nintensity = 2";
+    let spot = "type = \"spot\"\nposition = [1, 2, 0]\ntarget = [0, 0, 0]\nintensity = 5";
+    let derived_light = |decl: &str, lights: &[&str]| {
+        let s = scene(&text(decl, lights));
+        penumbra::lighting::lpv::plan(&s.methods[0], &Facts::new(&s))
+            .unwrap()
+            .into_iter()
+            .find(|d| d.param == "light")
+            .map(|d| (d.value.as_integer().unwrap(), d.why))
+    };
+    let (index, why) = derived_light("\"lpv\"", &[lamp, lamp, spot]).expect("a derived light");
+    assert_eq!(index, 2, "{why}");
+    assert!(why.contains("cube RSM") && why.contains("left out"), "{why}");
+    assert_eq!(derived_light("\"lpv\"", &[spot, lamp]), None);
+    assert_eq!(derived_light("{ name = \"lpv\", light = 1 }", &[lamp, spot]), None);
+    assert_eq!(derived_light("\"lpv\"", &[lamp]), None);
+    // The derived light lights the volume: the same as setting it (both planned, so both take
+    // the derived iterations).
+    let planned = |decl: &str| {
+        let mut s = scene(&text(decl, &[lamp, spot]));
+        let derived = penumbra::lighting::lpv::plan(&s.methods[0], &Facts::new(&s)).unwrap();
+        s.methods[0] = penumbra::lighting::plan::apply(&s.methods[0], &derived);
+        volume_of(&s).0
+    };
+    let (derived, set) = (planned("\"lpv\""), planned("{ name = \"lpv\", light = 1 }"));
+    assert!(max_abs(&set) > 0.0, "the spot lights the volume");
+    assert_eq!(max_diff(&derived, &set), 0.0);
+    // Point lights alone: one line, naming the file.
+    let s = scene(&text("\"lpv\"", &[lamp]));
+    let mut f = common::MethodFixture::new(&s);
+    let e = Lpv::new(&mut f.context(&s, Terms::INDIRECT), &s.methods[0])
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("lpv test") && e.contains("cube RSM") && !e.contains('\n'),
+        "{e}"
+    );
+}

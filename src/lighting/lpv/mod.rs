@@ -247,6 +247,7 @@ pub fn plan(
             ));
         }
     }
+    derived.extend(light_note(decl, facts.scene));
     let texels = |side: u32| (side as u64).pow(2) * (4 * 16 + 4);
     let need = u64::from(config.cascades) * volume_bytes(&config) + texels(config.rsm) + texels(config.gbuffer);
     facts.check(
@@ -324,6 +325,30 @@ fn transmittance_buffer(cx: &mut CreateContext<'_>) -> Result<BufferId> {
         .create_storage_buffer("lpv transmittance", bytemuck::cast_slice(&tau))?;
     cx.states.forget_buffer(transmittance);
     Ok(transmittance)
+}
+
+/// `light` when unset and the scene's first punctual light is a point light, which the RSM
+/// cannot take: the first spot or directional light, so a scene whose lamps come first is lit
+/// by its spot or sun rather than refused. `None` where light 0 serves, or where nothing does
+/// (then the method is refused at creation, naming the light).
+fn light_note(decl: &MethodDecl, scene: &crate::scene::Scene) -> Option<crate::lighting::plan::Derived> {
+    use crate::gpu_scene::LIGHT_POINT;
+    if decl.param("light").is_some() {
+        return None;
+    }
+    let lights = punctual_lights(scene);
+    if lights.first()?.position[3] != LIGHT_POINT {
+        return None;
+    }
+    let i = lights.iter().position(|l| l.position[3] != LIGHT_POINT)?;
+    Some(crate::lighting::plan::Derived::new(
+        "light",
+        i as i64,
+        format!(
+            "the first spot or directional light of the scene's {} point, spot and directional lights: a point light would need a cube RSM; the others are left out (one light a volume)",
+            lights.len()
+        ),
+    ))
 }
 
 /// The scene's punctual light (point, spot or directional, in order) the configuration lights
