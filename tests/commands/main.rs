@@ -14,4 +14,5 @@ mod faults;
 mod fuzz;
 mod prt_refine;
 mod report;
+mod scale;
 mod slow_bakes;
