@@ -312,3 +312,45 @@ fn occluders_block_only_between_the_ends() {
         "the light and receiver both above"
     );
 }
+
+/// The shadow rays' clearance follows the scene: a 3 mm model's 10 µm gap under a floating
+/// square still shadows the floor (a fixed 0.1 mm would step over it), and a wall 3 km from the
+/// origin does not shadow its own points (0.1 mm is under one step of an f32 coordinate there,
+/// and the ray started on the wall).
+#[test]
+fn occluders_keep_clear_by_the_scene_s_size_and_distance() {
+    let quad = |c: DVec3, u: DVec3, w: DVec3| {
+        Polygon::from_vertices(vec![c - u - w, c + u - w, c + u + w, c - u + w]).unwrap()
+    };
+    let mm = 1e-3;
+    let floor = quad(v(0.0, 0.0, 0.0), v(1.5 * mm, 0.0, 0.0), v(0.0, 1.5 * mm, 0.0));
+    let square = quad(v(0.0, 0.0, 0.01 * mm), v(0.5 * mm, 0.0, 0.0), v(0.0, 0.5 * mm, 0.0));
+    let small = Occluders::new([&floor, &square]);
+    assert!(
+        small.blocked(v(0.0, 0.0, 0.0), v(0.0, 0.0, 3.0 * mm)),
+        "the square 10 µm above the floor"
+    );
+    assert!(
+        !small.blocked(v(1.0 * mm, 0.0, 0.0), v(1.0 * mm, 0.0, 3.0 * mm)),
+        "beside it"
+    );
+    // A floor meeting a wall at 25 degrees 3 km out; receivers along their junction, on both
+    // at once, each lit from in front of the wall.
+    let (x, z) = (3000.3, 2000.7);
+    let along = v(-(25f64.to_radians().sin()), 0.0, 25f64.to_radians().cos());
+    let front = v(-along.z, 0.0, along.x);
+    let wall = quad(v(x, 1.0, z), v(0.0, 1.0, 0.0), along);
+    let ground = quad(v(x, 0.0, z), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0));
+    let far = Occluders::new([&wall, &ground]);
+    let mut rng = Lcg(7);
+    let mut shadowed = 0;
+    for _ in 0..1000 {
+        let p = v(x, 0.0, z) + along * rng.range(-0.9, 0.9);
+        let light = p + front * rng.range(0.5, 5.0) + v(0.0, rng.range(0.5, 3.0), 0.0) + along * rng.range(-3.0, 3.0);
+        shadowed += usize::from(far.blocked(p, light));
+    }
+    assert_eq!(
+        shadowed, 0,
+        "of 1,000 points where the wall meets the floor, lit from the room"
+    );
+}

@@ -8,7 +8,7 @@ use glam::DVec3;
 
 use crate::bake::{BakeData, Progress};
 use crate::lighting::many_lights::geometry::{point_in_convex_polygon, segment_plane};
-use crate::lighting::many_lights::occluders::END_CLEARANCE;
+use crate::lighting::many_lights::occluders::clearance;
 use crate::lighting::many_lights::{LightModel, ManyLight, Occluders, ScenePolygon, Segments};
 
 /// Marks an empty slot of a segment's light set (fewer than K lights passed).
@@ -125,21 +125,26 @@ impl BakeData for LightSets {
 
 /// The thesis's feeler over the scene polygons, with the digest's corrections (§3.3 item 7):
 /// the segment's own polygon and polygons coplanar with it are skipped, and crossings within
-/// [`END_CLEARANCE`] of either end do not block (as for [`Occluders`], so both agree).
+/// the scene's [`clearance`] of either end do not block (as for [`Occluders`], so both agree).
 pub struct ThesisFeeler<'a> {
     polygons: &'a [ScenePolygon],
+    clearance: f64,
 }
 
 impl<'a> ThesisFeeler<'a> {
     pub fn new(polygons: &'a [ScenePolygon]) -> Self {
-        ThesisFeeler { polygons }
+        let corners = polygons.iter().flat_map(|q| q.polygon.vertices.iter().copied());
+        ThesisFeeler {
+            polygons,
+            clearance: clearance(corners),
+        }
     }
 
     /// Whether a polygon other than `own` (and its coplanar neighbours) lies between `p` and
     /// `light`.
     pub fn blocked(&self, own: usize, p: DVec3, light: DVec3) -> bool {
         let len = (light - p).length();
-        if len <= 2.0 * END_CLEARANCE {
+        if len <= 2.0 * self.clearance {
             return false;
         }
         let own_plane = self.polygons.get(own).map(|q| q.polygon.plane);
@@ -151,7 +156,7 @@ impl<'a> ThesisFeeler<'a> {
                 continue;
             };
             let t = (hit - p).length();
-            if t < END_CLEARANCE || t > len - END_CLEARANCE {
+            if t < self.clearance || t > len - self.clearance {
                 continue;
             }
             if point_in_convex_polygon(hit, &q.polygon.vertices, q.polygon.plane.normal) {
