@@ -1504,12 +1504,13 @@ fn the_maxima_warn_before_their_volumes_and_maps_are_allocated() {
     assert!(peak < 1 << 20, "{peak} kB resident when the warning came");
 }
 
-/// A scene whose first light is a point lamp: unset, `light` becomes its first spot or
-/// directional light (the RSM cannot take a point light), said in the plan's line, and the
-/// volume is that light's; with `light` set, or a spot light first, nothing is derived; with
-/// point lights alone the method is refused in one line at creation.
+/// Unset, `light` is the spot or sun that sends the most flux into the scene (the RSM cannot
+/// take a point light), said in the plan's line, and the volume is that light's: a scene whose
+/// first light is a lamp is lit by its spot, and of two spots the wider and brighter one lights
+/// the volume. With `light` set, or the strongest light first, nothing is derived; with point
+/// lights alone the method is refused in one line at creation.
 #[test]
-fn a_scene_whose_first_light_is_a_lamp_is_lit_by_its_spot() {
+fn the_volume_is_lit_by_the_strongest_spot_or_sun() {
     use penumbra::lighting::plan::Facts;
     let text = |decl: &str, lights: &[&str]| {
         let lights: String = lights.iter().map(|l| format!("[[lights]]\n{l}\n")).collect();
@@ -1530,8 +1531,21 @@ fn a_scene_whose_first_light_is_a_lamp_is_lit_by_its_spot() {
     };
     let (index, why) = derived_light("\"lpv\"", &[lamp, lamp, spot]).expect("a derived light");
     assert_eq!(index, 2, "{why}");
-    assert!(why.contains("cube RSM") && why.contains("left out"), "{why}");
+    assert!(why.contains("cube RSM") && why.contains("0 other"), "{why}");
     assert_eq!(derived_light("\"lpv\"", &[spot, lamp]), None);
+    // A narrow spot first, a wide one (25° against 30°, the same intensity) and a dim sun after:
+    // the wide spot sends the most (5·2π(1 − cos 30°) = 4.21 W; the sun 0.1 W/m² over the 3 m
+    // plane's 9 m², 0.9 W).
+    let narrow = "type = \"spot\"\nposition = [1, 2, 0]\ntarget = [0, 0, 0]\nintensity = 5\nouter_deg = 25";
+    let sun = "type = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 0.1";
+    let (index, why) = derived_light("\"lpv\"", &[narrow, spot, sun]).expect("a derived light");
+    assert_eq!(index, 1, "{why}");
+    assert!(why.contains("4.209 W") && why.contains("2 other"), "{why}");
+    let bright_sun = "type = \"directional\"\ndirection = [0, -1, 0]\nirradiance = 1";
+    assert_eq!(
+        derived_light("\"lpv\"", &[narrow, spot, bright_sun]).map(|d| d.0),
+        Some(2)
+    );
     assert_eq!(derived_light("{ name = \"lpv\", light = 1 }", &[lamp, spot]), None);
     assert_eq!(derived_light("\"lpv\"", &[lamp]), None);
     // The derived light lights the volume: the same as setting it (both planned, so both take

@@ -247,7 +247,7 @@ pub fn plan(
             ));
         }
     }
-    derived.extend(light_note(decl, facts.scene));
+    derived.extend(light_note(decl, facts.scene, facts.bounds(NAME)?));
     let texels = |side: u32| (side as u64).pow(2) * (4 * 16 + 4);
     let need = u64::from(config.cascades) * volume_bytes(&config) + texels(config.rsm) + texels(config.gbuffer);
     facts.check(
@@ -327,28 +327,54 @@ fn transmittance_buffer(cx: &mut CreateContext<'_>) -> Result<BufferId> {
     Ok(transmittance)
 }
 
-/// `light` when unset and the scene's first punctual light is a point light, which the RSM
-/// cannot take: the first spot or directional light, so a scene whose lamps come first is lit
-/// by its spot or sun rather than refused. `None` where light 0 serves, or where nothing does
-/// (then the method is refused at creation, naming the light).
-fn light_note(decl: &MethodDecl, scene: &crate::scene::Scene) -> Option<crate::lighting::plan::Derived> {
-    use crate::gpu_scene::LIGHT_POINT;
+/// `light` when unset: of the scene's spot and directional lights (a point light would need a
+/// cube RSM), the one that sends the most flux into the scene, the first on a tie, so that the
+/// one light a volume bounces is the one with the most light to bounce. A spot's flux is its
+/// intensity over its cone, 2π(1 − cos θ_outer) sr; a sun's its irradiance over the scene's
+/// bounds seen along its direction. `None` where that is light 0 (the default), or where the
+/// scene has no such light (then the method is refused at creation, naming the light).
+fn light_note(
+    decl: &MethodDecl,
+    scene: &crate::scene::Scene,
+    bounds: Option<(glam::DVec3, glam::DVec3)>,
+) -> Option<crate::lighting::plan::Derived> {
+    use crate::gpu_scene::{LIGHT_DIRECTIONAL, LIGHT_SPOT};
     if decl.param("light").is_some() {
         return None;
     }
+    let size = bounds.map_or(glam::DVec3::ZERO, |(lo, hi)| hi - lo);
+    let flux = |l: &GpuLight| {
+        let power = f64::from(l.intensity[0].max(l.intensity[1]).max(l.intensity[2]));
+        if l.position[3] == LIGHT_SPOT {
+            Some(power * std::f64::consts::TAU * (1.0 - f64::from(l.cone[1])))
+        } else if l.position[3] == LIGHT_DIRECTIONAL {
+            let d = glam::Vec3::from_slice(&l.direction[..3])
+                .as_dvec3()
+                .normalize_or_zero()
+                .abs();
+            Some(power * (d.x * size.y * size.z + d.y * size.x * size.z + d.z * size.x * size.y))
+        } else {
+            None
+        }
+    };
     let lights = punctual_lights(scene);
-    if lights.first()?.position[3] != LIGHT_POINT {
-        return None;
-    }
-    let i = lights.iter().position(|l| l.position[3] != LIGHT_POINT)?;
-    Some(crate::lighting::plan::Derived::new(
-        "light",
-        i as i64,
-        format!(
-            "the first spot or directional light of the scene's {} point, spot and directional lights: a point light would need a cube RSM; the others are left out (one light a volume)",
-            lights.len()
-        ),
-    ))
+    let (best, most) = (lights.iter().enumerate())
+        .filter_map(|(i, l)| flux(l).map(|f| (i, f)))
+        .fold(None, |b: Option<(usize, f64)>, (i, f)| match b {
+            Some((_, g)) if g >= f => b,
+            _ => Some((i, f)),
+        })?;
+    let others = lights.iter().filter(|l| flux(l).is_some()).count() - 1;
+    (best != 0).then(|| {
+        crate::lighting::plan::Derived::new(
+            "light",
+            best as i64,
+            format!(
+                "of the scene's {} point, spot and directional lights, the spot or sun that sends the most flux into the scene ({most:.3} W; point lights would need a cube RSM); {others} other spot or sun light(s) left out, one light a volume",
+                lights.len()
+            ),
+        )
+    })
 }
 
 /// The scene's punctual light (point, spot or directional, in order) the configuration lights
