@@ -99,7 +99,8 @@ void main() {
         }
     }
     ivec3 corner = ivec3(floor(p + 0.5));
-    if (inside(corner)) {
+    // rsm.w = 1: a second or later light's RSM, whose surfels the first light's already block.
+    if (inside(corner) && volume.rsm.w == 0) {
         // The 2-band lobe of max(0, n.w) peaks at 0.75 (LPV_COS0 * SH_Y00 + LPV_COS1 * SH_C1):
         // scaled by 4/3 so that a surface filling the cell blocks light meeting it head-on
         // completely, as max(0, n.w) itself would.

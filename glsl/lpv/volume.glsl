@@ -22,7 +22,8 @@ layout(set = 0, binding = LPV_VOLUME_BINDING) uniform VolumeBlock {
     ivec4 size;     // cells per axis; w: cell count
     vec4 origin;    // world position of the volume's corner; w: cell size (metres)
     vec4 units;     // x: fixed-point units per W/sr, y: its inverse, z: per blocking unit, w: its inverse
-    ivec4 rsm;      // x: RSM texels per side; y: gather samples; z: the document's transform bug
+    ivec4 rsm;      // x: RSM texels per side; y: gather samples; z: the document's transform bug;
+                    // w: 1 where the surfels add light but no blocking (a later light's RSM)
     mat4 light_view_proj;  // world -> the RSM's clip space
     vec4 light;     // xyz: direction the light travels (unit); w: 1 for a spot light
     vec4 light_pos; // xyz: spot light position; w: the RSM's clip depth per metre along the light

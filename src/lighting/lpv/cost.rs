@@ -33,7 +33,7 @@ const LABEL: &str = "lpv calibration";
 /// A frame's work per stage, in the units its time scales with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Work {
-    /// Texels drawn: the RSM's and the G-buffer's.
+    /// Texels drawn: the RSMs' (one a light) and the G-buffer's.
     pub raster: f64,
     /// Surfels scattered (the RSM's and the G-buffer's texels) into each cascade, or the
     /// document's samples gathered by each cell.
@@ -46,9 +46,10 @@ pub struct Work {
 }
 
 impl Work {
-    pub fn of(config: &Config) -> Work {
+    /// The work of `config` with an RSM for each of `lights` lights.
+    pub fn of(config: &Config, lights: usize) -> Work {
         let texels = |side: u32| f64::from(side).powi(2);
-        let drawn = texels(config.rsm) + texels(config.gbuffer);
+        let drawn = texels(config.rsm) * lights.max(1) as f64 + texels(config.gbuffer);
         let cells = f64::from(config.grid).powi(3);
         let cascades = f64::from(config.cascades);
         let scatter = config.injection == Injection::Scatter;
@@ -79,7 +80,7 @@ impl Rates {
     /// From one calibration's pass times (milliseconds, by pass name) of the stages of `small`
     /// (one volume, its propagation steps named "… propagate k").
     pub fn measured(small: &Config, times: &[(String, f64)]) -> Rates {
-        let work = Work::of(small);
+        let work = Work::of(small, 1);
         let seconds = |pick: &dyn Fn(&str) -> bool| -> f64 {
             times.iter().filter(|(n, _)| pick(n)).map(|(_, ms)| ms / 1e3).sum()
         };
@@ -106,8 +107,8 @@ impl Rates {
 }
 
 /// A frame of `config` at `rates`.
-pub fn estimate(config: &Config, rates: &Rates) -> FrameCost {
-    let work = Work::of(config);
+pub fn estimate(config: &Config, rates: &Rates, lights: usize) -> FrameCost {
+    let work = Work::of(config, lights);
     FrameCost {
         parts: vec![
             (
@@ -200,11 +201,11 @@ fn time_stages(
 ) -> Result<Option<Vec<(String, f64)>>> {
     let scene = cx.scene_gpu;
     let volume = VolumeGpu::new(cx.gpu, cx.shaders, cx.states, small, LABEL)?;
-    let maps = Rsm::new(cx.gpu, cx.shaders, cx.states, small)?;
+    let maps = Rsm::new(cx.gpu, cx.shaders, cx.states, small, 1)?;
     let mut graph = RenderGraph::new();
-    maps.add_raster(&mut graph, scene, calls, transmittance, blocks[0]);
+    maps.add_raster(&mut graph, scene, calls, transmittance, std::slice::from_ref(blocks[0]));
     maps.add_gbuffer(&mut graph, scene, calls, transmittance, blocks[1]);
-    maps.add_injection(&mut graph, &volume, blocks[0], blocks[1]);
+    maps.add_injection(&mut graph, &volume, std::slice::from_ref(blocks[0]), blocks[1]);
     volume.add_propagation(&mut graph, blocks[0]);
     graph.output_buffer(volume.accumulation);
     let frame = cx.gpu.create_frame()?;

@@ -33,7 +33,7 @@ use crate::gpu_scene::{punctual_lights, record_draws, vertex_layout, DrawCall, G
 use crate::graph::{Access, RenderGraph};
 use crate::lighting::{CreateContext, FrameContext, LightingMethod, ReferenceKind, Term, RADIANCE_FORMAT};
 use crate::scene::{MethodDecl, MethodSchema, ParamKind, ParamSchema};
-use config::{Config, Lookup, Mode};
+use config::{Config, Injection, Lookup, Mode};
 use rsm::{LightCamera, Rsm};
 use volume::{Placement, VolumeBlock, VolumeGpu};
 
@@ -247,9 +247,19 @@ pub fn plan(
             ));
         }
     }
-    derived.extend(light_note(decl, facts.scene, facts.bounds(NAME)?));
+    let rsms = if every_light(decl, &config) {
+        let lights = punctual_lights(facts.scene);
+        (lights
+            .iter()
+            .filter(|l| l.position[3] != crate::gpu_scene::LIGHT_POINT)
+            .count())
+        .max(1) as u64
+    } else {
+        derived.extend(light_note(decl, facts.scene, facts.bounds(NAME)?));
+        1
+    };
     let texels = |side: u32| (side as u64).pow(2) * (4 * 16 + 4);
-    let need = u64::from(config.cascades) * volume_bytes(&config) + texels(config.rsm) + texels(config.gbuffer);
+    let need = u64::from(config.cascades) * volume_bytes(&config) + rsms * texels(config.rsm) + texels(config.gbuffer);
     facts.check(
         NAME,
         &format!(
@@ -327,8 +337,9 @@ fn transmittance_buffer(cx: &mut CreateContext<'_>) -> Result<BufferId> {
     Ok(transmittance)
 }
 
-/// `light` when unset: of the scene's spot and directional lights (a point light would need a
-/// cube RSM), the one that sends the most flux into the scene, the first on a tie, so that the
+/// `light` when unset and the volume takes one light (the document's mode, the gather): of the
+/// scene's spot and directional lights (a point light would need a cube RSM), the one that
+/// sends the most flux into the scene, the first on a tie, so that the
 /// one light a volume bounces is the one with the most light to bounce. A spot's flux is its
 /// intensity over its cone, 2π(1 − cos θ_outer) sr; a sun's its irradiance over the scene's
 /// bounds seen along its direction. `None` where that is light 0 (the default), or where the
@@ -375,6 +386,46 @@ fn light_note(
             ),
         )
     })
+}
+
+/// Every light's block for every volume, `[volume][light]`: the fixed-point units shared, over
+/// the lights' summed flux bounds (so that their sums add), and the blocking from the first
+/// light's RSM alone (a surface two lights see would otherwise block twice).
+fn light_blocks(cameras: &[LightCamera], placements: &[Placement], config: &Config) -> Vec<Vec<VolumeBlock>> {
+    let flux: f32 = cameras.iter().map(|c| c.flux_bound).sum();
+    (placements.iter())
+        .map(|p| {
+            (cameras.iter().enumerate())
+                .map(|(k, c)| {
+                    let mut b = c.block_sharing(p, config, flux);
+                    b.rsm[3] = i32::from(k > 0);
+                    b
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The lights whose RSMs the volume takes: in the corrected scatter, with `light` unset, every
+/// spot and directional light of the scene (point lights would need a cube RSM); else the one
+/// light `light` names (the document's mode and the gather take one).
+fn lights_of(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config) -> Result<Vec<GpuLight>> {
+    use crate::gpu_scene::{LIGHT_DIRECTIONAL, LIGHT_SPOT};
+    if every_light(decl, config) {
+        let all: Vec<GpuLight> = (punctual_lights(cx.scene).into_iter())
+            .filter(|l| l.position[3] == LIGHT_SPOT || l.position[3] == LIGHT_DIRECTIONAL)
+            .collect();
+        if !all.is_empty() {
+            return Ok(all);
+        }
+    }
+    Ok(vec![light_of(cx, decl, config)?])
+}
+
+/// Whether the volume takes every spot and directional light: the corrected scatter with
+/// `light` unset.
+fn every_light(decl: &MethodDecl, config: &Config) -> bool {
+    decl.param("light").is_none() && config.mode == Mode::Corrected && config.injection == Injection::Scatter
 }
 
 /// The scene's punctual light (point, spot or directional, in order) the configuration lights
@@ -499,13 +550,13 @@ pub struct Lpv {
     pub placements: Vec<Placement>,
     /// The finest cascade's side when the cascades follow the camera.
     finest: Option<f32>,
-    /// The light as the last frame had it (the scene's light motion and board applied, then
-    /// turned by `light_spin`), and its index in the frame's lights.
-    light: GpuLight,
-    light_index: usize,
-    /// Over the largest volume.
-    camera: LightCamera,
-    blocks: Vec<VolumeBlock>,
+    /// The lights as the last frame had them (the scene's light motion and board applied, then
+    /// turned by `light_spin`), each with its index in the frame's lights.
+    lights: Vec<(GpuLight, usize)>,
+    /// Per light, over the largest volume.
+    cameras: Vec<LightCamera>,
+    /// Per volume (cascade), each light's block.
+    blocks: Vec<Vec<VolumeBlock>>,
     /// The camera's G-buffer: drawing it, and injecting its surfels into each volume.
     gbuffer_raster: VolumeBlock,
     gbuffer_blocks: Vec<VolumeBlock>,
@@ -531,19 +582,22 @@ impl Lpv {
         for w in crate::lighting::params::Params::new(decl, Some(cx.scene)).inert_warnings(&config.inert()) {
             crate::errln!("{w}");
         }
-        let light = light_of(cx, decl, &config)?;
+        let lit = lights_of(cx, decl, &config)?;
+        let light = lit[0];
         let bounds = scene_bounds(cx)
             .ok_or_else(|| Error::Usage(format!("{}: {NAME}: the scene has no object to light", cx.scene.source)))?;
         let (finest, placements) = place_volumes(cx.scene.camera.position, bounds, &config);
-        // The frame's lights are `raster_lights`, one per scene light: the punctual light's slot.
-        let light_index = crate::gpu_scene::raster_lights(cx.scene)
-            .iter()
-            .position(|l| *l == light)
-            .unwrap_or(0);
+        // The frame's lights are `raster_lights`, one per scene light: each punctual light's slot.
+        let raster = crate::gpu_scene::raster_lights(cx.scene);
+        let lights: Vec<(GpuLight, usize)> = (lit.iter())
+            .map(|l| (*l, raster.iter().position(|r| r == l).unwrap_or(0)))
+            .collect();
         let largest = placements[placements.len() - 1];
-        let camera = LightCamera::new(&light, &largest, config.rsm, config.snap)
+        let cameras = (lit.iter())
+            .map(|l| LightCamera::new(l, &largest, config.rsm, config.snap))
+            .collect::<Result<Vec<_>>>()
             .map_err(|e| Error::Usage(format!("{}: {e}", cx.scene.source)))?;
-        let blocks: Vec<VolumeBlock> = placements.iter().map(|p| camera.block(p, &config)).collect();
+        let blocks = light_blocks(&cameras, &placements, &config);
         let transmittance = transmittance_buffer(cx)?;
         let calls: Vec<DrawCall> = cx
             .scene_gpu
@@ -556,19 +610,19 @@ impl Lpv {
         // sizes are made: at the maxima those alone take longer than the measurement.
         let rates = cost::calibrate(cx, &config, &light, &largest, &calls, transmittance)?;
         if let Some(rates) = &rates {
-            cx.warn_cost(NAME, &cost::estimate(&config, rates));
+            cx.warn_cost(NAME, &cost::estimate(&config, rates, lights.len()));
         }
         let volumes = create_volumes(cx, &config, placements.len())?;
         let cascade_block = cascade_block(&placements);
         // The scene's camera until the first frame says where the camera is.
         let eye = cx.scene.camera.position.extend(1.0).into();
         let view_proj = cx.scene.camera.view_projection(1.0).to_cols_array();
-        let gbuffer_raster = rsm::gbuffer_block(&blocks[0], view_proj, eye, config.gbuffer);
+        let gbuffer_raster = rsm::gbuffer_block(&blocks[0][0], view_proj, eye, config.gbuffer);
         let gbuffer_blocks = blocks
             .iter()
-            .map(|b| rsm::gbuffer_injection_block(b, config.gbuffer))
+            .map(|b| rsm::gbuffer_injection_block(&b[0], config.gbuffer))
             .collect();
-        let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config)?;
+        let rsm = Rsm::new(cx.gpu, cx.shaders, cx.states, &config, lights.len())?;
         let composite = composite_pipeline(cx, &config)?;
         let debug = debug_pipeline(cx, &config)?;
         let objects: Vec<Option<usize>> = cx.scene_gpu.draws.iter().map(|d| d.object).collect();
@@ -577,9 +631,8 @@ impl Lpv {
             config,
             placements,
             finest,
-            light,
-            light_index,
-            camera,
+            lights,
+            cameras,
             blocks,
             gbuffer_raster,
             gbuffer_blocks,
@@ -607,13 +660,19 @@ impl Lpv {
         &self.config
     }
 
+    /// The first light's camera.
     pub fn camera(&self) -> &LightCamera {
-        &self.camera
+        &self.cameras[0]
     }
 
-    /// The uniform block of cascade `k` (what its sets store per W/sr among it).
+    /// How many lights the volume bounces (an RSM each).
+    pub fn light_count(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// The first light's uniform block of cascade `k` (what its sets store per W/sr among it).
     pub fn block(&self, k: usize) -> &VolumeBlock {
-        &self.blocks[k]
+        &self.blocks[k][0]
     }
 
     /// The RSM, the injection and the propagation: the volume the composite reads
@@ -626,7 +685,7 @@ impl Lpv {
             .add_gbuffer(graph, scene, &self.calls, self.transmittance, &self.gbuffer_raster);
         for ((volume, block), gbuffer) in self.volumes.iter().zip(&self.blocks).zip(&self.gbuffer_blocks) {
             self.rsm.add_injection(graph, volume, block, gbuffer);
-            volume.add_propagation(graph, block);
+            volume.add_propagation(graph, &block[0]);
         }
     }
 }
@@ -640,7 +699,7 @@ impl Lpv {
         // RSM's and the finest volume's.
         let (map, block) = match (&self.rsm.gbuffer, self.config.view.gbuffer()) {
             (Some(g), true) => (g, &self.gbuffer_raster),
-            _ => (&self.rsm.map, &self.blocks[0]),
+            _ => (&self.rsm.map, &self.blocks[0][0]),
         };
         let layer = match self.config.view {
             config::View::RsmTransmitted => map.layers[1],
@@ -714,35 +773,35 @@ impl LightingMethod for Lpv {
             }
             None => false,
         };
-        // The frame's light (the scene's light motion turns it for every method), then the
+        // The frame's lights (the scene's light motion turns them for every method), then the
         // LPV's own `light_spin` about world up.
-        let mut light = frame.scene.lights.get(self.light_index).copied().unwrap_or(self.light);
-        if self.config.light_spin != 0.0 {
-            let turn = glam::Quat::from_rotation_y((self.config.light_spin * t as f64).to_radians() as f32);
-            light.direction = (turn * Vec3::from_slice(&light.direction[..3])).extend(0.0).into();
-        }
-        if light != self.light || moved {
-            self.light = light;
-            self.camera = LightCamera::new(
-                &light,
-                &self.placements[self.placements.len() - 1],
-                self.config.rsm,
-                self.config.snap,
-            )?;
-            self.blocks = self
-                .placements
-                .iter()
-                .map(|p| self.camera.block(p, &self.config))
-                .collect();
+        let turn = glam::Quat::from_rotation_y((self.config.light_spin * t as f64).to_radians() as f32);
+        let lights: Vec<(GpuLight, usize)> = (self.lights.iter())
+            .map(|&(last, index)| {
+                let mut light = frame.scene.lights.get(index).copied().unwrap_or(last);
+                if self.config.light_spin != 0.0 {
+                    light.direction = (turn * Vec3::from_slice(&light.direction[..3])).extend(0.0).into();
+                }
+                (light, index)
+            })
+            .collect();
+        // A light's change of intensity moves every light's shared fixed-point units.
+        if lights != self.lights || moved {
+            let largest = self.placements[self.placements.len() - 1];
+            self.cameras = (lights.iter())
+                .map(|(l, _)| LightCamera::new(l, &largest, self.config.rsm, self.config.snap))
+                .collect::<Result<Vec<_>>>()?;
+            self.lights = lights;
+            self.blocks = light_blocks(&self.cameras, &self.placements, &self.config);
             self.cascade_block = cascade_block(&self.placements);
         }
         if self.config.gbuffer > 0 {
             let (view_proj, eye, size) = (frame.uniforms.view_proj, frame.uniforms.camera_pos, self.config.gbuffer);
-            self.gbuffer_raster = rsm::gbuffer_block(&self.blocks[0], view_proj, eye, size);
+            self.gbuffer_raster = rsm::gbuffer_block(&self.blocks[0][0], view_proj, eye, size);
             self.gbuffer_blocks = self
                 .blocks
                 .iter()
-                .map(|b| rsm::gbuffer_injection_block(b, size))
+                .map(|b| rsm::gbuffer_injection_block(&b[0], size))
                 .collect();
         }
         Ok(())
@@ -764,12 +823,15 @@ impl LightingMethod for Lpv {
                 out.push(item(name, requested, allocated));
             }
         }
-        let (requested, allocated) = self.rsm.map.memory(gpu)?;
-        out.push(item(
-            format!("{NAME} rsm ({0}x{0}, 4 x RGBA32F + depth)", self.rsm.map.size),
-            requested,
-            allocated,
-        ));
+        for (k, map) in self.rsm.maps().enumerate() {
+            let (requested, allocated) = map.memory(gpu)?;
+            let which = if k == 0 { String::new() } else { format!(" {k}") };
+            out.push(item(
+                format!("{NAME} rsm{which} ({0}x{0}, 4 x RGBA32F + depth)", map.size),
+                requested,
+                allocated,
+            ));
+        }
         if let Some(c) = &self.rsm.gbuffer {
             let (requested, allocated) = c.memory(gpu)?;
             out.push(item(
@@ -782,7 +844,7 @@ impl LightingMethod for Lpv {
     }
 
     fn frame_cost(&self) -> Option<crate::lighting::FrameCost> {
-        Some(cost::estimate(&self.config, &self.rates?))
+        Some(cost::estimate(&self.config, &self.rates?, self.lights.len()))
     }
 
     fn add_passes<'a>(&'a self, graph: &mut RenderGraph<'a>, frame: &FrameContext<'a>) -> Result<()> {
@@ -839,7 +901,7 @@ impl LightingMethod for Lpv {
                 let maps = scene.material_maps[material as usize];
                 let mut binds = vec![
                     ("frame", Bind::UniformData(uniform_bytes)),
-                    ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0]))),
+                    ("volume", Bind::UniformData(bytemuck::bytes_of(&self.blocks[0][0]))),
                     ("cascades", Bind::UniformData(bytemuck::bytes_of(&self.cascade_block))),
                     (
                         "albedo_map",

@@ -103,9 +103,16 @@ impl LightCamera {
 
     /// The block every LPV pass reads.
     pub fn block(&self, placement: &Placement, config: &Config) -> VolumeBlock {
+        self.block_sharing(placement, config, self.flux_bound)
+    }
+
+    /// [`LightCamera::block`] with fixed-point units that cover `flux` (at least this light's
+    /// bound): the lights that inject into one volume share units over their summed bounds, so
+    /// that their sums add.
+    pub fn block_sharing(&self, placement: &Placement, config: &Config, flux: f32) -> VolumeBlock {
         let n = placement.n as i32;
         // Each coefficient of a cell sums at most 0.33 of the flux (COS1/π): 2³⁰ units cover it.
-        let units = (1u64 << 30) as f32 / (0.34 * self.flux_bound.max(1e-12));
+        let units = (1u64 << 30) as f32 / (0.34 * flux.max(self.flux_bound).max(1e-12));
         VolumeBlock {
             size: [n, n, n, n * n * n],
             origin: placement.origin.extend(placement.cell).into(),
@@ -176,8 +183,10 @@ impl SurfelMap {
 
 /// The RSM's layers, pipelines and the injection.
 pub struct Rsm {
-    /// The RSM itself.
+    /// The RSM itself (the first light's, where several light the volume).
     pub map: SurfelMap,
+    /// The other lights' RSMs, in order.
+    pub others: Vec<SurfelMap>,
     /// The camera's G-buffer, whose surfels add to the geometry volume (`gbuffer`).
     pub gbuffer: Option<SurfelMap>,
     raster: PipelineId,
@@ -192,8 +201,18 @@ pub struct Rsm {
 }
 
 impl Rsm {
-    pub fn new(gpu: &mut Gpu, shaders: &ShaderLibrary, states: &mut ResourceStates, config: &Config) -> Result<Rsm> {
+    /// The pipelines, and an RSM for each of `lights` lights.
+    pub fn new(
+        gpu: &mut Gpu,
+        shaders: &ShaderLibrary,
+        states: &mut ResourceStates,
+        config: &Config,
+        lights: usize,
+    ) -> Result<Rsm> {
         let map = SurfelMap::new(gpu, "lpv rsm", config.rsm)?;
+        let others = (1..lights)
+            .map(|k| SurfelMap::new(gpu, &format!("lpv rsm {k}"), config.rsm))
+            .collect::<Result<Vec<_>>>()?;
         let gbuffer = if config.gbuffer > 0 {
             Some(SurfelMap::new(gpu, "lpv gbuffer", config.gbuffer)?)
         } else {
@@ -240,6 +259,7 @@ impl Rsm {
         states.forget_buffer(offsets);
         Ok(Rsm {
             map,
+            others,
             gbuffer,
             raster,
             inject,
@@ -251,16 +271,29 @@ impl Rsm {
         })
     }
 
-    /// Draws the RSM (`block`: the light's camera over the largest volume).
+    /// Every light's RSM, the first light's first.
+    pub fn maps(&self) -> impl Iterator<Item = &SurfelMap> {
+        std::iter::once(&self.map).chain(&self.others)
+    }
+
+    /// Draws each light's RSM (`blocks[k]`: light k's camera over the largest volume); the
+    /// first is the pass `lpv rsm`, light k's `lpv rsm k`.
     pub fn add_raster<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
         scene: &'a SceneGpu,
         calls: &'a [DrawCall],
         transmittance: BufferId,
-        block: &'a VolumeBlock,
+        blocks: &'a [VolumeBlock],
     ) {
-        self.add_surfels(graph, "lpv rsm", &self.map, scene, calls, transmittance, block);
+        for (k, (map, block)) in self.maps().zip(blocks).enumerate() {
+            let name = if k == 0 {
+                "lpv rsm".to_string()
+            } else {
+                format!("lpv rsm {k}")
+            };
+            self.add_surfels(graph, &name, map, scene, calls, transmittance, block);
+        }
     }
 
     /// The G-buffer pass: the scene from the camera (`block`: the camera as the viewpoint, no
@@ -375,16 +408,18 @@ impl Rsm {
             });
     }
 
-    /// Injects the RSM into `volume`: scatter into the fixed-point sums (and the G-buffer's
-    /// surfels' blocking, with `gbuffer_block`), then resolve; or the document's gather straight
-    /// into the first wavefront.
+    /// Injects the RSMs into `volume` (`blocks[k]`: light k's block for it): each scattered into
+    /// the fixed-point sums, the first light's surfels (and the G-buffer's, with
+    /// `gbuffer_block`) also into the blocking, then resolved once; or the document's gather
+    /// of the first light straight into the first wavefront.
     pub fn add_injection<'a>(
         &'a self,
         graph: &mut RenderGraph<'a>,
         volume: &'a VolumeGpu,
-        block: &'a VolumeBlock,
+        blocks: &'a [VolumeBlock],
         gbuffer_block: &'a VolumeBlock,
     ) {
+        let block = &blocks[0];
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let mip = SubresourceRange::mip(0);
         let layers = self.map.layers;
@@ -392,14 +427,14 @@ impl Rsm {
         let s = self.nearest;
         match self.injection {
             Injection::Scatter => {
-                self.add_scatter(
-                    graph,
-                    &format!("{} inject", volume.label),
-                    &self.map,
-                    None,
-                    volume,
-                    block,
-                );
+                for (k, (map, block)) in self.maps().zip(blocks).enumerate() {
+                    let name = if k == 0 {
+                        format!("{} inject", volume.label)
+                    } else {
+                        format!("{} inject {k}", volume.label)
+                    };
+                    self.add_scatter(graph, &name, map, None, volume, block);
+                }
                 if let Some(map) = &self.gbuffer {
                     // Only blocking: the G-buffer's surfels carry no flux.
                     self.add_scatter(
