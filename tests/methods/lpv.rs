@@ -1624,3 +1624,57 @@ fn every_spot_and_sun_adds_its_bounce_to_the_volume() {
         "max |all - sum| = {diff:e} (largest coefficient {scale})"
     );
 }
+
+/// At most `max_lights` spots and suns light the volume (8 unset), those sending the most flux:
+/// ten spots make eight RSMs, and the plan says two are left out; with `max_lights = 2` of three
+/// spots, the volume is the two brightest spots' alone.
+#[test]
+fn the_volume_takes_the_strongest_lights_up_to_max_lights() {
+    use penumbra::lighting::plan::Facts;
+    let spot = |x: f64, intensity: f64| {
+        format!("[[lights]]\ntype = \"spot\"\nposition = [{x}, 2, 0]\ntarget = [{x}, 0, 0]\nintensity = {intensity}\n")
+    };
+    let text = |decl: &str, lights: &str| {
+        format!(
+            "methods = [{decl}]\n[camera]\nposition = [3, 2, 0]\ntarget = [0, 0.5, 0]\n\
+             [[objects]]\nmesh = \"plane\"\nsize = 3\n{lights}"
+        )
+    };
+    let ten: String = (0..10)
+        .map(|i| spot(-1.35 + 0.3 * f64::from(i), 1.0 + f64::from(i)))
+        .collect();
+    let s = scene(&text("\"lpv\"", &ten));
+    let derived = penumbra::lighting::lpv::plan(&s.methods[0], &Facts::new(&s)).unwrap();
+    let note = derived
+        .iter()
+        .find(|d| d.param == "max_lights")
+        .expect("a max_lights line");
+    assert_eq!(note.value.as_integer(), Some(8));
+    assert!(
+        note.why.contains("10 spot and sun lights") && note.why.contains("2 are left out"),
+        "{}",
+        note.why
+    );
+    let mut f = common::MethodFixture::new(&s);
+    let lpv = Lpv::new(&mut f.context(&s, Terms::INDIRECT), &s.methods[0]).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(lpv.light_count(), 8);
+    // Three spots, the middle one dimmest: with two allowed, the outer two light the volume.
+    let three = format!("{}{}{}", spot(-0.8, 4.0), spot(0.0, 1.0), spot(0.8, 3.0));
+    let decl = "{ name = \"lpv\", storage = \"f32\", geometry_volume = false, iterations = 6";
+    let capped = volume_of(&scene(&text(&format!("{decl}, max_lights = 2 }}"), &three))).0;
+    let outer = |i: usize| volume_of(&scene(&text(&format!("{decl}, light = {i} }}"), &three))).0;
+    let (a, b) = (outer(0), outer(2));
+    let mut sum = a.clone();
+    for (s, x) in sum.iter_mut().zip(&b) {
+        for (c, d) in s.cells.iter_mut().zip(&x.cells) {
+            for k in 0..4 {
+                c[k] += d[k];
+            }
+        }
+    }
+    let (diff, scale) = (max_diff(&capped, &sum), max_abs(&capped));
+    assert!(
+        diff <= 2e-3 * scale,
+        "max |capped - two brightest| = {diff:e} (largest {scale})"
+    );
+}

@@ -101,6 +101,9 @@ pub struct Config {
     pub published_omega: bool,
     /// Which of the scene's lights (point, spot, directional, in order) lights the RSM.
     pub light: usize,
+    /// With every spot and sun lighting the volume: at most this many, those sending the most
+    /// flux (an RSM and an injection each a frame).
+    pub max_lights: usize,
     /// The light turns about the vertical at this many degrees per second (the LPV's light
     /// only: for measuring stability, T13).
     pub light_spin: f64,
@@ -196,6 +199,7 @@ impl Config {
             transform_bug: !corrected,
             published_omega: false,
             light: 0,
+            max_lights: 8,
             light_spin: 0.0,
             snap: true,
             blend: !corrected,
@@ -250,6 +254,7 @@ impl Config {
                 "transform_bug" => c.transform_bug = flag(p, v)?,
                 "published_omega" => c.published_omega = flag(p, v)?,
                 "light" => c.light = int(p, v, 0..=65535, "the index of a point, spot or directional light")? as usize,
+                "max_lights" => c.max_lights = int(p, v, 1..=256, "a light count from 1 to 256")? as usize,
                 "light_spin" => {
                     c.light_spin = Params::float(v)
                         .filter(|x| x.is_finite() && x.abs() <= 3600.0)

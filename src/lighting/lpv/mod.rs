@@ -95,6 +95,10 @@ pub const SCHEMA: MethodSchema = MethodSchema {
             kind: ParamKind::Int,
         },
         ParamSchema {
+            name: "max_lights",
+            kind: ParamKind::Int,
+        },
+        ParamSchema {
             name: "light_spin",
             kind: ParamKind::Float,
         },
@@ -248,12 +252,8 @@ pub fn plan(
         }
     }
     let rsms = if every_light(decl, &config) {
-        let lights = punctual_lights(facts.scene);
-        (lights
-            .iter()
-            .filter(|l| l.position[3] != crate::gpu_scene::LIGHT_POINT)
-            .count())
-        .max(1) as u64
+        derived.extend(max_lights_note(decl, &config, facts.scene));
+        (by_flux(&punctual_lights(facts.scene), glam::DVec3::ZERO).len()).clamp(1, config.max_lights) as u64
     } else {
         derived.extend(light_note(decl, facts.scene, facts.bounds(NAME)?));
         1
@@ -337,52 +337,81 @@ fn transmittance_buffer(cx: &mut CreateContext<'_>) -> Result<BufferId> {
     Ok(transmittance)
 }
 
-/// `light` when unset and the volume takes one light (the document's mode, the gather): of the
-/// scene's spot and directional lights (a point light would need a cube RSM), the one that
-/// sends the most flux into the scene, the first on a tie, so that the
-/// one light a volume bounces is the one with the most light to bounce. A spot's flux is its
-/// intensity over its cone, 2π(1 − cos θ_outer) sr; a sun's its irradiance over the scene's
-/// bounds seen along its direction. `None` where that is light 0 (the default), or where the
-/// scene has no such light (then the method is refused at creation, naming the light).
+/// The flux a spot or sun sends into a scene whose bounds are `size` across (W), `None` for
+/// other lights: a spot's intensity over its cone, 2π(1 − cos θ_outer) sr; a sun's irradiance
+/// over the bounds seen along its direction.
+fn light_flux(l: &GpuLight, size: glam::DVec3) -> Option<f64> {
+    use crate::gpu_scene::{LIGHT_DIRECTIONAL, LIGHT_SPOT};
+    let power = f64::from(l.intensity[0].max(l.intensity[1]).max(l.intensity[2]));
+    if l.position[3] == LIGHT_SPOT {
+        Some(power * std::f64::consts::TAU * (1.0 - f64::from(l.cone[1])))
+    } else if l.position[3] == LIGHT_DIRECTIONAL {
+        let d = glam::Vec3::from_slice(&l.direction[..3])
+            .as_dvec3()
+            .normalize_or_zero()
+            .abs();
+        Some(power * (d.x * size.y * size.z + d.y * size.x * size.z + d.z * size.x * size.y))
+    } else {
+        None
+    }
+}
+
+/// The spots and suns of `lights` (index, flux), the most flux first (scene order on a tie).
+fn by_flux(lights: &[GpuLight], size: glam::DVec3) -> Vec<(usize, f64)> {
+    let mut out: Vec<(usize, f64)> = (lights.iter().enumerate())
+        .filter_map(|(i, l)| light_flux(l, size).map(|f| (i, f)))
+        .collect();
+    out.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    out
+}
+
+/// `light` when unset and the volume takes one light (the document's mode, the gather): the
+/// spot or sun that sends the most flux into the scene ([`light_flux`]; a point light would
+/// need a cube RSM), so that the one light a volume bounces is the one with the most light to
+/// bounce. `None` where that is light 0 (the default), or where the scene has no such light
+/// (then the method is refused at creation, naming the light).
 fn light_note(
     decl: &MethodDecl,
     scene: &crate::scene::Scene,
     bounds: Option<(glam::DVec3, glam::DVec3)>,
 ) -> Option<crate::lighting::plan::Derived> {
-    use crate::gpu_scene::{LIGHT_DIRECTIONAL, LIGHT_SPOT};
     if decl.param("light").is_some() {
         return None;
     }
     let size = bounds.map_or(glam::DVec3::ZERO, |(lo, hi)| hi - lo);
-    let flux = |l: &GpuLight| {
-        let power = f64::from(l.intensity[0].max(l.intensity[1]).max(l.intensity[2]));
-        if l.position[3] == LIGHT_SPOT {
-            Some(power * std::f64::consts::TAU * (1.0 - f64::from(l.cone[1])))
-        } else if l.position[3] == LIGHT_DIRECTIONAL {
-            let d = glam::Vec3::from_slice(&l.direction[..3])
-                .as_dvec3()
-                .normalize_or_zero()
-                .abs();
-            Some(power * (d.x * size.y * size.z + d.y * size.x * size.z + d.z * size.x * size.y))
-        } else {
-            None
-        }
-    };
     let lights = punctual_lights(scene);
-    let (best, most) = (lights.iter().enumerate())
-        .filter_map(|(i, l)| flux(l).map(|f| (i, f)))
-        .fold(None, |b: Option<(usize, f64)>, (i, f)| match b {
-            Some((_, g)) if g >= f => b,
-            _ => Some((i, f)),
-        })?;
-    let others = lights.iter().filter(|l| flux(l).is_some()).count() - 1;
+    let ranked = by_flux(&lights, size);
+    let &(best, most) = ranked.first()?;
     (best != 0).then(|| {
         crate::lighting::plan::Derived::new(
             "light",
             best as i64,
             format!(
-                "of the scene's {} point, spot and directional lights, the spot or sun that sends the most flux into the scene ({most:.3} W; point lights would need a cube RSM); {others} other spot or sun light(s) left out, one light a volume",
-                lights.len()
+                "of the scene's {} point, spot and directional lights, the spot or sun that sends the most flux into the scene ({most:.3} W; point lights would need a cube RSM); {} other spot or sun light(s) left out, one light a volume",
+                lights.len(),
+                ranked.len() - 1
+            ),
+        )
+    })
+}
+
+/// `max_lights` when unset and the scene has more spots and suns than it: said, with how many
+/// the volume leaves out (the dimmest), since each light costs an RSM and an injection a frame.
+fn max_lights_note(
+    decl: &MethodDecl,
+    config: &Config,
+    scene: &crate::scene::Scene,
+) -> Option<crate::lighting::plan::Derived> {
+    let lights = punctual_lights(scene);
+    let candidates = by_flux(&lights, glam::DVec3::ZERO).len();
+    (decl.param("max_lights").is_none() && candidates > config.max_lights).then(|| {
+        crate::lighting::plan::Derived::new(
+            "max_lights",
+            config.max_lights as i64,
+            format!(
+                "the scene has {candidates} spot and sun lights, an RSM and an injection each a frame: the {} sending the most flux light the volume, {} are left out",
+                config.max_lights,
+                candidates - config.max_lights
             ),
         )
     })
@@ -406,17 +435,20 @@ fn light_blocks(cameras: &[LightCamera], placements: &[Placement], config: &Conf
         .collect()
 }
 
-/// The lights whose RSMs the volume takes: in the corrected scatter, with `light` unset, every
-/// spot and directional light of the scene (point lights would need a cube RSM); else the one
-/// light `light` names (the document's mode and the gather take one).
+/// The lights whose RSMs the volume takes: in the corrected scatter, with `light` unset, the
+/// scene's spot and directional lights (point lights would need a cube RSM), at most
+/// `max_lights` of them, the most flux first (the first adds the blocking); else the one light
+/// `light` names (the document's mode and the gather take one).
 fn lights_of(cx: &CreateContext<'_>, decl: &MethodDecl, config: &Config) -> Result<Vec<GpuLight>> {
-    use crate::gpu_scene::{LIGHT_DIRECTIONAL, LIGHT_SPOT};
     if every_light(decl, config) {
-        let all: Vec<GpuLight> = (punctual_lights(cx.scene).into_iter())
-            .filter(|l| l.position[3] == LIGHT_SPOT || l.position[3] == LIGHT_DIRECTIONAL)
+        let size = scene_bounds(cx).map_or(glam::DVec3::ZERO, |(lo, hi)| (hi - lo).as_dvec3());
+        let lights = punctual_lights(cx.scene);
+        let chosen: Vec<GpuLight> = (by_flux(&lights, size).into_iter())
+            .take(config.max_lights)
+            .map(|(i, _)| lights[i])
             .collect();
-        if !all.is_empty() {
-            return Ok(all);
+        if !chosen.is_empty() {
+            return Ok(chosen);
         }
     }
     Ok(vec![light_of(cx, decl, config)?])
