@@ -936,6 +936,7 @@ fn bad_parameters_name_the_field() {
         (r#"{ name = "lpv", mode = "exact" }"#, "methods[0].mode"),
         (r#"{ name = "lpv", view = "everything" }"#, "methods[0].view"),
         (r#"{ name = "lpv", light = 3 }"#, "methods[0].light"),
+        (r#"{ name = "lpv", max_lights = 0 }"#, "methods[0].max_lights"),
         (r#"{ name = "lpv", centre = [0, 1, 0] }"#, "methods[0].size"),
         (r#"{ name = "lpv", size = 2 }"#, "methods[0].centre"),
         (r#"{ name = "lpv", centre = [0, 1], size = 2 }"#, "methods[0].centre"),
