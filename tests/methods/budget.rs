@@ -74,7 +74,10 @@ fn assert_refusal(message: &str, took: Duration, needs: &[&str]) {
     for n in needs.iter().chain(&["would need", "memory_budget_mb"]) {
         assert!(message.contains(n), "`{n}` missing from: {message}");
     }
-    assert!(took < Duration::from_secs(1), "refused after {took:?}");
+    // Up front, not after a bake (which takes tens of seconds and more): the triangle soup's
+    // refusal, the slowest, took 0.55 s alone and 1.16 s beside a build on lavapipe's 2-core
+    // host, so the bound leaves room for a loaded machine.
+    assert!(took < Duration::from_secs(3), "refused after {took:?}");
 }
 
 /// The size a refusal names, in MB.
