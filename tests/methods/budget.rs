@@ -144,7 +144,7 @@ fn sh_lightmap_over_the_budget_is_refused_before_baking() {
 /// merges its triangles into charts instead: `src/lighting/radiosity/tests/curved.rs`.)
 #[test]
 fn a_triangle_soups_light_map_is_refused_with_advice_that_can_work() {
-    let dir = std::env::temp_dir().join(format!("penumbra-soup-{}", std::process::id()));
+    let dir = crate::support::temp_path("soup");
     std::fs::create_dir_all(&dir).unwrap();
     let mut obj = String::new();
     let mut rng = crate::support::rng::Lcg(7);
