@@ -1609,16 +1609,7 @@ fn every_spot_and_sun_adds_its_bounce_to_the_volume() {
         alone.iter().all(|g| max_abs(g) > 0.0),
         "each light lights the volume alone"
     );
-    let mut sum = alone[0].clone();
-    for g in &alone[1..] {
-        for (s, a) in sum.iter_mut().zip(g) {
-            for (c, d) in s.cells.iter_mut().zip(&a.cells) {
-                for k in 0..4 {
-                    c[k] += d[k];
-                }
-            }
-        }
-    }
+    let sum = sum_of(&alone);
     let (diff, scale) = (max_diff(&all, &sum), max_abs(&all));
     assert!(
         diff <= 2e-3 * scale,
@@ -1664,18 +1655,25 @@ fn the_volume_takes_the_strongest_lights_up_to_max_lights() {
     let decl = "{ name = \"lpv\", storage = \"f32\", geometry_volume = false, iterations = 6";
     let capped = volume_of(&scene(&text(&format!("{decl}, max_lights = 2 }}"), &three))).0;
     let outer = |i: usize| volume_of(&scene(&text(&format!("{decl}, light = {i} }}"), &three))).0;
-    let (a, b) = (outer(0), outer(2));
-    let mut sum = a.clone();
-    for (s, x) in sum.iter_mut().zip(&b) {
-        for (c, d) in s.cells.iter_mut().zip(&x.cells) {
-            for k in 0..4 {
-                c[k] += d[k];
-            }
-        }
-    }
+    let sum = sum_of(&[outer(0), outer(2)]);
     let (diff, scale) = (max_diff(&capped, &sum), max_abs(&capped));
     assert!(
         diff <= 2e-3 * scale,
         "max |capped - two brightest| = {diff:e} (largest {scale})"
     );
+}
+
+/// The coefficient-wise sum of several volumes of one size.
+fn sum_of(volumes: &[[Grid; 3]]) -> [Grid; 3] {
+    let mut sum = volumes[0].clone();
+    for v in &volumes[1..] {
+        for (s, g) in sum.iter_mut().zip(v) {
+            for (c, d) in s.cells.iter_mut().zip(&g.cells) {
+                for k in 0..4 {
+                    c[k] += d[k];
+                }
+            }
+        }
+    }
+    sum
 }
